@@ -1,0 +1,9 @@
+"""dttmm: the discrete-time transfer matrix method for multibody chains."""
+from .elements import BallJoint, ElasticHinge, FixedHinge, RigidBody
+from .model import Ground, Model, PrescribedMotion, build_chain
+
+__all__ = ["RigidBody", "BallJoint", "FixedHinge", "ElasticHinge", "Ground", "PrescribedMotion",
+           "Model", "build_chain"]
+from .solver import DivergenceError, simulate  # noqa: E402
+
+__all__ += ["simulate", "DivergenceError"]

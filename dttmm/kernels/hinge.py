@@ -1,0 +1,89 @@
+"""Transfer of an elastic hinge over one time step (docs/hinges.md).
+
+Inboard station z_in = [a, phi_in, m, q] at the inboard output point; outboard station
+z_out = [a_out, phi_out, m_out, q] at the outboard input point, offset by the deflection d.
+  q = -(K_w d + C_w d_dot),   K_w = A_in K_t A_in^T, C_w = A_in C_t A_in^T
+  d_ddot = c1 d + w1d,  d_dot = c3 d + w3d          (the integrator on the world vector d)
+  a_out = a + d_ddot
+  m_out = m - d x q                                 (equilibrium of the massless hinge)
+  m_out = -A_in (K_r psi + C_r A_in^T (w_out - w_in)),  exp(psi^) = A_in^T A_out R0^T
+The last line is solved for phi_out, linearized about the guess (its Jacobian drops the small
+terms in psi and d, which changes the convergence rate of Newton iterations, not the solution).
+"""
+import numpy as np
+from numba import njit
+
+from .body import A, CONST, M, PHI, Q
+from .so3 import hat, log_so3
+
+
+@njit(cache=True)
+def elastic_hinge_transfer(h, rot_in, lam_in, w_in, rot_out, lam_out, w_out, phi_out_star,
+                           c1, c3, w1d, w3d, z_star, u):
+    """Fill u (12 x 13) with z_out = u[:, :12] z_in + u[:, 12], linearized about z_star (the
+    inboard station guess).  rot/lam/w: rotation, left Jacobian and angular velocity of the
+    inboard and outboard bodies at the guess; phi_out_star: the outboard body's guessed phi."""
+    r0 = h[0:9].reshape((3, 3))
+    k_t = h[9:18].reshape((3, 3))
+    c_t = h[18:27].reshape((3, 3))
+    k_r = h[27:36].reshape((3, 3))
+    c_r = h[36:45].reshape((3, 3))
+    k_w = rot_in @ k_t @ rot_in.T
+    c_w = rot_in @ c_t @ rot_in.T
+    kr_w = rot_in @ k_r @ rot_in.T
+    cr_w = rot_in @ c_r @ rot_in.T
+
+    d_of_q = -np.linalg.inv(k_w + c3 * c_w)      # d = d_of_q q + d0
+    d0 = d_of_q @ (c_w @ w3d)
+    q_star = z_star[Q:Q + 3]
+    phi_in_star = z_star[PHI:PHI + 3]
+    d_star = d_of_q @ q_star + d0
+
+    psi = np.empty(3)
+    log_so3(rot_in.T @ rot_out @ r0.T, psi)
+    n_star = -rot_in @ (k_r @ psi + c_r @ (rot_in.T @ (w_out - w_in)))
+    n_out = -kr_w @ lam_out - c3 * cr_w
+    n_in = kr_w @ lam_in + c3 * cr_w
+    n_out_inv = np.linalg.inv(n_out)
+
+    dh = np.empty((3, 3))
+    hat(d_star, dh)
+    qh = np.empty((3, 3))
+    hat(q_star, qh)
+    dm_dq = -dh + qh @ d_of_q                    # m_out = m + dm_dq q + m0
+    m0 = qh @ d0 - qh @ d_star
+
+    for r in range(12):
+        for c in range(13):
+            u[r, c] = 0.0
+    for i in range(3):
+        u[A + i, A + i] = 1.0
+        u[M + i, M + i] = 1.0
+        u[Q + i, Q + i] = 1.0
+    u[A:A + 3, Q:Q + 3] = c1 * d_of_q
+    u[A:A + 3, CONST] = c1 * d0 + w1d
+    u[M:M + 3, Q:Q + 3] = dm_dq
+    u[M:M + 3, CONST] = m0
+    # phi_out = phi_out* + n_out^-1 (m_out - n* - n_in (phi_in - phi_in*))
+    u[PHI:PHI + 3, M:M + 3] = n_out_inv
+    u[PHI:PHI + 3, Q:Q + 3] = n_out_inv @ dm_dq
+    u[PHI:PHI + 3, PHI:PHI + 3] = -n_out_inv @ n_in
+    u[PHI:PHI + 3, CONST] = phi_out_star + n_out_inv @ (m0 - n_star + n_in @ phi_in_star)
+
+
+@njit(cache=True)
+def elastic_hinge_loads(h, rot_in, w_in, rot_out, w_out, d, d_dot):
+    """Spring-damper force q and couples (m_in about the inboard point, m_out about the outboard
+    point) of an elastic hinge in a given state: used where the state is known (the consistent
+    start)."""
+    r0 = h[0:9].reshape((3, 3))
+    k_t = h[9:18].reshape((3, 3))
+    c_t = h[18:27].reshape((3, 3))
+    k_r = h[27:36].reshape((3, 3))
+    c_r = h[36:45].reshape((3, 3))
+    q = -rot_in @ (k_t @ (rot_in.T @ d) + c_t @ (rot_in.T @ d_dot))
+    psi = np.empty(3)
+    log_so3(rot_in.T @ rot_out @ r0.T, psi)
+    m_out = -rot_in @ (k_r @ psi + c_r @ (rot_in.T @ (w_out - w_in)))
+    m_in = m_out + np.cross(d, q)
+    return q, m_in, m_out

@@ -1,0 +1,76 @@
+"""Rotation kernels: hat map, exponential, logarithm and left Jacobian of SO(3) (docs/rotations.md)."""
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def hat(v, out):
+    """out = v^ (the cross-product matrix: v^ w = v x w)."""
+    out[0, 0] = 0.0
+    out[0, 1] = -v[2]
+    out[0, 2] = v[1]
+    out[1, 0] = v[2]
+    out[1, 1] = 0.0
+    out[1, 2] = -v[0]
+    out[2, 0] = -v[1]
+    out[2, 1] = v[0]
+    out[2, 2] = 0.0
+
+
+@njit(cache=True)
+def expm_so3(phi, out):
+    """out = exp(phi^), Rodrigues' formula, series near zero."""
+    th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    if th2 < 1e-8:
+        a = 1.0 - th2 / 6.0 + th2 * th2 / 120.0
+        b = 0.5 - th2 / 24.0 + th2 * th2 / 720.0
+    else:
+        th = np.sqrt(th2)
+        a = np.sin(th) / th
+        b = (1.0 - np.cos(th)) / th2
+    k = np.empty((3, 3))
+    hat(phi, k)
+    for i in range(3):
+        for j in range(3):
+            kk = k[i, 0] * k[0, j] + k[i, 1] * k[1, j] + k[i, 2] * k[2, j]
+            out[i, j] = a * k[i, j] + b * kk
+        out[i, i] += 1.0
+
+
+@njit(cache=True)
+def left_jacobian(phi, out):
+    """out = J_l(phi) = I + (1-cos t)/t^2 phi^ + (t - sin t)/t^3 phi^^, so that
+    exp((phi + dphi)^) = exp((J_l dphi)^) exp(phi^) to first order."""
+    th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    if th2 < 1e-8:
+        b = 0.5 - th2 / 24.0 + th2 * th2 / 720.0
+        c = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
+    else:
+        th = np.sqrt(th2)
+        b = (1.0 - np.cos(th)) / th2
+        c = (th - np.sin(th)) / (th2 * th)
+    k = np.empty((3, 3))
+    hat(phi, k)
+    for i in range(3):
+        for j in range(3):
+            kk = k[i, 0] * k[0, j] + k[i, 1] * k[1, j] + k[i, 2] * k[2, j]
+            out[i, j] = b * k[i, j] + c * kk
+        out[i, i] += 1.0
+
+
+@njit(cache=True)
+def log_so3(r, out):
+    """out = the rotation vector of r (angle in [0, pi))."""
+    c = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
+    c = min(1.0, max(-1.0, c))
+    th = np.arccos(c)
+    w0 = r[2, 1] - r[1, 2]
+    w1 = r[0, 2] - r[2, 0]
+    w2 = r[1, 0] - r[0, 1]
+    if th < 1e-6:
+        f = 0.5 + th * th / 12.0
+    else:
+        f = th / (2.0 * np.sin(th))
+    out[0] = f * w0
+    out[1] = f * w1
+    out[2] = f * w2

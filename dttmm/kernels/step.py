@@ -1,0 +1,283 @@
+"""The time loop: predict, linearize every element, sweep, Newton-correct, update (docs/solver.md).
+
+Integrator: generalized-alpha in the form of Arnold and Bruls (2007), applied to each body's
+world rotation increment phi (A_i = exp(phi^) A_{i-1}) and to each elastic hinge's deflection d:
+  x        = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1}     (x = phi, or d - d_n)
+  v_{n+1}  = v_n + h (1 - gamma) p_n + h gamma p_{n+1}
+  (1 - alpha_f) acc_{n+1} + alpha_f acc_n = (1 - alpha_m) p_{n+1} + alpha_m p_n
+with p the pseudo-acceleration.  alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (rho_inf = 1)
+is the trapezoidal Newmark rule.  Station positions are not integrated: they follow from the
+rotations by kinematics, and the transfers work with accelerations, so the joint constraints hold
+exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").
+"""
+import numpy as np
+from numba import njit
+
+from ..elements.hinges import BALL, ELASTIC, FIXED
+from .body import rigid_body_transfer
+from .hinge import elastic_hinge_loads, elastic_hinge_transfer
+from .so3 import expm_so3, left_jacobian, log_so3
+from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_reduced, fold_ball_body, riccati_full,
+                    riccati_reduced)
+from .sweep import BALL as EL_BALL
+
+RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED = 0, 1, 2
+OK, SINGULAR, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _integrator_coefficients(h, coef):
+    beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
+    c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
+    c3 = gamma / (beta * h)
+    return c1, c3
+
+
+@njit(cache=True)
+def _offsets(h, coef, v, acc, p):
+    """w1, w3 with acc_{n+1} = c1 x + w1, v_{n+1} = c3 x + w3 (x the increment over the step)."""
+    beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
+    known = h * v + h * h * (0.5 - beta) * p
+    ratio = (1.0 - alpha_m) / (1.0 - alpha_f)
+    w1 = -ratio * known / (beta * h * h) + (alpha_m * p - alpha_f * acc) / (1.0 - alpha_f)
+    w3 = v + h * (1.0 - gamma) * p - gamma / (beta * h) * known
+    return w1, w3
+
+
+@njit(cache=True)
+def _advance_history(h, coef, x, v, acc, p):
+    """In place: v, acc, p at t_{n+1} from the increment x."""
+    beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
+    p_new = (x - h * v - h * h * (0.5 - beta) * p) / (beta * h * h)
+    v_new = v + h * (1.0 - gamma) * p + h * gamma * p_new
+    acc_new = ((1.0 - alpha_m) * p_new + alpha_m * p - alpha_f * acc) / (1.0 - alpha_f)
+    v[:] = v_new
+    acc[:] = acc_new
+    p[:] = p_new
+
+
+@njit(cache=True)
+def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
+                    g_rot, g_lam, g_w, rot_star, lam, phi_star, c1, c3, w1, w3, w1d, w3d,
+                    z_star, force, torque, at_start):
+    """Element kinds and transfers about the guess z_star.  at_start: the consistent-start
+    solve, where elastic hinges are LOCKED (their loads are set by the caller)."""
+    n = body_params.shape[0]
+    for k in range(n):
+        jh = 2 * k
+        hk = hinge_kind[k]
+        if hk == BALL:
+            kind[jh] = EL_BALL
+        elif hk == FIXED:
+            kind[jh] = IDENTITY
+        elif at_start:
+            kind[jh] = LOCKED
+        else:
+            kind[jh] = TRANSFER
+            if k == 0:
+                rot_in, lam_in, w_in = g_rot, g_lam, g_w
+            else:
+                rot_in, lam_in = rot_star[k - 1], lam[k - 1]
+                w_in = c3 * phi_star[k - 1] + w3[k - 1]
+            w_out = c3 * phi_star[k] + w3[k]
+            elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, rot_star[k], lam[k],
+                                   w_out, phi_star[k], c1, c3, w1d[k], w3d[k], z_star[jh], u[jh])
+        kind[jh + 1] = TRANSFER
+        load = body_params[k, 0] * gravity + force[k]
+        rigid_body_transfer(body_params[k], rot_star[k], lam[k], c1, c3, w1[k], w3[k],
+                            z_star[jh + 1], load, torque[k], u[jh + 1])
+
+
+@njit(cache=True)
+def _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
+           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z):
+    """Solve the assembled step into z (stations' states); returns 0 or a singularity code."""
+    if mode == RICCATI_FULL:
+        return riccati_full(kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
+                            sc_g, sc_gv, z)
+    n = red_v.shape[0]
+    for k in range(n):
+        fold_ball_body(u[2 * k + 1], red_v[k], red_phi[k])
+    if mode == RICCATI_REDUCED:
+        status = riccati_reduced(red_v, root_f[0:3], red_s, red_p, red_tinv, red_t, red_aq)
+    else:
+        status = direct_reduced(red_v, root_f[0:3], red_aq)
+    if status != 0:
+        return status
+    z[:, :] = 0.0
+    z[0, 0:3] = root_f[0:3]
+    z[0, 3:6] = root_f[3:6]
+    z[0, 9:12] = red_aq[0, 3:6]
+    xq = np.empty(7)
+    xq[6] = 1.0
+    for k in range(n):
+        xq[0:6] = red_aq[k]
+        phi = red_phi[k] @ xq
+        for s in (2 * k + 1, 2 * k + 2):
+            z[s, 3:6] = phi
+        z[2 * k + 1, 0:3] = red_aq[k, 0:3]
+        z[2 * k + 1, 9:12] = red_aq[k, 3:6]
+        z[2 * k + 2, 0:3] = red_aq[k + 1, 0:3]
+        z[2 * k + 2, 9:12] = red_aq[k + 1, 3:6]
+    return 0
+
+
+@njit(cache=True)
+def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
+                          g_acc, g_rot, g_w, g_wd, force, torque,
+                          rot, omega, defl, defl_rate,
+                          kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
+                          red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z):
+    """The consistent start: one linear sweep at acceleration level.  The phi slot of every
+    station holds the angular acceleration, the rotations and rates are the initial ones, and an
+    elastic hinge's loads are known from its state (its outboard motion is free).  Returns the
+    status; z holds the stations' accelerations and loads."""
+    n = body_params.shape[0]
+    zero3 = np.zeros((n, 3))
+    lam = np.zeros((n, 3, 3))
+    z_star = np.zeros(z.shape)
+    _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
+                    g_rot, np.zeros((3, 3)), g_w, rot, lam, zero3, 1.0, 0.0, zero3, omega,
+                    zero3, zero3, z_star, force, torque, True)
+    for k in range(n):
+        if hinge_kind[k] == ELASTIC:
+            rot_in = g_rot if k == 0 else rot[k - 1]
+            w_in = g_w if k == 0 else omega[k - 1]
+            q, m_in, m_out = elastic_hinge_loads(hinge_params[k], rot_in, w_in, rot[k], omega[k],
+                                                 defl[k], defl_rate[k])
+            known_loads[2 * k, 0:3] = m_in
+            known_loads[2 * k, 3:6] = q
+            known_loads[2 * k, 6:9] = m_out
+            known_loads[2 * k, 9:12] = q
+    root_f = np.empty(6)
+    root_f[0:3] = g_acc
+    root_f[3:6] = g_wd
+    return _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g,
+                  sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z)
+
+
+@njit(cache=True)
+def advance(mode, h, coef, newton_max, newton_tol,
+            body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
+            g_acc, g_rot, g_w, g_wd, force, torque,
+            rot, omega, omega_dot, pseudo, defl, defl_rate, defl_acc, defl_pseudo, z,
+            kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
+            red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq,
+            record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
+            out_info):
+    """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
+    and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
+    Records after every record_every-th step (counting from the chunk's start).
+    out_info: [status, failing step, newton iterations used (max), recorded count]."""
+    n = body_params.shape[0]
+    n_steps = g_acc.shape[0]
+    c1, c3 = _integrator_coefficients(h, coef)
+    phi_star = np.empty((n, 3))
+    rot_star = np.empty((n, 3, 3))
+    lam = np.empty((n, 3, 3))
+    w1 = np.empty((n, 3))
+    w3 = np.empty((n, 3))
+    w1d = np.zeros((n, 3))
+    w3d = np.zeros((n, 3))
+    z_star = np.empty(z.shape)
+    e3 = np.empty((3, 3))
+    g_lam = np.empty((3, 3))
+    phi_g = np.empty(3)
+    root_f = np.empty(6)
+    max_iter = 0
+    n_rec = 0
+    for s in range(n_steps):
+        rot_now = g_rot[s + 1]
+        log_so3(rot_now @ g_rot[s].T, phi_g)
+        left_jacobian(phi_g, g_lam)
+        for k in range(n):
+            if locked[k]:
+                phi_star[k] = phi_g
+                rot_star[k] = rot_now @ lock_rel[k]
+                w1[k] = g_wd[s] - c1 * phi_g
+                w3[k] = g_w[s] - c3 * phi_g
+            else:
+                w1[k], w3[k] = _offsets(h, coef, omega[k], omega_dot[k], pseudo[k])
+                phi_star[k] = h * omega[k] + 0.5 * h * h * pseudo[k]
+                expm_so3(phi_star[k], e3)
+                rot_star[k] = e3 @ rot[k]
+            left_jacobian(phi_star[k], lam[k])
+            if hinge_kind[k] == ELASTIC:
+                a1, a3 = _offsets(h, coef, defl_rate[k], defl_acc[k], defl_pseudo[k])
+                w1d[k] = a1 - c1 * defl[k]
+                w3d[k] = a3 - c3 * defl[k]
+        z_star[:, :] = z
+        z_star[0, 3:6] = phi_g
+        for k in range(n):
+            z_star[2 * k + 1, 3:6] = phi_star[k]
+            z_star[2 * k + 2, 3:6] = phi_star[k]
+        root_f[0:3] = g_acc[s]
+        root_f[3:6] = phi_g
+        for it in range(newton_max + 1):
+            _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
+                            rot_now, g_lam, g_w[s], rot_star, lam, phi_star, c1, c3, w1, w3,
+                            w1d, w3d, z_star, force[s], torque[s], False)
+            status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
+                            sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
+                            red_aq, z)
+            if status != 0:
+                out_info[0] = SINGULAR
+                out_info[1] = s
+                out_info[2] = status
+                return
+            change = 0.0
+            for k in range(n):
+                for i in range(3):
+                    change = max(change, abs(z[2 * k + 1, 3 + i] - phi_star[k, i]))
+            max_iter = max(max_iter, it)
+            if it == newton_max or change <= newton_tol:
+                break
+            z_star[:, :] = z
+            for k in range(n):
+                if not locked[k]:
+                    phi_star[k] = z[2 * k + 1, 3:6]
+                    expm_so3(phi_star[k], e3)
+                    rot_star[k] = e3 @ rot[k]
+                    left_jacobian(phi_star[k], lam[k])
+        if newton_max > 0 and newton_tol > 0.0 and change > newton_tol:
+            out_info[0] = NO_CONVERGENCE
+            out_info[1] = s
+            out_info[2] = newton_max
+            return
+        # update the histories
+        finite = True
+        for k in range(n):
+            if locked[k]:
+                rot[k] = rot_now @ lock_rel[k]
+                omega[k] = g_w[s]
+                omega_dot[k] = g_wd[s]
+                pseudo[k] = g_wd[s]
+            else:
+                phi = z[2 * k + 1, 3:6].copy()
+                _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
+                expm_so3(phi, e3)
+                rot[k] = e3 @ rot[k]
+            if hinge_kind[k] == ELASTIC:
+                d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - w1d[k]) / c1
+                x = d_new - defl[k]
+                _advance_history(h, coef, x, defl_rate[k], defl_acc[k], defl_pseudo[k])
+                defl[k] = d_new
+            for i in range(3):
+                if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
+                    finite = False
+        if not finite:
+            out_info[0] = NOT_FINITE
+            out_info[1] = s
+            return
+        if (s + 1) % record_every == 0:
+            rec_rot[n_rec] = rot
+            rec_omega[n_rec] = omega
+            rec_omega_dot[n_rec] = omega_dot
+            rec_z[n_rec] = z
+            rec_defl[n_rec] = defl
+            rec_defl_rate[n_rec] = defl_rate
+            n_rec += 1
+    out_info[0] = OK
+    out_info[1] = n_steps
+    out_info[2] = max_iter
+    out_info[3] = n_rec

@@ -1,0 +1,226 @@
+"""Assembly sweeps: solve one step's chain of affine transfers with its boundary conditions.
+
+Full-state sweep (docs/assembly.md).  Stations j = 0 .. 2n: station 0 is the ground, station
+2k+1 body k's input point, station 2k+2 its output point; element j joins station j to j+1.
+Each station's 12 entries are split into f (6) and e (6), carried as f = S e + P (the Riccati
+transform of Horner and Pilkey).  The split changes where the boundary makes it:
+  SPLIT_A  f = [a, m], e = [phi, q]   after a ball joint (m = 0 there)
+  SPLIT_B  f = [a, phi], e = [m, q]   from the ground (a and phi prescribed)
+  SPLIT_C  f = [m, q], e = [a, phi]   after a hinge whose loads are known (consistent start)
+Element kinds: TRANSFER (affine matrix), IDENTITY (fixed hinge), BALL (m = 0 inboard, outboard
+rotation free), LOCKED (inboard loads known, outboard motion free).
+
+Reduced sweeps (all ball joints): each body folds into a 6 x 7 map on [a; q; 1], solved either by
+Riccati (f = a, e = q) or by multiplying the maps out (direct).
+"""
+import numpy as np
+from numba import njit
+
+TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
+SPLIT_A, SPLIT_B, SPLIT_C = 0, 1, 2
+F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]], dtype=np.int64)
+E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)
+
+
+class SingularStepError(Exception):
+    pass
+
+
+@njit(cache=True)
+def _station_basis(split, s_mat, p_vec, basis, offset):
+    """z = basis e + offset for a station carried as f = S e + P."""
+    f_idx = F_IDX[split]
+    e_idx = E_IDX[split]
+    for r in range(12):
+        offset[r] = 0.0
+        for c in range(6):
+            basis[r, c] = 0.0
+    for r in range(6):
+        offset[f_idx[r]] = p_vec[r]
+        basis[e_idx[r], r] = 1.0
+        for c in range(6):
+            basis[f_idx[r], c] = s_mat[r, c]
+
+
+@njit(cache=True)
+def _moment_force_system(basis, offset, target):
+    """W e = rhs: the rows of z = basis e + offset that fix [m; q] = target."""
+    w = np.empty((6, 6))
+    rhs = np.empty(6)
+    for r in range(6):
+        rhs[r] = target[r] - offset[6 + r]
+        for c in range(6):
+            w[r, c] = basis[6 + r, c]
+    return w, rhs
+
+
+@njit(cache=True)
+def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec, g_mat, g_vec, z):
+    """Solve one step; returns 0, or j + 1 if element j (or the tip, j = n_el) is singular.
+
+    kind (n_el,), u (n_el, 12, 13): element transfers; known_loads (n_el, 12): for LOCKED
+    elements [m_in, q_in, m_out, q_out]; root_f: [a, phi] of the ground station.
+    Scratch: split, s_mat, p_vec (stations), t_inv, t_vec, g_mat, g_vec (elements).  Output z
+    (n_el + 1, 12): every station's state.
+    """
+    n_el = kind.shape[0]
+    basis = np.empty((12, 6))
+    offset = np.empty(12)
+    split[0] = SPLIT_B
+    s_mat[0, :, :] = 0.0
+    p_vec[0, :] = root_f
+    for j in range(n_el):
+        sp = split[j]
+        f_idx = F_IDX[sp]
+        e_idx = E_IDX[sp]
+        k = kind[j]
+        if k == IDENTITY:
+            split[j + 1] = sp
+            s_mat[j + 1] = s_mat[j]
+            p_vec[j + 1] = p_vec[j]
+        elif k == TRANSFER:
+            uf = np.empty((6, 12))
+            ue = np.empty((6, 12))
+            cf = np.empty(6)
+            ce = np.empty(6)
+            for r in range(6):
+                cf[r] = u[j, f_idx[r], 12]
+                ce[r] = u[j, e_idx[r], 12]
+                for c in range(6):
+                    uf[r, c] = u[j, f_idx[r], f_idx[c]]       # U_ff
+                    uf[r, 6 + c] = u[j, f_idx[r], e_idx[c]]   # U_fe
+                    ue[r, c] = u[j, e_idx[r], f_idx[c]]       # U_ef
+                    ue[r, 6 + c] = u[j, e_idx[r], e_idx[c]]   # U_ee
+            s = s_mat[j]
+            p = p_vec[j]
+            t = ue[:, :6] @ s + ue[:, 6:]
+            if abs(np.linalg.det(t)) == 0.0:
+                return j + 1
+            ti = np.linalg.inv(t)
+            tv = ue[:, :6] @ p + ce
+            s_new = (uf[:, :6] @ s + uf[:, 6:]) @ ti
+            split[j + 1] = sp
+            s_mat[j + 1] = s_new
+            p_vec[j + 1] = uf[:, :6] @ p + cf - s_new @ tv
+            t_inv[j] = ti
+            t_vec[j] = tv
+        else:
+            _station_basis(sp, s_mat[j], p_vec[j], basis, offset)
+            if k == BALL:
+                w, rhs = _moment_force_system(basis, offset, np.zeros(6))
+            else:
+                w, rhs = _moment_force_system(basis, offset, known_loads[j, 0:6])
+            if abs(np.linalg.det(w)) == 0.0:
+                return j + 1
+            wi = np.linalg.inv(w)
+            g_vec[j] = wi @ rhs
+            s_mat[j + 1, :, :] = 0.0
+            p_vec[j + 1, :] = 0.0
+            if k == BALL:
+                # inboard e = g + G q; outboard f = [a, m] = [(basis G) q + basis g + offset; 0]
+                g_mat[j] = wi[:, 3:6]
+                bg = basis @ g_mat[j]
+                bo = basis @ g_vec[j] + offset
+                split[j + 1] = SPLIT_A
+                s_mat[j + 1, 0:3, 3:6] = bg[0:3]
+                p_vec[j + 1, 0:3] = bo[0:3]
+            else:
+                g_mat[j, :, :] = 0.0
+                split[j + 1] = SPLIT_C
+                p_vec[j + 1] = known_loads[j, 6:12]
+    # free tip: m = 0, q = 0
+    _station_basis(split[n_el], s_mat[n_el], p_vec[n_el], basis, offset)
+    w, rhs = _moment_force_system(basis, offset, np.zeros(6))
+    if abs(np.linalg.det(w)) == 0.0:
+        return n_el + 1
+    e = np.linalg.solve(w, rhs)
+    z[n_el] = basis @ e + offset
+    for j in range(n_el - 1, -1, -1):
+        k = kind[j]
+        sp = split[j]
+        e_idx = E_IDX[sp]
+        e_out = np.empty(6)
+        for r in range(6):
+            e_out[r] = z[j + 1, E_IDX[split[j + 1]][r]]
+        if k == IDENTITY:
+            e = e_out
+        elif k == TRANSFER:
+            e = t_inv[j] @ (e_out - t_vec[j])
+        else:
+            e = g_vec[j] + g_mat[j] @ z[j + 1, 9:12]
+        _station_basis(sp, s_mat[j], p_vec[j], basis, offset)
+        z[j] = basis @ e + offset
+    return 0
+
+
+@njit(cache=True)
+def fold_ball_body(u, v, phi_map):
+    """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
+    phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
+    0 = U_ma a + U_mphi phi + U_mq q + u_m."""
+    cols = np.array([0, 1, 2, 9, 10, 11, 12])
+    ump = np.empty((3, 3))
+    rest = np.empty((3, 7))
+    for r in range(3):
+        for c in range(3):
+            ump[r, c] = u[6 + r, 3 + c]
+        for c in range(7):
+            rest[r, c] = u[6 + r, cols[c]]
+    phi_map[:, :] = -np.linalg.solve(ump, rest)
+    rows = np.array([0, 1, 2, 9, 10, 11])
+    for r in range(6):
+        for c in range(7):
+            s = u[rows[r], cols[c]]
+            for i in range(3):
+                s += u[rows[r], 3 + i] * phi_map[i, c]
+            v[r, c] = s
+
+
+@njit(cache=True)
+def riccati_reduced(v, a_root, s_mat, p_vec, t_inv, t_vec, aq):
+    """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output."""
+    n = v.shape[0]
+    s_mat[0, :, :] = 0.0
+    p_vec[0, :] = a_root
+    for k in range(n):
+        vaa = v[k, 0:3, 0:3]
+        vaq = v[k, 0:3, 3:6]
+        vqa = v[k, 3:6, 0:3]
+        vqq = v[k, 3:6, 3:6]
+        t = vqa @ s_mat[k] + vqq
+        if abs(np.linalg.det(t)) == 0.0:
+            return k + 1
+        ti = np.linalg.inv(t)
+        tv = vqa @ p_vec[k] + v[k, 3:6, 6]
+        s_new = (vaa @ s_mat[k] + vaq) @ ti
+        s_mat[k + 1] = s_new
+        p_vec[k + 1] = vaa @ p_vec[k] + v[k, 0:3, 6] - s_new @ tv
+        t_inv[k] = ti
+        t_vec[k] = tv
+    aq[n, 0:3] = p_vec[n]      # tip: q = 0
+    aq[n, 3:6] = 0.0
+    for k in range(n - 1, -1, -1):
+        q = t_inv[k] @ (aq[k + 1, 3:6] - t_vec[k])
+        aq[k, 3:6] = q
+        aq[k, 0:3] = s_mat[k] @ q + p_vec[k]
+    return 0
+
+
+@njit(cache=True)
+def direct_reduced(v, a_root, aq):
+    """Multiply the reduced maps out (the paper's way), solve q_0 from the free tip, q_N = 0,
+    and propagate forward.  Loses accuracy on long or stiff chains (docs/assembly.md)."""
+    n = v.shape[0]
+    prod = np.eye(7)
+    step = np.eye(7)
+    for k in range(n):
+        step[0:6, :] = v[k]
+        prod = step @ prod
+    pqq = prod[3:6, 3:6]
+    if abs(np.linalg.det(pqq)) == 0.0:
+        return n + 1
+    aq[0, 0:3] = a_root
+    aq[0, 3:6] = -np.linalg.solve(pqq, prod[3:6, 0:3] @ a_root + prod[3:6, 6])
+    for k in range(n):
+        aq[k + 1] = v[k, :, 0:6] @ aq[k] + v[k, :, 6]
+    return 0

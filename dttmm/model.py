@@ -1,0 +1,215 @@
+"""The chain description: built from elements, validated once, frozen into flat arrays."""
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from .elements import BALL, FIXED, BallJoint, ElasticHinge, FixedHinge, RigidBody
+from .elements._checks import finite_vector, rotation_matrix
+from .elements.hinges import HINGE_KIND_NAMES, pack_hinge
+from .elements.rigid_body import pack_body
+
+
+class PrescribedMotion:
+    """Prescribed motion of the ground frame (a driven hub), as functions of time.
+
+    Each argument is a function of t (or None for zero / identity): position, velocity and
+    acceleration of the ground point (world, m), rotation matrix of the ground frame, and its
+    world-frame angular velocity and angular acceleration.  Derivatives are given, not
+    differentiated numerically, so the solver sees the exact motion.
+    """
+
+    def __init__(self, position=None, velocity=None, acceleration=None,
+                 rotation=None, angular_velocity=None, angular_acceleration=None):
+        self._f = (position, velocity, acceleration, rotation, angular_velocity, angular_acceleration)
+        for name, f in zip(("position", "velocity", "acceleration", "rotation",
+                            "angular_velocity", "angular_acceleration"), self._f):
+            if f is not None and not callable(f):
+                raise ValueError(f"PrescribedMotion: {name} must be a function of time or None")
+
+    def __call__(self, t):
+        """(r, v, a, R, w, w_dot) at time t."""
+        r, v, a, rot, w, wd = self._f
+        zero = np.zeros(3)
+        return (zero if r is None else np.asarray(r(t), float),
+                zero if v is None else np.asarray(v(t), float),
+                zero if a is None else np.asarray(a(t), float),
+                np.eye(3) if rot is None else np.asarray(rot(t), float),
+                zero if w is None else np.asarray(w(t), float),
+                zero if wd is None else np.asarray(wd(t), float))
+
+    @classmethod
+    def spin_about_axis(cls, axis, angle, rate, acceleration, position=(0.0, 0.0, 0.0)):
+        """Rotation by angle(t) about a fixed world axis through a fixed point; rate and
+        acceleration are the first and second derivatives of angle(t)."""
+        n = np.asarray(axis, float)
+        n = n / np.linalg.norm(n)
+        k = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+        p = np.asarray(position, float)
+
+        def rotation(t):
+            th = angle(t)
+            return np.eye(3) + np.sin(th) * k + (1.0 - np.cos(th)) * k @ k
+
+        return cls(position=lambda t: p, rotation=rotation,
+                   angular_velocity=lambda t: rate(t) * n,
+                   angular_acceleration=lambda t: acceleration(t) * n)
+
+
+@dataclass(frozen=True)
+class Ground:
+    """Where the root hinge attaches: a fixed point and frame, or a prescribed motion."""
+    position: object = (0.0, 0.0, 0.0)
+    rotation: object = None
+    motion: Optional[PrescribedMotion] = None
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A frozen chain: flat float arrays for the kernels plus the description it came from.
+
+    Bodies are numbered 0..n-1 from the root; hinge k joins body k-1 (the ground for k = 0) to
+    body k.  The last body's output point is the free tip.
+    """
+    n_bodies: int
+    body_params: np.ndarray          # (n, BODY_PARAM_SIZE), see elements/rigid_body.py
+    hinge_kind: np.ndarray           # (n,) BALL / FIXED / ELASTIC
+    hinge_params: np.ndarray         # (n, HINGE_PARAM_SIZE), see elements/hinges.py
+    gravity: np.ndarray              # (3,) world, m/s^2
+    ground_position: np.ndarray      # (3,) at rest (motion is None) or at t = 0
+    ground_rotation: np.ndarray      # (3, 3)
+    ground_motion: Optional[PrescribedMotion]
+    initial_rotation: np.ndarray     # (n, 3, 3)
+    initial_angular_velocity: np.ndarray  # (n, 3) world
+    ground_locked: np.ndarray        # (n,) bool: rotation fixed to the ground frame by fixed hinges
+    forces: tuple                    # per body: None or f(t) -> world force at the mass centre
+    torques: tuple                   # per body: None or f(t) -> world torque
+    body_names: tuple
+    hinge_names: tuple
+    body_mass_center_inertia: np.ndarray  # (n, 3, 3) J_C in body axes (for energies)
+
+    @property
+    def all_ball(self):
+        """True when every hinge is a ball joint: the reduced [a; q] transfer applies."""
+        return bool(np.all(self.hinge_kind == BALL))
+
+    @property
+    def has_applied_loads(self):
+        return any(f is not None for f in self.forces + self.torques)
+
+    def ground_state(self, t):
+        """(r, v, a, R, w, w_dot) of the ground frame at time t."""
+        if self.ground_motion is None:
+            z = np.zeros(3)
+            return self.ground_position, z, z, self.ground_rotation, z, z
+        return self.ground_motion(t)
+
+
+def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground()) -> Model:
+    """Validate a chain described root to tip and freeze it into a Model.
+
+    elements alternates hinges and bodies, starting with the root hinge (which joins the first
+    body to the ground) and ending with the tip body, whose output point is free:
+        [hinge_0, body_0, hinge_1, body_1, ..., hinge_{n-1}, body_{n-1}]
+    """
+    elements = list(elements)
+    if len(elements) == 0:
+        raise ValueError("Chain: elements is empty; a chain needs at least a root hinge and a body")
+    if len(elements) % 2 != 0:
+        raise ValueError("Chain: elements must alternate hinge, body, hinge, body, ... and end with "
+                         f"a body; got {len(elements)} elements")
+    hinges, bodies = elements[0::2], elements[1::2]
+    for k, h in enumerate(hinges):
+        if not isinstance(h, (BallJoint, FixedHinge, ElasticHinge)):
+            raise ValueError(f"Chain: element {2 * k} must be a hinge (BallJoint, FixedHinge, "
+                             f"ElasticHinge), got {type(h).__name__}")
+    for k, b in enumerate(bodies):
+        if not isinstance(b, RigidBody):
+            raise ValueError(f"Chain: element {2 * k + 1} must be a body, got {type(b).__name__}")
+    g = finite_vector("Chain", "gravity", gravity)
+    if not isinstance(ground, Ground):
+        raise ValueError("Chain: ground must be a Ground")
+    if ground.motion is not None:
+        r_g, _, _, rot_g, w_g, _ = ground.motion(0.0)
+        r_g = finite_vector("Ground", "motion position(0)", r_g)
+        rot_g = rotation_matrix("Ground", "motion rotation(0)", rot_g)
+        w_g = finite_vector("Ground", "motion angular_velocity(0)", w_g)
+    else:
+        r_g = finite_vector("Ground", "position", ground.position)
+        rot_g = np.eye(3) if ground.rotation is None else rotation_matrix("Ground", "rotation",
+                                                                          ground.rotation)
+        w_g = np.zeros(3)
+
+    n = len(bodies)
+    bv = [b.validated(k) for k, b in enumerate(bodies)]
+    hv = [h.validated(k) for k, h in enumerate(hinges)]
+    kinds = np.array([h.kind for h in hinges], dtype=np.int64)
+
+    rotations = np.zeros((n, 3, 3))
+    omegas = np.zeros((n, 3))
+    locked = np.zeros(n, dtype=bool)
+    for k in range(n):
+        a_in = rot_g if k == 0 else rotations[k - 1]
+        w_in = w_g if k == 0 else omegas[k - 1]
+        locked[k] = kinds[k] == FIXED and (k == 0 or locked[k - 1])
+        if kinds[k] == FIXED:
+            rot, om = a_in @ hv[k]["rotation"], w_in
+            for key, implied in (("rotation", rot), ("omega", om)):
+                given = bv[k][key]
+                if given is not None and not np.allclose(given, implied, atol=1e-9):
+                    arg = "rotation" if key == "rotation" else "angular_velocity"
+                    raise ValueError(f"{bodies[k].label(k)}: {arg} contradicts the fixed hinge "
+                                     f"before it (the body moves with its inboard neighbour); "
+                                     f"leave it None")
+        else:
+            default = a_in @ hv[k]["rotation"] if kinds[k] != BALL else np.eye(3)
+            rot = default if bv[k]["rotation"] is None else bv[k]["rotation"]
+            om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
+        rotations[k], omegas[k] = rot, om
+
+    _check_ball_lookahead(bodies, bv, kinds)
+
+    return Model(
+        n_bodies=n,
+        body_params=np.array([pack_body(v) for v in bv]),
+        hinge_kind=kinds,
+        hinge_params=np.array([pack_hinge(v) for v in hv]),
+        gravity=g,
+        ground_position=r_g,
+        ground_rotation=rot_g,
+        ground_motion=ground.motion,
+        initial_rotation=rotations,
+        initial_angular_velocity=omegas,
+        ground_locked=locked,
+        forces=tuple(v["force"] for v in bv),
+        torques=tuple(v["torque"] for v in bv),
+        body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
+        hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
+        body_mass_center_inertia=np.array([v["j_c"] for v in bv]),
+    )
+
+
+def _check_ball_lookahead(bodies, bv, kinds):
+    """A body between two moment-free cuts (ball joints or the free tip) finds its rotation from
+    its own moment equation, whose matrix is -chi1 (J_I + M l_IO^ l_IC^) (docs/rigid_body.md).
+    If that matrix is singular (no inertia about the hinge-to-hinge axis) the step is undefined."""
+    n = len(bodies)
+    for k in range(n):
+        outboard_free = k == n - 1 or kinds[k + 1] == BALL
+        if kinds[k] != BALL or not outboard_free:
+            continue
+        v = bv[k]
+        l_io, l_ic = v["l_io"], v["l_ic"]
+        if k == n - 1:
+            mat = v["j_i"]       # free tip: no force at the output point
+        else:
+            mat = v["j_i"] + v["mass"] * _hat(l_io) @ _hat(l_ic)
+        s = np.linalg.svd(mat, compute_uv=False)
+        if s[-1] <= 1e-10 * max(s[0], 1e-300):
+            raise ValueError(f"{bodies[k].label(k)}: inertia: the ball-joint look-ahead is singular "
+                             f"(singular values of J_I + M l_IO^ l_IC^: {s}); the body has no "
+                             f"inertia about its hinge-to-hinge axis")
+
+
+def _hat(v):
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])

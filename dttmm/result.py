@@ -1,0 +1,149 @@
+"""One result object for every solver: recorded samples of the chain's state, and energies."""
+import csv
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
+from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
+
+
+@dataclass(frozen=True, eq=False)
+class Result:
+    """Samples of a run, one row per recorded time.  Shapes: T samples, n bodies.
+
+    position_input/_mass_center/_output (T, n, 3): world positions of each body's points, m.
+    rotation (T, n, 3, 3): body-to-world rotation matrices.
+    angular_velocity, angular_acceleration (T, n, 3): world frame.
+    force, moment (T, n, 3): what the inboard side exerts on each body at its input point
+        (moment about that point), world frame.
+    kinetic, potential (T,): J; potential counts gravity and the hinges' springs.
+    """
+    method: str
+    t: np.ndarray
+    position_input: np.ndarray
+    position_mass_center: np.ndarray
+    position_output: np.ndarray
+    rotation: np.ndarray
+    angular_velocity: np.ndarray
+    angular_acceleration: np.ndarray
+    force: np.ndarray
+    moment: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    wall_time: float = 0.0
+    n_steps: int = 0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def total_energy(self):
+        return self.kinetic + self.potential
+
+    @property
+    def quaternion(self):
+        """(T, n, 4) unit quaternions [w, x, y, z] with w >= 0."""
+        return rotation_to_quaternion(self.rotation)
+
+    @property
+    def xyz_angles(self):
+        """(T, n, 3) the paper's space-fixed x-y-z angles, A = Rz(tz) Ry(ty) Rx(tx); singular
+        (and then only one of tx, tz is defined) where ty = +-90 deg."""
+        return rotation_to_xyz_angles(self.rotation)
+
+    def save_npz(self, path):
+        np.savez_compressed(path, method=self.method, t=self.t, position_input=self.position_input,
+                            position_mass_center=self.position_mass_center,
+                            position_output=self.position_output, rotation=self.rotation,
+                            quaternion=self.quaternion, xyz_angles=self.xyz_angles,
+                            angular_velocity=self.angular_velocity,
+                            angular_acceleration=self.angular_acceleration,
+                            force=self.force, moment=self.moment, kinetic=self.kinetic,
+                            potential=self.potential, total_energy=self.total_energy)
+
+    def save_csv(self, path):
+        """t, then x,y,z of each body's output point, then the energies."""
+        n = self.position_output.shape[1]
+        head = ["t"] + [f"{c}{k + 1}" for k in range(n) for c in "xyz"] + [
+            "kinetic", "potential", "total_energy"]
+        rows = np.column_stack([self.t, self.position_output.reshape(len(self.t), -1),
+                                self.kinetic, self.potential, self.total_energy])
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(head)
+            w.writerows(rows.tolist())
+
+
+def rotation_to_quaternion(rot):
+    rot = np.asarray(rot)
+    shape = rot.shape[:-2]
+    r = rot.reshape(-1, 3, 3)
+    q = np.empty((len(r), 4))
+    for i, m in enumerate(r):
+        tr = m[0, 0] + m[1, 1] + m[2, 2]
+        k = np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]])
+        if k == 0:
+            s = 2.0 * np.sqrt(1.0 + tr)
+            q[i] = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+        elif k == 1:
+            s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+            q[i] = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+        elif k == 2:
+            s = 2.0 * np.sqrt(1.0 - m[0, 0] + m[1, 1] - m[2, 2])
+            q[i] = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+        else:
+            s = 2.0 * np.sqrt(1.0 - m[0, 0] - m[1, 1] + m[2, 2])
+            q[i] = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+        if q[i, 0] < 0:
+            q[i] = -q[i]
+    return q.reshape(shape + (4,))
+
+
+def rotation_to_xyz_angles(rot):
+    rot = np.asarray(rot)
+    ty = np.arcsin(np.clip(-rot[..., 2, 0], -1.0, 1.0))
+    tx = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
+    tz = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
+    return np.stack([tx, ty, tz], axis=-1)
+
+
+def _log_so3(r):
+    c = np.clip(0.5 * (np.trace(r) - 1.0), -1.0, 1.0)
+    th = np.arccos(c)
+    w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    if th < 1e-6:
+        return 0.5 * w
+    return th / (2.0 * np.sin(th)) * w
+
+
+def chain_energies(model, rotation, omega, r_in, v_in, deflection):
+    """Kinetic and potential energy of one state, from positions and velocities alone.
+
+    rotation (n,3,3), omega (n,3), r_in, v_in (n,3) input-point positions and velocities,
+    deflection (n,3): world deflection d of each elastic hinge (ignored for other hinges).
+    """
+    kinetic = potential = 0.0
+    ground_rot = model.ground_rotation
+    for k in range(model.n_bodies):
+        p = model.body_params[k]
+        a = rotation[k]
+        rho_c = a @ p[TO_MASS_CENTER]
+        v_c = v_in[k] + np.cross(omega[k], rho_c)
+        j_c = a @ model.body_mass_center_inertia[k] @ a.T
+        kinetic += 0.5 * p[MASS] * v_c @ v_c + 0.5 * omega[k] @ j_c @ omega[k]
+        potential -= p[MASS] * model.gravity @ (r_in[k] + rho_c)
+        if model.hinge_kind[k] == ELASTIC:
+            h = model.hinge_params[k]
+            a_in = ground_rot if k == 0 else rotation[k - 1]
+            d_b = a_in.T @ deflection[k]
+            psi = _log_so3(a_in.T @ a @ h[REST_ROTATION].reshape(3, 3).T)
+            potential += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
+            potential += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
+    return kinetic, potential
+
+
+def point_positions(model, rotation, r_in):
+    """Mass-centre and output-point positions from input points and rotations."""
+    p = model.body_params
+    r_c = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_MASS_CENTER])
+    r_o = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_OUTPUT])
+    return r_c, r_o

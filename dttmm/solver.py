@@ -1,0 +1,291 @@
+"""DT-TMM time integration of a chain: simulate(model, t_end, dt, ...) -> Result.
+
+The frozen Model is read-only; all mutable state lives in a Workspace allocated once per run.
+The time loop runs in numba (kernels/step.py) in chunks; Python only evaluates prescribed ground
+motion and applied loads for each chunk and collects the recorded samples.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .elements.hinges import ELASTIC
+from .elements.rigid_body import TO_OUTPUT
+from .kernels import step as kstep
+from .model import Model
+from .result import Result, chain_energies, point_positions
+
+METHODS = ("riccati", "direct")
+
+
+class DivergenceError(RuntimeError):
+    """A run that cannot go on: the step, the time and the cause are in the message."""
+
+    def __init__(self, step, t, cause):
+        super().__init__(f"DT-TMM run stopped at step {step} (t = {t:.6g} s): {cause}")
+        self.step = step
+        self.t = t
+        self.cause = cause
+
+
+@dataclass(frozen=True)
+class Integrator:
+    """Generalized-alpha coefficients (Chung and Hulbert 1993) from the spectral radius at
+    infinite frequency rho_inf; rho_inf = 1 is the trapezoidal Newmark rule (beta 1/4, gamma 1/2)."""
+    beta: float
+    gamma: float
+    alpha_m: float
+    alpha_f: float
+
+    @classmethod
+    def from_rho_inf(cls, rho_inf):
+        r = float(rho_inf)
+        if not (np.isfinite(r) and 0.0 <= r <= 1.0):
+            raise ValueError(f"simulate: rho_inf must be in [0, 1], got {rho_inf!r}")
+        alpha_m = (2.0 * r - 1.0) / (r + 1.0)
+        alpha_f = r / (r + 1.0)
+        gamma = 0.5 + alpha_f - alpha_m
+        return cls(beta=0.25 * (gamma + 0.5) ** 2, gamma=gamma, alpha_m=alpha_m, alpha_f=alpha_f)
+
+    def array(self):
+        return np.array([self.beta, self.gamma, self.alpha_m, self.alpha_f])
+
+
+class Workspace:
+    """Preallocated state and scratch of one run (nothing here is shared between runs)."""
+
+    def __init__(self, model: Model):
+        n = model.n_bodies
+        n_el, n_st = 2 * n, 2 * n + 1
+        self.rot = model.initial_rotation.copy()
+        self.omega = model.initial_angular_velocity.copy()
+        self.omega_dot = np.zeros((n, 3))
+        self.pseudo = np.zeros((n, 3))
+        self.defl = np.zeros((n, 3))
+        self.defl_rate = np.zeros((n, 3))
+        self.defl_acc = np.zeros((n, 3))
+        self.defl_pseudo = np.zeros((n, 3))
+        self.z = np.zeros((n_st, 12))
+        self.kind = np.zeros(n_el, dtype=np.int64)
+        self.u = np.zeros((n_el, 12, 13))
+        self.known_loads = np.zeros((n_el, 12))
+        self.sc_split = np.zeros(n_st, dtype=np.int64)
+        self.sc_s = np.zeros((n_st, 6, 6))
+        self.sc_p = np.zeros((n_st, 6))
+        self.sc_tinv = np.zeros((n_el, 6, 6))
+        self.sc_t = np.zeros((n_el, 6))
+        self.sc_g = np.zeros((n_el, 6, 3))
+        self.sc_gv = np.zeros((n_el, 6))
+        self.red_v = np.zeros((n, 6, 7))
+        self.red_phi = np.zeros((n, 3, 7))
+        self.red_s = np.zeros((n + 1, 3, 3))
+        self.red_p = np.zeros((n + 1, 3))
+        self.red_tinv = np.zeros((n, 3, 3))
+        self.red_t = np.zeros((n, 3))
+        self.red_aq = np.zeros((n + 1, 6))
+
+    def scratch(self):
+        return (self.kind, self.u, self.known_loads, self.sc_split, self.sc_s, self.sc_p,
+                self.sc_tinv, self.sc_t, self.sc_g, self.sc_gv, self.red_v, self.red_phi,
+                self.red_s, self.red_p, self.red_tinv, self.red_t, self.red_aq)
+
+
+def _check_positive(name, value):
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"simulate: {name} must be a number, got {value!r}") from None
+    if not np.isfinite(x) or x <= 0.0:
+        raise ValueError(f"simulate: {name} must be finite and > 0, got {value!r}")
+    return x
+
+
+def _mode(model, method, full_state):
+    if method not in METHODS:
+        raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
+    reduced = model.all_ball and not full_state
+    if method == "direct":
+        if not reduced:
+            raise ValueError("simulate: method='direct' is implemented for chains whose hinges are "
+                             "all ball joints (the reduced [a; q] transfer); use method='riccati'")
+        return kstep.DIRECT_REDUCED
+    return kstep.RICCATI_REDUCED if reduced else kstep.RICCATI_FULL
+
+
+def _loads(model, times):
+    """(steps, n, 3) applied forces and torques at the given times."""
+    n = model.n_bodies
+    force = np.zeros((len(times), n, 3))
+    torque = np.zeros((len(times), n, 3))
+    for k in range(n):
+        f, tq = model.forces[k], model.torques[k]
+        for i, t in enumerate(times):
+            if f is not None:
+                force[i, k] = f(t)
+            if tq is not None:
+                torque[i, k] = tq(t)
+    return force, torque
+
+
+def _ground(model, times):
+    """Ground acceleration, rotation, angular velocity and acceleration at the given times."""
+    m = len(times)
+    acc, w, wd = np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3))
+    rot = np.empty((m, 3, 3))
+    for i, t in enumerate(times):
+        _, _, acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
+    return acc, rot, w, wd
+
+
+def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_iterations=0,
+             newton_tol=1e-12, record_every=1, full_state=False) -> Result:
+    """Integrate the chain from t = 0 to t_end with steps dt by DT-TMM.
+
+    method: "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
+        transfer matrices out, as the paper does; ball-joint chains only).
+    rho_inf: generalized-alpha spectral radius at infinite frequency; 1 (default) is the
+        trapezoidal Newmark rule, smaller values add numerical damping of high frequencies.
+    newton_iterations: extra linearizations about the latest solution per step (0: one
+        linearization about the predictor, already second-order accurate); the step stops
+        iterating once the rotation update is below newton_tol (rad).
+    record_every: keep every k-th step (and t = 0).
+    full_state: use the 13-entry state even where the reduced [a; q] form applies.
+    """
+    if not isinstance(model, Model):
+        raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
+    t_end = _check_positive("t_end", t_end)
+    dt = _check_positive("dt", dt)
+    n_steps = int(round(t_end / dt))
+    if n_steps < 1:
+        raise ValueError(f"simulate: dt = {dt} is larger than t_end = {t_end}")
+    if int(record_every) != record_every or record_every < 1:
+        raise ValueError(f"simulate: record_every must be an integer >= 1, got {record_every!r}")
+    record_every = int(record_every)
+    if int(newton_iterations) != newton_iterations or newton_iterations < 0:
+        raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
+                         f"got {newton_iterations!r}")
+    newton_tol = float(newton_tol)
+    mode = _mode(model, method, full_state)
+    coef = Integrator.from_rho_inf(rho_inf).array()
+
+    ws = Workspace(model)
+    n = model.n_bodies
+    lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
+    params = (model.body_params, model.hinge_kind, model.hinge_params, model.gravity)
+
+    wall0 = time.perf_counter()
+    g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
+    force, torque = _loads(model, [0.0])
+    status = kstep.initial_accelerations(mode, *params, g_acc[0], g_rot[0], g_w[0], g_wd[0],
+                                         force[0], torque[0], ws.rot, ws.omega, ws.defl,
+                                         ws.defl_rate, *ws.scratch(), ws.z)
+    if status != 0:
+        raise DivergenceError(0, 0.0, _singular_cause(model, status, "consistent start"))
+    for k in range(n):
+        ws.omega_dot[k] = g_wd[0] if model.ground_locked[k] else ws.z[2 * k + 1, 3:6]
+        if model.hinge_kind[k] == ELASTIC:
+            ws.defl_acc[k] = ws.z[2 * k + 1, 0:3] - ws.z[2 * k, 0:3]
+    ws.pseudo[:] = ws.omega_dot
+    ws.defl_pseudo[:] = ws.defl_acc
+    ws.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
+
+    samples = [_sample(ws)]
+    sample_steps = [0]
+    chunk = record_every * max(1, 1000 // record_every)
+    static_ground = model.ground_motion is None
+    if static_ground:
+        g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
+    no_loads = not model.has_applied_loads
+    if no_loads:
+        force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
+    n_rec_max = chunk // record_every
+    rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
+               omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
+               defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)))
+    info = np.zeros(4, dtype=np.int64)
+    max_newton = 0
+    done = 0
+    while done < n_steps:
+        m = min(chunk, n_steps - done)
+        times = (done + np.arange(m + 1)) * dt
+        if not static_ground:
+            g_acc, g_rot, g_w, g_wd = _ground(model, times)
+            g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
+        if not no_loads:
+            force, torque = _loads(model, times[1:])
+        kstep.advance(mode, dt, coef, int(newton_iterations), newton_tol, *params,
+                      model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m], g_wd[:m],
+                      force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot, ws.pseudo, ws.defl,
+                      ws.defl_rate, ws.defl_acc, ws.defl_pseudo, ws.z, *ws.scratch(),
+                      record_every, rec["rot"], rec["omega"], rec["omega_dot"], rec["z"],
+                      rec["defl"], rec["defl_rate"], info)
+        if info[0] != kstep.OK:
+            step = done + int(info[1]) + 1
+            raise DivergenceError(step, step * dt, _failure_cause(model, info))
+        for i in range(int(info[3])):
+            samples.append({key: rec[key][i].copy() for key in rec})
+            sample_steps.append(done + (i + 1) * record_every)
+        max_newton = max(max_newton, int(info[2]))
+        done += m
+    wall = time.perf_counter() - wall0
+    t = np.array(sample_steps) * dt
+    return _result(model, t, samples, wall, n_steps,
+                   dict(mode=["riccati-full", "riccati-reduced", "direct-reduced"][mode],
+                        dt=dt, rho_inf=rho_inf, newton_iterations_used=max_newton))
+
+
+def _sample(ws):
+    return dict(rot=ws.rot.copy(), omega=ws.omega.copy(), omega_dot=ws.omega_dot.copy(),
+                z=ws.z.copy(), defl=ws.defl.copy(), defl_rate=ws.defl_rate.copy())
+
+
+def _singular_cause(model, status, where):
+    j = status - 1
+    n_el = 2 * model.n_bodies
+    if j >= n_el:
+        return f"{where}: the boundary equations at the free tip are singular"
+    k = j // 2
+    what = f"hinge '{model.hinge_names[k]}'" if j % 2 == 0 else f"body '{model.body_names[k]}'"
+    return f"{where}: the transfer at {what} is singular"
+
+
+def _failure_cause(model, info):
+    code = int(info[0])
+    if code == kstep.SINGULAR:
+        return _singular_cause(model, int(info[2]), "step")
+    if code == kstep.NOT_FINITE:
+        return ("the state became NaN or infinite (the step is too large for the motion, or the "
+                "model is unstable)")
+    return f"Newton iterations did not converge in {int(info[2])} iterations"
+
+
+def _result(model, t, samples, wall, n_steps, info):
+    n = model.n_bodies
+    m = len(samples)
+    rot = np.array([s["rot"] for s in samples])
+    omega = np.array([s["omega"] for s in samples])
+    z = np.array([s["z"] for s in samples])
+    defl = np.array([s["defl"] for s in samples])
+    defl_rate = np.array([s["defl_rate"] for s in samples])
+    r_in = np.empty((m, n, 3))
+    v_in = np.empty((m, n, 3))
+    l_io = model.body_params[:, TO_OUTPUT]
+    for i, ti in enumerate(t):
+        r_g, v_g = model.ground_state(ti)[:2]
+        r_prev, v_prev = r_g, v_g
+        for k in range(n):
+            r_in[i, k] = r_prev + defl[i, k]
+            v_in[i, k] = v_prev + defl_rate[i, k]
+            rho = rot[i, k] @ l_io[k]
+            r_prev = r_in[i, k] + rho
+            v_prev = v_in[i, k] + np.cross(omega[i, k], rho)
+    r_c, r_o = point_positions(model, rot, r_in)
+    energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i])
+                         for i in range(m)])
+    inputs = 2 * np.arange(n) + 1
+    return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
+                  position_output=r_o, rotation=rot, angular_velocity=omega,
+                  angular_acceleration=np.array([s["omega_dot"] for s in samples]),
+                  force=z[:, inputs, 9:12], moment=z[:, inputs, 6:9],
+                  kinetic=energies[:, 0], potential=energies[:, 1], wall_time=wall,
+                  n_steps=n_steps, info=dict(info, velocity_input=v_in))
