@@ -34,6 +34,7 @@ class Result:
     wall_time: float = 0.0
     n_steps: int = 0
     info: dict = field(default_factory=dict)
+    velocity_input: np.ndarray = None      # (T, n, 3) world velocity of each input point
 
     @property
     def total_energy(self):
@@ -71,6 +72,18 @@ class Result:
             w = csv.writer(fh)
             w.writerow(head)
             w.writerows(rows.tolist())
+
+
+def angular_momentum(model, result, point=(0.0, 0.0, 0.0)):
+    """(T, 3) world angular momentum of the chain about a fixed point, from a result's state."""
+    p = model.body_params
+    rot = result.rotation
+    rho_c = np.einsum("tkij,kj->tki", rot, p[:, TO_MASS_CENTER])
+    v_c = result.velocity_input + np.cross(result.angular_velocity, rho_c)
+    r_c = result.position_input + rho_c - np.asarray(point, float)
+    j_c = np.einsum("tkij,kjl,tkml->tkim", rot, model.body_mass_center_inertia, rot)
+    spin = np.einsum("tkij,tkj->tki", j_c, result.angular_velocity)
+    return np.sum(p[:, MASS][None, :, None] * np.cross(r_c, v_c) + spin, axis=1)
 
 
 def rotation_to_quaternion(rot):

@@ -288,4 +288,4 @@ def _result(model, t, samples, wall, n_steps, info):
                   angular_acceleration=np.array([s["omega_dot"] for s in samples]),
                   force=z[:, inputs, 9:12], moment=z[:, inputs, 6:9],
                   kinetic=energies[:, 0], potential=energies[:, 1], wall_time=wall,
-                  n_steps=n_steps, info=dict(info, velocity_input=v_in))
+                  n_steps=n_steps, info=info, velocity_input=v_in)

@@ -217,6 +217,10 @@ def advance(mode, h, coef, newton_max, newton_tol,
             _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                             rot_now, g_lam, g_w[s], rot_star, lam, phi_star, c1, c3, w1, w3,
                             w1d, w3d, z_star, force[s], torque[s], False)
+            if not np.all(np.isfinite(u)):
+                out_info[0] = NOT_FINITE
+                out_info[1] = s
+                return
             status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
                             sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
                             red_aq, z)

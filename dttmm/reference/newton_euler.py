@@ -272,7 +272,7 @@ def _assemble(rot, omega, defl, q_el, m_el, body_params, hinge_kind, f_col, m_co
             arm = rho_o + defl[k + 1]
             if hinge_kind[k + 1] == ELASTIC:
                 bn -= q_el[k + 1]
-                be -= m_el[k + 1] + _cross(rho_o, q_el[k + 1])
+                be -= m_el[k + 1] + _cross(arm, q_el[k + 1])
             else:
                 c = f_col[k + 1]
                 ha = _hat(arm)

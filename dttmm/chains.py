@@ -1,0 +1,24 @@
+"""Ready-made chains used by the examples, tests and benchmarks."""
+import numpy as np
+
+from .elements import BallJoint, RigidBody
+from .model import build_chain
+
+
+def unit_link(**kwargs):
+    """The paper's 1 m, 1 kg link: mass centre at [0.5, 0, 0], output point at [1, 0, 0] m,
+    inertia about the input point diag(1/6, 5/12, 5/12) kg m^2 (a uniform 1 m cube)."""
+    return RigidBody(mass=1.0, inertia=[1.0 / 6.0, 5.0 / 12.0, 5.0 / 12.0], inertia_about="input",
+                     to_mass_center=[0.5, 0.0, 0.0], to_output=[1.0, 0.0, 0.0], **kwargs)
+
+
+def rigid_chain(n_links, gravity=(0.0, -9.81, 0.0), tip_angular_velocity=(0.0, 0.1, 0.0)):
+    """n_links unit links joined by ball-and-socket hinges, link 1 to the ground at the origin,
+    all along +x at rest except the last, which spins at tip_angular_velocity."""
+    if int(n_links) != n_links or n_links < 1:
+        raise ValueError(f"rigid_chain: n_links must be an integer >= 1, got {n_links!r}")
+    elements = []
+    for k in range(int(n_links)):
+        w = np.asarray(tip_angular_velocity, float) if k == n_links - 1 else None
+        elements += [BallJoint(), unit_link(name=f"link{k + 1}", angular_velocity=w)]
+    return build_chain(elements, gravity=gravity)

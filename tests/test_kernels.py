@@ -1,0 +1,117 @@
+"""Each kernel against a plain-numpy (or scipy) statement of what it computes."""
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.spatial.transform import Rotation
+
+from dttmm.kernels.body import rigid_body_transfer
+from dttmm.kernels.hinge import elastic_hinge_loads, elastic_hinge_transfer
+from dttmm.kernels.so3 import expm_so3, hat, left_jacobian, log_so3
+
+rng = np.random.default_rng(7)
+
+
+def skew(v):
+    return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+
+@pytest.mark.parametrize("scale", [1e-9, 1e-3, 0.5, 2.5])
+def test_so3_kernels_match_scipy(scale):
+    phi = rng.normal(size=3) * scale
+    out = np.empty((3, 3))
+    hat(phi, out)
+    assert np.allclose(out, skew(phi))
+    expm_so3(phi, out)
+    assert np.allclose(out, expm(skew(phi)), atol=1e-15)
+    back = np.empty(3)
+    log_so3(out, back)
+    assert np.allclose(back, Rotation.from_matrix(out).as_rotvec(), atol=1e-12)
+    # left Jacobian: exp((phi + e)^) = exp((J_l e)^) exp(phi^) to first order in e
+    left_jacobian(phi, out)
+    eps = 1e-6
+    for i in range(3):
+        e = np.zeros(3)
+        e[i] = eps
+        d = expm(skew(phi + e)) @ expm(skew(phi)).T
+        w = np.array([d[2, 1] - d[1, 2], d[0, 2] - d[2, 0], d[1, 0] - d[0, 1]]) / 2
+        assert np.allclose(w / eps, out[:, i], atol=1e-6)
+
+
+def body_outputs(p, rot_prev, c1, c3, w1, w3, z, load, torque):
+    """The rigid body's nonlinear transfer, written out with numpy (docs/rigid_body.md)."""
+    mass, l_ic, l_io, j_b = p[0], p[1:4], p[4:7], p[7:16].reshape(3, 3)
+    a_i, phi, m_i, q_i = z[0:3], z[3:6], z[6:9], z[9:12]
+    rot = expm(skew(phi)) @ rot_prev
+    wd, w = c1 * phi + w1, c3 * phi + w3
+    rho, rho_c = rot @ l_io, rot @ l_ic
+    j = rot @ j_b @ rot.T
+    a_o = a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho))
+    a_c = a_i + np.cross(wd, rho_c) + np.cross(w, np.cross(w, rho_c))
+    q_o = q_i + load - mass * a_c
+    m_o = (m_i - np.cross(rho, q_o) + np.cross(rho_c, load) + torque
+           - (j @ wd + np.cross(w, j @ w) + mass * np.cross(rho_c, a_i)))
+    return np.concatenate([a_o, phi, m_o, q_o])
+
+
+def test_rigid_body_transfer_is_the_exact_linearization():
+    j_c = np.array([[0.3, 0.02, -0.01], [0.02, 0.5, 0.03], [-0.01, 0.03, 0.4]])
+    l_ic, l_io = np.array([0.4, 0.1, -0.05]), np.array([1.0, 0.2, 0.1])
+    mass = 2.0
+    j_i = j_c + mass * (l_ic @ l_ic * np.eye(3) - np.outer(l_ic, l_ic))
+    p = np.concatenate([[mass], l_ic, l_io, j_i.ravel()])
+    rot_prev = Rotation.from_rotvec([0.3, -0.7, 0.2]).as_matrix()
+    h = 1e-3
+    c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
+    w1, w3 = rng.normal(size=3) * 10, rng.normal(size=3)
+    load, torque = rng.normal(size=3), rng.normal(size=3)
+    z_star = np.concatenate([rng.normal(size=3), rng.normal(size=3) * 1e-3, rng.normal(size=3),
+                             rng.normal(size=3)])
+    u = np.empty((12, 13))
+    rot_star = expm(skew(z_star[3:6])) @ rot_prev
+    lam = np.empty((3, 3))
+    left_jacobian(z_star[3:6], lam)
+    rigid_body_transfer(p, rot_star, lam, c1, c3, w1, w3, z_star, load, torque, u)
+    exact = body_outputs(p, rot_prev, c1, c3, w1, w3, z_star, load, torque)
+    assert np.allclose(u[:, :12] @ z_star + u[:, 12], exact, rtol=1e-12, atol=1e-9)
+    # Jacobian by central differences, column by column
+    for c in range(12):
+        e = np.zeros(12)
+        step = 1e-7 if 3 <= c < 6 else 1e-4
+        e[c] = step
+        fd = (body_outputs(p, rot_prev, c1, c3, w1, w3, z_star + e, load, torque)
+              - body_outputs(p, rot_prev, c1, c3, w1, w3, z_star - e, load, torque)) / (2 * step)
+        scale = max(1.0, np.abs(fd).max())
+        assert np.allclose(u[:, c], fd, atol=2e-6 * scale), f"column {c}"
+
+
+def test_elastic_hinge_transfer_reproduces_the_spring_law():
+    """At the linearization point the hinge's affine map gives the outboard state that satisfies
+    the spring-damper law written out independently."""
+    k_t, c_t = np.diag([1e4, 2e4, 3e4]), np.diag([10.0, 20.0, 5.0])
+    k_r, c_r = np.diag([500.0, 600.0, 700.0]), np.diag([1.0, 2.0, 3.0])
+    r0 = Rotation.from_rotvec([0.1, 0.2, -0.1]).as_matrix()
+    hrow = np.concatenate([r0.ravel(), k_t.ravel(), c_t.ravel(), k_r.ravel(), c_r.ravel()])
+    rot_in = Rotation.from_rotvec([0.2, 0.1, 0.3]).as_matrix()
+    psi_true = np.array([0.01, -0.02, 0.015])
+    rot_out = rot_in @ expm(skew(psi_true)) @ r0
+    w_in, w_out = np.array([0.1, 0.2, 0.3]), np.array([0.2, 0.1, 0.4])
+    d, d_dot = np.array([1e-4, -2e-4, 3e-4]), np.array([1e-3, 0.0, -1e-3])
+    q, m_in, m_out = elastic_hinge_loads(hrow, rot_in, w_in, rot_out, w_out, d, d_dot)
+    assert np.allclose(q, -rot_in @ (k_t @ rot_in.T @ d + c_t @ rot_in.T @ d_dot))
+    assert np.allclose(m_out, -rot_in @ (k_r @ psi_true + c_r @ rot_in.T @ (w_out - w_in)))
+    assert np.allclose(m_in, m_out + np.cross(d, q))
+    # integrator coefficients chosen so that this state is the step's outcome
+    c1, c3 = 4e6, 1e3
+    w3d = d_dot - c3 * d
+    w1d = 5.0 - c1 * d
+    z_in = np.concatenate([np.ones(3), np.zeros(3), m_in, q])
+    lam = np.eye(3)
+    u = np.empty((12, 13))
+    phi_out_star = np.array([0.3, 0.2, 0.1])
+    elastic_hinge_transfer(hrow, rot_in, lam, w_in, rot_out, lam, w_out, phi_out_star,
+                           c1, c3, w1d, w3d, z_in, u)
+    z_out = u[:, :12] @ z_in + u[:, 12]
+    assert np.allclose(z_out[9:12], q)
+    assert np.allclose(z_out[6:9], m_out, atol=1e-12)
+    assert np.allclose(z_out[0:3], 1.0 + c1 * d + w1d)          # a_out = a_in + d_ddot
+    assert np.allclose(z_out[3:6], phi_out_star, atol=1e-10)    # the guess satisfies the law

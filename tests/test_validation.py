@@ -1,0 +1,111 @@
+"""Bad input raises ValueError at build time, naming the element and the argument; a diverging
+run stops with the step and the cause."""
+import numpy as np
+import pytest
+
+from dttmm import (BallJoint, DivergenceError, ElasticHinge, FixedHinge, RigidBody, build_chain,
+                   simulate)
+from dttmm.chains import rigid_chain, unit_link
+
+
+def body(**kw):
+    args = dict(mass=1.0, inertia=[0.1, 0.2, 0.2], inertia_about="mass_center",
+                to_mass_center=[0.5, 0, 0], to_output=[1, 0, 0])
+    args.update(kw)
+    return RigidBody(**args)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(mass=0.0), ["body 1", "mass"]),
+    (dict(mass=-2.0), ["body 1", "mass"]),
+    (dict(mass=float("nan")), ["body 1", "mass"]),
+    (dict(inertia=[[0.1, 0.05, 0], [0.0, 0.2, 0], [0, 0, 0.2]]), ["body 1", "inertia", "symmetric"]),
+    (dict(inertia=[0.1, -0.2, 0.2]), ["body 1", "inertia", "positive definite"]),
+    (dict(inertia=[0.1, 0.1, 0.5]), ["body 1", "inertia", "triangle"]),
+    (dict(inertia=[0.1, np.inf, 0.2]), ["body 1", "inertia"]),
+    (dict(to_output=[1, np.nan, 0]), ["body 1", "to_output"]),
+    (dict(to_mass_center=[1, 2]), ["body 1", "to_mass_center"]),
+    (dict(inertia_about="centroid"), ["body 1", "inertia_about"]),
+    (dict(angular_velocity=[0, np.nan, 0]), ["body 1", "angular_velocity"]),
+    (dict(rotation=np.diag([1.0, 1.0, -1.0])), ["body 1", "rotation"]),
+    (dict(force=lambda t: [0.0, np.nan, 0.0]), ["body 1", "force"]),
+])
+def test_bad_body_parameters_name_body_and_argument(kwargs, words):
+    with pytest.raises(ValueError) as err:
+        build_chain([BallJoint(), body(), BallJoint(), body(**kwargs)])
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_named_body_is_named():
+    with pytest.raises(ValueError, match="'forearm'.*mass"):
+        build_chain([BallJoint(), body(name="forearm", mass=0)])
+
+
+@pytest.mark.parametrize("hinge, words", [
+    (ElasticHinge(translational_stiffness=-1.0, rotational_stiffness=1.0),
+     ["ElasticHinge", "hinge 1", "translational_stiffness"]),
+    (ElasticHinge(translational_stiffness=1.0, rotational_stiffness=[1, 0, 1]),
+     ["ElasticHinge", "hinge 1", "rotational_stiffness"]),
+    (ElasticHinge(1.0, 1.0, rotational_damping=-1.0), ["hinge 1", "rotational_damping"]),
+    (ElasticHinge(1.0, np.nan), ["hinge 1", "rotational_stiffness"]),
+    (FixedHinge(rotation=np.ones((3, 3))), ["FixedHinge", "hinge 1", "rotation"]),
+])
+def test_bad_hinge_parameters(hinge, words):
+    with pytest.raises(ValueError) as err:
+        build_chain([BallJoint(), body(), hinge, body()])
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_empty_chain_and_bad_structure():
+    with pytest.raises(ValueError, match="empty"):
+        build_chain([])
+    with pytest.raises(ValueError, match="alternate"):
+        build_chain([BallJoint(), body(), BallJoint()])
+    with pytest.raises(ValueError, match="element 0 must be a hinge"):
+        build_chain([body(), BallJoint()])
+    with pytest.raises(ValueError, match="gravity"):
+        build_chain([BallJoint(), body()], gravity=[0, np.inf, 0])
+
+
+def test_singular_ball_joint_lookahead_is_caught_at_build_time():
+    # between two ball joints the body's moment equation has the matrix J_I + M l_IO^ l_IC^;
+    # with l_IC = [0.5, 0, 0], l_IO = [1, 0, 0] it is J_C + M diag(0, -1/4, -1/4): singular when
+    # J_C,yy = M / 4 (the output point is the centre of percussion for the input point)
+    rod = RigidBody(mass=1.0, inertia=[0.1, 0.25, 0.2], inertia_about="mass_center",
+                    to_mass_center=[0.5, 0, 0], to_output=[1, 0, 0], name="rod")
+    with pytest.raises(ValueError, match="'rod'.*look-ahead is singular"):
+        build_chain([BallJoint(), unit_link(), BallJoint(), rod, BallJoint(), unit_link()])
+
+
+def test_fixed_hinge_contradiction():
+    with pytest.raises(ValueError, match="body 1.*angular_velocity.*fixed hinge"):
+        build_chain([BallJoint(), body(), FixedHinge(), body(angular_velocity=[1, 0, 0])])
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    (dict(dt=0.0), "dt"), (dict(dt=-1e-3), "dt"), (dict(dt=np.nan), "dt"),
+    (dict(t_end=0.0), "t_end"), (dict(method="euler"), "method"), (dict(rho_inf=1.5), "rho_inf"),
+    (dict(record_every=0), "record_every"), (dict(newton_iterations=-1), "newton_iterations"),
+])
+def test_bad_solver_arguments(kwargs, word):
+    args = dict(t_end=0.1, dt=1e-3)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=word):
+        simulate(rigid_chain(2), args.pop("t_end"), args.pop("dt"), **args)
+
+
+def test_direct_mode_says_where_it_applies():
+    model = build_chain([BallJoint(), body(), FixedHinge(), body()])
+    with pytest.raises(ValueError, match="direct"):
+        simulate(model, 0.1, 1e-3, method="direct")
+
+
+def test_diverging_run_stops_with_step_and_cause():
+    """A torque growing without bound makes the chain spin up until the state overflows."""
+    spinning = unit_link(torque=lambda t: [0.0, 0.0, 1e300 * t])
+    with pytest.raises(DivergenceError) as err:
+        simulate(build_chain([BallJoint(), spinning]), 1.0, 1e-2)
+    assert "step" in str(err.value) and "NaN or infinite" in str(err.value)
+    assert err.value.step >= 1
