@@ -1,0 +1,94 @@
+"""DT-TMM against the independent Newton-Euler reference: order, accuracy, long runs."""
+import numpy as np
+import pytest
+from helpers import fitted_order
+
+from dttmm import BallJoint, build_chain, simulate
+from dttmm.chains import rigid_chain, unit_link
+from dttmm.reference import simulate_reference
+
+T_END = 2.0
+SAMPLE = 0.01          # compare on a 10 ms grid
+DTS = [4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4]
+
+
+def reference_on_grid(model, t_end, rtol=1e-12, atol=1e-12):
+    t = np.arange(int(round(t_end / SAMPLE)) + 1) * SAMPLE
+    return simulate_reference(model, t_end, method="DOP853", rtol=rtol, atol=atol, t_eval=t)
+
+
+def position_error(model, ref, dt, **kw):
+    res = simulate(model, ref.t[-1], dt, record_every=int(round(SAMPLE / dt)), **kw)
+    assert np.allclose(res.t, ref.t)
+    return np.abs(res.position_output - ref.position_output).max(), res
+
+
+@pytest.fixture(scope="module", params=[3, 10])
+def chain_and_reference(request):
+    model = rigid_chain(request.param)
+    return request.param, model, reference_on_grid(model, T_END)
+
+
+def test_second_order_convergence_and_accuracy(chain_and_reference):
+    n, model, ref = chain_and_reference
+    errors = [position_error(model, ref, dt)[0] for dt in DTS]
+    order = fitted_order(DTS, errors)
+    fine, _ = position_error(model, ref, 1e-4)
+    print(f"N={n}: errors {['%.2e' % e for e in errors]}, order {order:.3f}, "
+          f"error at dt=1e-4 {fine:.2e} m")
+    assert order == pytest.approx(2.0, abs=0.2)
+    assert fine <= 2e-6
+
+
+def test_direct_and_riccati_agree():
+    model = rigid_chain(3)
+    a = simulate(model, T_END, 1e-3, method="riccati", record_every=10)
+    b = simulate(model, T_END, 1e-3, method="direct", record_every=10)
+    c = simulate(model, T_END, 1e-3, method="riccati", full_state=True, record_every=10)
+    assert np.abs(a.position_output - b.position_output).max() < 1e-9
+    assert np.abs(a.position_output - c.position_output).max() < 1e-9
+
+
+def falling_from_upright():
+    """Two links standing up (body x along world +y), leaning 0.1 rad towards +z, falling in 3D:
+    the links' x axes pass through world z, where the x-y-z angle theta_y is -90 deg."""
+    c, s = np.cos(0.1), np.sin(0.1)
+    up = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    lean = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])      # about world x: +y tilts to +z
+    rot = lean @ up
+    return build_chain([BallJoint(), unit_link(rotation=rot, angular_velocity=[0.3, 0.0, 0.01]),
+                        BallJoint(), unit_link(rotation=rot)])
+
+
+def test_order_through_the_xyz_angle_singularity():
+    model = falling_from_upright()
+    ref = reference_on_grid(model, 1.5)
+    theta_y = np.degrees(ref.xyz_angles[:, :, 1])
+    assert np.abs(np.abs(theta_y) - 90.0).min() < 1.0        # the motion does pass through +-90
+    dts = DTS[1:]
+    errors = [position_error(model, ref, dt)[0] for dt in dts]
+    order = fitted_order(dts, errors)
+    print(f"through theta_y = 90 deg: errors {['%.2e' % e for e in errors]}, order {order:.3f}")
+    assert order == pytest.approx(2.0, abs=0.2)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n_links", [3, 10])
+def test_long_runs_stay_bounded(n_links):
+    """60 s at dt = 1e-3 and 1e-4: no growing oscillation (the largest angular acceleration stays
+    within 1.5x of the reference's) and the energy stays within 1e-4 of the largest kinetic
+    energy."""
+    model = rigid_chain(n_links)
+    t_end = 60.0
+    ref = simulate_reference(model, t_end, method="DOP853", rtol=1e-9, atol=1e-11,
+                             t_eval=np.arange(0, t_end + 1e-9, 0.005))
+    ref_peak = np.abs(ref.angular_acceleration).max()
+    for dt in (1e-3, 1e-4):
+        res = simulate(model, t_end, dt, record_every=int(round(0.005 / dt)))
+        peak = np.abs(res.angular_acceleration).max()
+        e = res.total_energy
+        drift = np.abs(e - e[0]).max() / res.kinetic.max()
+        print(f"N={n_links} dt={dt:g}: peak angular acceleration {peak:.3g} "
+              f"(reference {ref_peak:.3g}), energy drift {drift:.2e}")
+        assert peak < 1.5 * ref_peak
+        assert drift < 1e-4
