@@ -120,22 +120,21 @@ def rotation_to_xyz_angles(rot):
 
 
 def _log_so3(r):
-    c = np.clip(0.5 * (np.trace(r) - 1.0), -1.0, 1.0)
-    th = np.arccos(c)
-    w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-    if th < 1e-6:
-        return 0.5 * w
-    return th / (2.0 * np.sin(th)) * w
+    """Rotation vector of r, through the quaternion (accurate at every angle)."""
+    w, x, y, z = rotation_to_quaternion(r)
+    s = np.sqrt(x * x + y * y + z * z)
+    return 2.0 * np.arctan2(s, w) / s * np.array([x, y, z]) if s > 1e-300 else np.zeros(3)
 
 
-def chain_energies(model, rotation, omega, r_in, v_in, deflection):
+def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None):
     """Kinetic and potential energy of one state, from positions and velocities alone.
 
     rotation (n,3,3), omega (n,3), r_in, v_in (n,3) input-point positions and velocities,
-    deflection (n,3): world deflection d of each elastic hinge (ignored for other hinges).
+    deflection (n,3): world deflection d of each elastic hinge (ignored for other hinges),
+    ground_rotation: the ground frame at this time (default: the model's, at rest or t = 0).
     """
     kinetic = potential = 0.0
-    ground_rot = model.ground_rotation
+    ground_rot = model.ground_rotation if ground_rotation is None else ground_rotation
     for k in range(model.n_bodies):
         p = model.body_params[k]
         a = rotation[k]

@@ -280,8 +280,9 @@ def _result(model, t, samples, wall, n_steps, info):
             r_prev = r_in[i, k] + rho
             v_prev = v_in[i, k] + np.cross(omega[i, k], rho)
     r_c, r_o = point_positions(model, rot, r_in)
-    energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i])
-                         for i in range(m)])
+    energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i],
+                                        ground_rotation=model.ground_state(ti)[3])
+                         for i, ti in enumerate(t)])
     inputs = 2 * np.arange(n) + 1
     return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
                   position_output=r_o, rotation=rot, angular_velocity=omega,

@@ -31,7 +31,6 @@ Elastic hinges add no rows: d_k'' = a_k - a_out_{k-1}.
 The right-hand side is numba-compiled; the Python wrapper only evaluates the ground motion and
 the applied loads at time t and hands them to the kernel as arrays.
 """
-import dataclasses
 import math
 import time
 
@@ -526,16 +525,6 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         ys = np.zeros((nt, 0))
         wall, n_steps, nfev = 0.0, 0, 0
 
-    if model.ground_motion is not None and n > 0 and model.hinge_kind[0] == ELASTIC:
-        # chain_energies measures the root hinge's rotation against model.ground_rotation (the
-        # ground frame at t = 0); hand it the ground frame of the sample time instead
-        def energy_model(t):
-            return dataclasses.replace(model, ground_rotation=np.asarray(
-                model.ground_state(t)[3], dtype=float))
-    else:
-        def energy_model(t):
-            return model
-
     rot = np.empty((nt, n, 3, 3))
     omega = np.empty((nt, n, 3))
     r_in = np.empty((nt, n, 3))
@@ -549,15 +538,13 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         rk, wk, rik, vik, dk, _, ak, fk, mk = prob.evaluate(t, ys[i])
         rot[i], omega[i], r_in[i], v_in[i] = rk, wk, rik, vik
         alpha[i], force[i], moment[i] = ak, fk, mk
-        kinetic[i], potential[i] = chain_energies(energy_model(t), rk, wk, rik, vik, dk)
+        kinetic[i], potential[i] = chain_energies(model, rk, wk, rik, vik, dk,
+                                                    ground_rotation=model.ground_state(t)[3])
     r_c, r_o = point_positions(model, rot, r_in)
 
-    extra = {}
-    if "velocity_input" in {f.name for f in dataclasses.fields(Result)}:
-        extra["velocity_input"] = v_in
     return Result(method=f"newton-euler/{method}", t=np.array(t_eval), position_input=r_in,
                   position_mass_center=r_c, position_output=r_o, rotation=rot,
                   angular_velocity=omega, angular_acceleration=alpha, force=force, moment=moment,
                   kinetic=kinetic, potential=potential, wall_time=wall, n_steps=n_steps,
                   info={"nfev": nfev, "n_state": prob.n_state, "n_unknowns": prob.n_unknowns},
-                  **extra)
+                  velocity_input=v_in)
