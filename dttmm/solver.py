@@ -83,11 +83,14 @@ class Workspace:
         self.red_tinv = np.zeros((n, 3, 3))
         self.red_t = np.zeros((n, 3))
         self.red_aq = np.zeros((n + 1, 6))
+        self.dir_z = np.zeros((n_st, 12, 6))
+        self.dir_o = np.zeros((n_st, 12))
 
     def scratch(self):
         return (self.kind, self.u, self.known_loads, self.sc_split, self.sc_s, self.sc_p,
                 self.sc_tinv, self.sc_t, self.sc_g, self.sc_gv, self.red_v, self.red_phi,
-                self.red_s, self.red_p, self.red_tinv, self.red_t, self.red_aq)
+                self.red_s, self.red_p, self.red_tinv, self.red_t, self.red_aq, self.dir_z,
+                self.dir_o)
 
 
 def _check_positive(name, value):
@@ -105,10 +108,7 @@ def _mode(model, method, full_state):
         raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
     reduced = model.all_ball and not full_state
     if method == "direct":
-        if not reduced:
-            raise ValueError("simulate: method='direct' is implemented for chains whose hinges are "
-                             "all ball joints (the reduced [a; q] transfer); use method='riccati'")
-        return kstep.DIRECT_REDUCED
+        return kstep.DIRECT_REDUCED if reduced else kstep.DIRECT_FULL
     return kstep.RICCATI_REDUCED if reduced else kstep.RICCATI_FULL
 
 
@@ -142,12 +142,13 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     """Integrate the chain from t = 0 to t_end with steps dt by DT-TMM.
 
     method: "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
-        transfer matrices out, as the paper does; ball-joint chains only).
+        transfer matrices out, as the paper does; loses accuracy on long or stiff chains).
     rho_inf: generalized-alpha spectral radius at infinite frequency; 1 (default) is the
         trapezoidal Newmark rule, smaller values add numerical damping of high frequencies.
     newton_iterations: extra linearizations about the latest solution per step (0: one
         linearization about the predictor, already second-order accurate); the step stops
-        iterating once the rotation update is below newton_tol (rad).
+        iterating once the rotation update is below newton_tol (rad).  Steps that used all
+        iterations without reaching newton_tol are counted in info["newton_unconverged_steps"].
     record_every: keep every k-th step (and t = 0).
     full_state: use the 13-entry state even where the reduced [a; q] form applies.
     """
@@ -202,7 +203,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
                defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)))
-    info = np.zeros(4, dtype=np.int64)
+    info = np.zeros(5, dtype=np.int64)
     max_newton = 0
     done = 0
     while done < n_steps:
@@ -230,8 +231,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     wall = time.perf_counter() - wall0
     t = np.array(sample_steps) * dt
     return _result(model, t, samples, wall, n_steps,
-                   dict(mode=["riccati-full", "riccati-reduced", "direct-reduced"][mode],
-                        dt=dt, rho_inf=rho_inf, newton_iterations_used=max_newton))
+                   dict(mode=["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"][mode],
+                        dt=dt, rho_inf=rho_inf, newton_iterations_used=max_newton,
+                        newton_unconverged_steps=int(info[4])))
 
 
 def _sample(ws):
@@ -253,10 +255,8 @@ def _failure_cause(model, info):
     code = int(info[0])
     if code == kstep.SINGULAR:
         return _singular_cause(model, int(info[2]), "step")
-    if code == kstep.NOT_FINITE:
-        return ("the state became NaN or infinite (the step is too large for the motion, or the "
-                "model is unstable)")
-    return f"Newton iterations did not converge in {int(info[2])} iterations"
+    return ("the state became NaN or infinite (the step is too large for the motion, or the "
+            "model is unstable)")
 
 
 def _result(model, t, samples, wall, n_steps, info):

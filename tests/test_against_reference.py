@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from helpers import fitted_order
 
-from dttmm import BallJoint, build_chain, simulate
+from dttmm import BallJoint, ElasticHinge, FixedHinge, build_chain, simulate
 from dttmm.chains import rigid_chain, unit_link
 from dttmm.reference import simulate_reference
 
@@ -47,6 +47,35 @@ def test_direct_and_riccati_agree():
     c = simulate(model, T_END, 1e-3, method="riccati", full_state=True, record_every=10)
     assert np.abs(a.position_output - b.position_output).max() < 1e-9
     assert np.abs(a.position_output - c.position_output).max() < 1e-9
+
+
+def mixed_chain():
+    """Every hinge kind and the split changes between them: an elastic root (anisotropic,
+    damped), a welded pair, a ball joint, an elastic hinge with a rest rotation."""
+    from test_analytic import body_b, rot_z
+    return build_chain([
+        ElasticHinge([2e4, 3e4, 4e4], 2e3, translational_damping=5.0, rotational_damping=0.5),
+        unit_link(angular_velocity=[0.3, 1.0, -0.5]), FixedHinge(rotation=rot_z(0.4)), body_b(),
+        BallJoint(), unit_link(angular_velocity=[0, 0, 1.0]),
+        ElasticHinge(1e4, [500, 800, 1000], rotation=rot_z(-0.3)), body_b()])
+
+
+def test_mixed_chain_convergence_both_methods():
+    model = mixed_chain()
+    ref = reference_on_grid(model, 1.0, rtol=1e-12, atol=1e-13)
+    dts = [1e-3, 5e-4, 2.5e-4, 1.25e-4]
+    errors = {"riccati": [], "direct": []}
+    for dt in dts:
+        for method in errors:
+            err, res = position_error(model, ref, dt, method=method)
+            errors[method].append(err)
+    force_error = np.abs(res.force - ref.force).max() / np.abs(ref.force).max()
+    for method, errs in errors.items():
+        print(f"mixed chain, {method}: errors {['%.2e' % e for e in errs]}, "
+              f"order {fitted_order(dts, errs):.3f}")
+        assert fitted_order(dts, errs) == pytest.approx(2.0, abs=0.2)
+        assert errs[-1] < 3e-6
+    assert force_error < 1e-3     # hinge loads, relative to their peak, at dt = 1.25e-4
 
 
 def falling_from_upright():

@@ -96,12 +96,6 @@ def test_bad_solver_arguments(kwargs, word):
         simulate(rigid_chain(2), args.pop("t_end"), args.pop("dt"), **args)
 
 
-def test_direct_mode_says_where_it_applies():
-    model = build_chain([BallJoint(), body(), FixedHinge(), body()])
-    with pytest.raises(ValueError, match="direct"):
-        simulate(model, 0.1, 1e-3, method="direct")
-
-
 def test_diverging_run_stops_with_step_and_cause():
     """A torque growing without bound makes the chain spin up until the state overflows."""
     spinning = unit_link(torque=lambda t: [0.0, 0.0, 1e300 * t])

@@ -17,12 +17,12 @@ from ..elements.hinges import BALL, ELASTIC, FIXED
 from .body import rigid_body_transfer
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .so3 import expm_so3, left_jacobian, log_so3
-from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_reduced, fold_ball_body, riccati_full,
-                    riccati_reduced)
+from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
+                    riccati_full, riccati_reduced)
 from .sweep import BALL as EL_BALL
 
-RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED = 0, 1, 2
-OK, SINGULAR, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2, 3
+RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL = 0, 1, 2, 3
+OK, SINGULAR, NOT_FINITE = 0, 1, 2
 
 
 @njit(cache=True)
@@ -57,11 +57,30 @@ def _advance_history(h, coef, x, v, acc, p):
 
 
 @njit(cache=True)
+def _rotation_slots_to_acceleration(u, c1, w1_in, w1_out):
+    """Rewrite a transfer in phi slots as one in angular-acceleration slots, w' = c1 phi + w1
+    (docs/assembly.md, "scaling"): phi_in = (w'_in - w1_in) / c1, w'_out = c1 phi_out + w1_out.
+    Both are ~ m/s^2 like the a slots, where phi is ~ h^2 times smaller: the sweep's 6 x 6
+    matrices would otherwise mix scales 1e8 apart."""
+    for r in range(12):
+        s = u[r, 12]
+        for i in range(3):
+            s -= u[r, 3 + i] * w1_in[i] / c1
+            u[r, 3 + i] /= c1
+        u[r, 12] = s
+    for i in range(3):
+        for c in range(13):
+            u[3 + i, c] *= c1
+        u[3 + i, 12] += w1_out[i]
+
+
+@njit(cache=True)
 def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, g_lam, g_w, rot_star, lam, phi_star, c1, c3, w1, w3, w1d, w3d,
+                    g_rot, g_lam, g_w, w1_g, rot_star, lam, phi_star, c1, c3, w1, w3, w1d, w3d,
                     z_star, force, torque, at_start):
-    """Element kinds and transfers about the guess z_star.  at_start: the consistent-start
-    solve, where elastic hinges are LOCKED (their loads are set by the caller)."""
+    """Element kinds and transfers about the guess z_star (phi slots), written in angular
+    acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
+    angular accelerations and elastic hinges are LOCKED (their loads are set by the caller)."""
     n = body_params.shape[0]
     for k in range(n):
         jh = 2 * k
@@ -82,19 +101,25 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
             w_out = c3 * phi_star[k] + w3[k]
             elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, rot_star[k], lam[k],
                                    w_out, phi_star[k], c1, c3, w1d[k], w3d[k], z_star[jh], u[jh])
+            if not at_start:
+                _rotation_slots_to_acceleration(u[jh], c1, w1_g if k == 0 else w1[k - 1], w1[k])
         kind[jh + 1] = TRANSFER
         load = body_params[k, 0] * gravity + force[k]
         rigid_body_transfer(body_params[k], rot_star[k], lam[k], c1, c3, w1[k], w3[k],
                             z_star[jh + 1], load, torque[k], u[jh + 1])
+        if not at_start:
+            _rotation_slots_to_acceleration(u[jh + 1], c1, w1[k], w1[k])
 
 
 @njit(cache=True)
 def _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z):
+           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z):
     """Solve the assembled step into z (stations' states); returns 0 or a singularity code."""
     if mode == RICCATI_FULL:
         return riccati_full(kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
                             sc_g, sc_gv, z)
+    if mode == DIRECT_FULL:
+        return direct_full(kind, u, known_loads, root_f, dir_z, dir_o, sc_gv, sc_g, z)
     n = red_v.shape[0]
     for k in range(n):
         fold_ball_body(u[2 * k + 1], red_v[k], red_phi[k])
@@ -127,7 +152,8 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
                           g_acc, g_rot, g_w, g_wd, force, torque,
                           rot, omega, defl, defl_rate,
                           kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-                          red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z):
+                          red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
+                          z):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration, the rotations and rates are the initial ones, and an
     elastic hinge's loads are known from its state (its outboard motion is free).  Returns the
@@ -137,7 +163,7 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
     lam = np.zeros((n, 3, 3))
     z_star = np.zeros(z.shape)
     _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, np.zeros((3, 3)), g_w, rot, lam, zero3, 1.0, 0.0, zero3, omega,
+                    g_rot, np.zeros((3, 3)), g_w, g_wd, rot, lam, zero3, 1.0, 0.0, zero3, omega,
                     zero3, zero3, z_star, force, torque, True)
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
@@ -153,7 +179,7 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
     return _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g,
-                  sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, z)
+                  sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z)
 
 
 @njit(cache=True)
@@ -162,13 +188,14 @@ def advance(mode, h, coef, newton_max, newton_tol,
             g_acc, g_rot, g_w, g_wd, force, torque,
             rot, omega, omega_dot, pseudo, defl, defl_rate, defl_acc, defl_pseudo, z,
             kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-            red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq,
+            red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
             record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
             out_info):
     """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
     and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
     Records after every record_every-th step (counting from the chunk's start).
-    out_info: [status, failing step, newton iterations used (max), recorded count]."""
+    out_info: [status, failing step, newton iterations used (max), recorded count, steps whose
+    Newton iterations stopped above newton_tol (accumulated over chunks)]."""
     n = body_params.shape[0]
     n_steps = g_acc.shape[0]
     c1, c3 = _integrator_coefficients(h, coef)
@@ -211,11 +238,21 @@ def advance(mode, h, coef, newton_max, newton_tol,
         for k in range(n):
             z_star[2 * k + 1, 3:6] = phi_star[k]
             z_star[2 * k + 2, 3:6] = phi_star[k]
+            if hinge_kind[k] == ELASTIC:
+                # the spring force at the predicted deflection: an O(h^3) guess, where the last
+                # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
+                d_pred = defl[k] + h * defl_rate[k] + 0.5 * h * h * defl_pseudo[k]
+                rot_in = rot_now if k == 0 else rot_star[k - 1]
+                q_pred, _, _ = elastic_hinge_loads(hinge_params[k], rot_in, g_w[s], rot_star[k],
+                                                   g_w[s], d_pred, c3 * d_pred + w3d[k])
+                z_star[2 * k, 9:12] = q_pred
+                z_star[2 * k + 1, 9:12] = q_pred
         root_f[0:3] = g_acc[s]
-        root_f[3:6] = phi_g
+        root_f[3:6] = g_wd[s]
+        w1_g = g_wd[s] - c1 * phi_g
         for it in range(newton_max + 1):
             _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                            rot_now, g_lam, g_w[s], rot_star, lam, phi_star, c1, c3, w1, w3,
+                            rot_now, g_lam, g_w[s], w1_g, rot_star, lam, phi_star, c1, c3, w1, w3,
                             w1d, w3d, z_star, force[s], torque[s], False)
             if not np.all(np.isfinite(u)):
                 out_info[0] = NOT_FINITE
@@ -223,12 +260,17 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 return
             status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
                             sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
-                            red_aq, z)
+                            red_aq, dir_z, dir_o, z)
             if status != 0:
                 out_info[0] = SINGULAR
                 out_info[1] = s
                 out_info[2] = status
                 return
+            z[0, 3:6] = phi_g                          # back from acceleration to phi slots
+            for k in range(n):
+                phi = (z[2 * k + 1, 3:6] - w1[k]) / c1
+                z[2 * k + 1, 3:6] = phi
+                z[2 * k + 2, 3:6] = phi
             change = 0.0
             for k in range(n):
                 for i in range(3):
@@ -243,11 +285,8 @@ def advance(mode, h, coef, newton_max, newton_tol,
                     expm_so3(phi_star[k], e3)
                     rot_star[k] = e3 @ rot[k]
                     left_jacobian(phi_star[k], lam[k])
-        if newton_max > 0 and newton_tol > 0.0 and change > newton_tol:
-            out_info[0] = NO_CONVERGENCE
-            out_info[1] = s
-            out_info[2] = newton_max
-            return
+        if newton_max > 0 and change > newton_tol:
+            out_info[4] += 1
         # update the histories
         finite = True
         for k in range(n):

@@ -10,6 +10,10 @@ transform of Horner and Pilkey).  The split changes where the boundary makes it:
 Element kinds: TRANSFER (affine matrix), IDENTITY (fixed hinge), BALL (m = 0 inboard, outboard
 rotation free), LOCKED (inboard loads known, outboard motion free).
 
+Full-state direct sweep: every station as z = Z x + o in terms of a 6-parameter vector x, the
+matrices multiplied out from the root (the paper's way).  A ball joint or a LOCKED hinge swaps
+parameters instead: the inboard conditions fix some of x, the outboard's free entries join it.
+
 Reduced sweeps (all ball joints): each body folds into a 6 x 7 map on [a; q; 1], solved either by
 Riccati (f = a, e = q) or by multiplying the maps out (direct).
 """
@@ -150,6 +154,70 @@ def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec
             e = g_vec[j] + g_mat[j] @ z[j + 1, 9:12]
         _station_basis(sp, s_mat[j], p_vec[j], basis, offset)
         z[j] = basis @ e + offset
+    return 0
+
+
+@njit(cache=True)
+def direct_full(kind, u, known_loads, root_f, zmat, zoff, x0, nmat, z):
+    """Multiply the transfers out from the root; returns 0 or j + 1 for a singular element j.
+
+    zmat (n_el + 1, 12, 6), zoff (n_el + 1, 12): stations as z = Z x + o; x0 (n_el, 6),
+    nmat (n_el, 6, 3): at a transition j the inboard parameters are x0[j] + nmat[j] y, with y
+    the first three outboard parameters (a ball joint; nmat = 0 for a LOCKED hinge)."""
+    n_el = kind.shape[0]
+    # ground station: a, phi known; x = [m, q]
+    zmat[0, :, :] = 0.0
+    zoff[0, :] = 0.0
+    zoff[0, 0:6] = root_f
+    for i in range(6):
+        zmat[0, 6 + i, i] = 1.0
+    for j in range(n_el):
+        k = kind[j]
+        if k == IDENTITY:
+            zmat[j + 1] = zmat[j]
+            zoff[j + 1] = zoff[j]
+        elif k == TRANSFER:
+            uj = np.ascontiguousarray(u[j, :, 0:12])
+            zmat[j + 1] = uj @ zmat[j]
+            zoff[j + 1] = uj @ zoff[j] + u[j, :, 12]
+        elif k == BALL:
+            cm = zmat[j, 6:9, :]
+            if np.linalg.matrix_rank(cm) < 3:
+                return j + 1
+            # x = x0 + N y with cm x0 = -o_m (least norm) and N spanning the null space of cm
+            _, _, vt = np.linalg.svd(cm)
+            x0[j] = np.linalg.pinv(cm) @ (-zoff[j, 6:9])
+            nmat[j] = vt[3:6].T
+            inner_z = zmat[j] @ nmat[j]
+            inner_o = zmat[j] @ x0[j] + zoff[j]
+            zmat[j + 1, :, :] = 0.0
+            zoff[j + 1, :] = 0.0
+            for r in (0, 1, 2, 9, 10, 11):
+                zoff[j + 1, r] = inner_o[r]
+                for c in range(3):
+                    zmat[j + 1, r, c] = inner_z[r, c]
+            for i in range(3):
+                zmat[j + 1, 3 + i, 3 + i] = 1.0      # the outboard rotation is a new parameter
+        else:
+            w = zmat[j, 6:12, :]
+            if abs(np.linalg.det(w)) == 0.0:
+                return j + 1
+            x0[j] = np.linalg.solve(w, known_loads[j, 0:6] - zoff[j, 6:12])
+            nmat[j, :, :] = 0.0
+            zmat[j + 1, :, :] = 0.0
+            zoff[j + 1, :] = 0.0
+            zoff[j + 1, 6:12] = known_loads[j, 6:12]
+            for i in range(6):
+                zmat[j + 1, i, i] = 1.0              # outboard a and phi are new parameters
+    w = zmat[n_el, 6:12, :]
+    if abs(np.linalg.det(w)) == 0.0:
+        return n_el + 1
+    x = np.linalg.solve(w, -zoff[n_el, 6:12])
+    z[n_el] = zmat[n_el] @ x + zoff[n_el]
+    for j in range(n_el - 1, -1, -1):
+        if kind[j] == BALL or kind[j] == LOCKED:
+            x = x0[j] + nmat[j] @ x[0:3]
+        z[j] = zmat[j] @ x + zoff[j]
     return 0
 
 
