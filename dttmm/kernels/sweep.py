@@ -83,29 +83,31 @@ def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec
             s_mat[j + 1] = s_mat[j]
             p_vec[j + 1] = p_vec[j]
         elif k == TRANSFER:
-            uf = np.empty((6, 12))
-            ue = np.empty((6, 12))
+            u_ff = np.empty((6, 6))
+            u_fe = np.empty((6, 6))
+            u_ef = np.empty((6, 6))
+            u_ee = np.empty((6, 6))
             cf = np.empty(6)
             ce = np.empty(6)
             for r in range(6):
                 cf[r] = u[j, f_idx[r], 12]
                 ce[r] = u[j, e_idx[r], 12]
                 for c in range(6):
-                    uf[r, c] = u[j, f_idx[r], f_idx[c]]       # U_ff
-                    uf[r, 6 + c] = u[j, f_idx[r], e_idx[c]]   # U_fe
-                    ue[r, c] = u[j, e_idx[r], f_idx[c]]       # U_ef
-                    ue[r, 6 + c] = u[j, e_idx[r], e_idx[c]]   # U_ee
+                    u_ff[r, c] = u[j, f_idx[r], f_idx[c]]
+                    u_fe[r, c] = u[j, f_idx[r], e_idx[c]]
+                    u_ef[r, c] = u[j, e_idx[r], f_idx[c]]
+                    u_ee[r, c] = u[j, e_idx[r], e_idx[c]]
             s = s_mat[j]
             p = p_vec[j]
-            t = ue[:, :6] @ s + ue[:, 6:]
+            t = u_ef @ s + u_ee
             if abs(np.linalg.det(t)) == 0.0:
                 return j + 1
             ti = np.linalg.inv(t)
-            tv = ue[:, :6] @ p + ce
-            s_new = (uf[:, :6] @ s + uf[:, 6:]) @ ti
+            tv = u_ef @ p + ce
+            s_new = (u_ff @ s + u_fe) @ ti
             split[j + 1] = sp
             s_mat[j + 1] = s_new
-            p_vec[j + 1] = uf[:, :6] @ p + cf - s_new @ tv
+            p_vec[j + 1] = u_ff @ p + cf - s_new @ tv
             t_inv[j] = ti
             t_vec[j] = tv
         else:
