@@ -70,7 +70,9 @@ def test_rigid_body_transfer_is_the_exact_linearization():
     rot_star = expm(skew(z_star[3:6])) @ rot_prev
     lam = np.empty((3, 3))
     left_jacobian(z_star[3:6], lam)
-    rigid_body_transfer(p, rot_star, lam, c1, c3, w1, w3, z_star, load, torque, u)
+    phi = z_star[3:6]
+    rigid_body_transfer(p, rot_star, lam, c1 * np.eye(3), c3 * np.eye(3), c1 * phi + w1,
+                        c3 * phi + w3, z_star, load, torque, u)
     exact = body_outputs(p, rot_prev, c1, c3, w1, w3, z_star, load, torque)
     assert np.allclose(u[:, :12] @ z_star + u[:, 12], exact, rtol=1e-12, atol=1e-9)
     # Jacobian by central differences, column by column
@@ -108,7 +110,8 @@ def test_elastic_hinge_transfer_reproduces_the_spring_law():
     lam = np.eye(3)
     u = np.empty((12, 13))
     phi_out_star = np.array([0.3, 0.2, 0.1])
-    elastic_hinge_transfer(hrow, rot_in, lam, w_in, rot_out, lam, w_out, phi_out_star,
+    dw = c3 * np.eye(3)
+    elastic_hinge_transfer(hrow, rot_in, lam, w_in, dw, rot_out, lam, w_out, dw, phi_out_star,
                            c1, c3, w1d, w3d, z_in, u)
     z_out = u[:, :12] @ z_in + u[:, 12]
     assert np.allclose(z_out[9:12], q)

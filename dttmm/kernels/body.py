@@ -6,9 +6,9 @@ Station state z = [a, phi, m, q] (12 entries, then the affine 1):
        (in the consistent-start solve the same slot holds the angular acceleration),
   m, q moment (about the station point) and force that the inboard side exerts on the outboard
        side, world components.
-The body's kinematics are affine in phi: w_dot = c1 phi + w1, w = c3 phi + w3 (the integrator's
-coefficients), and its rotation is linearized about phi*: A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*),
-Lam = J_l(phi*).
+The body's angular velocity and acceleration are linearized about phi* by the integrator
+(docs/solver.md): w ~ w* + Dw (phi - phi*), w_dot ~ wd* + Dwd (phi - phi*), and its rotation as
+A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 """
 import numpy as np
 from numba import njit
@@ -20,9 +20,9 @@ CONST = 12                  # column of the affine part
 
 
 @njit(cache=True)
-def _kappa(w, wd, rho, c1, c3, d_rho):
+def _kappa(w, wd, rho, dwd, dw, d_rho):
     """kappa = wd x rho + w x (w x rho) and its derivative with respect to phi, given
-    d wd/d phi = c1 I, d w/d phi = c3 I and d rho/d phi = d_rho."""
+    d wd/d phi = dwd, d w/d phi = dw and d rho/d phi = d_rho."""
     w_rho = np.cross(w, rho)
     kappa = np.cross(wd, rho) + np.cross(w, w_rho)
     rho_h = np.empty((3, 3))
@@ -33,16 +33,18 @@ def _kappa(w, wd, rho, c1, c3, d_rho):
     hat(wd, wd_h)
     wr_h = np.empty((3, 3))
     hat(w_rho, wr_h)
-    d = -c1 * rho_h + wd_h @ d_rho + c3 * (-wr_h - w_h @ rho_h) + w_h @ (w_h @ d_rho)
+    d = -rho_h @ dwd + wd_h @ d_rho + (-wr_h - w_h @ rho_h) @ dw + w_h @ (w_h @ d_rho)
     return kappa, d
 
 
 @njit(cache=True)
-def rigid_body_transfer(p, a_star, lam, c1, c3, w1, w3, z_star, load, torque, u):
+def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body,
     linearized about the input state z_star (the rotation at z_star[PHI] is a_star).
 
-    p: body parameter row (mass, l_IC, l_IO, J_I); load = M g + F (world, at the mass centre);
+    p: body parameter row (mass, l_IC, l_IO, J_I); wd, w: angular acceleration and velocity at
+    the guess, dwd, dw their derivatives with respect to phi; load = M g + F (world, at the mass
+    centre);
     torque: applied world torque.  Equations (uniform sign convention, docs/rigid_body.md):
       a_O = a_I + kappa(l_IO)
       q_O = q_I + load - M (a_I + kappa(l_IC))
@@ -56,8 +58,6 @@ def rigid_body_transfer(p, a_star, lam, c1, c3, w1, w3, z_star, load, torque, u)
     phi = z_star[PHI:PHI + 3]
     m_i = z_star[M:M + 3]
     q_i = z_star[Q:Q + 3]
-    wd = c1 * phi + w1
-    w = c3 * phi + w3
 
     rho = a_star @ l_io
     rho_c = a_star @ l_ic
@@ -67,8 +67,8 @@ def rigid_body_transfer(p, a_star, lam, c1, c3, w1, w3, z_star, load, torque, u)
     hat(rho_c, rhoc_h)
     d_rho = -rho_h @ lam          # d(A l_IO)/d phi
     d_rhoc = -rhoc_h @ lam        # d(A l_IC)/d phi
-    kap_o, dkap_o = _kappa(w, wd, rho, c1, c3, d_rho)
-    kap_c, dkap_c = _kappa(w, wd, rho_c, c1, c3, d_rhoc)
+    kap_o, dkap_o = _kappa(w, wd, rho, dwd, dw, d_rho)
+    kap_c, dkap_c = _kappa(w, wd, rho_c, dwd, dw, d_rhoc)
 
     j = a_star @ j_body @ a_star.T
     jwd = j @ wd
@@ -102,16 +102,16 @@ def rigid_body_transfer(p, a_star, lam, c1, c3, w1, w3, z_star, load, torque, u)
     d_m = mass * (rho_h @ dkap_c) + tmp @ d_rho
     hat(load, tmp)
     d_m -= tmp @ d_rhoc
-    # J w_dot: J c1 + [-(J wd)^ + J wd^] Lam
+    # J w_dot: J Dwd + [-(J wd)^ + J wd^] Lam
     t1 = np.empty((3, 3))
     hat(jwd, t1)
     t2 = np.empty((3, 3))
     hat(wd, t2)
     d_j_wd = -t1 + j @ t2
-    d_m -= c1 * j + d_j_wd @ lam
-    # w x J w: (w^ J - (J w)^) c3 + w^ [-(J w)^ + J w^] Lam
+    d_m -= j @ dwd + d_j_wd @ lam
+    # w x J w: (w^ J - (J w)^) Dw + w^ [-(J w)^ + J w^] Lam
     hat(jw, t1)
-    d_m -= c3 * (w_h @ j - t1) + w_h @ (-t1 + j @ w_h) @ lam
+    d_m -= (w_h @ j - t1) @ dw + w_h @ (-t1 + j @ w_h) @ lam
     # M rho_C x a_I: -M a_I^ d_rhoc
     hat(a_i, tmp)
     d_m += mass * (tmp @ d_rhoc)

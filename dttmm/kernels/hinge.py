@@ -18,11 +18,12 @@ from .so3 import hat, log_so3
 
 
 @njit(cache=True)
-def elastic_hinge_transfer(h, rot_in, lam_in, w_in, rot_out, lam_out, w_out, phi_out_star,
-                           c1, c3, w1d, w3d, z_star, u):
+def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_out, dw_out,
+                           phi_out_star, c1, c3, w1d, w3d, z_star, u):
     """Fill u (12 x 13) with z_out = u[:, :12] z_in + u[:, 12], linearized about z_star (the
-    inboard station guess).  rot/lam/w: rotation, left Jacobian and angular velocity of the
-    inboard and outboard bodies at the guess; phi_out_star: the outboard body's guessed phi."""
+    inboard station guess).  rot/lam/w/dw: rotation, left Jacobian, angular velocity and its
+    derivative with respect to phi of the inboard and outboard bodies at the guess;
+    phi_out_star: the outboard body's guessed phi; c1, c3, w1d, w3d: the integrator on d."""
     r0 = h[0:9].reshape((3, 3))
     k_t = h[9:18].reshape((3, 3))
     c_t = h[18:27].reshape((3, 3))
@@ -42,8 +43,8 @@ def elastic_hinge_transfer(h, rot_in, lam_in, w_in, rot_out, lam_out, w_out, phi
     psi = np.empty(3)
     log_so3(rot_in.T @ rot_out @ r0.T, psi)
     n_star = -rot_in @ (k_r @ psi + c_r @ (rot_in.T @ (w_out - w_in)))
-    n_out = -kr_w @ lam_out - c3 * cr_w
-    n_in = kr_w @ lam_in + c3 * cr_w
+    n_out = -kr_w @ lam_out - cr_w @ dw_out
+    n_in = kr_w @ lam_in + cr_w @ dw_in
     n_out_inv = np.linalg.inv(n_out)
 
     dh = np.empty((3, 3))

@@ -16,7 +16,7 @@ from numba import njit
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from .body import rigid_body_transfer
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
-from .so3 import expm_so3, left_jacobian, log_so3
+from .so3 import expm_so3, hat, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
                     riccati_full, riccati_reduced)
 from .sweep import BALL as EL_BALL
@@ -57,27 +57,54 @@ def _advance_history(h, coef, x, v, acc, p):
 
 
 @njit(cache=True)
-def _rotation_slots_to_acceleration(u, c1, w1_in, w1_out):
-    """Rewrite a transfer in phi slots as one in angular-acceleration slots, w' = c1 phi + w1
-    (docs/assembly.md, "scaling"): phi_in = (w'_in - w1_in) / c1, w'_out = c1 phi_out + w1_out.
-    Both are ~ m/s^2 like the a slots, where phi is ~ h^2 times smaller: the sweep's 6 x 6
-    matrices would otherwise mix scales 1e8 apart."""
+def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
+    """A body's rotation, angular velocity and acceleration at the end of the step as functions
+    of its world rotation increment phi, with their derivatives (docs/solver.md):
+    A = exp(phi^) A_n, w = c3 phi + w3, w' = c1 phi + w1."""
+    e3 = np.empty((3, 3))
+    expm_so3(phi, e3)
+    rot[:, :] = e3 @ rot_n
+    left_jacobian(phi, lam)
+    w[:] = c3 * phi + w3
+    wd[:] = c1 * phi + w1
+    dw[:, :] = c3 * np.eye(3)
+    dwd[:, :] = c1 * np.eye(3)
+
+
+@njit(cache=True)
+def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, phi_out):
+    """Rewrite a transfer linearized in phi slots as one in angular-acceleration slots
+    (docs/assembly.md, "scaling"): phi_in = phi_in* + Dwd_in^-1 (w'_in - wd_in*) and
+    w'_out = wd_out* + Dwd_out (phi_out - phi_out*).  Angular accelerations are ~ m/s^2 like the
+    a slots, where phi is ~ h^2 times smaller: the sweep's 6 x 6 matrices would otherwise mix
+    scales 1e8 apart."""
+    g_in = np.linalg.inv(dwd_in)
+    col = np.empty((12, 3))
     for r in range(12):
-        s = u[r, 12]
         for i in range(3):
-            s -= u[r, 3 + i] * w1_in[i] / c1
-            u[r, 3 + i] /= c1
-        u[r, 12] = s
+            col[r, i] = u[r, 3 + i]
+    new_col = col @ g_in
+    shift = col @ phi_in - new_col @ wd_in
+    for r in range(12):
+        u[r, 12] += shift[r]
+        for i in range(3):
+            u[r, 3 + i] = new_col[r, i]
+    rows = np.empty((3, 13))
     for i in range(3):
         for c in range(13):
-            u[3 + i, c] *= c1
-        u[3 + i, 12] += w1_out[i]
+            rows[i, c] = u[3 + i, c]
+    new_rows = dwd_out @ rows
+    const = wd_out - dwd_out @ phi_out
+    for i in range(3):
+        for c in range(13):
+            u[3 + i, c] = new_rows[i, c]
+        u[3 + i, 12] += const[i]
 
 
 @njit(cache=True)
 def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, g_lam, g_w, w1_g, rot_star, lam, phi_star, c1, c3, w1, w3, w1d, w3d,
-                    z_star, force, torque, at_start):
+                    g_rot, g_lam, g_w, g_wd, g_dwd, g_phi, rot_star, lam, phi_star, w, wd, dw, dwd,
+                    c1, c3, w1d, w3d, z_star, force, torque, at_start):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
     angular accelerations and elastic hinges are LOCKED (their loads are set by the caller)."""
@@ -94,21 +121,24 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
         else:
             kind[jh] = TRANSFER
             if k == 0:
-                rot_in, lam_in, w_in = g_rot, g_lam, g_w
+                rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
+                    g_rot, g_lam, g_w, g_wd, g_dwd, g_dwd, g_phi)
             else:
-                rot_in, lam_in = rot_star[k - 1], lam[k - 1]
-                w_in = c3 * phi_star[k - 1] + w3[k - 1]
-            w_out = c3 * phi_star[k] + w3[k]
-            elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, rot_star[k], lam[k],
-                                   w_out, phi_star[k], c1, c3, w1d[k], w3d[k], z_star[jh], u[jh])
-            if not at_start:
-                _rotation_slots_to_acceleration(u[jh], c1, w1_g if k == 0 else w1[k - 1], w1[k])
+                rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
+                    rot_star[k - 1], lam[k - 1], w[k - 1], wd[k - 1], dw[k - 1], dwd[k - 1],
+                    phi_star[k - 1])
+            elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, dw_in, rot_star[k],
+                                   lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
+                                   z_star[jh], u[jh])
+            _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
+                                            phi_star[k])
         kind[jh + 1] = TRANSFER
         load = body_params[k, 0] * gravity + force[k]
-        rigid_body_transfer(body_params[k], rot_star[k], lam[k], c1, c3, w1[k], w3[k],
+        rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
                             z_star[jh + 1], load, torque[k], u[jh + 1])
         if not at_start:
-            _rotation_slots_to_acceleration(u[jh + 1], c1, w1[k], w1[k])
+            _rotation_slots_to_acceleration(u[jh + 1], dwd[k], wd[k], phi_star[k], dwd[k], wd[k],
+                                            phi_star[k])
 
 
 @njit(cache=True)
@@ -155,16 +185,20 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
                           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
                           z):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
-    station holds the angular acceleration, the rotations and rates are the initial ones, and an
+    station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free).  Returns the
     status; z holds the stations' accelerations and loads."""
     n = body_params.shape[0]
     zero3 = np.zeros((n, 3))
-    lam = np.zeros((n, 3, 3))
+    zero33 = np.zeros((n, 3, 3))
+    unit33 = np.zeros((n, 3, 3))
+    for k in range(n):
+        unit33[k] = np.eye(3)
     z_star = np.zeros(z.shape)
     _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, np.zeros((3, 3)), g_w, g_wd, rot, lam, zero3, 1.0, 0.0, zero3, omega,
-                    zero3, zero3, z_star, force, torque, True)
+                    g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3), rot, zero33, zero3,
+                    omega, zero3, zero33, unit33, 1.0, 0.0, zero3, zero3, z_star, force, torque,
+                    True)
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
             rot_in = g_rot if k == 0 else rot[k - 1]
@@ -186,13 +220,16 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
 def advance(mode, h, coef, newton_max, newton_tol,
             body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
             g_acc, g_rot, g_w, g_wd, force, torque,
-            rot, omega, omega_dot, pseudo, defl, defl_rate, defl_acc, defl_pseudo, z,
+            rot, omega, omega_dot, hist_v, hist_acc, hist_p,
+            defl, defl_rate, defl_acc, defl_pseudo, z,
             kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
             red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
             record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
             out_info):
     """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
     and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
+    hist_v, hist_acc, hist_p: the rotation integrator's velocity, acceleration and
+    pseudo-acceleration (world frame).
     Records after every record_every-th step (counting from the chunk's start).
     out_info: [status, failing step, newton iterations used (max), recorded count, steps whose
     Newton iterations stopped above newton_tol (accumulated over chunks)]."""
@@ -202,6 +239,10 @@ def advance(mode, h, coef, newton_max, newton_tol,
     phi_star = np.empty((n, 3))
     rot_star = np.empty((n, 3, 3))
     lam = np.empty((n, 3, 3))
+    w = np.empty((n, 3))
+    wd = np.empty((n, 3))
+    dw = np.empty((n, 3, 3))
+    dwd = np.empty((n, 3, 3))
     w1 = np.empty((n, 3))
     w3 = np.empty((n, 3))
     w1d = np.zeros((n, 3))
@@ -209,6 +250,7 @@ def advance(mode, h, coef, newton_max, newton_tol,
     z_star = np.empty(z.shape)
     e3 = np.empty((3, 3))
     g_lam = np.empty((3, 3))
+    g_dwd = c1 * np.eye(3)
     phi_g = np.empty(3)
     root_f = np.empty(6)
     max_iter = 0
@@ -221,14 +263,16 @@ def advance(mode, h, coef, newton_max, newton_tol,
             if locked[k]:
                 phi_star[k] = phi_g
                 rot_star[k] = rot_now @ lock_rel[k]
-                w1[k] = g_wd[s] - c1 * phi_g
-                w3[k] = g_w[s] - c3 * phi_g
+                lam[k] = g_lam
+                w[k] = g_w[s]
+                wd[k] = g_wd[s]
+                dw[k] = c3 * np.eye(3)
+                dwd[k] = g_dwd
             else:
-                w1[k], w3[k] = _offsets(h, coef, omega[k], omega_dot[k], pseudo[k])
-                phi_star[k] = h * omega[k] + 0.5 * h * h * pseudo[k]
-                expm_so3(phi_star[k], e3)
-                rot_star[k] = e3 @ rot[k]
-            left_jacobian(phi_star[k], lam[k])
+                w1[k], w3[k] = _offsets(h, coef, hist_v[k], hist_acc[k], hist_p[k])
+                phi_star[k] = h * hist_v[k] + 0.5 * h * h * hist_p[k]   # constant-acceleration
+                _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
+                                 lam[k], w[k], wd[k], dw[k], dwd[k])
             if hinge_kind[k] == ELASTIC:
                 a1, a3 = _offsets(h, coef, defl_rate[k], defl_acc[k], defl_pseudo[k])
                 w1d[k] = a1 - c1 * defl[k]
@@ -249,11 +293,11 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 z_star[2 * k + 1, 9:12] = q_pred
         root_f[0:3] = g_acc[s]
         root_f[3:6] = g_wd[s]
-        w1_g = g_wd[s] - c1 * phi_g
         for it in range(newton_max + 1):
             _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                            rot_now, g_lam, g_w[s], w1_g, rot_star, lam, phi_star, c1, c3, w1, w3,
-                            w1d, w3d, z_star, force[s], torque[s], False)
+                            rot_now, g_lam, g_w[s], g_wd[s], g_dwd, phi_g, rot_star, lam,
+                            phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
+                            torque[s], False)
             if not np.all(np.isfinite(u)):
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
@@ -266,15 +310,15 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 out_info[1] = s
                 out_info[2] = status
                 return
-            z[0, 3:6] = phi_g                          # back from acceleration to phi slots
-            for k in range(n):
-                phi = (z[2 * k + 1, 3:6] - w1[k]) / c1
-                z[2 * k + 1, 3:6] = phi
-                z[2 * k + 2, 3:6] = phi
+            # back from angular-acceleration to phi slots
+            z[0, 3:6] = phi_g
             change = 0.0
             for k in range(n):
+                phi = phi_star[k] + np.linalg.solve(dwd[k], z[2 * k + 1, 3:6] - wd[k])
+                z[2 * k + 1, 3:6] = phi
+                z[2 * k + 2, 3:6] = phi
                 for i in range(3):
-                    change = max(change, abs(z[2 * k + 1, 3 + i] - phi_star[k, i]))
+                    change = max(change, abs(phi[i] - phi_star[k, i]))
             max_iter = max(max_iter, it)
             if it == newton_max or change <= newton_tol:
                 break
@@ -282,24 +326,24 @@ def advance(mode, h, coef, newton_max, newton_tol,
             for k in range(n):
                 if not locked[k]:
                     phi_star[k] = z[2 * k + 1, 3:6]
-                    expm_so3(phi_star[k], e3)
-                    rot_star[k] = e3 @ rot[k]
-                    left_jacobian(phi_star[k], lam[k])
+                    _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k],
+                                     rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
         # update the histories
         finite = True
         for k in range(n):
+            phi = z[2 * k + 1, 3:6].copy()
             if locked[k]:
                 rot[k] = rot_now @ lock_rel[k]
                 omega[k] = g_w[s]
                 omega_dot[k] = g_wd[s]
-                pseudo[k] = g_wd[s]
             else:
-                phi = z[2 * k + 1, 3:6].copy()
-                _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
+                _advance_history(h, coef, phi, hist_v[k], hist_acc[k], hist_p[k])
                 expm_so3(phi, e3)
                 rot[k] = e3 @ rot[k]
+                omega[k] = hist_v[k]
+                omega_dot[k] = hist_acc[k]
             if hinge_kind[k] == ELASTIC:
                 d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - w1d[k]) / c1
                 x = d_new - defl[k]

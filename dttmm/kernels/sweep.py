@@ -253,10 +253,10 @@ def riccati_reduced(v, a_root, s_mat, p_vec, t_inv, t_vec, aq):
     s_mat[0, :, :] = 0.0
     p_vec[0, :] = a_root
     for k in range(n):
-        vaa = v[k, 0:3, 0:3]
-        vaq = v[k, 0:3, 3:6]
-        vqa = v[k, 3:6, 0:3]
-        vqq = v[k, 3:6, 3:6]
+        vaa = np.ascontiguousarray(v[k, 0:3, 0:3])
+        vaq = np.ascontiguousarray(v[k, 0:3, 3:6])
+        vqa = np.ascontiguousarray(v[k, 3:6, 0:3])
+        vqq = np.ascontiguousarray(v[k, 3:6, 3:6])
         t = vqa @ s_mat[k] + vqq
         if abs(np.linalg.det(t)) == 0.0:
             return k + 1
@@ -292,5 +292,5 @@ def direct_reduced(v, a_root, aq):
     aq[0, 0:3] = a_root
     aq[0, 3:6] = -np.linalg.solve(pqq, prod[3:6, 0:3] @ a_root + prod[3:6, 6])
     for k in range(n):
-        aq[k + 1] = v[k, :, 0:6] @ aq[k] + v[k, :, 6]
+        aq[k + 1] = np.ascontiguousarray(v[k, :, 0:6]) @ aq[k] + v[k, :, 6]
     return 0
