@@ -27,6 +27,26 @@ class PrescribedMotion:
             if f is not None and not callable(f):
                 raise ValueError(f"PrescribedMotion: {name} must be a function of time or None")
 
+    def check(self, times=(0.0, 0.37, 1.0), eps=1e-5, rtol=1e-4):
+        """Raise ValueError if the given derivatives contradict the position and rotation
+        (central differences at a few times)."""
+        def fd(f, t):
+            return (np.asarray(f(t + eps)) - np.asarray(f(t - eps))) / (2 * eps)
+
+        for t in times:
+            r, v, a, rot, w, wd = self(t)
+            rot_dot = (self(t + eps)[3] - self(t - eps)[3]) / (2 * eps)
+            w_fd = rot_dot @ rot.T
+            pairs = (("velocity", v, fd(lambda s: self(s)[0], t)),
+                     ("acceleration", a, fd(lambda s: self(s)[1], t)),
+                     ("angular_velocity", w, np.array([w_fd[2, 1], w_fd[0, 2], w_fd[1, 0]])),
+                     ("angular_acceleration", wd, fd(lambda s: self(s)[4], t)))
+            for name, given, numeric in pairs:
+                scale = max(1.0, np.abs(numeric).max())
+                if not np.all(np.isfinite(given)) or np.abs(given - numeric).max() > rtol * scale:
+                    raise ValueError(f"PrescribedMotion: {name}({t:g}) = {given} contradicts the "
+                                     f"motion's own derivative {numeric}")
+
     def __call__(self, t):
         """(r, v, a, R, w, w_dot) at time t."""
         r, v, a, rot, w, wd = self._f
@@ -130,6 +150,7 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
     if not isinstance(ground, Ground):
         raise ValueError("Chain: ground must be a Ground")
     if ground.motion is not None:
+        ground.motion.check()
         r_g, _, _, rot_g, w_g, _ = ground.motion(0.0)
         r_g = finite_vector("Ground", "motion position(0)", r_g)
         rot_g = rotation_matrix("Ground", "motion rotation(0)", rot_g)

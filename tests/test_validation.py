@@ -103,3 +103,11 @@ def test_diverging_run_stops_with_step_and_cause():
         simulate(build_chain([BallJoint(), spinning]), 1.0, 1e-2)
     assert "step" in str(err.value) and "NaN or infinite" in str(err.value)
     assert err.value.step >= 1
+
+
+def test_inconsistent_prescribed_motion():
+    from dttmm import Ground, PrescribedMotion
+    bad = PrescribedMotion.spin_about_axis([0, 0, 1], angle=lambda t: t * t, rate=lambda t: t,
+                                           acceleration=lambda t: 1.0)     # rate should be 2 t
+    with pytest.raises(ValueError, match="PrescribedMotion: angular_velocity"):
+        build_chain([FixedHinge(), body()], ground=Ground(motion=bad))

@@ -32,10 +32,13 @@ class RigidBody:
     to_output:       body-frame vector from the input point to the output point, m.
     force, torque:   optional functions of time t returning a world-frame force applied at the
                      mass centre (N) and a world-frame torque (N m).
-    rotation:        initial rotation matrix (body to world); None for identity.  Bodies joined
-                     to their inboard neighbour by a fixed hinge take theirs from that hinge.
-    angular_velocity: initial world-frame angular velocity, rad/s.  Likewise taken from the
-                     inboard body across a fixed hinge.
+    rotation:        initial rotation matrix (body to world); None for identity behind a ball
+                     joint, and for the inboard body's frame turned by the hinge's rest rotation
+                     behind an elastic hinge.  Bodies joined to their inboard neighbour by a fixed
+                     hinge take theirs from that hinge.
+    angular_velocity: initial world-frame angular velocity, rad/s; None for zero (at rest in the
+                     world, not relative to the inboard body).  Taken from the inboard body
+                     across a fixed hinge.
     """
     mass: float
     inertia: object
