@@ -183,7 +183,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
                                          force[0], torque[0], ws.rot, ws.omega, ws.defl,
                                          ws.defl_rate, *ws.scratch(), ws.z)
     if status != 0:
-        raise DivergenceError(0, 0.0, _singular_cause(model, status, "consistent start"))
+        raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
         ws.omega_dot[k] = g_wd[0] if model.ground_locked[k] else ws.z[2 * k + 1, 3:6]
         if model.hinge_kind[k] == ELASTIC:
@@ -216,16 +216,24 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
             g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
         if not no_loads:
             force, torque = _loads(model, times[1:])
-        kstep.advance(mode, dt, coef, int(newton_iterations), newton_tol, *params,
-                      model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m], g_wd[:m],
-                      force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot, ws.hist_v,
-                      ws.hist_acc, ws.hist_p, ws.defl,
-                      ws.defl_rate, ws.defl_acc, ws.defl_pseudo, ws.z, *ws.scratch(),
-                      record_every, rec["rot"], rec["omega"], rec["omega_dot"], rec["z"],
-                      rec["defl"], rec["defl_rate"], info)
+        try:
+            kstep.advance(mode, dt, coef, int(newton_iterations), newton_tol, *params,
+                          model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
+                          g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
+                          ws.hist_v, ws.hist_acc, ws.hist_p, ws.defl, ws.defl_rate, ws.defl_acc,
+                          ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
+                          rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
+                          rec["defl_rate"], info)
+        except np.linalg.LinAlgError as err:
+            raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
+                                  f"somewhere in steps {done + 1}..{done + m} ({err}); "
+                                  f"{_DIRECT_HINT if method == 'direct' else ''}") from None
         if info[0] != kstep.OK:
             step = done + int(info[1]) + 1
-            raise DivergenceError(step, step * dt, _failure_cause(model, info))
+            cause = _failure_cause(model, mode, info)
+            if method == "direct" and info[0] == kstep.SINGULAR:
+                cause += "; " + _DIRECT_HINT
+            raise DivergenceError(step, step * dt, cause)
         for i in range(int(info[3])):
             samples.append({key: rec[key][i].copy() for key in rec})
             sample_steps.append(done + (i + 1) * record_every)
@@ -244,20 +252,30 @@ def _sample(ws):
                 z=ws.z.copy(), defl=ws.defl.copy(), defl_rate=ws.defl_rate.copy())
 
 
-def _singular_cause(model, status, where):
+_DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "
+                "long or stiff chains; use method='riccati'")
+
+
+def _singular_cause(model, mode, status, where):
+    """status: j + 1 for element j of the full-state sweeps (2k: hinge k, 2k + 1: body k), or
+    k + 1 for body k of the reduced sweeps; past the last element: the tip's equations."""
     j = status - 1
-    n_el = 2 * model.n_bodies
+    reduced = mode in (kstep.RICCATI_REDUCED, kstep.DIRECT_REDUCED)
+    n_el = model.n_bodies if reduced else 2 * model.n_bodies
     if j >= n_el:
         return f"{where}: the boundary equations at the free tip are singular"
+    if reduced:
+        return (f"{where}: the transfer across hinge '{model.hinge_names[j]}' and body "
+                f"'{model.body_names[j]}' is singular")
     k = j // 2
     what = f"hinge '{model.hinge_names[k]}'" if j % 2 == 0 else f"body '{model.body_names[k]}'"
     return f"{where}: the transfer at {what} is singular"
 
 
-def _failure_cause(model, info):
+def _failure_cause(model, mode, info):
     code = int(info[0])
     if code == kstep.SINGULAR:
-        return _singular_cause(model, int(info[2]), "step")
+        return _singular_cause(model, mode, int(info[2]), "step")
     return ("the state became NaN or infinite (the step is too large for the motion, or the "
             "model is unstable)")
 
