@@ -1,8 +1,8 @@
 """dttmm: the discrete-time transfer matrix method for multibody chains."""
-from .elements import BallJoint, ElasticHinge, FixedHinge, RigidBody
+from .elements import BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, RigidBody
 from .model import Ground, Model, PrescribedMotion, build_chain
 
-__all__ = ["RigidBody", "BallJoint", "FixedHinge", "ElasticHinge", "Ground", "PrescribedMotion",
+__all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge", "Ground", "PrescribedMotion",
            "Model", "build_chain"]
 from .solver import DivergenceError, simulate  # noqa: E402
 

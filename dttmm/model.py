@@ -4,7 +4,9 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from .elements import BALL, FIXED, BallJoint, ElasticHinge, FixedHinge, RigidBody
+from .elements import (BALL, BEAM, FIXED, RIGID, BallJoint, ElasticHinge, EulerBernoulliBeam,
+                       FixedHinge, RigidBody)
+from .elements.beam import BEAM_PARAM_SIZE, FAMILY, MODES, PINNED
 from .elements._checks import finite_vector, rotation_matrix
 from .elements.hinges import HINGE_KIND_NAMES, pack_hinge
 from .elements.rigid_body import pack_body
@@ -107,6 +109,18 @@ class Model:
     body_names: tuple
     hinge_names: tuple
     body_mass_center_inertia: np.ndarray  # (n, 3, 3) J_C in body axes (for energies)
+    body_kind: np.ndarray            # (n,) RIGID / BEAM
+    beam_params: np.ndarray          # (n, BEAM_PARAM_SIZE), zero rows for rigid bodies; for a
+                                     # beam, body_params holds the undeformed beam as a rigid body
+
+    @property
+    def n_modes(self):
+        """(n,) modal coordinates of each body: 2 x modes per plane for a beam, 0 if rigid."""
+        return np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES], 0).astype(np.int64)
+
+    @property
+    def has_beams(self):
+        return bool(np.any(self.body_kind == BEAM))
 
     @property
     def all_ball(self):
@@ -144,8 +158,9 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
             raise ValueError(f"Chain: element {2 * k} must be a hinge (BallJoint, FixedHinge, "
                              f"ElasticHinge), got {type(h).__name__}")
     for k, b in enumerate(bodies):
-        if not isinstance(b, RigidBody):
-            raise ValueError(f"Chain: element {2 * k + 1} must be a body, got {type(b).__name__}")
+        if not isinstance(b, (RigidBody, EulerBernoulliBeam)):
+            raise ValueError(f"Chain: element {2 * k + 1} must be a body (RigidBody, "
+                             f"EulerBernoulliBeam), got {type(b).__name__}")
     g = finite_vector("Chain", "gravity", gravity)
     if not isinstance(ground, Ground):
         raise ValueError("Chain: ground must be a Ground")
@@ -188,7 +203,11 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
 
-    _check_ball_lookahead(bodies, bv, kinds)
+    body_kind = np.array([BEAM if isinstance(b, EulerBernoulliBeam) else RIGID for b in bodies],
+                         dtype=np.int64)
+    beam_params = np.array([v.get("beam", np.zeros(BEAM_PARAM_SIZE)) for v in bv])
+    _check_mode_families(bodies, kinds, body_kind, beam_params)
+    _check_ball_lookahead(bodies, bv, kinds, body_kind)
 
     return Model(
         n_bodies=n,
@@ -207,17 +226,32 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
         body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
         hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
         body_mass_center_inertia=np.array([v["j_c"] for v in bv]),
+        body_kind=body_kind,
+        beam_params=beam_params,
     )
 
 
-def _check_ball_lookahead(bodies, bv, kinds):
+def _check_mode_families(bodies, kinds, body_kind, beam_params):
+    """Pinned (sine) modes need moment-free cuts at both ends of the beam."""
+    n = len(bodies)
+    for k in range(n):
+        if body_kind[k] != BEAM or beam_params[k, FAMILY] != PINNED:
+            continue
+        inboard_free = kinds[k] == BALL
+        outboard_free = k == n - 1 or kinds[k + 1] == BALL
+        if not (inboard_free and outboard_free):
+            raise ValueError(f"{bodies[k].label(k)}: mode_family 'pinned' needs a ball joint (or "
+                             f"the free tip) at both ends of the beam")
+
+
+def _check_ball_lookahead(bodies, bv, kinds, body_kind):
     """A body between two moment-free cuts (ball joints or the free tip) finds its rotation from
     its own moment equation, whose matrix is -chi1 (J_I + M l_IO^ l_IC^) (docs/rigid_body.md).
     If that matrix is singular (no inertia about the hinge-to-hinge axis) the step is undefined."""
     n = len(bodies)
     for k in range(n):
         outboard_free = k == n - 1 or kinds[k + 1] == BALL
-        if kinds[k] != BALL or not outboard_free:
+        if kinds[k] != BALL or not outboard_free or body_kind[k] != RIGID:
             continue
         v = bv[k]
         l_io, l_ic = v["l_io"], v["l_ic"]

@@ -156,6 +156,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     """
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
+    if model.has_beams:
+        raise ValueError("simulate: the DT-TMM solver does not handle EulerBernoulliBeam elements "
+                         "yet (issue 3); dttmm.reference.simulate_reference does")
     t_end = _check_positive("t_end", t_end)
     dt = _check_positive("dt", dt)
     n_steps = int(round(t_end / dt))
