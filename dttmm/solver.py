@@ -9,7 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .elements import BEAM
+from .elements.beam import LENGTH, MODES
 from .elements.hinges import ELASTIC
+from .kernels.beam import N_QUAD, gauss_points
 from .elements.rigid_body import TO_OUTPUT
 from .kernels import step as kstep
 from .model import Model
@@ -87,12 +90,36 @@ class Workspace:
         self.red_aq = np.zeros((n + 1, 6))
         self.dir_z = np.zeros((n_st, 12, 6))
         self.dir_o = np.zeros((n_st, 12))
+        n_eta = int(model.n_modes.sum())
+        self.eta = np.zeros(n_eta)            # beams' modal coordinates, rates, accelerations and
+        self.eta_d = np.zeros(n_eta)          # the integrator's pseudo-accelerations, flat over
+        self.eta_acc = np.zeros(n_eta)        # the beams (v coordinates of a beam, then w)
+        self.eta_p = np.zeros(n_eta)
+        self.eta_map = np.zeros((n_eta, 13))
+        self.beams = beam_tables(model)
 
     def scratch(self):
         return (self.kind, self.u, self.known_loads, self.sc_split, self.sc_s, self.sc_p,
                 self.sc_tinv, self.sc_t, self.sc_g, self.sc_gv, self.red_v, self.red_phi,
                 self.red_s, self.red_p, self.red_tinv, self.red_t, self.red_aq, self.dir_z,
                 self.dir_o)
+
+
+def beam_tables(model):
+    """(body_kind, beam_params, quadrature points, weights, mode shapes at the points, offsets
+    of each body's modal coordinates) for the kernels."""
+    n = model.n_bodies
+    max_modes = max(1, int(model.beam_params[:, MODES].max()))
+    xq, wq = np.zeros((n, N_QUAD)), np.zeros((n, N_QUAD))
+    modes = np.zeros((n, max_modes, N_QUAD))
+    for k in range(n):
+        if model.body_kind[k] == BEAM:
+            length = model.beam_params[k, LENGTH]
+            xq[k], wq[k] = gauss_points(length)
+            for j in range(int(model.beam_params[k, MODES])):
+                modes[k, j] = np.sin((j + 1) * np.pi * xq[k] / length)
+    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
+    return (model.body_kind, model.beam_params, xq, wq, modes, mode_off)
 
 
 def _check_positive(name, value):
@@ -156,9 +183,6 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     """
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
-    if model.has_beams:
-        raise ValueError("simulate: the DT-TMM solver does not handle EulerBernoulliBeam elements "
-                         "yet (issue 3); dttmm.reference.simulate_reference does")
     t_end = _check_positive("t_end", t_end)
     dt = _check_positive("dt", dt)
     n_steps = int(round(t_end / dt))
@@ -184,7 +208,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     force, torque = _loads(model, [0.0])
     status = kstep.initial_accelerations(mode, *params, g_acc[0], g_rot[0], g_w[0], g_wd[0],
                                          force[0], torque[0], ws.rot, ws.omega, ws.defl,
-                                         ws.defl_rate, *ws.scratch(), ws.z)
+                                         ws.defl_rate, *ws.scratch(), ws.z, ws.beams, ws.eta,
+                                         ws.eta_d, ws.eta_acc, ws.eta_map)
     if status != 0:
         raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
@@ -192,6 +217,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
         if model.hinge_kind[k] == ELASTIC:
             ws.defl_acc[k] = ws.z[2 * k + 1, 0:3] - ws.z[2 * k, 0:3]
     ws.hist_v[:], ws.hist_acc[:], ws.hist_p[:] = ws.omega, ws.omega_dot, ws.omega_dot
+    ws.eta_p[:] = ws.eta_acc
     ws.defl_pseudo[:] = ws.defl_acc
     ws.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -207,7 +233,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     n_rec_max = chunk // record_every
     rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
-               defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)))
+               defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)),
+               eta=np.empty((n_rec_max, len(ws.eta))), eta_d=np.empty((n_rec_max, len(ws.eta))))
     info = np.zeros(5, dtype=np.int64)
     max_newton = 0
     done = 0
@@ -226,7 +253,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
                           ws.hist_v, ws.hist_acc, ws.hist_p, ws.defl, ws.defl_rate, ws.defl_acc,
                           ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
                           rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
-                          rec["defl_rate"], info)
+                          rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,
+                          ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"])
         except np.linalg.LinAlgError as err:
             raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
                                   f"somewhere in steps {done + 1}..{done + m} ({err}); "
@@ -252,7 +280,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
 
 def _sample(ws):
     return dict(rot=ws.rot.copy(), omega=ws.omega.copy(), omega_dot=ws.omega_dot.copy(),
-                z=ws.z.copy(), defl=ws.defl.copy(), defl_rate=ws.defl_rate.copy())
+                z=ws.z.copy(), defl=ws.defl.copy(), defl_rate=ws.defl_rate.copy(),
+                eta=ws.eta.copy(), eta_d=ws.eta_d.copy())
 
 
 _DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "

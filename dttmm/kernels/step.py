@@ -13,7 +13,9 @@ exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").
 import numpy as np
 from numba import njit
 
+from ..elements import BEAM
 from ..elements.hinges import BALL, ELASTIC, FIXED
+from .beam import beam_transfer
 from .body import rigid_body_transfer
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .so3 import expm_so3, hat, left_jacobian, log_so3
@@ -104,10 +106,15 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 @njit(cache=True)
 def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                     g_rot, g_lam, g_w, g_wd, g_dwd, g_phi, rot_star, lam, phi_star, w, wd, dw, dwd,
-                    c1, c3, w1d, w3d, z_star, force, torque, at_start):
+                    c1, c3, w1d, w3d, z_star, force, torque, at_start, rot, w3, beams, modal):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
-    angular accelerations and elastic hinges are LOCKED (their loads are set by the caller)."""
+    angular accelerations and elastic hinges are LOCKED (their loads are set by the caller).
+    rot, w3: the bodies' rotations at the step's start and the integrator's offsets (beams).
+    beams = (body_kind, beam_params, xq, wq, modes, mode_off); modal = (eta, eta_d, w1e, w3e,
+    eta_dd_star, eta_map), flat over the beams' modal coordinates."""
+    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off = beams
+    eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     n = body_params.shape[0]
     for k in range(n):
         jh = 2 * k
@@ -133,6 +140,16 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
                                             phi_star[k])
         kind[jh + 1] = TRANSFER
+        if body_kind[k] == BEAM:
+            i0, i1 = mode_off[k], mode_off[k + 1]
+            m = (i1 - i0) // 2
+            zs = z_star[jh + 1].copy()
+            zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
+            beam_transfer(beam_params[k], beam_xq[k], beam_wq[k], beam_modes[k, :m], gravity,
+                          at_start, rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k],
+                          w1e[i0:i1], w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], zs,
+                          eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1])
+            continue
         load = body_params[k, 0] * gravity + force[k]
         rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
                             z_star[jh + 1], load, torque[k], u[jh + 1])
@@ -183,11 +200,12 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
                           rot, omega, defl, defl_rate,
                           kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
                           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
-                          z):
+                          z, beams, eta, eta_d, eta_acc, eta_map):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
-    elastic hinge's loads are known from its state (its outboard motion is free).  Returns the
-    status; z holds the stations' accelerations and loads."""
+    elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
+    accelerations come out in eta_acc.  Returns the status; z holds the stations' accelerations
+    and loads."""
     n = body_params.shape[0]
     zero3 = np.zeros((n, 3))
     zero33 = np.zeros((n, 3, 3))
@@ -198,7 +216,8 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
     _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                     g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3), rot, zero33, zero3,
                     omega, zero3, zero33, unit33, 1.0, 0.0, zero3, zero3, z_star, force, torque,
-                    True)
+                    True, rot, zero3, beams, (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta),
+                                              np.zeros_like(eta), eta_map))
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
             rot_in = g_rot if k == 0 else rot[k - 1]
@@ -212,8 +231,24 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    return _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g,
-                  sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z)
+    status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
+                    sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z,
+                    dir_o, z)
+    _modal_accelerations(beams, eta_map, z, eta_acc)
+    return status
+
+
+@njit(cache=True)
+def _modal_accelerations(beams, eta_map, z, eta_acc):
+    """eta'' of every beam from its input station (angular-acceleration slots)."""
+    body_kind, mode_off = beams[0], beams[5]
+    zin = np.empty(13)
+    zin[12] = 1.0
+    for k in range(body_kind.shape[0]):
+        if body_kind[k] == BEAM:
+            zin[0:12] = z[2 * k + 1]
+            for i in range(mode_off[k], mode_off[k + 1]):
+                eta_acc[i] = eta_map[i] @ zin
 
 
 @njit(cache=True)
@@ -225,11 +260,12 @@ def advance(mode, h, coef, newton_max, newton_tol,
             kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
             red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
             record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
-            out_info):
+            out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d):
     """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
     and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
     hist_v, hist_acc, hist_p: the rotation integrator's velocity, acceleration and
-    pseudo-acceleration (world frame).
+    pseudo-acceleration (world frame); eta, eta_d, eta_acc, eta_p: the same for the beams'
+    modal coordinates (flat), with their coordinates themselves.
     Records after every record_every-th step (counting from the chunk's start).
     out_info: [status, failing step, newton iterations used (max), recorded count, steps whose
     Newton iterations stopped above newton_tol (accumulated over chunks)]."""
@@ -248,6 +284,12 @@ def advance(mode, h, coef, newton_max, newton_tol,
     w1d = np.zeros((n, 3))
     w3d = np.zeros((n, 3))
     z_star = np.empty(z.shape)
+    n_eta = eta.shape[0]
+    w1e = np.zeros(n_eta)
+    w3e = np.zeros(n_eta)
+    eta_dd_star = np.zeros(n_eta)
+    eta_dd_new = np.zeros(n_eta)
+    modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
     e3 = np.empty((3, 3))
     g_lam = np.empty((3, 3))
     g_dwd = c1 * np.eye(3)
@@ -277,6 +319,11 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 a1, a3 = _offsets(h, coef, defl_rate[k], defl_acc[k], defl_pseudo[k])
                 w1d[k] = a1 - c1 * defl[k]
                 w3d[k] = a3 - c3 * defl[k]
+        if n_eta > 0:
+            a1, a3 = _offsets(h, coef, eta_d, eta_acc, eta_p)
+            w1e[:] = a1 - c1 * eta
+            w3e[:] = a3 - c3 * eta
+            eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * eta_p) + w1e
         z_star[:, :] = z
         z_star[0, 3:6] = phi_g
         for k in range(n):
@@ -297,7 +344,7 @@ def advance(mode, h, coef, newton_max, newton_tol,
             _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                             rot_now, g_lam, g_w[s], g_wd[s], g_dwd, phi_g, rot_star, lam,
                             phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
-                            torque[s], False)
+                            torque[s], False, rot, w3, beams, modal)
             if not np.all(np.isfinite(u)):
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
@@ -310,9 +357,12 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 out_info[1] = s
                 out_info[2] = status
                 return
+            _modal_accelerations(beams, eta_map, z, eta_dd_new)
             # back from angular-acceleration to phi slots
             z[0, 3:6] = phi_g
             change = 0.0
+            for i in range(n_eta):
+                change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
             for k in range(n):
                 phi = phi_star[k] + np.linalg.solve(dwd[k], z[2 * k + 1, 3:6] - wd[k])
                 z[2 * k + 1, 3:6] = phi
@@ -323,6 +373,7 @@ def advance(mode, h, coef, newton_max, newton_tol,
             if it == newton_max or change <= newton_tol:
                 break
             z_star[:, :] = z
+            eta_dd_star[:] = eta_dd_new
             for k in range(n):
                 if not locked[k]:
                     phi_star[k] = z[2 * k + 1, 3:6]
@@ -352,6 +403,12 @@ def advance(mode, h, coef, newton_max, newton_tol,
             for i in range(3):
                 if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                     finite = False
+        if n_eta > 0:
+            eta_new = (eta_dd_new - w1e) / c1
+            _advance_history(h, coef, eta_new - eta, eta_d, eta_acc, eta_p)
+            eta[:] = eta_new
+            if not np.all(np.isfinite(eta_d)):
+                finite = False
         if not finite:
             out_info[0] = NOT_FINITE
             out_info[1] = s
@@ -363,6 +420,8 @@ def advance(mode, h, coef, newton_max, newton_tol,
             rec_z[n_rec] = z
             rec_defl[n_rec] = defl
             rec_defl_rate[n_rec] = defl_rate
+            rec_eta[n_rec] = eta
+            rec_eta_d[n_rec] = eta_d
             n_rec += 1
     out_info[0] = OK
     out_info[1] = n_steps

@@ -1,0 +1,152 @@
+"""Transfer of an Euler-Bernoulli modal beam over one time step (docs/beam.md).
+
+Station slots as for the rigid body but with the angular acceleration in the rotation slot (the
+sweep's scaling, docs/assembly.md): z = [a, w', m, q].  The beam's modal accelerations eta'' are
+internal unknowns, fixed by its modal equations; eliminating them leaves a 12 x 13 transfer like
+a rigid body's, plus the affine map eta'' = E [z_in; 1] used to recover them.
+
+The nonlinear relations are evaluated exactly (Gauss-Legendre quadrature along the beam) and
+linearized by central differences about the guess: the affine map reproduces the relations at
+the guess, so the step's solution is that of the exact linearization up to the differences'
+error in the slope (~1e-10 relative), which is second order in the O(h^3) predictor error.
+"""
+import numpy as np
+from numba import njit
+
+from .so3 import expm_so3
+
+N_QUAD = 24
+
+
+def gauss_points(length):
+    """N_QUAD Gauss-Legendre points and weights on [0, length]."""
+    x, w = np.polynomial.legendre.leggauss(N_QUAD)
+    return 0.5 * length * (x + 1.0), 0.5 * length * w
+
+
+@njit(cache=True)
+def beam_relations(bp, xq, wq, modes, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i, m_i, q_i,
+                   out, residual):
+    """The beam's exact relations in a given state (docs/beam.md):
+    out = [a_O, w'_O (= w'), m_O, q_O]; residual = the modal equations' left minus right sides.
+    bp: beam parameter row; xq, wq: quadrature; modes (m, N_QUAD): Y_k at the points."""
+    length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
+    m = modes.shape[0]
+    e1 = rot[:, 0].copy()
+    e2 = rot[:, 1].copy()
+    e3 = rot[:, 2].copy()
+    sum_f = np.zeros(3)
+    sum_m = np.zeros(3)
+    for r in range(2 * m):
+        residual[r] = 0.0
+    for j in range(xq.shape[0]):
+        v = w_ = vd = wdd = vdd = wddd = 0.0
+        for k in range(m):
+            y = modes[k, j]
+            v += y * eta[k]
+            w_ += y * eta[m + k]
+            vd += y * eta_d[k]
+            wdd += y * eta_d[m + k]
+            vdd += y * eta_dd[k]
+            wddd += y * eta_dd[m + k]
+        rho = xq[j] * e1 + v * e2 + w_ * e3
+        u_dot = vd * e2 + wdd * e3
+        u_ddot = vdd * e2 + wddd * e3
+        acc = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho)) + 2.0 * np.cross(w, u_dot)
+               + u_ddot)
+        f = mu * wq[j] * (gravity - acc)          # force on the segment: gravity minus inertia
+        sum_f += f
+        sum_m += np.cross(rho, f)
+        f2 = e2[0] * f[0] + e2[1] * f[1] + e2[2] * f[2]
+        f3 = e3[0] * f[0] + e3[1] * f[1] + e3[2] * f[2]
+        for k in range(m):
+            residual[k] -= modes[k, j] * f2
+            residual[m + k] -= modes[k, j] * f3
+    for k in range(m):
+        beta_l = (k + 1) * np.pi / length
+        modal_mass = 0.5 * mu * length
+        for r, ei in ((k, ei_v), (m + k, ei_w)):
+            stiffness = ei * beta_l ** 4 * 0.5 * length
+            omega_k = beta_l * beta_l * np.sqrt(ei / mu)
+            residual[r] += 2.0 * zeta * omega_k * modal_mass * eta_d[r] + stiffness * eta[r]
+    q_o = q_i + sum_f
+    rho_l = length * e1
+    jp = j_p * length
+    spin = jp * (e1 @ wd) * e1 + jp * (e1 @ w) * np.cross(w, e1)   # J_p,w w' + w x J_p,w w
+    out[0:3] = a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
+    out[3:6] = wd
+    out[6:9] = m_i - np.cross(rho_l, q_o) + sum_m - spin
+    out[9:12] = q_o
+
+
+@njit(cache=True)
+def _evaluate(bp, xq, wq, modes, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+              w1e, w3e, eta_n, eta_d_n, x, out, residual):
+    """beam_relations with the state expressed in the step's unknowns
+    x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md)."""
+    n = residual.shape[0]
+    wd = x[3:6]
+    eta_dd = x[12:12 + n]
+    if start:
+        rot, w, eta, eta_d = rot_n, w_n, eta_n, eta_d_n
+    else:
+        phi = phi_star + (wd - wd_star) / c1
+        e = np.empty((3, 3))
+        expm_so3(phi, e)
+        rot = e @ rot_n
+        w = c3 * phi + w3
+        eta = (eta_dd - w1e) / c1
+        eta_d = c3 * eta + w3e
+    beam_relations(bp, xq, wq, modes, gravity, rot, w, wd, eta, eta_d, eta_dd, x[0:3], x[6:9],
+                   x[9:12], out, residual)
+
+
+@njit(cache=True)
+def beam_transfer(bp, xq, wq, modes, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                  w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
+    """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
+    (n x 13) with eta'' = eta_map [z_I; 1], linearized about (z_star, eta_dd_star).
+
+    start: the consistent-start solve (rotation, rates and modal state fixed, w' and eta''
+    free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
+    eta' = c3 eta + w3e."""
+    n = eta_dd_star.shape[0]
+    nx = 12 + n
+    x0 = np.empty(nx)
+    x0[0:12] = z_star
+    x0[12:] = eta_dd_star
+    o0 = np.empty(12)
+    r0 = np.empty(n)
+    _evaluate(bp, xq, wq, modes, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+              w1e, w3e, eta_n, eta_d_n, x0, o0, r0)
+    d_o = np.zeros((12, nx))
+    d_r = np.zeros((n, nx))
+    op = np.empty(12)
+    om = np.empty(12)
+    rp = np.empty(n)
+    rm = np.empty(n)
+    xp = x0.copy()
+    for c in range(nx):
+        if 6 <= c < 9:
+            d_o[c, c] = 1.0              # m_O = m_I + ...: exactly linear, no difference needed
+            continue
+        step = 1e-3 * (1.0 + abs(x0[c]))
+        xp[c] = x0[c] + step
+        _evaluate(bp, xq, wq, modes, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                  w1e, w3e, eta_n, eta_d_n, xp, op, rp)
+        xp[c] = x0[c] - step
+        _evaluate(bp, xq, wq, modes, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                  w1e, w3e, eta_n, eta_d_n, xp, om, rm)
+        xp[c] = x0[c]
+        d_o[:, c] = (op - om) / (2.0 * step)
+        d_r[:, c] = (rp - rm) / (2.0 * step)
+    # modal equations: r0 + d_r[:, :12] dz + d_r[:, 12:] dy = 0
+    r_y_inv = np.linalg.inv(np.ascontiguousarray(d_r[:, 12:]))
+    e_z = -r_y_inv @ np.ascontiguousarray(d_r[:, :12])
+    e_0 = eta_dd_star - r_y_inv @ r0 - e_z @ z_star
+    eta_map[:, 0:12] = e_z
+    eta_map[:, 12] = e_0
+    o_y = np.ascontiguousarray(d_o[:, 12:])
+    u_z = np.ascontiguousarray(d_o[:, :12]) + o_y @ e_z
+    u[:, 0:12] = u_z
+    u[:, 12] = o0 + o_y @ (e_0 + e_z @ z_star - eta_dd_star) - u_z @ z_star
