@@ -333,8 +333,11 @@ def _result(model, t, samples, wall, n_steps, info):
             r_prev = r_in[i, k] + rho
             v_prev = v_in[i, k] + np.cross(omega[i, k], rho)
     r_c, r_o = point_positions(model, rot, r_in)
+    eta = np.array([s["eta"] for s in samples])
+    eta_d = np.array([s["eta_d"] for s in samples])
     energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i],
-                                        ground_rotation=model.ground_state(ti)[3])
+                                        ground_rotation=model.ground_state(ti)[3], eta=eta[i],
+                                        eta_dot=eta_d[i])
                          for i, ti in enumerate(t)])
     inputs = 2 * np.arange(n) + 1
     return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
@@ -342,4 +345,6 @@ def _result(model, t, samples, wall, n_steps, info):
                   angular_acceleration=np.array([s["omega_dot"] for s in samples]),
                   force=z[:, inputs, 9:12], moment=z[:, inputs, 6:9],
                   kinetic=energies[:, 0], potential=energies[:, 1], wall_time=wall,
-                  n_steps=n_steps, info=info, velocity_input=v_in)
+                  n_steps=n_steps, info=info, velocity_input=v_in,
+                  modal_coordinates=eta if model.has_beams else None,
+                  modal_velocities=eta_d if model.has_beams else None)
