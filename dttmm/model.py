@@ -109,6 +109,7 @@ class Model:
     body_names: tuple
     hinge_names: tuple
     body_mass_center_inertia: np.ndarray  # (n, 3, 3) J_C in body axes (for energies)
+    tip_pinned: bool                 # the tip is joined to the ground by a ball joint (else free)
     body_kind: np.ndarray            # (n,) RIGID / BEAM
     beam_params: np.ndarray          # (n, BEAM_PARAM_SIZE), zero rows for rigid bodies; for a
                                      # beam, body_params holds the undeformed beam as a rigid body
@@ -139,13 +140,18 @@ class Model:
         return self.ground_motion(t)
 
 
-def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground()) -> Model:
+def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
+                tip="free") -> Model:
     """Validate a chain described root to tip and freeze it into a Model.
 
     elements alternates hinges and bodies, starting with the root hinge (which joins the first
-    body to the ground) and ending with the tip body, whose output point is free:
+    body to the ground) and ending with the tip body:
         [hinge_0, body_0, hinge_1, body_1, ..., hinge_{n-1}, body_{n-1}]
+    tip: "free" (default), or "ball": the tip body's output point is joined to the ground by a
+    ball-and-socket joint where it starts (a fixed point; e.g. a simply supported beam).
     """
+    if tip not in ("free", "ball"):
+        raise ValueError(f"Chain: tip must be 'free' or 'ball', got {tip!r}")
     elements = list(elements)
     if len(elements) == 0:
         raise ValueError("Chain: elements is empty; a chain needs at least a root hinge and a body")
@@ -226,6 +232,7 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
         body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
         hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
         body_mass_center_inertia=np.array([v["j_c"] for v in bv]),
+        tip_pinned=tip == "ball",
         body_kind=body_kind,
         beam_params=beam_params,
     )

@@ -206,7 +206,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     wall0 = time.perf_counter()
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
-    status = kstep.initial_accelerations(mode, *params, g_acc[0], g_rot[0], g_w[0], g_wd[0],
+    status = kstep.initial_accelerations(mode, model.tip_pinned, *params, g_acc[0], g_rot[0],
+                                         g_w[0], g_wd[0],
                                          force[0], torque[0], ws.rot, ws.omega, ws.defl,
                                          ws.defl_rate, *ws.scratch(), ws.z, ws.beams, ws.eta,
                                          ws.eta_d, ws.eta_acc, ws.eta_map)
@@ -247,7 +248,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
         if not no_loads:
             force, torque = _loads(model, times[1:])
         try:
-            kstep.advance(mode, dt, coef, int(newton_iterations), newton_tol, *params,
+            kstep.advance(mode, model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
+                          *params,
                           model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
                           g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
                           ws.hist_v, ws.hist_acc, ws.hist_p, ws.defl, ws.defl_rate, ws.defl_acc,

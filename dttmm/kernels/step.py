@@ -159,21 +159,22 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
 
 
 @njit(cache=True)
-def _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-           red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z):
+def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
+           sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z):
     """Solve the assembled step into z (stations' states); returns 0 or a singularity code."""
     if mode == RICCATI_FULL:
-        return riccati_full(kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
-                            sc_g, sc_gv, z)
+        return riccati_full(kind, u, known_loads, root_f, tip_pinned, sc_split, sc_s, sc_p,
+                            sc_tinv, sc_t, sc_g, sc_gv, z)
     if mode == DIRECT_FULL:
-        return direct_full(kind, u, known_loads, root_f, dir_z, dir_o, sc_gv, sc_g, z)
+        return direct_full(kind, u, known_loads, root_f, tip_pinned, dir_z, dir_o, sc_gv, sc_g, z)
     n = red_v.shape[0]
     for k in range(n):
         fold_ball_body(u[2 * k + 1], red_v[k], red_phi[k])
     if mode == RICCATI_REDUCED:
-        status = riccati_reduced(red_v, root_f[0:3], red_s, red_p, red_tinv, red_t, red_aq)
+        status = riccati_reduced(red_v, root_f[0:3], tip_pinned, red_s, red_p, red_tinv, red_t,
+                                 red_aq)
     else:
-        status = direct_reduced(red_v, root_f[0:3], red_aq)
+        status = direct_reduced(red_v, root_f[0:3], tip_pinned, red_aq)
     if status != 0:
         return status
     z[:, :] = 0.0
@@ -195,7 +196,7 @@ def _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc
 
 
 @njit(cache=True)
-def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
+def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_params, gravity,
                           g_acc, g_rot, g_w, g_wd, force, torque,
                           rot, omega, defl, defl_rate,
                           kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
@@ -231,7 +232,7 @@ def initial_accelerations(mode, body_params, hinge_kind, hinge_params, gravity,
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
+    status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
                     sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z,
                     dir_o, z)
     _modal_accelerations(beams, eta_map, z, eta_acc)
@@ -252,7 +253,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
 
 
 @njit(cache=True)
-def advance(mode, h, coef, newton_max, newton_tol,
+def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
             g_acc, g_rot, g_w, g_wd, force, torque,
             rot, omega, omega_dot, hist_v, hist_acc, hist_p,
@@ -349,7 +350,7 @@ def advance(mode, h, coef, newton_max, newton_tol,
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
                 return
-            status = _solve(mode, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
+            status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
                             sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
                             red_aq, dir_z, dir_o, z)
             if status != 0:

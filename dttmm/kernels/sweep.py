@@ -47,6 +47,22 @@ def _station_basis(split, s_mat, p_vec, basis, offset):
 
 
 @njit(cache=True)
+def _tip_system(basis, offset, tip_pinned):
+    """W e = rhs for the tip: m = 0 and q = 0 (free), or a = 0 and m = 0 (joined to the ground by
+    a ball joint)."""
+    w = np.empty((6, 6))
+    rhs = np.empty(6)
+    first = 0 if tip_pinned else 9
+    for r in range(3):
+        rhs[r] = -offset[6 + r]
+        rhs[3 + r] = -offset[first + r]
+        for c in range(6):
+            w[r, c] = basis[6 + r, c]
+            w[3 + r, c] = basis[first + r, c]
+    return w, rhs
+
+
+@njit(cache=True)
 def _moment_force_system(basis, offset, target):
     """W e = rhs: the rows of z = basis e + offset that fix [m; q] = target."""
     w = np.empty((6, 6))
@@ -59,11 +75,13 @@ def _moment_force_system(basis, offset, target):
 
 
 @njit(cache=True)
-def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec, g_mat, g_vec, z):
+def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, t_inv, t_vec,
+                 g_mat, g_vec, z):
     """Solve one step; returns 0, or j + 1 if element j (or the tip, j = n_el) is singular.
 
     kind (n_el,), u (n_el, 12, 13): element transfers; known_loads (n_el, 12): for LOCKED
-    elements [m_in, q_in, m_out, q_out]; root_f: [a, phi] of the ground station.
+    elements [m_in, q_in, m_out, q_out]; root_f: [a, phi] of the ground station; tip_pinned: the
+    tip is joined to the ground by a ball joint (else free).
     Scratch: split, s_mat, p_vec (stations), t_inv, t_vec, g_mat, g_vec (elements).  Output z
     (n_el + 1, 12): every station's state.
     """
@@ -134,12 +152,14 @@ def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec
                 g_mat[j, :, :] = 0.0
                 split[j + 1] = SPLIT_C
                 p_vec[j + 1] = known_loads[j, 6:12]
-    # free tip: m = 0, q = 0
     _station_basis(split[n_el], s_mat[n_el], p_vec[n_el], basis, offset)
-    w, rhs = _moment_force_system(basis, offset, np.zeros(6))
-    if abs(np.linalg.det(w)) == 0.0:
+    w, rhs = _tip_system(basis, offset, tip_pinned)
+    if tip_pinned:
+        e = np.linalg.pinv(w, rcond=1e-12) @ rhs          # least norm, as in riccati_reduced
+    elif abs(np.linalg.det(w)) == 0.0:
         return n_el + 1
-    e = np.linalg.solve(w, rhs)
+    else:
+        e = np.linalg.solve(w, rhs)
     z[n_el] = basis @ e + offset
     for j in range(n_el - 1, -1, -1):
         k = kind[j]
@@ -160,7 +180,7 @@ def riccati_full(kind, u, known_loads, root_f, split, s_mat, p_vec, t_inv, t_vec
 
 
 @njit(cache=True)
-def direct_full(kind, u, known_loads, root_f, zmat, zoff, x0, nmat, z):
+def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, z):
     """Multiply the transfers out from the root; returns 0 or j + 1 for a singular element j.
 
     zmat (n_el + 1, 12, 6), zoff (n_el + 1, 12): stations as z = Z x + o; x0 (n_el, 6),
@@ -211,10 +231,13 @@ def direct_full(kind, u, known_loads, root_f, zmat, zoff, x0, nmat, z):
             zoff[j + 1, 6:12] = known_loads[j, 6:12]
             for i in range(6):
                 zmat[j + 1, i, i] = 1.0              # outboard a and phi are new parameters
-    w = zmat[n_el, 6:12, :]
-    if abs(np.linalg.det(w)) == 0.0:
+    w, rhs = _tip_system(zmat[n_el], zoff[n_el], tip_pinned)
+    if tip_pinned:
+        x = np.linalg.pinv(w, rcond=1e-12) @ rhs          # least norm, as in riccati_reduced
+    elif abs(np.linalg.det(w)) == 0.0:
         return n_el + 1
-    x = np.linalg.solve(w, -zoff[n_el, 6:12])
+    else:
+        x = np.linalg.solve(w, rhs)
     z[n_el] = zmat[n_el] @ x + zoff[n_el]
     for j in range(n_el - 1, -1, -1):
         if kind[j] == BALL or kind[j] == LOCKED:
@@ -247,8 +270,9 @@ def fold_ball_body(u, v, phi_map):
 
 
 @njit(cache=True)
-def riccati_reduced(v, a_root, s_mat, p_vec, t_inv, t_vec, aq):
-    """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output."""
+def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
+    """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output.
+    Tip: q = 0 (free) or a = 0 (tip_pinned)."""
     n = v.shape[0]
     s_mat[0, :, :] = 0.0
     p_vec[0, :] = a_root
@@ -267,8 +291,14 @@ def riccati_reduced(v, a_root, s_mat, p_vec, t_inv, t_vec, aq):
         p_vec[k + 1] = vaa @ p_vec[k] + v[k, 0:3, 6] - s_new @ tv
         t_inv[k] = ti
         t_vec[k] = tv
-    aq[n, 0:3] = p_vec[n]      # tip: q = 0
-    aq[n, 3:6] = 0.0
+    if tip_pinned:
+        # least norm: a chain closed between two fixed points can leave the force along an
+        # inextensible member statically indeterminate (no pre-stress is assumed)
+        aq[n, 3:6] = -np.linalg.pinv(np.ascontiguousarray(s_mat[n]), rcond=1e-12) @ p_vec[n]
+        aq[n, 0:3] = 0.0
+    else:
+        aq[n, 0:3] = p_vec[n]
+        aq[n, 3:6] = 0.0
     for k in range(n - 1, -1, -1):
         q = t_inv[k] @ (aq[k + 1, 3:6] - t_vec[k])
         aq[k, 3:6] = q
@@ -277,20 +307,26 @@ def riccati_reduced(v, a_root, s_mat, p_vec, t_inv, t_vec, aq):
 
 
 @njit(cache=True)
-def direct_reduced(v, a_root, aq):
-    """Multiply the reduced maps out (the paper's way), solve q_0 from the free tip, q_N = 0,
-    and propagate forward.  Loses accuracy on long or stiff chains (docs/assembly.md)."""
+def direct_reduced(v, a_root, tip_pinned, aq):
+    """Multiply the reduced maps out (the paper's way), solve q_0 from the tip (free: q_N = 0;
+    pinned: a_N = 0), and propagate forward.  Loses accuracy on long or stiff chains
+    (docs/assembly.md)."""
     n = v.shape[0]
     prod = np.eye(7)
     step = np.eye(7)
     for k in range(n):
         step[0:6, :] = v[k]
         prod = step @ prod
-    pqq = prod[3:6, 3:6]
-    if abs(np.linalg.det(pqq)) == 0.0:
-        return n + 1
+    r = 0 if tip_pinned else 3
+    pqq = np.ascontiguousarray(prod[r:r + 3, 3:6])
+    rhs = np.ascontiguousarray(prod[r:r + 3, 0:3]) @ a_root + prod[r:r + 3, 6]
     aq[0, 0:3] = a_root
-    aq[0, 3:6] = -np.linalg.solve(pqq, prod[3:6, 0:3] @ a_root + prod[3:6, 6])
+    if tip_pinned:
+        aq[0, 3:6] = -np.linalg.pinv(pqq, rcond=1e-12) @ rhs     # least norm (riccati_reduced)
+    elif abs(np.linalg.det(pqq)) == 0.0:
+        return n + 1
+    else:
+        aq[0, 3:6] = -np.linalg.solve(pqq, rhs)
     for k in range(n):
         aq[k + 1] = np.ascontiguousarray(v[k, :, 0:6]) @ aq[k] + v[k, :, 6]
     return 0
