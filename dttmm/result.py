@@ -4,6 +4,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .elements import BEAM
+from .elements.beam import (EI_V, EI_W, LENGTH, MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH)
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
 
@@ -17,7 +19,11 @@ class Result:
     angular_velocity, angular_acceleration (T, n, 3): world frame.
     force, moment (T, n, 3): what the inboard side exerts on each body at its input point
         (moment about that point), world frame.
-    kinetic, potential (T,): J; potential counts gravity and the hinges' springs.
+    kinetic, potential (T,): J; potential counts gravity, the hinges' springs and the beams'
+        strain energy.
+    modal_coordinates, modal_velocities (T, total modes): the beams' modal coordinates eta and
+        rates, concatenated in body order (a beam's v coordinates first, then w); None when the
+        chain has no beams (or the solver does not record them).
     """
     method: str
     t: np.ndarray
@@ -35,6 +41,8 @@ class Result:
     n_steps: int = 0
     info: dict = field(default_factory=dict)
     velocity_input: np.ndarray = None      # (T, n, 3) world velocity of each input point
+    modal_coordinates: np.ndarray = None   # (T, total modes) beams' eta, body order, v then w
+    modal_velocities: np.ndarray = None    # (T, total modes) their rates
 
     @property
     def total_energy(self):
@@ -126,23 +134,77 @@ def _log_so3(r):
     return 2.0 * np.arctan2(s, w) / s * np.array([x, y, z]) if s > 1e-300 else np.zeros(3)
 
 
-def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None):
+# Gauss-Legendre rule for the beam integrals in chain_energies: 64 points on [0, L] integrate
+# the products of sin(j pi x / L), sin(k pi x / L) (j, k <= 10) times x^2 to ~1e-16 relative
+# (tests/test_reference_beam.py checks it against the closed forms).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
+
+
+def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
+    """Kinetic energy (int 1/2 mu |r'|^2 dx + 1/2 j_p L (w . A e1)^2) and potential energy
+    (-int mu g . r dx + sum 1/2 k eta^2) of one pinned beam (docs/beam.md), by quadrature."""
+    length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
+    x = 0.5 * length * (_GL_X + 1.0)
+    wq = 0.5 * length * _GL_W
+    k = np.arange(1, nm + 1)
+    y = np.sin(np.outer(x, k) * np.pi / length)            # (Q, nm)
+    p = np.zeros((len(x), 3))                              # x e1 + u(x), body frame
+    p[:, 0] = x
+    p[:, 1] = y @ eta[:nm]
+    p[:, 2] = y @ eta[nm:2 * nm]
+    u_dot = np.zeros((len(x), 3))
+    u_dot[:, 1] = y @ eta_dot[:nm]
+    u_dot[:, 2] = y @ eta_dot[nm:2 * nm]
+    rho = p @ a.T
+    vel = v_in + np.cross(w, rho) + u_dot @ a.T
+    spin = w @ a[:, 0]
+    kinetic = 0.5 * mu * wq @ np.einsum("qi,qi->q", vel, vel)
+    kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
+    potential = -mu * wq @ ((r_in + rho) @ gravity)
+    half = 0.5 * length * (k * np.pi / length) ** 4           # k_k = EI (k pi / L)^4 L / 2
+    potential += 0.5 * np.sum(half * (row[EI_V] * eta[:nm] ** 2 + row[EI_W] * eta[nm:2 * nm] ** 2))
+    return kinetic, potential
+
+
+def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
+                   eta=None, eta_dot=None):
     """Kinetic and potential energy of one state, from positions and velocities alone.
 
     rotation (n,3,3), omega (n,3), r_in, v_in (n,3) input-point positions and velocities,
     deflection (n,3): world deflection d of each elastic hinge (ignored for other hinges),
-    ground_rotation: the ground frame at this time (default: the model's, at rest or t = 0).
+    ground_rotation: the ground frame at this time (default: the model's, at rest or t = 0),
+    eta, eta_dot: the beams' modal coordinates and rates, flat and concatenated in body order
+    (a beam's v coordinates first, then w), as Result.modal_coordinates; None for zero.  A beam
+    counts int 1/2 mu |r'(x)|^2 dx + 1/2 j_p L (w . A e1)^2 kinetic and -int mu g . r(x) dx +
+    sum 1/2 k_k eta_k^2 potential energy (docs/beam.md).
     """
     kinetic = potential = 0.0
     ground_rot = model.ground_rotation if ground_rotation is None else ground_rotation
+    n_modes = model.n_modes
+    total = int(np.sum(n_modes))
+    eta = np.zeros(total) if eta is None else np.asarray(eta, dtype=float).reshape(-1)
+    eta_dot = np.zeros(total) if eta_dot is None else np.asarray(eta_dot, dtype=float).reshape(-1)
+    if eta.size != total or eta_dot.size != total:
+        raise ValueError(f"chain_energies: eta and eta_dot must hold {total} modal coordinates "
+                         f"(got {eta.size} and {eta_dot.size})")
+    offset = 0
     for k in range(model.n_bodies):
         p = model.body_params[k]
         a = rotation[k]
-        rho_c = a @ p[TO_MASS_CENTER]
-        v_c = v_in[k] + np.cross(omega[k], rho_c)
-        j_c = a @ model.body_mass_center_inertia[k] @ a.T
-        kinetic += 0.5 * p[MASS] * v_c @ v_c + 0.5 * omega[k] @ j_c @ omega[k]
-        potential -= p[MASS] * model.gravity @ (r_in[k] + rho_c)
+        if model.body_kind[k] == BEAM:
+            nm = int(n_modes[k])
+            t_k, v_k = _beam_energies(model.beam_params[k], a, omega[k], r_in[k], v_in[k],
+                                      eta[offset:offset + nm], eta_dot[offset:offset + nm],
+                                      model.gravity)
+            offset += nm
+            kinetic += t_k
+            potential += v_k
+        else:
+            rho_c = a @ p[TO_MASS_CENTER]
+            v_c = v_in[k] + np.cross(omega[k], rho_c)
+            j_c = a @ model.body_mass_center_inertia[k] @ a.T
+            kinetic += 0.5 * p[MASS] * v_c @ v_c + 0.5 * omega[k] @ j_c @ omega[k]
+            potential -= p[MASS] * model.gravity @ (r_in[k] + rho_c)
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
             a_in = ground_rot if k == 0 else rotation[k - 1]
@@ -151,6 +213,36 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
             potential += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
             potential += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
     return kinetic, potential
+
+
+def beam_midpoint_deflection(model, result, body):
+    """(T, 2) mid-span deflection of beam `body` relative to its chord, d = A u(L/2), projected on
+    e2 and e3: e1 = A e1 is the chord direction, e3 the unit part of world z orthogonal to e1,
+    e2 = e3 x e1 (for a chord in the world x-y plane: e2 is in that plane, e3 = world z).
+    Undefined (NaN) while the chord is along world z."""
+    body = int(body)
+    if not 0 <= body < model.n_bodies or model.body_kind[body] != BEAM:
+        raise ValueError(f"beam_midpoint_deflection: body {body} is not an EulerBernoulliBeam")
+    if result.modal_coordinates is None:
+        raise ValueError("beam_midpoint_deflection: the result holds no modal coordinates")
+    n_modes = model.n_modes
+    offset = int(np.sum(n_modes[:body]))
+    nm = int(model.beam_params[body, MODES])
+    eta = np.asarray(result.modal_coordinates)[:, offset:offset + 2 * nm]
+    y_mid = np.sin(np.arange(1, nm + 1) * np.pi / 2.0)
+    rot = np.asarray(result.rotation)[:, body]
+    u = np.zeros((len(eta), 3))
+    u[:, 1] = eta[:, :nm] @ y_mid
+    u[:, 2] = eta[:, nm:] @ y_mid
+    d = np.einsum("tij,tj->ti", rot, u)
+    e1 = rot[:, :, 0]
+    z = np.array([0.0, 0.0, 1.0])
+    e3 = z - e1[:, 2:3] * e1
+    norm = np.linalg.norm(e3, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        e3 = np.where(norm > 1e-12, e3 / norm, np.nan)
+    e2 = np.cross(e3, e1)
+    return np.stack([np.einsum("ti,ti->t", d, e2), np.einsum("ti,ti->t", d, e3)], axis=1)
 
 
 def point_positions(model, rotation, r_in):

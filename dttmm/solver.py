@@ -12,7 +12,7 @@ import numpy as np
 from .elements import BEAM
 from .elements.beam import LENGTH, MODES
 from .elements.hinges import ELASTIC
-from .kernels.beam import N_QUAD, gauss_points
+from .kernels.beam import gauss_points, quadrature_size
 from .elements.rigid_body import TO_OUTPUT
 from .kernels import step as kstep
 from .model import Model
@@ -110,12 +110,13 @@ def beam_tables(model):
     of each body's modal coordinates) for the kernels."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
-    xq, wq = np.zeros((n, N_QUAD)), np.zeros((n, N_QUAD))
-    modes = np.zeros((n, max_modes, N_QUAD))
+    n_q = quadrature_size(max_modes)
+    xq, wq = np.zeros((n, n_q)), np.zeros((n, n_q))
+    modes = np.zeros((n, max_modes, n_q))
     for k in range(n):
         if model.body_kind[k] == BEAM:
             length = model.beam_params[k, LENGTH]
-            xq[k], wq[k] = gauss_points(length)
+            xq[k], wq[k] = gauss_points(length, n_q)
             for j in range(int(model.beam_params[k, MODES])):
                 modes[k, j] = np.sin((j + 1) * np.pi * xq[k] / length)
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
