@@ -11,7 +11,6 @@ import json
 import statistics
 import time
 
-import numpy as np
 
 from dttmm import simulate
 from dttmm.chains import rigid_chain

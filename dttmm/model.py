@@ -1,6 +1,6 @@
 """The chain description: built from elements, validated once, frozen into flat arrays."""
 from dataclasses import dataclass
-from typing import Callable, Optional, Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 

@@ -67,7 +67,10 @@ class Result:
                             angular_velocity=self.angular_velocity,
                             angular_acceleration=self.angular_acceleration,
                             force=self.force, moment=self.moment, kinetic=self.kinetic,
-                            potential=self.potential, total_energy=self.total_energy)
+                            potential=self.potential, total_energy=self.total_energy,
+                            **({} if self.modal_coordinates is None else dict(
+                                modal_coordinates=self.modal_coordinates,
+                                modal_velocities=self.modal_velocities)))
 
     def save_csv(self, path):
         """t, then x,y,z of each body's output point, then the energies."""

@@ -3,7 +3,6 @@ import numpy as np
 import pytest
 from helpers import crossing_period, rot_z
 
-import dttmm
 from dttmm import (BallJoint, ElasticHinge, FixedHinge, Ground, PrescribedMotion, RigidBody,
                    build_chain, simulate)
 from dttmm.chains import unit_link

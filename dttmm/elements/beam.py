@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import finite_scalar, finite_vector, optional_function, rotation_matrix
+from ._checks import finite_scalar, finite_vector, rotation_matrix
 
 PINNED = 0            # sin(k pi x / L): between two moment-free cuts (ball joints, free tip)
 MODE_FAMILY_NAMES = {"pinned": PINNED}

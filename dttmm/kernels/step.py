@@ -18,7 +18,7 @@ from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
 from .body import rigid_body_transfer
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
-from .so3 import expm_so3, hat, left_jacobian, log_so3
+from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
                     riccati_full, riccati_reduced)
 from .sweep import BALL as EL_BALL

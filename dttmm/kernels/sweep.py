@@ -26,10 +26,6 @@ F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]],
 E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)
 
 
-class SingularStepError(Exception):
-    pass
-
-
 @njit(cache=True)
 def _station_basis(split, s_mat, p_vec, basis, offset):
     """z = basis e + offset for a station carried as f = S e + P."""
@@ -60,6 +56,18 @@ def _tip_system(basis, offset, tip_pinned):
             w[r, c] = basis[6 + r, c]
             w[3 + r, c] = basis[first + r, c]
     return w, rhs
+
+
+@njit(cache=True)
+def _solve_tip(w, rhs, tip_pinned):
+    """(solved, e) of the tip's W e = rhs.  A pinned tip takes the least-norm solution: a chain
+    closed between two fixed points can leave the force along an inextensible member statically
+    indeterminate (no pre-stress is assumed; docs/assembly.md)."""
+    if tip_pinned:
+        return True, np.linalg.pinv(w, rcond=1e-12) @ rhs
+    if abs(np.linalg.det(w)) == 0.0:
+        return False, rhs
+    return True, np.linalg.solve(w, rhs)
 
 
 @njit(cache=True)
@@ -154,12 +162,9 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
                 p_vec[j + 1] = known_loads[j, 6:12]
     _station_basis(split[n_el], s_mat[n_el], p_vec[n_el], basis, offset)
     w, rhs = _tip_system(basis, offset, tip_pinned)
-    if tip_pinned:
-        e = np.linalg.pinv(w, rcond=1e-12) @ rhs          # least norm, as in riccati_reduced
-    elif abs(np.linalg.det(w)) == 0.0:
+    solved, e = _solve_tip(w, rhs, tip_pinned)
+    if not solved:
         return n_el + 1
-    else:
-        e = np.linalg.solve(w, rhs)
     z[n_el] = basis @ e + offset
     for j in range(n_el - 1, -1, -1):
         k = kind[j]
@@ -232,12 +237,9 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
             for i in range(6):
                 zmat[j + 1, i, i] = 1.0              # outboard a and phi are new parameters
     w, rhs = _tip_system(zmat[n_el], zoff[n_el], tip_pinned)
-    if tip_pinned:
-        x = np.linalg.pinv(w, rcond=1e-12) @ rhs          # least norm, as in riccati_reduced
-    elif abs(np.linalg.det(w)) == 0.0:
+    solved, x = _solve_tip(w, rhs, tip_pinned)
+    if not solved:
         return n_el + 1
-    else:
-        x = np.linalg.solve(w, rhs)
     z[n_el] = zmat[n_el] @ x + zoff[n_el]
     for j in range(n_el - 1, -1, -1):
         if kind[j] == BALL or kind[j] == LOCKED:
@@ -292,9 +294,8 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
         t_inv[k] = ti
         t_vec[k] = tv
     if tip_pinned:
-        # least norm: a chain closed between two fixed points can leave the force along an
-        # inextensible member statically indeterminate (no pre-stress is assumed)
-        aq[n, 3:6] = -np.linalg.pinv(np.ascontiguousarray(s_mat[n]), rcond=1e-12) @ p_vec[n]
+        _, q = _solve_tip(np.ascontiguousarray(s_mat[n]), -p_vec[n], True)
+        aq[n, 3:6] = q
         aq[n, 0:3] = 0.0
     else:
         aq[n, 0:3] = p_vec[n]
@@ -321,12 +322,10 @@ def direct_reduced(v, a_root, tip_pinned, aq):
     pqq = np.ascontiguousarray(prod[r:r + 3, 3:6])
     rhs = np.ascontiguousarray(prod[r:r + 3, 0:3]) @ a_root + prod[r:r + 3, 6]
     aq[0, 0:3] = a_root
-    if tip_pinned:
-        aq[0, 3:6] = -np.linalg.pinv(pqq, rcond=1e-12) @ rhs     # least norm (riccati_reduced)
-    elif abs(np.linalg.det(pqq)) == 0.0:
+    solved, q0 = _solve_tip(pqq, -rhs, tip_pinned)     # least norm in the root's unknowns
+    if not solved:
         return n + 1
-    else:
-        aq[0, 3:6] = -np.linalg.solve(pqq, rhs)
+    aq[0, 3:6] = q0
     for k in range(n):
         aq[k + 1] = np.ascontiguousarray(v[k, :, 0:6]) @ aq[k] + v[k, :, 6]
     return 0
