@@ -335,6 +335,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
                 d_pred = defl[k] + h * defl_rate[k] + 0.5 * h * h * defl_pseudo[k]
                 rot_in = rot_now if k == 0 else rot_star[k - 1]
+                # (the force does not depend on the angular velocities: any will do for them)
                 q_pred, _, _ = elastic_hinge_loads(hinge_params[k], rot_in, g_w[s], rot_star[k],
                                                    g_w[s], d_pred, c3 * d_pred + w3d[k])
                 z_star[2 * k, 9:12] = q_pred
