@@ -1,8 +1,9 @@
 """The time loop: predict, linearize every element, sweep, Newton-correct, update (docs/solver.md).
 
 Integrator: generalized-alpha in the form of Arnold and Bruls (2007), applied to each body's
-world rotation increment phi (A_i = exp(phi^) A_{i-1}) and to each elastic hinge's deflection d:
-  x        = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1}     (x = phi, or d - d_n)
+world rotation increment phi (A_i = exp(phi^) A_{i-1}), to each elastic hinge's deflection d and
+to each beam's modal coordinates eta:
+  x        = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1}     (x = phi, d - d_n, eta - eta_n)
   v_{n+1}  = v_n + h (1 - gamma) p_n + h gamma p_{n+1}
   (1 - alpha_f) acc_{n+1} + alpha_f acc_n = (1 - alpha_m) p_{n+1} + alpha_m p_n
 with p the pseudo-acceleration.  alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (rho_inf = 1)
