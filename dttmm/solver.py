@@ -63,9 +63,7 @@ class Workspace:
         self.rot = model.initial_rotation.copy()
         self.omega = model.initial_angular_velocity.copy()
         self.omega_dot = np.zeros((n, 3))
-        self.hist_v = np.zeros((n, 3))      # the rotation integrator's velocity, acceleration
-        self.hist_acc = np.zeros((n, 3))    # and pseudo-acceleration (world frame)
-        self.hist_p = np.zeros((n, 3))
+        self.pseudo = np.zeros((n, 3))      # the rotation integrator's pseudo-acceleration
         self.defl = np.zeros((n, 3))
         self.defl_rate = np.zeros((n, 3))
         self.defl_acc = np.zeros((n, 3))
@@ -218,7 +216,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
         ws.omega_dot[k] = g_wd[0] if model.ground_locked[k] else ws.z[2 * k + 1, 3:6]
         if model.hinge_kind[k] == ELASTIC:
             ws.defl_acc[k] = ws.z[2 * k + 1, 0:3] - ws.z[2 * k, 0:3]
-    ws.hist_v[:], ws.hist_acc[:], ws.hist_p[:] = ws.omega, ws.omega_dot, ws.omega_dot
+    ws.pseudo[:] = ws.omega_dot
     ws.eta_p[:] = ws.eta_acc
     ws.defl_pseudo[:] = ws.defl_acc
     ws.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
@@ -253,7 +251,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
                           *params,
                           model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
                           g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
-                          ws.hist_v, ws.hist_acc, ws.hist_p, ws.defl, ws.defl_rate, ws.defl_acc,
+                          ws.pseudo, ws.defl, ws.defl_rate, ws.defl_acc,
                           ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
                           rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
                           rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,

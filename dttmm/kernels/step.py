@@ -257,7 +257,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
 def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
             g_acc, g_rot, g_w, g_wd, force, torque,
-            rot, omega, omega_dot, hist_v, hist_acc, hist_p,
+            rot, omega, omega_dot, pseudo,
             defl, defl_rate, defl_acc, defl_pseudo, z,
             kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
             red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
@@ -265,7 +265,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d):
     """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
     and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
-    hist_v, hist_acc, hist_p: the rotation integrator's velocity, acceleration and
+    omega, omega_dot, pseudo: the rotation integrator's velocity, acceleration and
     pseudo-acceleration (world frame); eta, eta_d, eta_acc, eta_p: the same for the beams'
     modal coordinates (flat), with their coordinates themselves.
     Records after every record_every-th step (counting from the chunk's start).
@@ -313,8 +313,8 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 dw[k] = c3 * np.eye(3)
                 dwd[k] = g_dwd
             else:
-                w1[k], w3[k] = _offsets(h, coef, hist_v[k], hist_acc[k], hist_p[k])
-                phi_star[k] = h * hist_v[k] + 0.5 * h * h * hist_p[k]   # constant-acceleration
+                w1[k], w3[k] = _offsets(h, coef, omega[k], omega_dot[k], pseudo[k])
+                phi_star[k] = h * omega[k] + 0.5 * h * h * pseudo[k]   # constant-acceleration
                 _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
                                  lam[k], w[k], wd[k], dw[k], dwd[k])
             if hinge_kind[k] == ELASTIC:
@@ -393,11 +393,9 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 omega[k] = g_w[s]
                 omega_dot[k] = g_wd[s]
             else:
-                _advance_history(h, coef, phi, hist_v[k], hist_acc[k], hist_p[k])
+                _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
                 expm_so3(phi, e3)
                 rot[k] = e3 @ rot[k]
-                omega[k] = hist_v[k]
-                omega_dot[k] = hist_acc[k]
             if hinge_kind[k] == ELASTIC:
                 d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - w1d[k]) / c1
                 x = d_new - defl[k]
