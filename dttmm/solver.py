@@ -13,12 +13,14 @@ from .elements import BEAM
 from .elements.beam import LENGTH, MODES
 from .elements.hinges import ELASTIC
 from .kernels.beam import gauss_points, quadrature_size
-from .elements.rigid_body import TO_OUTPUT
+from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from .kernels import em_step
 from .kernels import step as kstep
 from .model import Model
 from .result import Result, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
+SCHEMES = ("newmark", "energy_momentum")
 
 
 class DivergenceError(RuntimeError):
@@ -165,17 +167,23 @@ def _ground(model, times):
     return acc, rot, w, wd
 
 
-def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_iterations=0,
-             newton_tol=1e-12, record_every=1, full_state=False) -> Result:
+def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho_inf=1.0,
+             newton_iterations=None, newton_tol=1e-12, record_every=1,
+             full_state=False) -> Result:
     """Integrate the chain from t = 0 to t_end with steps dt by DT-TMM.
 
     method: "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
         transfer matrices out, as the paper does; loses accuracy on long or stiff chains).
+    scheme: "newmark" (default; generalized-alpha, every element) or "energy_momentum" (rigid
+        chains with ball and fixed hinges on a fixed ground: a second-order step that conserves
+        the total energy and the angular momentum exactly, up to newton_tol; docs/solver.md).
     rho_inf: generalized-alpha spectral radius at infinite frequency; 1 (default) is the
         trapezoidal Newmark rule, smaller values add numerical damping of high frequencies.
-    newton_iterations: extra linearizations about the latest solution per step (0: one
-        linearization about the predictor, already second-order accurate); the step stops
-        iterating once the rotation update is below newton_tol (rad).  Steps that used all
+        (Newmark scheme only.)
+    newton_iterations: extra linearizations about the latest solution per step; the step stops
+        iterating once the rotation update is below newton_tol (rad).  Default: 0 for Newmark
+        (one linearization about the predictor is already second-order accurate), 20 for the
+        energy-momentum scheme (which conserves only once converged).  Steps that used all
         iterations without reaching newton_tol are counted in info["newton_unconverged_steps"].
     record_every: keep every k-th step (and t = 0).
     full_state: use the 13-entry state even where the reduced [a; q] form applies.
@@ -190,12 +198,18 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     if int(record_every) != record_every or record_every < 1:
         raise ValueError(f"simulate: record_every must be an integer >= 1, got {record_every!r}")
     record_every = int(record_every)
+    if scheme not in SCHEMES:
+        raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
+    if newton_iterations is None:
+        newton_iterations = 20 if scheme == "energy_momentum" else 0
     if int(newton_iterations) != newton_iterations or newton_iterations < 0:
         raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
                          f"got {newton_iterations!r}")
     newton_tol = float(newton_tol)
     mode = _mode(model, method, full_state)
     coef = Integrator.from_rho_inf(rho_inf).array()
+    if scheme == "energy_momentum":
+        _check_energy_momentum(model)
 
     ws = Workspace(model)
     n = model.n_bodies
@@ -224,6 +238,14 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     samples = [_sample(ws)]
     sample_steps = [0]
     chunk = record_every * max(1, 1000 // record_every)
+    if scheme == "energy_momentum":
+        info = _run_energy_momentum(model, ws, n_steps, dt, mode, int(newton_iterations),
+                                    newton_tol, record_every, chunk, samples, sample_steps)
+        wall = time.perf_counter() - wall0
+        t = np.array(sample_steps) * dt
+        info.update(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme,
+                    forces="step means (about t - dt/2)")
+        return _result(model, t, samples, wall, n_steps, info)
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
@@ -274,9 +296,78 @@ def simulate(model: Model, t_end, dt, *, method="riccati", rho_inf=1.0, newton_i
     wall = time.perf_counter() - wall0
     t = np.array(sample_steps) * dt
     return _result(model, t, samples, wall, n_steps,
-                   dict(mode=["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"][mode],
-                        dt=dt, rho_inf=rho_inf, newton_iterations_used=max_newton,
+                   dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf, newton_iterations_used=max_newton,
                         newton_unconverged_steps=int(info[4])))
+
+
+_MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"]
+
+
+def _check_energy_momentum(model):
+    """The energy-momentum scheme's scope: rigid bodies, ball and fixed hinges, a fixed ground."""
+    where = "simulate(scheme='energy_momentum')"
+    for k in range(model.n_bodies):
+        if model.body_kind[k] == BEAM:
+            raise ValueError(f"{where}: body '{model.body_names[k]}' is a beam; the scheme "
+                             f"covers rigid bodies only (use scheme='newmark')")
+        if model.hinge_kind[k] == ELASTIC:
+            raise ValueError(f"{where}: hinge '{model.hinge_names[k]}' is elastic; the scheme "
+                             f"covers ball and fixed hinges only (use scheme='newmark')")
+    if model.ground_motion is not None:
+        raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
+                         f"fixed ground (use scheme='newmark')")
+
+
+def _initial_mass_center_velocities(model, rot, omega):
+    """(n, 3) mass-centre velocities from the initial rotations and angular velocities."""
+    p = model.body_params
+    v_in = model.ground_state(0.0)[1].copy()
+    v_c = np.empty((model.n_bodies, 3))
+    for k in range(model.n_bodies):
+        v_c[k] = v_in + np.cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
+        v_in = v_in + np.cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
+    return v_c
+
+
+def _run_energy_momentum(model, ws, n_steps, dt, mode, newton_iterations, newton_tol,
+                         record_every, chunk, samples, sample_steps):
+    """The energy-momentum time loop (kernels/em_step.py) in chunks; appends the recorded
+    samples (with each body's mass-centre velocity) and returns the run's info."""
+    n = model.n_bodies
+    v_c = _initial_mass_center_velocities(model, ws.rot, ws.omega)
+    samples[0]["v_c"] = v_c.copy()
+    n_rec_max = chunk // record_every
+    rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
+               omega_dot=np.empty((n_rec_max, n, 3)), v_c=np.empty((n_rec_max, n, 3)),
+               z=np.empty((n_rec_max, 2 * n + 1, 12)))
+    zeros = dict(defl=np.zeros((n, 3)), defl_rate=np.zeros((n, 3)), eta=ws.eta.copy(),
+                 eta_d=ws.eta_d.copy())
+    no_loads = not model.has_applied_loads
+    if no_loads:
+        force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
+    info = np.zeros(5, dtype=np.int64)
+    max_newton = 0
+    done = 0
+    while done < n_steps:
+        m = min(chunk, n_steps - done)
+        if not no_loads:           # the step's mean load, by the midpoint rule
+            force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt)
+        em_step.advance_em(mode, model.tip_pinned, dt, newton_iterations, newton_tol,
+                           model.body_params, model.body_mass_center_inertia, model.hinge_kind,
+                           model.gravity, force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
+                           v_c, ws.z, *ws.scratch(), record_every, rec["rot"], rec["omega"],
+                           rec["omega_dot"], rec["v_c"], rec["z"], info)
+        if info[0] != kstep.OK:
+            step = done + int(info[1]) + 1
+            raise DivergenceError(step, step * dt, _failure_cause(model, mode, info))
+        for i in range(int(info[3])):
+            sample = {key: rec[key][i].copy() for key in rec}
+            sample.update(zeros)
+            samples.append(sample)
+            sample_steps.append(done + (i + 1) * record_every)
+        max_newton = max(max_newton, int(info[2]))
+        done += m
+    return dict(newton_iterations_used=max_newton, newton_unconverged_steps=int(info[4]))
 
 
 def _sample(ws):
@@ -333,6 +424,11 @@ def _result(model, t, samples, wall, n_steps, info):
             rho = rot[i, k] @ l_io[k]
             r_prev = r_in[i, k] + rho
             v_prev = v_in[i, k] + np.cross(omega[i, k], rho)
+            if "v_c" in samples[i]:
+                # energy-momentum scheme: every mass centre carries its own velocity, which the
+                # rigid-body field about it defines the input point's (docs/solver.md)
+                rho_c = rot[i, k] @ model.body_params[k, TO_MASS_CENTER]
+                v_in[i, k] = samples[i]["v_c"][k] - np.cross(omega[i, k], rho_c)
     r_c, r_o = point_positions(model, rot, r_in)
     eta = np.array([s["eta"] for s in samples])
     eta_d = np.array([s["eta_d"] for s in samples])

@@ -74,3 +74,39 @@ def log_so3(r, out):
     out[0] = f * w0
     out[1] = f * w1
     out[2] = f * w2
+
+
+@njit(cache=True)
+def cayley(phi, out):
+    """out = cay(phi) = (I - phi^/2)^-1 (I + phi^/2) = I + 4/(4 + |phi|^2) (phi^ + phi^^/2):
+    the rotation by 2 atan(|phi|/2) about phi (docs/solver.md, energy-momentum scheme)."""
+    f = 4.0 / (4.0 + phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
+    k = np.empty((3, 3))
+    hat(phi, k)
+    for i in range(3):
+        for j in range(3):
+            kk = k[i, 0] * k[0, j] + k[i, 1] * k[1, j] + k[i, 2] * k[2, j]
+            out[i, j] = f * (k[i, j] + 0.5 * kk)
+        out[i, i] += 1.0
+
+
+@njit(cache=True)
+def cayley_tangent(phi, out):
+    """out = D(phi) = 4/(4 + |phi|^2) (I + phi^/2), so that
+    cay(phi + dphi) = cay((D dphi)^) cay(phi) to first order."""
+    f = 4.0 / (4.0 + phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
+    hat(phi, out)
+    for i in range(3):
+        for j in range(3):
+            out[i, j] *= 0.5 * f
+        out[i, i] += f
+
+
+@njit(cache=True)
+def cayley_log(r, out):
+    """out = the Cayley vector phi of r (cay(phi) = r): 2 vee(r - r^T) / (1 + tr r); rotations
+    by less than pi."""
+    f = 2.0 / (1.0 + r[0, 0] + r[1, 1] + r[2, 2])
+    out[0] = f * (r[2, 1] - r[1, 2])
+    out[1] = f * (r[0, 2] - r[2, 0])
+    out[2] = f * (r[1, 0] - r[0, 1])
