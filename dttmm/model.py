@@ -6,10 +6,13 @@ import numpy as np
 
 from .elements import (BALL, BEAM, FIXED, RIGID, BallJoint, ElasticHinge, EulerBernoulliBeam,
                        FixedHinge, RigidBody)
-from .elements.beam import BEAM_PARAM_SIZE, FAMILY, MODES, PINNED
+from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
+                            MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
 from .elements._checks import finite_vector, rotation_matrix
+from .elements.hinges import ELASTIC as ELASTIC_KIND
 from .elements.hinges import HINGE_KIND_NAMES, pack_hinge
 from .elements.rigid_body import pack_body
+from .kernels.so3 import expm_so3, left_jacobian
 
 
 class PrescribedMotion:
@@ -113,6 +116,9 @@ class Model:
     body_kind: np.ndarray            # (n,) RIGID / BEAM
     beam_params: np.ndarray          # (n, BEAM_PARAM_SIZE), zero rows for rigid bodies; for a
                                      # beam, body_params holds the undeformed beam as a rigid body
+                                     # (its FAMILY column resolved: PINNED or CLAMPED)
+    initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w)
+    initial_modal_velocities: np.ndarray
 
     @property
     def n_modes(self):
@@ -187,13 +193,23 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
     hv = [h.validated(k) for k, h in enumerate(hinges)]
     kinds = np.array([h.kind for h in hinges], dtype=np.int64)
 
+    body_kind = np.array([BEAM if isinstance(b, EulerBernoulliBeam) else RIGID for b in bodies],
+                         dtype=np.int64)
+    beam_params = np.array([v.get("beam", np.zeros(BEAM_PARAM_SIZE)) for v in bv])
+    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip)
+    _check_ball_lookahead(bodies, bv, kinds, body_kind)
+
     rotations = np.zeros((n, 3, 3))
     omegas = np.zeros((n, 3))
     locked = np.zeros(n, dtype=bool)
     for k in range(n):
-        a_in = rot_g if k == 0 else rotations[k - 1]
-        w_in = w_g if k == 0 else omegas[k - 1]
-        locked[k] = kinds[k] == FIXED and (k == 0 or locked[k - 1])
+        if k == 0:
+            a_in, w_in = rot_g, w_g
+        else:   # the inboard's output section (a beam's end section, docs/beam.md)
+            a_in, w_in = output_section(beam_params[k - 1], rotations[k - 1], omegas[k - 1],
+                                        bv[k - 1].get("eta0"), bv[k - 1].get("eta_d0"))
+        locked[k] = kinds[k] == FIXED and (k == 0 or (locked[k - 1]
+                                                      and body_kind[k - 1] == RIGID))
         if kinds[k] == FIXED:
             rot, om = a_in @ hv[k]["rotation"], w_in
             for key, implied in (("rotation", rot), ("omega", om)):
@@ -208,12 +224,7 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
             rot = default if bv[k]["rotation"] is None else bv[k]["rotation"]
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
-
-    body_kind = np.array([BEAM if isinstance(b, EulerBernoulliBeam) else RIGID for b in bodies],
-                         dtype=np.int64)
-    beam_params = np.array([v.get("beam", np.zeros(BEAM_PARAM_SIZE)) for v in bv])
-    _check_mode_families(bodies, kinds, body_kind, beam_params)
-    _check_ball_lookahead(bodies, bv, kinds, body_kind)
+    beams = [k for k in range(n) if body_kind[k] == BEAM]
 
     return Model(
         n_bodies=n,
@@ -235,20 +246,65 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
         tip_pinned=tip == "ball",
         body_kind=body_kind,
         beam_params=beam_params,
+        initial_modal_coordinates=np.concatenate([np.zeros(0)] + [bv[k]["eta0"] for k in beams]),
+        initial_modal_velocities=np.concatenate([np.zeros(0)] + [bv[k]["eta_d0"] for k in beams]),
     )
 
 
-def _check_mode_families(bodies, kinds, body_kind, beam_params):
-    """Pinned (sine) modes need moment-free cuts at both ends of the beam."""
+def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
+    """Rotation and world angular velocity of a body's output section: the body's own for a
+    rigid body; for a beam A_O = A exp(theta_O^), theta_O = [0, -w'(L), v'(L)], and
+    w_O = w + A J_l(theta_O) theta_O' (docs/beam.md, "End sections")."""
+    m = int(beam_row[MODES])
+    if m == 0 or eta is None:
+        return rotation, omega
+    eta_dot = np.zeros(2 * m) if eta_dot is None else eta_dot
+    _, dy, _, _, _ = mode_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], m, [beam_row[LENGTH]])
+    slope = dy[:, 0]
+    theta = np.array([0.0, -slope @ eta[m:], slope @ eta[:m]])
+    theta_dot = np.array([0.0, -slope @ eta_dot[m:], slope @ eta_dot[:m]])
+    e, jl = np.empty((3, 3)), np.empty((3, 3))
+    expm_so3(theta, e)
+    left_jacobian(theta, jl)
+    return rotation @ e, omega + rotation @ jl @ theta_dot
+
+
+def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
+    """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
+    pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
+    the input section's frame, with the clamped-free eigenfunctions when the output is the free
+    tip and the loaded-end polynomial modes when it carries loads.  An explicit choice that
+    contradicts the hinges is refused (clamped between moment-free ends only if the user
+    insists); no elastic hinge at a beam's end yet."""
     n = len(bodies)
     for k in range(n):
-        if body_kind[k] != BEAM or beam_params[k, FAMILY] != PINNED:
+        if body_kind[k] != BEAM:
             continue
-        inboard_free = kinds[k] == BALL
-        outboard_free = k == n - 1 or kinds[k + 1] == BALL
-        if not (inboard_free and outboard_free):
-            raise ValueError(f"{bodies[k].label(k)}: mode_family 'pinned' needs a ball joint (or "
-                             f"the free tip) at both ends of the beam")
+        who = bodies[k].label(k)
+        for j, end in ((k, "input"), (k + 1, "output")):
+            if j < n and kinds[j] == ELASTIC_KIND:
+                raise ValueError(f"{who}: an elastic hinge at the beam's {end} end is not "
+                                 f"supported yet; use a ball joint or a fixed hinge")
+        input_free = kinds[k] == BALL
+        free_tip = k == n - 1 and tip == "free"
+        output_free = free_tip or (k == n - 1) or kinds[k + 1] == BALL
+        family = int(beam_params[k, FAMILY])
+        if family == PINNED and not (input_free and output_free):
+            raise ValueError(f"{who}: mode_family 'pinned' needs moment-free ends (a ball joint "
+                             f"or the tip at both ends); a fixed hinge holds this beam: use "
+                             f"'clamped' (or 'auto')")
+        if family == CLAMPED and input_free and output_free and not bv[k]["force_mode_family"]:
+            raise ValueError(f"{who}: mode_family 'clamped' contradicts the moment-free ends of "
+                             f"the beam (pass force_mode_family=True to insist)")
+        if family == AUTO and input_free and output_free:
+            family = PINNED
+        elif family != PINNED:
+            family = CLAMPED if free_tip else CLAMPED_LOADED
+        if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
+            raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "
+                             f"clamped beam whose output carries loads (polynomial modes), got "
+                             f"{int(beam_params[k, MODES])}")
+        beam_params[k, FAMILY] = family
 
 
 def _check_ball_lookahead(bodies, bv, kinds, body_kind):

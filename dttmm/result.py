@@ -5,7 +5,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import (EI_V, EI_W, LENGTH, MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH)
+from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
+                            POLAR_PER_LENGTH, mode_shapes)
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
 
@@ -145,12 +146,12 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 
 def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     """Kinetic energy (int 1/2 mu |r'|^2 dx + 1/2 j_p L (w . A e1)^2) and potential energy
-    (-int mu g . r dx + sum 1/2 k eta^2) of one pinned beam (docs/beam.md), by quadrature."""
+    (-int mu g . r dx + sum 1/2 k eta^2) of one beam (docs/beam.md), by quadrature."""
     length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
     x = 0.5 * length * (_GL_X + 1.0)
     wq = 0.5 * length * _GL_W
-    k = np.arange(1, nm + 1)
-    y = np.sin(np.outer(x, k) * np.pi / length)            # (Q, nm)
+    y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)
+    y = y.T                                                # (Q, nm)
     p = np.zeros((len(x), 3))                              # x e1 + u(x), body frame
     p[:, 0] = x
     p[:, 1] = y @ eta[:nm]
@@ -164,8 +165,8 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     kinetic = 0.5 * mu * wq @ np.einsum("qi,qi->q", vel, vel)
     kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
     potential = -mu * wq @ ((r_in + rho) @ gravity)
-    half = 0.5 * length * (k * np.pi / length) ** 4           # k_k = EI (k pi / L)^4 L / 2
-    potential += 0.5 * np.sum(half * (row[EI_V] * eta[:nm] ** 2 + row[EI_W] * eta[nm:2 * nm] ** 2))
+    potential += 0.5 * np.sum(stiffness * (row[EI_V] * eta[:nm] ** 2
+                                           + row[EI_W] * eta[nm:2 * nm] ** 2))
     return kinetic, potential
 
 
@@ -248,9 +249,34 @@ def beam_midpoint_deflection(model, result, body):
     return np.stack([np.einsum("ti,ti->t", d, e2), np.einsum("ti,ti->t", d, e3)], axis=1)
 
 
-def point_positions(model, rotation, r_in):
-    """Mass-centre and output-point positions from input points and rotations."""
+def beam_output_offset(row, rotation, omega, eta, eta_dot):
+    """World offset r_O - r_I = A (L e1 + u(L)) of a beam's output point and its rate
+    w x (r_O - r_I) + A u'(L) (docs/beam.md, "End sections")."""
+    length, nm = row[LENGTH], int(row[MODES])
+    y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
+    p = np.array([length, y @ eta[:nm], y @ eta[nm:2 * nm]])
+    p_dot = np.array([0.0, y @ eta_dot[:nm], y @ eta_dot[nm:2 * nm]])
+    rho = rotation @ p
+    return rho, np.cross(omega, rho) + rotation @ p_dot
+
+
+def point_positions(model, rotation, r_in, eta=None):
+    """Mass-centre and output-point positions from input points and rotations ((T, n, ...) or
+    (n, ...) arrays); eta (T, total modes) or (total modes,) moves the beams' output points."""
     p = model.body_params
     r_c = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_MASS_CENTER])
     r_o = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_OUTPUT])
+    if eta is not None and model.has_beams:
+        eta = np.asarray(eta, dtype=float)
+        single = eta.ndim == 1
+        rot_t, eta_t = (rotation[None], eta[None]) if single else (rotation, eta)
+        r_o_t = r_o[None] if single else r_o
+        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+        for k in np.nonzero(model.body_kind == BEAM)[0]:
+            e = eta_t[:, offsets[k]:offsets[k + 1]]
+            for i in range(len(e)):
+                rho, _ = beam_output_offset(model.beam_params[k], rot_t[i, k], np.zeros(3), e[i],
+                                            np.zeros_like(e[i]))
+                r_o_t[i, k] = r_in[i, k] + rho if not single else r_in[k] + rho
+        r_o = r_o_t[0] if single else r_o_t
     return r_c, r_o

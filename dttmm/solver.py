@@ -10,14 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import LENGTH, MODES
+from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
 from .elements.hinges import ELASTIC
 from .kernels.beam import gauss_points, quadrature_size
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import em_step
 from .kernels import step as kstep
 from .model import Model
-from .result import Result, chain_energies, point_positions
+from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
 SCHEMES = ("newmark", "energy_momentum")
@@ -91,9 +91,11 @@ class Workspace:
         self.dir_z = np.zeros((n_st, 12, 6))
         self.dir_o = np.zeros((n_st, 12))
         n_eta = int(model.n_modes.sum())
-        self.eta = np.zeros(n_eta)            # beams' modal coordinates, rates, accelerations and
-        self.eta_d = np.zeros(n_eta)          # the integrator's pseudo-accelerations, flat over
-        self.eta_acc = np.zeros(n_eta)        # the beams (v coordinates of a beam, then w)
+        # the beams' modal coordinates, rates, accelerations and the integrator's
+        # pseudo-accelerations, flat over the beams (v coordinates of a beam, then w)
+        self.eta = model.initial_modal_coordinates.copy()
+        self.eta_d = model.initial_modal_velocities.copy()
+        self.eta_acc = np.zeros(n_eta)
         self.eta_p = np.zeros(n_eta)
         self.eta_map = np.zeros((n_eta, 13))
         self.beams = beam_tables(model)
@@ -107,20 +109,26 @@ class Workspace:
 
 def beam_tables(model):
     """(body_kind, beam_params, quadrature points, weights, mode shapes at the points, offsets
-    of each body's modal coordinates) for the kernels."""
+    of each body's modal coordinates, [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI])
+    for the kernels (docs/beam.md, "Mode shapes")."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
     n_q = quadrature_size(max_modes)
     xq, wq = np.zeros((n, n_q)), np.zeros((n, n_q))
     modes = np.zeros((n, max_modes, n_q))
+    ends = np.zeros((n, max_modes, 2))
+    factors = np.ones((n, max_modes, 2))
     for k in range(n):
         if model.body_kind[k] == BEAM:
             length = model.beam_params[k, LENGTH]
+            family, m = int(model.beam_params[k, FAMILY]), int(model.beam_params[k, MODES])
             xq[k], wq[k] = gauss_points(length, n_q)
-            for j in range(int(model.beam_params[k, MODES])):
-                modes[k, j] = np.sin((j + 1) * np.pi * xq[k] / length)
+            modes[k, :m] = mode_shapes(family, length, m, xq[k])[0]
+            y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
+            ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
+            factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
-    return (model.body_kind, model.beam_params, xq, wq, modes, mode_off)
+    return (model.body_kind, model.beam_params, xq, wq, modes, mode_off, ends, factors)
 
 
 def _check_positive(name, value):
@@ -415,23 +423,30 @@ def _result(model, t, samples, wall, n_steps, info):
     r_in = np.empty((m, n, 3))
     v_in = np.empty((m, n, 3))
     l_io = model.body_params[:, TO_OUTPUT]
+    eta = np.array([s["eta"] for s in samples])
+    eta_d = np.array([s["eta_d"] for s in samples])
+    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     for i, ti in enumerate(t):
         r_g, v_g = model.ground_state(ti)[:2]
         r_prev, v_prev = r_g, v_g
         for k in range(n):
             r_in[i, k] = r_prev + defl[i, k]
             v_in[i, k] = v_prev + defl_rate[i, k]
-            rho = rot[i, k] @ l_io[k]
+            if model.body_kind[k] == BEAM:
+                j0, j1 = mode_off[k], mode_off[k + 1]
+                rho, rho_dot = beam_output_offset(model.beam_params[k], rot[i, k], omega[i, k],
+                                                  eta[i, j0:j1], eta_d[i, j0:j1])
+            else:
+                rho = rot[i, k] @ l_io[k]
+                rho_dot = np.cross(omega[i, k], rho)
             r_prev = r_in[i, k] + rho
-            v_prev = v_in[i, k] + np.cross(omega[i, k], rho)
+            v_prev = v_in[i, k] + rho_dot
             if "v_c" in samples[i]:
                 # energy-momentum scheme: every mass centre carries its own velocity, which the
                 # rigid-body field about it defines the input point's (docs/solver.md)
                 rho_c = rot[i, k] @ model.body_params[k, TO_MASS_CENTER]
                 v_in[i, k] = samples[i]["v_c"][k] - np.cross(omega[i, k], rho_c)
-    r_c, r_o = point_positions(model, rot, r_in)
-    eta = np.array([s["eta"] for s in samples])
-    eta_d = np.array([s["eta_d"] for s in samples])
+    r_c, r_o = point_positions(model, rot, r_in, eta)
     energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i],
                                         ground_rotation=model.ground_state(ti)[3], eta=eta[i],
                                         eta_dot=eta_d[i])

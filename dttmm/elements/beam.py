@@ -9,11 +9,82 @@ inertia is kept for the frame's spin about x.
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import eigh
 
 from ._checks import finite_scalar, finite_vector, rotation_matrix
 
-PINNED = 0            # sin(k pi x / L): between two moment-free cuts (ball joints, free tip)
-MODE_FAMILY_NAMES = {"pinned": PINNED}
+PINNED = 0            # sin(k pi x / L) in the chord frame: between moment-free ends
+CLAMPED = 1           # clamped-free eigenfunctions in the input section's frame: a free tip
+CLAMPED_LOADED = 2    # input section's frame, polynomial Ritz modes: an output that carries loads
+AUTO = -1             # chosen by build_chain from the beam's two ends
+MODE_FAMILY_NAMES = {"pinned": PINNED, "clamped": CLAMPED, "auto": AUTO}
+FAMILY_LABELS = {PINNED: "pinned", CLAMPED: "clamped (clamped-free eigenfunctions)",
+                 CLAMPED_LOADED: "clamped (loaded-end polynomial modes)"}
+MAX_LOADED_MODES = 6  # the polynomial basis x^2 .. x^(m+1) is well conditioned up to here
+CLAMPED_ROOTS = (1.87510406871196, 4.69409113297418, 7.85475743823761, 10.9955407348755,
+                 14.1371683910465)     # b_k L, the roots of 1 + cos x cosh x = 0
+
+
+def clamped_root(k):
+    """b_k L of the k-th clamped-free mode (k = 1, 2, ...)."""
+    return CLAMPED_ROOTS[k - 1] if k <= len(CLAMPED_ROOTS) else (2 * k - 1) * np.pi / 2
+
+
+def mode_shapes(family, length, n_modes, x):
+    """(Y, Y', Y'') of the family's first n_modes shapes at the points x, each (n_modes, len(x)),
+    and the modal mass and stiffness factors (m_k / mu, k_k / EI), each (n_modes,)
+    (docs/beam.md, "Mode shapes")."""
+    x = np.asarray(x, dtype=float)
+    y, dy, ddy = (np.empty((n_modes, x.size)) for _ in range(3))
+    mass, stiff = np.empty(n_modes), np.empty(n_modes)
+    for j in range(n_modes):
+        if family == PINNED:
+            b = (j + 1) * np.pi / length
+            y[j], dy[j], ddy[j] = np.sin(b * x), b * np.cos(b * x), -b * b * np.sin(b * x)
+            mass[j], stiff[j] = 0.5 * length, 0.5 * length * b ** 4
+        elif family == CLAMPED:
+            bl = clamped_root(j + 1)
+            b = bl / length
+            s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+            one_s = (np.sin(bl) - np.cos(bl) - np.exp(-bl)) / (np.sinh(bl) + np.sin(bl))
+            bx = b * x
+            # cosh - s sinh = e^-bx + (1 - s) sinh: no cancellation at large b x
+            y[j] = np.exp(-bx) + one_s * np.sinh(bx) - np.cos(bx) + s * np.sin(bx)
+            dy[j] = b * (-np.exp(-bx) + one_s * np.cosh(bx) + np.sin(bx) + s * np.cos(bx))
+            ddy[j] = b * b * (np.exp(-bx) + one_s * np.sinh(bx) + np.cos(bx) - s * np.sin(bx))
+            mass[j], stiff[j] = length, length * b ** 4
+        elif family != CLAMPED_LOADED:
+            raise ValueError(f"mode_shapes: unknown family {family!r}")
+    if family == CLAMPED_LOADED:
+        coef, lam = _loaded_modes(n_modes)
+        t = x / length
+        for j in range(n_modes):
+            y[j] = dy[j] = ddy[j] = 0.0
+            for i in range(coef.shape[0]):   # (x/L)^(i+2) and its derivatives
+                p = i + 2
+                y[j] += coef[i, j] * t ** p
+                dy[j] += coef[i, j] * p * t ** (p - 1) / length
+                ddy[j] += coef[i, j] * p * (p - 1) * t ** (p - 2) / length ** 2
+            mass[j], stiff[j] = length, length * lam[j] / length ** 4
+    return y, dy, ddy, mass, stiff
+
+
+def _loaded_modes(n_modes):
+    """Coefficients c (n, n) of the loaded-end modes Y_j(x) = sum_i c_ij (x/L)^(i+2) on a unit
+    length, and their eigenvalues lam_j (EI d4Y/dx4 = lam mu Y on a unit length): the Ritz
+    eigenvectors of the beam clamped at x = 0 in the polynomial space x^2 .. x^(n+1), which holds
+    the exact static deflection under any end force and moment (n >= 2; one mode is x^2, the
+    deflection under an end moment: the lowest Ritz mode of x^2, x^3 would be stiffer in a chain
+    of elements, since it nearly drops the end curvature).  Normalized to
+    int_0^1 Y_j^2 = 1 and Y_j(1) > 0, so int_0^L Y_j Y_k dx = L delta_jk on any length."""
+    p = np.arange(2, n_modes + 2)
+    mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                     # int t^(p_i + p_j)
+    pp = p * (p - 1.0)
+    stiff = np.outer(pp, pp) / (p[:, None] + p[None, :] - 3.0)       # int Y_i'' Y_j''
+    lam, coef = eigh(stiff, mass)
+    coef = coef / np.sqrt(np.einsum("ij,ik,kj->j", coef, mass, coef))
+    coef = coef * np.sign(coef.sum(axis=0))
+    return coef, lam
 
 # layout of one row of Model.beam_params
 LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY = range(8)
@@ -33,8 +104,12 @@ class EulerBernoulliBeam:
                        spin about its own axis well posed.
     modes_per_plane:   number of bending modes in each plane, >= 1.
     damping_ratio:     modal damping ratio (>= 0).
-    mode_family:       "pinned" (sine modes in a chord frame; needs moment-free cuts at both
-                       ends: ball joints or the free tip).
+    mode_family:       "auto" (default: "pinned" after a ball joint, "clamped" after a fixed
+                       hinge), "pinned" (sine modes in the chord frame) or "clamped"
+                       (clamped-free eigenfunctions in the input section's frame); docs/beam.md.
+    force_mode_family: accept "clamped" after a ball joint (admissible but slow to converge).
+    initial_modal_coordinates, initial_modal_velocities: eta and eta' at t = 0 (2 x
+                       modes_per_plane entries: the v coordinates, then the w coordinates).
     rotation, angular_velocity: initial frame rotation and world angular velocity, as for
                        RigidBody.
     """
@@ -46,7 +121,10 @@ class EulerBernoulliBeam:
     area: float = None
     modes_per_plane: int = 1
     damping_ratio: float = 0.0
-    mode_family: str = "pinned"
+    mode_family: str = "auto"
+    force_mode_family: bool = False
+    initial_modal_coordinates: object = None
+    initial_modal_velocities: object = None
     rotation: object = None
     angular_velocity: object = None
     name: str = ""
@@ -82,6 +160,10 @@ class EulerBernoulliBeam:
         if self.mode_family not in MODE_FAMILY_NAMES:
             raise ValueError(f"{who}: mode_family must be one of {sorted(MODE_FAMILY_NAMES)}, "
                              f"got {self.mode_family!r}")
+        n_coord = 2 * int(self.modes_per_plane)
+        eta0, eta_d0 = (np.zeros(n_coord) if v is None else finite_vector(who, arg, v, size=n_coord)
+                        for arg, v in (("initial_modal_coordinates", self.initial_modal_coordinates),
+                                       ("initial_modal_velocities", self.initial_modal_velocities)))
         rotation = None if self.rotation is None else rotation_matrix(who, "rotation", self.rotation)
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
@@ -96,4 +178,5 @@ class EulerBernoulliBeam:
         row[MODES], row[FAMILY] = int(self.modes_per_plane), MODE_FAMILY_NAMES[self.mode_family]
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
                     j_i=j_c + shift, force=None, torque=None, rotation=rotation, omega=omega,
-                    beam=row)
+                    beam=row, eta0=eta0, eta_d0=eta_d0,
+                    force_mode_family=bool(self.force_mode_family))

@@ -112,9 +112,11 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
     angular accelerations and elastic hinges are LOCKED (their loads are set by the caller).
     rot, w3: the bodies' rotations at the step's start and the integrator's offsets (beams).
-    beams = (body_kind, beam_params, xq, wq, modes, mode_off); modal = (eta, eta_d, w1e, w3e,
-    eta_dd_star, eta_map), flat over the beams' modal coordinates."""
-    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off = beams
+    beams = (body_kind, beam_params, xq, wq, modes, mode_off, ends, factors) (solver.beam_tables);
+    modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
+    coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
+    beam's end section (kernels/beam.py)."""
+    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     n = body_params.shape[0]
     for k in range(n):
@@ -146,10 +148,16 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
             m = (i1 - i0) // 2
             zs = z_star[jh + 1].copy()
             zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
-            beam_transfer(beam_params[k], beam_xq[k], beam_wq[k], beam_modes[k, :m], gravity,
-                          at_start, rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k],
-                          w1e[i0:i1], w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], zs,
-                          eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1])
+            welded = k + 1 < n and hinge_kind[k + 1] == FIXED
+            kout = k + 1 if welded else k
+            outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
+                        wd[kout] - c1 * phi_star[kout])
+            tables = (beam_xq[k], beam_wq[k], beam_modes[k, :m], beam_ends[k, :m],
+                      beam_factors[k, :m])
+            beam_transfer(beam_params[k], tables, outboard, gravity, at_start, rot[k],
+                          phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
+                          eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1], u[jh + 1],
+                          eta_map[i0:i1])
             continue
         load = body_params[k, 0] * gravity + force[k]
         rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
@@ -312,6 +320,8 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 wd[k] = g_wd[s]
                 dw[k] = c3 * np.eye(3)
                 dwd[k] = g_dwd
+                w1[k] = g_wd[s] - c1 * phi_g        # so that w' = c1 phi + w1, w = c3 phi + w3
+                w3[k] = g_w[s] - c3 * phi_g         # hold the ground's values (beams use them)
             else:
                 w1[k], w3[k] = _offsets(h, coef, omega[k], omega_dot[k], pseudo[k])
                 phi_star[k] = h * omega[k] + 0.5 * h * h * pseudo[k]   # constant-acceleration

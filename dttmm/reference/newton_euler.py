@@ -1,61 +1,92 @@
 """Independent reference solver: global Newton-Euler equations with joint reactions.
 
 This module shares only the model description (dttmm.model, dttmm.elements, dttmm.result) with
-the rest of the package; it uses no transfer matrices.
+the rest of the package; it uses no transfer matrices, and it evaluates the beams' mode shapes
+itself (it does not call dttmm.elements.beam.mode_shapes).
 
 Formulation
 -----------
 Coordinates.  Each body whose inboard hinge leaves its rotation free (ball joint or elastic
 hinge) carries a quaternion q_k (body to world, normalised whenever it is read) and its world
-angular velocity w_k.  A body behind a fixed hinge takes A_k = A_{k-1} R0, w_k = w_{k-1} (the
-ground frame for k = 0).  Each elastic hinge carries its world deflection d_k and its rate.
-Positions and velocities follow from the ground point by kinematics,
-    r_in_k = r_out_{k-1} + d_k,   r_out_k = r_in_k + A_k l_IO,
-so ball and fixed joints hold exactly (to round-off) by construction.
+angular velocity w_k.  A body behind a fixed hinge is welded to its inboard neighbour's OUTPUT
+SECTION: A_k = A_O,{k-1} R0, w_k = w_O,{k-1} (the ground frame for k = 0), where the output
+section of a rigid body is the body itself and that of a beam is its deflected end section
+(docs/beam.md, "End sections"):
+    A_O = A exp(theta_O^),  theta_O = [0, -w'(L), v'(L)],  w_O = w + A J_l(theta_O) theta_O'.
+Each elastic hinge carries its world deflection d_k and its rate.  Positions and velocities
+follow from the ground point by kinematics,
+    r_in_k = r_O,{k-1} + d_k,   r_O,k = r_in_k + rho_O,k,
+with rho_O = A l_IO for a rigid body and rho_O = A (L e1 + u(L)) for a beam, so ball and fixed
+joints hold exactly (to round-off) by construction.
 
 Equations.  At every right-hand-side evaluation one dense linear system is assembled and solved
 for all unknowns at once: the input-point acceleration a_k and angular acceleration alpha_k of
-every body, the reaction force F_k of every ball or fixed hinge, and the reaction couple N_k of
-every fixed hinge.  Rows are, for each body k (world frame; rho_c = A l_IC, rho_o = A l_IO,
-J = A J_I A^T):
+every body, the reaction force F_k of every ball or fixed hinge, the reaction couple N_k of
+every fixed hinge, and the beams' modal accelerations.  Rows are, for each rigid body k (world
+frame; rho_c = A l_IC, J = A J_I A^T):
     Newton:         M (a_k + alpha_k x rho_c + w x (w x rho_c)) = Q_k - Q_{k+1} + M g + f_k
     Euler about I:  J alpha_k + w x J w + M rho_c x a_k
-                        = N_k - N_{k+1} - (rho_o + d_{k+1}) x Q_{k+1} + rho_c x (M g + f_k) + tau_k
-where Q_k, N_k are the force and couple (about the input point) the inboard side exerts on body
-k: unknown reactions for ball / fixed hinges (N_k = 0 for a ball joint), the spring-damper law for
-elastic hinges.  For each ball or fixed hinge the constraint rows at acceleration level
-    a_k = a_{k-1} + alpha_{k-1} x rho_o,{k-1} + w_{k-1} x (w_{k-1} x rho_o,{k-1})  (a_ground, k=0)
-and for each fixed hinge alpha_k = alpha_{k-1} (alpha_ground for k = 0) close the system.
-Elastic hinges add no rows: d_k'' = a_k - a_out_{k-1}.  A tip joined to the ground (Model
-tip_pinned, build_chain(tip="ball")) adds its reaction force and the row a_out_{n-1} = 0 (a point
+                        = N_k - N_{k+1} - (rho_O + d_{k+1}) x Q_{k+1} + rho_c x (M g + f_k) + tau_k
+where Q_k, N_k are the force and couple the inboard side exerts on body k at its input point:
+unknown reactions for ball / fixed hinges (N_k = 0 for a ball joint), the spring-damper law for
+elastic hinges.  Hinge k's force acts at r_in_k, which for a ball or fixed hinge is the inboard
+output point O, so N_{k+1} is also the couple about O (the contract's m_O).
+
+End kinematics.  Every body exposes its output point and output section, linear in its
+accelerations (B_r = dr_O/d eta = A Phi(L), B_t = A J_l(theta_O) D with D = d theta_O / d eta;
+zero for a rigid body):
+    a_O     = a_I + alpha x rho_O + B_r eta'' + [w x (w x rho_O) + 2 w x (A u'(L))]
+    alpha_O = alpha + B_t eta'' + [w x (A J_l theta_O') + A (dJ_l[theta_O'] theta_O')]
+where dJ_l[u] is the derivative of J_l(theta) along u (see _so3_coefficients):
+    J_l    = I + a t^ + b t^ t^,      a = (1 - cos p)/p^2,  b = (p - sin p)/p^3,  p = |t|,
+    dJ_l[u] = (t.u) (a1 t^ + b1 t^ t^) + a u^ + b (u^ t^ + t^ u^),  a1 = a'(p)/p, b1 = b'(p)/p,
+so d/dt [J_l(t) t'] = J_l t'' + dJ_l[t'] t' exactly; a, b, a1, b1 come from their Taylor series
+for p < 2 (exact to rounding) and from the closed forms above.  The constraint rows of a ball or
+fixed hinge k are a_k = a_O,{k-1} (a_ground for k = 0) and, for a fixed hinge, alpha_k =
+alpha_O,{k-1} (alpha_ground).  Their reactions enter the inboard body's rows with the transposed
+Jacobians (virtual work): Newton + F_k, Euler about I + rho_O x F_k + N_k, and a beam's modal
+rows + B_r^T F_k + B_t^T N_k, i.e. the generalized forces of the outboard's force -q_O and
+couple -m_O in docs/beam.md's modal equations, with the end section's virtual rotation (world)
+A J_l(theta_O) d theta_O.  The system matrix is then symmetric in its constraint blocks, and
+the reactions do no work on any motion the constraints allow: energy is conserved.
+Elastic hinges add no rows: d_k'' = a_k - a_O,{k-1}.  A tip joined to the ground (Model
+tip_pinned, build_chain(tip="ball")) adds its reaction force and the row a_O,{n-1} = 0 (a point
 fixed in the world); a chain lying straight between its two fixed points then leaves the tension
 along it indeterminate, and the solver takes the solution with the least tip force (SVD), as the
 DT-TMM sweeps do.
 
-Euler-Bernoulli beams (docs/beam.md).  A beam body carries, besides its frame (quaternion, w),
-its modal coordinates eta = [eta_v (n), eta_w (n)] and their rates; the unknowns gain the modal
-accelerations eta'' and the rows gain the 2n modal equations.  In body components, with
-p(x) = x e1 + Phi(x) eta the frame-relative position of the section at x, Phi(x) = [e2 Y(x),
-e3 Y(x)] (3 x 2n), Y_k = sin(k pi x / L), and the frame's body-frame w_b, alpha_b, a_b:
+Euler-Bernoulli beams (docs/beam.md).  A beam body carries, besides its frame (quaternion, w, or
+the inboard output section through a fixed hinge), its modal coordinates eta = [eta_v (n),
+eta_w (n)] and their rates; the unknowns gain the modal accelerations eta'' and the rows gain
+the 2n modal equations.  In body components, with p(x) = x e1 + Phi(x) eta the frame-relative
+position of the section at x, Phi(x) = [e2 Y(x), e3 Y(x)] (3 x 2n), and the frame's body-frame
+w_b, alpha_b, a_b:
     A^T r''(x) = a_b + alpha_b x p + w_b x (w_b x p) + 2 w_b x Phi eta' + Phi eta''
 and the integrals the equations need are moments of the line mass:
     m = mu L,  s = int mu p,  Q = int mu p p^T,  J_b = tr(Q) E - Q,  P = int mu Phi,
     G = int mu p^ Phi,  C = int mu (Phi eta') p^T,
-so that (world; h = A s, J = A (J_b + J_p) A^T, J_p = diag(j_p L, 0, 0)):
+so that (world; h = A s, J = A (J_b + J_p) A^T, J_p = diag(j_p L, 0, 0), M_Y = int Y Y^T):
     Newton:  m a_I - h^ alpha + A P eta'' - F_k + F_{k+1}
                  = m g - w x (w x h) - 2 w x (A P eta')
-    Euler:   J alpha + h^ a_I + A G eta'' - N_k + N_{k+1} + rho_o^ F_{k+1}
+    Euler:   J alpha + h^ a_I + A G eta'' - N_k + N_{k+1} + rho_O^ F_{k+1}
                  = h x g - w x J w - 2 A (w_b tr C - C w_b)
-    modal:   (A P)^T a_I + (A G)^T alpha + (mu L / 2) eta''
+    modal:   (A P)^T a_I + (A G)^T alpha + mu blockdiag(M_Y, M_Y) eta''
+                 + B_r^T F_{k+1} + B_t^T N_{k+1}
                  = (A P)^T g - int mu Phi^T w_b^ w_b^ p - 2 int mu Phi^T w_b^ Phi eta'
                    - c eta' - k eta
-(int mu p x (w x (w x p)) = w x J_b w and int mu p x (w x u') = w tr C - C w).  The moments
-are evaluated ANALYTICALLY from the three sine integrals
-    int_0^L Y_k = L (1 - (-1)^k) / (k pi),  int_0^L x Y_k = -L^2 (-1)^k / (k pi),
-    int_0^L Y_j Y_k = (L / 2) delta_jk,
-so they are exact to round-off for any number of modes.  (The energies in dttmm.result are
-computed independently, by Gauss-Legendre quadrature of |r'(x)|^2 and g . r(x).)  A beam's
-output point is O = r_I + A L e1 (Y_k(L) = 0), so the joint rows are those of a rigid body.
+(int mu p x (w x (w x p)) = w x J_b w and int mu p x (w x u') = w tr C - C w).  All of these
+follow from three integrals of the shapes, int_0^L Y_k, int_0^L x Y_k and int_0^L Y_j Y_k, and
+the end values Y_k(L), Y_k'(L):
+  pinned:  Y_k = sin(k pi x / L), ANALYTIC: int Y_k = L (1 - (-1)^k) / (k pi),
+           int x Y_k = -L^2 (-1)^k / (k pi), int Y_j Y_k = (L / 2) delta_jk, Y_k(L) = 0,
+           Y_k'(L) = (k pi / L) (-1)^k; modal mass mu L / 2, stiffness EI (k pi / L)^4 L / 2.
+  clamped: Y_k = e^(-b x) + (1 - s) sinh b x - cos b x + s sin b x (the clamped-free
+           eigenfunctions, b = b_k from the roots of 1 + cos bL cosh bL = 0), integrals by
+           GAUSS-LEGENDRE QUADRATURE with 48 + 8 n points on [0, L] (exact to ~1e-15 relative;
+           tests/test_reference_clamped.py checks it against twice the points), Y_k(L),
+           Y_k'(L) from the closed form; modal mass mu L (mu int Y_k^2), stiffness EI b_k^4 L.
+Damping c_k = 2 zeta omega_k m_k, omega_k = sqrt(k_k / m_k), per plane.  (The energies in
+dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
 The right-hand side is numba-compiled; the Python wrapper only evaluates the ground motion and
 the applied loads at time t and hands them to the kernel as arrays.
@@ -68,8 +99,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..elements import BEAM
-from ..elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
-                             PINNED, POLAR_PER_LENGTH)
+from ..elements.beam import (CLAMPED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH,
+                             MODES, PINNED, POLAR_PER_LENGTH)
 from ..elements.hinges import (C_ROTATION, C_TRANSLATION, ELASTIC, FIXED, K_ROTATION,
                                K_TRANSLATION, REST_ROTATION)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -91,6 +122,81 @@ _CR = C_ROTATION.start
 _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES = POLAR_PER_LENGTH, DAMPING_RATIO, MODES
+
+# rows of the per-beam shape constants (_Problem.shape_vec[k, row, mode])
+_SY, _TY, _YL, _DYL, _MF, _KF = range(6)
+N_SHAPE_ROWS = 6
+
+# b_k L of the clamped-free modes: the roots of 1 + cos x cosh x = 0, and beyond the fifth
+# (2k - 1) pi / 2, as docs/beam.md prescribes (off the true root by ~1 / cosh(b_k L): 6e-8 for
+# k = 6, so those shapes are orthogonal only to ~1e-8; the mass matrix here is the quadrature
+# of int Y_j Y_k, not L delta_jk, so the equations stay consistent with the energy)
+_CLAMPED_ROOTS = (1.87510406871196, 4.69409113297418, 7.85475743823761, 10.9955407348755,
+                  14.1371683910465)
+
+
+def clamped_shapes(length, n_modes, x):
+    """(Y, Y') of the first n_modes clamped-free eigenfunctions at the points x, each
+    (n_modes, len(x)), and b_k (n_modes,): Y = cosh bx - cos bx - s (sinh bx - sin bx), written as
+    e^(-bx) + (1 - s) sinh bx - cos bx + s sin bx so that no digits cancel at large b x."""
+    x = np.asarray(x, dtype=float).reshape(-1)
+    y = np.empty((n_modes, x.size))
+    dy = np.empty((n_modes, x.size))
+    betas = np.empty(n_modes)
+    for j in range(n_modes):
+        k = j + 1
+        bl = _CLAMPED_ROOTS[j] if k <= len(_CLAMPED_ROOTS) else (2 * k - 1) * math.pi / 2.0
+        b = bl / length
+        den = math.sinh(bl) + math.sin(bl)
+        s = (math.cosh(bl) + math.cos(bl)) / den
+        one_minus_s = (math.sin(bl) - math.cos(bl) - math.exp(-bl)) / den
+        bx = b * x
+        e = np.exp(-bx)
+        y[j] = e + one_minus_s * np.sinh(bx) - np.cos(bx) + s * np.sin(bx)
+        dy[j] = b * (-e + one_minus_s * np.cosh(bx) + np.sin(bx) + s * np.cos(bx))
+        betas[j] = b
+    return y, dy, betas
+
+
+def quadrature_points(n_modes):
+    """Gauss-Legendre points used for the clamped integrals of a beam with n_modes per plane."""
+    return 48 + 8 * int(n_modes)
+
+
+def beam_shape_constants(beam_row, n_points=None):
+    """Shape constants of one beam: a (N_SHAPE_ROWS, n) array with rows int Y_k, int x Y_k,
+    Y_k(L), Y_k'(L), m_k / mu and k_k / EI, and the (n, n) matrix int Y_j Y_k (module docstring:
+    analytic for 'pinned', Gauss-Legendre quadrature for 'clamped'; n_points overrides the
+    number of points)."""
+    length, nm, family = float(beam_row[LENGTH]), int(beam_row[MODES]), int(beam_row[FAMILY])
+    vec = np.zeros((N_SHAPE_ROWS, nm))
+    k = np.arange(1, nm + 1)
+    if family == PINNED:
+        sgn = (-1.0) ** k
+        vec[_SY] = length * (1.0 - sgn) / (k * np.pi)
+        vec[_TY] = -length * length * sgn / (k * np.pi)
+        vec[_YL] = 0.0
+        vec[_DYL] = (k * np.pi / length) * sgn
+        vec[_MF] = 0.5 * length
+        vec[_KF] = (k * np.pi / length) ** 4 * 0.5 * length
+        mat = np.diag(np.full(nm, 0.5 * length))
+    elif family == CLAMPED:
+        nq = quadrature_points(nm) if n_points is None else int(n_points)
+        xg, wg = np.polynomial.legendre.leggauss(nq)
+        x = 0.5 * length * (xg + 1.0)
+        wq = 0.5 * length * wg
+        y, _, betas = clamped_shapes(length, nm, x)
+        y_end, dy_end, _ = clamped_shapes(length, nm, [length])
+        vec[_SY] = y @ wq
+        vec[_TY] = y @ (wq * x)
+        vec[_YL] = y_end[:, 0]
+        vec[_DYL] = dy_end[:, 0]
+        mat = (y * wq) @ y.T
+        vec[_MF] = np.diag(mat)
+        vec[_KF] = betas ** 4 * length
+    else:
+        raise ValueError(f"simulate_reference: unknown beam mode family {family}")
+    return vec, mat
 
 
 # ----------------------------------------------------------------------------------------------
@@ -197,28 +303,155 @@ def _log_rot(r):
     return psi
 
 
+@numba.njit(cache=True)
+def _so3_coefficients(t):
+    """Coefficients of exp and of the left Jacobian at the rotation vector t, p = |t|:
+    c = sin p / p, a = (1 - cos p)/p^2, b = (p - sin p)/p^3 and a1 = a'(p)/p, b1 = b'(p)/p
+    (all even in p).  Taylor series for p < 2 (16 terms, alternating with terms below 2: exact
+    to rounding there), closed forms beyond (where they cancel no more than a digit)."""
+    p2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2]
+    if p2 < 4.0:
+        # c = sum (-1)^n p^2n / (2n+1)!, a = sum (-1)^n p^2n / (2n+2)!,
+        # b = sum (-1)^n p^2n / (2n+3)!, a1 = sum_{n>=1} (-1)^n 2n p^(2n-2) / (2n+2)!,
+        # b1 = sum_{n>=1} (-1)^n 2n p^(2n-2) / (2n+3)!
+        c = a = b = a1 = b1 = 0.0
+        pw = 1.0                     # (-1)^n p^2n
+        q = -1.0                     # (-1)^n p^(2n-2), from n = 1 on
+        f1 = 1.0                     # (2n+1)!
+        for n in range(16):
+            f2 = f1 * (2 * n + 2)    # (2n+2)!
+            f3 = f2 * (2 * n + 3)    # (2n+3)!
+            c += pw / f1
+            a += pw / f2
+            b += pw / f3
+            if n >= 1:
+                a1 += 2.0 * n * q / f2
+                b1 += 2.0 * n * q / f3
+                q = -q * p2
+            pw = -pw * p2
+            f1 = f3                  # (2(n+1)+1)! = (2n+3)!
+    else:
+        p = math.sqrt(p2)
+        sp, cp = math.sin(p), math.cos(p)
+        c = sp / p
+        a = (1.0 - cp) / p2
+        b = (p - sp) / (p2 * p)
+        a1 = (p * sp - 2.0 * (1.0 - cp)) / (p2 * p2)
+        b1 = (1.0 - cp) / (p2 * p2) - 3.0 * (p - sp) / (p2 * p2 * p)
+    return c, a, b, a1, b1
+
+
+@numba.njit(cache=True)
+def _expm(t):
+    """exp(t^), Rodrigues' formula."""
+    c, a, _, _, _ = _so3_coefficients(t)
+    th = _hat(t)
+    e = np.eye(3) + c * th + a * (th @ th)
+    return e
+
+
+@numba.njit(cache=True)
+def _left_jacobian(t):
+    """J_l(t) = I + a t^ + b t^ t^: exp((t + d)^) = exp((J_l d)^) exp(t^) to first order."""
+    _, a, b, _, _ = _so3_coefficients(t)
+    th = _hat(t)
+    return np.eye(3) + a * th + b * (th @ th)
+
+
+@numba.njit(cache=True)
+def _left_jacobian_derivative(t, u):
+    """dJ_l[u] = d/ds J_l(t + s u) at s = 0 = (t.u) (a1 t^ + b1 t^ t^) + a u^ + b (u^ t^ + t^ u^),
+    since d p / ds = (t.u) / p and a'(p) dp/ds = a1 (t.u)."""
+    _, a, b, a1, b1 = _so3_coefficients(t)
+    th = _hat(t)
+    uh = _hat(u)
+    tu = t[0] * u[0] + t[1] * u[1] + t[2] * u[2]
+    return tu * (a1 * th + b1 * (th @ th)) + a * uh + b * (uh @ th + th @ uh)
+
+
+@numba.njit(cache=True)
+def _end_section_rate(t, t_dot, t_ddot):
+    """d/dt [J_l(t) t'] = J_l(t) t'' + dJ_l[t'] t' (body frame), for tests and the kernels."""
+    return _left_jacobian(t) @ t_ddot + _left_jacobian_derivative(t, t_dot) @ t_dot
+
+
 # ----------------------------------------------------------------------------------------------
 # kinematics, hinge laws, global system
 # ----------------------------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def _kinematics(y, body_params, hinge_kind, hinge_params, q_off, w_off, d_off,
-                r_g, v_g, rot_g, w_g):
+def _beam_end(bp, sv, a, w, eta, eta_dot):
+    """Output point and output section of one beam (module docstring, "End kinematics"), from
+    its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
+    velocity v_O - v_I, A_O, w_O, the velocity parts of a_O and alpha_O, B_r = A Phi(L) and
+    B_t = A J_l(theta_O) D (3 x 2n each, world)."""
+    nm = int(bp[_BMODES])
+    u_l = np.zeros(3)                 # u(L), body frame
+    ud_l = np.zeros(3)                # u'(L) (time derivative)
+    th = np.zeros(3)                  # theta_O = [0, -w'(L), v'(L)]
+    thd = np.zeros(3)
+    for j in range(nm):
+        yl, dyl = sv[_YL, j], sv[_DYL, j]
+        u_l[1] += yl * eta[j]
+        u_l[2] += yl * eta[nm + j]
+        ud_l[1] += yl * eta_dot[j]
+        ud_l[2] += yl * eta_dot[nm + j]
+        th[1] -= dyl * eta[nm + j]
+        th[2] += dyl * eta[j]
+        thd[1] -= dyl * eta_dot[nm + j]
+        thd[2] += dyl * eta_dot[j]
+    p_l = u_l.copy()
+    p_l[0] += bp[_BL]
+    rho = a @ p_l
+    aud = a @ ud_l
+    v_rel = _cross(w, rho) + aud
+    jl = _left_jacobian(th)
+    rot_o = a @ _expm(th)
+    ajt = a @ (jl @ thd)
+    w_o = w + ajt
+    acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud)
+    alpha_v = _cross(w, ajt) + a @ (_left_jacobian_derivative(th, thd) @ thd)
+    br = np.zeros((3, 2 * nm))
+    d = np.zeros((3, 2 * nm))
+    for j in range(nm):
+        br[1, j] = sv[_YL, j]
+        br[2, nm + j] = sv[_YL, j]
+        d[2, j] = sv[_DYL, j]
+        d[1, nm + j] = -sv[_DYL, j]
+    br = a @ br
+    bt = a @ (jl @ d)
+    return rho, v_rel, rot_o, w_o, acc_v, alpha_v, br, bt
+
+
+@numba.njit(cache=True)
+def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+                q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
-    deflections (world) of every body, from the state and the ground motion."""
+    deflections (world) of every body, from the state and the ground motion; and each body's
+    output point and section: rho_O = r_O - r_I, A_O, w_O, the velocity parts of a_O and
+    alpha_O, (beams) B_r, B_t padded to the widest beam's 2n columns, and v_O."""
     n = body_params.shape[0]
+    n2max = 2 * shape_vec.shape[2]
     rot = np.empty((n, 3, 3))
     omega = np.empty((n, 3))
     r_in = np.empty((n, 3))
     v_in = np.empty((n, 3))
     defl = np.zeros((n, 3))
     defl_rate = np.zeros((n, 3))
+    rho_o = np.empty((n, 3))
+    v_o = np.empty((n, 3))
+    rot_o = np.empty((n, 3, 3))
+    omega_o = np.empty((n, 3))
+    acc_v = np.empty((n, 3))
+    alpha_v = np.zeros((n, 3))
+    b_r = np.zeros((n, 3, n2max))
+    b_t = np.zeros((n, 3, n2max))
     r_prev = r_g.copy()          # output point of the inboard body (ground point for k = 0)
     v_prev = v_g.copy()
     for k in range(n):
-        if hinge_kind[k] == FIXED:
-            a_in = rot_g if k == 0 else rot[k - 1]
-            w_in = w_g if k == 0 else omega[k - 1]
+        if hinge_kind[k] == FIXED:   # welded to the inboard output section (or the ground)
+            a_in = rot_g if k == 0 else rot_o[k - 1]
+            w_in = w_g if k == 0 else omega_o[k - 1]
             rot[k] = a_in @ _mat3(hinge_params[k], _R0)
             omega[k] = w_in
         else:
@@ -229,10 +462,25 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, q_off, w_off, d_off,
             defl_rate[k] = y[d_off[k] + 3:d_off[k] + 6]
         r_in[k] = r_prev + defl[k]
         v_in[k] = v_prev + defl_rate[k]
-        rho_o = rot[k] @ _vec3(body_params[k], _LIO)
-        r_prev = r_in[k] + rho_o
-        v_prev = v_in[k] + _cross(omega[k], rho_o)
-    return rot, omega, r_in, v_in, defl, defl_rate
+        if body_kind[k] == _BEAM:
+            nm2 = 2 * int(beam_params[k, _BMODES])
+            o = m_off[k]
+            rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
+                beam_params[k], shape_vec[k], rot[k], omega[k], y[e0 + o:e0 + o + nm2],
+                y[e0 + n_modal + o:e0 + n_modal + o + nm2])
+            rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
+            b_r[k, :, :nm2] = br
+            b_t[k, :, :nm2] = bt
+        else:
+            rho = rot[k] @ _vec3(body_params[k], _LIO)
+            v_rel = _cross(omega[k], rho)
+            rho_o[k], rot_o[k], omega_o[k] = rho, rot[k], omega[k]
+            acc_v[k] = _cross(omega[k], v_rel)
+        r_prev = r_in[k] + rho
+        v_prev = v_in[k] + v_rel
+        v_o[k] = v_prev
+    return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
+            b_r, b_t, v_o)
 
 
 @numba.njit(cache=True)
@@ -257,58 +505,45 @@ def _elastic_loads(rot, omega, defl, defl_rate, hinge_kind, hinge_params, rot_g,
     return q, m
 
 
+
+
 @numba.njit(cache=True)
-def _beam_terms(bp, eta, eta_dot, a, w, gravity):
-    """World-frame mass properties, coupling blocks and velocity terms of one pinned beam at its
-    current (eta, eta'), from the analytic moments of the module docstring.
+def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
+    """World-frame mass properties, coupling blocks and velocity terms of one beam at its
+    current (eta, eta'), from the shape integrals sv (int Y, int x Y, ...) and my = int Y Y^T
+    (module docstring).
 
     Returns mass, h = A s (first moment about I), J = A (J_b + J_p) A^T, AP = A P and AG = A G
     (3 x 2n), the velocity terms of the Newton and Euler rows (right-hand side), the modal
     equations' right-hand side (gravity, velocity, damping and stiffness terms) and the modal
-    mass mu L / 2."""
+    mass matrix of one plane, mu int Y Y^T (n x n)."""
     length = bp[_BL]
     mu = bp[_BMU]
     nm = int(bp[_BMODES])
     n2 = 2 * nm
-    # int_0^L Y_k dx and int_0^L x Y_k dx, analytic
-    sy = np.empty(nm)
-    ty = np.empty(nm)
-    for j in range(nm):
-        k = j + 1
-        sgn = 1.0 if k % 2 == 0 else -1.0          # (-1)^k
-        sy[j] = length * (1.0 - sgn) / (k * math.pi)
-        ty[j] = -length * length * sgn / (k * math.pi)
-    half = 0.5 * length                            # int Y_j Y_k = (L / 2) delta_jk
-    sv = sw = tv = tw = 0.0
-    vv = vw = ww = 0.0
-    tdv = tdw = dvv = dvw = dwv = dww = 0.0
-    for j in range(nm):
-        ev, ew, dv, dw = eta[j], eta[nm + j], eta_dot[j], eta_dot[nm + j]
-        sv += sy[j] * ev
-        sw += sy[j] * ew
-        tv += ty[j] * ev
-        tw += ty[j] * ew
-        vv += ev * ev
-        vw += ev * ew
-        ww += ew * ew
-        tdv += ty[j] * dv
-        tdw += ty[j] * dw
-        dvv += dv * ev
-        dvw += dv * ew
-        dwv += dw * ev
-        dww += dw * ew
+    sy = sv[_SY, :nm]
+    ty = sv[_TY, :nm]
+    myy = np.ascontiguousarray(my[:nm, :nm])
+    ev = np.ascontiguousarray(eta[:nm])
+    ew = np.ascontiguousarray(eta[nm:n2])
+    dv = np.ascontiguousarray(eta_dot[:nm])
+    dw = np.ascontiguousarray(eta_dot[nm:n2])
+    mev = myy @ ev                                 # int Y v, int Y w, int Y v', int Y w'
+    mew = myy @ ew
+    mdv = myy @ dv
+    mdw = myy @ dw
     mass = mu * length
     s_b = np.empty(3)
     s_b[0] = mu * length * length / 2.0
-    s_b[1] = mu * sv
-    s_b[2] = mu * sw
+    s_b[1] = mu * (sy @ ev)
+    s_b[2] = mu * (sy @ ew)
     q = np.empty((3, 3))                           # int mu p p^T
     q[0, 0] = mu * length ** 3 / 3.0
-    q[0, 1] = q[1, 0] = mu * tv
-    q[0, 2] = q[2, 0] = mu * tw
-    q[1, 1] = mu * half * vv
-    q[1, 2] = q[2, 1] = mu * half * vw
-    q[2, 2] = mu * half * ww
+    q[0, 1] = q[1, 0] = mu * (ty @ ev)
+    q[0, 2] = q[2, 0] = mu * (ty @ ew)
+    q[1, 1] = mu * (ev @ mev)
+    q[1, 2] = q[2, 1] = mu * (ev @ mew)
+    q[2, 2] = mu * (ew @ mew)
     tr = q[0, 0] + q[1, 1] + q[2, 2]
     j_b = -q
     for i in range(3):
@@ -319,17 +554,17 @@ def _beam_terms(bp, eta, eta_dot, a, w, gravity):
     for j in range(nm):
         p_b[1, j] = mu * sy[j]
         p_b[2, nm + j] = mu * sy[j]
-        g_b[2, j] = mu * ty[j]                     # p x (Y_k e2): T_k e3 - (L/2) eta_w,k e1
-        g_b[0, j] = -mu * half * eta[nm + j]
-        g_b[1, nm + j] = -mu * ty[j]               # p x (Y_k e3): -T_k e2 + (L/2) eta_v,k e1
-        g_b[0, nm + j] = mu * half * eta[j]
+        g_b[2, j] = mu * ty[j]                     # p x (Y_j e2) = Y_j (-w, 0, x)
+        g_b[0, j] = -mu * mew[j]
+        g_b[1, nm + j] = -mu * ty[j]               # p x (Y_j e3) = Y_j (v, -x, 0)
+        g_b[0, nm + j] = mu * mev[j]
     c = np.zeros((3, 3))                           # int mu (Phi eta') p^T
-    c[1, 0] = mu * tdv
-    c[2, 0] = mu * tdw
-    c[1, 1] = mu * half * dvv
-    c[1, 2] = mu * half * dvw
-    c[2, 1] = mu * half * dwv
-    c[2, 2] = mu * half * dww
+    c[1, 0] = mu * (ty @ dv)
+    c[2, 0] = mu * (ty @ dw)
+    c[1, 1] = mu * (dv @ mev)
+    c[1, 2] = mu * (dv @ mew)
+    c[2, 1] = mu * (dw @ mev)
+    c[2, 2] = mu * (dw @ mew)
     w_b = a.T @ w
     trc = c[0, 0] + c[1, 1] + c[2, 2]
     cor_b = 2.0 * (trc * w_b - c @ w_b)            # int mu p x (2 w x u')
@@ -347,28 +582,25 @@ def _beam_terms(bp, eta, eta_dot, a, w, gravity):
         mm[i, i] -= ww2
     g_w = ap.T @ gravity                           # (A P)^T g
     modal = np.empty(n2)
-    m_k = mu * half
     for j in range(nm):
-        k = j + 1
-        ev, ew, dv, dw = eta[j], eta[nm + j], eta_dot[j], eta_dot[nm + j]
-        beta4 = (k * math.pi / length) ** 4
-        kv = bp[_BEIV] * beta4 * half
-        kw = bp[_BEIW] * beta4 * half
+        m_k = mu * sv[_MF, j]
+        kv = bp[_BEIV] * sv[_KF, j]
+        kw = bp[_BEIW] * sv[_KF, j]
         cv = 2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k
         cw = 2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k
-        cent_v = mu * (ty[j] * mm[1, 0] + half * (mm[1, 1] * ev + mm[1, 2] * ew))
-        cent_w = mu * (ty[j] * mm[2, 0] + half * (mm[2, 1] * ev + mm[2, 2] * ew))
-        cori_v = -2.0 * m_k * w_b[0] * dw          # 2 int mu Y_k e2 . (w_b x Phi eta')
-        cori_w = 2.0 * m_k * w_b[0] * dv
-        modal[j] = g_w[j] - cent_v - cori_v - cv * dv - kv * ev
-        modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw - kw * ew
-    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_k
+        cent_v = mu * (ty[j] * mm[1, 0] + mm[1, 1] * mev[j] + mm[1, 2] * mew[j])
+        cent_w = mu * (ty[j] * mm[2, 0] + mm[2, 1] * mev[j] + mm[2, 2] * mew[j])
+        cori_v = -2.0 * mu * w_b[0] * mdw[j]       # 2 int mu Y_j e2 . (w_b x Phi eta')
+        cori_w = 2.0 * mu * w_b[0] * mdv[j]
+        modal[j] = g_w[j] - cent_v - cori_v - cv * dv[j] - kv * ev[j]
+        modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw[j] - kw * ew[j]
+    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy
 
 
 @numba.njit(cache=True)
-def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kind, beam_params,
-              m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g,
-              forces, torques):
+def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, body_params,
+              hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal,
+              e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g, forces, torques):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
@@ -382,16 +614,18 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
         p = body_params[k]
         a = rot[k]
         w = omega[k]
-        rho_o = a @ _vec3(p, _LIO)
         rn, re = 6 * k, 6 * k + 3          # Newton rows, Euler rows
         ca, cal = 6 * k, 6 * k + 3         # a_k, alpha_k columns
+        nm2 = 0
+        ce = -1
         if body_kind[k] == _BEAM:
-            nm2 = 2 * int(beam_params[k, _BMODES])
+            nm = int(beam_params[k, _BMODES])
+            nm2 = 2 * nm
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
-            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_k = _beam_terms(
-                beam_params[k], eta, eta_dot, a, w, gravity)
+            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy = _beam_terms(
+                beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, gravity)
             weight = mass * gravity + forces[k]
             bn = weight - _cross(w, _cross(w, h)) + newton_v
             be = -_cross(w, j_w @ w) + _cross(h, gravity) + euler_v + torques[k]
@@ -402,8 +636,11 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
                     s[re + i, ce + j] = ag[i, j]      # rotation:    + A G eta''
                     s[ce + j, ca + i] = ap[i, j]      # modal:  (A P)^T a + (A G)^T alpha
                     s[ce + j, cal + i] = ag[i, j]
-                s[ce + j, ce + j] = m_k
                 b[ce + j] = modal[j]
+            for j in range(nm):                       # modal mass, one block per plane
+                for i in range(nm):
+                    s[ce + j, ce + i] = m_yy[j, i]
+                    s[ce + nm + j, ce + nm + i] = m_yy[j, i]
         else:
             mass = p[_MASS]
             rho_c = a @ _vec3(p, _LIC)
@@ -434,10 +671,11 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
                 c = m_col[k]
                 for i in range(3):
                     s[re + i, c + i] = -1.0
-        # the outboard hinge acting on body k (its force acts at r_out_k + d_{k+1})
+        # the outboard hinge acting on body k: force -F_{k+1} at r_O + d_{k+1}, couple -N_{k+1};
+        # a beam's modal rows get their generalized forces B_r^T F_{k+1} + B_t^T N_{k+1}
         if k + 1 < n:
-            arm = rho_o + defl[k + 1]
-            if hinge_kind[k + 1] == ELASTIC:
+            arm = rho_o[k] + defl[k + 1]
+            if hinge_kind[k + 1] == ELASTIC:      # (never at a beam's end: build_chain refuses)
                 bn -= q_el[k + 1]
                 be -= m_el[k + 1] + _cross(arm, q_el[k + 1])
             else:
@@ -447,14 +685,19 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
                     s[rn + i, c + i] = 1.0
                     for j in range(3):
                         s[re + i, c + j] = ha[i, j]
+                    for j in range(nm2):
+                        s[ce + j, c + i] = b_r[k, i, j]
                 if hinge_kind[k + 1] == FIXED:
                     c = m_col[k + 1]
                     for i in range(3):
                         s[re + i, c + i] = 1.0
+                        for j in range(nm2):
+                            s[ce + j, c + i] = b_t[k, i, j]
         for i in range(3):
             b[rn + i] = bn[i]
             b[re + i] = be[i]
-        # constraint rows of the inboard hinge (acceleration level)
+        # constraint rows of the inboard hinge (acceleration level):
+        #     a_k = a_O,{k-1},  alpha_k = alpha_O,{k-1} (fixed hinge)
         if hinge_kind[k] != ELASTIC:
             r = f_col[k]
             for i in range(3):
@@ -463,15 +706,17 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
                 for i in range(3):
                     b[r + i] = a_g[i]
             else:
-                rho_po = rot[k - 1] @ _vec3(body_params[k - 1], _LIO)
-                wp = omega[k - 1]
-                hpo = _hat(rho_po)
-                cent = _cross(wp, _cross(wp, rho_po))
+                kp = k - 1
+                hpo = _hat(rho_o[kp])
+                pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                pce = e_col0 + m_off[kp]
                 for i in range(3):
-                    s[r + i, 6 * (k - 1) + i] = -1.0
+                    s[r + i, 6 * kp + i] = -1.0
                     for j in range(3):
-                        s[r + i, 6 * (k - 1) + 3 + j] = hpo[i, j]
-                    b[r + i] = cent[i]
+                        s[r + i, 6 * kp + 3 + j] = hpo[i, j]
+                    for j in range(pn2):
+                        s[r + i, pce + j] = -b_r[kp, i, j]
+                    b[r + i] = acc_v[kp, i]
             if hinge_kind[k] == FIXED:
                 r = m_col[k]
                 for i in range(3):
@@ -479,21 +724,30 @@ def _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kin
                     if k == 0:
                         b[r + i] = wd_g[i]
                     else:
-                        s[r + i, 6 * (k - 1) + 3 + i] = -1.0
+                        kp = k - 1
+                        pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                        pce = e_col0 + m_off[kp]
+                        s[r + i, 6 * kp + 3 + i] = -1.0
+                        for j in range(pn2):
+                            s[r + i, pce + j] = -b_t[kp, i, j]
+                        b[r + i] = alpha_v[kp, i]
     if t_col >= 0:
         # tip joined to a fixed point by a ball joint: the tip body receives -F_t at its output
-        # point (F_t = q at the tip station, uniform convention), and a_out = 0 there
+        # point (F_t = q at the tip station, uniform convention), and a_O = 0 there
         k = n - 1
-        rho_o = rot[k] @ _vec3(body_params[k], _LIO)
-        ha = _hat(rho_o)
-        cent = _cross(omega[k], _cross(omega[k], rho_o))
+        ha = _hat(rho_o[k])
+        nm2 = 2 * int(beam_params[k, _BMODES]) if body_kind[k] == _BEAM else 0
+        ce = e_col0 + m_off[k]
         for i in range(3):
             s[6 * k + i, t_col + i] = 1.0
             s[t_col + i, 6 * k + i] = -1.0
             for j in range(3):
                 s[6 * k + 3 + i, t_col + j] = ha[i, j]
                 s[t_col + i, 6 * k + 3 + j] = ha[i, j]
-            b[t_col + i] = cent[i]
+            for j in range(nm2):
+                s[ce + j, t_col + i] = b_r[k, i, j]
+                s[t_col + i, ce + j] = -b_r[k, i, j]
+            b[t_col + i] = acc_v[k, i]
     return s, b
 
 
@@ -522,17 +776,21 @@ def _solve_least_tip_force(s, b, t_col):
     return x
 
 
+
 @numba.njit(cache=True)
-def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, q_off,
-                    w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
-                    gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
-    """Kinematics plus the solved accelerations, hinge loads and modal accelerations."""
-    rot, omega, r_in, v_in, defl, defl_rate = _kinematics(
-        y, body_params, hinge_kind, hinge_params, q_off, w_off, d_off, r_g, v_g, rot_g, w_g)
+def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+                    shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
+                    t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
+    """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
+    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta."""
+    (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
+     b_t, v_o) = _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
+                        shape_vec, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g)
     q_el, m_el = _elastic_loads(rot, omega, defl, defl_rate, hinge_kind, hinge_params, rot_g, w_g)
-    s, b = _assemble(y, rot, omega, defl, q_el, m_el, body_params, hinge_kind, body_kind,
-                     beam_params, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
-                     gravity, a_g, wd_g, forces, torques)
+    s, b = _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el,
+                     body_params, hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off,
+                     e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g,
+                     forces, torques)
     if t_col >= 0:
         x = _solve_least_tip_force(s, b, t_col)
     else:
@@ -553,19 +811,21 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             if hinge_kind[k] == FIXED:
                 moment[k] = x[m_col[k]:m_col[k] + 3]
     modal_acc = x[e_col0:e_col0 + n_modal].copy()
-    return rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc
+    return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
+            b_r)
 
 
 @numba.njit(cache=True)
-def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, q_off, w_off,
-               d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, r_g,
-               v_g, a_g, rot_g, w_g, wd_g, forces, torques):
+def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+               shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
+               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
     modal coordinates of all beams, their rates]."""
-    rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc = _solve_dynamics(
-        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, q_off, w_off, d_off,
-        m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, r_g, v_g, a_g,
-        rot_g, w_g, wd_g, forces, torques)
+    (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
+     b_r) = _solve_dynamics(
+        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
+        q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
+        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):
@@ -585,9 +845,12 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             if k == 0:
                 a_prev_out = a_g
             else:
-                rho_po = rot[k - 1] @ _vec3(body_params[k - 1], _LIO)
-                a_prev_out = (acc[k - 1] + _cross(alpha[k - 1], rho_po)
-                              + _cross(omega[k - 1], _cross(omega[k - 1], rho_po)))
+                kp = k - 1
+                a_prev_out = acc[kp] + _cross(alpha[kp], rho_o[kp]) + acc_v[kp]
+                if body_kind[kp] == _BEAM:
+                    nm2 = 2 * int(beam_params[kp, _BMODES])
+                    br = np.ascontiguousarray(b_r[kp, :, :nm2])
+                    a_prev_out = a_prev_out + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
             dy[o + 3:o + 6] = acc[k] - a_prev_out
     for i in range(n_modal):
         dy[e0 + i] = y[e0 + n_modal + i]
@@ -630,10 +893,24 @@ class _Problem:
         # all their rates
         self.body_kind = np.ascontiguousarray(model.body_kind, dtype=np.int64)
         self.beam_params = np.ascontiguousarray(model.beam_params, dtype=float)
-        for k in range(n):
-            if self.body_kind[k] == BEAM and self.beam_params[k, FAMILY] != PINNED:
-                raise ValueError(f"simulate_reference: body {k}: only the 'pinned' beam mode "
-                                 f"family is implemented")
+        beams = [k for k in range(n) if self.body_kind[k] == BEAM]
+        for k in beams:
+            if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED):
+                raise ValueError(f"simulate_reference: body {k}: unknown beam mode family "
+                                 f"{self.beam_params[k, FAMILY]}")
+            for j in (k, k + 1):
+                if j < n and kinds[j] == ELASTIC:
+                    raise ValueError(f"simulate_reference: body {k}: an elastic hinge at a "
+                                     f"beam's end is not supported")
+        # shape constants of every beam, padded to the widest beam (module docstring)
+        mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
+        self.shape_vec = np.zeros((n, N_SHAPE_ROWS, mmax))
+        self.shape_mat = np.zeros((n, mmax, mmax))
+        for k in beams:
+            vec, mat = beam_shape_constants(self.beam_params[k])
+            m = vec.shape[1]
+            self.shape_vec[k, :, :m] = vec
+            self.shape_mat[k, :m, :m] = mat
         n_modes = np.asarray(model.n_modes, dtype=np.int64)
         self.m_off = np.full(n, -1, dtype=np.int64)
         nm = 0
@@ -674,6 +951,11 @@ class _Problem:
             if self.q_off[k] >= 0:
                 y[self.q_off[k]:self.q_off[k] + 4] = rotation_to_quaternion(m.initial_rotation[k])
                 y[self.w_off[k]:self.w_off[k] + 3] = m.initial_angular_velocity[k]
+        nm = self.n_modal
+        if nm > 0:
+            y[self.e0:self.e0 + nm] = np.asarray(m.initial_modal_coordinates, dtype=float)
+            y[self.e0 + nm:self.e0 + 2 * nm] = np.asarray(m.initial_modal_velocities,
+                                                          dtype=float)
         return y
 
     def time_inputs(self, t):
@@ -689,16 +971,28 @@ class _Problem:
     def _args(self, y, t):
         r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques = self.time_inputs(t)
         return (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
-                self.beam_params, self.q_off, self.w_off, self.d_off, self.m_off, self.e0,
-                self.n_modal, self.e_col0, self.f_col, self.m_col, self.t_col, self.n_unknowns,
-                self.gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques)
+                self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
+                self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
+                self.m_col, self.t_col, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
+                wd_g, forces, torques)
 
     def rhs(self, t, y):
         return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
 
     def evaluate(self, t, y):
-        """Everything Result records at one time, from the state."""
+        """Everything Result records at one time, from the state (see _solve_dynamics)."""
         return _solve_dynamics(*self._args(np.ascontiguousarray(y, dtype=float), t))
+
+    def end_sections(self, t, y):
+        """Every body's output point and section at one time, world: (rho_O = r_O - r_I, v_O,
+        A_O, w_O), each (n, ...)."""
+        r_g, v_g, _, rot_g, w_g, _ = (np.asarray(x, dtype=float)
+                                      for x in self.model.ground_state(t))
+        out = _kinematics(np.ascontiguousarray(y, dtype=float), self.body_params, self.kinds,
+                          self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
+                          self.q_off, self.w_off, self.d_off, self.m_off, self.e0, self.n_modal,
+                          r_g, v_g, rot_g, w_g)
+        return out[6], out[13], out[7], out[8]
 
 
 def _check_args(model, t_end, method, rtol, atol, t_eval):
@@ -745,19 +1039,21 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     tolerances; t_eval: recorded times (default 201 points over [0, t_end]), sampled from the
     integrator's dense output.  Returns a dttmm.result.Result; info holds nfev and the number of
     state variables and unknowns of the global system.  For chains with EulerBernoulliBeam
-    bodies the result also holds modal_coordinates and modal_velocities (T, total modes; body
-    order, a beam's v coordinates first, then w), the energies count the beams' deflection, and
-    position_mass_center is each beam's deflected mass centre.  A chain built with tip="ball"
-    has its tip held at its starting point (fixed in the world, a_tip = 0, also when the ground
-    moves); the initial angular velocities must leave it at rest there.
+    bodies (mode families 'pinned' and 'clamped') the result also holds modal_coordinates and
+    modal_velocities (T, total modes; body order, a beam's v coordinates first, then w), the
+    energies count the beams' deflection (dttmm.result.chain_energies), position_mass_center is
+    each beam's deflected mass centre and position_output its deflected output point
+    r_I + A (L e1 + u(L)).  The initial modal coordinates and rates are the model's.  A chain
+    built with tip="ball" has its tip held at its starting point (fixed in the world, a_tip = 0,
+    also when the ground moves); the initial angular velocities must leave it at rest there.
     """
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     prob = _Problem(model)
     y0 = prob.initial_state()
     n, nt = prob.n, len(t_eval)
     if prob.t_col >= 0:
-        rk, wk, _, vik = prob.evaluate(0.0, y0)[:4]
-        v_tip = vik[-1] + np.cross(wk[-1], rk[-1] @ model.body_params[-1, _LIO:_LIO + 3])
+        wk = prob.evaluate(0.0, y0)[1]
+        v_tip = prob.end_sections(0.0, y0)[1][-1]
         reach = float(np.linalg.norm(model.body_params[:, _LIO:_LIO + 3], axis=1).sum())
         scale = max(1.0, float(np.abs(wk).max()) * reach)
         if np.abs(v_tip).max() > 1e-12 * scale:
@@ -793,19 +1089,22 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     nm, e0 = prob.n_modal, prob.e0
     eta = np.ascontiguousarray(ys[:, e0:e0 + nm])
     eta_dot = np.ascontiguousarray(ys[:, e0 + nm:e0 + 2 * nm])
+    rho_out = np.empty((nt, n, 3))
     for i, t in enumerate(t_eval):
-        rk, wk, rik, vik, dk, _, ak, fk, mk, _ = prob.evaluate(t, ys[i])
+        rk, wk, rik, vik, dk, _, ak, fk, mk, _, rho_out[i] = prob.evaluate(t, ys[i])[:11]
         rot[i], omega[i], r_in[i], v_in[i] = rk, wk, rik, vik
         alpha[i], force[i], moment[i] = ak, fk, mk
         kinetic[i], potential[i] = chain_energies(model, rk, wk, rik, vik, dk,
                                                     ground_rotation=model.ground_state(t)[3],
                                                     eta=eta[i], eta_dot=eta_dot[i])
     r_c, r_o = point_positions(model, rot, r_in)
-    for k in range(n):                          # a beam's mass centre moves with its deflection
-        if prob.body_kind[k] == BEAM:
+    for k in range(n):                          # a beam's mass centre and output point move
+        if prob.body_kind[k] == BEAM:           # with its deflection
             r_c[:, k] = r_in[:, k] + np.einsum("tij,tj->ti", rot[:, k],
                                                _beam_mass_center(prob.beam_params[k],
+                                                                 prob.shape_vec[k],
                                                                  eta[:, prob.m_off[k]:]))
+            r_o[:, k] = r_in[:, k] + rho_out[:, k]
 
     return Result(method=f"newton-euler/{method}", t=np.array(t_eval), position_input=r_in,
                   position_mass_center=r_c, position_output=r_o, rotation=rot,
@@ -817,12 +1116,11 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   modal_velocities=eta_dot if nm > 0 else None)
 
 
-def _beam_mass_center(bp, eta):
-    """(T, 3) body-frame mass centre of a pinned beam, s / (mu L) with s = int mu p dx; eta holds
-    the beam's coordinates in its first 2n columns."""
+def _beam_mass_center(bp, sv, eta):
+    """(T, 3) body-frame mass centre of a beam, s / (mu L) with s = int mu p dx; sv: the beam's
+    shape constants (row _SY = int Y_k dx); eta holds its coordinates in its first 2n columns."""
     length, nm = bp[LENGTH], int(bp[MODES])
-    k = np.arange(1, nm + 1)
-    sy = length * (1.0 - (-1.0) ** k) / (k * np.pi)       # int_0^L Y_k dx
+    sy = sv[_SY, :nm]
     out = np.zeros((len(eta), 3))
     out[:, 0] = length / 2.0
     out[:, 1] = eta[:, :nm] @ sy / length
