@@ -18,3 +18,30 @@ def fitted_order(dts, errors):
 def rot_z(angle):
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def fitted_frequencies(t, x, count, span=0.05):
+    """Angular frequencies of the count strongest components of a signal, one at a time: the
+    peak of the windowed spectrum of what the components found so far leave unexplained starts
+    each new one, then every frequency is refined by scanning around it (the amplitudes, cosine
+    and sine of every component and a constant, fitted linearly at each trial)."""
+    t = np.asarray(t)
+    x = np.asarray(x)
+    freqs = 2 * np.pi * np.fft.rfftfreq(8 * len(x), t[1] - t[0])
+
+    def fit(w):
+        cols = [np.ones_like(t)] + [f(wi * t) for wi in w for f in (np.cos, np.sin)]
+        a = np.column_stack(cols)
+        return a @ np.linalg.lstsq(a, x, rcond=None)[0] - x
+
+    omega = []
+    for _ in range(count):
+        rest = -fit(omega)
+        spec = np.abs(np.fft.rfft((rest - rest.mean()) * np.hanning(len(x)), n=8 * len(x)))
+        omega.append(freqs[int(np.argmax(spec[1:])) + 1])
+        for width in (span, span / 20, span / 400):
+            for k in range(len(omega)):
+                grid = omega[k] * (1 + np.linspace(-width, width, 201))
+                costs = [np.linalg.norm(fit(omega[:k] + [g] + omega[k + 1:])) for g in grid]
+                omega[k] = grid[int(np.argmin(costs))]
+    return np.sort(omega)

@@ -80,11 +80,17 @@ the end values Y_k(L), Y_k'(L):
   pinned:  Y_k = sin(k pi x / L), ANALYTIC: int Y_k = L (1 - (-1)^k) / (k pi),
            int x Y_k = -L^2 (-1)^k / (k pi), int Y_j Y_k = (L / 2) delta_jk, Y_k(L) = 0,
            Y_k'(L) = (k pi / L) (-1)^k; modal mass mu L / 2, stiffness EI (k pi / L)^4 L / 2.
-  clamped: Y_k = e^(-b x) + (1 - s) sinh b x - cos b x + s sin b x (the clamped-free
-           eigenfunctions, b = b_k from the roots of 1 + cos bL cosh bL = 0), integrals by
-           GAUSS-LEGENDRE QUADRATURE with 48 + 8 n points on [0, L] (exact to ~1e-15 relative;
-           tests/test_reference_clamped.py checks it against twice the points), Y_k(L),
-           Y_k'(L) from the closed form; modal mass mu L (mu int Y_k^2), stiffness EI b_k^4 L.
+  clamped (free tip): Y_k = e^(-b x) + (1 - s) sinh b x - cos b x + s sin b x (the
+           clamped-free eigenfunctions, b = b_k from the roots of 1 + cos bL cosh bL = 0),
+           integrals by GAUSS-LEGENDRE QUADRATURE with 48 + 8 n points on [0, L] (exact to
+           ~1e-14 relative; tests/test_reference_clamped.py checks it against twice the points),
+           Y_k(L), Y_k'(L) from the closed form; modal mass mu int Y_k^2 (= mu L), stiffness
+           EI b_k^4 L.
+  clamped, loaded end (CLAMPED_LOADED: a ball joint, fixed hinge or the pinned tip at the
+           output): Y_j = sum_i c_ij (x/L)^(i+2), c the Ritz eigenvectors of docs/beam.md (solved
+           here by scipy.linalg.eigh, normalized int_0^L Y_j Y_k = L delta_jk, Y_j(L) > 0); the
+           integrals are polynomial moments, ANALYTIC (int t^p = 1 / (p + 1)); modal mass mu L,
+           stiffness EI lam_j / L^3.
 Damping c_k = 2 zeta omega_k m_k, omega_k = sqrt(k_k / m_k), per plane.  (The energies in
 dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
@@ -97,10 +103,11 @@ import time
 import numba
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.linalg import eigh
 
 from ..elements import BEAM
-from ..elements.beam import (CLAMPED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH,
-                             MODES, PINNED, POLAR_PER_LENGTH)
+from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH,
+                             MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH)
 from ..elements.hinges import (C_ROTATION, C_TRANSLATION, ELASTIC, FIXED, K_ROTATION,
                                K_TRANSLATION, REST_ROTATION)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -166,8 +173,8 @@ def quadrature_points(n_modes):
 def beam_shape_constants(beam_row, n_points=None):
     """Shape constants of one beam: a (N_SHAPE_ROWS, n) array with rows int Y_k, int x Y_k,
     Y_k(L), Y_k'(L), m_k / mu and k_k / EI, and the (n, n) matrix int Y_j Y_k (module docstring:
-    analytic for 'pinned', Gauss-Legendre quadrature for 'clamped'; n_points overrides the
-    number of points)."""
+    analytic for 'pinned' and the loaded-end modes, Gauss-Legendre quadrature for the
+    clamped-free eigenfunctions; n_points overrides the number of points)."""
     length, nm, family = float(beam_row[LENGTH]), int(beam_row[MODES]), int(beam_row[FAMILY])
     vec = np.zeros((N_SHAPE_ROWS, nm))
     k = np.arange(1, nm + 1)
@@ -194,9 +201,35 @@ def beam_shape_constants(beam_row, n_points=None):
         mat = (y * wq) @ y.T
         vec[_MF] = np.diag(mat)
         vec[_KF] = betas ** 4 * length
+    elif family == CLAMPED_LOADED:
+        # Y_j = sum_i c_ij (x/L)^p_i, p_i = i + 2: every integral is a polynomial moment
+        c, lam = loaded_mode_coefficients(nm)
+        p = np.arange(2, nm + 2, dtype=float)
+        vec[_SY] = length * (c.T @ (1.0 / (p + 1.0)))
+        vec[_TY] = length * length * (c.T @ (1.0 / (p + 2.0)))
+        vec[_YL] = c.sum(axis=0)
+        vec[_DYL] = (c.T @ p) / length
+        mat = length * (c.T @ (1.0 / (p[:, None] + p[None, :] + 1.0)) @ c)
+        vec[_MF] = np.diag(mat)
+        vec[_KF] = lam / length ** 3
     else:
         raise ValueError(f"simulate_reference: unknown beam mode family {family}")
     return vec, mat
+
+
+def loaded_mode_coefficients(n_modes):
+    """The loaded-end modes of docs/beam.md on a unit length: c (n, n) with
+    Y_j(t) = sum_i c_ij t^(i+2), and lam_j, from K c = lam M c with M_ij = 1 / (p_i + p_j + 1),
+    K_ij = p_i (p_i - 1) p_j (p_j - 1) / (p_i + p_j - 3), p_i = i + 2; normalized to
+    int_0^1 Y_j^2 = 1 (c^T M c = I) and Y_j(1) = sum_i c_ij > 0."""
+    p = np.arange(2, n_modes + 2, dtype=float)
+    m = 1.0 / (p[:, None] + p[None, :] + 1.0)
+    pp = p * (p - 1.0)
+    k = np.outer(pp, pp) / (p[:, None] + p[None, :] - 3.0)
+    lam, c = eigh(k, m)
+    c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, m, c))
+    c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
+    return c, lam
 
 
 # ----------------------------------------------------------------------------------------------
@@ -895,7 +928,7 @@ class _Problem:
         self.beam_params = np.ascontiguousarray(model.beam_params, dtype=float)
         beams = [k for k in range(n) if self.body_kind[k] == BEAM]
         for k in beams:
-            if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED):
+            if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED, CLAMPED_LOADED):
                 raise ValueError(f"simulate_reference: body {k}: unknown beam mode family "
                                  f"{self.beam_params[k, FAMILY]}")
             for j in (k, k + 1):
@@ -1039,7 +1072,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     tolerances; t_eval: recorded times (default 201 points over [0, t_end]), sampled from the
     integrator's dense output.  Returns a dttmm.result.Result; info holds nfev and the number of
     state variables and unknowns of the global system.  For chains with EulerBernoulliBeam
-    bodies (mode families 'pinned' and 'clamped') the result also holds modal_coordinates and
+    bodies (every mode family of docs/beam.md) the result also holds modal_coordinates and
     modal_velocities (T, total modes; body order, a beam's v coordinates first, then w), the
     energies count the beams' deflection (dttmm.result.chain_energies), position_mass_center is
     each beam's deflected mass centre and position_output its deflected output point
