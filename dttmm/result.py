@@ -220,8 +220,9 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
 
 
 def beam_midpoint_deflection(model, result, body):
-    """(T, 2) mid-span deflection of beam `body` relative to its chord, d = A u(L/2), projected on
-    e2 and e3: e1 = A e1 is the chord direction, e3 the unit part of world z orthogonal to e1,
+    """(T, 2) mid-span deflection of beam `body` relative to its chord I -> O (the mid-point's
+    offset from the chord's middle, less its part along the chord; A u(L/2) for pinned modes,
+    whose chord is the frame's x axis), projected on e2 and e3: e1 = A e1 is the chord direction, e3 the unit part of world z orthogonal to e1,
     e2 = e3 x e1 (for a chord in the world x-y plane: e2 is in that plane, e3 = world z).
     Undefined (NaN) while the chord is along world z."""
     body = int(body)
@@ -231,15 +232,25 @@ def beam_midpoint_deflection(model, result, body):
         raise ValueError("beam_midpoint_deflection: the result holds no modal coordinates")
     n_modes = model.n_modes
     offset = int(np.sum(n_modes[:body]))
-    nm = int(model.beam_params[body, MODES])
+    row = model.beam_params[body]
+    nm, length = int(row[MODES]), row[LENGTH]
     eta = np.asarray(result.modal_coordinates)[:, offset:offset + 2 * nm]
-    y_mid = np.sin(np.arange(1, nm + 1) * np.pi / 2.0)
+    y = mode_shapes(int(row[FAMILY]), length, nm, [0.5 * length, length])[0]
     rot = np.asarray(result.rotation)[:, body]
-    u = np.zeros((len(eta), 3))
-    u[:, 1] = eta[:, :nm] @ y_mid
-    u[:, 2] = eta[:, nm:] @ y_mid
-    d = np.einsum("tij,tj->ti", rot, u)
-    e1 = rot[:, :, 0]
+    # frame-relative mid-point and output point; the deflection is the mid-point's offset from
+    # the chord's middle, without its part along the chord
+    p_mid = np.zeros((len(eta), 3))
+    p_mid[:, 0] = 0.5 * length
+    p_mid[:, 1] = eta[:, :nm] @ y[:, 0]
+    p_mid[:, 2] = eta[:, nm:] @ y[:, 0]
+    p_out = np.zeros((len(eta), 3))
+    p_out[:, 0] = length
+    p_out[:, 1] = eta[:, :nm] @ y[:, 1]
+    p_out[:, 2] = eta[:, nm:] @ y[:, 1]
+    chord = np.einsum("tij,tj->ti", rot, p_out)
+    e1 = chord / np.linalg.norm(chord, axis=1, keepdims=True)
+    d = np.einsum("tij,tj->ti", rot, p_mid - 0.5 * p_out)
+    d -= np.einsum("ti,ti->t", d, e1)[:, None] * e1
     z = np.array([0.0, 0.0, 1.0])
     e3 = z - e1[:, 2:3] * e1
     norm = np.linalg.norm(e3, axis=1, keepdims=True)

@@ -143,3 +143,14 @@ def test_mode_family_contradictions_are_refused():
         build_chain([FixedHinge(), beam(modes=7), FixedHinge(), beam()])
     with pytest.raises(ValueError, match="initial_modal_coordinates must have 4 entries"):
         build_chain([FixedHinge(), beam(initial_modal_coordinates=[1e-3])])
+
+
+def test_elastic_root_approaches_the_clamp():
+    """A beam on an elastic root hinge moves as the clamped beam when the springs stiffen: the
+    gap shrinks as 1/k (1.5e-3 m at k = 1e5, 1.5e-5 m at 1e7)."""
+    from dttmm import ElasticHinge
+    clamped = simulate(build_chain([FixedHinge(), beam()]), 0.3, 5e-4)
+    gaps = [np.abs(simulate(build_chain([ElasticHinge(k, k), beam()]), 0.3, 5e-4).position_output
+                   - clamped.position_output).max() for k in (1e5, 1e7)]
+    assert gaps[1] < 3e-5
+    assert 50 < gaps[0] / gaps[1] < 200
