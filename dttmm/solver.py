@@ -15,6 +15,7 @@ from .elements.hinges import ELASTIC
 from .kernels.beam import gauss_points, quadrature_size
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import em_step
+from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .kernels import step as kstep
 from .model import Model
 from .result import Result, beam_output_offset, chain_energies, point_positions
@@ -232,6 +233,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                                          force[0], torque[0], ws.rot, ws.omega, ws.defl,
                                          ws.defl_rate, *ws.scratch(), ws.z, ws.beams, ws.eta,
                                          ws.eta_d, ws.eta_acc, ws.eta_map)
+    if status == LOST_ACCURACY:
+        raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
+                              + _DIRECT_HINT)
     if status != 0:
         raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
@@ -367,7 +371,10 @@ def _run_energy_momentum(model, ws, n_steps, dt, mode, newton_iterations, newton
                            rec["omega_dot"], rec["v_c"], rec["z"], info)
         if info[0] != kstep.OK:
             step = done + int(info[1]) + 1
-            raise DivergenceError(step, step * dt, _failure_cause(model, mode, info))
+            cause = _failure_cause(model, mode, info)
+            if mode in (kstep.DIRECT_FULL, kstep.DIRECT_REDUCED) and info[0] == kstep.SINGULAR:
+                cause += "; " + _DIRECT_HINT
+            raise DivergenceError(step, step * dt, cause)
         for i in range(int(info[3])):
             sample = {key: rec[key][i].copy() for key in rec}
             sample.update(zeros)
@@ -406,6 +413,9 @@ def _singular_cause(model, mode, status, where):
 
 def _failure_cause(model, mode, info):
     code = int(info[0])
+    if code == kstep.SINGULAR and int(info[2]) == LOST_ACCURACY:
+        return (f"the direct sweep lost its accuracy: the multiplied-out transfers cancel (a "
+                f"transfer relation is violated by more than {DIRECT_TOLERANCE:g} of its terms)")
     if code == kstep.SINGULAR:
         return _singular_cause(model, mode, int(info[2]), "step")
     return ("the state became NaN or infinite (the step is too large for the motion, or the "

@@ -21,6 +21,8 @@ import numpy as np
 from numba import njit
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
+LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
+DIRECT_TOLERANCE = 1e-6      # largest relative transfer residual a direct solution may leave
 SPLIT_A, SPLIT_B, SPLIT_C = 0, 1, 2
 F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]], dtype=np.int64)
 E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)
@@ -245,7 +247,29 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
         if kind[j] == BALL or kind[j] == LOCKED:
             x = x0[j] + nmat[j] @ x[0:3]
         z[j] = zmat[j] @ x + zoff[j]
+    if transfer_residual(kind, u, z) > DIRECT_TOLERANCE:
+        return LOST_ACCURACY
     return 0
+
+
+@njit(cache=True)
+def transfer_residual(kind, u, z):
+    """Largest relative residual |z_j+1 - U_j z_j - u_j| / (|z_j+1| + |U_j| |z_j| + |u_j|),
+    row by row, over the TRANSFER elements: what a solution built from multiplied-out transfers
+    has lost to cancellation (a Riccati solution leaves rounding)."""
+    worst = 0.0
+    for j in range(kind.shape[0]):
+        if kind[j] != TRANSFER:
+            continue
+        for r in range(12):
+            res = z[j + 1, r] - u[j, r, 12]
+            scale = abs(z[j + 1, r]) + abs(u[j, r, 12])
+            for c in range(12):
+                res -= u[j, r, c] * z[j, c]
+                scale += abs(u[j, r, c] * z[j, c])
+            if scale > 0.0:
+                worst = max(worst, abs(res) / scale)
+    return worst
 
 
 @njit(cache=True)
@@ -328,4 +352,13 @@ def direct_reduced(v, a_root, tip_pinned, aq):
     aq[0, 3:6] = q0
     for k in range(n):
         aq[k + 1] = np.ascontiguousarray(v[k, :, 0:6]) @ aq[k] + v[k, :, 6]
+    # propagated forward, the tip condition shows what the products lost
+    first = 0 if tip_pinned else 3
+    scale = 0.0
+    for k in range(n + 1):
+        for i in range(3):
+            scale = max(scale, abs(aq[k, first + i]))
+    for i in range(3):
+        if abs(aq[n, first + i]) > DIRECT_TOLERANCE * scale:
+            return LOST_ACCURACY
     return 0
