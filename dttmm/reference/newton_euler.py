@@ -49,11 +49,13 @@ rows + B_r^T F_k + B_t^T N_k, i.e. the generalized forces of the outboard's forc
 couple -m_O in docs/beam.md's modal equations, with the end section's virtual rotation (world)
 A J_l(theta_O) d theta_O.  The system matrix is then symmetric in its constraint blocks, and
 the reactions do no work on any motion the constraints allow: energy is conserved.
-Elastic hinges add no rows: d_k'' = a_k - a_O,{k-1}.  A tip joined to the ground (Model
-tip_pinned, build_chain(tip="ball")) adds its reaction force and the row a_O,{n-1} = 0 (a point
-fixed in the world); a chain lying straight between its two fixed points then leaves the tension
-along it indeterminate, and the solver takes the solution with the least tip force (SVD), as the
-DT-TMM sweeps do.
+Elastic hinges add no rows: d_k'' = a_k - a_O,{k-1}; one may sit at a beam's input (its loads
+act at I and do no modal work there, Y_k(0) = Y_k'(0) = 0 for the clamped families), not at a
+beam's output (build_chain refuses it), so its inboard body is rigid or the ground.  A tip
+joined to the ground (Model tip_pinned, build_chain(tip="ball")) adds its reaction force and the
+row a_O,{n-1} = 0 (a point fixed in the world); a chain lying straight between its two fixed
+points then leaves the tension along it indeterminate, and the solver takes the solution with
+the least tip force (SVD), as the DT-TMM sweeps do.
 
 Euler-Bernoulli beams (docs/beam.md).  A beam body carries, besides its frame (quaternion, w, or
 the inboard output section through a fixed hinge), its modal coordinates eta = [eta_v (n),
@@ -931,10 +933,9 @@ class _Problem:
             if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED, CLAMPED_LOADED):
                 raise ValueError(f"simulate_reference: body {k}: unknown beam mode family "
                                  f"{self.beam_params[k, FAMILY]}")
-            for j in (k, k + 1):
-                if j < n and kinds[j] == ELASTIC:
-                    raise ValueError(f"simulate_reference: body {k}: an elastic hinge at a "
-                                     f"beam's end is not supported")
+            if k + 1 < n and kinds[k + 1] == ELASTIC:     # its inboard frame would be A_O
+                raise ValueError(f"simulate_reference: body {k}: an elastic hinge at a beam's "
+                                 f"output end is not supported")
         # shape constants of every beam, padded to the widest beam (module docstring)
         mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
         self.shape_vec = np.zeros((n, N_SHAPE_ROWS, mmax))
