@@ -228,11 +228,15 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     wall0 = time.perf_counter()
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
-    status = kstep.initial_accelerations(mode, model.tip_pinned, *params, g_acc[0], g_rot[0],
-                                         g_w[0], g_wd[0],
-                                         force[0], torque[0], ws.rot, ws.omega, ws.defl,
-                                         ws.defl_rate, *ws.scratch(), ws.z, ws.beams, ws.eta,
-                                         ws.eta_d, ws.eta_acc, ws.eta_map)
+    try:
+        status = kstep.initial_accelerations(mode, model.tip_pinned, *params, g_acc[0], g_rot[0],
+                                             g_w[0], g_wd[0], force[0], torque[0], ws.rot,
+                                             ws.omega, ws.defl, ws.defl_rate, *ws.scratch(), ws.z,
+                                             ws.beams, ws.eta, ws.eta_d, ws.eta_acc, ws.eta_map)
+    except np.linalg.LinAlgError as err:
+        raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
+                              f"or not finite ({err})"
+                              + (f"; {_DIRECT_HINT}" if method == "direct" else "")) from None
     if status == LOST_ACCURACY:
         raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
                               + _DIRECT_HINT)

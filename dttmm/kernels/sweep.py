@@ -22,7 +22,7 @@ from numba import njit
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
-DIRECT_TOLERANCE = 1e-6      # largest relative transfer residual a direct solution may leave
+DIRECT_TOLERANCE = 1e-4      # largest relative transfer residual a direct solution may leave
 SPLIT_A, SPLIT_B, SPLIT_C = 0, 1, 2
 F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]], dtype=np.int64)
 E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)

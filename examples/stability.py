@@ -1,0 +1,200 @@
+"""Where methods fail and where DT-TMM with the Riccati sweep does not (issue 4).
+
+    python examples/stability.py [--quick] [--out DIR] [--long]
+
+1. Direct vs Riccati as the chain grows: rigid ball-joint chains (N = 3 .. 1000) and stiff
+   cantilevers of beam elements joined by fixed hinges, at dt = 1e-3 and 1e-4.  The error of the
+   direct sweep is measured against the Riccati run at the same dt (what the products lose) and
+   the Riccati run against the Newton-Euler reference where that is feasible (N <= 10).
+2. Unconditional stability: the three-pendulum with the beam's modulus raised 10x .. 1000x.
+   DT-TMM keeps dt = 1e-4; the explicit Runge-Kutta reference's step count grows with the
+   stiffest frequency.
+3. (--long) 120 s of the three-pendulum and of a 10-link chain at dt = 1e-4: the largest angular
+   acceleration and the energy error in 20 s windows.
+Prints every number and saves PNG charts in DIR (default: stability/).
+"""
+import argparse
+import os
+import time
+
+import numpy as np
+
+from dttmm import DivergenceError, EulerBernoulliBeam, FixedHinge, build_chain, simulate
+from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.reference import simulate_reference
+
+
+def stiff_cantilever(n_elements, length=5.0):
+    elements = []
+    for _ in range(n_elements):
+        elements += [FixedHinge(),
+                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
+                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
+                                        modes_per_plane=2)]
+    return build_chain(elements)
+
+
+def direct_vs_riccati(make, sizes, dts, t_end, reference_up_to):
+    """rows of (N, dt, direct error or None if it stopped, Riccati error vs reference (False
+    beyond reference_up_to), us per step of Riccati, of direct)."""
+    simulate(make(sizes[0]), 10 * dts[0], dts[0])                     # JIT warm-up
+    simulate(make(sizes[0]), 10 * dts[0], dts[0], method="direct")
+    rows = []
+    for n in sizes:
+        model = make(n)
+        for dt in dts:
+            steps = max(10, int(round(t_end / dt)))
+            t = steps * dt
+            ric = simulate(model, t, dt, record_every=steps)
+            try:
+                dire = simulate(model, t, dt, method="direct", record_every=steps)
+                d_err = np.abs(dire.position_output - ric.position_output).max()
+                d_cost = 1e6 * dire.wall_time / steps
+            except DivergenceError as err:
+                d_err, d_cost = None, None
+                print(f"    N={n} dt={dt:g}: direct stopped: {err.cause[:70]}")
+            r_err = False                    # not computed
+            if n <= reference_up_to:
+                ref = simulate_reference(model, t, rtol=1e-12, atol=1e-13, t_eval=[0.0, t])
+                r_err = np.abs(ric.position_output[-1] - ref.position_output[-1]).max()
+            rows.append((n, dt, d_err, r_err, 1e6 * ric.wall_time / steps, d_cost))
+            print(f"  N={n:5d} dt={dt:g}: direct - Riccati {_fmt(d_err)} m, Riccati - reference "
+                  f"{_fmt(r_err)} m, Riccati {rows[-1][4]:.0f} us/step, direct "
+                  f"{_fmt(d_cost, '.0f')} us/step", flush=True)
+    return rows
+
+
+def _fmt(x, spec=".2e"):
+    return "failed" if x is None else ("-" if x is False else format(x, spec))
+
+
+def stiffened_three_pendulum(factors, t_end, dt):
+    rows = []
+    for f in factors:
+        model = three_pendulum(2, stiffness_factor=f)
+        grid = np.array([0.0, t_end])
+        tight = simulate_reference(model, t_end, method="DOP853", rtol=1e-11, atol=1e-13,
+                                   t_eval=grid)
+        res = simulate(model, t_end, dt, record_every=int(round(t_end / dt)))
+        t0 = time.perf_counter()
+        rk = simulate_reference(model, t_end, method="RK45", rtol=1e-6, atol=1e-8, t_eval=grid)
+        rk_wall = time.perf_counter() - t0
+        rows.append((f, np.abs(res.position_output[-1] - tight.position_output[-1]).max(),
+                     res.wall_time, np.abs(rk.position_output[-1]
+                                           - tight.position_output[-1]).max(),
+                     rk_wall, int(rk.info.get("nfev", -1))))
+        print(f"  E x {f:g}: DT-TMM dt={dt:g} error {rows[-1][1]:.2e} m in {rows[-1][2]:.2f} s; "
+              f"RK45 rtol 1e-6 error {rows[-1][3]:.2e} m in {rk_wall:.2f} s, "
+              f"{rows[-1][5]} right-hand sides", flush=True)
+    return rows
+
+
+def long_runs(t_end, dt):
+    out = {}
+    for name, model in (("three-pendulum", three_pendulum(2)), ("10-link chain", rigid_chain(10))):
+        res = simulate(model, t_end, dt, record_every=int(round(0.005 / dt)))
+        e = res.total_energy
+        windows = np.array_split(np.arange(len(res.t)), int(round(t_end / 20.0)))
+        peaks = [np.abs(res.angular_acceleration[w]).max() for w in windows]
+        drift = np.abs(e - e[0]).max() / res.kinetic.max()
+        out[name] = (res.t, e, peaks, drift)
+        print(f"  {name}: {t_end:g} s at dt={dt:g}: peak angular acceleration per 20 s window "
+              f"{np.round(peaks, 1)}, energy drift {drift:.2e} of the largest kinetic energy",
+              flush=True)
+    return out
+
+
+def chart_sizes(path, title, rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for dt, style in zip(sorted({r[1] for r in rows}, reverse=True), ("o-", "s--")):
+        sel = [r for r in rows if r[1] == dt]
+        ok = [r for r in sel if r[2] is not None]
+        ax.loglog([r[0] for r in ok], [max(r[2], 1e-17) for r in ok], style,
+                  label=f"direct - Riccati, dt={dt:g}")
+        failed = [r[0] for r in sel if r[2] is None]
+        if failed:
+            ax.loglog(failed, [1e2] * len(failed), "x", ms=10, color="k")
+        ref = [r for r in sel if r[3] not in (None, False)]
+        if ref:
+            ax.loglog([r[0] for r in ref], [r[3] for r in ref], style[0] + ":",
+                      label=f"Riccati - Newton-Euler, dt={dt:g}")
+    ax.axhline(1e2, color="k", lw=0.5)
+    ax.text(ax.get_xlim()[0] * 1.1, 2e2, "x: direct stopped (lost accuracy / singular)",
+            fontsize=8)
+    ax.set_xlabel("number of bodies N")
+    ax.set_ylabel("max position error, m")
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def chart_stiff(path, rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
+    f = [r[0] for r in rows]
+    a1.loglog(f, [r[1] for r in rows], "o-", label="DT-TMM, fixed dt")
+    a1.loglog(f, [r[3] for r in rows], "s--", label="RK45, rtol 1e-6")
+    a1.set_xlabel("modulus factor")
+    a1.set_ylabel("position error at the end, m")
+    a1.legend(fontsize=8)
+    a2.loglog(f, [r[2] for r in rows], "o-", label="DT-TMM wall time, s")
+    a2.loglog(f, [r[4] for r in rows], "s--", label="RK45 wall time, s")
+    a2.set_xlabel("modulus factor")
+    a2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def chart_long(path, data):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for name, (t, e, _, _) in data.items():
+        ax.plot(t, (e - e[0]) / np.abs(e).max(), label=name)
+    ax.set_xlabel("t, s")
+    ax.set_ylabel("energy error / |E|max")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer sizes and shorter runs")
+    ap.add_argument("--out", default="stability", help="directory for the PNG charts")
+    ap.add_argument("--long", action="store_true", help="also the 120 s runs (~15 min)")
+    args = ap.parse_args(argv)
+    os.makedirs(args.out, exist_ok=True)
+    rigid_sizes = [3, 10, 30] if args.quick else [3, 10, 30, 100, 300, 1000]
+    beam_sizes = [3, 10, 30] if args.quick else [3, 10, 30, 100, 300]
+    t_end = 0.02 if args.quick else 0.05
+    print("1. direct vs Riccati, rigid ball-joint chains")
+    rigid = direct_vs_riccati(rigid_chain, rigid_sizes, [1e-3, 1e-4], t_end, 10)
+    chart_sizes(os.path.join(args.out, "direct_vs_riccati_rigid.png"),
+                "rigid ball-joint chains", rigid)
+    print("   stiff cantilevers of beam elements (fixed hinges)")
+    beams = direct_vs_riccati(stiff_cantilever, beam_sizes, [1e-3, 1e-4], t_end, 3)
+    chart_sizes(os.path.join(args.out, "direct_vs_riccati_beams.png"),
+                "cantilevers of stiff beam elements", beams)
+    print("2. the three-pendulum with a stiffer beam, DT-TMM at fixed dt vs explicit RK45")
+    stiff = stiffened_three_pendulum([1, 10, 100] if args.quick else [1, 10, 100, 1000],
+                                     0.2 if args.quick else 0.5, 1e-4)
+    chart_stiff(os.path.join(args.out, "stiff_three_pendulum.png"), stiff)
+    if args.long:
+        print("3. long runs")
+        chart_long(os.path.join(args.out, "long_runs.png"), long_runs(120.0, 1e-4))
+    print(f"charts in {args.out}/")
+
+
+if __name__ == "__main__":
+    main()
