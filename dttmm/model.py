@@ -275,16 +275,13 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
     the input section's frame, with the clamped-free eigenfunctions when the output is the free
     tip and the loaded-end polynomial modes when it carries loads.  An explicit choice that
     contradicts the hinges is refused (clamped between moment-free ends only if the user
-    insists); no elastic hinge at a beam's output yet (one at its input clamps it elastically:
-    the frame is the input section's, as after a fixed hinge)."""
+    insists).  An elastic hinge at the input clamps the beam elastically (the frame is the input
+    section's, as after a fixed hinge); one at the output loads it (loaded-end modes)."""
     n = len(bodies)
     for k in range(n):
         if body_kind[k] != BEAM:
             continue
         who = bodies[k].label(k)
-        if k + 1 < n and kinds[k + 1] == ELASTIC_KIND:
-            raise ValueError(f"{who}: an elastic hinge at the beam's output end is not "
-                             f"supported yet; use a ball joint or a fixed hinge there")
         input_free = kinds[k] == BALL
         free_tip = k == n - 1 and tip == "free"
         output_free = free_tip or (k == n - 1) or kinds[k + 1] == BALL

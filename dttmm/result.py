@@ -170,6 +170,11 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     return kinetic, potential
 
 
+def _output_section(*args):
+    from .model import output_section     # (model imports the elements this module uses)
+    return output_section(*args)
+
+
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
                    eta=None, eta_dot=None):
     """Kinetic and potential energy of one state, from positions and velocities alone.
@@ -192,6 +197,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         raise ValueError(f"chain_energies: eta and eta_dot must hold {total} modal coordinates "
                          f"(got {eta.size} and {eta_dot.size})")
     offset = 0
+    mode_off = np.concatenate([[0], np.cumsum(n_modes)])
     for k in range(model.n_bodies):
         p = model.body_params[k]
         a = rotation[k]
@@ -212,6 +218,10 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
             a_in = ground_rot if k == 0 else rotation[k - 1]
+            if k > 0 and model.body_kind[k - 1] == BEAM:     # the beam's end section
+                j0, j1 = mode_off[k - 1], mode_off[k]
+                a_in = _output_section(model.beam_params[k - 1], a_in, np.zeros(3),
+                                      eta[j0:j1])[0]
             d_b = a_in.T @ deflection[k]
             psi = _log_so3(a_in.T @ a @ h[REST_ROTATION].reshape(3, 3).T)
             potential += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b

@@ -5,19 +5,19 @@ The time loop runs in numba (kernels/step.py) in chunks; Python only evaluates p
 motion and applied loads for each chunk and collects the recorded samples.
 """
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .elements import BEAM
+from .elements import BEAM, RIGID
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
-from .elements.hinges import ELASTIC
-from .kernels.beam import gauss_points, quadrature_size
+from .elements.hinges import ELASTIC, FIXED, HINGE_PARAM_SIZE, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import em_step
-from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .kernels import step as kstep
-from .model import Model
+from .kernels.beam import gauss_points, quadrature_size
+from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
+from .model import Model, output_section
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
@@ -215,6 +215,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
                          f"got {newton_iterations!r}")
     newton_tol = float(newton_tol)
+    user_model = model
+    model, keep = kernel_chain(user_model)
     mode = _mode(model, method, full_state)
     coef = Integrator.from_rho_inf(rho_inf).array()
     if scheme == "energy_momentum":
@@ -261,7 +263,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         t = np.array(sample_steps) * dt
         info.update(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme,
                     forces="step means (about t - dt/2)")
-        return _result(model, t, samples, wall, n_steps, info)
+        return _result(user_model, t, samples, wall, n_steps, info)
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
@@ -311,7 +313,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         done += m
     wall = time.perf_counter() - wall0
     t = np.array(sample_steps) * dt
-    return _result(model, t, samples, wall, n_steps,
+    return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
                    dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf, newton_iterations_used=max_newton,
                         newton_unconverged_steps=int(info[4])))
 
@@ -387,6 +389,57 @@ def _run_energy_momentum(model, ws, n_steps, dt, mode, newton_iterations, newton
         max_newton = max(max_newton, int(info[2]))
         done += m
     return dict(newton_iterations_used=max_newton, newton_unconverged_steps=int(info[4]))
+
+
+def kernel_chain(model):
+    """The chain the kernels integrate, and the kernel index of each of the model's bodies: the
+    model itself, except that a beam whose output hinge is elastic gets a massless, zero-length
+    body welded to its end section (docs/beam.md, "End sections"), which carries the section's
+    rotation history for the hinge as every welded body does.  Results are mapped back."""
+    n = model.n_bodies
+    ends = [k for k in range(n - 1)
+            if model.body_kind[k] == BEAM and model.hinge_kind[k + 1] == ELASTIC]
+    if not ends:
+        return model, np.arange(n)
+    rows = {name: [] for name in ("body_params", "hinge_kind", "hinge_params", "body_kind",
+                                  "beam_params", "initial_rotation", "initial_angular_velocity",
+                                  "ground_locked", "forces", "torques", "body_names",
+                                  "hinge_names", "body_mass_center_inertia")}
+    keep = []
+    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    identity = np.zeros(HINGE_PARAM_SIZE)
+    identity[REST_ROTATION] = np.eye(3).reshape(-1)
+    for k in range(n):
+        keep.append(len(rows["body_kind"]))
+        for name in rows:
+            rows[name].append(getattr(model, name)[k])
+        if k in ends:
+            eta0 = model.initial_modal_coordinates[mode_off[k]:mode_off[k + 1]]
+            eta_d0 = model.initial_modal_velocities[mode_off[k]:mode_off[k + 1]]
+            rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
+                                        model.initial_angular_velocity[k], eta0, eta_d0)
+            carrier = dict(body_params=np.zeros_like(model.body_params[k]), hinge_kind=FIXED,
+                           hinge_params=identity, body_kind=RIGID,
+                           beam_params=np.zeros_like(model.beam_params[k]), initial_rotation=rot,
+                           initial_angular_velocity=omega, ground_locked=False, forces=None,
+                           torques=None, body_names=f"{model.body_names[k]} end section",
+                           hinge_names=f"{model.body_names[k]} end weld",
+                           body_mass_center_inertia=np.zeros((3, 3)))
+            for name in rows:
+                rows[name].append(carrier[name])
+    arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names")
+                     else np.array(v)) for name, v in rows.items()}
+    return replace(model, n_bodies=len(arrays["body_kind"]), **arrays), np.array(keep)
+
+
+def _user_sample(sample, keep):
+    """A kernel-chain sample restricted to the model's bodies and their stations."""
+    if len(keep) == len(sample["rot"]):
+        return sample
+    stations = np.concatenate([[0], np.ravel([[2 * k + 1, 2 * k + 2] for k in keep])])
+    out = {key: sample[key][keep] for key in ("rot", "omega", "omega_dot", "defl", "defl_rate")}
+    out.update(z=sample["z"][stations], eta=sample["eta"], eta_d=sample["eta_d"])
+    return out
 
 
 def _sample(ws):

@@ -114,23 +114,25 @@ def reference_60s():
 
 
 def long_run_ratios(dt, reference):
-    """Peak angular acceleration over the reference's, overall and in the last 10 s, and the
-    energy drift over the largest kinetic energy, of a 60 s DT-TMM run."""
+    """Peak angular acceleration over the reference's, over the run and over its last 10 s
+    against the reference's whole run (the motion is chaotic: the two runs' windows do not
+    correspond, their envelopes do), and the energy drift over the largest kinetic energy, of a
+    60 s DT-TMM run."""
     res = simulate(three_pendulum(2), 60.0, dt, record_every=int(round(0.005 / dt)))
     last = res.t >= 50.0
     acc, ref = np.abs(res.angular_acceleration), np.abs(reference.angular_acceleration)
     e = res.total_energy
-    ratios = (acc.max() / ref.max(), acc[last].max() / ref[last].max())
+    ratios = (acc.max() / ref.max(), acc[last].max() / ref.max())
     drift = np.abs(e - e[0]).max() / res.kinetic.max()
-    print(f"three-pendulum 60 s, dt={dt:g}: peak angular acceleration / reference {ratios}, "
+    print(f"three-pendulum 60 s, dt={dt:g}: peak angular acceleration / reference's {ratios}, "
           f"energy drift {drift:.2e}")
     return ratios, drift
 
 
 @pytest.mark.slow
 def test_sixty_seconds_at_large_dt(reference_60s):
-    """dt = 1e-3: no growing oscillation (peaks within 1.5x of the reference's, overall and in
-    the last 10 s); energy drift 2.6e-4 of the largest kinetic energy (bounded, O(dt^2))."""
+    """dt = 1e-3: no growing oscillation (the peak within 1.5x of the reference's, over the run
+    and in its last 10 s); energy drift 2.6e-4 of the largest kinetic energy (bounded, O(dt^2))."""
     ratios, drift = long_run_ratios(1e-3, reference_60s)
     assert max(ratios) < 1.5
     assert drift < 1e-3
@@ -138,7 +140,8 @@ def test_sixty_seconds_at_large_dt(reference_60s):
 
 @pytest.mark.long
 def test_sixty_seconds_at_small_dt(reference_60s):
-    """dt = 1e-4 (600 000 steps, ~5 min): measured peak ratios 1.1, energy drift 2.0e-6."""
+    """dt = 1e-4 (600 000 steps, ~5 min): measured peak 267 rad/s^2 against the reference's 297,
+    energy drift 2.0e-6."""
     ratios, drift = long_run_ratios(1e-4, reference_60s)
     assert max(ratios) < 1.5
     assert drift < 1e-4

@@ -254,21 +254,27 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
 
 @njit(cache=True)
 def transfer_residual(kind, u, z):
-    """Largest relative residual |z_j+1 - U_j z_j - u_j| / (|z_j+1| + |U_j| |z_j| + |u_j|),
-    row by row, over the TRANSFER elements: what a solution built from multiplied-out transfers
-    has lost to cancellation (a Riccati solution leaves rounding)."""
+    """Largest relative residual of the TRANSFER elements' relations z_j+1 = U_j z_j + u_j, by
+    block (a, phi, m, q): max |residual| over max (|z_j+1| + |U_j| |z_j| + |u_j|) of the block's
+    rows.  What a solution built from multiplied-out transfers has lost to cancellation (a
+    Riccati solution leaves rounding)."""
     worst = 0.0
     for j in range(kind.shape[0]):
         if kind[j] != TRANSFER:
             continue
-        for r in range(12):
-            res = z[j + 1, r] - u[j, r, 12]
-            scale = abs(z[j + 1, r]) + abs(u[j, r, 12])
-            for c in range(12):
-                res -= u[j, r, c] * z[j, c]
-                scale += abs(u[j, r, c] * z[j, c])
-            if scale > 0.0:
-                worst = max(worst, abs(res) / scale)
+        for b in range(4):
+            res_max = 0.0
+            scale_max = 0.0
+            for r in range(3 * b, 3 * b + 3):
+                res = z[j + 1, r] - u[j, r, 12]
+                scale = abs(z[j + 1, r]) + abs(u[j, r, 12])
+                for c in range(12):
+                    res -= u[j, r, c] * z[j, c]
+                    scale += abs(u[j, r, c] * z[j, c])
+                res_max = max(res_max, abs(res))
+                scale_max = max(scale_max, scale)
+            if scale_max > 0.0:
+                worst = max(worst, res_max / scale_max)
     return worst
 
 
