@@ -497,3 +497,111 @@ def test_elastic_hinge_at_beam_input():
     assert springs.max() > 1e-2 and res.kinetic.max() > 1e-1
     assert np.abs(energy - energy[0]).max() < 1e-9 * res.kinetic.max()      # 2e-12 measured
     check_weld(model, res, 0, R_REL)
+
+
+# --------------------------------------------------------------------------------------------
+# an elastic hinge at a beam's output: its inboard frame is the beam's end section
+# --------------------------------------------------------------------------------------------
+
+def beam_then_elastic(hinge, etad0=None, w=None):
+    """A clamped beam (loaded-end modes: its output carries the hinge) deflected in both planes,
+    `hinge` at its output, then the off-axis block."""
+    return [FixedHinge(),
+            beam(1.0, 2, EI_SOFT, initial_modal_coordinates=[3e-3, -3e-4, 2e-3, 2e-4],
+                 initial_modal_velocities=etad0),
+            hinge, tip_body(angular_velocity=w)]
+
+
+def hinge_after_beam(model, res, k_t, k_r, r0):
+    """Hinge 1 after beam 0, rebuilt with this file's end section (A_O, r_O): deflection d
+    (world), psi with exp(psi^) = A_O^T A_1 R0^T, the spring force -A_O K_t A_O^T d, the spring
+    couple -A_O K_r psi (world) and the spring energy (T,)."""
+    r_o, a_o = end_section(model, res, 0)
+    d = res.position_input[:, 1] - r_o
+    d_b = np.einsum("tji,tj->ti", a_o, d)
+    rel = np.einsum("tji,tjk,lk->til", a_o, res.rotation[:, 1], r0)
+    psi = Rotation.from_matrix(rel).as_rotvec()
+    force = -np.einsum("tij,jk,tk->ti", a_o, k_t, d_b)
+    couple = -np.einsum("tij,jk,tk->ti", a_o, k_r, psi)
+    energy = 0.5 * (np.einsum("ti,ij,tj->t", d_b, k_t, d_b)
+                    + np.einsum("ti,ij,tj->t", psi, k_r, psi))
+    return d, psi, force, couple, energy
+
+
+@pytest.mark.parametrize("gravity, k_t", [([0.0, 0.0, 0.0], 3e3 * np.eye(3)),
+                                          ([0.0, -G, 0.0], 3e3 * np.eye(3)),
+                                          ([0.0, -G, 0.0], np.diag([2e3, 3e3, 5e3]))])
+def test_elastic_hinge_at_beam_output_energy(gravity, k_t):
+    """Beam -> elastic hinge (kinked rest rotation) -> block, the beam bending and the block
+    spinning at t = 0: the hinge's springs act in the beam's END SECTION (A_O, w_O), its loads
+    do modal work at O; total energy (this file's quadrature plus the springs in the end
+    section's frame) conserved; the recorded hinge loads are the law in that frame.  The
+    anisotropic K_t checks the couple d x q on the end section (isotropic K_t is central)."""
+    k_r = 40.0 * np.eye(3)              # isotropic: the law -K_r psi is conservative only then
+    model = build_chain(beam_then_elastic(
+        ElasticHinge(translational_stiffness=k_t, rotational_stiffness=k_r, rotation=R_REL),
+        etad0=[0.05, 0.0, -0.1, 0.0], w=[0.3, -0.5, 1.0]), gravity=gravity)
+    assert model.beam_params[0, FAMILY] == CLAMPED_LOADED
+    res = simulate_reference(model, 1.0, rtol=1e-11, atol=1e-14,
+                             t_eval=np.linspace(0.0, 1.0, 201))
+    d, psi, force, couple, springs = hinge_after_beam(model, res, k_t, k_r, R_REL)
+    energy = energies(model, res) + springs
+    assert res.kinetic.max() > 1e-2 and springs.max() > 1e-3          # J: 1.8e-3, 1.5e-2
+    assert np.abs(psi).max() > 3e-3 and np.abs(d).max() > 5e-4
+    drift = np.abs(energy - energy[0]).max() / res.kinetic.max()
+    assert drift < 1e-9, drift                                     # 5e-14 to 1e-12 measured
+    # chain_energies (dttmm.result) agrees: it too takes the end section as the inboard frame
+    assert np.abs(energy - res.total_energy).max() < 1e-12 * res.kinetic.max()
+    scale_f, scale_m = np.abs(force).max(), np.abs(couple).max()
+    assert np.abs(res.force[:, 1] - force).max() < 1e-9 * scale_f
+    assert np.abs(res.moment[:, 1] - couple).max() < 1e-9 * scale_m
+    # the end section's rotation is not the beam's frame here: the law in A would differ
+    a = res.rotation[:, 0]
+    rel_a = np.einsum("tji,tjk,lk->til", a, res.rotation[:, 1], R_REL)
+    couple_a = -np.einsum("tij,jk,tk->ti", a, k_r, Rotation.from_matrix(rel_a).as_rotvec())
+    assert np.abs(couple_a - couple).max() > scale_m                 # 5x to 25x measured
+
+
+def test_stiff_elastic_hinge_at_beam_output_approaches_weld():
+    """With springs of stiffness k the chain approaches the same chain with a fixed hinge (same
+    rest rotation) at the beam's output, the gap shrinking like 1 / k (the hinge sags by ~ the
+    end loads / k, and oscillates about that)."""
+    t_end, t = 0.05, np.linspace(0.0, 0.05, 51)
+
+    def run(hinge):
+        model = build_chain(beam_then_elastic(hinge), gravity=[0.0, -G, 0.0])
+        return model, simulate_reference(model, t_end, rtol=1e-9, atol=1e-12, t_eval=t)
+
+    weld_model, weld = run(FixedHinge(rotation=R_REL))
+    gaps = []
+    for k in (1e7, 1e8):
+        model, res = run(ElasticHinge(translational_stiffness=k, rotational_stiffness=1e-3 * k,
+                                      rotation=R_REL))
+        assert model.beam_params[0, FAMILY] == weld_model.beam_params[0, FAMILY]
+        gaps.append((np.abs(res.position_output[:, 1] - weld.position_output[:, 1]).max(),
+                     np.abs(res.rotation[:, 1] - weld.rotation[:, 1]).max(),
+                     np.abs(res.modal_coordinates - weld.modal_coordinates).max()))
+    gaps = np.array(gaps)
+    ratio = gaps[0] / gaps[1]
+    assert np.all((ratio > 7.0) & (ratio < 14.0)), (gaps, ratio)   # ~1 / k: 8.5-10.6 measured
+    assert gaps[1, 0] < 1e-6 and gaps[1, 1] < 1e-5                 # 2.2e-7 m, 2.4e-6 at k = 1e8
+    # ... against motion of the block and bending of the beam that are not small
+    assert np.ptp(weld.position_output[:, 1, 1]) > 5e-3              # 1.6e-2 m
+    assert np.ptp(weld.modal_coordinates, axis=0).max() > 1e-4
+
+
+def test_damped_elastic_hinge_at_beam_output_dissipates():
+    """Dampers in the elastic hinge after the beam (C_t, C_r on d' and w_1 - w_O): the total
+    energy decreases at every sample, by a clear amount over the run."""
+    k_t, k_r = 3e3 * np.eye(3), 40.0 * np.eye(3)
+    model = build_chain(beam_then_elastic(
+        ElasticHinge(translational_stiffness=k_t, rotational_stiffness=k_r,
+                     translational_damping=10.0, rotational_damping=0.1, rotation=R_REL),
+        etad0=[0.05, 0.0, -0.1, 0.0], w=[0.3, -0.5, 1.0]), gravity=[0.0, -G, 0.0])
+    res = simulate_reference(model, 1.0, rtol=1e-11, atol=1e-14,
+                             t_eval=np.linspace(0.0, 1.0, 401))
+    energy = energies(model, res) + hinge_after_beam(model, res, k_t, k_r, R_REL)[4]
+    scale = res.kinetic.max()
+    assert np.abs(energy - res.total_energy).max() < 1e-12 * scale
+    assert np.diff(energy).max() < 0.0, np.diff(energy).max() / scale     # -8e-8 measured
+    assert energy[0] - energy[-1] > 5e-3 * scale                          # 1.6e-2 measured

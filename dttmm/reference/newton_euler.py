@@ -49,9 +49,18 @@ rows + B_r^T F_k + B_t^T N_k, i.e. the generalized forces of the outboard's forc
 couple -m_O in docs/beam.md's modal equations, with the end section's virtual rotation (world)
 A J_l(theta_O) d theta_O.  The system matrix is then symmetric in its constraint blocks, and
 the reactions do no work on any motion the constraints allow: energy is conserved.
-Elastic hinges add no rows: d_k'' = a_k - a_O,{k-1}; one may sit at a beam's input (its loads
-act at I and do no modal work there, Y_k(0) = Y_k'(0) = 0 for the clamped families), not at a
-beam's output (build_chain refuses it), so its inboard body is rigid or the ground.  A tip
+Elastic hinges add no rows: d_k'' = a_k - a_O,{k-1}, and their loads are known from the state.
+Their inboard frame is the inboard body's output section (the ground frame for k = 0): with
+A_in := A_O,{k-1}, w_in := w_O,{k-1} (for a beam its deflected end section, for a rigid body the
+body itself) the law of docs/hinges.md reads
+    q     = -A_O (K_t A_O^T d_k + C_t A_O^T d_k'),     d_k = r_in_k - r_O,{k-1}
+    m_out = -A_O (K_r psi + C_r A_O^T (w_k - w_O)),   exp(psi^) = A_O^T A_k R0^T
+    m_in  = m_out + d_k x q,
+spring energy 1/2 (A_O^T d)^T K_t (A_O^T d) + 1/2 psi^T K_r psi.  Body k gets q, m_out in its
+Newton / Euler rows; the inboard body gets -q at r_O and the couple -m_in (Newton - q, Euler
+about I - m_in - rho_O x q) and, for a beam, the same generalized forces as a weld's reactions,
+- B_r^T q - B_t^T m_in in its modal rows (right-hand side).  An elastic hinge at a beam's input
+acts at I and does no modal work there (Y_k(0) = Y_k'(0) = 0 for the clamped families).  A tip
 joined to the ground (Model tip_pinned, build_chain(tip="ball")) adds its reaction force and the
 row a_O,{n-1} = 0 (a point fixed in the world); a chain lying straight between its two fixed
 points then leaves the tension along it indeterminate, and the solver takes the solution with
@@ -519,9 +528,11 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
 
 
 @numba.njit(cache=True)
-def _elastic_loads(rot, omega, defl, defl_rate, hinge_kind, hinge_params, rot_g, w_g):
+def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
+                   w_g):
     """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
-    the other hinges)."""
+    the other hinges).  The hinge's inboard frame is the inboard body's output section (A_O,
+    w_O): the body itself for a rigid body, the deflected end section for a beam."""
     n = rot.shape[0]
     q = np.zeros((n, 3))
     m = np.zeros((n, 3))
@@ -529,8 +540,8 @@ def _elastic_loads(rot, omega, defl, defl_rate, hinge_kind, hinge_params, rot_g,
         if hinge_kind[k] != ELASTIC:
             continue
         h = hinge_params[k]
-        a_in = rot_g if k == 0 else rot[k - 1]
-        w_in = w_g if k == 0 else omega[k - 1]
+        a_in = rot_g if k == 0 else rot_o[k - 1]
+        w_in = w_g if k == 0 else omega_o[k - 1]
         d_b = a_in.T @ defl[k]
         dd_b = a_in.T @ defl_rate[k]
         q[k] = -(a_in @ (_mat3(h, _KT) @ d_b + _mat3(h, _CT) @ dd_b))
@@ -710,9 +721,17 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
         # a beam's modal rows get their generalized forces B_r^T F_{k+1} + B_t^T N_{k+1}
         if k + 1 < n:
             arm = rho_o[k] + defl[k + 1]
-            if hinge_kind[k + 1] == ELASTIC:      # (never at a beam's end: build_chain refuses)
+            if hinge_kind[k + 1] == ELASTIC:
+                # -q at r_O and the couple -m_in = -(m_out + d x q) about r_O; on a beam their
+                # generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
                 bn -= q_el[k + 1]
                 be -= m_el[k + 1] + _cross(arm, q_el[k + 1])
+                m_in = m_el[k + 1] + _cross(defl[k + 1], q_el[k + 1])
+                for j in range(nm2):
+                    gen = 0.0
+                    for i in range(3):
+                        gen += b_r[k, i, j] * q_el[k + 1, i] + b_t[k, i, j] * m_in[i]
+                    b[ce + j] -= gen
             else:
                 c = f_col[k + 1]
                 ha = _hat(arm)
@@ -821,7 +840,8 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
      b_t, v_o) = _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
                         shape_vec, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g)
-    q_el, m_el = _elastic_loads(rot, omega, defl, defl_rate, hinge_kind, hinge_params, rot_g, w_g)
+    q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
+                                hinge_params, rot_g, w_g)
     s, b = _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el,
                      body_params, hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off,
                      e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g,
@@ -933,9 +953,6 @@ class _Problem:
             if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED, CLAMPED_LOADED):
                 raise ValueError(f"simulate_reference: body {k}: unknown beam mode family "
                                  f"{self.beam_params[k, FAMILY]}")
-            if k + 1 < n and kinds[k + 1] == ELASTIC:     # its inboard frame would be A_O
-                raise ValueError(f"simulate_reference: body {k}: an elastic hinge at a beam's "
-                                 f"output end is not supported")
         # shape constants of every beam, padded to the widest beam (module docstring)
         mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
         self.shape_vec = np.zeros((n, N_SHAPE_ROWS, mmax))
