@@ -101,3 +101,19 @@ def test_direct_and_riccati_agree_on_short_systems(name):
     runs = [simulate(model, 0.5, 1e-3, method=m, record_every=50) for m in ("riccati", "direct")]
     scale = np.abs(runs[0].position_output).max()
     assert np.abs(runs[0].position_output - runs[1].position_output).max() <= 1e-10 * scale
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("name", ["three_pendulum", "chain10"])
+def test_two_minutes_at_small_dt(name):
+    """120 s at dt = 1e-4 (1.2 million steps; minutes each, so opt-in: pytest -m long): the
+    energy within 1e-4 of the largest kinetic energy throughout, and the largest angular
+    acceleration of the last 20 s no more than 1.5x that of the first 100 s (no growing
+    oscillation)."""
+    model = three_pendulum(2) if name == "three_pendulum" else rigid_chain(10)
+    res = simulate(model, 120.0, 1e-4, record_every=50)
+    e = res.total_energy
+    assert np.abs(e - e[0]).max() < 1e-4 * res.kinetic.max()
+    acc = np.abs(res.angular_acceleration).max(axis=(1, 2))
+    late = res.t > 100.0
+    assert acc[late].max() < 1.5 * acc[~late].max()
