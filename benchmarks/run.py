@@ -1,0 +1,263 @@
+"""The project's benchmark: every timing and work-precision figure in one process.
+
+    python benchmarks/run.py [--quick] --json FILE
+
+Writes the figures to FILE (names carry their units) and PNG charts beside it.  Timings are
+medians over repeats after a JIT warm-up; where two methods are compared the figure is their
+ratio, measured in this one run (these machines are noisy).  Not a test: nothing is asserted.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate
+from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.reference import simulate_reference
+from dttmm.result import beam_midpoint_deflection
+from dttmm.elements import BALL, FIXED
+from dttmm.kernels import step as kstep
+from dttmm.solver import Workspace, _mode, kernel_chain
+from numba import njit
+
+
+def median_us_per_step(model, steps, repeats, **kw):
+    simulate(model, 5 * 1e-4, 1e-4, **kw)                         # warm-up (JIT, caches)
+    times = []
+    for _ in range(repeats):
+        res = simulate(model, steps * 1e-4, 1e-4, record_every=steps, **kw)
+        times.append(res.wall_time / res.n_steps)
+    return 1e6 * float(np.median(times))
+
+
+@njit
+def _repeat_solve(repeats, mode, tip_pinned, kind, u, known_loads, root, sc_split, sc_s, sc_p,
+                  sc_tinv, sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
+                  red_aq, dir_z, dir_o, z):
+    for _ in range(repeats):
+        kstep._solve(mode, tip_pinned, kind, u, known_loads, root, sc_split, sc_s, sc_p, sc_tinv,
+                     sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq,
+                     dir_z, dir_o, z)
+
+
+def floor_us_per_step(model, repeats=20000):
+    """The cost of the dense products and the boundary solve alone: the step's sweep (same
+    element kinds and matrix sizes, the mode simulate picks) on fixed transfers, in a compiled
+    loop."""
+    chain, _ = kernel_chain(model)
+    ws = Workspace(chain)
+    rng = np.random.default_rng(0)
+    for j in range(ws.u.shape[0]):
+        ws.u[j, :, :12] = np.eye(12) + 0.05 * rng.normal(size=(12, 12))
+        ws.u[j, :, 12] = rng.normal(size=12)
+        if j % 2 == 1:
+            ws.kind[j] = kstep.TRANSFER
+        else:
+            ws.kind[j] = {BALL: kstep.EL_BALL, FIXED: kstep.IDENTITY}.get(
+                int(chain.hinge_kind[j // 2]), kstep.TRANSFER)
+    args = (_mode(chain, "riccati", False), chain.tip_pinned, ws.kind, ws.u, ws.known_loads,
+            np.zeros(6), *ws.scratch()[3:], ws.z)
+    _repeat_solve(10, *args)
+    t0 = time.perf_counter()
+    _repeat_solve(repeats, *args)
+    return 1e6 * (time.perf_counter() - t0) / repeats
+
+
+def end_errors(model, res, ref, beam=None):
+    pos = float(np.abs(res.position_output[-1] - ref.position_output[-1]).max())
+    if beam is None:
+        return pos
+    mid = float(np.abs(beam_midpoint_deflection(model, res, beam)[-1]
+                       - beam_midpoint_deflection(model, ref, beam)[-1]).max())
+    return max(pos, mid)
+
+
+def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,)):
+    """Curves of (wall time s, error m at t_end) for DT-TMM over dts (per Newton setting) and
+    for the reference over rtols (RK45, DOP853)."""
+    grid = np.array([0.0, t_end])
+    tight = simulate_reference(model, t_end, method="DOP853", rtol=1e-12, atol=1e-14,
+                               t_eval=grid)
+    simulate(model, 10 * dts[-1], dts[-1])
+    curves = {}
+    for it in newton:
+        pts = []
+        for dt in dts:
+            res = simulate(model, t_end, dt, newton_iterations=it,
+                           record_every=int(round(t_end / dt)))
+            pts.append((res.wall_time, end_errors(model, res, tight, beam)))
+        curves[f"dttmm_newton{it}"] = pts
+    for method in ("RK45", "DOP853"):
+        pts = []
+        for rtol in rtols:
+            t0 = time.perf_counter()
+            ref = simulate_reference(model, t_end, method=method, rtol=rtol, atol=rtol * 1e-2,
+                                     t_eval=grid)
+            pts.append((time.perf_counter() - t0, end_errors(model, ref, tight, beam)))
+        curves[method] = pts
+    return curves
+
+
+def time_at_error(points, target):
+    """Wall time at the given error, interpolated in log-log on a curve (None if the curve
+    does not reach it)."""
+    pts = sorted(points, key=lambda p: p[1])
+    errs = np.log([max(p[1], 1e-300) for p in pts])
+    times = np.log([p[0] for p in pts])
+    lt = np.log(target)
+    if lt < errs[0] or lt > errs[-1]:
+        return None
+    return float(np.exp(np.interp(lt, errs, times)))
+
+
+def speedups(curves, targets):
+    out = {}
+    for target in targets:
+        ours = time_at_error(curves["dttmm_newton0"], target)
+        theirs = [time_at_error(curves[m], target) for m in ("RK45", "DOP853")]
+        theirs = [t for t in theirs if t is not None]
+        out[target] = None if ours is None or not theirs else min(theirs) / ours
+    return out
+
+
+def chart_work_precision(path, title, curves):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for name, pts in curves.items():
+        ax.loglog([p[0] for p in pts], [max(p[1], 1e-16) for p in pts], "o-", label=name)
+    ax.set_xlabel("wall time, s")
+    ax.set_ylabel("error at the end, m")
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def chart_scaling(path, sizes, rigid, beams, reference):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    ax.loglog(sizes, rigid, "o-", label="DT-TMM rigid chain, us/step")
+    ax.loglog(sizes[:len(beams)], beams, "s-", label="DT-TMM beam cantilever, us/step")
+    ax.loglog(sizes[:len(reference)], reference, "^--", label="Newton-Euler, us per RHS")
+    ax.set_xlabel("bodies N")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def stiff_cantilever(n):
+    elements = []
+    for _ in range(n):
+        elements += [FixedHinge(), EulerBernoulliBeam(length=5.0 / n, bending_stiffness=1e4,
+                                                      mass_per_length=2.0,
+                                                      polar_inertia_per_length=1e-3,
+                                                      modes_per_plane=2)]
+    return build_chain(elements)
+
+
+def reference_us_per_rhs(model, evaluations=200):
+    from dttmm.reference.newton_euler import _Problem
+    prob = _Problem(model)
+    y = prob.initial_state()
+    prob.rhs(0.0, y)
+    t0 = time.perf_counter()
+    for _ in range(evaluations):
+        prob.rhs(0.0, y)
+    return 1e6 * (time.perf_counter() - t0) / evaluations
+
+
+def jit_warmup_seconds(cold):
+    code = ("import time; t0 = time.perf_counter(); from dttmm import simulate; "
+            "from dttmm.chains import three_pendulum; simulate(three_pendulum(2), 1e-4, 1e-4); "
+            "print(time.perf_counter() - t0)")
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as cache:
+        if cold:
+            env["NUMBA_CACHE_DIR"] = cache
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env=env, check=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer points, shorter runs")
+    ap.add_argument("--json", required=True, help="output file for the figures")
+    args = ap.parse_args(argv)
+    out_dir = os.path.dirname(os.path.abspath(args.json))
+    os.makedirs(out_dir, exist_ok=True)
+    quick = args.quick
+    fig = {}
+    steps, repeats = (500, 3) if quick else (2000, 5)
+
+    for m in (1, 2, 3):
+        fig[f"three_pendulum_us_per_step_modes{m}"] = median_us_per_step(three_pendulum(m),
+                                                                          steps, repeats)
+    fig["floor_us_per_step"] = floor_us_per_step(three_pendulum(2))
+    fig["ratio_to_floor"] = fig["three_pendulum_us_per_step_modes2"] / fig["floor_us_per_step"]
+    fig["rigid_chain_3_us_per_step_energy_momentum"] = median_us_per_step(
+        rigid_chain(3), steps, repeats, scheme="energy_momentum")
+    print(json.dumps(fig, indent=1), flush=True)
+
+    model = three_pendulum(2)
+    t_wp = 0.5 if quick else 2.0
+    dts = [2e-3, 1e-3, 5e-4, 2.5e-4] if quick else [2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4, 6.25e-5]
+    rtols = [1e-2, 1e-4, 1e-6, 1e-8] if quick else [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8,
+                                                     1e-9, 1e-10]
+    curves = work_precision(model, t_wp, dts, rtols, beam=1, newton=(0, 2))
+    chart_work_precision(os.path.join(out_dir, "work_precision_three_pendulum.png"),
+                         f"three-pendulum, {t_wp:g} s", curves)
+    for target, ratio in speedups(curves, (1e-4, 1e-6, 1e-8)).items():
+        fig[f"speedup_vs_newton_euler_at_{target:.0e}m"] = ratio
+    fig["work_precision_three_pendulum"] = curves
+    print({k: v for k, v in fig.items() if k.startswith("speedup")}, flush=True)
+
+    for n in ((30,) if quick else (30, 100)):
+        t_c = 0.1 if quick else 0.5
+        c = work_precision(rigid_chain(n), t_c, [2e-3, 1e-3, 5e-4, 2.5e-4],
+                           [1e-2, 1e-4, 1e-6, 1e-8] if quick else [1e-2, 1e-3, 1e-4, 1e-5, 1e-6,
+                                                                    1e-7, 1e-8])
+        chart_work_precision(os.path.join(out_dir, f"work_precision_chain{n}.png"),
+                             f"{n}-link rigid chain, {t_c:g} s", c)
+        fig[f"chain{n}_speedup_vs_newton_euler_at_1e-06m"] = speedups(c, (1e-6,))[1e-6]
+        fig[f"work_precision_chain{n}"] = c
+        print(n, fig[f"chain{n}_speedup_vs_newton_euler_at_1e-06m"], flush=True)
+
+    sizes = [3, 10, 30, 100] if quick else [3, 10, 30, 100, 300, 1000]
+    rigid = [median_us_per_step(rigid_chain(n), 50 if n >= 300 else 200, 3) for n in sizes]
+    beam_sizes = sizes[:3] if quick else sizes[:4]
+    beams = [median_us_per_step(stiff_cantilever(n), 50, 3) for n in beam_sizes]
+    ref_sizes = sizes[:3] if quick else sizes[:5]
+    reference = [reference_us_per_rhs(rigid_chain(n)) for n in ref_sizes]
+    for n, us in zip(sizes, rigid):
+        fig[f"rigid_chain_{n}_us_per_step"] = us
+    for n, us in zip(beam_sizes, beams):
+        fig[f"beam_chain_{n}_us_per_step"] = us
+    for n, us in zip(ref_sizes, reference):
+        fig[f"newton_euler_rigid_chain_{n}_us_per_rhs"] = us
+    big = [i for i, n in enumerate(sizes) if n >= 30]
+    fig["rigid_chain_cost_slope"] = float(np.polyfit(np.log([sizes[i] for i in big]),
+                                                     np.log([rigid[i] for i in big]), 1)[0])
+    chart_scaling(os.path.join(out_dir, "scaling.png"), sizes, rigid, beams, reference)
+
+    fig["jit_warmup_s_warm_cache"] = jit_warmup_seconds(cold=False)
+    fig["jit_warmup_s_cold_cache"] = None if quick else jit_warmup_seconds(cold=True)
+    with open(args.json, "w") as f:
+        json.dump(fig, f, indent=1)
+    print(json.dumps({k: v for k, v in fig.items() if not k.startswith("work_precision")},
+                     indent=1))
+
+
+if __name__ == "__main__":
+    main()
