@@ -13,7 +13,7 @@ error in the slope (~1e-10 relative), which is second order in the O(h^3) predic
 import numpy as np
 from numba import njit
 
-from .so3 import expm_so3, left_jacobian, log_so3
+from .so3 import expm_so3, hat, left_jacobian, log_so3
 
 def quadrature_size(modes_per_plane):
     """Gauss-Legendre points that integrate the beam's relations to rounding: 24 points are exact
@@ -30,20 +30,28 @@ def gauss_points(length, n_points):
 
 @njit(cache=True)
 def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w, wd, eta, eta_d,
-                   eta_dd, a_i, m_i, q_i, out, residual):
+                   eta_dd, a_i, m_i, q_i, out, residual, aux):
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end loads' generalized forces (the moment's only if end_moment: a fixed hinge
     at the output; elsewhere m_O = 0).  bp: beam parameter row; xq, wq: quadrature; modes
     (m, N_QUAD): Y_k at the points; ends (m, 2): Y_k(L), Y_k'(L); factors (m, 2): modal mass
-    over mu and modal stiffness over EI."""
+    over mu and modal stiffness over EI.  aux (4, 3) receives what the analytic columns of the
+    linearization need (beam_transfer): the first mass moment S = int mu rho, rho_L = r_O - r_I,
+    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment).
+    The quadrature loop is written in scalars: it runs 2 (3 + n) + 1 times per beam and step."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
     m = modes.shape[0]
-    e1 = rot[:, 0].copy()
-    e2 = rot[:, 1].copy()
-    e3 = rot[:, 2].copy()
-    sum_f = np.zeros(3)
-    sum_m = np.zeros(3)
+    e10, e11, e12 = rot[0, 0], rot[1, 0], rot[2, 0]
+    e20, e21, e22 = rot[0, 1], rot[1, 1], rot[2, 1]
+    e30, e31, e32 = rot[0, 2], rot[1, 2], rot[2, 2]
+    w0, w1, w2 = w[0], w[1], w[2]
+    wd0, wd1, wd2 = wd[0], wd[1], wd[2]
+    g0, g1, g2 = gravity[0], gravity[1], gravity[2]
+    a0, a1, a2 = a_i[0], a_i[1], a_i[2]
+    sf0 = sf1 = sf2 = 0.0          # int f
+    sm0 = sm1 = sm2 = 0.0          # int rho x f
+    s0 = s1 = s2 = 0.0             # int mu rho
     for r in range(2 * m):
         residual[r] = 0.0
     for j in range(xq.shape[0]):
@@ -56,19 +64,41 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
             wdd += y * eta_d[m + k]
             vdd += y * eta_dd[k]
             wddd += y * eta_dd[m + k]
-        rho = xq[j] * e1 + v * e2 + w_ * e3
-        u_dot = vd * e2 + wdd * e3
-        u_ddot = vdd * e2 + wddd * e3
-        acc = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho)) + 2.0 * np.cross(w, u_dot)
-               + u_ddot)
-        f = mu * wq[j] * (gravity - acc)          # force on the segment: gravity minus inertia
-        sum_f += f
-        sum_m += np.cross(rho, f)
-        f2 = e2[0] * f[0] + e2[1] * f[1] + e2[2] * f[2]
-        f3 = e3[0] * f[0] + e3[1] * f[1] + e3[2] * f[2]
+        x = xq[j]
+        r0 = x * e10 + v * e20 + w_ * e30            # rho = A (x e1 + u)
+        r1 = x * e11 + v * e21 + w_ * e31
+        r2 = x * e12 + v * e22 + w_ * e32
+        u0 = vd * e20 + wdd * e30                    # A u'
+        u1 = vd * e21 + wdd * e31
+        u2 = vd * e22 + wdd * e32
+        wr0 = w1 * r2 - w2 * r1                      # w x rho
+        wr1 = w2 * r0 - w0 * r2
+        wr2 = w0 * r1 - w1 * r0
+        # r'' = a_I + w' x rho + w x (w x rho) + 2 w x A u' + A u''
+        acc0 = (a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * u2 - w2 * u1)
+                + vdd * e20 + wddd * e30)
+        acc1 = (a1 + wd2 * r0 - wd0 * r2 + w2 * wr0 - w0 * wr2 + 2.0 * (w2 * u0 - w0 * u2)
+                + vdd * e21 + wddd * e31)
+        acc2 = (a2 + wd0 * r1 - wd1 * r0 + w0 * wr1 - w1 * wr0 + 2.0 * (w0 * u1 - w1 * u0)
+                + vdd * e22 + wddd * e32)
+        c = mu * wq[j]
+        f0 = c * (g0 - acc0)                         # force on the segment: gravity - inertia
+        f1 = c * (g1 - acc1)
+        f2 = c * (g2 - acc2)
+        sf0 += f0
+        sf1 += f1
+        sf2 += f2
+        sm0 += r1 * f2 - r2 * f1
+        sm1 += r2 * f0 - r0 * f2
+        sm2 += r0 * f1 - r1 * f0
+        s0 += c * r0
+        s1 += c * r1
+        s2 += c * r2
+        p2 = e20 * f0 + e21 * f1 + e22 * f2
+        p3 = e30 * f0 + e31 * f1 + e32 * f2
         for k in range(m):
-            residual[k] -= modes[k, j] * f2
-            residual[m + k] -= modes[k, j] * f3
+            residual[k] -= modes[k, j] * p2
+            residual[m + k] -= modes[k, j] * p3
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -85,15 +115,21 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
         wd_l += y * eta_d[m + k]
         vdd_l += y * eta_dd[k]
         wdd_l += y * eta_dd[m + k]
+    e1 = rot[:, 0].copy()
+    e2 = rot[:, 1].copy()
+    e3 = rot[:, 2].copy()
     rho_l = length * e1 + v_l * e2 + w_l * e3
-    q_o = q_i + sum_f
+    q_o = q_i + np.array([sf0, sf1, sf2])
     jp = j_p * length
     spin = jp * (e1 @ wd) * e1 + jp * (e1 @ w) * np.cross(w, e1)   # J_p,w w' + w x J_p,w w
     out[0:3] = (a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
                 + 2.0 * np.cross(w, vd_l * e2 + wd_l * e3) + vdd_l * e2 + wdd_l * e3)
     out[3:6] = wd
-    out[6:9] = m_i - np.cross(rho_l, q_o) + sum_m - spin
+    out[6:9] = m_i - np.cross(rho_l, q_o) + np.array([sm0, sm1, sm2]) - spin
     out[9:12] = q_o
+    aux[0, 0], aux[0, 1], aux[0, 2] = s0, s1, s2
+    aux[1] = rho_l
+    aux[2:4] = 0.0
     # generalized forces of the outboard's -q_O (at O) and -m_O (docs/beam.md, modal equations)
     q2 = q_o @ e2
     q3 = q_o @ e3
@@ -105,9 +141,11 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
             theta[2] += ends[k, 1] * eta[k]
         jl = np.empty((3, 3))
         left_jacobian(theta, jl)
+        aux[2] = rot @ jl[:, 1]
+        aux[3] = rot @ jl[:, 2]
         m_o = out[6:9]
-        mv = m_o @ (rot @ jl[:, 2])
-        mw = -(m_o @ (rot @ jl[:, 1]))
+        mv = m_o @ aux[3]
+        mw = -(m_o @ aux[2])
     for k in range(m):
         residual[k] += q2 * ends[k, 0] + mv * ends[k, 1]
         residual[m + k] += q3 * ends[k, 0] + mw * ends[k, 1]
@@ -155,7 +193,7 @@ def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
 
 @njit(cache=True)
 def _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
-              w1e, w3e, eta_n, eta_d_n, x, out, residual):
+              w1e, w3e, eta_n, eta_d_n, x, out, residual, aux):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
     tables = (xq, wq, modes, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
@@ -178,7 +216,7 @@ def _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1
         eta = (eta_dd - w1e) / c1
         eta_d = c3 * eta + w3e
     beam_relations(bp, xq, wq, modes, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
-                   eta_dd, x[0:3], x[6:9], x[9:12], out, residual)
+                   eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
     if welded:
         if start:
             out[3:6] = _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd)
@@ -188,6 +226,65 @@ def _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1
             phi_out = np.empty(3)
             log_so3(a_o @ r_rel @ rot_out_n.T, phi_out)
             out[3:6] = c1 * phi_out + w1_out
+    return rot
+
+
+@njit(cache=True)
+def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
+    """The Jacobian's columns for a_I (0:3), m_I (6:9) and q_I (9:12), in which the relations
+    are affine (docs/beam.md, "The DT-TMM transfer"): with the beam's mass M_b, its first mass
+    moment S and rho_L = r_O - r_I (aux),
+      d a_O = I da,  d q_O = -M_b da + dq,  d m_O = (M_b rho_L^ - S^) da + dm - rho_L^ dq,
+    and the modal rows through the inertia (P_k = int mu Y_k) and the end loads."""
+    m = modes.shape[0]
+    e2 = rot[:, 1].copy()
+    e3 = rot[:, 2].copy()
+    s_vec = aux[0]
+    rho_l = aux[1]
+    mass = 0.0
+    for j in range(wq.shape[0]):
+        mass += mu * wq[j]
+    rl_h = np.empty((3, 3))
+    hat(rho_l, rl_h)
+    s_h = np.empty((3, 3))
+    hat(s_vec, s_h)
+    dm_da = mass * rl_h - s_h
+    for i in range(3):
+        d_o[i, i] = 1.0
+        d_o[9 + i, i] = -mass
+        d_o[9 + i, 9 + i] = 1.0
+        d_o[6 + i, 6 + i] = 1.0
+        for c in range(3):
+            d_o[6 + i, c] = dm_da[i, c]
+            d_o[6 + i, 9 + c] = -rl_h[i, c]
+    for k in range(m):
+        p_k = 0.0
+        for j in range(wq.shape[0]):
+            p_k += mu * wq[j] * modes[k, j]
+        y_l, dy_l = ends[k, 0], ends[k, 1]
+        for c in range(3):
+            # inertia (d r''/d a_I = I) and the end force q_O
+            d_r[k, c] = (p_k - mass * y_l) * e2[c]
+            d_r[m + k, c] = (p_k - mass * y_l) * e3[c]
+            d_r[k, 9 + c] = y_l * e2[c]
+            d_r[m + k, 9 + c] = y_l * e3[c]
+        if welded:
+            # the end moment m_O through A J_l e3 (v) and -A J_l e2 (w)
+            gv = aux[3]
+            gw = -aux[2]
+            for c in range(3):
+                ga_v = ga_w = gq_v = gq_w = 0.0
+                for i in range(3):
+                    ga_v += gv[i] * dm_da[i, c]
+                    ga_w += gw[i] * dm_da[i, c]
+                    gq_v -= gv[i] * rl_h[i, c]
+                    gq_w -= gw[i] * rl_h[i, c]
+                d_r[k, c] += dy_l * ga_v
+                d_r[m + k, c] += dy_l * ga_w
+                d_r[k, 9 + c] += dy_l * gq_v
+                d_r[m + k, 9 + c] += dy_l * gq_w
+                d_r[k, 6 + c] = dy_l * gv[c]
+                d_r[m + k, 6 + c] = dy_l * gw[c]
 
 
 @njit(cache=True)
@@ -200,33 +297,37 @@ def beam_transfer(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star
     free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
     eta' = c3 eta + w3e.  tables, outboard: see _evaluate."""
     welded = outboard[0]
+    xq, wq, modes, ends, factors = tables
     n = eta_dd_star.shape[0]
+    m = n // 2
     nx = 12 + n
     x0 = np.empty(nx)
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
     o0 = np.empty(12)
     r0 = np.empty(n)
-    _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
-              w1e, w3e, eta_n, eta_d_n, x0, o0, r0)
+    aux = np.empty((4, 3))
+    aux_fd = np.empty((4, 3))
+    rot = _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
+                    w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux)
     d_o = np.zeros((12, nx))
     d_r = np.zeros((n, nx))
+    _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
     op = np.empty(12)
     om = np.empty(12)
     rp = np.empty(n)
     rm = np.empty(n)
     xp = x0.copy()
-    for c in range(nx):
-        if 6 <= c < 9 and not welded:
-            d_o[c, c] = 1.0              # m_O = m_I + ...: exactly linear, no difference needed
-            continue
+    for c in range(3, nx):
+        if 6 <= c < 12:
+            continue                     # a_I, m_I, q_I: analytic (_affine_columns)
         step = 1e-3 * (1.0 + abs(x0[c]))
         xp[c] = x0[c] + step
         _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                  w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp)
+                  w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd)
         xp[c] = x0[c] - step
         _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                  w_n, w1e, w3e, eta_n, eta_d_n, xp, om, rm)
+                  w_n, w1e, w3e, eta_n, eta_d_n, xp, om, rm, aux_fd)
         xp[c] = x0[c]
         d_o[:, c] = (op - om) / (2.0 * step)
         d_r[:, c] = (rp - rm) / (2.0 * step)
