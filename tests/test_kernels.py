@@ -118,3 +118,13 @@ def test_elastic_hinge_transfer_reproduces_the_spring_law():
     assert np.allclose(z_out[6:9], m_out, atol=1e-12)
     assert np.allclose(z_out[0:3], 1.0 + c1 * d + w1d)          # a_out = a_in + d_ddot
     assert np.allclose(z_out[3:6], phi_out_star, atol=1e-10)    # the guess satisfies the law
+
+
+def test_inv3_matches_numpy():
+    from dttmm.kernels.mat3 import inv3
+    a = rng.normal(size=(3, 3)) + 3 * np.eye(3)
+    out = np.empty((3, 3))
+    det = inv3(a, out)
+    assert det == pytest.approx(np.linalg.det(a), rel=1e-13)
+    assert np.allclose(out, np.linalg.inv(a), rtol=1e-13, atol=1e-15)
+    assert inv3(np.ones((3, 3)), out) == 0.0 and not np.all(np.isfinite(out))

@@ -19,6 +19,7 @@ from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
 from .body import rigid_body_transfer
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
+from .mat3 import inv3
 from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
                     riccati_full, riccati_reduced)
@@ -81,7 +82,8 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
     w'_out = wd_out* + Dwd_out (phi_out - phi_out*).  Angular accelerations are ~ m/s^2 like the
     a slots, where phi is ~ h^2 times smaller: the sweep's 6 x 6 matrices would otherwise mix
     scales 1e8 apart."""
-    g_in = np.linalg.inv(dwd_in)
+    g_in = np.empty((3, 3))
+    inv3(dwd_in, g_in)
     col = np.empty((12, 3))
     for r in range(12):
         for i in range(3):
@@ -307,6 +309,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
     root_f = np.empty(6)
     max_iter = 0
     n_rec = 0
+    g_inv = np.empty((3, 3))
     for s in range(n_steps):
         rot_now = g_rot[s + 1]
         log_so3(rot_now @ g_rot[s].T, phi_g)
@@ -377,7 +380,8 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             for i in range(n_eta):
                 change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
             for k in range(n):
-                phi = phi_star[k] + np.linalg.solve(dwd[k], z[2 * k + 1, 3:6] - wd[k])
+                inv3(dwd[k], g_inv)
+                phi = phi_star[k] + g_inv @ (z[2 * k + 1, 3:6] - wd[k])
                 z[2 * k + 1, 3:6] = phi
                 z[2 * k + 2, 3:6] = phi
                 for i in range(3):

@@ -20,6 +20,8 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
+from .mat3 import inv3
+
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
 DIRECT_TOLERANCE = 1e-4      # largest relative transfer residual a direct solution may leave
@@ -291,7 +293,9 @@ def fold_ball_body(u, v, phi_map):
             ump[r, c] = u[6 + r, 3 + c]
         for c in range(7):
             rest[r, c] = u[6 + r, cols[c]]
-    phi_map[:, :] = -np.linalg.solve(ump, rest)
+    ump_inv = np.empty((3, 3))
+    inv3(ump, ump_inv)
+    phi_map[:, :] = -(ump_inv @ rest)
     rows = np.array([0, 1, 2, 9, 10, 11])
     for r in range(6):
         for c in range(7):
@@ -314,9 +318,9 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
         vqa = np.ascontiguousarray(v[k, 3:6, 0:3])
         vqq = np.ascontiguousarray(v[k, 3:6, 3:6])
         t = vqa @ s_mat[k] + vqq
-        if abs(np.linalg.det(t)) == 0.0:
+        ti = np.empty((3, 3))
+        if inv3(t, ti) == 0.0:
             return k + 1
-        ti = np.linalg.inv(t)
         tv = vqa @ p_vec[k] + v[k, 3:6, 6]
         s_new = (vaa @ s_mat[k] + vaq) @ ti
         s_mat[k + 1] = s_new
