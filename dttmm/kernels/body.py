@@ -20,20 +20,50 @@ CONST = 12                  # column of the affine part
 
 
 @njit(cache=True)
+def _mm(a, b):
+    """a @ b for 3 x 3 matrices, by loops: BLAS's call overhead dominates at this size."""
+    out = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+    return out
+
+
+@njit(cache=True)
+def _mv(a, v):
+    """a @ v for a 3 x 3 matrix and a 3-vector."""
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = a[i, 0] * v[0] + a[i, 1] * v[1] + a[i, 2] * v[2]
+    return out
+
+
+@njit(cache=True)
+def _cross(a, b):
+    out = np.empty(3)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    return out
+
+
+@njit(cache=True)
+def _hat(v):
+    out = np.empty((3, 3))
+    hat(v, out)
+    return out
+
+
+@njit(cache=True)
 def _kappa(w, wd, rho, dwd, dw, d_rho):
     """kappa = wd x rho + w x (w x rho) and its derivative with respect to phi, given
     d wd/d phi = dwd, d w/d phi = dw and d rho/d phi = d_rho."""
-    w_rho = np.cross(w, rho)
-    kappa = np.cross(wd, rho) + np.cross(w, w_rho)
-    rho_h = np.empty((3, 3))
-    hat(rho, rho_h)
-    w_h = np.empty((3, 3))
-    hat(w, w_h)
-    wd_h = np.empty((3, 3))
-    hat(wd, wd_h)
-    wr_h = np.empty((3, 3))
-    hat(w_rho, wr_h)
-    d = -rho_h @ dwd + wd_h @ d_rho + (-wr_h - w_h @ rho_h) @ dw + w_h @ (w_h @ d_rho)
+    w_rho = _cross(w, rho)
+    kappa = _cross(wd, rho) + _cross(w, w_rho)
+    rho_h = _hat(rho)
+    w_h = _hat(w)
+    d = (-_mm(rho_h, dwd) + _mm(_hat(wd), d_rho) - _mm(_hat(w_rho) + _mm(w_h, rho_h), dw)
+         + _mm(w_h, _mm(w_h, d_rho)))
     return kappa, d
 
 
@@ -49,6 +79,7 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
       a_O = a_I + kappa(l_IO)
       q_O = q_I + load - M (a_I + kappa(l_IC))
       m_O = m_I - rho x q_O + rho_C x load + torque - (J w_dot + w x J w + M rho_C x a_I)
+    (3 x 3 products by loops, _mm / _mv: the kernel runs once per body and step.)
     """
     mass = p[0]
     l_ic = p[1:4]
@@ -59,28 +90,24 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     m_i = z_star[M:M + 3]
     q_i = z_star[Q:Q + 3]
 
-    rho = a_star @ l_io
-    rho_c = a_star @ l_ic
-    rho_h = np.empty((3, 3))
-    hat(rho, rho_h)
-    rhoc_h = np.empty((3, 3))
-    hat(rho_c, rhoc_h)
-    d_rho = -rho_h @ lam          # d(A l_IO)/d phi
-    d_rhoc = -rhoc_h @ lam        # d(A l_IC)/d phi
+    rho = _mv(a_star, l_io)
+    rho_c = _mv(a_star, l_ic)
+    rho_h = _hat(rho)
+    rhoc_h = _hat(rho_c)
+    d_rho = -_mm(rho_h, lam)          # d(A l_IO)/d phi
+    d_rhoc = -_mm(rhoc_h, lam)        # d(A l_IC)/d phi
     kap_o, dkap_o = _kappa(w, wd, rho, dwd, dw, d_rho)
     kap_c, dkap_c = _kappa(w, wd, rho_c, dwd, dw, d_rhoc)
 
-    j = a_star @ j_body @ a_star.T
-    jwd = j @ wd
-    jw = j @ w
-    w_h = np.empty((3, 3))
-    hat(w, w_h)
-    tmp = np.empty((3, 3))
+    j = _mm(_mm(a_star, j_body), a_star.T)
+    jwd = _mv(j, wd)
+    jw = _mv(j, w)
+    w_h = _hat(w)
 
     # values at the linearization point
     q_o = q_i + load - mass * (a_i + kap_c)
-    m_o = (m_i - np.cross(rho, q_o) + np.cross(rho_c, load) + torque
-           - (jwd + np.cross(w, jw) + mass * np.cross(rho_c, a_i)))
+    m_o = (m_i - _cross(rho, q_o) + _cross(rho_c, load) + torque
+           - (jwd + _cross(w, jw) + mass * _cross(rho_c, a_i)))
 
     for r in range(12):
         for c in range(13):
@@ -92,30 +119,23 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
         u[Q + i, Q + i] = 1.0
         u[Q + i, A + i] = -mass
         u[M + i, M + i] = 1.0
-    u[A:A + 3, PHI:PHI + 3] = dkap_o
-    u[Q:Q + 3, PHI:PHI + 3] = -mass * dkap_c
     # m_O row: d/d q_I, d/d a_I, d/d phi
-    u[M:M + 3, Q:Q + 3] = -rho_h
-    u[M:M + 3, A:A + 3] = mass * rho_h - mass * rhoc_h
     # -rho x q_O: rho^ (M dkap_c) + q_O^ d_rho ; rho_C x load: -load^ d_rhoc
-    hat(q_o, tmp)
-    d_m = mass * (rho_h @ dkap_c) + tmp @ d_rho
-    hat(load, tmp)
-    d_m -= tmp @ d_rhoc
+    d_m = mass * _mm(rho_h, dkap_c) + _mm(_hat(q_o), d_rho) - _mm(_hat(load), d_rhoc)
     # J w_dot: J Dwd + [-(J wd)^ + J wd^] Lam
-    t1 = np.empty((3, 3))
-    hat(jwd, t1)
-    t2 = np.empty((3, 3))
-    hat(wd, t2)
-    d_j_wd = -t1 + j @ t2
-    d_m -= j @ dwd + d_j_wd @ lam
+    jw_h = _hat(jw)
+    d_m -= _mm(j, dwd) + _mm(-_hat(jwd) + _mm(j, _hat(wd)), lam)
     # w x J w: (w^ J - (J w)^) Dw + w^ [-(J w)^ + J w^] Lam
-    hat(jw, t1)
-    d_m -= (w_h @ j - t1) @ dw + w_h @ (-t1 + j @ w_h) @ lam
+    d_m -= _mm(_mm(w_h, j) - jw_h, dw) + _mm(w_h, _mm(-jw_h + _mm(j, w_h), lam))
     # M rho_C x a_I: -M a_I^ d_rhoc
-    hat(a_i, tmp)
-    d_m += mass * (tmp @ d_rhoc)
-    u[M:M + 3, PHI:PHI + 3] = d_m
+    d_m += mass * _mm(_hat(a_i), d_rhoc)
+    for i in range(3):
+        for c in range(3):
+            u[A + i, PHI + c] = dkap_o[i, c]
+            u[Q + i, PHI + c] = -mass * dkap_c[i, c]
+            u[M + i, Q + c] = -rho_h[i, c]
+            u[M + i, A + c] = mass * (rho_h[i, c] - rhoc_h[i, c])
+            u[M + i, PHI + c] = d_m[i, c]
 
     # affine part: u z* + const = value at z*
     value = np.empty(12)
@@ -124,7 +144,7 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     value[M:M + 3] = m_o
     value[Q:Q + 3] = q_o
     for r in range(12):
-        s = value[r]
+        acc = value[r]
         for c in range(12):
-            s -= u[r, c] * z_star[c]
-        u[r, CONST] = s
+            acc -= u[r, c] * z_star[c]
+        u[r, CONST] = acc
