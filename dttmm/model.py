@@ -9,7 +9,6 @@ from .elements import (BALL, BEAM, FIXED, RIGID, BallJoint, ElasticHinge, EulerB
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
                             MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
 from .elements._checks import finite_vector, rotation_matrix
-from .elements.hinges import ELASTIC as ELASTIC_KIND
 from .elements.hinges import HINGE_KIND_NAMES, pack_hinge
 from .elements.rigid_body import pack_body
 from .kernels.so3 import expm_so3, left_jacobian
@@ -116,7 +115,8 @@ class Model:
     body_kind: np.ndarray            # (n,) RIGID / BEAM
     beam_params: np.ndarray          # (n, BEAM_PARAM_SIZE), zero rows for rigid bodies; for a
                                      # beam, body_params holds the undeformed beam as a rigid body
-                                     # (its FAMILY column resolved: PINNED or CLAMPED)
+                                     # (its FAMILY column resolved: PINNED, CLAMPED or
+                                     # CLAMPED_LOADED)
     initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w)
     initial_modal_velocities: np.ndarray
 
@@ -284,12 +284,12 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
         who = bodies[k].label(k)
         input_free = kinds[k] == BALL
         free_tip = k == n - 1 and tip == "free"
-        output_free = free_tip or (k == n - 1) or kinds[k + 1] == BALL
+        output_free = k == n - 1 or kinds[k + 1] == BALL      # the tip (free or pinned) too
         family = int(beam_params[k, FAMILY])
         if family == PINNED and not (input_free and output_free):
             raise ValueError(f"{who}: mode_family 'pinned' needs moment-free ends (a ball joint "
-                             f"or the tip at both ends); a fixed hinge holds this beam: use "
-                             f"'clamped' (or 'auto')")
+                             f"or the tip at both ends); a fixed or elastic hinge holds this "
+                             f"beam: use 'clamped' (or 'auto')")
         if family == CLAMPED and input_free and output_free and not bv[k]["force_mode_family"]:
             raise ValueError(f"{who}: mode_family 'clamped' contradicts the moment-free ends of "
                              f"the beam (pass force_mode_family=True to insist)")

@@ -220,7 +220,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     mode = _mode(model, method, full_state)
     coef = Integrator.from_rho_inf(rho_inf).array()
     if scheme == "energy_momentum":
-        _check_energy_momentum(model)
+        _check_energy_momentum(user_model)
 
     ws = Workspace(model)
     n = model.n_bodies
@@ -263,7 +263,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         t = np.array(sample_steps) * dt
         info.update(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme,
                     forces="step means (about t - dt/2)")
-        return _result(user_model, t, samples, wall, n_steps, info)
+        return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
+                       info)
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))

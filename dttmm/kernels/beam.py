@@ -297,9 +297,8 @@ def beam_transfer(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star
     free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
     eta' = c3 eta + w3e.  tables, outboard: see _evaluate."""
     welded = outboard[0]
-    xq, wq, modes, ends, factors = tables
+    _, wq, modes, ends, _ = tables
     n = eta_dd_star.shape[0]
-    m = n // 2
     nx = 12 + n
     x0 = np.empty(nx)
     x0[0:12] = z_star
