@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm import simulate
+from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
@@ -154,16 +154,6 @@ def chart_scaling(path, sizes, rigid, beams, reference):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
-
-
-def stiff_cantilever(n):
-    elements = []
-    for _ in range(n):
-        elements += [FixedHinge(), EulerBernoulliBeam(length=5.0 / n, bending_stiffness=1e4,
-                                                      mass_per_length=2.0,
-                                                      polar_inertia_per_length=1e-3,
-                                                      modes_per_plane=2)]
-    return build_chain(elements)
 
 
 def reference_us_per_rhs(model, evaluations=200):

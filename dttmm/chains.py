@@ -1,7 +1,7 @@
 """Ready-made chains used by the examples, tests and benchmarks."""
 import numpy as np
 
-from .elements import BallJoint, RigidBody
+from .elements import BallJoint, FixedHinge, RigidBody
 from .model import build_chain
 
 
@@ -44,3 +44,16 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
                         BallJoint(name="joint5"),
                         unit_link(name="body6", angular_velocity=[0.0, 0.1, 0.0])],
                        gravity=gravity)
+
+
+def stiff_cantilever(n_elements, length=5.0):
+    """A cantilever of n_elements beam elements (EI = 1e4 N m^2, 2 kg/m, two modes per plane)
+    welded end to end by fixed hinges: the stiff beam chain of the stability study."""
+    from .elements import EulerBernoulliBeam
+    elements = []
+    for _ in range(n_elements):
+        elements += [FixedHinge(),
+                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
+                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
+                                        modes_per_plane=2)]
+    return build_chain(elements)

@@ -19,19 +19,9 @@ import time
 
 import numpy as np
 
-from dttmm import DivergenceError, EulerBernoulliBeam, FixedHinge, build_chain, simulate
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm import DivergenceError, simulate
+from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
-
-
-def stiff_cantilever(n_elements, length=5.0):
-    elements = []
-    for _ in range(n_elements):
-        elements += [FixedHinge(),
-                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
-                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
-                                        modes_per_plane=2)]
-    return build_chain(elements)
 
 
 def direct_vs_riccati(make, sizes, dts, t_end, reference_up_to, converged_up_to):

@@ -4,9 +4,9 @@ import warnings
 import numpy as np
 import pytest
 
-from dttmm import (DivergenceError, ElasticHinge, EulerBernoulliBeam, FixedHinge, RigidBody,
+from dttmm import (DivergenceError, ElasticHinge, FixedHinge, RigidBody,
                    build_chain, simulate)
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum, unit_link
 
 H = 1e-3
 K_SPRING = 1e4
@@ -54,16 +54,6 @@ def test_direct_fails_by_ten_masses():
     assert np.abs(res.position_output[-1, :, 1] - expected).max() <= 1e-9 * np.abs(expected).max()
     with pytest.raises(DivergenceError, match="direct sweep lost its accuracy"):
         simulate(spring_chain(10), H, H, method="direct")
-
-
-def stiff_cantilever(n_elements, length=5.0):
-    elements = []
-    for _ in range(n_elements):
-        elements += [FixedHinge(),
-                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
-                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
-                                        modes_per_plane=2)]
-    return build_chain(elements)
 
 
 @pytest.mark.parametrize("model_name", ["rigid100", "beams50"])

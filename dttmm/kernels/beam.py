@@ -135,10 +135,7 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     q3 = q_o @ e3
     mv = mw = 0.0
     if end_moment:
-        theta = np.zeros(3)
-        for k in range(m):
-            theta[1] -= ends[k, 1] * eta[m + k]
-            theta[2] += ends[k, 1] * eta[k]
+        theta = end_angles(ends, eta)
         jl = np.empty((3, 3))
         left_jacobian(theta, jl)
         aux[2] = rot @ jl[:, 1]
@@ -152,15 +149,22 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
 
 
 @njit(cache=True)
-def end_section(ends, eta, rot, out):
-    """out = A exp(theta_O^): the output section's rotation, theta_O = [0, -w'(L), v'(L)]."""
+def end_angles(ends, eta):
+    """theta_O = [0, -w'(L), v'(L)]: the output section's rotation vector in the frame, from
+    the modal coordinates (or their rates) and the end slopes Y_k'(L) (docs/beam.md)."""
     m = ends.shape[0]
     theta = np.zeros(3)
     for k in range(m):
         theta[1] -= ends[k, 1] * eta[m + k]
         theta[2] += ends[k, 1] * eta[k]
+    return theta
+
+
+@njit(cache=True)
+def end_section(ends, eta, rot, out):
+    """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
-    expm_so3(theta, e)
+    expm_so3(end_angles(ends, eta), e)
     out[:, :] = rot @ e
 
 
@@ -168,18 +172,9 @@ def end_section(ends, eta, rot, out):
 def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
     """w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the output
     section (the consistent start; d J_l / dt by a central difference along theta')."""
-    m = ends.shape[0]
-    th = np.zeros(3)
-    th_d = np.zeros(3)
-    th_dd = np.zeros(3)
-    for k in range(m):
-        s = ends[k, 1]
-        th[1] -= s * eta[m + k]
-        th[2] += s * eta[k]
-        th_d[1] -= s * eta_d[m + k]
-        th_d[2] += s * eta_d[k]
-        th_dd[1] -= s * eta_dd[m + k]
-        th_dd[2] += s * eta_dd[k]
+    th = end_angles(ends, eta)
+    th_d = end_angles(ends, eta_d)
+    th_dd = end_angles(ends, eta_dd)
     jl = np.empty((3, 3))
     left_jacobian(th, jl)
     jp = np.empty((3, 3))

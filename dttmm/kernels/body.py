@@ -137,10 +137,16 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
             u[M + i, A + c] = mass * (rho_h[i, c] - rhoc_h[i, c])
             u[M + i, PHI + c] = d_m[i, c]
 
-    # affine part: u z* + const = value at z*
+    affine_part(u, a_i + kap_o, phi, m_o, q_o, z_star)
+
+
+@njit(cache=True)
+def affine_part(u, a_o, phi_o, m_o, q_o, z_star):
+    """u[:, CONST] such that u [z*; 1] = [a_o, phi_o, m_o, q_o], the transfer's value at the
+    guess z* (the linearized map reproduces the relations there)."""
     value = np.empty(12)
-    value[A:A + 3] = a_i + kap_o
-    value[PHI:PHI + 3] = phi
+    value[A:A + 3] = a_o
+    value[PHI:PHI + 3] = phi_o
     value[M:M + 3] = m_o
     value[Q:Q + 3] = q_o
     for r in range(12):

@@ -18,10 +18,10 @@ equations are (EM1-EM4):
 import numpy as np
 from numba import njit
 
+from .body import affine_part
 from .so3 import cayley, cayley_tangent, hat
 
 A, B, M, Q = 0, 3, 6, 9
-CONST = 12
 
 
 @njit(cache=True)
@@ -114,13 +114,4 @@ def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torqu
     u[M:M + 3, Q:Q + 3] = -rhoo_h
     u[M:M + 3, B:B + 3] = d_mo
 
-    value = np.empty(12)
-    value[A:A + 3] = a_o
-    value[B:B + 3] = b
-    value[M:M + 3] = m_o
-    value[Q:Q + 3] = q_o
-    for r in range(12):
-        acc = value[r]
-        for c in range(12):
-            acc -= u[r, c] * z_star[c]
-        u[r, CONST] = acc
+    affine_part(u, a_o, b, m_o, q_o, z_star)
