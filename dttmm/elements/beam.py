@@ -18,8 +18,6 @@ CLAMPED = 1           # clamped-free eigenfunctions in the input section's frame
 CLAMPED_LOADED = 2    # input section's frame, polynomial Ritz modes: an output that carries loads
 AUTO = -1             # chosen by build_chain from the beam's two ends
 MODE_FAMILY_NAMES = {"pinned": PINNED, "clamped": CLAMPED, "auto": AUTO}
-FAMILY_LABELS = {PINNED: "pinned", CLAMPED: "clamped (clamped-free eigenfunctions)",
-                 CLAMPED_LOADED: "clamped (loaded-end polynomial modes)"}
 MAX_LOADED_MODES = 6  # the polynomial basis x^2 .. x^(m+1) is well conditioned up to here
 CLAMPED_ROOTS = (1.87510406871196, 4.69409113297418, 7.85475743823761, 10.9955407348755,
                  14.1371683910465)     # b_k L, the roots of 1 + cos x cosh x = 0
