@@ -21,17 +21,19 @@ from .model import Model, output_section
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
-SCHEMES = ("newmark", "energy_momentum")
+SCHEMES = ("newmark", "energy_momentum", "paper")
 
 
 class DivergenceError(RuntimeError):
-    """A run that cannot go on: the step, the time and the cause are in the message."""
+    """A run that cannot go on: the step, the time and the cause are in the message.
+    partial: the Result recorded before the failure (Newmark and paper's schemes), or None."""
 
-    def __init__(self, step, t, cause):
+    def __init__(self, step, t, cause, partial=None):
         super().__init__(f"DT-TMM run stopped at step {step} (t = {t:.6g} s): {cause}")
         self.step = step
         self.t = t
         self.cause = cause
+        self.partial = partial
 
 
 @dataclass(frozen=True)
@@ -185,7 +187,11 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         transfer matrices out, as the paper does; loses accuracy on long or stiff chains).
     scheme: "newmark" (default; generalized-alpha, every element) or "energy_momentum" (rigid
         chains with ball and fixed hinges on a fixed ground: a second-order step that conserves
-        the total energy and the angular momentum exactly, up to newton_tol; docs/solver.md).
+        the total energy and the angular momentum exactly, up to newton_tol; docs/solver.md)
+        or "paper" (the paper's scheme, for comparison only: Newmark with every station point
+        and mass centre carrying its own position history, tied to the rotations at position
+        level; rigid bodies and beams, ball and fixed hinges, a fixed ground.  It develops a
+        growing step-to-step oscillation in long runs: docs/solver.md, "The paper's scheme").
     rho_inf: generalized-alpha spectral radius at infinite frequency; 1 (default) is the
         trapezoidal Newmark rule, smaller values add numerical damping of high frequencies.
         (Newmark scheme only.)
@@ -221,6 +227,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     coef = Integrator.from_rho_inf(rho_inf).array()
     if scheme == "energy_momentum":
         _check_energy_momentum(user_model)
+    if scheme == "paper":
+        _check_paper(user_model)
 
     ws = Workspace(model)
     n = model.n_bodies
@@ -251,9 +259,12 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     ws.pseudo[:] = ws.omega_dot
     ws.eta_p[:] = ws.eta_acc
     ws.defl_pseudo[:] = ws.defl_acc
+    histories = _station_histories(model, ws, scheme == "paper")
     ws.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
     samples = [_sample(ws)]
+    if scheme == "paper":
+        samples[0].update(v_st=histories[1].copy(), v_c=histories[4].copy())
     sample_steps = [0]
     chunk = record_every * max(1, 1000 // record_every)
     if scheme == "energy_momentum":
@@ -276,6 +287,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
                defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)),
                eta=np.empty((n_rec_max, len(ws.eta))), eta_d=np.empty((n_rec_max, len(ws.eta))))
+    if scheme == "paper":
+        rec.update(v_st=np.empty((n_rec_max, n + 1, 3)), v_c=np.empty((n_rec_max, n, 3)))
+    histories = histories + ((rec["v_st"], rec["v_c"]) if scheme == "paper"
+                             else (np.zeros((1, 1, 3)), np.zeros((1, 1, 3))))
     info = np.zeros(5, dtype=np.int64)
     max_newton = 0
     done = 0
@@ -296,20 +311,24 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                           ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
                           rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
                           rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,
-                          ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"])
+                          ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"], histories)
         except np.linalg.LinAlgError as err:
             raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
                                   f"somewhere in steps {done + 1}..{done + m} ({err}); "
                                   f"{_DIRECT_HINT if method == 'direct' else ''}") from None
+        for i in range(int(info[3])):
+            samples.append({key: rec[key][i].copy() for key in rec})
+            sample_steps.append(done + (i + 1) * record_every)
         if info[0] != kstep.OK:
             step = done + int(info[1]) + 1
             cause = _failure_cause(model, mode, info)
             if method == "direct" and info[0] == kstep.SINGULAR:
                 cause += "; " + _DIRECT_HINT
-            raise DivergenceError(step, step * dt, cause)
-        for i in range(int(info[3])):
-            samples.append({key: rec[key][i].copy() for key in rec})
-            sample_steps.append(done + (i + 1) * record_every)
+            partial = _result(user_model, np.array(sample_steps) * dt,
+                              [_user_sample(s, keep) for s in samples],
+                              time.perf_counter() - wall0, step - 1,
+                              dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf))
+            raise DivergenceError(step, step * dt, cause, partial)
         max_newton = max(max_newton, int(info[2]))
         done += m
     wall = time.perf_counter() - wall0
@@ -335,6 +354,47 @@ def _check_energy_momentum(model):
     if model.ground_motion is not None:
         raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
                          f"fixed ground (use scheme='newmark')")
+
+
+def _check_paper(model):
+    """The paper's scheme's scope: rigid bodies and beams, ball and fixed hinges, fixed ground."""
+    where = "simulate(scheme='paper')"
+    for k in range(model.n_bodies):
+        if model.hinge_kind[k] == ELASTIC:
+            raise ValueError(f"{where}: hinge '{model.hinge_names[k]}' is elastic; the scheme "
+                             f"covers ball and fixed hinges only (use scheme='newmark')")
+    if model.ground_motion is not None:
+        raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
+                         f"fixed ground (use scheme='newmark')")
+
+
+def _station_histories(model, ws, independent):
+    """The paper's scheme's state (kernels/step.py, advance): velocity, acceleration and
+    pseudo-acceleration of the ground point and every body's output point ((n + 1, 3) each), and
+    of every rigid body's mass centre ((n, 3)), at t = 0 from the consistent start (ws.z holds
+    the stations' accelerations and ws.omega_dot the angular ones).  Empty unless independent."""
+    n = model.n_bodies
+    if not independent:
+        empty = np.zeros((1, 3))
+        return (False, empty, empty, empty, empty, empty, empty)
+    st_v, st_a = np.zeros((n + 1, 3)), np.zeros((n + 1, 3))
+    c_v, c_a = np.zeros((n, 3)), np.zeros((n, 3))
+    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    for k in range(n):
+        w, wd = ws.omega[k], ws.omega_dot[k]
+        if model.body_kind[k] == BEAM:
+            j0, j1 = mode_off[k], mode_off[k + 1]
+            _, rho_dot = beam_output_offset(model.beam_params[k], ws.rot[k], w, ws.eta[j0:j1],
+                                            ws.eta_d[j0:j1])
+        else:
+            rho_c = ws.rot[k] @ model.body_params[k, TO_MASS_CENTER]
+            c_v[k] = st_v[k] + np.cross(w, rho_c)
+            c_a[k] = (ws.z[2 * k + 1, 0:3] + np.cross(wd, rho_c)
+                      + np.cross(w, np.cross(w, rho_c)))
+            rho_dot = np.cross(w, ws.rot[k] @ model.body_params[k, TO_OUTPUT])
+        st_v[k + 1] = st_v[k] + rho_dot
+        st_a[k + 1] = ws.z[2 * k + 2, 0:3]
+    return (True, st_v, st_a, st_a.copy(), c_v, c_a, c_a.copy())
 
 
 def _initial_mass_center_velocities(model, rot, omega):
@@ -509,9 +569,12 @@ def _result(model, t, samples, wall, n_steps, info):
                 rho_dot = np.cross(omega[i, k], rho)
             r_prev = r_in[i, k] + rho
             v_prev = v_in[i, k] + rho_dot
-            if "v_c" in samples[i]:
-                # energy-momentum scheme: every mass centre carries its own velocity, which the
-                # rigid-body field about it defines the input point's (docs/solver.md)
+            if "v_st" in samples[i] and model.body_kind[k] == BEAM:
+                v_in[i, k] = samples[i]["v_st"][k]    # the paper's scheme: the point's own
+            elif "v_c" in samples[i]:
+                # energy-momentum and paper's schemes: every mass centre carries its own
+                # velocity, which with the rigid-body field about it defines the input point's
+                # (docs/solver.md)
                 rho_c = rot[i, k] @ model.body_params[k, TO_MASS_CENTER]
                 v_in[i, k] = samples[i]["v_c"][k] - np.cross(omega[i, k], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)

@@ -187,8 +187,8 @@ def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
 
 
 @njit(cache=True)
-def _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
-              w1e, w3e, eta_n, eta_d_n, x, out, residual, aux):
+def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
+              w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
     tables = (xq, wq, modes, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
@@ -212,6 +212,16 @@ def _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1
         eta_d = c3 * eta + w3e
     beam_relations(bp, xq, wq, modes, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
                    eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
+    independent, dw1 = history
+    if independent and not start:
+        m = ends.shape[0]
+        v_l = w_l = 0.0
+        for k in range(m):
+            v_l += ends[k, 0] * eta_n[k]
+            w_l += ends[k, 0] * eta_n[m + k]
+        for i in range(3):
+            rho_l_n = bp[0] * rot_n[i, 0] + v_l * rot_n[i, 1] + w_l * rot_n[i, 2]
+            out[i] = x[i] + c1 * (aux[1, i] - rho_l_n) + dw1[i]
     if welded:
         if start:
             out[3:6] = _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd)
@@ -283,14 +293,14 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 
 
 @njit(cache=True)
-def beam_transfer(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
+def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
                   w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
     (n x 13) with eta'' = eta_map [z_I; 1], linearized about (z_star, eta_dd_star).
 
     start: the consistent-start solve (rotation, rates and modal state fixed, w' and eta''
     free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
-    eta' = c3 eta + w3e.  tables, outboard: see _evaluate."""
+    eta' = c3 eta + w3e.  tables, outboard, history: see _evaluate."""
     welded = outboard[0]
     _, wq, modes, ends, _ = tables
     n = eta_dd_star.shape[0]
@@ -302,8 +312,8 @@ def beam_transfer(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star
     r0 = np.empty(n)
     aux = np.empty((4, 3))
     aux_fd = np.empty((4, 3))
-    rot = _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                    w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux)
+    rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+                    c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux)
     d_o = np.zeros((12, nx))
     d_r = np.zeros((n, nx))
     _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
@@ -317,11 +327,11 @@ def beam_transfer(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star
             continue                     # a_I, m_I, q_I: analytic (_affine_columns)
         step = 1e-3 * (1.0 + abs(x0[c]))
         xp[c] = x0[c] + step
-        _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                  w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd)
+        _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd)
         xp[c] = x0[c] - step
-        _evaluate(bp, tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                  w_n, w1e, w3e, eta_n, eta_d_n, xp, om, rm, aux_fd)
+        _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, xp, om, rm, aux_fd)
         xp[c] = x0[c]
         d_o[:, c] = (op - om) / (2.0 * step)
         d_r[:, c] = (rp - rm) / (2.0 * step)

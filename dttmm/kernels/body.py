@@ -154,3 +154,49 @@ def affine_part(u, a_o, phi_o, m_o, q_o, z_star):
         for c in range(12):
             acc -= u[r, c] * z_star[c]
         u[r, CONST] = acc
+
+
+@njit(cache=True)
+def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in, w1_out, w1_c,
+                               z_star, u):
+    """The paper's scheme (docs/solver.md, "The paper's scheme"): turn the rigid transfer that
+    rigid_body_transfer wrote into u (phi slots) into one where the output point and the mass
+    centre carry their own Newmark histories, tied to the input point at position level only:
+      a_X = a_I + sigma_X,  sigma_X = c1 (A - A_n) l_X + w1_X - w1_I       (X = O, C)
+    in place of the rigid kinematics a_X = a_I + kappa(rho_X).  Newton for the mass centre and
+    Euler about it are unchanged, so with Dq = -M (sigma_C - kappa_C)
+      q_O' = q_O + Dq,   m_O' = m_O - (rho - rho_C) x Dq.
+    w1_in, w1_out, w1_c: the histories' offsets (a_X = c1 dr_X + w1_X)."""
+    mass = p[0]
+    l_ic = p[1:4]
+    l_io = p[4:7]
+    rho = _mv(a_star, l_io)
+    rho_c = _mv(a_star, l_ic)
+    d_rho = -_mm(_hat(rho), lam)
+    d_rhoc = -_mm(_hat(rho_c), lam)
+    kap_o, dkap_o = _kappa(w, wd, rho, dwd, dw, d_rho)
+    kap_c, dkap_c = _kappa(w, wd, rho_c, dwd, dw, d_rhoc)
+    sig_o = c1 * (rho - _mv(rot_n, l_io)) + w1_out - w1_in
+    sig_c = c1 * (rho_c - _mv(rot_n, l_ic)) + w1_c - w1_in
+    dq = -mass * (sig_c - kap_c)
+    d_dq = -mass * (c1 * d_rhoc - dkap_c)
+    arm = rho - rho_c
+    dm = -_cross(arm, dq)
+    d_dm = -_mm(_hat(arm), d_dq) + _mm(_hat(dq), d_rho - d_rhoc)
+    delta = np.empty(12)
+    d_delta = np.zeros((12, 3))
+    for i in range(3):
+        delta[A + i] = sig_o[i] - kap_o[i]
+        delta[PHI + i] = 0.0
+        delta[M + i] = dm[i]
+        delta[Q + i] = dq[i]
+        for c in range(3):
+            d_delta[A + i, c] = c1 * d_rho[i, c] - dkap_o[i, c]
+            d_delta[M + i, c] = d_dm[i, c]
+            d_delta[Q + i, c] = d_dq[i, c]
+    for r in range(12):
+        shift = delta[r]
+        for c in range(3):
+            u[r, PHI + c] += d_delta[r, c]
+            shift -= d_delta[r, c] * z_star[PHI + c]
+        u[r, CONST] += shift

@@ -17,7 +17,7 @@ from numba import njit
 from ..elements import BEAM
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
-from .body import rigid_body_transfer
+from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .mat3 import inv3
 from .so3 import expm_so3, left_jacobian, log_so3
@@ -109,7 +109,8 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 @njit(cache=True)
 def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                     g_rot, g_lam, g_w, g_wd, g_dwd, g_phi, rot_star, lam, phi_star, w, wd, dw, dwd,
-                    c1, c3, w1d, w3d, z_star, force, torque, at_start, rot, w3, beams, modal):
+                    c1, c3, w1d, w3d, z_star, force, torque, at_start, rot, w3, beams, modal,
+                    stations):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
     angular accelerations and elastic hinges are LOCKED (their loads are set by the caller).
@@ -117,7 +118,12 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     beams = (body_kind, beam_params, xq, wq, modes, mode_off, ends, factors) (solver.beam_tables);
     modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
     coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
-    beam's end section (kernels/beam.py)."""
+    beam's end section (kernels/beam.py).  stations = (independent, w1_st, w1_c): in the
+    paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
+    then each body's output) and every rigid body's mass centre (w1_c) has its own Newmark
+    history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme")."""
+    independent, w1_st, w1_c = stations
+    independent = independent and not at_start
     body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     n = body_params.shape[0]
@@ -156,7 +162,8 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                         wd[kout] - c1 * phi_star[kout])
             tables = (beam_xq[k], beam_wq[k], beam_modes[k, :m], beam_ends[k, :m],
                       beam_factors[k, :m])
-            beam_transfer(beam_params[k], tables, outboard, gravity, at_start, rot[k],
+            history = (independent, w1_st[k + 1] - w1_st[k])
+            beam_transfer(beam_params[k], tables, outboard, history, gravity, at_start, rot[k],
                           phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
                           eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1], u[jh + 1],
                           eta_map[i0:i1])
@@ -164,6 +171,10 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
         load = body_params[k, 0] * gravity + force[k]
         rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
                             z_star[jh + 1], load, torque[k], u[jh + 1])
+        if independent:
+            station_history_correction(body_params[k], rot[k], rot_star[k], lam[k], dwd[k],
+                                       dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1], w1_c[k],
+                                       z_star[jh + 1], u[jh + 1])
         if not at_start:
             _rotation_slots_to_acceleration(u[jh + 1], dwd[k], wd[k], phi_star[k], dwd[k], wd[k],
                                             phi_star[k])
@@ -229,7 +240,8 @@ def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_param
                     g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3), rot, zero33, zero3,
                     omega, zero3, zero33, unit33, 1.0, 0.0, zero3, zero3, z_star, force, torque,
                     True, rot, zero3, beams, (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta),
-                                              np.zeros_like(eta), eta_map))
+                                              np.zeros_like(eta), eta_map),
+                    (False, np.zeros((n + 1, 3)), zero3))
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
             rot_in = g_rot if k == 0 else rot[k - 1]
@@ -272,17 +284,26 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
             red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
             record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
-            out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d):
+            out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d, histories):
     """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
     and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
     omega, omega_dot, pseudo: the rotation integrator's velocity, acceleration and
     pseudo-acceleration (world frame); eta, eta_d, eta_acc, eta_p: the same for the beams'
     modal coordinates (flat), with their coordinates themselves.
+    histories = (independent, st_v, st_a, st_p, c_v, c_a, c_p, rec_st_v, rec_c_v): the paper's
+    scheme (independent): the Newmark histories of the station points (ground point, then each
+    body's output; (n + 1, 3)) and of the rigid bodies' mass centres ((n, 3)), and where their
+    velocities are recorded (docs/solver.md, "The paper's scheme").
     Records after every record_every-th step (counting from the chunk's start).
-    out_info: [status, failing step, newton iterations used (max), recorded count, steps whose
-    Newton iterations stopped above newton_tol (accumulated over chunks)]."""
+    out_info: [status, failing step, newton iterations used (max), recorded count (also when
+    the run fails), steps whose Newton iterations stopped above newton_tol (accumulated over
+    chunks)]."""
     n = body_params.shape[0]
     n_steps = g_acc.shape[0]
+    independent, st_v, st_a, st_p, c_v, c_a, c_p, rec_st_v, rec_c_v = histories
+    w1_st = np.zeros((n + 1, 3))
+    w1_c = np.zeros((n, 3))
+    stations = (independent, w1_st, w1_c)
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star = np.empty((n, 3))
     rot_star = np.empty((n, 3, 3))
@@ -339,6 +360,11 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             w1e[:] = a1 - c1 * eta
             w3e[:] = a3 - c3 * eta
             eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * eta_p) + w1e
+        if independent:
+            for j in range(n + 1):
+                w1_st[j], _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
+            for k in range(n):
+                w1_c[k], _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
         z_star[:, :] = z
         z_star[0, 3:6] = phi_g
         for k in range(n):
@@ -360,10 +386,11 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                             rot_now, g_lam, g_w[s], g_wd[s], g_dwd, phi_g, rot_star, lam,
                             phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
-                            torque[s], False, rot, w3, beams, modal)
+                            torque[s], False, rot, w3, beams, modal, stations)
             if not np.all(np.isfinite(u)):
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
+                out_info[3] = n_rec
                 return
             status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
                             sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
@@ -372,6 +399,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 out_info[0] = SINGULAR
                 out_info[1] = s
                 out_info[2] = status
+                out_info[3] = n_rec
                 return
             _modal_accelerations(beams, eta_map, z, eta_dd_new)
             # back from angular-acceleration to phi slots
@@ -399,6 +427,20 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
         # update the histories
+        if independent:
+            for k in range(n):
+                # a_X = c1 dr_X + w1_X: each point's displacement over the step
+                x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
+                x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
+                if beams[0][k] != BEAM:
+                    if locked[k]:
+                        rot_new = rot_now @ lock_rel[k]
+                    else:
+                        expm_so3(z[2 * k + 1, 3:6], e3)
+                        rot_new = e3 @ rot[k]
+                    x_c = x_in + (rot_new - rot[k]) @ body_params[k, 1:4]
+                    _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
+                _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
         finite = True
         for k in range(n):
             phi = z[2 * k + 1, 3:6].copy()
@@ -427,6 +469,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
         if not finite:
             out_info[0] = NOT_FINITE
             out_info[1] = s
+            out_info[3] = n_rec
             return
         if (s + 1) % record_every == 0:
             rec_rot[n_rec] = rot
@@ -437,6 +480,9 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             rec_defl_rate[n_rec] = defl_rate
             rec_eta[n_rec] = eta
             rec_eta_d[n_rec] = eta_d
+            if independent:
+                rec_st_v[n_rec] = st_v
+                rec_c_v[n_rec] = c_v
             n_rec += 1
     out_info[0] = OK
     out_info[1] = n_steps
