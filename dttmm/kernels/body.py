@@ -58,13 +58,59 @@ def _hat(v):
 def _kappa(w, wd, rho, dwd, dw, d_rho):
     """kappa = wd x rho + w x (w x rho) and its derivative with respect to phi, given
     d wd/d phi = dwd, d w/d phi = dw and d rho/d phi = d_rho."""
-    w_rho = _cross(w, rho)
-    kappa = _cross(wd, rho) + _cross(w, w_rho)
-    rho_h = _hat(rho)
-    w_h = _hat(w)
-    d = (-_mm(rho_h, dwd) + _mm(_hat(wd), d_rho) - _mm(_hat(w_rho) + _mm(w_h, rho_h), dw)
-         + _mm(w_h, _mm(w_h, d_rho)))
+    kappa = np.empty(3)
+    d = np.empty((3, 3))
+    _kappa_into(w, wd, rho, dwd, dw, d_rho, kappa, d, np.empty((5, 3, 3)))
     return kappa, d
+
+
+@njit(cache=True)
+def _mm_add(a, b, f, out):
+    """out += f a @ b (3 x 3, by loops)."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] += f * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j])
+
+
+@njit(cache=True)
+def _mv_into(a, v, out):
+    for i in range(3):
+        out[i] = a[i, 0] * v[0] + a[i, 1] * v[1] + a[i, 2] * v[2]
+
+
+@njit(cache=True)
+def _cross_into(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True)
+def _kappa_into(w, wd, rho, dwd, dw, d_rho, kappa, d, buf):
+    """kappa = wd x rho + w x (w x rho) and d = d kappa / d phi
+    = -rho^ Dwd + wd^ R - ((w x rho)^ + w^ rho^) Dw + w^ w^ R (R = d rho / d phi);
+    buf: (5, 3, 3) scratch."""
+    rho_h, wd_h, w_h, m1, m2 = buf[0], buf[1], buf[2], buf[3], buf[4]
+    wr0 = w[1] * rho[2] - w[2] * rho[1]
+    wr1 = w[2] * rho[0] - w[0] * rho[2]
+    wr2 = w[0] * rho[1] - w[1] * rho[0]
+    kappa[0] = wd[1] * rho[2] - wd[2] * rho[1] + w[1] * wr2 - w[2] * wr1
+    kappa[1] = wd[2] * rho[0] - wd[0] * rho[2] + w[2] * wr0 - w[0] * wr2
+    kappa[2] = wd[0] * rho[1] - wd[1] * rho[0] + w[0] * wr1 - w[1] * wr0
+    hat(rho, rho_h)
+    hat(wd, wd_h)
+    hat(w, w_h)
+    m1[:, :] = 0.0
+    m1[0, 1], m1[0, 2], m1[1, 2] = -wr2, wr1, -wr0          # (w x rho)^
+    m1[1, 0], m1[2, 0], m1[2, 1] = wr2, -wr1, wr0
+    _mm_add(w_h, rho_h, 1.0, m1)
+    m2[:, :] = 0.0
+    _mm_add(w_h, d_rho, 1.0, m2)
+    d[:, :] = 0.0
+    _mm_add(rho_h, dwd, -1.0, d)
+    _mm_add(wd_h, d_rho, 1.0, d)
+    _mm_add(m1, dw, -1.0, d)
+    _mm_add(w_h, m2, 1.0, d)
 
 
 @njit(cache=True)
@@ -79,56 +125,96 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
       a_O = a_I + kappa(l_IO)
       q_O = q_I + load - M (a_I + kappa(l_IC))
       m_O = m_I - rho x q_O + rho_C x load + torque - (J w_dot + w x J w + M rho_C x a_I)
-    (3 x 3 products by loops, _mm / _mv: the kernel runs once per body and step.)
+    (3 x 3 products by loops into one scratch block: the kernel runs once per body and step,
+    where BLAS calls and small allocations would cost more than the arithmetic.)
     """
     mass = p[0]
     l_ic = p[1:4]
     l_io = p[4:7]
     j_body = p[7:16].reshape((3, 3))
     a_i = z_star[A:A + 3]
-    phi = z_star[PHI:PHI + 3]
     m_i = z_star[M:M + 3]
     q_i = z_star[Q:Q + 3]
+    mat = np.empty((19, 3, 3))
+    vec = np.empty((12, 3))
+    rho, rho_c, kap_o, kap_c, jwd, jw, q_o, m_o, t0, t1, a_o = (
+        vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6], vec[7], vec[8], vec[9], vec[10])
+    rho_h, rhoc_h, d_rho, d_rhoc, dkap_o, dkap_c, j, jt, d_m, h1, h2, h3 = (
+        mat[0], mat[1], mat[2], mat[3], mat[4], mat[5], mat[6], mat[7], mat[8], mat[9], mat[10],
+        mat[11])
+    scratch = mat[12:17]
+    w_h, jw_h = mat[17], mat[18]
 
-    rho = _mv(a_star, l_io)
-    rho_c = _mv(a_star, l_ic)
-    rho_h = _hat(rho)
-    rhoc_h = _hat(rho_c)
-    d_rho = -_mm(rho_h, lam)          # d(A l_IO)/d phi
-    d_rhoc = -_mm(rhoc_h, lam)        # d(A l_IC)/d phi
-    kap_o, dkap_o = _kappa(w, wd, rho, dwd, dw, d_rho)
-    kap_c, dkap_c = _kappa(w, wd, rho_c, dwd, dw, d_rhoc)
+    _mv_into(a_star, l_io, rho)
+    _mv_into(a_star, l_ic, rho_c)
+    hat(rho, rho_h)
+    hat(rho_c, rhoc_h)
+    d_rho[:, :] = 0.0
+    _mm_add(rho_h, lam, -1.0, d_rho)          # d(A l_IO)/d phi
+    d_rhoc[:, :] = 0.0
+    _mm_add(rhoc_h, lam, -1.0, d_rhoc)        # d(A l_IC)/d phi
+    _kappa_into(w, wd, rho, dwd, dw, d_rho, kap_o, dkap_o, scratch)
+    _kappa_into(w, wd, rho_c, dwd, dw, d_rhoc, kap_c, dkap_c, scratch)
 
-    j = _mm(_mm(a_star, j_body), a_star.T)
-    jwd = _mv(j, wd)
-    jw = _mv(j, w)
-    w_h = _hat(w)
+    jt[:, :] = 0.0
+    _mm_add(a_star, j_body, 1.0, jt)
+    for r in range(3):                        # J = A J_I A^T
+        for c in range(3):
+            j[r, c] = jt[r, 0] * a_star[c, 0] + jt[r, 1] * a_star[c, 1] + jt[r, 2] * a_star[c, 2]
+    _mv_into(j, wd, jwd)
+    _mv_into(j, w, jw)
+    hat(w, w_h)
+    hat(jw, jw_h)
 
     # values at the linearization point
-    q_o = q_i + load - mass * (a_i + kap_c)
-    m_o = (m_i - _cross(rho, q_o) + _cross(rho_c, load) + torque
-           - (jwd + _cross(w, jw) + mass * _cross(rho_c, a_i)))
+    for i in range(3):
+        q_o[i] = q_i[i] + load[i] - mass * (a_i[i] + kap_c[i])
+        a_o[i] = a_i[i] + kap_o[i]
+    _cross_into(rho, q_o, t0)
+    _cross_into(rho_c, load, t1)
+    for i in range(3):
+        m_o[i] = m_i[i] - t0[i] + t1[i] + torque[i] - jwd[i]
+    _cross_into(w, jw, t0)
+    _cross_into(rho_c, a_i, t1)
+    for i in range(3):
+        m_o[i] -= t0[i] + mass * t1[i]
 
     for r in range(12):
         for c in range(13):
             u[r, c] = 0.0
-    # a_O row
     for i in range(3):
         u[A + i, A + i] = 1.0
         u[PHI + i, PHI + i] = 1.0
         u[Q + i, Q + i] = 1.0
         u[Q + i, A + i] = -mass
         u[M + i, M + i] = 1.0
-    # m_O row: d/d q_I, d/d a_I, d/d phi
+    # d m_O / d phi (docs/rigid_body.md, "Linearization"):
     # -rho x q_O: rho^ (M dkap_c) + q_O^ d_rho ; rho_C x load: -load^ d_rhoc
-    d_m = mass * _mm(rho_h, dkap_c) + _mm(_hat(q_o), d_rho) - _mm(_hat(load), d_rhoc)
+    d_m[:, :] = 0.0
+    _mm_add(rho_h, dkap_c, mass, d_m)
+    hat(q_o, h1)
+    _mm_add(h1, d_rho, 1.0, d_m)
+    hat(load, h1)
+    _mm_add(h1, d_rhoc, -1.0, d_m)
     # J w_dot: J Dwd + [-(J wd)^ + J wd^] Lam
-    jw_h = _hat(jw)
-    d_m -= _mm(j, dwd) + _mm(-_hat(jwd) + _mm(j, _hat(wd)), lam)
+    _mm_add(j, dwd, -1.0, d_m)
+    hat(jwd, h1)
+    h2[:, :] = -h1
+    hat(wd, h1)
+    _mm_add(j, h1, 1.0, h2)
+    _mm_add(h2, lam, -1.0, d_m)
     # w x J w: (w^ J - (J w)^) Dw + w^ [-(J w)^ + J w^] Lam
-    d_m -= _mm(_mm(w_h, j) - jw_h, dw) + _mm(w_h, _mm(-jw_h + _mm(j, w_h), lam))
+    h2[:, :] = -jw_h
+    _mm_add(w_h, j, 1.0, h2)
+    _mm_add(h2, dw, -1.0, d_m)
+    h2[:, :] = -jw_h
+    _mm_add(j, w_h, 1.0, h2)
+    h3[:, :] = 0.0
+    _mm_add(h2, lam, 1.0, h3)
+    _mm_add(w_h, h3, -1.0, d_m)
     # M rho_C x a_I: -M a_I^ d_rhoc
-    d_m += mass * _mm(_hat(a_i), d_rhoc)
+    hat(a_i, h1)
+    _mm_add(h1, d_rhoc, mass, d_m)
     for i in range(3):
         for c in range(3):
             u[A + i, PHI + c] = dkap_o[i, c]
@@ -137,7 +223,7 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
             u[M + i, A + c] = mass * (rho_h[i, c] - rhoc_h[i, c])
             u[M + i, PHI + c] = d_m[i, c]
 
-    affine_part(u, a_i + kap_o, phi, m_o, q_o, z_star)
+    affine_part(u, a_o, z_star[PHI:PHI + 3], m_o, q_o, z_star)
 
 
 @njit(cache=True)

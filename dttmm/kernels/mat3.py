@@ -1,5 +1,6 @@
-"""3 x 3 inverse by cofactors: the sweeps and the step invert many 3 x 3 matrices, where a LAPACK
-call costs more in its overhead than in its arithmetic."""
+"""Small dense algebra by loops: the sweeps and the step invert and multiply many 3 x 3 (and
+3 x 13, 6 x 7) matrices, where a BLAS or LAPACK call costs more in its overhead than in its
+arithmetic."""
 import numpy as np
 from numba import njit
 
@@ -23,3 +24,24 @@ def inv3(a, out):
     out[1, 2] = (a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]) * f
     out[2, 2] = (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]) * f
     return det
+
+
+@njit(cache=True)
+def matmul_into(a, b, out):
+    """out = a @ b by loops (small matrices: BLAS's call overhead dominates at these sizes)."""
+    for i in range(a.shape[0]):
+        for j in range(b.shape[1]):
+            s = 0.0
+            for k in range(a.shape[1]):
+                s += a[i, k] * b[k, j]
+            out[i, j] = s
+
+
+@njit(cache=True)
+def matvec_into(a, x, out):
+    """out = a @ x by loops."""
+    for i in range(a.shape[0]):
+        s = 0.0
+        for k in range(a.shape[1]):
+            s += a[i, k] * x[k]
+        out[i] = s

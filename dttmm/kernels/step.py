@@ -19,7 +19,7 @@ from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
-from .mat3 import inv3
+from .mat3 import inv3, matmul_into
 from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
                     riccati_full, riccati_reduced)
@@ -52,12 +52,11 @@ def _offsets(h, coef, v, acc, p):
 def _advance_history(h, coef, x, v, acc, p):
     """In place: v, acc, p at t_{n+1} from the increment x."""
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
-    p_new = (x - h * v - h * h * (0.5 - beta) * p) / (beta * h * h)
-    v_new = v + h * (1.0 - gamma) * p + h * gamma * p_new
-    acc_new = ((1.0 - alpha_m) * p_new + alpha_m * p - alpha_f * acc) / (1.0 - alpha_f)
-    v[:] = v_new
-    acc[:] = acc_new
-    p[:] = p_new
+    for i in range(x.shape[0]):
+        p_new = (x[i] - h * v[i] - h * h * (0.5 - beta) * p[i]) / (beta * h * h)
+        v[i] += h * (1.0 - gamma) * p[i] + h * gamma * p_new
+        acc[i] = ((1.0 - alpha_m) * p_new + alpha_m * p[i] - alpha_f * acc[i]) / (1.0 - alpha_f)
+        p[i] = p_new
 
 
 @njit(cache=True)
@@ -67,12 +66,14 @@ def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     A = exp(phi^) A_n, w = c3 phi + w3, w' = c1 phi + w1."""
     e3 = np.empty((3, 3))
     expm_so3(phi, e3)
-    rot[:, :] = e3 @ rot_n
+    matmul_into(e3, rot_n, rot)
     left_jacobian(phi, lam)
-    w[:] = c3 * phi + w3
-    wd[:] = c1 * phi + w1
-    dw[:, :] = c3 * np.eye(3)
-    dwd[:, :] = c1 * np.eye(3)
+    for i in range(3):
+        w[i] = c3 * phi[i] + w3[i]
+        wd[i] = c1 * phi[i] + w1[i]
+        for j in range(3):
+            dw[i, j] = c3 if i == j else 0.0
+            dwd[i, j] = c1 if i == j else 0.0
 
 
 @njit(cache=True)
@@ -84,26 +85,32 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
     scales 1e8 apart."""
     g_in = np.empty((3, 3))
     inv3(dwd_in, g_in)
-    col = np.empty((12, 3))
     for r in range(12):
+        c0, c1, c2 = u[r, 3], u[r, 4], u[r, 5]
+        shift = c0 * phi_in[0] + c1 * phi_in[1] + c2 * phi_in[2]
         for i in range(3):
-            col[r, i] = u[r, 3 + i]
-    new_col = col @ g_in
-    shift = col @ phi_in - new_col @ wd_in
-    for r in range(12):
-        u[r, 12] += shift[r]
-        for i in range(3):
-            u[r, 3 + i] = new_col[r, i]
+            new = c0 * g_in[0, i] + c1 * g_in[1, i] + c2 * g_in[2, i]
+            u[r, 3 + i] = new
+            shift -= new * wd_in[i]
+        u[r, 12] += shift
     rows = np.empty((3, 13))
     for i in range(3):
         for c in range(13):
             rows[i, c] = u[3 + i, c]
-    new_rows = dwd_out @ rows
-    const = wd_out - dwd_out @ phi_out
     for i in range(3):
         for c in range(13):
-            u[3 + i, c] = new_rows[i, c]
-        u[3 + i, 12] += const[i]
+            u[3 + i, c] = dwd_out[i, 0] * rows[0, c] + dwd_out[i, 1] * rows[1, c] + \
+                dwd_out[i, 2] * rows[2, c]
+        u[3 + i, 12] += wd_out[i] - (dwd_out[i, 0] * phi_out[0] + dwd_out[i, 1] * phi_out[1]
+                                     + dwd_out[i, 2] * phi_out[2])
+
+
+@njit(cache=True)
+def _all_finite(a):
+    for x in a.flat:
+        if not np.isfinite(x):
+            return False
+    return True
 
 
 @njit(cache=True)
@@ -203,13 +210,13 @@ def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p,
     z[0, 0:3] = root_f[0:3]
     z[0, 3:6] = root_f[3:6]
     z[0, 9:12] = red_aq[0, 3:6]
-    xq = np.empty(7)
-    xq[6] = 1.0
     for k in range(n):
-        xq[0:6] = red_aq[k]
-        phi = red_phi[k] @ xq
-        for s in (2 * k + 1, 2 * k + 2):
-            z[s, 3:6] = phi
+        for i in range(3):
+            phi = red_phi[k, i, 6]
+            for c in range(6):
+                phi += red_phi[k, i, c] * red_aq[k, c]
+            z[2 * k + 1, 3 + i] = phi
+            z[2 * k + 2, 3 + i] = phi
         z[2 * k + 1, 0:3] = red_aq[k, 0:3]
         z[2 * k + 1, 9:12] = red_aq[k, 3:6]
         z[2 * k + 2, 0:3] = red_aq[k + 1, 0:3]
@@ -331,6 +338,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
     max_iter = 0
     n_rec = 0
     g_inv = np.empty((3, 3))
+    rot_prev = np.empty((3, 3))
     for s in range(n_steps):
         rot_now = g_rot[s + 1]
         log_so3(rot_now @ g_rot[s].T, phi_g)
@@ -387,7 +395,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                             rot_now, g_lam, g_w[s], g_wd[s], g_dwd, phi_g, rot_star, lam,
                             phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
                             torque[s], False, rot, w3, beams, modal, stations)
-            if not np.all(np.isfinite(u)):
+            if not _all_finite(u):
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
                 out_info[3] = n_rec
@@ -409,11 +417,15 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
             for k in range(n):
                 inv3(dwd[k], g_inv)
-                phi = phi_star[k] + g_inv @ (z[2 * k + 1, 3:6] - wd[k])
-                z[2 * k + 1, 3:6] = phi
-                z[2 * k + 2, 3:6] = phi
+                dw0 = z[2 * k + 1, 3] - wd[k, 0]
+                dw1 = z[2 * k + 1, 4] - wd[k, 1]
+                dw2 = z[2 * k + 1, 5] - wd[k, 2]
                 for i in range(3):
-                    change = max(change, abs(phi[i] - phi_star[k, i]))
+                    phi_i = phi_star[k, i] + g_inv[i, 0] * dw0 + g_inv[i, 1] * dw1 + \
+                        g_inv[i, 2] * dw2
+                    z[2 * k + 1, 3 + i] = phi_i
+                    z[2 * k + 2, 3 + i] = phi_i
+                    change = max(change, abs(phi_i - phi_star[k, i]))
             max_iter = max(max_iter, it)
             if it == newton_max or change <= newton_tol:
                 break
@@ -443,15 +455,16 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
         finite = True
         for k in range(n):
-            phi = z[2 * k + 1, 3:6].copy()
+            phi = z[2 * k + 1, 3:6]
             if locked[k]:
-                rot[k] = rot_now @ lock_rel[k]
+                matmul_into(rot_now, lock_rel[k], rot[k])
                 omega[k] = g_w[s]
                 omega_dot[k] = g_wd[s]
             else:
                 _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
                 expm_so3(phi, e3)
-                rot[k] = e3 @ rot[k]
+                rot_prev[:, :] = rot[k]
+                matmul_into(e3, rot_prev, rot[k])
             if hinge_kind[k] == ELASTIC:
                 d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - w1d[k]) / c1
                 x = d_new - defl[k]

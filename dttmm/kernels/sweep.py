@@ -20,7 +20,7 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
-from .mat3 import inv3
+from .mat3 import inv3, matmul_into
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -284,25 +284,24 @@ def transfer_residual(kind, u, z):
 def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
-    0 = U_ma a + U_mphi phi + U_mq q + u_m."""
-    cols = np.array([0, 1, 2, 9, 10, 11, 12])
+    0 = U_ma a + U_mphi phi + U_mq q + u_m.  (Columns and rows [a; q; 1] of u: 0..2, 9..12.)"""
     ump = np.empty((3, 3))
-    rest = np.empty((3, 7))
     for r in range(3):
         for c in range(3):
             ump[r, c] = u[6 + r, 3 + c]
-        for c in range(7):
-            rest[r, c] = u[6 + r, cols[c]]
     ump_inv = np.empty((3, 3))
     inv3(ump, ump_inv)
-    phi_map[:, :] = -(ump_inv @ rest)
-    rows = np.array([0, 1, 2, 9, 10, 11])
-    for r in range(6):
+    for i in range(3):
         for c in range(7):
-            s = u[rows[r], cols[c]]
-            for i in range(3):
-                s += u[rows[r], 3 + i] * phi_map[i, c]
-            v[r, c] = s
+            cc = c if c < 3 else c + 6
+            phi_map[i, c] = -(ump_inv[i, 0] * u[6, cc] + ump_inv[i, 1] * u[7, cc]
+                              + ump_inv[i, 2] * u[8, cc])
+    for r in range(6):
+        rr = r if r < 3 else r + 6
+        for c in range(7):
+            cc = c if c < 3 else c + 6
+            v[r, c] = (u[rr, cc] + u[rr, 3] * phi_map[0, c] + u[rr, 4] * phi_map[1, c]
+                       + u[rr, 5] * phi_map[2, c])
 
 
 @njit(cache=True)
@@ -312,21 +311,31 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     n = v.shape[0]
     s_mat[0, :, :] = 0.0
     p_vec[0, :] = a_root
+    t = np.empty((3, 3))
+    num = np.empty((3, 3))
     for k in range(n):
-        vaa = np.ascontiguousarray(v[k, 0:3, 0:3])
-        vaq = np.ascontiguousarray(v[k, 0:3, 3:6])
-        vqa = np.ascontiguousarray(v[k, 3:6, 0:3])
-        vqq = np.ascontiguousarray(v[k, 3:6, 3:6])
-        t = vqa @ s_mat[k] + vqq
-        ti = np.empty((3, 3))
+        # q_I = T^-1 (q_O - tv), T = V_qa S + V_qq, tv = V_qa P + v_q;
+        # a_O = S' q_O + P', S' = (V_aa S + V_aq) T^-1, P' = V_aa P + v_a - S' tv
+        sk, pk, vk = s_mat[k], p_vec[k], v[k]
+        for i in range(3):
+            tvi = vk[3 + i, 6]
+            for j in range(3):
+                t[i, j] = (vk[3 + i, 3 + j] + vk[3 + i, 0] * sk[0, j] + vk[3 + i, 1] * sk[1, j]
+                           + vk[3 + i, 2] * sk[2, j])
+                num[i, j] = (vk[i, 3 + j] + vk[i, 0] * sk[0, j] + vk[i, 1] * sk[1, j]
+                             + vk[i, 2] * sk[2, j])
+                tvi += vk[3 + i, j] * pk[j]
+            t_vec[k, i] = tvi
+        ti = t_inv[k]
         if inv3(t, ti) == 0.0:
             return k + 1
-        tv = vqa @ p_vec[k] + v[k, 3:6, 6]
-        s_new = (vaa @ s_mat[k] + vaq) @ ti
-        s_mat[k + 1] = s_new
-        p_vec[k + 1] = vaa @ p_vec[k] + v[k, 0:3, 6] - s_new @ tv
-        t_inv[k] = ti
-        t_vec[k] = tv
+        s_new = s_mat[k + 1]
+        matmul_into(num, ti, s_new)
+        for i in range(3):
+            pi = vk[i, 6]
+            for j in range(3):
+                pi += vk[i, j] * pk[j] - s_new[i, j] * t_vec[k, j]
+            p_vec[k + 1, i] = pi
     if tip_pinned:
         _, q = _solve_tip(np.ascontiguousarray(s_mat[n]), -p_vec[n], True)
         aq[n, 3:6] = q
@@ -335,9 +344,13 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
         aq[n, 0:3] = p_vec[n]
         aq[n, 3:6] = 0.0
     for k in range(n - 1, -1, -1):
-        q = t_inv[k] @ (aq[k + 1, 3:6] - t_vec[k])
-        aq[k, 3:6] = q
-        aq[k, 0:3] = s_mat[k] @ q + p_vec[k]
+        for i in range(3):
+            aq[k, 3 + i] = (t_inv[k, i, 0] * (aq[k + 1, 3] - t_vec[k, 0])
+                            + t_inv[k, i, 1] * (aq[k + 1, 4] - t_vec[k, 1])
+                            + t_inv[k, i, 2] * (aq[k + 1, 5] - t_vec[k, 2]))
+        for i in range(3):
+            aq[k, i] = (s_mat[k, i, 0] * aq[k, 3] + s_mat[k, i, 1] * aq[k, 4]
+                        + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
     return 0
 
 
