@@ -41,7 +41,7 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     over mu and modal stiffness over EI.  aux (4, 3) receives what the analytic columns of the
     linearization need (beam_transfer): the first mass moment S = int mu rho, rho_L = r_O - r_I,
     and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment).
-    The quadrature loop is written in scalars: it runs 2 (3 + n) + 1 times per beam and step."""
+    Written in scalars: it runs 3 + n + 1 times per beam and step."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
     m = modes.shape[0]
     e10, e11, e12 = rot[0, 0], rot[1, 0], rot[2, 0]
@@ -117,34 +117,49 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
         wd_l += y * eta_d[m + k]
         vdd_l += y * eta_dd[k]
         wdd_l += y * eta_dd[m + k]
-    e1 = rot[:, 0].copy()
-    e2 = rot[:, 1].copy()
-    e3 = rot[:, 2].copy()
-    rho_l = length * e1 + v_l * e2 + w_l * e3
-    q_o = q_i + np.array([sf0, sf1, sf2])
+    # (in scalars: this tail runs once per evaluation, where small temporaries would cost more
+    # than the arithmetic)
+    rho_l = aux[1]
+    for i in range(3):
+        rho_l[i] = length * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]
+    r0, r1, r2 = rho_l[0], rho_l[1], rho_l[2]
+    qo0, qo1, qo2 = q_i[0] + sf0, q_i[1] + sf1, q_i[2] + sf2
     jp = j_p * length
-    spin = jp * (e1 @ wd) * e1 + jp * (e1 @ w) * np.cross(w, e1)   # J_p,w w' + w x J_p,w w
-    out[0:3] = (a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
-                + 2.0 * np.cross(w, vd_l * e2 + wd_l * e3) + vdd_l * e2 + wdd_l * e3)
-    out[3:6] = wd
-    out[6:9] = m_i - np.cross(rho_l, q_o) + np.array([sm0, sm1, sm2]) - spin
-    out[9:12] = q_o
+    s_wd = jp * (e10 * wd0 + e11 * wd1 + e12 * wd2)
+    s_w = jp * (e10 * w0 + e11 * w1 + e12 * w2)
+    wr0, wr1, wr2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0      # w x rho_L
+    d0 = vd_l * rot[0, 1] + wd_l * rot[0, 2]                                   # A u'(L)
+    d1 = vd_l * rot[1, 1] + wd_l * rot[1, 2]
+    d2 = vd_l * rot[2, 1] + wd_l * rot[2, 2]
+    # a_O = a_I + w' x rho_L + w x (w x rho_L) + 2 w x A u'(L) + A u''(L)
+    out[0] = (a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * d2 - w2 * d1)
+              + vdd_l * rot[0, 1] + wdd_l * rot[0, 2])
+    out[1] = (a1 + wd2 * r0 - wd0 * r2 + w2 * wr0 - w0 * wr2 + 2.0 * (w2 * d0 - w0 * d2)
+              + vdd_l * rot[1, 1] + wdd_l * rot[1, 2])
+    out[2] = (a2 + wd0 * r1 - wd1 * r0 + w0 * wr1 - w1 * wr0 + 2.0 * (w0 * d1 - w1 * d0)
+              + vdd_l * rot[2, 1] + wdd_l * rot[2, 2])
+    out[3], out[4], out[5] = wd0, wd1, wd2
+    # m_O = m_I - rho_L x q_O + int rho x f - (J_p,w w' + w x J_p,w w), J_p,w = jp e1 e1^T
+    out[6] = m_i[0] - (r1 * qo2 - r2 * qo1) + sm0 - (s_wd * e10 + s_w * (w1 * e12 - w2 * e11))
+    out[7] = m_i[1] - (r2 * qo0 - r0 * qo2) + sm1 - (s_wd * e11 + s_w * (w2 * e10 - w0 * e12))
+    out[8] = m_i[2] - (r0 * qo1 - r1 * qo0) + sm2 - (s_wd * e12 + s_w * (w0 * e11 - w1 * e10))
+    out[9], out[10], out[11] = qo0, qo1, qo2
     aux[0, 0], aux[0, 1], aux[0, 2] = s0, s1, s2
-    aux[1] = rho_l
     aux[2:4] = 0.0
     # generalized forces of the outboard's -q_O (at O) and -m_O (docs/beam.md, modal equations)
-    q2 = q_o @ e2
-    q3 = q_o @ e3
+    q2 = qo0 * rot[0, 1] + qo1 * rot[1, 1] + qo2 * rot[2, 1]
+    q3 = qo0 * rot[0, 2] + qo1 * rot[1, 2] + qo2 * rot[2, 2]
     mv = mw = 0.0
     if end_moment:
         theta = end_angles(ends, eta)
         jl = np.empty((3, 3))
         left_jacobian(theta, jl)
-        aux[2] = rot @ jl[:, 1]
-        aux[3] = rot @ jl[:, 2]
-        m_o = out[6:9]
-        mv = m_o @ aux[3]
-        mw = -(m_o @ aux[2])
+        for i in range(3):
+            aux[2, i] = rot[i, 0] * jl[0, 1] + rot[i, 1] * jl[1, 1] + rot[i, 2] * jl[2, 1]
+            aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
+        for i in range(3):
+            mv += out[6 + i] * aux[3, i]
+            mw -= out[6 + i] * aux[2, i]
     for k in range(m):
         residual[k] += q2 * ends[k, 0] + mv * ends[k, 1]
         residual[m + k] += q3 * ends[k, 0] + mw * ends[k, 1]
@@ -327,8 +342,8 @@ def _solve_in_place(a, b):
 
 
 @njit(cache=True)
-def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                  w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
+def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
     (n x 13) with eta'' = eta_map [z_I; 1], linearized about (z_star, eta_dd_star).
 

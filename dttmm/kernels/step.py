@@ -49,6 +49,20 @@ def _offsets(h, coef, v, acc, p):
 
 
 @njit(cache=True)
+def _offsets_into(h, coef, v, acc, p, w1, w3, x_pred):
+    """_offsets in place, with the constant-acceleration predictor x_pred = h v + h^2 p / 2
+    (elementwise, no temporaries: it runs for every body and step)."""
+    beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
+    ratio = (1.0 - alpha_m) / (1.0 - alpha_f)
+    for i in range(v.shape[0]):
+        known = h * v[i] + h * h * (0.5 - beta) * p[i]
+        w1[i] = (-ratio * known / (beta * h * h)
+                 + (alpha_m * p[i] - alpha_f * acc[i]) / (1.0 - alpha_f))
+        w3[i] = v[i] + h * (1.0 - gamma) * p[i] - gamma / (beta * h) * known
+        x_pred[i] = h * v[i] + 0.5 * h * h * p[i]
+
+
+@njit(cache=True)
 def _advance_history(h, coef, x, v, acc, p):
     """In place: v, acc, p at t_{n+1} from the increment x."""
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
@@ -339,9 +353,14 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
     n_rec = 0
     g_inv = np.empty((3, 3))
     rot_prev = np.empty((3, 3))
+    rel = np.empty((3, 3))
     for s in range(n_steps):
         rot_now = g_rot[s + 1]
-        log_so3(rot_now @ g_rot[s].T, phi_g)
+        for i in range(3):
+            for j in range(3):
+                rel[i, j] = (rot_now[i, 0] * g_rot[s, j, 0] + rot_now[i, 1] * g_rot[s, j, 1]
+                             + rot_now[i, 2] * g_rot[s, j, 2])
+        log_so3(rel, phi_g)
         left_jacobian(phi_g, g_lam)
         for k in range(n):
             if locked[k]:
@@ -355,8 +374,8 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 w1[k] = g_wd[s] - c1 * phi_g        # so that w' = c1 phi + w1, w = c3 phi + w3
                 w3[k] = g_w[s] - c3 * phi_g         # hold the ground's values (beams use them)
             else:
-                w1[k], w3[k] = _offsets(h, coef, omega[k], omega_dot[k], pseudo[k])
-                phi_star[k] = h * omega[k] + 0.5 * h * h * pseudo[k]   # constant-acceleration
+                _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
+                              phi_star[k])          # phi* by the constant-acceleration predictor
                 _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
                                  lam[k], w[k], wd[k], dw[k], dwd[k])
             if hinge_kind[k] == ELASTIC:
