@@ -18,6 +18,22 @@ def hat(v, out):
 
 
 @njit(cache=True)
+def _identity_plus(a, b, phi, th2, out):
+    """out = I + a phi^ + b phi^ phi^, with phi^ phi^ = phi phi^T - |phi|^2 I (th2 = |phi|^2),
+    in scalars (it runs for every body and step)."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = b * phi[i] * phi[j]
+        out[i, i] += 1.0 - b * th2
+    out[0, 1] -= a * phi[2]
+    out[0, 2] += a * phi[1]
+    out[1, 0] += a * phi[2]
+    out[1, 2] -= a * phi[0]
+    out[2, 0] -= a * phi[1]
+    out[2, 1] += a * phi[0]
+
+
+@njit(cache=True)
 def expm_so3(phi, out):
     """out = exp(phi^), Rodrigues' formula, series near zero."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
@@ -28,13 +44,7 @@ def expm_so3(phi, out):
         th = np.sqrt(th2)
         a = np.sin(th) / th
         b = (1.0 - np.cos(th)) / th2
-    k = np.empty((3, 3))
-    hat(phi, k)
-    for i in range(3):
-        for j in range(3):
-            kk = k[i, 0] * k[0, j] + k[i, 1] * k[1, j] + k[i, 2] * k[2, j]
-            out[i, j] = a * k[i, j] + b * kk
-        out[i, i] += 1.0
+    _identity_plus(a, b, phi, th2, out)
 
 
 @njit(cache=True)
@@ -49,13 +59,7 @@ def left_jacobian(phi, out):
         th = np.sqrt(th2)
         b = (1.0 - np.cos(th)) / th2
         c = (th - np.sin(th)) / (th2 * th)
-    k = np.empty((3, 3))
-    hat(phi, k)
-    for i in range(3):
-        for j in range(3):
-            kk = k[i, 0] * k[0, j] + k[i, 1] * k[1, j] + k[i, 2] * k[2, j]
-            out[i, j] = b * k[i, j] + c * kk
-        out[i, i] += 1.0
+    _identity_plus(b, c, phi, th2, out)
 
 
 @njit(cache=True)

@@ -107,14 +107,11 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
             u[r, 3 + i] = new
             shift -= new * wd_in[i]
         u[r, 12] += shift
-    rows = np.empty((3, 13))
+    for c in range(13):
+        r0, r1, r2 = u[3, c], u[4, c], u[5, c]
+        for i in range(3):
+            u[3 + i, c] = dwd_out[i, 0] * r0 + dwd_out[i, 1] * r1 + dwd_out[i, 2] * r2
     for i in range(3):
-        for c in range(13):
-            rows[i, c] = u[3 + i, c]
-    for i in range(3):
-        for c in range(13):
-            u[3 + i, c] = dwd_out[i, 0] * rows[0, c] + dwd_out[i, 1] * rows[1, c] + \
-                dwd_out[i, 2] * rows[2, c]
         u[3 + i, 12] += wd_out[i] - (dwd_out[i, 0] * phi_out[0] + dwd_out[i, 1] * phi_out[1]
                                      + dwd_out[i, 2] * phi_out[2])
 
@@ -148,6 +145,7 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     n = body_params.shape[0]
+    load = np.empty(3)
     for k in range(n):
         jh = 2 * k
         hk = hinge_kind[k]
@@ -189,7 +187,8 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                           eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1], u[jh + 1],
                           eta_map[i0:i1])
             continue
-        load = body_params[k, 0] * gravity + force[k]
+        for i in range(3):
+            load[i] = body_params[k, 0] * gravity[i] + force[k, i]
         rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
                             z_star[jh + 1], load, torque[k], u[jh + 1])
         if independent:

@@ -285,12 +285,8 @@ def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
     0 = U_ma a + U_mphi phi + U_mq q + u_m.  (Columns and rows [a; q; 1] of u: 0..2, 9..12.)"""
-    ump = np.empty((3, 3))
-    for r in range(3):
-        for c in range(3):
-            ump[r, c] = u[6 + r, 3 + c]
     ump_inv = np.empty((3, 3))
-    inv3(ump, ump_inv)
+    inv3(u[6:9, 3:6], ump_inv)
     for i in range(3):
         for c in range(7):
             cc = c if c < 3 else c + 6
