@@ -9,7 +9,9 @@ to each beam's modal coordinates eta:
 with p the pseudo-acceleration.  alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (rho_inf = 1)
 is the trapezoidal Newmark rule.  Station positions are not integrated: they follow from the
 rotations by kinematics, and the transfers work with accelerations, so the joint constraints hold
-exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").
+exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").  The paper's
+scheme, for comparison, gives station points their own position histories (the histories
+argument of advance; docs/solver.md, "The paper's scheme").
 """
 import numpy as np
 from numba import njit
@@ -100,10 +102,10 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
     g_in = np.empty((3, 3))
     inv3(dwd_in, g_in)
     for r in range(12):
-        c0, c1, c2 = u[r, 3], u[r, 4], u[r, 5]
-        shift = c0 * phi_in[0] + c1 * phi_in[1] + c2 * phi_in[2]
+        u3, u4, u5 = u[r, 3], u[r, 4], u[r, 5]
+        shift = u3 * phi_in[0] + u4 * phi_in[1] + u5 * phi_in[2]
         for i in range(3):
-            new = c0 * g_in[0, i] + c1 * g_in[1, i] + c2 * g_in[2, i]
+            new = u3 * g_in[0, i] + u4 * g_in[1, i] + u5 * g_in[2, i]
             u[r, 3 + i] = new
             shift -= new * wd_in[i]
         u[r, 12] += shift
