@@ -18,10 +18,14 @@ from .mat3 import matmul_into
 from .so3 import expm_so3, hat, left_jacobian, log_so3
 
 def quadrature_size(modes_per_plane):
-    """Gauss-Legendre points that integrate the beam's relations to rounding: 24 points are exact
-    to 1e-15 up to 6 modes per plane, 5e-13 at 7 and 1e-6 at 10 (products of sine modes with
-    x^2), so 3 m + 6 points."""
-    return max(24, 3 * int(modes_per_plane) + 6)
+    """Gauss-Legendre points that integrate the beam's relations to rounding, for every mode
+    family: measured against 60 points on random states (relations, modal residuals and the
+    linearization's aux), the largest relative error is 2e-16 at 12 points for 1 mode per
+    plane, 2e-16 at 12 for 2 modes, 6e-16 at 14 for 3, 3e-16 at 16 for 4, 2e-16 at 20 for 6;
+    24 points leave 5e-13 at 7 modes and 1e-6 at 10 (products of sine modes with x^2).  So
+    2 m + 10 points, and 3 m + 6 beyond 4 modes."""
+    m = int(modes_per_plane)
+    return max(2 * m + 10, 3 * m + 6)
 
 
 def gauss_points(length, n_points):
