@@ -13,6 +13,7 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 from numba import njit
 
+from .mat3 import matvec_into
 from .so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
@@ -70,12 +71,6 @@ def _mm_add(a, b, f, out):
     for i in range(3):
         for j in range(3):
             out[i, j] += f * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j])
-
-
-@njit(cache=True)
-def _mv_into(a, v, out):
-    for i in range(3):
-        out[i] = a[i, 0] * v[0] + a[i, 1] * v[1] + a[i, 2] * v[2]
 
 
 @njit(cache=True)
@@ -145,8 +140,8 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     scratch = mat[12:17]
     w_h, jw_h = mat[17], mat[18]
 
-    _mv_into(a_star, l_io, rho)
-    _mv_into(a_star, l_ic, rho_c)
+    matvec_into(a_star, l_io, rho)
+    matvec_into(a_star, l_ic, rho_c)
     hat(rho, rho_h)
     hat(rho_c, rhoc_h)
     d_rho[:, :] = 0.0
@@ -161,8 +156,8 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     for r in range(3):                        # J = A J_I A^T
         for c in range(3):
             j[r, c] = jt[r, 0] * a_star[c, 0] + jt[r, 1] * a_star[c, 1] + jt[r, 2] * a_star[c, 2]
-    _mv_into(j, wd, jwd)
-    _mv_into(j, w, jw)
+    matvec_into(j, wd, jwd)
+    matvec_into(j, w, jw)
     hat(w, w_h)
     hat(jw, jw_h)
 

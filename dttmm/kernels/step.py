@@ -42,11 +42,9 @@ def _integrator_coefficients(h, coef):
 @njit(cache=True)
 def _offsets(h, coef, v, acc, p):
     """w1, w3 with acc_{n+1} = c1 x + w1, v_{n+1} = c3 x + w3 (x the increment over the step)."""
-    beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
-    known = h * v + h * h * (0.5 - beta) * p
-    ratio = (1.0 - alpha_m) / (1.0 - alpha_f)
-    w1 = -ratio * known / (beta * h * h) + (alpha_m * p - alpha_f * acc) / (1.0 - alpha_f)
-    w3 = v + h * (1.0 - gamma) * p - gamma / (beta * h) * known
+    w1 = np.empty_like(v)
+    w3 = np.empty_like(v)
+    _offsets_into(h, coef, v, acc, p, w1, w3, np.empty_like(v))
     return w1, w3
 
 
