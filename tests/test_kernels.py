@@ -128,3 +128,21 @@ def test_inv3_matches_numpy():
     assert det == pytest.approx(np.linalg.det(a), rel=1e-13)
     assert np.allclose(out, np.linalg.inv(a), rtol=1e-13, atol=1e-15)
     assert inv3(np.ones((3, 3)), out) == 0.0 and not np.all(np.isfinite(out))
+
+
+def test_small_solve_matches_lapack_and_flags_singular():
+    """The beam's modal systems are solved without LAPACK (kernels/beam.py, _solve_in_place):
+    it must agree with numpy's solve, pivoting included, and leave NaN (for the step's finite
+    check) on a singular matrix."""
+    from dttmm.kernels.beam import _solve_in_place
+    rng = np.random.default_rng(7)
+    for n in (2, 4, 12):
+        a = rng.normal(size=(n, n))
+        a[0, 0] = 0.0                                  # needs a row exchange
+        b = rng.normal(size=(n, 13))
+        x = b.copy()
+        _solve_in_place(a.copy(), x)
+        assert np.allclose(x, np.linalg.solve(a, b), rtol=1e-10, atol=1e-12)
+    x = np.ones((3, 2))
+    _solve_in_place(np.zeros((3, 3)), x)
+    assert np.isnan(x).all()

@@ -317,7 +317,8 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 @njit(cache=True)
 def _solve_in_place(a, b):
     """b <- a^-1 b by Gaussian elimination with partial pivoting (a is overwritten): the modal
-    systems are small (2 .. 12), where LAPACK's call overhead dominates."""
+    systems are small (2 .. 12), where LAPACK's call overhead dominates.  A singular a leaves b
+    NaN, which the step's finite check reports (rather than a division error)."""
     n = a.shape[0]
     for k in range(n):
         p = k
@@ -330,6 +331,9 @@ def _solve_in_place(a, b):
             for c in range(b.shape[1]):
                 b[k, c], b[p, c] = b[p, c], b[k, c]
         piv = a[k, k]
+        if piv == 0.0:
+            b[:, :] = np.nan
+            return
         for r in range(k + 1, n):
             f = a[r, k] / piv
             if f != 0.0:
