@@ -14,6 +14,7 @@ from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
 from .elements.hinges import ELASTIC, FIXED, HINGE_PARAM_SIZE, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import em_step
+from .kernels import ball_chain
 from .kernels import step as kstep
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
@@ -281,10 +282,15 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if no_loads:
         force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
     n_rec_max = chunk // record_every
+    # rigid bodies between ball joints: the fused loop (kernels/ball_chain.py; it records no
+    # hinge deflections or modal coordinates: there are none, hence the zeros below)
+    fused = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
+             and not model.has_beams)
+    loop = "ball-chain" if fused else "general"
     rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
-               defl=np.empty((n_rec_max, n, 3)), defl_rate=np.empty((n_rec_max, n, 3)),
-               eta=np.empty((n_rec_max, len(ws.eta))), eta_d=np.empty((n_rec_max, len(ws.eta))))
+               defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
+               eta=np.zeros((n_rec_max, len(ws.eta))), eta_d=np.zeros((n_rec_max, len(ws.eta))))
     if scheme == "paper":
         rec.update(v_st=np.empty((n_rec_max, n + 1, 3)), v_c=np.empty((n_rec_max, n, 3)))
     histories = histories + ((rec["v_st"], rec["v_c"]) if scheme == "paper"
@@ -301,15 +307,23 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         if not no_loads:
             force, torque = _loads(model, times[1:])
         try:
-            kstep.advance(mode, model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
-                          *params,
-                          model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
-                          g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
-                          ws.pseudo, ws.defl, ws.defl_rate, ws.defl_acc,
-                          ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
-                          rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
-                          rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,
-                          ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"], histories)
+            if fused:
+                ball_chain.advance_ball_chain(
+                    model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
+                    model.body_params, model.gravity, g_acc[:m], g_rot[:m + 1], force[:m],
+                    torque[:m], ws.rot, ws.omega, ws.omega_dot, ws.pseudo, ws.z, ws.red_s,
+                    ws.red_p, ws.red_tinv, ws.red_t, ws.red_aq, record_every, rec["rot"],
+                    rec["omega"], rec["omega_dot"], rec["z"], info)
+            else:
+                kstep.advance(mode, model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
+                              *params,
+                              model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
+                              g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
+                              ws.pseudo, ws.defl, ws.defl_rate, ws.defl_acc,
+                              ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
+                              rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
+                              rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,
+                              ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"], histories)
         except np.linalg.LinAlgError as err:
             raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
                                   f"somewhere in steps {done + 1}..{done + m} ({err}); "
@@ -325,17 +339,20 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
             partial = _result(user_model, np.array(sample_steps) * dt,
                               [_user_sample(s, keep) for s in samples],
                               time.perf_counter() - wall0, step - 1,
-                              dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf))
+                              dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf,
+                                   loop=loop))
             raise DivergenceError(step, step * dt, cause, partial)
         max_newton = max(max_newton, int(info[2]))
         done += m
     wall = time.perf_counter() - wall0
     t = np.array(sample_steps) * dt
     return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
-                   dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf, newton_iterations_used=max_newton,
+                   dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf, loop=loop,
+                        newton_iterations_used=max_newton,
                         newton_unconverged_steps=int(info[4])))
 
 
+FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)
 _MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"]
 
 

@@ -1,0 +1,392 @@
+"""The time loop fused for chains of rigid bodies joined by ball joints (docs/assembly.md,
+"The fused ball-chain step").
+
+The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), computed
+without the 12 x 13 transfers: each body's reduced 6 x 7 map on [a; q; 1] is written directly in
+angular-acceleration slots, folded and swept in one pass, on preallocated arrays.  Results agree
+with the general loop to rounding (tests/test_ball_chain.py).
+"""
+import numpy as np
+from numba import njit
+
+from .mat3 import inv3
+from .so3 import expm_so3, left_jacobian, log_so3
+from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
+    _offsets_into
+from .sweep import _solve_tip
+
+
+@njit(cache=True)
+def _mm(a, b, out):
+    """out = a @ b (3 x 3)."""
+    for i in range(3):
+        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
+        for j in range(3):
+            out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
+
+
+@njit(cache=True)
+def _hat_mm(v, b, out):
+    """out = v^ @ b (3 x 3): row i of v^ b is (v x b[:, j])_i."""
+    for j in range(3):
+        b0, b1, b2 = b[0, j], b[1, j], b[2, j]
+        out[0, j] = v[1] * b2 - v[2] * b1
+        out[1, j] = v[2] * b0 - v[0] * b2
+        out[2, j] = v[0] * b1 - v[1] * b0
+
+
+@njit(cache=True)
+def _mm_hat(a, v, out):
+    """out = a @ v^ (3 x 3): row i of a v^ is a[i] x v."""
+    for i in range(3):
+        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
+        out[i, 0] = a1 * v[2] - a2 * v[1]
+        out[i, 1] = a2 * v[0] - a0 * v[2]
+        out[i, 2] = a0 * v[1] - a1 * v[0]
+
+
+@njit(cache=True)
+def _rate_matrix(rho, w, out):
+    """out = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) I: the derivative of
+    w x (w x rho) with respect to w (docs/rigid_body.md, "Linearization")."""
+    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = 2.0 * rho[i] * w[j] - w[i] * rho[j]
+        out[i, i] -= wr
+
+
+@njit(cache=True)
+def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf, vec):
+    """Body k's reduced map in angular-acceleration slots (docs/assembly.md, "The fused
+    ball-chain step"), linearized about the guess (phi*, a_I*, q_I*):
+      [a_O; q_O] = v [a_I; q_I; 1],   alpha = pmap [a_I; q_I; 1]  (the angular acceleration).
+    p: body parameter row (mass, l_IC, l_IO, J_I); rot, lam: A* and J_l(phi*); w, wd: angular
+    velocity and acceleration at phi*; s = 1/c1, r = c3/c1 (d w / d alpha = r I, d phi / d alpha
+    = s I); load = M g + F at the mass centre, torque applied; buf (14, 3, 3), vec (11, 3)
+    scratch."""
+    mass = p[0]
+    j_body = p[7:16].reshape((3, 3))
+    rho, rho_c, kap_o, kap_c, q_o, m_o, jw, jwd, ext, arm, r_m = (
+        vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6], vec[7], vec[8], vec[9], vec[10])
+    kmat, n_o, n_c, d_o, d_c, d_m, jm, t1, t2, b, g, p_q, p_a, rate = (
+        buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8], buf[9], buf[10],
+        buf[11], buf[12], buf[13])
+    for i in range(3):
+        rho[i] = rot[i, 0] * p[4] + rot[i, 1] * p[5] + rot[i, 2] * p[6]        # A* l_IO
+        rho_c[i] = rot[i, 0] * p[1] + rot[i, 1] * p[2] + rot[i, 2] * p[3]      # A* l_IC
+    # K = wd^ + w^ w^, kappa(x) = K x = wd x x + w x (w x x)
+    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+    for i in range(3):
+        for j in range(3):
+            kmat[i, j] = w[i] * w[j]
+        kmat[i, i] -= ww
+    kmat[0, 1] -= wd[2]
+    kmat[0, 2] += wd[1]
+    kmat[1, 0] += wd[2]
+    kmat[1, 2] -= wd[0]
+    kmat[2, 0] -= wd[1]
+    kmat[2, 1] += wd[0]
+    for i in range(3):
+        kap_o[i] = kmat[i, 0] * rho[0] + kmat[i, 1] * rho[1] + kmat[i, 2] * rho[2]
+        kap_c[i] = kmat[i, 0] * rho_c[0] + kmat[i, 1] * rho_c[1] + kmat[i, 2] * rho_c[2]
+    # d rho / d phi = -rho^ Lam = -N_o; d kappa / d alpha = -rho^ - s K N_o - r (rate matrix)
+    _hat_mm(rho, lam, n_o)
+    _hat_mm(rho_c, lam, n_c)
+    _mm(kmat, n_o, t1)
+    _rate_matrix(rho, w, rate)
+    for i in range(3):
+        for j in range(3):
+            d_o[i, j] = -s * t1[i, j] - r * rate[i, j]
+    _mm(kmat, n_c, t1)
+    _rate_matrix(rho_c, w, rate)
+    for i in range(3):
+        for j in range(3):
+            d_c[i, j] = -s * t1[i, j] - r * rate[i, j]
+    d_o[0, 1] += rho[2]
+    d_o[0, 2] -= rho[1]
+    d_o[1, 0] -= rho[2]
+    d_o[1, 2] += rho[0]
+    d_o[2, 0] += rho[1]
+    d_o[2, 1] -= rho[0]
+    d_c[0, 1] += rho_c[2]
+    d_c[0, 2] -= rho_c[1]
+    d_c[1, 0] -= rho_c[2]
+    d_c[1, 2] += rho_c[0]
+    d_c[2, 0] += rho_c[1]
+    d_c[2, 1] -= rho_c[0]
+    # J = A* J_I A*^T, and the moment relation's values at the guess (docs/rigid_body.md):
+    # m_O = -rho x q_O + rho_C x load + torque - (J wd + w x J w + M rho_C x a_I)
+    _mm(rot, j_body, t1)
+    for i in range(3):
+        for j in range(3):
+            jm[i, j] = t1[i, 0] * rot[j, 0] + t1[i, 1] * rot[j, 1] + t1[i, 2] * rot[j, 2]
+    for i in range(3):
+        jw[i] = jm[i, 0] * w[0] + jm[i, 1] * w[1] + jm[i, 2] * w[2]
+        jwd[i] = jm[i, 0] * wd[0] + jm[i, 1] * wd[1] + jm[i, 2] * wd[2]
+        q_o[i] = q_i[i] + load[i] - mass * (a_i[i] + kap_c[i])
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        m_o[i] = (-(rho[i1] * q_o[i2] - rho[i2] * q_o[i1])
+                  + rho_c[i1] * load[i2] - rho_c[i2] * load[i1] + torque[i] - jwd[i]
+                  - (w[i1] * jw[i2] - w[i2] * jw[i1])
+                  - mass * (rho_c[i1] * a_i[i2] - rho_c[i2] * a_i[i1]))
+    # d m_O / d alpha = M rho^ D_c - J - r (w^ J - (J w)^)
+    #   + s [-q_O^ N_o + (load - M a_I)^ N_c + B Lam],  B = (J wd)^ - J wd^ - w^ (J w^ - (J w)^)
+    _mm_hat(jm, w, t1)                          # J w^
+    t1[0, 1] += jw[2]                           # J w^ - (J w)^
+    t1[0, 2] -= jw[1]
+    t1[1, 0] -= jw[2]
+    t1[1, 2] += jw[0]
+    t1[2, 0] += jw[1]
+    t1[2, 1] -= jw[0]
+    _hat_mm(w, t1, t2)                          # w^ (J w^ - (J w)^)
+    _mm_hat(jm, wd, b)
+    for i in range(3):
+        for j in range(3):
+            b[i, j] = -b[i, j] - t2[i, j]
+    b[0, 1] -= jwd[2]
+    b[0, 2] += jwd[1]
+    b[1, 0] += jwd[2]
+    b[1, 2] -= jwd[0]
+    b[2, 0] -= jwd[1]
+    b[2, 1] += jwd[0]
+    _mm(b, lam, t1)                             # B Lam
+    _hat_mm(q_o, n_o, t2)
+    for i in range(3):
+        for j in range(3):
+            t1[i, j] -= t2[i, j]
+    for i in range(3):
+        ext[i] = load[i] - mass * a_i[i]
+    _hat_mm(ext, n_c, t2)
+    _hat_mm(rho, d_c, b)                        # rho^ D_c
+    for i in range(3):
+        for j in range(3):
+            d_m[i, j] = mass * b[i, j] + s * (t1[i, j] + t2[i, j]) - jm[i, j]
+    _hat_mm(w, jm, t1)                          # w^ J - (J w)^
+    t1[0, 1] += jw[2]
+    t1[0, 2] -= jw[1]
+    t1[1, 0] -= jw[2]
+    t1[1, 2] += jw[0]
+    t1[2, 0] += jw[1]
+    t1[2, 1] -= jw[0]
+    for i in range(3):
+        for j in range(3):
+            d_m[i, j] -= r * t1[i, j]
+    # fold (m_I = m_O = 0): 0 = r_m - rho^ q_I + M (rho - rho_C)^ a_I + D_m (alpha - wd),
+    # r_m = m_O* + rho^ q_I* - M (rho - rho_C)^ a_I*
+    if inv3(d_m, g) == 0.0:
+        g[:, :] = np.nan                        # reported by the sweep's finite check
+    _mm_hat(g, rho, p_q)                        # alpha = P_a a_I + P_q q_I + p0
+    for i in range(3):
+        arm[i] = rho[i] - rho_c[i]
+    _mm_hat(g, arm, p_a)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        r_m[i] = (m_o[i] + rho[i1] * q_i[i2] - rho[i2] * q_i[i1]
+                  - mass * (arm[i1] * a_i[i2] - arm[i2] * a_i[i1]))
+    for i in range(3):
+        g_r = g[i, 0] * r_m[0] + g[i, 1] * r_m[1] + g[i, 2] * r_m[2]
+        for j in range(3):
+            pmap[i, j] = -mass * p_a[i, j]
+            pmap[i, 3 + j] = p_q[i, j]
+        pmap[i, 6] = wd[i] - g_r
+    # [a_O; q_O]: a_O = a_I + kappa_O + D_o (alpha - wd),
+    #             q_O = q_I + load - M a_I - M kappa_C - M D_c (alpha - wd)
+    for i in range(3):
+        for c in range(7):
+            do = d_o[i, 0] * pmap[0, c] + d_o[i, 1] * pmap[1, c] + d_o[i, 2] * pmap[2, c]
+            dc = d_c[i, 0] * pmap[0, c] + d_c[i, 1] * pmap[1, c] + d_c[i, 2] * pmap[2, c]
+            v[i, c] = do
+            v[3 + i, c] = -mass * dc
+        v[i, i] += 1.0
+        v[3 + i, i] -= mass
+        v[3 + i, 3 + i] += 1.0
+        shift_o = d_o[i, 0] * wd[0] + d_o[i, 1] * wd[1] + d_o[i, 2] * wd[2]
+        shift_c = d_c[i, 0] * wd[0] + d_c[i, 1] * wd[1] + d_c[i, 2] * wd[2]
+        v[i, 6] += kap_o[i] - shift_o
+        v[3 + i, 6] += load[i] - mass * kap_c[i] + mass * shift_c
+
+
+@njit(cache=True)
+def _riccati_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
+    """One forward step of the reduced Riccati sweep (kernels/sweep.py::riccati_reduced):
+    a = S q + P at the input; T = V_qa S + V_qq, tv = V_qa P + v_q; q_I = T^-1 (q_O - tv),
+    S' = (V_aa S + V_aq) T^-1, P' = V_aa P + v_a - S' tv.  Returns the determinant of T.
+    t, num: 3 x 3 scratch."""
+    for i in range(3):
+        tvi = v[3 + i, 6]
+        for j in range(3):
+            t[i, j] = (v[3 + i, 3 + j] + v[3 + i, 0] * s_in[0, j] + v[3 + i, 1] * s_in[1, j]
+                       + v[3 + i, 2] * s_in[2, j])
+            num[i, j] = (v[i, 3 + j] + v[i, 0] * s_in[0, j] + v[i, 1] * s_in[1, j]
+                         + v[i, 2] * s_in[2, j])
+            tvi += v[3 + i, j] * p_in[j]
+        t_vec[i] = tvi
+    det = inv3(t, t_inv)
+    _mm(num, t_inv, s_out)
+    for i in range(3):
+        pi = v[i, 6]
+        for j in range(3):
+            pi += v[i, j] * p_in[j] - s_out[i, j] * t_vec[j]
+        p_out[i] = pi
+    return det
+
+
+@njit(cache=True)
+def _write_stations(aq, phi, phi_g, z):
+    """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
+    ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
+    n = phi.shape[0]
+    z[:, :] = 0.0
+    z[0, 0:3] = aq[0, 0:3]
+    z[0, 3:6] = phi_g
+    z[0, 9:12] = aq[0, 3:6]
+    for k in range(n):
+        for i in range(3):
+            z[2 * k + 1, i] = aq[k, i]
+            z[2 * k + 1, 3 + i] = phi[k, i]
+            z[2 * k + 1, 9 + i] = aq[k, 3 + i]
+            z[2 * k + 2, i] = aq[k + 1, i]
+            z[2 * k + 2, 3 + i] = phi[k, i]
+            z[2 * k + 2, 9 + i] = aq[k + 1, 3 + i]
+
+
+@njit(cache=True)
+def _ground_increment(g_rot, s, out):
+    """The ground's rotation increment over step s: log(R_{s+1} R_s^T)."""
+    rel = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = (g_rot[s + 1, i, 0] * g_rot[s, j, 0] + g_rot[s + 1, i, 1] * g_rot[s, j, 1]
+                         + g_rot[s + 1, i, 2] * g_rot[s, j, 2])
+    log_so3(rel, out)
+
+
+@njit(cache=True)
+def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity,
+                       g_acc, g_rot, force, torque, rot, omega, omega_dot, pseudo, z,
+                       s_mat, p_vec, t_inv, t_vec, aq, record_every, rec_rot, rec_omega,
+                       rec_omega_dot, rec_z, out_info):
+    """kernels/step.py::advance for a chain of rigid bodies joined by ball joints (RICCATI_REDUCED
+    mode, Newmark scheme), the same arguments' meaning; z holds the stations' states (input
+    guess and output) in the general loop's layout.  Per step and Newton iteration one forward
+    pass (kinematics, reduced map, Riccati step per body) and one backward pass (recovery)."""
+    n = body_params.shape[0]
+    n_steps = g_acc.shape[0]
+    c1, c3 = _integrator_coefficients(h, coef)
+    s_c, r_c = 1.0 / c1, c3 / c1
+    w1 = np.empty((n, 3))
+    w3 = np.empty((n, 3))
+    phi_star = np.empty((n, 3))
+    phi_new = np.empty((n, 3))
+    pmap = np.empty((n, 3, 7))
+    v = np.empty((6, 7))
+    buf = np.empty((16, 3, 3))
+    vec = np.empty((11, 3))
+    e3 = np.empty((3, 3))
+    rot_star = np.empty((3, 3))
+    lam = np.empty((3, 3))
+    rot_prev = np.empty((3, 3))
+    w = np.empty(3)
+    wd = np.empty(3)
+    load = np.empty(3)
+    phi_g = np.zeros(3)
+    for k in range(n):                              # the guess: the last solution
+        for i in range(3):
+            aq[k, i] = z[2 * k + 1, i]
+            aq[k, 3 + i] = z[2 * k + 1, 9 + i]
+            aq[n, i] = z[2 * n, i]
+            aq[n, 3 + i] = z[2 * n, 9 + i]
+    max_iter = 0
+    n_rec = 0
+    for s in range(n_steps):
+        for k in range(n):
+            _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
+                          phi_star[k])              # phi* by the constant-acceleration predictor
+        for it in range(newton_max + 1):
+            s_mat[0, :, :] = 0.0
+            p_vec[0, :] = g_acc[s]
+            for k in range(n):
+                phi = phi_star[k]
+                expm_so3(phi, e3)
+                _mm(e3, rot[k], rot_star)
+                left_jacobian(phi, lam)
+                for i in range(3):
+                    w[i] = c3 * phi[i] + w3[k, i]
+                    wd[i] = c1 * phi[i] + w1[k, i]
+                    load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
+                ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
+                              aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
+                if _riccati_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
+                                 t_vec[k], buf[14], buf[15]) == 0.0:
+                    out_info[0] = SINGULAR
+                    out_info[1] = s
+                    out_info[2] = k + 1
+                    out_info[3] = n_rec
+                    return
+            if tip_pinned:
+                _, q = _solve_tip(np.ascontiguousarray(s_mat[n]), -p_vec[n], True)
+                aq[n, 3:6] = q
+                aq[n, 0:3] = 0.0
+            else:
+                aq[n, 0:3] = p_vec[n]
+                aq[n, 3:6] = 0.0
+            change = 0.0
+            finite = True
+            for k in range(n - 1, -1, -1):
+                for i in range(3):
+                    aq[k, 3 + i] = (t_inv[k, i, 0] * (aq[k + 1, 3] - t_vec[k, 0])
+                                    + t_inv[k, i, 1] * (aq[k + 1, 4] - t_vec[k, 1])
+                                    + t_inv[k, i, 2] * (aq[k + 1, 5] - t_vec[k, 2]))
+                for i in range(3):
+                    aq[k, i] = (s_mat[k, i, 0] * aq[k, 3] + s_mat[k, i, 1] * aq[k, 4]
+                                + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
+                pk = pmap[k]
+                for i in range(3):
+                    alpha = pk[i, 6]
+                    for c in range(6):
+                        alpha += pk[i, c] * aq[k, c]
+                    x = (alpha - w1[k, i]) / c1     # back from w' = c1 phi + w1
+                    phi_new[k, i] = x
+                    change = max(change, abs(x - phi_star[k, i]))
+                    if not np.isfinite(x):
+                        finite = False
+            if not finite:
+                out_info[0] = NOT_FINITE
+                out_info[1] = s
+                out_info[3] = n_rec
+                return
+            max_iter = max(max_iter, it)
+            if it == newton_max or change <= newton_tol:
+                break
+            phi_star[:, :] = phi_new
+        if newton_max > 0 and change > newton_tol:
+            out_info[4] += 1
+        for k in range(n):                          # update the histories
+            _advance_history(h, coef, phi_new[k], omega[k], omega_dot[k], pseudo[k])
+            expm_so3(phi_new[k], e3)
+            rot_prev[:, :] = rot[k]
+            _mm(e3, rot_prev, rot[k])
+            for i in range(3):
+                if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
+                    finite = False
+        if not finite:
+            out_info[0] = NOT_FINITE
+            out_info[1] = s
+            out_info[3] = n_rec
+            return
+        if (s + 1) % record_every == 0:
+            _ground_increment(g_rot, s, phi_g)
+            _write_stations(aq, phi_new, phi_g, rec_z[n_rec])
+            rec_rot[n_rec] = rot
+            rec_omega[n_rec] = omega
+            rec_omega_dot[n_rec] = omega_dot
+            n_rec += 1
+    if n_steps > 0:
+        _ground_increment(g_rot, n_steps - 1, phi_g)
+        _write_stations(aq, phi_new, phi_g, z)
+    out_info[0] = OK
+    out_info[1] = n_steps
+    out_info[2] = max_iter
+    out_info[3] = n_rec
