@@ -209,13 +209,14 @@ def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
 
 @njit(cache=True)
 def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
-              w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux):
+              w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
     tables = (xq, wq, modes, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
-    (at the start: the end section's angular acceleration)."""
+    (at the start: the end section's angular acceleration).  work: (24 + 2 n) scratch, which
+    holds the state (the returned rotation is a view on it)."""
     xq, wq, modes, ends, factors = tables
     welded, r_rel, rot_out_n, w1_out = outboard
     n = residual.shape[0]
@@ -224,14 +225,20 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     if start:
         rot, w, eta, eta_d = rot_n, w_n, eta_n, eta_d_n
     else:
-        phi = phi_star + (wd - wd_star) / c1
-        e = np.empty((3, 3))
+        e = work[0:9].reshape((3, 3))
+        rot = work[9:18].reshape((3, 3))
+        phi = work[18:21]
+        w = work[21:24]
+        eta = work[24:24 + n]
+        eta_d = work[24 + n:24 + 2 * n]
+        for i in range(3):
+            phi[i] = phi_star[i] + (wd[i] - wd_star[i]) / c1
+            w[i] = c3 * phi[i] + w3[i]
         expm_so3(phi, e)
-        rot = np.empty((3, 3))
         matmul_into(e, rot_n, rot)
-        w = c3 * phi + w3
-        eta = (eta_dd - w1e) / c1
-        eta_d = c3 * eta + w3e
+        for i in range(n):
+            eta[i] = (eta_dd[i] - w1e[i]) / c1
+            eta_d[i] = c3 * eta[i] + w3e[i]
     beam_relations(bp, xq, wq, modes, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
                    eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
     independent, dw1 = history
@@ -362,21 +369,33 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     _, wq, modes, ends, _ = tables
     n = eta_dd_star.shape[0]
     nx = 12 + n
-    x0 = np.empty(nx)
+    # every array of the linearization carved out of one block (one allocation per call)
+    nw = 24 + 2 * n
+    block = np.empty(2 * nx + 24 + 2 * n + 24 + 2 * nw + 12 * nx + n * nx + 13 * n + n * n)
+    x0, xp = block[0:nx], block[nx:2 * nx]
+    o = 2 * nx
+    o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
+        block[o + 24 + n:o + 24 + 2 * n]
+    o += 24 + 2 * n
+    aux, aux_fd = block[o:o + 12].reshape((4, 3)), block[o + 12:o + 24].reshape((4, 3))
+    o += 24
+    work, work_fd = block[o:o + nw], block[o + nw:o + 2 * nw]
+    o += 2 * nw
+    d_o = block[o:o + 12 * nx].reshape((12, nx))
+    o += 12 * nx
+    d_r = block[o:o + n * nx].reshape((n, nx))
+    o += n * nx
+    rhs = block[o:o + 13 * n].reshape((n, 13))
+    o += 13 * n
+    modal = block[o:o + n * n].reshape((n, n))
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
-    o0 = np.empty(12)
-    r0 = np.empty(n)
-    aux = np.empty((4, 3))
-    aux_fd = np.empty((4, 3))
     rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
-                    c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux)
-    d_o = np.zeros((12, nx))
-    d_r = np.zeros((n, nx))
+                    c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
+    d_o[:, :] = 0.0
+    d_r[:, :] = 0.0
     _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
-    op = np.empty(12)
-    rp = np.empty(n)
-    xp = x0.copy()
+    xp[:] = x0
     for c in range(3, nx):
         if 6 <= c < 12:
             continue                     # a_I, m_I, q_I: analytic (_affine_columns)
@@ -387,7 +406,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         step = 1e-3 * (1.0 + abs(x0[c]))
         xp[c] = x0[c] + step
         _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
-                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd)
+                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd, work_fd)
         xp[c] = x0[c]
         for r in range(12):
             d_o[r, c] = (op[r] - o0[r]) / step
@@ -396,12 +415,12 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # modal equations r0 + d_r[:, :12] dz + d_r[:, 12:] dy = 0, solved for dy (dz = z - z*):
     # eta'' = eta_map [z; 1] with eta_map = [E_z, eta''* - E_z z*] and
     # [E_z, e_r] = -d_r[:, 12:]^-1 [d_r[:, :12], r0]
-    rhs = np.empty((n, 13))
     for r in range(n):
         for c in range(12):
             rhs[r, c] = -d_r[r, c]
         rhs[r, 12] = -r0[r]
-    _solve_in_place(d_r[:, 12:].copy(), rhs)
+    modal[:, :] = d_r[:, 12:]
+    _solve_in_place(modal, rhs)
     for r in range(n):
         e0 = eta_dd_star[r] + rhs[r, 12]
         for c in range(12):
