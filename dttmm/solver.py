@@ -282,10 +282,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if no_loads:
         force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
     n_rec_max = chunk // record_every
-    # rigid bodies between ball joints: the fused loop (kernels/ball_chain.py; it records no
-    # hinge deflections or modal coordinates: there are none, hence the zeros below)
-    fused = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
-             and not model.has_beams)
+    # rigid bodies and beams between ball joints: the fused loop (kernels/ball_chain.py; it
+    # records no hinge deflections: there are none, hence the zeros below)
+    fused = FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
     loop = "ball-chain" if fused else "general"
     rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
@@ -313,7 +312,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                     model.body_params, model.gravity, g_acc[:m], g_rot[:m + 1], force[:m],
                     torque[:m], ws.rot, ws.omega, ws.omega_dot, ws.pseudo, ws.z, ws.red_s,
                     ws.red_p, ws.red_tinv, ws.red_t, ws.red_aq, record_every, rec["rot"],
-                    rec["omega"], rec["omega_dot"], rec["z"], info)
+                    rec["omega"], rec["omega_dot"], rec["z"], info, ws.beams, ws.eta, ws.eta_d,
+                    ws.eta_acc, ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"])
             else:
                 kstep.advance(mode, model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
                               *params,

@@ -1,19 +1,22 @@
-"""The time loop fused for chains of rigid bodies joined by ball joints (docs/assembly.md,
-"The fused ball-chain step").
+"""The time loop fused for chains of rigid bodies and beams joined by ball joints
+(docs/assembly.md, "The fused ball-chain step").
 
-The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), computed
-without the 12 x 13 transfers: each body's reduced 6 x 7 map on [a; q; 1] is written directly in
-angular-acceleration slots, folded and swept in one pass, on preallocated arrays.  Results agree
-with the general loop to rounding (tests/test_ball_chain.py).
+The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), on
+preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
+angular-acceleration slots (no 12 x 13 transfer), a beam's transfer (kernels/beam.py, already in
+those slots) is folded, and each map goes straight into its Riccati step.  Results agree with
+the general loop to rounding (tests/test_ball_chain.py).
 """
 import numpy as np
 from numba import njit
 
+from ..elements import BEAM
+from .beam import beam_transfer
 from .mat3 import inv3
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into
-from .sweep import _solve_tip
+from .sweep import _solve_tip, fold_ball_body
 
 
 @njit(cache=True)
@@ -267,11 +270,13 @@ def _ground_increment(g_rot, s, out):
 def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity,
                        g_acc, g_rot, force, torque, rot, omega, omega_dot, pseudo, z,
                        s_mat, p_vec, t_inv, t_vec, aq, record_every, rec_rot, rec_omega,
-                       rec_omega_dot, rec_z, out_info):
-    """kernels/step.py::advance for a chain of rigid bodies joined by ball joints (RICCATI_REDUCED
-    mode, Newmark scheme), the same arguments' meaning; z holds the stations' states (input
-    guess and output) in the general loop's layout.  Per step and Newton iteration one forward
-    pass (kinematics, reduced map, Riccati step per body) and one backward pass (recovery)."""
+                       rec_omega_dot, rec_z, out_info, beams, eta, eta_d, eta_acc, eta_p,
+                       eta_map, rec_eta, rec_eta_d):
+    """kernels/step.py::advance for a chain of rigid bodies and beams joined by ball joints
+    (RICCATI_REDUCED mode, Newmark scheme), the same arguments' meaning; z holds the stations'
+    states (input guess and output) in the general loop's layout.  Per step and Newton iteration
+    one forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
+    (recovery, beams' modal accelerations)."""
     n = body_params.shape[0]
     n_steps = g_acc.shape[0]
     c1, c3 = _integrator_coefficients(h, coef)
@@ -292,6 +297,17 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     wd = np.empty(3)
     load = np.empty(3)
     phi_g = np.zeros(3)
+    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
+    n_eta = eta.shape[0]
+    w1e = np.zeros(n_eta)
+    w3e = np.zeros(n_eta)
+    a1e = np.zeros(n_eta)
+    eta_dd_star = np.zeros(n_eta)
+    eta_dd_new = np.zeros(n_eta)
+    u = np.empty((12, 13))
+    z_in = np.zeros(12)                             # a beam's input guess [a, w', 0, q]
+    outboard = (False, np.eye(3), np.eye(3), np.zeros(3))   # a ball joint at every output
+    history = (False, np.zeros(3))                  # (the paper's scheme: never here)
     for k in range(n):                              # the guess: the last solution
         for i in range(3):
             aq[k, i] = z[2 * k + 1, i]
@@ -304,6 +320,12 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
         for k in range(n):
             _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
                           phi_star[k])              # phi* by the constant-acceleration predictor
+        if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
+            _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
+            for i in range(n_eta):
+                w1e[i] = a1e[i] - c1 * eta[i]
+                w3e[i] -= c3 * eta[i]
+                eta_dd_star[i] = c1 * (eta[i] + eta_dd_star[i]) + w1e[i]
         for it in range(newton_max + 1):
             s_mat[0, :, :] = 0.0
             p_vec[0, :] = g_acc[s]
@@ -316,8 +338,23 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     w[i] = c3 * phi[i] + w3[k, i]
                     wd[i] = c1 * phi[i] + w1[k, i]
                     load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
-                ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
-                              aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
+                if body_kind[k] == BEAM:
+                    i0, i1 = mode_off[k], mode_off[k + 1]
+                    m = (i1 - i0) // 2
+                    for i in range(3):
+                        z_in[i] = aq[k, i]
+                        z_in[3 + i] = wd[i]
+                        z_in[9 + i] = aq[k, 3 + i]
+                    tables = (beam_xq[k], beam_wq[k], beam_modes[k, :m], beam_ends[k, :m],
+                              beam_factors[k, :m])
+                    beam_transfer(beam_params[k], tables, outboard, history, gravity, False,
+                                  rot[k], phi, wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
+                                  eta[i0:i1], eta_d[i0:i1], z_in, eta_dd_star[i0:i1], u,
+                                  eta_map[i0:i1])
+                    fold_ball_body(u, v, pmap[k])
+                else:
+                    ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
+                                  aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
                 if _riccati_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
                                  t_vec[k], buf[14], buf[15]) == 0.0:
                     out_info[0] = SINGULAR
@@ -347,11 +384,20 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     alpha = pk[i, 6]
                     for c in range(6):
                         alpha += pk[i, c] * aq[k, c]
+                    wd[i] = alpha
                     x = (alpha - w1[k, i]) / c1     # back from w' = c1 phi + w1
                     phi_new[k, i] = x
                     change = max(change, abs(x - phi_star[k, i]))
                     if not np.isfinite(x):
                         finite = False
+                if body_kind[k] == BEAM:            # eta'' = eta_map [a, w', 0, q; 1]
+                    for i in range(mode_off[k], mode_off[k + 1]):
+                        e = eta_map[i, 12]
+                        for c in range(3):
+                            e += (eta_map[i, c] * aq[k, c] + eta_map[i, 3 + c] * wd[c]
+                                  + eta_map[i, 9 + c] * aq[k, 3 + c])
+                        eta_dd_new[i] = e
+                        change = max(change, abs(e - eta_dd_star[i]) / c1)
             if not finite:
                 out_info[0] = NOT_FINITE
                 out_info[1] = s
@@ -361,6 +407,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             if it == newton_max or change <= newton_tol:
                 break
             phi_star[:, :] = phi_new
+            eta_dd_star[:] = eta_dd_new
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
         for k in range(n):                          # update the histories
@@ -371,6 +418,14 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             for i in range(3):
                 if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                     finite = False
+        for i in range(n_eta):
+            eta_new = (eta_dd_new[i] - w1e[i]) / c1
+            a1e[i] = eta_new - eta[i]               # (the increment)
+            eta[i] = eta_new
+        _advance_history(h, coef, a1e, eta_d, eta_acc, eta_p)
+        for i in range(n_eta):
+            if not np.isfinite(eta_d[i]):
+                finite = False
         if not finite:
             out_info[0] = NOT_FINITE
             out_info[1] = s
@@ -382,6 +437,8 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             rec_rot[n_rec] = rot
             rec_omega[n_rec] = omega
             rec_omega_dot[n_rec] = omega_dot
+            rec_eta[n_rec] = eta
+            rec_eta_d[n_rec] = eta_d
             n_rec += 1
     if n_steps > 0:
         _ground_increment(g_rot, n_steps - 1, phi_g)
