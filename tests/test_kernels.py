@@ -146,3 +146,56 @@ def test_small_solve_matches_lapack_and_flags_singular():
     x = np.ones((3, 2))
     _solve_in_place(np.zeros((3, 3)), x)
     assert np.isnan(x).all()
+
+
+@pytest.mark.parametrize("start", [False, True])
+def test_beam_transfer_is_the_linearization_of_the_beam_relations(start):
+    """The beam's transfer (analytic a_I, m_I, q_I and eta'' columns; w' columns by forward
+    differences) against central differences of its exact relations (_evaluate) in every
+    unknown, eliminated through the modal equations the same way (docs/beam.md).  Measured:
+    7e-11 relative at most, the same as the kernel with every w' and eta'' column differenced
+    (before _modal_columns)."""
+    from dttmm.chains import three_pendulum
+    from dttmm.kernels.beam import _evaluate, beam_transfer
+    from dttmm.solver import Workspace
+    model = three_pendulum(2, damping_ratio=0.03)
+    _, bp, xq, wq, modes, mode_off, ends, factors = Workspace(model).beams
+    k = 1
+    m = (mode_off[k + 1] - mode_off[k]) // 2
+    n = 2 * m
+    tables = (xq[k], wq[k], modes[k, :m], ends[k, :m], factors[k, :m])
+    gen = np.random.default_rng(11)
+    h = 1e-4
+    c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
+    rot_n = Rotation.from_rotvec([0.4, -0.2, 0.9]).as_matrix()
+    # a state of the size a step meets: rates ~ 1 rad/s, accelerations ~ 10 (w1 and w1e then
+    # cancel c1 phi* and c1 eta*)
+    phi_star, w3, w_n = gen.normal(size=3) * 1e-4, gen.normal(size=3), gen.normal(size=3)
+    wd_star = gen.normal(size=3) * 10
+    eta_n, eta_d_n = gen.normal(size=n) * 1e-4, gen.normal(size=n) * 1e-3
+    eta_dd_star = gen.normal(size=n) * 10
+    w1e, w3e = eta_dd_star - c1 * (eta_n + 1e-8), gen.normal(size=n) * 1e-2
+    z_star = np.concatenate([gen.normal(size=3), wd_star, np.zeros(3), gen.normal(size=3)])
+    args = (bp[k], tables, (False, np.eye(3), np.eye(3), np.zeros(3)), (False, np.zeros(3)),
+            model.gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, eta_n,
+            eta_d_n)
+    u, eta_map = np.empty((12, 13)), np.empty((n, 13))
+    beam_transfer(*args, z_star, eta_dd_star, u, eta_map)
+
+    def relations(x):
+        out, res = np.empty(12), np.empty(n)
+        _evaluate(*args, x, out, res, np.empty((4, 3)), np.empty(24 + 2 * n))
+        return np.concatenate([out, res])
+
+    x0 = np.concatenate([z_star, eta_dd_star])
+    jac = np.empty((12 + n, 12 + n))
+    for c in range(12 + n):
+        step = 1e-4 * (1.0 + abs(x0[c]))
+        e = np.zeros(12 + n)
+        e[c] = step
+        jac[:, c] = (relations(x0 + e) - relations(x0 - e)) / (2 * step)
+    e_z = -np.linalg.solve(jac[12:, 12:], jac[12:, :12])
+    u_fd = jac[:12, :12] + jac[:12, 12:] @ e_z
+    for name, got, want in (("u", u[:, :12], u_fd), ("eta_map", eta_map[:, :12], e_z)):
+        scale = np.abs(want).max(axis=1, keepdims=True) + 1e-300
+        assert np.abs((got - want) / scale).max() < 1e-9, name

@@ -44,7 +44,8 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     (m, N_QUAD): Y_k at the points; ends (m, 2): Y_k(L), Y_k'(L); factors (m, 2): modal mass
     over mu and modal stiffness over EI.  aux (4, 3) receives what the analytic columns of the
     linearization need (beam_transfer): the first mass moment S = int mu rho, rho_L = r_O - r_I,
-    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment).
+    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment); given 2 m more rows, also
+    F_k = int Y_k f and Q_k = int mu Y_k rho (k < m; the eta'' columns, _modal_columns).
     Written in scalars: it runs 3 + n + 1 times per beam and step."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
     m = modes.shape[0]
@@ -60,6 +61,9 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     s0 = s1 = s2 = 0.0             # int mu rho
     for r in range(2 * m):
         residual[r] = 0.0
+    sums = aux.shape[0] > 4
+    if sums:
+        aux[4:4 + 2 * m] = 0.0
     for j in range(xq.shape[0]):
         v = w_ = vd = wdd = vdd = wddd = 0.0
         for k in range(m):
@@ -105,6 +109,16 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
         for k in range(m):
             residual[k] -= modes[k, j] * p2
             residual[m + k] -= modes[k, j] * p3
+        if sums:
+            for k in range(m):
+                y = modes[k, j]
+                cy = c * y
+                aux[4 + k, 0] += y * f0
+                aux[4 + k, 1] += y * f1
+                aux[4 + k, 2] += y * f2
+                aux[4 + m + k, 0] += cy * r0
+                aux[4 + m + k, 1] += cy * r1
+                aux[4 + m + k, 2] += cy * r2
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -322,6 +336,64 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 
 
 @njit(cache=True)
+def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r):
+    """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment (docs/beam.md,
+    "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by r = c3/c1 (s = r = 0 at
+    the consistent start), so every point's acceleration by Y_k(x) G with g = A e2 (v plane) or
+    A e3 (w plane) and G = g + 2 r w x g + s (w' x g + w x (w x g)); with P_k = int mu Y_k,
+    F_k = int Y_k f, Q_k = int mu Y_k rho (aux rows 4..) and M_kl = int mu Y_k Y_l:
+      d a_O = Y_k(L) G,  d q_O = -P_k G,
+      d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
+      d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
+      the diagonal: damping and stiffness)."""
+    _, wq, modes, ends, factors = tables
+    mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
+    m = modes.shape[0]
+    rho_l = aux[1]
+    big_g = np.empty(3)
+    d_q = np.empty(3)
+    for plane in range(2):
+        g = rot[:, 1 + plane]
+        g0, g1, g2 = g[0], g[1], g[2]
+        wg0, wg1, wg2 = w[1] * g2 - w[2] * g1, w[2] * g0 - w[0] * g2, w[0] * g1 - w[1] * g0
+        big_g[0] = g0 + 2.0 * r * wg0 + s * (wd[1] * g2 - wd[2] * g1 + w[1] * wg2 - w[2] * wg1)
+        big_g[1] = g1 + 2.0 * r * wg1 + s * (wd[2] * g0 - wd[0] * g2 + w[2] * wg0 - w[0] * wg2)
+        big_g[2] = g2 + 2.0 * r * wg2 + s * (wd[0] * g1 - wd[1] * g0 + w[0] * wg1 - w[1] * wg0)
+        for k in range(m):
+            col = 12 + plane * m + k
+            p_k = 0.0
+            for j in range(wq.shape[0]):
+                p_k += mu * wq[j] * modes[k, j]
+            y_l = ends[k, 0]
+            f_k = aux[4 + k]
+            q_k = aux[4 + m + k]
+            for i in range(3):
+                d_q[i] = -p_k * big_g[i]
+            for i in range(3):
+                i1, i2 = (i + 1) % 3, (i + 2) % 3
+                d_o[i, col] = y_l * big_g[i]
+                d_o[3 + i, col] = 0.0
+                d_o[6 + i, col] = (-s * y_l * (g[i1] * q_o[i2] - g[i2] * q_o[i1])   # d rho_L x q_O
+                                   - (rho_l[i1] * d_q[i2] - rho_l[i2] * d_q[i1])
+                                   + s * (g[i1] * f_k[i2] - g[i2] * f_k[i1])
+                                   - (q_k[i1] * big_g[i2] - q_k[i2] * big_g[i1]))
+                d_o[9 + i, col] = d_q[i]
+            for plane2 in range(2):
+                h0, h1, h2 = rot[0, 1 + plane2], rot[1, 1 + plane2], rot[2, 1 + plane2]
+                h_dot_g = h0 * big_g[0] + h1 * big_g[1] + h2 * big_g[2]
+                h_dot_q = h0 * d_q[0] + h1 * d_q[1] + h2 * d_q[2]
+                for l in range(m):
+                    m_lk = 0.0
+                    for j in range(wq.shape[0]):
+                        m_lk += mu * wq[j] * modes[l, j] * modes[k, j]
+                    d_r[plane2 * m + l, col] = m_lk * h_dot_g + ends[l, 0] * h_dot_q
+            modal_mass = mu * factors[k, 0]
+            stiffness = (ei_v if plane == 0 else ei_w) * factors[k, 1]
+            omega_k = np.sqrt(stiffness / modal_mass)
+            d_r[plane * m + k, col] += r * 2.0 * zeta * omega_k * modal_mass + s * stiffness
+
+
+@njit(cache=True)
 def _solve_in_place(a, b):
     """b <- a^-1 b by Gaussian elimination with partial pivoting (a is overwritten): the modal
     systems are small (2 .. 12), where LAPACK's call overhead dominates.  A singular a leaves b
@@ -371,14 +443,16 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
     nw = 24 + 2 * n
-    block = np.empty(2 * nx + 24 + 2 * n + 24 + 2 * nw + 12 * nx + n * nx + 13 * n + n * n)
+    block = np.empty(2 * nx + 24 + 2 * n + 24 + 3 * n + 2 * nw + 12 * nx + n * nx + 13 * n
+                     + n * n)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
         block[o + 24 + n:o + 24 + 2 * n]
     o += 24 + 2 * n
-    aux, aux_fd = block[o:o + 12].reshape((4, 3)), block[o + 12:o + 24].reshape((4, 3))
-    o += 24
+    aux = block[o:o + 12 + 3 * n].reshape((4 + n, 3))       # with the modal sums
+    aux_fd = block[o + 12 + 3 * n:o + 24 + 3 * n].reshape((4, 3))
+    o += 24 + 3 * n
     work, work_fd = block[o:o + nw], block[o + nw:o + 2 * nw]
     o += 2 * nw
     d_o = block[o:o + 12 * nx].reshape((12, nx))
@@ -395,10 +469,19 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
+    # eta'' columns analytic unless the output carries a moment (welded) or its own history
+    analytic = not welded and not (history[0] and not start)
+    if analytic:
+        w = w_n if start else work[21:24]
+        if start:
+            _modal_columns(bp, tables, rot, w, x0[3:6], 0.0, 0.0, o0[9:12], aux, d_o, d_r)
+        else:
+            _modal_columns(bp, tables, rot, w, x0[3:6], 1.0 / c1, c3 / c1, o0[9:12], aux, d_o,
+                           d_r)
     xp[:] = x0
     for c in range(3, nx):
-        if 6 <= c < 12:
-            continue                     # a_I, m_I, q_I: analytic (_affine_columns)
+        if 6 <= c < 12 or (c >= 12 and analytic):
+            continue                     # a_I, m_I, q_I (_affine_columns), eta'' (_modal_columns)
         # one-sided: the relations are affine in w' and eta'' up to terms scaled by 1 / c1 (w'
         # and eta'' reach the rotation and eta through phi = phi* + (w' - wd*) / c1 and
         # eta = (eta'' - w1e) / c1), so a forward difference is as exact as a central one
