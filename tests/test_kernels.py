@@ -150,11 +150,12 @@ def test_small_solve_matches_lapack_and_flags_singular():
 
 @pytest.mark.parametrize("start", [False, True])
 def test_beam_transfer_is_the_linearization_of_the_beam_relations(start):
-    """The beam's transfer (analytic a_I, m_I, q_I and eta'' columns; w' columns by forward
-    differences) against central differences of its exact relations (_evaluate) in every
-    unknown, eliminated through the modal equations the same way (docs/beam.md).  Measured:
-    7e-11 relative at most, the same as the kernel with every w' and eta'' column differenced
-    (before _modal_columns)."""
+    """The beam's transfer (every column written out where the output carries no moment:
+    _affine_columns, _modal_columns, _rotation_columns) against central differences of its exact
+    relations (_evaluate) in every unknown, eliminated through the modal equations the same way
+    (docs/beam.md).  Measured: 7e-12 (u) and 2.5e-11 (eta_map) relative, the central
+    differences' own error; the kernel with its w' and eta'' columns forward-differenced gave
+    7e-11 here."""
     from dttmm.chains import three_pendulum
     from dttmm.kernels.beam import _evaluate, beam_transfer
     from dttmm.solver import Workspace

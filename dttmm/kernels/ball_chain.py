@@ -12,7 +12,7 @@ from numba import njit
 
 from ..elements import BEAM
 from .beam import beam_transfer
-from .mat3 import inv3
+from .mat3 import hat_mul, inv3, mul_hat
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into
@@ -26,26 +26,6 @@ def _mm(a, b, out):
         a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
         for j in range(3):
             out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
-
-
-@njit(cache=True)
-def _hat_mm(v, b, out):
-    """out = v^ @ b (3 x 3): row i of v^ b is (v x b[:, j])_i."""
-    for j in range(3):
-        b0, b1, b2 = b[0, j], b[1, j], b[2, j]
-        out[0, j] = v[1] * b2 - v[2] * b1
-        out[1, j] = v[2] * b0 - v[0] * b2
-        out[2, j] = v[0] * b1 - v[1] * b0
-
-
-@njit(cache=True)
-def _mm_hat(a, v, out):
-    """out = a @ v^ (3 x 3): row i of a v^ is a[i] x v."""
-    for i in range(3):
-        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
-        out[i, 0] = a1 * v[2] - a2 * v[1]
-        out[i, 1] = a2 * v[0] - a0 * v[2]
-        out[i, 2] = a0 * v[1] - a1 * v[0]
 
 
 @njit(cache=True)
@@ -94,8 +74,8 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf
         kap_o[i] = kmat[i, 0] * rho[0] + kmat[i, 1] * rho[1] + kmat[i, 2] * rho[2]
         kap_c[i] = kmat[i, 0] * rho_c[0] + kmat[i, 1] * rho_c[1] + kmat[i, 2] * rho_c[2]
     # d rho / d phi = -rho^ Lam = -N_o; d kappa / d alpha = -rho^ - s K N_o - r (rate matrix)
-    _hat_mm(rho, lam, n_o)
-    _hat_mm(rho_c, lam, n_c)
+    hat_mul(rho, lam, n_o)
+    hat_mul(rho_c, lam, n_c)
     _mm(kmat, n_o, t1)
     _rate_matrix(rho, w, rate)
     for i in range(3):
@@ -136,15 +116,15 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf
                   - mass * (rho_c[i1] * a_i[i2] - rho_c[i2] * a_i[i1]))
     # d m_O / d alpha = M rho^ D_c - J - r (w^ J - (J w)^)
     #   + s [-q_O^ N_o + (load - M a_I)^ N_c + B Lam],  B = (J wd)^ - J wd^ - w^ (J w^ - (J w)^)
-    _mm_hat(jm, w, t1)                          # J w^
+    mul_hat(jm, w, t1)                          # J w^
     t1[0, 1] += jw[2]                           # J w^ - (J w)^
     t1[0, 2] -= jw[1]
     t1[1, 0] -= jw[2]
     t1[1, 2] += jw[0]
     t1[2, 0] += jw[1]
     t1[2, 1] -= jw[0]
-    _hat_mm(w, t1, t2)                          # w^ (J w^ - (J w)^)
-    _mm_hat(jm, wd, b)
+    hat_mul(w, t1, t2)                          # w^ (J w^ - (J w)^)
+    mul_hat(jm, wd, b)
     for i in range(3):
         for j in range(3):
             b[i, j] = -b[i, j] - t2[i, j]
@@ -155,18 +135,18 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf
     b[2, 0] -= jwd[1]
     b[2, 1] += jwd[0]
     _mm(b, lam, t1)                             # B Lam
-    _hat_mm(q_o, n_o, t2)
+    hat_mul(q_o, n_o, t2)
     for i in range(3):
         for j in range(3):
             t1[i, j] -= t2[i, j]
     for i in range(3):
         ext[i] = load[i] - mass * a_i[i]
-    _hat_mm(ext, n_c, t2)
-    _hat_mm(rho, d_c, b)                        # rho^ D_c
+    hat_mul(ext, n_c, t2)
+    hat_mul(rho, d_c, b)                        # rho^ D_c
     for i in range(3):
         for j in range(3):
             d_m[i, j] = mass * b[i, j] + s * (t1[i, j] + t2[i, j]) - jm[i, j]
-    _hat_mm(w, jm, t1)                          # w^ J - (J w)^
+    hat_mul(w, jm, t1)                          # w^ J - (J w)^
     t1[0, 1] += jw[2]
     t1[0, 2] -= jw[1]
     t1[1, 0] -= jw[2]
@@ -180,10 +160,10 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf
     # r_m = m_O* + rho^ q_I* - M (rho - rho_C)^ a_I*
     if inv3(d_m, g) == 0.0:
         g[:, :] = np.nan                        # reported by the sweep's finite check
-    _mm_hat(g, rho, p_q)                        # alpha = P_a a_I + P_q q_I + p0
+    mul_hat(g, rho, p_q)                        # alpha = P_a a_I + P_q q_I + p0
     for i in range(3):
         arm[i] = rho[i] - rho_c[i]
-    _mm_hat(g, arm, p_a)
+    mul_hat(g, arm, p_a)
     for i in range(3):
         i1, i2 = (i + 1) % 3, (i + 2) % 3
         r_m[i] = (m_o[i] + rho[i1] * q_i[i2] - rho[i2] * q_i[i1]

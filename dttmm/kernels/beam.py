@@ -14,8 +14,21 @@ slope (~1e-10 relative), which is second order in the O(h^3) predictor error.
 import numpy as np
 from numba import njit
 
-from .mat3 import matmul_into
+from .mat3 import hat_mul, matmul_into, mul_hat
 from .so3 import expm_so3, hat, left_jacobian, log_so3
+
+# rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
+# int mu A u', int mu A u'', int mu rho x A u''; A u'(L), A u''(L); J = int mu (|rho|^2 E -
+# rho rho^T) (3 rows); C = int mu (A u') rho^T (3 rows); then per mode k < m: F_k = int Y_k f,
+# Q_k = int mu Y_k rho, int mu Y_k A u', int mu Y_k A u''
+SUM_U, SUM_V, SUM_H, END_U, END_V, SUM_J, SUM_C, SUM_MODES = 4, 5, 6, 7, 8, 9, 12, 15
+
+
+@njit(cache=True)
+def aux_rows(m):
+    """Rows of the aux array with every sum (m modes per plane)."""
+    return SUM_MODES + 4 * m
+
 
 def quadrature_size(modes_per_plane):
     """Gauss-Legendre points that integrate the beam's relations to rounding, for every mode
@@ -44,8 +57,9 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     (m, N_QUAD): Y_k at the points; ends (m, 2): Y_k(L), Y_k'(L); factors (m, 2): modal mass
     over mu and modal stiffness over EI.  aux (4, 3) receives what the analytic columns of the
     linearization need (beam_transfer): the first mass moment S = int mu rho, rho_L = r_O - r_I,
-    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment); given 2 m more rows, also
-    F_k = int Y_k f and Q_k = int mu Y_k rho (k < m; the eta'' columns, _modal_columns).
+    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment); given the rows of
+    aux_rows(m) (beam_transfer's base evaluation), also the sums the analytic w' and eta''
+    columns need (_rotation_columns, _modal_columns; the row layout: aux_rows).
     Written in scalars: it runs 3 + n + 1 times per beam and step."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
     m = modes.shape[0]
@@ -63,7 +77,9 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
         residual[r] = 0.0
     sums = aux.shape[0] > 4
     if sums:
-        aux[4:4 + 2 * m] = 0.0
+        aux[4:] = 0.0
+    su, sv, sh = aux[SUM_U], aux[SUM_V], aux[SUM_H]
+    sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
     for j in range(xq.shape[0]):
         v = w_ = vd = wdd = vdd = wddd = 0.0
         for k in range(m):
@@ -110,15 +126,54 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
             residual[k] -= modes[k, j] * p2
             residual[m + k] -= modes[k, j] * p3
         if sums:
+            vv0 = vdd * e20 + wddd * e30             # A u''
+            vv1 = vdd * e21 + wddd * e31
+            vv2 = vdd * e22 + wddd * e32
+            su[0] += c * u0
+            su[1] += c * u1
+            su[2] += c * u2
+            sv[0] += c * vv0
+            sv[1] += c * vv1
+            sv[2] += c * vv2
+            sh[0] += c * (r1 * vv2 - r2 * vv1)
+            sh[1] += c * (r2 * vv0 - r0 * vv2)
+            sh[2] += c * (r0 * vv1 - r1 * vv0)
+            cr0, cr1, cr2 = c * r0, c * r1, c * r2
+            sj[0, 0] += cr1 * r1 + cr2 * r2          # J: |rho|^2 E - rho rho^T
+            sj[1, 1] += cr0 * r0 + cr2 * r2
+            sj[2, 2] += cr0 * r0 + cr1 * r1
+            sj[0, 1] -= cr0 * r1
+            sj[0, 2] -= cr0 * r2
+            sj[1, 2] -= cr1 * r2
+            sc[0, 0] += u0 * cr0                     # C: (A u') rho^T
+            sc[0, 1] += u0 * cr1
+            sc[0, 2] += u0 * cr2
+            sc[1, 0] += u1 * cr0
+            sc[1, 1] += u1 * cr1
+            sc[1, 2] += u1 * cr2
+            sc[2, 0] += u2 * cr0
+            sc[2, 1] += u2 * cr1
+            sc[2, 2] += u2 * cr2
+            base = SUM_MODES
             for k in range(m):
                 y = modes[k, j]
                 cy = c * y
-                aux[4 + k, 0] += y * f0
-                aux[4 + k, 1] += y * f1
-                aux[4 + k, 2] += y * f2
-                aux[4 + m + k, 0] += cy * r0
-                aux[4 + m + k, 1] += cy * r1
-                aux[4 + m + k, 2] += cy * r2
+                fk, qk = aux[base + k], aux[base + m + k]
+                uk, vk = aux[base + 2 * m + k], aux[base + 3 * m + k]
+                fk[0] += y * f0
+                fk[1] += y * f1
+                fk[2] += y * f2
+                qk[0] += cy * r0
+                qk[1] += cy * r1
+                qk[2] += cy * r2
+                uk[0] += cy * u0
+                uk[1] += cy * u1
+                uk[2] += cy * u2
+                vk[0] += cy * vv0
+                vk[1] += cy * vv1
+                vk[2] += cy * vv2
+    if sums:
+        sj[1, 0], sj[2, 0], sj[2, 1] = sj[0, 1], sj[0, 2], sj[1, 2]
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -149,6 +204,10 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     d0 = vd_l * rot[0, 1] + wd_l * rot[0, 2]                                   # A u'(L)
     d1 = vd_l * rot[1, 1] + wd_l * rot[1, 2]
     d2 = vd_l * rot[2, 1] + wd_l * rot[2, 2]
+    if sums:
+        for i in range(3):
+            aux[END_U, i] = vd_l * rot[i, 1] + wd_l * rot[i, 2]
+            aux[END_V, i] = vdd_l * rot[i, 1] + wdd_l * rot[i, 2]             # A u''(L)
     # a_O = a_I + w' x rho_L + w x (w x rho_L) + 2 w x A u'(L) + A u''(L)
     out[0] = (a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * d2 - w2 * d1)
               + vdd_l * rot[0, 1] + wdd_l * rot[0, 2])
@@ -336,12 +395,182 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 
 
 @njit(cache=True)
+def _point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out, t1, t2):
+    """out = d r''/d w' for r'' = a_I + w' x rho + w x (w x rho) + 2 w x U + V (a point, or a
+    mass-weighted sum of points: it is linear in rho, U = A u', V = A u''), through w' itself,
+    w (d w = r d w') and the frame's rotation (d theta = s Lam d w', rho, U, V turning with it):
+      -rho^ - r (R(rho) + 2 U^) - s (K rho^ + 2 w^ U^ + V^) Lam,
+    R(rho) = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) E, K = w'^ + w^ w^."""
+    mul_hat(kmat, rho, t1)
+    wu = w[0] * u_r[0] + w[1] * u_r[1] + w[2] * u_r[2]
+    for i in range(3):
+        for j in range(3):
+            t1[i, j] += 2.0 * u_r[i] * w[j]          # w^ U^ = U w^T - (w . U) E
+        t1[i, i] -= 2.0 * wu
+    t1[0, 1] -= v_r[2]
+    t1[0, 2] += v_r[1]
+    t1[1, 0] += v_r[2]
+    t1[1, 2] -= v_r[0]
+    t1[2, 0] -= v_r[1]
+    t1[2, 1] += v_r[0]
+    matmul_into(t1, lam, t2)
+    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = -r * (2.0 * rho[i] * w[j] - w[i] * rho[j]) - s * t2[i, j]
+        out[i, i] += r * wr
+    for i in range(3):                               # -rho^ - 2 r U^
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        out[i1, i2] += rho[i] + 2.0 * r * u_r[i]
+        out[i2, i1] -= rho[i] + 2.0 * r * u_r[i]
+
+
+@njit(cache=True)
+def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r):
+    """The Jacobian's w' columns (3:6) for a beam whose output carries no moment (docs/beam.md,
+    "The w' columns"): every relation through w' itself, w (r = c3/c1) and the frame's rotation
+    (s Lam, s = 1/c1; s = r = 0 at the consistent start), from the sums of beam_relations (aux):
+      d q_O = -D(S, int mu U, int mu V),   d a_O = D(rho_L, U_L, V_L)  (D: _point_jacobian)
+      d m_O = -rho_L^ d q_O - J + r Dw + s Theta Lam - d T,
+        Dw    = -(w^ J - (J w)^) - 2 (tr C E - C)
+        Theta = -q_O^ rho_L^ + (g - a_I)^ S^ + (J w')^ - J w'^ + w^ ((J w)^ - J w^)
+                - 2 (C w)^ + 2 C w^ + H^
+        T     = j_p L (e1 (e1 . w') + (e1 . w) w x e1),  e1 = A e1
+      d residual_(plane, l) = g^T D(Q_l, int mu Y_l U, int mu Y_l V)
+                              + s (F_l x g + Y_l(L) g x q_O)^T Lam + Y_l(L) g^T d q_O."""
+    m = ends.shape[0]
+    jp = bp[4] * bp[0]
+    buf = np.empty((8, 3, 3))
+    kmat, t1, t2, dq, dm, theta, th_l, dcol = (buf[0], buf[1], buf[2], buf[3], buf[4], buf[5],
+                                               buf[6], buf[7])
+    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+    for i in range(3):
+        for j in range(3):
+            kmat[i, j] = w[i] * w[j]
+        kmat[i, i] -= ww
+    kmat[0, 1] -= wd[2]
+    kmat[0, 2] += wd[1]
+    kmat[1, 0] += wd[2]
+    kmat[1, 2] -= wd[0]
+    kmat[2, 0] -= wd[1]
+    kmat[2, 1] += wd[0]
+    s_vec, rho_l = aux[0], aux[1]
+    sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
+    # a_O, the rotation slot (w' itself), q_O
+    _point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol, t1, t2)
+    _point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq, t1, t2)
+    for i in range(3):
+        for j in range(3):
+            d_o[i, 3 + j] = dcol[i, j]
+            d_o[3 + i, 3 + j] = 1.0 if i == j else 0.0
+            dq[i, j] = -dq[i, j]
+            d_o[9 + i, 3 + j] = dq[i, j]
+    # m_O
+    jw = np.empty(3)
+    jwd = np.empty(3)
+    cw = np.empty(3)
+    ga = np.empty(3)
+    e1 = rot[:, 0]
+    for i in range(3):
+        jw[i] = sj[i, 0] * w[0] + sj[i, 1] * w[1] + sj[i, 2] * w[2]
+        jwd[i] = sj[i, 0] * wd[0] + sj[i, 1] * wd[1] + sj[i, 2] * wd[2]
+        cw[i] = sc[i, 0] * w[0] + sc[i, 1] * w[1] + sc[i, 2] * w[2]
+        ga[i] = gravity[i] - a_i[i]
+    tr_c = sc[0, 0] + sc[1, 1] + sc[2, 2]
+    e1w = e1[0] * w[0] + e1[1] * w[1] + e1[2] * w[2]
+    e1wd = e1[0] * wd[0] + e1[1] * wd[1] + e1[2] * wd[2]
+    wxe = np.empty(3)
+    exw = np.empty(3)
+    exwd = np.empty(3)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        wxe[i] = w[i1] * e1[i2] - w[i2] * e1[i1]
+        exw[i] = -wxe[i]
+        exwd[i] = e1[i1] * wd[i2] - e1[i2] * wd[i1]
+    # Theta (the rotation's part), then times Lam
+    qr = q_o[0] * rho_l[0] + q_o[1] * rho_l[1] + q_o[2] * rho_l[2]
+    gs = ga[0] * s_vec[0] + ga[1] * s_vec[1] + ga[2] * s_vec[2]
+    mul_hat(sj, wd, t1)                               # J w'^
+    mul_hat(sj, w, t2)                                # J w^ (used below)
+    for i in range(3):
+        for j in range(3):
+            theta[i, j] = -rho_l[i] * q_o[j] + s_vec[i] * ga[j] - t1[i, j]
+        theta[i, i] += qr - gs
+    # w^ ((J w)^ - J w^)
+    for i in range(3):
+        for j in range(3):
+            t2[i, j] = -t2[i, j]
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        t2[i2, i1] += jw[i]
+        t2[i1, i2] -= jw[i]
+    hat_mul(w, t2, t1)
+    mul_hat(sc, w, t2)                                # C w^
+    for i in range(3):
+        for j in range(3):
+            theta[i, j] += t1[i, j] + 2.0 * t2[i, j]
+    for i in range(3):                                # + (J w')^ - 2 (C w)^ + H^
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        x = jwd[i] - 2.0 * cw[i] + aux[SUM_H, i]
+        theta[i2, i1] += x
+        theta[i1, i2] -= x
+    # minus T's rotation part: j_p L [-(e1 . w') e1^ + e1 (e1 x w')^T + (w x e1)(e1 x w)^T
+    #                                 - (e1 . w) w^ e1^],  w^ e1^ = e1 w^T - (w . e1) E
+    for i in range(3):
+        for j in range(3):
+            theta[i, j] -= jp * (e1[i] * exwd[j] + wxe[i] * exw[j] - e1w * e1[i] * w[j])
+        theta[i, i] -= jp * e1w * e1w
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        theta[i2, i1] += jp * e1wd * e1[i]            # - (-(e1 . w') e1^)
+        theta[i1, i2] -= jp * e1wd * e1[i]
+    matmul_into(theta, lam, th_l)
+    # d m_O = -rho_L^ dq - J + r Dw + s Theta Lam - (T's w' and w parts)
+    hat_mul(rho_l, dq, t1)
+    hat_mul(w, sj, t2)                                # w^ J
+    for i in range(3):
+        for j in range(3):
+            dw = -(t2[i, j]) + 2.0 * sc[i, j] - jp * (wxe[i] * e1[j])
+            dm[i, j] = (-t1[i, j] - sj[i, j] + s * th_l[i, j] - jp * e1[i] * e1[j] + r * dw)
+        dm[i, i] -= r * 2.0 * tr_c
+    for i in range(3):                                # r [(J w)^ + jp (e1 . w) e1^]
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        x = r * (jw[i] + jp * e1w * e1[i])
+        dm[i2, i1] += x
+        dm[i1, i2] -= x
+    for i in range(3):
+        for j in range(3):
+            d_o[6 + i, 3 + j] = dm[i, j]
+    # modal rows
+    vec = np.empty(3)
+    for plane in range(2):
+        g = rot[:, 1 + plane]
+        gq0 = g[1] * q_o[2] - g[2] * q_o[1]
+        gq1 = g[2] * q_o[0] - g[0] * q_o[2]
+        gq2 = g[0] * q_o[1] - g[1] * q_o[0]
+        for l in range(m):
+            f_l = aux[SUM_MODES + l]
+            y_l = ends[l, 0]
+            _point_jacobian(aux[SUM_MODES + m + l], aux[SUM_MODES + 2 * m + l],
+                            aux[SUM_MODES + 3 * m + l], w, kmat, lam, s, r, dcol, t1, t2)
+            vec[0] = f_l[1] * g[2] - f_l[2] * g[1] + y_l * gq0
+            vec[1] = f_l[2] * g[0] - f_l[0] * g[2] + y_l * gq1
+            vec[2] = f_l[0] * g[1] - f_l[1] * g[0] + y_l * gq2
+            row = plane * m + l
+            for j in range(3):
+                d_r[row, 3 + j] = s * (vec[0] * lam[0, j] + vec[1] * lam[1, j]
+                                       + vec[2] * lam[2, j])
+                for i in range(3):
+                    d_r[row, 3 + j] += g[i] * (dcol[i, j] + y_l * dq[i, j])
+
+
+@njit(cache=True)
 def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r):
     """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment (docs/beam.md,
     "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by r = c3/c1 (s = r = 0 at
     the consistent start), so every point's acceleration by Y_k(x) G with g = A e2 (v plane) or
     A e3 (w plane) and G = g + 2 r w x g + s (w' x g + w x (w x g)); with P_k = int mu Y_k,
-    F_k = int Y_k f, Q_k = int mu Y_k rho (aux rows 4..) and M_kl = int mu Y_k Y_l:
+    F_k = int Y_k f, Q_k = int mu Y_k rho (aux) and M_kl = int mu Y_k Y_l:
       d a_O = Y_k(L) G,  d q_O = -P_k G,
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
@@ -365,8 +594,8 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r):
             for j in range(wq.shape[0]):
                 p_k += mu * wq[j] * modes[k, j]
             y_l = ends[k, 0]
-            f_k = aux[4 + k]
-            q_k = aux[4 + m + k]
+            f_k = aux[SUM_MODES + k]
+            q_k = aux[SUM_MODES + m + k]
             for i in range(3):
                 d_q[i] = -p_k * big_g[i]
             for i in range(3):
@@ -443,16 +672,16 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
     nw = 24 + 2 * n
-    block = np.empty(2 * nx + 24 + 2 * n + 24 + 3 * n + 2 * nw + 12 * nx + n * nx + 13 * n
-                     + n * n)
+    na = 3 * aux_rows(n // 2)
+    block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
         block[o + 24 + n:o + 24 + 2 * n]
     o += 24 + 2 * n
-    aux = block[o:o + 12 + 3 * n].reshape((4 + n, 3))       # with the modal sums
-    aux_fd = block[o + 12 + 3 * n:o + 24 + 3 * n].reshape((4, 3))
-    o += 24 + 3 * n
+    aux = block[o:o + na].reshape((na // 3, 3))             # with every sum
+    aux_fd = block[o + na:o + na + 12].reshape((4, 3))
+    o += na + 12
     work, work_fd = block[o:o + nw], block[o + nw:o + 2 * nw]
     o += 2 * nw
     d_o = block[o:o + 12 * nx].reshape((12, nx))
@@ -473,15 +702,17 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     analytic = not welded and not (history[0] and not start)
     if analytic:
         w = w_n if start else work[21:24]
-        if start:
-            _modal_columns(bp, tables, rot, w, x0[3:6], 0.0, 0.0, o0[9:12], aux, d_o, d_r)
-        else:
-            _modal_columns(bp, tables, rot, w, x0[3:6], 1.0 / c1, c3 / c1, o0[9:12], aux, d_o,
-                           d_r)
+        s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)
+        lam = np.empty((3, 3))
+        left_jacobian(phi_star, lam)
+        _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, o0[9:12], aux, d_o, d_r)
+        _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], o0[9:12], gravity,
+                          aux, d_o, d_r)
     xp[:] = x0
     for c in range(3, nx):
-        if 6 <= c < 12 or (c >= 12 and analytic):
-            continue                     # a_I, m_I, q_I (_affine_columns), eta'' (_modal_columns)
+        if 6 <= c < 12 or analytic:
+            continue                     # a_I, m_I, q_I (_affine_columns), the rest where
+            #                              written out (_modal_columns, _rotation_columns)
         # one-sided: the relations are affine in w' and eta'' up to terms scaled by 1 / c1 (w'
         # and eta'' reach the rotation and eta through phi = phi* + (w' - wd*) / c1 and
         # eta = (eta'' - w1e) / c1), so a forward difference is as exact as a central one

@@ -45,3 +45,23 @@ def matvec_into(a, x, out):
         for k in range(a.shape[1]):
             s += a[i, k] * x[k]
         out[i] = s
+
+
+@njit(cache=True)
+def hat_mul(v, b, out):
+    """out = v^ @ b (3 x 3): column j is v x b[:, j]."""
+    for j in range(3):
+        b0, b1, b2 = b[0, j], b[1, j], b[2, j]
+        out[0, j] = v[1] * b2 - v[2] * b1
+        out[1, j] = v[2] * b0 - v[0] * b2
+        out[2, j] = v[0] * b1 - v[1] * b0
+
+
+@njit(cache=True)
+def mul_hat(a, v, out):
+    """out = a @ v^ (3 x 3): row i is a[i] x v."""
+    for i in range(3):
+        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
+        out[i, 0] = a1 * v[2] - a2 * v[1]
+        out[i, 1] = a2 * v[0] - a0 * v[2]
+        out[i, 2] = a0 * v[1] - a1 * v[0]
