@@ -426,7 +426,8 @@ def _point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out, t1, t2):
 
 
 @njit(cache=True)
-def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r):
+def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r,
+                      scratch):
     """The Jacobian's w' columns (3:6) for a beam whose output carries no moment (docs/beam.md,
     "The w' columns"): every relation through w' itself, w (r = c3/c1) and the frame's rotation
     (s Lam, s = 1/c1; s = r = 0 at the consistent start), from the sums of beam_relations (aux):
@@ -437,10 +438,14 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
                 - 2 (C w)^ + 2 C w^ + H^
         T     = j_p L (e1 (e1 . w') + (e1 . w) w x e1),  e1 = A e1
       d residual_(plane, l) = g^T D(Q_l, int mu Y_l U, int mu Y_l V)
-                              + s (F_l x g + Y_l(L) g x q_O)^T Lam + Y_l(L) g^T d q_O."""
+                              + s (F_l x g + Y_l(L) g x q_O)^T Lam + Y_l(L) g^T d q_O.
+    scratch: 99 entries."""
     m = ends.shape[0]
     jp = bp[4] * bp[0]
-    buf = np.empty((8, 3, 3))
+    buf = scratch[0:72].reshape((8, 3, 3))
+    vecs = scratch[72:99].reshape((9, 3))
+    jw, jwd, cw, ga, wxe, exw, exwd, vec = (vecs[0], vecs[1], vecs[2], vecs[3], vecs[4], vecs[5],
+                                            vecs[6], vecs[7])
     kmat, t1, t2, dq, dm, theta, th_l, dcol = (buf[0], buf[1], buf[2], buf[3], buf[4], buf[5],
                                                buf[6], buf[7])
     ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
@@ -466,10 +471,6 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
             dq[i, j] = -dq[i, j]
             d_o[9 + i, 3 + j] = dq[i, j]
     # m_O
-    jw = np.empty(3)
-    jwd = np.empty(3)
-    cw = np.empty(3)
-    ga = np.empty(3)
     e1 = rot[:, 0]
     for i in range(3):
         jw[i] = sj[i, 0] * w[0] + sj[i, 1] * w[1] + sj[i, 2] * w[2]
@@ -479,9 +480,6 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
     tr_c = sc[0, 0] + sc[1, 1] + sc[2, 2]
     e1w = e1[0] * w[0] + e1[1] * w[1] + e1[2] * w[2]
     e1wd = e1[0] * wd[0] + e1[1] * wd[1] + e1[2] * wd[2]
-    wxe = np.empty(3)
-    exw = np.empty(3)
-    exwd = np.empty(3)
     for i in range(3):
         i1, i2 = (i + 1) % 3, (i + 2) % 3
         wxe[i] = w[i1] * e1[i2] - w[i2] * e1[i1]
@@ -542,7 +540,6 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
         for j in range(3):
             d_o[6 + i, 3 + j] = dm[i, j]
     # modal rows
-    vec = np.empty(3)
     for plane in range(2):
         g = rot[:, 1 + plane]
         gq0 = g[1] * q_o[2] - g[2] * q_o[1]
@@ -565,7 +562,7 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
 
 
 @njit(cache=True)
-def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r):
+def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
     """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment (docs/beam.md,
     "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by r = c3/c1 (s = r = 0 at
     the consistent start), so every point's acceleration by Y_k(x) G with g = A e2 (v plane) or
@@ -574,13 +571,12 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r):
       d a_O = Y_k(L) G,  d q_O = -P_k G,
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
-      the diagonal: damping and stiffness)."""
+      the diagonal: damping and stiffness).  scratch: 6 entries."""
     _, wq, modes, ends, factors = tables
     mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
     m = modes.shape[0]
     rho_l = aux[1]
-    big_g = np.empty(3)
-    d_q = np.empty(3)
+    big_g, d_q = scratch[0:3], scratch[3:6]
     for plane in range(2):
         g = rot[:, 1 + plane]
         g0, g1, g2 = g[0], g[1], g[2]
@@ -673,7 +669,8 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # every array of the linearization carved out of one block (one allocation per call)
     nw = 24 + 2 * n
     na = 3 * aux_rows(n // 2)
-    block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n)
+    block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
+                     + 114)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -691,6 +688,9 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     rhs = block[o:o + 13 * n].reshape((n, 13))
     o += 13 * n
     modal = block[o:o + n * n].reshape((n, n))
+    o += n * n
+    lam = block[o:o + 9].reshape((3, 3))
+    columns_scratch = block[o + 9:o + 114]
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
     rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
@@ -703,11 +703,11 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     if analytic:
         w = w_n if start else work[21:24]
         s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)
-        lam = np.empty((3, 3))
         left_jacobian(phi_star, lam)
-        _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, o0[9:12], aux, d_o, d_r)
+        _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, o0[9:12], aux, d_o, d_r,
+                       columns_scratch[99:105])
         _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], o0[9:12], gravity,
-                          aux, d_o, d_r)
+                          aux, d_o, d_r, columns_scratch[0:99])
     xp[:] = x0
     for c in range(3, nx):
         if 6 <= c < 12 or analytic:
