@@ -146,27 +146,27 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 
 def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     """Kinetic energy (int 1/2 mu |r'|^2 dx + 1/2 j_p L (w . A e1)^2) and potential energy
-    (-int mu g . r dx + sum 1/2 k eta^2) of one beam (docs/beam.md), by quadrature."""
+    (-int mu g . r dx + sum 1/2 k eta^2) of one beam (docs/beam.md), by quadrature, for T states
+    at once: a (T, 3, 3), w, r_in, v_in (T, 3), eta, eta_dot (T, 2 m)."""
     length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
     x = 0.5 * length * (_GL_X + 1.0)
     wq = 0.5 * length * _GL_W
-    y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)
-    y = y.T                                                # (Q, nm)
-    p = np.zeros((len(x), 3))                              # x e1 + u(x), body frame
-    p[:, 0] = x
-    p[:, 1] = y @ eta[:nm]
-    p[:, 2] = y @ eta[nm:2 * nm]
-    u_dot = np.zeros((len(x), 3))
-    u_dot[:, 1] = y @ eta_dot[:nm]
-    u_dot[:, 2] = y @ eta_dot[nm:2 * nm]
-    rho = p @ a.T
-    vel = v_in + np.cross(w, rho) + u_dot @ a.T
-    spin = w @ a[:, 0]
-    kinetic = 0.5 * mu * wq @ np.einsum("qi,qi->q", vel, vel)
+    y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)      # y (m, Q)
+    p = np.zeros((len(eta), len(x), 3))                    # x e1 + u(x), body frame
+    p[:, :, 0] = x
+    p[:, :, 1] = eta[:, :nm] @ y
+    p[:, :, 2] = eta[:, nm:2 * nm] @ y
+    u_dot = np.zeros_like(p)
+    u_dot[:, :, 1] = eta_dot[:, :nm] @ y
+    u_dot[:, :, 2] = eta_dot[:, nm:2 * nm] @ y
+    rho = np.einsum("tij,tqj->tqi", a, p)
+    vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + np.einsum("tij,tqj->tqi", a, u_dot)
+    spin = np.einsum("ti,ti->t", w, a[:, :, 0])
+    kinetic = 0.5 * mu * np.einsum("q,tqi,tqi->t", wq, vel, vel)
     kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
-    potential = -mu * wq @ ((r_in + rho) @ gravity)
-    potential += 0.5 * np.sum(stiffness * (row[EI_V] * eta[:nm] ** 2
-                                           + row[EI_W] * eta[nm:2 * nm] ** 2))
+    potential = -mu * np.einsum("q,tqi,i->t", wq, r_in[:, None, :] + rho, gravity)
+    potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
+                        + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
     return kinetic, potential
 
 
@@ -177,55 +177,68 @@ def _output_section(*args):
 
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
                    eta=None, eta_dot=None):
-    """Kinetic and potential energy of one state, from positions and velocities alone.
+    """Kinetic and potential energy of one state, or of T states at once, from positions and
+    velocities alone.
 
     rotation (n,3,3), omega (n,3), r_in, v_in (n,3) input-point positions and velocities,
     deflection (n,3): world deflection d of each elastic hinge (ignored for other hinges),
-    ground_rotation: the ground frame at this time (default: the model's, at rest or t = 0),
-    eta, eta_dot: the beams' modal coordinates and rates, flat and concatenated in body order
-    (a beam's v coordinates first, then w), as Result.modal_coordinates; None for zero.  A beam
-    counts int 1/2 mu |r'(x)|^2 dx + 1/2 j_p L (w . A e1)^2 kinetic and -int mu g . r(x) dx +
-    sum 1/2 k_k eta_k^2 potential energy (docs/beam.md).
+    ground_rotation (3,3): the ground frame at this time (default: the model's, at rest or
+    t = 0), eta, eta_dot: the beams' modal coordinates and rates, flat and concatenated in body
+    order (a beam's v coordinates first, then w), as Result.modal_coordinates; None for zero.
+    With a leading axis of T states on every array (ground_rotation (T,3,3) or one frame), the
+    energies come back as two (T,) arrays.  A beam counts int 1/2 mu |r'(x)|^2 dx +
+    1/2 j_p L (w . A e1)^2 kinetic and -int mu g . r(x) dx + sum 1/2 k_k eta_k^2 potential
+    energy (docs/beam.md).
     """
-    kinetic = potential = 0.0
+    rotation = np.asarray(rotation, dtype=float)
+    single = rotation.ndim == 3
+    rotation, omega, r_in, v_in, deflection = (
+        np.asarray(x, dtype=float)[None] if single else np.asarray(x, dtype=float)
+        for x in (rotation, omega, r_in, v_in, deflection))
+    n_t = rotation.shape[0]
     ground_rot = model.ground_rotation if ground_rotation is None else ground_rotation
+    ground_rot = np.broadcast_to(np.asarray(ground_rot, dtype=float), (n_t, 3, 3))
     n_modes = model.n_modes
     total = int(np.sum(n_modes))
-    eta = np.zeros(total) if eta is None else np.asarray(eta, dtype=float).reshape(-1)
-    eta_dot = np.zeros(total) if eta_dot is None else np.asarray(eta_dot, dtype=float).reshape(-1)
-    if eta.size != total or eta_dot.size != total:
+    eta = np.zeros((n_t, total)) if eta is None else np.asarray(eta, dtype=float).reshape(n_t, -1)
+    eta_dot = (np.zeros((n_t, total)) if eta_dot is None
+               else np.asarray(eta_dot, dtype=float).reshape(n_t, -1))
+    if eta.shape[1] != total or eta_dot.shape[1] != total:
         raise ValueError(f"chain_energies: eta and eta_dot must hold {total} modal coordinates "
-                         f"(got {eta.size} and {eta_dot.size})")
-    offset = 0
+                         f"(got {eta.shape[1]} and {eta_dot.shape[1]})")
+    kinetic, potential = np.zeros(n_t), np.zeros(n_t)
     mode_off = np.concatenate([[0], np.cumsum(n_modes)])
     for k in range(model.n_bodies):
         p = model.body_params[k]
-        a = rotation[k]
+        a = rotation[:, k]
+        j0, j1 = mode_off[k], mode_off[k + 1]
         if model.body_kind[k] == BEAM:
-            nm = int(n_modes[k])
-            t_k, v_k = _beam_energies(model.beam_params[k], a, omega[k], r_in[k], v_in[k],
-                                      eta[offset:offset + nm], eta_dot[offset:offset + nm],
+            t_k, v_k = _beam_energies(model.beam_params[k], a, omega[:, k], r_in[:, k],
+                                      v_in[:, k], eta[:, j0:j1], eta_dot[:, j0:j1],
                                       model.gravity)
-            offset += nm
             kinetic += t_k
             potential += v_k
         else:
             rho_c = a @ p[TO_MASS_CENTER]
-            v_c = v_in[k] + np.cross(omega[k], rho_c)
-            j_c = a @ model.body_mass_center_inertia[k] @ a.T
-            kinetic += 0.5 * p[MASS] * v_c @ v_c + 0.5 * omega[k] @ j_c @ omega[k]
-            potential -= p[MASS] * model.gravity @ (r_in[k] + rho_c)
+            v_c = v_in[:, k] + np.cross(omega[:, k], rho_c)
+            w_body = np.einsum("tji,tj->ti", a, omega[:, k])          # A^T w
+            kinetic += 0.5 * p[MASS] * np.einsum("ti,ti->t", v_c, v_c)
+            kinetic += 0.5 * np.einsum("ti,ij,tj->t", w_body, model.body_mass_center_inertia[k],
+                                       w_body)
+            potential -= p[MASS] * (r_in[:, k] + rho_c) @ model.gravity
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
-            a_in = ground_rot if k == 0 else rotation[k - 1]
-            if k > 0 and model.body_kind[k - 1] == BEAM:     # the beam's end section
-                j0, j1 = mode_off[k - 1], mode_off[k]
-                a_in = _output_section(model.beam_params[k - 1], a_in, np.zeros(3),
-                                      eta[j0:j1])[0]
-            d_b = a_in.T @ deflection[k]
-            psi = _log_so3(a_in.T @ a @ h[REST_ROTATION].reshape(3, 3).T)
-            potential += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
-            potential += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
+            for i in range(n_t):                # (a log per state: elastic hinges only)
+                a_in = ground_rot[i] if k == 0 else rotation[i, k - 1]
+                if k > 0 and model.body_kind[k - 1] == BEAM:     # the beam's end section
+                    a_in = _output_section(model.beam_params[k - 1], a_in, np.zeros(3),
+                                           eta[i, mode_off[k - 1]:j0])[0]
+                d_b = a_in.T @ deflection[i, k]
+                psi = _log_so3(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
+                potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
+                potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
+    if single:
+        return float(kinetic[0]), float(potential[0])
     return kinetic, potential
 
 
@@ -272,13 +285,16 @@ def beam_midpoint_deflection(model, result, body):
 
 def beam_output_offset(row, rotation, omega, eta, eta_dot):
     """World offset r_O - r_I = A (L e1 + u(L)) of a beam's output point and its rate
-    w x (r_O - r_I) + A u'(L) (docs/beam.md, "End sections")."""
+    w x (r_O - r_I) + A u'(L) (docs/beam.md, "End sections"); any leading axes (T states)."""
     length, nm = row[LENGTH], int(row[MODES])
     y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
-    p = np.array([length, y @ eta[:nm], y @ eta[nm:2 * nm]])
-    p_dot = np.array([0.0, y @ eta_dot[:nm], y @ eta_dot[nm:2 * nm]])
-    rho = rotation @ p
-    return rho, np.cross(omega, rho) + rotation @ p_dot
+    eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
+    p = np.stack([np.full(eta.shape[:-1], length), eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y],
+                 axis=-1)
+    p_dot = np.stack([np.zeros(eta.shape[:-1]), eta_dot[..., :nm] @ y,
+                      eta_dot[..., nm:2 * nm] @ y], axis=-1)
+    rho = np.einsum("...ij,...j->...i", rotation, p)
+    return rho, np.cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 
 
 def point_positions(model, rotation, r_in, eta=None):
@@ -289,15 +305,10 @@ def point_positions(model, rotation, r_in, eta=None):
     r_o = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_OUTPUT])
     if eta is not None and model.has_beams:
         eta = np.asarray(eta, dtype=float)
-        single = eta.ndim == 1
-        rot_t, eta_t = (rotation[None], eta[None]) if single else (rotation, eta)
-        r_o_t = r_o[None] if single else r_o
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
         for k in np.nonzero(model.body_kind == BEAM)[0]:
-            e = eta_t[:, offsets[k]:offsets[k + 1]]
-            for i in range(len(e)):
-                rho, _ = beam_output_offset(model.beam_params[k], rot_t[i, k], np.zeros(3), e[i],
-                                            np.zeros_like(e[i]))
-                r_o_t[i, k] = r_in[i, k] + rho if not single else r_in[k] + rho
-        r_o = r_o_t[0] if single else r_o_t
+            e = eta[..., offsets[k]:offsets[k + 1]]
+            rho, _ = beam_output_offset(model.beam_params[k], rotation[..., k, :, :],
+                                        np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
+            r_o[..., k, :] = r_in[..., k, :] + rho
     return r_c, r_o

@@ -174,6 +174,9 @@ def _ground(model, times):
     m = len(times)
     acc, w, wd = np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3))
     rot = np.empty((m, 3, 3))
+    if model.ground_motion is None:             # at rest: one frame for every time
+        rot[:] = model.ground_rotation
+        return acc, rot, w, wd
     for i, t in enumerate(times):
         _, _, acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
     return acc, rot, w, wd
@@ -558,40 +561,43 @@ def _result(model, t, samples, wall, n_steps, info):
     eta = np.array([s["eta"] for s in samples])
     eta_d = np.array([s["eta_d"] for s in samples])
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
-    for i, ti in enumerate(t):
-        r_g, v_g = model.ground_state(ti)[:2]
-        r_prev, v_prev = r_g, v_g
-        for k in range(n):
-            r_in[i, k] = r_prev + defl[i, k]
-            v_in[i, k] = v_prev + defl_rate[i, k]
-            if model.body_kind[k] == BEAM:
-                j0, j1 = mode_off[k], mode_off[k + 1]
-                rho, rho_dot = beam_output_offset(model.beam_params[k], rot[i, k], omega[i, k],
-                                                  eta[i, j0:j1], eta_d[i, j0:j1])
-            else:
-                rho = rot[i, k] @ l_io[k]
-                rho_dot = np.cross(omega[i, k], rho)
-            r_prev = r_in[i, k] + rho
-            v_prev = v_in[i, k] + rho_dot
-            if "v_st" in samples[i] and model.body_kind[k] == BEAM:
-                v_in[i, k] = samples[i]["v_st"][k]    # the paper's scheme: the point's own
-            elif "v_c" in samples[i]:
-                # energy-momentum and paper's schemes: every mass centre carries its own
-                # velocity, which with the rigid-body field about it defines the input point's
-                # (docs/solver.md)
-                rho_c = rot[i, k] @ model.body_params[k, TO_MASS_CENTER]
-                v_in[i, k] = samples[i]["v_c"][k] - np.cross(omega[i, k], rho_c)
+    # the ground point and frame at every sample (one state for a ground at rest)
+    grounds = [model.ground_state(ti) for ti in (t if model.ground_motion is not None else t[:1])]
+    r_prev = np.broadcast_to(np.array([g[0] for g in grounds], dtype=float), (m, 3))
+    v_prev = np.broadcast_to(np.array([g[1] for g in grounds], dtype=float), (m, 3))
+    ground_rot = np.broadcast_to(np.array([g[3] for g in grounds], dtype=float), (m, 3, 3))
+    # the paper's and energy-momentum schemes' own point velocities (every sample has them)
+    v_st = np.array([s["v_st"] for s in samples]) if "v_st" in samples[0] else None
+    v_c = np.array([s["v_c"] for s in samples]) if "v_c" in samples[0] else None
+    for k in range(n):                      # input points down the chain, all samples at once
+        r_in[:, k] = r_prev + defl[:, k]
+        v_in[:, k] = v_prev + defl_rate[:, k]
+        if model.body_kind[k] == BEAM:
+            j0, j1 = mode_off[k], mode_off[k + 1]
+            rho, rho_dot = beam_output_offset(model.beam_params[k], rot[:, k], omega[:, k],
+                                              eta[:, j0:j1], eta_d[:, j0:j1])
+        else:
+            rho = rot[:, k] @ l_io[k]
+            rho_dot = np.cross(omega[:, k], rho)
+        r_prev = r_in[:, k] + rho
+        v_prev = v_in[:, k] + rho_dot
+        if v_st is not None and model.body_kind[k] == BEAM:
+            v_in[:, k] = v_st[:, k]          # the paper's scheme: the point's own
+        elif v_c is not None:
+            # energy-momentum and paper's schemes: every mass centre carries its own
+            # velocity, which with the rigid-body field about it defines the input point's
+            # (docs/solver.md)
+            rho_c = rot[:, k] @ model.body_params[k, TO_MASS_CENTER]
+            v_in[:, k] = v_c[:, k] - np.cross(omega[:, k], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)
-    energies = np.array([chain_energies(model, rot[i], omega[i], r_in[i], v_in[i], defl[i],
-                                        ground_rotation=model.ground_state(ti)[3], eta=eta[i],
-                                        eta_dot=eta_d[i])
-                         for i, ti in enumerate(t)])
+    kinetic, potential = chain_energies(model, rot, omega, r_in, v_in, defl,
+                                        ground_rotation=ground_rot, eta=eta, eta_dot=eta_d)
     inputs = 2 * np.arange(n) + 1
     return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
                   position_output=r_o, rotation=rot, angular_velocity=omega,
                   angular_acceleration=np.array([s["omega_dot"] for s in samples]),
                   force=z[:, inputs, 9:12], moment=z[:, inputs, 6:9],
-                  kinetic=energies[:, 0], potential=energies[:, 1], wall_time=wall,
+                  kinetic=kinetic, potential=potential, wall_time=wall,
                   n_steps=n_steps, info=info, velocity_input=v_in,
                   modal_coordinates=eta if model.has_beams else None,
                   modal_velocities=eta_d if model.has_beams else None)
