@@ -12,6 +12,7 @@ from numba import njit
 
 from ..elements import BEAM
 from .beam import beam_transfer
+from .body import kappa_matrix, point_jacobian
 from .mat3 import hat_mul, inv3, mul_hat
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
@@ -29,75 +30,36 @@ def _mm(a, b, out):
 
 
 @njit(cache=True)
-def _rate_matrix(rho, w, out):
-    """out = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) I: the derivative of
-    w x (w x rho) with respect to w (docs/rigid_body.md, "Linearization")."""
-    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = 2.0 * rho[i] * w[j] - w[i] * rho[j]
-        out[i, i] -= wr
-
-
-@njit(cache=True)
 def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf, vec):
     """Body k's reduced map in angular-acceleration slots (docs/assembly.md, "The fused
     ball-chain step"), linearized about the guess (phi*, a_I*, q_I*):
       [a_O; q_O] = v [a_I; q_I; 1],   alpha = pmap [a_I; q_I; 1]  (the angular acceleration).
     p: body parameter row (mass, l_IC, l_IO, J_I); rot, lam: A* and J_l(phi*); w, wd: angular
     velocity and acceleration at phi*; s = 1/c1, r = c3/c1 (d w / d alpha = r I, d phi / d alpha
-    = s I); load = M g + F at the mass centre, torque applied; buf (14, 3, 3), vec (11, 3)
+    = s I); load = M g + F at the mass centre, torque applied; buf (14, 3, 3), vec (12, 3)
     scratch."""
     mass = p[0]
     j_body = p[7:16].reshape((3, 3))
-    rho, rho_c, kap_o, kap_c, q_o, m_o, jw, jwd, ext, arm, r_m = (
-        vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6], vec[7], vec[8], vec[9], vec[10])
-    kmat, n_o, n_c, d_o, d_c, d_m, jm, t1, t2, b, g, p_q, p_a, rate = (
+    rho, rho_c, kap_o, kap_c, q_o, m_o, jw, jwd, ext, arm, r_m, zero = (
+        vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6], vec[7], vec[8], vec[9], vec[10],
+        vec[11])
+    kmat, n_o, n_c, d_o, d_c, d_m, jm, t1, t2, b, g, p_q, p_a, _ = (
         buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8], buf[9], buf[10],
         buf[11], buf[12], buf[13])
     for i in range(3):
         rho[i] = rot[i, 0] * p[4] + rot[i, 1] * p[5] + rot[i, 2] * p[6]        # A* l_IO
         rho_c[i] = rot[i, 0] * p[1] + rot[i, 1] * p[2] + rot[i, 2] * p[3]      # A* l_IC
-    # K = wd^ + w^ w^, kappa(x) = K x = wd x x + w x (w x x)
-    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-    for i in range(3):
-        for j in range(3):
-            kmat[i, j] = w[i] * w[j]
-        kmat[i, i] -= ww
-    kmat[0, 1] -= wd[2]
-    kmat[0, 2] += wd[1]
-    kmat[1, 0] += wd[2]
-    kmat[1, 2] -= wd[0]
-    kmat[2, 0] -= wd[1]
-    kmat[2, 1] += wd[0]
+    kappa_matrix(w, wd, kmat)                   # kappa(x) = K x = wd x x + w x (w x x)
     for i in range(3):
         kap_o[i] = kmat[i, 0] * rho[0] + kmat[i, 1] * rho[1] + kmat[i, 2] * rho[2]
         kap_c[i] = kmat[i, 0] * rho_c[0] + kmat[i, 1] * rho_c[1] + kmat[i, 2] * rho_c[2]
-    # d rho / d phi = -rho^ Lam = -N_o; d kappa / d alpha = -rho^ - s K N_o - r (rate matrix)
+    # d rho / d phi = -rho^ Lam = -N_o; d kappa / d alpha = -rho^ - s K N_o - r R(rho)
+    # (a point of a rigid body: point_jacobian without deformation rates)
     hat_mul(rho, lam, n_o)
     hat_mul(rho_c, lam, n_c)
-    _mm(kmat, n_o, t1)
-    _rate_matrix(rho, w, rate)
-    for i in range(3):
-        for j in range(3):
-            d_o[i, j] = -s * t1[i, j] - r * rate[i, j]
-    _mm(kmat, n_c, t1)
-    _rate_matrix(rho_c, w, rate)
-    for i in range(3):
-        for j in range(3):
-            d_c[i, j] = -s * t1[i, j] - r * rate[i, j]
-    d_o[0, 1] += rho[2]
-    d_o[0, 2] -= rho[1]
-    d_o[1, 0] -= rho[2]
-    d_o[1, 2] += rho[0]
-    d_o[2, 0] += rho[1]
-    d_o[2, 1] -= rho[0]
-    d_c[0, 1] += rho_c[2]
-    d_c[0, 2] -= rho_c[1]
-    d_c[1, 0] -= rho_c[2]
-    d_c[1, 2] += rho_c[0]
-    d_c[2, 0] += rho_c[1]
-    d_c[2, 1] -= rho_c[0]
+    zero[:] = 0.0
+    point_jacobian(rho, zero, zero, w, kmat, lam, s, r, d_o, t1, t2)
+    point_jacobian(rho_c, zero, zero, w, kmat, lam, s, r, d_c, t1, t2)
     # J = A* J_I A*^T, and the moment relation's values at the guess (docs/rigid_body.md):
     # m_O = -rho x q_O + rho_C x load + torque - (J wd + w x J w + M rho_C x a_I)
     _mm(rot, j_body, t1)
@@ -268,7 +230,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     pmap = np.empty((n, 3, 7))
     v = np.empty((6, 7))
     buf = np.empty((16, 3, 3))
-    vec = np.empty((11, 3))
+    vec = np.empty((12, 3))
     e3 = np.empty((3, 3))
     rot_star = np.empty((3, 3))
     lam = np.empty((3, 3))

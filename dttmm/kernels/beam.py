@@ -14,6 +14,7 @@ slope (~1e-10 relative), which is second order in the O(h^3) predictor error.
 import numpy as np
 from numba import njit
 
+from .body import kappa_matrix, point_jacobian
 from .mat3 import hat_mul, matmul_into, mul_hat
 from .so3 import expm_so3, hat, left_jacobian, log_so3
 
@@ -395,37 +396,6 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 
 
 @njit(cache=True)
-def _point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out, t1, t2):
-    """out = d r''/d w' for r'' = a_I + w' x rho + w x (w x rho) + 2 w x U + V (a point, or a
-    mass-weighted sum of points: it is linear in rho, U = A u', V = A u''), through w' itself,
-    w (d w = r d w') and the frame's rotation (d theta = s Lam d w', rho, U, V turning with it):
-      -rho^ - r (R(rho) + 2 U^) - s (K rho^ + 2 w^ U^ + V^) Lam,
-    R(rho) = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) E, K = w'^ + w^ w^."""
-    mul_hat(kmat, rho, t1)
-    wu = w[0] * u_r[0] + w[1] * u_r[1] + w[2] * u_r[2]
-    for i in range(3):
-        for j in range(3):
-            t1[i, j] += 2.0 * u_r[i] * w[j]          # w^ U^ = U w^T - (w . U) E
-        t1[i, i] -= 2.0 * wu
-    t1[0, 1] -= v_r[2]
-    t1[0, 2] += v_r[1]
-    t1[1, 0] += v_r[2]
-    t1[1, 2] -= v_r[0]
-    t1[2, 0] -= v_r[1]
-    t1[2, 1] += v_r[0]
-    matmul_into(t1, lam, t2)
-    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = -r * (2.0 * rho[i] * w[j] - w[i] * rho[j]) - s * t2[i, j]
-        out[i, i] += r * wr
-    for i in range(3):                               # -rho^ - 2 r U^
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        out[i1, i2] += rho[i] + 2.0 * r * u_r[i]
-        out[i2, i1] -= rho[i] + 2.0 * r * u_r[i]
-
-
-@njit(cache=True)
 def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r,
                       scratch):
     """The Jacobian's w' columns (3:6) for a beam whose output carries no moment (docs/beam.md,
@@ -448,22 +418,12 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
                                             vecs[6], vecs[7])
     kmat, t1, t2, dq, dm, theta, th_l, dcol = (buf[0], buf[1], buf[2], buf[3], buf[4], buf[5],
                                                buf[6], buf[7])
-    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-    for i in range(3):
-        for j in range(3):
-            kmat[i, j] = w[i] * w[j]
-        kmat[i, i] -= ww
-    kmat[0, 1] -= wd[2]
-    kmat[0, 2] += wd[1]
-    kmat[1, 0] += wd[2]
-    kmat[1, 2] -= wd[0]
-    kmat[2, 0] -= wd[1]
-    kmat[2, 1] += wd[0]
+    kappa_matrix(w, wd, kmat)
     s_vec, rho_l = aux[0], aux[1]
     sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
     # a_O, the rotation slot (w' itself), q_O
-    _point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol, t1, t2)
-    _point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq, t1, t2)
+    point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol, t1, t2)
+    point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq, t1, t2)
     for i in range(3):
         for j in range(3):
             d_o[i, 3 + j] = dcol[i, j]
@@ -548,7 +508,7 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
         for l in range(m):
             f_l = aux[SUM_MODES + l]
             y_l = ends[l, 0]
-            _point_jacobian(aux[SUM_MODES + m + l], aux[SUM_MODES + 2 * m + l],
+            point_jacobian(aux[SUM_MODES + m + l], aux[SUM_MODES + 2 * m + l],
                             aux[SUM_MODES + 3 * m + l], w, kmat, lam, s, r, dcol, t1, t2)
             vec[0] = f_l[1] * g[2] - f_l[2] * g[1] + y_l * gq0
             vec[1] = f_l[2] * g[0] - f_l[0] * g[2] + y_l * gq1

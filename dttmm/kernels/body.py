@@ -13,7 +13,7 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 from numba import njit
 
-from .mat3 import matvec_into
+from .mat3 import matmul_into, matvec_into, mul_hat
 from .so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
@@ -281,3 +281,51 @@ def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in,
             u[r, PHI + c] += d_delta[r, c]
             shift -= d_delta[r, c] * z_star[PHI + c]
         u[r, CONST] += shift
+
+
+@njit(cache=True)
+def kappa_matrix(w, wd, out):
+    """out = K = wd^ + w^ w^, so that kappa(x) = wd x x + w x (w x x) = K x (the acceleration
+    of a body point at x from the reference point, docs/rigid_body.md)."""
+    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = w[i] * w[j]
+        out[i, i] -= ww
+    out[0, 1] -= wd[2]
+    out[0, 2] += wd[1]
+    out[1, 0] += wd[2]
+    out[1, 2] -= wd[0]
+    out[2, 0] -= wd[1]
+    out[2, 1] += wd[0]
+
+
+@njit(cache=True)
+def point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out, t1, t2):
+    """out = d r''/d w' for r'' = a_I + w' x rho + w x (w x rho) + 2 w x U + V (a point, or a
+    mass-weighted sum of points: it is linear in rho, U = A u', V = A u''), through w' itself,
+    w (d w = r d w') and the frame's rotation (d theta = s Lam d w', rho, U, V turning with it):
+      -rho^ - r (R(rho) + 2 U^) - s (K rho^ + 2 w^ U^ + V^) Lam,
+    R(rho) = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) E, K = w'^ + w^ w^."""
+    mul_hat(kmat, rho, t1)
+    wu = w[0] * u_r[0] + w[1] * u_r[1] + w[2] * u_r[2]
+    for i in range(3):
+        for j in range(3):
+            t1[i, j] += 2.0 * u_r[i] * w[j]          # w^ U^ = U w^T - (w . U) E
+        t1[i, i] -= 2.0 * wu
+    t1[0, 1] -= v_r[2]
+    t1[0, 2] += v_r[1]
+    t1[1, 0] += v_r[2]
+    t1[1, 2] -= v_r[0]
+    t1[2, 0] -= v_r[1]
+    t1[2, 1] += v_r[0]
+    matmul_into(t1, lam, t2)
+    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = -r * (2.0 * rho[i] * w[j] - w[i] * rho[j]) - s * t2[i, j]
+        out[i, i] += r * wr
+    for i in range(3):                               # -rho^ - 2 r U^
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        out[i1, i2] += rho[i] + 2.0 * r * u_r[i]
+        out[i2, i1] -= rho[i] + 2.0 * r * u_r[i]
