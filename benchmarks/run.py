@@ -230,9 +230,12 @@ def main(argv=None):
         print(n, fig[f"chain{n}_speedup_vs_newton_euler_at_1e-06m"], flush=True)
 
     sizes = [3, 10, 30, 100] if quick else [3, 10, 30, 100, 300, 1000]
-    rigid = [median_us_per_step(rigid_chain(n), 50 if n >= 300 else 200, 3) for n in sizes]
+    # ~0.1-0.5 s of stepping per size (shorter runs left the differences to the machine's noise)
+    rigid = [median_us_per_step(rigid_chain(n), max(100, min(2000, 60000 // n)), 5)
+             for n in sizes]
     beam_sizes = sizes[:3] if quick else sizes[:4]
-    beams = [median_us_per_step(stiff_cantilever(n), 50, 3) for n in beam_sizes]
+    beams = [median_us_per_step(stiff_cantilever(n), max(50, min(1000, 6000 // n)), 3)
+             for n in beam_sizes]
     ref_sizes = sizes[:3] if quick else sizes[:5]
     reference = [reference_us_per_rhs(rigid_chain(n)) for n in ref_sizes]
     for n, us in zip(sizes, rigid):
