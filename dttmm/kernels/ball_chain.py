@@ -237,6 +237,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     rot_prev = np.empty((3, 3))
     w = np.empty(3)
     wd = np.empty(3)
+    alpha = np.empty(3)
     load = np.empty(3)
     phi_g = np.zeros(3)
     body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
@@ -254,8 +255,9 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
         for i in range(3):
             aq[k, i] = z[2 * k + 1, i]
             aq[k, 3 + i] = z[2 * k + 1, 9 + i]
-            aq[n, i] = z[2 * n, i]
-            aq[n, 3 + i] = z[2 * n, 9 + i]
+    for i in range(3):
+        aq[n, i] = z[2 * n, i]
+        aq[n, 3 + i] = z[2 * n, 9 + i]
     max_iter = 0
     n_rec = 0
     for s in range(n_steps):
@@ -263,6 +265,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
                           phi_star[k])              # phi* by the constant-acceleration predictor
         if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
+            # (eta_dd_star first receives the predicted increment of eta)
             _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
             for i in range(n_eta):
                 w1e[i] = a1e[i] - c1 * eta[i]
@@ -323,11 +326,10 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                                 + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
                 pk = pmap[k]
                 for i in range(3):
-                    alpha = pk[i, 6]
+                    alpha[i] = pk[i, 6]
                     for c in range(6):
-                        alpha += pk[i, c] * aq[k, c]
-                    wd[i] = alpha
-                    x = (alpha - w1[k, i]) / c1     # back from w' = c1 phi + w1
+                        alpha[i] += pk[i, c] * aq[k, c]
+                    x = (alpha[i] - w1[k, i]) / c1  # back from w' = c1 phi + w1
                     phi_new[k, i] = x
                     change = max(change, abs(x - phi_star[k, i]))
                     if not np.isfinite(x):
@@ -336,7 +338,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     for i in range(mode_off[k], mode_off[k + 1]):
                         e = eta_map[i, 12]
                         for c in range(3):
-                            e += (eta_map[i, c] * aq[k, c] + eta_map[i, 3 + c] * wd[c]
+                            e += (eta_map[i, c] * aq[k, c] + eta_map[i, 3 + c] * alpha[c]
                                   + eta_map[i, 9 + c] * aq[k, 3 + c])
                         eta_dd_new[i] = e
                         change = max(change, abs(e - eta_dd_star[i]) / c1)

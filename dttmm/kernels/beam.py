@@ -6,10 +6,11 @@ internal unknowns, fixed by its modal equations; eliminating them leaves a 12 x 
 a rigid body's, plus the affine map eta'' = E [z_in; 1] used to recover them.
 
 The nonlinear relations are evaluated exactly (Gauss-Legendre quadrature along the beam) and
-linearized about the guess: the a_I, m_I, q_I columns analytically, the w' and eta'' columns by
-forward differences (docs/beam.md).  The affine map reproduces the relations at the guess, so
-the step's solution is that of the exact linearization up to the differences' error in the
-slope (~1e-10 relative), which is second order in the O(h^3) predictor error.
+linearized about the guess, every column written out (docs/beam.md) where the output carries no
+moment; at a weld and in the paper's scheme the w' and eta'' columns by forward differences.
+The affine map reproduces the relations at the guess, so the step's solution is that of the
+exact linearization (up to the differences' error in the slope, ~1e-10 relative, where they
+are used: second order in the O(h^3) predictor error).
 """
 import numpy as np
 from numba import njit
@@ -658,7 +659,8 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
-    # eta'' columns analytic unless the output carries a moment (welded) or its own history
+    # w' and eta'' columns written out unless the output carries a moment (welded) or its own
+    # history (the paper's scheme); there, forward differences below
     analytic = not welded and not (history[0] and not start)
     if analytic:
         w = w_n if start else work[21:24]
