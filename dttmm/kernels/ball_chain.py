@@ -17,7 +17,8 @@ from .mat3 import hat_mul, inv3, mul_hat
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into
-from .sweep import _solve_tip, fold_ball_body
+from .sweep import (fold_ball_body, riccati_reduced_recover, riccati_reduced_step,
+                    riccati_reduced_tip)
 
 
 @njit(cache=True)
@@ -154,31 +155,6 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf
 
 
 @njit(cache=True)
-def _riccati_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
-    """One forward step of the reduced Riccati sweep (kernels/sweep.py::riccati_reduced):
-    a = S q + P at the input; T = V_qa S + V_qq, tv = V_qa P + v_q; q_I = T^-1 (q_O - tv),
-    S' = (V_aa S + V_aq) T^-1, P' = V_aa P + v_a - S' tv.  Returns the determinant of T.
-    t, num: 3 x 3 scratch."""
-    for i in range(3):
-        tvi = v[3 + i, 6]
-        for j in range(3):
-            t[i, j] = (v[3 + i, 3 + j] + v[3 + i, 0] * s_in[0, j] + v[3 + i, 1] * s_in[1, j]
-                       + v[3 + i, 2] * s_in[2, j])
-            num[i, j] = (v[i, 3 + j] + v[i, 0] * s_in[0, j] + v[i, 1] * s_in[1, j]
-                         + v[i, 2] * s_in[2, j])
-            tvi += v[3 + i, j] * p_in[j]
-        t_vec[i] = tvi
-    det = inv3(t, t_inv)
-    _mm(num, t_inv, s_out)
-    for i in range(3):
-        pi = v[i, 6]
-        for j in range(3):
-            pi += v[i, j] * p_in[j] - s_out[i, j] * t_vec[j]
-        p_out[i] = pi
-    return det
-
-
-@njit(cache=True)
 def _write_stations(aq, phi, phi_g, z):
     """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
     ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
@@ -300,30 +276,18 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                 else:
                     ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
                                   aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
-                if _riccati_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
-                                 t_vec[k], buf[14], buf[15]) == 0.0:
+                if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1],
+                                        t_inv[k], t_vec[k], buf[14], buf[15]) == 0.0:
                     out_info[0] = SINGULAR
                     out_info[1] = s
                     out_info[2] = k + 1
                     out_info[3] = n_rec
                     return
-            if tip_pinned:
-                _, q = _solve_tip(np.ascontiguousarray(s_mat[n]), -p_vec[n], True)
-                aq[n, 3:6] = q
-                aq[n, 0:3] = 0.0
-            else:
-                aq[n, 0:3] = p_vec[n]
-                aq[n, 3:6] = 0.0
+            riccati_reduced_tip(tip_pinned, s_mat[n], p_vec[n], aq[n])
             change = 0.0
             finite = True
             for k in range(n - 1, -1, -1):
-                for i in range(3):
-                    aq[k, 3 + i] = (t_inv[k, i, 0] * (aq[k + 1, 3] - t_vec[k, 0])
-                                    + t_inv[k, i, 1] * (aq[k + 1, 4] - t_vec[k, 1])
-                                    + t_inv[k, i, 2] * (aq[k + 1, 5] - t_vec[k, 2]))
-                for i in range(3):
-                    aq[k, i] = (s_mat[k, i, 0] * aq[k, 3] + s_mat[k, i, 1] * aq[k, 4]
-                                + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
+                riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq)
                 pk = pmap[k]
                 for i in range(3):
                     alpha[i] = pk[i, 6]

@@ -301,6 +301,57 @@ def fold_ball_body(u, v, phi_map):
 
 
 @njit(cache=True)
+def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
+    """One body of the reduced Riccati sweep, a = S q + P at its input -> at its output:
+    q_I = T^-1 (q_O - tv), T = V_qa S + V_qq, tv = V_qa P + v_q;
+    a_O = S' q_O + P', S' = (V_aa S + V_aq) T^-1, P' = V_aa P + v_a - S' tv.
+    v (6, 7); t, num: 3 x 3 scratch.  Returns det T (0: singular)."""
+    for i in range(3):
+        tvi = v[3 + i, 6]
+        for j in range(3):
+            t[i, j] = (v[3 + i, 3 + j] + v[3 + i, 0] * s_in[0, j] + v[3 + i, 1] * s_in[1, j]
+                       + v[3 + i, 2] * s_in[2, j])
+            num[i, j] = (v[i, 3 + j] + v[i, 0] * s_in[0, j] + v[i, 1] * s_in[1, j]
+                         + v[i, 2] * s_in[2, j])
+            tvi += v[3 + i, j] * p_in[j]
+        t_vec[i] = tvi
+    det = inv3(t, t_inv)
+    if det == 0.0:
+        return det
+    matmul_into(num, t_inv, s_out)
+    for i in range(3):
+        pi = v[i, 6]
+        for j in range(3):
+            pi += v[i, j] * p_in[j] - s_out[i, j] * t_vec[j]
+        p_out[i] = pi
+    return det
+
+
+@njit(cache=True)
+def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
+    """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned)."""
+    if tip_pinned:
+        _, q = _solve_tip(np.ascontiguousarray(s_tip), -p_tip, True)
+        aq_tip[3:6] = q
+        aq_tip[0:3] = 0.0
+    else:
+        aq_tip[0:3] = p_tip
+        aq_tip[3:6] = 0.0
+
+
+@njit(cache=True)
+def riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq):
+    """[a; q] at body k's input from its output's: q_I = T^-1 (q_O - tv), a_I = S q_I + P."""
+    for i in range(3):
+        aq[k, 3 + i] = (t_inv[k, i, 0] * (aq[k + 1, 3] - t_vec[k, 0])
+                        + t_inv[k, i, 1] * (aq[k + 1, 4] - t_vec[k, 1])
+                        + t_inv[k, i, 2] * (aq[k + 1, 5] - t_vec[k, 2]))
+    for i in range(3):
+        aq[k, i] = (s_mat[k, i, 0] * aq[k, 3] + s_mat[k, i, 1] * aq[k, 4]
+                    + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
+
+
+@njit(cache=True)
 def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output.
     Tip: q = 0 (free) or a = 0 (tip_pinned)."""
@@ -310,43 +361,12 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     t = np.empty((3, 3))
     num = np.empty((3, 3))
     for k in range(n):
-        # q_I = T^-1 (q_O - tv), T = V_qa S + V_qq, tv = V_qa P + v_q;
-        # a_O = S' q_O + P', S' = (V_aa S + V_aq) T^-1, P' = V_aa P + v_a - S' tv
-        sk, pk, vk = s_mat[k], p_vec[k], v[k]
-        for i in range(3):
-            tvi = vk[3 + i, 6]
-            for j in range(3):
-                t[i, j] = (vk[3 + i, 3 + j] + vk[3 + i, 0] * sk[0, j] + vk[3 + i, 1] * sk[1, j]
-                           + vk[3 + i, 2] * sk[2, j])
-                num[i, j] = (vk[i, 3 + j] + vk[i, 0] * sk[0, j] + vk[i, 1] * sk[1, j]
-                             + vk[i, 2] * sk[2, j])
-                tvi += vk[3 + i, j] * pk[j]
-            t_vec[k, i] = tvi
-        ti = t_inv[k]
-        if inv3(t, ti) == 0.0:
+        if riccati_reduced_step(v[k], s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
+                                t_vec[k], t, num) == 0.0:
             return k + 1
-        s_new = s_mat[k + 1]
-        matmul_into(num, ti, s_new)
-        for i in range(3):
-            pi = vk[i, 6]
-            for j in range(3):
-                pi += vk[i, j] * pk[j] - s_new[i, j] * t_vec[k, j]
-            p_vec[k + 1, i] = pi
-    if tip_pinned:
-        _, q = _solve_tip(np.ascontiguousarray(s_mat[n]), -p_vec[n], True)
-        aq[n, 3:6] = q
-        aq[n, 0:3] = 0.0
-    else:
-        aq[n, 0:3] = p_vec[n]
-        aq[n, 3:6] = 0.0
+    riccati_reduced_tip(tip_pinned, s_mat[n], p_vec[n], aq[n])
     for k in range(n - 1, -1, -1):
-        for i in range(3):
-            aq[k, 3 + i] = (t_inv[k, i, 0] * (aq[k + 1, 3] - t_vec[k, 0])
-                            + t_inv[k, i, 1] * (aq[k + 1, 4] - t_vec[k, 1])
-                            + t_inv[k, i, 2] * (aq[k + 1, 5] - t_vec[k, 2]))
-        for i in range(3):
-            aq[k, i] = (s_mat[k, i, 0] * aq[k, 3] + s_mat[k, i, 1] * aq[k, 4]
-                        + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
+        riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq)
     return 0
 
 
