@@ -16,7 +16,7 @@ from .body import kappa_matrix, point_jacobian
 from .mat3 import hat_mul, inv3, mul_hat
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
-    _offsets_into
+    _offsets_into, report
 from .sweep import (fold_ball_body, riccati_reduced_recover, riccati_reduced_step,
                     riccati_reduced_tip)
 
@@ -278,10 +278,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                                   aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
                 if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1],
                                         t_inv[k], t_vec[k], buf[14], buf[15]) == 0.0:
-                    out_info[0] = SINGULAR
-                    out_info[1] = s
-                    out_info[2] = k + 1
-                    out_info[3] = n_rec
+                    report(out_info, SINGULAR, s, k + 1, n_rec)
                     return
             riccati_reduced_tip(tip_pinned, s_mat[n], p_vec[n], aq[n])
             change = 0.0
@@ -307,9 +304,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                         eta_dd_new[i] = e
                         change = max(change, abs(e - eta_dd_star[i]) / c1)
             if not finite:
-                out_info[0] = NOT_FINITE
-                out_info[1] = s
-                out_info[3] = n_rec
+                report(out_info, NOT_FINITE, s, 0, n_rec)
                 return
             max_iter = max(max_iter, it)
             if it == newton_max or change <= newton_tol:
@@ -335,9 +330,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             if not np.isfinite(eta_d[i]):
                 finite = False
         if not finite:
-            out_info[0] = NOT_FINITE
-            out_info[1] = s
-            out_info[3] = n_rec
+            report(out_info, NOT_FINITE, s, 0, n_rec)
             return
         if (s + 1) % record_every == 0:
             _ground_increment(g_rot, s, phi_g)
@@ -351,7 +344,4 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     if n_steps > 0:
         _ground_increment(g_rot, n_steps - 1, phi_g)
         _write_stations(aq, phi_new, phi_g, z)
-    out_info[0] = OK
-    out_info[1] = n_steps
-    out_info[2] = max_iter
-    out_info[3] = n_rec
+    report(out_info, OK, n_steps, max_iter, n_rec)

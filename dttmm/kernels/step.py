@@ -117,6 +117,17 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 
 
 @njit(cache=True)
+def report(out_info, status, step, detail, n_rec):
+    """The time loops' outcome in out_info: [status, the failing step (or the steps taken),
+    detail (the singular element's code for SINGULAR, the most Newton iterations used for OK,
+    0 for NOT_FINITE), samples recorded]; out_info[4] (unconverged steps) is the loop's own."""
+    out_info[0] = status
+    out_info[1] = step
+    out_info[2] = detail
+    out_info[3] = n_rec
+
+
+@njit(cache=True)
 def _all_finite(a):
     for x in a.flat:
         if not np.isfinite(x):
@@ -414,18 +425,13 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                             phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
                             torque[s], False, rot, w3, beams, modal, stations)
             if not _all_finite(u):
-                out_info[0] = NOT_FINITE
-                out_info[1] = s
-                out_info[3] = n_rec
+                report(out_info, NOT_FINITE, s, 0, n_rec)
                 return
             status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
                             sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
                             red_aq, dir_z, dir_o, z)
             if status != 0:
-                out_info[0] = SINGULAR
-                out_info[1] = s
-                out_info[2] = status
-                out_info[3] = n_rec
+                report(out_info, SINGULAR, s, status, n_rec)
                 return
             _modal_accelerations(beams, eta_map, z, eta_dd_new)
             # back from angular-acceleration to phi slots
@@ -498,9 +504,7 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             if not np.all(np.isfinite(eta_d)):
                 finite = False
         if not finite:
-            out_info[0] = NOT_FINITE
-            out_info[1] = s
-            out_info[3] = n_rec
+            report(out_info, NOT_FINITE, s, 0, n_rec)
             return
         if (s + 1) % record_every == 0:
             rec_rot[n_rec] = rot
@@ -515,7 +519,4 @@ def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
                 rec_st_v[n_rec] = st_v
                 rec_c_v[n_rec] = c_v
             n_rec += 1
-    out_info[0] = OK
-    out_info[1] = n_steps
-    out_info[2] = max_iter
-    out_info[3] = n_rec
+    report(out_info, OK, n_steps, max_iter, n_rec)
