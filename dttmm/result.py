@@ -208,8 +208,18 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                          f"(got {eta.shape[1]} and {eta_dot.shape[1]})")
     kinetic, potential = np.zeros(n_t), np.zeros(n_t)
     mode_off = np.concatenate([[0], np.cumsum(n_modes)])
+    rigid = np.nonzero(model.body_kind != BEAM)[0]     # every rigid body at once
+    if len(rigid):
+        p = model.body_params[rigid]
+        a = rotation[:, rigid]
+        rho_c = np.einsum("tkij,kj->tki", a, p[:, TO_MASS_CENTER])
+        v_c = v_in[:, rigid] + np.cross(omega[:, rigid], rho_c)
+        w_body = np.einsum("tkji,tkj->tki", a, omega[:, rigid])          # A^T w
+        kinetic += 0.5 * np.einsum("k,tki,tki->t", p[:, MASS], v_c, v_c)
+        kinetic += 0.5 * np.einsum("tki,kij,tkj->t", w_body,
+                                   model.body_mass_center_inertia[rigid], w_body)
+        potential -= np.einsum("k,tki,i->t", p[:, MASS], r_in[:, rigid] + rho_c, model.gravity)
     for k in range(model.n_bodies):
-        p = model.body_params[k]
         a = rotation[:, k]
         j0, j1 = mode_off[k], mode_off[k + 1]
         if model.body_kind[k] == BEAM:
@@ -218,14 +228,6 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                                       model.gravity)
             kinetic += t_k
             potential += v_k
-        else:
-            rho_c = a @ p[TO_MASS_CENTER]
-            v_c = v_in[:, k] + np.cross(omega[:, k], rho_c)
-            w_body = np.einsum("tji,tj->ti", a, omega[:, k])          # A^T w
-            kinetic += 0.5 * p[MASS] * np.einsum("ti,ti->t", v_c, v_c)
-            kinetic += 0.5 * np.einsum("ti,ij,tj->t", w_body, model.body_mass_center_inertia[k],
-                                       w_body)
-            potential -= p[MASS] * (r_in[:, k] + rho_c) @ model.gravity
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
             for i in range(n_t):                # (a log per state: elastic hinges only)
