@@ -12,8 +12,9 @@ from numba import njit
 
 from ..elements import BEAM
 from .beam import beam_transfer
-from .body import kappa_matrix, point_jacobian
-from .mat3 import hat_mul, inv3, mul_hat
+from .body import kappa_values, rigid_point_jacobian_values
+from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt, t_mul_hat,
+                   t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into, report
@@ -31,127 +32,91 @@ def _mm(a, b, out):
 
 
 @njit(cache=True)
-def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap, buf, vec):
+def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     """Body k's reduced map in angular-acceleration slots (docs/assembly.md, "The fused
     ball-chain step"), linearized about the guess (phi*, a_I*, q_I*):
       [a_O; q_O] = v [a_I; q_I; 1],   alpha = pmap [a_I; q_I; 1]  (the angular acceleration).
     p: body parameter row (mass, l_IC, l_IO, J_I); rot, lam: A* and J_l(phi*); w, wd: angular
     velocity and acceleration at phi*; s = 1/c1, r = c3/c1 (d w / d alpha = r I, d phi / d alpha
-    = s I); load = M g + F at the mass centre, torque applied; buf (14, 3, 3), vec (12, 3)
-    scratch."""
+    = s I); load f = M g + F at the mass centre, torque applied.  Written on values
+    (kernels/mat3.py's tuples): every intermediate stays in registers."""
     mass = p[0]
-    j_body = p[7:16].reshape((3, 3))
-    rho, rho_c, kap_o, kap_c, q_o, m_o, jw, jwd, ext, arm, r_m, zero = (
-        vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6], vec[7], vec[8], vec[9], vec[10],
-        vec[11])
-    kmat, n_o, n_c, d_o, d_c, d_m, jm, t1, t2, b, g, p_q, p_a, _ = (
-        buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8], buf[9], buf[10],
-        buf[11], buf[12], buf[13])
-    for i in range(3):
-        rho[i] = rot[i, 0] * p[4] + rot[i, 1] * p[5] + rot[i, 2] * p[6]        # A* l_IO
-        rho_c[i] = rot[i, 0] * p[1] + rot[i, 1] * p[2] + rot[i, 2] * p[3]      # A* l_IC
-    kappa_matrix(w, wd, kmat)                   # kappa(x) = K x = wd x x + w x (w x x)
-    for i in range(3):
-        kap_o[i] = kmat[i, 0] * rho[0] + kmat[i, 1] * rho[1] + kmat[i, 2] * rho[2]
-        kap_c[i] = kmat[i, 0] * rho_c[0] + kmat[i, 1] * rho_c[1] + kmat[i, 2] * rho_c[2]
-    # d rho / d phi = -rho^ Lam = -N_o; d kappa / d alpha = -rho^ - s K N_o - r R(rho)
-    # (a point of a rigid body: point_jacobian without deformation rates)
-    hat_mul(rho, lam, n_o)
-    hat_mul(rho_c, lam, n_c)
-    zero[:] = 0.0
-    point_jacobian(rho, zero, zero, w, kmat, lam, s, r, d_o, t1, t2)
-    point_jacobian(rho_c, zero, zero, w, kmat, lam, s, r, d_c, t1, t2)
+    a = t_of_mat(rot)
+    lm = t_of_mat(lam)
+    w_ = t_of_vec(w)
+    wd_ = t_of_vec(wd)
+    a_in = t_of_vec(a_i)
+    f = t_of_vec(load)
+    rho = t_mv(a, (p[4], p[5], p[6]))                      # A* l_IO
+    rho_c = t_mv(a, (p[1], p[2], p[3]))                    # A* l_IC
+    arm = t_lin3(1.0, rho, -1.0, rho_c)
+    kmat = kappa_values(w_, wd_)                            # kappa(x) = K x
+    kap_o = t_mv(kmat, rho)
+    kap_c = t_mv(kmat, rho_c)
+    d_o = rigid_point_jacobian_values(rho, w_, kmat, lm, s, r)
+    d_c = rigid_point_jacobian_values(rho_c, w_, kmat, lm, s, r)
     # J = A* J_I A*^T, and the moment relation's values at the guess (docs/rigid_body.md):
-    # m_O = -rho x q_O + rho_C x load + torque - (J wd + w x J w + M rho_C x a_I)
-    _mm(rot, j_body, t1)
+    # q_O = q_I + f - M (a_I + kappa_C),
+    # m_O = -rho x q_O + rho_C x f + torque - (J w' + w x J w + M rho_C x a_I)
+    jm = t_mmt(t_mm(a, (p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15])), a)
+    jw = t_mv(jm, w_)
+    jwd = t_mv(jm, wd_)
+    q_o = (q_i[0] + f[0] - mass * (a_in[0] + kap_c[0]), q_i[1] + f[1] - mass * (a_in[1] + kap_c[1]),
+           q_i[2] + f[2] - mass * (a_in[2] + kap_c[2]))
+    m_1 = t_cross(rho_c, f)
+    m_2 = t_cross(rho, q_o)
+    m_3 = t_cross(w_, jw)
+    m_4 = t_cross(rho_c, a_in)
+    m_o = (m_1[0] - m_2[0] + torque[0] - jwd[0] - m_3[0] - mass * m_4[0],
+           m_1[1] - m_2[1] + torque[1] - jwd[1] - m_3[1] - mass * m_4[1],
+           m_1[2] - m_2[2] + torque[2] - jwd[2] - m_3[2] - mass * m_4[2])
+    # D_m = M rho^ D_c - J - r (w^ J - (J w)^) + s [B - q_O^ rho^ + (f - M a_I)^ rho_C^] Lam,
+    # B = (J w')^ - J w'^ - w^ (J w^ - (J w)^);  x^ y^ = y x^T - (x . y) E
+    t1 = t_lin9(1.0, t_mul_hat(jm, w_), -1.0, t_hat(jw))
+    b = t_lin9(1.0, t_lin9(1.0, t_hat(jwd), -1.0, t_mul_hat(jm, wd_)), -1.0, t_hat_mul(w_, t1))
+    ext = (f[0] - mass * a_in[0], f[1] - mass * a_in[1], f[2] - mass * a_in[2])
+    q_rho = t_plus_diag(t_outer(rho, q_o), -(q_o[0] * rho[0] + q_o[1] * rho[1] + q_o[2] * rho[2]))
+    e_rho = t_plus_diag(t_outer(rho_c, ext),
+                        -(ext[0] * rho_c[0] + ext[1] * rho_c[1] + ext[2] * rho_c[2]))
+    inner = t_mm(t_lin9(1.0, t_lin9(1.0, b, -1.0, q_rho), 1.0, e_rho), lm)
+    d_m = t_lin9(mass, t_hat_mul(rho, d_c), s, inner)
+    d_m = t_lin9(1.0, d_m, -1.0, jm)
+    d_m = t_lin9(1.0, d_m, -r, t_lin9(1.0, t_hat_mul(w_, jm), -1.0, t_hat(jw)))
+    # fold (m_I = m_O = 0): 0 = r_m - rho^ q_I + M (rho - rho_C)^ a_I + D_m (alpha - w'),
+    # r_m = m_O* + rho^ q_I* - M (rho - rho_C)^ a_I*:  alpha = P_a a_I + P_q q_I + w' - G r_m
+    det, g = t_inverse(d_m)
+    if det == 0.0:
+        g = (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan)
+        # (reported by the sweep's finite check)
+    m_5 = t_cross(rho, (q_i[0], q_i[1], q_i[2]))
+    m_6 = t_cross(arm, a_in)
+    y = t_mv(g, (m_o[0] + m_5[0] - mass * m_6[0], m_o[1] + m_5[1] - mass * m_6[1],
+                 m_o[2] + m_5[2] - mass * m_6[2]))              # G r_m
+    p_q = t_mul_hat(g, rho)                                     # G rho^
+    p_a = t_mul_hat(g, arm)                                     # G (rho - rho_C)^
     for i in range(3):
         for j in range(3):
-            jm[i, j] = t1[i, 0] * rot[j, 0] + t1[i, 1] * rot[j, 1] + t1[i, 2] * rot[j, 2]
-    for i in range(3):
-        jw[i] = jm[i, 0] * w[0] + jm[i, 1] * w[1] + jm[i, 2] * w[2]
-        jwd[i] = jm[i, 0] * wd[0] + jm[i, 1] * wd[1] + jm[i, 2] * wd[2]
-        q_o[i] = q_i[i] + load[i] - mass * (a_i[i] + kap_c[i])
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        m_o[i] = (-(rho[i1] * q_o[i2] - rho[i2] * q_o[i1])
-                  + rho_c[i1] * load[i2] - rho_c[i2] * load[i1] + torque[i] - jwd[i]
-                  - (w[i1] * jw[i2] - w[i2] * jw[i1])
-                  - mass * (rho_c[i1] * a_i[i2] - rho_c[i2] * a_i[i1]))
-    # d m_O / d alpha = M rho^ D_c - J - r (w^ J - (J w)^)
-    #   + s [-q_O^ N_o + (load - M a_I)^ N_c + B Lam],  B = (J wd)^ - J wd^ - w^ (J w^ - (J w)^)
-    mul_hat(jm, w, t1)                          # J w^
-    t1[0, 1] += jw[2]                           # J w^ - (J w)^
-    t1[0, 2] -= jw[1]
-    t1[1, 0] -= jw[2]
-    t1[1, 2] += jw[0]
-    t1[2, 0] += jw[1]
-    t1[2, 1] -= jw[0]
-    hat_mul(w, t1, t2)                          # w^ (J w^ - (J w)^)
-    mul_hat(jm, wd, b)
+            pmap[i, j] = -mass * p_a[3 * i + j]
+            pmap[i, 3 + j] = p_q[3 * i + j]
+        pmap[i, 6] = wd[i] - y[i]
+    # a_O = a_I + kappa_O + D_o (alpha - w'),  q_O = q_I + f - M a_I - M kappa_C - M D_c (alpha - w')
+    dog_a = t_mul_hat(t_mm(d_o, g), arm)
+    dog_r = t_mul_hat(t_mm(d_o, g), rho)
+    dcg_a = t_mul_hat(t_mm(d_c, g), arm)
+    dcg_r = t_mul_hat(t_mm(d_c, g), rho)
+    d_o_y = t_mv(d_o, y)
+    d_c_y = t_mv(d_c, y)
     for i in range(3):
         for j in range(3):
-            b[i, j] = -b[i, j] - t2[i, j]
-    b[0, 1] -= jwd[2]
-    b[0, 2] += jwd[1]
-    b[1, 0] += jwd[2]
-    b[1, 2] -= jwd[0]
-    b[2, 0] -= jwd[1]
-    b[2, 1] += jwd[0]
-    _mm(b, lam, t1)                             # B Lam
-    hat_mul(q_o, n_o, t2)
-    for i in range(3):
-        for j in range(3):
-            t1[i, j] -= t2[i, j]
-    for i in range(3):
-        ext[i] = load[i] - mass * a_i[i]
-    hat_mul(ext, n_c, t2)
-    hat_mul(rho, d_c, b)                        # rho^ D_c
-    for i in range(3):
-        for j in range(3):
-            d_m[i, j] = mass * b[i, j] + s * (t1[i, j] + t2[i, j]) - jm[i, j]
-    hat_mul(w, jm, t1)                          # w^ J - (J w)^
-    t1[0, 1] += jw[2]
-    t1[0, 2] -= jw[1]
-    t1[1, 0] -= jw[2]
-    t1[1, 2] += jw[0]
-    t1[2, 0] += jw[1]
-    t1[2, 1] -= jw[0]
-    for i in range(3):
-        for j in range(3):
-            d_m[i, j] -= r * t1[i, j]
-    # fold (m_I = m_O = 0): 0 = r_m - rho^ q_I + M (rho - rho_C)^ a_I + D_m (alpha - wd),
-    # r_m = m_O* + rho^ q_I* - M (rho - rho_C)^ a_I*
-    if inv3(d_m, g) == 0.0:
-        g[:, :] = np.nan                        # reported by the sweep's finite check
-    mul_hat(g, rho, p_q)                        # alpha = P_a a_I + P_q q_I + p0
-    for i in range(3):
-        arm[i] = rho[i] - rho_c[i]
-    mul_hat(g, arm, p_a)
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        r_m[i] = (m_o[i] + rho[i1] * q_i[i2] - rho[i2] * q_i[i1]
-                  - mass * (arm[i1] * a_i[i2] - arm[i2] * a_i[i1]))
-    for i in range(3):
-        g_r = g[i, 0] * r_m[0] + g[i, 1] * r_m[1] + g[i, 2] * r_m[2]
-        for j in range(3):
-            pmap[i, j] = -mass * p_a[i, j]
-            pmap[i, 3 + j] = p_q[i, j]
-        pmap[i, 6] = wd[i] - g_r
-    # [a_O; q_O]: a_O = a_I + kappa_O + D_o (alpha - wd),
-    #             q_O = q_I + load - M a_I - M kappa_C - M D_c (alpha - wd)
-    for i in range(3):
-        for c in range(7):
-            do = d_o[i, 0] * pmap[0, c] + d_o[i, 1] * pmap[1, c] + d_o[i, 2] * pmap[2, c]
-            dc = d_c[i, 0] * pmap[0, c] + d_c[i, 1] * pmap[1, c] + d_c[i, 2] * pmap[2, c]
-            v[i, c] = do
-            v[3 + i, c] = -mass * dc
+            v[i, j] = -mass * dog_a[3 * i + j]
+            v[i, 3 + j] = dog_r[3 * i + j]
+            v[3 + i, j] = mass * mass * dcg_a[3 * i + j]
+            v[3 + i, 3 + j] = -mass * dcg_r[3 * i + j]
         v[i, i] += 1.0
         v[3 + i, i] -= mass
         v[3 + i, 3 + i] += 1.0
-        shift_o = d_o[i, 0] * wd[0] + d_o[i, 1] * wd[1] + d_o[i, 2] * wd[2]
-        shift_c = d_c[i, 0] * wd[0] + d_c[i, 1] * wd[1] + d_c[i, 2] * wd[2]
-        v[i, 6] += kap_o[i] - shift_o
-        v[3 + i, 6] += load[i] - mass * kap_c[i] + mass * shift_c
+        v[i, 6] = kap_o[i] - d_o_y[i]
+        v[3 + i, 6] = f[i] - mass * kap_c[i] + mass * d_c_y[i]
 
 
 @njit(cache=True)
@@ -205,8 +170,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     phi_new = np.empty((n, 3))
     pmap = np.empty((n, 3, 7))
     v = np.empty((6, 7))
-    buf = np.empty((16, 3, 3))
-    vec = np.empty((12, 3))
+    buf = np.empty((2, 3, 3))
     e3 = np.empty((3, 3))
     rot_star = np.empty((3, 3))
     lam = np.empty((3, 3))
@@ -275,9 +239,9 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     fold_ball_body(u, v, pmap[k])
                 else:
                     ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
-                                  aq[k, 3:6], load, torque[s, k], v, pmap[k], buf, vec)
+                                  aq[k, 3:6], load, torque[s, k], v, pmap[k])
                 if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1],
-                                        t_inv[k], t_vec[k], buf[14], buf[15]) == 0.0:
+                                        t_inv[k], t_vec[k], buf[0], buf[1]) == 0.0:
                     report(out_info, SINGULAR, s, k + 1, n_rec)
                     return
             riccati_reduced_tip(tip_pinned, s_mat[n], p_vec[n], aq[n])

@@ -423,8 +423,8 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
     s_vec, rho_l = aux[0], aux[1]
     sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
     # a_O, the rotation slot (w' itself), q_O
-    point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol, t1, t2)
-    point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq, t1, t2)
+    point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol)
+    point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq)
     for i in range(3):
         for j in range(3):
             d_o[i, 3 + j] = dcol[i, j]
@@ -510,7 +510,7 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
             f_l = aux[SUM_MODES + l]
             y_l = ends[l, 0]
             point_jacobian(aux[SUM_MODES + m + l], aux[SUM_MODES + 2 * m + l],
-                            aux[SUM_MODES + 3 * m + l], w, kmat, lam, s, r, dcol, t1, t2)
+                            aux[SUM_MODES + 3 * m + l], w, kmat, lam, s, r, dcol)
             vec[0] = f_l[1] * g[2] - f_l[2] * g[1] + y_l * gq0
             vec[1] = f_l[2] * g[0] - f_l[0] * g[2] + y_l * gq1
             vec[2] = f_l[0] * g[1] - f_l[1] * g[0] + y_l * gq2

@@ -13,7 +13,8 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 from numba import njit
 
-from .mat3 import matmul_into, matvec_into, mul_hat
+from .mat3 import (matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_of_mat, t_of_vec, t_outer,
+                   t_plus_diag)
 from .so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
@@ -284,48 +285,59 @@ def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in,
 
 
 @njit(cache=True)
-def kappa_matrix(w, wd, out):
-    """out = K = wd^ + w^ w^, so that kappa(x) = wd x x + w x (w x x) = K x (the acceleration
-    of a body point at x from the reference point, docs/rigid_body.md)."""
-    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = w[i] * w[j]
-        out[i, i] -= ww
-    out[0, 1] -= wd[2]
-    out[0, 2] += wd[1]
-    out[1, 0] += wd[2]
-    out[1, 2] -= wd[0]
-    out[2, 0] -= wd[1]
-    out[2, 1] += wd[0]
+def kappa_values(w, wd):
+    """K = wd^ + w^ w^ = w w^T - |w|^2 E + wd^ as a 9-tuple (kernels/mat3.py), so that
+    kappa(x) = wd x x + w x (w x x) = K x (the acceleration of a body point at x from the
+    reference point, docs/rigid_body.md)."""
+    return t_lin9(1.0, t_plus_diag(t_outer(w, w), -(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])),
+                  1.0, t_hat(wd))
 
 
 @njit(cache=True)
-def point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out, t1, t2):
-    """out = d r''/d w' for r'' = a_I + w' x rho + w x (w x rho) + 2 w x U + V (a point, or a
-    mass-weighted sum of points: it is linear in rho, U = A u', V = A u''), through w' itself,
-    w (d w = r d w') and the frame's rotation (d theta = s Lam d w', rho, U, V turning with it):
-      -rho^ - r (R(rho) + 2 U^) - s (K rho^ + 2 w^ U^ + V^) Lam,
-    R(rho) = (w x rho)^ + w^ rho^ = 2 rho w^T - w rho^T - (w . rho) E, K = w'^ + w^ w^."""
-    mul_hat(kmat, rho, t1)
-    wu = w[0] * u_r[0] + w[1] * u_r[1] + w[2] * u_r[2]
+def kappa_matrix(w, wd, out):
+    """out = K (kappa_values) as a 3 x 3 array."""
+    k = kappa_values(t_of_vec(w), t_of_vec(wd))
     for i in range(3):
         for j in range(3):
-            t1[i, j] += 2.0 * u_r[i] * w[j]          # w^ U^ = U w^T - (w . U) E
-        t1[i, i] -= 2.0 * wu
-    t1[0, 1] -= v_r[2]
-    t1[0, 2] += v_r[1]
-    t1[1, 0] += v_r[2]
-    t1[1, 2] -= v_r[0]
-    t1[2, 0] -= v_r[1]
-    t1[2, 1] += v_r[0]
-    matmul_into(t1, lam, t2)
-    wr = w[0] * rho[0] + w[1] * rho[1] + w[2] * rho[2]
+            out[i, j] = k[3 * i + j]
+
+
+@njit(cache=True)
+def _jacobian_terms(x, y, t, w, lam, s, r):
+    """-y^ - r R(x) - s t Lam, R(x) = 2 x w^T - w x^T - (w . x) E (point_jacobian_values)."""
+    out = t_lin9(-2.0 * r, t_outer(x, w), r, t_outer(w, x))
+    out = t_lin9(1.0, t_plus_diag(out, r * (w[0] * x[0] + w[1] * x[1] + w[2] * x[2])), -s,
+                 t_mm(t, lam))
+    return t_lin9(1.0, out, -1.0, t_hat(y))
+
+
+@njit(cache=True)
+def point_jacobian_values(x, u, v, w, kmat, lam, s, r):
+    """d r''/d w' for r'' = a_I + w' x x + w x (w x x) + 2 w x U + V (a point, or a
+    mass-weighted sum of points: it is linear in x, U = A u', V = A u''), through w' itself,
+    w (d w = r d w') and the frame's rotation (d theta = s Lam d w', x, U, V turning with it):
+      -x^ - r (R(x) + 2 U^) - s (K x^ + 2 w^ U^ + V^) Lam,
+    R(x) = (w x x)^ + w^ x^ = 2 x w^T - w x^T - (w . x) E, K = w'^ + w^ w^.
+    Every argument and the result on values (3- and 9-tuples, kernels/mat3.py)."""
+    # K x^ + 2 w^ U^ + V^,  w^ U^ = U w^T - (w . U) E
+    t = t_lin9(1.0, t_mul_hat(kmat, x), 2.0, t_outer(u, w))
+    t = t_lin9(1.0, t_plus_diag(t, -2.0 * (w[0] * u[0] + w[1] * u[1] + w[2] * u[2])), 1.0,
+               t_hat(v))
+    y = (x[0] + 2.0 * r * u[0], x[1] + 2.0 * r * u[1], x[2] + 2.0 * r * u[2])
+    return _jacobian_terms(x, y, t, w, lam, s, r)
+
+
+@njit(cache=True)
+def rigid_point_jacobian_values(x, w, kmat, lam, s, r):
+    """point_jacobian_values of a point of a rigid body (U = V = 0): -x^ - r R(x) - s K x^ Lam."""
+    return _jacobian_terms(x, x, t_mul_hat(kmat, x), w, lam, s, r)
+
+
+@njit(cache=True)
+def point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out):
+    """out = point_jacobian_values on 3 x 3 and 3-arrays."""
+    d = point_jacobian_values(t_of_vec(rho), t_of_vec(u_r), t_of_vec(v_r), t_of_vec(w),
+                              t_of_mat(kmat), t_of_mat(lam), s, r)
     for i in range(3):
         for j in range(3):
-            out[i, j] = -r * (2.0 * rho[i] * w[j] - w[i] * rho[j]) - s * t2[i, j]
-        out[i, i] += r * wr
-    for i in range(3):                               # -rho^ - 2 r U^
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        out[i1, i2] += rho[i] + 2.0 * r * u_r[i]
-        out[i2, i1] -= rho[i] + 2.0 * r * u_r[i]
+            out[i, j] = d[3 * i + j]

@@ -65,3 +65,115 @@ def mul_hat(a, v, out):
         out[i, 0] = a1 * v[2] - a2 * v[1]
         out[i, 1] = a2 * v[0] - a0 * v[2]
         out[i, 2] = a0 * v[1] - a1 * v[0]
+
+
+# --------------------------------------------------------------------------------------------
+# The same algebra on values: 3-vectors as 3-tuples, 3 x 3 matrices as row-major 9-tuples.
+# A kernel written with these keeps its intermediates in registers (no scratch arrays that the
+# compiler must assume may alias each other); used by kernels/ball_chain.py::ball_body_map.
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def t_of_mat(a):
+    """A 3 x 3 array as a 9-tuple."""
+    return (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
+
+
+@njit(cache=True)
+def t_of_vec(x):
+    """A 3-array as a 3-tuple."""
+    return (x[0], x[1], x[2])
+
+
+@njit(cache=True)
+def t_mm(a, b):
+    """a @ b."""
+    return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
+            a[0] * b[2] + a[1] * b[5] + a[2] * b[8], a[3] * b[0] + a[4] * b[3] + a[5] * b[6],
+            a[3] * b[1] + a[4] * b[4] + a[5] * b[7], a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
+            a[6] * b[0] + a[7] * b[3] + a[8] * b[6], a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
+            a[6] * b[2] + a[7] * b[5] + a[8] * b[8])
+
+
+@njit(cache=True)
+def t_mmt(a, b):
+    """a @ b^T."""
+    return (a[0] * b[0] + a[1] * b[1] + a[2] * b[2], a[0] * b[3] + a[1] * b[4] + a[2] * b[5],
+            a[0] * b[6] + a[1] * b[7] + a[2] * b[8], a[3] * b[0] + a[4] * b[1] + a[5] * b[2],
+            a[3] * b[3] + a[4] * b[4] + a[5] * b[5], a[3] * b[6] + a[4] * b[7] + a[5] * b[8],
+            a[6] * b[0] + a[7] * b[1] + a[8] * b[2], a[6] * b[3] + a[7] * b[4] + a[8] * b[5],
+            a[6] * b[6] + a[7] * b[7] + a[8] * b[8])
+
+
+@njit(cache=True)
+def t_mv(a, x):
+    """a @ x."""
+    return (a[0] * x[0] + a[1] * x[1] + a[2] * x[2], a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
+            a[6] * x[0] + a[7] * x[1] + a[8] * x[2])
+
+
+@njit(cache=True)
+def t_cross(x, y):
+    """x x y."""
+    return (x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0])
+
+
+@njit(cache=True)
+def t_hat_mul(v, b):
+    """v^ @ b: column j is v x b[:, j]."""
+    return (v[1] * b[6] - v[2] * b[3], v[1] * b[7] - v[2] * b[4], v[1] * b[8] - v[2] * b[5],
+            v[2] * b[0] - v[0] * b[6], v[2] * b[1] - v[0] * b[7], v[2] * b[2] - v[0] * b[8],
+            v[0] * b[3] - v[1] * b[0], v[0] * b[4] - v[1] * b[1], v[0] * b[5] - v[1] * b[2])
+
+
+@njit(cache=True)
+def t_mul_hat(a, v):
+    """a @ v^: row i is a[i] x v."""
+    return (a[1] * v[2] - a[2] * v[1], a[2] * v[0] - a[0] * v[2], a[0] * v[1] - a[1] * v[0],
+            a[4] * v[2] - a[5] * v[1], a[5] * v[0] - a[3] * v[2], a[3] * v[1] - a[4] * v[0],
+            a[7] * v[2] - a[8] * v[1], a[8] * v[0] - a[6] * v[2], a[6] * v[1] - a[7] * v[0])
+
+
+@njit(cache=True)
+def t_hat(v):
+    """v^ (v^ x = v x x)."""
+    return (0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+
+
+@njit(cache=True)
+def t_outer(x, y):
+    """x y^T."""
+    return (x[0] * y[0], x[0] * y[1], x[0] * y[2], x[1] * y[0], x[1] * y[1], x[1] * y[2],
+            x[2] * y[0], x[2] * y[1], x[2] * y[2])
+
+
+@njit(cache=True)
+def t_lin3(a, x, b, y):
+    """a x + b y (3-tuples)."""
+    return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2])
+
+
+@njit(cache=True)
+def t_lin9(a, x, b, y):
+    """a x + b y (9-tuples)."""
+    return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2],
+            a * x[3] + b * y[3], a * x[4] + b * y[4], a * x[5] + b * y[5],
+            a * x[6] + b * y[6], a * x[7] + b * y[7], a * x[8] + b * y[8])
+
+
+@njit(cache=True)
+def t_plus_diag(a, c):
+    """a + c E."""
+    return (a[0] + c, a[1], a[2], a[3], a[4] + c, a[5], a[6], a[7], a[8] + c)
+
+
+@njit(cache=True)
+def t_inverse(a):
+    """(det a, a^-1) by the adjugate (the inverse is not finite when det a = 0)."""
+    c00 = a[4] * a[8] - a[5] * a[7]
+    c01 = a[5] * a[6] - a[3] * a[8]
+    c02 = a[3] * a[7] - a[4] * a[6]
+    det = a[0] * c00 + a[1] * c01 + a[2] * c02
+    f = 1.0 / det if det != 0.0 else np.inf
+    return det, (c00 * f, (a[2] * a[7] - a[1] * a[8]) * f, (a[1] * a[5] - a[2] * a[4]) * f,
+                 c01 * f, (a[0] * a[8] - a[2] * a[6]) * f, (a[2] * a[3] - a[0] * a[5]) * f,
+                 c02 * f, (a[1] * a[6] - a[0] * a[7]) * f, (a[0] * a[4] - a[1] * a[3]) * f)
