@@ -15,9 +15,10 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from .body import kappa_matrix, point_jacobian
-from .mat3 import hat_mul, matmul_into, mul_hat
-from .so3 import expm_so3, hat, left_jacobian, log_so3
+from .body import kappa_values, point_jacobian_values
+from .mat3 import (matmul_into, t_cross, t_hat, t_hat_mul, t_lin9, t_mm, t_mul_hat, t_mv,
+                   t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
+from .so3 import expm_so3, left_jacobian, log_so3
 
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
 # int mu A u', int mu A u'', int mu rho x A u''; A u'(L), A u''(L); J = int mu (|rho|^2 E -
@@ -80,8 +81,10 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
     sums = aux.shape[0] > 4
     if sums:
         aux[4:] = 0.0
-    su, sv, sh = aux[SUM_U], aux[SUM_V], aux[SUM_H]
-    sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
+    # the fixed-size sums in scalars (kept in registers), written to aux after the loop
+    su0 = su1 = su2 = sv0 = sv1 = sv2 = sh0 = sh1 = sh2 = 0.0
+    j00 = j11 = j22 = j01 = j02 = j12 = 0.0
+    c00 = c01 = c02 = c10 = c11 = c12 = c20 = c21 = c22 = 0.0
     for j in range(xq.shape[0]):
         v = w_ = vd = wdd = vdd = wddd = 0.0
         for k in range(m):
@@ -131,31 +134,31 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
             vv0 = vdd * e20 + wddd * e30             # A u''
             vv1 = vdd * e21 + wddd * e31
             vv2 = vdd * e22 + wddd * e32
-            su[0] += c * u0
-            su[1] += c * u1
-            su[2] += c * u2
-            sv[0] += c * vv0
-            sv[1] += c * vv1
-            sv[2] += c * vv2
-            sh[0] += c * (r1 * vv2 - r2 * vv1)
-            sh[1] += c * (r2 * vv0 - r0 * vv2)
-            sh[2] += c * (r0 * vv1 - r1 * vv0)
+            su0 += c * u0
+            su1 += c * u1
+            su2 += c * u2
+            sv0 += c * vv0
+            sv1 += c * vv1
+            sv2 += c * vv2
+            sh0 += c * (r1 * vv2 - r2 * vv1)
+            sh1 += c * (r2 * vv0 - r0 * vv2)
+            sh2 += c * (r0 * vv1 - r1 * vv0)
             cr0, cr1, cr2 = c * r0, c * r1, c * r2
-            sj[0, 0] += cr1 * r1 + cr2 * r2          # J: |rho|^2 E - rho rho^T
-            sj[1, 1] += cr0 * r0 + cr2 * r2
-            sj[2, 2] += cr0 * r0 + cr1 * r1
-            sj[0, 1] -= cr0 * r1
-            sj[0, 2] -= cr0 * r2
-            sj[1, 2] -= cr1 * r2
-            sc[0, 0] += u0 * cr0                     # C: (A u') rho^T
-            sc[0, 1] += u0 * cr1
-            sc[0, 2] += u0 * cr2
-            sc[1, 0] += u1 * cr0
-            sc[1, 1] += u1 * cr1
-            sc[1, 2] += u1 * cr2
-            sc[2, 0] += u2 * cr0
-            sc[2, 1] += u2 * cr1
-            sc[2, 2] += u2 * cr2
+            j00 += cr1 * r1 + cr2 * r2               # J: |rho|^2 E - rho rho^T
+            j11 += cr0 * r0 + cr2 * r2
+            j22 += cr0 * r0 + cr1 * r1
+            j01 -= cr0 * r1
+            j02 -= cr0 * r2
+            j12 -= cr1 * r2
+            c00 += u0 * cr0                          # C: (A u') rho^T
+            c01 += u0 * cr1
+            c02 += u0 * cr2
+            c10 += u1 * cr0
+            c11 += u1 * cr1
+            c12 += u1 * cr2
+            c20 += u2 * cr0
+            c21 += u2 * cr1
+            c22 += u2 * cr2
             base = SUM_MODES
             for k in range(m):
                 y = modes[k, j]
@@ -175,7 +178,18 @@ def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w
                 vk[1] += cy * vv1
                 vk[2] += cy * vv2
     if sums:
-        sj[1, 0], sj[2, 0], sj[2, 1] = sj[0, 1], sj[0, 2], sj[1, 2]
+        aux[SUM_U, 0], aux[SUM_U, 1], aux[SUM_U, 2] = su0, su1, su2
+        aux[SUM_V, 0], aux[SUM_V, 1], aux[SUM_V, 2] = sv0, sv1, sv2
+        aux[SUM_H, 0], aux[SUM_H, 1], aux[SUM_H, 2] = sh0, sh1, sh2
+        sj = aux[SUM_J:SUM_J + 3]
+        sj[0, 0], sj[1, 1], sj[2, 2] = j00, j11, j22
+        sj[0, 1] = sj[1, 0] = j01
+        sj[0, 2] = sj[2, 0] = j02
+        sj[1, 2] = sj[2, 1] = j12
+        sc = aux[SUM_C:SUM_C + 3]
+        sc[0, 0], sc[0, 1], sc[0, 2] = c00, c01, c02
+        sc[1, 0], sc[1, 1], sc[1, 2] = c10, c11, c12
+        sc[2, 0], sc[2, 1], sc[2, 2] = c20, c21, c22
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -346,26 +360,21 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
       d a_O = I da,  d q_O = -M_b da + dq,  d m_O = (M_b rho_L^ - S^) da + dm - rho_L^ dq,
     and the modal rows through the inertia (P_k = int mu Y_k) and the end loads."""
     m = modes.shape[0]
-    e2 = rot[:, 1].copy()
-    e3 = rot[:, 2].copy()
-    s_vec = aux[0]
-    rho_l = aux[1]
+    e2 = (rot[0, 1], rot[1, 1], rot[2, 1])
+    e3 = (rot[0, 2], rot[1, 2], rot[2, 2])
     mass = 0.0
     for j in range(wq.shape[0]):
         mass += mu * wq[j]
-    rl_h = np.empty((3, 3))
-    hat(rho_l, rl_h)
-    s_h = np.empty((3, 3))
-    hat(s_vec, s_h)
-    dm_da = mass * rl_h - s_h
+    rl_h = t_hat(t_of_vec(aux[1]))                      # rho_L^
+    dm_da = t_lin9(mass, rl_h, -1.0, t_hat(t_of_vec(aux[0])))      # M_b rho_L^ - S^
     for i in range(3):
         d_o[i, i] = 1.0
         d_o[9 + i, i] = -mass
         d_o[9 + i, 9 + i] = 1.0
         d_o[6 + i, 6 + i] = 1.0
         for c in range(3):
-            d_o[6 + i, c] = dm_da[i, c]
-            d_o[6 + i, 9 + c] = -rl_h[i, c]
+            d_o[6 + i, c] = dm_da[3 * i + c]
+            d_o[6 + i, 9 + c] = -rl_h[3 * i + c]
     for k in range(m):
         p_k = 0.0
         for j in range(wq.shape[0]):
@@ -379,15 +388,15 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
             d_r[m + k, 9 + c] = y_l * e3[c]
         if welded:
             # the end moment m_O through A J_l e3 (v) and -A J_l e2 (w)
-            gv = aux[3]
-            gw = -aux[2]
+            gv = t_of_vec(aux[3])
+            gw = (-aux[2, 0], -aux[2, 1], -aux[2, 2])
             for c in range(3):
                 ga_v = ga_w = gq_v = gq_w = 0.0
                 for i in range(3):
-                    ga_v += gv[i] * dm_da[i, c]
-                    ga_w += gw[i] * dm_da[i, c]
-                    gq_v -= gv[i] * rl_h[i, c]
-                    gq_w -= gw[i] * rl_h[i, c]
+                    ga_v += gv[i] * dm_da[3 * i + c]
+                    ga_w += gw[i] * dm_da[3 * i + c]
+                    gq_v -= gv[i] * rl_h[3 * i + c]
+                    gq_w -= gw[i] * rl_h[3 * i + c]
                 d_r[k, c] += dy_l * ga_v
                 d_r[m + k, c] += dy_l * ga_w
                 d_r[k, 9 + c] += dy_l * gq_v
@@ -397,12 +406,11 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
 
 
 @njit(cache=True)
-def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r,
-                      scratch):
+def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r):
     """The Jacobian's w' columns (3:6) for a beam whose output carries no moment (docs/beam.md,
     "The w' columns"): every relation through w' itself, w (r = c3/c1) and the frame's rotation
     (s Lam, s = 1/c1; s = r = 0 at the consistent start), from the sums of beam_relations (aux):
-      d q_O = -D(S, int mu U, int mu V),   d a_O = D(rho_L, U_L, V_L)  (D: _point_jacobian)
+      d q_O = -D(S, int mu U, int mu V),   d a_O = D(rho_L, U_L, V_L)  (D: point_jacobian_values)
       d m_O = -rho_L^ d q_O - J + r Dw + s Theta Lam - d T,
         Dw    = -(w^ J - (J w)^) - 2 (tr C E - C)
         Theta = -q_O^ rho_L^ + (g - a_I)^ S^ + (J w')^ - J w'^ + w^ ((J w)^ - J w^)
@@ -410,116 +418,84 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
         T     = j_p L (e1 (e1 . w') + (e1 . w) w x e1),  e1 = A e1
       d residual_(plane, l) = g^T D(Q_l, int mu Y_l U, int mu Y_l V)
                               + s (F_l x g + Y_l(L) g x q_O)^T Lam + Y_l(L) g^T d q_O.
-    scratch: 99 entries."""
+    On values (3- and 9-tuples, kernels/mat3.py), like kernels/ball_chain.py::ball_body_map;
+    x^ y^ = y x^T - (x . y) E throughout."""
     m = ends.shape[0]
     jp = bp[4] * bp[0]
-    buf = scratch[0:72].reshape((8, 3, 3))
-    vecs = scratch[72:99].reshape((9, 3))
-    jw, jwd, cw, ga, wxe, exw, exwd, vec = (vecs[0], vecs[1], vecs[2], vecs[3], vecs[4], vecs[5],
-                                            vecs[6], vecs[7])
-    kmat, t1, t2, dq, dm, theta, th_l, dcol = (buf[0], buf[1], buf[2], buf[3], buf[4], buf[5],
-                                               buf[6], buf[7])
-    kappa_matrix(w, wd, kmat)
-    s_vec, rho_l = aux[0], aux[1]
-    sj, sc = aux[SUM_J:SUM_J + 3], aux[SUM_C:SUM_C + 3]
+    w_, wd_, lm = t_of_vec(w), t_of_vec(wd), t_of_mat(lam)
+    kmat = kappa_values(w_, wd_)
+    s_vec, rho_l = t_of_vec(aux[0]), t_of_vec(aux[1])
+    sj, sc = t_of_mat(aux[SUM_J:SUM_J + 3]), t_of_mat(aux[SUM_C:SUM_C + 3])
+    qo = t_of_vec(q_o)
     # a_O, the rotation slot (w' itself), q_O
-    point_jacobian(rho_l, aux[END_U], aux[END_V], w, kmat, lam, s, r, dcol)
-    point_jacobian(s_vec, aux[SUM_U], aux[SUM_V], w, kmat, lam, s, r, dq)
+    dcol = point_jacobian_values(rho_l, t_of_vec(aux[END_U]), t_of_vec(aux[END_V]), w_, kmat, lm,
+                                 s, r)
+    dq = t_scale9(-1.0, point_jacobian_values(s_vec, t_of_vec(aux[SUM_U]), t_of_vec(aux[SUM_V]),
+                                              w_, kmat, lm, s, r))
     for i in range(3):
         for j in range(3):
-            d_o[i, 3 + j] = dcol[i, j]
+            d_o[i, 3 + j] = dcol[3 * i + j]
             d_o[3 + i, 3 + j] = 1.0 if i == j else 0.0
-            dq[i, j] = -dq[i, j]
-            d_o[9 + i, 3 + j] = dq[i, j]
+            d_o[9 + i, 3 + j] = dq[3 * i + j]
     # m_O
-    e1 = rot[:, 0]
-    for i in range(3):
-        jw[i] = sj[i, 0] * w[0] + sj[i, 1] * w[1] + sj[i, 2] * w[2]
-        jwd[i] = sj[i, 0] * wd[0] + sj[i, 1] * wd[1] + sj[i, 2] * wd[2]
-        cw[i] = sc[i, 0] * w[0] + sc[i, 1] * w[1] + sc[i, 2] * w[2]
-        ga[i] = gravity[i] - a_i[i]
-    tr_c = sc[0, 0] + sc[1, 1] + sc[2, 2]
+    e1 = (rot[0, 0], rot[1, 0], rot[2, 0])
+    jw, jwd, cw = t_mv(sj, w_), t_mv(sj, wd_), t_mv(sc, w_)
+    ga = (gravity[0] - a_i[0], gravity[1] - a_i[1], gravity[2] - a_i[2])
+    tr_c = sc[0] + sc[4] + sc[8]
     e1w = e1[0] * w[0] + e1[1] * w[1] + e1[2] * w[2]
     e1wd = e1[0] * wd[0] + e1[1] * wd[1] + e1[2] * wd[2]
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        wxe[i] = w[i1] * e1[i2] - w[i2] * e1[i1]
-        exw[i] = -wxe[i]
-        exwd[i] = e1[i1] * wd[i2] - e1[i2] * wd[i1]
-    # Theta (the rotation's part), then times Lam
-    qr = q_o[0] * rho_l[0] + q_o[1] * rho_l[1] + q_o[2] * rho_l[2]
+    wxe = t_cross(w_, e1)
+    exwd = t_cross(e1, wd_)
+    # Theta (the rotation's part), then times Lam:
+    # -q_O^ rho_L^ + (g - a_I)^ S^ - J w'^ + w^ ((J w)^ - J w^) + 2 C w^ + ((J w')^ - 2 (C w)^ + H^)
+    qr = qo[0] * rho_l[0] + qo[1] * rho_l[1] + qo[2] * rho_l[2]
     gs = ga[0] * s_vec[0] + ga[1] * s_vec[1] + ga[2] * s_vec[2]
-    mul_hat(sj, wd, t1)                               # J w'^
-    mul_hat(sj, w, t2)                                # J w^ (used below)
-    for i in range(3):
-        for j in range(3):
-            theta[i, j] = -rho_l[i] * q_o[j] + s_vec[i] * ga[j] - t1[i, j]
-        theta[i, i] += qr - gs
-    # w^ ((J w)^ - J w^)
-    for i in range(3):
-        for j in range(3):
-            t2[i, j] = -t2[i, j]
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        t2[i2, i1] += jw[i]
-        t2[i1, i2] -= jw[i]
-    hat_mul(w, t2, t1)
-    mul_hat(sc, w, t2)                                # C w^
-    for i in range(3):
-        for j in range(3):
-            theta[i, j] += t1[i, j] + 2.0 * t2[i, j]
-    for i in range(3):                                # + (J w')^ - 2 (C w)^ + H^
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        x = jwd[i] - 2.0 * cw[i] + aux[SUM_H, i]
-        theta[i2, i1] += x
-        theta[i1, i2] -= x
+    theta = t_plus_diag(t_lin9(-1.0, t_outer(rho_l, qo), 1.0, t_outer(s_vec, ga)), qr - gs)
+    theta = t_lin9(1.0, theta, -1.0, t_mul_hat(sj, wd_))
+    theta = t_lin9(1.0, theta, 1.0,
+                   t_hat_mul(w_, t_lin9(1.0, t_hat(jw), -1.0, t_mul_hat(sj, w_))))
+    theta = t_lin9(1.0, theta, 2.0, t_mul_hat(sc, w_))
+    sh = aux[SUM_H]
+    theta = t_lin9(1.0, theta, 1.0, t_hat((jwd[0] - 2.0 * cw[0] + sh[0],
+                                          jwd[1] - 2.0 * cw[1] + sh[1],
+                                          jwd[2] - 2.0 * cw[2] + sh[2])))
     # minus T's rotation part: j_p L [-(e1 . w') e1^ + e1 (e1 x w')^T + (w x e1)(e1 x w)^T
     #                                 - (e1 . w) w^ e1^],  w^ e1^ = e1 w^T - (w . e1) E
+    t_rot = t_lin9(1.0, t_outer(e1, exwd), -1.0, t_outer(wxe, wxe))
+    t_rot = t_plus_diag(t_lin9(1.0, t_rot, -e1w, t_outer(e1, w_)), e1w * e1w)
+    t_rot = t_lin9(1.0, t_rot, -e1wd, t_hat(e1))
+    th_l = t_mm(t_lin9(1.0, theta, -jp, t_rot), lm)
+    # d m_O = -rho_L^ dq - J + r Dw + s Theta Lam - (T's w' and w parts: j_p L e1 e1^T and
+    # j_p L ((w x e1) e1^T - (e1 . w) e1^)), Dw = -(w^ J - (J w)^) - 2 (tr C E - C)
+    dw = t_lin9(-1.0, t_hat_mul(w_, sj), 2.0, sc)
+    dw = t_lin9(1.0, dw, -jp, t_outer(wxe, e1))
+    dw = t_plus_diag(dw, -2.0 * tr_c)
+    dw = t_lin9(1.0, dw, 1.0, t_hat((jw[0] + jp * e1w * e1[0], jw[1] + jp * e1w * e1[1],
+                                    jw[2] + jp * e1w * e1[2])))
+    dm = t_lin9(-1.0, t_hat_mul(rho_l, dq), -1.0, sj)
+    dm = t_lin9(1.0, dm, s, th_l)
+    dm = t_lin9(1.0, dm, -jp, t_outer(e1, e1))
+    dm = t_lin9(1.0, dm, r, dw)
     for i in range(3):
         for j in range(3):
-            theta[i, j] -= jp * (e1[i] * exwd[j] + wxe[i] * exw[j] - e1w * e1[i] * w[j])
-        theta[i, i] -= jp * e1w * e1w
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        theta[i2, i1] += jp * e1wd * e1[i]            # - (-(e1 . w') e1^)
-        theta[i1, i2] -= jp * e1wd * e1[i]
-    matmul_into(theta, lam, th_l)
-    # d m_O = -rho_L^ dq - J + r Dw + s Theta Lam - (T's w' and w parts)
-    hat_mul(rho_l, dq, t1)
-    hat_mul(w, sj, t2)                                # w^ J
-    for i in range(3):
-        for j in range(3):
-            dw = -(t2[i, j]) + 2.0 * sc[i, j] - jp * (wxe[i] * e1[j])
-            dm[i, j] = (-t1[i, j] - sj[i, j] + s * th_l[i, j] - jp * e1[i] * e1[j] + r * dw)
-        dm[i, i] -= r * 2.0 * tr_c
-    for i in range(3):                                # r [(J w)^ + jp (e1 . w) e1^]
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        x = r * (jw[i] + jp * e1w * e1[i])
-        dm[i2, i1] += x
-        dm[i1, i2] -= x
-    for i in range(3):
-        for j in range(3):
-            d_o[6 + i, 3 + j] = dm[i, j]
+            d_o[6 + i, 3 + j] = dm[3 * i + j]
     # modal rows
     for plane in range(2):
-        g = rot[:, 1 + plane]
-        gq0 = g[1] * q_o[2] - g[2] * q_o[1]
-        gq1 = g[2] * q_o[0] - g[0] * q_o[2]
-        gq2 = g[0] * q_o[1] - g[1] * q_o[0]
+        g = (rot[0, 1 + plane], rot[1, 1 + plane], rot[2, 1 + plane])
+        gq = t_cross(g, qo)
         for l in range(m):
-            f_l = aux[SUM_MODES + l]
             y_l = ends[l, 0]
-            point_jacobian(aux[SUM_MODES + m + l], aux[SUM_MODES + 2 * m + l],
-                            aux[SUM_MODES + 3 * m + l], w, kmat, lam, s, r, dcol)
-            vec[0] = f_l[1] * g[2] - f_l[2] * g[1] + y_l * gq0
-            vec[1] = f_l[2] * g[0] - f_l[0] * g[2] + y_l * gq1
-            vec[2] = f_l[0] * g[1] - f_l[1] * g[0] + y_l * gq2
+            dcol = point_jacobian_values(t_of_vec(aux[SUM_MODES + m + l]),
+                                         t_of_vec(aux[SUM_MODES + 2 * m + l]),
+                                         t_of_vec(aux[SUM_MODES + 3 * m + l]), w_, kmat, lm, s, r)
+            fg = t_cross(t_of_vec(aux[SUM_MODES + l]), g)
+            vec = (fg[0] + y_l * gq[0], fg[1] + y_l * gq[1], fg[2] + y_l * gq[2])
             row = plane * m + l
             for j in range(3):
-                d_r[row, 3 + j] = s * (vec[0] * lam[0, j] + vec[1] * lam[1, j]
-                                       + vec[2] * lam[2, j])
+                x = s * (vec[0] * lm[j] + vec[1] * lm[3 + j] + vec[2] * lm[6 + j])
                 for i in range(3):
-                    d_r[row, 3 + j] += g[i] * (dcol[i, j] + y_l * dq[i, j])
+                    x += g[i] * (dcol[3 * i + j] + y_l * dq[3 * i + j])
+                d_r[row, 3 + j] = x
 
 
 @njit(cache=True)
@@ -532,12 +508,24 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
       d a_O = Y_k(L) G,  d q_O = -P_k G,
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
-      the diagonal: damping and stiffness).  scratch: 6 entries."""
+      the diagonal: damping and stiffness).  scratch: 6 + m + m^2 entries (m modes per plane)."""
     _, wq, modes, ends, factors = tables
     mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
     m = modes.shape[0]
     rho_l = aux[1]
     big_g, d_q = scratch[0:3], scratch[3:6]
+    p_mode = scratch[6:6 + m]                           # P_k = int mu Y_k
+    m_modes = scratch[6 + m:6 + m + m * m].reshape((m, m))     # M_lk = int mu Y_l Y_k
+    for k in range(m):
+        p_k = 0.0
+        for j in range(wq.shape[0]):
+            p_k += mu * wq[j] * modes[k, j]
+        p_mode[k] = p_k
+        for l in range(m):
+            m_lk = 0.0
+            for j in range(wq.shape[0]):
+                m_lk += mu * wq[j] * modes[l, j] * modes[k, j]
+            m_modes[l, k] = m_lk
     for plane in range(2):
         g = rot[:, 1 + plane]
         g0, g1, g2 = g[0], g[1], g[2]
@@ -547,9 +535,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
         big_g[2] = g2 + 2.0 * r * wg2 + s * (wd[0] * g1 - wd[1] * g0 + w[0] * wg1 - w[1] * wg0)
         for k in range(m):
             col = 12 + plane * m + k
-            p_k = 0.0
-            for j in range(wq.shape[0]):
-                p_k += mu * wq[j] * modes[k, j]
+            p_k = p_mode[k]
             y_l = ends[k, 0]
             f_k = aux[SUM_MODES + k]
             q_k = aux[SUM_MODES + m + k]
@@ -569,10 +555,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
                 h_dot_g = h0 * big_g[0] + h1 * big_g[1] + h2 * big_g[2]
                 h_dot_q = h0 * d_q[0] + h1 * d_q[1] + h2 * d_q[2]
                 for l in range(m):
-                    m_lk = 0.0
-                    for j in range(wq.shape[0]):
-                        m_lk += mu * wq[j] * modes[l, j] * modes[k, j]
-                    d_r[plane2 * m + l, col] = m_lk * h_dot_g + ends[l, 0] * h_dot_q
+                    d_r[plane2 * m + l, col] = m_modes[l, k] * h_dot_g + ends[l, 0] * h_dot_q
             modal_mass = mu * factors[k, 0]
             stiffness = (ei_v if plane == 0 else ei_w) * factors[k, 1]
             omega_k = np.sqrt(stiffness / modal_mass)
@@ -615,6 +598,15 @@ def _solve_in_place(a, b):
 
 
 @njit(cache=True)
+def _rhs_column(c):
+    """Column of z (a_I 0:3, w' 3:6, m_I 6:9, q_I 9:12) in beam_transfer's modal right-hand
+    sides, ordered a_I, w', q_I, the constant (9), m_I (10:13)."""
+    if c < 6:
+        return c
+    return c + 4 if c < 9 else c - 3
+
+
+@njit(cache=True)
 def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
                   c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
@@ -631,7 +623,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     nw = 24 + 2 * n
     na = 3 * aux_rows(n // 2)
     block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 114)
+                     + 15 + n // 2 + (n // 2) ** 2)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -651,7 +643,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     modal = block[o:o + n * n].reshape((n, n))
     o += n * n
     lam = block[o:o + 9].reshape((3, 3))
-    columns_scratch = block[o + 9:o + 114]
+    columns_scratch = block[o + 9:]
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
     rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
@@ -667,9 +659,9 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)
         left_jacobian(phi_star, lam)
         _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, o0[9:12], aux, d_o, d_r,
-                       columns_scratch[99:105])
+                       columns_scratch)
         _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], o0[9:12], gravity,
-                          aux, d_o, d_r, columns_scratch[0:99])
+                          aux, d_o, d_r)
     xp[:] = x0
     for c in range(3, nx):
         if 6 <= c < 12 or analytic:
@@ -690,28 +682,37 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
             d_r[r, c] = (rp[r] - r0[r]) / step
     # modal equations r0 + d_r[:, :12] dz + d_r[:, 12:] dy = 0, solved for dy (dz = z - z*):
     # eta'' = eta_map [z; 1] with eta_map = [E_z, eta''* - E_z z*] and
-    # [E_z, e_r] = -d_r[:, 12:]^-1 [d_r[:, :12], r0]
+    # [E_z, e_r] = -d_r[:, 12:]^-1 [d_r[:, :12], r0].  rhs holds the columns of z in the order
+    # a_I, w', q_I, the constant, m_I: without an end moment (not welded) the modal equations do
+    # not depend on m_I (_affine_columns), and those three columns stay out of the solve.
+    n_rhs = 13 if welded else 10
     for r in range(n):
         for c in range(12):
-            rhs[r, c] = -d_r[r, c]
-        rhs[r, 12] = -r0[r]
+            rhs[r, _rhs_column(c)] = -d_r[r, c]
+        rhs[r, 9] = -r0[r]
     modal[:, :] = d_r[:, 12:]
-    _solve_in_place(modal, rhs)
+    _solve_in_place(modal, rhs[:, :n_rhs])
     for r in range(n):
-        e0 = eta_dd_star[r] + rhs[r, 12]
+        e0 = eta_dd_star[r] + rhs[r, 9]
         for c in range(12):
-            eta_map[r, c] = rhs[r, c]
-            e0 -= rhs[r, c] * z_star[c]
+            e = rhs[r, _rhs_column(c)] if _rhs_column(c) < n_rhs else 0.0
+            eta_map[r, c] = e
+            e0 -= e * z_star[c]
         eta_map[r, 12] = e0
-    # outputs: o0 + d_o[:, :12] dz + d_o[:, 12:] dy  =  u [z; 1]
+    # outputs: o0 + d_o[:, :12] dz + d_o[:, 12:] dy  =  u [z; 1]; the w' slot's rows do not
+    # depend on eta'' where the columns are written out (_modal_columns: it is w' itself)
     for r in range(12):
         const = o0[r]
+        through_modes = not (analytic and 3 <= r < 6)
         for c in range(12):
             acc = d_o[r, c]
-            for i in range(n):
-                acc += d_o[r, 12 + i] * rhs[i, c]
+            rc = _rhs_column(c)
+            if through_modes and rc < n_rhs:
+                for i in range(n):
+                    acc += d_o[r, 12 + i] * rhs[i, rc]
             u[r, c] = acc
             const -= acc * z_star[c]
-        for i in range(n):
-            const += d_o[r, 12 + i] * rhs[i, 12]
+        if through_modes:
+            for i in range(n):
+                const += d_o[r, 12 + i] * rhs[i, 9]
         u[r, 12] = const

@@ -13,8 +13,7 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 from numba import njit
 
-from .mat3 import (matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_of_mat, t_of_vec, t_outer,
-                   t_plus_diag)
+from .mat3 import matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_outer, t_plus_diag
 from .so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
@@ -294,15 +293,6 @@ def kappa_values(w, wd):
 
 
 @njit(cache=True)
-def kappa_matrix(w, wd, out):
-    """out = K (kappa_values) as a 3 x 3 array."""
-    k = kappa_values(t_of_vec(w), t_of_vec(wd))
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = k[3 * i + j]
-
-
-@njit(cache=True)
 def _jacobian_terms(x, y, t, w, lam, s, r):
     """-y^ - r R(x) - s t Lam, R(x) = 2 x w^T - w x^T - (w . x) E (point_jacobian_values)."""
     out = t_lin9(-2.0 * r, t_outer(x, w), r, t_outer(w, x))
@@ -331,13 +321,3 @@ def point_jacobian_values(x, u, v, w, kmat, lam, s, r):
 def rigid_point_jacobian_values(x, w, kmat, lam, s, r):
     """point_jacobian_values of a point of a rigid body (U = V = 0): -x^ - r R(x) - s K x^ Lam."""
     return _jacobian_terms(x, x, t_mul_hat(kmat, x), w, lam, s, r)
-
-
-@njit(cache=True)
-def point_jacobian(rho, u_r, v_r, w, kmat, lam, s, r, out):
-    """out = point_jacobian_values on 3 x 3 and 3-arrays."""
-    d = point_jacobian_values(t_of_vec(rho), t_of_vec(u_r), t_of_vec(v_r), t_of_vec(w),
-                              t_of_mat(kmat), t_of_mat(lam), s, r)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = d[3 * i + j]

@@ -161,6 +161,13 @@ def t_lin9(a, x, b, y):
 
 
 @njit(cache=True)
+def t_scale9(a, x):
+    """a x (9-tuple)."""
+    return (a * x[0], a * x[1], a * x[2], a * x[3], a * x[4], a * x[5], a * x[6], a * x[7],
+            a * x[8])
+
+
+@njit(cache=True)
 def t_plus_diag(a, c):
     """a + c E."""
     return (a[0] + c, a[1], a[2], a[3], a[4] + c, a[5], a[6], a[7], a[8] + c)

@@ -20,7 +20,7 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
-from .mat3 import inv3, matmul_into
+from .mat3 import inv3, matmul_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -285,13 +285,12 @@ def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
     0 = U_ma a + U_mphi phi + U_mq q + u_m.  (Columns and rows [a; q; 1] of u: 0..2, 9..12.)"""
-    ump_inv = np.empty((3, 3))
-    inv3(u[6:9, 3:6], ump_inv)
+    _, ump_inv = t_inverse(t_of_mat(u[6:9, 3:6]))        # (not finite where singular)
     for i in range(3):
         for c in range(7):
             cc = c if c < 3 else c + 6
-            phi_map[i, c] = -(ump_inv[i, 0] * u[6, cc] + ump_inv[i, 1] * u[7, cc]
-                              + ump_inv[i, 2] * u[8, cc])
+            phi_map[i, c] = -(ump_inv[3 * i] * u[6, cc] + ump_inv[3 * i + 1] * u[7, cc]
+                              + ump_inv[3 * i + 2] * u[8, cc])
     for r in range(6):
         rr = r if r < 3 else r + 6
         for c in range(7):
