@@ -216,14 +216,10 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
             p_vec[0, :] = g_acc[s]
             for k in range(n):
                 phi = phi_star[k]
-                expm_so3(phi, e3)
-                _mm(e3, rot[k], rot_star)
-                left_jacobian(phi, lam)
                 for i in range(3):
                     w[i] = c3 * phi[i] + w3[k, i]
                     wd[i] = c1 * phi[i] + w1[k, i]
-                    load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
-                if body_kind[k] == BEAM:
+                if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
                     i0, i1 = mode_off[k], mode_off[k + 1]
                     m = (i1 - i0) // 2
                     for i in range(3):
@@ -238,6 +234,11 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                                   eta_map[i0:i1])
                     fold_ball_body(u, v, pmap[k])
                 else:
+                    expm_so3(phi, e3)
+                    _mm(e3, rot[k], rot_star)
+                    left_jacobian(phi, lam)
+                    for i in range(3):
+                        load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
                     ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
                                   aq[k, 3:6], load, torque[s, k], v, pmap[k])
                 if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1],
