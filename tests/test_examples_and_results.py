@@ -28,6 +28,14 @@ def test_rigid_chain_example(tmp_path):
     assert out_png.stat().st_size > 1000
 
 
+def test_rigid_chain_example_richardson():
+    run = subprocess.run([sys.executable, str(ROOT / "examples" / "rigid_chain.py"), "--links", "3",
+                          "--t-end", "0.1", "--dt", "1e-2", "--richardson"], capture_output=True,
+                         text=True, check=True)
+    assert "30 steps of 0.01 and 0.005 s (Richardson)" in run.stdout
+    assert "Richardson correction" in run.stdout
+
+
 def test_result_saves_and_recording_stride(tmp_path):
     model = rigid_chain(2)
     res = simulate(model, 0.1, 1e-3, record_every=10)
