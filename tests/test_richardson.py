@@ -88,3 +88,16 @@ def test_divergence_names_the_run():
     runaway = build_chain([BallJoint(), unit_link(), BallJoint(), spinning])
     with pytest.raises(DivergenceError, match=r"in the Richardson run at dt = 0\.01 s"):
         simulate(runaway, 1.0, 0.01, richardson=True)
+
+
+def test_energy_drift_fourth_order():
+    """The chain conserves energy; the extrapolated result's largest drift over 1 s falls at
+    fourth order (measured: 2.1e-5, 1.25e-6, 7.5e-8 J of a 121 J peak kinetic energy, slope 4.1),
+    where the dt/2 run's falls at second order (2.3e-3 .. 1.4e-4 J)."""
+    model = rigid_chain(5)
+    drifts = []
+    for dt in DTS:
+        res = simulate(model, 1.0, dt, richardson=True, record_every=int(round(0.05 / dt)))
+        drifts.append(np.abs(res.total_energy - res.total_energy[0]).max())
+    assert 3.7 < fitted_order(DTS, drifts) < 4.5, drifts
+    assert drifts[-1] < 1e-6 * res.kinetic.max()
