@@ -46,6 +46,7 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     w_ = t_of_vec(w)
     wd_ = t_of_vec(wd)
     a_in = t_of_vec(a_i)
+    q_in = t_of_vec(q_i)
     f = t_of_vec(load)
     rho = t_mv(a, (p[4], p[5], p[6]))                      # A* l_IO
     rho_c = t_mv(a, (p[1], p[2], p[3]))                    # A* l_IC
@@ -61,8 +62,9 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     jm = t_mmt(t_mm(a, (p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15])), a)
     jw = t_mv(jm, w_)
     jwd = t_mv(jm, wd_)
-    q_o = (q_i[0] + f[0] - mass * (a_in[0] + kap_c[0]), q_i[1] + f[1] - mass * (a_in[1] + kap_c[1]),
-           q_i[2] + f[2] - mass * (a_in[2] + kap_c[2]))
+    q_o = (q_in[0] + f[0] - mass * (a_in[0] + kap_c[0]),
+           q_in[1] + f[1] - mass * (a_in[1] + kap_c[1]),
+           q_in[2] + f[2] - mass * (a_in[2] + kap_c[2]))
     m_1 = t_cross(rho_c, f)
     m_2 = t_cross(rho, q_o)
     m_3 = t_cross(w_, jw)
@@ -85,10 +87,9 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     # fold (m_I = m_O = 0): 0 = r_m - rho^ q_I + M (rho - rho_C)^ a_I + D_m (alpha - w'),
     # r_m = m_O* + rho^ q_I* - M (rho - rho_C)^ a_I*:  alpha = P_a a_I + P_q q_I + w' - G r_m
     det, g = t_inverse(d_m)
-    if det == 0.0:
+    if det == 0.0:                  # (reported by the sweep's finite check)
         g = (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan)
-        # (reported by the sweep's finite check)
-    m_5 = t_cross(rho, (q_i[0], q_i[1], q_i[2]))
+    m_5 = t_cross(rho, q_in)
     m_6 = t_cross(arm, a_in)
     y = t_mv(g, (m_o[0] + m_5[0] - mass * m_6[0], m_o[1] + m_5[1] - mass * m_6[1],
                  m_o[2] + m_5[2] - mass * m_6[2]))              # G r_m
@@ -99,11 +100,14 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
             pmap[i, j] = -mass * p_a[3 * i + j]
             pmap[i, 3 + j] = p_q[3 * i + j]
         pmap[i, 6] = wd[i] - y[i]
-    # a_O = a_I + kappa_O + D_o (alpha - w'),  q_O = q_I + f - M a_I - M kappa_C - M D_c (alpha - w')
-    dog_a = t_mul_hat(t_mm(d_o, g), arm)
-    dog_r = t_mul_hat(t_mm(d_o, g), rho)
-    dcg_a = t_mul_hat(t_mm(d_c, g), arm)
-    dcg_r = t_mul_hat(t_mm(d_c, g), rho)
+    # a_O = a_I + kappa_O + D_o (alpha - w'),
+    # q_O = q_I + f - M a_I - M kappa_C - M D_c (alpha - w')
+    d_o_g = t_mm(d_o, g)
+    d_c_g = t_mm(d_c, g)
+    dog_a = t_mul_hat(d_o_g, arm)
+    dog_r = t_mul_hat(d_o_g, rho)
+    dcg_a = t_mul_hat(d_c_g, arm)
+    dcg_r = t_mul_hat(d_c_g, rho)
     d_o_y = t_mv(d_o, y)
     d_c_y = t_mv(d_c, y)
     for i in range(3):
