@@ -112,27 +112,31 @@ class Workspace:
 
 
 def beam_tables(model):
-    """(body_kind, beam_params, quadrature points, weights, mode shapes at the points, offsets
-    of each body's modal coordinates, [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI])
-    for the kernels (docs/beam.md, "Mode shapes")."""
+    """(body_kind, beam_params, modal integrals, offsets of each body's modal coordinates,
+    [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI]) for the kernels (docs/beam.md, "Mode
+    shapes" and "The integrals in the frame").  The modal integrals of beam k, moments[k, j] =
+    [int Y_j, int x Y_j, int Y_j Y_0, .., int Y_j Y_(m-1)] over [0, L], by Gauss-Legendre
+    quadrature exact to rounding for the mode families (kernels/beam.py::quadrature_size)."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
-    n_q = quadrature_size(max_modes)
-    xq, wq = np.zeros((n, n_q)), np.zeros((n, n_q))
-    modes = np.zeros((n, max_modes, n_q))
+    moments = np.zeros((n, max_modes, max_modes + 2))
     ends = np.zeros((n, max_modes, 2))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):
         if model.body_kind[k] == BEAM:
             length = model.beam_params[k, LENGTH]
             family, m = int(model.beam_params[k, FAMILY]), int(model.beam_params[k, MODES])
-            xq[k], wq[k] = gauss_points(length, n_q)
-            modes[k, :m] = mode_shapes(family, length, m, xq[k])[0]
+            x, wq = gauss_points(length, quadrature_size(m))
+            y = mode_shapes(family, length, m, x)[0]
+            moments[k, :m, 0] = y @ wq
+            moments[k, :m, 1] = y @ (wq * x)
+            gram = (y * wq) @ y.T
+            moments[k, :m, 2:2 + m] = 0.5 * (gram + gram.T)
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
             factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
-    return (model.body_kind, model.beam_params, xq, wq, modes, mode_off, ends, factors)
+    return (model.body_kind, model.beam_params, moments, mode_off, ends, factors)
 
 
 def _check_positive(name, value):

@@ -184,7 +184,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     alpha = np.empty(3)
     load = np.empty(3)
     phi_g = np.zeros(3)
-    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
+    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = beams
     n_eta = eta.shape[0]
     w1e = np.zeros(n_eta)
     w3e = np.zeros(n_eta)
@@ -230,8 +230,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                         z_in[i] = aq[k, i]
                         z_in[3 + i] = wd[i]
                         z_in[9 + i] = aq[k, 3 + i]
-                    tables = (beam_xq[k], beam_wq[k], beam_modes[k, :m], beam_ends[k, :m],
-                              beam_factors[k, :m])
+                    tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
                     beam_transfer(beam_params[k], tables, outboard, history, gravity, False,
                                   rot[k], phi, wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
                                   eta[i0:i1], eta_d[i0:i1], z_in, eta_dd_star[i0:i1], u,

@@ -5,9 +5,10 @@ sweep's scaling, docs/assembly.md): z = [a, w', m, q].  The beam's modal acceler
 internal unknowns, fixed by its modal equations; eliminating them leaves a 12 x 13 transfer like
 a rigid body's, plus the affine map eta'' = E [z_in; 1] used to recover them.
 
-The nonlinear relations are evaluated exactly (Gauss-Legendre quadrature along the beam) and
-linearized about the guess, every column written out (docs/beam.md) where the output carries no
-moment; at a weld and in the paper's scheme the w' and eta'' columns by forward differences.
+The nonlinear relations are evaluated exactly (the integrals along the beam through the beam's
+constant modal integrals, docs/beam.md "The integrals in the frame") and linearized about the
+guess, every column written out (docs/beam.md) where the output carries no moment; at a weld
+and in the paper's scheme the w' and eta'' columns by forward differences.
 The affine map reproduces the relations at the guess, so the step's solution is that of the
 exact linearization (up to the differences' error in the slope, ~1e-10 relative, where they
 are used: second order in the O(h^3) predictor error).
@@ -34,12 +35,13 @@ def aux_rows(m):
 
 
 def quadrature_size(modes_per_plane):
-    """Gauss-Legendre points that integrate the beam's relations to rounding, for every mode
-    family: measured against 60 points on random states (relations, modal residuals and the
-    linearization's aux), the largest relative error is 2e-16 at 12 points for 1 mode per
-    plane, 2e-16 at 12 for 2 modes, 6e-16 at 14 for 3, 3e-16 at 16 for 4, 2e-16 at 20 for 6;
-    24 points leave 5e-13 at 7 modes and 1e-6 at 10 (products of sine modes with x^2).  So
-    2 m + 10 points, and 3 m + 6 beyond 4 modes."""
+    """Gauss-Legendre points that integrate the beam's modal integrals (solver.beam_tables) to
+    rounding, for every mode family.  Measured when the kernel still sampled the relations
+    themselves (products of up to three mode-shape factors, more than the modal integrals'
+    two), against 60 points on random states: the largest relative error is 2e-16 at 12
+    points for 1 mode per plane, 2e-16 at 12 for 2 modes, 6e-16 at 14 for 3, 3e-16 at 16 for
+    4, 2e-16 at 20 for 6; 24 points leave 5e-13 at 7 modes and 1e-6 at 10 (products of sine
+    modes with x^2).  So 2 m + 10 points, and 3 m + 6 beyond 4 modes."""
     m = int(modes_per_plane)
     return max(2 * m + 10, 3 * m + 6)
 
@@ -51,145 +53,163 @@ def gauss_points(length, n_points):
 
 
 @njit(cache=True)
-def beam_relations(bp, xq, wq, modes, ends, factors, end_moment, gravity, rot, w, wd, eta, eta_d,
+def beam_relations(bp, moments, ends, factors, end_moment, gravity, rot, w, wd, eta, eta_d,
                    eta_dd, a_i, m_i, q_i, out, residual, aux):
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end loads' generalized forces (the moment's only if end_moment: a fixed hinge
-    at the output; elsewhere m_O = 0).  bp: beam parameter row; xq, wq: quadrature; modes
-    (m, N_QUAD): Y_k at the points; ends (m, 2): Y_k(L), Y_k'(L); factors (m, 2): modal mass
-    over mu and modal stiffness over EI.  aux (4, 3) receives what the analytic columns of the
-    linearization need (beam_transfer): the first mass moment S = int mu rho, rho_L = r_O - r_I,
-    and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless end_moment); given the rows of
-    aux_rows(m) (beam_transfer's base evaluation), also the sums the analytic w' and eta''
-    columns need (_rotation_columns, _modal_columns; the row layout: aux_rows).
-    Written in scalars: it runs 3 + n + 1 times per beam and step."""
+    at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the modal
+    integrals [int Y_k, int x Y_k, int Y_k Y_l] (beam_moments); ends (m, 2): Y_k(L), Y_k'(L);
+    factors (m, 2): modal mass over mu and modal stiffness over EI.  aux (4, 3) receives what
+    the analytic columns of the linearization need (beam_transfer): the first mass moment
+    S = int mu rho, rho_L = r_O - r_I, and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless
+    end_moment); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums
+    the analytic w' and eta'' columns need (_rotation_columns, _modal_columns; the row layout:
+    aux_rows).
+    The integrals along the beam are linear and quadratic in eta, so they are written with the
+    modal integrals in the beam's frame (docs/beam.md, "The integrals in the frame"): with
+    rho = x e1 + u (frame components), s = int rho, Pi = int rho rho^T, J = tr(Pi) E - Pi,
+    C = int u' rho^T, H = int rho x u'' (per unit mu), and omega, alpha, gamma = A^T (w, w',
+    g - a_I):
+      int f / mu        = L gamma - (alpha x s + omega x (omega x s) + 2 omega x s' + s'')
+      int rho x f / mu  = s x gamma - (J alpha + omega x J omega + 2 (tr C omega - C omega) + H)
+      int Y_k f / mu    = P_k gamma - (alpha x Q_k + omega x (omega x Q_k) + 2 omega x Q_k'
+                                       + Q_k''),   Q_k = int Y_k rho = [X_k, (M eta_v)_k,
+                                                                        (M eta_w)_k]
+    (f the line load, gravity minus inertia).  Written in scalars: it runs 3 + n + 1 times per
+    beam and step where columns are differenced."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
-    m = modes.shape[0]
+    m = ends.shape[0]
     e10, e11, e12 = rot[0, 0], rot[1, 0], rot[2, 0]
     e20, e21, e22 = rot[0, 1], rot[1, 1], rot[2, 1]
     e30, e31, e32 = rot[0, 2], rot[1, 2], rot[2, 2]
     w0, w1, w2 = w[0], w[1], w[2]
     wd0, wd1, wd2 = wd[0], wd[1], wd[2]
-    g0, g1, g2 = gravity[0], gravity[1], gravity[2]
     a0, a1, a2 = a_i[0], a_i[1], a_i[2]
-    sf0 = sf1 = sf2 = 0.0          # int f
-    sm0 = sm1 = sm2 = 0.0          # int rho x f
-    s0 = s1 = s2 = 0.0             # int mu rho
-    for r in range(2 * m):
-        residual[r] = 0.0
+    ga0, ga1, ga2 = gravity[0] - a0, gravity[1] - a1, gravity[2] - a2
+    # omega, alpha, gamma: w, w', g - a_I in the frame
+    o0, o1, o2 = (e10 * w0 + e11 * w1 + e12 * w2, e20 * w0 + e21 * w1 + e22 * w2,
+                  e30 * w0 + e31 * w1 + e32 * w2)
+    al0, al1, al2 = (e10 * wd0 + e11 * wd1 + e12 * wd2, e20 * wd0 + e21 * wd1 + e22 * wd2,
+                     e30 * wd0 + e31 * wd1 + e32 * wd2)
+    gm0, gm1, gm2 = (e10 * ga0 + e11 * ga1 + e12 * ga2, e20 * ga0 + e21 * ga1 + e22 * ga2,
+                     e30 * ga0 + e31 * ga1 + e32 * ga2)
     sums = aux.shape[0] > 4
-    if sums:
-        aux[4:] = 0.0
-    # the fixed-size sums in scalars (kept in registers), written to aux after the loop
-    su0 = su1 = su2 = sv0 = sv1 = sv2 = sh0 = sh1 = sh2 = 0.0
-    j00 = j11 = j22 = j01 = j02 = j12 = 0.0
-    c00 = c01 = c02 = c10 = c11 = c12 = c20 = c21 = c22 = 0.0
-    for j in range(xq.shape[0]):
-        v = w_ = vd = wdd = vdd = wddd = 0.0
-        for k in range(m):
-            y = modes[k, j]
-            v += y * eta[k]
-            w_ += y * eta[m + k]
-            vd += y * eta_d[k]
-            wdd += y * eta_d[m + k]
-            vdd += y * eta_dd[k]
-            wddd += y * eta_dd[m + k]
-        x = xq[j]
-        r0 = x * e10 + v * e20 + w_ * e30            # rho = A (x e1 + u)
-        r1 = x * e11 + v * e21 + w_ * e31
-        r2 = x * e12 + v * e22 + w_ * e32
-        u0 = vd * e20 + wdd * e30                    # A u'
-        u1 = vd * e21 + wdd * e31
-        u2 = vd * e22 + wdd * e32
-        wr0 = w1 * r2 - w2 * r1                      # w x rho
-        wr1 = w2 * r0 - w0 * r2
-        wr2 = w0 * r1 - w1 * r0
-        # r'' = a_I + w' x rho + w x (w x rho) + 2 w x A u' + A u''
-        acc0 = (a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * u2 - w2 * u1)
-                + vdd * e20 + wddd * e30)
-        acc1 = (a1 + wd2 * r0 - wd0 * r2 + w2 * wr0 - w0 * wr2 + 2.0 * (w2 * u0 - w0 * u2)
-                + vdd * e21 + wddd * e31)
-        acc2 = (a2 + wd0 * r1 - wd1 * r0 + w0 * wr1 - w1 * wr0 + 2.0 * (w0 * u1 - w1 * u0)
-                + vdd * e22 + wddd * e32)
-        c = mu * wq[j]
-        f0 = c * (g0 - acc0)                         # force on the segment: gravity - inertia
-        f1 = c * (g1 - acc1)
-        f2 = c * (g2 - acc2)
-        sf0 += f0
-        sf1 += f1
-        sf2 += f2
-        sm0 += r1 * f2 - r2 * f1
-        sm1 += r2 * f0 - r0 * f2
-        sm2 += r0 * f1 - r1 * f0
-        s0 += c * r0
-        s1 += c * r1
-        s2 += c * r2
-        p2 = e20 * f0 + e21 * f1 + e22 * f2
-        p3 = e30 * f0 + e31 * f1 + e32 * f2
-        for k in range(m):
-            residual[k] -= modes[k, j] * p2
-            residual[m + k] -= modes[k, j] * p3
+    # the modal sums: P.eta, X.eta (and their rates), and the quadratic forms of M
+    pv = pw = pdv = pdw = pddv = pddw = 0.0
+    xv = xw = xdv = xdw = xddv = xddw = 0.0
+    vv = vw = ww = dvv = dvw = dwv = dww = hx = 0.0
+    for k in range(m):
+        p_k, x_k = moments[k, 0], moments[k, 1]
+        ev, ew, edv, edw = eta[k], eta[m + k], eta_d[k], eta_d[m + k]
+        eddv, eddw = eta_dd[k], eta_dd[m + k]
+        pv += p_k * ev
+        pw += p_k * ew
+        pdv += p_k * edv
+        pdw += p_k * edw
+        pddv += p_k * eddv
+        pddw += p_k * eddw
+        xv += x_k * ev
+        xw += x_k * ew
+        xdv += x_k * edv
+        xdw += x_k * edw
+        xddv += x_k * eddv
+        xddw += x_k * eddw
+        # (M eta_v)_k, (M eta_w)_k and their rates: Q_k's, Q_k''s and Q_k'''s last entries
+        mv = mw = mdv = mdw = mddv = mddw = 0.0
+        for l in range(m):
+            y = moments[k, 2 + l]
+            mv += y * eta[l]
+            mw += y * eta[m + l]
+            mdv += y * eta_d[l]
+            mdw += y * eta_d[m + l]
+            mddv += y * eta_dd[l]
+            mddw += y * eta_dd[m + l]
+        vv += ev * mv
+        vw += ev * mw
+        ww += ew * mw
+        dvv += edv * mv
+        dvw += edv * mw
+        dwv += edw * mv
+        dww += edw * mw
+        hx += ev * mddw - ew * mddv
+        # int Y_k f / mu in the frame (docstring); q: Q_k, u: Q_k', v: Q_k''
+        q0, q1, q2 = x_k, mv, mw
+        oq0, oq1, oq2 = o1 * q2 - o2 * q1, o2 * q0 - o0 * q2, o0 * q1 - o1 * q0
+        f1 = (p_k * gm1 - (al2 * q0 - al0 * q2) - (o2 * oq0 - o0 * oq2) - 2.0 * (-o0 * mdw)
+              - mddv)
+        f2 = (p_k * gm2 - (al0 * q1 - al1 * q0) - (o0 * oq1 - o1 * oq0) - 2.0 * (o0 * mdv)
+              - mddw)
+        residual[k] = -mu * f1
+        residual[m + k] = -mu * f2
         if sums:
-            vv0 = vdd * e20 + wddd * e30             # A u''
-            vv1 = vdd * e21 + wddd * e31
-            vv2 = vdd * e22 + wddd * e32
-            su0 += c * u0
-            su1 += c * u1
-            su2 += c * u2
-            sv0 += c * vv0
-            sv1 += c * vv1
-            sv2 += c * vv2
-            sh0 += c * (r1 * vv2 - r2 * vv1)
-            sh1 += c * (r2 * vv0 - r0 * vv2)
-            sh2 += c * (r0 * vv1 - r1 * vv0)
-            cr0, cr1, cr2 = c * r0, c * r1, c * r2
-            j00 += cr1 * r1 + cr2 * r2               # J: |rho|^2 E - rho rho^T
-            j11 += cr0 * r0 + cr2 * r2
-            j22 += cr0 * r0 + cr1 * r1
-            j01 -= cr0 * r1
-            j02 -= cr0 * r2
-            j12 -= cr1 * r2
-            c00 += u0 * cr0                          # C: (A u') rho^T
-            c01 += u0 * cr1
-            c02 += u0 * cr2
-            c10 += u1 * cr0
-            c11 += u1 * cr1
-            c12 += u1 * cr2
-            c20 += u2 * cr0
-            c21 += u2 * cr1
-            c22 += u2 * cr2
-            base = SUM_MODES
-            for k in range(m):
-                y = modes[k, j]
-                cy = c * y
-                fk, qk = aux[base + k], aux[base + m + k]
-                uk, vk = aux[base + 2 * m + k], aux[base + 3 * m + k]
-                fk[0] += y * f0
-                fk[1] += y * f1
-                fk[2] += y * f2
-                qk[0] += cy * r0
-                qk[1] += cy * r1
-                qk[2] += cy * r2
-                uk[0] += cy * u0
-                uk[1] += cy * u1
-                uk[2] += cy * u2
-                vk[0] += cy * vv0
-                vk[1] += cy * vv1
-                vk[2] += cy * vv2
+            f0 = (p_k * gm0 - (al1 * q2 - al2 * q1) - (o1 * oq2 - o2 * oq1)
+                  - 2.0 * (o1 * mdw - o2 * mdv))
+            fk, qk = aux[SUM_MODES + k], aux[SUM_MODES + m + k]
+            uk, vk = aux[SUM_MODES + 2 * m + k], aux[SUM_MODES + 3 * m + k]
+            for i in range(3):
+                c0, c1, c2 = rot[i, 0], rot[i, 1], rot[i, 2]
+                fk[i] = mu * (c0 * f0 + c1 * f1 + c2 * f2)
+                qk[i] = mu * (c0 * q0 + c1 * q1 + c2 * q2)
+                uk[i] = mu * (c1 * mdv + c2 * mdw)
+                vk[i] = mu * (c1 * mddv + c2 * mddw)
+    # s, s', s'' and the second moments Pi (per unit mu, in the frame)
+    s0, s1, s2 = 0.5 * length * length, pv, pw
+    pxx = length * length * length / 3.0
+    # J = tr(Pi) E - Pi
+    j00, j11, j22 = vv + ww, pxx + ww, pxx + vv
+    j01, j02, j12 = -xv, -xw, -vw
+    # C = int u' rho^T (its first row is zero), H = int rho x u''
+    c10, c11, c12, c20, c21, c22 = xdv, dvv, dvw, xdw, dwv, dww
+    h0, h1, h2 = hx, -xddw, xddv
+    # int f / mu: L gamma - (alpha x s + omega x (omega x s) + 2 omega x s' + s''), s' = (0, pdv,
+    # pdw), s'' = (0, pddv, pddw)
+    os0, os1, os2 = o1 * s2 - o2 * s1, o2 * s0 - o0 * s2, o0 * s1 - o1 * s0
+    fb0 = length * gm0 - (al1 * s2 - al2 * s1) - (o1 * os2 - o2 * os1) - 2.0 * (o1 * pdw - o2 * pdv)
+    fb1 = (length * gm1 - (al2 * s0 - al0 * s2) - (o2 * os0 - o0 * os2) - 2.0 * (-o0 * pdw)
+           - pddv)
+    fb2 = (length * gm2 - (al0 * s1 - al1 * s0) - (o0 * os1 - o1 * os0) - 2.0 * (o0 * pdv)
+           - pddw)
+    # int rho x f / mu: s x gamma - (J alpha + omega x J omega + 2 (tr C omega - C omega) + H)
+    jo0 = j00 * o0 + j01 * o1 + j02 * o2
+    jo1 = j01 * o0 + j11 * o1 + j12 * o2
+    jo2 = j02 * o0 + j12 * o1 + j22 * o2
+    tr_c = c11 + c22
+    co1 = c10 * o0 + c11 * o1 + c12 * o2
+    co2 = c20 * o0 + c21 * o1 + c22 * o2
+    mb0 = (s1 * gm2 - s2 * gm1 - (j00 * al0 + j01 * al1 + j02 * al2) - (o1 * jo2 - o2 * jo1)
+           - 2.0 * tr_c * o0 - h0)
+    mb1 = (s2 * gm0 - s0 * gm2 - (j01 * al0 + j11 * al1 + j12 * al2) - (o2 * jo0 - o0 * jo2)
+           - 2.0 * (tr_c * o1 - co1) - h1)
+    mb2 = (s0 * gm1 - s1 * gm0 - (j02 * al0 + j12 * al1 + j22 * al2) - (o0 * jo1 - o1 * jo0)
+           - 2.0 * (tr_c * o2 - co2) - h2)
+    # back to the world: int f, int rho x f, S = int mu rho
+    sf0 = mu * (e10 * fb0 + e20 * fb1 + e30 * fb2)
+    sf1 = mu * (e11 * fb0 + e21 * fb1 + e31 * fb2)
+    sf2 = mu * (e12 * fb0 + e22 * fb1 + e32 * fb2)
+    sm0 = mu * (e10 * mb0 + e20 * mb1 + e30 * mb2)
+    sm1 = mu * (e11 * mb0 + e21 * mb1 + e31 * mb2)
+    sm2 = mu * (e12 * mb0 + e22 * mb1 + e32 * mb2)
     if sums:
-        aux[SUM_U, 0], aux[SUM_U, 1], aux[SUM_U, 2] = su0, su1, su2
-        aux[SUM_V, 0], aux[SUM_V, 1], aux[SUM_V, 2] = sv0, sv1, sv2
-        aux[SUM_H, 0], aux[SUM_H, 1], aux[SUM_H, 2] = sh0, sh1, sh2
-        sj = aux[SUM_J:SUM_J + 3]
-        sj[0, 0], sj[1, 1], sj[2, 2] = j00, j11, j22
-        sj[0, 1] = sj[1, 0] = j01
-        sj[0, 2] = sj[2, 0] = j02
-        sj[1, 2] = sj[2, 1] = j12
-        sc = aux[SUM_C:SUM_C + 3]
-        sc[0, 0], sc[0, 1], sc[0, 2] = c00, c01, c02
-        sc[1, 0], sc[1, 1], sc[1, 2] = c10, c11, c12
-        sc[2, 0], sc[2, 1], sc[2, 2] = c20, c21, c22
+        for i in range(3):
+            c0, c1, c2 = rot[i, 0], rot[i, 1], rot[i, 2]
+            aux[SUM_U, i] = mu * (c1 * pdv + c2 * pdw)
+            aux[SUM_V, i] = mu * (c1 * pddv + c2 * pddw)
+            aux[SUM_H, i] = mu * (c0 * h0 + c1 * h1 + c2 * h2)
+            # A J and A C (C's first row is zero), then times A^T below
+            aux[SUM_J + i, 0] = c0 * j00 + c1 * j01 + c2 * j02
+            aux[SUM_J + i, 1] = c0 * j01 + c1 * j11 + c2 * j12
+            aux[SUM_J + i, 2] = c0 * j02 + c1 * j12 + c2 * j22
+            aux[SUM_C + i, 0] = c1 * c10 + c2 * c20
+            aux[SUM_C + i, 1] = c1 * c11 + c2 * c21
+            aux[SUM_C + i, 2] = c1 * c12 + c2 * c22
+        for base in (SUM_J, SUM_C):
+            for i in range(3):
+                b0, b1, b2 = aux[base + i, 0], aux[base + i, 1], aux[base + i, 2]
+                for j in range(3):
+                    aux[base + i, j] = mu * (b0 * rot[j, 0] + b1 * rot[j, 1] + b2 * rot[j, 2])
+    s0, s1, s2 = (mu * (e10 * s0 + e20 * s1 + e30 * s2), mu * (e11 * s0 + e21 * s1 + e31 * s2),
+                  mu * (e12 * s0 + e22 * s1 + e32 * s2))
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -301,12 +321,12 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
-    tables = (xq, wq, modes, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
+    tables = (moments, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
     (at the start: the end section's angular acceleration).  work: (24 + 2 n) scratch, which
     holds the state (the returned rotation is a view on it)."""
-    xq, wq, modes, ends, factors = tables
+    moments, ends, factors = tables
     welded, r_rel, rot_out_n, w1_out = outboard
     n = residual.shape[0]
     wd = x[3:6]
@@ -328,7 +348,7 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for i in range(n):
             eta[i] = (eta_dd[i] - w1e[i]) / c1
             eta_d[i] = c3 * eta[i] + w3e[i]
-    beam_relations(bp, xq, wq, modes, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
+    beam_relations(bp, moments, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
                    eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
     independent, dw1 = history
     if independent and not start:
@@ -353,18 +373,16 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
 
 
 @njit(cache=True)
-def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
+def _affine_columns(bp, moments, ends, welded, rot, aux, d_o, d_r):
     """The Jacobian's columns for a_I (0:3), m_I (6:9) and q_I (9:12), in which the relations
     are affine (docs/beam.md, "The DT-TMM transfer"): with the beam's mass M_b, its first mass
     moment S and rho_L = r_O - r_I (aux),
       d a_O = I da,  d q_O = -M_b da + dq,  d m_O = (M_b rho_L^ - S^) da + dm - rho_L^ dq,
     and the modal rows through the inertia (P_k = int mu Y_k) and the end loads."""
-    m = modes.shape[0]
+    m = ends.shape[0]
     e2 = (rot[0, 1], rot[1, 1], rot[2, 1])
     e3 = (rot[0, 2], rot[1, 2], rot[2, 2])
-    mass = 0.0
-    for j in range(wq.shape[0]):
-        mass += mu * wq[j]
+    mass = bp[1] * bp[0]
     rl_h = t_hat(t_of_vec(aux[1]))                      # rho_L^
     dm_da = t_lin9(mass, rl_h, -1.0, t_hat(t_of_vec(aux[0])))      # M_b rho_L^ - S^
     for i in range(3):
@@ -376,9 +394,7 @@ def _affine_columns(mu, wq, modes, ends, welded, rot, aux, d_o, d_r):
             d_o[6 + i, c] = dm_da[3 * i + c]
             d_o[6 + i, 9 + c] = -rl_h[3 * i + c]
     for k in range(m):
-        p_k = 0.0
-        for j in range(wq.shape[0]):
-            p_k += mu * wq[j] * modes[k, j]
+        p_k = bp[1] * moments[k, 0]
         y_l, dy_l = ends[k, 0], ends[k, 1]
         for c in range(3):
             # inertia (d r''/d a_I = I) and the end force q_O
@@ -508,24 +524,12 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
       d a_O = Y_k(L) G,  d q_O = -P_k G,
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
-      the diagonal: damping and stiffness).  scratch: 6 + m + m^2 entries (m modes per plane)."""
-    _, wq, modes, ends, factors = tables
+      the diagonal: damping and stiffness).  scratch: 6 entries."""
+    moments, ends, factors = tables
     mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
-    m = modes.shape[0]
+    m = ends.shape[0]
     rho_l = aux[1]
     big_g, d_q = scratch[0:3], scratch[3:6]
-    p_mode = scratch[6:6 + m]                           # P_k = int mu Y_k
-    m_modes = scratch[6 + m:6 + m + m * m].reshape((m, m))     # M_lk = int mu Y_l Y_k
-    for k in range(m):
-        p_k = 0.0
-        for j in range(wq.shape[0]):
-            p_k += mu * wq[j] * modes[k, j]
-        p_mode[k] = p_k
-        for l in range(m):
-            m_lk = 0.0
-            for j in range(wq.shape[0]):
-                m_lk += mu * wq[j] * modes[l, j] * modes[k, j]
-            m_modes[l, k] = m_lk
     for plane in range(2):
         g = rot[:, 1 + plane]
         g0, g1, g2 = g[0], g[1], g[2]
@@ -535,7 +539,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
         big_g[2] = g2 + 2.0 * r * wg2 + s * (wd[0] * g1 - wd[1] * g0 + w[0] * wg1 - w[1] * wg0)
         for k in range(m):
             col = 12 + plane * m + k
-            p_k = p_mode[k]
+            p_k = mu * moments[k, 0]
             y_l = ends[k, 0]
             f_k = aux[SUM_MODES + k]
             q_k = aux[SUM_MODES + m + k]
@@ -555,7 +559,8 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
                 h_dot_g = h0 * big_g[0] + h1 * big_g[1] + h2 * big_g[2]
                 h_dot_q = h0 * d_q[0] + h1 * d_q[1] + h2 * d_q[2]
                 for l in range(m):
-                    d_r[plane2 * m + l, col] = m_modes[l, k] * h_dot_g + ends[l, 0] * h_dot_q
+                    d_r[plane2 * m + l, col] = (mu * moments[l, 2 + k] * h_dot_g
+                                                + ends[l, 0] * h_dot_q)
             modal_mass = mu * factors[k, 0]
             stiffness = (ei_v if plane == 0 else ei_w) * factors[k, 1]
             omega_k = np.sqrt(stiffness / modal_mass)
@@ -616,14 +621,14 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
     eta' = c3 eta + w3e.  tables, outboard, history: see _evaluate."""
     welded = outboard[0]
-    _, wq, modes, ends, _ = tables
+    ends = tables[1]
     n = eta_dd_star.shape[0]
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
     nw = 24 + 2 * n
     na = 3 * aux_rows(n // 2)
     block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 15 + n // 2 + (n // 2) ** 2)
+                     + 15)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -650,7 +655,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
                     c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
-    _affine_columns(bp[1], wq, modes, ends, welded, rot, aux, d_o, d_r)
+    _affine_columns(bp, tables[0], ends, welded, rot, aux, d_o, d_r)
     # w' and eta'' columns written out unless the output carries a moment (welded) or its own
     # history (the paper's scheme); there, forward differences below
     analytic = not welded and not (history[0] and not start)

@@ -144,7 +144,7 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
     angular accelerations and elastic hinges are LOCKED (their loads are set by the caller).
     rot, w3: the bodies' rotations at the step's start and the integrator's offsets (beams).
-    beams = (body_kind, beam_params, xq, wq, modes, mode_off, ends, factors) (solver.beam_tables);
+    beams = (body_kind, beam_params, moments, mode_off, ends, factors) (solver.beam_tables);
     modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
     coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
     beam's end section (kernels/beam.py).  stations = (independent, w1_st, w1_c): in the
@@ -153,7 +153,7 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme")."""
     independent, w1_st, w1_c = stations
     independent = independent and not at_start
-    body_kind, beam_params, beam_xq, beam_wq, beam_modes, mode_off, beam_ends, beam_factors = beams
+    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     n = body_params.shape[0]
     load = np.empty(3)
@@ -190,8 +190,7 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
             kout = k + 1 if welded else k
             outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
                         wd[kout] - c1 * phi_star[kout])
-            tables = (beam_xq[k], beam_wq[k], beam_modes[k, :m], beam_ends[k, :m],
-                      beam_factors[k, :m])
+            tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
             history = (independent, w1_st[k + 1] - w1_st[k])
             beam_transfer(beam_params[k], tables, outboard, history, gravity, at_start, rot[k],
                           phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
@@ -296,7 +295,7 @@ def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_param
 @njit(cache=True)
 def _modal_accelerations(beams, eta_map, z, eta_acc):
     """eta'' of every beam from its input station (angular-acceleration slots)."""
-    body_kind, mode_off = beams[0], beams[5]
+    body_kind, mode_off = beams[0], beams[3]
     zin = np.empty(13)
     zin[12] = 1.0
     for k in range(body_kind.shape[0]):
