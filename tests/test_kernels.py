@@ -227,7 +227,7 @@ def test_beam_relations_match_a_direct_quadrature(family, m):
     w, wd, a_i, m_i, q_i, g = (gen.normal(size=3) for _ in range(6))
     eta, eta_d, eta_dd = (gen.normal(size=n) * s for s in (0.05, 0.5, 5.0))
     out, res, aux = np.empty(12), np.empty(n), np.empty((aux_rows(m), 3))
-    beam_relations(bp, moments[0], ends[0], factors[0], False, g, rot, w, wd, eta, eta_d, eta_dd,
+    beam_relations(bp, moments[0], ends[0], factors[0], g, rot, w, wd, eta, eta_d, eta_dd,
                    a_i, m_i, q_i, out, res, aux)
 
     t, wt = np.polynomial.legendre.leggauss(40)

@@ -3,23 +3,22 @@
 
 The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), on
 preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
-angular-acceleration slots (no 12 x 13 transfer), a beam's transfer (kernels/beam.py, already in
-those slots) is folded, and each map goes straight into its Riccati step.  Results agree with
+angular-acceleration slots (no 12 x 13 transfer), so is a beam's (kernels/beam.py::beam_ball_map),
+and each map goes straight into its Riccati step.  Results agree with
 the general loop to rounding (tests/test_ball_chain.py).
 """
 import numpy as np
 from numba import njit
 
 from ..elements import BEAM
-from .beam import beam_transfer
+from .beam import ball_map_work_size, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
 from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt, t_mul_hat,
                    t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into, report
-from .sweep import (fold_ball_body, riccati_reduced_recover, riccati_reduced_step,
-                    riccati_reduced_tip)
+from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
 @njit(cache=True)
@@ -191,10 +190,10 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     a1e = np.zeros(n_eta)
     eta_dd_star = np.zeros(n_eta)
     eta_dd_new = np.zeros(n_eta)
-    u = np.empty((12, 13))
-    z_in = np.zeros(12)                             # a beam's input guess [a, w', 0, q]
-    outboard = (False, np.eye(3), np.eye(3), np.zeros(3))   # a ball joint at every output
-    history = (False, np.zeros(3))                  # (the paper's scheme: never here)
+    max_modes = 0
+    for k in range(n):
+        max_modes = max(max_modes, mode_off[k + 1] - mode_off[k])
+    beam_work = np.empty(ball_map_work_size(max_modes))    # (beam_ball_map's)
     for k in range(n):                              # the guess: the last solution
         for i in range(3):
             aq[k, i] = z[2 * k + 1, i]
@@ -226,16 +225,11 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                 if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
                     i0, i1 = mode_off[k], mode_off[k + 1]
                     m = (i1 - i0) // 2
-                    for i in range(3):
-                        z_in[i] = aq[k, i]
-                        z_in[3 + i] = wd[i]
-                        z_in[9 + i] = aq[k, 3 + i]
                     tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
-                    beam_transfer(beam_params[k], tables, outboard, history, gravity, False,
-                                  rot[k], phi, wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
-                                  eta[i0:i1], eta_d[i0:i1], z_in, eta_dd_star[i0:i1], u,
+                    beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
+                                  w1e[i0:i1], w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], aq[k, 0:3],
+                                  aq[k, 3:6], eta_dd_star[i0:i1], beam_work, v, pmap[k],
                                   eta_map[i0:i1])
-                    fold_ball_body(u, v, pmap[k])
                 else:
                     expm_so3(phi, e3)
                     _mm(e3, rot[k], rot_star)
@@ -263,12 +257,11 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     change = max(change, abs(x - phi_star[k, i]))
                     if not np.isfinite(x):
                         finite = False
-                if body_kind[k] == BEAM:            # eta'' = eta_map [a, w', 0, q; 1]
+                if body_kind[k] == BEAM:            # eta'' = eta_map[:, :7] [a; q; 1]
                     for i in range(mode_off[k], mode_off[k + 1]):
-                        e = eta_map[i, 12]
-                        for c in range(3):
-                            e += (eta_map[i, c] * aq[k, c] + eta_map[i, 3 + c] * alpha[c]
-                                  + eta_map[i, 9 + c] * aq[k, 3 + c])
+                        e = eta_map[i, 6]
+                        for c in range(6):
+                            e += eta_map[i, c] * aq[k, c]
                         eta_dd_new[i] = e
                         change = max(change, abs(e - eta_dd_star[i]) / c1)
             if not finite:

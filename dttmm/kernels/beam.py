@@ -53,17 +53,16 @@ def gauss_points(length, n_points):
 
 
 @njit(cache=True)
-def beam_relations(bp, moments, ends, factors, end_moment, gravity, rot, w, wd, eta, eta_d,
-                   eta_dd, a_i, m_i, q_i, out, residual, aux):
+def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i,
+                   m_i, q_i, out, residual, aux):
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
-    sides, with the end loads' generalized forces (the moment's only if end_moment: a fixed hinge
-    at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the modal
+    sides, with the end force's generalized forces (an end moment's: add_end_moment, at a fixed
+    hinge at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the modal
     integrals [int Y_k, int x Y_k, int Y_k Y_l] (beam_moments); ends (m, 2): Y_k(L), Y_k'(L);
     factors (m, 2): modal mass over mu and modal stiffness over EI.  aux (4, 3) receives what
     the analytic columns of the linearization need (beam_transfer): the first mass moment
-    S = int mu rho, rho_L = r_O - r_I, and A J_l(theta_O) e2, A J_l(theta_O) e3 (zero unless
-    end_moment); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums
+    S = int mu rho, rho_L = r_O - r_I, and zeros (add_end_moment's A J_l(theta_O) e2, e3); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums
     the analytic w' and eta'' columns need (_rotation_columns, _modal_columns; the row layout:
     aux_rows).
     The integrals along the beam are linear and quadratic in eta, so they are written with the
@@ -262,20 +261,32 @@ def beam_relations(bp, moments, ends, factors, end_moment, gravity, rot, w, wd, 
     # generalized forces of the outboard's -q_O (at O) and -m_O (docs/beam.md, modal equations)
     q2 = qo0 * rot[0, 1] + qo1 * rot[1, 1] + qo2 * rot[2, 1]
     q3 = qo0 * rot[0, 2] + qo1 * rot[1, 2] + qo2 * rot[2, 2]
-    mv = mw = 0.0
-    if end_moment:
-        theta = end_angles(ends, eta)
-        jl = np.empty((3, 3))
-        left_jacobian(theta, jl)
-        for i in range(3):
-            aux[2, i] = rot[i, 0] * jl[0, 1] + rot[i, 1] * jl[1, 1] + rot[i, 2] * jl[2, 1]
-            aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
-        for i in range(3):
-            mv += out[6 + i] * aux[3, i]
-            mw -= out[6 + i] * aux[2, i]
     for k in range(m):
-        residual[k] += q2 * ends[k, 0] + mv * ends[k, 1]
-        residual[m + k] += q3 * ends[k, 0] + mw * ends[k, 1]
+        residual[k] += q2 * ends[k, 0]
+        residual[m + k] += q3 * ends[k, 0]
+
+
+@njit(cache=True)
+def add_end_moment(ends, eta, rot, out, residual, aux):
+    """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
+    on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
+    Y_k'(L), residual_w,k -= m_O . (A J_l e2) Y_k'(L), J_l = J_l(theta_O); aux[2], aux[3] =
+    A J_l e2, A J_l e3.  out, residual, aux: beam_relations'.  (Kept out of beam_relations,
+    whose loops LLVM optimizes better without this branch's allocations: measured 0.34 against
+    0.25 us per evaluation.)"""
+    m = ends.shape[0]
+    jl = np.empty((3, 3))
+    left_jacobian(end_angles(ends, eta), jl)
+    for i in range(3):
+        aux[2, i] = rot[i, 0] * jl[0, 1] + rot[i, 1] * jl[1, 1] + rot[i, 2] * jl[2, 1]
+        aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
+    mv = mw = 0.0
+    for i in range(3):
+        mv += out[6 + i] * aux[3, i]
+        mw -= out[6 + i] * aux[2, i]
+    for k in range(m):
+        residual[k] += mv * ends[k, 1]
+        residual[m + k] += mw * ends[k, 1]
 
 
 @njit(cache=True)
@@ -348,8 +359,10 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for i in range(n):
             eta[i] = (eta_dd[i] - w1e[i]) / c1
             eta_d[i] = c3 * eta[i] + w3e[i]
-    beam_relations(bp, moments, ends, factors, welded, gravity, rot, w, wd, eta, eta_d,
-                   eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
+    beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, x[0:3],
+                   x[6:9], x[9:12], out, residual, aux)
+    if welded:
+        add_end_moment(ends, eta, rot, out, residual, aux)
     independent, dw1 = history
     if independent and not start:
         m = ends.shape[0]
@@ -495,16 +508,17 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
     for i in range(3):
         for j in range(3):
             d_o[6 + i, 3 + j] = dm[3 * i + j]
-    # modal rows
-    for plane in range(2):
-        g = (rot[0, 1 + plane], rot[1, 1 + plane], rot[2, 1 + plane])
-        gq = t_cross(g, qo)
-        for l in range(m):
-            y_l = ends[l, 0]
-            dcol = point_jacobian_values(t_of_vec(aux[SUM_MODES + m + l]),
-                                         t_of_vec(aux[SUM_MODES + 2 * m + l]),
-                                         t_of_vec(aux[SUM_MODES + 3 * m + l]), w_, kmat, lm, s, r)
-            fg = t_cross(t_of_vec(aux[SUM_MODES + l]), g)
+    # modal rows (D(Q_l, ..) is the same for both planes)
+    for l in range(m):
+        y_l = ends[l, 0]
+        dcol = point_jacobian_values(t_of_vec(aux[SUM_MODES + m + l]),
+                                     t_of_vec(aux[SUM_MODES + 2 * m + l]),
+                                     t_of_vec(aux[SUM_MODES + 3 * m + l]), w_, kmat, lm, s, r)
+        f_l = t_of_vec(aux[SUM_MODES + l])
+        for plane in range(2):
+            g = (rot[0, 1 + plane], rot[1, 1 + plane], rot[2, 1 + plane])
+            gq = t_cross(g, qo)
+            fg = t_cross(f_l, g)
             vec = (fg[0] + y_l * gq[0], fg[1] + y_l * gq[1], fg[2] + y_l * gq[2])
             row = plane * m + l
             for j in range(3):
@@ -721,3 +735,103 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
             for i in range(n):
                 const += d_o[r, 12 + i] * rhs[i, 9]
         u[r, 12] = const
+
+
+@njit(cache=True)
+def ball_map_work_size(n):
+    """Entries of beam_ball_map's work array for n modal coordinates."""
+    nx, ny = 12 + n, 3 + n
+    return nx + 12 + n + 21 + 2 * n + 3 * aux_rows(n // 2) + nx * nx + ny * ny + 7 * ny + 15
+
+
+@njit(cache=True)
+def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e, eta_n,
+                  eta_d_n, a_i, q_i, eta_dd_star, work, v, pmap, emap):
+    """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded
+    straight into the fused loop's reduced maps (docs/beam.md, "Between ball joints"):
+      [a_O; q_O] = v [a_I; q_I; 1],   w' = pmap [a_I; q_I; 1],   eta'' = emap[:, :7] [a_I; q_I; 1],
+    linearized about (a_I*, w'*, q_I*, eta''*) = (a_i, wd_star, q_i, eta_dd_star).  The same
+    relations and columns as beam_transfer (beam_relations, _affine_columns, _modal_columns,
+    _rotation_columns) with m_I = 0; the moment rows (m_O = 0) and the modal rows are solved at
+    once for (w', eta''), a (3 + n)-square system with 7 right-hand sides, which replaces
+    beam_transfer's modal solve, its 12 x 13 product and fold_ball_body's.  The other
+    arguments as for beam_transfer; work: ball_map_work_size(n) entries (no allocation)."""
+    moments, ends = tables[0], tables[1]
+    n = eta_dd_star.shape[0]
+    nx, ny = 12 + n, 3 + n
+    x0, o0, r0 = work[0:nx], work[nx:nx + 12], work[nx + 12:nx + 12 + n]
+    o = nx + 12 + n
+    e, rot = work[o:o + 9].reshape((3, 3)), work[o + 9:o + 18].reshape((3, 3))
+    w, eta, eta_d = work[o + 18:o + 21], work[o + 21:o + 21 + n], work[o + 21 + n:o + 21 + 2 * n]
+    o += 21 + 2 * n
+    na = 3 * aux_rows(n // 2)
+    aux = work[o:o + na].reshape((na // 3, 3))
+    o += na
+    d_o = work[o:o + 12 * nx].reshape((12, nx))
+    o += 12 * nx
+    d_r = work[o:o + n * nx].reshape((n, nx))
+    o += n * nx
+    kmat = work[o:o + ny * ny].reshape((ny, ny))
+    o += ny * ny
+    g = work[o:o + 7 * ny].reshape((ny, 7))
+    o += 7 * ny
+    lam = work[o:o + 9].reshape((3, 3))
+    scratch = work[o + 9:o + 15]
+    # the state at the guess (as _evaluate): phi = phi*, w = c3 phi* + w3, A = exp(phi*^) A_n,
+    # eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e
+    for i in range(3):
+        x0[i], x0[3 + i], x0[6 + i], x0[9 + i] = a_i[i], wd_star[i], 0.0, q_i[i]
+        w[i] = c3 * phi_star[i] + w3[i]
+    for i in range(n):
+        x0[12 + i] = eta_dd_star[i]
+        eta[i] = (eta_dd_star[i] - w1e[i]) / c1
+        eta_d[i] = c3 * eta[i] + w3e[i]
+    expm_so3(phi_star, e)
+    matmul_into(e, rot_n, rot)
+    beam_relations(bp, moments, ends, tables[2], gravity, rot, w, wd_star, eta, eta_d,
+                   eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
+    d_o[:, :] = 0.0
+    d_r[:, :] = 0.0
+    s_c, r_c = 1.0 / c1, c3 / c1
+    _affine_columns(bp, moments, ends, False, rot, aux, d_o, d_r)
+    left_jacobian(phi_star, lam)
+    _modal_columns(bp, tables, rot, w, wd_star, s_c, r_c, o0[9:12], aux, d_o, d_r, scratch)
+    _rotation_columns(bp, ends, rot, lam, w, wd_star, s_c, r_c, a_i, o0[9:12], gravity, aux,
+                      d_o, d_r)
+    # rows m_O (d_o 6:9) and the modal residuals (d_r) in the unknowns y = [w', eta''] (columns
+    # 3:6, 12:): K (y - y*) = -(B (z - z*) + c), z = [a_I; q_I] (columns 0:3, 9:12), so
+    # y = y* + G [z - z*; 1] with G = -K^-1 [B, c]
+    for i in range(ny):
+        row = d_o[6 + i] if i < 3 else d_r[i - 3]
+        for j in range(ny):
+            kmat[i, j] = row[3 + j] if j < 3 else row[9 + j]
+        for c in range(6):
+            g[i, c] = -row[c if c < 3 else c + 6]
+        g[i, 6] = -(o0[6 + i] if i < 3 else r0[i - 3])
+    _solve_in_place(kmat, g)
+    for i in range(ny):                      # the maps of w' and eta'' over [a_I; q_I; 1]
+        const = (wd_star[i] if i < 3 else eta_dd_star[i - 3]) + g[i, 6]
+        for c in range(6):
+            const -= g[i, c] * (a_i[c] if c < 3 else q_i[c - 3])
+            if i < 3:
+                pmap[i, c] = g[i, c]
+            else:
+                emap[i - 3, c] = g[i, c]
+        if i < 3:
+            pmap[i, 6] = const
+        else:
+            emap[i - 3, 6] = const
+    for r in range(6):                       # [a_O; q_O] = o0 + D_z (z - z*) + D_y G [z - z*; 1]
+        row = d_o[r if r < 3 else r + 6]
+        const = row_y_g = 0.0
+        for c in range(7):
+            acc = 0.0
+            for j in range(ny):
+                acc += row[3 + j if j < 3 else 9 + j] * g[j, c]
+            if c < 6:
+                acc += row[c if c < 3 else c + 6]
+                v[r, c] = acc
+                const -= acc * (a_i[c] if c < 3 else q_i[c - 3])
+            else:
+                row_y_g = acc
+        v[r, 6] = o0[r if r < 3 else r + 6] + row_y_g + const
