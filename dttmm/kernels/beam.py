@@ -16,9 +16,10 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
+from . import no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
-from .mat3 import (matmul_into, t_cross, t_hat, t_hat_mul, t_lin9, t_mm, t_mul_hat, t_mv,
-                   t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
+from .mat3 import (matmul_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat,
+                   t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
 from .so3 import expm_so3, left_jacobian, log_so3
 
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
@@ -52,7 +53,7 @@ def gauss_points(length, n_points):
     return 0.5 * length * (x + 1.0), 0.5 * length * w
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i,
                    m_i, q_i, out, residual, aux):
     """The beam's exact relations in a given state (docs/beam.md):
@@ -144,14 +145,12 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         if sums:
             f0 = (p_k * gm0 - (al1 * q2 - al2 * q1) - (o1 * oq2 - o2 * oq1)
                   - 2.0 * (o1 * mdw - o2 * mdv))
-            fk, qk = aux[SUM_MODES + k], aux[SUM_MODES + m + k]
-            uk, vk = aux[SUM_MODES + 2 * m + k], aux[SUM_MODES + 3 * m + k]
             for i in range(3):
                 c0, c1, c2 = rot[i, 0], rot[i, 1], rot[i, 2]
-                fk[i] = mu * (c0 * f0 + c1 * f1 + c2 * f2)
-                qk[i] = mu * (c0 * q0 + c1 * q1 + c2 * q2)
-                uk[i] = mu * (c1 * mdv + c2 * mdw)
-                vk[i] = mu * (c1 * mddv + c2 * mddw)
+                aux[SUM_MODES + k, i] = mu * (c0 * f0 + c1 * f1 + c2 * f2)          # F_k
+                aux[SUM_MODES + m + k, i] = mu * (c0 * q0 + c1 * q1 + c2 * q2)      # Q_k
+                aux[SUM_MODES + 2 * m + k, i] = mu * (c1 * mdv + c2 * mdw)
+                aux[SUM_MODES + 3 * m + k, i] = mu * (c1 * mddv + c2 * mddw)
     # s, s', s'' and the second moments Pi (per unit mu, in the frame)
     s0, s1, s2 = 0.5 * length * length, pv, pw
     pxx = length * length * length / 3.0
@@ -227,10 +226,9 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         wdd_l += y * eta_dd[m + k]
     # (in scalars: this tail runs once per evaluation, where small temporaries would cost more
     # than the arithmetic)
-    rho_l = aux[1]
     for i in range(3):
-        rho_l[i] = length * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]
-    r0, r1, r2 = rho_l[0], rho_l[1], rho_l[2]
+        aux[1, i] = length * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]     # rho_L
+    r0, r1, r2 = aux[1, 0], aux[1, 1], aux[1, 2]
     qo0, qo1, qo2 = q_i[0] + sf0, q_i[1] + sf1, q_i[2] + sf2
     jp = j_p * length
     s_wd = jp * (e10 * wd0 + e11 * wd1 + e12 * wd2)
@@ -385,7 +383,7 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     return rot
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def _affine_columns(bp, moments, ends, welded, rot, aux, d_o, d_r):
     """The Jacobian's columns for a_I (0:3), m_I (6:9) and q_I (9:12), in which the relations
     are affine (docs/beam.md, "The DT-TMM transfer"): with the beam's mass M_b, its first mass
@@ -434,7 +432,7 @@ def _affine_columns(bp, moments, ends, welded, rot, aux, d_o, d_r):
                 d_r[m + k, 6 + c] = dy_l * gw[c]
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d_o, d_r):
     """The Jacobian's w' columns (3:6) for a beam whose output carries no moment (docs/beam.md,
     "The w' columns"): every relation through w' itself, w (r = c3/c1) and the frame's rotation
@@ -528,7 +526,7 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
                 d_r[row, 3 + j] = x
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
     """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment (docs/beam.md,
     "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by r = c3/c1 (s = r = 0 at
@@ -581,7 +579,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
             d_r[plane * m + k, col] += r * 2.0 * zeta * omega_k * modal_mass + s * stiffness
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def _solve_in_place(a, b):
     """b <- a^-1 b by Gaussian elimination with partial pivoting (a is overwritten): the modal
     systems are small (2 .. 12), where LAPACK's call overhead dominates.  A singular a leaves b
@@ -741,10 +739,11 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
 def ball_map_work_size(n):
     """Entries of beam_ball_map's work array for n modal coordinates."""
     nx, ny = 12 + n, 3 + n
-    return nx + 12 + n + 21 + 2 * n + 3 * aux_rows(n // 2) + nx * nx + ny * ny + 7 * ny + 15
+    return (nx + 12 + n + 21 + 2 * n + 3 * aux_rows(n // 2) + nx * nx + n * n + 10 * n + 7 * ny
+            + 15)
 
 
-@njit(cache=True)
+@no_alloc_kernel
 def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e, eta_n,
                   eta_d_n, a_i, q_i, eta_dd_star, work, v, pmap, emap):
     """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded
@@ -752,10 +751,11 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
       [a_O; q_O] = v [a_I; q_I; 1],   w' = pmap [a_I; q_I; 1],   eta'' = emap[:, :7] [a_I; q_I; 1],
     linearized about (a_I*, w'*, q_I*, eta''*) = (a_i, wd_star, q_i, eta_dd_star).  The same
     relations and columns as beam_transfer (beam_relations, _affine_columns, _modal_columns,
-    _rotation_columns) with m_I = 0; the moment rows (m_O = 0) and the modal rows are solved at
-    once for (w', eta''), a (3 + n)-square system with 7 right-hand sides, which replaces
-    beam_transfer's modal solve, its 12 x 13 product and fold_ball_body's.  The other
-    arguments as for beam_transfer; work: ball_map_work_size(n) entries (no allocation)."""
+    _rotation_columns) with m_I = 0; the moment rows (m_O = 0) and the modal rows are solved
+    together for (w', eta'') by blocks (the modal system, then a 3 x 3 Schur complement),
+    which replaces beam_transfer's modal solve, its 12 x 13 product and sweep.fold_ball_body.
+    The other arguments as for beam_transfer; work: ball_map_work_size(n) entries (no
+    allocation)."""
     moments, ends = tables[0], tables[1]
     n = eta_dd_star.shape[0]
     nx, ny = 12 + n, 3 + n
@@ -771,8 +771,10 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
     o += 12 * nx
     d_r = work[o:o + n * nx].reshape((n, nx))
     o += n * nx
-    kmat = work[o:o + ny * ny].reshape((ny, ny))
-    o += ny * ny
+    kmat = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    xm = work[o:o + 10 * n].reshape((n, 10))
+    o += 10 * n
     g = work[o:o + 7 * ny].reshape((ny, 7))
     o += 7 * ny
     lam = work[o:o + 9].reshape((3, 3))
@@ -800,15 +802,39 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
                       d_o, d_r)
     # rows m_O (d_o 6:9) and the modal residuals (d_r) in the unknowns y = [w', eta''] (columns
     # 3:6, 12:): K (y - y*) = -(B (z - z*) + c), z = [a_I; q_I] (columns 0:3, 9:12), so
-    # y = y* + G [z - z*; 1] with G = -K^-1 [B, c]
-    for i in range(ny):
-        row = d_o[6 + i] if i < 3 else d_r[i - 3]
-        for j in range(ny):
-            kmat[i, j] = row[3 + j] if j < 3 else row[9 + j]
+    # y = y* + G [z - z*; 1] with G = -K^-1 [B, c].  By blocks, K = [[K_mw, K_me], [K_rw, K_re]]:
+    # X = K_re^-1 [K_rw, -B_r, -c_r] (the modal system), the Schur complement
+    # S = K_mw - K_me X_w, then G_w = S^-1 (-[B_m, c_m] - K_me X_z), G_eta = X_z - X_w G_w
+    for i in range(n):
+        for j in range(n):
+            kmat[i, j] = d_r[i, 12 + j]
+        for j in range(3):
+            xm[i, j] = d_r[i, 3 + j]
         for c in range(6):
-            g[i, c] = -row[c if c < 3 else c + 6]
-        g[i, 6] = -(o0[6 + i] if i < 3 else r0[i - 3])
-    _solve_in_place(kmat, g)
+            xm[i, 3 + c] = -d_r[i, c if c < 3 else c + 6]
+        xm[i, 9] = -r0[i]
+    _solve_in_place(kmat, xm)
+    for i in range(3):
+        for j in range(3):
+            x = d_o[6 + i, 3 + j]
+            for l in range(n):
+                x -= d_o[6 + i, 12 + l] * xm[l, j]
+            g[i, j] = x                      # S (g's first rows are free until G_w)
+    det, s_inv = t_inverse(t_of_mat(g))
+    if det == 0.0:
+        s_inv = (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan)
+    for c in range(7):
+        for i in range(3):                   # -[B_m, c_m] - K_me X_z, then S^-1 times it
+            x = -(d_o[6 + i, c if c < 3 else c + 6] if c < 6 else o0[6 + i])
+            for l in range(n):
+                x -= d_o[6 + i, 12 + l] * xm[l, 3 + c]
+            g[i, c] = x
+        r_0, r_1, r_2 = g[0, c], g[1, c], g[2, c]
+        for i in range(3):
+            g[i, c] = s_inv[3 * i] * r_0 + s_inv[3 * i + 1] * r_1 + s_inv[3 * i + 2] * r_2
+        for l in range(n):
+            g[3 + l, c] = xm[l, 3 + c] - (xm[l, 0] * g[0, c] + xm[l, 1] * g[1, c]
+                                          + xm[l, 2] * g[2, c])
     for i in range(ny):                      # the maps of w' and eta'' over [a_I; q_I; 1]
         const = (wd_star[i] if i < 3 else eta_dd_star[i - 3]) + g[i, 6]
         for c in range(6):
