@@ -3,9 +3,9 @@
 
 The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), on
 preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
-angular-acceleration slots (no 12 x 13 transfer), so is a beam's (kernels/beam.py::beam_ball_map),
-and each map goes straight into its Riccati step.  Results agree with
-the general loop to rounding (tests/test_ball_chain.py).
+angular-acceleration slots (no 12 x 13 transfer), and so is each beam's
+(kernels/beam.py::beam_ball_map); each map goes straight into its Riccati step.  Results agree
+with the general loop to rounding (tests/test_ball_chain.py).
 """
 import numpy as np
 from numba import njit
@@ -160,7 +160,8 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                        eta_map, rec_eta, rec_eta_d):
     """kernels/step.py::advance for a chain of rigid bodies and beams joined by ball joints
     (RICCATI_REDUCED mode, Newmark scheme), the same arguments' meaning; z holds the stations'
-    states (input guess and output) in the general loop's layout.  Per step and Newton iteration
+    states (input guess and output) in the general loop's layout; eta_map's first 7 columns
+    hold the beams' maps eta'' = eta_map[:, :7] [a_I; q_I; 1].  Per step and Newton iteration
     one forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
     (recovery, beams' modal accelerations)."""
     n = body_params.shape[0]
