@@ -282,3 +282,48 @@ def test_beam_relations_match_a_direct_quadrature(family, m):
     for name, (got, ref) in want.items():
         scale = np.abs(ref).max() + 1e-300
         assert np.abs(got - ref).max() < 1e-12 * scale, name
+
+
+def test_beam_ball_map_folds_the_beam_transfer():
+    """The fused loop's beam map (beam_ball_map: the moment and modal rows solved together by
+    blocks) against the general loop's path for the same state: beam_transfer (modal solve,
+    12 x 13 transfer in angular-acceleration slots), then fold_ball_body (m_I = m_O = 0) and
+    eta'' recovered from the input station with the folded w'.  Measured: 2e-15 (v), 1e-14
+    (pmap) and 4e-16 (eta map) relative to each row's largest entry."""
+    from dttmm.chains import three_pendulum
+    from dttmm.kernels.beam import ball_map_work_size, beam_ball_map, beam_transfer
+    from dttmm.kernels.sweep import fold_ball_body
+    from dttmm.solver import Workspace
+    model = three_pendulum(2, damping_ratio=0.03)
+    _, bp, moments, mode_off, ends, factors = Workspace(model).beams
+    k, m = 1, 2
+    n = 2 * m
+    tables = (moments[k, :m, :m + 2], ends[k, :m], factors[k, :m])
+    gen = np.random.default_rng(5)
+    h = 1e-3
+    c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
+    rot_n = Rotation.from_rotvec([-0.3, 0.7, 0.2]).as_matrix()
+    phi_star, w3 = gen.normal(size=3) * 1e-3, gen.normal(size=3)
+    wd_star = gen.normal(size=3) * 10
+    eta_n, eta_d_n = gen.normal(size=n) * 1e-4, gen.normal(size=n) * 1e-3
+    eta_dd_star = gen.normal(size=n) * 10
+    w1e, w3e = eta_dd_star - c1 * (eta_n + 1e-7), gen.normal(size=n) * 1e-2
+    a_i, q_i = gen.normal(size=3), gen.normal(size=3)
+    w = c3 * phi_star + w3
+    z_star = np.concatenate([a_i, wd_star, np.zeros(3), q_i])
+    u, eta_map = np.empty((12, 13)), np.empty((n, 13))
+    beam_transfer(bp[k], tables, (False, np.eye(3), np.eye(3), np.zeros(3)), (False, np.zeros(3)),
+                  model.gravity, False, rot_n, phi_star, wd_star, c1, c3, w3, w, w1e, w3e, eta_n,
+                  eta_d_n, z_star, eta_dd_star, u, eta_map)
+    v_want, p_want = np.empty((6, 7)), np.empty((3, 7))
+    fold_ball_body(u, v_want, p_want)
+    # eta'' = eta_map [a, w', 0, q; 1] with w' = p_want [a; q; 1]
+    e_want = eta_map[:, [0, 1, 2, 9, 10, 11, 12]] + eta_map[:, 3:6] @ p_want
+    v, pmap, emap = np.empty((6, 7)), np.empty((3, 7)), np.full((n, 13), np.nan)
+    beam_ball_map(bp[k], tables, model.gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e,
+                  eta_n, eta_d_n, a_i, q_i, eta_dd_star, np.empty(ball_map_work_size(n)), v,
+                  pmap, emap)
+    for name, got, want in (("v", v, v_want), ("pmap", pmap, p_want),
+                            ("eta map", emap[:, :7], e_want)):
+        scale = np.abs(want).max(axis=1, keepdims=True)
+        assert np.abs((got - want) / scale).max() < 1e-11, name
