@@ -59,12 +59,13 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end force's generalized forces (an end moment's: add_end_moment, at a fixed
-    hinge at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the modal
-    integrals [int Y_k, int x Y_k, int Y_k Y_l] (beam_moments); ends (m, 2): Y_k(L), Y_k'(L);
-    factors (m, 2): modal mass over mu and modal stiffness over EI.  aux (4, 3) receives what
-    the analytic columns of the linearization need (beam_transfer): the first mass moment
-    S = int mu rho, rho_L = r_O - r_I, and zeros (add_end_moment's A J_l(theta_O) e2, e3); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums
-    the analytic w' and eta'' columns need (_rotation_columns, _modal_columns; the row layout:
+    hinge at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the
+    modal integrals [int Y_k, int x Y_k, int Y_k Y_l] (solver.beam_tables); ends (m, 2):
+    Y_k(L), Y_k'(L); factors (m, 2): modal mass over mu and modal stiffness over EI.  aux (4, 3)
+    receives what the analytic columns of the linearization need (beam_transfer): the first
+    mass moment S = int mu rho, rho_L = r_O - r_I, and zeros (add_end_moment's A J_l(theta_O)
+    e2, e3); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums the
+    analytic w' and eta'' columns need (_rotation_columns, _modal_columns; the row layout:
     aux_rows).
     The integrals along the beam are linear and quadratic in eta, so they are written with the
     modal integrals in the beam's frame (docs/beam.md, "The integrals in the frame"): with
@@ -115,7 +116,7 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         xdw += x_k * edw
         xddv += x_k * eddv
         xddw += x_k * eddw
-        # (M eta_v)_k, (M eta_w)_k and their rates: Q_k's, Q_k''s and Q_k'''s last entries
+        # (M eta_v)_k, (M eta_w)_k and their rates: the last entries of Q_k, Q_k' and Q_k''
         mv = mw = mdv = mdw = mddv = mddw = 0.0
         for l in range(m):
             y = moments[k, 2 + l]
