@@ -21,7 +21,7 @@ from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coeffi
 from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _mm(a, b, out):
     """out = a @ b (3 x 3)."""
     for i in range(3):
@@ -30,7 +30,7 @@ def _mm(a, b, out):
             out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     """Body k's reduced map in angular-acceleration slots (docs/assembly.md, "The fused
     ball-chain step"), linearized about the guess (phi*, a_I*, q_I*):

@@ -5,7 +5,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def inv3(a, out):
     """out = a^-1 (t_inverse, written to an array); returns the determinant (out is not finite
     when it is 0)."""
@@ -16,7 +16,7 @@ def inv3(a, out):
     return det
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def matmul_into(a, b, out):
     """out = a @ b by loops (small matrices: BLAS's call overhead dominates at these sizes)."""
     for i in range(a.shape[0]):

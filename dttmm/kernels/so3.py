@@ -17,7 +17,7 @@ def hat(v, out):
     out[2, 2] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _identity_plus(a, b, phi, th2, out):
     """out = I + a phi^ + b phi^ phi^, with phi^ phi^ = phi phi^T - |phi|^2 I (th2 = |phi|^2),
     in scalars (it runs for every body and step)."""
@@ -33,7 +33,7 @@ def _identity_plus(a, b, phi, th2, out):
     out[2, 1] += a * phi[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def expm_so3(phi, out):
     """out = exp(phi^), Rodrigues' formula, series near zero."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
@@ -47,7 +47,7 @@ def expm_so3(phi, out):
     _identity_plus(a, b, phi, th2, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def left_jacobian(phi, out):
     """out = J_l(phi) = I + (1-cos t)/t^2 phi^ + (t - sin t)/t^3 phi^^, so that
     exp((phi + dphi)^) = exp((J_l dphi)^) exp(phi^) to first order."""

@@ -48,7 +48,7 @@ def _offsets(h, coef, v, acc, p):
     return w1, w3
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _offsets_into(h, coef, v, acc, p, w1, w3, x_pred):
     """_offsets in place, with the constant-acceleration predictor x_pred = h v + h^2 p / 2
     (elementwise, no temporaries: it runs for every body and step)."""
@@ -62,7 +62,7 @@ def _offsets_into(h, coef, v, acc, p, w1, w3, x_pred):
         x_pred[i] = h * v[i] + 0.5 * h * h * p[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _advance_history(h, coef, x, v, acc, p):
     """In place: v, acc, p at t_{n+1} from the increment x."""
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]

@@ -299,7 +299,7 @@ def fold_ball_body(u, v, phi_map):
                        + u[rr, 5] * phi_map[2, c])
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
     """One body of the reduced Riccati sweep, a = S q + P at its input -> at its output:
     q_I = T^-1 (q_O - tv), T = V_qa S + V_qq, tv = V_qa P + v_q;
@@ -338,7 +338,7 @@ def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
         aq_tip[3:6] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq):
     """[a; q] at body k's input from its output's: q_I = T^-1 (q_O - tv), a_I = S q_I + P."""
     for i in range(3):
