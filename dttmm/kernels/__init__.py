@@ -16,5 +16,7 @@ def no_alloc_kernel(fn):
 # exponential and left Jacobian, the 3 x 3 products and inverse, the reduced Riccati step and
 # recovery, the rigid body's reduced map) are declared njit(cache=True, inline='always'):
 # numba inlines them into each caller before compiling it.  Measured in one process, 21
-# interleaved pairs, twice: 0.78x the time per step on the rigid 3-link chain and 0.90x on the
-# three-pendulum; a cold numba cache takes ~25 s longer to fill (114 against 87 s).
+# interleaved pairs: the predictor, history, so3, Riccati step and recovery kernels 0.78x the
+# time per step on the rigid 3-link chain and 0.90x on the three-pendulum (twice); the rigid map
+# and the 3 x 3 product and inverse a further 0.87x and 0.95x (once).  A cold numba cache takes
+# ~25 s longer to fill (114 against 87 s).
