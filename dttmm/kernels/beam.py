@@ -327,6 +327,20 @@ def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
 
 
 @njit(cache=True)
+def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d):
+    """The beam's state at the end of the step for a rotation increment phi and modal
+    accelerations eta'' (the integrator's relations, docs/solver.md): w = c3 phi + w3,
+    A = exp(phi^) A_n (e: 3 x 3 scratch), eta = (eta'' - w1e) / c1, eta' = c3 eta + w3e."""
+    for i in range(3):
+        w[i] = c3 * phi[i] + w3[i]
+    expm_so3(phi, e)
+    matmul_into(e, rot_n, rot)
+    for i in range(eta.shape[0]):
+        eta[i] = (eta_dd[i] - w1e[i]) / c1
+        eta_d[i] = c3 * eta[i] + w3e[i]
+
+
+@njit(cache=True)
 def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
@@ -352,12 +366,7 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         eta_d = work[24 + n:24 + 2 * n]
         for i in range(3):
             phi[i] = phi_star[i] + (wd[i] - wd_star[i]) / c1
-            w[i] = c3 * phi[i] + w3[i]
-        expm_so3(phi, e)
-        matmul_into(e, rot_n, rot)
-        for i in range(n):
-            eta[i] = (eta_dd[i] - w1e[i]) / c1
-            eta_d[i] = c3 * eta[i] + w3e[i]
+        _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
     beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, x[0:3],
                    x[6:9], x[9:12], out, residual, aux)
     if welded:
@@ -780,17 +789,11 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
     o += 7 * ny
     lam = work[o:o + 9].reshape((3, 3))
     scratch = work[o + 9:o + 15]
-    # the state at the guess (as _evaluate): phi = phi*, w = c3 phi* + w3, A = exp(phi*^) A_n,
-    # eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e
     for i in range(3):
         x0[i], x0[3 + i], x0[6 + i], x0[9 + i] = a_i[i], wd_star[i], 0.0, q_i[i]
-        w[i] = c3 * phi_star[i] + w3[i]
     for i in range(n):
         x0[12 + i] = eta_dd_star[i]
-        eta[i] = (eta_dd_star[i] - w1e[i]) / c1
-        eta_d[i] = c3 * eta[i] + w3e[i]
-    expm_so3(phi_star, e)
-    matmul_into(e, rot_n, rot)
+    _step_state(phi_star, c1, c3, w3, rot_n, eta_dd_star, w1e, w3e, e, rot, w, eta, eta_d)
     beam_relations(bp, moments, ends, tables[2], gravity, rot, w, wd_star, eta, eta_d,
                    eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
     d_o[:, :] = 0.0
