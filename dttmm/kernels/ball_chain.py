@@ -228,9 +228,8 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
                     m = (i1 - i0) // 2
                     tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
                     beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
-                                  w1e[i0:i1], w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], aq[k, 0:3],
-                                  aq[k, 3:6], eta_dd_star[i0:i1], beam_work, v, pmap[k],
-                                  eta_map[i0:i1])
+                                  w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
+                                  eta_dd_star[i0:i1], beam_work, v, pmap[k], eta_map[i0:i1])
                 else:
                     expm_so3(phi, e3)
                     _mm(e3, rot[k], rot_star)

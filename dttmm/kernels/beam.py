@@ -754,8 +754,8 @@ def ball_map_work_size(n):
 
 
 @no_alloc_kernel
-def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e, eta_n,
-                  eta_d_n, a_i, q_i, eta_dd_star, work, v, pmap, emap):
+def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e, a_i, q_i,
+                  eta_dd_star, work, v, pmap, emap):
     """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded
     straight into the fused loop's reduced maps (docs/beam.md, "Between ball joints"):
       [a_O; q_O] = v [a_I; q_I; 1],   w' = pmap [a_I; q_I; 1],   eta'' = emap[:, :7] [a_I; q_I; 1],
@@ -764,8 +764,8 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
     _rotation_columns) with m_I = 0; the moment rows (m_O = 0) and the modal rows are solved
     together for (w', eta'') by blocks (the modal system, then a 3 x 3 Schur complement),
     which replaces beam_transfer's modal solve, its 12 x 13 product and sweep.fold_ball_body.
-    The other arguments as for beam_transfer; work: ball_map_work_size(n) entries (no
-    allocation)."""
+    The other arguments as for beam_transfer (eta and eta' come from eta''* through w1e and
+    w3e); work: ball_map_work_size(n) entries (no allocation)."""
     moments, ends = tables[0], tables[1]
     n = eta_dd_star.shape[0]
     nx, ny = 12 + n, 3 + n
