@@ -53,6 +53,23 @@ def gauss_points(length, n_points):
     return 0.5 * length * (x + 1.0), 0.5 * length * w
 
 
+@njit(cache=True)
+def _weighted_coordinates(y, eta, eta_d, eta_dd):
+    """sum_l y_l x_l for the v and the w coordinates x of eta, eta' and eta'' (m = len(y) modes
+    per plane): the deflection, its rate and its acceleration at a point, with y the mode
+    shapes there, or a row of the modal mass matrix times them."""
+    m = y.shape[0]
+    v = w = vd = wd = vdd = wdd = 0.0
+    for l in range(m):
+        v += y[l] * eta[l]
+        w += y[l] * eta[m + l]
+        vd += y[l] * eta_d[l]
+        wd += y[l] * eta_d[m + l]
+        vdd += y[l] * eta_dd[l]
+        wdd += y[l] * eta_dd[m + l]
+    return v, w, vd, wd, vdd, wdd
+
+
 @no_alloc_kernel
 def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i,
                    m_i, q_i, out, residual, aux):
@@ -117,15 +134,8 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         xddv += x_k * eddv
         xddw += x_k * eddw
         # (M eta_v)_k, (M eta_w)_k and their rates: the last entries of Q_k, Q_k' and Q_k''
-        mv = mw = mdv = mdw = mddv = mddw = 0.0
-        for l in range(m):
-            y = moments[k, 2 + l]
-            mv += y * eta[l]
-            mw += y * eta[m + l]
-            mdv += y * eta_d[l]
-            mdw += y * eta_d[m + l]
-            mddv += y * eta_dd[l]
-            mddw += y * eta_dd[m + l]
+        mv, mw, mdv, mdw, mddv, mddw = _weighted_coordinates(moments[k, 2:2 + m], eta, eta_d,
+                                                             eta_dd)
         vv += ev * mv
         vw += ev * mw
         ww += ew * mw
@@ -216,15 +226,7 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
             omega_k = np.sqrt(stiffness / modal_mass)
             residual[r] += 2.0 * zeta * omega_k * modal_mass * eta_d[r] + stiffness * eta[r]
     # the output point O = r_I + A (L e1 + u(L)) and its acceleration
-    v_l = w_l = vd_l = wd_l = vdd_l = wdd_l = 0.0
-    for k in range(m):
-        y = ends[k, 0]
-        v_l += y * eta[k]
-        w_l += y * eta[m + k]
-        vd_l += y * eta_d[k]
-        wd_l += y * eta_d[m + k]
-        vdd_l += y * eta_dd[k]
-        wdd_l += y * eta_dd[m + k]
+    v_l, w_l, vd_l, wd_l, vdd_l, wdd_l = _weighted_coordinates(ends[:, 0], eta, eta_d, eta_dd)
     # (in scalars: this tail runs once per evaluation, where small temporaries would cost more
     # than the arithmetic)
     for i in range(3):
