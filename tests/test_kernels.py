@@ -132,19 +132,22 @@ def test_inv3_matches_numpy():
 
 def test_small_solve_matches_lapack_and_flags_singular():
     """The beam's modal systems are solved without LAPACK (kernels/beam.py, _solve_in_place):
-    it must agree with numpy's solve, pivoting included, and leave NaN (for the step's finite
-    check) on a singular matrix."""
+    it must agree with numpy's solve, pivoting included, on the first n_rhs columns of b and
+    the first n columns of a (the beam map's work rows are wider), leave the rest alone, and
+    leave NaN (for the step's finite check) on a singular matrix."""
     from dttmm.kernels.beam import _solve_in_place
     rng = np.random.default_rng(7)
     for n in (2, 4, 12):
         a = rng.normal(size=(n, n))
         a[0, 0] = 0.0                                  # needs a row exchange
         b = rng.normal(size=(n, 13))
+        padded = np.hstack([a, np.full((n, 3), np.inf)])
         x = b.copy()
-        _solve_in_place(a.copy(), x)
-        assert np.allclose(x, np.linalg.solve(a, b), rtol=1e-10, atol=1e-12)
+        _solve_in_place(padded, x, 10)
+        assert np.allclose(x[:, :10], np.linalg.solve(a, b[:, :10]), rtol=1e-10, atol=1e-12)
+        assert np.array_equal(x[:, 10:], b[:, 10:])
     x = np.ones((3, 2))
-    _solve_in_place(np.zeros((3, 3)), x)
+    _solve_in_place(np.zeros((3, 3)), x, 2)
     assert np.isnan(x).all()
 
 
@@ -291,7 +294,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     eta'' recovered from the input station with the folded w'.  Measured: 2e-15 (v), 1e-14
     (pmap) and 4e-16 (eta map) relative to each row's largest entry."""
     from dttmm.chains import three_pendulum
-    from dttmm.kernels.beam import ball_map_work_size, beam_ball_map, beam_transfer
+    from dttmm.kernels.beam import ball_map_work_shape, beam_ball_map, beam_transfer
     from dttmm.kernels.sweep import fold_ball_body
     from dttmm.solver import Workspace
     model = three_pendulum(2, damping_ratio=0.03)
@@ -321,7 +324,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     e_want = eta_map[:, [0, 1, 2, 9, 10, 11, 12]] + eta_map[:, 3:6] @ p_want
     v, pmap, emap = np.empty((6, 7)), np.empty((3, 7)), np.full((n, 13), np.nan)
     beam_ball_map(bp[k], tables, model.gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e,
-                  a_i, q_i, eta_dd_star, np.empty(ball_map_work_size(n)), v, pmap, emap)
+                  a_i, q_i, eta_dd_star, np.empty(ball_map_work_shape(n)), v, pmap, emap)
     for name, got, want in (("v", v, v_want), ("pmap", pmap, p_want),
                             ("eta map", emap[:, :7], e_want)):
         scale = np.abs(want).max(axis=1, keepdims=True)

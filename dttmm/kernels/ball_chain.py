@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from ..elements import BEAM
-from .beam import ball_map_work_size, beam_ball_map
+from .beam import ball_map_work_shape, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
 from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt, t_mul_hat,
                    t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
@@ -194,7 +194,7 @@ def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params,
     max_modes = 0
     for k in range(n):
         max_modes = max(max_modes, mode_off[k + 1] - mode_off[k])
-    beam_work = np.empty(ball_map_work_size(max_modes))    # (beam_ball_map's)
+    beam_work = np.empty(ball_map_work_shape(max_modes))    # (beam_ball_map's)
     for k in range(n):                              # the guess: the last solution
         for i in range(3):
             aq[k, i] = z[2 * k + 1, i]

@@ -18,7 +18,7 @@ from numba import njit
 
 from . import no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
-from .mat3 import (matmul_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat,
+from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat,
                    t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
 from .so3 import expm_so3, left_jacobian, log_so3
 
@@ -336,7 +336,9 @@ def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
     for i in range(3):
         w[i] = c3 * phi[i] + w3[i]
     expm_so3(phi, e)
-    matmul_into(e, rot_n, rot)
+    for i in range(3):
+        for j in range(3):
+            rot[i, j] = e[i, 0] * rot_n[0, j] + e[i, 1] * rot_n[1, j] + e[i, 2] * rot_n[2, j]
     for i in range(eta.shape[0]):
         eta[i] = (eta_dd[i] - w1e[i]) / c1
         eta_d[i] = c3 * eta[i] + w3e[i]
@@ -592,10 +594,11 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
 
 
 @no_alloc_kernel
-def _solve_in_place(a, b):
-    """b <- a^-1 b by Gaussian elimination with partial pivoting (a is overwritten): the modal
-    systems are small (2 .. 12), where LAPACK's call overhead dominates.  A singular a leaves b
-    NaN, which the step's finite check reports (rather than a division error)."""
+def _solve_in_place(a, b, n_rhs):
+    """b[:, :n_rhs] <- a^-1 b[:, :n_rhs] by Gaussian elimination with partial pivoting (a is
+    overwritten; its first a.shape[0] columns are the matrix): the modal systems are small
+    (2 .. 12), where LAPACK's call overhead dominates.  A singular a leaves b NaN, which the
+    step's finite check reports (rather than a division error)."""
     n = a.shape[0]
     for k in range(n):
         p = k
@@ -605,25 +608,28 @@ def _solve_in_place(a, b):
         if p != k:
             for c in range(n):
                 a[k, c], a[p, c] = a[p, c], a[k, c]
-            for c in range(b.shape[1]):
+            for c in range(n_rhs):
                 b[k, c], b[p, c] = b[p, c], b[k, c]
         piv = a[k, k]
         if piv == 0.0:
-            b[:, :] = np.nan
+            for r in range(n):
+                for c in range(n_rhs):
+                    b[r, c] = np.nan
             return
         for r in range(k + 1, n):
             f = a[r, k] / piv
             if f != 0.0:
                 for c in range(k + 1, n):
                     a[r, c] -= f * a[k, c]
-                for c in range(b.shape[1]):
+                for c in range(n_rhs):
                     b[r, c] -= f * b[k, c]
     for k in range(n - 1, -1, -1):
-        for c in range(b.shape[1]):
+        inv = 1.0 / a[k, k]
+        for c in range(n_rhs):
             s = b[k, c]
             for j in range(k + 1, n):
                 s -= a[k, j] * b[j, c]
-            b[k, c] = s / a[k, k]
+            b[k, c] = s * inv
 
 
 @njit(cache=True)
@@ -720,7 +726,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
             rhs[r, _rhs_column(c)] = -d_r[r, c]
         rhs[r, 9] = -r0[r]
     modal[:, :] = d_r[:, 12:]
-    _solve_in_place(modal, rhs[:, :n_rhs])
+    _solve_in_place(modal, rhs, n_rhs)
     for r in range(n):
         e0 = eta_dd_star[r] + rhs[r, 9]
         for c in range(12):
@@ -748,11 +754,10 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
 
 
 @njit(cache=True)
-def ball_map_work_size(n):
-    """Entries of beam_ball_map's work array for n modal coordinates."""
-    nx, ny = 12 + n, 3 + n
-    return (nx + 12 + n + 21 + 2 * n + 3 * aux_rows(n // 2) + nx * nx + n * n + 10 * n + 7 * ny
-            + 15)
+def ball_map_work_shape(n):
+    """Shape of beam_ball_map's work block for up to n modal coordinates: rows of 12 + n
+    entries."""
+    return 31 + aux_rows(n // 2) + 3 * n + 3 + n, 12 + n
 
 
 @no_alloc_kernel
@@ -767,30 +772,28 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
     together for (w', eta'') by blocks (the modal system, then a 3 x 3 Schur complement),
     which replaces beam_transfer's modal solve, its 12 x 13 product and sweep.fold_ball_body.
     The other arguments as for beam_transfer (eta and eta' come from eta''* through w1e and
-    w3e); work: ball_map_work_size(n) entries (no allocation)."""
+    w3e).  work: a block of at least ball_map_work_shape(n) (no allocation), carved by rows:
+    each array below is a block of whole rows (or a row's start), which keeps it contiguous (a
+    reshape costs a call into numba's runtime, and a block of columns is strided)."""
     moments, ends = tables[0], tables[1]
     n = eta_dd_star.shape[0]
     nx, ny = 12 + n, 3 + n
-    x0, o0, r0 = work[0:nx], work[nx:nx + 12], work[nx + 12:nx + 12 + n]
-    o = nx + 12 + n
-    e, rot = work[o:o + 9].reshape((3, 3)), work[o + 9:o + 18].reshape((3, 3))
-    w, eta, eta_d = work[o + 18:o + 21], work[o + 21:o + 21 + n], work[o + 21 + n:o + 21 + 2 * n]
-    o += 21 + 2 * n
-    na = 3 * aux_rows(n // 2)
-    aux = work[o:o + na].reshape((na // 3, 3))
+    x0, o0, r0, w = work[0][0:nx], work[1][0:12], work[2][0:n], work[3][0:3]
+    eta, eta_d, scratch = work[4][0:n], work[5][0:n], work[6][0:6]
+    e, rot, lam, smat = work[7:10], work[10:13], work[13:16], work[16:19]   # 3 x 3 (in rows)
+    o = 19
+    na = aux_rows(n // 2)
+    aux = work[o:o + na]
     o += na
-    d_o = work[o:o + 12 * nx].reshape((12, nx))
-    o += 12 * nx
-    d_r = work[o:o + n * nx].reshape((n, nx))
-    o += n * nx
-    kmat = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    xm = work[o:o + 10 * n].reshape((n, 10))
-    o += 10 * n
-    g = work[o:o + 7 * ny].reshape((ny, 7))
-    o += 7 * ny
-    lam = work[o:o + 9].reshape((3, 3))
-    scratch = work[o + 9:o + 15]
+    d_o = work[o:o + 12]
+    o += 12
+    d_r = work[o:o + n]
+    o += n
+    kmat = work[o:o + n]
+    o += n
+    xm = work[o:o + n]                       # its first 10 columns
+    o += n
+    g = work[o:o + ny]                       # its first 7 columns
     for i in range(3):
         x0[i], x0[3 + i], x0[6 + i], x0[9 + i] = a_i[i], wd_star[i], 0.0, q_i[i]
     for i in range(n):
@@ -819,28 +822,33 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
         for c in range(6):
             xm[i, 3 + c] = -d_r[i, c if c < 3 else c + 6]
         xm[i, 9] = -r0[i]
-    _solve_in_place(kmat, xm)
+    _solve_in_place(kmat, xm, 10)
+    # S in smat, -[B_m, c_m] - K_me X_z in g's first rows; every product below by rows (the
+    # inner loops along a row, free of chained sums: measured, the column-by-column products
+    # were latency-bound)
     for i in range(3):
+        r = 6 + i
+        for c in range(7):
+            g[i, c] = -(d_o[r, c if c < 3 else c + 6] if c < 6 else o0[r])
         for j in range(3):
-            x = d_o[6 + i, 3 + j]
-            for l in range(n):
-                x -= d_o[6 + i, 12 + l] * xm[l, j]
-            g[i, j] = x                      # S (g's first rows are free until G_w)
-    det, s_inv = t_inverse(t_of_mat(g))
+            smat[i, j] = d_o[r, 3 + j]
+        for l in range(n):
+            k_l = d_o[r, 12 + l]
+            for j in range(3):
+                smat[i, j] -= k_l * xm[l, j]
+            for c in range(7):
+                g[i, c] -= k_l * xm[l, 3 + c]
+    det, s_inv = t_inverse(t_of_mat(smat))
     if det == 0.0:
         s_inv = (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan)
-    for c in range(7):
-        for i in range(3):                   # -[B_m, c_m] - K_me X_z, then S^-1 times it
-            x = -(d_o[6 + i, c if c < 3 else c + 6] if c < 6 else o0[6 + i])
-            for l in range(n):
-                x -= d_o[6 + i, 12 + l] * xm[l, 3 + c]
-            g[i, c] = x
+    for c in range(7):                       # G_w = S^-1 (-[B_m, c_m] - K_me X_z)
         r_0, r_1, r_2 = g[0, c], g[1, c], g[2, c]
         for i in range(3):
             g[i, c] = s_inv[3 * i] * r_0 + s_inv[3 * i + 1] * r_1 + s_inv[3 * i + 2] * r_2
-        for l in range(n):
-            g[3 + l, c] = xm[l, 3 + c] - (xm[l, 0] * g[0, c] + xm[l, 1] * g[1, c]
-                                          + xm[l, 2] * g[2, c])
+    for l in range(n):                       # G_eta = X_z - X_w G_w
+        x_0, x_1, x_2 = xm[l, 0], xm[l, 1], xm[l, 2]
+        for c in range(7):
+            g[3 + l, c] = xm[l, 3 + c] - (x_0 * g[0, c] + x_1 * g[1, c] + x_2 * g[2, c])
     for i in range(ny):                      # the maps of w' and eta'' over [a_I; q_I; 1]
         const = (wd_star[i] if i < 3 else eta_dd_star[i - 3]) + g[i, 6]
         for c in range(6):
@@ -855,15 +863,11 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
             emap[i - 3, 6] = const
     for r in range(6):                       # [a_O; q_O] = o0 + D_z (z - z*) + D_y G [z - z*; 1]
         row = d_o[r if r < 3 else r + 6]
-        const = row_y_g = 0.0
         for c in range(7):
-            acc = 0.0
-            for j in range(ny):
-                acc += row[3 + j if j < 3 else 9 + j] * g[j, c]
-            if c < 6:
-                acc += row[c if c < 3 else c + 6]
-                v[r, c] = acc
-                const -= acc * (a_i[c] if c < 3 else q_i[c - 3])
-            else:
-                row_y_g = acc
-        v[r, 6] = o0[r if r < 3 else r + 6] + row_y_g + const
+            v[r, c] = row[c if c < 3 else c + 6] if c < 6 else o0[r if r < 3 else r + 6]
+        for j in range(ny):
+            d_j = row[3 + j if j < 3 else 9 + j]
+            for c in range(7):
+                v[r, c] += d_j * g[j, c]
+        for c in range(6):
+            v[r, 6] -= v[r, c] * (a_i[c] if c < 3 else q_i[c - 3])
