@@ -174,3 +174,64 @@ def t_inverse(a):
     return det, (c00 * f, (a[2] * a[7] - a[1] * a[8]) * f, (a[1] * a[5] - a[2] * a[4]) * f,
                  c01 * f, (a[0] * a[8] - a[2] * a[6]) * f, (a[2] * a[3] - a[0] * a[5]) * f,
                  c02 * f, (a[1] * a[6] - a[0] * a[7]) * f, (a[0] * a[4] - a[1] * a[3]) * f)
+
+
+@njit(cache=True)
+def least_norm_solve3(a, b, rcond):
+    """The least-norm least-squares solution of a x = b (3 x 3), as np.linalg.pinv(a, rcond) @ b
+    but without allocating: by a one-sided Jacobi SVD (Hestenes), whose singular values are
+    accurate to rounding relative to the largest (those of a^T a would square the relative
+    error).  Columns p, q of u = a v are rotated until orthogonal; then a = u v^T with u's
+    columns sigma_j u_j, and x = sum over sigma_j > rcond sigma_max of v_j (u_j . b) / sigma_j."""
+    u = t_of_mat(a)
+    v = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    for _ in range(30):
+        rotated = False
+        for p, q in ((0, 1), (0, 2), (1, 2)):
+            alpha = u[p] * u[p] + u[3 + p] * u[3 + p] + u[6 + p] * u[6 + p]
+            beta = u[q] * u[q] + u[3 + q] * u[3 + q] + u[6 + q] * u[6 + q]
+            gamma = u[p] * u[q] + u[3 + p] * u[3 + q] + u[6 + p] * u[6 + q]
+            if abs(gamma) <= 1e-15 * np.sqrt(alpha * beta):
+                continue
+            rotated = True
+            zeta = (beta - alpha) / (2.0 * gamma)
+            t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + np.sqrt(1.0 + zeta * zeta))
+            c = 1.0 / np.sqrt(1.0 + t * t)
+            s = c * t
+            u = _rotate_columns(u, p, q, c, s)
+            v = _rotate_columns(v, p, q, c, s)
+        if not rotated:
+            break
+    sigma = (np.sqrt(u[0] * u[0] + u[3] * u[3] + u[6] * u[6]),
+             np.sqrt(u[1] * u[1] + u[4] * u[4] + u[7] * u[7]),
+             np.sqrt(u[2] * u[2] + u[5] * u[5] + u[8] * u[8]))
+    cutoff = rcond * max(sigma[0], sigma[1], sigma[2])
+    x0 = x1 = x2 = 0.0
+    for j in range(3):
+        if sigma[j] > cutoff:
+            f = (u[j] * b[0] + u[3 + j] * b[1] + u[6 + j] * b[2]) / (sigma[j] * sigma[j])
+            x0 += f * v[j]
+            x1 += f * v[3 + j]
+            x2 += f * v[6 + j]
+    return x0, x1, x2
+
+
+@njit(cache=True, inline='always')
+def _rotated(m, i, p, q, c, s):
+    """Entry i of m (9-tuple, row-major 3 x 3) after its columns p, q become c m_p - s m_q and
+    s m_p + c m_q."""
+    col = i % 3
+    row = i - col
+    if col == p:
+        return c * m[i] - s * m[row + q]
+    if col == q:
+        return s * m[row + p] + c * m[i]
+    return m[i]
+
+
+@njit(cache=True, inline='always')
+def _rotate_columns(m, p, q, c, s):
+    """m (9-tuple, row-major 3 x 3) with columns p, q rotated (_rotated)."""
+    return (_rotated(m, 0, p, q, c, s), _rotated(m, 1, p, q, c, s), _rotated(m, 2, p, q, c, s),
+            _rotated(m, 3, p, q, c, s), _rotated(m, 4, p, q, c, s), _rotated(m, 5, p, q, c, s),
+            _rotated(m, 6, p, q, c, s), _rotated(m, 7, p, q, c, s), _rotated(m, 8, p, q, c, s))

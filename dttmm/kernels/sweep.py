@@ -20,7 +20,7 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
-from .mat3 import inv3, matmul_into, t_inverse, t_of_mat
+from .mat3 import inv3, least_norm_solve3, matmul_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -328,14 +328,17 @@ def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
 
 @njit(cache=True)
 def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
-    """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned)."""
+    """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned; the least-norm
+    q, as _solve_tip's, by least_norm_solve3: it allocates nothing)."""
     if tip_pinned:
-        _, q = _solve_tip(np.ascontiguousarray(s_tip), -p_tip, True)
-        aq_tip[3:6] = q
-        aq_tip[0:3] = 0.0
+        q = least_norm_solve3(s_tip, (-p_tip[0], -p_tip[1], -p_tip[2]), 1e-12)
+        for i in range(3):
+            aq_tip[i] = 0.0
+            aq_tip[3 + i] = q[i]
     else:
-        aq_tip[0:3] = p_tip
-        aq_tip[3:6] = 0.0
+        for i in range(3):
+            aq_tip[i] = p_tip[i]
+            aq_tip[3 + i] = 0.0
 
 
 @njit(cache=True, inline='always')
