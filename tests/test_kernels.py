@@ -37,6 +37,24 @@ def test_so3_kernels_match_scipy(scale):
         assert np.allclose(w / eps, out[:, i], atol=1e-6)
 
 
+@pytest.mark.parametrize("angle", [1e-5, 3e-3, 0.0099, 0.0101, 0.3])
+def test_so3_series_branch_is_exact_to_rounding(angle):
+    """exp and J_l switch from series to closed forms at |phi| = 1e-2 (kernels/so3.py): they
+    match scipy's expm and J_l = int_0^1 exp(s phi^) ds (10-point Gauss-Legendre of scipy's
+    expm, exact to rounding here) to 4e-16 on the series side; the closed forms lose digits to
+    cancellation just above it (measured 2e-15 at 0.0101), hence 1e-14 there."""
+    direction = rng.normal(size=3)
+    phi = angle * direction / np.linalg.norm(direction)
+    tol = 4e-16 if angle < 1e-2 else 1e-14
+    out = np.empty((3, 3))
+    expm_so3(phi, out)
+    assert np.abs(out - expm(skew(phi))).max() < tol
+    x, w = np.polynomial.legendre.leggauss(10)
+    jl = sum(0.5 * wk * expm(0.5 * (xk + 1.0) * skew(phi)) for xk, wk in zip(x, w))
+    left_jacobian(phi, out)
+    assert np.abs(out - jl).max() < tol
+
+
 def body_outputs(p, rot_prev, c1, c3, w1, w3, z, load, torque):
     """The rigid body's nonlinear transfer, written out with numpy (docs/rigid_body.md)."""
     mass, l_ic, l_io, j_b = p[0], p[1:4], p[4:7], p[7:16].reshape(3, 3)

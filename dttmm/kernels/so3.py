@@ -1,4 +1,10 @@
-"""Rotation kernels: hat map, exponential, logarithm and left Jacobian of SO(3) (docs/rotations.md)."""
+"""Rotation kernels: hat map, exponential, logarithm and left Jacobian of SO(3)
+(docs/conventions.md).
+
+exp and J_l take their coefficients from series below |phi| = 1e-2: a step's rotation increment
+is ~1e-4 rad, where the closed forms cost a square root, a sine and a cosine and lose digits
+((1 - cos t) / t^2 carries a relative error ~eps / t^2, 1e-8 at t = 1e-4).  Four terms leave a
+remainder below t^8 / 9! < 3e-22 there."""
 import numpy as np
 from numba import njit
 
@@ -35,11 +41,11 @@ def _identity_plus(a, b, phi, th2, out):
 
 @njit(cache=True, inline='always')
 def expm_so3(phi, out):
-    """out = exp(phi^), Rodrigues' formula, series near zero."""
+    """out = exp(phi^), Rodrigues' formula (series below |phi| = 1e-2)."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < 1e-8:
-        a = 1.0 - th2 / 6.0 + th2 * th2 / 120.0
-        b = 0.5 - th2 / 24.0 + th2 * th2 / 720.0
+    if th2 < 1e-4:
+        a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0))
+        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
     else:
         th = np.sqrt(th2)
         a = np.sin(th) / th
@@ -52,9 +58,9 @@ def left_jacobian(phi, out):
     """out = J_l(phi) = I + (1-cos t)/t^2 phi^ + (t - sin t)/t^3 phi^^, so that
     exp((phi + dphi)^) = exp((J_l dphi)^) exp(phi^) to first order."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < 1e-8:
-        b = 0.5 - th2 / 24.0 + th2 * th2 / 720.0
-        c = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
+    if th2 < 1e-4:
+        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
+        c = 1.0 / 6.0 - th2 / 120.0 * (1.0 - th2 / 42.0 * (1.0 - th2 / 72.0))
     else:
         th = np.sqrt(th2)
         b = (1.0 - np.cos(th)) / th2
