@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from ..elements import BEAM
-from . import no_alloc_kernel
+from . import CONTRACT, no_alloc_kernel
 from .beam import ball_map_work_shape, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
 from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt, t_mul_hat,
@@ -22,7 +22,7 @@ from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coeffi
 from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def _mm(a, b, out):
     """out = a @ b (3 x 3)."""
     for i in range(3):
@@ -31,7 +31,7 @@ def _mm(a, b, out):
             out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     """Body k's reduced map in angular-acceleration slots (docs/assembly.md, "The fused
     ball-chain step"), linearized about the guess (phi*, a_I*, q_I*):
@@ -123,7 +123,7 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
         v[3 + i, 6] = f[i] - mass * kap_c[i] + mass * d_c_y[i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _write_stations(aq, phi, phi_g, z):
     """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
     ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
@@ -143,7 +143,7 @@ def _write_stations(aq, phi, phi_g, z):
             z[2 * k + 2, 9 + i] = aq[k + 1, 3 + i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _ground_increment(g_rot, s, rel, out):
     """The ground's rotation increment over step s: log(R_{s+1} R_s^T) (rel: 3 x 3 scratch)."""
     for i in range(3):
@@ -153,7 +153,7 @@ def _ground_increment(g_rot, s, rel, out):
     log_so3(rel, out)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity,
                        g_acc, g_rot, force, torque, rot, omega, omega_dot, pseudo, z,
                        s_mat, p_vec, t_inv, t_vec, aq, record_every, rec_rot, rec_omega,

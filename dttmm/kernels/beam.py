@@ -16,7 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from . import no_alloc_kernel
+from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat,
                    t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
@@ -29,7 +29,7 @@ from .so3 import expm_so3, left_jacobian, log_so3
 SUM_U, SUM_V, SUM_H, END_U, END_V, SUM_J, SUM_C, SUM_MODES = 4, 5, 6, 7, 8, 9, 12, 15
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def aux_rows(m):
     """Rows of the aux array with every sum (m modes per plane)."""
     return SUM_MODES + 4 * m
@@ -53,7 +53,7 @@ def gauss_points(length, n_points):
     return 0.5 * length * (x + 1.0), 0.5 * length * w
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _weighted_coordinates(y, eta, eta_d, eta_dd):
     """sum_l y_l x_l for the v and the w coordinates x of eta, eta' and eta'' (m = len(y) modes
     per plane): the deflection, its rate and its acceleration at a point, with y the mode
@@ -267,7 +267,7 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         residual[m + k] += q3 * ends[k, 0]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def add_end_moment(ends, eta, rot, out, residual, aux):
     """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
     on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
@@ -290,7 +290,7 @@ def add_end_moment(ends, eta, rot, out, residual, aux):
         residual[m + k] += mw * ends[k, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def end_angles(ends, eta):
     """theta_O = [0, -w'(L), v'(L)]: the output section's rotation vector in the frame, from
     the modal coordinates (or their rates) and the end slopes Y_k'(L) (docs/beam.md)."""
@@ -302,7 +302,7 @@ def end_angles(ends, eta):
     return theta
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def end_section(ends, eta, rot, out):
     """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
@@ -310,7 +310,7 @@ def end_section(ends, eta, rot, out):
     out[:, :] = rot @ e
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
     """w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the output
     section (the consistent start; d J_l / dt by a central difference along theta')."""
@@ -328,7 +328,7 @@ def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
     return wd + np.cross(w, rot @ (jl @ th_d)) + rot @ (jl @ th_dd + jl_dot_thd)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d):
     """The beam's state at the end of the step for a rotation increment phi and modal
     accelerations eta'' (the integrator's relations, docs/solver.md): w = c3 phi + w3,
@@ -344,7 +344,7 @@ def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
         eta_d[i] = c3 * eta[i] + w3e[i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
@@ -632,7 +632,7 @@ def _solve_in_place(a, b, n_rhs):
             b[k, c] = s * inv
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _rhs_column(c):
     """Column of z (a_I 0:3, w' 3:6, m_I 6:9, q_I 9:12) in beam_transfer's modal right-hand
     sides, ordered a_I, w', q_I, the constant (9), m_I (10:13)."""
@@ -641,7 +641,7 @@ def _rhs_column(c):
     return c + 4 if c < 9 else c - 3
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
                   c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
@@ -753,7 +753,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         u[r, 12] = const
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def ball_map_work_shape(n):
     """Shape of beam_ball_map's work block for up to n modal coordinates: rows of 12 + n
     entries."""

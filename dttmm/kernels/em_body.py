@@ -18,13 +18,14 @@ equations are (EM1-EM4):
 import numpy as np
 from numba import njit
 
+from . import CONTRACT
 from .body import affine_part
 from .so3 import cayley, cayley_tangent, hat
 
 A, B, M, Q = 0, 3, 6, 9
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     """A_{n+1} and the world angular velocity w_{n+1} = A_{n+1} W_{n+1} for the slot value b."""
     phi = 0.5 * h * h * b
@@ -35,7 +36,7 @@ def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     omega_new[:] = rot_new @ w_body
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body
     over one energy-momentum step, linearized about the input state z_star (exact Jacobian).

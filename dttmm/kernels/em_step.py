@@ -10,6 +10,7 @@ on a fixed ground.
 import numpy as np
 from numba import njit
 
+from . import CONTRACT
 from ..elements.hinges import BALL
 from .em_body import em_body_kinematics, rigid_body_transfer_em
 from .step import NOT_FINITE, OK, SINGULAR, _solve
@@ -17,7 +18,7 @@ from .sweep import IDENTITY, TRANSFER
 from .sweep import BALL as EL_BALL
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def advance_em(mode, tip_pinned, h, newton_max, newton_tol, body_params, j_c, hinge_kind,
                gravity, force, torque, rot, omega, omega_dot, v_c, z,
                kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,

@@ -8,8 +8,10 @@ remainder below t^8 / 9! < 3e-22 there."""
 import numpy as np
 from numba import njit
 
+from . import CONTRACT
 
-@njit(cache=True)
+
+@njit(cache=True, fastmath=CONTRACT)
 def hat(v, out):
     """out = v^ (the cross-product matrix: v^ w = v x w)."""
     out[0, 0] = 0.0
@@ -23,7 +25,7 @@ def hat(v, out):
     out[2, 2] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def _identity_plus(a, b, phi, th2, out):
     """out = I + a phi^ + b phi^ phi^, with phi^ phi^ = phi phi^T - |phi|^2 I (th2 = |phi|^2),
     in scalars (it runs for every body and step)."""
@@ -39,7 +41,7 @@ def _identity_plus(a, b, phi, th2, out):
     out[2, 1] += a * phi[0]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def expm_so3(phi, out):
     """out = exp(phi^), Rodrigues' formula (series below |phi| = 1e-2)."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
@@ -53,7 +55,7 @@ def expm_so3(phi, out):
     _identity_plus(a, b, phi, th2, out)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def left_jacobian(phi, out):
     """out = J_l(phi) = I + (1-cos t)/t^2 phi^ + (t - sin t)/t^3 phi^^, so that
     exp((phi + dphi)^) = exp((J_l dphi)^) exp(phi^) to first order."""
@@ -68,7 +70,7 @@ def left_jacobian(phi, out):
     _identity_plus(b, c, phi, th2, out)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def log_so3(r, out):
     """out = the rotation vector of r (angle in [0, pi))."""
     c = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
@@ -86,7 +88,7 @@ def log_so3(r, out):
     out[2] = f * w2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def cayley(phi, out):
     """out = cay(phi) = (I - phi^/2)^-1 (I + phi^/2) = I + 4/(4 + |phi|^2) (phi^ + phi^^/2):
     the rotation by 2 atan(|phi|/2) about phi (docs/solver.md, energy-momentum scheme)."""
@@ -100,7 +102,7 @@ def cayley(phi, out):
         out[i, i] += 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def cayley_tangent(phi, out):
     """out = D(phi) = 4/(4 + |phi|^2) (I + phi^/2), so that
     cay(phi + dphi) = cay((D dphi)^) cay(phi) to first order."""
@@ -112,7 +114,7 @@ def cayley_tangent(phi, out):
         out[i, i] += f
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def cayley_log(r, out):
     """out = the Cayley vector phi of r (cay(phi) = r): 2 vee(r - r^T) / (1 + tr r); rotations
     by less than pi."""

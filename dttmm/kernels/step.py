@@ -16,6 +16,7 @@ argument of advance; docs/solver.md, "The paper's scheme").
 import numpy as np
 from numba import njit
 
+from . import CONTRACT
 from ..elements import BEAM
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
@@ -31,7 +32,7 @@ RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL = 0, 1, 2, 3
 OK, SINGULAR, NOT_FINITE = 0, 1, 2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _integrator_coefficients(h, coef):
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
     c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
@@ -39,7 +40,7 @@ def _integrator_coefficients(h, coef):
     return c1, c3
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _offsets(h, coef, v, acc, p):
     """w1, w3 with acc_{n+1} = c1 x + w1, v_{n+1} = c3 x + w3 (x the increment over the step)."""
     w1 = np.empty_like(v)
@@ -48,7 +49,7 @@ def _offsets(h, coef, v, acc, p):
     return w1, w3
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def _offsets_into(h, coef, v, acc, p, w1, w3, x_pred):
     """_offsets in place, with the constant-acceleration predictor x_pred = h v + h^2 p / 2
     (elementwise, no temporaries: it runs for every body and step)."""
@@ -62,7 +63,7 @@ def _offsets_into(h, coef, v, acc, p, w1, w3, x_pred):
         x_pred[i] = h * v[i] + 0.5 * h * h * p[i]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def _advance_history(h, coef, x, v, acc, p):
     """In place: v, acc, p at t_{n+1} from the increment x."""
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
@@ -73,7 +74,7 @@ def _advance_history(h, coef, x, v, acc, p):
         p[i] = p_new
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     """A body's rotation, angular velocity and acceleration at the end of the step as functions
     of its world rotation increment phi, with their derivatives (docs/solver.md):
@@ -90,7 +91,7 @@ def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
             dwd[i, j] = c1 if i == j else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, phi_out):
     """Rewrite a transfer linearized in phi slots as one in angular-acceleration slots
     (docs/assembly.md, "scaling"): phi_in = phi_in* + Dwd_in^-1 (w'_in - wd_in*) and
@@ -116,7 +117,7 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
                                      + dwd_out[i, 2] * phi_out[2])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def report(out_info, status, step, detail, n_rec):
     """The time loops' outcome in out_info: [status, the failing step (or the steps taken),
     detail (the singular element's code for SINGULAR, the most Newton iterations used for OK,
@@ -127,7 +128,7 @@ def report(out_info, status, step, detail, n_rec):
     out_info[3] = n_rec
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _all_finite(a):
     for x in a.flat:
         if not np.isfinite(x):
@@ -135,7 +136,7 @@ def _all_finite(a):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                     g_rot, g_lam, g_w, g_wd, g_dwd, g_phi, rot_star, lam, phi_star, w, wd, dw, dwd,
                     c1, c3, w1d, w3d, z_star, force, torque, at_start, rot, w3, beams, modal,
@@ -210,7 +211,7 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                                             phi_star[k])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
            sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z):
     """Solve the assembled step into z (stations' states); returns 0 or a singularity code."""
@@ -247,7 +248,7 @@ def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p,
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_params, gravity,
                           g_acc, g_rot, g_w, g_wd, force, torque,
                           rot, omega, defl, defl_rate,
@@ -292,7 +293,7 @@ def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_param
     return status
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _modal_accelerations(beams, eta_map, z, eta_acc):
     """eta'' of every beam from its input station (angular-acceleration slots)."""
     body_kind, mode_off = beams[0], beams[3]
@@ -305,7 +306,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
                 eta_acc[i] = eta_map[i] @ zin
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
             body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
             g_acc, g_rot, g_w, g_wd, force, torque,

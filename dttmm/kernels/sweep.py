@@ -20,6 +20,7 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
+from . import CONTRACT
 from .mat3 import inv3, least_norm_solve3, matmul_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
@@ -30,7 +31,7 @@ F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]],
 E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _station_basis(split, s_mat, p_vec, basis, offset):
     """z = basis e + offset for a station carried as f = S e + P."""
     f_idx = F_IDX[split]
@@ -46,7 +47,7 @@ def _station_basis(split, s_mat, p_vec, basis, offset):
             basis[f_idx[r], c] = s_mat[r, c]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _tip_system(basis, offset, tip_pinned):
     """W e = rhs for the tip: m = 0 and q = 0 (free), or a = 0 and m = 0 (joined to the ground by
     a ball joint)."""
@@ -62,7 +63,7 @@ def _tip_system(basis, offset, tip_pinned):
     return w, rhs
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _solve_tip(w, rhs, tip_pinned):
     """(solved, e) of the tip's W e = rhs.  A pinned tip takes the least-norm solution: a chain
     closed between two fixed points can leave the force along an inextensible member statically
@@ -74,7 +75,7 @@ def _solve_tip(w, rhs, tip_pinned):
     return True, np.linalg.solve(w, rhs)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def _moment_force_system(basis, offset, target):
     """W e = rhs: the rows of z = basis e + offset that fix [m; q] = target."""
     w = np.empty((6, 6))
@@ -86,7 +87,7 @@ def _moment_force_system(basis, offset, target):
     return w, rhs
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, t_inv, t_vec,
                  g_mat, g_vec, z):
     """Solve one step; returns 0, or j + 1 if element j (or the tip, j = n_el) is singular.
@@ -188,7 +189,7 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, z):
     """Multiply the transfers out from the root; returns 0 or j + 1 for a singular element j.
 
@@ -254,7 +255,7 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def transfer_residual(kind, u, z):
     """Largest relative residual of the TRANSFER elements' relations z_j+1 = U_j z_j + u_j, by
     block (a, phi, m, q): max |residual| over max (|z_j+1| + |U_j| |z_j| + |u_j|) of the block's
@@ -280,7 +281,7 @@ def transfer_residual(kind, u, z):
     return worst
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
@@ -299,7 +300,7 @@ def fold_ball_body(u, v, phi_map):
                        + u[rr, 5] * phi_map[2, c])
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
     """One body of the reduced Riccati sweep, a = S q + P at its input -> at its output:
     q_I = T^-1 (q_O - tv), T = V_qa S + V_qq, tv = V_qa P + v_q;
@@ -326,7 +327,7 @@ def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
     return det
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
     """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned; the least-norm
     q, as _solve_tip's, by least_norm_solve3: it allocates nothing)."""
@@ -341,7 +342,7 @@ def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
             aq_tip[3 + i] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq):
     """[a; q] at body k's input from its output's: q_I = T^-1 (q_O - tv), a_I = S q_I + P."""
     for i in range(3):
@@ -353,7 +354,7 @@ def riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq):
                     + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output.
     Tip: q = 0 (free) or a = 0 (tip_pinned)."""
@@ -372,7 +373,7 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def direct_reduced(v, a_root, tip_pinned, aq):
     """Multiply the reduced maps out (the paper's way), solve q_0 from the tip (free: q_N = 0;
     pinned: a_N = 0), and propagate forward.  Loses accuracy on long or stiff chains

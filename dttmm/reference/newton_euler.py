@@ -122,6 +122,7 @@ from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W,
 from ..elements.hinges import (C_ROTATION, C_TRANSLATION, ELASTIC, FIXED, K_ROTATION,
                                K_TRANSLATION, REST_ROTATION)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
+from ..kernels import CONTRACT
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
@@ -247,7 +248,7 @@ def loaded_mode_coefficients(n_modes):
 # small pure kernels
 # ----------------------------------------------------------------------------------------------
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _mat3(row, start):
     m = np.empty((3, 3))
     for i in range(3):
@@ -256,7 +257,7 @@ def _mat3(row, start):
     return m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _vec3(row, start):
     v = np.empty(3)
     for i in range(3):
@@ -264,7 +265,7 @@ def _vec3(row, start):
     return v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _cross(a, b):
     c = np.empty(3)
     c[0] = a[1] * b[2] - a[2] * b[1]
@@ -273,7 +274,7 @@ def _cross(a, b):
     return c
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _hat(v):
     m = np.zeros((3, 3))
     m[0, 1] = -v[2]
@@ -285,7 +286,7 @@ def _hat(v):
     return m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _quat_to_rot(q):
     """Rotation matrix of the quaternion [w, x, y, z], normalised first."""
     s = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -303,7 +304,7 @@ def _quat_to_rot(q):
     return r
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _log_rot(r):
     """Rotation vector psi with expm(hat(psi)) = r, |psi| <= pi; robust at every angle (it goes
     through the quaternion of r, largest component first)."""
@@ -347,7 +348,7 @@ def _log_rot(r):
     return psi
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _so3_coefficients(t):
     """Coefficients of exp and of the left Jacobian at the rotation vector t, p = |t|:
     c = sin p / p, a = (1 - cos p)/p^2, b = (p - sin p)/p^3 and a1 = a'(p)/p, b1 = b'(p)/p
@@ -385,7 +386,7 @@ def _so3_coefficients(t):
     return c, a, b, a1, b1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _expm(t):
     """exp(t^), Rodrigues' formula."""
     c, a, _, _, _ = _so3_coefficients(t)
@@ -394,7 +395,7 @@ def _expm(t):
     return e
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _left_jacobian(t):
     """J_l(t) = I + a t^ + b t^ t^: exp((t + d)^) = exp((J_l d)^) exp(t^) to first order."""
     _, a, b, _, _ = _so3_coefficients(t)
@@ -402,7 +403,7 @@ def _left_jacobian(t):
     return np.eye(3) + a * th + b * (th @ th)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _left_jacobian_derivative(t, u):
     """dJ_l[u] = d/ds J_l(t + s u) at s = 0 = (t.u) (a1 t^ + b1 t^ t^) + a u^ + b (u^ t^ + t^ u^),
     since d p / ds = (t.u) / p and a'(p) dp/ds = a1 (t.u)."""
@@ -413,7 +414,7 @@ def _left_jacobian_derivative(t, u):
     return tu * (a1 * th + b1 * (th @ th)) + a * uh + b * (uh @ th + th @ uh)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _end_section_rate(t, t_dot, t_ddot):
     """d/dt [J_l(t) t'] = J_l(t) t'' + dJ_l[t'] t' (body frame), for tests and the kernels."""
     return _left_jacobian(t) @ t_ddot + _left_jacobian_derivative(t, t_dot) @ t_dot
@@ -423,7 +424,7 @@ def _end_section_rate(t, t_dot, t_ddot):
 # kinematics, hinge laws, global system
 # ----------------------------------------------------------------------------------------------
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _beam_end(bp, sv, a, w, eta, eta_dot):
     """Output point and output section of one beam (module docstring, "End kinematics"), from
     its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
@@ -467,7 +468,7 @@ def _beam_end(bp, sv, a, w, eta, eta_dot):
     return rho, v_rel, rot_o, w_o, acc_v, alpha_v, br, bt
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                 q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
@@ -527,7 +528,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             b_r, b_t, v_o)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
                    w_g):
     """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
@@ -553,7 +554,7 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
 
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     """World-frame mass properties, coupling blocks and velocity terms of one beam at its
     current (eta, eta'), from the shape integrals sv (int Y, int x Y, ...) and my = int Y Y^T
@@ -643,7 +644,7 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, body_params,
               hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal,
               e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g, forces, torques):
@@ -805,7 +806,7 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
     return s, b
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _solve_least_tip_force(s, b, t_col):
     """Solve S x = b where S may be singular: with the tip joined to a fixed point, a chain that
     lies straight between its two fixed points leaves the tension along it statically
@@ -831,7 +832,7 @@ def _solve_least_tip_force(s, b, t_col):
 
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
@@ -870,7 +871,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             b_r)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=CONTRACT)
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
