@@ -186,8 +186,8 @@ def _ball_chain_steps(tip_pinned, h, coef, newton_max, newton_tol, body_params, 
                       out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d,
                       per_body, pmap, v, mats, vecs, per_mode, beam_work):
     """advance_ball_chain's time loop, on its scratch (no allocation, so compiled without
-    numba's reference counting: measured, the three-pendulum's step 0.90x and the rigid 3-link
-    chain's 0.88x, 15 interleaved pairs).  Per step and Newton iteration one forward pass
+    numba's reference counting: measured, the three-pendulum's and the rigid 3-link chain's
+    step 0.88x, 15 interleaved pairs).  Per step and Newton iteration one forward pass
     (kinematics, reduced map, Riccati step per body) and one backward pass (recovery, beams'
     modal accelerations).  Scratch: per_body (4, n, 3), pmap (n, 3, 7), v (6, 7), mats
     (7, 3, 3), vecs (5, 3), per_mode (5, n_eta), beam_work (beam_ball_map's)."""

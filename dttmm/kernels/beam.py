@@ -755,9 +755,9 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
 
 @njit(cache=True, fastmath=CONTRACT)
 def ball_map_work_shape(n):
-    """Shape of beam_ball_map's work block for up to n modal coordinates: rows of 12 + n
-    entries."""
-    return 31 + aux_rows(n // 2) + 3 * n + 3 + n, 12 + n
+    """Shape of beam_ball_map's work block for up to n modal coordinates, rows of 12 + n entries:
+    19 rows of vectors and 3 x 3 blocks, aux, d_o (12), d_r, kmat, xm (n each), g (3 + n)."""
+    return 19 + aux_rows(n // 2) + 12 + 3 * n + 3 + n, 12 + n
 
 
 @no_alloc_kernel
