@@ -14,21 +14,12 @@ from ..elements import BEAM
 from . import CONTRACT, no_alloc_kernel
 from .beam import ball_map_work_shape, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
-from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt, t_mul_hat,
-                   t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
+from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt,
+                   t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from .so3 import expm_so3, left_jacobian, log_so3
 from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
     _offsets_into, report
 from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
-
-
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def _mm(a, b, out):
-    """out = a @ b (3 x 3)."""
-    for i in range(3):
-        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
-        for j in range(3):
-            out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -242,7 +233,7 @@ def _ball_chain_steps(tip_pinned, h, coef, newton_max, newton_tol, body_params, 
                                   eta_dd_star[i0:i1], beam_work, v, pmap[k], eta_map[i0:i1])
                 else:
                     expm_so3(phi, e3)
-                    _mm(e3, rot[k], rot_star)
+                    mm3_into(e3, rot[k], rot_star)
                     left_jacobian(phi, lam)
                     for i in range(3):
                         load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
@@ -293,7 +284,7 @@ def _ball_chain_steps(tip_pinned, h, coef, newton_max, newton_tol, body_params, 
             for i in range(3):
                 for j in range(3):
                     rot_prev[i, j] = rot[k, i, j]
-            _mm(e3, rot_prev, rot[k])
+            mm3_into(e3, rot_prev, rot[k])
             for i in range(3):
                 if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                     finite = False

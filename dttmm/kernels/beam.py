@@ -18,8 +18,8 @@ from numba import njit
 
 from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
-from .mat3 import (t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat,
-                   t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
+from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
+                   t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
 from .so3 import expm_so3, left_jacobian, log_so3
 
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
@@ -336,9 +336,7 @@ def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
     for i in range(3):
         w[i] = c3 * phi[i] + w3[i]
     expm_so3(phi, e)
-    for i in range(3):
-        for j in range(3):
-            rot[i, j] = e[i, 0] * rot_n[0, j] + e[i, 1] * rot_n[1, j] + e[i, 2] * rot_n[2, j]
+    mm3_into(e, rot_n, rot)
     for i in range(eta.shape[0]):
         eta[i] = (eta_dd[i] - w1e[i]) / c1
         eta_d[i] = c3 * eta[i] + w3e[i]

@@ -19,6 +19,16 @@ def inv3(a, out):
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
+def mm3_into(a, b, out):
+    """out = a @ b for 3 x 3 blocks (their first three rows and columns; the size fixed, so the
+    loops unroll: matmul_into's follow the arrays' shapes)."""
+    for i in range(3):
+        a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
+        for j in range(3):
+            out[i, j] = a0 * b[0, j] + a1 * b[1, j] + a2 * b[2, j]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
 def matmul_into(a, b, out):
     """out = a @ b by loops (small matrices: BLAS's call overhead dominates at these sizes)."""
     for i in range(a.shape[0]):
