@@ -10,6 +10,8 @@ from numba import njit
 
 from . import CONTRACT
 
+SERIES_BELOW = 1e-4       # |phi|^2 below which exp and J_l use their series (docstring)
+
 
 @njit(cache=True, fastmath=CONTRACT)
 def hat(v, out):
@@ -45,7 +47,7 @@ def _identity_plus(a, b, phi, th2, out):
 def expm_so3(phi, out):
     """out = exp(phi^), Rodrigues' formula (series below |phi| = 1e-2)."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < 1e-4:
+    if th2 < SERIES_BELOW:
         a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0))
         b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
     else:
@@ -60,7 +62,7 @@ def left_jacobian(phi, out):
     """out = J_l(phi) = I + (1-cos t)/t^2 phi^ + (t - sin t)/t^3 phi^^, so that
     exp((phi + dphi)^) = exp((J_l dphi)^) exp(phi^) to first order."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < 1e-4:
+    if th2 < SERIES_BELOW:
         b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
         c = 1.0 / 6.0 - th2 / 120.0 * (1.0 - th2 / 42.0 * (1.0 - th2 / 72.0))
     else:

@@ -29,6 +29,8 @@ DIRECT_TOLERANCE = 1e-4      # largest relative transfer residual a direct solut
 SPLIT_A, SPLIT_B, SPLIT_C = 0, 1, 2
 F_IDX = np.array([[0, 1, 2, 6, 7, 8], [0, 1, 2, 3, 4, 5], [6, 7, 8, 9, 10, 11]], dtype=np.int64)
 E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]], dtype=np.int64)
+# A pinned tip's least-norm solves drop singular values below TIP_RCOND times the largest.
+TIP_RCOND = 1e-12
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -69,7 +71,7 @@ def _solve_tip(w, rhs, tip_pinned):
     closed between two fixed points can leave the force along an inextensible member statically
     indeterminate (no pre-stress is assumed; docs/assembly.md)."""
     if tip_pinned:
-        return True, np.linalg.pinv(w, rcond=1e-12) @ rhs
+        return True, np.linalg.pinv(w, rcond=TIP_RCOND) @ rhs
     if abs(np.linalg.det(w)) == 0.0:
         return False, rhs
     return True, np.linalg.solve(w, rhs)
@@ -332,7 +334,7 @@ def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
     """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned; the least-norm
     q, as _solve_tip's, by least_norm_solve3: it allocates nothing)."""
     if tip_pinned:
-        q = least_norm_solve3(s_tip, (-p_tip[0], -p_tip[1], -p_tip[2]), 1e-12)
+        q = least_norm_solve3(s_tip, (-p_tip[0], -p_tip[1], -p_tip[2]), TIP_RCOND)
         for i in range(3):
             aq_tip[i] = 0.0
             aq_tip[3 + i] = q[i]
