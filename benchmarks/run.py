@@ -41,13 +41,9 @@ def median_us_per_step(model, steps, repeats, **kw):
 
 
 @njit
-def _repeat_solve(repeats, mode, tip_pinned, kind, u, known_loads, root, sc_split, sc_s, sc_p,
-                  sc_tinv, sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
-                  red_aq, dir_z, dir_o, z):
+def _repeat_solve(repeats, mode, tip_pinned, sweep, root, z):
     for _ in range(repeats):
-        kstep._solve(mode, tip_pinned, kind, u, known_loads, root, sc_split, sc_s, sc_p, sc_tinv,
-                     sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq,
-                     dir_z, dir_o, z)
+        kstep.solve_step(mode, tip_pinned, sweep, root, z)
 
 
 def floor_us_per_step(model, repeats=20000):
@@ -56,17 +52,17 @@ def floor_us_per_step(model, repeats=20000):
     loop."""
     chain, _ = kernel_chain(model)
     ws = Workspace(chain)
+    sweep = ws.sweep
     rng = np.random.default_rng(0)
-    for j in range(ws.u.shape[0]):
-        ws.u[j, :, :12] = np.eye(12) + 0.05 * rng.normal(size=(12, 12))
-        ws.u[j, :, 12] = rng.normal(size=12)
+    for j in range(sweep.u.shape[0]):
+        sweep.u[j, :, :12] = np.eye(12) + 0.05 * rng.normal(size=(12, 12))
+        sweep.u[j, :, 12] = rng.normal(size=12)
         if j % 2 == 1:
-            ws.kind[j] = kstep.TRANSFER
+            sweep.kind[j] = kstep.TRANSFER
         else:
-            ws.kind[j] = {BALL: kstep.EL_BALL, FIXED: kstep.IDENTITY}.get(
+            sweep.kind[j] = {BALL: kstep.EL_BALL, FIXED: kstep.IDENTITY}.get(
                 int(chain.hinge_kind[j // 2]), kstep.TRANSFER)
-    args = (_mode(chain, "riccati", False), chain.tip_pinned, ws.kind, ws.u, ws.known_loads,
-            np.zeros(6), *ws.scratch()[3:], ws.z)
+    args = (_mode(chain, "riccati", False), chain.tip_pinned, sweep, np.zeros(6), ws.state.z)
     _repeat_solve(10, *args)
     t0 = time.perf_counter()
     _repeat_solve(repeats, *args)

@@ -1,9 +1,9 @@
 """dttmm: the discrete-time transfer matrix method for multibody chains."""
 from .elements import BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, RigidBody
-from .model import Ground, Model, PrescribedMotion, build_chain
+from .model import Ground, Model, PrescribedMotion, System, build_chain
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge", "Ground", "PrescribedMotion",
-           "Model", "build_chain"]
+           "Model", "System", "build_chain"]
 from .solver import DivergenceError, simulate  # noqa: E402
 
 __all__ += ["simulate", "DivergenceError"]

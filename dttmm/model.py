@@ -4,12 +4,13 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .elements import (BALL, BEAM, FIXED, RIGID, BallJoint, ElasticHinge, EulerBernoulliBeam,
-                       FixedHinge, RigidBody)
+from .elements import BALL, BEAM, FIXED, RIGID
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
                             MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
 from .elements._checks import finite_vector, rotation_matrix
-from .elements.hinges import HINGE_KIND_NAMES, pack_hinge
+from .elements.hinges import pack_hinge
+from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
+                             body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
 from .kernels.so3 import expm_so3, left_jacobian
 
@@ -92,8 +93,9 @@ class Ground:
 class Model:
     """A frozen chain: flat float arrays for the kernels plus the description it came from.
 
-    Bodies are numbered 0..n-1 from the root; hinge k joins body k-1 (the ground for k = 0) to
-    body k.  The last body's output point is the free tip.
+    Bodies are numbered 0..n-1, parents first; hinge k joins body parent[k] (the ground for -1)
+    at its attachment point to body k.  In a chain parent[k] = k - 1, every body hangs from its
+    parent's output point, and the last body's output point is the tip.
     """
     n_bodies: int
     body_params: np.ndarray          # (n, BODY_PARAM_SIZE), see elements/rigid_body.py
@@ -119,6 +121,17 @@ class Model:
                                      # CLAMPED_LOADED)
     initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w)
     initial_modal_velocities: np.ndarray
+    parent: np.ndarray               # (n,) the parent body of body k (< k), -1 for the ground
+    attachment: np.ndarray           # (n,) where on the parent: 0 its output point, j >= 1 its
+                                     # j-th named point (RigidBody.points)
+    attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
+                                     # point, m (zero for the ground)
+
+    @property
+    def is_chain(self):
+        """Every body hangs from the output point of the body before it (or the ground)."""
+        return bool(np.all(self.parent == np.arange(self.n_bodies) - 1)
+                    and np.all(self.attachment == 0))
 
     @property
     def n_modes(self):
@@ -131,8 +144,9 @@ class Model:
 
     @property
     def all_ball(self):
-        """True when every hinge is a ball joint: the reduced [a; q] transfer applies."""
-        return bool(np.all(self.hinge_kind == BALL))
+        """True when every hinge is moment-free (a ball joint): the reduced [a; q] transfer
+        applies (elements/kinds.py)."""
+        return all(JOINT_KIND[int(c)].moment_free for c in self.hinge_kind)
 
     @property
     def has_applied_loads(self):
@@ -146,9 +160,47 @@ class Model:
         return self.ground_motion(t)
 
 
+class System:
+    """A multibody system under construction: a tree of bodies, each joined by a joint to its
+    parent (the ground or another body) at one of the parent's attachment points.
+
+        system = System(gravity=[0, -9.81, 0])
+        system.add(link1, BallJoint())                        # to the ground point
+        system.add(link2, BallJoint(), parent=link1)          # to link1's output point
+        system.add(link4, BallJoint(), parent="link1")        # by name; a second branch
+        system.add(link3, BallJoint(), parent=link2, at="p")  # at link2's named point "p"
+        model = system.build()
+
+    Bodies may be added in any order; build() resolves the parents, refuses a parent not in
+    the system, an attachment point the parent does not have, and a cycle, and freezes the
+    system into a Model whose bodies are numbered parents first (in the order added where that
+    allows).  build_chain is the same for a chain.
+    """
+
+    def __init__(self, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground()):
+        self.gravity = gravity
+        self.ground = ground
+        self._entries = []          # (body, joint, parent, at) as added
+
+    def add(self, body, joint, parent=None, at=None):
+        """Join body to parent by joint.  parent: None for the ground point, or a body of the
+        system (the body itself or its name; it may be added later).  at: the parent's
+        attachment point, None (or "output") for its output point, or the name of one of a
+        rigid body's points (RigidBody(points={...})).  Returns body."""
+        self._entries.append((body, joint, parent, at))
+        return body
+
+    def build(self, tip="free") -> "Model":
+        """Validate and freeze into a Model.  tip: "free" (default) or, for a chain only,
+        "ball": the last body's output point is joined to the ground by a ball joint where it
+        starts (a fixed point; e.g. a simply supported beam)."""
+        return _freeze(*_resolve_topology(self._entries), self.gravity, self.ground, tip)
+
+
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
-                tip="free") -> Model:
-    """Validate a chain described root to tip and freeze it into a Model.
+                tip="free") -> "Model":
+    """Validate a chain described root to tip and freeze it into a Model (a System whose every
+    body hangs from the output point of the one before it).
 
     elements alternates hinges and bodies, starting with the root hinge (which joins the first
     body to the ground) and ending with the tip body:
@@ -156,8 +208,6 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
     tip: "free" (default), or "ball": the tip body's output point is joined to the ground by a
     ball-and-socket joint where it starts (a fixed point; e.g. a simply supported beam).
     """
-    if tip not in ("free", "ball"):
-        raise ValueError(f"Chain: tip must be 'free' or 'ball', got {tip!r}")
     elements = list(elements)
     if len(elements) == 0:
         raise ValueError("Chain: elements is empty; a chain needs at least a root hinge and a body")
@@ -166,13 +216,113 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
                          f"a body; got {len(elements)} elements")
     hinges, bodies = elements[0::2], elements[1::2]
     for k, h in enumerate(hinges):
-        if not isinstance(h, (BallJoint, FixedHinge, ElasticHinge)):
-            raise ValueError(f"Chain: element {2 * k} must be a hinge (BallJoint, FixedHinge, "
-                             f"ElasticHinge), got {type(h).__name__}")
+        if joint_kind_of(h) is None:
+            raise ValueError(f"Chain: element {2 * k} must be a hinge ({names(JOINT_KINDS)}), "
+                             f"got {type(h).__name__}")
     for k, b in enumerate(bodies):
-        if not isinstance(b, (RigidBody, EulerBernoulliBeam)):
-            raise ValueError(f"Chain: element {2 * k + 1} must be a body (RigidBody, "
-                             f"EulerBernoulliBeam), got {type(b).__name__}")
+        if body_kind_of(b) is None:
+            raise ValueError(f"Chain: element {2 * k + 1} must be a body ({names(BODY_KINDS)}), "
+                             f"got {type(b).__name__}")
+    parents = [-1] + list(range(len(bodies) - 1))
+    return _freeze(bodies, hinges, parents, [0] * len(bodies), gravity, ground, tip)
+
+
+def _resolve_topology(entries):
+    """(bodies, joints, parent index, attachment index) in topological order (parents first,
+    otherwise as added) from System entries; ValueError for a parent not in the system, an
+    attachment point the parent lacks, a body added twice and a cycle."""
+    if not entries:
+        raise ValueError("System: no bodies; add at least one (System.add(body, joint))")
+    for i, (body, joint, _, _) in enumerate(entries):
+        if body_kind_of(body) is None:
+            raise ValueError(f"System: entry {i}: {body!r} is not a body ({names(BODY_KINDS)})")
+        if joint_kind_of(joint) is None:
+            raise ValueError(f"System: {_who(body, i)}: joint must be one of "
+                             f"{names(JOINT_KINDS)}, got {type(joint).__name__}")
+    by_id = {}
+    by_name = {}
+    for i, (body, _, _, _) in enumerate(entries):
+        if id(body) in by_id:
+            raise ValueError(f"System: {_who(body, i)} is added twice")
+        by_id[id(body)] = i
+        if body.name:
+            if body.name in by_name:
+                raise ValueError(f"System: two bodies are named '{body.name}'; names must be "
+                                 f"unique")
+            by_name[body.name] = i
+    parent_of = []
+    for i, (body, _, parent, _) in enumerate(entries):
+        if parent is None:
+            parent_of.append(-1)
+        elif isinstance(parent, str):
+            if parent not in by_name:
+                raise ValueError(f"System: {_who(body, i)}: parent '{parent}' is not in the "
+                                 f"system (bodies: {', '.join(sorted(by_name)) or 'none named'})")
+            parent_of.append(by_name[parent])
+        elif id(parent) in by_id:
+            parent_of.append(by_id[id(parent)])
+        else:
+            raise ValueError(f"System: {_who(body, i)}: parent {_who(parent)} is not in the "
+                             f"system (add it too)")
+        if parent_of[-1] == i:
+            raise ValueError(f"System: {_who(body, i)} is its own parent")
+    order, state = [], [0] * len(entries)           # 0 new, 1 on the path, 2 placed
+
+    def place(i, path):
+        if state[i] == 2:
+            return
+        if state[i] == 1:
+            cycle = " -> ".join(_who(entries[j][0], j) for j in path[path.index(i):] + [i])
+            raise ValueError(f"System: the parents form a cycle: {cycle}")
+        state[i] = 1
+        if parent_of[i] >= 0:
+            place(parent_of[i], path + [i])
+        state[i] = 2
+        order.append(i)
+
+    for i in range(len(entries)):
+        place(i, [])
+    new_index = {i: k for k, i in enumerate(order)}
+    bodies = [entries[i][0] for i in order]
+    joints = [entries[i][1] for i in order]
+    parents = [new_index[parent_of[i]] if parent_of[i] >= 0 else -1 for i in order]
+    attach = []
+    for k, i in enumerate(order):
+        at, p = entries[i][3], parents[k]
+        if at is None or at == "output":
+            attach.append(0)
+            continue
+        if p < 0:
+            raise ValueError(f"System: {_who(bodies[k], i)}: at={at!r}: the ground has one "
+                             f"attachment point (leave at=None)")
+        pts = getattr(bodies[p], "points", None) or {}
+        if at not in pts:
+            raise ValueError(f"System: {_who(bodies[k], i)}: at={at!r}: {_who(bodies[p])} has no "
+                             f"attachment point {at!r} (it has: {', '.join(['output', *pts])})")
+        attach.append(1 + list(pts).index(at))
+    return bodies, joints, parents, attach
+
+
+def _who(body, index=None):
+    where = f" (entry {index})" if index is not None else ""
+    name = getattr(body, "name", "")
+    return f"{type(body).__name__} '{name}'{where}" if name else f"{type(body).__name__}{where}"
+
+
+def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
+    """Validate every element and the system, and freeze them into a Model.  bodies, hinges:
+    in topological order; parents[k] < k the parent body of body k (-1: the ground); attach[k]
+    its attachment point on the parent (0: the output point, j: the parent's j-th named
+    point)."""
+    if tip not in ("free", "ball"):
+        raise ValueError(f"Chain: tip must be 'free' or 'ball', got {tip!r}")
+    n = len(bodies)
+    parent = np.array(parents, dtype=np.int64)
+    attachment = np.array(attach, dtype=np.int64)
+    chain = bool(np.all(parent == np.arange(n) - 1) and np.all(attachment == 0))
+    if tip == "ball" and not chain:
+        raise ValueError("System: tip='ball' joins the last body of a chain to the ground; this "
+                         "system is a tree")
     g = finite_vector("Chain", "gravity", gravity)
     if not isinstance(ground, Ground):
         raise ValueError("Chain: ground must be a Ground")
@@ -188,28 +338,38 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
                                                                           ground.rotation)
         w_g = np.zeros(3)
 
-    n = len(bodies)
     bv = [b.validated(k) for k, b in enumerate(bodies)]
     hv = [h.validated(k) for k, h in enumerate(hinges)]
-    kinds = np.array([h.kind for h in hinges], dtype=np.int64)
-
-    body_kind = np.array([BEAM if isinstance(b, EulerBernoulliBeam) else RIGID for b in bodies],
-                         dtype=np.int64)
+    kinds = np.array([joint_kind_of(h).code for h in hinges], dtype=np.int64)
+    body_kind = np.array([body_kind_of(b).code for b in bodies], dtype=np.int64)
+    children = [[c for c in range(n) if parent[c] == k] for k in range(n)]
     beam_params = np.array([v.get("beam", np.zeros(BEAM_PARAM_SIZE)) for v in bv])
-    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip)
-    _check_ball_lookahead(bodies, bv, kinds, body_kind)
+    attachment_point = np.zeros((n, 3))
+    for k in range(n):
+        p = parent[k]
+        if p < 0:
+            continue
+        if body_kind[p] == BEAM and attachment[k] != 0:
+            raise ValueError(f"{bodies[k].label(k)}: a beam has one attachment point, its "
+                             f"output end")
+        attachment_point[k] = (bv[p]["l_io"] if attachment[k] == 0
+                               else list(bv[p]["points"].values())[attachment[k] - 1])
+    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip)
+    _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
     rotations = np.zeros((n, 3, 3))
     omegas = np.zeros((n, 3))
     locked = np.zeros(n, dtype=bool)
     for k in range(n):
-        if k == 0:
+        p = parent[k]
+        if p < 0:
             a_in, w_in = rot_g, w_g
-        else:   # the inboard's output section (a beam's end section, docs/beam.md)
-            a_in, w_in = output_section(beam_params[k - 1], rotations[k - 1], omegas[k - 1],
-                                        bv[k - 1].get("eta0"), bv[k - 1].get("eta_d0"))
-        locked[k] = kinds[k] == FIXED and (k == 0 or (locked[k - 1]
-                                                      and body_kind[k - 1] == RIGID))
+        elif attachment[k] == 0:     # the parent's output section (a beam's end section)
+            a_in, w_in = output_section(beam_params[p], rotations[p], omegas[p],
+                                        bv[p].get("eta0"), bv[p].get("eta_d0"))
+        else:
+            a_in, w_in = rotations[p], omegas[p]
+        locked[k] = kinds[k] == FIXED and (p < 0 or (locked[p] and body_kind[p] == RIGID))
         if kinds[k] == FIXED:
             rot, om = a_in @ hv[k]["rotation"], w_in
             for key, implied in (("rotation", rot), ("omega", om)):
@@ -248,6 +408,9 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
         beam_params=beam_params,
         initial_modal_coordinates=np.concatenate([np.zeros(0)] + [bv[k]["eta0"] for k in beams]),
         initial_modal_velocities=np.concatenate([np.zeros(0)] + [bv[k]["eta_d0"] for k in beams]),
+        parent=parent,
+        attachment=attachment,
+        attachment_point=attachment_point,
     )
 
 
@@ -269,7 +432,7 @@ def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
     return rotation @ e, omega + rotation @ jl @ theta_dot
 
 
-def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
+def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip):
     """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
     pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
     the input section's frame, with the clamped-free eigenfunctions when the output is the free
@@ -283,8 +446,10 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
             continue
         who = bodies[k].label(k)
         input_free = kinds[k] == BALL
-        free_tip = k == n - 1 and tip == "free"
-        output_free = k == n - 1 or kinds[k + 1] == BALL      # the tip (free or pinned) too
+        leaf = not children[k]
+        free_tip = leaf and tip == "free"
+        # a leaf's output is the tip (free or pinned); otherwise every joint there moment-free
+        output_free = leaf or all(kinds[c] == BALL for c in children[k])
         family = int(beam_params[k, FAMILY])
         if family == PINNED and not (input_free and output_free):
             raise ValueError(f"{who}: mode_family 'pinned' needs moment-free ends (a ball joint "
@@ -304,18 +469,21 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, tip):
         beam_params[k, FAMILY] = family
 
 
-def _check_ball_lookahead(bodies, bv, kinds, body_kind):
+def _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment):
     """A body between two moment-free cuts (ball joints or the free tip) finds its rotation from
     its own moment equation, whose matrix is -chi1 (J_I + M l_IO^ l_IC^) (docs/rigid_body.md).
-    If that matrix is singular (no inertia about the hinge-to-hinge axis) the step is undefined."""
+    If that matrix is singular (no inertia about the hinge-to-hinge axis) the step is undefined.
+    (Checked for a leaf and for a body with one child at its output.)"""
     n = len(bodies)
     for k in range(n):
-        outboard_free = k == n - 1 or kinds[k + 1] == BALL
+        leaf = not children[k]
+        single = len(children[k]) == 1 and attachment[children[k][0]] == 0
+        outboard_free = leaf or (single and kinds[children[k][0]] == BALL)
         if kinds[k] != BALL or not outboard_free or body_kind[k] != RIGID:
             continue
         v = bv[k]
         l_io, l_ic = v["l_io"], v["l_ic"]
-        if k == n - 1:
+        if leaf:
             mat = v["j_i"]       # free tip: no force at the output point
         else:
             mat = v["j_i"] + v["mass"] * _hat(l_io) @ _hat(l_ic)

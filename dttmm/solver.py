@@ -1,8 +1,9 @@
 """DT-TMM time integration of a chain: simulate(model, t_end, dt, ...) -> Result.
 
 The frozen Model is read-only; all mutable state lives in a Workspace allocated once per run.
-The time loop runs in numba (kernels/step.py) in chunks; Python only evaluates prescribed ground
-motion and applied loads for each chunk and collects the recorded samples.
+The time loop runs in numba (one skeleton, kernels/loop.py, with the scheme's loop variant) in
+chunks; Python only evaluates prescribed ground motion and applied loads for each chunk and
+collects the recorded samples.
 """
 import time
 from dataclasses import dataclass, replace
@@ -10,12 +11,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .elements import BEAM, RIGID
+from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
 from .elements.hinges import ELASTIC, FIXED, HINGE_PARAM_SIZE, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import em_step
-from .kernels import ball_chain
+from .kernels import ball_chain, em_step
 from .kernels import step as kstep
+from .kernels.loop import (OK, SINGULAR, UNSUPPORTED, Inputs, Params, Record, Run, Settings, State,
+                           Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .model import Model, output_section
@@ -61,54 +64,46 @@ class Integrator:
 
 
 class Workspace:
-    """Preallocated state and scratch of one run (nothing here is shared between runs)."""
+    """Preallocated state and scratch of one run (nothing here is shared between runs): the
+    state the loops advance (kernels/loop.py::State), the assembly's scratch (Sweep) and the
+    beams' tables (beam_tables)."""
 
     def __init__(self, model: Model):
         n = model.n_bodies
         n_el, n_st = 2 * n, 2 * n + 1
-        self.rot = model.initial_rotation.copy()
-        self.omega = model.initial_angular_velocity.copy()
-        self.omega_dot = np.zeros((n, 3))
-        self.pseudo = np.zeros((n, 3))      # the rotation integrator's pseudo-acceleration
-        self.defl = np.zeros((n, 3))
-        self.defl_rate = np.zeros((n, 3))
-        self.defl_acc = np.zeros((n, 3))
-        self.defl_pseudo = np.zeros((n, 3))
-        self.z = np.zeros((n_st, 12))
-        self.kind = np.zeros(n_el, dtype=np.int64)
-        self.u = np.zeros((n_el, 12, 13))
-        self.known_loads = np.zeros((n_el, 12))
-        self.sc_split = np.zeros(n_st, dtype=np.int64)
-        self.sc_s = np.zeros((n_st, 6, 6))
-        self.sc_p = np.zeros((n_st, 6))
-        self.sc_tinv = np.zeros((n_el, 6, 6))
-        self.sc_t = np.zeros((n_el, 6))
-        self.sc_g = np.zeros((n_el, 6, 3))
-        self.sc_gv = np.zeros((n_el, 6))
-        self.red_v = np.zeros((n, 6, 7))
-        self.red_phi = np.zeros((n, 3, 7))
-        self.red_s = np.zeros((n + 1, 3, 3))
-        self.red_p = np.zeros((n + 1, 3))
-        self.red_tinv = np.zeros((n, 3, 3))
-        self.red_t = np.zeros((n, 3))
-        self.red_aq = np.zeros((n + 1, 6))
-        self.dir_z = np.zeros((n_st, 12, 6))
-        self.dir_o = np.zeros((n_st, 12))
         n_eta = int(model.n_modes.sum())
-        # the beams' modal coordinates, rates, accelerations and the integrator's
-        # pseudo-accelerations, flat over the beams (v coordinates of a beam, then w)
-        self.eta = model.initial_modal_coordinates.copy()
-        self.eta_d = model.initial_modal_velocities.copy()
-        self.eta_acc = np.zeros(n_eta)
-        self.eta_p = np.zeros(n_eta)
-        self.eta_map = np.zeros((n_eta, 13))
+        z3 = lambda: np.zeros((n, 3))                               # noqa: E731
+        self.state = State(
+            rot=model.initial_rotation.copy(), omega=model.initial_angular_velocity.copy(),
+            omega_dot=z3(), pseudo=z3(),    # pseudo: the rotation integrator's pseudo-acceleration
+            defl=z3(), defl_rate=z3(), defl_acc=z3(), defl_pseudo=z3(),
+            z=np.zeros((n_st, 12)),
+            # the beams' modal coordinates, rates, accelerations and the integrator's
+            # pseudo-accelerations, flat over the beams (v coordinates of a beam, then w)
+            eta=model.initial_modal_coordinates.copy(),
+            eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
+            eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3())
+        self.sweep = Sweep(
+            kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
+            known_loads=np.zeros((n_el, 12)), split=np.zeros(n_st, dtype=np.int64),
+            s=np.zeros((n_st, 6, 6)), p=np.zeros((n_st, 6)), tinv=np.zeros((n_el, 6, 6)),
+            t=np.zeros((n_el, 6)), g=np.zeros((n_el, 6, 3)), gv=np.zeros((n_el, 6)),
+            red_v=np.zeros((n, 6, 7)), red_phi=np.zeros((n, 3, 7)), red_s=np.zeros((n + 1, 3, 3)),
+            red_p=np.zeros((n + 1, 3)), red_tinv=np.zeros((n, 3, 3)), red_t=np.zeros((n, 3)),
+            red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_st, 12, 6)),
+            dir_o=np.zeros((n_st, 12)))
         self.beams = beam_tables(model)
 
-    def scratch(self):
-        return (self.kind, self.u, self.known_loads, self.sc_split, self.sc_s, self.sc_p,
-                self.sc_tinv, self.sc_t, self.sc_g, self.sc_gv, self.red_v, self.red_phi,
-                self.red_s, self.red_p, self.red_tinv, self.red_t, self.red_aq, self.dir_z,
-                self.dir_o)
+
+def kernel_params(model, beams=None):
+    """The frozen model's arrays as the kernels read them (kernels/loop.py::Params)."""
+    lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
+    return Params(body_params=model.body_params, hinge_kind=model.hinge_kind,
+                  hinge_params=model.hinge_params, gravity=model.gravity,
+                  beams=beam_tables(model) if beams is None else beams,
+                  locked=model.ground_locked, lock_rel=lock_rel,
+                  mass_center_inertia=model.body_mass_center_inertia,
+                  tip_pinned=bool(model.tip_pinned))
 
 
 def beam_tables(model):
@@ -254,26 +249,26 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                 raise DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
                                       f"s: {err.cause}", err.partial) from None
         return richardson_extrapolation(*runs)
+    check_supported(model, scheme)
     user_model = model
     model, keep = kernel_chain(user_model)
     mode = _mode(model, method, full_state)
     coef = Integrator.from_rho_inf(rho_inf).array()
-    if scheme != "newmark":
-        _check_scheme_scope(user_model, scheme)
 
     ws = Workspace(model)
+    state = ws.state
     n = model.n_bodies
-    lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
-    params = (model.body_params, model.hinge_kind, model.hinge_params, model.gravity)
+    params = kernel_params(model, ws.beams)
+    settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
+                        newton_tol=newton_tol, record_every=record_every)
 
     wall0 = time.perf_counter()
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
     try:
-        status = kstep.initial_accelerations(mode, model.tip_pinned, *params, g_acc[0], g_rot[0],
-                                             g_w[0], g_wd[0], force[0], torque[0], ws.rot,
-                                             ws.omega, ws.defl, ws.defl_rate, *ws.scratch(), ws.z,
-                                             ws.beams, ws.eta, ws.eta_d, ws.eta_acc, ws.eta_map)
+        status = kstep.initial_accelerations(params, settings, state, ws.sweep,
+                                             (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0],
+                                             torque[0])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -281,32 +276,48 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if status == LOST_ACCURACY:
         raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
                               + _DIRECT_HINT)
+    if status < 0:
+        raise ValueError(_unsupported_cause(model, -status, "the consistent start"))
     if status != 0:
         raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
-        ws.omega_dot[k] = g_wd[0] if model.ground_locked[k] else ws.z[2 * k + 1, 3:6]
+        state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
         if model.hinge_kind[k] == ELASTIC:
-            ws.defl_acc[k] = ws.z[2 * k + 1, 0:3] - ws.z[2 * k, 0:3]
-    ws.pseudo[:] = ws.omega_dot
-    ws.eta_p[:] = ws.eta_acc
-    ws.defl_pseudo[:] = ws.defl_acc
-    histories = _station_histories(model, ws, scheme == "paper")
-    ws.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
+            state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[2 * k, 0:3]
+    state.pseudo[:] = state.omega_dot
+    state.eta_p[:] = state.eta_acc
+    state.defl_pseudo[:] = state.defl_acc
+    histories = _station_histories(model, state, scheme == "paper")
+    state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
-    samples = [_sample(ws)]
-    if scheme == "paper":
-        samples[0].update(v_st=histories[1].copy(), v_c=histories[4].copy())
+    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
+    # fused loop (kernels/ball_chain.py), the energy-momentum scheme its own, the rest the
+    # general loop (kernels/step.py); each records what its scheme defines
+    keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
+    fused = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
+             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
+    if scheme == "energy_momentum":
+        loop_name, loop, runner = "energy-momentum", em_step.energy_momentum_loop(n), run_steps
+        state.v_c[:] = _initial_mass_center_velocities(model, state.rot, state.omega)
+        keys.append("v_c")
+    elif fused:
+        loop_name, runner = "ball-chain", run_steps_no_alloc
+        loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
+        ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
+    else:
+        loop_name, runner = "general", run_steps
+        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories)
+        if scheme == "paper":
+            keys += ["v_st", "v_c"]
+    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
+
+    def sample():
+        values = dict(state._asdict(), **history_values)
+        return {key: values[key].copy() for key in keys}
+
+    samples = [sample()]
     sample_steps = [0]
     chunk = record_every * max(1, 1000 // record_every)
-    if scheme == "energy_momentum":
-        info = _run_energy_momentum(model, ws, n_steps, dt, mode, int(newton_iterations),
-                                    newton_tol, record_every, chunk, samples, sample_steps)
-        wall = time.perf_counter() - wall0
-        t = np.array(sample_steps) * dt
-        info.update(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme,
-                    forces="step means (about t - dt/2)")
-        return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
-                       info)
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
@@ -314,73 +325,58 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if no_loads:
         force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
     n_rec_max = chunk // record_every
-    # rigid bodies and beams between ball joints: the fused loop (kernels/ball_chain.py; it
-    # records no hinge deflections: there are none, hence the zeros below)
-    fused = FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
-    loop = "ball-chain" if fused else "general"
-    rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
-               omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
-               defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
-               eta=np.zeros((n_rec_max, len(ws.eta))), eta_d=np.zeros((n_rec_max, len(ws.eta))))
-    if scheme == "paper":
-        rec.update(v_st=np.empty((n_rec_max, n + 1, 3)), v_c=np.empty((n_rec_max, n, 3)))
-    histories = histories + ((rec["v_st"], rec["v_c"]) if scheme == "paper"
-                             else (np.zeros((1, 1, 3)), np.zeros((1, 1, 3))))
+    rec = Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
+                 omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
+                 defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
+                 eta=np.zeros((n_rec_max, len(state.eta))),
+                 eta_d=np.zeros((n_rec_max, len(state.eta))),
+                 v_st=np.zeros((n_rec_max if scheme == "paper" else 1, n + 1, 3)),
+                 v_c=np.zeros((n_rec_max if "v_c" in keys else 1, n, 3)))
     info = np.zeros(5, dtype=np.int64)
     max_newton = 0
     done = 0
+    run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name)
+    if scheme == "energy_momentum":
+        run_info.update(forces="step means (about t - dt/2)")
+    else:
+        run_info.update(rho_inf=rho_inf)
     while done < n_steps:
         m = min(chunk, n_steps - done)
         times = (done + np.arange(m + 1)) * dt
         if not static_ground:
             g_acc, g_rot, g_w, g_wd = _ground(model, times)
             g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
-        if not no_loads:
-            force, torque = _loads(model, times[1:])
+        if not no_loads:    # at the step's end; the energy-momentum step's mean by the midpoint
+            force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt
+                                   if scheme == "energy_momentum" else times[1:])
+        inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
+                        force=force[:m], torque=torque[:m])
         try:
-            if fused:
-                ball_chain.advance_ball_chain(
-                    model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
-                    model.body_params, model.gravity, g_acc[:m], g_rot[:m + 1], force[:m],
-                    torque[:m], ws.rot, ws.omega, ws.omega_dot, ws.pseudo, ws.z, ws.red_s,
-                    ws.red_p, ws.red_tinv, ws.red_t, ws.red_aq, record_every, rec["rot"],
-                    rec["omega"], rec["omega_dot"], rec["z"], info, ws.beams, ws.eta, ws.eta_d,
-                    ws.eta_acc, ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"])
-            else:
-                kstep.advance(mode, model.tip_pinned, dt, coef, int(newton_iterations), newton_tol,
-                              *params,
-                              model.ground_locked, lock_rel, g_acc[:m], g_rot[:m + 1], g_w[:m],
-                              g_wd[:m], force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
-                              ws.pseudo, ws.defl, ws.defl_rate, ws.defl_acc,
-                              ws.defl_pseudo, ws.z, *ws.scratch(), record_every, rec["rot"],
-                              rec["omega"], rec["omega_dot"], rec["z"], rec["defl"],
-                              rec["defl_rate"], info, ws.beams, ws.eta, ws.eta_d, ws.eta_acc,
-                              ws.eta_p, ws.eta_map, rec["eta"], rec["eta_d"], histories)
+            runner(loop, Run(params, settings, state, ws.sweep, inputs, rec), info)
         except np.linalg.LinAlgError as err:
             raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
                                   f"somewhere in steps {done + 1}..{done + m} ({err}); "
                                   f"{_DIRECT_HINT if method == 'direct' else ''}") from None
         for i in range(int(info[3])):
-            samples.append({key: rec[key][i].copy() for key in rec})
+            samples.append({key: getattr(rec, key)[i].copy() for key in keys})
             sample_steps.append(done + (i + 1) * record_every)
-        if info[0] != kstep.OK:
+        if info[0] == UNSUPPORTED:
+            raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
+        if info[0] != OK:
             step = done + int(info[1]) + 1
             cause = _failure_cause(model, mode, info)
-            if method == "direct" and info[0] == kstep.SINGULAR:
+            if method == "direct" and info[0] == SINGULAR:
                 cause += "; " + _DIRECT_HINT
             partial = _result(user_model, np.array(sample_steps) * dt,
                               [_user_sample(s, keep) for s in samples],
-                              time.perf_counter() - wall0, step - 1,
-                              dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf,
-                                   loop=loop))
+                              time.perf_counter() - wall0, step - 1, dict(run_info))
             raise DivergenceError(step, step * dt, cause, partial)
         max_newton = max(max_newton, int(info[2]))
         done += m
     wall = time.perf_counter() - wall0
     t = np.array(sample_steps) * dt
     return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
-                   dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, rho_inf=rho_inf, loop=loop,
-                        newton_iterations_used=max_newton,
+                   dict(run_info, newton_iterations_used=max_newton,
                         newton_unconverged_steps=int(info[4])))
 
 
@@ -388,27 +384,45 @@ FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests
 _MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"]
 
 
-def _check_scheme_scope(model, scheme):
-    """The scope of the energy-momentum and paper's schemes: ball and fixed hinges on a fixed
-    ground; rigid bodies only for energy-momentum, rigid bodies and beams for the paper's."""
+def check_supported(model, scheme):
+    """Refuse, before a run, what the solver does not implement for this model: a tree (so
+    far), and an element kind whose declaration (elements/kinds.py) does not list the scheme;
+    the energy-momentum and paper's schemes need a fixed ground."""
+    if not model.is_chain:
+        k = next(k for k in range(model.n_bodies)
+                 if model.parent[k] != k - 1 or model.attachment[k] != 0)
+        p = model.parent[k]
+        where = "the ground" if p < 0 else f"body '{model.body_names[p]}'"
+        raise ValueError(f"simulate: body '{model.body_names[k]}' is joined to {where} at "
+                         f"attachment point {int(model.attachment[k])}, not to the output of "
+                         f"the body before it: the model is a tree, and the solver runs "
+                         f"chains only so far (build the chain with build_chain)")
     where = f"simulate(scheme='{scheme}')"
     for k in range(model.n_bodies):
-        if model.body_kind[k] == BEAM and scheme == "energy_momentum":
-            raise ValueError(f"{where}: body '{model.body_names[k]}' is a beam; the scheme "
-                             f"covers rigid bodies only (use scheme='newmark')")
-        if model.hinge_kind[k] == ELASTIC:
-            raise ValueError(f"{where}: hinge '{model.hinge_names[k]}' is elastic; the scheme "
-                             f"covers ball and fixed hinges only (use scheme='newmark')")
-    if model.ground_motion is not None:
+        for role, kinds, code, name in (("body", BODY_KIND, model.body_kind[k],
+                                         model.body_names[k]),
+                                        ("hinge", JOINT_KIND, model.hinge_kind[k],
+                                         model.hinge_names[k])):
+            kind = kinds.get(int(code))
+            if kind is None:
+                raise ValueError(f"simulate: {role} '{name}' has kind code {int(code)}, which no "
+                                 f"element kind declares (elements/kinds.py)")
+            if scheme not in kind.schemes:
+                covered = [kd.name for kd in kinds.values() if scheme in kd.schemes]
+                raise ValueError(f"{where}: {role} '{name}' is {kind.what} ({kind.name}); the "
+                                 f"scheme covers {', '.join(covered)} only (use "
+                                 f"scheme='newmark')")
+    if scheme != "newmark" and model.ground_motion is not None:
         raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
                          f"fixed ground (use scheme='newmark')")
 
 
-def _station_histories(model, ws, independent):
+def _station_histories(model, state, independent):
     """The paper's scheme's state (kernels/step.py, advance): velocity, acceleration and
     pseudo-acceleration of the ground point and every body's output point ((n + 1, 3) each), and
-    of every rigid body's mass centre ((n, 3)), at t = 0 from the consistent start (ws.z holds
-    the stations' accelerations and ws.omega_dot the angular ones).  Empty unless independent."""
+    of every rigid body's mass centre ((n, 3)), at t = 0 from the consistent start (state.z
+    holds the stations' accelerations and state.omega_dot the angular ones).  Empty unless
+    independent."""
     n = model.n_bodies
     if not independent:
         empty = np.zeros((1, 3))
@@ -417,19 +431,19 @@ def _station_histories(model, ws, independent):
     c_v, c_a = np.zeros((n, 3)), np.zeros((n, 3))
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     for k in range(n):
-        w, wd = ws.omega[k], ws.omega_dot[k]
+        w, wd = state.omega[k], state.omega_dot[k]
         if model.body_kind[k] == BEAM:
             j0, j1 = mode_off[k], mode_off[k + 1]
-            _, rho_dot = beam_output_offset(model.beam_params[k], ws.rot[k], w, ws.eta[j0:j1],
-                                            ws.eta_d[j0:j1])
+            _, rho_dot = beam_output_offset(model.beam_params[k], state.rot[k], w, state.eta[j0:j1],
+                                            state.eta_d[j0:j1])
         else:
-            rho_c = ws.rot[k] @ model.body_params[k, TO_MASS_CENTER]
+            rho_c = state.rot[k] @ model.body_params[k, TO_MASS_CENTER]
             c_v[k] = st_v[k] + np.cross(w, rho_c)
-            c_a[k] = (ws.z[2 * k + 1, 0:3] + np.cross(wd, rho_c)
+            c_a[k] = (state.z[2 * k + 1, 0:3] + np.cross(wd, rho_c)
                       + np.cross(w, np.cross(w, rho_c)))
-            rho_dot = np.cross(w, ws.rot[k] @ model.body_params[k, TO_OUTPUT])
+            rho_dot = np.cross(w, state.rot[k] @ model.body_params[k, TO_OUTPUT])
         st_v[k + 1] = st_v[k] + rho_dot
-        st_a[k + 1] = ws.z[2 * k + 2, 0:3]
+        st_a[k + 1] = state.z[2 * k + 2, 0:3]
     return (True, st_v, st_a, st_a.copy(), c_v, c_a, c_a.copy())
 
 
@@ -442,50 +456,6 @@ def _initial_mass_center_velocities(model, rot, omega):
         v_c[k] = v_in + np.cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
         v_in = v_in + np.cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
     return v_c
-
-
-def _run_energy_momentum(model, ws, n_steps, dt, mode, newton_iterations, newton_tol,
-                         record_every, chunk, samples, sample_steps):
-    """The energy-momentum time loop (kernels/em_step.py) in chunks; appends the recorded
-    samples (with each body's mass-centre velocity) and returns the run's info."""
-    n = model.n_bodies
-    v_c = _initial_mass_center_velocities(model, ws.rot, ws.omega)
-    samples[0]["v_c"] = v_c.copy()
-    n_rec_max = chunk // record_every
-    rec = dict(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
-               omega_dot=np.empty((n_rec_max, n, 3)), v_c=np.empty((n_rec_max, n, 3)),
-               z=np.empty((n_rec_max, 2 * n + 1, 12)))
-    zeros = dict(defl=np.zeros((n, 3)), defl_rate=np.zeros((n, 3)), eta=ws.eta.copy(),
-                 eta_d=ws.eta_d.copy())
-    no_loads = not model.has_applied_loads
-    if no_loads:
-        force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
-    info = np.zeros(5, dtype=np.int64)
-    max_newton = 0
-    done = 0
-    while done < n_steps:
-        m = min(chunk, n_steps - done)
-        if not no_loads:           # the step's mean load, by the midpoint rule
-            force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt)
-        em_step.advance_em(mode, model.tip_pinned, dt, newton_iterations, newton_tol,
-                           model.body_params, model.body_mass_center_inertia, model.hinge_kind,
-                           model.gravity, force[:m], torque[:m], ws.rot, ws.omega, ws.omega_dot,
-                           v_c, ws.z, *ws.scratch(), record_every, rec["rot"], rec["omega"],
-                           rec["omega_dot"], rec["v_c"], rec["z"], info)
-        if info[0] != kstep.OK:
-            step = done + int(info[1]) + 1
-            cause = _failure_cause(model, mode, info)
-            if mode in (kstep.DIRECT_FULL, kstep.DIRECT_REDUCED) and info[0] == kstep.SINGULAR:
-                cause += "; " + _DIRECT_HINT
-            raise DivergenceError(step, step * dt, cause)
-        for i in range(int(info[3])):
-            sample = {key: rec[key][i].copy() for key in rec}
-            sample.update(zeros)
-            samples.append(sample)
-            sample_steps.append(done + (i + 1) * record_every)
-        max_newton = max(max_newton, int(info[2]))
-        done += m
-    return dict(newton_iterations_used=max_newton, newton_unconverged_steps=int(info[4]))
 
 
 def kernel_chain(model):
@@ -526,7 +496,12 @@ def kernel_chain(model):
                 rows[name].append(carrier[name])
     arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names")
                      else np.array(v)) for name, v in rows.items()}
-    return replace(model, n_bodies=len(arrays["body_kind"]), **arrays), np.array(keep)
+    n_new = len(arrays["body_kind"])
+    attachment_point = np.zeros((n_new, 3))
+    attachment_point[1:] = arrays["body_params"][:-1, TO_OUTPUT]
+    return replace(model, n_bodies=n_new, parent=np.arange(n_new) - 1,
+                   attachment=np.zeros(n_new, dtype=np.int64), attachment_point=attachment_point,
+                   **arrays), np.array(keep)
 
 
 def _user_sample(sample, keep):
@@ -537,12 +512,6 @@ def _user_sample(sample, keep):
     out = {key: sample[key][keep] for key in ("rot", "omega", "omega_dot", "defl", "defl_rate")}
     out.update(z=sample["z"][stations], eta=sample["eta"], eta_d=sample["eta_d"])
     return out
-
-
-def _sample(ws):
-    return dict(rot=ws.rot.copy(), omega=ws.omega.copy(), omega_dot=ws.omega_dot.copy(),
-                z=ws.z.copy(), defl=ws.defl.copy(), defl_rate=ws.defl_rate.copy(),
-                eta=ws.eta.copy(), eta_d=ws.eta_d.copy())
 
 
 _DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "
@@ -563,6 +532,16 @@ def _singular_cause(model, mode, status, where):
     k = j // 2
     what = f"hinge '{model.hinge_names[k]}'" if j % 2 == 0 else f"body '{model.body_names[k]}'"
     return f"{where}: the transfer at {what} is singular"
+
+
+def _unsupported_cause(model, code, where):
+    """code: j + 1 for element j (2k: hinge k, 2k + 1: body k) of a kind the loop does not know
+    (a safety net: simulate refuses unsupported combinations before the run)."""
+    j = code - 1
+    k = j // 2
+    what = (f"hinge '{model.hinge_names[k]}' (kind {int(model.hinge_kind[k])})" if j % 2 == 0
+            else f"body '{model.body_names[k]}' (kind {int(model.body_kind[k])})")
+    return f"simulate: {where} does not support {what}"
 
 
 def _failure_cause(model, mode, info):

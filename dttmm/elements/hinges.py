@@ -9,8 +9,7 @@ import numpy as np
 
 from ._checks import matrix3, rotation_matrix, symmetric_positive
 
-BALL, FIXED, ELASTIC = 0, 1, 2
-HINGE_KIND_NAMES = {BALL: "BallJoint", FIXED: "FixedHinge", ELASTIC: "ElasticHinge"}
+BALL, FIXED, ELASTIC = 0, 1, 2        # Model.hinge_kind (declared in kinds.py)
 
 # layout of one row of Model.hinge_params (3x3 blocks, row-major)
 REST_ROTATION = slice(0, 9)        # R0: outboard frame = inboard frame R0 at rest

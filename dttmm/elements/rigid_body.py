@@ -39,6 +39,9 @@ class RigidBody:
     angular_velocity: initial world-frame angular velocity, rad/s; None for zero (at rest in the
                      world, not relative to the inboard body).  Taken from the inboard body
                      across a fixed hinge.
+    points:          further attachment points for other bodies' joints (dttmm.System.add(...,
+                     at=NAME)): a dict of name -> body-frame vector from the input point, m.  The
+                     output point is the attachment point "output".
     """
     mass: float
     inertia: object
@@ -50,6 +53,7 @@ class RigidBody:
     rotation: object = None
     angular_velocity: object = None
     name: str = ""
+    points: Optional[dict] = None
     _valid: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def label(self, index=None):
@@ -81,7 +85,17 @@ class RigidBody:
         rotation = None if self.rotation is None else rotation_matrix(who, "rotation", self.rotation)
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
-        return dict(mass=mass, l_ic=l_ic, l_io=l_io, j_c=j_c, j_i=j_c + shift,
+        points = {}
+        if self.points is not None:
+            if not isinstance(self.points, dict):
+                raise ValueError(f"{who}: points must be a dict of name -> body-frame vector, "
+                                 f"got {type(self.points).__name__}")
+            for key, value in self.points.items():
+                if not isinstance(key, str) or not key or key in ("output", "input"):
+                    raise ValueError(f"{who}: points: {key!r} is not a valid point name (a "
+                                     f"non-empty string other than 'output' and 'input')")
+                points[key] = finite_vector(who, f"points[{key!r}]", value)
+        return dict(mass=mass, l_ic=l_ic, l_io=l_io, j_c=j_c, j_i=j_c + shift, points=points,
                     force=optional_function(who, "force", self.force),
                     torque=optional_function(who, "torque", self.torque),
                     rotation=rotation, omega=omega)

@@ -1,24 +1,26 @@
 """The time loop fused for chains of rigid bodies and beams joined by ball joints
 (docs/assembly.md, "The fused ball-chain step").
 
-The same step as kernels/step.py::advance in RICCATI_REDUCED mode (Newmark scheme), on
-preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
+The same step as the general loop (kernels/step.py) in RICCATI_REDUCED mode (Newmark scheme),
+as a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
 angular-acceleration slots (no 12 x 13 transfer), and so is each beam's
 (kernels/beam.py::beam_ball_map); each map goes straight into its Riccati step.  Results agree
 with the general loop to rounding (tests/test_ball_chain.py).
 """
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
 
-from ..elements import BEAM
+from ..elements import BEAM, RIGID
 from . import CONTRACT, no_alloc_kernel
 from .beam import ball_map_work_shape, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt,
                    t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from .so3 import expm_so3, left_jacobian, log_so3
-from .step import NOT_FINITE, OK, SINGULAR, _advance_history, _integrator_coefficients, \
-    _offsets_into, report
+from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
+from .step import _advance_history, _offsets_into
 from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
@@ -144,175 +146,217 @@ def _ground_increment(g_rot, s, rel, out):
     log_so3(rel, out)
 
 
+# The fused loop's own scratch (allocated by fused_loop; nothing is allocated in the loop, so
+# its skeleton is compiled without numba's reference counting: loop.py::run_steps_no_alloc).
+FusedLoop = namedtuple("FusedLoop", [
+    "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
+    "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)
+    "pmap",             # (n, 3, 7) each body's angular acceleration w' = pmap [a_I; q_I; 1]
+    "v",                # (6, 7) one body's reduced map [a_O; q_O] = v [a_I; q_I; 1]
+    "mats",             # (7, 3, 3) T, its numerator, exp(phi^), A*, J_l(phi*), A_n, ground rel.
+    "vecs",             # (5, 3) w, w', alpha, the load, the ground's increment
+    "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
+    "beam_work",        # beam_ball_map's work block (kernels/beam.py::ball_map_work_shape)
+])
+
+
+def fused_loop(n, mode_off, h, coef):
+    """The fused loop's scratch for n bodies whose modal coordinates start at mode_off."""
+    beta, gamma, alpha_m, alpha_f = coef
+    c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
+    c3 = gamma / (beta * h)
+    max_modes = int(np.max(np.diff(mode_off))) if n else 0
+    return FusedLoop(np.array([c1, c3, 1.0 / c1, c3 / c1]), np.zeros((4, n, 3)),
+                     np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
+                     np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
+                     np.zeros(ball_map_work_shape(max_modes)))
+
+
 @njit(cache=True, fastmath=CONTRACT)
-def advance_ball_chain(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity,
-                       g_acc, g_rot, force, torque, rot, omega, omega_dot, pseudo, z,
-                       s_mat, p_vec, t_inv, t_vec, aq, record_every, rec_rot, rec_omega,
-                       rec_omega_dot, rec_z, out_info, beams, eta, eta_d, eta_acc, eta_p,
-                       eta_map, rec_eta, rec_eta_d):
-    """kernels/step.py::advance for a chain of rigid bodies and beams joined by ball joints
-    (RICCATI_REDUCED mode, Newmark scheme), the same arguments' meaning; z holds the stations'
-    states (input guess and output) in the general loop's layout; eta_map's first 7 columns
-    hold the beams' maps eta'' = eta_map[:, :7] [a_I; q_I; 1].  Allocates the loop's scratch
-    and runs it (_ball_chain_steps)."""
-    n = body_params.shape[0]
-    n_eta = eta.shape[0]
-    mode_off = beams[3]
-    max_modes = 0
+def guess_from_stations(z, aq):
+    """The fused loop's guess [a; q] of every station (red_aq) from the stations' states z."""
+    n = aq.shape[0] - 1
     for k in range(n):
-        max_modes = max(max_modes, mode_off[k + 1] - mode_off[k])
-    _ball_chain_steps(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity, g_acc,
-                      g_rot, force, torque, rot, omega, omega_dot, pseudo, z, s_mat, p_vec,
-                      t_inv, t_vec, aq, record_every, rec_rot, rec_omega, rec_omega_dot, rec_z,
-                      out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d,
-                      np.empty((4, n, 3)), np.empty((n, 3, 7)), np.empty((6, 7)),
-                      np.empty((7, 3, 3)), np.zeros((5, 3)), np.zeros((5, n_eta)),
-                      np.empty(ball_map_work_shape(max_modes)))
-
-
-@no_alloc_kernel
-def _ball_chain_steps(tip_pinned, h, coef, newton_max, newton_tol, body_params, gravity, g_acc,
-                      g_rot, force, torque, rot, omega, omega_dot, pseudo, z, s_mat, p_vec,
-                      t_inv, t_vec, aq, record_every, rec_rot, rec_omega, rec_omega_dot, rec_z,
-                      out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d,
-                      per_body, pmap, v, mats, vecs, per_mode, beam_work):
-    """advance_ball_chain's time loop, on its scratch (no allocation, so compiled without
-    numba's reference counting: measured, the three-pendulum's and the rigid 3-link chain's
-    step 0.88x, 15 interleaved pairs).  Per step and Newton iteration one forward pass
-    (kinematics, reduced map, Riccati step per body) and one backward pass (recovery, beams'
-    modal accelerations).  Scratch: per_body (4, n, 3), pmap (n, 3, 7), v (6, 7), mats
-    (7, 3, 3), vecs (5, 3), per_mode (5, n_eta), beam_work (beam_ball_map's)."""
-    n = body_params.shape[0]
-    n_steps = g_acc.shape[0]
-    c1, c3 = _integrator_coefficients(h, coef)
-    s_c, r_c = 1.0 / c1, c3 / c1
-    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], per_body[3]
-    t_buf, num_buf, e3, rot_star, lam, rot_prev, rel = (mats[0], mats[1], mats[2], mats[3],
-                                                        mats[4], mats[5], mats[6])
-    w, wd, alpha, load, phi_g = vecs[0], vecs[1], vecs[2], vecs[3], vecs[4]
-    w1e, w3e, a1e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[2],
-                                              per_mode[3], per_mode[4])
-    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = beams
-    n_eta = eta.shape[0]
-    for k in range(n):                              # the guess: the last solution
         for i in range(3):
             aq[k, i] = z[2 * k + 1, i]
             aq[k, 3 + i] = z[2 * k + 1, 9 + i]
     for i in range(3):
         aq[n, i] = z[2 * n, i]
         aq[n, 3 + i] = z[2 * n, 9 + i]
-    max_iter = 0
-    n_rec = 0
-    for s in range(n_steps):
-        for k in range(n):
-            _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
-                          phi_star[k])              # phi* by the constant-acceleration predictor
-        if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
-            # (eta_dd_star first receives the predicted increment of eta)
-            _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
-            for i in range(n_eta):
-                w1e[i] = a1e[i] - c1 * eta[i]
-                w3e[i] -= c3 * eta[i]
-                eta_dd_star[i] = c1 * (eta[i] + eta_dd_star[i]) + w1e[i]
-        for it in range(newton_max + 1):
-            for i in range(3):
-                p_vec[0, i] = g_acc[s, i]
-                for j in range(3):
-                    s_mat[0, i, j] = 0.0
-            for k in range(n):
-                phi = phi_star[k]
-                for i in range(3):
-                    w[i] = c3 * phi[i] + w3[k, i]
-                    wd[i] = c1 * phi[i] + w1[k, i]
-                if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
-                    i0, i1 = mode_off[k], mode_off[k + 1]
-                    m = (i1 - i0) // 2
-                    tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
-                    beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
-                                  w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
-                                  eta_dd_star[i0:i1], beam_work, v, pmap[k], eta_map[i0:i1])
-                else:
-                    expm_so3(phi, e3)
-                    mm3_into(e3, rot[k], rot_star)
-                    left_jacobian(phi, lam)
-                    for i in range(3):
-                        load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
-                    ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
-                                  aq[k, 3:6], load, torque[s, k], v, pmap[k])
-                if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1],
-                                        t_inv[k], t_vec[k], t_buf, num_buf) == 0.0:
-                    report(out_info, SINGULAR, s, k + 1, n_rec)
-                    return
-            riccati_reduced_tip(tip_pinned, s_mat[n], p_vec[n], aq[n])
-            change = 0.0
-            finite = True
-            for k in range(n - 1, -1, -1):
-                riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq)
-                pk = pmap[k]
-                for i in range(3):
-                    alpha[i] = pk[i, 6]
-                    for c in range(6):
-                        alpha[i] += pk[i, c] * aq[k, c]
-                    x = (alpha[i] - w1[k, i]) / c1  # back from w' = c1 phi + w1
-                    phi_new[k, i] = x
-                    change = max(change, abs(x - phi_star[k, i]))
-                    if not np.isfinite(x):
-                        finite = False
-                if body_kind[k] == BEAM:            # eta'' = eta_map[:, :7] [a; q; 1]
-                    for i in range(mode_off[k], mode_off[k + 1]):
-                        e = eta_map[i, 6]
-                        for c in range(6):
-                            e += eta_map[i, c] * aq[k, c]
-                        eta_dd_new[i] = e
-                        change = max(change, abs(e - eta_dd_star[i]) / c1)
-            if not finite:
-                report(out_info, NOT_FINITE, s, 0, n_rec)
-                return
-            max_iter = max(max_iter, it)
-            if it == newton_max or change <= newton_tol:
-                break
-            for k in range(n):
-                for i in range(3):
-                    phi_star[k, i] = phi_new[k, i]
-            for i in range(n_eta):
-                eta_dd_star[i] = eta_dd_new[i]
-        if newton_max > 0 and change > newton_tol:
-            out_info[4] += 1
-        for k in range(n):                          # update the histories
-            _advance_history(h, coef, phi_new[k], omega[k], omega_dot[k], pseudo[k])
-            expm_so3(phi_new[k], e3)
-            for i in range(3):
-                for j in range(3):
-                    rot_prev[i, j] = rot[k, i, j]
-            mm3_into(e3, rot_prev, rot[k])
-            for i in range(3):
-                if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
-                    finite = False
+
+
+@no_alloc_kernel
+def _predict(loop, run, s, _):
+    """phi* of every body by the constant-acceleration predictor, with the integrator's offsets
+    of the rotations and the modal coordinates."""
+    state = run.state
+    h, coef = run.settings.h, run.settings.coef
+    c1, c3 = loop.coefficients[0], loop.coefficients[1]
+    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    omega, omega_dot, pseudo = state.omega, state.omega_dot, state.pseudo
+    for k in range(omega.shape[0]):
+        _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k], phi_star[k])
+    eta = state.eta
+    n_eta = eta.shape[0]
+    if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
+        w1e, w3e, a1e, eta_dd_star = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[2],
+                                      loop.per_mode[3])
+        # (eta_dd_star first receives the predicted increment of eta)
+        _offsets_into(h, coef, state.eta_d, state.eta_acc, state.eta_p, a1e, w3e, eta_dd_star)
         for i in range(n_eta):
-            eta_new = (eta_dd_new[i] - w1e[i]) / c1
-            a1e[i] = eta_new - eta[i]               # (the increment)
-            eta[i] = eta_new
-        _advance_history(h, coef, a1e, eta_d, eta_acc, eta_p)
-        for i in range(n_eta):
-            if not np.isfinite(eta_d[i]):
+            w1e[i] = a1e[i] - c1 * eta[i]
+            w3e[i] -= c3 * eta[i]
+            eta_dd_star[i] = c1 * (eta[i] + eta_dd_star[i]) + w1e[i]
+
+
+@no_alloc_kernel
+def _iterate(loop, run, s, it):
+    """One forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
+    (recovery, beams' modal accelerations); returns (status, detail, change)."""
+    params, state, inputs, sweep = run.params, run.state, run.inputs, run.sweep
+    c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
+                        loop.coefficients[3])
+    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
+        loop.per_body[3]
+    mats, vecs, pmap, v = loop.mats, loop.vecs, loop.pmap, loop.v
+    t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
+    w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
+    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
+                                         loop.per_mode[4])
+    s_mat, p_vec, t_inv, t_vec, aq = sweep.red_s, sweep.red_p, sweep.red_tinv, sweep.red_t, \
+        sweep.red_aq
+    body_params, gravity, rot = params.body_params, params.gravity, state.rot
+    force, torque = inputs.force, inputs.torque
+    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    eta_map = state.eta_map
+    n = body_params.shape[0]
+    for i in range(3):
+        p_vec[0, i] = inputs.g_acc[s, i]
+        for j in range(3):
+            s_mat[0, i, j] = 0.0
+    for k in range(n):
+        phi = phi_star[k]
+        for i in range(3):
+            w[i] = c3 * phi[i] + w3[k, i]
+            wd[i] = c1 * phi[i] + w1[k, i]
+        if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
+            i0, i1 = mode_off[k], mode_off[k + 1]
+            m = (i1 - i0) // 2
+            tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
+            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
+                          w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6], eta_dd_star[i0:i1],
+                          loop.beam_work, v, pmap[k], eta_map[i0:i1])
+        elif body_kind[k] == RIGID:
+            expm_so3(phi, e3)
+            mm3_into(e3, rot[k], rot_star)
+            left_jacobian(phi, lam)
+            for i in range(3):
+                load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
+            ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
+                          aq[k, 3:6], load, torque[s, k], v, pmap[k])
+        else:
+            return UNSUPPORTED, 2 * k + 2, 0.0
+        if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
+                                t_vec[k], t_buf, num_buf) == 0.0:
+            return SINGULAR, k + 1, 0.0
+    riccati_reduced_tip(params.tip_pinned, s_mat[n], p_vec[n], aq[n])
+    change = 0.0
+    finite = True
+    for k in range(n - 1, -1, -1):
+        riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq)
+        pk = pmap[k]
+        for i in range(3):
+            alpha[i] = pk[i, 6]
+            for c in range(6):
+                alpha[i] += pk[i, c] * aq[k, c]
+            x = (alpha[i] - w1[k, i]) / c1      # back from w' = c1 phi + w1
+            phi_new[k, i] = x
+            change = max(change, abs(x - phi_star[k, i]))
+            if not np.isfinite(x):
                 finite = False
-        if not finite:
-            report(out_info, NOT_FINITE, s, 0, n_rec)
-            return
-        if (s + 1) % record_every == 0:
-            _ground_increment(g_rot, s, rel, phi_g)
-            _write_stations(aq, phi_new, phi_g, rec_z[n_rec])
-            for k in range(n):
-                for i in range(3):
-                    rec_omega[n_rec, k, i] = omega[k, i]
-                    rec_omega_dot[n_rec, k, i] = omega_dot[k, i]
-                    for j in range(3):
-                        rec_rot[n_rec, k, i, j] = rot[k, i, j]
-            for i in range(n_eta):
-                rec_eta[n_rec, i] = eta[i]
-                rec_eta_d[n_rec, i] = eta_d[i]
-            n_rec += 1
+        if body_kind[k] == BEAM:                # eta'' = eta_map[:, :7] [a; q; 1]
+            for i in range(mode_off[k], mode_off[k + 1]):
+                e = eta_map[i, 6]
+                for c in range(6):
+                    e += eta_map[i, c] * aq[k, c]
+                eta_dd_new[i] = e
+                change = max(change, abs(e - eta_dd_star[i]) / c1)
+    if not finite:
+        return NOT_FINITE, 0, change
+    return OK, 0, change
+
+
+@no_alloc_kernel
+def _adopt(loop, run, s, it):
+    phi_star, phi_new = loop.per_body[2], loop.per_body[3]
+    for k in range(phi_star.shape[0]):
+        for i in range(3):
+            phi_star[k, i] = phi_new[k, i]
+    eta_dd_star, eta_dd_new = loop.per_mode[3], loop.per_mode[4]
+    for i in range(eta_dd_star.shape[0]):
+        eta_dd_star[i] = eta_dd_new[i]
+
+
+@no_alloc_kernel
+def _update(loop, run, s, _):
+    """Rotations and modal coordinates over the step from the solution; every rate finite?"""
+    state = run.state
+    h, coef = run.settings.h, run.settings.coef
+    c1 = loop.coefficients[0]
+    phi_new = loop.per_body[3]
+    e3, rot_prev = loop.mats[2], loop.mats[5]
+    rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
+    eta, eta_d = state.eta, state.eta_d
+    w1e, a1e, eta_dd_new = loop.per_mode[0], loop.per_mode[2], loop.per_mode[4]
+    finite = True
+    for k in range(rot.shape[0]):
+        _advance_history(h, coef, phi_new[k], omega[k], omega_dot[k], pseudo[k])
+        expm_so3(phi_new[k], e3)
+        for i in range(3):
+            for j in range(3):
+                rot_prev[i, j] = rot[k, i, j]
+        mm3_into(e3, rot_prev, rot[k])
+        for i in range(3):
+            if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
+                finite = False
+    n_eta = eta.shape[0]
+    for i in range(n_eta):
+        eta_new = (eta_dd_new[i] - w1e[i]) / c1
+        a1e[i] = eta_new - eta[i]               # (the increment)
+        eta[i] = eta_new
+    _advance_history(h, coef, a1e, eta_d, state.eta_acc, state.eta_p)
+    for i in range(n_eta):
+        if not np.isfinite(eta_d[i]):
+            finite = False
+    return finite
+
+
+@no_alloc_kernel
+def _record(loop, run, s, slot):
+    state, rec = run.state, run.rec
+    phi_g = loop.vecs[4]
+    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
+    _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, rec.z[slot])
+    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
+    for k in range(rot.shape[0]):
+        for i in range(3):
+            rec.omega[slot, k, i] = omega[k, i]
+            rec.omega_dot[slot, k, i] = omega_dot[k, i]
+            for j in range(3):
+                rec.rot[slot, k, i, j] = rot[k, i, j]
+    for i in range(state.eta.shape[0]):
+        rec.eta[slot, i] = state.eta[i]
+        rec.eta_d[slot, i] = state.eta_d[i]
+
+
+@no_alloc_kernel
+def _finish(loop, run, n_steps, _):
+    """The stations' states z after the chunk's last step (the general loop's layout)."""
     if n_steps > 0:
-        _ground_increment(g_rot, n_steps - 1, rel, phi_g)
-        _write_stations(aq, phi_new, phi_g, z)
-    report(out_info, OK, n_steps, max_iter, n_rec)
+        phi_g = loop.vecs[4]
+        _ground_increment(run.inputs.g_rot, n_steps - 1, loop.mats[6], phi_g)
+        _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, run.state.z)
+
+
+loop_variant(FusedLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+             record=_record, finish=_finish)

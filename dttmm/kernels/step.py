@@ -10,18 +10,25 @@ with p the pseudo-acceleration.  alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/
 is the trapezoidal Newmark rule.  Station positions are not integrated: they follow from the
 rotations by kinematics, and the transfers work with accelerations, so the joint constraints hold
 exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").  The paper's
-scheme, for comparison, gives station points their own position histories (the histories
-argument of advance; docs/solver.md, "The paper's scheme").
+scheme, for comparison, gives station points their own position histories (GeneralLoop.histories;
+docs/solver.md, "The paper's scheme").
+
+This module is the general loop's pieces (kernels/loop.py: predict, iterate, adopt, update,
+record, finish) for every chain, sweep and the Newmark and paper's schemes, and the consistent
+start.
 """
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
 
 from . import CONTRACT
-from ..elements import BEAM
+from ..elements import BEAM, RIGID
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
+from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import inv3, matmul_into
 from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
@@ -29,7 +36,6 @@ from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fol
 from .sweep import BALL as EL_BALL
 
 RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL = 0, 1, 2, 3
-OK, SINGULAR, NOT_FINITE = 0, 1, 2
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -118,17 +124,6 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def report(out_info, status, step, detail, n_rec):
-    """The time loops' outcome in out_info: [status, the failing step (or the steps taken),
-    detail (the singular element's code for SINGULAR, the most Newton iterations used for OK,
-    0 for NOT_FINITE), samples recorded]; out_info[4] (unconverged steps) is the loop's own."""
-    out_info[0] = status
-    out_info[1] = step
-    out_info[2] = detail
-    out_info[3] = n_rec
-
-
-@njit(cache=True, fastmath=CONTRACT)
 def _all_finite(a):
     for x in a.flat:
         if not np.isfinite(x):
@@ -136,17 +131,57 @@ def _all_finite(a):
     return True
 
 
+# A body's kinematics at the step's end as functions of its world rotation increment phi, at
+# the guess phi*: rotation, left Jacobian J_l(phi*), angular velocity and acceleration and their
+# derivatives with respect to phi (docs/solver.md); (n, ...) arrays, one row per body.
+Guess = namedtuple("Guess", ["phi", "rot", "lam", "w", "wd", "dw", "dwd"])
+
+# The general loop's own scratch (allocated by the solver, kernels/step.py::general_loop):
+GeneralLoop = namedtuple("GeneralLoop", [
+    "guess",                        # Guess
+    "w1", "w3",                     # (n, 3) w' = c1 phi + w1, w = c3 phi + w3
+    "w1d", "w3d",                   # (n, 3) the same for the elastic hinges' deflections d
+    "z_star",                       # (2n + 1, 12) the stations' guess (phi slots)
+    "w1e", "w3e",                   # (total modes,) eta'' = c1 eta + w1e, eta' = c3 eta + w3e
+    "eta_dd_star", "eta_dd_new",    # (total modes,) the modal accelerations' guess, solution
+    "ground",                       # (rot, lam, w, wd, dwd, phi) of the ground over the step
+    "root_f",                       # (6,) the ground station's [a, w']
+    "e3", "g_inv", "rot_prev",      # 3 x 3 scratch
+    "histories",                    # the paper's scheme: (independent, st_v, st_a, st_p, c_v,
+                                    # c_a, c_p, w1_st, w1_c), see general_loop
+])
+
+
+def general_loop(n, n_eta, h, coef, histories):
+    """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
+    paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (solver._station_histories);
+    the loop adds the w1 offsets of every station point and mass centre."""
+    c1, _ = _coefficients_py(h, coef)
+    guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
+                  np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)))
+    ground = (np.eye(3), np.zeros((3, 3)), np.zeros(3), np.zeros(3), c1 * np.eye(3), np.zeros(3))
+    return GeneralLoop(guess, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+                       np.zeros((n, 3)), np.zeros((2 * n + 1, 12)), np.zeros(n_eta),
+                       np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
+                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
+                       tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))))
+
+
+def _coefficients_py(h, coef):
+    beta, gamma, alpha_m, alpha_f = coef
+    return (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h), gamma / (beta * h)
+
+
 @njit(cache=True, fastmath=CONTRACT)
-def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, g_lam, g_w, g_wd, g_dwd, g_phi, rot_star, lam, phi_star, w, wd, dw, dwd,
-                    c1, c3, w1d, w3d, z_star, force, torque, at_start, rot, w3, beams, modal,
-                    stations):
+def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
+                    at_start, rot, w3, modal, stations):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
-    acceleration slots.  at_start: the consistent-start solve, where the phi slots already hold
-    angular accelerations and elastic hinges are LOCKED (their loads are set by the caller).
-    rot, w3: the bodies' rotations at the step's start and the integrator's offsets (beams).
-    beams = (body_kind, beam_params, moments, mode_off, ends, factors) (solver.beam_tables);
-    modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
+    acceleration slots; returns 0, or j + 1 for an element j (2k: hinge k, 2k + 1: body k) of a
+    kind this loop does not know.  at_start: the consistent-start solve, where the phi slots
+    already hold angular accelerations and elastic hinges are LOCKED (their loads are set by the
+    caller).  guess: each body's kinematics at the guess; ground: (rot, lam, w, wd, dwd, phi) of
+    the ground.  rot, w3: the bodies' rotations at the step's start and the integrator's offsets
+    (beams).  modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
     coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
     beam's end section (kernels/beam.py).  stations = (independent, w1_st, w1_c): in the
     paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
@@ -154,8 +189,11 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
     history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme")."""
     independent, w1_st, w1_c = stations
     independent = independent and not at_start
-    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = beams
+    body_params, hinge_kind, hinge_params = params.body_params, params.hinge_kind, params.hinge_params
+    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
+    phi_star, rot_star, lam, w, wd, dw, dwd = guess
+    kind, u = sweep.kind, sweep.u
     n = body_params.shape[0]
     load = np.empty(3)
     for k in range(n):
@@ -165,13 +203,13 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
             kind[jh] = EL_BALL
         elif hk == FIXED:
             kind[jh] = IDENTITY
-        elif at_start:
+        elif hk == ELASTIC and at_start:
             kind[jh] = LOCKED
-        else:
+        elif hk == ELASTIC:
             kind[jh] = TRANSFER
             if k == 0:
-                rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
-                    g_rot, g_lam, g_w, g_wd, g_dwd, g_dwd, g_phi)
+                rot_in, lam_in, w_in, wd_in, dwd_in, phi_in = ground
+                dw_in = dwd_in
             else:
                 rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
                     rot_star[k - 1], lam[k - 1], w[k - 1], wd[k - 1], dw[k - 1], dwd[k - 1],
@@ -181,6 +219,8 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                                    z_star[jh], u[jh])
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
                                             phi_star[k])
+        else:
+            return jh + 1
         kind[jh + 1] = TRANSFER
         if body_kind[k] == BEAM:
             i0, i1 = mode_off[k], mode_off[k + 1]
@@ -193,43 +233,49 @@ def _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
                         wd[kout] - c1 * phi_star[kout])
             tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
             history = (independent, w1_st[k + 1] - w1_st[k])
-            beam_transfer(beam_params[k], tables, outboard, history, gravity, at_start, rot[k],
-                          phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
-                          eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1], u[jh + 1],
-                          eta_map[i0:i1])
-            continue
-        for i in range(3):
-            load[i] = body_params[k, 0] * gravity[i] + force[k, i]
-        rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
-                            z_star[jh + 1], load, torque[k], u[jh + 1])
-        if independent:
-            station_history_correction(body_params[k], rot[k], rot_star[k], lam[k], dwd[k],
-                                       dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1], w1_c[k],
-                                       z_star[jh + 1], u[jh + 1])
-        if not at_start:
-            _rotation_slots_to_acceleration(u[jh + 1], dwd[k], wd[k], phi_star[k], dwd[k], wd[k],
-                                            phi_star[k])
+            beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
+                          rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
+                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1],
+                          u[jh + 1], eta_map[i0:i1])
+        elif body_kind[k] == RIGID:
+            for i in range(3):
+                load[i] = body_params[k, 0] * params.gravity[i] + force[k, i]
+            rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
+                                z_star[jh + 1], load, torque[k], u[jh + 1])
+            if independent:
+                station_history_correction(body_params[k], rot[k], rot_star[k], lam[k], dwd[k],
+                                           dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],
+                                           w1_c[k], z_star[jh + 1], u[jh + 1])
+            if not at_start:
+                _rotation_slots_to_acceleration(u[jh + 1], dwd[k], wd[k], phi_star[k], dwd[k],
+                                                wd[k], phi_star[k])
+        else:
+            return jh + 2
+    return 0
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
-           sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o, z):
-    """Solve the assembled step into z (stations' states); returns 0 or a singularity code."""
+def solve_step(mode, tip_pinned, sweep, root_f, z):
+    """Solve the assembled step (sweep.kind, sweep.u, sweep.known_loads) into z (the stations'
+    states) by the mode's sweep; returns 0 or a singularity code (sweep.py)."""
+    sw = sweep
     if mode == RICCATI_FULL:
-        return riccati_full(kind, u, known_loads, root_f, tip_pinned, sc_split, sc_s, sc_p,
-                            sc_tinv, sc_t, sc_g, sc_gv, z)
+        return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
+                            sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
     if mode == DIRECT_FULL:
-        return direct_full(kind, u, known_loads, root_f, tip_pinned, dir_z, dir_o, sc_gv, sc_g, z)
-    n = red_v.shape[0]
+        return direct_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.dir_z,
+                           sw.dir_o, sw.gv, sw.g, z)
+    n = sw.red_v.shape[0]
     for k in range(n):
-        fold_ball_body(u[2 * k + 1], red_v[k], red_phi[k])
+        fold_ball_body(sw.u[2 * k + 1], sw.red_v[k], sw.red_phi[k])
     if mode == RICCATI_REDUCED:
-        status = riccati_reduced(red_v, root_f[0:3], tip_pinned, red_s, red_p, red_tinv, red_t,
-                                 red_aq)
+        status = riccati_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_s, sw.red_p,
+                                 sw.red_tinv, sw.red_t, sw.red_aq)
     else:
-        status = direct_reduced(red_v, root_f[0:3], tip_pinned, red_aq)
+        status = direct_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_aq)
     if status != 0:
         return status
+    red_aq, red_phi = sw.red_aq, sw.red_phi
     z[:, :] = 0.0
     z[0, 0:3] = root_f[0:3]
     z[0, 3:6] = root_f[3:6]
@@ -249,36 +295,39 @@ def _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p,
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_params, gravity,
-                          g_acc, g_rot, g_w, g_wd, force, torque,
-                          rot, omega, defl, defl_rate,
-                          kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-                          red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
-                          z, beams, eta, eta_d, eta_acc, eta_map):
+def initial_accelerations(params, settings, state, sweep, ground, force, torque):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
-    accelerations come out in eta_acc.  Returns the status; z holds the stations' accelerations
-    and loads."""
-    n = body_params.shape[0]
+    accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
+    force, torque (n, 3) at t = 0.  Returns the status: 0, a singularity code (sweep.py), or
+    -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
+    accelerations and loads."""
+    g_acc, g_rot, g_w, g_wd = ground
+    rot, omega = state.rot, state.omega
+    hinge_kind, hinge_params = params.hinge_kind, params.hinge_params
+    n = params.body_params.shape[0]
     zero3 = np.zeros((n, 3))
-    zero33 = np.zeros((n, 3, 3))
     unit33 = np.zeros((n, 3, 3))
     for k in range(n):
         unit33[k] = np.eye(3)
-    z_star = np.zeros(z.shape)
-    _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                    g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3), rot, zero33, zero3,
-                    omega, zero3, zero33, unit33, 1.0, 0.0, zero3, zero3, z_star, force, torque,
-                    True, rot, zero3, beams, (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta),
-                                              np.zeros_like(eta), eta_map),
-                    (False, np.zeros((n + 1, 3)), zero3))
+    guess = Guess(zero3, rot, np.zeros((n, 3, 3)), omega, zero3, np.zeros((n, 3, 3)), unit33)
+    g = (g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3))
+    eta = state.eta
+    modal = (eta, state.eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
+             state.eta_map)
+    unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
+                              np.zeros(state.z.shape), force, torque, True, rot, zero3, modal,
+                              (False, np.zeros((n + 1, 3)), zero3))
+    if unknown != 0:
+        return -unknown
+    known_loads = sweep.known_loads
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
             rot_in = g_rot if k == 0 else rot[k - 1]
             w_in = g_w if k == 0 else omega[k - 1]
             q, m_in, m_out = elastic_hinge_loads(hinge_params[k], rot_in, w_in, rot[k], omega[k],
-                                                 defl[k], defl_rate[k])
+                                                 state.defl[k], state.defl_rate[k])
             known_loads[2 * k, 0:3] = m_in
             known_loads[2 * k, 3:6] = q
             known_loads[2 * k, 6:9] = m_out
@@ -286,10 +335,8 @@ def initial_accelerations(mode, tip_pinned, body_params, hinge_kind, hinge_param
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv, sc_t,
-                    sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z,
-                    dir_o, z)
-    _modal_accelerations(beams, eta_map, z, eta_acc)
+    status = solve_step(settings.mode, params.tip_pinned, sweep, root_f, state.z)
+    _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
     return status
 
 
@@ -307,216 +354,222 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def advance(mode, tip_pinned, h, coef, newton_max, newton_tol,
-            body_params, hinge_kind, hinge_params, gravity, locked, lock_rel,
-            g_acc, g_rot, g_w, g_wd, force, torque,
-            rot, omega, omega_dot, pseudo,
-            defl, defl_rate, defl_acc, defl_pseudo, z,
-            kind, u, known_loads, sc_split, sc_s, sc_p, sc_tinv, sc_t, sc_g, sc_gv,
-            red_v, red_phi, red_s, red_p, red_tinv, red_t, red_aq, dir_z, dir_o,
-            record_every, rec_rot, rec_omega, rec_omega_dot, rec_z, rec_defl, rec_defl_rate,
-            out_info, beams, eta, eta_d, eta_acc, eta_p, eta_map, rec_eta, rec_eta_d, histories):
-    """Take g_acc.shape[0] steps.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1}
-    and g_rot[s], g_rot[s + 1] at t_s, t_{s+1}; force/torque (steps, n, 3) at t_{s+1} (world).
-    omega, omega_dot, pseudo: the rotation integrator's velocity, acceleration and
-    pseudo-acceleration (world frame); eta, eta_d, eta_acc, eta_p: the same for the beams'
-    modal coordinates (flat), with their coordinates themselves.
-    histories = (independent, st_v, st_a, st_p, c_v, c_a, c_p, rec_st_v, rec_c_v): the paper's
-    scheme (independent): the Newmark histories of the station points (ground point, then each
-    body's output; (n + 1, 3)) and of the rigid bodies' mass centres ((n, 3)), and where their
-    velocities are recorded (docs/solver.md, "The paper's scheme").
-    Records after every record_every-th step (counting from the chunk's start).
-    out_info: [status, failing step, newton iterations used (max), recorded count (also when
-    the run fails), steps whose Newton iterations stopped above newton_tol (accumulated over
-    chunks)]."""
-    n = body_params.shape[0]
-    n_steps = g_acc.shape[0]
-    independent, st_v, st_a, st_p, c_v, c_a, c_p, rec_st_v, rec_c_v = histories
-    w1_st = np.zeros((n + 1, 3))
-    w1_c = np.zeros((n, 3))
-    stations = (independent, w1_st, w1_c)
+def _predict(loop, run, s, _):
+    """The general loop's guess for step s: every body's phi* by the constant-acceleration
+    predictor (a locked body's from the ground's motion), the integrator's offsets of every
+    rotation, deflection, modal coordinate (and, in the paper's scheme, station point), and the
+    stations' guess z_star.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1} and
+    g_rot[s], g_rot[s + 1] at t_s, t_{s+1}."""
+    params, state, inputs = run.params, run.state, run.inputs
+    h, coef = run.settings.h, run.settings.coef
     c1, c3 = _integrator_coefficients(h, coef)
-    phi_star = np.empty((n, 3))
-    rot_star = np.empty((n, 3, 3))
-    lam = np.empty((n, 3, 3))
-    w = np.empty((n, 3))
-    wd = np.empty((n, 3))
-    dw = np.empty((n, 3, 3))
-    dwd = np.empty((n, 3, 3))
-    w1 = np.empty((n, 3))
-    w3 = np.empty((n, 3))
-    w1d = np.zeros((n, 3))
-    w3d = np.zeros((n, 3))
-    z_star = np.empty(z.shape)
-    n_eta = eta.shape[0]
-    w1e = np.zeros(n_eta)
-    w3e = np.zeros(n_eta)
-    eta_dd_star = np.zeros(n_eta)
-    eta_dd_new = np.zeros(n_eta)
-    modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
-    e3 = np.empty((3, 3))
-    g_lam = np.empty((3, 3))
-    g_dwd = c1 * np.eye(3)
-    phi_g = np.empty(3)
-    root_f = np.empty(6)
-    max_iter = 0
-    n_rec = 0
-    g_inv = np.empty((3, 3))
-    rot_prev = np.empty((3, 3))
-    rel = np.empty((3, 3))
-    for s in range(n_steps):
-        rot_now = g_rot[s + 1]
+    hinge_kind, locked, lock_rel = params.hinge_kind, params.locked, params.lock_rel
+    phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
+    w1, w3, w1d, w3d = loop.w1, loop.w3, loop.w1d, loop.w3d
+    g_rot_s, g_lam, _, _, g_dwd, phi_g = loop.ground
+    independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
+    z, z_star = state.z, loop.z_star
+    n = params.body_params.shape[0]
+    rot_now = inputs.g_rot[s + 1]
+    g_rot_s[:, :] = rot_now
+    rel = loop.e3
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = (rot_now[i, 0] * inputs.g_rot[s, j, 0]
+                         + rot_now[i, 1] * inputs.g_rot[s, j, 1]
+                         + rot_now[i, 2] * inputs.g_rot[s, j, 2])
+    log_so3(rel, phi_g)
+    left_jacobian(phi_g, g_lam)
+    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
+    loop.ground[2][:] = g_w
+    loop.ground[3][:] = g_wd
+    for k in range(n):
+        if locked[k]:
+            phi_star[k] = phi_g
+            rot_star[k] = rot_now @ lock_rel[k]
+            lam[k] = g_lam
+            w[k] = g_w
+            wd[k] = g_wd
+            dw[k] = c3 * np.eye(3)
+            dwd[k] = g_dwd
+            w1[k] = g_wd - c1 * phi_g        # so that w' = c1 phi + w1, w = c3 phi + w3
+            w3[k] = g_w - c3 * phi_g         # hold the ground's values (beams use them)
+        else:
+            _offsets_into(h, coef, state.omega[k], state.omega_dot[k], state.pseudo[k], w1[k],
+                          w3[k], phi_star[k])   # phi* by the constant-acceleration predictor
+            _body_kinematics(c1, c3, state.rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
+                             lam[k], w[k], wd[k], dw[k], dwd[k])
+        if hinge_kind[k] == ELASTIC:
+            a1, a3 = _offsets(h, coef, state.defl_rate[k], state.defl_acc[k],
+                              state.defl_pseudo[k])
+            w1d[k] = a1 - c1 * state.defl[k]
+            w3d[k] = a3 - c3 * state.defl[k]
+    eta, eta_d = state.eta, state.eta_d
+    if eta.shape[0] > 0:
+        a1, a3 = _offsets(h, coef, eta_d, state.eta_acc, state.eta_p)
+        loop.w1e[:] = a1 - c1 * eta
+        loop.w3e[:] = a3 - c3 * eta
+        loop.eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * state.eta_p) + loop.w1e
+    if independent:
+        for j in range(n + 1):
+            w1_st[j], _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
+        for k in range(n):
+            w1_c[k], _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
+    z_star[:, :] = z
+    z_star[0, 3:6] = phi_g
+    for k in range(n):
+        z_star[2 * k + 1, 3:6] = phi_star[k]
+        z_star[2 * k + 2, 3:6] = phi_star[k]
+        if hinge_kind[k] == ELASTIC:
+            # the spring force at the predicted deflection: an O(h^3) guess, where the last
+            # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
+            d_pred = state.defl[k] + h * state.defl_rate[k] + 0.5 * h * h * state.defl_pseudo[k]
+            rot_in = rot_now if k == 0 else rot_star[k - 1]
+            # (the force does not depend on the angular velocities: any will do for them)
+            q_pred, _, _ = elastic_hinge_loads(params.hinge_params[k], rot_in, g_w, rot_star[k],
+                                               g_w, d_pred, c3 * d_pred + w3d[k])
+            z_star[2 * k, 9:12] = q_pred
+            z_star[2 * k + 1, 9:12] = q_pred
+    loop.root_f[0:3] = inputs.g_acc[s]
+    loop.root_f[3:6] = g_wd
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _iterate(loop, run, s, it):
+    """Linearize every element about the guess, sweep, and recover every body's phi and the
+    beams' modal accelerations; returns (status, detail, change): change is the largest update
+    of a phi (rad) or of a modal coordinate (eta'' / c1)."""
+    params, state, inputs = run.params, run.state, run.inputs
+    c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
+    phi_star, wd, dwd = loop.guess.phi, loop.guess.wd, loop.guess.dwd
+    z = state.z
+    modal = (state.eta, state.eta_d, loop.w1e, loop.w3e, loop.eta_dd_star, state.eta_map)
+    stations = (loop.histories[0], loop.histories[7], loop.histories[8])
+    unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
+                              loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s], False,
+                              state.rot, loop.w3, modal, stations)
+    if unknown != 0:
+        return UNSUPPORTED, unknown, 0.0
+    if not _all_finite(run.sweep.u):
+        return NOT_FINITE, 0, 0.0
+    status = solve_step(run.settings.mode, params.tip_pinned, run.sweep, loop.root_f, z)
+    if status != 0:
+        return SINGULAR, status, 0.0
+    eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
+    _modal_accelerations(params.beams, state.eta_map, z, eta_dd_new)
+    # back from angular-acceleration to phi slots
+    z[0, 3:6] = loop.ground[5]
+    change = 0.0
+    for i in range(eta_dd_new.shape[0]):
+        change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
+    g_inv = loop.g_inv
+    for k in range(params.body_params.shape[0]):
+        inv3(dwd[k], g_inv)
+        dw0 = z[2 * k + 1, 3] - wd[k, 0]
+        dw1 = z[2 * k + 1, 4] - wd[k, 1]
+        dw2 = z[2 * k + 1, 5] - wd[k, 2]
         for i in range(3):
-            for j in range(3):
-                rel[i, j] = (rot_now[i, 0] * g_rot[s, j, 0] + rot_now[i, 1] * g_rot[s, j, 1]
-                             + rot_now[i, 2] * g_rot[s, j, 2])
-        log_so3(rel, phi_g)
-        left_jacobian(phi_g, g_lam)
+            phi_i = phi_star[k, i] + g_inv[i, 0] * dw0 + g_inv[i, 1] * dw1 + g_inv[i, 2] * dw2
+            z[2 * k + 1, 3 + i] = phi_i
+            z[2 * k + 2, 3 + i] = phi_i
+            change = max(change, abs(phi_i - phi_star[k, i]))
+    return OK, 0, change
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _adopt(loop, run, s, it):
+    """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''*."""
+    c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
+    z, rot = run.state.z, run.state.rot
+    phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
+    loop.z_star[:, :] = z
+    loop.eta_dd_star[:] = loop.eta_dd_new
+    for k in range(phi_star.shape[0]):
+        if not run.params.locked[k]:
+            phi_star[k] = z[2 * k + 1, 3:6]
+            _body_kinematics(c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
+                             lam[k], w[k], wd[k], dw[k], dwd[k])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _update(loop, run, s, _):
+    """Advance the histories over step s from the solution in state.z: rotations (a locked
+    body's from the ground's), elastic deflections, modal coordinates, and in the paper's scheme
+    every station point and mass centre; returns whether every rate is finite."""
+    params, state, inputs = run.params, run.state, run.inputs
+    h, coef = run.settings.h, run.settings.coef
+    c1, _ = _integrator_coefficients(h, coef)
+    body_params, locked, lock_rel = params.body_params, params.locked, params.lock_rel
+    rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
+    defl, z, e3 = state.defl, state.z, loop.e3
+    independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
+    n = body_params.shape[0]
+    rot_now = inputs.g_rot[s + 1]
+    if independent:
         for k in range(n):
-            if locked[k]:
-                phi_star[k] = phi_g
-                rot_star[k] = rot_now @ lock_rel[k]
-                lam[k] = g_lam
-                w[k] = g_w[s]
-                wd[k] = g_wd[s]
-                dw[k] = c3 * np.eye(3)
-                dwd[k] = g_dwd
-                w1[k] = g_wd[s] - c1 * phi_g        # so that w' = c1 phi + w1, w = c3 phi + w3
-                w3[k] = g_w[s] - c3 * phi_g         # hold the ground's values (beams use them)
-            else:
-                _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
-                              phi_star[k])          # phi* by the constant-acceleration predictor
-                _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
-                                 lam[k], w[k], wd[k], dw[k], dwd[k])
-            if hinge_kind[k] == ELASTIC:
-                a1, a3 = _offsets(h, coef, defl_rate[k], defl_acc[k], defl_pseudo[k])
-                w1d[k] = a1 - c1 * defl[k]
-                w3d[k] = a3 - c3 * defl[k]
-        if n_eta > 0:
-            a1, a3 = _offsets(h, coef, eta_d, eta_acc, eta_p)
-            w1e[:] = a1 - c1 * eta
-            w3e[:] = a3 - c3 * eta
-            eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * eta_p) + w1e
-        if independent:
-            for j in range(n + 1):
-                w1_st[j], _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
-            for k in range(n):
-                w1_c[k], _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
-        z_star[:, :] = z
-        z_star[0, 3:6] = phi_g
-        for k in range(n):
-            z_star[2 * k + 1, 3:6] = phi_star[k]
-            z_star[2 * k + 2, 3:6] = phi_star[k]
-            if hinge_kind[k] == ELASTIC:
-                # the spring force at the predicted deflection: an O(h^3) guess, where the last
-                # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
-                d_pred = defl[k] + h * defl_rate[k] + 0.5 * h * h * defl_pseudo[k]
-                rot_in = rot_now if k == 0 else rot_star[k - 1]
-                # (the force does not depend on the angular velocities: any will do for them)
-                q_pred, _, _ = elastic_hinge_loads(hinge_params[k], rot_in, g_w[s], rot_star[k],
-                                                   g_w[s], d_pred, c3 * d_pred + w3d[k])
-                z_star[2 * k, 9:12] = q_pred
-                z_star[2 * k + 1, 9:12] = q_pred
-        root_f[0:3] = g_acc[s]
-        root_f[3:6] = g_wd[s]
-        for it in range(newton_max + 1):
-            _build_elements(body_params, hinge_kind, hinge_params, gravity, kind, u,
-                            rot_now, g_lam, g_w[s], g_wd[s], g_dwd, phi_g, rot_star, lam,
-                            phi_star, w, wd, dw, dwd, c1, c3, w1d, w3d, z_star, force[s],
-                            torque[s], False, rot, w3, beams, modal, stations)
-            if not _all_finite(u):
-                report(out_info, NOT_FINITE, s, 0, n_rec)
-                return
-            status = _solve(mode, tip_pinned, kind, u, known_loads, root_f, sc_split, sc_s, sc_p, sc_tinv,
-                            sc_t, sc_g, sc_gv, red_v, red_phi, red_s, red_p, red_tinv, red_t,
-                            red_aq, dir_z, dir_o, z)
-            if status != 0:
-                report(out_info, SINGULAR, s, status, n_rec)
-                return
-            _modal_accelerations(beams, eta_map, z, eta_dd_new)
-            # back from angular-acceleration to phi slots
-            z[0, 3:6] = phi_g
-            change = 0.0
-            for i in range(n_eta):
-                change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
-            for k in range(n):
-                inv3(dwd[k], g_inv)
-                dw0 = z[2 * k + 1, 3] - wd[k, 0]
-                dw1 = z[2 * k + 1, 4] - wd[k, 1]
-                dw2 = z[2 * k + 1, 5] - wd[k, 2]
-                for i in range(3):
-                    phi_i = phi_star[k, i] + g_inv[i, 0] * dw0 + g_inv[i, 1] * dw1 + \
-                        g_inv[i, 2] * dw2
-                    z[2 * k + 1, 3 + i] = phi_i
-                    z[2 * k + 2, 3 + i] = phi_i
-                    change = max(change, abs(phi_i - phi_star[k, i]))
-            max_iter = max(max_iter, it)
-            if it == newton_max or change <= newton_tol:
-                break
-            z_star[:, :] = z
-            eta_dd_star[:] = eta_dd_new
-            for k in range(n):
-                if not locked[k]:
-                    phi_star[k] = z[2 * k + 1, 3:6]
-                    _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k],
-                                     rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
-        if newton_max > 0 and change > newton_tol:
-            out_info[4] += 1
-        # update the histories
-        if independent:
-            for k in range(n):
-                # a_X = c1 dr_X + w1_X: each point's displacement over the step
-                x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
-                x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
-                if beams[0][k] != BEAM:
-                    if locked[k]:
-                        rot_new = rot_now @ lock_rel[k]
-                    else:
-                        expm_so3(z[2 * k + 1, 3:6], e3)
-                        rot_new = e3 @ rot[k]
-                    x_c = x_in + (rot_new - rot[k]) @ body_params[k, 1:4]
-                    _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
-                _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
-        finite = True
-        for k in range(n):
-            phi = z[2 * k + 1, 3:6]
-            if locked[k]:
-                matmul_into(rot_now, lock_rel[k], rot[k])
-                omega[k] = g_w[s]
-                omega_dot[k] = g_wd[s]
-            else:
-                _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
-                expm_so3(phi, e3)
-                rot_prev[:, :] = rot[k]
-                matmul_into(e3, rot_prev, rot[k])
-            if hinge_kind[k] == ELASTIC:
-                d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - w1d[k]) / c1
-                x = d_new - defl[k]
-                _advance_history(h, coef, x, defl_rate[k], defl_acc[k], defl_pseudo[k])
-                defl[k] = d_new
-            for i in range(3):
-                if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
-                    finite = False
-        if n_eta > 0:
-            eta_new = (eta_dd_new - w1e) / c1
-            _advance_history(h, coef, eta_new - eta, eta_d, eta_acc, eta_p)
-            eta[:] = eta_new
-            if not np.all(np.isfinite(eta_d)):
+            # a_X = c1 dr_X + w1_X: each point's displacement over the step
+            x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
+            x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
+            if params.beams[0][k] != BEAM:
+                if locked[k]:
+                    rot_new = rot_now @ lock_rel[k]
+                else:
+                    expm_so3(z[2 * k + 1, 3:6], e3)
+                    rot_new = e3 @ rot[k]
+                x_c = x_in + (rot_new - rot[k]) @ body_params[k, 1:4]
+                _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
+            _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
+    finite = True
+    for k in range(n):
+        phi = z[2 * k + 1, 3:6]
+        if locked[k]:
+            matmul_into(rot_now, lock_rel[k], rot[k])
+            omega[k] = inputs.g_w[s]
+            omega_dot[k] = inputs.g_wd[s]
+        else:
+            _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
+            expm_so3(phi, e3)
+            loop.rot_prev[:, :] = rot[k]
+            matmul_into(e3, loop.rot_prev, rot[k])
+        if params.hinge_kind[k] == ELASTIC:
+            d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - loop.w1d[k]) / c1
+            x = d_new - defl[k]
+            _advance_history(h, coef, x, state.defl_rate[k], state.defl_acc[k],
+                             state.defl_pseudo[k])
+            defl[k] = d_new
+        for i in range(3):
+            if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-        if not finite:
-            report(out_info, NOT_FINITE, s, 0, n_rec)
-            return
-        if (s + 1) % record_every == 0:
-            rec_rot[n_rec] = rot
-            rec_omega[n_rec] = omega
-            rec_omega_dot[n_rec] = omega_dot
-            rec_z[n_rec] = z
-            rec_defl[n_rec] = defl
-            rec_defl_rate[n_rec] = defl_rate
-            rec_eta[n_rec] = eta
-            rec_eta_d[n_rec] = eta_d
-            if independent:
-                rec_st_v[n_rec] = st_v
-                rec_c_v[n_rec] = c_v
-            n_rec += 1
-    report(out_info, OK, n_steps, max_iter, n_rec)
+    eta = state.eta
+    if eta.shape[0] > 0:
+        eta_new = (loop.eta_dd_new - loop.w1e) / c1
+        _advance_history(h, coef, eta_new - eta, state.eta_d, state.eta_acc, state.eta_p)
+        eta[:] = eta_new
+        if not np.all(np.isfinite(state.eta_d)):
+            finite = False
+    return finite
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _record(loop, run, s, slot):
+    state, rec = run.state, run.rec
+    rec.rot[slot] = state.rot
+    rec.omega[slot] = state.omega
+    rec.omega_dot[slot] = state.omega_dot
+    rec.z[slot] = state.z
+    rec.defl[slot] = state.defl
+    rec.defl_rate[slot] = state.defl_rate
+    rec.eta[slot] = state.eta
+    rec.eta_d[slot] = state.eta_d
+    if loop.histories[0]:
+        rec.v_st[slot] = loop.histories[1]
+        rec.v_c[slot] = loop.histories[4]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _finish(loop, run, n_steps, _):
+    pass
+
+
+loop_variant(GeneralLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+             record=_record, finish=_finish)

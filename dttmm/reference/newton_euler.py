@@ -1051,6 +1051,9 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
     if not isinstance(model, Model):
         raise ValueError(f"simulate_reference: model must be a dttmm Model (from build_chain), "
                          f"got {type(model).__name__}")
+    if not model.is_chain:
+        raise ValueError("simulate_reference: the model is a tree; the reference solver runs "
+                         "chains only so far (build the chain with build_chain)")
     try:
         t_end = float(t_end)
     except (TypeError, ValueError):

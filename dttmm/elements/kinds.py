@@ -1,0 +1,75 @@
+"""Every element kind, declared once: its class, its code in the model's arrays, and what it
+supports (docs/README.md, "Adding an element kind").
+
+The model builder, the solver and the result read these declarations, never a class or a code
+of their own: a combination a kind does not declare (a scheme, the fused loop, the direct
+sweep) is refused with a ValueError naming the element before a run starts, and every kernel's
+dispatch on the codes ends in an explicit refusal (kernels/loop.py, UNSUPPORTED) rather than
+running one kind as another.
+"""
+from dataclasses import dataclass
+
+from .beam import EulerBernoulliBeam
+from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
+from .rigid_body import RigidBody
+
+RIGID, BEAM = 0, 1      # Model.body_kind
+
+SCHEMES = ("newmark", "energy_momentum", "paper")
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One element kind.
+
+    code:        its value in Model.body_kind or Model.hinge_kind.
+    cls:         the element class users build it from.
+    schemes:     the solver's schemes whose loops implement it.
+    fused:       bodies: the fused ball-chain loop (kernels/ball_chain.py) has its reduced map.
+    moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
+                 across it).
+    doc:         the page that derives its equations.
+    what:        how messages describe it ("hinge 'spring' is elastic").
+    """
+    code: int
+    cls: type
+    schemes: tuple
+    fused: bool = False
+    moment_free: bool = False
+    doc: str = ""
+    what: str = ""
+
+    @property
+    def name(self):
+        return self.cls.__name__
+
+
+BODY_KINDS = (
+    Kind(RIGID, RigidBody, SCHEMES, fused=True, doc="docs/rigid_body.md", what="a rigid body"),
+    Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper"), fused=True, doc="docs/beam.md",
+         what="a beam"),
+)
+
+JOINT_KINDS = (
+    Kind(BALL, BallJoint, SCHEMES, moment_free=True, doc="docs/hinges.md", what="a ball joint"),
+    Kind(FIXED, FixedHinge, SCHEMES, doc="docs/hinges.md", what="a fixed hinge"),
+    Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
+)
+
+BODY_KIND = {k.code: k for k in BODY_KINDS}
+JOINT_KIND = {k.code: k for k in JOINT_KINDS}
+HINGE_KIND_NAMES = {k.code: k.name for k in JOINT_KINDS}
+
+
+def body_kind_of(element):
+    """The Kind of a body element, or None if it is not one."""
+    return next((k for k in BODY_KINDS if type(element) is k.cls), None)
+
+
+def joint_kind_of(element):
+    """The Kind of a joint element, or None if it is not one."""
+    return next((k for k in JOINT_KINDS if type(element) is k.cls), None)
+
+
+def names(kinds):
+    return ", ".join(k.name for k in kinds)

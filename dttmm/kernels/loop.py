@@ -1,0 +1,164 @@
+"""The step skeleton every scheme and loop variant goes through (docs/solver.md, "The step").
+
+A run's data reach the kernels as a few typed structures (numba named tuples), not dozens of
+positional arrays:
+
+  Params    the frozen model's arrays (bodies, hinges, beams' tables, gravity, locks, the tip)
+  Settings  the run's integrator and Newton settings
+  State     the preallocated state the loop advances in place
+  Sweep     the assembly's scratch (element transfers, Riccati and direct sweeps)
+  Inputs    one chunk's prescribed data (ground motion, applied loads), step by step
+  Record    where one chunk's samples are written
+
+bundled as one Run, and a loop variant's own scratch (its "loop" structure).  run_steps is the
+skeleton: predict, then Newton iterations (iterate: linearize, sweep, recover; adopt: the
+solution becomes the next guess), update, record; finish once the chunk is done.  A variant
+(the general loop in kernels/step.py, the fused ball-chain loop in kernels/ball_chain.py, the
+energy-momentum loop in kernels/em_step.py) supplies only these pieces, declared once with
+loop_variant(); numba picks them at compile time from the type of the loop structure, so the
+skeleton costs nothing at run time.  A loop structure no variant declared fails to compile.
+"""
+from collections import namedtuple
+
+from numba import njit, types
+from numba.core.errors import TypingError
+from numba.extending import overload
+
+from . import CONTRACT, no_alloc_kernel
+
+OK, SINGULAR, NOT_FINITE, UNSUPPORTED = 0, 1, 2, 3
+
+Params = namedtuple("Params", [
+    "body_params",      # (n, BODY_PARAM_SIZE) elements/rigid_body.py
+    "hinge_kind",       # (n,) BALL / FIXED / ELASTIC: hinge k joins body k - 1 (or the ground)
+    "hinge_params",     # (n, HINGE_PARAM_SIZE) elements/hinges.py
+    "gravity",          # (3,) m/s^2
+    "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors): solver.beam_tables
+    "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
+    "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame
+    "mass_center_inertia",  # (n, 3, 3) J_C in body axes (the energy-momentum step)
+    "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
+])
+
+Settings = namedtuple("Settings", [
+    "mode",             # RICCATI_FULL / RICCATI_REDUCED / DIRECT_REDUCED / DIRECT_FULL (step.py)
+    "h",                # the step, s
+    "coef",             # (4,) beta, gamma, alpha_m, alpha_f (solver.Integrator)
+    "newton_max",       # extra linearizations per step
+    "newton_tol",       # stop iterating below this change (rad; scaled modal units)
+    "record_every",     # record after every record_every-th step of a chunk
+])
+
+State = namedtuple("State", [
+    "rot", "omega", "omega_dot", "pseudo",          # (n, 3, 3), (n, 3) x 3: world frame
+    "defl", "defl_rate", "defl_acc", "defl_pseudo",  # (n, 3) elastic hinges' deflections
+    "z",                                            # (2n + 1, 12) the stations' states
+    "eta", "eta_d", "eta_acc", "eta_p",             # (total modes,) the beams' coordinates
+    "eta_map",                                      # (total modes, 13) eta'' on the input state
+    "v_c",                                          # (n, 3) mass-centre velocities (EM scheme)
+])
+
+Sweep = namedtuple("Sweep", [
+    "kind", "u", "known_loads",                      # the elements and their transfers
+    "split", "s", "p", "tinv", "t", "g", "gv",       # full-state Riccati sweep (sweep.py)
+    "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
+    "dir_z", "dir_o",                                # direct full-state sweep
+])
+
+Inputs = namedtuple("Inputs", [
+    "g_acc", "g_rot", "g_w", "g_wd",   # ground: (m, 3) at t_{s+1}; rotations (m + 1, 3, 3) at t_s
+    "force", "torque",                 # (m, n, 3) applied at t_{s+1} (EM: the step's means)
+])
+
+Record = namedtuple("Record", [
+    "rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d",
+    "v_st", "v_c",      # the paper's scheme's point velocities; the EM scheme's mass centres
+])
+
+Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec"])
+
+_PIECES = ("predict", "iterate", "adopt", "update", "record", "finish")
+_VARIANTS = {}          # loop structure's class -> {piece name: njit function}
+
+
+def loop_variant(loop_class, **pieces):
+    """Declare a loop variant: the named tuple class of its own scratch and its njit pieces,
+    each called as piece(loop, run, s, i):
+      predict(loop, run, s, 0)         the guess for step s
+      iterate(loop, run, s, it)        linearize, sweep, recover -> (status, detail, change)
+      adopt(loop, run, s, it)          the latest solution becomes the guess
+      update(loop, run, s, 0)          advance the state over step s -> every value finite
+      record(loop, run, s, slot)       write the state into run.rec at slot
+      finish(loop, run, n_steps, 0)    once, after the chunk's last step
+    """
+    if set(pieces) != set(_PIECES):
+        raise TypeError(f"loop_variant({loop_class.__name__}): pieces must be exactly {_PIECES}, "
+                        f"got {sorted(pieces)}")
+    _VARIANTS[loop_class] = dict(pieces)
+
+
+def _piece(name):
+    def stub(loop, run, s, i):
+        raise NotImplementedError(f"{name} runs compiled only")
+    stub.__name__ = name
+
+    @overload(stub, jit_options=dict(cache=True, fastmath=CONTRACT))
+    def _select(loop, run, s, i):
+        cls = loop.instance_class if isinstance(loop, types.BaseNamedTuple) else None
+        impl = _VARIANTS.get(cls, {}).get(name)
+        if impl is None:
+            raise TypingError(f"no loop variant declares the piece {name!r} for {loop}")
+        return lambda loop, run, s, i: impl(loop, run, s, i)
+    return stub
+
+
+predict, iterate, adopt, update, record, finish = (_piece(name) for name in _PIECES)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def report(out_info, status, step, detail, n_rec):
+    """The loop's outcome in out_info: [status, the failing step (or the steps taken), detail
+    (the singular element's code for SINGULAR, the most Newton iterations used for OK, 0 for
+    NOT_FINITE), samples recorded]; out_info[4] (unconverged steps) accumulates over chunks."""
+    out_info[0] = status
+    out_info[1] = step
+    out_info[2] = detail
+    out_info[3] = n_rec
+
+
+def _run_steps(loop, run, out_info):
+    """Take run.inputs.force.shape[0] steps (docs/solver.md, "The step")."""
+    n_steps = run.inputs.force.shape[0]
+    newton_max, newton_tol = run.settings.newton_max, run.settings.newton_tol
+    max_iter = 0
+    n_rec = 0
+    for s in range(n_steps):
+        predict(loop, run, s, 0)
+        change = 0.0
+        for it in range(newton_max + 1):
+            status, detail, change = iterate(loop, run, s, it)
+            if status != OK:
+                report(out_info, status, s, detail, n_rec)
+                return
+            max_iter = max(max_iter, it)
+            if it == newton_max or change <= newton_tol:
+                break
+            adopt(loop, run, s, it)
+        if newton_max > 0 and change > newton_tol:
+            out_info[4] += 1
+        if not update(loop, run, s, 0):
+            report(out_info, NOT_FINITE, s, 0, n_rec)
+            return
+        if (s + 1) % run.settings.record_every == 0:
+            record(loop, run, s, n_rec)
+            n_rec += 1
+    finish(loop, run, n_steps, 0)
+    report(out_info, OK, n_steps, max_iter, n_rec)
+
+
+# One skeleton, compiled twice: with numba's reference counting for the variants whose pieces
+# allocate (the general and energy-momentum loops), without it for those that allocate nothing
+# (the fused ball-chain loop; kernels/__init__.py::no_alloc_kernel).  Each loop structure is only
+# ever passed to one of the two (numba's cache keys on the signature, not on that option).
+run_steps = njit(cache=True, fastmath=CONTRACT)(_run_steps)
+run_steps_no_alloc = no_alloc_kernel(_run_steps)
