@@ -4,7 +4,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, RIGID
+from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
+from .elements.joints import rotation_about
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
                             MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
 from .elements._checks import finite_vector, rotation_matrix
@@ -121,6 +122,8 @@ class Model:
                                      # CLAMPED_LOADED)
     initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w)
     initial_modal_velocities: np.ndarray
+    drives: tuple                    # per hinge: one validated drive (elements/drives.py) or None
+                                     # per coordinate of a joint with coordinates, else ()
     parent: np.ndarray               # (n,) the parent body of body k (< k), -1 for the ground
     attachment: np.ndarray           # (n,) where on the parent: 0 its output point, j >= 1 its
                                      # j-th named point (RigidBody.points)
@@ -370,7 +373,12 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
         else:
             a_in, w_in = rotations[p], omegas[p]
         locked[k] = kinds[k] == FIXED and (p < 0 or (locked[p] and body_kind[p] == RIGID))
-        if kinds[k] == FIXED:
+        if kinds[k] in (REVOLUTE, UNIVERSAL, PRISMATIC):
+            rot, om, hv[k]["rotation"] = _joint_start(kinds[k], hv[k], a_in, w_in,
+                                                      bv[k]["rotation"], bv[k]["omega"],
+                                                      hinges[k].__class__.__name__,
+                                                      bodies[k].label(k))
+        elif kinds[k] == FIXED:
             rot, om = a_in @ hv[k]["rotation"], w_in
             for key, implied in (("rotation", rot), ("omega", om)):
                 given = bv[k][key]
@@ -411,7 +419,34 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
         parent=parent,
         attachment=attachment,
         attachment_point=attachment_point,
+        drives=tuple(v.get("drives", ()) for v in hv),
     )
+
+
+def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
+    """A child's rotation and angular velocity at t = 0 behind a joint with coordinates, and the
+    joint's R0 (elements/joints.py): A = A_P Rot(n, q) R0 (revolute), A_P Rot(n1, q1) R0
+    Rot(n2, q2) (universal), A_P R0 (prismatic); w = w_P + the joint's rates about its axes."""
+    n1, n2, (q1, q2), (qd1, qd2) = v["axis1"], v["axis2"], v["q0"], v["qd0"]
+    r1 = rotation_about(n1, q1) if kind != PRISMATIC else np.eye(3)
+    r2 = rotation_about(n2, q2) if kind == UNIVERSAL else np.eye(3)
+    r0 = np.eye(3) if given_rot is None else r1.T @ a_in.T @ given_rot @ r2.T
+    if kind == UNIVERSAL:
+        dot = float(n1 @ (r0 @ n2))
+        if abs(dot) > 1e-9:
+            raise ValueError(f"{joint_name} before {who}: axis1 and axis2 must be perpendicular "
+                             f"(axis1 . axis2 in the parent's frame at q = 0: {dot:.3g})")
+    rot = a_in @ r1 @ r0 @ r2
+    omega = w_in.copy()
+    if kind == REVOLUTE:
+        omega = omega + a_in @ n1 * qd1
+    elif kind == UNIVERSAL:
+        omega = omega + a_in @ n1 * qd1 + rot @ n2 * qd2
+    if given_omega is not None and not np.allclose(given_omega, omega, atol=1e-9):
+        raise ValueError(f"{who}: angular_velocity {given_omega} contradicts the {joint_name} "
+                         f"before it (the body turns with its parent and the joint's rates: "
+                         f"{omega}); leave it None and give the joint's rates")
+    return rot, omega, r0
 
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):

@@ -7,6 +7,7 @@ import numpy as np
 from .elements import BEAM
 from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
                             POLAR_PER_LENGTH, mode_shapes)
+from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
 
@@ -44,6 +45,14 @@ class Result:
     velocity_input: np.ndarray = None      # (T, n, 3) world velocity of each input point
     modal_coordinates: np.ndarray = None   # (T, total modes) beams' eta, body order, v then w
     modal_velocities: np.ndarray = None    # (T, total modes) their rates
+    # joints with coordinates (revolute, universal, prismatic; elements/joints.py), their
+    # coordinates in hinge order, a joint's in its own order (rad or m):
+    joint_coordinates: np.ndarray = None   # (T, total coordinates) q
+    joint_rates: np.ndarray = None         # (T, total coordinates) q'
+    drive_force: np.ndarray = None         # (T, total coordinates) the generalized force (N m or
+                                           # N) each coordinate's drive applies on the child (the
+                                           # parent takes the reaction); for a prescribed motion
+                                           # the force the motion needs; 0 without a drive
 
     @property
     def total_energy(self):
@@ -176,7 +185,7 @@ def _output_section(*args):
 
 
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
-                   eta=None, eta_dot=None):
+                   eta=None, eta_dot=None, joint_coordinates=None):
     """Kinetic and potential energy of one state, or of T states at once, from positions and
     velocities alone.
 
@@ -188,7 +197,10 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     With a leading axis of T states on every array (ground_rotation (T,3,3) or one frame), the
     energies come back as two (T,) arrays.  A beam counts int 1/2 mu |r'(x)|^2 dx +
     1/2 j_p L (w . A e1)^2 kinetic and -int mu g . r(x) dx + sum 1/2 k_k eta_k^2 potential
-    energy (docs/beam.md).
+    energy (docs/beam.md).  joint_coordinates: the coordinates q of the joints with coordinates,
+    flat in hinge order (as Result.joint_coordinates); given, the potential counts
+    1/2 k (q - rest)^2 of every SpringDamper drive (docs/joints.md, "Drives"); None (default):
+    no drive springs are counted.
     """
     rotation = np.asarray(rotation, dtype=float)
     single = rotation.ndim == 3
@@ -231,17 +243,35 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
             for i in range(n_t):                # (a log per state: elastic hinges only)
-                a_in = ground_rot[i] if k == 0 else rotation[i, k - 1]
-                if k > 0 and model.body_kind[k - 1] == BEAM:     # the beam's end section
-                    a_in = _output_section(model.beam_params[k - 1], a_in, np.zeros(3),
-                                           eta[i, mode_off[k - 1]:j0])[0]
+                inb = model.parent[k]                    # the hinge's inboard body
+                a_in = ground_rot[i] if inb < 0 else rotation[i, inb]
+                if inb >= 0 and model.body_kind[inb] == BEAM:     # the beam's end section
+                    a_in = _output_section(model.beam_params[inb], a_in, np.zeros(3),
+                                           eta[i, mode_off[inb]:mode_off[inb + 1]])[0]
                 d_b = a_in.T @ deflection[i, k]
                 psi = _log_so3(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
+    if joint_coordinates is not None:
+        potential += _drive_spring_energy(model, joint_coordinates, n_t)
     if single:
         return float(kinetic[0]), float(potential[0])
     return kinetic, potential
+
+
+def _drive_spring_energy(model, joint_coordinates, n_t):
+    """(T,) sum of 1/2 k (q - rest)^2 over every SpringDamper drive (docs/joints.md, "Drives");
+    joint_coordinates (T, total coordinates) or (total coordinates,), Model.drives' order."""
+    drives = [d for per_joint in model.drives for d in per_joint]
+    q = np.asarray(joint_coordinates, dtype=float).reshape(n_t, -1)
+    if q.shape[1] != len(drives):
+        raise ValueError(f"chain_energies: joint_coordinates must hold {len(drives)} joint "
+                         f"coordinates (got {q.shape[1]})")
+    energy = np.zeros(n_t)
+    for c, d in enumerate(drives):
+        if d is not None and d["kind"] == SPRING_DAMPER:
+            energy += 0.5 * d["stiffness"] * (q[:, c] - d["rest"]) ** 2
+    return energy
 
 
 def beam_midpoint_deflection(model, result, body):

@@ -17,7 +17,11 @@ K_TRANSLATION = slice(9, 18)       # in the inboard body's frame, N/m
 C_TRANSLATION = slice(18, 27)      # N s/m
 K_ROTATION = slice(27, 36)         # N m/rad
 C_ROTATION = slice(36, 45)         # N m s/rad
-HINGE_PARAM_SIZE = 45
+AXIS_1 = slice(45, 48)             # joints with coordinates (joints.py): the (first) axis,
+AXIS_2 = slice(48, 51)             # parent frame; a universal joint's second, child frame
+COORDINATE_0 = slice(51, 53)       # their coordinates (rad or m) and rates at t = 0
+RATE_0 = slice(53, 55)
+HINGE_PARAM_SIZE = 55
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,4 +99,9 @@ def pack_hinge(v):
     row[C_TRANSLATION] = v["c_t"].reshape(-1)
     row[K_ROTATION] = v["k_r"].reshape(-1)
     row[C_ROTATION] = v["c_r"].reshape(-1)
+    if "axis1" in v:
+        row[AXIS_1] = v["axis1"]
+        row[AXIS_2] = v["axis2"]
+        row[COORDINATE_0] = v["q0"]
+        row[RATE_0] = v["qd0"]
     return row

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from .beam import EulerBernoulliBeam
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
+from .joints import PRISMATIC, REVOLUTE, UNIVERSAL, PrismaticJoint, RevoluteJoint, UniversalJoint
 from .rigid_body import RigidBody
 
 RIGID, BEAM = 0, 1      # Model.body_kind
@@ -24,7 +25,8 @@ class Kind:
 
     code:        its value in Model.body_kind or Model.hinge_kind.
     cls:         the element class users build it from.
-    schemes:     the solver's schemes whose loops implement it.
+    schemes:     the solver's schemes whose loops implement it (none: built, validated and run by
+                 the Newton-Euler reference only, so far).
     fused:       bodies: the fused ball-chain loop (kernels/ball_chain.py) has its reduced map.
     moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
                  across it).
@@ -54,6 +56,11 @@ JOINT_KINDS = (
     Kind(BALL, BallJoint, SCHEMES, moment_free=True, doc="docs/hinges.md", what="a ball joint"),
     Kind(FIXED, FixedHinge, SCHEMES, doc="docs/hinges.md", what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
+    # joints with coordinates and drives: built and validated, run by the Newton-Euler
+    # reference; no DT-TMM scheme implements them yet
+    Kind(REVOLUTE, RevoluteJoint, (), doc="docs/joints.md", what="a revolute joint"),
+    Kind(UNIVERSAL, UniversalJoint, (), doc="docs/joints.md", what="a universal joint"),
+    Kind(PRISMATIC, PrismaticJoint, (), doc="docs/joints.md", what="a prismatic joint"),
 )
 
 BODY_KIND = {k.code: k for k in BODY_KINDS}

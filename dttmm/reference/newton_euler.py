@@ -22,8 +22,9 @@ joints hold exactly (to round-off) by construction.
 Equations.  At every right-hand-side evaluation one dense linear system is assembled and solved
 for all unknowns at once: the input-point acceleration a_k and angular acceleration alpha_k of
 every body, the reaction force F_k of every ball or fixed hinge, the reaction couple N_k of
-every fixed hinge, and the beams' modal accelerations.  Rows are, for each rigid body k (world
-frame; rho_c = A l_IC, J = A J_I A^T):
+every fixed hinge, and the beams' modal accelerations (joints with coordinates add their
+reactions F_k, N_k and coordinate accelerations q'': "Joints with coordinates" below).  Rows
+are, for each rigid body k (world frame; rho_c = A l_IC, J = A J_I A^T):
     Newton:         M (a_k + alpha_k x rho_c + w x (w x rho_c)) = Q_k - Q_{k+1} + M g + f_k
     Euler about I:  J alpha_k + w x J w + M rho_c x a_k
                         = N_k - N_{k+1} - (rho_O + d_{k+1}) x Q_{k+1} + rho_c x (M g + f_k) + tau_k
@@ -65,6 +66,44 @@ joined to the ground (Model tip_pinned, build_chain(tip="ball")) adds its reacti
 row a_O,{n-1} = 0 (a point fixed in the world); a chain lying straight between its two fixed
 points then leaves the tension along it indeterminate, and the solver takes the solution with
 the least tip force (SVD), as the DT-TMM sweeps do.
+
+Joints with coordinates (revolute, universal, prismatic; docs/joints.md).  Their coordinates q
+and rates q' (one each, two for a universal joint) are states (all coordinates in hinge order,
+then all rates: Result.joint_coordinates' order); the child carries no quaternion of its own but
+follows its parent's output section (A_P, w_P, alpha_P; the ground frame for a root joint) and
+the coordinates, with n, n1 fixed in the parent's section, n2 in the child, R0 the hinge's rest
+rotation and u = A_P n, u1 = A_P n1, v2 = A n2 (world):
+    revolute:   A = A_P Rot(n, q) R0,                w = w_P + u q'
+    universal:  A = A_P Rot(n1, q1) R0 Rot(n2, q2),  w = w_P + u1 q1' + v2 q2'
+    prismatic:  A = A_P R0,                          w = w_P,
+                r_in = r_O,P + d,  d = u q,  d' = w_P x d + u q'
+(Rot(n, q) = exp(q n^); the prismatic d takes an elastic hinge's deflection's place in the
+kinematics, in the parent's arm rho_O + d and in the energies' input points).  Differentiating,
+with u' = w_P x u (u is fixed in the parent's section) and v2' = w x v2 (fixed in the child):
+    revolute:   alpha = alpha_P + u q'' + (w_P x u) q'
+    universal:  alpha = alpha_P + u1 q1'' + v2 q2'' + (w_P x u1) q1' + (w x v2) q2'
+                (w x v2 = (w_P + u1 q1') x v2: the q1' q2' term is the cross-coupling)
+    prismatic:  alpha = alpha_P,
+                a_in  = a_O,P + alpha_P x d + u q'' + w_P x (w_P x d) + 2 w_P x u q'
+and these are the joint's constraint rows, the weld's rows with the coordinate terms added
+(a_in = a_O,P for revolute and universal joints); for a beam parent alpha_P = alpha_O,P =
+alpha_kp + B_t eta''_kp + [velocity part] (End kinematics), so the slide's alpha_P x d puts
+d^ B_t in the row's modal columns.  Each such joint has a reaction force F_k and couple N_k (the
+total loads the parent exerts on the child at its input point, the drive's included: Result
+force and moment) and, per coordinate, one more unknown, q_i'', and one more row:
+    free coordinate:        s_i . N_k = tau_i   (s_i . F_k for the slide)
+    prescribed (MOTION):    q_i'' = q_p''(t)
+with s_i the coordinate's world direction (u, u1, v2; the slide's u) and tau_i the drive's
+generalized force: FORCE f(t, q, q'), SPRING_DAMPER -k (q - rest) - c q', no drive 0.  The
+virtual power of the joint loads on a relative motion is N . (w - w_P) = sum (s_i . N) q_i'
+(F . u q' for the slide, whose relative angular velocity is zero), so s_i . N is coordinate i's
+generalized force; for a prescribed coordinate it is what the solve returns (Result
+drive_force), and its q, q' are read from the motion at every evaluation (their state entries
+only carry them along).  On the parent the loads are -F_k at r_O,P + d and -N_k: Euler row
++ (rho_O + d) x F_k + N_k, a beam parent's modal rows + B_r^T F_k + B_t^T (N_k + d x F_k), the
+transposes of the constraint rows' parent columns as for a weld.  The drive springs store
+1/2 k (q - rest)^2 (dttmm.result.chain_energies(joint_coordinates=...)), the dampers dissipate
+c q'^2, a FORCE drive does the work tau q'.
 
 Euler-Bernoulli beams (docs/beam.md).  A beam body carries, besides its frame (quaternion, w, or
 the inboard output section through a fixed hinge), its modal coordinates eta = [eta_v (n),
@@ -119,8 +158,11 @@ from scipy.linalg import eigh
 from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH,
                              MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH)
-from ..elements.hinges import (C_ROTATION, C_TRANSLATION, ELASTIC, FIXED, K_ROTATION,
-                               K_TRANSLATION, REST_ROTATION)
+from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
+from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
+                               FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
+from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
+from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
 from ..model import Model
@@ -141,6 +183,10 @@ _CR = C_ROTATION.start
 _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES = POLAR_PER_LENGTH, DAMPING_RATIO, MODES
+_AX1 = AXIS_1.start
+_AX2 = AXIS_2.start
+_REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
+JOINTS_WITH_COORDINATES = (REVOLUTE, UNIVERSAL, PRISMATIC)
 
 # rows of the per-beam shape constants (_Problem.shape_vec[k, row, mode])
 _SY, _TY, _YL, _DYL, _MF, _KF = range(6)
@@ -469,10 +515,90 @@ def _beam_end(bp, sv, a, w, eta, eta_dot):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _rot_about(n, q):
+    """Rot(n, q) = exp(q n^) for a unit axis n (Rodrigues)."""
+    k = _hat(n)
+    return np.eye(3) + math.sin(q) * k + (1.0 - math.cos(q)) * (k @ k)
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_coordinates(y, joints, k, kind):
+    """(q, q') of joint k, each padded to 2 entries (module docstring, "Joints with
+    coordinates"; joints = (c_off, c0, n_coord, ...): the coordinates at y[c0 + c_off[k] + i],
+    their rates at y[c0 + n_coord + c_off[k] + i])."""
+    c_off, c0, n_coord = joints[0], joints[1], joints[2]
+    q = np.zeros(2)
+    qd = np.zeros(2)
+    o = c_off[k]
+    for i in range(2 if kind == _UNIVERSAL else 1):
+        q[i] = y[c0 + o + i]
+        qd[i] = y[c0 + n_coord + o + i]
+    return q, qd
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_frame(kind, h, a_in, w_in, q, qd):
+    """Child frame behind a joint with coordinates (module docstring): its rotation A, angular
+    velocity w and, for a slide, the offset d = A_P n q of its input point from the attachment
+    point and its rate d' = w_P x d + A_P n q' (zero for revolute and universal joints)."""
+    n1 = _vec3(h, _AX1)
+    r0 = _mat3(h, _R0)
+    d = np.zeros(3)
+    d_rate = np.zeros(3)
+    if kind == _REVOLUTE:                   # A = A_P Rot(n, q) R0,  w = w_P + (A_P n) q'
+        rot = a_in @ _rot_about(n1, q[0]) @ r0
+        w = w_in + (a_in @ n1) * qd[0]
+    elif kind == _UNIVERSAL:                # A = A_P Rot(n1, q1) R0 Rot(n2, q2),
+        n2 = _vec3(h, _AX2)                 # w = w_P + (A_P n1) q1' + (A n2) q2'
+        rot = a_in @ _rot_about(n1, q[0]) @ r0 @ _rot_about(n2, q[1])
+        w = w_in + (a_in @ n1) * qd[0] + (rot @ n2) * qd[1]
+    else:                                   # prismatic: A = A_P R0, w = w_P, d = (A_P n) q
+        rot = a_in @ r0
+        w = w_in.copy()
+        u = a_in @ n1
+        d = u * q[0]
+        d_rate = _cross(w_in, d) + u * qd[0]
+    return rot, w, d, d_rate
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_directions(kind, h, a_in, rot):
+    """World directions s_i (columns, 3 x 2) of a joint's coordinates: the rotation axes u = A_P n
+    (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
+    (prismatic); and the number of coordinates."""
+    s = np.zeros((3, 2))
+    s[:, 0] = a_in @ _vec3(h, _AX1)
+    if kind == _UNIVERSAL:
+        s[:, 1] = rot @ _vec3(h, _AX2)
+        return s, 2
+    return s, 1
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
+    """Velocity parts of a joint's constraint rows (module docstring): of the child's angular
+    acceleration, (w_P x u) q' (revolute), (w_P x u1) q1' + (w x v2) q2' (universal), 0
+    (prismatic); of its input point's acceleration relative to the attachment point's,
+    w_P x (w_P x d) + 2 w_P x u q' (prismatic), 0 otherwise."""
+    rot_v = np.zeros(3)
+    slide_v = np.zeros(3)
+    u = np.ascontiguousarray(dirs[:, 0])
+    if kind == _PRISMATIC:
+        slide_v = _cross(w_in, _cross(w_in, d)) + 2.0 * qd[0] * _cross(w_in, u)
+    else:
+        rot_v = qd[0] * _cross(w_in, u)
+        if kind == _UNIVERSAL:
+            rot_v = rot_v + qd[1] * _cross(w, np.ascontiguousarray(dirs[:, 1]))
+    return rot_v, slide_v
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
-                q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g):
+                q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
+                joints):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
-    deflections (world) of every body, from the state and the ground motion; and each body's
+    deflections and slides (world) of every body, from the state and the ground motion (a
+    prismatic joint's offset d = A_P n q and its rate take the deflection's place); and each body's
     output point and section: rho_O = r_O - r_I, A_O, w_O, the velocity parts of a_O and
     alpha_O, (beams) B_r, B_t padded to the widest beam's 2n columns, and v_O."""
     n = body_params.shape[0]
@@ -491,14 +617,24 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     alpha_v = np.zeros((n, 3))
     b_r = np.zeros((n, 3, n2max))
     b_t = np.zeros((n, 3, n2max))
-    r_prev = r_g.copy()          # output point of the inboard body (ground point for k = 0)
-    v_prev = v_g.copy()
-    for k in range(n):
+    parent = topology[0]
+    for k in range(n):           # parents first (Model.parent[k] < k)
+        kp = parent[k]
+        if kp < 0:               # the output point of the inboard body, or the ground point
+            r_prev, v_prev = r_g, v_g
+        else:
+            r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
         if hinge_kind[k] == FIXED:   # welded to the inboard output section (or the ground)
-            a_in = rot_g if k == 0 else rot_o[k - 1]
-            w_in = w_g if k == 0 else omega_o[k - 1]
+            a_in = rot_g if kp < 0 else rot_o[kp]
+            w_in = w_g if kp < 0 else omega_o[kp]
             rot[k] = a_in @ _mat3(hinge_params[k], _R0)
             omega[k] = w_in
+        elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard output section
+            a_in = rot_g if kp < 0 else rot_o[kp]
+            w_in = w_g if kp < 0 else omega_o[kp]
+            q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
+            rot[k], omega[k], defl[k], defl_rate[k] = _joint_frame(
+                hinge_kind[k], hinge_params[k], a_in, w_in, q, qd)
         else:
             rot[k] = _quat_to_rot(y[q_off[k]:q_off[k] + 4])
             omega[k] = y[w_off[k]:w_off[k] + 3]
@@ -521,16 +657,14 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             v_rel = _cross(omega[k], rho)
             rho_o[k], rot_o[k], omega_o[k] = rho, rot[k], omega[k]
             acc_v[k] = _cross(omega[k], v_rel)
-        r_prev = r_in[k] + rho
-        v_prev = v_in[k] + v_rel
-        v_o[k] = v_prev
+        v_o[k] = v_in[k] + v_rel
     return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
             b_r, b_t, v_o)
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
-                   w_g):
+                   w_g, parent):
     """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
     the other hinges).  The hinge's inboard frame is the inboard body's output section (A_O,
     w_O): the body itself for a rigid body, the deflected end section for a beam."""
@@ -541,8 +675,8 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
         if hinge_kind[k] != ELASTIC:
             continue
         h = hinge_params[k]
-        a_in = rot_g if k == 0 else rot_o[k - 1]
-        w_in = w_g if k == 0 else omega_o[k - 1]
+        a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
+        w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
         d_b = a_in.T @ defl[k]
         dd_b = a_in.T @ defl_rate[k]
         q[k] = -(a_in @ (_mat3(h, _KT) @ d_b + _mat3(h, _CT) @ dd_b))
@@ -645,16 +779,67 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
-def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, body_params,
-              hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal,
-              e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g, forces, torques):
+def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_in, pce, f_col,
+                m_col, joints):
+    """Joint k's share of the global system (module docstring, "Joints with coordinates"), on
+    top of the weld's rows that _assemble wrote (a_k = a_O,P, alpha_k = alpha_O,P): each
+    coordinate's -s_i q_i'' in the rotation rows (revolute, universal) or the translation rows
+    (slide), the velocity terms, the slide's alpha_P x d, and the coordinate rows
+        s_i . N_k (or F_k) = tau_i     (a free coordinate: the drive's generalized force)
+        q_i'' = q_p''(t)               (a prescribed coordinate),
+    both from joints[5] (drive_value).  (a_in, w_in): the parent's output section or the ground
+    frame (kp < 0); alpha_in: the velocity part of the parent's alpha_O (the ground's angular
+    acceleration for kp < 0); b_t_in, pce: the parent beam's B_t and first modal column."""
+    c_off, c_col0, prescribed, drive_value = joints[0], joints[3], joints[4], joints[5]
+    dirs, nc = _joint_directions(kind, h, a_in, rot)
+    rot_v, slide_v = _joint_velocity_terms(kind, dirs, w_in, w, d, qd)
+    rf, rm = f_col[k], m_col[k]
+    rs = rf if kind == _PRISMATIC else rm       # the rows (and reaction) a coordinate moves
+    for i in range(nc):
+        c = c_off[k] + i
+        cq = c_col0 + c
+        for j in range(3):
+            s[rs + j, cq] = -dirs[j, i]
+        if prescribed[c]:
+            s[cq, cq] = 1.0
+        else:
+            for j in range(3):
+                s[cq, rs + j] = dirs[j, i]
+        b[cq] = drive_value[c]
+    for j in range(3):
+        b[rm + j] += rot_v[j]
+        b[rf + j] += slide_v[j]
+    if kind == _PRISMATIC:
+        # a_k - ... - alpha_O,P x d = ...: on the left d^ alpha_O,P, with alpha_O,P =
+        # alpha_P + B_t eta''_P + alpha_in; alpha_in x d on the right
+        hd = _hat(d)
+        b_v = _cross(alpha_in, d)
+        for i in range(3):
+            b[rf + i] += b_v[i]
+        if kp >= 0:
+            hdb = hd @ b_t_in
+            for i in range(3):
+                for j in range(3):
+                    s[rf + i, 6 * kp + 3 + j] += hd[i, j]
+                for j in range(hdb.shape[1]):
+                    s[rf + i, pce + j] += hdb[i, j]
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, q_el, m_el,
+              body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+              shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity,
+              a_g, rot_g, w_g, wd_g, forces, torques, topology, joints):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
     uses the same row index, so S is square.  Beam k's modal accelerations sit in the columns
     e_col0 + m_off[k] + (0..2n-1), its modal equations in the same rows; its coordinates and
-    rates are y[e0 + m_off[k] + ...] and y[e0 + n_modal + m_off[k] + ...]."""
+    rates are y[e0 + m_off[k] + ...] and y[e0 + n_modal + m_off[k] + ...].  A joint with
+    coordinates has both reaction columns and its coordinates' accelerations in the columns
+    joints[3] + c_off[k] + (0, 1), its coordinate rows in the same rows (_joint_rows)."""
     n = rot.shape[0]
+    parent, child_start, child_list = topology
     s = np.zeros((n_unknowns, n_unknowns))
     b = np.zeros(n_unknowns)
     for k in range(n):
@@ -714,27 +899,30 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
             c = f_col[k]
             for i in range(3):
                 s[rn + i, c + i] = -1.0
-            if hinge_kind[k] == FIXED:
+            if m_col[k] >= 0:              # a fixed hinge or a joint with coordinates
                 c = m_col[k]
                 for i in range(3):
                     s[re + i, c + i] = -1.0
-        # the outboard hinge acting on body k: force -F_{k+1} at r_O + d_{k+1}, couple -N_{k+1};
-        # a beam's modal rows get their generalized forces B_r^T F_{k+1} + B_t^T N_{k+1}
-        if k + 1 < n:
-            arm = rho_o[k] + defl[k + 1]
-            if hinge_kind[k + 1] == ELASTIC:
+        # each outboard hinge c (joining a child c at the output point) acting on body k:
+        # force -F_c at r_O + d_c, couple -N_c; a beam's modal rows get their generalized
+        # forces B_r^T F_c + B_t^T (N_c + d_c x F_c) (d_c: an elastic hinge's deflection or a
+        # slide, zero otherwise)
+        for ci in range(child_start[k], child_start[k + 1]):
+            kc = child_list[ci]
+            arm = rho_o[k] + defl[kc]
+            if hinge_kind[kc] == ELASTIC:
                 # -q at r_O and the couple -m_in = -(m_out + d x q) about r_O; on a beam their
                 # generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
-                bn -= q_el[k + 1]
-                be -= m_el[k + 1] + _cross(arm, q_el[k + 1])
-                m_in = m_el[k + 1] + _cross(defl[k + 1], q_el[k + 1])
+                bn -= q_el[kc]
+                be -= m_el[kc] + _cross(arm, q_el[kc])
+                m_in = m_el[kc] + _cross(defl[kc], q_el[kc])
                 for j in range(nm2):
                     gen = 0.0
                     for i in range(3):
-                        gen += b_r[k, i, j] * q_el[k + 1, i] + b_t[k, i, j] * m_in[i]
+                        gen += b_r[k, i, j] * q_el[kc, i] + b_t[k, i, j] * m_in[i]
                     b[ce + j] -= gen
             else:
-                c = f_col[k + 1]
+                c = f_col[kc]
                 ha = _hat(arm)
                 for i in range(3):
                     s[rn + i, c + i] = 1.0
@@ -742,8 +930,14 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
                         s[re + i, c + j] = ha[i, j]
                     for j in range(nm2):
                         s[ce + j, c + i] = b_r[k, i, j]
-                if hinge_kind[k + 1] == FIXED:
-                    c = m_col[k + 1]
+                if hinge_kind[kc] == _PRISMATIC and nm2 > 0:
+                    # B_t^T (d x F) = B_t^T d^ F: column i gets -(d^ B_t)[i, :]
+                    hdb = _hat(defl[kc]) @ np.ascontiguousarray(b_t[k, :, :nm2])
+                    for i in range(3):
+                        for j in range(nm2):
+                            s[ce + j, c + i] -= hdb[i, j]
+                if m_col[kc] >= 0:
+                    c = m_col[kc]
                     for i in range(3):
                         s[re + i, c + i] = 1.0
                         for j in range(nm2):
@@ -757,11 +951,11 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
             r = f_col[k]
             for i in range(3):
                 s[r + i, ca + i] = 1.0
-            if k == 0:
+            if parent[k] < 0:
                 for i in range(3):
                     b[r + i] = a_g[i]
             else:
-                kp = k - 1
+                kp = parent[k]
                 hpo = _hat(rho_o[kp])
                 pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
                 pce = e_col0 + m_off[kp]
@@ -772,20 +966,33 @@ def _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el, 
                     for j in range(pn2):
                         s[r + i, pce + j] = -b_r[kp, i, j]
                     b[r + i] = acc_v[kp, i]
-            if hinge_kind[k] == FIXED:
+            if m_col[k] >= 0:
                 r = m_col[k]
                 for i in range(3):
                     s[r + i, cal + i] = 1.0
-                    if k == 0:
+                    if parent[k] < 0:
                         b[r + i] = wd_g[i]
                     else:
-                        kp = k - 1
+                        kp = parent[k]
                         pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
                         pce = e_col0 + m_off[kp]
                         s[r + i, 6 * kp + 3 + i] = -1.0
                         for j in range(pn2):
                             s[r + i, pce + j] = -b_t[kp, i, j]
                         b[r + i] = alpha_v[kp, i]
+            if joints[0][k] >= 0:
+                kp = parent[k]
+                _, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
+                if kp < 0:
+                    _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_g, w_g, wd_g,
+                                rot[k], omega[k], defl[k], qd, np.zeros((3, 0)), 0, f_col,
+                                m_col, joints)
+                else:
+                    pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                    _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_o[kp],
+                                omega_o[kp], alpha_v[kp], rot[k], omega[k], defl[k], qd,
+                                np.ascontiguousarray(b_t[kp, :, :pn2]), e_col0 + m_off[kp],
+                                f_col, m_col, joints)
     if t_col >= 0:
         # tip joined to a fixed point by a ball joint: the tip body receives -F_t at its output
         # point (F_t = q at the tip station, uniform convention), and a_O = 0 there
@@ -835,18 +1042,23 @@ def _solve_least_tip_force(s, b, t_col):
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
-                    t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
+                    t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
+                    topology, joints):
     """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
-    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta."""
+    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, and, per joint
+    coordinate (joints), its acceleration q'' and the joint loads' generalized force s_i . N
+    (s_i . F for a slide)."""
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
      b_t, v_o) = _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
-                        shape_vec, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g)
+                        shape_vec, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g,
+                        topology, joints)
     q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
-                                hinge_params, rot_g, w_g)
-    s, b = _assemble(y, rot, omega, defl, rho_o, acc_v, alpha_v, b_r, b_t, q_el, m_el,
-                     body_params, hinge_kind, body_kind, beam_params, shape_vec, shape_mat, m_off,
-                     e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity, a_g, wd_g,
-                     forces, torques)
+                                hinge_params, rot_g, w_g, topology[0])
+    s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, q_el,
+                     m_el, body_params, hinge_kind, hinge_params, body_kind, beam_params,
+                     shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
+                     n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, topology,
+                     joints)
     if t_col >= 0:
         x = _solve_least_tip_force(s, b, t_col)
     else:
@@ -864,28 +1076,42 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             moment[k] = m_el[k]
         else:
             force[k] = x[f_col[k]:f_col[k] + 3]
-            if hinge_kind[k] == FIXED:
+            if m_col[k] >= 0:
                 moment[k] = x[m_col[k]:m_col[k] + 3]
     modal_acc = x[e_col0:e_col0 + n_modal].copy()
+    c_off, n_coord, c_col0 = joints[0], joints[2], joints[3]
+    coord_acc = x[c_col0:c_col0 + n_coord].copy()
+    generalized = np.zeros(n_coord)
+    for k in range(n):
+        if c_off[k] < 0:
+            continue
+        kp = topology[0][k]
+        a_in = rot_g if kp < 0 else rot_o[kp]
+        dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
+        load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
+        for i in range(nc):
+            generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
+                dirs[2, i] * load[2]
     return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
-            b_r)
+            b_r, coord_acc, generalized)
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
-               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques):
+               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology,
+               joints):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
-    modal coordinates of all beams, their rates]."""
+    modal coordinates of all beams, their rates, joint coordinates, their rates]."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
-     b_r) = _solve_dynamics(
+     b_r, coord_acc, _) = _solve_dynamics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
-        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques)
+        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology, joints)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):
-        if hinge_kind[k] != FIXED:
+        if q_off[k] >= 0:
             o = q_off[k]
             qw, qx, qy, qz = y[o], y[o + 1], y[o + 2], y[o + 3]
             wx, wy, wz = omega[k, 0], omega[k, 1], omega[k, 2]
@@ -898,10 +1124,10 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
         if hinge_kind[k] == ELASTIC:
             o = d_off[k]
             dy[o:o + 3] = y[o + 3:o + 6]
-            if k == 0:
+            kp = topology[0][k]
+            if kp < 0:
                 a_prev_out = a_g
             else:
-                kp = k - 1
                 a_prev_out = acc[kp] + _cross(alpha[kp], rho_o[kp]) + acc_v[kp]
                 if body_kind[kp] == _BEAM:
                     nm2 = 2 * int(beam_params[kp, _BMODES])
@@ -911,6 +1137,10 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
     for i in range(n_modal):
         dy[e0 + i] = y[e0 + n_modal + i]
         dy[e0 + n_modal + i] = modal_acc[i]
+    c0, n_coord = joints[1], joints[2]
+    for i in range(n_coord):
+        dy[c0 + i] = y[c0 + n_coord + i]
+        dy[c0 + n_coord + i] = coord_acc[i]
     return dy
 
 
@@ -919,7 +1149,8 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
 # ----------------------------------------------------------------------------------------------
 
 class _Problem:
-    """Index bookkeeping and the per-time evaluation of ground motion and applied loads."""
+    """Index bookkeeping and the per-time evaluation of ground motion, applied loads and joint
+    drives."""
 
     def __init__(self, model):
         n = model.n_bodies
@@ -930,7 +1161,10 @@ class _Problem:
         self.body_params = np.ascontiguousarray(model.body_params, dtype=float)
         self.hinge_params = np.ascontiguousarray(model.hinge_params, dtype=float)
         self.gravity = np.asarray(model.gravity, dtype=float)
-        free = [k for k in range(n) if kinds[k] != FIXED]
+        # a quaternion and w of its own: bodies behind ball joints and elastic hinges (a fixed
+        # hinge's or a joint's child follows its parent and the joint's coordinates)
+        free = [k for k in range(n) if kinds[k] != FIXED and kinds[k] not in
+                JOINTS_WITH_COORDINATES]
         elastic = [k for k in range(n) if kinds[k] == ELASTIC]
         self.q_off = np.full(n, -1, dtype=np.int64)
         self.w_off = np.full(n, -1, dtype=np.int64)
@@ -973,6 +1207,20 @@ class _Problem:
         self.n_modal = nm
         self.e0 = o
         o += 2 * nm
+        # joints with coordinates: all coordinates (hinge order, a joint's in its own order, as
+        # Result.joint_coordinates), then all their rates
+        self.c_off = np.full(n, -1, dtype=np.int64)
+        self.coordinates = []                   # (hinge, index in the joint, validated drive)
+        for k in range(n):
+            if kinds[k] in JOINTS_WITH_COORDINATES:
+                self.c_off[k] = len(self.coordinates)
+                drives = model.drives[k]
+                for i in range(coordinate_count(kinds[k])):
+                    self.coordinates.append((k, i, drives[i] if i < len(drives) else None))
+        nq = len(self.coordinates)
+        self.n_coord = nq
+        self.c0 = o
+        o += 2 * nq
         self.n_state = o
         self.f_col = np.full(n, -1, dtype=np.int64)
         self.m_col = np.full(n, -1, dtype=np.int64)
@@ -981,11 +1229,13 @@ class _Problem:
             if kinds[k] != ELASTIC:
                 self.f_col[k] = c
                 c += 3
-            if kinds[k] == FIXED:
+            if kinds[k] == FIXED or kinds[k] in JOINTS_WITH_COORDINATES:
                 self.m_col[k] = c
                 c += 3
         self.e_col0 = c
         c += nm
+        self.c_col0 = c
+        c += nq
         self.t_col = -1
         if getattr(model, "tip_pinned", False):
             self.t_col = c
@@ -995,6 +1245,36 @@ class _Problem:
         self.torques = np.zeros((n, 3))
         self._force_fns = [(k, f) for k, f in enumerate(model.forces) if f is not None]
         self._torque_fns = [(k, f) for k, f in enumerate(model.torques) if f is not None]
+        # the tree: each body's parent and its children (CSR: child_list[child_start[k]:
+        # child_start[k + 1]]), every child on its parent's output point
+        parent = np.ascontiguousarray(model.parent, dtype=np.int64)
+        children = [[c for c in range(n) if parent[c] == k] for k in range(n)]
+        self.topology = (parent, np.cumsum([0] + [len(c) for c in children]).astype(np.int64),
+                         np.array([c for cs in children for c in cs], dtype=np.int64))
+        # the drives, evaluated in Python at every right-hand side (joint_inputs)
+        self.prescribed = np.zeros(nq, dtype=np.int64)
+        self.drive_value = np.zeros(nq)
+        self._motions, self._springs, self._drive_fns = [], [], []
+        for c, (k, i, d) in enumerate(self.coordinates):
+            if d is None:
+                continue
+            if d["kind"] == MOTION:
+                self.prescribed[c] = 1
+                self._motions.append((c, d["function"]))
+            elif d["kind"] == SPRING_DAMPER:
+                self._springs.append((c, d["stiffness"], d["damping"], d["rest"]))
+            elif d["kind"] == FORCE:
+                self._drive_fns.append((c, d["function"]))
+            else:
+                raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
+                                 f"kind {d['kind']}")
+        self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
+
+    def coordinate_label(self, c):
+        """How messages name coordinate c: its joint, hinge index and coordinate."""
+        k, i, _ = self.coordinates[c]
+        kind = JOINT_KIND[int(self.kinds[k])].name
+        return f"{kind} '{self.model.hinge_names[k]}' (hinge {k}), coordinate {i}"
 
     def initial_state(self):
         m = self.model
@@ -1008,6 +1288,36 @@ class _Problem:
             y[self.e0:self.e0 + nm] = np.asarray(m.initial_modal_coordinates, dtype=float)
             y[self.e0 + nm:self.e0 + 2 * nm] = np.asarray(m.initial_modal_velocities,
                                                           dtype=float)
+        for c, (k, i, _) in enumerate(self.coordinates):
+            y[self.c0 + c] = self.hinge_params[k, COORDINATE_0][i]
+            y[self.c0 + self.n_coord + c] = self.hinge_params[k, RATE_0][i]
+        return y
+
+    def _number(self, c, what, t, value):
+        """A drive's value as a float; ValueError naming the joint and coordinate otherwise."""
+        a = np.asarray(value, dtype=float)
+        if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
+            raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: {what} returned "
+                             f"{value!r} at t = {t:.17g} (need one finite number)")
+        return float(a.reshape(-1)[0])
+
+    def joint_inputs(self, t, y):
+        """The state with every prescribed coordinate and rate taken from its motion at time t,
+        and each coordinate's drive value (joints[5]): the generalized force f(t, q, q') or
+        -k (q - rest) - c q' of a free coordinate's drive (0 without one), the prescribed
+        acceleration of a driven one (module docstring, "Joints with coordinates")."""
+        c0, nq = self.c0, self.n_coord
+        if self._motions:
+            y = y.copy()
+        for c, (position, velocity, acceleration) in self._motions:
+            y[c0 + c] = self._number(c, "prescribed position", t, position(t))
+            y[c0 + nq + c] = self._number(c, "prescribed velocity", t, velocity(t))
+            self.drive_value[c] = self._number(c, "prescribed acceleration", t, acceleration(t))
+        for c, stiffness, damping, rest in self._springs:
+            self.drive_value[c] = -stiffness * (y[c0 + c] - rest) - damping * y[c0 + nq + c]
+        for c, f in self._drive_fns:
+            self.drive_value[c] = self._number(c, "drive function(t, q, q_dot)", t,
+                                               f(t, y[c0 + c], y[c0 + nq + c]))
         return y
 
     def time_inputs(self, t):
@@ -1022,11 +1332,12 @@ class _Problem:
 
     def _args(self, y, t):
         r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques = self.time_inputs(t)
+        y = self.joint_inputs(t, y)
         return (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.t_col, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
-                wd_g, forces, torques)
+                wd_g, forces, torques, self.topology, self.joints)
 
     def rhs(self, t, y):
         return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
@@ -1040,10 +1351,11 @@ class _Problem:
         A_O, w_O), each (n, ...)."""
         r_g, v_g, _, rot_g, w_g, _ = (np.asarray(x, dtype=float)
                                       for x in self.model.ground_state(t))
-        out = _kinematics(np.ascontiguousarray(y, dtype=float), self.body_params, self.kinds,
+        y = self.joint_inputs(t, np.ascontiguousarray(y, dtype=float))
+        out = _kinematics(y, self.body_params, self.kinds,
                           self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
                           self.q_off, self.w_off, self.d_off, self.m_off, self.e0, self.n_modal,
-                          r_g, v_g, rot_g, w_g)
+                          r_g, v_g, rot_g, w_g, self.topology, self.joints)
         return out[6], out[13], out[7], out[8]
 
 
@@ -1051,9 +1363,12 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
     if not isinstance(model, Model):
         raise ValueError(f"simulate_reference: model must be a dttmm Model (from build_chain), "
                          f"got {type(model).__name__}")
-    if not model.is_chain:
-        raise ValueError("simulate_reference: the model is a tree; the reference solver runs "
-                         "chains only so far (build the chain with build_chain)")
+    for k in np.nonzero(np.asarray(model.attachment) != 0)[0]:
+        kind = JOINT_KIND[int(model.hinge_kind[k])].name
+        raise ValueError(f"simulate_reference: {kind} '{model.hinge_names[k]}' (hinge {k}) joins "
+                         f"body '{model.body_names[k]}' to a named attachment point of its "
+                         f"parent; the reference solver joins bodies at output points only so "
+                         f"far")
     try:
         t_end = float(t_end)
     except (TypeError, ValueError):
@@ -1101,6 +1416,12 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     r_I + A (L e1 + u(L)).  The initial modal coordinates and rates are the model's.  A chain
     built with tip="ball" has its tip held at its starting point (fixed in the world, a_tip = 0,
     also when the ground moves); the initial angular velocities must leave it at rest there.
+    Joints with coordinates (revolute, universal, prismatic; module docstring) and their drives
+    run with beams as parents and children too; the result then holds joint_coordinates,
+    joint_rates (a prescribed coordinate's from its motion) and drive_force (T, total
+    coordinates; hinge order), a prismatic child's input point moves by its slide, and the
+    potential energy counts the drive springs.  A drive that returns a non-finite or non-scalar
+    value during the run raises ValueError naming the joint and coordinate.
     """
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     prob = _Problem(model)
@@ -1145,13 +1466,24 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     eta = np.ascontiguousarray(ys[:, e0:e0 + nm])
     eta_dot = np.ascontiguousarray(ys[:, e0 + nm:e0 + 2 * nm])
     rho_out = np.empty((nt, n, 3))
+    nq, c0 = prob.n_coord, prob.c0
+    q_rec = np.empty((nt, nq))
+    qd_rec = np.empty((nt, nq))
+    drive = np.empty((nt, nq))
     for i, t in enumerate(t_eval):
-        rk, wk, rik, vik, dk, _, ak, fk, mk, _, rho_out[i] = prob.evaluate(t, ys[i])[:11]
+        out = prob.evaluate(t, ys[i])
+        rk, wk, rik, vik, dk, _, ak, fk, mk, _, rho_out[i] = out[:11]
         rot[i], omega[i], r_in[i], v_in[i] = rk, wk, rik, vik
         alpha[i], force[i], moment[i] = ak, fk, mk
+        # the coordinates as the kinematics saw them (a prescribed one from its motion); a
+        # free coordinate's drive force as applied, a prescribed one's as the joint loads' s.N
+        y_i = prob.joint_inputs(t, ys[i])
+        q_rec[i], qd_rec[i] = y_i[c0:c0 + nq], y_i[c0 + nq:c0 + 2 * nq]
+        drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value)
         kinetic[i], potential[i] = chain_energies(model, rk, wk, rik, vik, dk,
                                                     ground_rotation=model.ground_state(t)[3],
-                                                    eta=eta[i], eta_dot=eta_dot[i])
+                                                    eta=eta[i], eta_dot=eta_dot[i],
+                                                    joint_coordinates=q_rec[i] if nq else None)
     r_c, r_o = point_positions(model, rot, r_in)
     for k in range(n):                          # a beam's mass centre and output point move
         if prob.body_kind[k] == BEAM:           # with its deflection
@@ -1168,7 +1500,10 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   info={"nfev": nfev, "n_state": prob.n_state, "n_unknowns": prob.n_unknowns},
                   velocity_input=v_in,
                   modal_coordinates=eta if nm > 0 else None,
-                  modal_velocities=eta_dot if nm > 0 else None)
+                  modal_velocities=eta_dot if nm > 0 else None,
+                  joint_coordinates=q_rec if nq > 0 else None,
+                  joint_rates=qd_rec if nq > 0 else None,
+                  drive_force=drive if nq > 0 else None)
 
 
 def _beam_mass_center(bp, sv, eta):

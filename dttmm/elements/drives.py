@@ -1,0 +1,115 @@
+"""Joint drives: what acts along a joint's free coordinate (docs/joints.md, "Drives").
+
+A drive sits on one coordinate q of a revolute joint (an angle, rad), of a prismatic joint (a
+slide, m) or of one axis of a universal joint.  It either applies a generalized force (a torque
+about the axis, N m, or a force along it, N) on the child, with the reaction on the parent, or
+prescribes the coordinate's motion q(t), the joint then applying whatever generalized force
+that motion needs (the Result records it).
+"""
+from dataclasses import dataclass
+from typing import Callable, Optional
+
+import numpy as np
+
+from ._checks import finite_scalar
+
+FORCE, SPRING_DAMPER, MOTION = 0, 1, 2      # Model.drive_kind (-1: no drive)
+
+
+def _scalar_of(who, argument, value):
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{who}: {argument} must return a number, got {value!r}") from None
+    if a.size != 1:
+        raise ValueError(f"{who}: {argument} must return one number, got shape {a.shape}")
+    x = float(a.reshape(-1)[0])
+    if not np.isfinite(x):
+        raise ValueError(f"{who}: {argument} returned {x} (not finite)")
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class JointForce:
+    """A generalized force f(t, q, q') on the joint's coordinate (N m about a revolute or
+    universal axis, N along a prismatic axis): a motor torque f(t), a nonlinear spring, any
+    function of time, coordinate and rate."""
+    function: Callable[[float, float, float], float]
+    kind = FORCE
+
+    def validated(self, who, q0, qd0):
+        if not callable(self.function):
+            raise ValueError(f"{who}: drive function must be callable as f(t, q, q_dot), got "
+                             f"{type(self.function).__name__}")
+        try:
+            value = self.function(0.0, q0, qd0)
+        except TypeError as err:
+            raise ValueError(f"{who}: drive function must take (t, q, q_dot): {err}") from None
+        _scalar_of(who, "drive function(0, q0, q_dot0)", value)
+        return dict(kind=FORCE, function=self.function, stiffness=0.0, damping=0.0, rest=0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class SpringDamper:
+    """f = -stiffness (q - rest) - damping q' on the joint's coordinate; rest None: the
+    coordinate's initial value (no force at the start)."""
+    stiffness: float
+    damping: float = 0.0
+    rest: Optional[float] = None
+    kind = SPRING_DAMPER
+
+    def validated(self, who, q0, qd0):
+        k = finite_scalar(who, "drive stiffness", self.stiffness, nonnegative=True)
+        c = finite_scalar(who, "drive damping", self.damping, nonnegative=True)
+        rest = q0 if self.rest is None else finite_scalar(who, "drive rest", self.rest)
+        return dict(kind=SPRING_DAMPER, function=None, stiffness=k, damping=c, rest=rest)
+
+
+@dataclass(frozen=True, eq=False)
+class JointMotion:
+    """The coordinate prescribed: position(t), velocity(t), acceleration(t) (rad or m, and
+    their first and second derivatives, given, not differentiated numerically)."""
+    position: Callable[[float], float]
+    velocity: Optional[Callable[[float], float]] = None
+    acceleration: Optional[Callable[[float], float]] = None
+    kind = MOTION
+
+    def validated(self, who, q0, qd0):
+        for name in ("position", "velocity", "acceleration"):
+            f = getattr(self, name)
+            if f is None:
+                raise ValueError(f"{who}: a prescribed joint motion needs its {name} (a function "
+                                 f"of time; give position, velocity and acceleration)")
+            if not callable(f):
+                raise ValueError(f"{who}: prescribed {name} must be a function of time")
+            _scalar_of(who, f"prescribed {name}(0)", f(0.0))
+        eps = 1e-5
+        for t in (0.0, 0.37, 1.0):
+            for name, f, deriv in (("velocity", self.position, self.velocity),
+                                   ("acceleration", self.velocity, self.acceleration)):
+                numeric = (_scalar_of(who, name, f(t + eps))
+                           - _scalar_of(who, name, f(t - eps))) / (2 * eps)
+                given = _scalar_of(who, f"prescribed {name}({t:g})", deriv(t))
+                if abs(given - numeric) > 1e-4 * max(1.0, abs(numeric)):
+                    raise ValueError(f"{who}: prescribed {name}({t:g}) = {given} contradicts the "
+                                     f"derivative of the motion, {numeric}")
+        return dict(kind=MOTION, function=(self.position, self.velocity, self.acceleration),
+                    stiffness=0.0, damping=0.0, rest=0.0)
+
+    def initial(self):
+        """(q(0), q'(0)): the joint starts on the prescribed motion."""
+        return float(np.asarray(self.position(0.0), dtype=float).reshape(-1)[0]), \
+            float(np.asarray(self.velocity(0.0), dtype=float).reshape(-1)[0])
+
+
+DRIVE_CLASSES = (JointForce, SpringDamper, JointMotion)
+
+
+def validated_drive(who, drive, q0, qd0):
+    """The drive's checked parameters (None for no drive); ValueError naming the joint."""
+    if drive is None:
+        return None
+    if not isinstance(drive, DRIVE_CLASSES):
+        raise ValueError(f"{who}: drive must be a JointForce, SpringDamper or JointMotion (or "
+                         f"None), got {type(drive).__name__}")
+    return drive.validated(who, q0, qd0)

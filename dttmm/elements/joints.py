@@ -1,0 +1,147 @@
+"""Joints with free coordinates: revolute, universal and prismatic (docs/joints.md).
+
+Each joins its parent's attachment point (the parent's output section, frame A_P) to its child's
+input point.  Axes are unit vectors, normalized here; a joint's coordinates q (angles in rad, a
+slide in m) start at the given values and rates, or on a prescribed motion's:
+
+  RevoluteJoint(axis):            A_child = A_P Rot(n, q) R0,  n = axis in the parent's frame
+                                  (the same axis R0^T n is fixed in the child); the child's input
+                                  point is the attachment point.
+  UniversalJoint(axis1, axis2):   A_child = A_P Rot(n1, q1) R0 Rot(n2, q2),  n1 in the parent's
+                                  frame, n2 in the child's; n1 and R0 n2 perpendicular.  The
+                                  child cannot turn about n1 x (A_child n2).
+  PrismaticJoint(axis):           A_child = A_P R0; the child's input point sits at the
+                                  attachment point + A_P n q (it slides along n, fixed in the
+                                  parent, and does not turn relative to the parent).
+
+R0 is the child's rotation relative to the parent at q = 0: the identity, or, when the child
+body is given an initial rotation, whatever makes that rotation hold at the initial q.  A drive
+(elements/drives.py) acts on each coordinate: a generalized force, a spring-damper, or a
+prescribed motion.
+"""
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ._checks import finite_scalar, finite_vector
+from .drives import JointMotion, validated_drive
+
+REVOLUTE, UNIVERSAL, PRISMATIC = 3, 4, 5      # Model.hinge_kind (declared in kinds.py)
+
+
+def _label(joint, index):
+    where = f"hinge {index}" if index is not None else "hinge"
+    kind = type(joint).__name__
+    return f"{kind} '{joint.name}' ({where})" if joint.name else f"{kind} ({where})"
+
+
+def unit_axis(who, argument, value):
+    v = finite_vector(who, argument, value)
+    norm = np.linalg.norm(v)
+    if norm < 1e-12:
+        raise ValueError(f"{who}: {argument} must be a nonzero vector, got {v}")
+    return v / norm
+
+
+def _coordinates(who, values, rates, drives, names):
+    """Initial coordinates and rates, from the arguments or from a prescribed motion."""
+    q0, qd0, checked = [], [], []
+    for i, (q, qd, drive, name) in enumerate(zip(values, rates, drives, names)):
+        q = finite_scalar(who, name[0], q)
+        qd = finite_scalar(who, name[1], qd)
+        if isinstance(drive, JointMotion):
+            d = validated_drive(who, drive, q, qd)
+            qm, qdm = drive.initial()
+            if (q != 0.0 and abs(q - qm) > 1e-12) or (qd != 0.0 and abs(qd - qdm) > 1e-12):
+                raise ValueError(f"{who}: {name[0]} = {q}, {name[1]} = {qd} contradict the "
+                                 f"prescribed motion's ({qm}, {qdm}) at t = 0; leave them 0")
+            q, qd = qm, qdm
+        else:
+            d = validated_drive(who, drive, q, qd)
+        q0.append(q)
+        qd0.append(qd)
+        checked.append(d)
+    return q0, qd0, checked
+
+
+def _common(axis1, axis2, q0, qd0, drives):
+    return dict(rotation=np.eye(3), k_t=np.zeros((3, 3)), c_t=np.zeros((3, 3)),
+                k_r=np.zeros((3, 3)), c_r=np.zeros((3, 3)), axis1=axis1, axis2=axis2,
+                q0=np.array(q0 + [0.0] * (2 - len(q0))),
+                qd0=np.array(qd0 + [0.0] * (2 - len(qd0))), drives=tuple(drives))
+
+
+@dataclass(frozen=True, eq=False)
+class RevoluteJoint:
+    """A hinge about one axis (parent frame); angle (rad) and rate (rad/s) at t = 0; drive on
+    the angle (JointForce, SpringDamper, JointMotion or None)."""
+    axis: object
+    angle: float = 0.0
+    rate: float = 0.0
+    drive: Optional[object] = None
+    name: str = ""
+    kind = REVOLUTE
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        n = unit_axis(who, "axis", self.axis)
+        q0, qd0, drives = _coordinates(who, [self.angle], [self.rate], [self.drive],
+                                       [("angle", "rate")])
+        return _common(n, np.zeros(3), q0, qd0, drives)
+
+
+@dataclass(frozen=True, eq=False)
+class UniversalJoint:
+    """Two perpendicular hinges: axis1 fixed in the parent, axis2 fixed in the child; angles
+    (rad) and rates (rad/s) at t = 0 and a drive on each angle."""
+    axis1: object
+    axis2: object
+    angles: tuple = (0.0, 0.0)
+    rates: tuple = (0.0, 0.0)
+    drives: tuple = (None, None)
+    name: str = ""
+    kind = UNIVERSAL
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        n1 = unit_axis(who, "axis1", self.axis1)
+        n2 = unit_axis(who, "axis2", self.axis2)
+        for argument in ("angles", "rates", "drives"):
+            value = getattr(self, argument)
+            if not isinstance(value, (tuple, list)) or len(value) != 2:
+                raise ValueError(f"{who}: {argument} must be a pair (one per axis), got {value!r}")
+        q0, qd0, drives = _coordinates(who, self.angles, self.rates, self.drives,
+                                       [("angles[0]", "rates[0]"), ("angles[1]", "rates[1]")])
+        return _common(n1, n2, q0, qd0, drives)
+
+
+@dataclass(frozen=True, eq=False)
+class PrismaticJoint:
+    """A slider along one axis (parent frame): position (m) and rate (m/s) at t = 0 and a drive
+    on the slide."""
+    axis: object
+    position: float = 0.0
+    rate: float = 0.0
+    drive: Optional[object] = None
+    name: str = ""
+    kind = PRISMATIC
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        n = unit_axis(who, "axis", self.axis)
+        q0, qd0, drives = _coordinates(who, [self.position], [self.rate], [self.drive],
+                                       [("position", "rate")])
+        return _common(n, np.zeros(3), q0, qd0, drives)
+
+
+def rotation_about(axis, angle):
+    """Rot(n, q) = exp(q n^) for a unit axis n (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+def coordinate_count(kind):
+    """Free coordinates of a joint kind."""
+    return {REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}.get(kind, 0)
+
