@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.chains import binary_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
@@ -273,6 +273,18 @@ def main(argv=None):
     fig["rigid_chain_cost_slope"] = float(np.polyfit(np.log([sizes[i] for i in big]),
                                                      np.log([rigid[i] for i in big]), 1)[0])
     chart_scaling(os.path.join(out_dir, "scaling.png"), sizes, rigid, beams, reference)
+
+    # binary trees of 2^d - 1 unit links against chains of as many links, each ratio of a tree
+    # and a chain measured back to back (median of 5 pairs)
+    for depth in ((6, 8) if quick else (6, 8, 10)):
+        n = 2 ** depth - 1
+        tree, chain = binary_tree(depth), rigid_chain(n)
+        run_steps = max(100, min(2000, 60000 // n))
+        pairs = [(median_us_per_step(tree, run_steps, 1), median_us_per_step(chain, run_steps, 1))
+                 for _ in range(5)]
+        fig[f"binary_tree_{n}_us_per_step"] = float(np.median([a for a, _ in pairs]))
+        fig[f"binary_tree_{n}_over_chain"] = float(np.median([a / b for a, b in pairs]))
+    print({k: v for k, v in fig.items() if k.startswith("binary_tree")}, flush=True)
 
     fig["jit_warmup_s_warm_cache"] = jit_warmup_seconds(cold=False)
     fig["jit_warmup_s_cold_cache"] = None if quick else jit_warmup_seconds(cold=True)

@@ -1,12 +1,17 @@
 """Per-step cost of two checkouts of dttmm, A against B, in alternating processes.
 
-    python benchmarks/step_ab.py A_DIR B_DIR [--pairs 9] [--json FILE]
+    python benchmarks/step_ab.py A_DIR B_DIR [--pairs 9] [--json FILE] [--in-process]
+
+--in-process: both checkouts' packages are copied under other names (dttmm_a, dttmm_b; the
+package imports itself relatively) into a temporary directory and imported into one process,
+which then alternates A and B run by run (the machine's drift between processes, which on these
+shared machines reaches 2x, then enters a pair only through the seconds between its two runs).
 
 For each system (the three-pendulum, rigid chains of 3, 100 and 1000 links) the two checkouts
 are timed in turn, A B A B ..., each time in a fresh process that imports that checkout's
 dttmm (warm numba cache, JIT warm-up run first).  A process measures the cost of one step as
 the difference of a long and a short run over the steps between (no setup, no recording), the
-median of 3.  The figure per system is the median over the pairs of the ratio A/B, so that the
+median of 5.  The figure per system is the median over the pairs of the ratio A/B, so that the
 machine's drift between pairs does not enter it.  Not a test: nothing is asserted.
 """
 import argparse
@@ -16,11 +21,11 @@ import statistics
 import subprocess
 import sys
 
-SYSTEMS = {          # name: (constructor expression, steps of the long run)
-    "three_pendulum": ("three_pendulum()", 4000),
-    "rigid_chain_3": ("rigid_chain(3)", 20000),
-    "rigid_chain_100": ("rigid_chain(100)", 1000),
-    "rigid_chain_1000": ("rigid_chain(1000)", 100),
+SYSTEMS = {          # name: (constructor expression, steps of the long run: ~0.1-0.3 s)
+    "three_pendulum": ("three_pendulum()", 40000),
+    "rigid_chain_3": ("rigid_chain(3)", 200000),
+    "rigid_chain_100": ("rigid_chain(100)", 5000),
+    "rigid_chain_1000": ("rigid_chain(1000)", 500),
 }
 
 _CHILD = r"""
@@ -32,7 +37,7 @@ steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
 short = max(1, steps // 5)
 costs = []
-for _ in range(3):
+for _ in range(5):
     a = simulate(model, steps * dt, dt, record_every=steps)
     b = simulate(model, short * dt, dt, record_every=short)
     costs.append((a.wall_time - b.wall_time) / (a.n_steps - b.n_steps))
@@ -49,6 +54,45 @@ def us_per_step(checkout, system):
     return float(out.stdout.strip().splitlines()[-1])
 
 
+def in_process(a_dir, b_dir, systems, pairs):
+    """{system: (median us A, median us B, [ratios])} with both packages in this process."""
+    import importlib
+    import shutil
+    import tempfile
+    import time
+    root = tempfile.mkdtemp(prefix="step_ab_")
+    for name, src in (("dttmm_a", a_dir), ("dttmm_b", b_dir)):
+        shutil.copytree(os.path.join(src, "dttmm"), os.path.join(root, name), symlinks=True)
+    sys.path.insert(0, root)
+    packages = [importlib.import_module(name) for name in ("dttmm_a", "dttmm_b")]
+    chains = [importlib.import_module(f"{name}.chains") for name in ("dttmm_a", "dttmm_b")]
+    out = {}
+    for system in systems:
+        expr, steps = SYSTEMS[system]
+        models = [eval(expr, vars(c)) for c in chains]                    # noqa: S307
+        dt = 1e-4
+        short = max(1, steps // 5)
+
+        def cost(i):
+            sim, model = packages[i].simulate, models[i]
+            t0 = time.perf_counter()
+            sim(model, steps * dt, dt, record_every=steps)
+            t1 = time.perf_counter()
+            sim(model, short * dt, dt, record_every=short)
+            t2 = time.perf_counter()
+            return 1e6 * ((t1 - t0) - (t2 - t1)) / (steps - short)
+
+        for i in (0, 1):
+            packages[i].simulate(models[i], 5 * dt, dt)                   # compile, caches
+        a_us, b_us = [], []
+        for _ in range(pairs):
+            a_us.append(cost(0))
+            b_us.append(cost(1))
+        out[system] = (a_us, b_us)
+    shutil.rmtree(root, ignore_errors=True)
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("a")
@@ -56,9 +100,22 @@ def main(argv=None):
     ap.add_argument("--pairs", type=int, default=9)
     ap.add_argument("--systems", nargs="+", default=list(SYSTEMS))
     ap.add_argument("--json")
+    ap.add_argument("--in-process", action="store_true",
+                    help="both packages in one process, alternating run by run")
     args = ap.parse_args(argv)
     out = {}
-    for system in args.systems:
+    if args.in_process:
+        for system, (a_us, b_us) in in_process(args.a, args.b, args.systems, args.pairs).items():
+            ratios = [a / b for a, b in zip(a_us, b_us)]
+            out[system] = dict(a_us_per_step=statistics.median(a_us),
+                               b_us_per_step=statistics.median(b_us),
+                               ratio_a_over_b=statistics.median(ratios), ratio_min=min(ratios),
+                               ratio_max=max(ratios), pairs=args.pairs, in_process=True)
+            print(f"{system} (one process): A {out[system]['a_us_per_step']:.3f} us, "
+                  f"B {out[system]['b_us_per_step']:.3f} us, "
+                  f"A/B {out[system]['ratio_a_over_b']:.3f} (min {min(ratios):.3f}, "
+                  f"max {max(ratios):.3f}, {args.pairs} pairs)", flush=True)
+    for system in ([] if args.in_process else args.systems):
         us_per_step(args.a, system), us_per_step(args.b, system)     # fill both numba caches
         a_us, b_us, ratios = [], [], []
         for _ in range(args.pairs):

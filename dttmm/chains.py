@@ -1,8 +1,11 @@
-"""Ready-made chains used by the examples, tests and benchmarks."""
+"""Ready-made chains and trees used by the examples, tests and benchmarks."""
 import numpy as np
 
 from .elements import BallJoint, FixedHinge, RigidBody
-from .model import build_chain
+from .model import System, build_chain
+
+# +90 degrees about world y: a body's x axis along world -z
+TURNED_ABOUT_Y = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 
 
 def unit_link(**kwargs):
@@ -57,3 +60,39 @@ def stiff_cantilever(n_elements, length=5.0):
                                         mass_per_length=2.0, polar_inertia_per_length=1e-3,
                                         modes_per_plane=2)]
     return build_chain(elements)
+
+
+def five_link_tree(gravity=(0.0, -9.81, 0.0)):
+    """Five unit links joined by ball joints (examples/tree.py): link 1 on the ground at the
+    origin; links 2 and 4 both on link 1's output point; link 3 on link 2's, link 5 on link 4's.
+    Links 1-3 along +x; links 4 and 5 turned by +90 deg about world y (along -z: link 4's output
+    at (1, 0, -1), link 5's at (1, 0, -2)).  All at rest except link 3, world angular velocity
+    [0, 0.1, 0] rad/s, and link 5, [0.2, 0, 0] rad/s."""
+    system = System(gravity=gravity)
+    system.add(unit_link(name="link1"), BallJoint(name="joint1"))
+    system.add(unit_link(name="link2"), BallJoint(name="joint2"), parent="link1")
+    system.add(unit_link(name="link3", angular_velocity=[0.0, 0.1, 0.0]),
+               BallJoint(name="joint3"), parent="link2")
+    system.add(unit_link(name="link4", rotation=TURNED_ABOUT_Y), BallJoint(name="joint4"),
+               parent="link1")
+    system.add(unit_link(name="link5", rotation=TURNED_ABOUT_Y, angular_velocity=[0.2, 0.0, 0.0]),
+               BallJoint(name="joint5"), parent="link4")
+    return system.build()
+
+
+def binary_tree(depth, gravity=(0.0, -9.81, 0.0)):
+    """2^depth - 1 unit links joined by ball joints, each carrying two children on its output
+    point (node i's parent is (i - 1) // 2, breadth first), the root on the ground at the
+    origin.  The children are turned alternately by +-0.3 rad about world y, so the tree
+    spreads; every fifth link spins at [0, 0, 0.3] rad/s, the rest are at rest."""
+    if int(depth) != depth or depth < 1:
+        raise ValueError(f"binary_tree: depth must be an integer >= 1, got {depth!r}")
+    c, s = np.cos(0.3), np.sin(0.3)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    system = System(gravity=gravity)
+    system.add(unit_link(name="n0"), BallJoint())
+    for i in range(1, 2 ** int(depth) - 1):
+        system.add(unit_link(name=f"n{i}", rotation=turn if i % 2 else turn.T,
+                             angular_velocity=[0.0, 0.0, 0.3] if i % 5 == 0 else None),
+                   BallJoint(), parent=f"n{(i - 1) // 2}")
+    return system.build()

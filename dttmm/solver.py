@@ -15,7 +15,7 @@ from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
 from .elements.hinges import ELASTIC, FIXED, HINGE_PARAM_SIZE, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import ball_chain, em_step
+from .kernels import ball_chain, em_step, tree
 from .kernels import step as kstep
 from .kernels.loop import (OK, SINGULAR, UNSUPPORTED, Inputs, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
@@ -91,7 +91,8 @@ class Workspace:
             red_v=np.zeros((n, 6, 7)), red_phi=np.zeros((n, 3, 7)), red_s=np.zeros((n + 1, 3, 3)),
             red_p=np.zeros((n + 1, 3)), red_tinv=np.zeros((n, 3, 3)), red_t=np.zeros((n, 3)),
             red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_st, 12, 6)),
-            dir_o=np.zeros((n_st, 12)))
+            dir_o=np.zeros((n_st, 12)), port_s=np.zeros((n, 3, 3)), port_p=np.zeros((n, 3)),
+            aq_out=np.zeros((n, 6)))
         self.beams = beam_tables(model)
 
 
@@ -103,7 +104,8 @@ def kernel_params(model, beams=None):
                   beams=beam_tables(model) if beams is None else beams,
                   locked=model.ground_locked, lock_rel=lock_rel,
                   mass_center_inertia=model.body_mass_center_inertia,
-                  tip_pinned=bool(model.tip_pinned))
+                  tip_pinned=bool(model.tip_pinned),
+                  parent=np.ascontiguousarray(model.parent, dtype=np.int64))
 
 
 def beam_tables(model):
@@ -148,6 +150,8 @@ def _mode(model, method, full_state):
     if method not in METHODS:
         raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
     reduced = model.all_ball and not full_state
+    if not model.is_chain:          # (check_supported has refused the rest)
+        return kstep.RICCATI_TREE
     if method == "direct":
         return kstep.DIRECT_REDUCED if reduced else kstep.DIRECT_FULL
     return kstep.RICCATI_REDUCED if reduced else kstep.RICCATI_FULL
@@ -249,7 +253,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                 raise DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
                                       f"s: {err.cause}", err.partial) from None
         return richardson_extrapolation(*runs)
-    check_supported(model, scheme)
+    check_supported(model, scheme, method, full_state)
     user_model = model
     model, keep = kernel_chain(user_model)
     mode = _mode(model, method, full_state)
@@ -294,12 +298,17 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     # fused loop (kernels/ball_chain.py), the energy-momentum scheme its own, the rest the
     # general loop (kernels/step.py); each records what its scheme defines
     keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
-    fused = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_REDUCED and scheme == "newmark"
+    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+             and scheme == "newmark"
              and all(BODY_KIND[int(c)].fused for c in model.body_kind))
     if scheme == "energy_momentum":
         loop_name, loop, runner = "energy-momentum", em_step.energy_momentum_loop(n), run_steps
         state.v_c[:] = _initial_mass_center_velocities(model, state.rot, state.omega)
         keys.append("v_c")
+    elif fused and mode == kstep.RICCATI_TREE:
+        loop_name, runner = "ball-tree", run_steps_no_alloc
+        loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
+        ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
     elif fused:
         loop_name, runner = "ball-chain", run_steps_no_alloc
         loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
@@ -381,22 +390,16 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
 
 
 FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)
-_MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full"]
+_MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full", "riccati-tree"]
 
 
-def check_supported(model, scheme):
-    """Refuse, before a run, what the solver does not implement for this model: a tree (so
-    far), and an element kind whose declaration (elements/kinds.py) does not list the scheme;
-    the energy-momentum and paper's schemes need a fixed ground."""
+def check_supported(model, scheme, method="riccati", full_state=False):
+    """Refuse, before a run, what the solver does not implement for this model: an element
+    kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
+    and paper's schemes need a fixed ground; a tree runs (so far) with the Newmark scheme, the
+    Riccati sweep, moment-free joints and every child on its parent's output point."""
     if not model.is_chain:
-        k = next(k for k in range(model.n_bodies)
-                 if model.parent[k] != k - 1 or model.attachment[k] != 0)
-        p = model.parent[k]
-        where = "the ground" if p < 0 else f"body '{model.body_names[p]}'"
-        raise ValueError(f"simulate: body '{model.body_names[k]}' is joined to {where} at "
-                         f"attachment point {int(model.attachment[k])}, not to the output of "
-                         f"the body before it: the model is a tree, and the solver runs "
-                         f"chains only so far (build the chain with build_chain)")
+        _check_tree(model, scheme, method, full_state)
     where = f"simulate(scheme='{scheme}')"
     for k in range(model.n_bodies):
         for role, kinds, code, name in (("body", BODY_KIND, model.body_kind[k],
@@ -407,6 +410,10 @@ def check_supported(model, scheme):
             if kind is None:
                 raise ValueError(f"simulate: {role} '{name}' has kind code {int(code)}, which no "
                                  f"element kind declares (elements/kinds.py)")
+            if not kind.schemes:
+                raise ValueError(f"simulate: {role} '{name}' is {kind.what} ({kind.name}), "
+                                 f"which DT-TMM does not run yet; the Newton-Euler reference "
+                                 f"does (dttmm.reference.simulate_reference)")
             if scheme not in kind.schemes:
                 covered = [kd.name for kd in kinds.values() if scheme in kd.schemes]
                 raise ValueError(f"{where}: {role} '{name}' is {kind.what} ({kind.name}); the "
@@ -415,6 +422,34 @@ def check_supported(model, scheme):
     if scheme != "newmark" and model.ground_motion is not None:
         raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
                          f"fixed ground (use scheme='newmark')")
+
+
+def _check_tree(model, scheme, method, full_state):
+    k = next((k for k in range(model.n_bodies)
+              if model.parent[k] != k - 1 or model.attachment[k] != 0), 0)
+    p = model.parent[k]
+    branch = (f"body '{model.body_names[k]}' hangs from "
+              + ("the ground" if p < 0 else f"body '{model.body_names[p]}'"))
+    if method == "direct":
+        raise ValueError(f"simulate: method='direct' multiplies the transfer matrices out along "
+                         f"a chain and does not extend to the branches of a tree ({branch}); use "
+                         f"method='riccati'")
+    if scheme != "newmark":
+        raise ValueError(f"simulate(scheme='{scheme}'): the scheme runs chains; the model is a "
+                         f"tree ({branch}); use scheme='newmark'")
+    if full_state:
+        raise ValueError(f"simulate: full_state=True runs the 12-entry sweep of a chain; the "
+                         f"model is a tree ({branch})")
+    for j in range(model.n_bodies):
+        kind = JOINT_KIND.get(int(model.hinge_kind[j]))
+        if kind is not None and not kind.moment_free:
+            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' is {kind.what} "
+                             f"({kind.name}); trees run with moment-free joints (BallJoint) "
+                             f"only so far ({branch})")
+        if model.attachment[j] != 0:
+            raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
+                             f"attachment point of '{model.body_names[model.parent[j]]}'; trees "
+                             f"run with every body on its parent's output point only so far")
 
 
 def _station_histories(model, state, independent):
@@ -522,7 +557,7 @@ def _singular_cause(model, mode, status, where):
     """status: j + 1 for element j of the full-state sweeps (2k: hinge k, 2k + 1: body k), or
     k + 1 for body k of the reduced sweeps; past the last element: the tip's equations."""
     j = status - 1
-    reduced = mode in (kstep.RICCATI_REDUCED, kstep.DIRECT_REDUCED)
+    reduced = mode in (kstep.RICCATI_REDUCED, kstep.DIRECT_REDUCED, kstep.RICCATI_TREE)
     n_el = model.n_bodies if reduced else 2 * model.n_bodies
     if j >= n_el:
         return f"{where}: the boundary equations at the free tip are singular"
@@ -585,6 +620,26 @@ def richardson_extrapolation(coarse, fine):
                    n_steps=coarse.n_steps + fine.n_steps, info=info, **fields)
 
 
+def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_ground):
+    """(T, n, 3) input points' positions and velocities of a tree, parents first: body k's
+    input is its parent's attachment point (the output point, rho, or a named point fixed in
+    the parent) plus its joint's deflection."""
+    r_in, v_in = np.empty_like(rho), np.empty_like(rho)
+    for k in range(model.n_bodies):
+        p = model.parent[k]
+        if p < 0:
+            r_in[:, k], v_in[:, k] = r_ground + defl[:, k], v_ground + defl_rate[:, k]
+            continue
+        if model.attachment[k] == 0:
+            arm, arm_dot = rho[:, p], rho_dot[:, p]
+        else:
+            arm = rot[:, p] @ model.attachment_point[k]
+            arm_dot = np.cross(omega[:, p], arm)
+        r_in[:, k] = r_in[:, p] + arm + defl[:, k]
+        v_in[:, k] = v_in[:, p] + arm_dot + defl_rate[:, k]
+    return r_in, v_in
+
+
 def _sum_before(x):
     """(T, n, 3): for each body, the sum of x over the bodies before it."""
     out = np.zeros_like(x)
@@ -621,8 +676,12 @@ def _result(model, t, samples, wall, n_steps, info):
                                                       omega[:, k], eta[:, j0:j1],
                                                       eta_d[:, j0:j1])
     # down the chain: r_in,k = r_ground + sum_{j<k} (d_j + rho_j) + d_k (d: hinge deflections)
-    r_in = r_prev[:, None] + _sum_before(defl + rho) + defl
-    v_in = v_prev[:, None] + _sum_before(defl_rate + rho_dot) + defl_rate
+    if model.is_chain:
+        r_in = r_prev[:, None] + _sum_before(defl + rho) + defl
+        v_in = v_prev[:, None] + _sum_before(defl_rate + rho_dot) + defl_rate
+    else:
+        r_in, v_in = _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_prev,
+                                  v_prev)
     if v_st is not None:                    # the paper's scheme: a beam's input point's own
         beams = model.body_kind == BEAM
         v_in[:, beams] = v_st[:, :n][:, beams]

@@ -11,6 +11,12 @@ from numba import njit
 CONTRACT = {"contract"}
 
 
+def loop_piece(fn):
+    """A loop variant's piece (kernels/loop.py), inlined by numba into the skeleton: each piece
+    takes the run's structures, which a call would pass as hundreds of scalars."""
+    return njit(cache=True, inline='always', fastmath=CONTRACT)(fn)
+
+
 def no_alloc_kernel(fn):
     """njit(cache=True) without numba's reference counting (its `_nrt=False` option), for the
     step's kernels that allocate nothing.  Every array argument and every view then costs no

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from ..elements import BEAM, RIGID
-from . import CONTRACT, no_alloc_kernel
+from . import CONTRACT, loop_piece
 from .beam import ball_map_work_shape, beam_ball_map
 from .body import kappa_values, rigid_point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt,
@@ -185,7 +185,7 @@ def guess_from_stations(z, aq):
         aq[n, 3 + i] = z[2 * n, 9 + i]
 
 
-@no_alloc_kernel
+@loop_piece
 def _predict(loop, run, s, _):
     """phi* of every body by the constant-acceleration predictor, with the integrator's offsets
     of the rotations and the modal coordinates."""
@@ -209,7 +209,7 @@ def _predict(loop, run, s, _):
             eta_dd_star[i] = c1 * (eta[i] + eta_dd_star[i]) + w1e[i]
 
 
-@no_alloc_kernel
+@loop_piece
 def _iterate(loop, run, s, it):
     """One forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
     (recovery, beams' modal accelerations); returns (status, detail, change)."""
@@ -286,7 +286,7 @@ def _iterate(loop, run, s, it):
     return OK, 0, change
 
 
-@no_alloc_kernel
+@loop_piece
 def _adopt(loop, run, s, it):
     phi_star, phi_new = loop.per_body[2], loop.per_body[3]
     for k in range(phi_star.shape[0]):
@@ -297,7 +297,7 @@ def _adopt(loop, run, s, it):
         eta_dd_star[i] = eta_dd_new[i]
 
 
-@no_alloc_kernel
+@loop_piece
 def _update(loop, run, s, _):
     """Rotations and modal coordinates over the step from the solution; every rate finite?"""
     state = run.state
@@ -331,7 +331,7 @@ def _update(loop, run, s, _):
     return finite
 
 
-@no_alloc_kernel
+@loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
     phi_g = loop.vecs[4]
@@ -349,7 +349,7 @@ def _record(loop, run, s, slot):
         rec.eta_d[slot, i] = state.eta_d[i]
 
 
-@no_alloc_kernel
+@loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
     if n_steps > 0:

@@ -13,9 +13,8 @@ mass-centre velocity; inputs.force and inputs.torque are the applied loads' step
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from . import CONTRACT
+from . import loop_piece
 from ..elements import RIGID
 from ..elements.hinges import BALL, FIXED
 from .em_body import em_body_kinematics, rigid_body_transfer_em
@@ -38,7 +37,7 @@ def energy_momentum_loop(n):
                               np.zeros(3))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _predict(loop, run, s, _):
     """The guess: phi = h w_n + h^2 w'_n / 2, in b = 2 phi / h^2 units."""
     state, h = run.state, run.settings.h
@@ -50,7 +49,7 @@ def _predict(loop, run, s, _):
         z_star[2 * k + 2, 3:6] = b
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _iterate(loop, run, s, it):
     """Every element's step transfer about the guess, the sweep; returns (status, detail,
     change) with change the largest update of a rotation increment (rad)."""
@@ -76,7 +75,8 @@ def _iterate(loop, run, s, it):
                                run.inputs.torque[s, k], u[2 * k + 1])
     if not np.all(np.isfinite(u)):
         return NOT_FINITE, 0, 0.0
-    status = solve_step(run.settings.mode, params.tip_pinned, sweep, loop.root_f, z)
+    status = solve_step(run.settings.mode, params.tip_pinned, params.parent, sweep,
+                        loop.root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     change = 0.0
@@ -86,12 +86,12 @@ def _iterate(loop, run, s, it):
     return OK, 0, change
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _adopt(loop, run, s, it):
     loop.z_star[:, :] = run.state.z
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _update(loop, run, s, _):
     """Rotations, angular velocities and mass-centre velocities over the step."""
     state, h = run.state, run.settings.h
@@ -115,7 +115,7 @@ def _update(loop, run, s, _):
     return finite
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
     rec.rot[slot] = state.rot
@@ -125,7 +125,7 @@ def _record(loop, run, s, slot):
     rec.z[slot] = state.z
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _finish(loop, run, n_steps, _):
     pass
 

@@ -38,6 +38,7 @@ Params = namedtuple("Params", [
     "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame
     "mass_center_inertia",  # (n, 3, 3) J_C in body axes (the energy-momentum step)
     "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
+    "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
 ])
 
 Settings = namedtuple("Settings", [
@@ -63,6 +64,7 @@ Sweep = namedtuple("Sweep", [
     "split", "s", "p", "tinv", "t", "g", "gv",       # full-state Riccati sweep (sweep.py)
     "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
     "dir_z", "dir_o",                                # direct full-state sweep
+    "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/tree.py)
 ])
 
 Inputs = namedtuple("Inputs", [
@@ -102,7 +104,7 @@ def _piece(name):
         raise NotImplementedError(f"{name} runs compiled only")
     stub.__name__ = name
 
-    @overload(stub, jit_options=dict(cache=True, fastmath=CONTRACT))
+    @overload(stub, inline='always', jit_options=dict(cache=True, fastmath=CONTRACT))
     def _select(loop, run, s, i):
         cls = loop.instance_class if isinstance(loop, types.BaseNamedTuple) else None
         impl = _VARIANTS.get(cls, {}).get(name)

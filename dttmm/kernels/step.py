@@ -22,7 +22,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from . import CONTRACT, loop_piece
 from ..elements import BEAM, RIGID
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from .beam import beam_transfer
@@ -32,10 +32,10 @@ from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import inv3, matmul_into
 from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
-                    riccati_full, riccati_reduced)
+                    riccati_full, riccati_reduced, riccati_tree_reduced, write_tree_stations)
 from .sweep import BALL as EL_BALL
 
-RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL = 0, 1, 2, 3
+RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE = 0, 1, 2, 3, 4
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -255,9 +255,10 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def solve_step(mode, tip_pinned, sweep, root_f, z):
+def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     """Solve the assembled step (sweep.kind, sweep.u, sweep.known_loads) into z (the stations'
-    states) by the mode's sweep; returns 0 or a singularity code (sweep.py)."""
+    states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
+    bodies' parents (RICCATI_TREE; a chain's are k - 1)."""
     sw = sweep
     if mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
@@ -268,6 +269,8 @@ def solve_step(mode, tip_pinned, sweep, root_f, z):
     n = sw.red_v.shape[0]
     for k in range(n):
         fold_ball_body(sw.u[2 * k + 1], sw.red_v[k], sw.red_phi[k])
+    if mode == RICCATI_TREE:
+        return _solve_tree(sw, parent, root_f, z)
     if mode == RICCATI_REDUCED:
         status = riccati_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_s, sw.red_p,
                                  sw.red_tinv, sw.red_t, sw.red_aq)
@@ -291,6 +294,25 @@ def solve_step(mode, tip_pinned, sweep, root_f, z):
         z[2 * k + 1, 9:12] = red_aq[k, 3:6]
         z[2 * k + 2, 0:3] = red_aq[k + 1, 0:3]
         z[2 * k + 2, 9:12] = red_aq[k + 1, 3:6]
+    return 0
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _solve_tree(sw, parent, root_f, z):
+    """The reduced tree sweep (kernels/tree.py) on the folded maps, into z."""
+    n = sw.red_v.shape[0]
+    status = riccati_tree_reduced(sw.red_v, parent, root_f[0:3], sw.red_s, sw.red_p, sw.red_tinv,
+                                  sw.port_s, sw.port_p, sw.red_aq, sw.aq_out)
+    if status != 0:
+        return status
+    phi = np.empty((n, 3))
+    for k in range(n):
+        for i in range(3):
+            x = sw.red_phi[k, i, 6]
+            for c in range(6):
+                x += sw.red_phi[k, i, c] * sw.red_aq[k, c]
+            phi[k, i] = x
+    write_tree_stations(parent, root_f[0:3], root_f[3:6], sw.red_aq, sw.aq_out, phi, z)
     return 0
 
 
@@ -335,7 +357,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque)
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    status = solve_step(settings.mode, params.tip_pinned, sweep, root_f, state.z)
+    status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
+                        state.z)
     _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
     return status
 
@@ -353,7 +376,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
                 eta_acc[i] = eta_map[i] @ zin
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _predict(loop, run, s, _):
     """The general loop's guess for step s: every body's phi* by the constant-acceleration
     predictor (a locked body's from the ground's motion), the integrator's offsets of every
@@ -434,7 +457,7 @@ def _predict(loop, run, s, _):
     loop.root_f[3:6] = g_wd
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _iterate(loop, run, s, it):
     """Linearize every element about the guess, sweep, and recover every body's phi and the
     beams' modal accelerations; returns (status, detail, change): change is the largest update
@@ -452,7 +475,8 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(run.sweep.u):
         return NOT_FINITE, 0, 0.0
-    status = solve_step(run.settings.mode, params.tip_pinned, run.sweep, loop.root_f, z)
+    status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
+                        loop.root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
@@ -476,7 +500,7 @@ def _iterate(loop, run, s, it):
     return OK, 0, change
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _adopt(loop, run, s, it):
     """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''*."""
     c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
@@ -491,7 +515,7 @@ def _adopt(loop, run, s, it):
                              lam[k], w[k], wd[k], dw[k], dwd[k])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _update(loop, run, s, _):
     """Advance the histories over step s from the solution in state.z: rotations (a locked
     body's from the ground's), elastic deflections, modal coordinates, and in the paper's scheme
@@ -550,7 +574,7 @@ def _update(loop, run, s, _):
     return finite
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
     rec.rot[slot] = state.rot
@@ -566,7 +590,7 @@ def _record(loop, run, s, slot):
         rec.v_c[slot] = loop.histories[4]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@loop_piece
 def _finish(loop, run, n_steps, _):
     pass
 

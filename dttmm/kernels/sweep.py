@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT
-from .mat3 import inv3, least_norm_solve3, matmul_into, t_inverse, t_of_mat
+from .mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -406,3 +406,134 @@ def direct_reduced(v, a_root, tip_pinned, aq):
         if abs(aq[n, first + i]) > DIRECT_TOLERANCE * scale:
             return LOST_ACCURACY
     return 0
+
+
+# Trees of bodies joined by ball joints: the reduced Riccati sweep from the leaves to the root
+# (docs/assembly.md, "Trees").
+#
+# Every body k has the reduced map of a body between moment-free cuts (the same as in a chain:
+# kernels/ball_chain.py::ball_body_map, kernels/beam.py::beam_ball_map, or folded from its
+# transfer, sweep.py::fold_ball_body):
+#     [a_O; q_O] = V [a_I; q_I; 1],  V = [[V_aa, V_aq, v_a], [V_qa, V_qq, v_q]].
+# At its output point O its children hang by ball joints: each child's input point is O
+# (a_Ic = a_O) and the force body k exerts at O is the sum of the forces on the children,
+# q_O = sum_c q_Ic.  Sweeping from the leaves, every child's input already carries
+# q_Ic = S_c a_Ic + P_c, so q_O = S_O a_O + P_O with S_O = sum_c S_c, P_O = sum_c P_c (S_O = 0,
+# P_O = 0 at a free leaf), and body k's map gives its own input's relation:
+#     V_qa a_I + V_qq q_I + v_q = S_O (V_aa a_I + V_aq q_I + v_a) + P_O
+#     q_I = S_I a_I + P_I,  T = V_qq - S_O V_aq,  S_I = T^-1 (S_O V_aa - V_qa),
+#                           P_I = T^-1 (S_O v_a + P_O - v_q).
+# The roots' inputs are the ground point (a_I = the ground's acceleration); the recovery runs from
+# the root to the leaves: q_I = S_I a_I + P_I, [a_O; q_O] = V [a_I; q_I; 1], a_Ic = a_O.
+# Bodies are numbered parents first (Model.parent[k] < k), so the sweep runs k = n-1 .. 0 and the
+# recovery k = 0 .. n-1: O(n) per step, 3 x 3 blocks as in a chain.
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def tree_reduced_step(v, s_o, p_o, s_i, p_i, t_inv, t, num):
+    """Body k of the leaves-to-root sweep (the comment "Trees" above): from its map v (6 x 7) and its
+    output's q_O = S_O a_O + P_O, its input's q_I = S_I a_I + P_I and T^-1.  t, num: 3 x 3
+    scratch.  Returns det T (0: singular)."""
+    r0 = p_o[0] - v[3, 6]
+    r1 = p_o[1] - v[4, 6]
+    r2 = p_o[2] - v[5, 6]
+    for i in range(3):
+        for j in range(3):
+            t[i, j] = v[3 + i, 3 + j] - (s_o[i, 0] * v[0, 3 + j] + s_o[i, 1] * v[1, 3 + j]
+                                         + s_o[i, 2] * v[2, 3 + j])
+            num[i, j] = (s_o[i, 0] * v[0, j] + s_o[i, 1] * v[1, j] + s_o[i, 2] * v[2, j]
+                         - v[3 + i, j])
+    r0 += s_o[0, 0] * v[0, 6] + s_o[0, 1] * v[1, 6] + s_o[0, 2] * v[2, 6]
+    r1 += s_o[1, 0] * v[0, 6] + s_o[1, 1] * v[1, 6] + s_o[1, 2] * v[2, 6]
+    r2 += s_o[2, 0] * v[0, 6] + s_o[2, 1] * v[1, 6] + s_o[2, 2] * v[2, 6]
+    det = inv3(t, t_inv)
+    if det == 0.0:
+        return det
+    mm3_into(t_inv, num, s_i)
+    for i in range(3):
+        p_i[i] = t_inv[i, 0] * r0 + t_inv[i, 1] * r1 + t_inv[i, 2] * r2
+    return det
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def tree_reduced_recover(v, s_i, p_i, a0, a1, a2, aq_in, aq_out):
+    """Body k's input [a_I; q_I] (q_I = S_I a_I + P_I, a_I = (a0, a1, a2)) and output
+    [a_O; q_O] = V [a_I; q_I; 1]."""
+    aq_in[0] = a0
+    aq_in[1] = a1
+    aq_in[2] = a2
+    for i in range(3):
+        aq_in[3 + i] = s_i[i, 0] * a0 + s_i[i, 1] * a1 + s_i[i, 2] * a2 + p_i[i]
+    for r in range(6):
+        x = v[r, 6]
+        for c in range(6):
+            x += v[r, c] * aq_in[c]
+        aq_out[r] = x
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _clear_ports(port_s, port_p):
+    for k in range(port_p.shape[0]):
+        for i in range(3):
+            port_p[k, i] = 0.0
+            for j in range(3):
+                port_s[k, i, j] = 0.0
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _add_to_port(s_i, p_i, port_s, port_p):
+    for i in range(3):
+        port_p[i] += p_i[i]
+        for j in range(3):
+            port_s[i, j] += s_i[i, j]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def riccati_tree_reduced(v, parent, a_root, s_in, p_in, t_inv, port_s, port_p, aq_in, aq_out):
+    """The reduced sweep of a tree of bodies between ball joints (the comment "Trees" above): v (n, 6, 7)
+    every body's map; parent (n,) (-1: the ground point, whose acceleration is a_root).  Writes
+    every body's input and output [a; q] into aq_in, aq_out (n, 6).  Scratch: s_in, t_inv,
+    port_s (n, 3, 3), p_in, port_p (n, 3).  Returns 0, or k + 1 where body k's T is singular."""
+    n = v.shape[0]
+    t = np.empty((3, 3))
+    num = np.empty((3, 3))
+    _clear_ports(port_s, port_p)
+    for k in range(n - 1, -1, -1):
+        if tree_reduced_step(v[k], port_s[k], port_p[k], s_in[k], p_in[k], t_inv[k], t,
+                             num) == 0.0:
+            return k + 1
+        if parent[k] >= 0:
+            _add_to_port(s_in[k], p_in[k], port_s[parent[k]], port_p[parent[k]])
+    for k in range(n):
+        p = parent[k]
+        if p < 0:
+            tree_reduced_recover(v[k], s_in[k], p_in[k], a_root[0], a_root[1], a_root[2],
+                                 aq_in[k], aq_out[k])
+        else:
+            tree_reduced_recover(v[k], s_in[k], p_in[k], aq_out[p, 0], aq_out[p, 1],
+                                 aq_out[p, 2], aq_in[k], aq_out[k])
+    return 0
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def write_tree_stations(parent, a_root, phi_root, aq_in, aq_out, phi, z):
+    """The stations' states in the general layout: z[2k + 1], z[2k + 2] body k's input and
+    output [a, phi, 0, q]; z[0] the ground point [a, phi, 0, sum of the roots' q]."""
+    n = phi.shape[0]
+    for r in range(z.shape[0]):
+        for c in range(12):
+            z[r, c] = 0.0
+    for i in range(3):
+        z[0, i] = a_root[i]
+        z[0, 3 + i] = phi_root[i]
+    for k in range(n):
+        for i in range(3):
+            if parent[k] < 0:
+                z[0, 9 + i] += aq_in[k, 3 + i]
+            z[2 * k + 1, i] = aq_in[k, i]
+            z[2 * k + 1, 3 + i] = phi[k, i]
+            z[2 * k + 1, 9 + i] = aq_in[k, 3 + i]
+            z[2 * k + 2, i] = aq_out[k, i]
+            z[2 * k + 2, 3 + i] = phi[k, i]
+            z[2 * k + 2, 9 + i] = aq_out[k, 3 + i]
+

@@ -1,0 +1,164 @@
+"""The fused loop variant for trees of rigid bodies and beams joined by ball joints: every
+body's reduced map (kernels/ball_chain.py::ball_body_map, kernels/beam.py::beam_ball_map) goes
+straight into the leaves-to-root sweep (kernels/sweep.py, "Trees"; docs/assembly.md, "Trees"),
+then the recovery from the root to the leaves.  Predict, adopt and update are the fused chain
+loop's (they do not depend on the topology)."""
+from collections import namedtuple
+
+import numpy as np
+
+from . import loop_piece
+from ..elements import BEAM, RIGID
+from .ball_chain import _adopt, _ground_increment, _predict, _update, ball_body_map
+from .beam import ball_map_work_shape, beam_ball_map
+from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
+from .mat3 import mm3_into
+from .so3 import expm_so3, left_jacobian
+from .sweep import _add_to_port, _clear_ports, tree_reduced_recover, tree_reduced_step, \
+    write_tree_stations
+
+
+# The fused tree loop's scratch: the fused chain loop's (kernels/ball_chain.py::FusedLoop, whose
+# predict, adopt and update pieces it shares) and the tree sweep's.
+FusedTreeLoop = namedtuple("FusedTreeLoop", [
+    "coefficients", "per_body", "pmap", "v", "mats", "vecs", "per_mode", "beam_work",
+    "parent",           # (n,) Model.parent
+    "maps",             # (n, 6, 7) every body's map V (the recovery needs them all)
+    "s_in", "p_in",     # (n, 3, 3), (n, 3) q_I = S_I a_I + P_I
+    "t_inv",            # (n, 3, 3)
+    "port_s", "port_p",  # (n, 3, 3), (n, 3) q_O = S_O a_O + P_O, summed over the children
+    "aq_out",           # (n, 6) every body's output [a; q] (its input's is Sweep.red_aq[k])
+])
+
+
+def fused_tree_loop(n, parent, mode_off, h, coef):
+    """The fused tree loop's scratch for n bodies with parents `parent`."""
+    beta, gamma, alpha_m, alpha_f = coef
+    c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
+    c3 = gamma / (beta * h)
+    max_modes = int(np.max(np.diff(mode_off))) if n else 0
+    return FusedTreeLoop(np.array([c1, c3, 1.0 / c1, c3 / c1]), np.zeros((4, n, 3)),
+                         np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
+                         np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
+                         np.zeros(ball_map_work_shape(max_modes)),
+                         np.ascontiguousarray(parent, dtype=np.int64), np.zeros((n, 6, 7)),
+                         np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3, 3)),
+                         np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)))
+
+
+@loop_piece
+def _iterate(loop, run, s, it):
+    """Every body's map and its step of the sweep, from the leaves to the root; then the
+    recovery from the root to the leaves, with each body's angular (and a beam's modal)
+    accelerations.  Returns (status, detail, change)."""
+    params, state, inputs = run.params, run.state, run.inputs
+    c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
+                        loop.coefficients[3])
+    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
+        loop.per_body[3]
+    mats, vecs, pmap, maps = loop.mats, loop.vecs, loop.pmap, loop.maps
+    t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
+    w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
+    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
+                                         loop.per_mode[4])
+    aq_in, aq_out = run.sweep.red_aq, loop.aq_out
+    s_in, p_in, t_inv, port_s, port_p = loop.s_in, loop.p_in, loop.t_inv, loop.port_s, \
+        loop.port_p
+    parent = loop.parent
+    body_params, gravity, rot = params.body_params, params.gravity, state.rot
+    force, torque = inputs.force, inputs.torque
+    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    eta_map = state.eta_map
+    n = body_params.shape[0]
+    _clear_ports(port_s, port_p)
+    for k in range(n - 1, -1, -1):
+        phi = phi_star[k]
+        for i in range(3):
+            w[i] = c3 * phi[i] + w3[k, i]
+            wd[i] = c1 * phi[i] + w1[k, i]
+        if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
+            i0, i1 = mode_off[k], mode_off[k + 1]
+            m = (i1 - i0) // 2
+            tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
+            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
+                          w1e[i0:i1], w3e[i0:i1], aq_in[k, 0:3], aq_in[k, 3:6],
+                          eta_dd_star[i0:i1], loop.beam_work, maps[k], pmap[k], eta_map[i0:i1])
+        elif body_kind[k] == RIGID:
+            expm_so3(phi, e3)
+            mm3_into(e3, rot[k], rot_star)
+            left_jacobian(phi, lam)
+            for i in range(3):
+                load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
+            ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq_in[k, 0:3],
+                          aq_in[k, 3:6], load, torque[s, k], maps[k], pmap[k])
+        else:
+            return UNSUPPORTED, 2 * k + 2, 0.0
+        if tree_reduced_step(maps[k], port_s[k], port_p[k], s_in[k], p_in[k], t_inv[k], t_buf,
+                             num_buf) == 0.0:
+            return SINGULAR, k + 1, 0.0
+        if parent[k] >= 0:
+            _add_to_port(s_in[k], p_in[k], port_s[parent[k]], port_p[parent[k]])
+    change = 0.0
+    finite = True
+    for k in range(n):
+        p = parent[k]
+        if p < 0:
+            tree_reduced_recover(maps[k], s_in[k], p_in[k], inputs.g_acc[s, 0],
+                                 inputs.g_acc[s, 1], inputs.g_acc[s, 2], aq_in[k], aq_out[k])
+        else:
+            tree_reduced_recover(maps[k], s_in[k], p_in[k], aq_out[p, 0], aq_out[p, 1],
+                                 aq_out[p, 2], aq_in[k], aq_out[k])
+        pk = pmap[k]
+        for i in range(3):
+            alpha[i] = pk[i, 6]
+            for c in range(6):
+                alpha[i] += pk[i, c] * aq_in[k, c]
+            x = (alpha[i] - w1[k, i]) / c1      # back from w' = c1 phi + w1
+            phi_new[k, i] = x
+            change = max(change, abs(x - phi_star[k, i]))
+            if not np.isfinite(x):
+                finite = False
+        if body_kind[k] == BEAM:                # eta'' = eta_map[:, :7] [a; q; 1]
+            for i in range(mode_off[k], mode_off[k + 1]):
+                e = eta_map[i, 6]
+                for c in range(6):
+                    e += eta_map[i, c] * aq_in[k, c]
+                eta_dd_new[i] = e
+                change = max(change, abs(e - eta_dd_star[i]) / c1)
+    if not finite:
+        return NOT_FINITE, 0, change
+    return OK, 0, change
+
+
+@loop_piece
+def _write(loop, run, s, z):
+    phi_g = loop.vecs[4]
+    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
+    write_tree_stations(loop.parent, run.inputs.g_acc[s], phi_g, run.sweep.red_aq, loop.aq_out,
+                        loop.per_body[3], z)
+
+
+@loop_piece
+def _record(loop, run, s, slot):
+    state, rec = run.state, run.rec
+    _write(loop, run, s, rec.z[slot])
+    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
+    for k in range(rot.shape[0]):
+        for i in range(3):
+            rec.omega[slot, k, i] = omega[k, i]
+            rec.omega_dot[slot, k, i] = omega_dot[k, i]
+            for j in range(3):
+                rec.rot[slot, k, i, j] = rot[k, i, j]
+    for i in range(state.eta.shape[0]):
+        rec.eta[slot, i] = state.eta[i]
+        rec.eta_d[slot, i] = state.eta_d[i]
+
+
+@loop_piece
+def _finish(loop, run, n_steps, _):
+    if n_steps > 0:
+        _write(loop, run, n_steps - 1, run.state.z)
+
+
+loop_variant(FusedTreeLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+             record=_record, finish=_finish)
