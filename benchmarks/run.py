@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import binary_tree, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
@@ -285,6 +285,14 @@ def main(argv=None):
         fig[f"binary_tree_{n}_us_per_step"] = float(np.median([a for a, _ in pairs]))
         fig[f"binary_tree_{n}_over_chain"] = float(np.median([a / b for a, b in pairs]))
     print({k: v for k, v in fig.items() if k.startswith("binary_tree")}, flush=True)
+
+    # the arm of examples/arm.py (joints with coordinates: the general loop's full-state tree
+    # sweep, Newton-iterated); the torque drive is a Python function called once per step
+    for drive in ("torque", "motion"):
+        for flexible in (False, True):
+            key = f"arm_{drive}{'_flexible' if flexible else ''}_us_per_step"
+            fig[key] = median_us_per_step(arm(drive, flexible), 2000, 3)
+    print({k: v for k, v in fig.items() if k.startswith("arm")}, flush=True)
 
     fig["jit_warmup_s_warm_cache"] = jit_warmup_seconds(cold=False)
     fig["jit_warmup_s_cold_cache"] = None if quick else jit_warmup_seconds(cold=True)

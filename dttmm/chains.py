@@ -96,3 +96,49 @@ def binary_tree(depth, gravity=(0.0, -9.81, 0.0)):
                              angular_velocity=[0.0, 0.0, 0.3] if i % 5 == 0 else None),
                    BallJoint(), parent=f"n{(i - 1) // 2}")
     return system.build()
+
+
+def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=False):
+    """The arm of examples/arm.py (docs/joints.md): link 1 on a revolute joint at the origin
+    about world y; link 2 on a revolute joint at link 1's output point about link 1's body z;
+    link 3 on a universal joint at link 2's output point (first axis link 2's body z, second
+    link 3's body y); body 4 (0.5 kg, inertia diag(0.01) kg m^2 about its mass centre, which is
+    its joint point) on a prismatic joint along link 3's body x through link 3's output point,
+    with a 50 N/m spring and a 0.5 N s/m damper.  All along +x, joint 1 turning at 0.5 rad/s.
+    drive "torque": 2 sin(pi t) N m on joint 1; "motion": joint 1's angle prescribed as
+    0.5 t + 0.2 (1 - cos 2t) rad.  flexible: link 2 is the paper's beam 4 (1 m, 20 mm square
+    section, E = 2.5e10 Pa, rho = 3300 kg/m^3).  undriven: no drive on joint 1 and no damper
+    (the energy test)."""
+    from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PrismaticJoint,
+                           RevoluteJoint, SpringDamper, UniversalJoint)
+    if drive not in ("torque", "motion"):
+        raise ValueError(f"arm: drive must be 'torque' or 'motion', got {drive!r}")
+    if undriven:
+        first = None
+    elif drive == "torque":
+        first = JointForce(lambda t, q, q_dot: 2.0 * np.sin(np.pi * t))
+    else:
+        first = JointMotion(position=lambda t: 0.5 * t + 0.2 * (1.0 - np.cos(2.0 * t)),
+                            velocity=lambda t: 0.5 + 0.4 * np.sin(2.0 * t),
+                            acceleration=lambda t: 0.8 * np.cos(2.0 * t))
+    if flexible:
+        side = 0.02
+        area = side * side
+        link2 = EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
+                                   bending_stiffness=2.5e10 * side ** 4 / 12.0,
+                                   polar_inertia_per_length=3300.0 * area * side * side / 6.0,
+                                   name="link2")
+    else:
+        link2 = unit_link(name="link2")
+    system = System(gravity=gravity)
+    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=first,
+                                                      name="joint1"))
+    system.add(link2, RevoluteJoint(axis=[0, 0, 1], name="joint2"), parent="link1")
+    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
+                                                       name="joint3"), parent="link2")
+    system.add(RigidBody(mass=0.5, inertia=[0.01, 0.01, 0.01], inertia_about="mass_center",
+                         name="body4"),
+               PrismaticJoint(axis=[1, 0, 0], name="joint4",
+                              drive=SpringDamper(50.0, 0.0 if undriven else 0.5)),
+               parent="link3")
+    return system.build()

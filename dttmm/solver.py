@@ -13,7 +13,9 @@ import numpy as np
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
-from .elements.hinges import ELASTIC, FIXED, HINGE_PARAM_SIZE, REST_ROTATION
+from .elements.drives import FORCE, MOTION
+from .elements.hinges import COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0, REST_ROTATION
+from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree
 from .kernels import step as kstep
@@ -82,7 +84,11 @@ class Workspace:
             # pseudo-accelerations, flat over the beams (v coordinates of a beam, then w)
             eta=model.initial_modal_coordinates.copy(),
             eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
-            eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3())
+            eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3(),
+            # joints with coordinates (kernels/joint.py): q, q', q'', pseudo, generalized force
+            jq=model.hinge_params[:, COORDINATE_0].copy(),
+            jqd=model.hinge_params[:, RATE_0].copy(), jqdd=np.zeros((n, 2)),
+            jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
             known_loads=np.zeros((n_el, 12)), split=np.zeros(n_st, dtype=np.int64),
@@ -92,7 +98,9 @@ class Workspace:
             red_p=np.zeros((n + 1, 3)), red_tinv=np.zeros((n, 3, 3)), red_t=np.zeros((n, 3)),
             red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_st, 12, 6)),
             dir_o=np.zeros((n_st, 12)), port_s=np.zeros((n, 3, 3)), port_p=np.zeros((n, 3)),
-            aq_out=np.zeros((n, 6)))
+            aq_out=np.zeros((n, 6)), tree_s=np.zeros((n, 6, 6)), tree_p=np.zeros((n, 6)),
+            joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
+            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
         self.beams = beam_tables(model)
 
 
@@ -105,7 +113,58 @@ def kernel_params(model, beams=None):
                   locked=model.ground_locked, lock_rel=lock_rel,
                   mass_center_inertia=model.body_mass_center_inertia,
                   tip_pinned=bool(model.tip_pinned),
-                  parent=np.ascontiguousarray(model.parent, dtype=np.int64))
+                  parent=np.ascontiguousarray(model.parent, dtype=np.int64),
+                  joint_drive=joint_drives(model))
+
+
+def joint_drives(model):
+    """(n, 2, 4): each joint coordinate's drive as the kernels read it, [kind, stiffness,
+    damping, rest], kind -1 for none (elements/drives.py)."""
+    table = np.zeros((model.n_bodies, 2, 4))
+    table[:, :, 0] = -1.0
+    for k, drives in enumerate(model.drives):
+        for i, d in enumerate(drives):
+            if d is not None:
+                table[k, i] = [d["kind"], d["stiffness"], d["damping"], d["rest"]]
+    return table
+
+
+def has_coordinates(model):
+    return bool(np.isin(model.hinge_kind, (REVOLUTE, UNIVERSAL, PRISMATIC)).any())
+
+
+def full_tree(model, full_state=False):
+    """Whether the model runs in the full-state tree sweep (mode "riccati-joints",
+    docs/assembly.md "Trees with joints"): joints with coordinates anywhere, a tree with fixed
+    hinges, or a tree asked to run in full state; ball-joint trees otherwise run reduced."""
+    return has_coordinates(model) or (not model.is_chain and (full_state or not model.all_ball))
+
+
+def _joint_inputs(model, times, state=None, dt=0.0):
+    """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q'') and a
+    JointForce's value f(t, q, q') at each time (kernels/loop.py::Inputs).  A JointForce is
+    evaluated at the coordinates the constant-acceleration predictor gives from the state
+    (one step ahead of it: the solver then takes one step per chunk); docs/joints.md, "Drives
+    in the step"."""
+    out = np.zeros((len(times), model.n_bodies, 2, 3))
+    for k, drives in enumerate(model.drives):
+        for i, d in enumerate(drives):
+            if d is None or d["kind"] not in (FORCE, MOTION):
+                continue
+            for j, t in enumerate(times):
+                if d["kind"] == MOTION:
+                    out[j, k, i] = [float(np.squeeze(f(t))) for f in d["function"]]
+                else:
+                    q, qd, qdd = state.jq[k, i], state.jqd[k, i], state.jqdd[k, i]
+                    if t > 0.0:
+                        q, qd = q + dt * qd + 0.5 * dt * dt * qdd, qd + dt * qdd
+                    value = float(np.squeeze(d["function"](t, q, qd)))
+                    if not np.isfinite(value):
+                        raise DivergenceError(int(round(t / dt)) if dt else 0, t,
+                                              f"the drive of {model.hinge_names[k]} "
+                                              f"(coordinate {i}) returned {value} at t = {t:g}")
+                    out[j, k, i, 0] = value
+    return out
 
 
 def beam_tables(model):
@@ -150,7 +209,9 @@ def _mode(model, method, full_state):
     if method not in METHODS:
         raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
     reduced = model.all_ball and not full_state
-    if not model.is_chain:          # (check_supported has refused the rest)
+    if full_tree(model, full_state):    # (check_supported has refused the rest)
+        return kstep.RICCATI_JOINTS
+    if not model.is_chain:
         return kstep.RICCATI_TREE
     if method == "direct":
         return kstep.DIRECT_REDUCED if reduced else kstep.DIRECT_FULL
@@ -204,11 +265,14 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         (Newmark scheme only.)
     newton_iterations: extra linearizations about the latest solution per step; the step stops
         iterating once the rotation update is below newton_tol (rad).  Default: 0 for Newmark
-        (one linearization about the predictor is already second-order accurate), 20 for the
-        energy-momentum scheme (which conserves only once converged).  Steps that used all
+        (one linearization about the predictor is already second-order accurate), 8 with joints
+        with coordinates (their linearization is exact only to O(dt) terms: iterated, the step
+        is the exact Newmark step; docs/joints.md), 20 for the energy-momentum scheme (which
+        conserves only once converged).  Steps that used all
         iterations without reaching newton_tol are counted in info["newton_unconverged_steps"].
     record_every: keep every k-th step (and t = 0).
-    full_state: use the 13-entry state even where the reduced [a; q] form applies.
+    full_state: use the 13-entry state even where the reduced [a; q] form applies (a tree: the
+        full-state tree sweep, docs/assembly.md "Trees with joints").
     richardson: run at dt and at dt/2 and return their Richardson extrapolation
         (4 y_dt/2 - y_dt) / 3 at the recorded times (Newmark scheme only): the trapezoidal
         rule's error expands in even powers of dt, so this removes the dt^2 term: fourth-order
@@ -231,8 +295,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     record_every = int(record_every)
     if scheme not in SCHEMES:
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
-    if newton_iterations is None:
-        newton_iterations = 20 if scheme == "energy_momentum" else 0
+    if newton_iterations is None:       # joints with coordinates: their Jacobian is exact only
+        # to O(h) terms (kernels/joint.py), so the step iterates to newton_tol
+        newton_iterations = (20 if scheme == "energy_momentum"
+                             else 8 if isinstance(model, Model) and has_coordinates(model) else 0)
     if int(newton_iterations) != newton_iterations or newton_iterations < 0:
         raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
                          f"got {newton_iterations!r}")
@@ -269,10 +335,11 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     wall0 = time.perf_counter()
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
+    joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
         status = kstep.initial_accelerations(params, settings, state, ws.sweep,
                                              (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0],
-                                             torque[0])
+                                             torque[0], joint_input[0])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -298,6 +365,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     # fused loop (kernels/ball_chain.py), the energy-momentum scheme its own, the rest the
     # general loop (kernels/step.py); each records what its scheme defines
     keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
+    if mode == kstep.RICCATI_JOINTS:
+        keys += ["jq", "jqd", "jtau"]
     fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
              and scheme == "newmark"
              and all(BODY_KIND[int(c)].fused for c in model.body_kind))
@@ -327,20 +396,30 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     samples = [sample()]
     sample_steps = [0]
     chunk = record_every * max(1, 1000 // record_every)
+    # a JointForce drive is evaluated in Python, one step ahead: one step per chunk
+    force_drives = any(d is not None and d["kind"] == FORCE for ds in model.drives for d in ds)
+    if force_drives:
+        chunk = 1
+        settings = settings._replace(record_every=1)      # Python keeps every record_every-th
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
     no_loads = not model.has_applied_loads
     if no_loads:
         force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
-    n_rec_max = chunk // record_every
+    n_rec_max = chunk // settings.record_every
     rec = Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                  omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
                  defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
                  eta=np.zeros((n_rec_max, len(state.eta))),
                  eta_d=np.zeros((n_rec_max, len(state.eta))),
                  v_st=np.zeros((n_rec_max if scheme == "paper" else 1, n + 1, 3)),
-                 v_c=np.zeros((n_rec_max if "v_c" in keys else 1, n, 3)))
+                 v_c=np.zeros((n_rec_max if "v_c" in keys else 1, n, 3)),
+                 jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
+                 jtau=np.zeros((n_rec_max, n, 2)))
+    joint_input = np.zeros((chunk, n, 2, 3))
+    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
+                            for ds in model.drives for d in ds)
     info = np.zeros(5, dtype=np.int64)
     max_newton = 0
     done = 0
@@ -358,8 +437,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         if not no_loads:    # at the step's end; the energy-momentum step's mean by the midpoint
             force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt
                                    if scheme == "energy_momentum" else times[1:])
+        if joint_inputs_vary:
+            joint_input = _joint_inputs(model, times[1:], state, dt)
         inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
-                        force=force[:m], torque=torque[:m])
+                        force=force[:m], torque=torque[:m], joint_input=joint_input[:m])
         try:
             runner(loop, Run(params, settings, state, ws.sweep, inputs, rec), info)
         except np.linalg.LinAlgError as err:
@@ -367,8 +448,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                                   f"somewhere in steps {done + 1}..{done + m} ({err}); "
                                   f"{_DIRECT_HINT if method == 'direct' else ''}") from None
         for i in range(int(info[3])):
+            if force_drives and (done + 1) % record_every != 0:
+                continue
             samples.append({key: getattr(rec, key)[i].copy() for key in keys})
-            sample_steps.append(done + (i + 1) * record_every)
+            sample_steps.append(done + (i + 1) * settings.record_every)
         if info[0] == UNSUPPORTED:
             raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
         if info[0] != OK:
@@ -390,16 +473,20 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
 
 
 FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)
-_MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full", "riccati-tree"]
+_MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full", "riccati-tree",
+               "riccati-joints"]
 
 
 def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
-    and paper's schemes need a fixed ground; a tree runs (so far) with the Newmark scheme, the
-    Riccati sweep, moment-free joints and every child on its parent's output point."""
-    if not model.is_chain:
-        _check_tree(model, scheme, method, full_state)
+    and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
+    the Newmark scheme, the Riccati sweep, ball, fixed, revolute, universal and prismatic joints
+    and every child on its parent's output point (_check_full_tree, _check_tree)."""
+    if full_tree(model, full_state):
+        _check_full_tree(model, scheme, method)
+    elif not model.is_chain:
+        _check_tree(model, scheme, method)
     where = f"simulate(scheme='{scheme}')"
     for k in range(model.n_bodies):
         for role, kinds, code, name in (("body", BODY_KIND, model.body_kind[k],
@@ -424,7 +511,59 @@ def check_supported(model, scheme, method="riccati", full_state=False):
                          f"fixed ground (use scheme='newmark')")
 
 
-def _check_tree(model, scheme, method, full_state):
+def _check_full_tree(model, scheme, method):
+    """The full-state tree sweep (full_tree) runs ball, fixed, revolute, universal and
+    prismatic joints, the Newmark scheme and the Riccati sweep."""
+    k = next((k for k in range(model.n_bodies)
+              if model.hinge_kind[k] in (REVOLUTE, UNIVERSAL, PRISMATIC)), None)
+    if k is not None:
+        what = (f"hinge '{model.hinge_names[k]}' is "
+                f"{JOINT_KIND[int(model.hinge_kind[k])].what}: joints with coordinates")
+    else:
+        k = next((k for k in range(model.n_bodies)
+                  if model.parent[k] != k - 1 or model.attachment[k] != 0), 0)
+        p = model.parent[k]
+        what = (f"body '{model.body_names[k]}' hangs from "
+                + ("the ground" if p < 0 else f"body '{model.body_names[p]}'")
+                + ": a tree")
+    if method == "direct":
+        raise ValueError(f"simulate: {what} run in the Riccati sweep from the leaves to the root; "
+                         f"method='direct' multiplies the transfer matrices out along a chain "
+                         f"and does not extend to them; use method='riccati'")
+    if scheme != "newmark":
+        raise ValueError(f"simulate(scheme='{scheme}'): {what} run with the Newmark scheme; the "
+                         f"scheme runs chains; use scheme='newmark'")
+    if model.tip_pinned:
+        raise ValueError(f"simulate: {what}: a pinned tip (a closed loop) does not run with "
+                         f"them yet")
+    for j in range(model.n_bodies):
+        kind = JOINT_KIND.get(int(model.hinge_kind[j]))
+        p = model.parent[j]
+        if kind is not None and kind.code == ELASTIC:
+            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' is {kind.what} "
+                             f"({kind.name}); the full-state tree sweep ({what}) runs ball, "
+                             f"fixed, revolute, universal and prismatic joints only so far (the "
+                             f"Newton-Euler reference runs them all)")
+        if model.attachment[j] != 0:
+            raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
+                             f"attachment point of '{model.body_names[p]}'; trees run with "
+                             f"every body on its parent's output point only so far")
+        after_beam = p >= 0 and model.body_kind[p] == BEAM and kind is not None
+        if (after_beam and kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC)
+                and not model.is_chain):
+            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' joins a beam's end in a "
+                             f"tree; a joint with coordinates after a beam runs in chains only "
+                             f"so far")
+        if after_beam and kind.code == FIXED and j != p + 1:
+            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' welds body "
+                             f"'{model.body_names[j]}' to beam '{model.body_names[p]}', which is "
+                             f"not the body before it; a weld on a beam's end runs when the "
+                             f"welded body directly follows the beam only so far")
+
+
+def _check_tree(model, scheme, method):
+    """Ball-joint trees run the reduced tree sweep (kernels/tree.py); full_state=True and fixed
+    hinges send a tree to the full-state sweep (_check_full_tree)."""
     k = next((k for k in range(model.n_bodies)
               if model.parent[k] != k - 1 or model.attachment[k] != 0), 0)
     p = model.parent[k]
@@ -437,15 +576,7 @@ def _check_tree(model, scheme, method, full_state):
     if scheme != "newmark":
         raise ValueError(f"simulate(scheme='{scheme}'): the scheme runs chains; the model is a "
                          f"tree ({branch}); use scheme='newmark'")
-    if full_state:
-        raise ValueError(f"simulate: full_state=True runs the 12-entry sweep of a chain; the "
-                         f"model is a tree ({branch})")
     for j in range(model.n_bodies):
-        kind = JOINT_KIND.get(int(model.hinge_kind[j]))
-        if kind is not None and not kind.moment_free:
-            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' is {kind.what} "
-                             f"({kind.name}); trees run with moment-free joints (BallJoint) "
-                             f"only so far ({branch})")
         if model.attachment[j] != 0:
             raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
                              f"attachment point of '{model.body_names[model.parent[j]]}'; trees "
@@ -499,14 +630,14 @@ def kernel_chain(model):
     body welded to its end section (docs/beam.md, "End sections"), which carries the section's
     rotation history for the hinge as every welded body does.  Results are mapped back."""
     n = model.n_bodies
-    ends = [k for k in range(n - 1)
-            if model.body_kind[k] == BEAM and model.hinge_kind[k + 1] == ELASTIC]
+    ends = [k for k in range(n - 1) if model.body_kind[k] == BEAM
+            and model.hinge_kind[k + 1] in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC)]
     if not ends:
         return model, np.arange(n)
     rows = {name: [] for name in ("body_params", "hinge_kind", "hinge_params", "body_kind",
                                   "beam_params", "initial_rotation", "initial_angular_velocity",
                                   "ground_locked", "forces", "torques", "body_names",
-                                  "hinge_names", "body_mass_center_inertia")}
+                                  "hinge_names", "body_mass_center_inertia", "drives")}
     keep = []
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     identity = np.zeros(HINGE_PARAM_SIZE)
@@ -526,10 +657,11 @@ def kernel_chain(model):
                            initial_angular_velocity=omega, ground_locked=False, forces=None,
                            torques=None, body_names=f"{model.body_names[k]} end section",
                            hinge_names=f"{model.body_names[k]} end weld",
-                           body_mass_center_inertia=np.zeros((3, 3)))
+                           body_mass_center_inertia=np.zeros((3, 3)), drives=())
             for name in rows:
                 rows[name].append(carrier[name])
-    arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names")
+    arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names",
+                                          "drives")
                      else np.array(v)) for name, v in rows.items()}
     n_new = len(arrays["body_kind"])
     attachment_point = np.zeros((n_new, 3))
@@ -546,6 +678,9 @@ def _user_sample(sample, keep):
     stations = np.concatenate([[0], np.ravel([[2 * k + 1, 2 * k + 2] for k in keep])])
     out = {key: sample[key][keep] for key in ("rot", "omega", "omega_dot", "defl", "defl_rate")}
     out.update(z=sample["z"][stations], eta=sample["eta"], eta_d=sample["eta_d"])
+    for key in ("jq", "jqd", "jtau"):
+        if key in sample:
+            out[key] = sample[key][keep]
     return out
 
 
@@ -693,8 +828,16 @@ def _result(model, t, samples, wall, n_steps, info):
         rho_c = np.einsum("tkij,kj->tki", rot[:, rigid], model.body_params[rigid, TO_MASS_CENTER])
         v_in[:, rigid] = v_c[:, rigid] - np.cross(omega[:, rigid], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)
+    joints = {}
+    columns = [(k, i) for k in range(n) for i in range(len(model.drives[k]))]
+    if "jq" in samples[0] and columns:
+        for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
+                          ("drive_force", "jtau")):
+            values = np.array([s[key] for s in samples])
+            joints[name] = np.stack([values[:, k, i] for k, i in columns], axis=1)
     kinetic, potential = chain_energies(model, rot, omega, r_in, v_in, defl,
-                                        ground_rotation=ground_rot, eta=eta, eta_dot=eta_d)
+                                        ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
+                                        joint_coordinates=joints.get("joint_coordinates"))
     inputs = 2 * np.arange(n) + 1
     return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
                   position_output=r_o, rotation=rot, angular_velocity=omega,
@@ -703,4 +846,4 @@ def _result(model, t, samples, wall, n_steps, info):
                   kinetic=kinetic, potential=potential, wall_time=wall,
                   n_steps=n_steps, info=info, velocity_input=v_in,
                   modal_coordinates=eta if model.has_beams else None,
-                  modal_velocities=eta_d if model.has_beams else None)
+                  modal_velocities=eta_d if model.has_beams else None, **joints)

@@ -4,7 +4,7 @@ build, and bad input refused at build time naming the joint and the argument
 import numpy as np
 import pytest
 
-from dttmm import (JointForce, JointMotion, PrismaticJoint, RevoluteJoint, RigidBody,
+from dttmm import (ElasticHinge, JointForce, JointMotion, PrismaticJoint, RevoluteJoint, RigidBody,
                    SpringDamper, System, UniversalJoint, simulate)
 from dttmm.chains import unit_link
 from dttmm.elements.joints import rotation_about
@@ -105,7 +105,14 @@ def test_universal_axes_must_be_perpendicular_and_rates_consistent():
         system.build()
 
 
-def test_dttmm_refuses_them_by_name_until_its_loops_run_them():
-    with pytest.raises(ValueError, match="hinge 'joint1' is a revolute joint.*does not run yet"
-                                         ".*simulate_reference"):
-        simulate(arm(), 0.01, 1e-3)
+def test_what_dttmm_does_not_run_with_them_is_refused_by_name():
+    with pytest.raises(ValueError, match="hinge 'joint1' is a revolute joint.*method='direct'"):
+        simulate(arm(), 0.01, 1e-3, method="direct")
+    with pytest.raises(ValueError, match="hinge 'joint1' is a revolute joint.*Newmark scheme.*"
+                                         "scheme='newmark'"):
+        simulate(arm(), 0.01, 1e-3, scheme="energy_momentum")
+    system = System()
+    system.add(unit_link(name="a"), RevoluteJoint([0, 0, 1], name="r"))
+    system.add(unit_link(name="b"), ElasticHinge(1e4, 1e3, name="spring"), parent="a")
+    with pytest.raises(ValueError, match="hinge 'spring' is elastic.*'r' is a revolute"):
+        simulate(system.build(), 0.01, 1e-3)

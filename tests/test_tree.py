@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
-from dttmm import BallJoint, FixedHinge, System, simulate
-from dttmm.chains import binary_tree, five_link_tree, rigid_chain, three_pendulum, unit_link
+from dttmm import BallJoint, ElasticHinge, FixedHinge, System, simulate
+from dttmm.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_chain,
+                          three_pendulum, unit_link)
 from dttmm.model import Model
+from dttmm.reference import simulate_reference
 from dttmm import solver
 
 def angular_momentum(model, res):
@@ -75,20 +77,53 @@ def test_binary_tree_of_1023_links():
 
 
 def test_what_trees_do_not_run_yet_is_refused():
-    system = System()
-    system.add(unit_link(name="a"), BallJoint())
-    system.add(unit_link(name="b"), BallJoint(), parent="a")
-    system.add(unit_link(name="c"), FixedHinge(name="weld"), parent="a")
-    welded = system.build()
-    with pytest.raises(ValueError, match="hinge 'weld' is a fixed hinge.*trees"):
-        simulate(welded, 0.01, 1e-3)
     tree = five_link_tree()
     with pytest.raises(ValueError, match="direct.*does not extend to .*tree.*riccati"):
         simulate(tree, 0.01, 1e-3, method="direct")
     with pytest.raises(ValueError, match="energy_momentum.*tree"):
         simulate(tree, 0.01, 1e-3, scheme="energy_momentum")
-    with pytest.raises(ValueError, match="full_state.*tree"):
-        simulate(tree, 0.01, 1e-3, full_state=True)
+    system = System()
+    system.add(unit_link(name="a"), BallJoint())
+    system.add(unit_link(name="b"), BallJoint(), parent="a")
+    system.add(unit_link(name="c"), ElasticHinge(1e4, 1e3, name="spring"), parent="a")
+    with pytest.raises(ValueError, match="hinge 'spring' is elastic.*full-state tree sweep"):
+        simulate(system.build(), 0.01, 1e-3)
+
+
+def test_the_full_state_tree_sweep_is_the_reduced_one():
+    """The same tree through the reduced sweep (fused loop) and through the full-state sweep
+    (general loop, an articulated-body step per ball joint): the same linear step, solved two
+    ways (docs/assembly.md, "Trees" and "Trees with joints")."""
+    tree = five_link_tree()
+    reduced = simulate(tree, 0.5, 1e-3)
+    full = simulate(tree, 0.5, 1e-3, full_state=True)
+    assert (reduced.info["mode"], full.info["mode"]) == ("riccati-tree", "riccati-joints")
+    np.testing.assert_allclose(full.position_output, reduced.position_output, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(full.angular_velocity, reduced.angular_velocity, rtol=0,
+                               atol=1e-10)
+    np.testing.assert_allclose(full.force, reduced.force, rtol=0, atol=1e-8)
+
+
+def test_a_tree_with_welds_matches_the_reference():
+    """Fixed hinges in a tree (the full-state sweep): welded bodies move with their parents
+    exactly and the whole converges at order 2 to the independent reference."""
+    turn = np.array([[np.cos(0.5), -np.sin(0.5), 0], [np.sin(0.5), np.cos(0.5), 0], [0, 0, 1]])
+    system = System(gravity=[0.0, -9.81, 0.0])
+    system.add(unit_link(name="a"), BallJoint())
+    system.add(unit_link(name="b"), FixedHinge(rotation=turn, name="weld_b"), parent="a")
+    system.add(unit_link(name="c", angular_velocity=[0.0, 0.4, 0.2]), BallJoint(), parent="b")
+    system.add(unit_link(name="d", rotation=TURNED_ABOUT_Y), BallJoint(), parent="a")
+    system.add(unit_link(name="e"), FixedHinge(name="weld_e"), parent="d")
+    model = system.build()
+    steps = np.array([1e-3, 5e-4])
+    runs = [simulate(model, 1.0, dt, record_every=int(round(0.01 / dt))) for dt in steps]
+    assert runs[0].info["mode"] == "riccati-joints"
+    relative = np.einsum("tji,tjk->tik", runs[-1].rotation[:, 0], runs[-1].rotation[:, 1])
+    assert np.abs(relative - turn).max() < 1e-12
+    ref = simulate_reference(model, 1.0, t_eval=runs[0].t, rtol=1e-12, atol=1e-12)
+    errors = [np.abs(r.position_output - ref.position_output).max() for r in runs]
+    assert abs(np.log(errors[0] / errors[1]) / np.log(2.0) - 2.0) < 0.2, errors
+    assert errors[-1] < 1e-5
 
 
 def test_tree_against_the_newton_euler_reference():

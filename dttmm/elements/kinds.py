@@ -56,11 +56,11 @@ JOINT_KINDS = (
     Kind(BALL, BallJoint, SCHEMES, moment_free=True, doc="docs/hinges.md", what="a ball joint"),
     Kind(FIXED, FixedHinge, SCHEMES, doc="docs/hinges.md", what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
-    # joints with coordinates and drives: built and validated, run by the Newton-Euler
-    # reference; no DT-TMM scheme implements them yet
-    Kind(REVOLUTE, RevoluteJoint, (), doc="docs/joints.md", what="a revolute joint"),
-    Kind(UNIVERSAL, UniversalJoint, (), doc="docs/joints.md", what="a universal joint"),
-    Kind(PRISMATIC, PrismaticJoint, (), doc="docs/joints.md", what="a prismatic joint"),
+    # joints with coordinates and drives (kernels/joint.py): the general loop's full-state
+    # tree sweep
+    Kind(REVOLUTE, RevoluteJoint, ("newmark",), doc="docs/joints.md", what="a revolute joint"),
+    Kind(UNIVERSAL, UniversalJoint, ("newmark",), doc="docs/joints.md", what="a universal joint"),
+    Kind(PRISMATIC, PrismaticJoint, ("newmark",), doc="docs/joints.md", what="a prismatic joint"),
 )
 
 BODY_KIND = {k.code: k for k in BODY_KINDS}

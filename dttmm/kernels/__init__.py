@@ -1,5 +1,29 @@
 """numba kernels on flat arrays: rotations, element transfer matrices, assembly sweeps, the step."""
+from pathlib import Path
+
 from numba import njit
+
+
+def _drop_stale_caches():
+    """numba checks a cached kernel against its own source file only, not against the files of
+    the kernels it calls or inlines (the step skeleton in loop.py inlines the pieces of step.py,
+    ball_chain.py, ...): after an edit of one of those (a git pull on an editable install) the
+    skeleton would load stale machine code.  So every numba cache index older than the newest
+    source file the kernels are compiled from (kernels/, elements/ for their constants,
+    reference/) is dropped before anything compiles; the kernels then compile afresh once.
+    Installed packages write their caches after their sources and keep them."""
+    package = Path(__file__).resolve().parent.parent
+    try:
+        newest = max(p.stat().st_mtime for part in ("kernels", "elements", "reference")
+                     for p in (package / part).glob("*.py"))
+        for index in package.rglob("__pycache__/*.nbi"):
+            if index.stat().st_mtime < newest:
+                index.unlink()
+    except OSError:         # a read-only or concurrently changing installation: leave it
+        pass
+
+
+_drop_stale_caches()
 
 
 # numba's fastmath flag 'contract' alone, on every kernel of the package (and the Newton-Euler

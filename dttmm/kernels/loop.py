@@ -39,6 +39,8 @@ Params = namedtuple("Params", [
     "mass_center_inertia",  # (n, 3, 3) J_C in body axes (the energy-momentum step)
     "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
     "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
+    "joint_drive",      # (n, 2, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
+                        # none; elements/drives.py)
 ])
 
 Settings = namedtuple("Settings", [
@@ -57,6 +59,9 @@ State = namedtuple("State", [
     "eta", "eta_d", "eta_acc", "eta_p",             # (total modes,) the beams' coordinates
     "eta_map",                                      # (total modes, 13) eta'' on the input state
     "v_c",                                          # (n, 3) mass-centre velocities (EM scheme)
+    "jq", "jqd", "jqdd", "jqp",                     # (n, 2) joint coordinates, rates,
+                                                    # accelerations, pseudo-accelerations
+    "jtau",                                         # (n, 2) their generalized forces
 ])
 
 Sweep = namedtuple("Sweep", [
@@ -65,16 +70,21 @@ Sweep = namedtuple("Sweep", [
     "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
     "dir_z", "dir_o",                                # direct full-state sweep
     "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/tree.py)
+    "tree_s", "tree_p",                              # full-state tree sweep (sweep.py)
+    "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints (kernels/joint.py)
 ])
 
 Inputs = namedtuple("Inputs", [
     "g_acc", "g_rot", "g_w", "g_wd",   # ground: (m, 3) at t_{s+1}; rotations (m + 1, 3, 3) at t_s
     "force", "torque",                 # (m, n, 3) applied at t_{s+1} (EM: the step's means)
+    "joint_input",                     # (m, n, 2, 3) per joint coordinate at t_{s+1}: a
+                                       # prescribed motion's (q, q', q''), a JointForce's value
 ])
 
 Record = namedtuple("Record", [
     "rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d",
     "v_st", "v_c",      # the paper's scheme's point velocities; the EM scheme's mass centres
+    "jq", "jqd", "jtau",  # joint coordinates, rates, generalized forces
 ])
 
 Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec"])

@@ -2,7 +2,9 @@
 
 Integrator: generalized-alpha in the form of Arnold and Bruls (2007), applied to each body's
 world rotation increment phi (A_i = exp(phi^) A_{i-1}), to each elastic hinge's deflection d and
-to each beam's modal coordinates eta:
+to each beam's modal coordinates eta and to each joint coordinate q (revolute, universal,
+prismatic; a child behind such a joint is not integrated on its own, its frame follows from its
+parent's and q, docs/joints.md):
   x        = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1}     (x = phi, d - d_n, eta - eta_n)
   v_{n+1}  = v_n + h (1 - gamma) p_n + h gamma p_{n+1}
   (1 - alpha_f) acc_{n+1} + alpha_f acc_n = (1 - alpha_m) p_{n+1} + alpha_m p_n
@@ -14,8 +16,8 @@ scheme, for comparison, gives station points their own position histories (Gener
 docs/solver.md, "The paper's scheme").
 
 This module is the general loop's pieces (kernels/loop.py: predict, iterate, adopt, update,
-record, finish) for every chain, sweep and the Newmark and paper's schemes, and the consistent
-start.
+record, finish) for every chain and tree, sweep and the Newmark and paper's schemes, and the
+consistent start.
 """
 from collections import namedtuple
 
@@ -25,17 +27,27 @@ from numba import njit
 from . import CONTRACT, loop_piece
 from ..elements import BEAM, RIGID
 from ..elements.hinges import BALL, ELASTIC, FIXED
+from ..elements.drives import MOTION
+from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
+from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import inv3, matmul_into
 from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
-                    riccati_full, riccati_reduced, riccati_tree_reduced, write_tree_stations)
+                    riccati_full, riccati_reduced, riccati_tree_full, riccati_tree_reduced,
+                    write_tree_stations)
 from .sweep import BALL as EL_BALL
+from .sweep import JOINT as EL_JOINT
 
-RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE = 0, 1, 2, 3, 4
+RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE, RICCATI_JOINTS = range(6)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def has_coordinates(kind):
+    return kind == REVOLUTE or kind == UNIVERSAL or kind == PRISMATIC
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -149,6 +161,8 @@ GeneralLoop = namedtuple("GeneralLoop", [
     "e3", "g_inv", "rot_prev",      # 3 x 3 scratch
     "histories",                    # the paper's scheme: (independent, st_v, st_a, st_p, c_v,
                                     # c_a, c_p, w1_st, w1_c), see general_loop
+    "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 2) each: the joint
+                                    # coordinates' offsets and guess (kernels/joint.py)
 ])
 
 
@@ -164,7 +178,8 @@ def general_loop(n, n_eta, h, coef, histories):
                        np.zeros((n, 3)), np.zeros((2 * n + 1, 12)), np.zeros(n_eta),
                        np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
                        np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
-                       tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))))
+                       tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
+                       tuple(np.zeros((n, 2)) for _ in range(5)))
 
 
 def _coefficients_py(h, coef):
@@ -174,7 +189,7 @@ def _coefficients_py(h, coef):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
-                    at_start, rot, w3, modal, stations):
+                    at_start, rot, w3, modal, stations, joints):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots; returns 0, or j + 1 for an element j (2k: hinge k, 2k + 1: body k) of a
     kind this loop does not know.  at_start: the consistent-start solve, where the phi slots
@@ -186,8 +201,12 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     beam's end section (kernels/beam.py).  stations = (independent, w1_st, w1_c): in the
     paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
     then each body's output) and every rigid body's mass centre (w1_c) has its own Newmark
-    history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme")."""
+    history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme").  joints =
+    (full_tree, q, q', q'', given): in the full-state tree sweep (RICCATI_JOINTS) ball joints and
+    joints with coordinates are JOINT elements (kernels/joint.py), linearized about the
+    coordinates' guess; given (n, 2): each JointForce drive's value over the step."""
     independent, w1_st, w1_c = stations
+    full_tree, q_j, qd_j, qdd_j, given = joints
     independent = independent and not at_start
     body_params, hinge_kind, hinge_params = params.body_params, params.hinge_kind, params.hinge_params
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
@@ -199,7 +218,17 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     for k in range(n):
         jh = 2 * k
         hk = hinge_kind[k]
-        if hk == BALL:
+        p = params.parent[k]
+        if full_tree and (hk == BALL or has_coordinates(hk)):
+            kind[jh] = EL_JOINT
+            if p < 0:
+                rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
+            else:
+                rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
+            joint_linearization(hk, hinge_params[k], params.joint_drive[k], given[k], rot_p,
+                                w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
+                                sweep.joint_dof[k], sweep.joint_tau_nu[k])
+        elif hk == BALL:
             kind[jh] = EL_BALL
         elif hk == FIXED:
             kind[jh] = IDENTITY
@@ -207,13 +236,12 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             kind[jh] = LOCKED
         elif hk == ELASTIC:
             kind[jh] = TRANSFER
-            if k == 0:
+            if p < 0:
                 rot_in, lam_in, w_in, wd_in, dwd_in, phi_in = ground
                 dw_in = dwd_in
             else:
                 rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
-                    rot_star[k - 1], lam[k - 1], w[k - 1], wd[k - 1], dw[k - 1], dwd[k - 1],
-                    phi_star[k - 1])
+                    rot_star[p], lam[p], w[p], wd[p], dw[p], dwd[p], phi_star[p])
             elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, dw_in, rot_star[k],
                                    lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
                                    z_star[jh], u[jh])
@@ -260,6 +288,10 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
     bodies' parents (RICCATI_TREE; a chain's are k - 1)."""
     sw = sweep
+    if mode == RICCATI_JOINTS:
+        return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
+                                 parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
+                                 sw.joint_tau, z)
     if mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
                             sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
@@ -317,12 +349,13 @@ def _solve_tree(sw, parent, root_f, z):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def initial_accelerations(params, settings, state, sweep, ground, force, torque):
+def initial_accelerations(params, settings, state, sweep, ground, force, torque, joint_input):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
-    force, torque (n, 3) at t = 0.  Returns the status: 0, a singularity code (sweep.py), or
+    force, torque (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates' inputs at t = 0
+    (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.  Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
     g_acc, g_rot, g_w, g_wd = ground
@@ -340,7 +373,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque)
              state.eta_map)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
                               np.zeros(state.z.shape), force, torque, True, rot, zero3, modal,
-                              (False, np.zeros((n + 1, 3)), zero3))
+                              (False, np.zeros((n + 1, 3)), zero3),
+                              (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
+                               joint_input[:, :, 2].copy(), joint_input[:, :, 0].copy()))
     if unknown != 0:
         return -unknown
     known_loads = sweep.known_loads
@@ -360,6 +395,11 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque)
     status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
                         state.z)
     _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
+    for k in range(n):
+        for i in range(n_coordinates(hinge_kind[k])):
+            state.jqdd[k, i] = sweep.joint_nu[k, i]
+            state.jqp[k, i] = sweep.joint_nu[k, i]
+            state.jtau[k, i] = sweep.joint_tau[k, i]
     return status
 
 
@@ -374,6 +414,127 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
             zin[0:12] = z[2 * k + 1]
             for i in range(mode_off[k], mode_off[k + 1]):
                 eta_acc[i] = eta_map[i] @ zin
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w1, w3, rot, lam,
+                       w, wd, dw, dwd):
+    """A joint child's guess: its frame from the parent's guess and the coordinates' (kernels/
+    joint.py::joint_frame), written as a body's kinematics in its rotation increment phi =
+    log(A A_n^T) with the offsets that make w = c3 phi + w3, w' = c1 phi + w1 hold at the guess
+    (the element kernels' derivatives in phi are then those of a body integrated on its own: a
+    Jacobian exact to O(c3/c1) terms, docs/joints.md)."""
+    rot_p, w_p, wd_p = parent_frame
+    d = np.empty(3)
+    d_rate = np.empty(3)
+    joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
+    rel = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = rot[i, 0] * rot_n[j, 0] + rot[i, 1] * rot_n[j, 1] + rot[i, 2] * rot_n[j, 2]
+    log_so3(rel, phi)
+    for i in range(3):
+        w1[i] = wd[i] - c1 * phi[i]
+        w3[i] = w[i] - c3 * phi[i]
+    _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
+    """The frame welded to beam k's end section (rest: the weld's R0) from the beam's frame and
+    modal coordinates (docs/beam.md, "End sections"): A_O = A exp(theta^) R0, theta = [0,
+    -w'(L), v'(L)]; w_O = w + A J_l(theta) theta'; w_O' = w' + w x (A J_l theta') +
+    A (J_l theta'' + J_l' theta'), J_l' theta' = theta' x (theta x theta') / 6 (J_l = E +
+    theta^ / 2 + theta^ theta^ / 6 + ..; the rest is of higher order in the end slope)."""
+    mode_off, ends = beams[3], beams[4]
+    i0 = mode_off[k]
+    m = (mode_off[k + 1] - i0) // 2
+    th = np.zeros(3)
+    th_d = np.zeros(3)
+    th_dd = np.zeros(3)
+    for j in range(m):
+        y = ends[k, j, 1]
+        th[1] -= y * eta[i0 + m + j]
+        th[2] += y * eta[i0 + j]
+        th_d[1] -= y * eta_d[i0 + m + j]
+        th_d[2] += y * eta_d[i0 + j]
+        th_dd[1] -= y * eta_dd[i0 + m + j]
+        th_dd[2] += y * eta_dd[i0 + j]
+    e = np.empty((3, 3))
+    expm_so3(th, e)
+    rot_out[:, :] = rot @ e @ rest
+    jl = np.empty((3, 3))
+    left_jacobian(th, jl)
+    rate = rot @ (jl @ th_d)
+    x = np.array([th[1] * th_d[2] - th[2] * th_d[1], th[2] * th_d[0] - th[0] * th_d[2],
+                  th[0] * th_d[1] - th[1] * th_d[0]])
+    extra = np.array([th_d[1] * x[2] - th_d[2] * x[1], th_d[2] * x[0] - th_d[0] * x[2],
+                      th_d[0] * x[1] - th_d[1] * x[0]]) / 6.0
+    acc = rot @ (jl @ th_dd + extra)
+    w_out[:] = w + rate
+    wd_out[0] = wd[0] + w[1] * rate[2] - w[2] * rate[1] + acc[0]
+    wd_out[1] = wd[1] + w[2] * rate[0] - w[0] * rate[2] + acc[1]
+    wd_out[2] = wd[2] + w[0] * rate[1] - w[1] * rate[0] + acc[2]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _welded(params, mode, k):
+    """In the full-state tree sweep, a body welded to another (a fixed hinge; not to the ground)
+    is not integrated on its own: its frame is its parent's (R0), or the end section's of a
+    parent beam (solver.kernel_chain's carrier, the parent frame of a joint with coordinates).
+    Integrated on its own, a body whose parent's rotation is set at position level (a joint
+    child, a beam's end) would drift from it, and differencing a rotation held at position level
+    with the trapezoidal rule's relations leaves a step-to-step mode in the acceleration that
+    grows without bound (docs/joints.md, "Beams")."""
+    return (mode == RICCATI_JOINTS and params.hinge_kind[k] == FIXED and params.parent[k] >= 0
+            and not params.locked[k])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
+    """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
+    or the end section's of a parent beam (_end_section_frame)."""
+    p = params.parent[k]
+    rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
+    if params.beams[0][p] == BEAM:
+        _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
+                           rot_out, w_out, wd_out)
+    else:
+        rot_out[:, :] = rot[p] @ rest
+        w_out[:] = w[p]
+        wd_out[:] = wd[p]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _welded_guess(params, k, c1, c3, w1e, w3e, eta_n, eta_dd_star, rot_n, guess, w1, w3):
+    """A welded body's guess from its parent's (_welded_frame; a beam's modal coordinates at
+    their guess), with the offsets that make w = c3 phi + w3, w' = c1 phi + w1 hold at it (as
+    _joint_child_guess)."""
+    phi_star, rot_star, lam, w, wd, dw, dwd = guess
+    eta = (eta_dd_star - w1e) / c1 if eta_n.shape[0] > 0 else eta_n.copy()
+    eta_d = c3 * eta + w3e
+    _welded_frame(params, k, rot_star, w, wd, eta, eta_d, eta_dd_star, rot_star[k], w[k],
+                  wd[k])
+    rel = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = (rot_star[k, i, 0] * rot_n[j, 0] + rot_star[k, i, 1] * rot_n[j, 1]
+                         + rot_star[k, i, 2] * rot_n[j, 2])
+    log_so3(rel, phi_star[k])
+    for i in range(3):
+        w1[i] = wd[k, i] - c1 * phi_star[k, i]
+        w3[i] = w[k, i] - c3 * phi_star[k, i]
+    _body_kinematics(c1, c3, rot_n, phi_star[k], w1, w3, rot_star[k], lam[k], w[k], wd[k],
+                     dw[k], dwd[k])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _coordinates_from_nu(c1, c3, q_n, w1q, w3q, nu, q, qd, qdd):
+    """A coordinate's guess from its acceleration nu: dq = (nu - w1q) / c1."""
+    dq = (nu - w1q) / c1
+    q[0] = q_n + dq
+    qd[0] = c3 * dq + w3q
+    qdd[0] = nu
 
 
 @loop_piece
@@ -406,8 +567,40 @@ def _predict(loop, run, s, _):
     g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
     loop.ground[2][:] = g_w
     loop.ground[3][:] = g_wd
+    eta, eta_d = state.eta, state.eta_d
+    if eta.shape[0] > 0:
+        a1, a3 = _offsets(h, coef, eta_d, state.eta_acc, state.eta_p)
+        loop.w1e[:] = a1 - c1 * eta
+        loop.w3e[:] = a3 - c3 * eta
+        loop.eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * state.eta_p) + loop.w1e
     for k in range(n):
-        if locked[k]:
+        hk = hinge_kind[k]
+        if has_coordinates(hk):
+            w1q, w3q, q_s, qd_s, qdd_s = loop.joints
+            _offsets_into(h, coef, state.jqd[k], state.jqdd[k], state.jqp[k], w1q[k], w3q[k],
+                          loop.e3[0])
+            for i in range(n_coordinates(hk)):
+                if params.joint_drive[k, i, 0] == MOTION:
+                    q_s[k, i] = inputs.joint_input[s, k, i, 0]
+                    qd_s[k, i] = inputs.joint_input[s, k, i, 1]
+                    qdd_s[k, i] = inputs.joint_input[s, k, i, 2]
+                    dq = q_s[k, i] - state.jq[k, i]
+                    w1q[k, i] = qdd_s[k, i] - c1 * dq
+                    w3q[k, i] = qd_s[k, i] - c3 * dq
+                else:
+                    dq = loop.e3[0, i]
+                    _coordinates_from_nu(c1, c3, state.jq[k, i], w1q[k, i], w3q[k, i],
+                                         c1 * dq + w1q[k, i], q_s[k, i:i + 1], qd_s[k, i:i + 1],
+                                         qdd_s[k, i:i + 1])
+            p = params.parent[k]
+            frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
+            _joint_child_guess(hk, params.hinge_params[k], frame, q_s[k], qd_s[k], qdd_s[k],
+                               c1, c3, state.rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
+                               lam[k], w[k], wd[k], dw[k], dwd[k])
+        elif _welded(params, run.settings.mode, k):
+            _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, state.eta, loop.eta_dd_star,
+                          state.rot[k], loop.guess, w1[k], w3[k])
+        elif locked[k]:
             phi_star[k] = phi_g
             rot_star[k] = rot_now @ lock_rel[k]
             lam[k] = g_lam
@@ -427,12 +620,6 @@ def _predict(loop, run, s, _):
                               state.defl_pseudo[k])
             w1d[k] = a1 - c1 * state.defl[k]
             w3d[k] = a3 - c3 * state.defl[k]
-    eta, eta_d = state.eta, state.eta_d
-    if eta.shape[0] > 0:
-        a1, a3 = _offsets(h, coef, eta_d, state.eta_acc, state.eta_p)
-        loop.w1e[:] = a1 - c1 * eta
-        loop.w3e[:] = a3 - c3 * eta
-        loop.eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * state.eta_p) + loop.w1e
     if independent:
         for j in range(n + 1):
             w1_st[j], _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
@@ -468,9 +655,11 @@ def _iterate(loop, run, s, it):
     z = state.z
     modal = (state.eta, state.eta_d, loop.w1e, loop.w3e, loop.eta_dd_star, state.eta_map)
     stations = (loop.histories[0], loop.histories[7], loop.histories[8])
+    joints = (run.settings.mode == RICCATI_JOINTS, loop.joints[2], loop.joints[3],
+              loop.joints[4], inputs.joint_input[s, :, :, 0])
     unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
                               loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s], False,
-                              state.rot, loop.w3, modal, stations)
+                              state.rot, loop.w3, modal, stations, joints)
     if unknown != 0:
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(run.sweep.u):
@@ -486,6 +675,10 @@ def _iterate(loop, run, s, it):
     change = 0.0
     for i in range(eta_dd_new.shape[0]):
         change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
+    qdd_s = loop.joints[4]
+    for k in range(params.body_params.shape[0]):
+        for i in range(n_coordinates(params.hinge_kind[k])):
+            change = max(change, abs(run.sweep.joint_nu[k, i] - qdd_s[k, i]) / c1)
     g_inv = loop.g_inv
     for k in range(params.body_params.shape[0]):
         inv3(dwd[k], g_inv)
@@ -506,10 +699,32 @@ def _adopt(loop, run, s, it):
     c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
     z, rot = run.state.z, run.state.rot
     phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
+    params, inputs = run.params, run.inputs
     loop.z_star[:, :] = z
     loop.eta_dd_star[:] = loop.eta_dd_new
+    w1q, w3q, q_s, qd_s, qdd_s = loop.joints
     for k in range(phi_star.shape[0]):
-        if not run.params.locked[k]:
+        hk = params.hinge_kind[k]
+        if has_coordinates(hk):
+            for i in range(n_coordinates(hk)):
+                if params.joint_drive[k, i, 0] != MOTION:
+                    _coordinates_from_nu(c1, c3, run.state.jq[k, i], w1q[k, i], w3q[k, i],
+                                         run.sweep.joint_nu[k, i], q_s[k, i:i + 1],
+                                         qd_s[k, i:i + 1], qdd_s[k, i:i + 1])
+            p = params.parent[k]
+            frame = ((inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]) if p < 0
+                     else (rot_star[p], w[p], wd[p]))
+            _joint_child_guess(hk, params.hinge_params[k], frame, q_s[k], qd_s[k], qdd_s[k],
+                               c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
+                               lam[k], w[k], wd[k], dw[k], dwd[k])
+            loop.z_star[2 * k + 1, 3:6] = phi_star[k]
+            loop.z_star[2 * k + 2, 3:6] = phi_star[k]
+        elif _welded(params, run.settings.mode, k):
+            _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, run.state.eta,
+                          loop.eta_dd_star, rot[k], loop.guess, loop.w1[k], loop.w3[k])
+            loop.z_star[2 * k + 1, 3:6] = phi_star[k]
+            loop.z_star[2 * k + 2, 3:6] = phi_star[k]
+        elif not params.locked[k]:
             phi_star[k] = z[2 * k + 1, 3:6]
             _body_kinematics(c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
                              lam[k], w[k], wd[k], dw[k], dwd[k])
@@ -544,9 +759,46 @@ def _update(loop, run, s, _):
                 _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
             _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
     finite = True
+    eta = state.eta
+    if eta.shape[0] > 0:
+        eta_new = (loop.eta_dd_new - loop.w1e) / c1
+        _advance_history(h, coef, eta_new - eta, state.eta_d, state.eta_acc, state.eta_p)
+        eta[:] = eta_new
+        if not np.all(np.isfinite(state.eta_d)):
+            finite = False
+    w1q = loop.joints[0]
+    x = np.zeros(2)
     for k in range(n):
         phi = z[2 * k + 1, 3:6]
-        if locked[k]:
+        hk = params.hinge_kind[k]
+        if has_coordinates(hk):
+            # the coordinates' histories, then the child's frame from its parent's new one
+            for i in range(n_coordinates(hk)):
+                x[i] = (run.sweep.joint_nu[k, i] - w1q[k, i]) / c1
+                if params.joint_drive[k, i, 0] == MOTION:
+                    x[i] = inputs.joint_input[s, k, i, 0] - state.jq[k, i]
+            _advance_history(h, coef, x, state.jqd[k], state.jqdd[k], state.jqp[k])
+            for i in range(n_coordinates(hk)):
+                state.jq[k, i] += x[i]
+                if params.joint_drive[k, i, 0] == MOTION:
+                    state.jq[k, i] = inputs.joint_input[s, k, i, 0]
+                    state.jqd[k, i] = inputs.joint_input[s, k, i, 1]
+                    state.jqdd[k, i] = inputs.joint_input[s, k, i, 2]
+                state.jtau[k, i] = run.sweep.joint_tau[k, i]
+            p = params.parent[k]
+            if p < 0:
+                rot_p, w_p, wd_p = rot_now, inputs.g_w[s], inputs.g_wd[s]
+            else:
+                rot_p, w_p, wd_p = rot[p], omega[p], omega_dot[p]
+            joint_frame(hk, params.hinge_params[k], rot_p, w_p, wd_p, state.jq[k],
+                        state.jqd[k], state.jqdd[k], rot[k], omega[k], omega_dot[k], defl[k],
+                        state.defl_rate[k])
+            pseudo[k] = omega_dot[k]
+        elif _welded(params, run.settings.mode, k):
+            _welded_frame(params, k, rot, omega, omega_dot, state.eta, state.eta_d,
+                          state.eta_acc, rot[k], omega[k], omega_dot[k])
+            pseudo[k] = omega_dot[k]
+        elif locked[k]:
             matmul_into(rot_now, lock_rel[k], rot[k])
             omega[k] = inputs.g_w[s]
             omega_dot[k] = inputs.g_wd[s]
@@ -564,13 +816,6 @@ def _update(loop, run, s, _):
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    eta = state.eta
-    if eta.shape[0] > 0:
-        eta_new = (loop.eta_dd_new - loop.w1e) / c1
-        _advance_history(h, coef, eta_new - eta, state.eta_d, state.eta_acc, state.eta_p)
-        eta[:] = eta_new
-        if not np.all(np.isfinite(state.eta_d)):
-            finite = False
     return finite
 
 
@@ -585,6 +830,9 @@ def _record(loop, run, s, slot):
     rec.defl_rate[slot] = state.defl_rate
     rec.eta[slot] = state.eta
     rec.eta_d[slot] = state.eta_d
+    rec.jq[slot] = state.jq
+    rec.jqd[slot] = state.jqd
+    rec.jtau[slot] = state.jtau
     if loop.histories[0]:
         rec.v_st[slot] = loop.histories[1]
         rec.v_c[slot] = loop.histories[4]

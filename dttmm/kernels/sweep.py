@@ -8,7 +8,8 @@ transform of Horner and Pilkey).  The split changes where the boundary makes it:
   SPLIT_B  f = [a, phi], e = [m, q]   from the ground (a and phi prescribed)
   SPLIT_C  f = [m, q], e = [a, phi]   after a hinge whose loads are known (consistent start)
 Element kinds: TRANSFER (affine matrix), IDENTITY (fixed hinge), BALL (m = 0 inboard, outboard
-rotation free), LOCKED (inboard loads known, outboard motion free).
+rotation free), LOCKED (inboard loads known, outboard motion free), JOINT (a joint with free
+coordinates, kernels/joint.py: the full-state tree sweep only).
 
 Full-state direct sweep: every station as z = Z x + o in terms of a 6-parameter vector x, the
 matrices multiplied out from the root (the paper's way).  A ball joint or a LOCKED hinge swaps
@@ -23,7 +24,7 @@ from numba import njit
 from . import CONTRACT
 from .mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
 
-TRANSFER, IDENTITY, BALL, LOCKED = 0, 1, 2, 3
+TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
 DIRECT_TOLERANCE = 1e-4      # largest relative transfer residual a direct solution may leave
 SPLIT_A, SPLIT_B, SPLIT_C = 0, 1, 2
@@ -537,3 +538,267 @@ def write_tree_stations(parent, a_root, phi_root, aq_in, aq_out, phi, z):
             z[2 * k + 2, 3 + i] = phi[k, i]
             z[2 * k + 2, 9 + i] = aq_out[k, 3 + i]
 
+
+@njit(cache=True, fastmath=CONTRACT)
+def _mm(a, b):
+    """a @ b for small blocks that may be strided views (no BLAS, no warning)."""
+    out = np.zeros((a.shape[0], b.shape[1]))
+    for i in range(a.shape[0]):
+        for k in range(a.shape[1]):
+            x = a[i, k]
+            for j in range(b.shape[1]):
+                out[i, j] += x * b[k, j]
+    return out
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _mv(a, x):
+    out = np.zeros(a.shape[0])
+    for i in range(a.shape[0]):
+        for k in range(a.shape[1]):
+            out[i] += a[i, k] * x[k]
+    return out
+
+
+# Trees in full state (joints with coordinates; docs/assembly.md, "Trees with joints")
+#
+# Leaves to root, every station's loads e = [m, q] as an affine function of its motion
+# f = [a, alpha] (angular-acceleration slots): e = S f + P, S = 0, P = 0 at a free end, summed
+# over the children at a parent's output point (they share its motion).  Through an element
+# z_O = U z_I + u:  T = U_ee - S_O U_fe,  S_I = T^-1 (S_O U_ff - U_ef),
+# P_I = T^-1 (S_O u_f + P_O - u_e).  Through a joint (kernels/joint.py) the free coordinates'
+# nu are eliminated as in an articulated-body step: with G = S_O B_F,
+# D = Bl_F^T G - diag(tau'_F), y = S_O c' + P_O (c' = c + B_P nu_P, the prescribed ones),
+# nu_F = D^-1 (tau0_F - Bl_F^T y) - D^-1 Bl_F^T S_O Phi f_I, and e_I = Psi e_O.
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _gauss_solve(a, b, n, m):
+    """Solve a[:n, :n] x = b[:n, :m] in place (x in b; a destroyed), partial pivoting; False if
+    a pivot vanishes against the matrix's scale."""
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(a[i, j]))
+    if not scale > 0.0:
+        return n == 0
+    for c in range(n):
+        piv = c
+        for r in range(c + 1, n):
+            if abs(a[r, c]) > abs(a[piv, c]):
+                piv = r
+        if not abs(a[piv, c]) > 1e-14 * scale:
+            return False
+        if piv != c:
+            for j in range(n):
+                a[c, j], a[piv, j] = a[piv, j], a[c, j]
+            for j in range(m):
+                b[c, j], b[piv, j] = b[piv, j], b[c, j]
+        inv = 1.0 / a[c, c]
+        for r in range(c + 1, n):
+            f = a[r, c] * inv
+            if f != 0.0:
+                for j in range(c, n):
+                    a[r, j] -= f * a[c, j]
+                for j in range(m):
+                    b[r, j] -= f * b[c, j]
+    for c in range(n - 1, -1, -1):
+        inv = 1.0 / a[c, c]
+        for j in range(m):
+            x = b[c, j]
+            for k in range(c + 1, n):
+                x -= a[c, k] * b[k, j]
+            b[c, j] = x * inv
+    return True
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _element_to_inboard(u, s_o, p_o, s_i, p_i):
+    """S_I, P_I through an affine element from the outboard S_O, P_O; False if T is singular."""
+    t = np.empty((6, 6))
+    x = np.empty((6, 7))
+    for i in range(6):
+        for j in range(6):
+            tv = u[6 + i, 6 + j]
+            xv = -u[6 + i, j]
+            for k in range(6):
+                tv -= s_o[i, k] * u[k, 6 + j]
+                xv += s_o[i, k] * u[k, j]
+            t[i, j] = tv
+            x[i, j] = xv
+        pv = p_o[i] - u[6 + i, 12]
+        for k in range(6):
+            pv += s_o[i, k] * u[k, 12]
+        x[i, 6] = pv
+    if not _gauss_solve(t, x, 6, 7):
+        return False
+    for i in range(6):
+        p_i[i] = x[i, 6]
+        for j in range(6):
+            s_i[i, j] = x[i, j]
+    return True
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
+    """The joint's elimination (the comment above): free coordinates' indices, H = D^-1 Bl_F^T
+    S_O Phi (mf x 6), D^-1 r (mf) and G = S_O B_F (6 x mf), with r = tau0_F - Bl_F^T y; returns
+    (mf, y) or mf = -1 if D is singular."""
+    y = np.empty(6)
+    for i in range(6):
+        ci = u[i, 12]
+        for c in range(3):
+            if dof[c] == 2:
+                ci += u[i, 6 + c] * tau_nu[c, 2]
+        y[i] = ci
+    sy = _mv(s_o, y) + p_o
+    mf = 0
+    for c in range(3):
+        if dof[c] == 1:
+            free[mf] = c
+            mf += 1
+    if mf == 0:
+        return 0, sy
+    s_phi = _mm(s_o, u[0:6, 0:6])
+    d = np.empty((3, 3))
+    rhs = np.empty((3, 7))
+    for a in range(mf):
+        ca = free[a]
+        for i in range(6):
+            gv = 0.0
+            for k in range(6):
+                gv += s_o[i, k] * u[k, 6 + ca]
+            g[i, a] = gv
+    for a in range(mf):
+        ca = free[a]
+        r = tau_nu[ca, 0]
+        for i in range(6):
+            r -= u[6 + i, ca] * sy[i]
+        rhs[a, 6] = r
+        for j in range(6):
+            x = 0.0
+            for i in range(6):
+                x += u[6 + i, ca] * s_phi[i, j]
+            rhs[a, j] = x
+        for b in range(mf):
+            x = 0.0
+            for i in range(6):
+                x += u[6 + i, ca] * g[i, b]
+            d[a, b] = x - (tau_nu[ca, 1] if a == b else 0.0)
+    if not _gauss_solve(d, rhs, mf, 7):
+        return -1, sy
+    for a in range(mf):
+        d_inv_r[a] = rhs[a, 6]
+        for j in range(6):
+            d_inv_bl_s_phi[a, j] = rhs[a, j]
+    return mf, sy
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root_f, s_mat,
+                      p_vec, port_s, port_p, joint_nu, joint_tau, z):
+    """The full-state sweep of a tree (the comment above): kind, u (2n elements: 2k hinge k,
+    2k + 1 body k), parent (n,), root_f (6,) the ground's [a, alpha].  Scratch: s_mat (2n + 1,
+    6, 6), p_vec (2n + 1, 6) (s[2k]: hinge k's inboard relation, s[2k + 1]: body k's input),
+    port_s, port_p (n, 6, 6), (n, 6).  Writes every station into z, each joint's nu (its
+    coordinates' q'', or a ball joint's relative angular acceleration) into joint_nu and its
+    generalized forces Bl . e_O into joint_tau.  Returns 0, or j + 1 for the element j whose
+    elimination is singular."""
+    n = parent.shape[0]
+    free = np.zeros(3, dtype=np.int64)
+    h_mat = np.empty((3, 6))
+    k0 = np.empty(3)
+    g = np.empty((6, 3))
+    port_s[:, :, :] = 0.0
+    port_p[:, :] = 0.0
+    for k in range(n - 1, -1, -1):
+        jb, jh = 2 * k + 1, 2 * k
+        if not _element_to_inboard(u[jb], port_s[k], port_p[k], s_mat[jb], p_vec[jb]):
+            return jb + 1
+        s_o, p_o = s_mat[jb], p_vec[jb]
+        kd = kind[jh]
+        if kd == IDENTITY:
+            s_mat[jh] = s_o
+            p_vec[jh] = p_o
+        elif kd == TRANSFER:
+            if not _element_to_inboard(u[jh], s_o, p_o, s_mat[jh], p_vec[jh]):
+                return jh + 1
+        elif kd == LOCKED:
+            s_mat[jh] = 0.0
+            p_vec[jh] = known_loads[jh, 0:6]
+        else:   # JOINT
+            mf, sy = _joint_parts(u[jh], joint_dof[k], joint_drive[k], s_o, p_o, free, h_mat,
+                                  k0, g)
+            if mf < 0:
+                return jh + 1
+            psi = u[jh, 6:12, 6:12]
+            s_e = _mm(s_o, u[jh, 0:6, 0:6])
+            p_e = sy.copy()
+            for i in range(6):
+                for a in range(mf):
+                    p_e[i] += g[i, a] * k0[a]
+                    for j in range(6):
+                        s_e[i, j] -= g[i, a] * h_mat[a, j]
+            s_mat[jh] = _mm(psi, s_e)
+            p_vec[jh] = _mv(psi, p_e)
+        p = parent[k]
+        if p >= 0:
+            port_s[p] += s_mat[jh]
+            port_p[p] += p_vec[jh]
+    for r in range(z.shape[0]):
+        for c in range(12):
+            z[r, c] = 0.0
+    z[0, 0:6] = root_f
+    f_i = np.empty(6)
+    f_o = np.empty(6)
+    for k in range(n):
+        jb, jh = 2 * k + 1, 2 * k
+        p = parent[k]
+        st = 0 if p < 0 else 2 * p + 2
+        f_i[:] = z[st, 0:6]
+        if p < 0:
+            z[0, 6:12] += _mv(s_mat[jh], f_i) + p_vec[jh]
+        kd = kind[jh]
+        if kd == IDENTITY:
+            f_o[:] = f_i
+        elif kd == TRANSFER:
+            zi = np.empty(12)
+            zi[0:6] = f_i
+            zi[6:12] = _mv(s_mat[jh], f_i) + p_vec[jh]
+            f_o[:] = _mv(u[jh, 0:6, 0:12], zi) + u[jh, 0:6, 12]
+        elif kd == LOCKED:
+            a = s_mat[jb].copy()
+            x = np.empty((6, 1))
+            x[:, 0] = known_loads[jh, 6:12] - p_vec[jb]
+            if not _gauss_solve(a, x, 6, 1):
+                return jh + 1
+            f_o[:] = x[:, 0]
+        else:
+            s_o, p_o = s_mat[jb], p_vec[jb]
+            mf, _ = _joint_parts(u[jh], joint_dof[k], joint_drive[k], s_o, p_o, free, h_mat,
+                                 k0, g)
+            if mf < 0:
+                return jh + 1
+            for c in range(3):
+                joint_nu[k, c] = joint_drive[k, c, 2] if joint_dof[k, c] == 2 else 0.0
+            for a in range(mf):
+                x = k0[a]
+                for j in range(6):
+                    x -= h_mat[a, j] * f_i[j]
+                joint_nu[k, free[a]] = x
+            f_o[:] = _mv(u[jh, 0:6, 0:6], f_i) + u[jh, 0:6, 12]
+            for c in range(3):
+                if joint_dof[k, c] != 0:
+                    for i in range(6):
+                        f_o[i] += u[jh, i, 6 + c] * joint_nu[k, c]
+        z[jb, 0:6] = f_o
+        z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_vec[jb]
+        if kd == JOINT:
+            for c in range(3):
+                x = 0.0
+                if joint_dof[k, c] != 0:
+                    for i in range(6):
+                        x += u[jh, 6 + i, c] * z[jb, 6 + i]
+                joint_tau[k, c] = x
+        z[jb + 1] = _mv(u[jb, :, 0:12], z[jb]) + u[jb, :, 12]
+    return 0
