@@ -354,7 +354,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     for k in range(n):
         state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
         if model.hinge_kind[k] == ELASTIC:
-            state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[2 * k, 0:3]
+            st = 2 * model.parent[k] + 2            # the inboard station (0: the ground)
+            state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[st, 0:3]
     state.pseudo[:] = state.omega_dot
     state.eta_p[:] = state.eta_acc
     state.defl_pseudo[:] = state.defl_acc
@@ -481,8 +482,9 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
-    the Newmark scheme, the Riccati sweep, ball, fixed, revolute, universal and prismatic joints
-    and every child on its parent's output point (_check_full_tree, _check_tree)."""
+    the Newmark scheme and the Riccati sweep, every child on its parent's output point, and no
+    joint with coordinates or elastic hinge on a beam's end in a tree (_check_full_tree,
+    _check_tree)."""
     if full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
     elif not model.is_chain:
@@ -512,20 +514,16 @@ def check_supported(model, scheme, method="riccati", full_state=False):
 
 
 def _check_full_tree(model, scheme, method):
-    """The full-state tree sweep (full_tree) runs ball, fixed, revolute, universal and
-    prismatic joints, the Newmark scheme and the Riccati sweep."""
+    """The full-state tree sweep (full_tree) runs every joint kind with the Newmark scheme and
+    the Riccati sweep; a beam's end carries a joint with coordinates or an elastic hinge in a
+    chain only (solver.kernel_chain's end-section carrier)."""
     k = next((k for k in range(model.n_bodies)
               if model.hinge_kind[k] in (REVOLUTE, UNIVERSAL, PRISMATIC)), None)
     if k is not None:
         what = (f"hinge '{model.hinge_names[k]}' is "
                 f"{JOINT_KIND[int(model.hinge_kind[k])].what}: joints with coordinates")
     else:
-        k = next((k for k in range(model.n_bodies)
-                  if model.parent[k] != k - 1 or model.attachment[k] != 0), 0)
-        p = model.parent[k]
-        what = (f"body '{model.body_names[k]}' hangs from "
-                + ("the ground" if p < 0 else f"body '{model.body_names[p]}'")
-                + ": a tree")
+        what = f"{_first_branch(model)}: a tree"
     if method == "direct":
         raise ValueError(f"simulate: {what} run in the Riccati sweep from the leaves to the root; "
                          f"method='direct' multiplies the transfer matrices out along a chain "
@@ -539,21 +537,16 @@ def _check_full_tree(model, scheme, method):
     for j in range(model.n_bodies):
         kind = JOINT_KIND.get(int(model.hinge_kind[j]))
         p = model.parent[j]
-        if kind is not None and kind.code == ELASTIC:
-            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' is {kind.what} "
-                             f"({kind.name}); the full-state tree sweep ({what}) runs ball, "
-                             f"fixed, revolute, universal and prismatic joints only so far (the "
-                             f"Newton-Euler reference runs them all)")
         if model.attachment[j] != 0:
             raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
                              f"attachment point of '{model.body_names[p]}'; trees run with "
                              f"every body on its parent's output point only so far")
         after_beam = p >= 0 and model.body_kind[p] == BEAM and kind is not None
-        if (after_beam and kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC)
+        if (after_beam and kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC, ELASTIC)
                 and not model.is_chain):
-            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' joins a beam's end in a "
-                             f"tree; a joint with coordinates after a beam runs in chains only "
-                             f"so far")
+            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' ({kind.what}) joins a "
+                             f"beam's end in a tree; a joint with coordinates or an elastic "
+                             f"hinge after a beam runs in chains only so far")
         if after_beam and kind.code == FIXED and j != p + 1:
             raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' welds body "
                              f"'{model.body_names[j]}' to beam '{model.body_names[p]}', which is "
@@ -561,14 +554,19 @@ def _check_full_tree(model, scheme, method):
                              f"welded body directly follows the beam only so far")
 
 
-def _check_tree(model, scheme, method):
-    """Ball-joint trees run the reduced tree sweep (kernels/tree.py); full_state=True and fixed
-    hinges send a tree to the full-state sweep (_check_full_tree)."""
+def _first_branch(model):
+    """The first body off the chain, said as where it hangs (for the messages)."""
     k = next((k for k in range(model.n_bodies)
               if model.parent[k] != k - 1 or model.attachment[k] != 0), 0)
     p = model.parent[k]
-    branch = (f"body '{model.body_names[k]}' hangs from "
-              + ("the ground" if p < 0 else f"body '{model.body_names[p]}'"))
+    return (f"body '{model.body_names[k]}' hangs from "
+            + ("the ground" if p < 0 else f"body '{model.body_names[p]}'"))
+
+
+def _check_tree(model, scheme, method):
+    """Ball-joint trees run the reduced tree sweep (kernels/tree.py); full_state=True and fixed or
+    elastic hinges send a tree to the full-state sweep (_check_full_tree)."""
+    branch = _first_branch(model)
     if method == "direct":
         raise ValueError(f"simulate: method='direct' multiplies the transfer matrices out along "
                          f"a chain and does not extend to the branches of a tree ({branch}); use "
@@ -630,6 +628,8 @@ def kernel_chain(model):
     body welded to its end section (docs/beam.md, "End sections"), which carries the section's
     rotation history for the hinge as every welded body does.  Results are mapped back."""
     n = model.n_bodies
+    if not model.is_chain:          # (trees: check_supported refuses what would need one)
+        return model, np.arange(n)
     ends = [k for k in range(n - 1) if model.body_kind[k] == BEAM
             and model.hinge_kind[k + 1] in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC)]
     if not ends:

@@ -264,26 +264,37 @@ def _iterate(loop, run, s, it):
     finite = True
     for k in range(n - 1, -1, -1):
         riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq)
-        pk = pmap[k]
-        for i in range(3):
-            alpha[i] = pk[i, 6]
-            for c in range(6):
-                alpha[i] += pk[i, c] * aq[k, c]
-            x = (alpha[i] - w1[k, i]) / c1      # back from w' = c1 phi + w1
-            phi_new[k, i] = x
-            change = max(change, abs(x - phi_star[k, i]))
-            if not np.isfinite(x):
-                finite = False
-        if body_kind[k] == BEAM:                # eta'' = eta_map[:, :7] [a; q; 1]
-            for i in range(mode_off[k], mode_off[k + 1]):
-                e = eta_map[i, 6]
-                for c in range(6):
-                    e += eta_map[i, c] * aq[k, c]
-                eta_dd_new[i] = e
-                change = max(change, abs(e - eta_dd_star[i]) / c1)
+        change, finite = recover_body(pmap[k], aq[k], w1[k], c1, phi_star[k], phi_new[k],
+                                      body_kind[k] == BEAM, mode_off[k], mode_off[k + 1],
+                                      eta_map, eta_dd_star, eta_dd_new, alpha, change, finite)
     if not finite:
         return NOT_FINITE, 0, change
     return OK, 0, change
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def recover_body(pk, aq_k, w1_k, c1, phi_star_k, phi_new_k, beam, i0, i1, eta_map, eta_dd_star,
+                 eta_dd_new, alpha, change, finite):
+    """A body's angular acceleration from its input [a; q] by its map pk (3 x 7), its rotation
+    increment phi = (alpha - w1) / c1, and a beam's modal accelerations eta'' = eta_map[:, :7]
+    [a; q; 1]; returns (change, finite) updated with the largest change of phi or eta'' / c1."""
+    for i in range(3):
+        alpha[i] = pk[i, 6]
+        for c in range(6):
+            alpha[i] += pk[i, c] * aq_k[c]
+        x = (alpha[i] - w1_k[i]) / c1           # back from w' = c1 phi + w1
+        phi_new_k[i] = x
+        change = max(change, abs(x - phi_star_k[i]))
+        if not np.isfinite(x):
+            finite = False
+    if beam:
+        for i in range(i0, i1):
+            e = eta_map[i, 6]
+            for c in range(6):
+                e += eta_map[i, c] * aq_k[c]
+            eta_dd_new[i] = e
+            change = max(change, abs(e - eta_dd_star[i]) / c1)
+    return change, finite
 
 
 @loop_piece

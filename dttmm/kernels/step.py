@@ -242,9 +242,14 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             else:
                 rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
                     rot_star[p], lam[p], w[p], wd[p], dw[p], dwd[p], phi_star[p])
+            if p == k - 1:
+                z_in = z_star[jh]           # the hinge's inboard station: 2k in a chain
+            else:                           # in a tree the parent's output station holds the
+                z_in = z_star[jh + 1].copy()    # loads of all its children: the hinge's own q
+                z_in[3:6] = phi_in              # is its outboard's (a massless hinge passes it)
             elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, dw_in, rot_star[k],
                                    lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
-                                   z_star[jh], u[jh])
+                                   z_in, u[jh])
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
                                             phi_star[k])
         else:
@@ -381,8 +386,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     known_loads = sweep.known_loads
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
-            rot_in = g_rot if k == 0 else rot[k - 1]
-            w_in = g_w if k == 0 else omega[k - 1]
+            p = params.parent[k]
+            rot_in = g_rot if p < 0 else rot[p]
+            w_in = g_w if p < 0 else omega[p]
             q, m_in, m_out = elastic_hinge_loads(hinge_params[k], rot_in, w_in, rot[k], omega[k],
                                                  state.defl[k], state.defl_rate[k])
             known_loads[2 * k, 0:3] = m_in
@@ -634,11 +640,13 @@ def _predict(loop, run, s, _):
             # the spring force at the predicted deflection: an O(h^3) guess, where the last
             # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
             d_pred = state.defl[k] + h * state.defl_rate[k] + 0.5 * h * h * state.defl_pseudo[k]
-            rot_in = rot_now if k == 0 else rot_star[k - 1]
+            p = params.parent[k]
+            rot_in = rot_now if p < 0 else rot_star[p]
             # (the force does not depend on the angular velocities: any will do for them)
             q_pred, _, _ = elastic_hinge_loads(params.hinge_params[k], rot_in, g_w, rot_star[k],
                                                g_w, d_pred, c3 * d_pred + w3d[k])
-            z_star[2 * k, 9:12] = q_pred
+            if p == k - 1:
+                z_star[2 * k, 9:12] = q_pred
             z_star[2 * k + 1, 9:12] = q_pred
     loop.root_f[0:3] = inputs.g_acc[s]
     loop.root_f[3:6] = g_wd
@@ -808,7 +816,8 @@ def _update(loop, run, s, _):
             loop.rot_prev[:, :] = rot[k]
             matmul_into(e3, loop.rot_prev, rot[k])
         if params.hinge_kind[k] == ELASTIC:
-            d_new = (z[2 * k + 1, 0:3] - z[2 * k, 0:3] - loop.w1d[k]) / c1
+            st = 2 * params.parent[k] + 2          # the inboard station (0: the ground)
+            d_new = (z[2 * k + 1, 0:3] - z[st, 0:3] - loop.w1d[k]) / c1
             x = d_new - defl[k]
             _advance_history(h, coef, x, state.defl_rate[k], state.defl_acc[k],
                              state.defl_pseudo[k])

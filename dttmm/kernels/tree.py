@@ -9,7 +9,8 @@ import numpy as np
 
 from . import loop_piece
 from ..elements import BEAM, RIGID
-from .ball_chain import _adopt, _ground_increment, _predict, _update, ball_body_map
+from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map,
+                         recover_body)
 from .beam import ball_map_work_shape, beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import mm3_into
@@ -108,23 +109,9 @@ def _iterate(loop, run, s, it):
         else:
             tree_reduced_recover(maps[k], s_in[k], p_in[k], aq_out[p, 0], aq_out[p, 1],
                                  aq_out[p, 2], aq_in[k], aq_out[k])
-        pk = pmap[k]
-        for i in range(3):
-            alpha[i] = pk[i, 6]
-            for c in range(6):
-                alpha[i] += pk[i, c] * aq_in[k, c]
-            x = (alpha[i] - w1[k, i]) / c1      # back from w' = c1 phi + w1
-            phi_new[k, i] = x
-            change = max(change, abs(x - phi_star[k, i]))
-            if not np.isfinite(x):
-                finite = False
-        if body_kind[k] == BEAM:                # eta'' = eta_map[:, :7] [a; q; 1]
-            for i in range(mode_off[k], mode_off[k + 1]):
-                e = eta_map[i, 6]
-                for c in range(6):
-                    e += eta_map[i, c] * aq_in[k, c]
-                eta_dd_new[i] = e
-                change = max(change, abs(e - eta_dd_star[i]) / c1)
+        change, finite = recover_body(pmap[k], aq_in[k], w1[k], c1, phi_star[k], phi_new[k],
+                                      body_kind[k] == BEAM, mode_off[k], mode_off[k + 1],
+                                      eta_map, eta_dd_star, eta_dd_new, alpha, change, finite)
     if not finite:
         return NOT_FINITE, 0, change
     return OK, 0, change
