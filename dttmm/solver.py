@@ -140,12 +140,21 @@ def full_tree(model, full_state=False):
     return has_coordinates(model) or (not model.is_chain and (full_state or not model.all_ball))
 
 
+def _iterates(model, full_state):
+    """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
+    Jacobian exact only to O(dt) terms (kernels/joint.py, step.py::_welded): their steps iterate
+    to newton_tol by default (without iterations a flexible link there is not stable)."""
+    return has_coordinates(model) or (full_tree(model, full_state) and any(
+        model.hinge_kind[k] == FIXED and model.parent[k] >= 0
+        and model.body_kind[model.parent[k]] == BEAM for k in range(model.n_bodies)))
+
+
 def _joint_inputs(model, times, state=None, dt=0.0):
     """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q'') and a
     JointForce's value f(t, q, q') at each time (kernels/loop.py::Inputs).  A JointForce is
     evaluated at the coordinates the constant-acceleration predictor gives from the state
-    (one step ahead of it: the solver then takes one step per chunk); docs/joints.md, "Drives
-    in the step"."""
+    (one step ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the
+    transfer"."""
     out = np.zeros((len(times), model.n_bodies, 2, 3))
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
@@ -266,8 +275,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     newton_iterations: extra linearizations about the latest solution per step; the step stops
         iterating once the rotation update is below newton_tol (rad).  Default: 0 for Newmark
         (one linearization about the predictor is already second-order accurate), 8 with joints
-        with coordinates (their linearization is exact only to O(dt) terms: iterated, the step
-        is the exact Newmark step; docs/joints.md), 20 for the energy-momentum scheme (which
+        with coordinates or a weld on a beam's end in a tree (their linearization is exact only
+        to O(dt) terms: iterated, the step is the exact Newmark step; docs/joints.md), 20 for
+        the energy-momentum scheme (which
         conserves only once converged).  Steps that used all
         iterations without reaching newton_tol are counted in info["newton_unconverged_steps"].
     record_every: keep every k-th step (and t = 0).
@@ -295,10 +305,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     record_every = int(record_every)
     if scheme not in SCHEMES:
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
-    if newton_iterations is None:       # joints with coordinates: their Jacobian is exact only
-        # to O(h) terms (kernels/joint.py), so the step iterates to newton_tol
+    if newton_iterations is None:
         newton_iterations = (20 if scheme == "energy_momentum"
-                             else 8 if isinstance(model, Model) and has_coordinates(model) else 0)
+                             else 8 if isinstance(model, Model) and _iterates(model, full_state)
+                             else 0)
     if int(newton_iterations) != newton_iterations or newton_iterations < 0:
         raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
                          f"got {newton_iterations!r}")

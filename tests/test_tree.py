@@ -196,3 +196,21 @@ def test_tree_example(tmp_path):
                              "0.01", "--dt", "1e-3", "--method", "direct"], capture_output=True,
                             text=True)
     assert direct.returncode == 2 and "method='direct'" in direct.stderr
+
+
+def test_a_weld_on_a_beams_end_in_a_tree_matches_the_reference():
+    """A body welded to a beam's end, beside a ball-joint branch there: its frame is the end
+    section's (step.py::_welded), the steps iterate, and the whole converges at order 2."""
+    system = System(gravity=[0.0, -9.81, 0.0])
+    system.add(_beam(), BallJoint())
+    system.add(unit_link(name="welded"), FixedHinge(name="weld"), parent="beam")
+    system.add(unit_link(name="hanging", angular_velocity=[0.0, 0.3, 0.2]), BallJoint(),
+               parent="beam")
+    model = system.build()
+    steps = np.array([1e-3, 5e-4])
+    runs = [simulate(model, 0.5, dt, record_every=int(round(0.01 / dt))) for dt in steps]
+    assert runs[0].info["newton_iterations_used"] >= 1
+    ref = simulate_reference(model, 0.5, t_eval=runs[0].t, rtol=1e-12, atol=1e-12)
+    errors = [np.abs(r.position_output - ref.position_output).max() for r in runs]
+    assert abs(np.log(errors[0] / errors[1]) / np.log(2.0) - 2.0) < 0.2, errors   # 2.00
+    assert errors[-1] < 1e-5                                                     # 3.5e-6 m
