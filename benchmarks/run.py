@@ -22,7 +22,7 @@ from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
 from dttmm.kernels import step as kstep
-from dttmm.solver import Workspace, _mode, kernel_chain
+from dttmm.solver import Workspace, _mode, kernel_model
 from numba import njit
 
 
@@ -50,7 +50,7 @@ def floor_us_per_step(model, repeats=20000):
     """The cost of the dense products and the boundary solve alone: the step's sweep (same
     element kinds and matrix sizes, the mode simulate picks) on fixed transfers, in a compiled
     loop."""
-    chain, _ = kernel_chain(model)
+    chain, _ = kernel_model(model)
     ws = Workspace(chain)
     sweep = ws.sweep
     rng = np.random.default_rng(0)

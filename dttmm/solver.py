@@ -143,7 +143,9 @@ def full_tree(model, full_state=False):
 def _iterates(model, full_state):
     """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
     Jacobian exact only to O(dt) terms (kernels/joint.py, step.py::_welded): their steps iterate
-    to newton_tol by default (without iterations a flexible link there is not stable)."""
+    to newton_tol by default (without iterations a flexible link there is not stable).  Asked of
+    the kernels' model (kernel_model: an end section is welded to its beam)."""
+    model = kernel_model(model)[0]
     return has_coordinates(model) or (full_tree(model, full_state) and any(
         model.hinge_kind[k] == FIXED and model.parent[k] >= 0
         and model.body_kind[model.parent[k]] == BEAM for k in range(model.n_bodies)))
@@ -331,7 +333,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         return richardson_extrapolation(*runs)
     check_supported(model, scheme, method, full_state)
     user_model = model
-    model, keep = kernel_chain(user_model)
+    model, keep = kernel_model(user_model)
     mode = _mode(model, method, full_state)
     coef = Integrator.from_rho_inf(rho_inf).array()
 
@@ -492,9 +494,7 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
-    the Newmark scheme and the Riccati sweep, every child on its parent's output point, and no
-    joint with coordinates or elastic hinge on a beam's end in a tree (_check_full_tree,
-    _check_tree)."""
+    the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree)."""
     if full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
     elif not model.is_chain:
@@ -524,9 +524,8 @@ def check_supported(model, scheme, method="riccati", full_state=False):
 
 
 def _check_full_tree(model, scheme, method):
-    """The full-state tree sweep (full_tree) runs every joint kind with the Newmark scheme and
-    the Riccati sweep; a beam's end carries a joint with coordinates or an elastic hinge in a
-    chain only (solver.kernel_chain's end-section carrier)."""
+    """The full-state tree sweep (full_tree) runs every joint kind, with the Newmark scheme and
+    the Riccati sweep only."""
     k = next((k for k in range(model.n_bodies)
               if model.hinge_kind[k] in (REVOLUTE, UNIVERSAL, PRISMATIC)), None)
     if k is not None:
@@ -544,24 +543,6 @@ def _check_full_tree(model, scheme, method):
     if model.tip_pinned:
         raise ValueError(f"simulate: {what}: a pinned tip (a closed loop) does not run with "
                          f"them yet")
-    for j in range(model.n_bodies):
-        kind = JOINT_KIND.get(int(model.hinge_kind[j]))
-        p = model.parent[j]
-        if model.attachment[j] != 0:
-            raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
-                             f"attachment point of '{model.body_names[p]}'; trees run with "
-                             f"every body on its parent's output point only so far")
-        after_beam = p >= 0 and model.body_kind[p] == BEAM and kind is not None
-        if (after_beam and kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC, ELASTIC)
-                and not model.is_chain):
-            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' ({kind.what}) joins a "
-                             f"beam's end in a tree; a joint with coordinates or an elastic "
-                             f"hinge after a beam runs in chains only so far")
-        if after_beam and kind.code == FIXED and j != p + 1:
-            raise ValueError(f"simulate: hinge '{model.hinge_names[j]}' welds body "
-                             f"'{model.body_names[j]}' to beam '{model.body_names[p]}', which is "
-                             f"not the body before it; a weld on a beam's end runs when the "
-                             f"welded body directly follows the beam only so far")
 
 
 def _first_branch(model):
@@ -584,11 +565,6 @@ def _check_tree(model, scheme, method):
     if scheme != "newmark":
         raise ValueError(f"simulate(scheme='{scheme}'): the scheme runs chains; the model is a "
                          f"tree ({branch}); use scheme='newmark'")
-    for j in range(model.n_bodies):
-        if model.attachment[j] != 0:
-            raise ValueError(f"simulate: body '{model.body_names[j]}' hangs from a named "
-                             f"attachment point of '{model.body_names[model.parent[j]]}'; trees "
-                             f"run with every body on its parent's output point only so far")
 
 
 def _station_histories(model, state, independent):
@@ -632,53 +608,99 @@ def _initial_mass_center_velocities(model, rot, omega):
     return v_c
 
 
-def kernel_chain(model):
-    """The chain the kernels integrate, and the kernel index of each of the model's bodies: the
-    model itself, except that a beam whose output hinge is elastic gets a massless, zero-length
-    body welded to its end section (docs/beam.md, "End sections"), which carries the section's
-    rotation history for the hinge as every welded body does.  Results are mapped back."""
+def kernel_model(model):
+    """The model the kernels integrate, and the kernel index of each of the model's bodies
+    (results are mapped back, _user_sample).  Two kinds of massless rigid body, welded to their
+    parent, stand in where a sweep needs a frame or a point that the model gives implicitly
+    (docs/topology.md, "What the kernels integrate"):
+    - an end section, welded to a beam's end with zero length, carries the section's rotation
+      history (docs/beam.md, "End sections") where a hinge there needs it: an elastic hinge or
+      a joint with coordinates, or in a tree any hinge but a ball joint, except a lone weld on
+      the body right after the beam (which the beam's transfer takes itself).  The beam's
+      children then hang from it.
+    - an attachment offset reaches from a rigid body's output point to one of its named points
+      (RigidBody(points=...)); the bodies hanging there hang from its output point.  Every
+      sweep then joins children at output points only.
+    The mass, momentum and energy of both are zero; a chain without them is the model itself."""
     n = model.n_bodies
-    if not model.is_chain:          # (trees: check_supported refuses what would need one)
+    chain = model.is_chain
+    children = [[] for _ in range(n)]
+    for c in range(n):
+        if model.parent[c] >= 0:
+            children[model.parent[c]].append(c)
+
+    def needs_section(k):
+        hinges = [int(model.hinge_kind[c]) for c in children[k]]
+        if model.body_kind[k] != BEAM or not hinges:
+            return False
+        if any(h in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC) for h in hinges):
+            return True
+        return (not chain and FIXED in hinges
+                and not (children[k] == [k + 1] and hinges == [FIXED]))
+
+    ends = {k for k in range(n) if needs_section(k)}
+    if not ends and not np.any(model.attachment):
         return model, np.arange(n)
-    ends = [k for k in range(n - 1) if model.body_kind[k] == BEAM
-            and model.hinge_kind[k + 1] in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC)]
-    if not ends:
-        return model, np.arange(n)
-    rows = {name: [] for name in ("body_params", "hinge_kind", "hinge_params", "body_kind",
-                                  "beam_params", "initial_rotation", "initial_angular_velocity",
-                                  "ground_locked", "forces", "torques", "body_names",
-                                  "hinge_names", "body_mass_center_inertia", "drives")}
-    keep = []
+    names = ("body_params", "hinge_kind", "hinge_params", "body_kind", "beam_params",
+             "initial_rotation", "initial_angular_velocity", "ground_locked", "forces",
+             "torques", "body_names", "hinge_names", "body_mass_center_inertia", "drives")
+    rows = {name: [] for name in names}
+    parent, keep, hub, offsets = [], [], {}, {}
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     identity = np.zeros(HINGE_PARAM_SIZE)
     identity[REST_ROTATION] = np.eye(3).reshape(-1)
+
+    def add_massless(inboard, to_output, rot, omega, locked, body_name, hinge_name):
+        body_params = np.zeros_like(model.body_params[0])
+        body_params[TO_OUTPUT] = to_output
+        row = dict(body_params=body_params, hinge_kind=FIXED, hinge_params=identity,
+                   body_kind=RIGID, beam_params=np.zeros_like(model.beam_params[0]),
+                   initial_rotation=rot, initial_angular_velocity=omega, ground_locked=locked,
+                   forces=None, torques=None, body_names=body_name, hinge_names=hinge_name,
+                   body_mass_center_inertia=np.zeros((3, 3)), drives=())
+        for name in names:
+            rows[name].append(row[name])
+        parent.append(inboard)
+        return len(parent) - 1
+
     for k in range(n):
-        keep.append(len(rows["body_kind"]))
-        for name in rows:
+        p = model.parent[k]
+        if p < 0:
+            inboard = -1
+        elif model.attachment[k] == 0:
+            inboard = hub[p]
+        else:                           # one offset per named point in use
+            key = (p, int(model.attachment[k]))
+            if key not in offsets:
+                offsets[key] = add_massless(
+                    keep[p], model.attachment_point[k] - model.body_params[p, TO_OUTPUT],
+                    model.initial_rotation[p], model.initial_angular_velocity[p],
+                    model.ground_locked[p], f"{model.body_names[p]} point {key[1]}",
+                    f"{model.body_names[p]} point {key[1]} weld")
+            inboard = offsets[key]
+        for name in names:
             rows[name].append(getattr(model, name)[k])
+        parent.append(inboard)
+        keep.append(len(parent) - 1)
+        hub[k] = keep[k]
         if k in ends:
             eta0 = model.initial_modal_coordinates[mode_off[k]:mode_off[k + 1]]
             eta_d0 = model.initial_modal_velocities[mode_off[k]:mode_off[k + 1]]
             rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
                                         model.initial_angular_velocity[k], eta0, eta_d0)
-            carrier = dict(body_params=np.zeros_like(model.body_params[k]), hinge_kind=FIXED,
-                           hinge_params=identity, body_kind=RIGID,
-                           beam_params=np.zeros_like(model.beam_params[k]), initial_rotation=rot,
-                           initial_angular_velocity=omega, ground_locked=False, forces=None,
-                           torques=None, body_names=f"{model.body_names[k]} end section",
-                           hinge_names=f"{model.body_names[k]} end weld",
-                           body_mass_center_inertia=np.zeros((3, 3)), drives=())
-            for name in rows:
-                rows[name].append(carrier[name])
+            hub[k] = add_massless(keep[k], np.zeros(3), rot, omega, False,
+                                  f"{model.body_names[k]} end section",
+                                  f"{model.body_names[k]} end weld")
     arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names",
                                           "drives")
                      else np.array(v)) for name, v in rows.items()}
-    n_new = len(arrays["body_kind"])
-    attachment_point = np.zeros((n_new, 3))
-    attachment_point[1:] = arrays["body_params"][:-1, TO_OUTPUT]
-    return replace(model, n_bodies=n_new, parent=np.arange(n_new) - 1,
-                   attachment=np.zeros(n_new, dtype=np.int64), attachment_point=attachment_point,
-                   **arrays), np.array(keep)
+    parent = np.array(parent, dtype=np.int64)
+    attachment_point = np.zeros((len(parent), 3))
+    inner = parent >= 0
+    attachment_point[inner] = arrays["body_params"][parent[inner]][:, TO_OUTPUT]
+    return replace(model, n_bodies=len(parent), parent=parent,
+                   attachment=np.zeros(len(parent), dtype=np.int64),
+                   attachment_point=attachment_point, **arrays), np.array(keep)
 
 
 def _user_sample(sample, keep):
@@ -748,7 +770,8 @@ def richardson_extrapolation(coarse, fine):
 
     names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
              "angular_acceleration", "force", "moment", "kinetic", "potential",
-             "velocity_input", "modal_coordinates", "modal_velocities")
+             "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
+             "joint_rates", "drive_force")
     fields = {name: combine(name) for name in names}
     u, _, vt = np.linalg.svd(combine("rotation"))       # nearest rotation: the polar factor
     u[..., :, 2] *= np.sign(np.linalg.det(u @ vt))[..., None]

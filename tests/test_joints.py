@@ -4,7 +4,7 @@ build, and bad input refused at build time naming the joint and the argument
 import numpy as np
 import pytest
 
-from dttmm import (BallJoint, JointForce, JointMotion, PrismaticJoint, RevoluteJoint, RigidBody,
+from dttmm import (JointForce, JointMotion, PrismaticJoint, RevoluteJoint, RigidBody,
                    SpringDamper, System, UniversalJoint, simulate)
 from dttmm.chains import unit_link
 from dttmm.elements.joints import rotation_about
@@ -111,13 +111,3 @@ def test_what_dttmm_does_not_run_with_them_is_refused_by_name():
     with pytest.raises(ValueError, match="hinge 'joint1' is a revolute joint.*Newmark scheme.*"
                                          "scheme='newmark'"):
         simulate(arm(), 0.01, 1e-3, scheme="energy_momentum")
-    from dttmm import EulerBernoulliBeam
-    system = System()
-    system.add(EulerBernoulliBeam(length=1.0, density=3300.0, area=4e-4, bending_stiffness=333.3,
-                                  polar_inertia_per_length=8.8e-4, name="beam"),
-               RevoluteJoint([0, 0, 1], name="r"))
-    system.add(unit_link(name="b"), RevoluteJoint([0, 0, 1], name="r2"), parent="beam")
-    system.add(unit_link(name="c"), BallJoint(), parent="beam")
-    with pytest.raises(ValueError, match="hinge 'r2' \\(a revolute joint\\) joins a beam's end in "
-                                         "a tree"):
-        simulate(system.build(), 0.01, 1e-3)

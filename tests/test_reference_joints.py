@@ -306,17 +306,6 @@ def test_slider_on_a_beam_end():
 # what the reference refuses
 # --------------------------------------------------------------------------------------------
 
-def test_refuses_named_attachment_points_naming_the_joint():
-    system = System()
-    system.add(unit_link(name="a", points={"side": [0.5, 0.2, 0.0]}),
-               RevoluteJoint(axis=[0, 0, 1]))
-    system.add(unit_link(name="b"), RevoluteJoint(axis=[0, 1, 0], name="elbow"), parent="a",
-               at="side")
-    with pytest.raises(ValueError, match="RevoluteJoint 'elbow' \\(hinge 1\\).*named "
-                                         "attachment point"):
-        simulate_reference(system.build(), 0.1)
-
-
 def test_a_drive_that_fails_during_the_run_names_its_joint():
     """A drive function valid at t = 0 (checked at build time) that returns NaN later."""
     system = System()

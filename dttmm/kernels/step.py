@@ -260,7 +260,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             m = (i1 - i0) // 2
             zs = z_star[jh + 1].copy()
             zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
-            welded = k + 1 < n and hinge_kind[k + 1] == FIXED
+            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
             kout = k + 1 if welded else k
             outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
                         wd[kout] - c1 * phi_star[kout])
@@ -487,7 +487,8 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
 def _welded(params, mode, k):
     """In the full-state tree sweep, a body welded to another (a fixed hinge; not to the ground)
     is not integrated on its own: its frame is its parent's (R0), or the end section's of a
-    parent beam (solver.kernel_chain's carrier, the parent frame of a joint with coordinates).
+    parent beam (solver.kernel_model's end section: the parent frame of a joint with
+    coordinates or an elastic hinge there).
     Integrated on its own, a body whose parent's rotation is set at position level (a joint
     child, a beam's end) would drift from it, and differencing a rotation held at position level
     with the trapezoidal rule's relations leaves a step-to-step mode in the acceleration that

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT
+from .joint import FREE, PRESCRIBED
 from .mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
@@ -648,13 +649,13 @@ def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
     for i in range(6):
         ci = u[i, 12]
         for c in range(3):
-            if dof[c] == 2:
+            if dof[c] == PRESCRIBED:
                 ci += u[i, 6 + c] * tau_nu[c, 2]
         y[i] = ci
     sy = _mv(s_o, y) + p_o
     mf = 0
     for c in range(3):
-        if dof[c] == 1:
+        if dof[c] == FREE:
             free[mf] = c
             mf += 1
     if mf == 0:
@@ -780,7 +781,7 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
             if mf < 0:
                 return jh + 1
             for c in range(3):
-                joint_nu[k, c] = joint_drive[k, c, 2] if joint_dof[k, c] == 2 else 0.0
+                joint_nu[k, c] = joint_drive[k, c, 2] if joint_dof[k, c] == PRESCRIBED else 0.0
             for a in range(mf):
                 x = k0[a]
                 for j in range(6):

@@ -67,6 +67,21 @@ row a_O,{n-1} = 0 (a point fixed in the world); a chain lying straight between i
 points then leaves the tension along it indeterminate, and the solver takes the solution with
 the least tip force (SVD), as the DT-TMM sweeps do.
 
+Attachment points.  In a tree "k - 1" above reads parent[k] = P, and hinge k sits at P's
+attachment point r_att,k (Model.attachment_point): a beam's output point, its only one, with
+its end section as the inboard frame, exactly as above; on a rigid parent any point x_k fixed in
+its frame (its output point l_IO or a named point, body frame from its input point), with the
+body's own frame (A_P, w_P, alpha_P) as the inboard frame:
+    rho_att,k = A_P x_k,   r_att,k = r_in,P + rho_att,k,   v_att,k = v_in,P + w_P x rho_att,k,
+    a_att,k = a_P + alpha_P x rho_att,k + w_P x (w_P x rho_att,k),
+so for x_k = l_IO these are r_O, v_O and a_O of the rigid body (rho_att = rho_O) and a chain
+runs exactly as before.  Everything above takes r_att,k in place of the inboard output point for
+hinge k: r_in_k = r_att,k + d_k, the constraint rows a_k = a_att,k (columns -1 at a_P and
+rho_att,k^ at alpha_P, right-hand side w_P x (w_P x rho_att,k)), the reactions' share of the
+parent's Euler row + (rho_att,k + d_k) x F_k + N_k (the transposes of those columns, so the
+reactions still do no work), an elastic hinge's -q at r_att,k and d_k'' = a_k - a_att,k.  Each
+child of one parent carries its own arm.
+
 Joints with coordinates (revolute, universal, prismatic; docs/joints.md).  Their coordinates q
 and rates q' (one each, two for a universal joint) are states (all coordinates in hinge order,
 then all rates: Result.joint_coordinates' order); the child carries no quaternion of its own but
@@ -595,12 +610,16 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                 q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
-                joints):
+                attachment_point, joints):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
     deflections and slides (world) of every body, from the state and the ground motion (a
     prismatic joint's offset d = A_P n q and its rate take the deflection's place); and each body's
     output point and section: rho_O = r_O - r_I, A_O, w_O, the velocity parts of a_O and
-    alpha_O, (beams) B_r, B_t padded to the widest beam's 2n columns, and v_O."""
+    alpha_O, (beams) B_r, B_t padded to the widest beam's 2n columns, and v_O.  Also, per body k
+    with a parent P, where its hinge attaches (module docstring, "Attachment points"):
+    rho_att[k] = r_att,k - r_in,P (A_P x_k on a rigid parent, x_k = attachment_point[k] in its
+    frame; a beam parent's rho_O) and acc_v_att[k], the velocity part of a_att,k (w_P x (w_P x
+    rho_att,k) on a rigid parent, the beam's a_O velocity part); zero rows for the roots."""
     n = body_params.shape[0]
     n2max = 2 * shape_vec.shape[2]
     rot = np.empty((n, 3, 3))
@@ -617,19 +636,34 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     alpha_v = np.zeros((n, 3))
     b_r = np.zeros((n, 3, n2max))
     b_t = np.zeros((n, 3, n2max))
+    rho_att = np.zeros((n, 3))
+    acc_v_att = np.zeros((n, 3))
     parent = topology[0]
     for k in range(n):           # parents first (Model.parent[k] < k)
         kp = parent[k]
-        if kp < 0:               # the output point of the inboard body, or the ground point
+        if kp < 0:               # the ground point
             r_prev, v_prev = r_g, v_g
-        else:
+        elif body_kind[kp] == _BEAM:     # a beam's one attachment point: its output point
+            rho_att[k] = rho_o[kp]
+            acc_v_att[k] = acc_v[kp]
             r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
-        if hinge_kind[k] == FIXED:   # welded to the inboard output section (or the ground)
+        else:
+            # a rigid parent's attachment point x_k (its output point l_IO or a named point):
+            # r_att = r_in,P + A_P x_k,  v_att = v_in,P + w_P x rho_att,
+            # a_att = a_P + alpha_P x rho_att + w_P x (w_P x rho_att)
+            arm = rot[kp] @ attachment_point[k]
+            v_arm = _cross(omega[kp], arm)
+            rho_att[k] = arm
+            acc_v_att[k] = _cross(omega[kp], v_arm)
+            r_prev, v_prev = r_in[kp] + arm, v_in[kp] + v_arm
+        # the inboard frame: the parent's output section (a rigid parent's own frame, A_O = A,
+        # w_O = w, whichever of its points the hinge is at; a beam's end section), or the ground
+        if hinge_kind[k] == FIXED:   # welded to the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
             rot[k] = a_in @ _mat3(hinge_params[k], _R0)
             omega[k] = w_in
-        elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard output section
+        elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
             q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
@@ -659,7 +693,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             acc_v[k] = _cross(omega[k], v_rel)
         v_o[k] = v_in[k] + v_rel
     return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
-            b_r, b_t, v_o)
+            b_r, b_t, v_o, rho_att, acc_v_att)
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
@@ -826,10 +860,10 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
-def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, q_el, m_el,
-              body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
-              shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns, gravity,
-              a_g, rot_g, w_g, wd_g, forces, torques, topology, joints):
+def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, rho_att,
+              acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
+              beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
+              n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, topology, joints):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
@@ -837,7 +871,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
     e_col0 + m_off[k] + (0..2n-1), its modal equations in the same rows; its coordinates and
     rates are y[e0 + m_off[k] + ...] and y[e0 + n_modal + m_off[k] + ...].  A joint with
     coordinates has both reaction columns and its coordinates' accelerations in the columns
-    joints[3] + c_off[k] + (0, 1), its coordinate rows in the same rows (_joint_rows)."""
+    joints[3] + c_off[k] + (0, 1), its coordinate rows in the same rows (_joint_rows).  Hinge k
+    attaches at rho_att[k] from its parent's input point, with the velocity part acc_v_att[k] of
+    that point's acceleration (_kinematics; module docstring, "Attachment points")."""
     n = rot.shape[0]
     parent, child_start, child_list = topology
     s = np.zeros((n_unknowns, n_unknowns))
@@ -881,8 +917,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             weight = mass * gravity + forces[k]
             # Newton: M a - hat(h) alpha - F_k + F_{k+1} = M g + f - w x (w x h) + q_k - q_{k+1}
             bn = weight - _cross(w, _cross(w, h))
-            # Euler about I: J alpha + hat(h) a - N_k + N_{k+1} + hat(rho_o + d_{k+1}) F_{k+1}
-            #     = -w x J w + rho_c x (M g + f) + tau + m_k - m_{k+1} - (rho_o + d_{k+1}) x q_{k+1}
+            # Euler about I: J alpha + hat(h) a - N_k + sum_c [N_c + hat(rho_att,c + d_c) F_c]
+            #     = -w x J w + rho_c x (M g + f) + tau + m_k - sum_c [m_c + (rho_att,c + d_c) x q_c]
+            # over the children c (rho_att,c = rho_o for a chain's output point)
             be = -_cross(w, j_w @ w) + _cross(rho_c, weight) + torques[k]
         hc = _hat(h)
         for i in range(3):
@@ -903,16 +940,17 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 c = m_col[k]
                 for i in range(3):
                     s[re + i, c + i] = -1.0
-        # each outboard hinge c (joining a child c at the output point) acting on body k:
-        # force -F_c at r_O + d_c, couple -N_c; a beam's modal rows get their generalized
-        # forces B_r^T F_c + B_t^T (N_c + d_c x F_c) (d_c: an elastic hinge's deflection or a
-        # slide, zero otherwise)
+        # each outboard hinge c (joining a child c at its attachment point r_att,c: a beam's
+        # output point, any point of a rigid body) acting on body k: force -F_c at
+        # r_att,c + d_c, couple -N_c; a beam's modal rows get their generalized forces
+        # B_r^T F_c + B_t^T (N_c + d_c x F_c) (d_c: an elastic hinge's deflection or a slide,
+        # zero otherwise)
         for ci in range(child_start[k], child_start[k + 1]):
             kc = child_list[ci]
-            arm = rho_o[k] + defl[kc]
+            arm = rho_att[kc] + defl[kc]
             if hinge_kind[kc] == ELASTIC:
-                # -q at r_O and the couple -m_in = -(m_out + d x q) about r_O; on a beam their
-                # generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
+                # -q at r_att and the couple -m_in = -(m_out + d x q) about r_att; on a beam
+                # their generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
                 bn -= q_el[kc]
                 be -= m_el[kc] + _cross(arm, q_el[kc])
                 m_in = m_el[kc] + _cross(defl[kc], q_el[kc])
@@ -945,8 +983,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         for i in range(3):
             b[rn + i] = bn[i]
             b[re + i] = be[i]
-        # constraint rows of the inboard hinge (acceleration level):
-        #     a_k = a_O,{k-1},  alpha_k = alpha_O,{k-1} (fixed hinge)
+        # constraint rows of the inboard hinge (acceleration level), P = parent[k]:
+        #     a_k = a_att,k = a_P + alpha_P x rho_att,k + B_r eta''_P + acc_v_att,k,
+        #     alpha_k = alpha_O,P (fixed hinge)
         if hinge_kind[k] != ELASTIC:
             r = f_col[k]
             for i in range(3):
@@ -956,7 +995,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                     b[r + i] = a_g[i]
             else:
                 kp = parent[k]
-                hpo = _hat(rho_o[kp])
+                hpo = _hat(rho_att[k])
                 pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
                 pce = e_col0 + m_off[kp]
                 for i in range(3):
@@ -965,7 +1004,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         s[r + i, 6 * kp + 3 + j] = hpo[i, j]
                     for j in range(pn2):
                         s[r + i, pce + j] = -b_r[kp, i, j]
-                    b[r + i] = acc_v[kp, i]
+                    b[r + i] = acc_v_att[k, i]
             if m_col[k] >= 0:
                 r = m_col[k]
                 for i in range(3):
@@ -1043,22 +1082,24 @@ def _solve_least_tip_force(s, b, t_col):
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
-                    topology, joints):
+                    topology, attachment_point, joints):
     """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
-    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, and, per joint
-    coordinate (joints), its acceleration q'' and the joint loads' generalized force s_i . N
-    (s_i . F for a slide)."""
+    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, per joint
+    coordinate (joints) its acceleration q'' and the joint loads' generalized force s_i . N
+    (s_i . F for a slide), and per hinge its attachment point's arm rho_att and the velocity part
+    of its acceleration acc_v_att (_kinematics)."""
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
-     b_t, v_o) = _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
-                        shape_vec, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g,
-                        topology, joints)
+     b_t, v_o, rho_att, acc_v_att) = _kinematics(
+        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, q_off,
+        w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology, attachment_point,
+        joints)
     q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
                                 hinge_params, rot_g, w_g, topology[0])
-    s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, q_el,
-                     m_el, body_params, hinge_kind, hinge_params, body_kind, beam_params,
-                     shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
-                     n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, topology,
-                     joints)
+    s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
+                     rho_att, acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params,
+                     body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
+                     f_col, m_col, t_col, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
+                     torques, topology, joints)
     if t_col >= 0:
         x = _solve_least_tip_force(s, b, t_col)
     else:
@@ -1093,21 +1134,22 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
                 dirs[2, i] * load[2]
     return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
-            b_r, coord_acc, generalized)
+            b_r, coord_acc, generalized, rho_att, acc_v_att)
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology,
-               joints):
+               attachment_point, joints):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
     modal coordinates of all beams, their rates, joint coordinates, their rates]."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
-     b_r, coord_acc, _) = _solve_dynamics(
+     b_r, coord_acc, _, rho_att, acc_v_att) = _solve_dynamics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
-        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology, joints)
+        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology, attachment_point,
+        joints)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):
@@ -1125,15 +1167,17 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             o = d_off[k]
             dy[o:o + 3] = y[o + 3:o + 6]
             kp = topology[0][k]
+            # d'' = a_k - a_att,k, the attachment point's acceleration (the ground's for a root;
+            # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's end)
             if kp < 0:
-                a_prev_out = a_g
+                a_att = a_g
             else:
-                a_prev_out = acc[kp] + _cross(alpha[kp], rho_o[kp]) + acc_v[kp]
+                a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
                 if body_kind[kp] == _BEAM:
                     nm2 = 2 * int(beam_params[kp, _BMODES])
                     br = np.ascontiguousarray(b_r[kp, :, :nm2])
-                    a_prev_out = a_prev_out + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
-            dy[o + 3:o + 6] = acc[k] - a_prev_out
+                    a_att = a_att + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
+            dy[o + 3:o + 6] = acc[k] - a_att
     for i in range(n_modal):
         dy[e0 + i] = y[e0 + n_modal + i]
         dy[e0 + n_modal + i] = modal_acc[i]
@@ -1246,11 +1290,15 @@ class _Problem:
         self._force_fns = [(k, f) for k, f in enumerate(model.forces) if f is not None]
         self._torque_fns = [(k, f) for k, f in enumerate(model.torques) if f is not None]
         # the tree: each body's parent and its children (CSR: child_list[child_start[k]:
-        # child_start[k + 1]]), every child on its parent's output point
+        # child_start[k + 1]]), and where each hinge attaches: Model.attachment_point, the point
+        # in its parent's frame from the parent's input point (a rigid parent's output point or
+        # one of its named points; a beam parent's output point, which the kernels take from
+        # the beam's deflected end instead)
         parent = np.ascontiguousarray(model.parent, dtype=np.int64)
         children = [[c for c in range(n) if parent[c] == k] for k in range(n)]
         self.topology = (parent, np.cumsum([0] + [len(c) for c in children]).astype(np.int64),
                          np.array([c for cs in children for c in cs], dtype=np.int64))
+        self.attachment_point = np.ascontiguousarray(model.attachment_point, dtype=float)
         # the drives, evaluated in Python at every right-hand side (joint_inputs)
         self.prescribed = np.zeros(nq, dtype=np.int64)
         self.drive_value = np.zeros(nq)
@@ -1337,7 +1385,7 @@ class _Problem:
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.t_col, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
-                wd_g, forces, torques, self.topology, self.joints)
+                wd_g, forces, torques, self.topology, self.attachment_point, self.joints)
 
     def rhs(self, t, y):
         return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
@@ -1355,7 +1403,8 @@ class _Problem:
         out = _kinematics(y, self.body_params, self.kinds,
                           self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
                           self.q_off, self.w_off, self.d_off, self.m_off, self.e0, self.n_modal,
-                          r_g, v_g, rot_g, w_g, self.topology, self.joints)
+                          r_g, v_g, rot_g, w_g, self.topology, self.attachment_point,
+                          self.joints)
         return out[6], out[13], out[7], out[8]
 
 
@@ -1363,12 +1412,6 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
     if not isinstance(model, Model):
         raise ValueError(f"simulate_reference: model must be a dttmm Model (from build_chain), "
                          f"got {type(model).__name__}")
-    for k in np.nonzero(np.asarray(model.attachment) != 0)[0]:
-        kind = JOINT_KIND[int(model.hinge_kind[k])].name
-        raise ValueError(f"simulate_reference: {kind} '{model.hinge_names[k]}' (hinge {k}) joins "
-                         f"body '{model.body_names[k]}' to a named attachment point of its "
-                         f"parent; the reference solver joins bodies at output points only so "
-                         f"far")
     try:
         t_end = float(t_end)
     except (TypeError, ValueError):
@@ -1421,7 +1464,9 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     joint_rates (a prescribed coordinate's from its motion) and drive_force (T, total
     coordinates; hinge order), a prismatic child's input point moves by its slide, and the
     potential energy counts the drive springs.  A drive that returns a non-finite or non-scalar
-    value during the run raises ValueError naming the joint and coordinate.
+    value during the run raises ValueError naming the joint and coordinate.  Trees run with every
+    hinge kind at any attachment point: a beam's output point, a rigid body's output point or
+    one of its named points (Model.attachment_point; module docstring, "Attachment points").
     """
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     prob = _Problem(model)
