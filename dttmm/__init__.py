@@ -1,12 +1,21 @@
-"""dttmm: the discrete-time transfer matrix method for multibody chains."""
+"""dttmm: the discrete-time transfer matrix method for multibody systems of rigid bodies and
+flexible beams (Rui et al.), with an independent Newton-Euler reference solver."""
+from importlib.metadata import PackageNotFoundError, version as _version
+
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
 from .model import Ground, Model, PrescribedMotion, System, build_chain
+from .result import Result
+from .solver import DivergenceError, simulate
+from .reference import simulate_reference
+
+try:
+    __version__ = _version("dttmm")
+except PackageNotFoundError:        # run from a source tree that is not installed
+    __version__ = "0.0.0+unknown"
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
-           "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain"]
-from .solver import DivergenceError, simulate  # noqa: E402
-
-__all__ += ["simulate", "DivergenceError"]
+           "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain",
+           "simulate", "simulate_reference", "Result", "DivergenceError", "__version__"]

@@ -1,6 +1,7 @@
 """One result object for every solver: recorded samples of the chain's state, and energies."""
 import csv
-from dataclasses import dataclass, field
+import json
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -70,17 +71,29 @@ class Result:
         return rotation_to_xyz_angles(self.rotation)
 
     def save_npz(self, path):
-        np.savez_compressed(path, method=self.method, t=self.t, position_input=self.position_input,
-                            position_mass_center=self.position_mass_center,
-                            position_output=self.position_output, rotation=self.rotation,
+        """Write every field to a compressed .npz (arrays as they are; method, wall_time,
+        n_steps and info as entries of their own), plus the derived quaternion, xyz_angles and
+        total_energy for readers outside dttmm; Result.load_npz reads it back."""
+        arrays = {f.name: getattr(self, f.name) for f in fields(self)
+                  if f.name not in ("method", "wall_time", "n_steps", "info")
+                  and getattr(self, f.name) is not None}
+        np.savez_compressed(path, method=self.method, wall_time=self.wall_time,
+                            n_steps=self.n_steps,
+                            info=json.dumps(self.info, default=_json_value),
                             quaternion=self.quaternion, xyz_angles=self.xyz_angles,
-                            angular_velocity=self.angular_velocity,
-                            angular_acceleration=self.angular_acceleration,
-                            force=self.force, moment=self.moment, kinetic=self.kinetic,
-                            potential=self.potential, total_energy=self.total_energy,
-                            **({} if self.modal_coordinates is None else dict(
-                                modal_coordinates=self.modal_coordinates,
-                                modal_velocities=self.modal_velocities)))
+                            total_energy=self.total_energy, **arrays)
+
+    @classmethod
+    def load_npz(cls, path):
+        """The Result that save_npz wrote to path (info's tuples come back as lists)."""
+        with np.load(path, allow_pickle=False) as data:
+            names = {f.name for f in fields(cls)}
+            values = {k: data[k] for k in data.files if k in names}
+        values["method"] = str(values["method"])
+        values["wall_time"] = float(values["wall_time"])
+        values["n_steps"] = int(values["n_steps"])
+        values["info"] = json.loads(str(values["info"]))
+        return cls(**values)
 
     def save_csv(self, path):
         """t, then x,y,z of each body's output point, then the energies."""
@@ -105,6 +118,11 @@ def angular_momentum(model, result, point=(0.0, 0.0, 0.0)):
     j_c = np.einsum("tkij,kjl,tkml->tkim", rot, model.body_mass_center_inertia, rot)
     spin = np.einsum("tkij,tkj->tki", j_c, result.angular_velocity)
     return np.sum(p[:, MASS][None, :, None] * np.cross(r_c, v_c) + spin, axis=1)
+
+
+def _json_value(x):
+    """info's values for json: numpy scalars as numbers, anything else as text."""
+    return x.item() if isinstance(x, np.generic) else str(x)
 
 
 def rotation_to_quaternion(rot):

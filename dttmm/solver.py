@@ -6,6 +6,7 @@ chunks; Python only evaluates prescribed ground motion and applied loads for eac
 collects the recorded samples.
 """
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -19,14 +20,17 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree
 from .kernels import step as kstep
-from .kernels.loop import (OK, SINGULAR, UNSUPPORTED, Inputs, Params, Record, Run, Settings, State,
+from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
+                           Monitor, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
+from .feedback import Progress, compile_notice
 from .model import Model, output_section
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
+MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
 SCHEMES = ("newmark", "energy_momentum", "paper")
 
 
@@ -206,6 +210,13 @@ def beam_tables(model):
     return (model.body_kind, model.beam_params, moments, mode_off, ends, factors)
 
 
+def _steps(t_end, dt):
+    """(n, h): n = ceil(t_end / dt) equal steps of h = t_end / n, so that the last one lands on
+    t_end; h = dt where dt divides t_end (to 1e-9 of a step)."""
+    n = max(1, int(np.ceil(t_end / dt - 1e-9)))
+    return n, (dt if abs(n * dt - t_end) <= 1e-9 * dt else t_end / n)
+
+
 def _check_positive(name, value):
     try:
         x = float(value)
@@ -259,49 +270,88 @@ def _ground(model, times):
 
 def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho_inf=1.0,
              newton_iterations=None, newton_tol=1e-12, record_every=1,
-             full_state=False, richardson=False) -> Result:
-    """Integrate the chain from t = 0 to t_end with steps dt by DT-TMM.
+             full_state=False, richardson=False, progress=None,
+             max_step_error=MAX_STEP_ERROR) -> Result:
+    """Integrate a model from t = 0 to t_end by DT-TMM.
 
-    method: "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
-        transfer matrices out, as the paper does; loses accuracy on long or stiff chains).
-    scheme: "newmark" (default; generalized-alpha, every element) or "energy_momentum" (rigid
-        chains with ball and fixed hinges on a fixed ground: a second-order step that conserves
-        the total energy and the angular momentum exactly, up to newton_tol; docs/solver.md)
-        or "paper" (the paper's scheme, for comparison only: Newmark with every station point
-        and mass centre carrying its own position history, tied to the rotations at position
-        level; rigid bodies and beams, ball and fixed hinges, a fixed ground.  It develops a
-        growing step-to-step oscillation in long runs: docs/solver.md, "The paper's scheme").
-    rho_inf: generalized-alpha spectral radius at infinite frequency; 1 (default) is the
-        trapezoidal Newmark rule, smaller values add numerical damping of high frequencies.
-        (Newmark scheme only.)
-    newton_iterations: extra linearizations about the latest solution per step; the step stops
-        iterating once the rotation update is below newton_tol (rad).  Default: 0 for Newmark
-        (one linearization about the predictor is already second-order accurate), 8 with joints
-        with coordinates or a weld on a beam's end in a tree (their linearization is exact only
-        to O(dt) terms: iterated, the step is the exact Newmark step; docs/joints.md), 20 for
-        the energy-momentum scheme (which
-        conserves only once converged).  Steps that used all
-        iterations without reaching newton_tol are counted in info["newton_unconverged_steps"].
-    record_every: keep every k-th step (and t = 0).
-    full_state: use the 13-entry state even where the reduced [a; q] form applies (a tree: the
+    Parameters
+    ----------
+    model : Model
+        The frozen system (``dttmm.System(...).build()`` or ``dttmm.build_chain``).
+    t_end : float
+        End time, s (> 0).
+    dt : float
+        The step, s (> 0). The run takes n = ceil(t_end / dt) equal steps of t_end / n (dt
+        itself where it divides t_end), so the last step lands on t_end; ``info["dt"]`` is the
+        step taken.
+    method : {"riccati", "direct"}
+        "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
+        transfer matrices out, as the paper does; chains only; loses accuracy on long or stiff
+        chains).
+    scheme : {"newmark", "energy_momentum", "paper"}
+        "newmark" (default): generalized-alpha, every element and topology.
+        "energy_momentum": rigid chains with ball and fixed hinges on a fixed ground; a
+        second-order step that conserves the total energy and the angular momentum to
+        newton_tol (docs/solver.md). "paper": the paper's scheme, for comparison only (every
+        station point with its own position history; it develops a growing step-to-step
+        oscillation in long runs; docs/solver.md, "The paper's scheme").
+    rho_inf : float
+        Generalized-alpha spectral radius at infinite frequency, in [0, 1]; 1 (default) is the
+        trapezoidal Newmark rule, smaller values damp high frequencies. Newmark scheme only.
+    newton_iterations : int, optional
+        Extra linearizations about the latest solution per step, stopping once the update is
+        below newton_tol (rad, or scaled modal units). Default: 0 for Newmark (one
+        linearization about the predictor is second-order accurate); 8 with joints with
+        coordinates or a weld on a beam's end in a tree (their linearization is exact only to
+        O(dt) terms; docs/joints.md); 20 for the energy-momentum scheme. Steps that use them
+        all without reaching newton_tol are counted in ``info["newton_unconverged_steps"]``.
+    newton_tol : float
+        See newton_iterations (rad; default 1e-12).
+    record_every : int
+        Record every k-th step (default 1), and always t = 0 and the final state.
+    full_state : bool
+        Use the 13-entry state even where the reduced [a; q] form applies (a tree: the
         full-state tree sweep, docs/assembly.md "Trees with joints").
-    richardson: run at dt and at dt/2 and return their Richardson extrapolation
-        (4 y_dt/2 - y_dt) / 3 at the recorded times (Newmark scheme only): the trapezoidal
-        rule's error expands in even powers of dt, so this removes the dt^2 term: fourth-order
-        accurate where dt resolves the motion (measured, also at rho_inf = 0.8), for 3x the
-        steps of one run.
-        Rotations are projected back onto SO(3).  info["richardson_correction_m"] is the largest
-        change the extrapolation made to a recorded point position (an estimate of the dt/2
-        run's own error); wall_time and n_steps count both runs.  docs/solver.md,
-        "Richardson extrapolation".
+    richardson : bool
+        Run at dt and dt/2 and return their Richardson extrapolation (4 y_dt/2 - y_dt) / 3 at
+        the recorded times (Newmark only): fourth-order accurate where dt resolves the motion,
+        for 3x the steps. ``info["richardson_correction_m"]`` is the largest change it made to a
+        recorded point position; wall_time and n_steps count both runs (docs/solver.md,
+        "Richardson extrapolation").
+    progress : bool, optional
+        A tqdm progress bar on stderr once the run is expected to take more than about two
+        seconds: None (default) when stderr is a terminal, True always, False never.
+    max_step_error : float, optional
+        Stop at the first step whose local error estimate (Zienkiewicz-Xie, |beta - 1/6| h^2
+        max |p_{n+1} - p_n| over every rotation, modal and joint coordinate and deflection; rad
+        or m) exceeds it; default 0.05; None never stops. ``info["step_error_max"]`` is the
+        run's largest estimate (docs/solver.md, "Runs that cannot go wrong").
+
+    Returns
+    -------
+    Result
+        The recorded samples (``dttmm.Result``: times in s, positions in m, rotations,
+        angular velocities in rad/s, interior forces in N and moments in N m at every body's
+        input, energies in J, joint coordinates and drive forces), ``wall_time`` (s, the whole
+        call) and ``info`` (mode, loop, dt, Newton and error statistics).
+
+    Raises
+    ------
+    ValueError
+        Before the run: a bad argument, or what the solver does not run for this model
+        (naming the element).
+    DivergenceError
+        A run that cannot go on: a step's error estimate above max_step_error, an
+        energy-momentum step that does not converge, a beam deflected beyond its length, a
+        singular transfer, or NaN. Its message names the step, the time and the cause;
+        ``err.partial`` holds the Result recorded before it.
     """
+    wall0 = time.perf_counter()
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     t_end = _check_positive("t_end", t_end)
     dt = _check_positive("dt", dt)
-    n_steps = int(round(t_end / dt))
-    if n_steps < 1:
-        raise ValueError(f"simulate: dt = {dt} is larger than t_end = {t_end}")
+    n_steps, dt = _steps(t_end, dt)
     if int(record_every) != record_every or record_every < 1:
         raise ValueError(f"simulate: record_every must be an integer >= 1, got {record_every!r}")
     record_every = int(record_every)
@@ -315,6 +365,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
                          f"got {newton_iterations!r}")
     newton_tol = float(newton_tol)
+    max_step_error = (np.inf if max_step_error is None
+                      else _check_positive("max_step_error", max_step_error))
     if richardson:
         if scheme != "newmark":
             raise ValueError(f"simulate: richardson=True needs scheme='newmark' (the "
@@ -326,7 +378,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                 runs.append(simulate(model, n_steps * dt, h, method=method, scheme=scheme,
                                      rho_inf=rho_inf, newton_iterations=newton_iterations,
                                      newton_tol=newton_tol, record_every=every,
-                                     full_state=full_state))
+                                     full_state=full_state, progress=progress,
+                                     max_step_error=max_step_error))
             except DivergenceError as err:
                 raise DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
                                       f"s: {err.cause}", err.partial) from None
@@ -342,16 +395,20 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     n = model.n_bodies
     params = kernel_params(model, ws.beams)
     settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
-                        newton_tol=newton_tol, record_every=record_every)
+                        newton_tol=newton_tol, record_every=record_every,
+                        max_step_error=max_step_error,
+                        stop_unconverged=scheme == "energy_momentum")
+    monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
+                      jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((n, 3)), error=np.zeros(2))
 
-    wall0 = time.perf_counter()
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
     joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
-        status = kstep.initial_accelerations(params, settings, state, ws.sweep,
-                                             (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0],
-                                             torque[0], joint_input[0])
+        with compile_notice():
+            status = kstep.initial_accelerations(params, settings, state, ws.sweep,
+                                                 (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                                                 force[0], torque[0], joint_input[0])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -441,48 +498,67 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         run_info.update(forces="step means (about t - dt/2)")
     else:
         run_info.update(rho_inf=rho_inf)
-    while done < n_steps:
-        m = min(chunk, n_steps - done)
-        times = (done + np.arange(m + 1)) * dt
-        if not static_ground:
-            g_acc, g_rot, g_w, g_wd = _ground(model, times)
-            g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
-        if not no_loads:    # at the step's end; the energy-momentum step's mean by the midpoint
-            force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt
-                                   if scheme == "energy_momentum" else times[1:])
-        if joint_inputs_vary:
-            joint_input = _joint_inputs(model, times[1:], state, dt)
-        inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
-                        force=force[:m], torque=torque[:m], joint_input=joint_input[:m])
-        try:
-            runner(loop, Run(params, settings, state, ws.sweep, inputs, rec), info)
-        except np.linalg.LinAlgError as err:
-            raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is singular "
-                                  f"somewhere in steps {done + 1}..{done + m} ({err}); "
-                                  f"{_DIRECT_HINT if method == 'direct' else ''}") from None
-        for i in range(int(info[3])):
-            if force_drives and (done + 1) % record_every != 0:
-                continue
-            samples.append({key: getattr(rec, key)[i].copy() for key in keys})
-            sample_steps.append(done + (i + 1) * settings.record_every)
-        if info[0] == UNSUPPORTED:
-            raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
-        if info[0] != OK:
-            step = done + int(info[1]) + 1
-            cause = _failure_cause(model, mode, info)
-            if method == "direct" and info[0] == SINGULAR:
-                cause += "; " + _DIRECT_HINT
-            partial = _result(user_model, np.array(sample_steps) * dt,
-                              [_user_sample(s, keep) for s in samples],
-                              time.perf_counter() - wall0, step - 1, dict(run_info))
-            raise DivergenceError(step, step * dt, cause, partial)
-        max_newton = max(max_newton, int(info[2]))
-        done += m
-    wall = time.perf_counter() - wall0
+    beam_tips = _beam_tips(model)
+    bar = Progress(n_steps, progress)
+    try:
+        while done < n_steps:
+            m = min(chunk, n_steps - done)
+            times = (done + np.arange(m + 1)) * dt
+            if not static_ground:
+                g_acc, g_rot, g_w, g_wd = _ground(model, times)
+                g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
+            if not no_loads:    # at the step's end; the energy-momentum step's mean: midpoint
+                force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt
+                                       if scheme == "energy_momentum" else times[1:])
+            if joint_inputs_vary:
+                joint_input = _joint_inputs(model, times[1:], state, dt)
+            inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
+                            force=force[:m], torque=torque[:m], joint_input=joint_input[:m])
+            try:
+                with compile_notice() if done == 0 else nullcontext():
+                    runner(loop, Run(params, settings, state, ws.sweep, inputs, rec, monitor),
+                           info)
+            except np.linalg.LinAlgError as err:
+                raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is "
+                                      f"singular somewhere in steps {done + 1}..{done + m} "
+                                      f"({err}); "
+                                      f"{_DIRECT_HINT if method == 'direct' else ''}") from None
+            for i in range(int(info[3])):
+                if force_drives and (done + 1) % record_every != 0:
+                    continue
+                samples.append({key: getattr(rec, key)[i].copy() for key in keys})
+                sample_steps.append(done + (i + 1) * settings.record_every)
+            if info[0] == UNSUPPORTED:
+                raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
+            if info[0] != OK:
+                step = done + int(info[1]) + 1
+                cause = _failure_cause(model, mode, info, monitor, settings)
+                if method == "direct" and info[0] == SINGULAR:
+                    cause += "; " + _DIRECT_HINT
+                partial = _result(user_model, np.array(sample_steps) * dt,
+                                  [_user_sample(s, keep) for s in samples],
+                                  time.perf_counter() - wall0, step - 1, dict(run_info))
+                raise DivergenceError(step, step * dt, cause, partial)
+            max_newton = max(max_newton, int(info[2]))
+            done += m
+            bar.update(done)
+            runaway = _beam_beyond_its_length(model, beam_tips, state.eta)
+            if runaway:
+                partial = _result(user_model, np.array(sample_steps) * dt,
+                                  [_user_sample(s, keep) for s in samples],
+                                  time.perf_counter() - wall0, done, dict(run_info))
+                raise DivergenceError(done, done * dt, runaway, partial)
+    finally:
+        bar.close()
+    if sample_steps[-1] != n_steps:         # the final state is always recorded
+        samples.append(sample())
+        sample_steps.append(n_steps)
     t = np.array(sample_steps) * dt
-    return _result(user_model, t, [_user_sample(s, keep) for s in samples], wall, n_steps,
-                   dict(run_info, newton_iterations_used=max_newton,
-                        newton_unconverged_steps=int(info[4])))
+    result = _result(user_model, t, [_user_sample(s, keep) for s in samples], 0.0, n_steps,
+                     dict(run_info, newton_iterations_used=max_newton,
+                          newton_unconverged_steps=int(info[4]),
+                          step_error_max=float(monitor.error[0])))
+    return replace(result, wall_time=time.perf_counter() - wall0)
 
 
 FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)
@@ -746,8 +822,45 @@ def _unsupported_cause(model, code, where):
     return f"simulate: {where} does not support {what}"
 
 
-def _failure_cause(model, mode, info):
+def _beam_tips(model):
+    """Per beam: (name, length, its modal coordinates' slice, the mode shapes at its tip)."""
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    tips = []
+    for k in np.nonzero(model.body_kind == BEAM)[0]:
+        row = model.beam_params[k]
+        length, nm = row[LENGTH], int(row[MODES])
+        y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
+        tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y))
+    return tips
+
+
+def _beam_beyond_its_length(model, tips, eta):
+    """The cause, if a beam's tip deflection exceeds its length (checked after every chunk of
+    steps): the modal beam is a small-deflection model, and such a deflection only comes from a
+    run gone wrong; "" otherwise."""
+    for name, length, part, y in tips:
+        e = eta[part]
+        nm = len(y)
+        tip = float(np.hypot(e[:nm] @ y, e[nm:] @ y))
+        if not tip <= length:
+            return (f"the tip of beam '{name}' deflects {tip:.3g} m, more than the beam's "
+                    f"length, {length:g} m: the modal beam describes small deflections, so the "
+                    f"run has gone wrong (a step too large for the motion, or a beam spun past its "
+                    f"first bending frequency, which the beam without geometric stiffening "
+                    f"cannot carry)")
+    return ""
+
+
+def _failure_cause(model, mode, info, monitor, settings):
     code = int(info[0])
+    if code == ERROR_ESTIMATE:
+        return (f"the step's local error estimate, {monitor.error[1]:.3g} (rad or m), exceeds "
+                f"max_step_error = {settings.max_step_error:g}: the step is too large for the "
+                f"motion (take a smaller dt), or the motion runs away (an unstable model)")
+    if code == UNCONVERGED:
+        return (f"the energy-momentum step's Newton iterations did not converge to newton_tol "
+                f"= {settings.newton_tol:g} in {settings.newton_max} iterations, so it "
+                f"conserves nothing: take a smaller dt")
     if code == kstep.SINGULAR and int(info[2]) == LOST_ACCURACY:
         return (f"the direct sweep lost its accuracy: the multiplied-out transfers cancel (a "
                 f"transfer relation is violated by more than {DIRECT_TOLERANCE:g} of its terms)")

@@ -1,13 +1,14 @@
 """The examples run end to end with small settings; results save and load."""
 import csv
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from dttmm import simulate
-from dttmm.chains import rigid_chain
+from dttmm import Result, simulate
+from dttmm.chains import rigid_chain, three_pendulum
 from dttmm.result import rotation_to_quaternion, rotation_to_xyz_angles
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +45,19 @@ def test_result_saves_and_recording_stride(tmp_path):
     data = np.load(tmp_path / "r.npz")
     assert np.array_equal(data["position_output"], res.position_output)
     assert data["quaternion"].shape == (11, 2, 4)
+    back = Result.load_npz(tmp_path / "r.npz")
+    for f in dataclasses.fields(Result):
+        a, b = getattr(res, f.name), getattr(back, f.name)
+        if isinstance(a, np.ndarray):
+            assert np.array_equal(a, b), f.name
+        elif f.name == "info":
+            assert set(a) == set(b) and b["dt"] == a["dt"] and b["mode"] == a["mode"]
+        else:
+            assert a == b, f.name
+    beams = simulate(three_pendulum(), 0.01, 1e-3)
+    beams.save_npz(tmp_path / "b.npz")
+    assert np.array_equal(Result.load_npz(tmp_path / "b.npz").modal_coordinates,
+                          beams.modal_coordinates)
     res.save_csv(tmp_path / "r.csv")
     rows = list(csv.reader(open(tmp_path / "r.csv")))
     assert rows[0][:4] == ["t", "x1", "y1", "z1"] and len(rows) == 12

@@ -9,6 +9,7 @@ positional arrays:
   Sweep     the assembly's scratch (element transfers, Riccati and direct sweeps)
   Inputs    one chunk's prescribed data (ground motion, applied loads), step by step
   Record    where one chunk's samples are written
+  Monitor   the step's local error estimate (docs/solver.md, "Runs that cannot go wrong")
 
 bundled as one Run, and a loop variant's own scratch (its "loop" structure).  run_steps is the
 skeleton: predict, then Newton iterations (iterate: linearize, sweep, recover; adopt: the
@@ -26,7 +27,7 @@ from numba.extending import overload
 
 from . import CONTRACT, no_alloc_kernel
 
-OK, SINGULAR, NOT_FINITE, UNSUPPORTED = 0, 1, 2, 3
+OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
 
 Params = namedtuple("Params", [
     "body_params",      # (n, BODY_PARAM_SIZE) elements/rigid_body.py
@@ -50,6 +51,9 @@ Settings = namedtuple("Settings", [
     "newton_max",       # extra linearizations per step
     "newton_tol",       # stop iterating below this change (rad; scaled modal units)
     "record_every",     # record after every record_every-th step of a chunk
+    "max_step_error",   # stop (ERROR_ESTIMATE) where a step's local error estimate exceeds it
+                        # (rad or m; inf: never)
+    "stop_unconverged",  # stop (UNCONVERGED) at a step whose Newton iterations do not converge
 ])
 
 State = namedtuple("State", [
@@ -87,7 +91,12 @@ Record = namedtuple("Record", [
     "jq", "jqd", "jtau",  # joint coordinates, rates, generalized forces
 ])
 
-Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec"])
+Monitor = namedtuple("Monitor", [
+    "pseudo", "eta_p", "jqp", "defl_pseudo",   # the state's pseudo-accelerations before a step
+    "error",            # (2,) the chunk's largest local error estimate; the failing step's
+])
+
+Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec", "monitor"])
 
 _PIECES = ("predict", "iterate", "adopt", "update", "record", "finish")
 _VARIANTS = {}          # loop structure's class -> {piece name: njit function}
@@ -138,10 +147,62 @@ def report(out_info, status, step, detail, n_rec):
     out_info[3] = n_rec
 
 
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _copy_into(src, dst):
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _copy2_into(src, dst):
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _largest_change(now, before, largest):
+    for i in range(now.shape[0]):
+        largest = max(largest, abs(now[i] - before[i]))
+    return largest
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _largest_change2(now, before, largest):
+    for i in range(now.shape[0]):
+        for j in range(now.shape[1]):
+            largest = max(largest, abs(now[i, j] - before[i, j]))
+    return largest
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def keep_pseudo(state, monitor):
+    """The pseudo-accelerations p_n before the step (for step_error)."""
+    _copy2_into(state.pseudo, monitor.pseudo)
+    _copy_into(state.eta_p, monitor.eta_p)
+    _copy2_into(state.jqp, monitor.jqp)
+    _copy2_into(state.defl_pseudo, monitor.defl_pseudo)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def step_error(state, monitor, h, beta):
+    """The step's local error estimate (Zienkiewicz and Xie 1991): the Newmark displacement
+    update x = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1} differs from the Taylor series by
+    (beta - 1/6) h^2 (p_{n+1} - p_n) + O(h^4), so e = |beta - 1/6| h^2 max |p_{n+1} - p_n| over
+    every rotation increment (rad), modal coordinate, joint coordinate (rad or m) and elastic
+    deflection (m)."""
+    largest = _largest_change2(state.pseudo, monitor.pseudo, 0.0)
+    largest = _largest_change(state.eta_p, monitor.eta_p, largest)
+    largest = _largest_change2(state.jqp, monitor.jqp, largest)
+    largest = _largest_change2(state.defl_pseudo, monitor.defl_pseudo, largest)
+    return abs(beta - 1.0 / 6.0) * h * h * largest
+
+
 def _run_steps(loop, run, out_info):
     """Take run.inputs.force.shape[0] steps (docs/solver.md, "The step")."""
     n_steps = run.inputs.force.shape[0]
     newton_max, newton_tol = run.settings.newton_max, run.settings.newton_tol
+    monitor = run.monitor
     max_iter = 0
     n_rec = 0
     for s in range(n_steps):
@@ -158,8 +219,18 @@ def _run_steps(loop, run, out_info):
             adopt(loop, run, s, it)
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
+            if run.settings.stop_unconverged:
+                report(out_info, UNCONVERGED, s, 0, n_rec)
+                return
+        keep_pseudo(run.state, run.monitor)
         if not update(loop, run, s, 0):
             report(out_info, NOT_FINITE, s, 0, n_rec)
+            return
+        error = step_error(run.state, run.monitor, run.settings.h, run.settings.coef[0])
+        monitor.error[0] = max(monitor.error[0], error)
+        if not error <= run.settings.max_step_error:
+            monitor.error[1] = error
+            report(out_info, ERROR_ESTIMATE, s, 0, n_rec)
             return
         if (s + 1) % run.settings.record_every == 0:
             record(loop, run, s, n_rec)
