@@ -62,7 +62,8 @@ def in_process(a_dir, b_dir, systems, pairs):
     import time
     root = tempfile.mkdtemp(prefix="step_ab_")
     for name, src in (("dttmm_a", a_dir), ("dttmm_b", b_dir)):
-        shutil.copytree(os.path.join(src, "dttmm"), os.path.join(root, name), symlinks=True)
+        shutil.copytree(os.path.join(src, "dttmm"), os.path.join(root, name), symlinks=True,
+                        ignore=shutil.ignore_patterns("__pycache__"))   # caches name dttmm
     sys.path.insert(0, root)
     packages = [importlib.import_module(name) for name in ("dttmm_a", "dttmm_b")]
     chains = [importlib.import_module(f"{name}.chains") for name in ("dttmm_a", "dttmm_b")]
