@@ -93,7 +93,7 @@ Record = namedtuple("Record", [
 
 Monitor = namedtuple("Monitor", [
     "pseudo", "eta_p", "jqp", "defl_pseudo",   # the state's pseudo-accelerations before a step
-    "error",            # (2,) the chunk's largest local error estimate; the failing step's
+    "error",            # (2,) the run's largest local error estimate so far; the failing step's
 ])
 
 Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec", "monitor"])
