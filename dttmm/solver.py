@@ -217,6 +217,37 @@ def _steps(t_end, dt):
     return n, (dt if abs(n * dt - t_end) <= 1e-9 * dt else t_end / n)
 
 
+def _record(n_rec_max, n, n_eta, v_st=False, v_c=False):
+    """Where a chunk's samples are written (kernels/loop.py::Record): n_rec_max of each; the
+    paper scheme's station velocities and the mass-centre velocities only where recorded."""
+    return Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
+                  omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
+                  defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
+                  eta=np.zeros((n_rec_max, n_eta)), eta_d=np.zeros((n_rec_max, n_eta)),
+                  v_st=np.zeros((n_rec_max if v_st else 1, n + 1, 3)),
+                  v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
+                  jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
+                  jtau=np.zeros((n_rec_max, n, 2)))
+
+
+_NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations not finite
+
+
+def _fused_start(runner, loop, run):
+    """The consistent start of the fused loops: their own iterate, once, at acceleration level
+    (kernels/ball_chain.py::start_loop; run.settings.start).  Leaves the stations' states in
+    state.z (angular accelerations in the phi slots) and the beams' modal accelerations in
+    state.eta_acc, as kernels/step.py::initial_accelerations does; returns its status codes."""
+    info = np.zeros(5, dtype=np.int64)
+    runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
+    run.state.eta_acc[:] = loop.per_mode[4]
+    if info[0] == SINGULAR:
+        return int(info[2])
+    if info[0] == UNSUPPORTED:
+        return -int(info[2])
+    return 0 if info[0] == OK else _NOT_FINITE_START
+
+
 def _check_positive(name, value):
     try:
         x = float(value)
@@ -397,18 +428,38 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
                         newton_tol=newton_tol, record_every=record_every,
                         max_step_error=max_step_error,
-                        stop_unconverged=scheme == "energy_momentum")
+                        stop_unconverged=scheme == "energy_momentum", start=False)
     monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
                       jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((n, 3)), error=np.zeros(2))
+
+    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
+    # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
+    # rest the general loop (kernels/step.py); each records what its scheme defines
+    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+             and scheme == "newmark"
+             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
+    if fused and mode == kstep.RICCATI_TREE:
+        loop_name, runner = "ball-tree", run_steps_no_alloc
+        loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
+    elif fused:
+        loop_name, runner = "ball-chain", run_steps_no_alloc
+        loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
 
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque = _loads(model, [0.0])
     joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
         with compile_notice():
-            status = kstep.initial_accelerations(params, settings, state, ws.sweep,
-                                                 (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                 force[0], torque[0], joint_input[0])
+            if fused:       # the fused loop's own sweep (compiles nothing else)
+                status = _fused_start(runner, loop, Run(
+                    params, settings._replace(newton_max=0, start=True), state, ws.sweep,
+                    Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
+                           force=force, torque=torque, joint_input=joint_input),
+                    _record(0, n, len(state.eta)), monitor))
+            else:
+                status = kstep.initial_accelerations(params, settings, state, ws.sweep,
+                                                     (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                                                     force[0], torque[0], joint_input[0])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -416,6 +467,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if status == LOST_ACCURACY:
         raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
                               + _DIRECT_HINT)
+    if status == _NOT_FINITE_START:
+        raise DivergenceError(0, 0.0, "consistent start: the accelerations are NaN or infinite "
+                              "(check the model's masses, inertias and initial state)")
     if status < 0:
         raise ValueError(_unsupported_cause(model, -status, "the consistent start"))
     if status != 0:
@@ -431,26 +485,14 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     histories = _station_histories(model, state, scheme == "paper")
     state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
-    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
-    # fused loop (kernels/ball_chain.py), the energy-momentum scheme its own, the rest the
-    # general loop (kernels/step.py); each records what its scheme defines
     keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
     if mode == kstep.RICCATI_JOINTS:
         keys += ["jq", "jqd", "jtau"]
-    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-             and scheme == "newmark"
-             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
     if scheme == "energy_momentum":
         loop_name, loop, runner = "energy-momentum", em_step.energy_momentum_loop(n), run_steps
         state.v_c[:] = _initial_mass_center_velocities(model, state.rot, state.omega)
         keys.append("v_c")
-    elif fused and mode == kstep.RICCATI_TREE:
-        loop_name, runner = "ball-tree", run_steps_no_alloc
-        loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
-        ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
     elif fused:
-        loop_name, runner = "ball-chain", run_steps_no_alloc
-        loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
         ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
     else:
         loop_name, runner = "general", run_steps
@@ -478,15 +520,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if no_loads:
         force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
     n_rec_max = chunk // settings.record_every
-    rec = Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
-                 omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
-                 defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
-                 eta=np.zeros((n_rec_max, len(state.eta))),
-                 eta_d=np.zeros((n_rec_max, len(state.eta))),
-                 v_st=np.zeros((n_rec_max if scheme == "paper" else 1, n + 1, 3)),
-                 v_c=np.zeros((n_rec_max if "v_c" in keys else 1, n, 3)),
-                 jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
-                 jtau=np.zeros((n_rec_max, n, 2)))
+    rec = _record(n_rec_max, n, len(state.eta), scheme == "paper", "v_c" in keys)
     joint_input = np.zeros((chunk, n, 2, 3))
     joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
                             for ds in model.drives for d in ds)

@@ -369,8 +369,9 @@ def test_beam_ball_map_folds_the_beam_transfer():
     # eta'' = eta_map [a, w', 0, q; 1] with w' = p_want [a; q; 1]
     e_want = eta_map[:, [0, 1, 2, 9, 10, 11, 12]] + eta_map[:, 3:6] @ p_want
     v, pmap, emap = np.empty((6, 7)), np.empty((3, 7)), np.full((n, 13), np.nan)
-    beam_ball_map(bp[k], tables, model.gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e,
-                  a_i, q_i, eta_dd_star, np.empty(ball_map_work_shape(n)), v, pmap, emap)
+    beam_ball_map(bp[k], tables, model.gravity, rot_n, phi_star, wd_star,
+                  np.array([c1, c3, 1.0 / c1, c3 / c1]), w3, w1e, w3e, a_i, q_i, eta_dd_star,
+                  np.empty(ball_map_work_shape(n)), v, pmap, emap)
     for name, got, want in (("v", v, v_want), ("pmap", pmap, p_want),
                             ("eta map", emap[:, :7], e_want)):
         scale = np.abs(want).max(axis=1, keepdims=True)

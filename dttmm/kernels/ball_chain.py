@@ -172,6 +172,25 @@ def fused_loop(n, mode_off, h, coef):
                      np.zeros(ball_map_work_shape(max_modes)))
 
 
+def start_loop(loop, state, sweep):
+    """The fused loop (chain or tree) set for the consistent start, which the skeleton then runs
+    as one pass of the loop's own iterate (Settings.start; docs/solver.md, "The consistent
+    start").  With the coefficients (c1, c3, s, r) = (1, 0, 0, 0), w1 = 0, w3 = w_n and the guess
+    phi* = 0, a body's rotation slot is its angular acceleration (w' = phi, w = w_n, A = A_n) and
+    nothing else moves with it (s = r = 0); with w1e = -eta_n, w3e = eta'_n and eta''* = 0 the
+    beams keep eta_n and eta'_n.  The relations are then linear in the accelerations: one sweep
+    solves them.  Returns the loop to run; its scratch is the step loop's own."""
+    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    w1[:] = 0.0
+    w3[:] = state.omega
+    phi_star[:] = 0.0
+    loop.per_mode[0] = -state.eta
+    loop.per_mode[1] = state.eta_d
+    loop.per_mode[3] = 0.0
+    sweep.red_aq[:] = 0.0
+    return loop._replace(coefficients=np.array([1.0, 0.0, 0.0, 0.0]))
+
+
 @njit(cache=True, fastmath=CONTRACT)
 def guess_from_stations(z, aq):
     """The fused loop's guess [a; q] of every station (red_aq) from the stations' states z."""
@@ -243,9 +262,9 @@ def _iterate(loop, run, s, it):
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = (i1 - i0) // 2
             tables = (beam_moments[k, :m, :m + 2], beam_ends[k, :m], beam_factors[k, :m])
-            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, c1, c3, w3[k],
-                          w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6], eta_dd_star[i0:i1],
-                          loop.beam_work, v, pmap[k], eta_map[i0:i1])
+            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,
+                          w3[k], w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
+                          eta_dd_star[i0:i1], loop.beam_work, v, pmap[k], eta_map[i0:i1])
         elif body_kind[k] == RIGID:
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)

@@ -759,8 +759,8 @@ def ball_map_work_shape(n):
 
 
 @no_alloc_kernel
-def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e, w3e, a_i, q_i,
-                  eta_dd_star, work, v, pmap, emap):
+def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w3, w1e, w3e, a_i,
+                  q_i, eta_dd_star, work, v, pmap, emap):
     """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded
     straight into the fused loop's reduced maps (docs/beam.md, "Between ball joints"):
       [a_O; q_O] = v [a_I; q_I; 1],   w' = pmap [a_I; q_I; 1],   eta'' = emap[:, :7] [a_I; q_I; 1],
@@ -769,11 +769,15 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
     _rotation_columns) with m_I = 0; the moment rows (m_O = 0) and the modal rows are solved
     together for (w', eta'') by blocks (the modal system, then a 3 x 3 Schur complement),
     which replaces beam_transfer's modal solve, its 12 x 13 product and sweep.fold_ball_body.
-    The other arguments as for beam_transfer (eta and eta' come from eta''* through w1e and
-    w3e).  work: a block of at least ball_map_work_shape(n) (no allocation), carved by rows:
+    coefficients: (c1, c3, s, r), the integrator's w' = c1 phi + w1, w = c3 phi + w3 and the
+    sensitivities s = d phi / d w', r = d w / d w' of the rotation and the modal coordinates
+    (1 / c1 and c3 / c1 in a step; 0 at the consistent start, where nothing but the
+    accelerations moves: kernels/ball_chain.py::start_loop).  The other arguments as for
+    beam_transfer (eta and eta' come from eta''* through w1e and w3e).  work: a block of at least ball_map_work_shape(n) (no allocation), carved by rows:
     each array below is a block of whole rows (or a row's start), which keeps it contiguous (a
     reshape costs a call into numba's runtime, and a block of columns is strided)."""
     moments, ends = tables[0], tables[1]
+    c1, c3, s_c, r_c = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
     n = eta_dd_star.shape[0]
     nx, ny = 12 + n, 3 + n
     x0, o0, r0, w = work[0][0:nx], work[1][0:12], work[2][0:n], work[3][0:3]
@@ -801,7 +805,6 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, c1, c3, w3, w1e
                    eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
-    s_c, r_c = 1.0 / c1, c3 / c1
     _affine_columns(bp, moments, ends, False, rot, aux, d_o, d_r)
     left_jacobian(phi_star, lam)
     _modal_columns(bp, tables, rot, w, wd_star, s_c, r_c, o0[9:12], aux, d_o, d_r, scratch)

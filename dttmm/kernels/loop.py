@@ -16,14 +16,14 @@ skeleton: predict, then Newton iterations (iterate: linearize, sweep, recover; a
 solution becomes the next guess), update, record; finish once the chunk is done.  A variant
 (the general loop in kernels/step.py, the fused ball-chain loop in kernels/ball_chain.py, the
 energy-momentum loop in kernels/em_step.py) supplies only these pieces, declared once with
-loop_variant(); numba picks them at compile time from the type of the loop structure, so the
-skeleton costs nothing at run time.  A loop structure no variant declared fails to compile.
+loop_variant(); each variant gets its own copy of the skeleton with its pieces inlined
+(_skeleton), so the skeleton costs nothing at run time.  A loop structure no variant declared
+is refused.
 """
 from collections import namedtuple
+from types import FunctionType
 
-from numba import njit, types
-from numba.core.errors import TypingError
-from numba.extending import overload
+from numba import njit
 
 from . import CONTRACT, no_alloc_kernel
 
@@ -54,6 +54,8 @@ Settings = namedtuple("Settings", [
     "max_step_error",   # stop (ERROR_ESTIMATE) where a step's local error estimate exceeds it
                         # (rad or m; inf: never)
     "stop_unconverged",  # stop (UNCONVERGED) at a step whose Newton iterations do not converge
+    "start",            # the consistent start instead of steps: the fused variants' one linear
+                        # sweep at acceleration level (kernels/ball_chain.py::start_loop)
 ])
 
 State = namedtuple("State", [
@@ -118,22 +120,16 @@ def loop_variant(loop_class, **pieces):
     _VARIANTS[loop_class] = dict(pieces)
 
 
-def _piece(name):
-    def stub(loop, run, s, i):
-        raise NotImplementedError(f"{name} runs compiled only")
-    stub.__name__ = name
-
-    @overload(stub, inline='always', jit_options=dict(cache=True, fastmath=CONTRACT))
-    def _select(loop, run, s, i):
-        cls = loop.instance_class if isinstance(loop, types.BaseNamedTuple) else None
-        impl = _VARIANTS.get(cls, {}).get(name)
-        if impl is None:
-            raise TypingError(f"no loop variant declares the piece {name!r} for {loop}")
-        return lambda loop, run, s, i: impl(loop, run, s, i)
-    return stub
+def _unbound(name):
+    def piece(loop, run, s, i):
+        raise NotImplementedError(f"{name}: a loop variant's piece, bound in its own skeleton "
+                                  f"(loop.py::_skeleton)")
+    piece.__name__ = name
+    return piece
 
 
-predict, iterate, adopt, update, record, finish = (_piece(name) for name in _PIECES)
+# the names the skeleton calls; each variant's copy of the skeleton binds them to its pieces
+predict, iterate, adopt, update, record, finish = (_unbound(name) for name in _PIECES)
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -206,7 +202,8 @@ def _run_steps(loop, run, out_info):
     max_iter = 0
     n_rec = 0
     for s in range(n_steps):
-        predict(loop, run, s, 0)
+        if not run.settings.start:
+            predict(loop, run, s, 0)
         change = 0.0
         for it in range(newton_max + 1):
             status, detail, change = iterate(loop, run, s, it)
@@ -217,6 +214,8 @@ def _run_steps(loop, run, out_info):
             if it == newton_max or change <= newton_tol:
                 break
             adopt(loop, run, s, it)
+        if run.settings.start:      # the accelerations at t = 0 are in: stations written below
+            break
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
             if run.settings.stop_unconverged:
@@ -239,9 +238,40 @@ def _run_steps(loop, run, out_info):
     report(out_info, OK, n_steps, max_iter, n_rec)
 
 
-# One skeleton, compiled twice: with numba's reference counting for the variants whose pieces
-# allocate (the general and energy-momentum loops), without it for those that allocate nothing
-# (the fused ball-chain loop; kernels/__init__.py::no_alloc_kernel).  Each loop structure is only
-# ever passed to one of the two (numba's cache keys on the signature, not on that option).
-run_steps = njit(cache=True, fastmath=CONTRACT)(_run_steps)
-run_steps_no_alloc = no_alloc_kernel(_run_steps)
+_SKELETONS = {}     # (loop structure's class, without reference counting) -> its skeleton
+
+
+def _skeleton(loop_class, no_alloc):
+    """_run_steps for one loop variant: a copy of its code whose globals bind predict, iterate,
+    ... to the variant's pieces, compiled (and cached) on its own.  numba inlines the pieces
+    (njit inline='always') before typing.  Measured on a cold cache, the three-pendulum's fused
+    skeleton: 60 s against 102 s (CPU) when the pieces were chosen by numba overloads on the
+    loop structure's type (docs/solver.md, "Compile time").  no_alloc: compiled without numba's
+    reference counting, for the variants whose pieces allocate nothing (the fused loops;
+    kernels/__init__.py::no_alloc_kernel)."""
+    key = (loop_class, no_alloc)
+    compiled = _SKELETONS.get(key)
+    if compiled is None:
+        pieces = _VARIANTS.get(loop_class)
+        if pieces is None:
+            raise TypeError(f"run_steps: no loop variant declares {loop_class.__name__} "
+                            f"(kernels/loop.py::loop_variant)")
+        name = f"run_steps_{loop_class.__name__}" + ("_no_alloc" if no_alloc else "")
+        fn = FunctionType(_run_steps.__code__, dict(globals(), **pieces), name)
+        fn.__qualname__ = name          # (numba's cache files are named after it)
+        fn.__doc__ = _run_steps.__doc__
+        compiled = (no_alloc_kernel if no_alloc else njit(cache=True, fastmath=CONTRACT))(fn)
+        _SKELETONS[key] = compiled
+    return compiled
+
+
+def run_steps(loop, run, out_info):
+    """The skeleton of the loop's variant with numba's reference counting (the general and
+    energy-momentum loops, whose pieces allocate)."""
+    _skeleton(type(loop), False)(loop, run, out_info)
+
+
+def run_steps_no_alloc(loop, run, out_info):
+    """The skeleton of the loop's variant without numba's reference counting (the fused loops,
+    which allocate nothing; a piece that allocates fails to compile)."""
+    _skeleton(type(loop), True)(loop, run, out_info)
