@@ -25,6 +25,10 @@ from dttmm.kernels import step as kstep
 from dttmm.solver import Workspace, _mode, kernel_model
 from numba import njit
 
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import recording  # noqa: E402  (benchmarks/recording.py)
+
 
 def median_us_per_step(model, steps, repeats, **kw):
     """Cost of one step at dt = 1e-4 without the run's fixed setup (workspace, consistent start):
@@ -293,6 +297,28 @@ def main(argv=None):
             key = f"arm_{drive}{'_flexible' if flexible else ''}_us_per_step"
             fig[key] = median_us_per_step(arm(drive, flexible), 2000, 3)
     print({k: v for k, v in fig.items() if k.startswith("arm")}, flush=True)
+
+    # recording (benchmarks/recording.py): every step recorded and the derived quantities read,
+    # against only the end, interleaved pairs; the 100-link chain's peak memory in a subprocess
+    for name, model in (("three_pendulum", three_pendulum(2)), ("rigid_chain_3", rigid_chain(3))):
+        rec = recording.recording_overhead(model, pairs=5 if quick else 15)
+        fig[f"recording_{name}_full_over_end_only"] = rec["full_over_end_only"]
+        fig[f"recording_{name}_us_per_sample"] = rec["extra_us_per_sample"]
+    mem = recording.long_run_memory(100, 1.0 if quick else 5.0, 1e-4)
+    fig["recording_chain100_peak_mb"] = mem["peak_mb"]
+    fig["recording_chain100_samples"] = mem["samples"]
+    print({k: v for k, v in fig.items() if k.startswith("recording")}, flush=True)
+
+    # sweeps: the Monte Carlo of examples/monte_carlo.py on 1 and 2 dask workers (runs per
+    # second, the LocalCluster's start and each worker's cache load included)
+    runs = 20 if quick else 100
+    for workers in (1, 2):
+        out = subprocess.run([sys.executable, os.path.join(ROOT, "examples", "monte_carlo.py"),
+                              "--runs", str(runs), "--workers", str(workers)],
+                             capture_output=True, text=True, check=True)
+        wall = float(out.stdout.split(" s; tip height")[0].rsplit(": ", 1)[-1])
+        fig[f"sweep_monte_carlo_{workers}_workers_runs_per_s"] = runs / wall
+    print({k: v for k, v in fig.items() if k.startswith("sweep")}, flush=True)
 
     fig["jit_warmup_s_warm_cache"] = jit_warmup_seconds(cold=False)
     fig["jit_warmup_s_cold_cache"] = None if quick else jit_warmup_seconds(cold=True)

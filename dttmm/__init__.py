@@ -6,9 +6,11 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
 from .model import Ground, Model, PrescribedMotion, System, build_chain
+from .recording import Checkpoint
 from .result import Result
 from .solver import DivergenceError, simulate
 from .reference import simulate_reference
+from .parameter_sweep import SweepTable, sweep
 
 try:
     __version__ = _version("dttmm")
@@ -18,4 +20,5 @@ except PackageNotFoundError:        # run from a source tree that is not install
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
            "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain",
-           "simulate", "simulate_reference", "Result", "DivergenceError", "__version__"]
+           "simulate", "simulate_reference", "Result", "Checkpoint", "DivergenceError",
+           "sweep", "SweepTable", "__version__"]

@@ -28,12 +28,12 @@ def rigid_chain(n_links, gravity=(0.0, -9.81, 0.0), tip_angular_velocity=(0.0, 0
 
 
 def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.0),
-                   stiffness_factor=1.0):
+                   stiffness_factor=1.0, tip_angular_velocity=(0.0, 0.1, 0.0)):
     """The paper's Section 5 system (notes §6): rigid body 2, ball joint, beam 4 (1 m, 1.32 kg,
     E = 2.5e10 Pa, rho = 3300 kg/m^3, 20 mm square section), ball joint, rigid body 6; joint 1
     joins body 2 to the ground at the origin.  All along +x at rest, except body 6 with angular
-    velocity [0, 0.1, 0] rad/s.  stiffness_factor multiplies the beam's modulus (a stiff
-    variant for the stability study)."""
+    velocity tip_angular_velocity ([0, 0.1, 0] rad/s).  stiffness_factor multiplies the beam's
+    modulus (a stiff variant for the stability study)."""
     from .elements import EulerBernoulliBeam
     side = 0.02
     area = side * side
@@ -45,7 +45,7 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
     return build_chain([BallJoint(name="joint1"), unit_link(name="body2"),
                         BallJoint(name="joint3"), beam,
                         BallJoint(name="joint5"),
-                        unit_link(name="body6", angular_velocity=[0.0, 0.1, 0.0])],
+                        unit_link(name="body6", angular_velocity=tip_angular_velocity)],
                        gravity=gravity)
 
 
@@ -111,16 +111,21 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
     (the energy test)."""
     from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PrismaticJoint,
                            RevoluteJoint, SpringDamper, UniversalJoint)
+    from .profiles import ProfileForce, profile
     if drive not in ("torque", "motion"):
         raise ValueError(f"arm: drive must be 'torque' or 'motion', got {drive!r}")
     if undriven:
         first = None
     elif drive == "torque":
-        first = JointForce(lambda t, q, q_dot: 2.0 * np.sin(np.pi * t))
-    else:
-        first = JointMotion(position=lambda t: 0.5 * t + 0.2 * (1.0 - np.cos(2.0 * t)),
-                            velocity=lambda t: 0.5 + 0.4 * np.sin(2.0 * t),
-                            acceleration=lambda t: 0.8 * np.cos(2.0 * t))
+        first = JointForce(ProfileForce(profile(       # 2 sin(pi t), N m
+            {"profile": "sine", "amplitude": 2.0, "frequency": 0.5})))
+    else:                                               # 0.5 t + 0.2 (1 - cos 2t), rad
+        angle = profile({"profile": "sum", "terms": [
+            {"profile": "linear", "slope": 0.5},
+            {"profile": "sine", "amplitude": -0.2, "angular_frequency": 2.0,
+             "phase": np.pi / 2, "offset": 0.2}]})
+        first = JointMotion(position=angle, velocity=angle.rate,
+                            acceleration=angle.acceleration)
     if flexible:
         side = 0.02
         area = side * side

@@ -27,7 +27,8 @@ class PrescribedMotion:
 
     def __init__(self, position=None, velocity=None, acceleration=None,
                  rotation=None, angular_velocity=None, angular_acceleration=None):
-        self._f = (position, velocity, acceleration, rotation, angular_velocity, angular_acceleration)
+        self._f = (position, velocity, acceleration, rotation, angular_velocity,
+                   angular_acceleration)
         for name, f in zip(("position", "velocity", "acceleration", "rotation",
                             "angular_velocity", "angular_acceleration"), self._f):
             if f is not None and not callable(f):
@@ -215,8 +216,8 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
     if len(elements) == 0:
         raise ValueError("Chain: elements is empty; a chain needs at least a root hinge and a body")
     if len(elements) % 2 != 0:
-        raise ValueError("Chain: elements must alternate hinge, body, hinge, body, ... and end with "
-                         f"a body; got {len(elements)} elements")
+        raise ValueError("Chain: elements must alternate hinge, body, hinge, body, ... and end "
+                         f"with a body; got {len(elements)} elements")
     hinges, bodies = elements[0::2], elements[1::2]
     for k, h in enumerate(hinges):
         if joint_kind_of(h) is None:
@@ -524,9 +525,9 @@ def _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment):
             mat = v["j_i"] + v["mass"] * _hat(l_io) @ _hat(l_ic)
         s = np.linalg.svd(mat, compute_uv=False)
         if s[-1] <= 1e-10 * max(s[0], 1e-300):
-            raise ValueError(f"{bodies[k].label(k)}: inertia: the ball-joint look-ahead is singular "
-                             f"(singular values of J_I + M l_IO^ l_IC^: {s}); the body has no "
-                             f"inertia about its hinge-to-hinge axis")
+            raise ValueError(f"{bodies[k].label(k)}: inertia: the ball-joint look-ahead is "
+                             f"singular (singular values of J_I + M l_IO^ l_IC^: {s}); the body "
+                             f"has no inertia about its hinge-to-hinge axis")
 
 
 def _hat(v):

@@ -1,7 +1,6 @@
 """One result object for every solver: recorded samples of the chain's state, and energies."""
 import csv
 import json
-from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -13,47 +12,101 @@ from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
 
 
-@dataclass(frozen=True, eq=False)
+FIELDS = (
+    "method", "t", "position_input", "position_mass_center", "position_output", "rotation",
+    "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
+    "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
+    "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint")
+# computed from the stored state on first use, when the solver leaves them to its derivation
+DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
+           "kinetic", "potential")
+# the stored state the derived fields come from
+_STATE_OF_DERIVED = {"t", "rotation", "angular_velocity", "modal_coordinates",
+                     "modal_velocities", "joint_coordinates"}
+_DEFAULTS = dict(wall_time=0.0, n_steps=0, info=None, body_names=None, checkpoint=None)
+
+
 class Result:
     """Samples of a run, one row per recorded time.  Shapes: T samples, n bodies.
 
+    t (T,): s.
     position_input/_mass_center/_output (T, n, 3): world positions of each body's points, m.
+    velocity_input (T, n, 3): world velocity of each input point, m/s.
     rotation (T, n, 3, 3): body-to-world rotation matrices.
-    angular_velocity, angular_acceleration (T, n, 3): world frame.
+    angular_velocity, angular_acceleration (T, n, 3): world frame, rad/s and rad/s^2.
     force, moment (T, n, 3): what the inboard side exerts on each body at its input point
-        (moment about that point), world frame.
+        (moment about that point), world frame, N and N m.
     kinetic, potential (T,): J; potential counts gravity, the hinges' springs and the beams'
         strain energy.
     modal_coordinates, modal_velocities (T, total modes): the beams' modal coordinates eta and
         rates, concatenated in body order (a beam's v coordinates first, then w); None when the
-        chain has no beams (or the solver does not record them).
+        model has no beams.
+    joint_coordinates, joint_rates, drive_force (T, total coordinates): the joints with
+        coordinates (revolute, universal, prismatic), in hinge order, a joint's in its own
+        order (rad or m; rad/s or m/s); the generalized force (N m or N) each coordinate's drive
+        applies on the child (for a prescribed motion, the force the motion needs); None
+        without such joints.
+    body_names (n,): the bodies' names (columns of save_csv).
+    wall_time (s), n_steps, info (the solver's statistics), checkpoint (DT-TMM: the state after
+        the last step, to continue the run from: simulate(..., resume=result.checkpoint)).
+
+    The positions, velocities and energies of a DT-TMM run are computed from the stored state
+    (rotations, rates, beams' and joints' coordinates) the first time they are read, all
+    samples at once, and kept; a run that records many samples pays for them only if asked.
+    A Result is read-only.
     """
-    method: str
-    t: np.ndarray
-    position_input: np.ndarray
-    position_mass_center: np.ndarray
-    position_output: np.ndarray
-    rotation: np.ndarray
-    angular_velocity: np.ndarray
-    angular_acceleration: np.ndarray
-    force: np.ndarray
-    moment: np.ndarray
-    kinetic: np.ndarray
-    potential: np.ndarray
-    wall_time: float = 0.0
-    n_steps: int = 0
-    info: dict = field(default_factory=dict)
-    velocity_input: np.ndarray = None      # (T, n, 3) world velocity of each input point
-    modal_coordinates: np.ndarray = None   # (T, total modes) beams' eta, body order, v then w
-    modal_velocities: np.ndarray = None    # (T, total modes) their rates
-    # joints with coordinates (revolute, universal, prismatic; elements/joints.py), their
-    # coordinates in hinge order, a joint's in its own order (rad or m):
-    joint_coordinates: np.ndarray = None   # (T, total coordinates) q
-    joint_rates: np.ndarray = None         # (T, total coordinates) q'
-    drive_force: np.ndarray = None         # (T, total coordinates) the generalized force (N m or
-                                           # N) each coordinate's drive applies on the child (the
-                                           # parent takes the reaction); for a prescribed motion
-                                           # the force the motion needs; 0 without a drive
+
+    __slots__ = ("_values", "_derivation")
+
+    def __init__(self, *, derivation=None, **values):
+        unknown = set(values) - set(FIELDS)
+        if unknown:
+            raise TypeError(f"Result: unknown fields {sorted(unknown)}")
+        for name in ("method", "t"):
+            if name not in values:
+                raise TypeError(f"Result: {name} is required")
+        full = {name: values.get(name, _DEFAULTS.get(name)) for name in FIELDS}
+        if full["info"] is None:
+            full["info"] = {}
+        if derivation is not None:          # left to the derivation unless given
+            for name in DERIVED:
+                if values.get(name) is None:
+                    del full[name]
+        object.__setattr__(self, "_values", full)
+        object.__setattr__(self, "_derivation", derivation)
+
+    def __getattr__(self, name):
+        values = object.__getattribute__(self, "_values")
+        if name in values:
+            return values[name]
+        if name in DERIVED:
+            values.update(object.__getattribute__(self, "_derivation")(name))
+            return values[name]
+        raise AttributeError(f"Result has no field {name!r}")
+
+    def __setattr__(self, name, value):
+        raise AttributeError("a Result is read-only (Result.replace makes a changed copy)")
+
+    def __repr__(self):
+        return (f"Result(method={self.method!r}, {len(self.t)} samples over "
+                f"[{self.t[0]:g}, {self.t[-1]:g}] s, {self.n_steps} steps, "
+                f"wall_time={self.wall_time:.3g} s)")
+
+    def __reduce__(self):
+        """Pickled (to another process) with its derived fields computed: the derivation is a
+        closure over the model."""
+        return (_restored, ({name: getattr(self, name) for name in FIELDS},))
+
+    def replace(self, **changes):
+        """A copy with some fields changed (derived fields not yet computed stay derivable,
+        unless the stored state they come from is changed)."""
+        values = dict(object.__getattribute__(self, "_values"), **changes)
+        derivation = object.__getattribute__(self, "_derivation")
+        if derivation is not None and set(changes) & _STATE_OF_DERIVED:
+            values.update({name: getattr(self, name) for name in DERIVED
+                           if name not in changes})
+            derivation = None
+        return Result(derivation=derivation, **values)
 
     @property
     def total_energy(self):
@@ -70,35 +123,66 @@ class Result:
         (and then only one of tx, tz is defined) where ty = +-90 deg."""
         return rotation_to_xyz_angles(self.rotation)
 
+    def plot_positions(self, **options):
+        """The bodies' points against time (dttmm.plots.plot_positions); a matplotlib Figure."""
+        from .plots import plot_positions
+        return plot_positions(self, **options)
+
+    def plot_angles(self, **options):
+        """The bodies' x-y-z angles, unwrapped (dttmm.plots.plot_angles)."""
+        from .plots import plot_angles
+        return plot_angles(self, **options)
+
+    def plot_energy(self, **options):
+        """Kinetic, potential and total energy and the total's change (dttmm.plots)."""
+        from .plots import plot_energy
+        return plot_energy(self, **options)
+
+    def plot_joints(self, **options):
+        """Joint coordinates and drive forces (dttmm.plots.plot_joints)."""
+        from .plots import plot_joints
+        return plot_joints(self, **options)
+
+    def plot_modal(self, **options):
+        """The beams' modal coordinates (dttmm.plots.plot_modal)."""
+        from .plots import plot_modal
+        return plot_modal(self, **options)
+
     def save_npz(self, path):
         """Write every field to a compressed .npz (arrays as they are; method, wall_time,
-        n_steps and info as entries of their own), plus the derived quaternion, xyz_angles and
-        total_energy for readers outside dttmm; Result.load_npz reads it back."""
-        arrays = {f.name: getattr(self, f.name) for f in fields(self)
-                  if f.name not in ("method", "wall_time", "n_steps", "info")
-                  and getattr(self, f.name) is not None}
+        n_steps, body_names and info as entries of their own), plus the derived quaternion,
+        xyz_angles and total_energy for readers outside dttmm; Result.load_npz reads it back.
+        The checkpoint is not written (Checkpoint.save)."""
+        arrays = {name: getattr(self, name) for name in FIELDS
+                  if name not in ("method", "wall_time", "n_steps", "info", "body_names",
+                                  "checkpoint") and getattr(self, name) is not None}
+        extra = {} if self.body_names is None else {"body_names": np.array(self.body_names)}
         np.savez_compressed(path, method=self.method, wall_time=self.wall_time,
                             n_steps=self.n_steps,
                             info=json.dumps(self.info, default=_json_value),
                             quaternion=self.quaternion, xyz_angles=self.xyz_angles,
-                            total_energy=self.total_energy, **arrays)
+                            total_energy=self.total_energy, **extra, **arrays)
 
     @classmethod
     def load_npz(cls, path):
         """The Result that save_npz wrote to path (info's tuples come back as lists)."""
         with np.load(path, allow_pickle=False) as data:
-            names = {f.name for f in fields(cls)}
-            values = {k: data[k] for k in data.files if k in names}
+            values = {k: data[k] for k in data.files if k in FIELDS}
         values["method"] = str(values["method"])
         values["wall_time"] = float(values["wall_time"])
         values["n_steps"] = int(values["n_steps"])
         values["info"] = json.loads(str(values["info"]))
+        if "body_names" in values:
+            values["body_names"] = tuple(str(x) for x in values["body_names"])
         return cls(**values)
 
     def save_csv(self, path):
-        """t, then x,y,z of each body's output point, then the energies."""
+        """t, then x, y, z of each body's output point (columns named after the bodies), then
+        the energies."""
         n = self.position_output.shape[1]
-        head = ["t"] + [f"{c}{k + 1}" for k in range(n) for c in "xyz"] + [
+        names = self.body_names if self.body_names is not None else [
+            f"body{k + 1}" for k in range(n)]
+        head = ["t"] + [f"{name}.{c}" for name in names for c in "xyz"] + [
             "kinetic", "potential", "total_energy"]
         rows = np.column_stack([self.t, self.position_output.reshape(len(self.t), -1),
                                 self.kinetic, self.potential, self.total_energy])
@@ -106,6 +190,10 @@ class Result:
             w = csv.writer(fh)
             w.writerow(head)
             w.writerows(rows.tolist())
+
+
+def _restored(values):
+    return Result(**values)
 
 
 def angular_momentum(model, result, point=(0.0, 0.0, 0.0)):
@@ -135,16 +223,20 @@ def rotation_to_quaternion(rot):
         k = np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]])
         if k == 0:
             s = 2.0 * np.sqrt(1.0 + tr)
-            q[i] = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+            q[i] = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s,
+                    (m[1, 0] - m[0, 1]) / s]
         elif k == 1:
             s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-            q[i] = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+            q[i] = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s,
+                    (m[0, 2] + m[2, 0]) / s]
         elif k == 2:
             s = 2.0 * np.sqrt(1.0 - m[0, 0] + m[1, 1] - m[2, 2])
-            q[i] = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+            q[i] = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s,
+                    (m[1, 2] + m[2, 1]) / s]
         else:
             s = 2.0 * np.sqrt(1.0 - m[0, 0] - m[1, 1] + m[2, 2])
-            q[i] = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+            q[i] = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s,
+                    0.25 * s]
         if q[i, 0] < 0:
             q[i] = -q[i]
     return q.reshape(shape + (4,))
@@ -295,7 +387,8 @@ def _drive_spring_energy(model, joint_coordinates, n_t):
 def beam_midpoint_deflection(model, result, body):
     """(T, 2) mid-span deflection of beam `body` relative to its chord I -> O (the mid-point's
     offset from the chord's middle, less its part along the chord; A u(L/2) for pinned modes,
-    whose chord is the frame's x axis), projected on e2 and e3: e1 = A e1 is the chord direction, e3 the unit part of world z orthogonal to e1,
+    whose chord is the frame's x axis), projected on e2 and e3: e1 = A e1 is the chord
+    direction, e3 the unit part of world z orthogonal to e1,
     e2 = e3 x e1 (for a chord in the world x-y plane: e2 is in that plane, e3 = world z).
     Undefined (NaN) while the chord is along world z."""
     body = int(body)

@@ -27,6 +27,7 @@ from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
 from .model import Model, output_section
+from .recording import Checkpoint, Recording
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
@@ -49,7 +50,8 @@ class DivergenceError(RuntimeError):
 @dataclass(frozen=True)
 class Integrator:
     """Generalized-alpha coefficients (Chung and Hulbert 1993) from the spectral radius at
-    infinite frequency rho_inf; rho_inf = 1 is the trapezoidal Newmark rule (beta 1/4, gamma 1/2)."""
+    infinite frequency rho_inf; rho_inf = 1 is the trapezoidal Newmark rule (beta 1/4,
+    gamma 1/2)."""
     beta: float
     gamma: float
     alpha_m: float
@@ -217,6 +219,49 @@ def _steps(t_end, dt):
     return n, (dt if abs(n * dt - t_end) <= 1e-9 * dt else t_end / n)
 
 
+def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt):
+    """The accelerations at t = 0 (docs/solver.md, "Consistent start") into state: by the fused
+    loop's own sweep (fused: its (runner, loop)) or kernels/step.py::initial_accelerations."""
+    n = model.n_bodies
+    g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
+    force, torque = _loads(model, [0.0])
+    joint_input = _joint_inputs(model, [0.0], state, dt)
+    try:
+        with compile_notice():
+            if fused:       # the fused loop's own sweep (compiles nothing else)
+                status = _fused_start(*fused, Run(
+                    params, settings._replace(newton_max=0, start=True), state, sweep,
+                    Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
+                           force=force, torque=torque, joint_input=joint_input),
+                    _record(0, n, len(state.eta)), monitor))
+            else:
+                status = kstep.initial_accelerations(params, settings, state, sweep,
+                                                     (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                                                     force[0], torque[0], joint_input[0])
+    except np.linalg.LinAlgError as err:
+        raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
+                              f"or not finite ({err})"
+                              + (f"; {_DIRECT_HINT}" if method == "direct" else "")) from None
+    if status == LOST_ACCURACY:
+        raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
+                              + _DIRECT_HINT)
+    if status == _NOT_FINITE_START:
+        raise DivergenceError(0, 0.0, "consistent start: the accelerations are NaN or infinite "
+                              "(check the model's masses, inertias and initial state)")
+    if status < 0:
+        raise ValueError(_unsupported_cause(model, -status, "the consistent start"))
+    if status != 0:
+        raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
+    for k in range(n):
+        state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
+        if model.hinge_kind[k] == ELASTIC:
+            st = 2 * model.parent[k] + 2            # the inboard station (0: the ground)
+            state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[st, 0:3]
+    state.pseudo[:] = state.omega_dot
+    state.eta_p[:] = state.eta_acc
+    state.defl_pseudo[:] = state.defl_acc
+
+
 def _record(n_rec_max, n, n_eta, v_st=False, v_c=False):
     """Where a chunk's samples are written (kernels/loop.py::Record): n_rec_max of each; the
     paper scheme's station velocities and the mass-centre velocities only where recorded."""
@@ -300,9 +345,9 @@ def _ground(model, times):
 
 
 def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho_inf=1.0,
-             newton_iterations=None, newton_tol=1e-12, record_every=1,
-             full_state=False, richardson=False, progress=None,
-             max_step_error=MAX_STEP_ERROR) -> Result:
+             newton_iterations=None, newton_tol=1e-12, record_every=None, record_dt=None,
+             t_eval=None, full_state=False, richardson=False, progress=None,
+             max_step_error=MAX_STEP_ERROR, resume=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -338,8 +383,16 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         all without reaching newton_tol are counted in ``info["newton_unconverged_steps"]``.
     newton_tol : float
         See newton_iterations (rad; default 1e-12).
-    record_every : int
-        Record every k-th step (default 1), and always t = 0 and the final state.
+    record_every : int, optional
+        Record every k-th step.
+    record_dt : float, optional
+        Record every record_dt seconds (rounded to a whole number of steps).
+    t_eval : array_like, optional
+        Record at these times, s (increasing, on the step grid: multiples of dt).
+        Give at most one of record_every, record_dt and t_eval. Default: every step of a run of
+        up to 1000 steps, else every ceil(steps / 1000)-th step (at most ~1000 samples). The
+        first and the final state are always recorded. Derived quantities (positions,
+        energies) are computed when first read (``Result``).
     full_state : bool
         Use the 13-entry state even where the reduced [a; q] form applies (a tree: the
         full-state tree sweep, docs/assembly.md "Trees with joints").
@@ -357,6 +410,11 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         max |p_{n+1} - p_n| over every rotation, modal and joint coordinate and deflection; rad
         or m) exceeds it; default 0.05; None never stops. ``info["step_error_max"]`` is the
         run's largest estimate (docs/solver.md, "Runs that cannot go wrong").
+    resume : Checkpoint, optional
+        Continue the run that wrote it (``result.checkpoint``, or ``Checkpoint.load``) from
+        its last step to t_end, with the same model, dt and options: the continued run takes
+        the same steps on the same numbers, so the two halves equal the whole run bit for bit.
+        Its first sample is the checkpoint's state.
 
     Returns
     -------
@@ -364,7 +422,8 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         The recorded samples (``dttmm.Result``: times in s, positions in m, rotations,
         angular velocities in rad/s, interior forces in N and moments in N m at every body's
         input, energies in J, joint coordinates and drive forces), ``wall_time`` (s, the whole
-        call) and ``info`` (mode, loop, dt, Newton and error statistics).
+        call), ``info`` (mode, loop, dt, Newton and error statistics) and ``checkpoint`` (the
+        state after the last step, for ``resume``).
 
     Raises
     ------
@@ -383,9 +442,23 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     t_end = _check_positive("t_end", t_end)
     dt = _check_positive("dt", dt)
     n_steps, dt = _steps(t_end, dt)
-    if int(record_every) != record_every or record_every < 1:
-        raise ValueError(f"simulate: record_every must be an integer >= 1, got {record_every!r}")
-    record_every = int(record_every)
+    start = 0
+    if resume is not None:
+        if not isinstance(resume, Checkpoint):
+            raise ValueError(f"simulate: resume must be a Checkpoint (result.checkpoint or "
+                             f"dttmm.Checkpoint.load(path)), got {type(resume).__name__}")
+        if richardson:
+            raise ValueError("simulate: resume and richardson=True do not combine (the "
+                             "extrapolation needs both runs from t = 0)")
+        if abs(dt - resume.h) > 1e-12 * resume.h:
+            raise ValueError(f"simulate(resume=...): the checkpoint's runs step dt = "
+                             f"{resume.h:.17g} s; this run steps {dt:.17g} s (t_end = {t_end:g} s "
+                             f"in steps of dt): resume with the same dt and a t_end on its grid")
+        if resume.step >= n_steps:
+            raise ValueError(f"simulate(resume=...): t_end = {t_end:g} s is not after the "
+                             f"checkpoint's t = {resume.t:g} s")
+        start = resume.step
+    sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start)
     if scheme not in SCHEMES:
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
     if newton_iterations is None:
@@ -404,11 +477,14 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                              f"{scheme!r} scheme's properties would not survive the "
                              f"extrapolation), got scheme={scheme!r}")
         runs = []
-        for h, every in ((dt, record_every), (0.5 * dt, 2 * record_every)):
+        for h, factor in ((dt, 1), (0.5 * dt, 2)):
+            # (the same times: twice the steps between samples)
+            records = (dict(record_every=factor * sampling) if isinstance(sampling, int)
+                       else dict(t_eval=np.concatenate([[0.0], sampling * dt])))
             try:
                 runs.append(simulate(model, n_steps * dt, h, method=method, scheme=scheme,
                                      rho_inf=rho_inf, newton_iterations=newton_iterations,
-                                     newton_tol=newton_tol, record_every=every,
+                                     newton_tol=newton_tol, **records,
                                      full_state=full_state, progress=progress,
                                      max_step_error=max_step_error))
             except DivergenceError as err:
@@ -426,11 +502,13 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     n = model.n_bodies
     params = kernel_params(model, ws.beams)
     settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
-                        newton_tol=newton_tol, record_every=record_every,
+                        newton_tol=newton_tol, record_every=1,
                         max_step_error=max_step_error,
                         stop_unconverged=scheme == "energy_momentum", start=False)
     monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
-                      jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((n, 3)), error=np.zeros(2))
+                      jqp=np.zeros((n if has_coordinates(model) else 0, 2)),
+                      defl_pseudo=np.zeros((n if (model.hinge_kind == ELASTIC).any() else 0, 3)),
+                      error=np.zeros(2))
 
     # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
     # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
@@ -445,43 +523,9 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         loop_name, runner = "ball-chain", run_steps_no_alloc
         loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
 
-    g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
-    force, torque = _loads(model, [0.0])
-    joint_input = _joint_inputs(model, [0.0], state, dt)
-    try:
-        with compile_notice():
-            if fused:       # the fused loop's own sweep (compiles nothing else)
-                status = _fused_start(runner, loop, Run(
-                    params, settings._replace(newton_max=0, start=True), state, ws.sweep,
-                    Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                           force=force, torque=torque, joint_input=joint_input),
-                    _record(0, n, len(state.eta)), monitor))
-            else:
-                status = kstep.initial_accelerations(params, settings, state, ws.sweep,
-                                                     (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                     force[0], torque[0], joint_input[0])
-    except np.linalg.LinAlgError as err:
-        raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
-                              f"or not finite ({err})"
-                              + (f"; {_DIRECT_HINT}" if method == "direct" else "")) from None
-    if status == LOST_ACCURACY:
-        raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
-                              + _DIRECT_HINT)
-    if status == _NOT_FINITE_START:
-        raise DivergenceError(0, 0.0, "consistent start: the accelerations are NaN or infinite "
-                              "(check the model's masses, inertias and initial state)")
-    if status < 0:
-        raise ValueError(_unsupported_cause(model, -status, "the consistent start"))
-    if status != 0:
-        raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
-    for k in range(n):
-        state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
-        if model.hinge_kind[k] == ELASTIC:
-            st = 2 * model.parent[k] + 2            # the inboard station (0: the ground)
-            state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[st, 0:3]
-    state.pseudo[:] = state.omega_dot
-    state.eta_p[:] = state.eta_acc
-    state.defl_pseudo[:] = state.defl_acc
+    if resume is None:
+        _consistent_start(model, mode, method, (runner, loop) if fused else None, params,
+                          settings, state, ws.sweep, monitor, dt)
     histories = _station_histories(model, state, scheme == "paper")
     state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -499,44 +543,51 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         loop = kstep.general_loop(n, len(state.eta), dt, coef, histories)
         if scheme == "paper":
             keys += ["v_st", "v_c"]
-    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
-
-    def sample():
-        values = dict(state._asdict(), **history_values)
-        return {key: values[key].copy() for key in keys}
-
-    samples = [sample()]
-    sample_steps = [0]
-    chunk = record_every * max(1, 1000 // record_every)
-    # a JointForce drive is evaluated in Python, one step ahead: one step per chunk
-    force_drives = any(d is not None and d["kind"] == FORCE for ds in model.drives for d in ds)
-    if force_drives:
-        chunk = 1
-        settings = settings._replace(record_every=1)      # Python keeps every record_every-th
-    static_ground = model.ground_motion is None
-    if static_ground:
-        g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(chunk + 1))
-    no_loads = not model.has_applied_loads
-    if no_loads:
-        force, torque = np.zeros((chunk, n, 3)), np.zeros((chunk, n, 3))
-    n_rec_max = chunk // settings.record_every
-    rec = _record(n_rec_max, n, len(state.eta), scheme == "paper", "v_c" in keys)
-    joint_input = np.zeros((chunk, n, 2, 3))
-    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
-                            for ds in model.drives for d in ds)
-    info = np.zeros(5, dtype=np.int64)
-    max_newton = 0
-    done = 0
     run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name)
     if scheme == "energy_momentum":
         run_info.update(forces="step means (about t - dt/2)")
     else:
         run_info.update(rho_inf=rho_inf)
+    structures = (state, ws.sweep, loop, monitor)
+    counters = (0, 0)
+    done = 0
+    if resume is not None:
+        resume.restore(structures, dict(run_info, method=method, bodies=n,
+                                        newton_iterations=int(newton_iterations)))
+        counters, done = resume.counters, resume.step
+    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
+    recording = Recording(keys, keep)
+    recording.add_state(state, history_values, done)
+    first = done
+
+    # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
+    # one step per chunk
+    force_drives = any(d is not None and d["kind"] == FORCE for ds in model.drives for d in ds)
+    size = 1 if force_drives else CHUNK
+    static_ground = model.ground_motion is None
+    if static_ground:
+        g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(size + 1))
+    no_loads = not model.has_applied_loads
+    if no_loads:
+        force, torque = np.zeros((size, n, 3)), np.zeros((size, n, 3))
+    every = sampling if isinstance(sampling, int) else size + 1
+    rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys)
+    joint_input = np.zeros((size, n, 2, 3))
+    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
+                            for ds in model.drives for d in ds)
+    info = np.zeros(5, dtype=np.int64)
+    info[4] = counters[1]
+    max_newton = counters[0]
     beam_tips = _beam_tips(model)
-    bar = Progress(n_steps, progress)
+
+    def partial(steps_taken):
+        return _result(user_model, recording, dt, time.perf_counter() - wall0, steps_taken,
+                       dict(run_info))
+
+    bar = Progress(n_steps - done, progress)
     try:
         while done < n_steps:
-            m = min(chunk, n_steps - done)
+            m, every = _next_chunk(done, n_steps, sampling, size)
             times = (done + np.arange(m + 1)) * dt
             if not static_ground:
                 g_acc, g_rot, g_w, g_wd = _ground(model, times)
@@ -549,19 +600,18 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
             inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
                             force=force[:m], torque=torque[:m], joint_input=joint_input[:m])
             try:
-                with compile_notice() if done == 0 else nullcontext():
-                    runner(loop, Run(params, settings, state, ws.sweep, inputs, rec, monitor),
-                           info)
+                with compile_notice() if done == first else nullcontext():
+                    runner(loop, Run(params, settings._replace(record_every=every), state,
+                                     ws.sweep, inputs, rec, monitor), info)
             except np.linalg.LinAlgError as err:
                 raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is "
                                       f"singular somewhere in steps {done + 1}..{done + m} "
                                       f"({err}); "
                                       f"{_DIRECT_HINT if method == 'direct' else ''}") from None
-            for i in range(int(info[3])):
-                if force_drives and (done + 1) % record_every != 0:
-                    continue
-                samples.append({key: getattr(rec, key)[i].copy() for key in keys})
-                sample_steps.append(done + (i + 1) * settings.record_every)
+            n_rec = int(info[3])
+            if n_rec:
+                recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
+                              done + every * np.arange(1, n_rec + 1))
             if info[0] == UNSUPPORTED:
                 raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
             if info[0] != OK:
@@ -569,30 +619,80 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                 cause = _failure_cause(model, mode, info, monitor, settings)
                 if method == "direct" and info[0] == SINGULAR:
                     cause += "; " + _DIRECT_HINT
-                partial = _result(user_model, np.array(sample_steps) * dt,
-                                  [_user_sample(s, keep) for s in samples],
-                                  time.perf_counter() - wall0, step - 1, dict(run_info))
-                raise DivergenceError(step, step * dt, cause, partial)
+                raise DivergenceError(step, step * dt, cause, partial(step - 1))
             max_newton = max(max_newton, int(info[2]))
             done += m
             bar.update(done)
             runaway = _beam_beyond_its_length(model, beam_tips, state.eta)
             if runaway:
-                partial = _result(user_model, np.array(sample_steps) * dt,
-                                  [_user_sample(s, keep) for s in samples],
-                                  time.perf_counter() - wall0, done, dict(run_info))
-                raise DivergenceError(done, done * dt, runaway, partial)
+                raise DivergenceError(done, done * dt, runaway, partial(done))
     finally:
         bar.close()
-    if sample_steps[-1] != n_steps:         # the final state is always recorded
-        samples.append(sample())
-        sample_steps.append(n_steps)
-    t = np.array(sample_steps) * dt
-    result = _result(user_model, t, [_user_sample(s, keep) for s in samples], 0.0, n_steps,
+    if recording.last_step != n_steps:         # the final state is always recorded
+        recording.add_state(state, history_values, n_steps)
+    checkpoint = Checkpoint.of(n_steps, dt, dict(run_info, method=method, bodies=n,
+                                                 newton_iterations=int(newton_iterations)),
+                               structures, (max_newton, info[4]))
+    result = _result(user_model, recording, dt, 0.0, n_steps,
                      dict(run_info, newton_iterations_used=max_newton,
                           newton_unconverged_steps=int(info[4]),
-                          step_error_max=float(monitor.error[0])))
-    return replace(result, wall_time=time.perf_counter() - wall0)
+                          step_error_max=float(monitor.error[0])), checkpoint)
+    return result.replace(wall_time=time.perf_counter() - wall0)
+
+
+CHUNK = 1000        # steps per call of the compiled loop (their inputs are prepared per chunk)
+MAX_SAMPLES = 1000  # simulate's default: every step up to this many, then every k-th step
+
+
+def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
+    """The steps a run records (besides its first and its last state): every k-th step (an
+    int k), or the given steps (an increasing array).  Default: every step of a run of up to
+    MAX_SAMPLES steps, else every ceil(n_steps / MAX_SAMPLES)-th."""
+    given = [name for name, v in (("record_every", record_every), ("record_dt", record_dt),
+                                  ("t_eval", t_eval)) if v is not None]
+    if len(given) > 1:
+        raise ValueError(f"simulate: give one of record_every, record_dt and t_eval, got "
+                         f"{' and '.join(given)}")
+    if record_every is not None:
+        if int(record_every) != record_every or record_every < 1:
+            raise ValueError(f"simulate: record_every must be an integer >= 1 (steps), got "
+                             f"{record_every!r}")
+        return int(record_every)
+    if record_dt is not None:
+        record_dt = _check_positive("record_dt", record_dt)
+        return max(1, int(round(record_dt / h)))
+    if t_eval is not None:
+        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
+        steps = np.round(times / h)
+        off = np.abs(steps * h - times) > 1e-6 * h
+        if times.ndim != 1 or not np.all(np.isfinite(times)):
+            raise ValueError("simulate: t_eval must be a 1-d array of finite times, s")
+        if off.any():
+            i = int(np.argmax(off))
+            raise ValueError(f"simulate: t_eval[{i}] = {times[i]:g} s is not on the step grid "
+                             f"(multiples of dt = {h:g} s): the run records the state after "
+                             f"whole steps; take a dt that divides the times, or record_dt")
+        if np.any(np.diff(steps) <= 0) or steps[0] < start or steps[-1] > n_steps:
+            raise ValueError(f"simulate: t_eval must increase within [{start * h:g}, "
+                             f"{n_steps * h:g}] s")
+        return steps[steps > start].astype(np.int64)
+    return max(1, -(-(n_steps - start) // MAX_SAMPLES))
+
+
+def _next_chunk(done, n_steps, sampling, size):
+    """(m, every): the next chunk's steps and its record stride (the compiled loop records after
+    every every-th step of the chunk; every > m: none), so that the run records the steps
+    `sampling` asks for (_sampling) and a chunk holds at most `size` steps."""
+    if isinstance(sampling, int):
+        k = sampling
+        if k <= size and done % k == 0:
+            return min(k * (size // k), n_steps - done), k
+        target = done + k - done % k
+    else:
+        later = sampling[sampling > done]
+        target = int(later[0]) if len(later) else n_steps + 1
+    m = min(size, target - done, n_steps - done)
+    return m, (m if done + m == target else m + 1)
 
 
 FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)
@@ -720,7 +820,8 @@ def _initial_mass_center_velocities(model, rot, omega):
 
 def kernel_model(model):
     """The model the kernels integrate, and the kernel index of each of the model's bodies
-    (results are mapped back, _user_sample).  Two kinds of massless rigid body, welded to their
+    (results are mapped back, recording.Recording).  Two kinds of massless rigid body, welded
+    to their
     parent, stand in where a sweep needs a frame or a point that the model gives implicitly
     (docs/topology.md, "What the kernels integrate"):
     - an end section, welded to a beam's end with zero length, carries the section's rotation
@@ -811,19 +912,6 @@ def kernel_model(model):
     return replace(model, n_bodies=len(parent), parent=parent,
                    attachment=np.zeros(len(parent), dtype=np.int64),
                    attachment_point=attachment_point, **arrays), np.array(keep)
-
-
-def _user_sample(sample, keep):
-    """A kernel-chain sample restricted to the model's bodies and their stations."""
-    if len(keep) == len(sample["rot"]):
-        return sample
-    stations = np.concatenate([[0], np.ravel([[2 * k + 1, 2 * k + 2] for k in keep])])
-    out = {key: sample[key][keep] for key in ("rot", "omega", "omega_dot", "defl", "defl_rate")}
-    out.update(z=sample["z"][stations], eta=sample["eta"], eta_d=sample["eta_d"])
-    for key in ("jq", "jqd", "jtau"):
-        if key in sample:
-            out[key] = sample[key][keep]
-    return out
 
 
 _DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "
@@ -931,8 +1019,9 @@ def richardson_extrapolation(coarse, fine):
                                            fine.info.get("newton_iterations_used", 0)),
                 newton_unconverged_steps=coarse.info.get("newton_unconverged_steps", 0)
                 + fine.info.get("newton_unconverged_steps", 0))
-    return replace(coarse, wall_time=coarse.wall_time + fine.wall_time,
-                   n_steps=coarse.n_steps + fine.n_steps, info=info, **fields)
+    return coarse.replace(wall_time=coarse.wall_time + fine.wall_time,
+                          n_steps=coarse.n_steps + fine.n_steps, info=info, checkpoint=None,
+                          **fields)
 
 
 def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_ground):
@@ -962,26 +1051,48 @@ def _sum_before(x):
     return out
 
 
-def _result(model, t, samples, wall, n_steps, info):
+def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
+    """The Result of a run's recording: the stored state as recorded; positions, velocities and
+    energies left to _derived, computed when first read."""
+    values = recording.arrays()
+    t = np.asarray(recording.steps, dtype=float) * h
+    rot, omega, eta, eta_d = values["rot"], values["omega"], values["eta"], values["eta_d"]
+    joints = {}
+    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    if "jq" in values and columns:
+        for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
+                          ("drive_force", "jtau")):
+            joints[name] = np.stack([values[key][:, k, i] for k, i in columns], axis=1)
+    derived = {}
+
+    def derivation(name):
+        if not derived:
+            derived.update(_derived(model, t, rot, omega, values["defl"], values["defl_rate"],
+                                    eta, eta_d, values.get("v_st"), values.get("v_c"),
+                                    joints.get("joint_coordinates")))
+        return derived
+
+    loads = values["z"]                     # every body's input [m; q]
+    return Result(method="dttmm", t=t, rotation=rot, angular_velocity=omega,
+                  angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
+                  moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
+                  modal_coordinates=eta if model.has_beams else None,
+                  modal_velocities=eta_d if model.has_beams else None,
+                  body_names=tuple(model.body_names), checkpoint=checkpoint,
+                  derivation=derivation, **joints)
+
+
+def _derived(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c, joint_coordinates):
+    """Positions and velocities of every body's points, and the energies, for all samples."""
     n = model.n_bodies
-    m = len(samples)
-    rot = np.array([s["rot"] for s in samples])
-    omega = np.array([s["omega"] for s in samples])
-    z = np.array([s["z"] for s in samples])
-    defl = np.array([s["defl"] for s in samples])
-    defl_rate = np.array([s["defl_rate"] for s in samples])
+    m = len(t)
     l_io = model.body_params[:, TO_OUTPUT]
-    eta = np.array([s["eta"] for s in samples])
-    eta_d = np.array([s["eta_d"] for s in samples])
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     # the ground point and frame at every sample (one state for a ground at rest)
     grounds = [model.ground_state(ti) for ti in (t if model.ground_motion is not None else t[:1])]
     r_prev = np.broadcast_to(np.array([g[0] for g in grounds], dtype=float), (m, 3))
     v_prev = np.broadcast_to(np.array([g[1] for g in grounds], dtype=float), (m, 3))
     ground_rot = np.broadcast_to(np.array([g[3] for g in grounds], dtype=float), (m, 3, 3))
-    # the paper's and energy-momentum schemes' own point velocities (every sample has them)
-    v_st = np.array([s["v_st"] for s in samples]) if "v_st" in samples[0] else None
-    v_c = np.array([s["v_c"] for s in samples]) if "v_c" in samples[0] else None
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
     rho_dot = np.cross(omega, rho)
@@ -1008,22 +1119,8 @@ def _result(model, t, samples, wall, n_steps, info):
         rho_c = np.einsum("tkij,kj->tki", rot[:, rigid], model.body_params[rigid, TO_MASS_CENTER])
         v_in[:, rigid] = v_c[:, rigid] - np.cross(omega[:, rigid], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)
-    joints = {}
-    columns = [(k, i) for k in range(n) for i in range(len(model.drives[k]))]
-    if "jq" in samples[0] and columns:
-        for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
-                          ("drive_force", "jtau")):
-            values = np.array([s[key] for s in samples])
-            joints[name] = np.stack([values[:, k, i] for k, i in columns], axis=1)
     kinetic, potential = chain_energies(model, rot, omega, r_in, v_in, defl,
                                         ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
-                                        joint_coordinates=joints.get("joint_coordinates"))
-    inputs = 2 * np.arange(n) + 1
-    return Result(method="dttmm", t=t, position_input=r_in, position_mass_center=r_c,
-                  position_output=r_o, rotation=rot, angular_velocity=omega,
-                  angular_acceleration=np.array([s["omega_dot"] for s in samples]),
-                  force=z[:, inputs, 9:12], moment=z[:, inputs, 6:9],
-                  kinetic=kinetic, potential=potential, wall_time=wall,
-                  n_steps=n_steps, info=info, velocity_input=v_in,
-                  modal_coordinates=eta if model.has_beams else None,
-                  modal_velocities=eta_d if model.has_beams else None, **joints)
+                                        joint_coordinates=joint_coordinates)
+    return dict(position_input=r_in, position_mass_center=r_c, position_output=r_o,
+                velocity_input=v_in, kinetic=kinetic, potential=potential)

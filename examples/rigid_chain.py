@@ -43,7 +43,8 @@ def main(argv=None):
           f"{res.wall_time:.3f} s wall, {1e6 * res.wall_time / res.n_steps:.1f} us/step")
     if args.richardson:
         print(f"Richardson correction: {res.info['richardson_correction_m']:.2e} m")
-    print(f"tip at t = {res.t[-1]:g} s: {np.array2string(res.position_output[-1, -1], precision=6)} m")
+    tip = np.array2string(res.position_output[-1, -1], precision=6)
+    print(f"tip at t = {res.t[-1]:g} s: {tip} m")
     print(f"energy drift: {np.abs(e - e[0]).max():.3e} J (largest kinetic energy "
           f"{res.kinetic.max():.3f} J)")
     if args.csv:

@@ -54,35 +54,50 @@ def write_csv(path, model, res):
 
 
 def plot(directory, model, dt_res, ne_res):
+    """The paper's Figs. 5-8, DT-TMM and the Newton-Euler reference overlaid, each component on
+    an axis of its own, angles unwrapped, and the difference DT-TMM - reference beside them."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     os.makedirs(directory, exist_ok=True)
-    mids = [beam_midpoint_deflection(model, r, BEAM4) for r in (dt_res, ne_res)]
+    if len(dt_res.t) != len(ne_res.t) or not np.allclose(dt_res.t, ne_res.t, atol=1e-9):
+        raise ValueError("plot: the two runs must be sampled at the same times")
+    mids = [1e3 * beam_midpoint_deflection(model, r, BEAM4) for r in (dt_res, ne_res)]
+    angles = [np.unwrap(r.xyz_angles, axis=0) for r in (dt_res, ne_res)]
     figures = [
-        ("fig5_midpoint_in_plane.png", "mid-point deflection v (in plane), mm",
-         [1e3 * m[:, 0] for m in mids]),
-        ("fig6_midpoint_out_of_plane.png", "mid-point deflection w (out of plane), mm",
-         [1e3 * m[:, 1] for m in mids]),
-        ("fig7_angles_body2.png", "x-y-z angles of body 2, rad",
-         [r.xyz_angles[:, BODY2] for r in (dt_res, ne_res)]),
-        ("fig8_angles_beam4.png", "x-y-z angles of beam 4, rad",
-         [r.xyz_angles[:, BEAM4] for r in (dt_res, ne_res)]),
+        ("fig5_midpoint_in_plane.png", "Fig. 5: beam 4's mid-point deflection in plane",
+         ["v (mm)"], [m[:, :1] for m in mids], "mm"),
+        ("fig6_midpoint_out_of_plane.png", "Fig. 6: beam 4's mid-point deflection out of plane",
+         ["w (mm)"], [m[:, 1:] for m in mids], "mm"),
+        ("fig7_angles_body2.png", "Fig. 7: x-y-z angles of body 2 (unwrapped)",
+         ["theta_x (rad)", "theta_y (rad)", "theta_z (rad)"], [a[:, BODY2] for a in angles],
+         "rad"),
+        ("fig8_angles_beam4.png", "Fig. 8: x-y-z angles of beam 4's frame (unwrapped)",
+         ["theta_x (rad)", "theta_y (rad)", "theta_z (rad)"], [a[:, BEAM4] for a in angles],
+         "rad"),
     ]
     paths = []
-    for name, label, (a, b) in figures:
-        fig, ax = plt.subplots(figsize=(6.5, 4))
-        a = np.atleast_2d(a.T).T
-        b = np.atleast_2d(b.T).T
-        for c in range(a.shape[1]):
-            tag = ["x", "y", "z"][c] if a.shape[1] == 3 else ""
-            ax.plot(dt_res.t, a[:, c], lw=1.2, label=f"DT-TMM {tag}".strip())
-            ax.plot(ne_res.t, b[:, c], "--", lw=1.0, label=f"Newton-Euler {tag}".strip())
-        ax.set(xlabel="t, s", ylabel=label)
-        ax.legend(fontsize=7)
-        fig.tight_layout()
+    for name, title, labels, (a, b), unit in figures:
+        rows = len(labels)
+        fig, axes = plt.subplots(rows, 2, figsize=(10, 2.2 + 1.9 * rows), sharex=True,
+                                 squeeze=False, constrained_layout=True)
+        for c in range(rows):
+            ax, diff = axes[c]
+            ax.plot(dt_res.t, a[:, c], lw=1.4, label="DT-TMM")
+            ax.plot(ne_res.t, b[:, c], "--", lw=1.1, label="Newton-Euler reference")
+            ax.set_ylabel(labels[c])
+            diff.plot(dt_res.t, a[:, c] - b[:, c], lw=1.0, color="k")
+            diff.set_ylabel(f"DT-TMM - reference ({unit})")
+            for x in (ax, diff):
+                x.grid(alpha=0.3)
+        axes[0, 0].legend(fontsize=8)
+        axes[0, 0].set_title("both methods", fontsize=10)
+        axes[0, 1].set_title("their difference", fontsize=10)
+        for x in axes[-1]:
+            x.set_xlabel("t (s)")
+        fig.suptitle(title)
         path = os.path.join(directory, name)
-        fig.savefig(path, dpi=100)
+        fig.savefig(path, dpi=90)
         plt.close(fig)
         paths.append(path)
     return paths

@@ -1,7 +1,8 @@
 """The fused loop for rigid bodies and beams between ball joints (kernels/ball_chain.py) against
-the general loop (kernels/step.py): the same step computed two ways, so they must agree to rounding, on every
-feature the fused loop covers.  (Its physics is checked like every other path's: the rigid-chain
-tests against the reference, conservation and analytic cases all run through it.)"""
+the general loop (kernels/step.py): the same step computed two ways, so they must agree to
+rounding, on every feature the fused loop covers.  (Its physics is checked like every other
+path's: the rigid-chain tests against the reference, conservation and analytic cases all run
+through it.)"""
 import numpy as np
 import pytest
 from helpers import rot_z

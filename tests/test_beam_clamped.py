@@ -86,7 +86,8 @@ def tip_mass_frequency(mass, inertia):
     def det(b):
         w2 = b ** 4 * EI / MU
         ch, sh, c, s = np.cosh(b * L), np.sinh(b * L), np.cos(b * L), np.sin(b * L)
-        row1 = EI * b ** 2 * np.array([ch + c, sh + s]) - w2 * inertia * b * np.array([sh + s, ch - c])
+        row1 = (EI * b ** 2 * np.array([ch + c, sh + s])
+                - w2 * inertia * b * np.array([sh + s, ch - c]))
         row2 = EI * b ** 3 * np.array([sh - s, ch + c]) + w2 * mass * np.array([ch - c, sh - s])
         return row1[0] * row2[1] - row1[1] * row2[0]
     b = brentq(det, 0.3 / L, ROOTS[0] / L)

@@ -1,4 +1,5 @@
-"""Validation helpers shared by the element classes: every failure names the element and the argument."""
+"""Validation helpers shared by the element classes: every failure names the element and the
+argument."""
 import numpy as np
 
 
@@ -6,7 +7,8 @@ def finite_vector(element, argument, value, size=3):
     try:
         v = np.array(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise ValueError(f"{element}: {argument} must be a vector of {size} numbers, got {value!r}") from None
+        raise ValueError(f"{element}: {argument} must be a vector of {size} numbers, "
+                         f"got {value!r}") from None
     if v.size != size:
         raise ValueError(f"{element}: {argument} must have {size} entries, got {v.size}")
     if not np.all(np.isfinite(v)):
@@ -33,14 +35,15 @@ def matrix3(element, argument, value):
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{element}: {argument} must be a scalar, 3 diagonal entries or a 3x3 matrix") from None
+        raise ValueError(f"{element}: {argument} must be a scalar, 3 diagonal entries or a 3x3 "
+                         f"matrix") from None
     if a.ndim == 0:
         a = a * np.eye(3)
     elif a.shape == (3,):
         a = np.diag(a)
     elif a.shape != (3, 3):
-        raise ValueError(f"{element}: {argument} must be a scalar, 3 diagonal entries or a 3x3 matrix, "
-                         f"got shape {a.shape}")
+        raise ValueError(f"{element}: {argument} must be a scalar, 3 diagonal entries or a 3x3 "
+                         f"matrix, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{element}: {argument} contains NaN or infinite entries")
     return a
@@ -53,7 +56,8 @@ def symmetric_positive(element, argument, a, semidefinite=False):
     scale = max(np.abs(eig).max(), 1e-300)
     if semidefinite:
         if eig.min() < -1e-12 * scale:
-            raise ValueError(f"{element}: {argument} must be positive semidefinite, eigenvalues {eig}")
+            raise ValueError(f"{element}: {argument} must be positive semidefinite, "
+                             f"eigenvalues {eig}")
     elif eig.min() <= 1e-12 * scale:
         raise ValueError(f"{element}: {argument} must be positive definite, eigenvalues {eig}")
     return 0.5 * (a + a.T)
@@ -62,7 +66,8 @@ def symmetric_positive(element, argument, a, semidefinite=False):
 def rotation_matrix(element, argument, value):
     a = matrix3(element, argument, value)
     if not np.allclose(a @ a.T, np.eye(3), atol=1e-9) or np.linalg.det(a) < 0.0:
-        raise ValueError(f"{element}: {argument} must be a proper rotation matrix (orthonormal, det +1)")
+        raise ValueError(f"{element}: {argument} must be a proper rotation matrix (orthonormal, "
+                         f"det +1)")
     # re-orthonormalise the 1e-9 slack away
     u, _, vt = np.linalg.svd(a)
     return u @ vt
@@ -72,7 +77,8 @@ def optional_function(element, argument, value):
     if value is None:
         return None
     if not callable(value):
-        raise ValueError(f"{element}: {argument} must be a function of time returning 3 numbers, or None")
+        raise ValueError(f"{element}: {argument} must be a function of time returning 3 numbers, "
+                         f"or None")
     out = finite_vector(element, f"{argument}(0)", value(0.0))
     del out
     return value

@@ -159,10 +159,12 @@ class EulerBernoulliBeam:
             raise ValueError(f"{who}: mode_family must be one of {sorted(MODE_FAMILY_NAMES)}, "
                              f"got {self.mode_family!r}")
         n_coord = 2 * int(self.modes_per_plane)
-        eta0, eta_d0 = (np.zeros(n_coord) if v is None else finite_vector(who, arg, v, size=n_coord)
-                        for arg, v in (("initial_modal_coordinates", self.initial_modal_coordinates),
-                                       ("initial_modal_velocities", self.initial_modal_velocities)))
-        rotation = None if self.rotation is None else rotation_matrix(who, "rotation", self.rotation)
+        given = (("initial_modal_coordinates", self.initial_modal_coordinates),
+                 ("initial_modal_velocities", self.initial_modal_velocities))
+        eta0, eta_d0 = (np.zeros(n_coord) if v is None
+                        else finite_vector(who, arg, v, size=n_coord) for arg, v in given)
+        rotation = (None if self.rotation is None
+                    else rotation_matrix(who, "rotation", self.rotation))
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
         mass = mu * length

@@ -26,7 +26,8 @@ HINGE_PARAM_SIZE = 55
 
 @dataclass(frozen=True, eq=False)
 class BallJoint:
-    """Smooth ball-and-socket hinge: positions and forces pass, no moment, free relative rotation."""
+    """Smooth ball-and-socket hinge: positions and forces pass, no moment, free relative
+    rotation."""
     name: str = ""
     kind = BALL
 
@@ -74,7 +75,8 @@ class ElasticHinge:
         who = _label(self, index)
         r = np.eye(3) if self.rotation is None else rotation_matrix(who, "rotation", self.rotation)
         k_t = symmetric_positive(who, "translational_stiffness",
-                                 matrix3(who, "translational_stiffness", self.translational_stiffness))
+                                 matrix3(who, "translational_stiffness",
+                                         self.translational_stiffness))
         k_r = symmetric_positive(who, "rotational_stiffness",
                                  matrix3(who, "rotational_stiffness", self.rotational_stiffness))
         c_t = symmetric_positive(who, "translational_damping",

@@ -82,7 +82,8 @@ class RigidBody:
         if p[0] + p[1] < p[2] - tol:
             raise ValueError(f"{who}: inertia violates the triangle inequality: principal moments "
                              f"about the mass centre {p} (need I1 + I2 >= I3)")
-        rotation = None if self.rotation is None else rotation_matrix(who, "rotation", self.rotation)
+        rotation = (None if self.rotation is None
+                    else rotation_matrix(who, "rotation", self.rotation))
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
         points = {}

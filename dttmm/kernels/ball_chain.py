@@ -2,10 +2,11 @@
 (docs/assembly.md, "The fused ball-chain step").
 
 The same step as the general loop (kernels/step.py) in RICCATI_REDUCED mode (Newmark scheme),
-as a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in
-angular-acceleration slots (no 12 x 13 transfer), and so is each beam's
-(kernels/beam.py::beam_ball_map); each map goes straight into its Riccati step.  Results agree
-with the general loop to rounding (tests/test_ball_chain.py).
+as a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each rigid
+body's reduced 6 x 7 map on [a; q; 1] is written directly in angular-acceleration slots (no
+12 x 13 transfer), and so is each beam's (kernels/beam.py::beam_ball_map); each map goes
+straight into its Riccati step.  Results agree with the general loop to rounding
+(tests/test_ball_chain.py).
 """
 from collections import namedtuple
 

@@ -540,11 +540,11 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
 
 @no_alloc_kernel
 def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
-    """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment (docs/beam.md,
-    "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by r = c3/c1 (s = r = 0 at
-    the consistent start), so every point's acceleration by Y_k(x) G with g = A e2 (v plane) or
-    A e3 (w plane) and G = g + 2 r w x g + s (w' x g + w x (w x g)); with P_k = int mu Y_k,
-    F_k = int Y_k f, Q_k = int mu Y_k rho (aux) and M_kl = int mu Y_k Y_l:
+    """The Jacobian's eta'' columns (12 + p) for a beam whose output carries no moment
+    (docs/beam.md, "The eta'' columns"): eta''_p moves eta_p by s = 1/c1 and eta'_p by
+    r = c3/c1 (s = r = 0 at the consistent start), so every point's acceleration by Y_k(x) G
+    with g = A e2 (v plane) or A e3 (w plane) and G = g + 2 r w x g + s (w' x g + w x (w x g));
+    with P_k = int mu Y_k, F_k = int Y_k f, Q_k = int mu Y_k rho (aux) and M_kl = int mu Y_k Y_l:
       d a_O = Y_k(L) G,  d q_O = -P_k G,
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
@@ -773,7 +773,8 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     sensitivities s = d phi / d w', r = d w / d w' of the rotation and the modal coordinates
     (1 / c1 and c3 / c1 in a step; 0 at the consistent start, where nothing but the
     accelerations moves: kernels/ball_chain.py::start_loop).  The other arguments as for
-    beam_transfer (eta and eta' come from eta''* through w1e and w3e).  work: a block of at least ball_map_work_shape(n) (no allocation), carved by rows:
+    beam_transfer (eta and eta' come from eta''* through w1e and w3e).  work: a block of at
+    least ball_map_work_shape(n) (no allocation), carved by rows:
     each array below is a block of whole rows (or a row's start), which keeps it contiguous (a
     reshape costs a call into numba's runtime, and a block of columns is strided)."""
     moments, ends = tables[0], tables[1]

@@ -7,8 +7,8 @@ Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's incremen
 
   joint_frame          the child's frame from its parent's and the coordinates (exact)
   joint_linearization  the joint as an element of the sweep, in angular-acceleration slots:
-                         f_O = Phi f_I + B nu + c      (f = [a, alpha]; nu = the coordinates' q'')
-                         e_I = Psi e_O                 (e = [m, q], loads moved to the inboard point)
+                         f_O = Phi f_I + B nu + c      (f = [a, alpha]; nu: the coordinates' q'')
+                         e_I = Psi e_O                 (e = [m, q], loads moved inboard)
                          Bl_i . e_O = tau_i            (the drive's generalized force, free q_i)
   drive_value          tau and d tau / d nu of a free coordinate's drive
 

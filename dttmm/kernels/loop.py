@@ -34,7 +34,8 @@ Params = namedtuple("Params", [
     "hinge_kind",       # (n,) BALL / FIXED / ELASTIC: hinge k joins body k - 1 (or the ground)
     "hinge_params",     # (n, HINGE_PARAM_SIZE) elements/hinges.py
     "gravity",          # (3,) m/s^2
-    "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors): solver.beam_tables
+    "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors):
+                        # solver.beam_tables
     "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
     "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame
     "mass_center_inertia",  # (n, 3, 3) J_C in body axes (the energy-momentum step)
@@ -151,8 +152,8 @@ def _copy_into(src, dst):
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def _copy2_into(src, dst):
-    for i in range(src.shape[0]):
-        for j in range(src.shape[1]):
+    for i in range(dst.shape[0]):           # (the monitor's rows: none for a kind not there)
+        for j in range(dst.shape[1]):
             dst[i, j] = src[i, j]
 
 
@@ -165,15 +166,17 @@ def _largest_change(now, before, largest):
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def _largest_change2(now, before, largest):
-    for i in range(now.shape[0]):
-        for j in range(now.shape[1]):
+    for i in range(before.shape[0]):
+        for j in range(before.shape[1]):
             largest = max(largest, abs(now[i, j] - before[i, j]))
     return largest
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def keep_pseudo(state, monitor):
-    """The pseudo-accelerations p_n before the step (for step_error)."""
+    """The pseudo-accelerations p_n before the step (for step_error).  The monitor holds rows
+    for what the model has: no joint coordinates' rows without joints with coordinates, no
+    deflections' rows without elastic hinges (solver.simulate), which it then skips."""
     _copy2_into(state.pseudo, monitor.pseudo)
     _copy_into(state.eta_p, monitor.eta_p)
     _copy2_into(state.jqp, monitor.jqp)

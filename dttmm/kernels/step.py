@@ -208,7 +208,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given = joints
     independent = independent and not at_start
-    body_params, hinge_kind, hinge_params = params.body_params, params.hinge_kind, params.hinge_params
+    body_params, hinge_kind = params.body_params, params.hinge_kind
+    hinge_params = params.hinge_params
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
@@ -360,7 +361,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
     force, torque (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates' inputs at t = 0
-    (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.  Returns the status: 0, a singularity code (sweep.py), or
+    (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.  Returns the status:
+    0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
     g_acc, g_rot, g_w, g_wd = ground

@@ -433,8 +433,8 @@ def direct_reduced(v, a_root, tip_pinned, aq):
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def tree_reduced_step(v, s_o, p_o, s_i, p_i, t_inv, t, num):
-    """Body k of the leaves-to-root sweep (the comment "Trees" above): from its map v (6 x 7) and its
-    output's q_O = S_O a_O + P_O, its input's q_I = S_I a_I + P_I and T^-1.  t, num: 3 x 3
+    """Body k of the leaves-to-root sweep (the comment "Trees" above): from its map v (6 x 7)
+    and its output's q_O = S_O a_O + P_O, its input's q_I = S_I a_I + P_I and T^-1.  t, num: 3 x 3
     scratch.  Returns det T (0: singular)."""
     r0 = p_o[0] - v[3, 6]
     r1 = p_o[1] - v[4, 6]
@@ -492,10 +492,11 @@ def _add_to_port(s_i, p_i, port_s, port_p):
 
 @njit(cache=True, fastmath=CONTRACT)
 def riccati_tree_reduced(v, parent, a_root, s_in, p_in, t_inv, port_s, port_p, aq_in, aq_out):
-    """The reduced sweep of a tree of bodies between ball joints (the comment "Trees" above): v (n, 6, 7)
-    every body's map; parent (n,) (-1: the ground point, whose acceleration is a_root).  Writes
-    every body's input and output [a; q] into aq_in, aq_out (n, 6).  Scratch: s_in, t_inv,
-    port_s (n, 3, 3), p_in, port_p (n, 3).  Returns 0, or k + 1 where body k's T is singular."""
+    """The reduced sweep of a tree of bodies between ball joints (the comment "Trees" above):
+    v (n, 6, 7) every body's map; parent (n,) (-1: the ground point, whose acceleration is
+    a_root).  Writes every body's input and output [a; q] into aq_in, aq_out (n, 6).  Scratch:
+    s_in, t_inv, port_s (n, 3, 3), p_in, port_p (n, 3).  Returns 0, or k + 1 where body k's T is
+    singular."""
     n = v.shape[0]
     t = np.empty((3, 3))
     num = np.empty((3, 3))

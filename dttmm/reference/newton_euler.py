@@ -1548,7 +1548,8 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   modal_velocities=eta_dot if nm > 0 else None,
                   joint_coordinates=q_rec if nq > 0 else None,
                   joint_rates=qd_rec if nq > 0 else None,
-                  drive_force=drive if nq > 0 else None)
+                  drive_force=drive if nq > 0 else None,
+                  body_names=tuple(model.body_names))
 
 
 def _beam_mass_center(bp, sv, eta):

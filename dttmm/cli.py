@@ -1,0 +1,212 @@
+"""The command line (docs/scenes.md, "Command line"):
+
+    dttmm run SCENE.toml [--t-end S] [--dt S] [--method M] [--scheme S] [--record-dt S]
+                         [--out FILE.npz] [--csv FILE] [--plots DIR] [--animate FILE.gif]
+    dttmm info SCENE.toml          bodies, joints, degrees of freedom, beams' modes, a dt
+    dttmm example [NAME]           the shipped scenes; NAME: write NAME.toml here
+
+Also `python -m dttmm ...`.  Exit status 0, or 2 with a one-line message for a bad scene or
+argument, 1 for a run that stopped (DivergenceError).
+"""
+import argparse
+import shutil
+import sys
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .elements.beam import EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, mode_shapes
+from .elements.hinges import BALL, ELASTIC, FIXED
+from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.rigid_body import MASS, TO_OUTPUT
+from .scene import SceneError, load_scene
+
+_JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
+                UNIVERSAL: "universal", PRISMATIC: "prismatic"}
+_JOINT_DOF = {BALL: 3, FIXED: 0, ELASTIC: 6, REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="dttmm", description="DT-TMM multibody dynamics: run "
+                                 "scene files, describe them, get the shipped examples.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="simulate a scene file")
+    run.add_argument("scene", help="scene file (TOML)")
+    run.add_argument("--t-end", type=float, help="end time, s (default: the scene's [run])")
+    run.add_argument("--dt", type=float, help="step, s (default: the scene's, else info's)")
+    run.add_argument("--method", choices=("riccati", "direct"))
+    run.add_argument("--scheme", choices=("newmark", "energy_momentum", "paper"))
+    run.add_argument("--record-dt", type=float, help="record every RECORD_DT s")
+    run.add_argument("--out", help="write the Result to FILE.npz (Result.load_npz reads it)")
+    run.add_argument("--csv", help="write t, the output points and the energies to FILE.csv")
+    run.add_argument("--plots", help="draw the run's figures into DIR")
+    run.add_argument("--animate", help="write a 3D animation (FILE.gif or FILE.mp4)")
+    run.add_argument("--checkpoint", help="write the final state to FILE.npz (to resume)")
+    run.add_argument("--resume", help="continue from a checkpoint file")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    info = sub.add_parser("info", help="describe a scene file")
+    info.add_argument("scene")
+    example = sub.add_parser("example", help="list the shipped scenes, or write one here")
+    example.add_argument("name", nargs="?")
+    example.add_argument("--to", default=".", help="directory to write NAME.toml into")
+    args = ap.parse_args(argv)
+    try:
+        return {"run": _run, "info": _info, "example": _example}[args.command](args)
+    except SceneError as err:
+        print(f"dttmm: {err}", file=sys.stderr)
+        return 2
+
+
+def _run(args):
+    from .recording import Checkpoint
+    from .solver import DivergenceError, simulate
+    scene = load_scene(args.scene)
+    options = dict(scene.run)
+    for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),
+                       ("scheme", args.scheme), ("record_dt", args.record_dt)):
+        if value is not None:
+            options[key] = value
+    if "t_end" not in options:
+        print(f"dttmm: {args.scene}: no end time: give --t-end or t_end in [run]",
+              file=sys.stderr)
+        return 2
+    if "dt" not in options:
+        options["dt"] = suggested_dt(scene.model)
+    if args.record_dt is not None:
+        options.pop("record_every", None)
+    t_end, dt = options.pop("t_end"), options.pop("dt")
+    resume = Checkpoint.load(args.resume) if args.resume else None
+    model = scene.model
+    print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, dt = {dt:g} s")
+    try:
+        res = simulate(model, t_end, dt, progress=False if args.no_progress else None,
+                       resume=resume, **options)
+    except DivergenceError as err:
+        print(f"dttmm: {err}", file=sys.stderr)
+        if err.partial is not None and args.out:
+            err.partial.save_npz(args.out)
+            print(f"wrote the samples before it to {args.out}", file=sys.stderr)
+        return 1
+    except ValueError as err:
+        print(f"dttmm: {err}", file=sys.stderr)
+        return 2
+    energy = res.total_energy
+    scale = max(float(np.abs(res.kinetic).max()), 1e-300)
+    print(f"ran {res.n_steps} steps in {res.wall_time:.3g} s (loop {res.info['loop']}, "
+          f"{res.info['mode']}); {len(res.t)} samples; largest step error estimate "
+          f"{res.info.get('step_error_max', 0.0):.2g}")
+    print(f"energy: largest kinetic {scale:.4g} J, total changed by "
+          f"{abs(energy[-1] - energy[0]):.3g} J ({abs(energy[-1] - energy[0]) / scale:.2g} of it)")
+    if args.out:
+        res.save_npz(args.out)
+        print(f"wrote {args.out}")
+    if args.csv:
+        res.save_csv(args.csv)
+        print(f"wrote {args.csv}")
+    if args.checkpoint:
+        res.checkpoint.save(args.checkpoint)
+        print(f"wrote {args.checkpoint} (continue with --resume {args.checkpoint})")
+    if args.plots:
+        from .plots import run_figures
+        for path in run_figures(res, scene.model, args.plots, title=scene.name):
+            print(f"wrote {path}")
+    if args.animate:
+        from .plots import animate
+        animate(res, scene.model, args.animate, title=scene.name)
+        print(f"wrote {args.animate}")
+    return 0
+
+
+def describe_counts(model):
+    kinds = model.body_kind
+    return (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
+            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), "
+            f"{degrees_of_freedom(model)} degrees of freedom")
+
+
+def degrees_of_freedom(model):
+    """Each joint's own freedoms (a ball 3, an elastic hinge 6, a revolute 1, ...) plus the
+    beams' modal coordinates, less 3 for a tip pinned to the ground."""
+    return int(sum(_JOINT_DOF[int(k)] for k in model.hinge_kind) + np.sum(model.n_modes)
+               - (3 if model.tip_pinned else 0))
+
+
+def beam_frequencies(model, k):
+    """(Hz) the retained modes' own frequencies of beam k, sqrt(k_j / m_j) / 2 pi with the
+    modal stiffness and mass (docs/beam.md), per plane: (v plane, w plane)."""
+    row = model.beam_params[k]
+    m = int(row[MODES])
+    _, _, _, mass, stiff = mode_shapes(int(row[FAMILY]), row[LENGTH], m, [0.0])
+    mu = row[MASS_PER_LENGTH]
+    return tuple(np.sqrt(row[ei] * stiff / (mu * mass)) / (2 * np.pi) for ei in (EI_V, EI_W))
+
+
+def suggested_dt(model):
+    """A step that resolves the model's fastest retained motion: 20 steps per period of the
+    highest retained beam mode, and 0.02 rad per step of the fastest initial spin or of a
+    pendulum swing sqrt(g / L) over the shortest body (rounded down to 1, 2 or 5 x 10^k s)."""
+    rates = [float(np.linalg.norm(w)) for w in model.initial_angular_velocity]
+    g = float(np.linalg.norm(model.gravity))
+    lengths = [float(np.linalg.norm(model.body_params[k, TO_OUTPUT]))
+               for k in range(model.n_bodies)]
+    lengths = [x for x in lengths if x > 0]
+    if g > 0 and lengths:
+        rates.append(np.sqrt(g / min(lengths)))
+    dt = 0.02 / max(max(rates, default=0.0), 1e-3)
+    for k in np.nonzero(model.body_kind == 1)[0]:
+        f = max(float(np.max(fs)) for fs in beam_frequencies(model, k))
+        dt = min(dt, 1.0 / (20.0 * f))
+    exponent = np.floor(np.log10(dt))
+    mantissa = dt / 10 ** exponent
+    return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
+
+
+def _info(args):
+    scene = load_scene(args.scene)
+    model = scene.model
+    print(f"{scene.name} ({scene.path}): {describe_counts(model)}")
+    print(f"gravity {model.gravity.tolist()} m/s^2; tip {'pinned' if model.tip_pinned else 'free'}")
+    print("bodies:")
+    for k in range(model.n_bodies):
+        kind = "beam" if model.body_kind[k] == 1 else "rigid"
+        p = model.parent[k]
+        parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
+        line = (f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
+                f"on a {_JOINT_NAMES[int(model.hinge_kind[k])]} joint "
+                f"'{model.hinge_names[k]}' to {parent}")
+        print(line)
+        if kind == "beam":
+            fv, fw = beam_frequencies(model, k)
+            print(f"  {'':<14} {int(model.beam_params[k, MODES])} modes per plane, own "
+                  f"frequencies (Hz): v {np.array2string(fv, precision=4)}, "
+                  f"w {np.array2string(fw, precision=4)}")
+    print(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
+          f"retained mode, 0.02 rad per step of the fastest spin or swing)")
+    if scene.run:
+        print(f"[run]: {', '.join(f'{k} = {v}' for k, v in scene.run.items())}")
+    return 0
+
+
+def shipped_scenes():
+    """name -> path of the scenes shipped in dttmm/scenes."""
+    folder = resources.files("dttmm") / "scenes"
+    return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".toml")}
+
+
+def _example(args):
+    scenes = shipped_scenes()
+    if args.name is None:
+        print("shipped scenes (dttmm example NAME writes NAME.toml here; dttmm run NAME.toml):")
+        for name, path in sorted(scenes.items()):
+            first = path.read_text().splitlines()[0].lstrip("# ").strip()
+            print(f"  {name:<18} {first}")
+        return 0
+    if args.name not in scenes:
+        print(f"dttmm: no shipped scene '{args.name}' (there are: {', '.join(sorted(scenes))})",
+              file=sys.stderr)
+        return 2
+    target = Path(args.to) / f"{args.name}.toml"
+    shutil.copyfile(scenes[args.name], target)
+    print(f"wrote {target}; run it: dttmm run {target}")
+    return 0

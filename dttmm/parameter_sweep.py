@@ -1,0 +1,139 @@
+"""Many runs of varied parameters on a distributed engine (docs/sweeps.md).
+
+    table = dttmm.sweep(make_model, {"spin": [0.1, 0.2], "stiffness": [0.5, 1.0]},
+                        t_end=1.0, dt=1e-4, outputs=tip_height)
+
+make_model(**parameters) builds each run's model; outputs(result, model) reduces each run to a
+dict of numbers (default: the final position of every body's output point).  The runs go to
+dask.distributed (a LocalCluster of n_workers processes by default, or the scheduler at
+`scheduler`), imported only here; without dask, to a local process pool.  Each worker process
+loads the compiled kernels from numba's cache (compiling them once if the cache is cold); a
+run on a worker is the same computation as in this process, so the table equals serial runs.
+"""
+import itertools
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+
+class SweepTable:
+    """The sweep's table: one row per run, a column per parameter and per output.
+    columns: name -> (runs,) array; parameters, outputs: the column names of each kind;
+    wall_time (s, the whole sweep), engine ("dask" or "processes")."""
+
+    def __init__(self, rows, parameters, outputs, wall_time, engine):
+        self.parameters, self.outputs = list(parameters), list(outputs)
+        self.columns = {name: np.array([row[name] for row in rows])
+                        for name in self.parameters + self.outputs}
+        self.wall_time, self.engine = wall_time, engine
+
+    def __len__(self):
+        return len(next(iter(self.columns.values()))) if self.columns else 0
+
+    def __getitem__(self, name):
+        return self.columns[name]
+
+    def __repr__(self):
+        return (f"SweepTable({len(self)} runs; parameters {self.parameters}; outputs "
+                f"{self.outputs}; {self.wall_time:.3g} s on {self.engine})")
+
+    def save_csv(self, path):
+        names = self.parameters + self.outputs
+        data = np.column_stack([self.columns[n] for n in names])
+        np.savetxt(path, data, delimiter=",", header=",".join(names), comments="",
+                   fmt="%.17g")
+
+
+def final_points(result, model):
+    """The default outputs: x, y, z of every body's output point at the end (m)."""
+    end = result.position_output[-1]
+    return {f"{name}.{c}": float(end[k, i]) for k, name in enumerate(model.body_names)
+            for i, c in enumerate("xyz")}
+
+
+def _run_one(make_model, parameters, t_end, dt, outputs, options):
+    """One run, on whichever process it lands: the model, the run, its outputs."""
+    from .solver import simulate
+    model = make_model(**parameters)
+    result = simulate(model, t_end, dt, progress=False, **options)
+    values = outputs(result, model)
+    return dict(parameters, **{k: float(v) for k, v in values.items()})
+
+
+def _grid(parameters):
+    """A list of dicts as it is; a dict of lists as their product (every combination)."""
+    if isinstance(parameters, dict):
+        names = list(parameters)
+        return [dict(zip(names, values))
+                for values in itertools.product(*(parameters[n] for n in names))]
+    runs = [dict(p) for p in parameters]
+    if not runs or any(set(r) != set(runs[0]) for r in runs):
+        raise ValueError("sweep: parameters must be a dict of lists, or a non-empty list of "
+                         "dicts with the same keys")
+    return runs
+
+
+def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="dask",
+          scheduler=None, n_workers=2, **simulate_options):
+    """Run simulate(make_model(**p), t_end, dt, **simulate_options) for every parameter set p
+    and gather outputs(result, model) as a SweepTable.
+
+    Parameters
+    ----------
+    make_model : callable
+        make_model(**p) -> Model; shipped to the workers by pickling (cloudpickle under dask:
+        a function defined in a script works).
+    parameters : dict of lists, or list of dicts
+        The runs: every combination of a dict's lists, or the dicts as given.
+    t_end, dt : float
+        simulate's end time and step, s.
+    outputs : callable, optional
+        outputs(result, model) -> dict of numbers; default: the final output points (m).
+    engine : {"dask", "processes", "serial"}
+        "dask" (default): dask.distributed, a LocalCluster of n_workers processes (one thread
+        each) unless `scheduler` names one ("tcp://host:8786"); falls back to "processes"
+        when dask is not installed (pip install dttmm[sweep]). "processes": a local process
+        pool. "serial": in this process, one after the other.
+    **simulate_options
+        Passed to every simulate call (method, scheme, record_dt, ...).
+
+    Returns
+    -------
+    SweepTable
+        One row per run, in the order of the parameter sets.
+    """
+    runs = _grid(parameters)
+    t0 = time.perf_counter()
+    args = (t_end, dt, outputs, simulate_options)
+    if engine == "dask":
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            engine = "processes"
+    if engine == "dask":
+        cluster = None if scheduler else LocalCluster(n_workers=n_workers, threads_per_worker=1,
+                                                      processes=True, dashboard_address=None)
+        client = Client(scheduler or cluster)
+        try:
+            futures = client.map(_run_one, [make_model] * len(runs), runs,
+                                 *[[a] * len(runs) for a in args], pure=False)
+            rows = client.gather(futures)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    elif engine == "processes":
+        workers = n_workers or os.cpu_count()
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            rows = list(pool.map(_run_one, [make_model] * len(runs), runs,
+                                 *[[a] * len(runs) for a in args]))
+    elif engine == "serial":
+        rows = [_run_one(make_model, p, *args) for p in runs]
+    else:
+        raise ValueError(f"sweep: engine must be 'dask', 'processes' or 'serial', got "
+                         f"{engine!r}")
+    names = list(runs[0])
+    return SweepTable(rows, names, [k for k in rows[0] if k not in names],
+                      time.perf_counter() - t0, engine)

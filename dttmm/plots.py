@@ -1,0 +1,221 @@
+"""Figures and animations of a Result (matplotlib, imported only here; docs/scenes.md,
+"Figures").  Every figure has a title and units on its axes; angles are unwrapped.
+
+    plot_positions(result)      the bodies' output points, x, y, z against t
+    plot_angles(result)         the x-y-z angles of each body, unwrapped
+    plot_energy(result)         kinetic, potential, total, and the total's change
+    plot_joints(result)         joint coordinates and drive forces (joints with coordinates)
+    plot_modal(result)          the beams' modal coordinates
+    run_figures(result, model, directory)   all that apply, as PNG files
+    animate(result, model, path)            a 3D animation, GIF (Pillow) or MP4 (ffmpeg)
+"""
+from pathlib import Path
+
+import numpy as np
+
+from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
+
+
+def _plt():
+    try:
+        import matplotlib
+    except ImportError:
+        raise ImportError("dttmm's figures and animations need matplotlib: "
+                          "pip install 'dttmm[plots]'") from None
+    if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
+        try:
+            matplotlib.use("Agg")
+        except Exception:               # an interactive session keeps its backend
+            pass
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _axes(ax, rows=1, figsize=(8, 6)):
+    plt = _plt()
+    if ax is not None:
+        return ax.figure, np.atleast_1d(ax)
+    fig, axes = plt.subplots(rows, 1, figsize=figsize, sharex=True, squeeze=False,
+                             constrained_layout=True)
+    return fig, axes[:, 0]
+
+
+def _names(result):
+    n = result.rotation.shape[1]
+    return result.body_names or tuple(f"body{k + 1}" for k in range(n))
+
+
+def plot_positions(result, ax=None, point="output", title=None):
+    """x, y, z (m) of each body's point ("output", "input" or "mass_center") against t (s),
+    one axis per component, so that a small component is not flattened by a large one."""
+    pos = getattr(result, f"position_{point}")
+    fig, axes = _axes(ax, 3)
+    for c, a in enumerate(axes[:3]):
+        for k, name in enumerate(_names(result)):
+            a.plot(result.t, pos[:, k, c], label=name)
+        a.set_ylabel(f"{'xyz'[c]} (m)")
+        a.grid(alpha=0.3)
+    axes[0].legend(fontsize="small", ncol=4)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title or f"{point.replace('_', ' ')} points")
+    return fig
+
+
+def plot_angles(result, ax=None, title=None):
+    """The space-fixed x-y-z angles (rad) of each body, A = Rz Ry Rx, unwrapped over time."""
+    angles = np.unwrap(result.xyz_angles, axis=0)
+    fig, axes = _axes(ax, 3)
+    for c, a in enumerate(axes[:3]):
+        for k, name in enumerate(_names(result)):
+            a.plot(result.t, angles[:, k, c], label=name)
+        a.set_ylabel(f"theta_{'xyz'[c]} (rad)")
+        a.grid(alpha=0.3)
+    axes[0].legend(fontsize="small", ncol=4)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title or "x-y-z angles (unwrapped)")
+    return fig
+
+
+def plot_energy(result, ax=None, title=None):
+    """Kinetic, potential and total energy (J), and the total's change from t = 0 on an axis
+    of its own (a drift of 1e-9 J is invisible beside energies of joules)."""
+    fig, axes = _axes(ax, 2)
+    axes[0].plot(result.t, result.kinetic, label="kinetic")
+    axes[0].plot(result.t, result.potential, label="potential")
+    axes[0].plot(result.t, result.total_energy, label="total")
+    axes[0].set_ylabel("energy (J)")
+    axes[0].legend(fontsize="small")
+    axes[1].plot(result.t, result.total_energy - result.total_energy[0], color="k")
+    axes[1].set_ylabel("total - total(0) (J)")
+    for a in axes:
+        a.grid(alpha=0.3)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title or "energy")
+    return fig
+
+
+def plot_joints(result, ax=None, title=None):
+    """Joint coordinates (rad or m) and the drives' generalized forces (N m or N)."""
+    if result.joint_coordinates is None:
+        raise ValueError("plot_joints: the result has no joints with coordinates")
+    fig, axes = _axes(ax, 2)
+    for j in range(result.joint_coordinates.shape[1]):
+        axes[0].plot(result.t, result.joint_coordinates[:, j], label=f"q{j + 1}")
+        axes[1].plot(result.t, result.drive_force[:, j], label=f"q{j + 1}")
+    axes[0].set_ylabel("coordinate (rad or m)")
+    axes[1].set_ylabel("drive force (N m or N)")
+    axes[0].legend(fontsize="small", ncol=4)
+    for a in axes:
+        a.grid(alpha=0.3)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title or "joints")
+    return fig
+
+
+def plot_modal(result, ax=None, title=None):
+    """The beams' modal coordinates eta (m, mode shapes of unit amplitude) against t."""
+    if result.modal_coordinates is None:
+        raise ValueError("plot_modal: the result has no beams")
+    fig, axes = _axes(ax, 1)
+    for j in range(result.modal_coordinates.shape[1]):
+        axes[0].plot(result.t, result.modal_coordinates[:, j], label=f"eta{j + 1}")
+    axes[0].set_ylabel("modal coordinate (m)")
+    axes[0].set_xlabel("t (s)")
+    axes[0].legend(fontsize="small", ncol=4)
+    axes[0].grid(alpha=0.3)
+    fig.suptitle(title or "beams' modal coordinates")
+    return fig
+
+
+def run_figures(result, model, directory, title=""):
+    """Every figure that applies to the run, as PNG files in directory; returns their paths."""
+    plt = _plt()
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    prefix = f"{title}: " if title else ""
+    figures = [("positions", plot_positions(result, title=prefix + "output points")),
+               ("angles", plot_angles(result, title=prefix + "x-y-z angles (unwrapped)")),
+               ("energy", plot_energy(result, title=prefix + "energy"))]
+    if result.joint_coordinates is not None:
+        figures.append(("joints", plot_joints(result, title=prefix + "joints")))
+    if result.modal_coordinates is not None:
+        figures.append(("modal", plot_modal(result, title=prefix + "beams' modal coordinates")))
+    paths = []
+    for name, fig in figures:
+        path = directory / f"{name}.png"
+        fig.savefig(path, dpi=90)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def centerlines(result, model, points=12):
+    """(T, n, points, 3) world points along every body: a rigid body's input, mass centre and
+    output points (repeated), a beam's deflected centreline (docs/beam.md)."""
+    n = model.n_bodies
+    out = np.empty((len(result.t), n, points, 3))
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    for k in range(n):
+        r_in = result.position_input[:, k]
+        if model.body_kind[k] == 1:
+            row = model.beam_params[k]
+            m, length = int(row[MODES]), row[LENGTH]
+            x = np.linspace(0.0, length, points)
+            y = mode_shapes(int(row[FAMILY]), length, m, x)[0]
+            eta = result.modal_coordinates[:, offsets[k]:offsets[k + 1]]
+            local = np.zeros((len(result.t), points, 3))
+            local[:, :, 0] = x
+            local[:, :, 1] = eta[:, :m] @ y
+            local[:, :, 2] = eta[:, m:] @ y
+            out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
+        else:
+            s = np.linspace(0.0, 1.0, points)[None, :, None]
+            r_c, r_o = result.position_mass_center[:, k], result.position_output[:, k]
+            first = np.where(s <= 0.5, r_in[:, None] + 2 * s * (r_c - r_in)[:, None],
+                             r_c[:, None] + (2 * s - 1) * (r_o - r_c)[:, None])
+            out[:, k] = first
+    return out
+
+
+def animate(result, model, path, title="", frames=150, fps=25):
+    """A 3D animation of the run (each body a line through its points, a beam its deflected
+    centreline) to path: .gif (Pillow, with matplotlib) or .mp4 (ffmpeg needed)."""
+    plt = _plt()
+    from matplotlib import animation
+    path = Path(path)
+    if path.suffix not in (".gif", ".mp4"):
+        raise ValueError(f"animate: {path}: write a .gif or an .mp4")
+    lines = centerlines(result, model)
+    # the world axis against gravity is drawn upwards (matplotlib's z)
+    g = np.asarray(model.gravity, dtype=float)
+    up = int(np.argmax(np.abs(g))) if np.any(g) else 2
+    order = [i for i in range(3) if i != up] + [up]
+    sign = np.array([1.0, 1.0, -1.0 if g[up] > 0 else 1.0])
+    lines = lines[..., order] * sign
+    labels = [f"{'-' if sign[j] < 0 else ''}{'xyz'[order[j]]} (m)" for j in range(3)]
+    pick = np.unique(np.linspace(0, len(result.t) - 1, min(frames, len(result.t))).astype(int))
+    lo, hi = lines.reshape(-1, 3).min(axis=0), lines.reshape(-1, 3).max(axis=0)
+    mid, half = 0.5 * (lo + hi), 0.5 * max(float(np.max(hi - lo)), 1e-9) * 1.1
+    fig = plt.figure(figsize=(6, 6))
+    ax = fig.add_subplot(projection="3d")
+    ax.set_box_aspect((1, 1, 1))
+    for i, set_lim in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
+        set_lim(mid[i] - half, mid[i] + half)
+        (ax.set_xlabel, ax.set_ylabel, ax.set_zlabel)[i](labels[i])
+    drawn = [ax.plot([], [], [], lw=2, marker="o", markevery=[0])[0]
+             for _ in range(model.n_bodies)]
+    stamp = ax.set_title("")
+
+    def frame(j):
+        i = pick[j]
+        for k, line in enumerate(drawn):
+            line.set_data_3d(lines[i, k, :, 0], lines[i, k, :, 1], lines[i, k, :, 2])
+        stamp.set_text(f"{title + ': ' if title else ''}t = {result.t[i]:.3f} s")
+        return drawn
+
+    anim = animation.FuncAnimation(fig, frame, frames=len(pick), interval=1000 / fps)
+    writer = (animation.PillowWriter(fps=fps) if path.suffix == ".gif"
+              else animation.FFMpegWriter(fps=fps))
+    anim.save(path, writer=writer)
+    plt.close(fig)
+    return path

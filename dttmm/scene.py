@@ -1,0 +1,433 @@
+"""Scene files: a model and its run in TOML (docs/scenes.md).
+
+    scene = load_scene("pendulum.toml")          # scene.model, scene.run (simulate's options)
+    save_scene(model, "copy.toml", run={...})    # and back: the same model's arrays
+
+A scene has [model] (name, gravity, tip), [ground] (position, rotation, or a spin about a fixed
+axis), one [[body]] table per body with its [body.joint] (how it hangs from its parent), loads
+and drives from named profiles (dttmm/profiles.py), and [run] (t_end, dt and simulate's other
+options).  Every mistake is reported with the file, the table and the key.
+"""
+import tomllib
+from collections import namedtuple
+from pathlib import Path
+
+import numpy as np
+
+from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
+                       JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
+                       UniversalJoint)
+from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
+                            POLAR_PER_LENGTH, DAMPING_RATIO)
+from .elements.drives import FORCE, MOTION, SPRING_DAMPER
+from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
+                              ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
+from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
+from .model import Ground, Model, PrescribedMotion, System
+from .profiles import Profile, ProfileForce, profile
+
+Scene = namedtuple("Scene", ["name", "model", "run", "path"])
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be read: the message names the file, the table and the key."""
+
+
+# the keys each table takes: key -> kind of value ("number", "int", "bool", "str", "vector",
+# "pair", "matrix", "stiffness": a number, 3 numbers or a 3 x 3 matrix, "profile", "table")
+_MODEL = {"name": "str", "gravity": "vector", "tip": "str"}
+_GROUND = {"position": "vector", "rotation": "matrix", "spin": "table"}
+_SPIN = {"axis": "vector", "angle": "profile", "position": "vector"}
+_RIGID = {"name": "str", "type": "str", "mass": "number", "inertia": "stiffness",
+          "inertia_about": "str", "to_mass_center": "vector", "to_output": "vector",
+          "rotation": "matrix", "angular_velocity": "vector", "points": "table",
+          "force": "profile", "torque": "profile", "joint": "table"}
+_BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "number",
+         "density": "number", "area": "number", "bending_stiffness": "pair",
+         "polar_inertia_per_length": "number", "modes_per_plane": "int",
+         "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
+         "initial_modal_coordinates": "list", "initial_modal_velocities": "list",
+         "rotation": "matrix", "angular_velocity": "vector", "joint": "table"}
+_JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
+_JOINTS = {
+    "ball": (BallJoint, {}),
+    "fixed": (FixedHinge, {"rotation": "matrix"}),
+    "elastic": (ElasticHinge, {"translational_stiffness": "stiffness",
+                               "rotational_stiffness": "stiffness",
+                               "translational_damping": "stiffness",
+                               "rotational_damping": "stiffness", "rotation": "matrix"}),
+    "revolute": (RevoluteJoint, {"axis": "vector", "angle": "number", "rate": "number",
+                                 "drive": "table"}),
+    "universal": (UniversalJoint, {"axis1": "vector", "axis2": "vector", "angles": "pair",
+                                   "rates": "pair", "drives": "drives"}),
+    "prismatic": (PrismaticJoint, {"axis": "vector", "position": "number", "rate": "number",
+                                   "drive": "table"}),
+}
+_DRIVES = ("spring_damper", "force", "motion", "none")
+_RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
+        "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
+        "record_every": "int", "record_dt": "number", "max_step_error": "number",
+        "full_state": "bool", "richardson": "bool"}
+
+
+def load_scene(path):
+    """Read a scene file: Scene(name, model, run, path); SceneError naming the file, the table
+    and the key for anything wrong in it."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except OSError as err:
+        raise SceneError(f"{path}: cannot read the scene file ({err.strerror})") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"{path}: not valid TOML: {err}") from None
+    return scene_from_dict(data, str(path))
+
+
+def scene_from_dict(data, where="scene"):
+    """The Scene a parsed scene file describes (load_scene without the file)."""
+    _keys(data, {"model": "table", "ground": "table", "body": "bodies", "run": "table"},
+          where, "the file")
+    header = data.get("model", {})
+    _keys(header, _MODEL, where, "[model]")
+    tip = header.get("tip", "free")
+    if tip not in ("free", "ball"):
+        raise SceneError(f"{where}: [model] key 'tip': 'free' or 'ball', got {tip!r}")
+    system = System(gravity=header.get("gravity", (0.0, -9.81, 0.0)),
+                    ground=_ground(data.get("ground", {}), where))
+    bodies = data.get("body")
+    if not bodies:
+        raise SceneError(f"{where}: no bodies: add a [[body]] table per body")
+    for i, table in enumerate(bodies):
+        body, joint, parent, at = _body(table, i, where)
+        system.add(body, joint, parent=parent, at=at)
+    try:
+        model = system.build(tip=tip)
+    except ValueError as err:
+        raise SceneError(f"{where}: {err}") from None
+    run = data.get("run", {})
+    _keys(run, _RUN, where, "[run]")
+    return Scene(name=header.get("name", Path(where).stem), model=model, run=dict(run),
+                 path=where)
+
+
+def _ground(table, where):
+    _keys(table, _GROUND, where, "[ground]")
+    spin = table.get("spin")
+    if spin is None:
+        return Ground(position=table.get("position", (0.0, 0.0, 0.0)),
+                      rotation=table.get("rotation"))
+    if "rotation" in table:
+        raise SceneError(f"{where}: [ground]: give rotation or spin, not both")
+    _keys(spin, _SPIN, where, "[ground.spin]")
+    for key in ("axis", "angle"):
+        if key not in spin:
+            raise SceneError(f"{where}: [ground.spin] needs the key '{key}'")
+    angle = _profile(spin["angle"], where, "[ground.spin] key 'angle'")
+    position = spin.get("position", table.get("position", (0.0, 0.0, 0.0)))
+    try:
+        motion = PrescribedMotion.spin_about_axis(spin["axis"], angle, angle.rate,
+                                                  angle.acceleration, position=position)
+    except (ValueError, ZeroDivisionError) as err:
+        raise SceneError(f"{where}: [ground.spin]: {err}") from None
+    motion.scene = {"axis": list(map(float, spin["axis"])), "angle": angle.spec(),
+                    "position": list(map(float, position))}
+    return Ground(motion=motion)
+
+
+def _body(table, i, where):
+    """(body, joint, parent name or None, attachment point) of the i-th [[body]] table."""
+    name = table.get("name")
+    label = f"[[body]] {i + 1}" + (f" ('{name}')" if isinstance(name, str) else "")
+    kind = table.get("type")
+    if kind not in ("rigid", "beam"):
+        raise SceneError(f"{where}: {label} key 'type': 'rigid' or 'beam', got "
+                         f"{kind!r}" if "type" in table else
+                         f"{where}: {label} needs the key 'type' ('rigid' or 'beam')")
+    schema = _RIGID if kind == "rigid" else _BEAM
+    _keys(table, schema, where, label)
+    for key in (("mass", "inertia", "inertia_about") if kind == "rigid"
+                else ("length", "bending_stiffness", "polar_inertia_per_length")):
+        if key not in table:
+            raise SceneError(f"{where}: {label} needs the key '{key}'")
+    if "joint" not in table:
+        raise SceneError(f"{where}: {label} needs a [body.joint] table (how it hangs from its "
+                         f"parent: type = 'ball', 'fixed', 'elastic', 'revolute', 'universal' "
+                         f"or 'prismatic')")
+    args = {k: v for k, v in table.items() if k not in ("type", "joint")}
+    for key in ("force", "torque"):
+        if key in args:
+            args[key] = _profile(args[key], where, f"{label} key '{key}'")
+    if "points" in args:
+        for point, vec in args["points"].items():
+            _value(vec, "vector", where, f"{label} key 'points.{point}'")
+    try:
+        body = (RigidBody if kind == "rigid" else EulerBernoulliBeam)(**args)
+        body.validated(i)
+    except TypeError as err:
+        raise SceneError(f"{where}: {label}: {err}") from None
+    except ValueError as err:
+        raise SceneError(f"{where}: {label}: {err}") from None
+    joint, parent, at = _joint(table["joint"], where, f"{label} [body.joint]")
+    return body, joint, parent, at
+
+
+def _joint(table, where, label):
+    kind = table.get("type")
+    if kind not in _JOINTS:
+        raise SceneError(f"{where}: {label} key 'type': one of {', '.join(_JOINTS)}, got "
+                         f"{kind!r}" if "type" in table else
+                         f"{where}: {label} needs the key 'type' (one of {', '.join(_JOINTS)})")
+    cls, own = _JOINTS[kind]
+    _keys(table, dict(_JOINT_COMMON, **own), where, label)
+    args = {k: v for k, v in table.items() if k not in _JOINT_COMMON or k == "name"}
+    if "drive" in args:
+        args["drive"] = _drive(args["drive"], where, f"{label} key 'drive'")
+    if "drives" in args:
+        args["drives"] = tuple(_drive(d, where, f"{label} key 'drives[{j}]'")
+                               for j, d in enumerate(args["drives"]))
+    for key in ("angles", "rates"):
+        if key in args:
+            args[key] = tuple(args[key])
+    try:
+        joint = cls(**args)
+        joint.validated()
+    except ValueError as err:
+        raise SceneError(f"{where}: {label}: {err}") from None
+    parent = table.get("parent", "ground")
+    return joint, (None if parent == "ground" else parent), table.get("at")
+
+
+def _drive(table, where, label):
+    if not isinstance(table, dict) or table.get("type") not in _DRIVES:
+        raise SceneError(f"{where}: {label}: a table with type = one of {', '.join(_DRIVES)}, "
+                         f"got {table!r}")
+    kind = table["type"]
+    rest = {k: v for k, v in table.items() if k != "type"}
+    if kind == "none":
+        return None
+    if kind == "spring_damper":
+        _keys(rest, {"stiffness": "number", "damping": "number", "rest": "number"}, where, label)
+        if "stiffness" not in rest:
+            raise SceneError(f"{where}: {label}: a spring_damper drive needs the key 'stiffness'")
+        return SpringDamper(**rest)
+    prof = _profile(rest, where, label)
+    if kind == "force":
+        return JointForce(ProfileForce(prof))
+    return JointMotion(position=prof, velocity=prof.rate, acceleration=prof.acceleration)
+
+
+def _profile(spec, where, label):
+    try:
+        return profile(spec, label)
+    except ValueError as err:
+        raise SceneError(f"{where}: {err}") from None
+
+
+def _keys(table, schema, where, label):
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: {label} must be a table, got {table!r}")
+    for key, value in table.items():
+        if key not in schema:
+            raise SceneError(f"{where}: {label}: unknown key '{key}' (it takes "
+                             f"{', '.join(schema)})")
+        _value(value, schema[key], where, f"{label} key '{key}'")
+
+
+def _value(value, kind, where, label):
+    def number(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+    ok = {"number": number(value), "int": isinstance(value, int) and not isinstance(value, bool),
+          "bool": isinstance(value, bool), "str": isinstance(value, str),
+          "vector": isinstance(value, list) and len(value) == 3 and all(map(number, value)),
+          "pair": number(value) or (isinstance(value, list) and len(value) == 2
+                                    and all(map(number, value))),
+          "list": isinstance(value, list) and all(map(number, value)),
+          "matrix": isinstance(value, list) and len(value) == 3 and all(
+              isinstance(r, list) and len(r) == 3 and all(map(number, r)) for r in value),
+          "table": isinstance(value, dict), "bodies": isinstance(value, list),
+          "drives": isinstance(value, list) and len(value) == 2,
+          "profile": number(value) or isinstance(value, dict)}
+    ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
+    if not ok[kind]:
+        what = {"number": "a number", "int": "an integer", "bool": "true or false",
+                "str": "a string", "vector": "3 numbers", "pair": "a number or 2 numbers",
+                "list": "a list of numbers", "matrix": "a 3 x 3 matrix (3 rows of 3)",
+                "table": "a table", "bodies": "an array of tables ([[body]])",
+                "drives": "a list of two drive tables", "profile": "a number or a profile table",
+                "stiffness": "a number, 3 numbers or a 3 x 3 matrix"}[kind]
+        raise SceneError(f"{where}: {label}: {what}, got {value!r}")
+
+
+# --- writing ---------------------------------------------------------------------------------
+
+def scene_of(model, run=None, name=None):
+    """The scene (a dict, as load_scene reads it) of a model: every body, joint, load and drive
+    from the model's arrays, so that it builds the same model again.  Loads, drives and ground
+    motion must be profiles (dttmm/profiles.py); a Python function cannot be written."""
+    if not isinstance(model, Model):
+        raise ValueError("save_scene: model must be a Model")
+    data = {"model": {"name": name or "model", "gravity": model.gravity.tolist(),
+                      "tip": "ball" if model.tip_pinned else "free"}}
+    if model.ground_motion is not None:
+        spec = getattr(model.ground_motion, "scene", None)
+        if spec is None:
+            raise ValueError("save_scene: the ground's motion is a PrescribedMotion of Python "
+                             "functions; only a spin from a scene file ([ground.spin]) can be "
+                             "written")
+        data["ground"] = {"spin": spec}
+    else:
+        data["ground"] = {"position": model.ground_position.tolist(),
+                          "rotation": model.ground_rotation.tolist()}
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    children = [[c for c in range(model.n_bodies) if model.parent[c] == k]
+                for k in range(model.n_bodies)]
+    named = [sorted({int(model.attachment[c]) for c in children[k] if model.attachment[c]})
+             for k in range(model.n_bodies)]
+    bodies = []
+    for k in range(model.n_bodies):
+        who = f"body '{model.body_names[k]}'"
+        kind = int(model.hinge_kind[k])
+        table = {"name": model.body_names[k]}
+        if model.body_kind[k] == 1:          # a beam
+            row = model.beam_params[k]
+            m = int(row[MODES])
+            ball_ends = kind == BALL and (not children[k] or all(
+                model.hinge_kind[c] == BALL for c in children[k]))
+            table.update(type="beam", length=row[LENGTH], mass_per_length=row[MASS_PER_LENGTH],
+                         bending_stiffness=[row[EI_V], row[EI_W]],
+                         polar_inertia_per_length=row[POLAR_PER_LENGTH], modes_per_plane=m,
+                         damping_ratio=row[DAMPING_RATIO],
+                         mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
+            if row[FAMILY] != PINNED and ball_ends:
+                table["force_mode_family"] = True
+            eta = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
+            eta_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
+            if np.any(eta):
+                table["initial_modal_coordinates"] = eta.tolist()
+            if np.any(eta_d):
+                table["initial_modal_velocities"] = eta_d.tolist()
+        else:
+            p = model.body_params[k]
+            table.update(type="rigid", mass=p[MASS],
+                         inertia=p[INERTIA_INPUT].reshape(3, 3).tolist(), inertia_about="input",
+                         to_mass_center=p[TO_MASS_CENTER].tolist(),
+                         to_output=p[TO_OUTPUT].tolist())
+            if named[k]:
+                table["points"] = {f"p{j}": model.attachment_point[c].tolist()
+                                   for j in named[k] for c in children[k]
+                                   if model.attachment[c] == j}
+            for key, f in (("force", model.forces[k]), ("torque", model.torques[k])):
+                if f is not None:
+                    if not isinstance(f, Profile):
+                        raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
+                                         f"only profiles (dttmm.profiles) can be written")
+                    table[key] = f.spec()
+        if kind in (BALL, ELASTIC):          # (else the joint sets them)
+            table["rotation"] = model.initial_rotation[k].tolist()
+            table["angular_velocity"] = model.initial_angular_velocity[k].tolist()
+        elif kind == PRISMATIC:
+            table["rotation"] = model.initial_rotation[k].tolist()
+        elif kind in (REVOLUTE, UNIVERSAL):
+            table["rotation"] = model.initial_rotation[k].tolist()
+        table["joint"] = _joint_table(model, k, who)
+        bodies.append(table)
+    data["body"] = bodies
+    if run:
+        data["run"] = dict(run)
+    return data
+
+
+def _joint_table(model, k, who):
+    kind = int(model.hinge_kind[k])
+    h = model.hinge_params[k]
+    p = model.parent[k]
+    table = {"type": {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
+                      UNIVERSAL: "universal", PRISMATIC: "prismatic"}[kind],
+             "name": model.hinge_names[k],
+             "parent": "ground" if p < 0 else model.body_names[p]}
+    if model.attachment[k]:
+        table["at"] = f"p{int(model.attachment[k])}"
+    rest = h[REST_ROTATION].reshape(3, 3)
+    if kind == FIXED:
+        table["rotation"] = rest.tolist()
+    elif kind == ELASTIC:
+        table.update(translational_stiffness=h[K_TRANSLATION].reshape(3, 3).tolist(),
+                     rotational_stiffness=h[K_ROTATION].reshape(3, 3).tolist(),
+                     translational_damping=h[C_TRANSLATION].reshape(3, 3).tolist(),
+                     rotational_damping=h[C_ROTATION].reshape(3, 3).tolist(),
+                     rotation=rest.tolist())
+    elif kind in (REVOLUTE, PRISMATIC):
+        coordinate = "angle" if kind == REVOLUTE else "position"
+        table.update(axis=h[AXIS_1].tolist(), **{coordinate: h[COORDINATE_0][0]},
+                     rate=h[RATE_0][0])
+        drive = _drive_table(model.drives[k][0], who)
+        if drive["type"] != "none":
+            table["drive"] = drive
+    elif kind == UNIVERSAL:
+        table.update(axis1=h[AXIS_1].tolist(), axis2=h[AXIS_2].tolist(),
+                     angles=h[COORDINATE_0].tolist(), rates=h[RATE_0].tolist(),
+                     drives=[_drive_table(d, who) for d in model.drives[k]])
+    return table
+
+
+def _drive_table(d, who):
+    if d is None:
+        return {"type": "none"}
+    if d["kind"] == SPRING_DAMPER:
+        return {"type": "spring_damper", "stiffness": d["stiffness"], "damping": d["damping"],
+                "rest": d["rest"]}
+    if d["kind"] == FORCE and isinstance(d["function"], ProfileForce):
+        return dict(type="force", **d["function"].profile.spec())
+    if d["kind"] == MOTION and isinstance(d["function"][0], Profile):
+        return dict(type="motion", **d["function"][0].spec())
+    raise ValueError(f"save_scene: the drive of the joint before {who} is a Python function; "
+                     f"only profiles (dttmm.profiles) can be written")
+
+
+def save_scene(model, path, run=None, name=None):
+    """Write a model (and optionally simulate's options, run) to a scene file."""
+    Path(path).write_text(to_toml(scene_of(model, run, name)))
+
+
+def to_toml(data):
+    """TOML text of a scene dict (tables, arrays of tables, numbers, strings, lists, inline
+    tables for profiles and drives); floats written exactly (repr)."""
+    lines = []
+
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (int, np.integer)):
+            return str(int(v))
+        if isinstance(v, (float, np.floating)):
+            return repr(float(v))
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(v, (list, tuple, np.ndarray)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+        raise TypeError(f"to_toml: cannot write {type(v).__name__}")
+
+    def table(name, t, array=False):
+        lines.append(f"\n[[{name}]]" if array else f"\n[{name}]")
+        nested = []
+        for k, v in t.items():
+            if isinstance(v, dict) and k in ("joint", "spin", "points"):
+                nested.append((k, v))
+            else:
+                lines.append(f"{k} = {value(v)}")
+        for k, v in nested:
+            table(f"{name}.{k}", v)
+
+    for key in ("model", "ground"):
+        if key in data:
+            table(key, data[key])
+    for body in data.get("body", []):
+        table("body", body, array=True)
+    if "run" in data:
+        table("run", data["run"])
+    return "\n".join(lines).lstrip() + "\n"

@@ -1,0 +1,214 @@
+"""Scene files, profiles and the command line (docs/scenes.md): every shipped scene builds the
+same model as its Python builder and runs from `dttmm run`; a model saves to a scene and loads
+back to the same arrays; bad scenes are refused naming the file, the table and the key."""
+import dataclasses
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from dttmm.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.cli import main, shipped_scenes
+from dttmm.model import Model
+from dttmm.profiles import KINDS, profile
+from dttmm.scene import SceneError, load_scene, save_scene
+
+BUILDERS = {"three_pendulum": three_pendulum, "rigid_chain": lambda: rigid_chain(3),
+            "tree": five_link_tree, "arm": lambda: arm("torque"),
+            "arm_motion": lambda: arm("motion"),
+            "flexible_arm": lambda: arm("motion", flexible=True),
+            "cantilever": lambda: stiff_cantilever(4)}
+
+
+def same_model(a, b):
+    for f in dataclasses.fields(Model):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray):
+            assert x.shape == y.shape and np.array_equal(x, y), f.name
+        elif f.name in ("n_bodies", "body_names", "hinge_names", "tip_pinned"):
+            assert x == y, f.name
+    for da, db in zip(a.drives, b.drives):
+        for x, y in zip(da, db):
+            assert (x is None) == (y is None)
+            if x is not None:
+                assert {k: x[k] for k in ("kind", "stiffness", "damping", "rest")} == \
+                       {k: y[k] for k in ("kind", "stiffness", "damping", "rest")}
+    for fa, fb in zip(a.forces + a.torques, b.forces + b.torques):
+        assert (fa is None) == (fb is None)
+
+
+def test_every_example_ships_as_a_scene_that_builds_the_same_model():
+    assert set(shipped_scenes()) == set(BUILDERS)
+    for name, build in BUILDERS.items():
+        same_model(build(), load_scene(shipped_scenes()[name]).model)
+
+
+@pytest.mark.parametrize("name", sorted(BUILDERS))
+def test_a_model_saves_to_a_scene_and_loads_back_the_same(name, tmp_path):
+    scene = load_scene(shipped_scenes()[name])
+    save_scene(scene.model, tmp_path / "copy.toml", run=scene.run, name=name)
+    back = load_scene(tmp_path / "copy.toml")
+    same_model(scene.model, back.model)
+    assert back.run == scene.run
+
+
+def test_the_drives_of_a_scene_move_as_in_python():
+    """The arm's motion drive from its scene equals the Python builder's law at any time."""
+    drive = load_scene(shipped_scenes()["arm_motion"]).model.drives[0][0]
+    position, velocity, acceleration = drive["function"]
+    for t in (0.0, 0.3, 1.7):
+        assert position(t) == pytest.approx(0.5 * t + 0.2 * (1.0 - np.cos(2.0 * t)), abs=1e-15)
+        assert velocity(t) == pytest.approx(0.5 + 0.4 * np.sin(2.0 * t), abs=1e-15)
+        assert acceleration(t) == pytest.approx(0.8 * np.cos(2.0 * t), abs=1e-15)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_profiles_carry_their_own_derivatives(kind):
+    """Each profile's rate and acceleration against central differences of its value."""
+    spec = {"constant": {"value": 2.0}, "linear": {"slope": 0.7, "offset": 1.0},
+            "sine": {"amplitude": [1.0, 2.0], "frequency": 0.8, "phase": 0.3},
+            "ramp": {"value": 3.0, "duration": 2.0}, "spin_up": {"omega": 6.0, "period": 15.0},
+            "table": {"t": [0.0, 1.0, 3.0], "value": [0.0, 2.0, 1.0]},
+            "sum": {"terms": [{"profile": "linear", "slope": 1.0},
+                              {"profile": "sine", "amplitude": 1.0,
+                               "angular_frequency": 2.0}]}}[kind]
+    p = profile(dict(profile=kind, **spec))
+    eps = 1e-5
+    for t in (0.4, 1.3, 7.7, 16.0):
+        rate = (np.asarray(p(t + eps)) - p(t - eps)) / (2 * eps)
+        acc = (np.asarray(p.rate(t + eps)) - p.rate(t - eps)) / (2 * eps)
+        assert np.allclose(p.rate(t), rate, atol=1e-6), t
+        assert np.allclose(p.acceleration(t), acc, atol=1e-5), t
+    assert profile(p.spec()).spec() == p.spec()
+
+
+def test_the_spin_up_law_of_seed_000():
+    """theta(t) = (W / T)(t^2 / 2 + (T / 2 pi)^2 (cos(2 pi t / T) - 1)) up to T, then
+    W (t - T / 2): continuous with its rate and acceleration at T, rate W after it."""
+    p = profile({"profile": "spin_up", "omega": 6.0, "period": 15.0})
+    t = 4.0
+    assert p(t) == pytest.approx(6.0 / 15.0 * (t * t / 2 + (15.0 / (2 * np.pi)) ** 2
+                                                * (np.cos(2 * np.pi * t / 15.0) - 1.0)))
+    assert p(15.0) == pytest.approx(6.0 * 7.5) and p.rate(15.0) == pytest.approx(6.0)
+    assert p.acceleration(15.0) == pytest.approx(0.0, abs=1e-12) and p.rate(20.0) == 6.0
+
+
+BASE = '''
+[model]
+gravity = [0.0, -9.81, 0.0]
+
+[[body]]
+name = "link"
+type = "rigid"
+mass = 1.0
+inertia = [0.1, 0.4, 0.4]
+inertia_about = "input"
+to_mass_center = [0.5, 0.0, 0.0]
+to_output = [1.0, 0.0, 0.0]
+
+[body.joint]
+type = "ball"
+
+[[body]]
+name = "beam"
+type = "beam"
+length = 1.0
+mass_per_length = 1.3
+bending_stiffness = 300.0
+polar_inertia_per_length = 1e-4
+
+[body.joint]
+type = "ball"
+parent = "link"
+'''
+
+
+@pytest.mark.parametrize("change, message", [
+    (("mass = 1.0\n", ""), r"\[\[body\]\] 1 \('link'\) needs the key 'mass'"),   # missing key
+    (("mass = 1.0", 'mass = "heavy"'), r"\[\[body\]\] 1 \('link'\) key 'mass': a number"),
+    (('type = "beam"', 'type = "rope"'), r"\[\[body\]\] 2 \('beam'\) key 'type'"),  # unknown kind
+    (("length = 1.0", "length = -1.0"), r"\[\[body\]\] 2 \('beam'\).*length must be > 0"),
+    (('type = "ball"\nparent', 'type = "hinge"\nparent'), r"\[body.joint\] key 'type'"),
+    (("inertia_about", "inertia_around"), r"unknown key 'inertia_around'"),
+    (('parent = "link"', 'parent = "lnk"'), r"parent 'lnk' is not in the system"),
+    (("bending_stiffness = 300.0", "bending_stiffness = [1, 2, 3]"),
+     r"key 'bending_stiffness': a number or 2 numbers"),
+])
+def test_bad_scenes_name_the_file_the_table_and_the_key(tmp_path, change, message):
+    path = tmp_path / "bad.toml"
+    old, new = change
+    assert old in BASE
+    path.write_text(BASE.replace(old, new, 1))
+    with pytest.raises(SceneError, match=message) as err:
+        load_scene(path)
+    assert str(path) in str(err.value)
+    path.write_text(BASE)
+    load_scene(path)                                        # (the base itself is fine)
+
+
+def test_a_profile_with_a_bad_key_is_refused(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE.replace('type = "rigid"', 'type = "rigid"\n'
+                                 'force = { profile = "sine", amplitude = 1.0 }'))
+    with pytest.raises(SceneError, match=r"key 'force'.*'frequency' \(Hz\) and "
+                                         r"'angular_frequency'"):
+        load_scene(path)
+    path.write_text("[model\n")
+    with pytest.raises(SceneError, match="not valid TOML"):
+        load_scene(path)
+
+
+def test_info_prints_the_model(capsys):
+    """The three-pendulum: 3 ball joints (9) and 2 modes per plane (4): 13 degrees of freedom;
+    the beam's first pinned mode (pi / L)^2 sqrt(EI / mu) / 2 pi = 24.96 Hz."""
+    assert main(["info", str(shipped_scenes()["three_pendulum"])]) == 0
+    out = capsys.readouterr().out
+    assert "13 degrees of freedom" in out and "24.96" in out and "suggested dt: 0.0005 s" in out
+
+
+def test_example_lists_and_writes_the_shipped_scenes(tmp_path, capsys):
+    assert main(["example"]) == 0
+    assert "three_pendulum" in capsys.readouterr().out
+    assert main(["example", "tree", "--to", str(tmp_path)]) == 0
+    same_model(five_link_tree(), load_scene(tmp_path / "tree.toml").model)
+    assert main(["example", "nothing"]) == 2
+
+
+@pytest.mark.parametrize("name", sorted(BUILDERS))
+def test_every_shipped_scene_runs_from_the_command_line(name, tmp_path):
+    out = tmp_path / "r.npz"
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run", str(shipped_scenes()[name]),
+                          "--t-end", "0.02", "--out", str(out), "--csv", str(tmp_path / "r.csv"),
+                          "--no-progress"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "ran 20 steps" in run.stdout or "ran 200 steps" in run.stdout
+    from dttmm import Result
+    res = Result.load_npz(out)
+    assert res.t[-1] == pytest.approx(0.02) and np.all(np.isfinite(res.position_output))
+
+
+def test_the_command_line_reports_a_bad_scene_and_a_run_that_stops(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BASE.replace("length = 1.0", "length = -1.0"))
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run", str(bad), "--t-end", "1"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "bad.toml" in run.stderr and "length" in run.stderr
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run",
+                          str(shipped_scenes()["rigid_chain"]), "--t-end", "5", "--dt", "0.5"],
+                         capture_output=True, text=True)
+    assert run.returncode == 1 and "local error estimate" in run.stderr
+
+
+def test_figures_and_an_animation_are_written(tmp_path):
+    from PIL import Image
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run",
+                          str(shipped_scenes()["flexible_arm"]), "--t-end", "0.05",
+                          "--plots", str(tmp_path / "figs"), "--animate",
+                          str(tmp_path / "arm.gif"), "--no-progress"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    names = {p.name for p in (tmp_path / "figs").iterdir()}
+    assert {"positions.png", "angles.png", "energy.png", "joints.png", "modal.png"} <= names
+    with Image.open(tmp_path / "arm.gif") as gif:
+        assert gif.n_frames > 10

@@ -1,0 +1,33 @@
+"""Sweeps of many runs (docs/sweeps.md): on a LocalCluster of 2 dask workers, and on a local
+process pool, the table equals the same runs made one after the other in this process."""
+import numpy as np
+import pytest
+
+import dttmm
+from dttmm.chains import rigid_chain
+
+RUNS = {"n_links": [3], "gravity": [(0.0, -9.81, 0.0), (0.0, -4.0, 0.0)],
+        "tip_angular_velocity": [(0.0, 0.1, 0.0), (0.3, 0.0, 0.2)]}
+
+
+@pytest.mark.parametrize("engine", ["dask", "processes"])
+def test_a_sweep_equals_the_serial_runs(engine):
+    pytest.importorskip("dask.distributed") if engine == "dask" else None
+    serial = dttmm.sweep(rigid_chain, RUNS, 0.2, 1e-3, engine="serial")
+    spread = dttmm.sweep(rigid_chain, RUNS, 0.2, 1e-3, engine=engine, n_workers=2)
+    assert len(serial) == len(spread) == 4 and spread.engine == engine
+    assert spread.outputs == serial.outputs and len(serial.outputs) == 9
+    for name in serial.parameters + serial.outputs:
+        assert np.array_equal(serial[name], spread[name]), name
+    # the table's rows are the runs themselves
+    one = dttmm.simulate(rigid_chain(3, gravity=(0.0, -4.0, 0.0),
+                                     tip_angular_velocity=(0.3, 0.0, 0.2)), 0.2, 1e-3)
+    assert spread["link3.y"][3] == one.position_output[-1, 2, 1]
+
+
+def test_a_sweep_refuses_ragged_parameters():
+    with pytest.raises(ValueError, match="same keys"):
+        dttmm.sweep(rigid_chain, [{"n_links": 2}, {"gravity": (0, 0, 0)}], 0.1, 1e-3,
+                    engine="serial")
+    with pytest.raises(ValueError, match="engine"):
+        dttmm.sweep(rigid_chain, {"n_links": [2]}, 0.1, 1e-3, engine="threads")
