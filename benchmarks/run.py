@@ -304,6 +304,8 @@ def main(argv=None):
         rec = recording.recording_overhead(model, pairs=5 if quick else 15)
         fig[f"recording_{name}_full_over_end_only"] = rec["full_over_end_only"]
         fig[f"recording_{name}_us_per_sample"] = rec["extra_us_per_sample"]
+        fig[f"recording_{name}_positions_us_per_sample"] = rec["positions_us_per_sample"]
+        fig[f"recording_{name}_energies_us_per_sample"] = rec["energies_us_per_sample"]
     mem = recording.long_run_memory(100, 1.0 if quick else 5.0, 1e-4)
     fig["recording_chain100_peak_mb"] = mem["peak_mb"]
     fig["recording_chain100_samples"] = mem["samples"]

@@ -81,7 +81,8 @@ class Result:
             return values[name]
         if name in DERIVED:
             values.update(object.__getattribute__(self, "_derivation")(name))
-            return values[name]
+            if name in values:
+                return values[name]
         raise AttributeError(f"Result has no field {name!r}")
 
     def __setattr__(self, name, value):
@@ -278,12 +279,13 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     u_dot = np.zeros_like(p)
     u_dot[:, :, 1] = eta_dot[:, :nm] @ y
     u_dot[:, :, 2] = eta_dot[:, nm:2 * nm] @ y
-    rho = np.einsum("tij,tqj->tqi", a, p)
-    vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + np.einsum("tij,tqj->tqi", a, u_dot)
+    a_t = np.swapaxes(a, 1, 2)
+    rho = p @ a_t                                          # A p, every state and point
+    vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + u_dot @ a_t
     spin = np.einsum("ti,ti->t", w, a[:, :, 0])
-    kinetic = 0.5 * mu * np.einsum("q,tqi,tqi->t", wq, vel, vel)
+    kinetic = 0.5 * mu * (np.sum(vel * vel, axis=2) @ wq)
     kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
-    potential = -mu * np.einsum("q,tqi,i->t", wq, r_in[:, None, :] + rho, gravity)
+    potential = -mu * (((r_in[:, None, :] + rho) @ gravity) @ wq)
     potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
                         + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
     return kinetic, potential

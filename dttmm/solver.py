@@ -1066,10 +1066,18 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     derived = {}
 
     def derivation(name):
+        """The points' positions and velocities, and (when asked) the energies from them."""
         if not derived:
-            derived.update(_derived(model, t, rot, omega, values["defl"], values["defl_rate"],
-                                    eta, eta_d, values.get("v_st"), values.get("v_c"),
-                                    joints.get("joint_coordinates")))
+            derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
+                                   eta, eta_d, values.get("v_st"), values.get("v_c")))
+        if name in ("kinetic", "potential") and "kinetic" not in derived:
+            grounds = (model.ground_state(ti)[3] for ti in
+                       (t if model.ground_motion is not None else t[:1]))
+            ground_rot = np.broadcast_to(np.array(list(grounds), dtype=float), (len(t), 3, 3))
+            derived["kinetic"], derived["potential"] = chain_energies(
+                model, rot, omega, derived["position_input"], derived["velocity_input"],
+                values["defl"], ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
+                joint_coordinates=joints.get("joint_coordinates"))
         return derived
 
     loads = values["z"]                     # every body's input [m; q]
@@ -1082,8 +1090,8 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
                   derivation=derivation, **joints)
 
 
-def _derived(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c, joint_coordinates):
-    """Positions and velocities of every body's points, and the energies, for all samples."""
+def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
+    """Positions of every body's points and velocities of its input, for all samples."""
     n = model.n_bodies
     m = len(t)
     l_io = model.body_params[:, TO_OUTPUT]
@@ -1092,7 +1100,6 @@ def _derived(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c, joint
     grounds = [model.ground_state(ti) for ti in (t if model.ground_motion is not None else t[:1])]
     r_prev = np.broadcast_to(np.array([g[0] for g in grounds], dtype=float), (m, 3))
     v_prev = np.broadcast_to(np.array([g[1] for g in grounds], dtype=float), (m, 3))
-    ground_rot = np.broadcast_to(np.array([g[3] for g in grounds], dtype=float), (m, 3, 3))
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
     rho_dot = np.cross(omega, rho)
@@ -1119,8 +1126,5 @@ def _derived(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c, joint
         rho_c = np.einsum("tkij,kj->tki", rot[:, rigid], model.body_params[rigid, TO_MASS_CENTER])
         v_in[:, rigid] = v_c[:, rigid] - np.cross(omega[:, rigid], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)
-    kinetic, potential = chain_energies(model, rot, omega, r_in, v_in, defl,
-                                        ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
-                                        joint_coordinates=joint_coordinates)
     return dict(position_input=r_in, position_mass_center=r_c, position_output=r_o,
-                velocity_input=v_in, kinetic=kinetic, potential=potential)
+                velocity_input=v_in)
