@@ -1,5 +1,5 @@
 """The chain description: built from elements, validated once, frozen into flat arrays."""
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Optional, Sequence
 
 import numpy as np
@@ -130,6 +130,14 @@ class Model:
                                      # j-th named point (RigidBody.points)
     attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
                                      # point, m (zero for the ground)
+
+    def __post_init__(self):
+        # frozen through and through: the arrays cannot be written either (a negative mass
+        # written after build() would otherwise simulate); the solvers hand their kernels copies
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
 
     @property
     def is_chain(self):

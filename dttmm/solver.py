@@ -113,13 +113,15 @@ class Workspace:
 def kernel_params(model, beams=None):
     """The frozen model's arrays as the kernels read them (kernels/loop.py::Params)."""
     lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
-    return Params(body_params=model.body_params, hinge_kind=model.hinge_kind,
-                  hinge_params=model.hinge_params, gravity=model.gravity,
+    # writable copies of the model's read-only arrays (numba types read-only arrays apart, and
+    # every kernel would compile twice)
+    return Params(body_params=np.array(model.body_params), hinge_kind=np.array(model.hinge_kind),
+                  hinge_params=np.array(model.hinge_params), gravity=np.array(model.gravity),
                   beams=beam_tables(model) if beams is None else beams,
-                  locked=model.ground_locked, lock_rel=lock_rel,
-                  mass_center_inertia=model.body_mass_center_inertia,
+                  locked=np.array(model.ground_locked), lock_rel=lock_rel,
+                  mass_center_inertia=np.array(model.body_mass_center_inertia),
                   tip_pinned=bool(model.tip_pinned),
-                  parent=np.ascontiguousarray(model.parent, dtype=np.int64),
+                  parent=np.array(model.parent, dtype=np.int64),
                   joint_drive=joint_drives(model))
 
 
@@ -209,7 +211,8 @@ def beam_tables(model):
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
             factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
-    return (model.body_kind, model.beam_params, moments, mode_off, ends, factors)
+    return (np.array(model.body_kind), np.array(model.beam_params), moments, mode_off, ends,
+            factors)
 
 
 def _steps(t_end, dt):

@@ -125,3 +125,26 @@ def test_direct_mode_fails_loudly_on_a_long_chain():
         simulate(model, 0.01, 1e-3, method="direct")
     res = simulate(model, 0.01, 1e-3)
     assert np.all(np.isfinite(res.position_output))
+
+
+def test_the_model_is_read_only_and_the_kernels_see_writable_copies():
+    """A negative mass written after build() must not simulate: the model's arrays refuse the
+    write.  The solvers hand their kernels writable copies, so no kernel is compiled a second
+    time for read-only arrays (numba types them apart)."""
+    from dttmm import simulate_reference
+    from dttmm.chains import arm, three_pendulum
+    from dttmm.kernels import loop, step as kstep
+    from dttmm.reference import newton_euler
+    for model in (three_pendulum(), arm("motion")):
+        with pytest.raises(ValueError, match="read-only"):
+            model.body_params[0, 0] = -1.0
+        with pytest.raises(ValueError, match="read-only"):
+            model.gravity[1] = 0.0
+        simulate(model, 0.01, 1e-3)
+        simulate_reference(model, 0.01, rtol=1e-6, atol=1e-6)
+    kernels = list(loop._SKELETONS.values()) + [kstep.initial_accelerations,
+                                                newton_euler.rhs_kernel,
+                                                newton_euler._solve_dynamics]
+    for kernel in kernels:
+        for signature in getattr(kernel, "signatures", []):
+            assert "readonly" not in str(signature), (kernel, signature)

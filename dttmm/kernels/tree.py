@@ -42,7 +42,7 @@ def fused_tree_loop(n, parent, mode_off, h, coef):
                          np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
                          np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
                          np.zeros(ball_map_work_shape(max_modes)),
-                         np.ascontiguousarray(parent, dtype=np.int64), np.zeros((n, 6, 7)),
+                         np.array(parent, dtype=np.int64), np.zeros((n, 6, 7)),
                          np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3, 3)),
                          np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)))
 

@@ -1198,13 +1198,14 @@ class _Problem:
 
     def __init__(self, model):
         n = model.n_bodies
-        kinds = np.asarray(model.hinge_kind, dtype=np.int64)
+        # writable copies of the model's read-only arrays (numba types read-only arrays apart)
+        kinds = np.array(model.hinge_kind, dtype=np.int64)
         self.model = model
         self.n = n
         self.kinds = kinds
-        self.body_params = np.ascontiguousarray(model.body_params, dtype=float)
-        self.hinge_params = np.ascontiguousarray(model.hinge_params, dtype=float)
-        self.gravity = np.asarray(model.gravity, dtype=float)
+        self.body_params = np.array(model.body_params, dtype=float)
+        self.hinge_params = np.array(model.hinge_params, dtype=float)
+        self.gravity = np.array(model.gravity, dtype=float)
         # a quaternion and w of its own: bodies behind ball joints and elastic hinges (a fixed
         # hinge's or a joint's child follows its parent and the joint's coordinates)
         free = [k for k in range(n) if kinds[k] != FIXED and kinds[k] not in
@@ -1225,8 +1226,8 @@ class _Problem:
             o += 6
         # beams: all modal coordinates (concatenated in body order, v then w of each beam), then
         # all their rates
-        self.body_kind = np.ascontiguousarray(model.body_kind, dtype=np.int64)
-        self.beam_params = np.ascontiguousarray(model.beam_params, dtype=float)
+        self.body_kind = np.array(model.body_kind, dtype=np.int64)
+        self.beam_params = np.array(model.beam_params, dtype=float)
         beams = [k for k in range(n) if self.body_kind[k] == BEAM]
         for k in beams:
             if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED, CLAMPED_LOADED):
@@ -1294,11 +1295,11 @@ class _Problem:
         # in its parent's frame from the parent's input point (a rigid parent's output point or
         # one of its named points; a beam parent's output point, which the kernels take from
         # the beam's deflected end instead)
-        parent = np.ascontiguousarray(model.parent, dtype=np.int64)
+        parent = np.array(model.parent, dtype=np.int64)
         children = [[c for c in range(n) if parent[c] == k] for k in range(n)]
         self.topology = (parent, np.cumsum([0] + [len(c) for c in children]).astype(np.int64),
                          np.array([c for cs in children for c in cs], dtype=np.int64))
-        self.attachment_point = np.ascontiguousarray(model.attachment_point, dtype=float)
+        self.attachment_point = np.array(model.attachment_point, dtype=float)
         # the drives, evaluated in Python at every right-hand side (joint_inputs)
         self.prescribed = np.zeros(nq, dtype=np.int64)
         self.drive_value = np.zeros(nq)
