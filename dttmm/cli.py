@@ -35,6 +35,8 @@ def main(argv=None):
     run.add_argument("scene", help="scene file (TOML)")
     run.add_argument("--t-end", type=float, help="end time, s (default: the scene's [run])")
     run.add_argument("--dt", type=float, help="step, s (default: the scene's, else info's)")
+    run.add_argument("--rtol", type=float,
+                     help="adaptive steps to this tolerance (rad, m); --dt is then the first")
     run.add_argument("--method", choices=("riccati", "direct"))
     run.add_argument("--scheme", choices=("newmark", "energy_momentum", "paper"))
     run.add_argument("--record-dt", type=float, help="record every RECORD_DT s")
@@ -64,7 +66,8 @@ def _run(args):
     scene = load_scene(args.scene)
     options = dict(scene.run)
     for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),
-                       ("scheme", args.scheme), ("record_dt", args.record_dt)):
+                       ("scheme", args.scheme), ("record_dt", args.record_dt),
+                       ("rtol", args.rtol)):
         if value is not None:
             options[key] = value
     if "t_end" not in options:
@@ -73,12 +76,14 @@ def _run(args):
         return 2
     if "dt" not in options:
         options["dt"] = suggested_dt(scene.model)
-    if args.record_dt is not None:
+    if args.record_dt is not None or "rtol" in options:
         options.pop("record_every", None)
     t_end, dt = options.pop("t_end"), options.pop("dt")
     resume = Checkpoint.load(args.resume) if args.resume else None
     model = scene.model
-    print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, dt = {dt:g} s")
+    steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
+             else f"dt = {dt:g} s")
+    print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, {steps}")
     try:
         res = simulate(model, t_end, dt, progress=False if args.no_progress else None,
                        resume=resume, **options)
@@ -93,6 +98,9 @@ def _run(args):
         return 2
     energy = res.total_energy
     scale = max(float(np.abs(res.kinetic).max()), 1e-300)
+    if "rtol" in options:
+        print(f"adaptive: steps of {res.info['dt_min']:.3g} to {res.info['dt_max']:.3g} s, "
+              f"{res.info['steps_rejected']} steps rejected")
     print(f"ran {res.n_steps} steps in {res.wall_time:.3g} s (loop {res.info['loop']}, "
           f"{res.info['mode']}); {len(res.t)} samples; largest step error estimate "
           f"{res.info.get('step_error_max', 0.0):.2g}")
@@ -104,7 +112,10 @@ def _run(args):
     if args.csv:
         res.save_csv(args.csv)
         print(f"wrote {args.csv}")
-    if args.checkpoint:
+    if args.checkpoint and res.checkpoint is None:
+        print("dttmm: no checkpoint written: an adaptive run has no step grid to resume on",
+              file=sys.stderr)
+    elif args.checkpoint:
         res.checkpoint.save(args.checkpoint)
         print(f"wrote {args.checkpoint} (continue with --resume {args.checkpoint})")
     if args.plots:

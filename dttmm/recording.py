@@ -22,9 +22,11 @@ class Recording:
         self.identity = np.array_equal(self.keep, np.arange(len(self.keep)))
         self.blocks = {key: [] for key in self.keys}
         self.steps = []
+        self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
 
-    def add(self, values, steps):
-        """values: key -> (m, ...) rows recorded at the m given steps."""
+    def add(self, values, steps, times=()):
+        """values: key -> (m, ...) rows recorded at the m given steps (and times, s, in an
+        adaptive run)."""
         for key in self.keys:
             block = values[key]
             if key == "z":                              # the inputs' [m; q] only
@@ -35,11 +37,14 @@ class Recording:
                 block = block[:, np.append(self.keep, len(self.keep))]
             self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
         self.steps.extend(steps)
+        self.times.extend(times)
 
-    def add_state(self, state, extra, step):
-        """One sample from the state the loop advances (t = 0, or the state at the end)."""
+    def add_state(self, state, extra, step, t=None):
+        """One sample from the state the loop advances (t = 0, the state at the end, or an
+        adaptive run's segment end at time t)."""
         values = dict(state._asdict(), **extra)
-        self.add({key: values[key][None] for key in self.keys}, [step])
+        self.add({key: values[key][None] for key in self.keys}, [step],
+                 () if t is None else [t])
 
     def arrays(self):
         """key -> all its rows (T, ...), in order; "z" holds the inputs' [m; q] (T, n, 6)."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
@@ -347,10 +348,10 @@ def _ground(model, times):
     return acc, rot, w, wd
 
 
-def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho_inf=1.0,
-             newton_iterations=None, newton_tol=1e-12, record_every=None, record_dt=None,
-             t_eval=None, full_state=False, richardson=False, progress=None,
-             max_step_error=MAX_STEP_ERROR, resume=None) -> Result:
+def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="riccati",
+             scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
+             record_every=None, record_dt=None, t_eval=None, full_state=False, richardson=False,
+             progress=None, max_step_error=MAX_STEP_ERROR, resume=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -359,10 +360,19 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         The frozen system (``dttmm.System(...).build()`` or ``dttmm.build_chain``).
     t_end : float
         End time, s (> 0).
-    dt : float
+    dt : float, optional
         The step, s (> 0). The run takes n = ceil(t_end / dt) equal steps of t_end / n (dt
         itself where it divides t_end), so the last step lands on t_end; ``info["dt"]`` is the
-        step taken.
+        step taken. With rtol: the first step (default t_end / 1000).
+    rtol, atol : float, optional
+        Adaptive steps (Newmark scheme): the step is chosen from the local error estimate so
+        that the error accumulated over the run stays near atol + rtol (rad for rotations, m
+        for displacements; rtol is relative to a motion of order one radian, atol an absolute
+        floor, default 0). Segments of up to 128 equal steps run compiled; one whose estimate
+        per unit time exceeds (atol + rtol) / t_end is taken again with a smaller step
+        (growth at most 1.5x, shrink at most 5x per segment). ``n_steps`` counts the accepted
+        steps; ``info`` reports ``steps_rejected`` (and ``segments_rejected``), ``dt_min`` and
+        ``dt_max`` (docs/solver.md, "Adaptive steps").
     method : {"riccati", "direct"}
         "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
         transfer matrices out, as the paper does; chains only; loses accuracy on long or stiff
@@ -391,9 +401,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     record_dt : float, optional
         Record every record_dt seconds (rounded to a whole number of steps).
     t_eval : array_like, optional
-        Record at these times, s (increasing, on the step grid: multiples of dt).
-        Give at most one of record_every, record_dt and t_eval. Default: every step of a run of
-        up to 1000 steps, else every ceil(steps / 1000)-th step (at most ~1000 samples). The
+        Record at these times, s (increasing, on the step grid: multiples of dt; an adaptive
+        run lands its steps on them). Give at most one of record_every, record_dt and t_eval.
+        Default: every step of a run of up to 1000 steps, else every ceil(steps / 1000)-th step
+        (at most ~1000 samples; adaptive: the first segment end after each t_end / 1000). The
         first and the final state are always recorded. Derived quantities (positions,
         energies) are computed when first read (``Result``).
     full_state : bool
@@ -443,6 +454,22 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     t_end = _check_positive("t_end", t_end)
+    adaptive = rtol is not None
+    if adaptive:
+        rtol, atol = _check_positive("rtol", rtol), float(atol)
+        if not atol >= 0.0:
+            raise ValueError(f"simulate: atol must be >= 0 (rad or m), got {atol!r}")
+        for name, given, why in (("record_every", record_every is not None, "use record_dt or "
+                                  "t_eval"), ("resume", resume is not None, "resume a fixed-step "
+                                  "run"), ("richardson", richardson, "the extrapolation needs "
+                                  "fixed steps"), ("scheme", scheme != "newmark", "the estimate "
+                                  "is the Newmark scheme's")):
+            if given:
+                raise ValueError(f"simulate: adaptive steps (rtol) and {name} do not combine: "
+                                 f"{why}")
+        dt = t_end / MAX_SAMPLES if dt is None else dt
+    elif dt is None:
+        raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
     dt = _check_positive("dt", dt)
     n_steps, dt = _steps(t_end, dt)
     start = 0
@@ -461,7 +488,10 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
             raise ValueError(f"simulate(resume=...): t_end = {t_end:g} s is not after the "
                              f"checkpoint's t = {resume.t:g} s")
         start = resume.step
-    sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start)
+    if adaptive:
+        sampling, targets = 1, adaptive_steps.sample_times(t_end, record_dt, t_eval)
+    else:
+        sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start)
     if scheme not in SCHEMES:
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
     if newton_iterations is None:
@@ -560,7 +590,7 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
         counters, done = resume.counters, resume.step
     history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
     recording = Recording(keys, keep)
-    recording.add_state(state, history_values, done)
+    recording.add_state(state, history_values, done, 0.0 if adaptive else None)
     first = done
 
     # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
@@ -583,40 +613,70 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
     max_newton = counters[0]
     beam_tips = _beam_tips(model)
 
+    def inputs_for(times, mid_times, h):
+        """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
+        ends times[1:] (the energy-momentum step's loads: at mid_times)."""
+        m = len(times) - 1
+        if static_ground:
+            ga, gr, gw, gwd = g_acc, g_rot, g_w, g_wd
+        else:
+            ga, gr, gw, gwd = _ground(model, times)
+            ga, gw, gwd = ga[1:], gw[1:], gwd[1:]
+        f, tq = (force, torque) if no_loads else _loads(
+            model, mid_times if scheme == "energy_momentum" else times[1:])
+        ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
+        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], force=f[:m],
+                      torque=tq[:m], joint_input=ji[:m])
+
+    def run_chunk(inputs, h, every, first_step, t_first, step_limit=max_step_error):
+        """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds
+        step_limit); a singular matrix found in numpy (the general loop's small solves) stops
+        the run."""
+        try:
+            with compile_notice() if first_step == first else nullcontext():
+                runner(loop, Run(params, settings._replace(h=h, record_every=every,
+                                                           max_step_error=step_limit),
+                                 state, ws.sweep, inputs, rec, monitor), info)
+        except np.linalg.LinAlgError as err:
+            raise DivergenceError(first_step + 1, t_first, f"a matrix of the sweep is singular "
+                                  f"somewhere in steps {first_step + 1}.."
+                                  f"{first_step + len(inputs.force)} ({err}); "
+                                  f"{_DIRECT_HINT if method == 'direct' else ''}") from None
+        if info[0] == UNSUPPORTED:
+            raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
+
     def partial(steps_taken):
         return _result(user_model, recording, dt, time.perf_counter() - wall0, steps_taken,
                        dict(run_info))
+
+    if adaptive:
+        control = adaptive_steps.StepControl(t_end, rtol, atol, dt)
+        n_steps, largest = _adaptive_loop(model, control, targets, structures, loop, coef,
+                                          inputs_for, run_chunk, info, monitor, settings, mode,
+                                          recording, history_values, partial, progress,
+                                          beam_tips, min(size, adaptive_steps.SEGMENT))
+        if recording.times[-1] != t_end:           # the final state is always recorded
+            recording.add_state(state, history_values, n_steps, t_end)
+        run_info.update(dt=None, dt_min=control.h_min, dt_max=control.h_max,
+                        segments_rejected=control.rejected,
+                        steps_rejected=control.rejected_steps, rtol=rtol, atol=atol)
+        result = _result(user_model, recording, dt, 0.0, n_steps,
+                         dict(run_info, newton_iterations_used=int(info[2]),
+                              newton_unconverged_steps=int(info[4]),
+                              step_error_max=largest))
+        return result.replace(wall_time=time.perf_counter() - wall0)
 
     bar = Progress(n_steps - done, progress)
     try:
         while done < n_steps:
             m, every = _next_chunk(done, n_steps, sampling, size)
             times = (done + np.arange(m + 1)) * dt
-            if not static_ground:
-                g_acc, g_rot, g_w, g_wd = _ground(model, times)
-                g_acc, g_w, g_wd = g_acc[1:], g_w[1:], g_wd[1:]
-            if not no_loads:    # at the step's end; the energy-momentum step's mean: midpoint
-                force, torque = _loads(model, (done + np.arange(m) + 0.5) * dt
-                                       if scheme == "energy_momentum" else times[1:])
-            if joint_inputs_vary:
-                joint_input = _joint_inputs(model, times[1:], state, dt)
-            inputs = Inputs(g_acc=g_acc[:m], g_rot=g_rot[:m + 1], g_w=g_w[:m], g_wd=g_wd[:m],
-                            force=force[:m], torque=torque[:m], joint_input=joint_input[:m])
-            try:
-                with compile_notice() if done == first else nullcontext():
-                    runner(loop, Run(params, settings._replace(record_every=every), state,
-                                     ws.sweep, inputs, rec, monitor), info)
-            except np.linalg.LinAlgError as err:
-                raise DivergenceError(done + 1, (done + 1) * dt, f"a matrix of the sweep is "
-                                      f"singular somewhere in steps {done + 1}..{done + m} "
-                                      f"({err}); "
-                                      f"{_DIRECT_HINT if method == 'direct' else ''}") from None
+            run_chunk(inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt), dt, every, done,
+                      (done + 1) * dt)
             n_rec = int(info[3])
             if n_rec:
                 recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
                               done + every * np.arange(1, n_rec + 1))
-            if info[0] == UNSUPPORTED:
-                raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
             if info[0] != OK:
                 step = done + int(info[1]) + 1
                 cause = _failure_cause(model, mode, info, monitor, settings)
@@ -641,6 +701,79 @@ def simulate(model: Model, t_end, dt, *, method="riccati", scheme="newmark", rho
                           newton_unconverged_steps=int(info[4]),
                           step_error_max=float(monitor.error[0])), checkpoint)
     return result.replace(wall_time=time.perf_counter() - wall0)
+
+
+def _adaptive_loop(model, control, targets, structures, loop, coef, inputs_for, run_chunk, info,
+                   monitor, settings, mode, recording, history_values, partial, progress,
+                   beam_tips, most):
+    """An adaptive run's segments (adaptive.py; docs/solver.md, "Adaptive steps"): save the
+    run's arrays, take up to `most` steps of the controller's h (landing on the next sample
+    time or t_end), then accept the segment or restore and retry with a smaller step.  A
+    segment that fails (estimate above max_step_error, NaN, no Newton convergence, a singular
+    transfer, a beam beyond its length) is retried with a quarter of the step; the run stops
+    with DivergenceError once the step falls below adaptive.MIN_STEP of t_end.  Returns (steps
+    taken, the largest accepted estimate); info[2] holds the most Newton iterations used."""
+    t_end = control.t_end
+    snapshot = adaptive_steps.Snapshot(structures)
+    t, taken, largest, most_newton, i_target = 0.0, 0, 0.0, 0, 0
+    every_default = t_end / MAX_SAMPLES
+    next_default = every_default
+    bar = Progress(MAX_SAMPLES, progress)
+    try:
+        while t < t_end:
+            if targets is not None:
+                while i_target < len(targets) and targets[i_target] <= t:
+                    i_target += 1
+            target = targets[i_target] if targets is not None and i_target < len(targets) \
+                else t_end
+            m, h = adaptive_steps.segment(t, control.h, target, most)
+            snapshot.save()
+            _set_step(loop, h, coef)
+            monitor.error[0] = 0.0
+            times = t + np.arange(m + 1) * h
+            lands = times[-1] >= target * (1 - 1e-12)
+            if lands:
+                times[-1] = target
+            # a step above the tolerance stops the segment at once (the skeleton's own check)
+            run_chunk(inputs_for(times, times[:-1] + 0.5 * h, h), h, m + 1, taken, times[1],
+                      min(settings.max_step_error, control.step_limit(h)))
+            over = info[0] == ERROR_ESTIMATE and monitor.error[0] <= settings.max_step_error
+            failed = (info[0] != OK and not over) or bool(
+                _beam_beyond_its_length(model, beam_tips, structures[0].eta))
+            steps_run = m if info[0] == OK else int(info[1]) + 1
+            if control.after(float(monitor.error[0]), h, steps_run, failed):
+                t, taken = float(times[-1]), taken + m
+                largest = max(largest, float(monitor.error[0]))
+                most_newton = max(most_newton, int(info[2]))
+                if (lands and targets is not None) or (targets is None and t >= next_default):
+                    recording.add_state(structures[0], history_values, taken, t)
+                    while next_default <= t:
+                        next_default += every_default
+                bar.update(int(MAX_SAMPLES * t / t_end))
+                continue
+            cause = (_failure_cause(model, mode, info, monitor, settings) if info[0] != OK
+                     else "a beam deflected beyond its length" if failed
+                     else f"local error estimate {monitor.error[0]:.3g} over the segment")
+            snapshot.restore()
+            if control.too_small:
+                raise DivergenceError(taken + 1, t, f"adaptive steps: the step fell below "
+                                      f"{adaptive_steps.MIN_STEP:g} of t_end ({control.h:.3g} s) "
+                                      f"at t = {t:.6g} s; last cause: {cause}", partial(taken))
+    finally:
+        bar.close()
+    info[2] = most_newton
+    return taken, largest
+
+
+def _set_step(loop, h, coef):
+    """A new step in the loop variant's step-dependent constants (an adaptive run's segment;
+    the skeleton's pieces take h itself from Settings): the fused loops' (c1, c3, 1/c1, c3/c1)
+    and the general loop's ground d(w')/d(phi) = c1 I (kernels/step.py::general_loop)."""
+    c1, c3 = kstep._coefficients_py(h, coef)
+    if isinstance(loop, kstep.GeneralLoop):
+        loop.ground[4][...] = c1 * np.eye(3)
+    elif hasattr(loop, "coefficients"):
+        loop.coefficients[:] = (c1, c3, 1.0 / c1, c3 / c1)
 
 
 CHUNK = 1000        # steps per call of the compiled loop (their inputs are prepared per chunk)
@@ -1058,7 +1191,8 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     """The Result of a run's recording: the stored state as recorded; positions, velocities and
     energies left to _derived, computed when first read."""
     values = recording.arrays()
-    t = np.asarray(recording.steps, dtype=float) * h
+    t = (np.asarray(recording.times) if recording.times
+         else np.asarray(recording.steps, dtype=float) * h)
     rot, omega, eta, eta_d = values["rot"], values["omega"], values["eta"], values["eta_d"]
     joints = {}
     columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]

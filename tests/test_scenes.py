@@ -198,6 +198,11 @@ def test_the_command_line_reports_a_bad_scene_and_a_run_that_stops(tmp_path):
                           str(shipped_scenes()["rigid_chain"]), "--t-end", "5", "--dt", "0.5"],
                          capture_output=True, text=True)
     assert run.returncode == 1 and "local error estimate" in run.stderr
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run",            # adapts instead
+                          str(shipped_scenes()["rigid_chain"]), "--t-end", "5", "--dt", "0.5",
+                          "--rtol", "1e-4", "--no-progress"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "adaptive steps, rtol = 0.0001" in run.stdout and "steps rejected" in run.stdout
 
 
 def test_figures_and_an_animation_are_written(tmp_path):
