@@ -63,24 +63,28 @@ def _peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _long_run(links, t_end, dt):
+def _long_run(links, t_end, dt, record_every=0, stream="-"):
     model = rigid_chain(links)
     t0 = time.perf_counter()
-    res = simulate(model, t_end, dt, progress=False)
-    res.position_output                                           # derived on first read
+    res = simulate(model, t_end, dt, progress=False, record_every=record_every or None,
+                   stream=None if stream == "-" else stream)
+    if stream == "-":
+        res.position_output                                       # derived on first read
     wall = time.perf_counter() - t0
     peak_mb = _peak_mb()
     print(json.dumps(dict(links=links, t_end=t_end, dt=dt, samples=len(res.t), wall_s=wall,
                           peak_mb=peak_mb)))
 
 
-def long_run_memory(links=100, t_end=5.0, dt=1e-4):
+def long_run_memory(links=100, t_end=5.0, dt=1e-4, record_every=0, stream="-"):
     """Peak resident memory (MB) of a process that builds a `links`-link chain, runs it with
-    the default recording and reads its positions: the process's own peak, imports and loaded
+    the default recording (or every record_every-th step; streamed to the directory `stream`)
+    and reads its positions (not when streamed): the process's own peak, imports and loaded
     kernels included.  A short run in a process before it fills numba's cache, so that the
     measured process loads the kernels instead of compiling them (compiling takes ~1 GB)."""
     for t in (10 * dt, t_end):
-        out = subprocess.run([sys.executable, __file__, "--child", str(links), str(t), str(dt)],
+        out = subprocess.run([sys.executable, __file__, "--child", str(links), str(t), str(dt),
+                              str(record_every), str(stream)],
                              capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -91,10 +95,11 @@ def main(argv=None):
     ap.add_argument("--links", type=int, default=100)
     ap.add_argument("--t-end", type=float, default=5.0)
     ap.add_argument("--dt", type=float, default=1e-4)
-    ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
+    ap.add_argument("--child", nargs=5, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        _long_run(int(args.child[0]), float(args.child[1]), float(args.child[2]))
+        _long_run(int(args.child[0]), float(args.child[1]), float(args.child[2]),
+                  int(args.child[3]), args.child[4])
         return
     for name, model in (("three-pendulum", three_pendulum()), ("rigid chain, 3 links",
                                                                rigid_chain(3))):

@@ -8,7 +8,7 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
 from .model import Ground, Model, PrescribedMotion, System, build_chain
 from .recording import Checkpoint
 from .result import Result
-from .solver import DivergenceError, simulate
+from .solver import DivergenceError, load_stream, simulate
 from .reference import simulate_reference
 from .parameter_sweep import SweepTable, sweep
 
@@ -20,5 +20,6 @@ except PackageNotFoundError:        # run from a source tree that is not install
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
            "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain",
-           "simulate", "simulate_reference", "Result", "Checkpoint", "DivergenceError",
+           "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
+           "DivergenceError",
            "sweep", "SweepTable", "__version__"]

@@ -2,6 +2,7 @@
 chunk, no copy per sample), and its checkpoint, everything a run carries from one step to the
 next, to continue it later bit for bit (docs/solver.md, "Steps and records")."""
 import json
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,9 +14,10 @@ _PER_BODY = ("rot", "omega", "omega_dot", "defl", "defl_rate", "jq", "jqd", "jta
 
 class Recording:
     """The samples of one run: each key's rows in blocks, and the steps they were taken at.
-    keep: the kernels' body of each of the model's bodies."""
+    keep: the kernels' body of each of the model's bodies.  stream: a SampleStream to write
+    the rows to instead of keeping them (simulate(..., stream=path))."""
 
-    def __init__(self, keys, keep):
+    def __init__(self, keys, keep, stream=None):
         self.keys = list(keys)
         self.keep = np.asarray(keep)
         self.inputs = 2 * self.keep + 1             # each body's input station
@@ -23,6 +25,15 @@ class Recording:
         self.blocks = {key: [] for key in self.keys}
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
+        self.stream = stream
+
+    @classmethod
+    def from_stream(cls, path):
+        """The recording a run streamed to path (its samples so far, if it stopped)."""
+        stream = SampleStream.open(path)
+        recording = cls(stream.meta["keys"], np.arange(0), stream)
+        recording.steps, recording.times = stream.steps_and_times()
+        return recording
 
     def add(self, values, steps, times=()):
         """values: key -> (m, ...) rows recorded at the m given steps (and times, s, in an
@@ -35,9 +46,14 @@ class Recording:
                 block = block[:, self.keep]
             elif not self.identity and key == "v_st":
                 block = block[:, np.append(self.keep, len(self.keep))]
-            self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
+            if self.stream is not None:
+                self.stream.write(key, block)
+            else:
+                self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
         self.steps.extend(steps)
         self.times.extend(times)
+        if self.stream is not None:
+            self.stream.commit(steps, times)
 
     def add_state(self, state, extra, step, t=None):
         """One sample from the state the loop advances (t = 0, the state at the end, or an
@@ -47,12 +63,92 @@ class Recording:
                  () if t is None else [t])
 
     def arrays(self):
-        """key -> all its rows (T, ...), in order; "z" holds the inputs' [m; q] (T, n, 6)."""
+        """key -> all its rows (T, ...), in order; "z" holds the inputs' [m; q] (T, n, 6).
+        Streamed: read-only memory maps of the stream's files."""
+        if self.stream is not None:
+            return self.stream.arrays()
         return {key: np.concatenate(blocks) for key, blocks in self.blocks.items()}
 
     @property
     def last_step(self):
         return self.steps[-1] if self.steps else -1
+
+
+class SampleStream:
+    """A run's samples written to a directory as they are recorded (docs/solver.md, "Steps and
+    records"): one raw file per key, rows appended (KEY.bin), the steps (and an adaptive run's
+    times) likewise, and index.json (keys, dtypes, row shapes, rows written, the run's dt and
+    info), rewritten after each block, so that the samples of a run that stops or is killed
+    stay readable (dttmm.load_stream).  The run's memory then holds no samples at all."""
+
+    INDEX = "index.json"
+
+    def __init__(self, path, meta):
+        self.path, self.meta = str(path), dict(meta)
+        self.meta.setdefault("rows", 0)
+        self.meta.setdefault("layout", {})
+
+    @classmethod
+    def create(cls, path, keys, dt, info):
+        """A new stream at path (a directory, created; a stream already there is replaced)."""
+        path = str(path)
+        if os.path.exists(path) and not os.path.isdir(path):
+            raise ValueError(f"simulate: stream must name a directory, and {path!r} is a file")
+        os.makedirs(path, exist_ok=True)
+        for name in os.listdir(path):
+            if name == cls.INDEX or name.endswith(".bin"):
+                os.remove(os.path.join(path, name))
+        stream = cls(path, dict(keys=list(keys), dt=dt, info=info))
+        stream._write_index()
+        return stream
+
+    @classmethod
+    def open(cls, path):
+        index = os.path.join(str(path), cls.INDEX)
+        if not os.path.isfile(index):
+            raise ValueError(f"load_stream: {str(path)!r} holds no stream ({cls.INDEX} is "
+                             f"missing: was it written by simulate(..., stream=path)?)")
+        with open(index) as fh:
+            return cls(path, json.load(fh))
+
+    def _file(self, key):
+        return os.path.join(self.path, f"{key}.bin")
+
+    def write(self, key, block):
+        block = np.ascontiguousarray(block)
+        self.meta["layout"].setdefault(key, [block.dtype.str, list(block.shape[1:])])
+        with open(self._file(key), "ab") as fh:
+            fh.write(block.tobytes())
+
+    def commit(self, steps, times):
+        """After a block's keys: its steps (and times), then the index with the new count."""
+        for key, values, dtype in (("_steps", steps, np.int64), ("_times", times, np.float64)):
+            if len(values):
+                with open(self._file(key), "ab") as fh:
+                    fh.write(np.asarray(values, dtype=dtype).tobytes())
+        self.meta["rows"] += len(steps)
+        self._write_index()
+
+    def _write_index(self):
+        temporary = os.path.join(self.path, self.INDEX + ".new")
+        with open(temporary, "w") as fh:
+            json.dump(self.meta, fh, default=float)
+        os.replace(temporary, os.path.join(self.path, self.INDEX))     # (atomic)
+
+    def arrays(self):
+        """key -> read-only memory map of its rows (rows, ...)."""
+        rows = self.meta["rows"]
+        return {key: np.memmap(self._file(key), dtype=np.dtype(dtype), mode="r",
+                               shape=(rows, *shape)) if rows * int(np.prod(shape)) else
+                np.zeros((rows, *shape), dtype=np.dtype(dtype))        # (nothing to map)
+                for key, (dtype, shape) in self.meta["layout"].items()}
+
+    def steps_and_times(self):
+        rows = self.meta["rows"]
+        steps = np.fromfile(self._file("_steps"), dtype=np.int64, count=rows).tolist()
+        times = (np.fromfile(self._file("_times"), dtype=np.float64, count=rows).tolist()
+                 if os.path.exists(self._file("_times")) else [])
+        return steps, times
 
 
 def leaves(structure):

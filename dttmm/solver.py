@@ -28,7 +28,7 @@ from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
 from .model import Model, output_section
-from .recording import Checkpoint, Recording
+from .recording import Checkpoint, Recording, SampleStream
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
 METHODS = ("riccati", "direct")
@@ -351,7 +351,8 @@ def _ground(model, times):
 def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="riccati",
              scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
              record_every=None, record_dt=None, t_eval=None, full_state=False, richardson=False,
-             progress=None, max_step_error=MAX_STEP_ERROR, resume=None) -> Result:
+             progress=None, max_step_error=MAX_STEP_ERROR, resume=None,
+             stream=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -429,6 +430,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         its last step to t_end, with the same model, dt and options: the continued run takes
         the same steps on the same numbers, so the two halves equal the whole run bit for bit.
         Its first sample is the checkpoint's state.
+    stream : str or path, optional
+        A directory to write the samples to as they are recorded, instead of keeping them in
+        memory (for long, densely recorded runs): one raw file per recorded quantity and an
+        index, rewritten after each chunk. The Result's stored arrays are then read-only
+        memory maps of those files; ``dttmm.load_stream(model, path)`` reads them again, also
+        those of a run that stopped or was killed (the samples written so far). A stream
+        already in the directory is replaced.
 
     Returns
     -------
@@ -589,7 +597,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                                         newton_iterations=int(newton_iterations)))
         counters, done = resume.counters, resume.step
     history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
-    recording = Recording(keys, keep)
+    recording = Recording(keys, keep, None if stream is None else SampleStream.create(
+        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)))
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
     first = done
 
@@ -701,6 +710,37 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                           newton_unconverged_steps=int(info[4]),
                           step_error_max=float(monitor.error[0])), checkpoint)
     return result.replace(wall_time=time.perf_counter() - wall0)
+
+
+def load_stream(model, path):
+    """The Result of the samples a run streamed to a directory.
+
+    Parameters
+    ----------
+    model : Model
+        The model that run simulated (the positions and energies are derived from it).
+    path : str or path
+        The directory given as ``simulate(..., stream=path)``.
+
+    Returns
+    -------
+    Result
+        The samples written (all of them, or those before the run stopped or was killed), its
+        stored arrays read-only memory maps of the stream's files; ``n_steps`` is the step of
+        the last sample, ``info`` the run's options.
+
+    Raises
+    ------
+    ValueError
+        No stream in the directory, or one of another model (its number of bodies).
+    """
+    recording = Recording.from_stream(path)
+    meta = recording.stream.meta
+    arrays = recording.arrays()
+    if len(recording.steps) and arrays["rot"].shape[1] != model.n_bodies:
+        raise ValueError(f"load_stream: the stream in {str(path)!r} holds "
+                         f"{arrays['rot'].shape[1]} bodies; the model has {model.n_bodies}")
+    return _result(model, recording, meta["dt"], 0.0, recording.last_step, dict(meta["info"]))
 
 
 def _adaptive_loop(model, control, targets, structures, loop, coef, inputs_for, run_chunk, info,
