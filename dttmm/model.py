@@ -19,10 +19,50 @@ from .kernels.so3 import expm_so3, left_jacobian
 class PrescribedMotion:
     """Prescribed motion of the ground frame (a driven hub), as functions of time.
 
-    Each argument is a function of t (or None for zero / identity): position, velocity and
+    Each argument is a function of t (s), or None for zero / identity: position, velocity and
     acceleration of the ground point (world, m), rotation matrix of the ground frame, and its
     world-frame angular velocity and angular acceleration.  Derivatives are given, not
-    differentiated numerically, so the solver sees the exact motion.
+    differentiated numerically, so the solver sees the exact motion; ``build`` checks them
+    against central differences of the motion (``check``), so a derivative left None must be
+    zero.  Pass it as ``Ground(motion=...)``; docs/hinges.md, "The root".
+
+    Parameters
+    ----------
+    position : callable, optional
+        position(t) -> 3 numbers: the ground point, world frame, m.  None: the origin.
+    velocity : callable, optional
+        velocity(t) -> its rate, m/s.  None: zero.
+    acceleration : callable, optional
+        acceleration(t) -> its second derivative, m/s^2.  None: zero.
+    rotation : callable, optional
+        rotation(t) -> (3, 3) rotation matrix of the ground frame (ground to world).  None:
+        the identity.
+    angular_velocity : callable, optional
+        angular_velocity(t) -> 3 numbers: the ground frame's angular velocity, world frame,
+        rad/s.  None: zero.
+    angular_acceleration : callable, optional
+        angular_acceleration(t) -> its rate, world frame, rad/s^2.  None: zero.
+
+    Raises
+    ------
+    ValueError
+        Here, for an argument that is neither callable nor None.  At build time
+        (``System.build``, ``build_chain``: ``check``), for a derivative that contradicts the
+        motion, or a position, rotation or angular velocity at t = 0 that is not finite (or
+        not a proper rotation matrix), naming the argument.
+
+    Examples
+    --------
+    A hub turned about world z at a steady 2 rad/s:
+
+    >>> import numpy as np
+    >>> import dttmm
+    >>> def hub(t):
+    ...     c, s = np.cos(2.0 * t), np.sin(2.0 * t)
+    ...     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    >>> motion = dttmm.PrescribedMotion(rotation=hub,
+    ...                                 angular_velocity=lambda t: np.array([0.0, 0.0, 2.0]))
+    >>> ground = dttmm.Ground(motion=motion)
     """
 
     def __init__(self, position=None, velocity=None, acceleration=None,
@@ -35,8 +75,23 @@ class PrescribedMotion:
                 raise ValueError(f"PrescribedMotion: {name} must be a function of time or None")
 
     def check(self, times=(0.0, 0.37, 1.0), eps=1e-5, rtol=1e-4):
-        """Raise ValueError if the given derivatives contradict the position and rotation
-        (central differences at a few times)."""
+        """Raise ValueError if the given derivatives contradict the position and rotation.
+
+        Parameters
+        ----------
+        times : sequence of float, optional
+            The times compared, s (default 0, 0.37 and 1).
+        eps : float, optional
+            Half-width of the central differences, s (default 1e-5; the functions are also
+            called at times - eps).
+        rtol : float, optional
+            Tolerance, relative to max(1, |central difference|) (default 1e-4).
+
+        Raises
+        ------
+        ValueError
+            Naming the derivative, the time, its value and the central difference.
+        """
         def fd(f, t):
             return (np.asarray(f(t + eps)) - np.asarray(f(t - eps))) / (2 * eps)
 
@@ -55,7 +110,15 @@ class PrescribedMotion:
                                      f"motion's own derivative {numeric}")
 
     def __call__(self, t):
-        """(r, v, a, R, w, w_dot) at time t."""
+        """The ground's state at time t (s).
+
+        Returns
+        -------
+        tuple of ndarray
+            (r, v, a, R, w, w_dot): position (3,) m, velocity (3,) m/s, acceleration (3,)
+            m/s^2, rotation (3, 3), angular velocity (3,) rad/s and angular acceleration (3,)
+            rad/s^2, world frame (zero / identity for the functions left None).
+        """
         r, v, a, rot, w, wd = self._f
         zero = np.zeros(3)
         return (zero if r is None else np.asarray(r(t), float),
@@ -67,8 +130,34 @@ class PrescribedMotion:
 
     @classmethod
     def spin_about_axis(cls, axis, angle, rate, acceleration, position=(0.0, 0.0, 0.0)):
-        """Rotation by angle(t) about a fixed world axis through a fixed point; rate and
-        acceleration are the first and second derivatives of angle(t)."""
+        """Rotation by angle(t) about a fixed world axis through a fixed point.
+
+        Parameters
+        ----------
+        axis : array_like of 3
+            The world axis, any nonzero length (normalized here; a zero axis is not checked
+            and gives NaN).
+        angle : callable
+            angle(t) -> the rotation angle at time t (s), rad.
+        rate : callable
+            rate(t) -> its first derivative, rad/s.
+        acceleration : callable
+            acceleration(t) -> its second derivative, rad/s^2.
+        position : array_like of 3, optional
+            The fixed ground point, world frame, m (default the origin).
+
+        Returns
+        -------
+        PrescribedMotion
+            The spin: rotation Rot(axis, angle(t)), angular velocity rate(t) axis, angular
+            acceleration acceleration(t) axis, the point fixed.
+
+        Examples
+        --------
+        >>> import dttmm
+        >>> spin = dttmm.PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: 0.5 * t * t,
+        ...                                               lambda t: t, lambda t: 1.0)
+        """
         n = np.asarray(axis, float)
         n = n / np.linalg.norm(n)
         k = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
@@ -85,7 +174,32 @@ class PrescribedMotion:
 
 @dataclass(frozen=True)
 class Ground:
-    """Where the root hinge attaches: a fixed point and frame, or a prescribed motion."""
+    """Where the root hinge attaches: a fixed point and frame, or a prescribed motion.
+
+    Parameters
+    ----------
+    position : array_like of 3, optional
+        The ground point, world frame, m (default the origin).  Ignored when motion is given.
+    rotation : array_like (3, 3), optional
+        The ground frame (ground to world; a proper rotation matrix), the inboard frame of the
+        root joint.  None (default): the identity.  Ignored when motion is given.
+    motion : PrescribedMotion, optional
+        A prescribed motion of the ground point and frame (a driven hub); its position and
+        rotation at t = 0 become ``Model.ground_position`` and ``Model.ground_rotation``.
+        None (default): the ground is fixed.
+
+    Raises
+    ------
+    ValueError
+        At build time (``System.build``, ``build_chain``), naming "Ground" and the argument: a
+        position without 3 finite entries, a rotation that is not a proper rotation matrix, or
+        a motion that fails ``PrescribedMotion.check`` or is not finite at t = 0.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> ground = dttmm.Ground(position=[0.0, 1.0, 0.0])
+    """
     position: object = (0.0, 0.0, 0.0)
     rotation: object = None
     motion: Optional[PrescribedMotion] = None
@@ -93,11 +207,91 @@ class Ground:
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """A frozen chain: flat float arrays for the kernels plus the description it came from.
+    """A frozen system: flat float arrays for the kernels plus the description it came from.
 
-    Bodies are numbered 0..n-1, parents first; hinge k joins body parent[k] (the ground for -1)
-    at its attachment point to body k.  In a chain parent[k] = k - 1, every body hangs from its
-    parent's output point, and the last body's output point is the tip.
+    Built by ``System.build`` or ``build_chain`` (which validate the elements), not by hand;
+    every argument is also a read-only attribute of the same name, and the arrays cannot be
+    written (a value changed after the build would skip its validation).  Bodies are numbered
+    0..n-1, parents first; hinge k joins body parent[k] (the ground for -1) at its attachment
+    point to body k.  In a chain parent[k] = k - 1, every body hangs from its parent's output
+    point, and the last body's output point is the tip.  Shapes: n bodies.
+
+    Parameters
+    ----------
+    n_bodies : int
+        n.
+    body_params : ndarray (n, 16)
+        Per body: mass (kg), l_IC (3, m), l_IO (3, m), and J_I, the inertia about the input
+        point in body axes (9, row-major, kg m^2); for a beam, the undeformed beam as a rigid
+        body (elements/rigid_body.py).
+    hinge_kind : ndarray (n,) of int
+        The joint before each body: 0 ball, 1 fixed, 2 elastic, 3 revolute, 4 universal,
+        5 prismatic (elements/kinds.py).
+    hinge_params : ndarray (n, 55)
+        Per joint: the rest rotation R0 (9), K_t (9, N/m), C_t (9, N s/m), K_r (9, N m/rad),
+        C_r (9, N m s/rad), all row-major, and for joints with coordinates axis 1 (3, parent
+        frame), axis 2 (3, a universal joint's, child frame), the coordinates (2, rad or m)
+        and rates (2, rad/s or m/s) at t = 0 (elements/hinges.py).
+    gravity : ndarray (3,)
+        World frame, m/s^2.
+    ground_position : ndarray (3,)
+        The ground point, world frame, m: at rest, or at t = 0 under a motion.
+    ground_rotation : ndarray (3, 3)
+        The ground frame (ground to world): at rest, or at t = 0 under a motion.
+    ground_motion : PrescribedMotion or None
+        The ground's prescribed motion, None for a fixed ground.
+    initial_rotation : ndarray (n, 3, 3)
+        Each body's rotation (body to world) at t = 0.
+    initial_angular_velocity : ndarray (n, 3)
+        Each body's angular velocity at t = 0, world frame, rad/s.
+    ground_locked : ndarray (n,) of bool
+        The body's rotation is fixed to the ground frame by fixed hinges (through rigid bodies
+        only): it is not integrated (docs/solver.md, "Bodies locked to the ground").
+    forces : tuple
+        Per body: None or f(t) -> the applied world force at the mass centre, N.
+    torques : tuple
+        Per body: None or f(t) -> the applied world torque, N m.
+    body_names : tuple of str
+        The bodies' names (``body{k}`` for a body without one).
+    hinge_names : tuple of str
+        The joints' names (the class name and index, e.g. ``BallJoint0``, for a joint
+        without one).
+    body_mass_center_inertia : ndarray (n, 3, 3)
+        J_C, the inertia about the mass centre in body axes, kg m^2 (for the energies).
+    tip_pinned : bool
+        The tip is joined to the ground by a ball joint (``tip="ball"``), else free.
+    body_kind : ndarray (n,) of int
+        0 rigid body, 1 beam.
+    beam_params : ndarray (n, 8)
+        Per beam: length (m), mass per length (kg/m), EI_v and EI_w (N m^2), polar inertia
+        per length (kg m), damping ratio, modes per plane, and the mode family resolved
+        (0 pinned, 1 clamped, 2 clamped with a loaded end; elements/beam.py); zero rows for
+        rigid bodies.
+    initial_modal_coordinates : ndarray (total modes,)
+        The beams' modal coordinates at t = 0, m, flat in body order (a beam's v coordinates
+        first, then w).
+    initial_modal_velocities : ndarray (total modes,)
+        Their rates at t = 0, m/s, in the same order.
+    drives : tuple
+        Per joint: for a joint with coordinates, one validated drive (a dict,
+        elements/drives.py) or None per coordinate; else ().
+    parent : ndarray (n,) of int
+        The parent body of body k (< k), -1 for the ground.
+    attachment : ndarray (n,) of int
+        Where on the parent: 0 its output point, j >= 1 its j-th named point
+        (``RigidBody.points``).
+    attachment_point : ndarray (n, 3)
+        That point in the parent's frame from its input point, m (zero for the ground).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                       to_output=[1.0, 0, 0])
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), rod])
+    >>> model.n_bodies, model.body_names, model.is_chain
+    (1, ('body0',), True)
     """
     n_bodies: int
     body_params: np.ndarray          # (n, BODY_PARAM_SIZE), see elements/rigid_body.py
@@ -152,6 +346,7 @@ class Model:
 
     @property
     def has_beams(self):
+        """Whether any body is a beam."""
         return bool(np.any(self.body_kind == BEAM))
 
     @property
@@ -162,10 +357,13 @@ class Model:
 
     @property
     def has_applied_loads(self):
+        """Whether any body has an applied force or torque."""
         return any(f is not None for f in self.forces + self.torques)
 
     def ground_state(self, t):
-        """(r, v, a, R, w, w_dot) of the ground frame at time t."""
+        """(r, v, a, R, w, w_dot) of the ground frame at time t (s): position m, velocity
+        m/s, acceleration m/s^2, rotation (3, 3), angular velocity rad/s and angular
+        acceleration rad/s^2, world frame (``PrescribedMotion.__call__``)."""
         if self.ground_motion is None:
             z = np.zeros(3)
             return self.ground_position, z, z, self.ground_rotation, z, z
@@ -174,7 +372,10 @@ class Model:
 
 class System:
     """A multibody system under construction: a tree of bodies, each joined by a joint to its
-    parent (the ground or another body) at one of the parent's attachment points.
+    parent (the ground or another body) at one of the parent's attachment points
+    (docs/topology.md).
+
+    ::
 
         system = System(gravity=[0, -9.81, 0])
         system.add(link1, BallJoint())                        # to the ground point
@@ -187,6 +388,32 @@ class System:
     the system, an attachment point the parent does not have, and a cycle, and freezes the
     system into a Model whose bodies are numbered parents first (in the order added where that
     allows).  build_chain is the same for a chain.
+
+    Parameters
+    ----------
+    gravity : array_like of 3, optional
+        Gravitational acceleration, world frame, m/s^2 (default (0, -9.81, 0)).  Checked at
+        build time (3 finite numbers).
+    ground : Ground, optional
+        Where the root joints attach: a fixed point and frame (default: the origin and the
+        identity), or a prescribed motion.
+
+    Examples
+    --------
+    A two-link pendulum with a third link on a named point of the first:
+
+    >>> import dttmm
+    >>> def link(name, **kw):
+    ...     return dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                            inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                            to_output=[1.0, 0, 0], name=name, **kw)
+    >>> system = dttmm.System(gravity=[0, -9.81, 0])
+    >>> link1 = system.add(link("link1", points={"p": [0.5, 0, 0]}), dttmm.BallJoint())
+    >>> link2 = system.add(link("link2"), dttmm.BallJoint(), parent=link1)
+    >>> link3 = system.add(link("link3"), dttmm.BallJoint(), parent="link1", at="p")
+    >>> model = system.build()
+    >>> model.parent.tolist(), model.attachment.tolist()
+    ([-1, 0, 0], [0, 0, 1])
     """
 
     def __init__(self, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground()):
@@ -195,30 +422,113 @@ class System:
         self._entries = []          # (body, joint, parent, at) as added
 
     def add(self, body, joint, parent=None, at=None):
-        """Join body to parent by joint.  parent: None for the ground point, or a body of the
-        system (the body itself or its name; it may be added later).  at: the parent's
-        attachment point, None (or "output") for its output point, or the name of one of a
-        rigid body's points (RigidBody(points={...})).  Returns body."""
+        """Join body to parent by joint.
+
+        Nothing is checked here: ``build`` validates every body, joint, parent and attachment
+        point.
+
+        Parameters
+        ----------
+        body : RigidBody or EulerBernoulliBeam
+            The body added (each body once).
+        joint : BallJoint, FixedHinge, ElasticHinge, RevoluteJoint, UniversalJoint or PrismaticJoint
+            The joint between the parent's attachment point and the body's input point.
+        parent : RigidBody, EulerBernoulliBeam or str, optional
+            None (default) for the ground point, or a body of the system (the body itself or
+            its name; it may be added later).
+        at : str, optional
+            The parent's attachment point: None (default) or "output" for its output point, or
+            the name of one of a rigid body's points (``RigidBody(points={...})``).  A beam
+            and the ground have only their one point.
+
+        Returns
+        -------
+        RigidBody or EulerBernoulliBeam
+            body, so that it can be named as a later body's parent.
+        """
         self._entries.append((body, joint, parent, at))
         return body
 
     def build(self, tip="free") -> "Model":
-        """Validate and freeze into a Model.  tip: "free" (default) or, for a chain only,
-        "ball": the last body's output point is joined to the ground by a ball joint where it
-        starts (a fixed point; e.g. a simply supported beam)."""
+        """Validate and freeze into a Model.
+
+        Parameters
+        ----------
+        tip : {"free", "ball"}, optional
+            "free" (default) or, for a chain only, "ball": the last body's output point is
+            joined to the ground by a ball joint where it starts (a fixed point; e.g. a simply
+            supported beam).
+
+        Returns
+        -------
+        Model
+            The frozen system, bodies numbered parents first (in the order added where that
+            allows).
+
+        Raises
+        ------
+        ValueError
+            No bodies; an entry that is not a body or whose joint is not a joint; a body added
+            twice; two bodies of one name; a parent not in the system, the body itself, or
+            parents that form a cycle; an attachment point the parent does not have (naming
+            the points it has); tip not "free" or "ball", or "ball" for a tree; bad gravity or
+            ground; and every element's own checks (naming the element, its index and the
+            argument; see each class), and the checks across elements: a beam's mode family
+            against its ends, a rotation or angular velocity contradicting the joint before a
+            body, a ball-joint body with no inertia about its hinge-to-hinge axis.
+        """
         return _freeze(*_resolve_topology(self._entries), self.gravity, self.ground, tip)
 
 
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
                 tip="free") -> "Model":
     """Validate a chain described root to tip and freeze it into a Model (a System whose every
-    body hangs from the output point of the one before it).
+    body hangs from the output point of the one before it; the same model as ``System.add``
+    body by body).
 
-    elements alternates hinges and bodies, starting with the root hinge (which joins the first
-    body to the ground) and ending with the tip body:
-        [hinge_0, body_0, hinge_1, body_1, ..., hinge_{n-1}, body_{n-1}]
-    tip: "free" (default), or "ball": the tip body's output point is joined to the ground by a
-    ball-and-socket joint where it starts (a fixed point; e.g. a simply supported beam).
+    Parameters
+    ----------
+    elements : sequence
+        Hinges and bodies alternately, starting with the root hinge (which joins the first
+        body to the ground) and ending with the tip body::
+
+            [hinge_0, body_0, hinge_1, body_1, ..., hinge_{n-1}, body_{n-1}]
+
+        Hinges: BallJoint, FixedHinge, ElasticHinge, RevoluteJoint, UniversalJoint,
+        PrismaticJoint; bodies: RigidBody, EulerBernoulliBeam.
+    gravity : array_like of 3, optional
+        Gravitational acceleration, world frame, m/s^2 (default (0, -9.81, 0)).
+    ground : Ground, optional
+        Where the root hinge attaches (default: the origin and the identity frame, fixed).
+    tip : {"free", "ball"}, optional
+        "free" (default), or "ball": the tip body's output point is joined to the ground by a
+        ball-and-socket joint where it starts (a fixed point; e.g. a simply supported beam).
+
+    Returns
+    -------
+    Model
+        The frozen chain, body k the k-th body of elements.
+
+    Raises
+    ------
+    ValueError
+        An empty or odd-length elements list; a hinge or body where the other is expected
+        (naming the element's position); tip not "free" or "ball"; bad gravity or ground; and
+        every element's own checks and the checks across elements, as ``System.build``.
+
+    Examples
+    --------
+    A triple pendulum of unit rods:
+
+    >>> import dttmm
+    >>> def rod():
+    ...     return dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                            inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                            to_output=[1.0, 0, 0])
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), rod(), dttmm.BallJoint(), rod(),
+    ...                            dttmm.BallJoint(), rod()])
+    >>> model.n_bodies
+    3
     """
     elements = list(elements)
     if len(elements) == 0:

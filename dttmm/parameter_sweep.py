@@ -20,8 +20,47 @@ import numpy as np
 
 class SweepTable:
     """The sweep's table: one row per run, a column per parameter and per output.
-    columns: name -> (runs,) array; parameters, outputs: the column names of each kind;
-    wall_time (s, the whole sweep), engine ("dask" or "processes")."""
+
+    Made by ``sweep`` (docs/sweeps.md).  ``table[name]`` is a column, ``len(table)`` the number
+    of runs.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One dict per run: column name -> value (the run's parameters and outputs).
+    parameters : sequence of str
+        The parameters' column names.
+    outputs : sequence of str
+        The outputs' column names.
+    wall_time : float
+        The whole sweep's wall-clock time, s.
+    engine : str
+        The engine the runs went to: "dask", "processes" or "serial".
+
+    Attributes
+    ----------
+    columns : dict
+        name -> (runs,) ndarray, for every parameter and output.
+    parameters, outputs : list of str
+        The column names of each kind.
+    wall_time : float
+        s, the whole sweep.
+    engine : str
+        "dask", "processes" or "serial".
+
+    Raises
+    ------
+    KeyError
+        A row without one of the columns.
+
+    Examples
+    --------
+    >>> from dttmm import SweepTable
+    >>> table = SweepTable([{"k": 1.0, "tip.y": -0.9}, {"k": 2.0, "tip.y": -0.8}], ["k"],
+    ...                    ["tip.y"], wall_time=0.1, engine="serial")
+    >>> len(table), table["tip.y"].tolist()
+    (2, [-0.9, -0.8])
+    """
 
     def __init__(self, rows, parameters, outputs, wall_time, engine):
         self.parameters, self.outputs = list(parameters), list(outputs)
@@ -40,6 +79,14 @@ class SweepTable:
                 f"{self.outputs}; {self.wall_time:.3g} s on {self.engine})")
 
     def save_csv(self, path):
+        """Write the table as CSV: a header row of the column names (parameters, then
+        outputs), then one row per run, every number to 17 significant digits.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file written (replaced if it exists).
+        """
         names = self.parameters + self.outputs
         data = np.column_stack([self.columns[n] for n in names])
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="",
@@ -88,7 +135,7 @@ def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="da
     parameters : dict of lists, or list of dicts
         The runs: every combination of a dict's lists, or the dicts as given.
     t_end, dt : float
-        simulate's end time and step, s.
+        simulate's end time and step, s (as ``simulate``: t_end > 0, dt > 0).
     outputs : callable, optional
         outputs(result, model) -> dict of numbers; default: the final output points (m).
     engine : {"dask", "processes", "serial"}
@@ -96,13 +143,39 @@ def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="da
         each) unless `scheduler` names one ("tcp://host:8786"); falls back to "processes"
         when dask is not installed (pip install dttmm[sweep]). "processes": a local process
         pool. "serial": in this process, one after the other.
+    scheduler : str, optional
+        The address of a running dask scheduler ("tcp://host:8786"); None (default): a
+        LocalCluster started for the sweep and closed after it.  Engine "dask" only.
+    n_workers : int, optional
+        Worker processes of the LocalCluster or the process pool (default 2); None for the
+        process pool: os.cpu_count().  Not used with a scheduler or engine "serial".
     **simulate_options
         Passed to every simulate call (method, scheme, record_dt, ...).
 
     Returns
     -------
     SweepTable
-        One row per run, in the order of the parameter sets.
+        One row per run, in the order of the parameter sets: the parameters' columns (the
+        parameter sets' keys), then the outputs' (outputs' keys, values as float).
+
+    Raises
+    ------
+    ValueError
+        parameters neither a dict of lists nor a non-empty list of dicts with the same keys;
+        an unknown engine; and anything a run raises (``simulate``'s ValueError or
+        ``DivergenceError``, make_model's or outputs' errors), from the worker.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> def make_model(spin):
+    ...     rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                           inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                           to_output=[1.0, 0, 0], angular_velocity=[0, 0, spin])
+    ...     return dttmm.build_chain([dttmm.BallJoint(), rod])
+    >>> table = dttmm.sweep(make_model, {"spin": [0.0, 1.0]}, t_end=0.1, dt=1e-3,
+    ...                     engine="serial")  # doctest: +SKIP
+    >>> table["body0.y"]  # doctest: +SKIP
     """
     runs = _grid(parameters)
     t0 = time.perf_counter()

@@ -23,14 +23,44 @@ KINDS = ("constant", "linear", "sine", "ramp", "spin_up", "table", "sum")
 
 
 class Profile:
-    """A function of time with its first two derivatives (closed form) and its spec."""
+    """A function of time with its first two derivatives (closed form) and its spec.
+
+    Made by ``profile(spec)``, which checks the parameters; called as ``p(t)``, with
+    ``p.rate(t)`` and ``p.acceleration(t)``, it serves as a load (``RigidBody(force=p)``), a
+    prescribed motion (``JointMotion(p, p.rate, p.acceleration)``), a joint force
+    (``JointForce(ProfileForce(p))``) or a ground spin angle.  The units are those of what it
+    stands for (values in N, N m, rad or m; times in s).
+
+    Parameters
+    ----------
+    kind : str
+        One of the module's kinds: "constant", "linear", "sine", "ramp", "spin_up", "table",
+        "sum".
+    **params
+        The kind's parameters, checked by ``profile`` (not here): numbers or arrays of one
+        length, "terms" a list of Profiles.
+
+    Examples
+    --------
+    >>> from dttmm.profiles import profile
+    >>> p = profile({"profile": "ramp", "value": 2.0, "duration": 0.5})
+    >>> p(0.25), p.rate(0.25), p.acceleration(0.25), p(1.0)
+    (1.0, 4.0, 0.0, 2.0)
+    """
 
     def __init__(self, kind, **params):
         self.kind = kind
         self.params = params
 
     def spec(self):
-        """The table that makes this profile again (profile(spec))."""
+        """The table that makes this profile again (``profile(spec)``).
+
+        Returns
+        -------
+        dict
+            {"profile": kind, parameter: value, ...}, arrays as lists, "terms" as their
+            specs.
+        """
         out = {"profile": self.kind}
         for key, value in self.params.items():
             if key == "terms":
@@ -43,12 +73,38 @@ class Profile:
         return f"profile({self.spec()!r})"
 
     def __call__(self, t):
+        """The value at time t (s): a float, or an ndarray for vector parameters."""
         return self._eval(float(t), 0)
 
     def rate(self, t):
+        """The first derivative at time t (s), per second, in closed form.
+
+        Parameters
+        ----------
+        t : float
+            Time, s.
+
+        Returns
+        -------
+        float or ndarray
+            d/dt of the value (at a ramp's or a table's knot, the slope of the piece after
+            it; zero after a ramp, and at and beyond a table's first and last times).
+        """
         return self._eval(float(t), 1)
 
     def acceleration(self, t):
+        """The second derivative at time t (s), per second squared, in closed form.
+
+        Parameters
+        ----------
+        t : float
+            Time, s.
+
+        Returns
+        -------
+        float or ndarray
+            d^2/dt^2 of the value (zero for the piecewise-linear ramp and table).
+        """
         return self._eval(float(t), 2)
 
     def _eval(self, t, order):
@@ -101,7 +157,44 @@ _PARAMS = {"constant": (("value",), ()), "linear": (("slope",), ("offset",)),
 
 
 def profile(spec, where="profile"):
-    """The Profile a table describes; ValueError naming `where` and the key for a bad one."""
+    """The Profile a table describes (docs/scenes.md, "Profiles").
+
+    Parameters
+    ----------
+    spec : dict, float or Profile
+        A table {"profile": KIND, key: value, ...} with the kind's keys (module docstring):
+        constant (value), linear (slope; offset), sine (amplitude, and one of frequency in Hz
+        or angular_frequency in rad/s; phase in rad, offset), ramp (value, duration in s),
+        spin_up (omega in rad/s, period in s), table (t: at least two increasing times, s;
+        value: one per time), sum (terms: a non-empty list of profiles).  Values are numbers
+        or lists of numbers of one length (a vector profile: a force, a torque).  A number
+        stands for a constant profile; a Profile is returned as it is.
+    where : str, optional
+        How messages name the profile (default "profile"; the scene reader passes the file,
+        the table and the key).
+
+    Returns
+    -------
+    Profile
+        The checked profile.
+
+    Raises
+    ------
+    ValueError
+        Naming `where` and the key: not a number or a table with the key "profile"; an
+        unknown kind; a missing or unknown key; a value that is not finite numbers; a sine
+        with neither or both of frequency and angular_frequency; a duration or period not
+        > 0; table times not at least two and increasing, or values not one per time.
+
+    Examples
+    --------
+    >>> from dttmm.profiles import profile
+    >>> p = profile({"profile": "sine", "amplitude": 2.0, "frequency": 0.5})   # 2 sin(pi t)
+    >>> float(p(0.5)), round(float(p.rate(0.0)), 6)
+    (2.0, 6.283185)
+    >>> profile({"profile": "spin_up", "omega": 6.0, "period": 15.0}).rate(20.0)
+    6.0
+    """
     if isinstance(spec, Profile):
         return spec
     if isinstance(spec, (int, float)) and not isinstance(spec, bool):
@@ -158,7 +251,22 @@ def _numbers(value, where):
 
 
 class ProfileForce:
-    """A joint drive's generalized force f(t, q, q') = profile(t) (elements/drives.JointForce)."""
+    """A joint drive's generalized force f(t, q, q') = profile(t) (elements/drives.JointForce).
+
+    A function of time only that ``save_scene`` can write (a scene's drive of type "force").
+
+    Parameters
+    ----------
+    prof : Profile
+        The force against time, N m (revolute, universal) or N (prismatic).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> from dttmm.profiles import ProfileForce, profile
+    >>> torque = profile({"profile": "ramp", "value": 1.0, "duration": 2.0})
+    >>> drive = dttmm.JointForce(ProfileForce(torque))
+    """
 
     def __init__(self, prof):
         self.profile = prof

@@ -162,12 +162,32 @@ def leaves(structure):
 
 @dataclass(frozen=True, eq=False)
 class Checkpoint:
-    """Everything a DT-TMM run carries from one step to the next after `step` steps (t = step
-    h): the state, the sweep's and the loop variant's arrays (the fused loops linearize each
-    step about the last one's solution), the error monitor and the run's counters.  A run
-    continued from it (simulate(..., resume=checkpoint)) takes the same steps on the same
-    numbers as the run that wrote it would have: the two halves equal the whole run bit for
-    bit.  save(path) / Checkpoint.load(path): a .npz file."""
+    """Everything a fixed-step DT-TMM run carries from one step to the next.
+
+    The state, the sweep's and the loop variant's arrays (the fused loops linearize each step
+    about the last one's solution), the error monitor and the run's counters after `step`
+    steps (t = step h). A run continued from it (``simulate(..., resume=checkpoint)``) takes
+    the same steps on the same numbers as the run that wrote it would have: the two halves
+    equal the whole run bit for bit. Made by ``simulate`` (``result.checkpoint``), not by hand.
+
+    Parameters
+    ----------
+    step : int
+        Steps taken.
+    h : float
+        The run's step, s.
+    run : dict
+        What a continued run must match (scheme, method, mode, loop, dt, bodies, Newton
+        iterations).
+    arrays : tuple of ndarray
+        Copies of the run's arrays, in ``leaves((state, sweep, loop, monitor))`` order.
+    counters : tuple of int
+        (most Newton iterations used, unconverged steps).
+
+    See Also
+    --------
+    save, load : keep it in a .npz file.
+    """
     step: int
     h: float
     run: dict           # what the continued run must match: scheme, method, mode, loop, ...
@@ -179,12 +199,30 @@ class Checkpoint:
         return self.step * self.h
 
     def save(self, path):
+        """Write the checkpoint to path (a .npz file; Checkpoint.load reads it).
+
+        Parameters
+        ----------
+        path : str or path
+            The file to write.
+        """
         np.savez_compressed(path, step=self.step, h=self.h, run=json.dumps(self.run),
                             counters=np.array(self.counters),
                             **{f"a{i}": a for i, a in enumerate(self.arrays)})
 
     @classmethod
     def load(cls, path):
+        """The checkpoint that save wrote to path.
+
+        Parameters
+        ----------
+        path : str or path
+            A .npz file written by Checkpoint.save.
+
+        Returns
+        -------
+        Checkpoint
+        """
         with np.load(path, allow_pickle=False) as data:
             n = sum(1 for name in data.files if name.startswith("a"))
             return cls(step=int(data["step"]), h=float(data["h"]),

@@ -29,31 +29,82 @@ _DEFAULTS = dict(wall_time=0.0, n_steps=0, info=None, body_names=None, checkpoin
 class Result:
     """Samples of a run, one row per recorded time.  Shapes: T samples, n bodies.
 
-    t (T,): s.
-    position_input/_mass_center/_output (T, n, 3): world positions of each body's points, m.
-    velocity_input (T, n, 3): world velocity of each input point, m/s.
-    rotation (T, n, 3, 3): body-to-world rotation matrices.
-    angular_velocity, angular_acceleration (T, n, 3): world frame, rad/s and rad/s^2.
-    force, moment (T, n, 3): what the inboard side exerts on each body at its input point
-        (moment about that point), world frame, N and N m.
-    kinetic, potential (T,): J; potential counts gravity, the hinges' springs and the beams'
-        strain energy.
-    modal_coordinates, modal_velocities (T, total modes): the beams' modal coordinates eta and
-        rates, concatenated in body order (a beam's v coordinates first, then w); None when the
-        model has no beams.
-    joint_coordinates, joint_rates, drive_force (T, total coordinates): the joints with
-        coordinates (revolute, universal, prismatic), in hinge order, a joint's in its own
-        order (rad or m; rad/s or m/s); the generalized force (N m or N) each coordinate's drive
-        applies on the child (for a prescribed motion, the force the motion needs); None
-        without such joints.
-    body_names (n,): the bodies' names (columns of save_csv).
-    wall_time (s), n_steps, info (the solver's statistics), checkpoint (DT-TMM: the state after
-        the last step, to continue the run from: simulate(..., resume=result.checkpoint)).
+    Made by ``simulate`` and ``simulate_reference`` (and ``Result.load_npz``); every field is
+    an attribute of the same name.  The positions, velocities and energies of a DT-TMM run are
+    computed from the stored state (rotations, rates, beams' and joints' coordinates) the first
+    time they are read, all samples at once, and kept; a run that records many samples pays
+    for them only if asked.  A Result is read-only (``replace`` makes a changed copy).
 
-    The positions, velocities and energies of a DT-TMM run are computed from the stored state
-    (rotations, rates, beams' and joints' coordinates) the first time they are read, all
-    samples at once, and kept; a run that records many samples pays for them only if asked.
-    A Result is read-only.
+    Parameters
+    ----------
+    derivation : callable, optional
+        derivation(name) -> dict of derived fields (any of position_input,
+        position_mass_center, position_output, velocity_input, kinetic, potential), called
+        the first time one of them is read and not given; the solvers' business.  None
+        (default): the fields are as given.
+    **values
+        The fields below by name; method and t are required, the others default to None
+        (wall_time 0, n_steps 0, info {}).
+
+    Attributes
+    ----------
+    method : str
+        The solver: "dttmm", or "newton-euler/DOP853" (or "/RK45") for the reference.
+    t : ndarray (T,)
+        The recorded times, s.
+    position_input, position_mass_center, position_output : ndarray (T, n, 3)
+        World positions of each body's input point, mass centre and output point, m (a
+        beam's output point deflected; its mass centre deflected in the reference, the
+        chord's midpoint in DT-TMM, docs/beam.md).
+    velocity_input : ndarray (T, n, 3)
+        World velocity of each input point, m/s.
+    rotation : ndarray (T, n, 3, 3)
+        Body-to-world rotation matrices (a beam's floating frame).
+    angular_velocity : ndarray (T, n, 3)
+        World frame, rad/s.
+    angular_acceleration : ndarray (T, n, 3)
+        World frame, rad/s^2.
+    force, moment : ndarray (T, n, 3)
+        What the inboard side exerts on each body at its input point (moment about that
+        point), world frame, N and N m.
+    kinetic, potential : ndarray (T,)
+        Energies, J; potential counts gravity, the hinges' springs, the drives' springs and
+        the beams' strain energy.  ``total_energy`` is their sum.
+    modal_coordinates, modal_velocities : ndarray (T, total modes) or None
+        The beams' modal coordinates eta (m) and rates (m/s), concatenated in body order (a
+        beam's v coordinates first, then w); None when the model has no beams.
+    joint_coordinates, joint_rates, drive_force : ndarray (T, total coordinates) or None
+        The joints with coordinates (revolute, universal, prismatic), in hinge order, a
+        joint's in its own order: coordinates (rad or m), rates (rad/s or m/s), and the
+        generalized force (N m or N) each coordinate's drive applies on the child (for a
+        prescribed motion, the force the motion needs); None without such joints.
+    body_names : tuple of str (n,) or None
+        The bodies' names (columns of save_csv).
+    wall_time : float
+        s: the run's wall-clock time.
+    n_steps : int
+        The steps taken (accepted steps of an adaptive run; both runs of a Richardson one).
+    info : dict
+        The solver's statistics (mode, loop, dt, Newton and error statistics; the reference:
+        nfev, n_state, n_unknowns).
+    checkpoint : Checkpoint or None
+        DT-TMM: the state after the last step, to continue the run from:
+        ``simulate(..., resume=result.checkpoint)``.
+
+    Raises
+    ------
+    TypeError
+        An unknown field, or method or t missing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import dttmm
+    >>> r = dttmm.Result(method="mine", t=np.linspace(0.0, 1.0, 3))
+    >>> r.n_steps, r.info, r.modal_coordinates
+    (0, {}, None)
+    >>> r.replace(n_steps=2).n_steps
+    2
     """
 
     __slots__ = ("_values", "_derivation")
@@ -99,8 +150,27 @@ class Result:
         return (_restored, ({name: getattr(self, name) for name in FIELDS},))
 
     def replace(self, **changes):
-        """A copy with some fields changed (derived fields not yet computed stay derivable,
-        unless the stored state they come from is changed)."""
+        """A copy with some fields changed.
+
+        Derived fields not yet computed stay derivable, unless the stored state they come
+        from (t, rotation, angular_velocity, modal or joint coordinates) is changed: then the
+        derived fields not in changes are computed from this Result's state first and kept.
+
+        Parameters
+        ----------
+        **changes
+            Field name -> new value (the fields of the class docstring).
+
+        Returns
+        -------
+        Result
+            The copy; this Result is unchanged.
+
+        Raises
+        ------
+        TypeError
+            An unknown field.
+        """
         values = dict(object.__getattribute__(self, "_values"), **changes)
         derivation = object.__getattribute__(self, "_derivation")
         if derivation is not None and set(changes) & _STATE_OF_DERIVED:
@@ -111,6 +181,7 @@ class Result:
 
     @property
     def total_energy(self):
+        """(T,) kinetic + potential, J."""
         return self.kinetic + self.potential
 
     @property
@@ -125,35 +196,139 @@ class Result:
         return rotation_to_xyz_angles(self.rotation)
 
     def plot_positions(self, **options):
-        """The bodies' points against time (dttmm.plots.plot_positions); a matplotlib Figure."""
+        """The bodies' points, x, y, z (m) against t (s), one axis per component
+        (dttmm.plots.plot_positions).
+
+        Parameters
+        ----------
+        **options
+            Passed to ``dttmm.plots.plot_positions``: ax (matplotlib axes to draw on, default a new
+            figure), title (str), point ("output", default, "input" or "mass_center").
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ImportError
+            Without matplotlib (``pip install 'dttmm[plots]'``).
+        """
         from .plots import plot_positions
         return plot_positions(self, **options)
 
     def plot_angles(self, **options):
-        """The bodies' x-y-z angles, unwrapped (dttmm.plots.plot_angles)."""
+        """The bodies' space-fixed x-y-z angles (rad) against t (s), unwrapped
+        (dttmm.plots.plot_angles).
+
+        Parameters
+        ----------
+        **options
+            Passed to ``dttmm.plots.plot_angles``: ax (matplotlib axes to draw on, default a new
+            figure), title (str).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ImportError
+            Without matplotlib (``pip install 'dttmm[plots]'``).
+        """
         from .plots import plot_angles
         return plot_angles(self, **options)
 
     def plot_energy(self, **options):
-        """Kinetic, potential and total energy and the total's change (dttmm.plots)."""
+        """Kinetic, potential and total energy (J), and the total's change from t = 0 on an
+        axis of its own (dttmm.plots.plot_energy).
+
+        Parameters
+        ----------
+        **options
+            Passed to ``dttmm.plots.plot_energy``: ax (matplotlib axes to draw on, default a new
+            figure), title (str).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ImportError
+            Without matplotlib (``pip install 'dttmm[plots]'``).
+        """
         from .plots import plot_energy
         return plot_energy(self, **options)
 
     def plot_joints(self, **options):
-        """Joint coordinates and drive forces (dttmm.plots.plot_joints)."""
+        """Joint coordinates (rad or m) and drive forces (N m or N) against t (s)
+        (dttmm.plots.plot_joints).
+
+        Parameters
+        ----------
+        **options
+            Passed to ``dttmm.plots.plot_joints``: ax (matplotlib axes to draw on, default a new
+            figure), title (str).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ImportError
+            Without matplotlib (``pip install 'dttmm[plots]'``).
+        ValueError
+            The result has no joints with coordinates.
+        """
         from .plots import plot_joints
         return plot_joints(self, **options)
 
     def plot_modal(self, **options):
-        """The beams' modal coordinates (dttmm.plots.plot_modal)."""
+        """The beams' modal coordinates eta (m) against t (s) (dttmm.plots.plot_modal).
+
+        Parameters
+        ----------
+        **options
+            Passed to ``dttmm.plots.plot_modal``: ax (matplotlib axes to draw on, default a new
+            figure), title (str).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ImportError
+            Without matplotlib (``pip install 'dttmm[plots]'``).
+        ValueError
+            The result has no beams.
+        """
         from .plots import plot_modal
         return plot_modal(self, **options)
 
     def save_npz(self, path):
-        """Write every field to a compressed .npz (arrays as they are; method, wall_time,
-        n_steps, body_names and info as entries of their own), plus the derived quaternion,
-        xyz_angles and total_energy for readers outside dttmm; Result.load_npz reads it back.
-        The checkpoint is not written (Checkpoint.save)."""
+        """Write every field to a compressed .npz.
+
+        Arrays as they are (derived fields computed if they were not; fields that are None
+        left out); method, wall_time, n_steps, body_names and info (as JSON: numpy scalars as
+        numbers, anything else json cannot write as text) as entries of their own; plus the
+        derived quaternion, xyz_angles and total_energy for readers outside dttmm.
+        ``Result.load_npz`` reads it back.  The checkpoint is not written
+        (``Checkpoint.save``).
+
+        Parameters
+        ----------
+        path : str or path-like or file
+            Where to write (``numpy.savez_compressed``: ".npz" is appended to a name without
+            it).
+        """
         arrays = {name: getattr(self, name) for name in FIELDS
                   if name not in ("method", "wall_time", "n_steps", "info", "body_names",
                                   "checkpoint") and getattr(self, name) is not None}
@@ -166,7 +341,24 @@ class Result:
 
     @classmethod
     def load_npz(cls, path):
-        """The Result that save_npz wrote to path (info's tuples come back as lists)."""
+        """The Result that save_npz wrote to path.
+
+        Parameters
+        ----------
+        path : str or path-like or file
+            The .npz file.
+
+        Returns
+        -------
+        Result
+            Every field written (info's tuples come back as lists; checkpoint None); the
+            derived fields as stored, not derived again.
+
+        Raises
+        ------
+        KeyError
+            A file without the entries save_npz writes (method, wall_time, n_steps, info).
+        """
         with np.load(path, allow_pickle=False) as data:
             values = {k: data[k] for k in data.files if k in FIELDS}
         values["method"] = str(values["method"])
@@ -178,8 +370,17 @@ class Result:
         return cls(**values)
 
     def save_csv(self, path):
-        """t, then x, y, z of each body's output point (columns named after the bodies), then
-        the energies."""
+        """Write a CSV table: t, then x, y, z of each body's output point, then the energies.
+
+        One row per sample; a header row names the columns: "t" (s), "NAME.x", "NAME.y",
+        "NAME.z" (m) for each body (body_names, or body1, body2, ... without them),
+        "kinetic", "potential", "total_energy" (J).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file written (replaced if it exists).
+        """
         n = self.position_output.shape[1]
         names = self.body_names if self.body_names is not None else [
             f"body{k + 1}" for k in range(n)]

@@ -72,8 +72,36 @@ _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
 
 
 def load_scene(path):
-    """Read a scene file: Scene(name, model, run, path); SceneError naming the file, the table
-    and the key for anything wrong in it."""
+    """Read a scene file (TOML; docs/scenes.md).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The scene file.
+
+    Returns
+    -------
+    Scene
+        A named tuple (name, model, run, path): the [model] table's name (default: the file's
+        stem), the built ``Model``, the [run] table as a dict (simulate's options: t_end, dt
+        in s, method, scheme, ...; e.g. ``simulate(scene.model, **scene.run)``) and the path
+        as a string.
+
+    Raises
+    ------
+    SceneError
+        (a ValueError) naming the file, the table and the key for anything wrong in it: a
+        file that cannot be read or is not valid TOML, an unknown key or a value of the wrong
+        kind, a missing key, a bad profile, and every check of ``System.build`` (naming the
+        element and the argument).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> from dttmm.scene import load_scene
+    >>> scene = load_scene("pendulum.toml")  # doctest: +SKIP
+    >>> result = dttmm.simulate(scene.model, **scene.run)  # doctest: +SKIP
+    """
     path = Path(path)
     try:
         with open(path, "rb") as fh:
@@ -86,7 +114,25 @@ def load_scene(path):
 
 
 def scene_from_dict(data, where="scene"):
-    """The Scene a parsed scene file describes (load_scene without the file)."""
+    """The Scene a parsed scene file describes (load_scene without the file).
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML (as ``tomllib.load`` or ``scene_of`` gives it).
+    where : str, optional
+        How messages name the source (default "scene"); its stem is the default name.
+
+    Returns
+    -------
+    Scene
+        As ``load_scene``.
+
+    Raises
+    ------
+    SceneError
+        As ``load_scene``.
+    """
     _keys(data, {"model": "table", "ground": "table", "body": "bodies", "run": "table"},
           where, "the file")
     header = data.get("model", {})
@@ -265,8 +311,37 @@ def _value(value, kind, where, label):
 
 def scene_of(model, run=None, name=None):
     """The scene (a dict, as load_scene reads it) of a model: every body, joint, load and drive
-    from the model's arrays, so that it builds the same model again.  Loads, drives and ground
-    motion must be profiles (dttmm/profiles.py); a Python function cannot be written."""
+    from the model's arrays, so that it builds the same model again.
+
+    Loads, drives and ground motion must be profiles (dttmm/profiles.py; ``ProfileForce`` for
+    a joint force, a ground spin read from a scene file); a Python function cannot be written.
+    A rigid body's inertia is written about its input point, a beam's mode family resolved
+    ("pinned" or "clamped", with force_mode_family where needed), the initial rotations of
+    bodies behind ball, elastic and coordinate joints, and a rigid body's named points in use
+    as "p1", "p2", ... (by their index among its points; points no joint uses are left out).
+
+    Parameters
+    ----------
+    model : Model
+        The model written.
+    run : dict, optional
+        simulate's options (t_end, dt in s, method, scheme, ...), written as the [run] table;
+        None or empty (default): no [run] table.
+    name : str, optional
+        The [model] table's name (default "model").
+
+    Returns
+    -------
+    dict
+        The scene: "model", "ground", "body" (a list of body tables, each with its "joint"
+        table) and, with run, "run".
+
+    Raises
+    ------
+    ValueError
+        A model that is not a Model; a ground motion, force, torque or drive given as a Python
+        function rather than a profile (naming the body or joint).
+    """
     if not isinstance(model, Model):
         raise ValueError("save_scene: model must be a Model")
     data = {"model": {"name": name or "model", "gravity": model.gravity.tolist(),
@@ -388,7 +463,42 @@ def _drive_table(d, who):
 
 
 def save_scene(model, path, run=None, name=None):
-    """Write a model (and optionally simulate's options, run) to a scene file."""
+    """Write a model (and optionally simulate's options, run) to a scene file.
+
+    Loading it builds the same model's arrays (``scene_of``: what is written, and what
+    cannot be).
+
+    Parameters
+    ----------
+    model : Model
+        The model written.
+    path : str or path-like
+        The TOML file (replaced if it exists).
+    run : dict, optional
+        simulate's options (t_end, dt in s, method, scheme, ...) for the [run] table.
+    name : str, optional
+        The [model] table's name (default "model").
+
+    Raises
+    ------
+    ValueError
+        As ``scene_of``: a model that is not a Model, or loads, drives or ground motion that
+        are Python functions rather than profiles.
+    TypeError
+        A value in run that TOML cannot hold (e.g. None).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> from dttmm.scene import load_scene, save_scene
+    >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                       to_output=[1.0, 0, 0])
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), rod])
+    >>> save_scene(model, "rod.toml", run={"t_end": 1.0, "dt": 1e-3})  # doctest: +SKIP
+    >>> load_scene("rod.toml").run  # doctest: +SKIP
+    {'t_end': 1.0, 'dt': 0.001}
+    """
     Path(path).write_text(to_toml(scene_of(model, run, name)))
 
 

@@ -37,8 +37,29 @@ SCHEMES = ("newmark", "energy_momentum", "paper")
 
 
 class DivergenceError(RuntimeError):
-    """A run that cannot go on: the step, the time and the cause are in the message.
-    partial: the Result recorded before the failure (Newmark and paper's schemes), or None."""
+    """A run that cannot go on (docs/solver.md, "Runs that cannot go wrong").
+
+    Raised by ``simulate`` for a step whose error estimate exceeds max_step_error, an
+    energy-momentum step that does not converge, a beam deflected beyond its length, a singular
+    transfer, NaN, a drive returning a non-finite value, or an adaptive step that fell below
+    1e-12 of t_end. The message names the step, the time and the cause.
+
+    Parameters
+    ----------
+    step : int
+        The step at which the run stopped (1 is the first step; 0 the consistent start).
+    t : float
+        Its time, s.
+    cause : str
+        What went wrong, and what to do about it where the solver can tell.
+    partial : Result, optional
+        The samples recorded before the failure (None where there are none).
+
+    Attributes
+    ----------
+    step, t, cause, partial
+        As given.
+    """
 
     def __init__(self, step, t, cause, partial=None):
         super().__init__(f"DT-TMM run stopped at step {step} (t = {t:.6g} s): {cause}")

@@ -91,25 +91,82 @@ BEAM_PARAM_SIZE = 8
 
 @dataclass(frozen=True, eq=False)
 class EulerBernoulliBeam:
-    """A uniform beam.
+    """A uniform Euler-Bernoulli beam with modal bending in two planes (docs/beam.md).
 
-    length:            m, > 0.
-    mass_per_length:   kg/m, > 0 (or give density and area).
-    bending_stiffness: (EI_v, EI_w) N m^2, for deflection v along body y (bending about z) and
-                       w along body z (bending about y); a scalar for both.
-    polar_inertia_per_length: kg m, the section's polar mass moment per length (rho I_p, e.g.
-                       mu a^2 / 6 for a square section of side a); > 0: it keeps the frame's
-                       spin about its own axis well posed.
-    modes_per_plane:   number of bending modes in each plane, >= 1.
-    damping_ratio:     modal damping ratio (>= 0).
-    mode_family:       "auto" (default: "pinned" after a ball joint, "clamped" after a fixed
-                       hinge), "pinned" (sine modes in the chord frame) or "clamped"
-                       (clamped-free eigenfunctions in the input section's frame); docs/beam.md.
-    force_mode_family: accept "clamped" after a ball joint (admissible but slow to converge).
-    initial_modal_coordinates, initial_modal_velocities: eta and eta' at t = 0 (2 x
-                       modes_per_plane entries: the v coordinates, then the w coordinates).
-    rotation, angular_velocity: initial frame rotation and world angular velocity, as for
-                       RigidBody.
+    Floating frame at the input end I, x along the reference axis (the chord I -> O for the
+    pinned family, the input section's tangent for the clamped ones); a section at x sits at
+    r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
+    w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation, no geometric stiffening;
+    the section's rotary inertia is left out, its polar inertia kept for the frame's spin
+    about x.  The arguments are checked when the model is built (``System.build`` or
+    ``build_chain``), not here.
+
+    Parameters
+    ----------
+    length : float
+        L, m (> 0).
+    bending_stiffness : float or array_like of 2
+        (EI_v, EI_w), N m^2 (each > 0): EI_v for the deflection v along body y (bending about
+        z), EI_w for w along body z (bending about y); a scalar for both.
+    polar_inertia_per_length : float
+        j_p = rho I_p, kg m: the section's polar mass moment per length (e.g. mu a^2 / 6 for a
+        square section of side a); > 0: it keeps the frame's spin about its own axis well
+        posed (its value barely matters).
+    mass_per_length : float, optional
+        mu, kg/m (> 0).  Give it, or density and area, not both.
+    density : float, optional
+        rho, kg/m^3 (> 0), with area: mu = density * area.
+    area : float, optional
+        Cross-section area, m^2 (> 0), with density.
+    modes_per_plane : int, optional
+        Number of bending modes in each plane, >= 1 (default 1); at most 6 for a clamped beam
+        whose output carries loads (its polynomial modes).  The beam has 2 x modes_per_plane
+        modal coordinates.
+    damping_ratio : float, optional
+        Modal damping ratio zeta (>= 0, default 0), dimensionless: each mode's damping
+        c_k = 2 zeta omega_k m_k, acting in the beam's (rotating) frame.
+    mode_family : {"auto", "pinned", "clamped"}, optional
+        "auto" (default): "pinned" between moment-free ends (ball joints, the free or the
+        pinned tip), otherwise "clamped" in the input section's frame (clamped-free
+        eigenfunctions when the output is the free tip, loaded-end polynomial modes when it
+        carries loads).  "pinned": sine modes in the chord frame (refused where a fixed or
+        elastic hinge holds the beam).  "clamped": the input section's frame (refused between
+        moment-free ends unless force_mode_family).  docs/beam.md, "Mode shapes".
+    force_mode_family : bool, optional
+        Accept "clamped" between moment-free ends, e.g. after a ball joint (admissible but slow
+        to converge: each shape carries a spurious input moment).  Default False.
+    initial_modal_coordinates : array_like of 2 x modes_per_plane, optional
+        eta at t = 0, m (the mode shapes have unit amplitude): the v coordinates, then the w
+        coordinates.  None (default): zero (undeformed).
+    initial_modal_velocities : array_like of 2 x modes_per_plane, optional
+        eta' at t = 0, m/s, in the same order.  None (default): zero.
+    rotation : array_like (3, 3), optional
+        Initial frame rotation (body to world), as for ``RigidBody``.
+    angular_velocity : array_like of 3, optional
+        Initial world-frame angular velocity of the frame, rad/s, as for ``RigidBody``.
+    name : str, optional
+        The body's name, as for ``RigidBody`` (default "": ``body{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the beam (its name and index) and the argument: a length,
+        stiffness, polar inertia, mass per length, density or area that is not a finite
+        number > 0; mass_per_length given with density or area, or neither; modes_per_plane
+        not an integer >= 1 (or above 6 for loaded-end modes); a negative damping ratio; an
+        unknown mode family, or one that contradicts the beam's ends; initial modal
+        coordinates or velocities without 2 x modes_per_plane finite entries; a bad rotation
+        or angular velocity.
+
+    Examples
+    --------
+    A steel strip, 1 m long, two modes per plane, pinned between ball joints:
+
+    >>> import dttmm
+    >>> beam = dttmm.EulerBernoulliBeam(length=1.0, density=7800.0, area=1e-4,
+    ...                                 bending_stiffness=[20.0, 200.0],
+    ...                                 polar_inertia_per_length=1e-5, modes_per_plane=2)
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), beam])
     """
     length: float
     bending_stiffness: object

@@ -31,9 +31,37 @@ def _scalar_of(who, argument, value):
 
 @dataclass(frozen=True, eq=False)
 class JointForce:
-    """A generalized force f(t, q, q') on the joint's coordinate (N m about a revolute or
-    universal axis, N along a prismatic axis): a motor torque f(t), a nonlinear spring, any
-    function of time, coordinate and rate."""
+    """A generalized force f(t, q, q') on the joint's coordinate (docs/joints.md, "Drives").
+
+    N m about a revolute or universal axis, N along a prismatic axis, on the child, with its
+    reaction on the parent: a motor torque f(t), a nonlinear spring, any function of time,
+    coordinate and rate.  ``simulate`` evaluates it once per step, at the coordinates the
+    constant-acceleration predictor gives (docs/joints.md, "In the transfer");
+    ``Result.drive_force`` records its values.
+
+    Parameters
+    ----------
+    function : callable
+        function(t, q, q_dot) -> one number: t in s, q in rad (or m), q_dot in rad/s (or m/s);
+        returns the generalized force, N m (or N).  Called at (0, q0, q_dot0) when the model is
+        built.
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint: function not callable, not taking (t, q, q_dot), or
+        not returning one finite number at t = 0.  During a run, a value that is not finite
+        stops ``simulate`` (``DivergenceError``) and ``simulate_reference`` (ValueError naming
+        the joint and the coordinate).
+
+    Examples
+    --------
+    A motor torque of 2 N m for the first second, with viscous friction 0.01 N m s/rad:
+
+    >>> import dttmm
+    >>> motor = dttmm.JointForce(lambda t, q, q_dot: (2.0 if t < 1.0 else 0.0) - 0.01 * q_dot)
+    >>> joint = dttmm.RevoluteJoint(axis=[0, 0, 1], drive=motor)
+    """
     function: Callable[[float, float, float], float]
     kind = FORCE
 
@@ -51,8 +79,33 @@ class JointForce:
 
 @dataclass(frozen=True, eq=False)
 class SpringDamper:
-    """f = -stiffness (q - rest) - damping q' on the joint's coordinate; rest None: the
-    coordinate's initial value (no force at the start)."""
+    """A linear spring and damper on the joint's coordinate: f = -stiffness (q - rest) -
+    damping q' (docs/joints.md, "Drives").
+
+    Its potential 1/2 stiffness (q - rest)^2 counts in the result's energies.
+
+    Parameters
+    ----------
+    stiffness : float
+        k, N m/rad about a revolute or universal axis, N/m along a prismatic one (>= 0).
+    damping : float, optional
+        c, N m s/rad (or N s/m), >= 0; default 0.
+    rest : float, optional
+        The coordinate at which the spring is relaxed, rad (or m).  None (default): the
+        coordinate's initial value (no force at the start).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint and the argument ("drive stiffness", "drive damping",
+        "drive rest"): not a finite number, or a negative stiffness or damping.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> torsion = dttmm.SpringDamper(stiffness=5.0, damping=0.05, rest=0.0)
+    >>> joint = dttmm.RevoluteJoint(axis=[0, 0, 1], angle=0.3, drive=torsion)
+    """
     stiffness: float
     damping: float = 0.0
     rest: Optional[float] = None
@@ -67,8 +120,44 @@ class SpringDamper:
 
 @dataclass(frozen=True, eq=False)
 class JointMotion:
-    """The coordinate prescribed: position(t), velocity(t), acceleration(t) (rad or m, and
-    their first and second derivatives, given, not differentiated numerically)."""
+    """The coordinate prescribed: position(t), velocity(t), acceleration(t) (docs/joints.md,
+    "Drives").
+
+    The derivatives are given, not differentiated numerically; the joint applies whatever
+    generalized force the motion needs (``Result.drive_force``), and starts on the motion (its
+    initial coordinate and rate are position(0) and velocity(0)).
+
+    Parameters
+    ----------
+    position : callable
+        position(t) -> one number: the coordinate at time t (s), rad (or m).
+    velocity : callable
+        velocity(t) -> its first derivative, rad/s (or m/s).  Required, although it defaults
+        to None.
+    acceleration : callable
+        acceleration(t) -> its second derivative, rad/s^2 (or m/s^2).  Required, although it
+        defaults to None.
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint: a function missing or not callable, or not returning
+        one finite number at t = 0; velocity or acceleration contradicting the central
+        difference (step 1e-5 s, so each function is also called at t = -1e-5 s) of the
+        function before it at t = 0, 0.37 and 1 s by more than 1e-4 max(1, |difference|); a
+        joint's initial value given (nonzero) that differs from the motion's at t = 0.  During
+        ``simulate_reference``, a value that is not one finite number (ValueError naming the
+        joint and the coordinate).
+
+    Examples
+    --------
+    A crank turned at 2 rad/s:
+
+    >>> import dttmm
+    >>> crank = dttmm.JointMotion(position=lambda t: 2.0 * t, velocity=lambda t: 2.0,
+    ...                           acceleration=lambda t: 0.0)
+    >>> joint = dttmm.RevoluteJoint(axis=[0, 0, 1], drive=crank)
+    """
     position: Callable[[float], float]
     velocity: Optional[Callable[[float], float]] = None
     acceleration: Optional[Callable[[float], float]] = None

@@ -27,7 +27,23 @@ HINGE_PARAM_SIZE = 55
 @dataclass(frozen=True, eq=False)
 class BallJoint:
     """Smooth ball-and-socket hinge: positions and forces pass, no moment, free relative
-    rotation."""
+    rotation (docs/hinges.md, "Smooth ball-and-socket").
+
+    Massless and frictionless: the outboard input point stays on the inboard attachment point
+    and the outboard body turns freely.  The outboard body starts in its own given rotation
+    (the identity by default; ``RigidBody.rotation``).
+
+    Parameters
+    ----------
+    name : str, optional
+        The hinge's name, in messages and ``Model.hinge_names`` (default "":
+        ``BallJoint{k}``).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> root = dttmm.BallJoint(name="shoulder")
+    """
     name: str = ""
     kind = BALL
 
@@ -38,7 +54,37 @@ class BallJoint:
 
 @dataclass(frozen=True, eq=False)
 class FixedHinge:
-    """Rigid weld: A_out = A_in @ rotation (a constant relative rotation, identity by default)."""
+    """Rigid weld: A_out = A_in @ rotation (a constant relative rotation, identity by default;
+    docs/hinges.md, "Fixed hinge").
+
+    The outboard body shares the inboard one's attachment point, angular velocity and
+    acceleration; its initial rotation and angular velocity follow from the inboard body's (a
+    contradicting ``rotation`` or ``angular_velocity`` given to the outboard body is refused).
+    A body joined to the ground by fixed hinges only (through rigid bodies) is locked to the
+    ground's motion.  At a beam's output the weld is to the beam's deflected end section.
+
+    Parameters
+    ----------
+    rotation : array_like (3, 3), optional
+        R0, the outboard frame relative to the inboard one (body to body; a proper rotation
+        matrix, det +1, to 1e-9).  None (default): the identity.
+    name : str, optional
+        The hinge's name, in messages and ``Model.hinge_names`` (default "":
+        ``FixedHinge{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the hinge (its name and index): a rotation that is not a proper
+        rotation matrix.
+
+    Examples
+    --------
+    A clamped root, the body turned 90 degrees about world z:
+
+    >>> import dttmm
+    >>> clamp = dttmm.FixedHinge(rotation=[[0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    """
     rotation: object = None
     name: str = ""
     kind = FIXED
@@ -52,16 +98,53 @@ class FixedHinge:
 
 @dataclass(frozen=True, eq=False)
 class ElasticHinge:
-    """Linear translational and rotational springs with optional viscous dampers.
+    """Linear translational and rotational springs with optional viscous dampers
+    (docs/hinges.md, "Elastic hinge").
 
-    The outboard input point sits at the inboard output point plus a deflection d; the outboard
-    frame is A_out = A_in expm(psi^) R0.  Springs and dampers act in the inboard body's frame:
+    The outboard input point sits at the inboard output point plus a deflection d (world); the
+    outboard frame is A_out = A_in expm(psi^) R0.  Springs and dampers act in the inboard
+    body's frame (at a beam's output: its deflected end section)::
+
         q (force on the outboard side)       = -A_in (K_t d_b + C_t d'_b),  d_b = A_in^T d,
                                                                              d'_b = A_in^T d/dt(d)
         m (couple on the outboard side, about its input point)
                                              = -A_in (K_r psi + C_r A_in^T (w_out - w_in)).
-    Stiffnesses are scalars, 3 diagonal entries or symmetric positive definite 3x3 matrices;
-    dampings likewise but may be zero.
+
+    The hinge starts undeflected (d = 0); the outboard body starts in the inboard frame turned
+    by R0 unless it is given a rotation of its own (``RigidBody.rotation``).  Stiffnesses are
+    scalars (times the identity), 3 diagonal entries or symmetric positive definite 3x3
+    matrices; dampings likewise but may be zero (positive semidefinite).  Newmark scheme only.
+
+    Parameters
+    ----------
+    translational_stiffness : float, array_like of 3, or array_like (3, 3)
+        K_t, N/m (symmetric positive definite).
+    rotational_stiffness : float, array_like of 3, or array_like (3, 3)
+        K_r, N m/rad (symmetric positive definite).
+    translational_damping : float, array_like of 3, or array_like (3, 3), optional
+        C_t, N s/m (symmetric positive semidefinite); default 0.
+    rotational_damping : float, array_like of 3, or array_like (3, 3), optional
+        C_r, N m s/rad (symmetric positive semidefinite); default 0.
+    rotation : array_like (3, 3), optional
+        R0, the rest rotation of the outboard frame relative to the inboard one (a proper
+        rotation matrix, det +1, to 1e-9).  None (default): the identity.
+    name : str, optional
+        The hinge's name, in messages and ``Model.hinge_names`` (default "":
+        ``ElasticHinge{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the hinge (its name and index) and the argument: a stiffness or
+        damping that is not a scalar, 3 entries or a 3x3 matrix, has non-finite entries, is
+        not symmetric, or is not positive definite (stiffness) or semidefinite (damping); a
+        rotation that is not a proper rotation matrix.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> spring = dttmm.ElasticHinge(translational_stiffness=1e6, rotational_stiffness=[50, 50, 80],
+    ...                             rotational_damping=0.1)
     """
     translational_stiffness: object
     rotational_stiffness: object

@@ -74,8 +74,48 @@ def _common(axis1, axis2, q0, qd0, drives):
 
 @dataclass(frozen=True, eq=False)
 class RevoluteJoint:
-    """A hinge about one axis (parent frame); angle (rad) and rate (rad/s) at t = 0; drive on
-    the angle (JointForce, SpringDamper, JointMotion or None)."""
+    """A hinge about one axis fixed in the parent: A_child = A_P Rot(n, q) R0 (docs/joints.md).
+
+    The child's input point is the parent's attachment point; the child turns relative to the
+    parent about n only, w = w_P + (A_P n) q'.  R0 is the identity, or, when the child body is
+    given an initial rotation, whatever makes that rotation hold at the initial angle.  Joints
+    with coordinates run in ``simulate_reference`` and in ``simulate``'s Newmark scheme (the
+    full-state tree sweep; not method="direct", nor a chain with tip="ball").
+
+    Parameters
+    ----------
+    axis : array_like of 3
+        n, the hinge axis in the parent's frame (the parent's output section; the ground frame
+        for a root joint); any nonzero length, normalized here.
+    angle : float, optional
+        q at t = 0, rad (default 0).  With a JointMotion drive leave it 0: the joint starts on
+        the motion.
+    rate : float, optional
+        q' at t = 0, rad/s (default 0); likewise.
+    drive : JointForce, SpringDamper or JointMotion, optional
+        What acts on the angle: a generalized torque about the axis (N m), a spring-damper, or
+        a prescribed angle.  None (default): the joint turns freely.
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "":
+        ``RevoluteJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index; the child body for its angular
+        velocity) and the argument: an axis that is zero or not 3 finite numbers; an initial
+        value that is not a finite number; a drive that is not a JointForce, SpringDamper,
+        JointMotion or None, or that fails its own checks (see each drive); initial values that
+        contradict a prescribed motion's at t = 0; a child's given angular velocity that
+        contradicts the joint's rates.
+
+    Examples
+    --------
+    A motor about the parent's z axis with a constant torque of 0.5 N m:
+
+    >>> import dttmm
+    >>> motor = dttmm.RevoluteJoint(axis=[0, 0, 1], drive=dttmm.JointForce(lambda t, q, qd: 0.5))
+    """
     axis: object
     angle: float = 0.0
     rate: float = 0.0
@@ -93,8 +133,50 @@ class RevoluteJoint:
 
 @dataclass(frozen=True, eq=False)
 class UniversalJoint:
-    """Two perpendicular hinges: axis1 fixed in the parent, axis2 fixed in the child; angles
-    (rad) and rates (rad/s) at t = 0 and a drive on each angle."""
+    """Two perpendicular hinges: A_child = A_P Rot(n1, q1) R0 Rot(n2, q2) (docs/joints.md).
+
+    axis1 (n1) is fixed in the parent, axis2 (n2) in the child; they must be perpendicular at
+    q = 0 (n1 . R0 n2 = 0, checked at build time) and then stay so: the child cannot turn
+    about n1 x (A_child n2).  The child's input point is the parent's attachment point;
+    w = w_P + (A_P n1) q1' + (A_child n2) q2'.  R0 is the identity, or, when the child body is
+    given an initial rotation, whatever makes that rotation hold at the initial angles.  Runs
+    where ``RevoluteJoint`` does.
+
+    Parameters
+    ----------
+    axis1 : array_like of 3
+        n1, the first axis, in the parent's frame; any nonzero length, normalized here.
+    axis2 : array_like of 3
+        n2, the second axis, in the child's frame; any nonzero length, normalized here.
+    angles : pair of float, optional
+        (q1, q2) at t = 0, rad (default (0, 0)).  A coordinate with a JointMotion drive
+        starts on the motion (leave its entry 0).
+    rates : pair of float, optional
+        (q1', q2') at t = 0, rad/s (default (0, 0)).
+    drives : pair, optional
+        The drive on each angle: JointForce (N m about the axis), SpringDamper, JointMotion or
+        None (default (None, None): both turn freely).
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "":
+        ``UniversalJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index; the child body for its angular
+        velocity) and the argument: an axis that is zero or not 3 finite numbers; axes that are
+        not perpendicular at q = 0; angles, rates or drives that are not a pair (tuple or list
+        of 2); an initial value that is not a finite number; a drive that is not a JointForce,
+        SpringDamper, JointMotion or None, or that fails its own checks (see each drive);
+        initial values that contradict a prescribed motion's at t = 0; a child's given angular
+        velocity that contradicts the joint's rates.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> cardan = dttmm.UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
+    ...                               drives=(dttmm.SpringDamper(2.0, 0.1), None))
+    """
     axis1: object
     axis2: object
     angles: tuple = (0.0, 0.0)
@@ -118,8 +200,43 @@ class UniversalJoint:
 
 @dataclass(frozen=True, eq=False)
 class PrismaticJoint:
-    """A slider along one axis (parent frame): position (m) and rate (m/s) at t = 0 and a drive
-    on the slide."""
+    """A slider along one axis fixed in the parent: A_child = A_P R0 (docs/joints.md).
+
+    The child's input point sits at the parent's attachment point + A_P n q: it slides along n
+    and does not turn relative to the parent (w = w_P).  R0 is the identity, or the child's
+    given initial rotation relative to the parent.  Runs where ``RevoluteJoint`` does.
+
+    Parameters
+    ----------
+    axis : array_like of 3
+        n, the sliding direction in the parent's frame; any nonzero length, normalized here.
+    position : float, optional
+        The slide q at t = 0, m (default 0).  With a JointMotion drive leave it 0: the joint
+        starts on the motion.
+    rate : float, optional
+        q' at t = 0, m/s (default 0); likewise.
+    drive : JointForce, SpringDamper or JointMotion, optional
+        What acts on the slide: a generalized force along the axis (N), a spring-damper
+        (N/m, N s/m), or a prescribed slide.  None (default): it slides freely.
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "":
+        ``PrismaticJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index; the child body for its angular
+        velocity) and the argument: an axis that is zero or not 3 finite numbers; an initial
+        value that is not a finite number; a drive that is not a JointForce, SpringDamper,
+        JointMotion or None, or that fails its own checks (see each drive); initial values that
+        contradict a prescribed motion's at t = 0; a child's given angular velocity that
+        contradicts the joint's rates.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> slider = dttmm.PrismaticJoint(axis=[1, 0, 0], drive=dttmm.SpringDamper(100.0, 1.0))
+    """
     axis: object
     position: float = 0.0
     rate: float = 0.0

@@ -22,26 +22,79 @@ BODY_PARAM_SIZE = 16
 
 @dataclass(frozen=True, eq=False)
 class RigidBody:
-    """A rigid body of the chain.
+    """A rigid body of the chain (docs/rigid_body.md).
 
-    mass:            kg, > 0.
-    inertia:         kg m^2; a 3x3 matrix, 3 diagonal entries or a scalar, in body axes.
-    inertia_about:   "mass_center" or "input": the point the inertia is given about (no default,
-                     so that it is always said).
-    to_mass_center:  body-frame vector from the input point to the mass centre, m.
-    to_output:       body-frame vector from the input point to the output point, m.
-    force, torque:   optional functions of time t returning a world-frame force applied at the
-                     mass centre (N) and a world-frame torque (N m).
-    rotation:        initial rotation matrix (body to world); None for identity behind a ball
-                     joint, and for the inboard body's frame turned by the hinge's rest rotation
-                     behind an elastic hinge.  Bodies joined to their inboard neighbour by a fixed
-                     hinge take theirs from that hinge.
-    angular_velocity: initial world-frame angular velocity, rad/s; None for zero (at rest in the
-                     world, not relative to the inboard body).  Taken from the inboard body
-                     across a fixed hinge.
-    points:          further attachment points for other bodies' joints (dttmm.System.add(...,
-                     at=NAME)): a dict of name -> body-frame vector from the input point, m.  The
-                     output point is the attachment point "output".
+    The body has an input point I (where its inboard joint attaches), a mass centre C and an
+    output point O (where an outboard joint attaches by default), all fixed in the body frame;
+    its rotation matrix A maps body-frame components to world components.  The arguments are
+    checked when the model is built (``System.build`` or ``build_chain``), not here.
+
+    Parameters
+    ----------
+    mass : float
+        Mass M, kg (> 0).
+    inertia : float, array_like of 3, or array_like (3, 3)
+        Mass moment of inertia, kg m^2, in body axes, about the point inertia_about names: a
+        3x3 matrix, its 3 diagonal entries, or a scalar (times the identity).  About the mass
+        centre it must be symmetric positive definite and satisfy the triangle inequality of
+        its principal moments (I1 + I2 >= I3).  Given about the input point it is moved to the
+        mass centre by the parallel-axis term, J_C = J_I - M (|l_IC|^2 E - l_IC l_IC^T).
+    inertia_about : {"mass_center", "input"}
+        The point the inertia is given about (no default, so that it is always said).
+    to_mass_center : array_like of 3, optional
+        l_IC: body-frame vector from the input point to the mass centre, m; default zero.
+    to_output : array_like of 3, optional
+        l_IO: body-frame vector from the input point to the output point, m; default zero.
+    force : callable, optional
+        force(t) -> 3 numbers: a world-frame force applied at the mass centre at time t (s),
+        N.  None (default): no applied force.  Evaluated at t = 0 when the model is built.
+    torque : callable, optional
+        torque(t) -> 3 numbers: a world-frame torque applied to the body at time t (s), N m.
+        None (default): no applied torque.  Evaluated at t = 0 when the model is built.
+    rotation : array_like (3, 3), optional
+        Initial rotation matrix A (body to world; proper orthonormal, det +1, to 1e-9).  None
+        (default): the identity behind a ball joint, and the inboard body's frame turned by
+        the hinge's rest rotation behind an elastic hinge.  Bodies joined to their inboard
+        neighbour by a fixed hinge take theirs from that hinge (a given one that contradicts
+        it is refused); behind a joint with coordinates a given rotation is the body's
+        rotation at the joint's initial coordinates and sets the joint's R0 (elements/joints.py).
+    angular_velocity : array_like of 3, optional
+        Initial world-frame angular velocity, rad/s.  None (default): zero (at rest in the
+        world, not relative to the inboard body).  Taken from the inboard body across a fixed
+        hinge, and from the parent and the joint's rates behind a joint with coordinates (a
+        given one that contradicts them is refused).
+    name : str, optional
+        The body's name: in messages, as a parent for ``System.add(..., parent=NAME)``, and in
+        ``Model.body_names`` and ``Result.body_names`` (default "": ``body{k}``).  Unique
+        within a System.
+    points : dict, optional
+        Further attachment points for other bodies' joints (``dttmm.System.add(...,
+        at=NAME)``): name -> body-frame vector from the input point, m.  Names are non-empty
+        strings other than "output" and "input"; the output point is the attachment point
+        "output".
+
+    Raises
+    ------
+    ValueError
+        At build time (``System.build``, ``build_chain``), naming the body (its name and index)
+        and the argument: a mass that is not > 0; a vector without 3 finite entries; an
+        inertia that is not a scalar, 3 entries or a 3x3 matrix, is not symmetric positive
+        definite about the mass centre or violates the triangle inequality; inertia_about not
+        one of the two; a rotation that is not a proper rotation matrix; a force or torque
+        that is not callable or does not return 3 finite numbers at t = 0; a bad points dict
+        or point name; a rotation or angular velocity contradicting a fixed hinge or joint
+        before the body; no inertia about the hinge-to-hinge axis of a body between two ball
+        joints (or a ball joint and the free tip).
+
+    Examples
+    --------
+    A uniform rod of 1 kg and 1 m along its body x axis, hanging from its input end:
+
+    >>> import dttmm
+    >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                       to_output=[1.0, 0, 0], name="rod")
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), rod])
     """
     mass: float
     inertia: object

@@ -1447,27 +1447,74 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
 
 
 def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=None):
-    """Integrate the chain with the global Newton-Euler equations and scipy's solve_ivp.
+    """Integrate the model with the global Newton-Euler equations and scipy's solve_ivp.
 
-    model: a dttmm Model; t_end > 0 (s); method "DOP853" or "RK45"; rtol, atol: solve_ivp
-    tolerances; t_eval: recorded times (default 201 points over [0, t_end]), sampled from the
-    integrator's dense output.  Returns a dttmm.result.Result; info holds nfev and the number of
-    state variables and unknowns of the global system.  For chains with EulerBernoulliBeam
-    bodies (every mode family of docs/beam.md) the result also holds modal_coordinates and
-    modal_velocities (T, total modes; body order, a beam's v coordinates first, then w), the
-    energies count the beams' deflection (dttmm.result.chain_energies), position_mass_center is
-    each beam's deflected mass centre and position_output its deflected output point
-    r_I + A (L e1 + u(L)).  The initial modal coordinates and rates are the model's.  A chain
-    built with tip="ball" has its tip held at its starting point (fixed in the world, a_tip = 0,
-    also when the ground moves); the initial angular velocities must leave it at rest there.
-    Joints with coordinates (revolute, universal, prismatic; module docstring) and their drives
-    run with beams as parents and children too; the result then holds joint_coordinates,
-    joint_rates (a prescribed coordinate's from its motion) and drive_force (T, total
-    coordinates; hinge order), a prismatic child's input point moves by its slide, and the
-    potential energy counts the drive springs.  A drive that returns a non-finite or non-scalar
-    value during the run raises ValueError naming the joint and coordinate.  Trees run with every
-    hinge kind at any attachment point: a beam's output point, a rigid body's output point or
-    one of its named points (Model.attachment_point; module docstring, "Attachment points").
+    An independent check of DT-TMM (docs/reference.md; the formulation is in this module's
+    docstring): it shares only the model description with the rest of the package.  Every
+    element and topology runs: trees with every hinge kind at any attachment point (a beam's
+    output point, a rigid body's output point or one of its named points;
+    Model.attachment_point; module docstring, "Attachment points"), and joints with
+    coordinates (revolute, universal, prismatic; module docstring) and their drives, with
+    beams as parents and children too.
+
+    Parameters
+    ----------
+    model : Model
+        The frozen system (``dttmm.System(...).build()`` or ``dttmm.build_chain``).  The
+        initial modal coordinates and rates are the model's.  A chain built with tip="ball"
+        has its tip held at its starting point (fixed in the world, a_tip = 0, also when the
+        ground moves); the initial angular velocities must leave it at rest there.
+    t_end : float
+        End time, s (finite, > 0).
+    method : {"DOP853", "RK45"}
+        solve_ivp's integrator (default "DOP853").
+    rtol : float
+        solve_ivp's relative tolerance (default 1e-10; finite, >= 100 machine epsilons).
+    atol : float
+        solve_ivp's absolute tolerance (default 1e-12; finite, > 0), in the state's units
+        (quaternion entries, rad/s, m, m/s, modal and joint coordinates and rates).
+    t_eval : array_like, optional
+        The recorded times, s: strictly increasing within [0, t_end]; default 201 points over
+        [0, t_end].  Sampled from the integrator's dense output (the state at t = 0 exactly
+        as given).
+
+    Returns
+    -------
+    Result
+        ``dttmm.Result`` with method "newton-euler/DOP853" (or "/RK45"): positions, velocities,
+        rotations, angular velocities and accelerations, the forces and moments at every
+        body's input, the energies (``dttmm.result.chain_energies``) at every recorded time;
+        wall_time (s, the integration only), n_steps (the integrator's steps) and info, which
+        holds nfev and the number of state variables (n_state) and unknowns (n_unknowns) of
+        the global system.  For models with EulerBernoulliBeam bodies (every mode family of
+        docs/beam.md) it also holds modal_coordinates and modal_velocities (T, total modes;
+        body order, a beam's v coordinates first, then w), the energies count the beams'
+        deflection, position_mass_center is each beam's deflected mass centre and
+        position_output its deflected output point r_I + A (L e1 + u(L)).  With joints with
+        coordinates it holds joint_coordinates, joint_rates (a prescribed coordinate's from
+        its motion) and drive_force (T, total coordinates; hinge order), a prismatic child's
+        input point moves by its slide, and the potential energy counts the drive springs.
+
+    Raises
+    ------
+    ValueError
+        A model that is not a Model, or a bad t_end, method, rtol, atol or t_eval (naming the
+        argument); a tip joined to a fixed point that the initial angular velocities move; a
+        drive that returns a non-finite or non-scalar value during the run (naming the joint
+        and coordinate).
+    RuntimeError
+        solve_ivp failed (the time and its message).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                       to_output=[1.0, 0, 0], angular_velocity=[0, 0, 1.0])
+    >>> model = dttmm.build_chain([dttmm.BallJoint(), rod])
+    >>> ref = dttmm.simulate_reference(model, 1.0, t_eval=[0.0, 0.5, 1.0])  # doctest: +SKIP
+    >>> ref.position_output.shape  # doctest: +SKIP
+    (3, 1, 3)
     """
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     prob = _Problem(model)
