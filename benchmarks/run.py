@@ -27,6 +27,7 @@ from numba import njit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import adaptive  # noqa: E402  (benchmarks/adaptive.py)
 import recording  # noqa: E402  (benchmarks/recording.py)
 
 
@@ -90,11 +91,12 @@ def end_errors(model, res, ref, beam=None):
     return max(pos, mid)
 
 
-def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,), richardson_dts=()):
-    """Curves of (wall time s, error m at t_end) for DT-TMM over dts (per Newton setting, and
-    with Richardson extrapolation over richardson_dts) and for the reference over rtols (RK45,
-    DOP853).  Every run is timed around the whole call, setup and result included, on both
-    sides."""
+def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,), richardson_dts=(),
+                   adaptive_rtols=()):
+    """Curves of (wall time s, error m at t_end) for DT-TMM over dts (per Newton setting, with
+    Richardson extrapolation over richardson_dts, and with adaptive steps over adaptive_rtols)
+    and for the reference over rtols (RK45, DOP853).  Every run is timed around the whole call,
+    setup and result included, on both sides."""
     grid = np.array([0.0, t_end])
     tight = simulate_reference(model, t_end, method="DOP853", rtol=1e-12, atol=1e-14,
                                t_eval=grid)
@@ -114,6 +116,9 @@ def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,), richardson_
         curves["dttmm_richardson"] = [timed(simulate, model, t_end, dt, richardson=True,
                                             record_every=int(round(t_end / dt)))
                                       for dt in richardson_dts]
+    if adaptive_rtols:
+        curves["dttmm_adaptive"] = [timed(simulate, model, t_end, rtol=rtol, t_eval=[t_end])
+                                    for rtol in adaptive_rtols]
     for method in ("RK45", "DOP853"):
         curves[method] = [timed(simulate_reference, model, t_end, method=method, rtol=rtol,
                                 atol=rtol * 1e-2, t_eval=grid) for rtol in rtols]
@@ -239,7 +244,7 @@ def main(argv=None):
     rtols = [1e-2, 1e-4, 1e-6, 1e-8] if quick else [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8,
                                                      1e-9, 1e-10]
     curves = work_precision(model, t_wp, dts, rtols, beam=1, newton=(0, 2),
-                            richardson_dts=dts[:-1])
+                            richardson_dts=dts[:-1], adaptive_rtols=(1e-3, 1e-4, 1e-5, 1e-6))
     chart_work_precision(os.path.join(out_dir, "work_precision_three_pendulum.png"),
                          f"three-pendulum, {t_wp:g} s", curves)
     report_speedups(fig, "", curves, (1e-4, 1e-6, 1e-8))
@@ -251,7 +256,8 @@ def main(argv=None):
         c = work_precision(rigid_chain(n), t_c, [2e-3, 1e-3, 5e-4, 2.5e-4],
                            [1e-2, 1e-4, 1e-6, 1e-8] if quick else [1e-2, 1e-3, 1e-4, 1e-5, 1e-6,
                                                                     1e-7, 1e-8],
-                           richardson_dts=[2.5e-2, 1.25e-2, 1e-2, 6.25e-3, 5e-3, 2.5e-3])
+                           richardson_dts=[2.5e-2, 1.25e-2, 1e-2, 6.25e-3, 5e-3, 2.5e-3],
+                           adaptive_rtols=(1e-3, 1e-4, 1e-5, 1e-6))
         chart_work_precision(os.path.join(out_dir, f"work_precision_chain{n}.png"),
                              f"{n}-link rigid chain, {t_c:g} s", c)
         report_speedups(fig, f"chain{n}_", c, (1e-6,))
@@ -310,6 +316,17 @@ def main(argv=None):
     fig["recording_chain100_peak_mb"] = mem["peak_mb"]
     fig["recording_chain100_samples"] = mem["samples"]
     print({k: v for k, v in fig.items() if k.startswith("recording")}, flush=True)
+
+    # adaptive steps against the fixed step of equal error (benchmarks/adaptive.py):
+    # interleaved pairs, the median wall-time ratio per rtol (the issue's limit: 1.5)
+    for name, model, t_a in (("three_pendulum", three_pendulum(), 2.0),
+                             ("chain30", rigid_chain(30), 1.0)):
+        table = adaptive.adaptive_against_fixed(model, t_a, (1e-3, 1e-4, 1e-5, 1e-6),
+                                                3 if quick else 7)
+        for rtol, row in table.items():
+            fig[f"adaptive_{name}_rtol{rtol:.0e}_over_fixed"] = row["ratio"]
+            fig[f"adaptive_{name}_rtol{rtol:.0e}_error_m"] = row["error"]
+    print({k: v for k, v in fig.items() if k.startswith("adaptive")}, flush=True)
 
     # sweeps: the Monte Carlo of examples/monte_carlo.py on 1 and 2 dask workers (runs per
     # second, the LocalCluster's start and each worker's cache load included)
