@@ -42,38 +42,41 @@ def _axes(ax, rows=1, figsize=(8, 6)):
 
 def _names(result):
     n = result.rotation.shape[1]
-    return result.body_names or tuple(f"body{k + 1}" for k in range(n))
+    return result.body_names or tuple(f"body{k}" for k in range(n))      # (as Model names them)
+
+
+def _finish(fig, axes, title, legend_columns=4):
+    """Grid on every axis, the legend on the first, t (s) under the last, the title."""
+    for a in axes:
+        a.grid(alpha=0.3)
+    axes[0].legend(fontsize="small", ncol=legend_columns)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title)
+    return fig
+
+
+def _per_component(result, values, ax, ylabel, title):
+    """values (T, n, 3): one axis per component, each body a line, so that a small component
+    is not flattened by a large one; ylabel formats the component's letter."""
+    fig, axes = _axes(ax, 3)
+    for c, a in enumerate(axes[:3]):
+        for k, name in enumerate(_names(result)):
+            a.plot(result.t, values[:, k, c], label=name)
+        a.set_ylabel(ylabel.format("xyz"[c]))
+    return _finish(fig, axes, title)
 
 
 def plot_positions(result, ax=None, point="output", title=None):
     """x, y, z (m) of each body's point ("output", "input" or "mass_center") against t (s),
-    one axis per component, so that a small component is not flattened by a large one."""
-    pos = getattr(result, f"position_{point}")
-    fig, axes = _axes(ax, 3)
-    for c, a in enumerate(axes[:3]):
-        for k, name in enumerate(_names(result)):
-            a.plot(result.t, pos[:, k, c], label=name)
-        a.set_ylabel(f"{'xyz'[c]} (m)")
-        a.grid(alpha=0.3)
-    axes[0].legend(fontsize="small", ncol=4)
-    axes[-1].set_xlabel("t (s)")
-    fig.suptitle(title or f"{point.replace('_', ' ')} points")
-    return fig
+    one axis per component."""
+    return _per_component(result, getattr(result, f"position_{point}"), ax, "{} (m)",
+                          title or f"{point.replace('_', ' ')} points")
 
 
 def plot_angles(result, ax=None, title=None):
     """The space-fixed x-y-z angles (rad) of each body, A = Rz Ry Rx, unwrapped over time."""
-    angles = np.unwrap(result.xyz_angles, axis=0)
-    fig, axes = _axes(ax, 3)
-    for c, a in enumerate(axes[:3]):
-        for k, name in enumerate(_names(result)):
-            a.plot(result.t, angles[:, k, c], label=name)
-        a.set_ylabel(f"theta_{'xyz'[c]} (rad)")
-        a.grid(alpha=0.3)
-    axes[0].legend(fontsize="small", ncol=4)
-    axes[-1].set_xlabel("t (s)")
-    fig.suptitle(title or "x-y-z angles (unwrapped)")
-    return fig
+    return _per_component(result, np.unwrap(result.xyz_angles, axis=0), ax, "theta_{} (rad)",
+                          title or "x-y-z angles (unwrapped)")
 
 
 def plot_energy(result, ax=None, title=None):
@@ -84,14 +87,9 @@ def plot_energy(result, ax=None, title=None):
     axes[0].plot(result.t, result.potential, label="potential")
     axes[0].plot(result.t, result.total_energy, label="total")
     axes[0].set_ylabel("energy (J)")
-    axes[0].legend(fontsize="small")
     axes[1].plot(result.t, result.total_energy - result.total_energy[0], color="k")
     axes[1].set_ylabel("total - total(0) (J)")
-    for a in axes:
-        a.grid(alpha=0.3)
-    axes[-1].set_xlabel("t (s)")
-    fig.suptitle(title or "energy")
-    return fig
+    return _finish(fig, axes, title or "energy", legend_columns=1)
 
 
 def plot_joints(result, ax=None, title=None):
@@ -104,12 +102,7 @@ def plot_joints(result, ax=None, title=None):
         axes[1].plot(result.t, result.drive_force[:, j], label=f"q{j + 1}")
     axes[0].set_ylabel("coordinate (rad or m)")
     axes[1].set_ylabel("drive force (N m or N)")
-    axes[0].legend(fontsize="small", ncol=4)
-    for a in axes:
-        a.grid(alpha=0.3)
-    axes[-1].set_xlabel("t (s)")
-    fig.suptitle(title or "joints")
-    return fig
+    return _finish(fig, axes, title or "joints")
 
 
 def plot_modal(result, ax=None, title=None):
@@ -120,11 +113,7 @@ def plot_modal(result, ax=None, title=None):
     for j in range(result.modal_coordinates.shape[1]):
         axes[0].plot(result.t, result.modal_coordinates[:, j], label=f"eta{j + 1}")
     axes[0].set_ylabel("modal coordinate (m)")
-    axes[0].set_xlabel("t (s)")
-    axes[0].legend(fontsize="small", ncol=4)
-    axes[0].grid(alpha=0.3)
-    fig.suptitle(title or "beams' modal coordinates")
-    return fig
+    return _finish(fig, axes, title or "beams' modal coordinates")
 
 
 def run_figures(result, model, directory, title=""):

@@ -26,6 +26,26 @@ _STATE_OF_DERIVED = {"t", "rotation", "angular_velocity", "modal_coordinates",
 _DEFAULTS = dict(wall_time=0.0, n_steps=0, info=None, body_names=None, checkpoint=None)
 
 
+def _plot_method(name, what, more_options="", missing=None):
+    """Result.<name>: dttmm.plots.<name> on this result (matplotlib imported when called)."""
+    def method(self, **options):
+        from . import plots
+        return getattr(plots, name)(self, **options)
+
+    method.__name__ = method.__qualname__ = name
+    method.__doc__ = (
+        f"{what} (dttmm.plots.{name}).\n\n"
+        f"        Parameters\n        ----------\n        **options\n"
+        f"            Passed to ``dttmm.plots.{name}``: ax (matplotlib axes to draw on, "
+        f"default a new\n            figure), title (str){more_options}.\n\n"
+        f"        Returns\n        -------\n        matplotlib.figure.Figure\n"
+        f"            The figure.\n\n"
+        f"        Raises\n        ------\n        ImportError\n"
+        f"            Without matplotlib (``pip install 'dttmm[plots]'``).\n"
+        + (f"        ValueError\n            {missing}\n" if missing else ""))
+    return method
+
+
 class Result:
     """Samples of a run, one row per recorded time.  Shapes: T samples, n bodies.
 
@@ -195,123 +215,20 @@ class Result:
         (and then only one of tx, tz is defined) where ty = +-90 deg."""
         return rotation_to_xyz_angles(self.rotation)
 
-    def plot_positions(self, **options):
-        """The bodies' points, x, y, z (m) against t (s), one axis per component
-        (dttmm.plots.plot_positions).
-
-        Parameters
-        ----------
-        **options
-            Passed to ``dttmm.plots.plot_positions``: ax (matplotlib axes to draw on, default a new
-            figure), title (str), point ("output", default, "input" or "mass_center").
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure.
-
-        Raises
-        ------
-        ImportError
-            Without matplotlib (``pip install 'dttmm[plots]'``).
-        """
-        from .plots import plot_positions
-        return plot_positions(self, **options)
-
-    def plot_angles(self, **options):
-        """The bodies' space-fixed x-y-z angles (rad) against t (s), unwrapped
-        (dttmm.plots.plot_angles).
-
-        Parameters
-        ----------
-        **options
-            Passed to ``dttmm.plots.plot_angles``: ax (matplotlib axes to draw on, default a new
-            figure), title (str).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure.
-
-        Raises
-        ------
-        ImportError
-            Without matplotlib (``pip install 'dttmm[plots]'``).
-        """
-        from .plots import plot_angles
-        return plot_angles(self, **options)
-
-    def plot_energy(self, **options):
-        """Kinetic, potential and total energy (J), and the total's change from t = 0 on an
-        axis of its own (dttmm.plots.plot_energy).
-
-        Parameters
-        ----------
-        **options
-            Passed to ``dttmm.plots.plot_energy``: ax (matplotlib axes to draw on, default a new
-            figure), title (str).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure.
-
-        Raises
-        ------
-        ImportError
-            Without matplotlib (``pip install 'dttmm[plots]'``).
-        """
-        from .plots import plot_energy
-        return plot_energy(self, **options)
-
-    def plot_joints(self, **options):
-        """Joint coordinates (rad or m) and drive forces (N m or N) against t (s)
-        (dttmm.plots.plot_joints).
-
-        Parameters
-        ----------
-        **options
-            Passed to ``dttmm.plots.plot_joints``: ax (matplotlib axes to draw on, default a new
-            figure), title (str).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure.
-
-        Raises
-        ------
-        ImportError
-            Without matplotlib (``pip install 'dttmm[plots]'``).
-        ValueError
-            The result has no joints with coordinates.
-        """
-        from .plots import plot_joints
-        return plot_joints(self, **options)
-
-    def plot_modal(self, **options):
-        """The beams' modal coordinates eta (m) against t (s) (dttmm.plots.plot_modal).
-
-        Parameters
-        ----------
-        **options
-            Passed to ``dttmm.plots.plot_modal``: ax (matplotlib axes to draw on, default a new
-            figure), title (str).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure.
-
-        Raises
-        ------
-        ImportError
-            Without matplotlib (``pip install 'dttmm[plots]'``).
-        ValueError
-            The result has no beams.
-        """
-        from .plots import plot_modal
-        return plot_modal(self, **options)
+    plot_positions = _plot_method(
+        "plot_positions", "The bodies' points, x, y, z (m) against t (s), one axis per "
+        "component", ', point ("output", default, "input" or "mass_center")')
+    plot_angles = _plot_method(
+        "plot_angles", "The bodies' space-fixed x-y-z angles (rad) against t (s), unwrapped")
+    plot_energy = _plot_method(
+        "plot_energy", "Kinetic, potential and total energy (J), and the total's change from "
+        "t = 0 on an axis of its own")
+    plot_joints = _plot_method(
+        "plot_joints", "Joint coordinates (rad or m) and drive forces (N m or N) against t (s)",
+        missing="The result has no joints with coordinates.")
+    plot_modal = _plot_method(
+        "plot_modal", "The beams' modal coordinates eta (m) against t (s)",
+        missing="The result has no beams.")
 
     def save_npz(self, path):
         """Write every field to a compressed .npz.
@@ -383,7 +300,7 @@ class Result:
         """
         n = self.position_output.shape[1]
         names = self.body_names if self.body_names is not None else [
-            f"body{k + 1}" for k in range(n)]
+            f"body{k}" for k in range(n)]
         head = ["t"] + [f"{name}.{c}" for name in names for c in "xyz"] + [
             "kinetic", "potential", "total_energy"]
         rows = np.column_stack([self.t, self.position_output.reshape(len(self.t), -1),
