@@ -8,7 +8,7 @@ from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
                             MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
-from .elements._checks import finite_vector, rotation_matrix
+from .elements._checks import derivative, finite_vector, rotation_matrix
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              body_kind_of, joint_kind_of, names)
@@ -82,8 +82,8 @@ class PrescribedMotion:
         times : sequence of float, optional
             The times compared, s (default 0, 0.37 and 1).
         eps : float, optional
-            Half-width of the central differences, s (default 1e-5; the functions are also
-            called at times - eps).
+            Step of the differences, s (default 1e-5): central ones, forward ones at t < eps
+            (the functions are not called before t = 0).
         rtol : float, optional
             Tolerance, relative to max(1, |central difference|) (default 1e-4).
 
@@ -93,11 +93,11 @@ class PrescribedMotion:
             Naming the derivative, the time, its value and the central difference.
         """
         def fd(f, t):
-            return (np.asarray(f(t + eps)) - np.asarray(f(t - eps))) / (2 * eps)
+            return derivative(f, t, eps)
 
         for t in times:
             r, v, a, rot, w, wd = self(t)
-            rot_dot = (self(t + eps)[3] - self(t - eps)[3]) / (2 * eps)
+            rot_dot = fd(lambda s: self(s)[3], t)
             w_fd = rot_dot @ rot.T
             pairs = (("velocity", v, fd(lambda s: self(s)[0], t)),
                      ("acceleration", a, fd(lambda s: self(s)[1], t)),
@@ -135,8 +135,8 @@ class PrescribedMotion:
         Parameters
         ----------
         axis : array_like of 3
-            The world axis, any nonzero length (normalized here; a zero axis is not checked
-            and gives NaN).
+            The world axis, any nonzero length (normalized here; a zero axis raises
+            ValueError).
         angle : callable
             angle(t) -> the rotation angle at time t (s), rad.
         rate : callable
@@ -158,7 +158,10 @@ class PrescribedMotion:
         >>> spin = dttmm.PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: 0.5 * t * t,
         ...                                               lambda t: t, lambda t: 1.0)
         """
-        n = np.asarray(axis, float)
+        n = finite_vector("PrescribedMotion.spin_about_axis", "axis", axis)
+        if not np.linalg.norm(n) > 0.0:
+            raise ValueError("PrescribedMotion.spin_about_axis: axis must be nonzero, got "
+                             f"{n.tolist()}")
         n = n / np.linalg.norm(n)
         k = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
         p = np.asarray(position, float)
@@ -295,7 +298,7 @@ class Model:
     """
     n_bodies: int
     body_params: np.ndarray          # (n, BODY_PARAM_SIZE), see elements/rigid_body.py
-    hinge_kind: np.ndarray           # (n,) BALL / FIXED / ELASTIC
+    hinge_kind: np.ndarray           # (n,) elements/kinds.py: BALL, FIXED, ELASTIC, REVOLUTE, ...
     hinge_params: np.ndarray         # (n, HINGE_PARAM_SIZE), see elements/hinges.py
     gravity: np.ndarray              # (3,) world, m/s^2
     ground_position: np.ndarray      # (3,) at rest (motion is None) or at t = 0
@@ -637,7 +640,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
     its attachment point on the parent (0: the output point, j: the parent's j-th named
     point)."""
     if tip not in ("free", "ball"):
-        raise ValueError(f"Chain: tip must be 'free' or 'ball', got {tip!r}")
+        raise ValueError(f"System: tip must be 'free' or 'ball', got {tip!r}")
     n = len(bodies)
     parent = np.array(parents, dtype=np.int64)
     attachment = np.array(attach, dtype=np.int64)
@@ -645,9 +648,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
     if tip == "ball" and not chain:
         raise ValueError("System: tip='ball' joins the last body of a chain to the ground; this "
                          "system is a tree")
-    g = finite_vector("Chain", "gravity", gravity)
+    g = finite_vector("System", "gravity", gravity)
     if not isinstance(ground, Ground):
-        raise ValueError("Chain: ground must be a Ground")
+        raise ValueError("System: ground must be a Ground")
     if ground.motion is not None:
         ground.motion.check()
         r_g, _, _, rot_g, w_g, _ = ground.motion(0.0)

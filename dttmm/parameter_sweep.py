@@ -106,6 +106,10 @@ def _run_one(make_model, parameters, t_end, dt, outputs, options):
     model = make_model(**parameters)
     result = simulate(model, t_end, dt, progress=False, **options)
     values = outputs(result, model)
+    clash = sorted(set(values) & set(parameters))
+    if clash:
+        raise ValueError(f"sweep: outputs {clash} have the names of parameters; name them "
+                         f"apart (a column each)")
     return dict(parameters, **{k: float(v) for k, v in values.items()})
 
 
@@ -113,6 +117,10 @@ def _grid(parameters):
     """A list of dicts as it is; a dict of lists as their product (every combination)."""
     if isinstance(parameters, dict):
         names = list(parameters)
+        empty = [n for n in names if len(parameters[n]) == 0]
+        if not names or empty:
+            raise ValueError(f"sweep: every parameter needs at least one value; "
+                             f"{empty or 'no parameters'} given none")
         return [dict(zip(names, values))
                 for values in itertools.product(*(parameters[n] for n in names))]
     runs = [dict(p) for p in parameters]

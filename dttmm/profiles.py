@@ -231,12 +231,12 @@ def profile(spec, where="profile"):
         if key in params and not np.all(params[key] > 0):
             raise ValueError(f"{where}: key '{key}' must be > 0 (s), got {spec[key]!r}")
     if kind == "table":
-        t = params["t"]
+        t = np.atleast_1d(params["t"])
         if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0):
             raise ValueError(f"{where}: key 't': at least two increasing times, s")
-        if len(params["value"]) != len(t):
+        if np.ndim(params["value"]) == 0 or len(params["value"]) != len(t):
             raise ValueError(f"{where}: key 'value': one value per time ({len(t)}), got "
-                             f"{len(params['value'])}")
+                             f"{spec['value']!r}")
     return Profile(kind, **params)
 
 

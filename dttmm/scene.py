@@ -318,7 +318,9 @@ def scene_of(model, run=None, name=None):
     A rigid body's inertia is written about its input point, a beam's mode family resolved
     ("pinned" or "clamped", with force_mode_family where needed), the initial rotations of
     bodies behind ball, elastic and coordinate joints, and a rigid body's named points in use
-    as "p1", "p2", ... (by their index among its points; points no joint uses are left out).
+    as "p1", "p2", ... up to the largest index in use, in the order of its points (a point no
+    joint uses, before one that is used, is written as a stand-in at the input point: the
+    model's arrays come back the same).
 
     Parameters
     ----------
@@ -390,10 +392,11 @@ def scene_of(model, run=None, name=None):
                          inertia=p[INERTIA_INPUT].reshape(3, 3).tolist(), inertia_about="input",
                          to_mass_center=p[TO_MASS_CENTER].tolist(),
                          to_output=p[TO_OUTPUT].tolist())
-            if named[k]:
-                table["points"] = {f"p{j}": model.attachment_point[c].tolist()
-                                   for j in named[k] for c in children[k]
-                                   if model.attachment[c] == j}
+            if named[k]:        # p1 .. p(largest index in use), so that the indices stay
+                used = {int(model.attachment[c]): model.attachment_point[c].tolist()
+                        for c in children[k] if model.attachment[c]}
+                table["points"] = {f"p{j}": used.get(j, [0.0, 0.0, 0.0])   # (unused: a stand-in)
+                                   for j in range(1, max(named[k]) + 1)}
             for key, f in (("force", model.forces[k]), ("torque", model.torques[k])):
                 if f is not None:
                     if not isinstance(f, Profile):

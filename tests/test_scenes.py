@@ -53,6 +53,22 @@ def test_a_model_saves_to_a_scene_and_loads_back_the_same(name, tmp_path):
     assert back.run == scene.run
 
 
+def test_named_points_keep_their_indices_through_a_scene(tmp_path):
+    """A body with three named points of which only the second and third carry children:
+    the saved scene keeps their indices (the first written as a stand-in), so the model comes
+    back with the same attachment arrays."""
+    from dttmm import BallJoint, System
+    from dttmm.chains import unit_link
+    system = System()
+    system.add(unit_link(name="hub", points={"a": [0.1, 0, 0], "b": [0.2, 0, 0],
+                                             "c": [0.3, 0.1, 0]}), BallJoint())
+    system.add(unit_link(name="left"), BallJoint(), parent="hub", at="b")
+    system.add(unit_link(name="right"), BallJoint(), parent="hub", at="c")
+    model = system.build()
+    save_scene(model, tmp_path / "points.toml")
+    same_model(model, load_scene(tmp_path / "points.toml").model)
+
+
 def test_the_drives_of_a_scene_move_as_in_python():
     """The arm's motion drive from its scene equals the Python builder's law at any time."""
     drive = load_scene(shipped_scenes()["arm_motion"]).model.drives[0][0]
@@ -154,6 +170,11 @@ def test_a_profile_with_a_bad_key_is_refused(tmp_path):
     with pytest.raises(SceneError, match=r"key 'force'.*'frequency' \(Hz\) and "
                                          r"'angular_frequency'"):
         load_scene(path)
+    from dttmm.profiles import profile
+    for spec, key in ((dict(profile="table", t=1.0, value=[1.0, 2.0]), "'t'"),
+                      (dict(profile="table", t=[0.0, 1.0], value=3.0), "'value'")):
+        with pytest.raises(ValueError, match=f"key {key}"):
+            profile(spec)
     path.write_text("[model\n")
     with pytest.raises(SceneError, match="not valid TOML"):
         load_scene(path)

@@ -31,3 +31,8 @@ def test_a_sweep_refuses_ragged_parameters():
                     engine="serial")
     with pytest.raises(ValueError, match="engine"):
         dttmm.sweep(rigid_chain, {"n_links": [2]}, 0.1, 1e-3, engine="threads")
+    with pytest.raises(ValueError, match="at least one value"):
+        dttmm.sweep(rigid_chain, {"n_links": []}, 0.1, 1e-3, engine="serial")
+    with pytest.raises(ValueError, match=r"outputs \['n_links'\] have the names of parameters"):
+        dttmm.sweep(rigid_chain, {"n_links": [2]}, 0.1, 1e-3, engine="serial",
+                    outputs=lambda result, model: {"n_links": 1.0})

@@ -148,3 +148,35 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_copies():
     for kernel in kernels:
         for signature in getattr(kernel, "signatures", []):
             assert "readonly" not in str(signature), (kernel, signature)
+
+
+def test_motions_defined_from_t_0_on_are_accepted():
+    """A prescribed joint motion defined for t >= 0 only: the derivative checks use forward
+    differences at t = 0 (they called it at t = -1e-5 s), and still catch a wrong derivative
+    there."""
+    from dttmm import JointMotion, RevoluteJoint, System
+    from dttmm.chains import unit_link
+
+    def angle(t):
+        assert t >= 0.0, "called before t = 0"
+        return t * t
+
+    def system(rate):
+        s = System()
+        s.add(unit_link(name="arm"),
+              RevoluteJoint(axis=[0, 0, 1], drive=JointMotion(angle, rate, lambda t: 2.0)))
+        return s
+
+    system(lambda t: 2.0 * t).build()
+    with pytest.raises(ValueError, match="velocity"):
+        system(lambda t: 2.0 * t + 1.0).build()
+
+
+def test_a_bad_number_and_a_zero_spin_axis_name_their_element():
+    from dttmm import EulerBernoulliBeam, PrescribedMotion
+    beam = EulerBernoulliBeam(length=1.0, density=1.0, area=1.0, bending_stiffness="stiff",
+                              polar_inertia_per_length=1.0, name="tube")
+    with pytest.raises(ValueError, match="tube.*bending_stiffness must be a number"):
+        build_chain([FixedHinge(), beam])
+    with pytest.raises(ValueError, match="spin_about_axis: axis must be nonzero"):
+        PrescribedMotion.spin_about_axis([0, 0, 0], lambda t: t, lambda t: 1.0, lambda t: 0.0)

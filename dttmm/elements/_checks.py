@@ -82,3 +82,14 @@ def optional_function(element, argument, value):
     out = finite_vector(element, f"{argument}(0)", value(0.0))
     del out
     return value
+
+
+def derivative(f, t, eps=1e-5):
+    """The derivative of f (a function of time returning numbers) at t, for checking a given
+    derivative: central differences, second-order forward ones where t - eps < 0 (a motion
+    may be defined for t >= 0 only, e.g. sqrt(t))."""
+    if t - eps >= 0.0:
+        return (np.asarray(f(t + eps), dtype=float) - np.asarray(f(t - eps), dtype=float)) \
+            / (2 * eps)
+    return (-3.0 * np.asarray(f(t), dtype=float) + 4.0 * np.asarray(f(t + eps), dtype=float)
+            - np.asarray(f(t + 2 * eps), dtype=float)) / (2 * eps)

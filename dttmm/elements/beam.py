@@ -201,7 +201,7 @@ class EulerBernoulliBeam:
                   * finite_scalar(who, "area", self.area, positive=True))
         else:
             raise ValueError(f"{who}: mass_per_length (or density and area) is required")
-        ei = np.broadcast_to(np.asarray(self.bending_stiffness, dtype=float), (2,)).copy() \
+        ei = np.full(2, finite_scalar(who, "bending_stiffness", self.bending_stiffness)) \
             if np.ndim(self.bending_stiffness) == 0 else finite_vector(
                 who, "bending_stiffness", self.bending_stiffness, size=2)
         for v in ei:

@@ -11,7 +11,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ._checks import finite_scalar
+from ._checks import derivative, finite_scalar
 
 FORCE, SPRING_DAMPER, MOTION = 0, 1, 2      # Model.drive_kind (-1: no drive)
 
@@ -142,8 +142,8 @@ class JointMotion:
     ------
     ValueError
         At build time, naming the joint: a function missing or not callable, or not returning
-        one finite number at t = 0; velocity or acceleration contradicting the central
-        difference (step 1e-5 s, so each function is also called at t = -1e-5 s) of the
+        one finite number at t = 0; velocity or acceleration contradicting the difference
+        (step 1e-5 s; a forward one at t = 0, so no function is called before t = 0) of the
         function before it at t = 0, 0.37 and 1 s by more than 1e-4 max(1, |difference|); a
         joint's initial value given (nonzero) that differs from the motion's at t = 0.  During
         ``simulate_reference``, a value that is not one finite number (ValueError naming the
@@ -176,8 +176,7 @@ class JointMotion:
         for t in (0.0, 0.37, 1.0):
             for name, f, deriv in (("velocity", self.position, self.velocity),
                                    ("acceleration", self.velocity, self.acceleration)):
-                numeric = (_scalar_of(who, name, f(t + eps))
-                           - _scalar_of(who, name, f(t - eps))) / (2 * eps)
+                numeric = float(derivative(lambda s: _scalar_of(who, name, f(s)), t, eps))
                 given = _scalar_of(who, f"prescribed {name}({t:g})", deriv(t))
                 if abs(given - numeric) > 1e-4 * max(1.0, abs(numeric)):
                     raise ValueError(f"{who}: prescribed {name}({t:g}) = {given} contradicts the "
