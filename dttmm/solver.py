@@ -812,9 +812,10 @@ def _adaptive_loop(model, control, targets, structures, loop, coef, inputs_for, 
                         next_default += every_default
                 bar.update(int(MAX_SAMPLES * t / t_end))
                 continue
-            cause = (_failure_cause(model, mode, info, monitor, settings) if info[0] != OK
-                     else "a beam deflected beyond its length" if failed
-                     else f"local error estimate {monitor.error[0]:.3g} over the segment")
+            cause = (f"local error estimate {monitor.error[0]:.3g} above the tolerance's "
+                     f"{control.step_limit(h):.3g} for a step of {h:.3g} s" if over
+                     else _failure_cause(model, mode, info, monitor, settings) if info[0] != OK
+                     else "a beam deflected beyond its length")
             snapshot.restore()
             if control.too_small:
                 raise DivergenceError(taken + 1, t, f"adaptive steps: the step fell below "
