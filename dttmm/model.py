@@ -182,10 +182,10 @@ class Ground:
     Parameters
     ----------
     position : array_like of 3, optional
-        The ground point, world frame, m (default the origin).  Ignored when motion is given.
+        The ground point, world frame, m (default the origin).  Refused beside a motion.
     rotation : array_like (3, 3), optional
         The ground frame (ground to world; a proper rotation matrix), the inboard frame of the
-        root joint.  None (default): the identity.  Ignored when motion is given.
+        root joint.  None (default): the identity.  Refused beside a motion (which gives it).
     motion : PrescribedMotion, optional
         A prescribed motion of the ground point and frame (a driven hub); its position and
         rotation at t = 0 become ``Model.ground_position`` and ``Model.ground_rotation``.
@@ -196,7 +196,8 @@ class Ground:
     ValueError
         At build time (``System.build``, ``build_chain``), naming "Ground" and the argument: a
         position without 3 finite entries, a rotation that is not a proper rotation matrix, or
-        a motion that fails ``PrescribedMotion.check`` or is not finite at t = 0.
+        a motion that fails ``PrescribedMotion.check`` or is not finite at t = 0, or a position
+        or rotation given beside a motion.
 
     Examples
     --------
@@ -652,6 +653,10 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
     if not isinstance(ground, Ground):
         raise ValueError("System: ground must be a Ground")
     if ground.motion is not None:
+        if ground.rotation is not None or np.any(finite_vector("Ground", "position",
+                                                               ground.position) != 0.0):
+            raise ValueError("Ground: with a motion, the ground's position and rotation are the "
+                             "motion's: give them to the PrescribedMotion, not to Ground")
         ground.motion.check()
         r_g, _, _, rot_g, w_g, _ = ground.motion(0.0)
         r_g = finite_vector("Ground", "motion position(0)", r_g)

@@ -180,3 +180,14 @@ def test_a_bad_number_and_a_zero_spin_axis_name_their_element():
         build_chain([FixedHinge(), beam])
     with pytest.raises(ValueError, match="spin_about_axis: axis must be nonzero"):
         PrescribedMotion.spin_about_axis([0, 0, 0], lambda t: t, lambda t: 1.0, lambda t: 0.0)
+
+
+def test_a_ground_position_beside_a_motion_is_refused():
+    """Ground(position=..., motion=...) used to drop the position silently."""
+    from dttmm import Ground, PrescribedMotion
+    hub = PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: t, lambda t: 1.0, lambda t: 0.0)
+    for ground in (Ground(position=[0.0, 1.0, 0.0], motion=hub),
+                   Ground(rotation=np.eye(3), motion=hub)):
+        with pytest.raises(ValueError, match="Ground: with a motion"):
+            build_chain([FixedHinge(), body()], ground=ground)
+    build_chain([FixedHinge(), body()], ground=Ground(motion=hub))
