@@ -16,7 +16,7 @@ import numpy as np
 
 from .recording import leaves
 
-SEGMENT = 128       # most steps per call of the compiled loop (a call costs ~45 us in Python)
+SEGMENT = 256       # most steps per call of the compiled loop (a call costs ~45 us in Python)
 SAFETY = 0.8        # aim below the tolerance
 GROW, SHRINK = 1.5, 0.2     # the largest change of the step from one segment to the next
 FAILED_SHRINK = 0.25        # after a segment that failed (estimate over max_step_error, NaN)

@@ -390,7 +390,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         Adaptive steps (Newmark scheme): the step is chosen from the local error estimate so
         that the error accumulated over the run stays near atol + rtol (rad for rotations, m
         for displacements; rtol is relative to a motion of order one radian, atol an absolute
-        floor, default 0). Segments of up to 128 equal steps run compiled; one whose estimate
+        floor, default 0). Segments of up to 256 equal steps run compiled; one whose estimate
         per unit time exceeds (atol + rtol) / t_end is taken again with a smaller step
         (growth at most 1.5x, shrink at most 5x per segment). ``n_steps`` counts the accepted
         steps; ``info`` reports ``steps_rejected`` (and ``segments_rejected``), ``dt_min`` and

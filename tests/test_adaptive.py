@@ -26,8 +26,8 @@ def _error(run, tip):
 
 
 def test_the_error_follows_rtol_over_three_decades(case):
-    """Measured (m) at rtol 1e-4 .. 1e-7: three-pendulum 1.1e-5, 1.3e-6, 9.9e-8, 6.5e-9;
-    30-link chain 3.1e-5, 3.9e-6, 3.9e-7, 4.2e-8: 0.06-0.4 rtol, slopes 1.08 and 0.96."""
+    """Measured (m) at rtol 1e-4 .. 1e-7: three-pendulum 1.0e-5, 9.8e-7, 9.1e-8, 8.2e-9;
+    30-link chain 2.8e-5, 4.0e-6, 3.8e-7, 4.0e-8: 0.08-0.4 rtol, slopes 1.03 and 0.96."""
     name, model, tip = case
     errors = [_error(simulate(model, T_END, rtol=rtol, t_eval=[T_END]), tip) for rtol in RTOLS]
     slope = np.polyfit(np.log(RTOLS), np.log(errors), 1)[0]
@@ -39,9 +39,9 @@ def test_the_error_follows_rtol_over_three_decades(case):
 def test_the_adaptive_run_takes_no_more_steps_than_the_fixed_step_of_equal_error(case):
     """Steps (rejected ones counted) against the fixed step reaching the same error, the fixed
     step's error interpolated as C dt^2 from its two nearest runs: at most 1.5x (the wall-time
-    ratio, which adds ~45 us of Python per segment of up to 128 steps, is
-    benchmarks/adaptive.py's).  Measured: three-pendulum 1030 / 979 (rtol 1e-4), 7985 / 7928
-    (1e-6); 30-link chain 760 / 616, 5404 / 5453."""
+    ratio, which adds ~45 us of Python per segment of up to 256 steps, is
+    benchmarks/adaptive.py's).  Measured: three-pendulum 1247 / 992 (rtol 1e-4), 9043 / 8277
+    (1e-6); 30-link chain 732 / 644, 5822 / 5551."""
     name, model, tip = case
     fixed_dts = (2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
     fixed = [(_error(simulate(model, T_END, dt, t_eval=[T_END]), tip), T_END / dt)
