@@ -1,9 +1,11 @@
-"""DT-TMM time integration of a chain: simulate(model, t_end, dt, ...) -> Result.
+"""DT-TMM time integration of a model (chains, trees, joints with coordinates):
+simulate(model, t_end, dt | rtol, ...) -> Result.
 
 The frozen Model is read-only; all mutable state lives in a Workspace allocated once per run.
 The time loop runs in numba (one skeleton, kernels/loop.py, with the scheme's loop variant) in
-chunks; Python only evaluates prescribed ground motion and applied loads for each chunk and
-collects the recorded samples.
+chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python only evaluates
+the prescribed ground motion, applied loads and joint drives for each chunk, judges segments,
+and collects the recorded samples (recording.py).
 """
 import time
 from contextlib import nullcontext
