@@ -37,6 +37,9 @@ def main(argv=None):
     run.add_argument("--dt", type=float, help="step, s (default: the scene's, else info's)")
     run.add_argument("--rtol", type=float,
                      help="adaptive steps to this tolerance (rad, m); --dt is then the first")
+    run.add_argument("--max-energy-error", type=float,
+                     help="stop when the energy balance breaks by more than this fraction of "
+                          "the largest kinetic energy")
     run.add_argument("--method", choices=("riccati", "direct"))
     run.add_argument("--scheme", choices=("newmark", "energy_momentum", "paper"))
     run.add_argument("--record-dt", type=float, help="record every RECORD_DT s")
@@ -67,7 +70,7 @@ def _run(args):
     options = dict(scene.run)
     for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),
                        ("scheme", args.scheme), ("record_dt", args.record_dt),
-                       ("rtol", args.rtol)):
+                       ("rtol", args.rtol), ("max_energy_error", args.max_energy_error)):
         if value is not None:
             options[key] = value
     if "t_end" not in options:
@@ -106,6 +109,9 @@ def _run(args):
           f"{res.info.get('step_error_max', 0.0):.2g}")
     print(f"energy: largest kinetic {scale:.4g} J, total changed by "
           f"{abs(energy[-1] - energy[0]):.3g} J ({abs(energy[-1] - energy[0]) / scale:.2g} of it)")
+    if "energy_balance_error" in res.info:
+        print(f"energy balance (the work of loads, drives, dampers and the ground counted): "
+              f"closes to {res.info['energy_balance_error']:.2g} of the largest kinetic energy")
     if args.out:
         res.save_npz(args.out)
         print(f"wrote {args.out}")

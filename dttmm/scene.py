@@ -68,7 +68,8 @@ _DRIVES = ("spring_damper", "force", "motion", "none")
 _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
         "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
         "record_every": "int", "record_dt": "number", "max_step_error": "number",
-        "full_state": "bool", "richardson": "bool", "rtol": "number", "atol": "number"}
+        "full_state": "bool", "richardson": "bool", "rtol": "number", "atol": "number",
+        "max_energy_error": "number"}
 
 
 def load_scene(path):

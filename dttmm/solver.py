@@ -30,6 +30,7 @@ from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
 from .model import Model, output_section
+from .energy_balance import EnergyBalance
 from .recording import Checkpoint, Recording, SampleStream
 from .result import Result, beam_output_offset, chain_energies, point_positions
 
@@ -374,8 +375,8 @@ def _ground(model, times):
 def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="riccati",
              scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
              record_every=None, record_dt=None, t_eval=None, full_state=False, richardson=False,
-             progress=None, max_step_error=MAX_STEP_ERROR, resume=None,
-             stream=None) -> Result:
+             progress=None, max_step_error=MAX_STEP_ERROR, max_energy_error=None,
+             resume=None, stream=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -448,6 +449,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         max |p_{n+1} - p_n| over every rotation, modal and joint coordinate and deflection; rad
         or m) exceeds it; default 0.05; None never stops. ``info["step_error_max"]`` is the
         run's largest estimate (docs/solver.md, "Runs that cannot go wrong").
+    max_energy_error : float, optional
+        Stop when the energy balance breaks: |E - E(0) - W| above this fraction of the largest
+        kinetic energy so far, E the total energy (the drives' springs left out), W the work of
+        the applied loads, the joint drives, the elastic hinges' and beams' dampers and a
+        moving ground since t = 0 (checked at the end of every chunk of up to 1000 steps;
+        fixed steps). ``info["energy_balance_error"]`` is the run's largest. Default None: not
+        checked (it derives every step's velocities; docs/solver.md, "Energy balance").
     resume : Checkpoint, optional
         Continue the run that wrote it (``result.checkpoint``, or ``Checkpoint.load``) from
         its last step to t_end, with the same model, dt and options: the continued run takes
@@ -490,7 +498,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         rtol, atol = _check_positive("rtol", rtol), float(atol)
         if not atol >= 0.0:
             raise ValueError(f"simulate: atol must be >= 0 (rad or m), got {atol!r}")
-        for name, given, why in (("record_every", record_every is not None, "use record_dt or "
+        for name, given, why in (("max_energy_error", max_energy_error is not None, "it is "
+                                  "checked at fixed steps"),
+                                 ("record_every", record_every is not None, "use record_dt or "
                                   "t_eval"), ("resume", resume is not None, "resume a fixed-step "
                                   "run"), ("richardson", richardson, "the extrapolation needs "
                                   "fixed steps"), ("scheme", scheme != "newmark", "the estimate "
@@ -535,6 +545,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     newton_tol = float(newton_tol)
     max_step_error = (np.inf if max_step_error is None
                       else _check_positive("max_step_error", max_step_error))
+    if max_energy_error is not None:
+        max_energy_error = _check_positive("max_energy_error", max_energy_error)
     if richardson:
         if scheme != "newmark":
             raise ValueError(f"simulate: richardson=True needs scheme='newmark' (the "
@@ -636,6 +648,21 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if no_loads:
         force, torque = np.zeros((size, n, 3)), np.zeros((size, n, 3))
     every = sampling if isinstance(sampling, int) else size + 1
+    balance = None
+    if max_energy_error is not None:            # every step's state, for the balance
+        every = 1
+
+        def result_of(values, steps):
+            rows = Recording(keys, keep)
+            rows.add(values, steps)
+            return _result(user_model, rows, dt, 0.0, 0, {}), rows.arrays()
+
+        balance = EnergyBalance(user_model, max_energy_error, result_of,
+                                beam_tables(user_model))
+        start_values = dict(state._asdict(), **history_values)
+        f0, tq0 = _loads(model, [done * dt])
+        balance.start({key: start_values[key][None] for key in keys}, f0[:, keep],
+                      tq0[:, keep])
     rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys)
     joint_input = np.zeros((size, n, 2, 3))
     joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
@@ -703,10 +730,15 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         while done < n_steps:
             m, every = _next_chunk(done, n_steps, sampling, size)
             times = (done + np.arange(m + 1)) * dt
-            run_chunk(inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt), dt, every, done,
-                      (done + 1) * dt)
+            inputs = inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
+            run_chunk(inputs, dt, 1 if balance else every, done, (done + 1) * dt)
             n_rec = int(info[3])
-            if n_rec:
+            if balance is not None and n_rec:       # the samples asked for, from every step's
+                picked = np.arange(every - 1, n_rec, every)
+                if len(picked):
+                    recording.add({key: getattr(rec, key)[picked] for key in keys},
+                                  done + 1 + picked)
+            elif n_rec:
                 recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
                               done + every * np.arange(1, n_rec + 1))
             if info[0] != OK:
@@ -716,6 +748,12 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                     cause += "; " + _DIRECT_HINT
                 raise DivergenceError(step, step * dt, cause, partial(step - 1))
             max_newton = max(max_newton, int(info[2]))
+            if balance is not None:
+                broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
+                                       done + np.arange(1, m + 1), dt,
+                                       inputs.force[:, keep], inputs.torque[:, keep])
+                if broken:
+                    raise DivergenceError(done + m, (done + m) * dt, broken, partial(done + m))
             done += m
             bar.update(done)
             runaway = _beam_beyond_its_length(model, beam_tips, state.eta)
@@ -731,7 +769,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     result = _result(user_model, recording, dt, 0.0, n_steps,
                      dict(run_info, newton_iterations_used=max_newton,
                           newton_unconverged_steps=int(info[4]),
-                          step_error_max=float(monitor.error[0])), checkpoint)
+                          step_error_max=float(monitor.error[0]),
+                          **({} if balance is None else
+                             {"energy_balance_error": balance.worst})), checkpoint)
     return result.replace(wall_time=time.perf_counter() - wall0)
 
 

@@ -224,6 +224,11 @@ def test_the_command_line_reports_a_bad_scene_and_a_run_that_stops(tmp_path):
                           "--rtol", "1e-4", "--no-progress"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "adaptive steps, rtol = 0.0001" in run.stdout and "steps rejected" in run.stdout
+    run = subprocess.run([sys.executable, "-m", "dttmm", "run",            # the balance
+                          str(shipped_scenes()["rigid_chain"]), "--t-end", "0.5", "--dt", "1e-3",
+                          "--max-energy-error", "1e-4", "--no-progress"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0 and "energy balance" in run.stdout, run.stderr
 
 
 def test_figures_and_an_animation_are_written(tmp_path):

@@ -1,0 +1,141 @@
+"""The energy balance of a run (docs/solver.md, "Energy balance"): simulate(...,
+max_energy_error=f) stops a run whose total energy E (kinetic, gravity, the hinges' and beams'
+strain; the drives' springs left out) departs from E(0) + W by more than f times the largest
+kinetic energy so far, W the work done on the system since t = 0:
+
+    P = sum F_k . v_Ck + tau_k . w_k                  applied loads (at the mass centre)
+      + sum Q_j q'_j                                  joint drives (springs, dampers, forces,
+                                                      prescribed motions: their generalized force)
+      - sum (A^T (d' - w_in x d)) . C_t A^T d'          elastic hinges' dampers (inboard axes A:
+            + w_rel . C_r w_rel                       the force pair's moment works on w_in)
+      - sum 2 zeta omega_k m_k eta'_k^2               beams' modal damping
+      + F_0 . v_g + (M_0 + d_0 x F_0) . w_g           a moving ground, through each root's load
+
+integrated over every step by the trapezoidal rule.  For a second-order step the balance
+closes to O(h^2); a run that breaks it (a step too large, a runaway the estimate missed) stops
+with DivergenceError at the end of the chunk where it broke.  It needs every step's state:
+the loop records each step of a chunk when the check is on (positions derived per step only
+where loads act), so it costs about the positions' price per step.
+"""
+import numpy as np
+
+from .elements import BEAM
+from .elements.beam import EI_V, EI_W, MASS_PER_LENGTH, DAMPING_RATIO, MODES
+from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
+from .elements.rigid_body import TO_MASS_CENTER
+from .result import _drive_spring_energy
+
+
+class EnergyBalance:
+    """The running balance of one run.  result_of(values, steps) -> (Result, the rows
+    restricted to the model's bodies) for rows of the kernels' recorded state (solver._result);
+    beams: solver.beam_tables(model) of the user's model (its modal factors)."""
+
+    def __init__(self, model, limit, result_of, beams):
+        self.model, self.limit, self.result_of = model, float(limit), result_of
+        self.work = 0.0
+        self.largest_kinetic = 0.0
+        self.worst = 0.0            # the largest |E - E0 - W| / largest kinetic energy so far
+        self.e0 = None
+        self.p_last = None
+        n = model.n_bodies
+        self.elastic = [k for k in range(n) if model.hinge_kind[k] == ELASTIC]
+        for k in self.elastic:
+            if model.parent[k] >= 0 and model.body_kind[model.parent[k]] == BEAM:
+                raise ValueError(f"simulate(max_energy_error=...): the elastic hinge "
+                                 f"{model.hinge_names[k]!r} follows a beam; its damper's work "
+                                 f"is not counted yet")
+        self.roots = [k for k in range(n) if model.parent[k] < 0]
+        # the beams' modal damping coefficients c_k = 2 zeta omega_k m_k, flat like eta
+        c = []
+        factors = beams[5]
+        for k in range(n):
+            if model.body_kind[k] != BEAM:
+                continue
+            row = model.beam_params[k]
+            m = int(row[MODES])
+            for ei in (row[EI_V], row[EI_W]):           # the v coordinates first, then w
+                mass = row[MASS_PER_LENGTH] * factors[k, :m, 0]
+                stiffness = ei * factors[k, :m, 1]
+                c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(stiffness * mass))
+        self.modal_damping = np.array(c)
+
+    def energy(self, res):
+        """(E, kinetic) of a one-row Result, the drives' springs left out (their force is in
+        the drives' work)."""
+        e = res.kinetic[-1] + res.potential[-1]
+        if res.joint_coordinates is not None:
+            e -= _drive_spring_energy(self.model, res.joint_coordinates[-1:], 1)[0]
+        return e, res.kinetic[-1]
+
+    def power(self, res, values, force, torque):
+        """(T,) the power of everything outside E at each row of res (its times t):
+        values, the rows' kernel state restricted to the model's bodies (defl, defl_rate);
+        force, torque (T, n, 3) the applied loads at those times."""
+        model = self.model
+        t = res.t
+        p = np.zeros(len(t))
+        w = res.angular_velocity
+        if model.has_applied_loads:
+            l_ic = model.body_params[:, TO_MASS_CENTER]
+            v_c = res.velocity_input + np.cross(w, np.einsum("tkij,kj->tki", res.rotation, l_ic))
+            p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w)
+        if res.joint_coordinates is not None:
+            p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
+        for k in self.elastic:
+            h = model.hinge_params[k]
+            inb = model.parent[k]
+            if inb < 0:
+                grounds = [model.ground_state(ti) for ti in t]
+                a_in = np.array([g[3] for g in grounds])
+                w_in = np.array([g[4] for g in grounds])
+            else:
+                a_in, w_in = res.rotation[:, inb], w[:, inb]
+            # the damper's force -A C_t A^T d' works on the separation's rate seen from the
+            # inboard body, A^T (d' - w_in x d) (the pair's moment d x q works against w_in);
+            # its moment -A C_r w_rel on the relative angular velocity
+            d_dot = values["defl_rate"][:, k]
+            dd_b = np.einsum("tji,tj->ti", a_in, d_dot)
+            rel_b = np.einsum("tji,tj->ti", a_in, d_dot - np.cross(w_in, values["defl"][:, k]))
+            w_b = np.einsum("tji,tj->ti", a_in, w[:, k] - w_in)
+            c_t, c_r = h[C_TRANSLATION].reshape(3, 3), h[C_ROTATION].reshape(3, 3)
+            p -= np.einsum("ti,ij,tj->t", rel_b, c_t, dd_b) + np.einsum("ti,ij,tj->t", w_b, c_r,
+                                                                         w_b)
+        if self.modal_damping.size and np.any(self.modal_damping):
+            p -= (res.modal_velocities ** 2) @ self.modal_damping
+        if model.ground_motion is not None:
+            grounds = [model.ground_state(ti) for ti in t]
+            v_g = np.array([g[1] for g in grounds])
+            w_g = np.array([g[4] for g in grounds])
+            for k in self.roots:
+                f, m = res.force[:, k], res.moment[:, k]
+                if model.hinge_kind[k] == ELASTIC:          # the moment about the ground point
+                    m = m + np.cross(values["defl"][:, k], f)
+                p += np.einsum("ti,ti->t", f, v_g) + np.einsum("ti,ti->t", m, w_g)
+        return p
+
+    def start(self, values, force, torque):
+        """The balance at t = 0 from the initial state's row."""
+        res, mapped = self.result_of(values, [0])
+        self.e0, self.largest_kinetic = self.energy(res)
+        self.p_last = self.power(res, mapped, force, torque)[0]
+
+    def chunk(self, values, steps, h, force, torque):
+        """Add a chunk of every-step rows (its steps' ends); returns the broken balance's
+        message, or None."""
+        res, mapped = self.result_of(values, steps)
+        p = self.power(res, mapped, force, torque)
+        self.work += 0.5 * h * (self.p_last + p[0] + np.sum(p[:-1] + p[1:]))
+        self.p_last = p[-1]
+        last = {key: v[-1:] for key, v in values.items()}
+        e, kinetic = self.energy(self.result_of(last, steps[-1:])[0])
+        self.largest_kinetic = max(self.largest_kinetic, kinetic)
+        gap = e - self.e0 - self.work
+        scale = max(self.largest_kinetic, 1e-300)
+        self.worst = max(self.worst, abs(gap) / scale)
+        if abs(gap) > self.limit * scale:
+            return (f"the energy balance broke: E - E(0) - W = {gap:.4g} J, {abs(gap) / scale:.3g}"
+                    f" of the largest kinetic energy {scale:.4g} J, above max_energy_error = "
+                    f"{self.limit:g} (W: the work of loads, drives, dampers and a moving ground; "
+                    f"a smaller dt, or rtol, keeps it)")
+        return None
