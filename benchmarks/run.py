@@ -31,6 +31,19 @@ import adaptive  # noqa: E402  (benchmarks/adaptive.py)
 import recording  # noqa: E402  (benchmarks/recording.py)
 
 
+def ball_joint_beams(n_elements, length=5.0):
+    """The elements of stiff_cantilever(n_elements) joined by ball joints instead of welds,
+    hanging from a ball joint: the beam element of the fused loop."""
+    from dttmm import BallJoint, EulerBernoulliBeam, build_chain
+    elements = []
+    for _ in range(n_elements):
+        elements += [BallJoint(),
+                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
+                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
+                                        modes_per_plane=2)]
+    return build_chain(elements)
+
+
 def median_us_per_step(model, steps, repeats, **kw):
     """Cost of one step at dt = 1e-4 without the run's fixed setup (workspace, consistent start):
     the difference of a run of `steps` steps and one of steps // 5, over the steps between."""
@@ -277,6 +290,14 @@ def main(argv=None):
         fig[f"rigid_chain_{n}_us_per_step"] = us
     for n, us in zip(beam_sizes, beams):
         fig[f"beam_chain_{n}_us_per_step"] = us
+    # a beam element welded by fixed hinges (the general loop) against one between ball joints
+    # (the fused loop), per element and step: issue 16's 2x target for the welded element
+    for n in (3, 10, 30, 100):
+        steps = max(50, min(1000, 6000 // n))
+        fig[f"welded_beam_{n}_us_per_element_step"] = median_us_per_step(
+            stiff_cantilever(n), steps, 3) / n
+        fig[f"ball_joint_beam_{n}_us_per_element_step"] = median_us_per_step(
+            ball_joint_beams(n), steps, 3) / n
     for n, us in zip(ref_sizes, reference):
         fig[f"newton_euler_rigid_chain_{n}_us_per_rhs"] = us
     big = [i for i, n in enumerate(sizes) if n >= 30]
