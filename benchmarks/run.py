@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from dttmm import simulate
+from dttmm import BallJoint, simulate
 from dttmm.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
@@ -29,19 +29,6 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import adaptive  # noqa: E402  (benchmarks/adaptive.py)
 import recording  # noqa: E402  (benchmarks/recording.py)
-
-
-def ball_joint_beams(n_elements, length=5.0):
-    """The elements of stiff_cantilever(n_elements) joined by ball joints instead of welds,
-    hanging from a ball joint: the beam element of the fused loop."""
-    from dttmm import BallJoint, EulerBernoulliBeam, build_chain
-    elements = []
-    for _ in range(n_elements):
-        elements += [BallJoint(),
-                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
-                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
-                                        modes_per_plane=2)]
-    return build_chain(elements)
 
 
 def median_us_per_step(model, steps, repeats, **kw):
@@ -297,7 +284,7 @@ def main(argv=None):
         fig[f"welded_beam_{n}_us_per_element_step"] = median_us_per_step(
             stiff_cantilever(n), steps, 3) / n
         fig[f"ball_joint_beam_{n}_us_per_element_step"] = median_us_per_step(
-            ball_joint_beams(n), steps, 3) / n
+            stiff_cantilever(n, joint=BallJoint), steps, 3) / n
     for n, us in zip(ref_sizes, reference):
         fig[f"newton_euler_rigid_chain_{n}_us_per_rhs"] = us
     big = [i for i, n in enumerate(sizes) if n >= 30]

@@ -73,13 +73,19 @@ def segment(t, h, target, most=SEGMENT):
     return m, (target - t) / m
 
 
+def checked_times(t_eval):
+    """t_eval as a 1-d float array of finite times (simulate's, fixed or adaptive steps)."""
+    times = np.atleast_1d(np.asarray(t_eval, dtype=float))
+    if times.ndim != 1 or not np.all(np.isfinite(times)):
+        raise ValueError("simulate: t_eval must be a 1-d array of finite times, s")
+    return times
+
+
 def sample_times(t_end, record_dt=None, t_eval=None):
     """The times an adaptive run lands on and records (besides t = 0 and t_end), or None for
     the default: the end of a segment once per t_end / MAX_SAMPLES (solver.MAX_SAMPLES)."""
     if t_eval is not None:
-        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
-        if times.ndim != 1 or not np.all(np.isfinite(times)):
-            raise ValueError("simulate: t_eval must be a 1-d array of finite times, s")
+        times = checked_times(t_eval)
         if np.any(np.diff(times) <= 0) or times[0] < 0.0 or times[-1] > t_end * (1 + 1e-12):
             raise ValueError(f"simulate: t_eval must increase within [0, {t_end:g}] s")
         return times[times > 0.0]

@@ -49,13 +49,14 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
                        gravity=gravity)
 
 
-def stiff_cantilever(n_elements, length=5.0):
+def stiff_cantilever(n_elements, length=5.0, joint=FixedHinge):
     """A cantilever of n_elements beam elements (EI = 1e4 N m^2, 2 kg/m, two modes per plane)
-    welded end to end by fixed hinges: the stiff beam chain of the stability study."""
+    welded end to end by fixed hinges: the stiff beam chain of the stability study.  joint:
+    the hinge class before every element (BallJoint: a hanging chain of the same elements)."""
     from .elements import EulerBernoulliBeam
     elements = []
     for _ in range(n_elements):
-        elements += [FixedHinge(),
+        elements += [joint(),
                      EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
                                         mass_per_length=2.0, polar_inertia_per_length=1e-3,
                                         modes_per_plane=2)]

@@ -76,6 +76,12 @@ class EnergyBalance:
         t = res.t
         p = np.zeros(len(t))
         w = res.angular_velocity
+        if model.ground_motion is not None:     # (r, v, a, R, w, w') of the ground at each t
+            grounds = [model.ground_state(ti) for ti in t]
+            g_rot, v_g, w_g = (np.array([g[i] for g in grounds]) for i in (3, 1, 4))
+        else:
+            g_rot, v_g, w_g = (np.broadcast_to(x, (len(t),) + np.shape(x)) for x in (
+                model.ground_rotation, np.zeros(3), np.zeros(3)))
         if model.has_applied_loads:
             l_ic = model.body_params[:, TO_MASS_CENTER]
             v_c = res.velocity_input + np.cross(w, np.einsum("tkij,kj->tki", res.rotation, l_ic))
@@ -86,9 +92,7 @@ class EnergyBalance:
             h = model.hinge_params[k]
             inb = model.parent[k]
             if inb < 0:
-                grounds = [model.ground_state(ti) for ti in t]
-                a_in = np.array([g[3] for g in grounds])
-                w_in = np.array([g[4] for g in grounds])
+                a_in, w_in = g_rot, w_g
             else:
                 a_in, w_in = res.rotation[:, inb], w[:, inb]
             # the damper's force -A C_t A^T d' works on the separation's rate seen from the
@@ -104,9 +108,6 @@ class EnergyBalance:
         if self.modal_damping.size and np.any(self.modal_damping):
             p -= (res.modal_velocities ** 2) @ self.modal_damping
         if model.ground_motion is not None:
-            grounds = [model.ground_state(ti) for ti in t]
-            v_g = np.array([g[1] for g in grounds])
-            w_g = np.array([g[4] for g in grounds])
             for k in self.roots:
                 f, m = res.force[:, k], res.moment[:, k]
                 if model.hinge_kind[k] == ELASTIC:          # the moment about the ground point

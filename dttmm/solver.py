@@ -873,11 +873,10 @@ def _set_step(loop, h, coef):
     """A new step in the loop variant's step-dependent constants (an adaptive run's segment;
     the skeleton's pieces take h itself from Settings): the fused loops' (c1, c3, 1/c1, c3/c1)
     and the general loop's ground d(w')/d(phi) = c1 I (kernels/step.py::general_loop)."""
-    c1, c3 = kstep._coefficients_py(h, coef)
     if isinstance(loop, kstep.GeneralLoop):
-        loop.ground[4][...] = c1 * np.eye(3)
+        loop.ground[4][...] = kstep._coefficients_py(h, coef)[0] * np.eye(3)
     elif hasattr(loop, "coefficients"):
-        loop.coefficients[:] = (c1, c3, 1.0 / c1, c3 / c1)
+        loop.coefficients[:] = kstep.fused_coefficients(h, coef)
 
 
 CHUNK = 1000        # steps per call of the compiled loop (their inputs are prepared per chunk)
@@ -902,11 +901,9 @@ def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
         record_dt = _check_positive("record_dt", record_dt)
         return max(1, int(round(record_dt / h)))
     if t_eval is not None:
-        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
+        times = adaptive_steps.checked_times(t_eval)
         steps = np.round(times / h)
         off = np.abs(steps * h - times) > 1e-6 * h
-        if times.ndim != 1 or not np.all(np.isfinite(times)):
-            raise ValueError("simulate: t_eval must be a 1-d array of finite times, s")
         if off.any():
             i = int(np.argmax(off))
             raise ValueError(f"simulate: t_eval[{i}] = {times[i]:g} s is not on the step grid "

@@ -21,7 +21,7 @@ from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin
                    t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from .so3 import expm_so3, left_jacobian, log_so3
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .step import _advance_history, _offsets_into
+from .step import _advance_history, _offsets_into, fused_coefficients
 from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
@@ -163,11 +163,8 @@ FusedLoop = namedtuple("FusedLoop", [
 
 def fused_loop(n, mode_off, h, coef):
     """The fused loop's scratch for n bodies whose modal coordinates start at mode_off."""
-    beta, gamma, alpha_m, alpha_f = coef
-    c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
-    c3 = gamma / (beta * h)
     max_modes = int(np.max(np.diff(mode_off))) if n else 0
-    return FusedLoop(np.array([c1, c3, 1.0 / c1, c3 / c1]), np.zeros((4, n, 3)),
+    return FusedLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)),
                      np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
                      np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
                      np.zeros(ball_map_work_shape(max_modes)))

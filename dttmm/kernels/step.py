@@ -187,6 +187,14 @@ def _coefficients_py(h, coef):
     return (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h), gamma / (beta * h)
 
 
+def fused_coefficients(h, coef):
+    """(4,) the fused loops' step constants c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1,
+    w = c3 phi + w3) for a step h: their loop's `coefficients`, set again by an adaptive run's
+    segments (solver._set_step)."""
+    c1, c3 = _coefficients_py(h, coef)
+    return np.array([c1, c3, 1.0 / c1, c3 / c1])
+
+
 @njit(cache=True, fastmath=CONTRACT)
 def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
                     at_start, rot, w3, modal, stations, joints):

@@ -15,6 +15,7 @@ from .beam import ball_map_work_shape, beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import mm3_into
 from .so3 import expm_so3, left_jacobian
+from .step import fused_coefficients
 from .sweep import _add_to_port, _clear_ports, tree_reduced_recover, tree_reduced_step, \
     write_tree_stations
 
@@ -34,11 +35,8 @@ FusedTreeLoop = namedtuple("FusedTreeLoop", [
 
 def fused_tree_loop(n, parent, mode_off, h, coef):
     """The fused tree loop's scratch for n bodies with parents `parent`."""
-    beta, gamma, alpha_m, alpha_f = coef
-    c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
-    c3 = gamma / (beta * h)
     max_modes = int(np.max(np.diff(mode_off))) if n else 0
-    return FusedTreeLoop(np.array([c1, c3, 1.0 / c1, c3 / c1]), np.zeros((4, n, 3)),
+    return FusedTreeLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)),
                          np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
                          np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
                          np.zeros(ball_map_work_shape(max_modes)),
