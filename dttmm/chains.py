@@ -28,12 +28,13 @@ def rigid_chain(n_links, gravity=(0.0, -9.81, 0.0), tip_angular_velocity=(0.0, 0
 
 
 def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.0),
-                   stiffness_factor=1.0, tip_angular_velocity=(0.0, 0.1, 0.0)):
+                   stiffness_factor=1.0, tip_angular_velocity=(0.0, 0.1, 0.0), stiffening=False):
     """The paper's Section 5 system (notes §6): rigid body 2, ball joint, beam 4 (1 m, 1.32 kg,
     E = 2.5e10 Pa, rho = 3300 kg/m^3, 20 mm square section), ball joint, rigid body 6; joint 1
     joins body 2 to the ground at the origin.  All along +x at rest, except body 6 with angular
     velocity tip_angular_velocity ([0, 0.1, 0] rad/s).  stiffness_factor multiplies the beam's
-    modulus (a stiff variant for the stability study)."""
+    modulus (a stiff variant for the stability study); stiffening: the beam's geometric
+    stiffening (docs/beam.md)."""
     from .elements import EulerBernoulliBeam
     side = 0.02
     area = side * side
@@ -41,7 +42,7 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
                               bending_stiffness=stiffness_factor * 2.5e10 * side ** 4 / 12.0,
                               polar_inertia_per_length=3300.0 * area * side * side / 6.0,
                               modes_per_plane=modes_per_plane, damping_ratio=damping_ratio,
-                              name="beam4")
+                              stiffening=stiffening, name="beam4")
     return build_chain([BallJoint(name="joint1"), unit_link(name="body2"),
                         BallJoint(name="joint3"), beam,
                         BallJoint(name="joint5"),

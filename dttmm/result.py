@@ -6,7 +6,7 @@ import numpy as np
 
 from .elements import BEAM
 from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
-                            POLAR_PER_LENGTH, mode_shapes)
+                            POLAR_PER_LENGTH, STIFFENING, foreshortening, mode_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -406,7 +406,36 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     potential = -mu * (((r_in[:, None, :] + rho) @ gravity) @ wq)
     potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
                         + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
+    if row[STIFFENING]:
+        # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
+        # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
+        # int mu c g . A e1; c(x) = 1/2 int_0^x (v'^2 + w'^2) by its own quadrature on [0, x]
+        c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
+        e1 = a[:, :, 0]
+        u = np.cross(w, e1)
+        int_c, int_cd, int_xc = c @ wq, c_dot @ wq, c @ (wq * x)
+        kinetic -= mu * (np.einsum("ti,ti->t", v_in, u) * int_c
+                         + np.einsum("ti,ti->t", v_in, e1) * int_cd
+                         + np.einsum("ti,ti->t", u, u) * int_xc)
+        potential += mu * (e1 @ gravity) * int_c
     return kinetic, potential
+
+
+def _foreshortening_along(row, points, eta, eta_dot):
+    """c(x) = 1/2 int_0^x (v'^2 + w'^2) dxi and its rate at each of the points, (T, points),
+    for T states of one beam: each by a Gauss-Legendre rule of its own on [0, x]."""
+    length, nm = row[LENGTH], int(row[MODES])
+    t, wt = np.polynomial.legendre.leggauss(len(_GL_X))
+    c, c_dot = np.zeros((len(eta), len(points))), np.zeros((len(eta), len(points)))
+    for i, x in enumerate(points):
+        xs, ws = 0.5 * x * (t + 1.0), 0.5 * x * wt
+        dy = mode_shapes(int(row[FAMILY]), length, nm, xs)[1]                  # (m, points)
+        for plane in range(2):
+            slope = eta[:, plane * nm:(plane + 1) * nm] @ dy                   # (T, points)
+            rate = eta_dot[:, plane * nm:(plane + 1) * nm] @ dy
+            c[:, i] += 0.5 * (slope * slope) @ ws
+            c_dot[:, i] += (slope * rate) @ ws
+    return c, c_dot
 
 
 def _output_section(*args):
@@ -547,15 +576,15 @@ def beam_midpoint_deflection(model, result, body):
 
 
 def beam_output_offset(row, rotation, omega, eta, eta_dot):
-    """World offset r_O - r_I = A (L e1 + u(L)) of a beam's output point and its rate
-    w x (r_O - r_I) + A u'(L) (docs/beam.md, "End sections"); any leading axes (T states)."""
+    """World offset r_O - r_I = A ((L - c(L)) e1 + u(L)) of a beam's output point and its rate
+    w x (r_O - r_I) + A (u'(L) - c'(L) e1) (docs/beam.md, "End sections"; c(L) the
+    foreshortening, "Geometric stiffening", zero without it); any leading axes (T states)."""
     length, nm = row[LENGTH], int(row[MODES])
     y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
     eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
-    p = np.stack([np.full(eta.shape[:-1], length), eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y],
-                 axis=-1)
-    p_dot = np.stack([np.zeros(eta.shape[:-1]), eta_dot[..., :nm] @ y,
-                      eta_dot[..., nm:2 * nm] @ y], axis=-1)
+    c, c_dot = foreshortening(row, eta, eta_dot)
+    p = np.stack([length - c, eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y], axis=-1)
+    p_dot = np.stack([-c_dot, eta_dot[..., :nm] @ y, eta_dot[..., nm:2 * nm] @ y], axis=-1)
     rho = np.einsum("...ij,...j->...i", rotation, p)
     return rho, np.cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 

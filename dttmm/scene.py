@@ -17,7 +17,7 @@ import numpy as np
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
-from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
+from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED, STIFFENING,
                             POLAR_PER_LENGTH, DAMPING_RATIO)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
@@ -47,7 +47,8 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "density": "number", "area": "number", "bending_stiffness": "pair",
          "polar_inertia_per_length": "number", "modes_per_plane": "int",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
-         "initial_modal_coordinates": "list", "initial_modal_velocities": "list",
+         "stiffening": "bool", "initial_modal_coordinates": "list",
+         "initial_modal_velocities": "list",
          "rotation": "matrix", "angular_velocity": "vector", "joint": "table"}
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
 _JOINTS = {
@@ -381,6 +382,8 @@ def scene_of(model, run=None, name=None):
                          mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
             if row[FAMILY] != PINNED and ball_ends:
                 table["force_mode_family"] = True
+            if not row[STIFFENING]:
+                table["stiffening"] = False
             eta = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
             eta_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
             if np.any(eta):

@@ -16,7 +16,7 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
-from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
+from .elements.beam import FAMILY, LENGTH, MODES, foreshortening_integrals, mode_shapes
 from .elements.drives import FORCE, MOTION
 from .elements.hinges import COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0, REST_ROTATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -216,10 +216,12 @@ def beam_tables(model):
     [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI]) for the kernels (docs/beam.md, "Mode
     shapes" and "The integrals in the frame").  The modal integrals of beam k, moments[k, j] =
     [int Y_j, int x Y_j, int Y_j Y_0, .., int Y_j Y_(m-1)] over [0, L], by Gauss-Legendre
-    quadrature exact to rounding for the mode families (kernels/beam.py::quadrature_size)."""
+    quadrature exact to rounding for the mode families (kernels/beam.py::quadrature_size), then
+    the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
+    (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
-    moments = np.zeros((n, max_modes, max_modes + 2))
+    moments = np.zeros((n, max_modes, 4 * max_modes + 2))
     ends = np.zeros((n, max_modes, 2))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):
@@ -232,6 +234,8 @@ def beam_tables(model):
             moments[k, :m, 1] = y @ (wq * x)
             gram = (y * wq) @ y.T
             moments[k, :m, 2:2 + m] = 0.5 * (gram + gram.T)
+            for i, d in enumerate(foreshortening_integrals(family, length, m)):
+                moments[k, :m, 2 + (i + 1) * m:2 + (i + 2) * m] = d
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
             factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness

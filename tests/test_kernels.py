@@ -197,8 +197,17 @@ def test_small_solve_matches_lapack_and_flags_singular():
     assert np.isnan(x).all()
 
 
+def _stiffened_cantilever():
+    """One clamped beam (free tip) on a hub: geometric stiffening on, the clamped family."""
+    from dttmm import EulerBernoulliBeam, FixedHinge, build_chain
+    return build_chain([FixedHinge(), EulerBernoulliBeam(
+        length=2.0, mass_per_length=3.0, bending_stiffness=[40.0, 60.0],
+        polar_inertia_per_length=0.01, modes_per_plane=3, stiffening=True)])
+
+
 @pytest.mark.parametrize("start", [False, True])
-def test_beam_transfer_is_the_linearization_of_the_beam_relations(start):
+@pytest.mark.parametrize("system", ["three_pendulum", "cantilever"])
+def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system):
     """The beam's transfer (every column written out where the output carries no moment:
     _affine_columns, _modal_columns, _rotation_columns) against central differences of its exact
     relations (_evaluate) in every unknown, eliminated through the modal equations the same way
@@ -208,12 +217,13 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start):
     from dttmm.chains import three_pendulum
     from dttmm.kernels.beam import _evaluate, beam_transfer
     from dttmm.solver import Workspace
-    model = three_pendulum(2, damping_ratio=0.03)
+    model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
+                if system == "three_pendulum" else (_stiffened_cantilever(), 0))
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
-    k = 1
+    assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
     m = (mode_off[k + 1] - mode_off[k]) // 2
     n = 2 * m
-    tables = (moments[k, :m, :m + 2], ends[k, :m], factors[k, :m])
+    tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m])
     gen = np.random.default_rng(11)
     h = 1e-4
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
@@ -251,14 +261,21 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start):
         assert np.abs((got - want) / scale).max() < 1e-9, name
 
 
-@pytest.mark.parametrize("family, m", [(0, 2), (1, 3), (2, 2), (2, 4)])
-def test_beam_relations_match_a_direct_quadrature(family, m):
+@pytest.mark.parametrize("family, m, stiffening", [(0, 2, 1), (1, 3, 1), (2, 2, 0), (2, 4, 1)])
+def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
     """beam_relations writes the integrals along the beam with the modal integrals in the
     beam's frame (docs/beam.md, "The integrals in the frame").  Here every integral is taken
     directly, as docs/beam.md states it, by 40-point Gauss-Legendre quadrature of the line load
     f = mu (g - r''(x)), r'' = a_I + w' x rho + w x (w x rho) + 2 w x A u' + A u'', in world
     components: the outputs (a_O, m_O, q_O), the modal residuals and every sum the analytic
-    columns use."""
+    columns use.  With geometric stiffening (docs/beam.md, "Geometric stiffening"): every
+    section also moves back by c(x) e1, c = 1/2 int_0^x (v'^2 + w'^2) (each c(x) and its rates
+    by a quadrature of its own over [0, x]), exactly in the line load's integral and the
+    output point, and to first order in c in the moment and the second moments (c's products
+    with the rigid x e1 and the rigid line load only); the residuals gain
+    int N(x) Y_k' u'(x) dx with the axial force N(x) = -e1 . q_O + int_x^L e1 . f_rigid
+    (f_rigid = mu (g - a_I - w' x x e1 - w x (w x x e1))), each N(x) by its own quadrature over
+    [x, L]."""
     from dttmm.elements.beam import BEAM_PARAM_SIZE, mode_shapes
     from dttmm.kernels.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES, SUM_U, SUM_V,
                                     aux_rows, beam_relations)
@@ -267,7 +284,7 @@ def test_beam_relations_match_a_direct_quadrature(family, m):
     gen = np.random.default_rng(3 + family + m)
     length, mu, ei_v, ei_w, j_p, zeta = 1.3, 2.1, 40.0, 55.0, 0.02, 0.04
     bp = np.zeros(BEAM_PARAM_SIZE)
-    bp[:8] = length, mu, ei_v, ei_w, j_p, zeta, m, family
+    bp[:9] = length, mu, ei_v, ei_w, j_p, zeta, m, family, stiffening
     model = SimpleNamespace(n_bodies=1, body_kind=np.array([1]), beam_params=bp[None, :],
                             n_modes=np.array([2 * m]))
     _, _, moments, _, ends, factors = beam_tables(model)
@@ -291,12 +308,33 @@ def test_beam_relations_match_a_direct_quadrature(family, m):
     r_dd = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho)) + 2 * np.cross(w, vel)
             + acc)
     f = mu * (g - r_dd)
-    q_o = q_i + wt @ f
-    rho_l = length * e1 + (ends[0, :m, 0] @ eta[:m]) * e2 \
+
+    def shortening(at):                     # c, c', c'' at the points `at`, each (len(at),)
+        out = np.zeros((3, len(at)))
+        ts, ws = np.polynomial.legendre.leggauss(40)
+        for i, xi in enumerate(at):
+            dys = mode_shapes(family, length, m, 0.5 * xi * (ts + 1.0))[1]
+            for p in range(2):
+                sl, sd, sdd = (dys.T @ v[p * m:(p + 1) * m] for v in (eta, eta_d, eta_dd))
+                out[:, i] += 0.5 * xi * ws @ np.array([0.5 * sl * sl, sl * sd,
+                                                       sd * sd + sl * sdd]).T
+        return out if stiffening else 0.0 * out
+    c, c_d, c_dd = shortening(x)
+    c_l, c_d_l, c_dd_l = shortening([length])[:, 0]
+    fore, fore_d, fore_dd = (-np.outer(v, e1) for v in (c, c_d, c_dd))   # -c e1 and rates
+    fore_acc = (np.cross(wd, fore) + np.cross(w, np.cross(w, fore)) + 2 * np.cross(w, fore_d)
+                + fore_dd)
+    f_rigid = mu * (g - a_i - np.cross(wd, np.outer(x, e1))
+                    - np.cross(w, np.cross(w, np.outer(x, e1))))
+    q_o = q_i + wt @ (f - mu * fore_acc)
+    end_u = (ends[0, :m, 0] @ eta_d[:m]) * e2 + (ends[0, :m, 0] @ eta_d[m:]) * e3 - c_d_l * e1
+    end_v = (ends[0, :m, 0] @ eta_dd[:m]) * e2 + (ends[0, :m, 0] @ eta_dd[m:]) * e3 - c_dd_l * e1
+    rho_l = (length - c_l) * e1 + (ends[0, :m, 0] @ eta[:m]) * e2 \
         + (ends[0, :m, 0] @ eta[m:]) * e3
     jp_w = j_p * length * np.outer(e1, e1)
     m_o = m_i - np.cross(rho_l, q_o) + wt @ np.cross(rho, f) - (jp_w @ wd
                                                                 + np.cross(w, jp_w @ w))
+    m_o += wt @ (np.cross(fore, f_rigid) - mu * np.cross(np.outer(x, e1), fore_acc))
     mass_k, stiff_k = factors[0, :m, 0] * mu, factors[0, :m, 1]
     res_want = np.empty(n)
     for p, (e, ei) in enumerate(((e2, ei_v), (e3, ei_w))):
@@ -306,23 +344,32 @@ def test_beam_relations_match_a_direct_quadrature(family, m):
             omega = np.sqrt(stiffness / mass_k[k])
             res_want[i] = (-(wt * y[k]) @ (f @ e) + 2 * zeta * omega * mass_k[k] * eta_d[i]
                            + stiffness * eta[i] + (q_o @ e) * ends[0, k, 0])
-    a_o = (a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
-           + 2 * np.cross(w, (ends[0, :m, 0] @ eta_d[:m]) * e2 + (ends[0, :m, 0] @ eta_d[m:]) * e3)
-           + (ends[0, :m, 0] @ eta_dd[:m]) * e2 + (ends[0, :m, 0] @ eta_dd[m:]) * e3)
+    if stiffening:
+        dy = mode_shapes(family, length, m, x)[1]
+        axial = np.empty_like(x)
+        for i, xi in enumerate(x):
+            ts, ws = np.polynomial.legendre.leggauss(40)
+            xs, ws = xi + 0.5 * (length - xi) * (ts + 1.0), 0.5 * (length - xi) * ws
+            f_rigid = mu * (g - a_i - np.cross(wd, np.outer(xs, e1))
+                            - np.cross(w, np.cross(w, np.outer(xs, e1))))
+            axial[i] = -(q_o @ e1) + ws @ (f_rigid @ e1)
+        for p in range(2):
+            slope = dy.T @ eta[p * m:(p + 1) * m]                   # v'(x) or w'(x)
+            res_want[p * m:(p + 1) * m] += (dy * (wt * axial * slope)).sum(axis=1)
+    a_o = a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l)) + 2 * np.cross(w, end_u) \
+        + end_v
     mw = mu * wt
     want = {
         "a_O": (out[0:3], a_o), "m_O": (out[6:9], m_o), "q_O": (out[9:12], q_o),
         "residual": (res, res_want),
-        "S": (aux[0], mw @ rho), "rho_L": (aux[1], rho_l),
-        "int mu A u'": (aux[SUM_U], mw @ vel), "int mu A u''": (aux[SUM_V], mw @ acc),
+        "S": (aux[0], mw @ (rho + fore)), "rho_L": (aux[1], rho_l),
+        "int mu A u'": (aux[SUM_U], mw @ (vel + fore_d)),
+        "int mu A u''": (aux[SUM_V], mw @ (acc + fore_dd)),
         "H": (aux[SUM_H], mw @ np.cross(rho, acc)),
         "J": (aux[SUM_J:SUM_J + 3], (mw * (rho * rho).sum(1)).sum() * np.eye(3)
-              - (rho.T * mw) @ rho),
-        "C": (aux[SUM_C:SUM_C + 3], (vel.T * mw) @ rho),
-        "A u'(L)": (aux[END_U], (ends[0, :m, 0] @ eta_d[:m]) * e2
-                    + (ends[0, :m, 0] @ eta_d[m:]) * e3),
-        "A u''(L)": (aux[END_V], (ends[0, :m, 0] @ eta_dd[:m]) * e2
-                     + (ends[0, :m, 0] @ eta_dd[m:]) * e3),
+              - (rho.T * mw) @ rho - 2 * (mw * x) @ c * (np.eye(3) - np.outer(e1, e1))),
+        "C": (aux[SUM_C:SUM_C + 3], (vel.T * mw) @ rho + ((fore_d.T * mw) @ np.outer(x, e1))),
+        "A u'(L)": (aux[END_U], end_u), "A u''(L)": (aux[END_V], end_v),
         "F_k": (aux[SUM_MODES:SUM_MODES + m], (y * wt) @ f),
         "Q_k": (aux[SUM_MODES + m:SUM_MODES + 2 * m], (y * mw) @ rho),
         "int mu Y_k A u'": (aux[SUM_MODES + 2 * m:SUM_MODES + 3 * m], (y * mw) @ vel),
@@ -347,7 +394,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
     k, m = 1, 2
     n = 2 * m
-    tables = (moments[k, :m, :m + 2], ends[k, :m], factors[k, :m])
+    tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m])
     gen = np.random.default_rng(5)
     h = 1e-3
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)

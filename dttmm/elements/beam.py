@@ -2,9 +2,9 @@
 
 Floating frame at the input end I, x along the reference axis (the chord I -> O); a section at
 x sits at r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
-w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation, no geometric stiffening; the
-section's rotary inertia is left out (Euler-Bernoulli, like the paper), but its small polar
-inertia is kept for the frame's spin about x.
+w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffening on request
+(docs/beam.md); the section's rotary inertia is left out (Euler-Bernoulli, like the paper), but
+its small polar inertia is kept for the frame's spin about x.
 """
 from dataclasses import dataclass
 
@@ -67,6 +67,42 @@ def mode_shapes(family, length, n_modes, x):
     return y, dy, ddy, mass, stiff
 
 
+def foreshortening_integrals(family, length, n_modes):
+    """D0, D1, D2 (3, n_modes, n_modes): int_0^L w(x) Y_j'(x) Y_k'(x) dx for w = 1, L - x and
+    (L^2 - x^2) / 2, the geometric stiffness integrals of docs/beam.md ("Geometric
+    stiffening"): c(L) = 1/2 eta^T D0 eta, int c = 1/2 eta^T D1 eta, int x c = 1/2 eta^T D2 eta
+    per plane.  By Gauss-Legendre quadrature with 3 n_modes + 12 points (the integrands are
+    products of two slopes and a quadratic, like the modal integrals of
+    kernels/beam.py::quadrature_size)."""
+    t, wt = np.polynomial.legendre.leggauss(3 * int(n_modes) + 12)
+    x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
+    dy = mode_shapes(family, length, n_modes, x)[1]
+    out = np.empty((3, n_modes, n_modes))
+    for i, weight in enumerate((wt, wt * (length - x), wt * 0.5 * (length * length - x * x))):
+        gram = (dy * weight) @ dy.T
+        out[i] = 0.5 * (gram + gram.T)
+    return out
+
+
+def foreshortening(beam_row, eta, eta_dot=None):
+    """(c(L), c'(L)): how far a beam's tip has moved back along its frame's axis, m, and its
+    rate, m/s (docs/beam.md, "Geometric stiffening"), for eta (..., 2 m) (any leading axes);
+    zero without geometric stiffening."""
+    eta = np.asarray(eta, dtype=float)
+    m = int(beam_row[MODES])
+    if not beam_row[STIFFENING] or m == 0:
+        zero = np.zeros(eta.shape[:-1])
+        return zero, zero.copy()
+    d0 = foreshortening_integrals(int(beam_row[FAMILY]), beam_row[LENGTH], m)[0]
+    eta_dot = np.zeros_like(eta) if eta_dot is None else np.asarray(eta_dot, dtype=float)
+    c = c_dot = 0.0
+    for plane in range(2):
+        e, ed = eta[..., plane * m:(plane + 1) * m], eta_dot[..., plane * m:(plane + 1) * m]
+        c = c + 0.5 * np.einsum("...j,jk,...k->...", e, d0, e)
+        c_dot = c_dot + np.einsum("...j,jk,...k->...", ed, d0, e)
+    return c, c_dot
+
+
 def _loaded_modes(n_modes):
     """Coefficients c (n, n) of the loaded-end modes Y_j(x) = sum_i c_ij (x/L)^(i+2) on a unit
     length, and their eigenvalues lam_j (EI d4Y/dx4 = lam mu Y on a unit length): the Ritz
@@ -85,8 +121,9 @@ def _loaded_modes(n_modes):
     return coef, lam
 
 # layout of one row of Model.beam_params
-LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY = range(8)
-BEAM_PARAM_SIZE = 8
+(LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY,
+ STIFFENING) = range(9)
+BEAM_PARAM_SIZE = 9
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,9 +133,9 @@ class EulerBernoulliBeam:
     Floating frame at the input end I, x along the reference axis (the chord I -> O for the
     pinned family, the input section's tangent for the clamped ones); a section at x sits at
     r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
-    w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation, no geometric stiffening;
-    the section's rotary inertia is left out, its polar inertia kept for the frame's spin
-    about x.  The arguments are checked when the model is built (``System.build`` or
+    w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffening on
+    request (``stiffening``); the section's rotary inertia is left out, its polar inertia
+    kept for the frame's spin about x.  The arguments are checked when the model is built (``System.build`` or
     ``build_chain``), not here.
 
     Parameters
@@ -146,6 +183,13 @@ class EulerBernoulliBeam:
         Initial world-frame angular velocity of the frame, rad/s, as for ``RigidBody``.
     name : str, optional
         The body's name, as for ``RigidBody`` (default "": ``body{k}``).
+    stiffening : bool, optional
+        Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
+        stiffening"): the foreshortening of the deflected centreline kept to second order in
+        the energy, so inertia (centrifugal loads included), gravity and the end loads stiffen
+        or soften the bending modes.  Default False for now: without axial modes the
+        centreline is inextensible, so a beam held at both ends (e.g. pinned between fixed
+        points) would lock; turn it on for beams that spin, carry a tip mass, or hang.
 
     Raises
     ------
@@ -156,7 +200,7 @@ class EulerBernoulliBeam:
         not an integer >= 1 (or above 6 for loaded-end modes); a negative damping ratio; an
         unknown mode family, or one that contradicts the beam's ends; initial modal
         coordinates or velocities without 2 x modes_per_plane finite entries; a bad rotation
-        or angular velocity.
+        or angular velocity; stiffening not a bool.
 
     Examples
     --------
@@ -183,6 +227,7 @@ class EulerBernoulliBeam:
     rotation: object = None
     angular_velocity: object = None
     name: str = ""
+    stiffening: bool = False
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -233,6 +278,9 @@ class EulerBernoulliBeam:
         row[LENGTH], row[MASS_PER_LENGTH], row[EI_V], row[EI_W] = length, mu, ei[0], ei[1]
         row[POLAR_PER_LENGTH], row[DAMPING_RATIO] = polar, zeta
         row[MODES], row[FAMILY] = int(self.modes_per_plane), MODE_FAMILY_NAMES[self.mode_family]
+        if not isinstance(self.stiffening, (bool, np.bool_)):
+            raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")
+        row[STIFFENING] = float(self.stiffening)
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
                     j_i=j_c + shift, force=None, torque=None, rotation=rotation, omega=omega,
                     beam=row, eta0=eta0, eta_d0=eta_d0,

@@ -16,6 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
+from ..elements.beam import STIFFENING
 from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
@@ -25,14 +26,29 @@ from .so3 import expm_so3, left_jacobian, log_so3
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
 # int mu A u', int mu A u'', int mu rho x A u''; A u'(L), A u''(L); J = int mu (|rho|^2 E -
 # rho rho^T) (3 rows); C = int mu (A u') rho^T (3 rows); then per mode k < m: F_k = int Y_k f,
-# Q_k = int mu Y_k rho, int mu Y_k A u', int mu Y_k A u''
+# Q_k = int mu Y_k rho, int mu Y_k A u', int mu Y_k A u''; then, with geometric stiffening
+# (docs/beam.md), per mode l < m of each plane (v, then w): (D0 x, D1 x, D2 x)_l for x = eta,
+# eta', eta'' (foreshortening_row), the axial force's coefficients (N_L, mu gamma_x,
+# mu (omega_y^2 + omega_z^2)) and g - a_I (world) (coefficient_row)
 SUM_U, SUM_V, SUM_H, END_U, END_V, SUM_J, SUM_C, SUM_MODES = 4, 5, 6, 7, 8, 9, 12, 15
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def aux_rows(m):
     """Rows of the aux array with every sum (m modes per plane)."""
-    return SUM_MODES + 4 * m
+    return SUM_MODES + 10 * m + 2
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def foreshortening_row(m, which, plane):
+    """First aux row of a plane's (D0 x, D1 x, D2 x), x = eta (which 0), eta' (1), eta'' (2)."""
+    return SUM_MODES + (4 + 2 * which + plane) * m
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def coefficient_row(m):
+    """aux row of (N_L, mu gamma_x, mu (omega_y^2 + omega_z^2)); the next holds g - a_I."""
+    return SUM_MODES + 10 * m
 
 
 def quadrature_size(modes_per_plane):
@@ -162,32 +178,74 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
                 aux[SUM_MODES + m + k, i] = mu * (c0 * q0 + c1 * q1 + c2 * q2)      # Q_k
                 aux[SUM_MODES + 2 * m + k, i] = mu * (c1 * mdv + c2 * mdw)
                 aux[SUM_MODES + 3 * m + k, i] = mu * (c1 * mddv + c2 * mddw)
-    # s, s', s'' and the second moments Pi (per unit mu, in the frame)
-    s0, s1, s2 = 0.5 * length * length, pv, pw
-    pxx = length * length * length / 3.0
+    # the foreshortening c(x) = 1/2 int_0^x (v'^2 + w'^2) (docs/beam.md, "Geometric
+    # stiffening"): C0 = c(L), C1 = int c, C2 = int x c = 1/2 eta^T (D0, D1, D2) eta over both
+    # planes, and their rates (D symmetric: C' = eta'^T D eta, C'' = eta'^T D eta' + eta^T D eta'')
+    stiff = bp[STIFFENING] != 0.0
+    cc0 = cd0 = cdd0 = cc1 = cd1 = cdd1 = cc2 = cd2 = 0.0
+    if stiff:
+        for plane in range(2):
+            for l in range(m):
+                x0 = x1 = x2 = y0 = y1 = y2 = z0 = z1 = z2 = 0.0     # D eta, D eta', D eta''
+                for k in range(m):
+                    b0, b1, b2 = moments[l, 2 + m + k], moments[l, 2 + 2 * m + k], \
+                        moments[l, 2 + 3 * m + k]
+                    i = plane * m + k
+                    ek, edk, eddk = eta[i], eta_d[i], eta_dd[i]
+                    x0 += b0 * ek
+                    x1 += b1 * ek
+                    x2 += b2 * ek
+                    y0 += b0 * edk
+                    y1 += b1 * edk
+                    y2 += b2 * edk
+                    z0 += b0 * eddk
+                    z1 += b1 * eddk
+                    z2 += b2 * eddk
+                el, edl = eta[plane * m + l], eta_d[plane * m + l]
+                cc0 += 0.5 * el * x0
+                cd0 += edl * x0
+                cdd0 += edl * y0 + el * z0
+                cc1 += 0.5 * el * x1
+                cd1 += edl * x1
+                cdd1 += edl * y1 + el * z1
+                cc2 += 0.5 * el * x2
+                cd2 += edl * x2
+                if sums:
+                    for which, (d0, d1, d2) in enumerate(((x0, x1, x2), (y0, y1, y2),
+                                                          (z0, z1, z2))):
+                        row = foreshortening_row(m, which, plane) + l
+                        aux[row, 0], aux[row, 1], aux[row, 2] = d0, d1, d2
+    # s, s', s'' and the second moments Pi (per unit mu, in the frame; with the foreshortening
+    # -c e1 to first order in c: s_x = L^2/2 - C1, Pi_xx = L^3/3 - 2 C2)
+    s0, s1, s2 = 0.5 * length * length - cc1, pv, pw
+    sd0, sdd0 = -cd1, -cdd1
+    pxx = length * length * length / 3.0 - 2.0 * cc2
     # J = tr(Pi) E - Pi
     j00, j11, j22 = vv + ww, pxx + ww, pxx + vv
     j01, j02, j12 = -xv, -xw, -vw
-    # C = int u' rho^T (its first row is zero), H = int rho x u''
+    # C = int rho' rho^T (its first row (-C2', 0, 0)), H = int rho x rho'' (c adds nothing)
+    c00 = -cd2
     c10, c11, c12, c20, c21, c22 = xdv, dvv, dvw, xdw, dwv, dww
     h0, h1, h2 = hx, -xddw, xddv
-    # int f / mu: L gamma - (alpha x s + omega x (omega x s) + 2 omega x s' + s''), s' = (0, pdv,
-    # pdw), s'' = (0, pddv, pddw)
+    # int f / mu: L gamma - (alpha x s + omega x (omega x s) + 2 omega x s' + s''), s' = (sd0,
+    # pdv, pdw), s'' = (sdd0, pddv, pddw)
     os0, os1, os2 = o1 * s2 - o2 * s1, o2 * s0 - o0 * s2, o0 * s1 - o1 * s0
-    fb0 = length * gm0 - (al1 * s2 - al2 * s1) - (o1 * os2 - o2 * os1) - 2.0 * (o1 * pdw - o2 * pdv)
-    fb1 = (length * gm1 - (al2 * s0 - al0 * s2) - (o2 * os0 - o0 * os2) - 2.0 * (-o0 * pdw)
-           - pddv)
-    fb2 = (length * gm2 - (al0 * s1 - al1 * s0) - (o0 * os1 - o1 * os0) - 2.0 * (o0 * pdv)
-           - pddw)
+    fb0 = (length * gm0 - (al1 * s2 - al2 * s1) - (o1 * os2 - o2 * os1)
+           - 2.0 * (o1 * pdw - o2 * pdv) - sdd0)
+    fb1 = (length * gm1 - (al2 * s0 - al0 * s2) - (o2 * os0 - o0 * os2)
+           - 2.0 * (o2 * sd0 - o0 * pdw) - pddv)
+    fb2 = (length * gm2 - (al0 * s1 - al1 * s0) - (o0 * os1 - o1 * os0)
+           - 2.0 * (o0 * pdv - o1 * sd0) - pddw)
     # int rho x f / mu: s x gamma - (J alpha + omega x J omega + 2 (tr C omega - C omega) + H)
     jo0 = j00 * o0 + j01 * o1 + j02 * o2
     jo1 = j01 * o0 + j11 * o1 + j12 * o2
     jo2 = j02 * o0 + j12 * o1 + j22 * o2
-    tr_c = c11 + c22
+    tr_c = c00 + c11 + c22
+    co0 = c00 * o0
     co1 = c10 * o0 + c11 * o1 + c12 * o2
     co2 = c20 * o0 + c21 * o1 + c22 * o2
     mb0 = (s1 * gm2 - s2 * gm1 - (j00 * al0 + j01 * al1 + j02 * al2) - (o1 * jo2 - o2 * jo1)
-           - 2.0 * tr_c * o0 - h0)
+           - 2.0 * (tr_c * o0 - co0) - h0)
     mb1 = (s2 * gm0 - s0 * gm2 - (j01 * al0 + j11 * al1 + j12 * al2) - (o2 * jo0 - o0 * jo2)
            - 2.0 * (tr_c * o1 - co1) - h1)
     mb2 = (s0 * gm1 - s1 * gm0 - (j02 * al0 + j12 * al1 + j22 * al2) - (o0 * jo1 - o1 * jo0)
@@ -202,14 +260,14 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     if sums:
         for i in range(3):
             c0, c1, c2 = rot[i, 0], rot[i, 1], rot[i, 2]
-            aux[SUM_U, i] = mu * (c1 * pdv + c2 * pdw)
-            aux[SUM_V, i] = mu * (c1 * pddv + c2 * pddw)
+            aux[SUM_U, i] = mu * (c0 * sd0 + c1 * pdv + c2 * pdw)
+            aux[SUM_V, i] = mu * (c0 * sdd0 + c1 * pddv + c2 * pddw)
             aux[SUM_H, i] = mu * (c0 * h0 + c1 * h1 + c2 * h2)
-            # A J and A C (C's first row is zero), then times A^T below
+            # A J and A C, then times A^T below
             aux[SUM_J + i, 0] = c0 * j00 + c1 * j01 + c2 * j02
             aux[SUM_J + i, 1] = c0 * j01 + c1 * j11 + c2 * j12
             aux[SUM_J + i, 2] = c0 * j02 + c1 * j12 + c2 * j22
-            aux[SUM_C + i, 0] = c1 * c10 + c2 * c20
+            aux[SUM_C + i, 0] = c0 * c00 + c1 * c10 + c2 * c20
             aux[SUM_C + i, 1] = c1 * c11 + c2 * c21
             aux[SUM_C + i, 2] = c1 * c12 + c2 * c22
         for base in (SUM_J, SUM_C):
@@ -229,28 +287,28 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     v_l, w_l, vd_l, wd_l, vdd_l, wdd_l = _weighted_coordinates(ends[:, 0], eta, eta_d, eta_dd)
     # (in scalars: this tail runs once per evaluation, where small temporaries would cost more
     # than the arithmetic)
-    for i in range(3):
-        aux[1, i] = length * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]     # rho_L
+    for i in range(3):                                                       # rho_L
+        aux[1, i] = (length - cc0) * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]
     r0, r1, r2 = aux[1, 0], aux[1, 1], aux[1, 2]
     qo0, qo1, qo2 = q_i[0] + sf0, q_i[1] + sf1, q_i[2] + sf2
     jp = j_p * length
     s_wd = jp * (e10 * wd0 + e11 * wd1 + e12 * wd2)
     s_w = jp * (e10 * w0 + e11 * w1 + e12 * w2)
     wr0, wr1, wr2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0      # w x rho_L
-    d0 = vd_l * rot[0, 1] + wd_l * rot[0, 2]                                   # A u'(L)
-    d1 = vd_l * rot[1, 1] + wd_l * rot[1, 2]
-    d2 = vd_l * rot[2, 1] + wd_l * rot[2, 2]
+    # A rho_L' and A rho_L'' in the frame's rates (u(L) and the foreshortening -c(L) e1)
+    d0 = -cd0 * e10 + vd_l * rot[0, 1] + wd_l * rot[0, 2]
+    d1 = -cd0 * e11 + vd_l * rot[1, 1] + wd_l * rot[1, 2]
+    d2 = -cd0 * e12 + vd_l * rot[2, 1] + wd_l * rot[2, 2]
+    dd0 = -cdd0 * e10 + vdd_l * rot[0, 1] + wdd_l * rot[0, 2]
+    dd1 = -cdd0 * e11 + vdd_l * rot[1, 1] + wdd_l * rot[1, 2]
+    dd2 = -cdd0 * e12 + vdd_l * rot[2, 1] + wdd_l * rot[2, 2]
     if sums:
-        for i in range(3):
-            aux[END_U, i] = vd_l * rot[i, 1] + wd_l * rot[i, 2]
-            aux[END_V, i] = vdd_l * rot[i, 1] + wdd_l * rot[i, 2]             # A u''(L)
-    # a_O = a_I + w' x rho_L + w x (w x rho_L) + 2 w x A u'(L) + A u''(L)
-    out[0] = (a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * d2 - w2 * d1)
-              + vdd_l * rot[0, 1] + wdd_l * rot[0, 2])
-    out[1] = (a1 + wd2 * r0 - wd0 * r2 + w2 * wr0 - w0 * wr2 + 2.0 * (w2 * d0 - w0 * d2)
-              + vdd_l * rot[1, 1] + wdd_l * rot[1, 2])
-    out[2] = (a2 + wd0 * r1 - wd1 * r0 + w0 * wr1 - w1 * wr0 + 2.0 * (w0 * d1 - w1 * d0)
-              + vdd_l * rot[2, 1] + wdd_l * rot[2, 2])
+        aux[END_U, 0], aux[END_U, 1], aux[END_U, 2] = d0, d1, d2
+        aux[END_V, 0], aux[END_V, 1], aux[END_V, 2] = dd0, dd1, dd2
+    # a_O = a_I + w' x rho_L + w x (w x rho_L) + 2 w x A rho_L' + A rho_L''
+    out[0] = a0 + wd1 * r2 - wd2 * r1 + w1 * wr2 - w2 * wr1 + 2.0 * (w1 * d2 - w2 * d1) + dd0
+    out[1] = a1 + wd2 * r0 - wd0 * r2 + w2 * wr0 - w0 * wr2 + 2.0 * (w2 * d0 - w0 * d2) + dd1
+    out[2] = a2 + wd0 * r1 - wd1 * r0 + w0 * wr1 - w1 * wr0 + 2.0 * (w0 * d1 - w1 * d0) + dd2
     out[3], out[4], out[5] = wd0, wd1, wd2
     # m_O = m_I - rho_L x q_O + int rho x f - (J_p,w w' + w x J_p,w w), J_p,w = jp e1 e1^T
     out[6] = m_i[0] - (r1 * qo2 - r2 * qo1) + sm0 - (s_wd * e10 + s_w * (w1 * e12 - w2 * e11))
@@ -265,6 +323,27 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     for k in range(m):
         residual[k] += q2 * ends[k, 0]
         residual[m + k] += q3 * ends[k, 0]
+    if stiff:
+        # geometric stiffening (docs/beam.md, "Geometric stiffening"): the generalized forces of
+        # the foreshortening, residual += G eta, G = N_L D0 + mu gamma_x D1
+        # + mu (omega_y^2 + omega_z^2) D2, N_L = -e1 . q_O the axial force at O (tension > 0):
+        # N_L D0 eta is the end force's work through c(L), the rest the line load's
+        n_l = -(qo0 * e10 + qo1 * e11 + qo2 * e12)
+        c_g = mu * gm0
+        c_w = mu * (o1 * o1 + o2 * o2)
+        for plane in range(2):
+            for l in range(m):
+                d0 = d1 = d2 = 0.0
+                for k in range(m):
+                    ek = eta[plane * m + k]
+                    d0 += moments[l, 2 + m + k] * ek
+                    d1 += moments[l, 2 + 2 * m + k] * ek
+                    d2 += moments[l, 2 + 3 * m + k] * ek
+                residual[plane * m + l] += n_l * d0 + c_g * d1 + c_w * d2
+        if sums:
+            r_c = coefficient_row(m)
+            aux[r_c, 0], aux[r_c, 1], aux[r_c, 2] = n_l, c_g, c_w
+            aux[r_c + 1, 0], aux[r_c + 1, 1], aux[r_c + 1, 2] = ga0, ga1, ga2
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -288,6 +367,19 @@ def add_end_moment(ends, eta, rot, out, residual, aux):
     for k in range(m):
         residual[k] += mv * ends[k, 1]
         residual[m + k] += mw * ends[k, 1]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def end_foreshortening(moments, eta):
+    """c(L) = 1/2 (eta_v^T D0 eta_v + eta_w^T D0 eta_w): how far the tip has moved back along the
+    frame's axis (docs/beam.md, "Geometric stiffening"); moments: the beam's modal integrals."""
+    m = moments.shape[0]
+    c = 0.0
+    for plane in range(2):
+        for l in range(m):
+            for k in range(m):
+                c += 0.5 * eta[plane * m + l] * moments[l, 2 + m + k] * eta[plane * m + k]
+    return c
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -380,8 +472,9 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for k in range(m):
             v_l += ends[k, 0] * eta_n[k]
             w_l += ends[k, 0] * eta_n[m + k]
+        c_l = end_foreshortening(moments, eta_n) if bp[STIFFENING] != 0.0 else 0.0
         for i in range(3):
-            rho_l_n = bp[0] * rot_n[i, 0] + v_l * rot_n[i, 1] + w_l * rot_n[i, 2]
+            rho_l_n = (bp[0] - c_l) * rot_n[i, 0] + v_l * rot_n[i, 1] + w_l * rot_n[i, 2]
             out[i] = x[i] + c1 * (aux[1, i] - rho_l_n) + dw1[i]
     if welded:
         if start:
@@ -442,6 +535,16 @@ def _affine_columns(bp, moments, ends, welded, rot, aux, d_o, d_r):
                 d_r[m + k, 9 + c] += dy_l * gq_w
                 d_r[k, 6 + c] = dy_l * gv[c]
                 d_r[m + k, 6 + c] = dy_l * gw[c]
+    if bp[STIFFENING] != 0.0:
+        # G eta's axial force: d N_L = M_b e1 . da - e1 . dq, d (mu gamma_x) = -mu e1 . da
+        for plane in range(2):
+            for l in range(m):
+                row = plane * m + l
+                d = aux[foreshortening_row(m, 0, plane) + l]
+                c_a = mass * d[0] - bp[1] * d[1]
+                for c in range(3):
+                    d_r[row, c] += c_a * rot[c, 0]
+                    d_r[row, 9 + c] -= d[0] * rot[c, 0]
 
 
 @no_alloc_kernel
@@ -536,6 +639,23 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
                 for i in range(3):
                     x += g[i] * (dcol[3 * i + j] + y_l * dq[3 * i + j])
                 d_r[row, 3 + j] = x
+    if bp[STIFFENING] != 0.0:
+        # G eta through the frame's rotation (d theta = s Lam e_j) and w (r e_j):
+        # d N_L = -d theta . (e1 x q_O) - e1 . d q_O, d gamma_x = d theta . (e1 x (g - a_I)),
+        # d (omega_y^2 + omega_z^2) = 2 r w_j - 2 (e1 . w) (r e1_j + d theta . (e1 x w))
+        mu = bp[1]
+        e1q, e1g, e1x = t_cross(e1, qo), t_cross(e1, ga), t_cross(e1, w_)
+        for j in range(3):
+            l0, l1, l2 = lm[j], lm[3 + j], lm[6 + j]
+            dn = (-s * (l0 * e1q[0] + l1 * e1q[1] + l2 * e1q[2])
+                  - (e1[0] * dq[j] + e1[1] * dq[3 + j] + e1[2] * dq[6 + j]))
+            dg = mu * s * (l0 * e1g[0] + l1 * e1g[1] + l2 * e1g[2])
+            dw2 = mu * (2.0 * r * w[j]
+                        - 2.0 * e1w * (r * e1[j] + s * (l0 * e1x[0] + l1 * e1x[1] + l2 * e1x[2])))
+            for plane in range(2):
+                for l in range(m):
+                    d = aux[foreshortening_row(m, 0, plane) + l]
+                    d_r[plane * m + l, 3 + j] += dn * d[0] + dg * d[1] + dw2 * d[2]
 
 
 @no_alloc_kernel
@@ -551,6 +671,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
       the diagonal: damping and stiffness).  scratch: 6 entries."""
     moments, ends, factors = tables
     mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
+    stiff = bp[STIFFENING] != 0.0
     m = ends.shape[0]
     rho_l = aux[1]
     big_g, d_q = scratch[0:3], scratch[3:6]
@@ -574,9 +695,14 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
                 d_o[i, col] = y_l * big_g[i]
                 d_o[3 + i, col] = 0.0
                 d_o[6 + i, col] = (-s * y_l * (g[i1] * q_o[i2] - g[i2] * q_o[i1])   # d rho_L x q_O
-                                   - (rho_l[i1] * d_q[i2] - rho_l[i2] * d_q[i1])
                                    + s * (g[i1] * f_k[i2] - g[i2] * f_k[i1])
                                    - (q_k[i1] * big_g[i2] - q_k[i2] * big_g[i1]))
+            if stiff:
+                _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o,
+                                       col)
+            for i in range(3):
+                i1, i2 = (i + 1) % 3, (i + 2) % 3
+                d_o[6 + i, col] -= rho_l[i1] * d_q[i2] - rho_l[i2] * d_q[i1]
                 d_o[9 + i, col] = d_q[i]
             for plane2 in range(2):
                 h0, h1, h2 = rot[0, 1 + plane2], rot[1, 1 + plane2], rot[2, 1 + plane2]
@@ -589,6 +715,52 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
             stiffness = (ei_v if plane == 0 else ei_w) * factors[k, 1]
             omega_k = np.sqrt(stiffness / modal_mass)
             d_r[plane * m + k, col] += r * 2.0 * zeta * omega_k * modal_mass + s * stiffness
+            if stiff:
+                # G eta: eta_k moves by s (G's column k), N_L by -e1 . d q_O
+                e1q = rot[0, 0] * d_q[0] + rot[1, 0] * d_q[1] + rot[2, 0] * d_q[2]
+                for plane2 in range(2):
+                    for l in range(m):
+                        d_r[plane2 * m + l, col] -= \
+                            e1q * aux[foreshortening_row(m, 0, plane2) + l, 0]
+                coef = aux[coefficient_row(m)]
+                for l in range(m):
+                    d_r[plane * m + l, col] += s * (coef[0] * moments[l, 2 + m + k]
+                                                    + coef[1] * moments[l, 2 + 2 * m + k]
+                                                    + coef[2] * moments[l, 2 + 3 * m + k])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o, col):
+    """The foreshortening's share of an eta'' column (docs/beam.md, "Geometric stiffening"):
+    eta''_k moves C_i = 1/2 eta^T D_i eta by s (D_i eta)_k, C_i' by r (D_i eta)_k + s (D_i eta')_k
+    and C_i'' by (D_i eta)_k + 2 r (D_i eta')_k + s (D_i eta'')_k; with e1 = A e1,
+    K(x) = w' x x + w x (w x x) and gamma = g - a_I:
+      d q_O += mu (dC1 K(e1) + 2 dC1' w x e1 + dC1'' e1)            (d_q, before its uses)
+      d a_O -= dC0 K(e1) + 2 dC0' w x e1 + dC0'' e1
+      d m_O += dC0 e1 x q_O + mu (-dC1 e1 x gamma + 2 dC2 (w' - e1 (e1 . w'))
+               - 2 dC2 (e1 . w) w x e1 + 2 dC2' (w - e1 (e1 . w)))     (-rho_L x d q_O apart)."""
+    x = aux[foreshortening_row(m, 0, plane) + k]
+    y = aux[foreshortening_row(m, 1, plane) + k]
+    z = aux[foreshortening_row(m, 2, plane) + k]
+    ga = aux[coefficient_row(m) + 1]
+    dc0, dcd0, dcdd0 = s * x[0], r * x[0] + s * y[0], x[0] + 2.0 * r * y[0] + s * z[0]
+    dc1, dcd1, dcdd1 = s * x[1], r * x[1] + s * y[1], x[1] + 2.0 * r * y[1] + s * z[1]
+    dc2, dcd2 = s * x[2], r * x[2] + s * y[2]
+    e = (rot[0, 0], rot[1, 0], rot[2, 0])
+    we = t_cross((w[0], w[1], w[2]), e)
+    wde = t_cross((wd[0], wd[1], wd[2]), e)
+    wwe = t_cross((w[0], w[1], w[2]), we)
+    e_w = e[0] * w[0] + e[1] * w[1] + e[2] * w[2]
+    e_wd = e[0] * wd[0] + e[1] * wd[1] + e[2] * wd[2]
+    eq = t_cross(e, (q_o[0], q_o[1], q_o[2]))
+    eg = t_cross(e, (ga[0], ga[1], ga[2]))
+    for i in range(3):
+        ke = wde[i] + wwe[i]
+        d_q[i] += mu * (dc1 * ke + 2.0 * dcd1 * we[i] + dcdd1 * e[i])
+        d_o[i, col] -= dc0 * ke + 2.0 * dcd0 * we[i] + dcdd0 * e[i]
+        d_o[6 + i, col] += dc0 * eq[i] + mu * (-dc1 * eg[i] + 2.0 * dc2 * (wd[i] - e[i] * e_wd)
+                                               - 2.0 * dc2 * e_w * we[i]
+                                               + 2.0 * dcd2 * (w[i] - e[i] * e_w))
 
 
 @no_alloc_kernel

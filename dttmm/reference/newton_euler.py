@@ -156,7 +156,18 @@ the end values Y_k(L), Y_k'(L):
            here by scipy.linalg.eigh, normalized int_0^L Y_j Y_k = L delta_jk, Y_j(L) > 0); the
            integrals are polynomial moments, ANALYTIC (int t^p = 1 / (p + 1)); modal mass mu L,
            stiffness EI lam_j / L^3.
-Damping c_k = 2 zeta omega_k m_k, omega_k = sqrt(k_k / m_k), per plane.  (The energies in
+Damping c_k = 2 zeta omega_k m_k, omega_k = sqrt(k_k / m_k), per plane.
+
+Geometric stiffening (docs/beam.md; a beam's STIFFENING flag): the section at x also moves back
+along e1 by the foreshortening c(x) = 1/2 int_0^x (v'^2 + w'^2), kept to first order in c:
+p(x) = x e1 + Phi eta - c e1 in s (s_x -= mu int c), Q (Q_xx -= 2 mu int x c) and C
+(C_xx = -mu d/dt int x c); the Newton row's A int mu p'' gains -mu A e1 (eta'^T D1 eta' +
+(D1 eta)^T eta''), the output point r_O moves back by c(L) (B_r gains -A e1 (D0 eta)^T, so
+the end forces work through it), and the modal rows gain mu e1 . (g - a_I) D1 eta +
+mu (w_y^2 + w_z^2) D2 eta on the left, with D0, D1, D2 = int (1, L - x, (L^2 - x^2) / 2) Y' Y'^T
+(stiffening_matrices: polynomial moments or quadrature of the slopes).  These are Lagrange's
+equations of the kinetic and potential energy to second order in eta, whose terms in c
+dttmm.result.chain_energies counts by its own quadrature of c(x).  (The energies in
 dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
 The right-hand side is numba-compiled; the Python wrapper only evaluates the ground motion and
@@ -172,7 +183,7 @@ from scipy.linalg import eigh
 
 from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH,
-                             MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH)
+                             MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
                                FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -197,7 +208,7 @@ _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
-_BJP, _BZETA, _BMODES = POLAR_PER_LENGTH, DAMPING_RATIO, MODES
+_BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _AX1 = AXIS_1.start
 _AX2 = AXIS_2.start
 _REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
@@ -288,6 +299,38 @@ def beam_shape_constants(beam_row, n_points=None):
     else:
         raise ValueError(f"simulate_reference: unknown beam mode family {family}")
     return vec, mat
+
+
+def stiffening_matrices(beam_row):
+    """The geometric stiffness integrals of one beam, (3, n, n): int_0^L w(x) Y_j'(x) Y_k'(x) dx
+    for w = 1, L - x and (L^2 - x^2) / 2 (module docstring, "Geometric stiffening"): for the
+    loaded-end modes as polynomial moments, otherwise by Gauss-Legendre quadrature of the
+    slopes with quadrature_points(n) points (products of two trigonometric or hyperbolic slopes
+    and a quadratic weight)."""
+    length, nm, family = float(beam_row[LENGTH]), int(beam_row[MODES]), int(beam_row[FAMILY])
+    out = np.empty((3, nm, nm))
+    if family == CLAMPED_LOADED:
+        # Y_j' = (1/L) sum_i c_ij p_i t^(p_i - 1): int_0^L t^a Y_j' Y_k' dx = (1/L) c^T T_a c,
+        # (T_a)_il = p_i p_l / (p_i + p_l - 1 + a)
+        c, _ = loaded_mode_coefficients(nm)
+        p = np.arange(2, nm + 2, dtype=float)
+        moment = [(c.T @ (np.outer(p, p) / (p[:, None] + p[None, :] - 1.0 + a)) @ c) / length
+                  for a in range(3)]
+        out[0] = moment[0]
+        out[1] = length * (moment[0] - moment[1])
+        out[2] = 0.5 * length * length * (moment[0] - moment[2])
+        return out
+    xg, wg = np.polynomial.legendre.leggauss(quadrature_points(nm))
+    x = 0.5 * length * (xg + 1.0)
+    wq = 0.5 * length * wg
+    if family == PINNED:
+        k = np.arange(1, nm + 1)[:, None]
+        dy = (k * np.pi / length) * np.cos(k * np.pi * x[None, :] / length)
+    else:
+        dy = clamped_shapes(length, nm, x)[1]
+    for i, weight in enumerate((np.ones_like(x), length - x, 0.5 * (length * length - x * x))):
+        out[i] = (dy * (wq * weight)) @ dy.T
+    return out
 
 
 def loaded_mode_coefficients(n_modes):
@@ -486,11 +529,13 @@ def _end_section_rate(t, t_dot, t_ddot):
 # ----------------------------------------------------------------------------------------------
 
 @numba.njit(cache=True, fastmath=CONTRACT)
-def _beam_end(bp, sv, a, w, eta, eta_dot):
+def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     """Output point and output section of one beam (module docstring, "End kinematics"), from
     its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
     velocity v_O - v_I, A_O, w_O, the velocity parts of a_O and alpha_O, B_r = A Phi(L) and
-    B_t = A J_l(theta_O) D (3 x 2n each, world)."""
+    B_t = A J_l(theta_O) D (3 x 2n each, world).  With geometric stiffening the output point
+    moves back by the foreshortening c(L) = 1/2 eta^T D0 eta along e1 (module docstring), so
+    B_r gains -A e1 (D0 eta)^T and the velocity terms its rates."""
     nm = int(bp[_BMODES])
     u_l = np.zeros(3)                 # u(L), body frame
     ud_l = np.zeros(3)                # u'(L) (time derivative)
@@ -508,6 +553,19 @@ def _beam_end(bp, sv, a, w, eta, eta_dot):
         thd[2] += dyl * eta_dot[j]
     p_l = u_l.copy()
     p_l[0] += bp[_BL]
+    d0_eta = np.zeros(2 * nm)         # D0 eta per plane (the foreshortening's slopes)
+    cdd_v = 0.0                       # eta'^T D0 eta': the velocity part of c''(L)
+    if bp[_BSTIFF] != 0.0:
+        wide = my.shape[1] // 4
+        d0 = np.ascontiguousarray(my[:nm, wide:wide + nm])
+        for plane in range(2):
+            e = np.ascontiguousarray(eta[plane * nm:(plane + 1) * nm])
+            ed = np.ascontiguousarray(eta_dot[plane * nm:(plane + 1) * nm])
+            de = d0 @ e
+            d0_eta[plane * nm:(plane + 1) * nm] = de
+            p_l[0] -= 0.5 * (e @ de)
+            ud_l[0] -= ed @ de
+            cdd_v += ed @ (d0 @ ed)
     rho = a @ p_l
     aud = a @ ud_l
     v_rel = _cross(w, rho) + aud
@@ -515,13 +573,15 @@ def _beam_end(bp, sv, a, w, eta, eta_dot):
     rot_o = a @ _expm(th)
     ajt = a @ (jl @ thd)
     w_o = w + ajt
-    acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud)
+    acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud) - cdd_v * a[:, 0]
     alpha_v = _cross(w, ajt) + a @ (_left_jacobian_derivative(th, thd) @ thd)
     br = np.zeros((3, 2 * nm))
     d = np.zeros((3, 2 * nm))
     for j in range(nm):
         br[1, j] = sv[_YL, j]
         br[2, nm + j] = sv[_YL, j]
+        br[0, j] = -d0_eta[j]
+        br[0, nm + j] = -d0_eta[nm + j]
         d[2, j] = sv[_DYL, j]
         d[1, nm + j] = -sv[_DYL, j]
     br = a @ br
@@ -609,7 +669,7 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
-                q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
+                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
                 attachment_point, joints):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
     deflections and slides (world) of every body, from the state and the ground motion (a
@@ -681,7 +741,8 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             nm2 = 2 * int(beam_params[k, _BMODES])
             o = m_off[k]
             rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
-                beam_params[k], shape_vec[k], rot[k], omega[k], y[e0 + o:e0 + o + nm2],
+                beam_params[k], shape_vec[k], shape_mat[k], rot[k], omega[k],
+                y[e0 + o:e0 + o + nm2],
                 y[e0 + n_modal + o:e0 + n_modal + o + nm2])
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
             b_r[k, :, :nm2] = br
@@ -748,12 +809,30 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     mdv = myy @ dv
     mdw = myy @ dw
     mass = mu * length
+    # the foreshortening -c(x) e1 to first order in c (module docstring, "Geometric
+    # stiffening"): C1 = int c, C2 = int x c = 1/2 eta^T (D1, D2) eta, their rates, and
+    # eta'^T D1 eta' (the velocity part of C1'')
+    geo = np.zeros((3, n2))           # D0 eta, D1 eta, D2 eta per plane
+    c1 = c1_dot = c2 = c2_dot = c1_vel = 0.0
+    if bp[_BSTIFF] != 0.0:
+        wide = my.shape[1] // 4
+        for i in range(3):
+            d = np.ascontiguousarray(my[:nm, (i + 1) * wide:(i + 1) * wide + nm])
+            geo[i, :nm] = d @ ev
+            geo[i, nm:] = d @ ew
+            if i == 1:
+                c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:])
+                c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:]
+                c1_vel = dv @ (d @ dv) + dw @ (d @ dw)
+            elif i == 2:
+                c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:])
+                c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:]
     s_b = np.empty(3)
-    s_b[0] = mu * length * length / 2.0
+    s_b[0] = mu * (length * length / 2.0 - c1)
     s_b[1] = mu * (sy @ ev)
     s_b[2] = mu * (sy @ ew)
     q = np.empty((3, 3))                           # int mu p p^T
-    q[0, 0] = mu * length ** 3 / 3.0
+    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2)
     q[0, 1] = q[1, 0] = mu * (ty @ ev)
     q[0, 2] = q[2, 0] = mu * (ty @ ew)
     q[1, 1] = mu * (ev @ mev)
@@ -773,7 +852,8 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         g_b[0, j] = -mu * mew[j]
         g_b[1, nm + j] = -mu * ty[j]               # p x (Y_j e3) = Y_j (v, -x, 0)
         g_b[0, nm + j] = mu * mev[j]
-    c = np.zeros((3, 3))                           # int mu (Phi eta') p^T
+    c = np.zeros((3, 3))                           # int mu p' p^T
+    c[0, 0] = -mu * c2_dot
     c[1, 0] = mu * (ty @ dv)
     c[2, 0] = mu * (ty @ dw)
     c[1, 1] = mu * (dv @ mev)
@@ -787,8 +867,10 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     ag = a @ g_b
     h = a @ s_b
     j_w = a @ j_b @ a.T
-    ud = ap @ eta_dot                              # A int mu u' dx
-    newton_v = -2.0 * _cross(w, ud)
+    e1 = np.ascontiguousarray(a[:, 0])
+    ud = ap @ eta_dot - mu * c1_dot * e1           # A int mu p' dx
+    # the velocity terms; A int mu p'' = A P eta'' - mu (eta'^T D1 eta' + (D1 eta)^T eta'') e1
+    newton_v = -2.0 * _cross(w, ud) + mu * c1_vel * e1
     euler_v = -(a @ cor_b)
     # modal right-hand side
     ww2 = w_b[0] * w_b[0] + w_b[1] * w_b[1] + w_b[2] * w_b[2]
@@ -809,7 +891,14 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         cori_w = 2.0 * mu * w_b[0] * mdv[j]
         modal[j] = g_w[j] - cent_v - cori_v - cv * dv[j] - kv * ev[j]
         modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw[j] - kw * ew[j]
-    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy
+    # geometric stiffening: + mu e1.(g - a_I) D1 eta + mu (w_y^2 + w_z^2) D2 eta on the left
+    # (module docstring; N_L D0 eta is the end force's work through B_r); the a_I term goes to
+    # the matrix (_assemble, with geo), the rest here
+    if bp[_BSTIFF] != 0.0:
+        known = mu * (e1 @ gravity) * geo[1] + mu * (w_b[1] ** 2 + w_b[2] ** 2) * geo[2]
+        for j in range(n2):
+            modal[j] -= known[j]
+    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy, geo
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
@@ -886,13 +975,14 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         ca, cal = 6 * k, 6 * k + 3         # a_k, alpha_k columns
         nm2 = 0
         ce = -1
+        geo = np.zeros((3, 0))
         if body_kind[k] == _BEAM:
             nm = int(beam_params[k, _BMODES])
             nm2 = 2 * nm
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
-            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy = _beam_terms(
+            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
                 beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, gravity)
             weight = mass * gravity + forces[k]
             bn = weight - _cross(w, _cross(w, h)) + newton_v
@@ -900,7 +990,8 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             ce = e_col0 + o
             for j in range(nm2):
                 for i in range(3):
-                    s[rn + i, ce + j] = ap[i, j]      # translation: + A P eta''
+                    # translation: + A P eta'' (and the foreshortening's -mu A e1 (D1 eta)^T)
+                    s[rn + i, ce + j] = ap[i, j] - beam_params[k, _BMU] * a[i, 0] * geo[1, j]
                     s[re + i, ce + j] = ag[i, j]      # rotation:    + A G eta''
                     s[ce + j, ca + i] = ap[i, j]      # modal:  (A P)^T a + (A G)^T alpha
                     s[ce + j, cal + i] = ag[i, j]
@@ -909,6 +1000,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 for i in range(nm):
                     s[ce + j, ce + i] = m_yy[j, i]
                     s[ce + nm + j, ce + nm + i] = m_yy[j, i]
+            for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
+                for i in range(3):
+                    s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
         else:
             mass = p[_MASS]
             rho_c = a @ _vec3(p, _LIC)
@@ -1090,9 +1184,9 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     of its acceleration acc_v_att (_kinematics)."""
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
      b_t, v_o, rho_att, acc_v_att) = _kinematics(
-        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, q_off,
-        w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology, attachment_point,
-        joints)
+        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
+        q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
+        attachment_point, joints)
     q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
                                 hinge_params, rot_g, w_g, topology[0])
     s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
@@ -1236,12 +1330,14 @@ class _Problem:
         # shape constants of every beam, padded to the widest beam (module docstring)
         mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
         self.shape_vec = np.zeros((n, N_SHAPE_ROWS, mmax))
-        self.shape_mat = np.zeros((n, mmax, mmax))
+        self.shape_mat = np.zeros((n, mmax, 4 * mmax))   # int Y Y^T, then D0, D1, D2
         for k in beams:
             vec, mat = beam_shape_constants(self.beam_params[k])
             m = vec.shape[1]
             self.shape_vec[k, :, :m] = vec
             self.shape_mat[k, :m, :m] = mat
+            for i, d in enumerate(stiffening_matrices(self.beam_params[k])):
+                self.shape_mat[k, :m, (i + 1) * mmax:(i + 1) * mmax + m] = d
         n_modes = np.asarray(model.n_modes, dtype=np.int64)
         self.m_off = np.full(n, -1, dtype=np.int64)
         nm = 0
@@ -1403,7 +1499,8 @@ class _Problem:
         y = self.joint_inputs(t, np.ascontiguousarray(y, dtype=float))
         out = _kinematics(y, self.body_params, self.kinds,
                           self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
-                          self.q_off, self.w_off, self.d_off, self.m_off, self.e0, self.n_modal,
+                          self.shape_mat, self.q_off, self.w_off, self.d_off, self.m_off,
+                          self.e0, self.n_modal,
                           r_g, v_g, rot_g, w_g, self.topology, self.attachment_point,
                           self.joints)
         return out[6], out[13], out[7], out[8]
@@ -1583,6 +1680,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
             r_c[:, k] = r_in[:, k] + np.einsum("tij,tj->ti", rot[:, k],
                                                _beam_mass_center(prob.beam_params[k],
                                                                  prob.shape_vec[k],
+                                                                 prob.shape_mat[k],
                                                                  eta[:, prob.m_off[k]:]))
             r_o[:, k] = r_in[:, k] + rho_out[:, k]
 
@@ -1600,13 +1698,21 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   body_names=tuple(model.body_names))
 
 
-def _beam_mass_center(bp, sv, eta):
+def _beam_mass_center(bp, sv, my, eta):
     """(T, 3) body-frame mass centre of a beam, s / (mu L) with s = int mu p dx; sv: the beam's
-    shape constants (row _SY = int Y_k dx); eta holds its coordinates in its first 2n columns."""
+    shape constants (row _SY = int Y_k dx), my its matrices (int Y Y^T, D0, D1, D2: with
+    geometric stiffening s_x loses mu int c = mu/2 eta^T D1 eta); eta holds its coordinates in
+    its first 2n columns."""
     length, nm = bp[LENGTH], int(bp[MODES])
     sy = sv[_SY, :nm]
     out = np.zeros((len(eta), 3))
     out[:, 0] = length / 2.0
+    if bp[STIFFENING]:
+        wide = my.shape[1] // 4
+        d1 = my[:nm, 2 * wide:2 * wide + nm]
+        for plane in range(2):
+            e = eta[:, plane * nm:(plane + 1) * nm]
+            out[:, 0] -= 0.5 * np.einsum("tj,jk,tk->t", e, d1, e) / length
     out[:, 1] = eta[:, :nm] @ sy / length
     out[:, 2] = eta[:, nm:2 * nm] @ sy / length
     return out

@@ -1,0 +1,71 @@
+"""Geometric stiffening of the beam (docs/beam.md, "Geometric stiffening"), by DT-TMM against
+the Newton-Euler reference and against the beam without it; the spin-up's one-element check is
+in test_examples_and_results.py, the kernels' in test_kernels.py."""
+import numpy as np
+import pytest
+
+from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate
+from dttmm.chains import three_pendulum
+from dttmm.reference.newton_euler import simulate_reference
+
+
+def test_the_three_pendulums_stiff_beam_barely_feels_it():
+    """The paper's beam is stiff (first frequency 25 Hz): its stiffening moves the bodies by
+    3.0e-5 m at most over 2 s (measured), 4% of the beam's 0.72 mm deflection.  Issue 16
+    expected below 1e-6 m; the physics says more: the joints pull the beam with ~10-20 N, which
+    raises its first bending frequency by a few tenths of a percent, and the vibration's phase
+    drifts by that much over 50 periods (both solvers agree on it: test below)."""
+    t = np.linspace(0.0, 2.0, 201)
+    runs = [simulate(three_pendulum(2, stiffening=s), 2.0, 1e-3, t_eval=t) for s in (False, True)]
+    change = np.abs(runs[0].position_output - runs[1].position_output).max()
+    assert 1e-6 < change < 1e-4, change
+
+
+def test_the_stiffened_three_pendulum_conserves_energy():
+    """Energy, with the foreshortening's terms (dttmm.result.chain_energies), over 2 s at
+    dt = 1e-3: within 1e-5 of the largest kinetic energy (issue 16)."""
+    res = simulate(three_pendulum(2, stiffening=True), 2.0, 1e-3)
+    e = res.kinetic + res.potential
+    assert np.abs(e - e[0]).max() < 1e-5 * res.kinetic.max()
+
+
+def _hub_cantilever():
+    """A soft cantilever with a tip mass on a hub driven about z, under gravity along -x (the
+    beam's axis: it hangs, so gravity, the spin and the tip body's pull all stiffen it)."""
+    from dttmm import Ground, PrescribedMotion, RigidBody
+
+    def angle(t):
+        return 2.0 * t * t
+
+    hub = PrescribedMotion.spin_about_axis([0, 0, 1], angle, lambda t: 4.0 * t, lambda t: 4.0)
+    beam = EulerBernoulliBeam(length=1.0, mass_per_length=1.0, bending_stiffness=[3.0, 4.0],
+                              polar_inertia_per_length=1e-3, modes_per_plane=2,
+                              stiffening=True)
+    tip = RigidBody(mass=0.5, inertia=np.diag([1e-3, 1e-3, 1e-3]), inertia_about="mass_center",
+                    to_mass_center=[0.05, 0.0, 0.0], to_output=[0.1, 0.0, 0.0])
+    return build_chain([FixedHinge(), beam, FixedHinge(), tip], gravity=[-9.81, 0.0, 0.0],
+                       ground=Ground(motion=hub))
+
+
+@pytest.mark.parametrize("system", ["three_pendulum", "hub_cantilever"])
+def test_stiffened_beam_converges_to_the_reference_at_order_2(system):
+    """DT-TMM against the Newton-Euler reference (rtol 1e-11) on the same stiffened models:
+    the three-pendulum (its beam between ball joints, pulled by the joints) and a soft
+    cantilever with a tip body on a driven hub under gravity along its axis (welded ends, the
+    end section's differenced columns); positions at t = 1 s, fitted order 2 +- 0.2."""
+    model = three_pendulum(2, stiffening=True) if system == "three_pendulum" \
+        else _hub_cantilever()
+    t = np.linspace(0.0, 1.0, 11)
+    ref = simulate_reference(model, 1.0, rtol=1e-11, atol=1e-13, t_eval=t)
+    steps = np.array([4e-3, 2e-3, 1e-3])
+    errors = [np.abs(simulate(model, 1.0, h, t_eval=t).position_output[-1]
+                     - ref.position_output[-1]).max() for h in steps]
+    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert abs(slope - 2.0) < 0.2, (errors, slope)
+
+
+def test_stiffening_must_be_a_bool():
+    beam = EulerBernoulliBeam(length=1.0, mass_per_length=1.0, bending_stiffness=1.0,
+                              polar_inertia_per_length=1e-3, stiffening="yes", name="b")
+    with pytest.raises(ValueError, match="'b'.*stiffening must be True or False"):
+        build_chain([FixedHinge(), beam])
