@@ -135,8 +135,8 @@ class EulerBernoulliBeam:
     r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
     w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffening on
     request (``stiffening``); the section's rotary inertia is left out, its polar inertia
-    kept for the frame's spin about x.  The arguments are checked when the model is built (``System.build`` or
-    ``build_chain``), not here.
+    kept for the frame's spin about x.  The arguments are checked when the model is built
+    (``System.build`` or ``build_chain``), not here.
 
     Parameters
     ----------
