@@ -382,8 +382,8 @@ def scene_of(model, run=None, name=None):
                          mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
             if row[FAMILY] != PINNED and ball_ends:
                 table["force_mode_family"] = True
-            if not row[STIFFENING]:
-                table["stiffening"] = False
+            if row[STIFFENING]:
+                table["stiffening"] = True
             eta = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
             eta_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
             if np.any(eta):

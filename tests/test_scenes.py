@@ -243,3 +243,16 @@ def test_figures_and_an_animation_are_written(tmp_path):
     assert {"positions.png", "angles.png", "energy.png", "joints.png", "modal.png"} <= names
     with Image.open(tmp_path / "arm.gif") as gif:
         assert gif.n_frames > 10
+
+
+def test_a_stiffened_beam_keeps_its_stiffening_through_a_scene(tmp_path):
+    """save_scene writes `stiffening = true` for a beam with geometric stiffening, and the scene
+    builds it back (beam_params' STIFFENING column), while a plain beam stays plain."""
+    from dttmm.chains import three_pendulum
+    for on in (True, False):
+        model = three_pendulum(2, stiffening=on)
+        save_scene(model, tmp_path / "tp.toml")
+        assert ("stiffening = true" in (tmp_path / "tp.toml").read_text()) == on
+        back = load_scene(tmp_path / "tp.toml").model
+        same_model(model, back)
+        assert back.beam_params[1, 8] == float(on)
