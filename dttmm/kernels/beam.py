@@ -86,6 +86,65 @@ def _weighted_coordinates(y, eta, eta_d, eta_dd):
     return v, w, vd, wd, vdd, wdd
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def _foreshortening_sums(moments, eta, eta_d, eta_dd, aux, sums):
+    """(C0, C0', C0'', C1, C1', C1'', C2, C2') of beam_relations (docs/beam.md, "Geometric
+    stiffening"), and with sums the rows D x of aux (foreshortening_row).  Kept out of
+    beam_relations, whose loops LLVM optimizes better without this branch."""
+    m = moments.shape[0]
+    cc0 = cd0 = cdd0 = cc1 = cd1 = cdd1 = cc2 = cd2 = 0.0
+    for plane in range(2):
+        for l in range(m):
+            x0 = x1 = x2 = y0 = y1 = y2 = z0 = z1 = z2 = 0.0     # D eta, D eta', D eta''
+            for k in range(m):
+                b0, b1, b2 = moments[l, 2 + m + k], moments[l, 2 + 2 * m + k], \
+                    moments[l, 2 + 3 * m + k]
+                i = plane * m + k
+                ek, edk, eddk = eta[i], eta_d[i], eta_dd[i]
+                x0 += b0 * ek
+                x1 += b1 * ek
+                x2 += b2 * ek
+                y0 += b0 * edk
+                y1 += b1 * edk
+                y2 += b2 * edk
+                z0 += b0 * eddk
+                z1 += b1 * eddk
+                z2 += b2 * eddk
+            el, edl = eta[plane * m + l], eta_d[plane * m + l]
+            cc0 += 0.5 * el * x0
+            cd0 += edl * x0
+            cdd0 += edl * y0 + el * z0
+            cc1 += 0.5 * el * x1
+            cd1 += edl * x1
+            cdd1 += edl * y1 + el * z1
+            cc2 += 0.5 * el * x2
+            cd2 += edl * x2
+            if sums:
+                r = foreshortening_row(m, 0, plane) + l
+                aux[r, 0], aux[r, 1], aux[r, 2] = x0, x1, x2
+                r = foreshortening_row(m, 1, plane) + l
+                aux[r, 0], aux[r, 1], aux[r, 2] = y0, y1, y2
+                r = foreshortening_row(m, 2, plane) + l
+                aux[r, 0], aux[r, 1], aux[r, 2] = z0, z1, z2
+    return cc0, cd0, cdd0, cc1, cd1, cdd1, cc2, cd2
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
+    """residual += G eta, G = N_L D0 + mu gamma_x D1 + mu (omega_y^2 + omega_z^2) D2, per plane
+    (docs/beam.md, "Geometric stiffening"); c_g, c_w: the last two coefficients."""
+    m = moments.shape[0]
+    for plane in range(2):
+        for l in range(m):
+            d0 = d1 = d2 = 0.0
+            for k in range(m):
+                ek = eta[plane * m + k]
+                d0 += moments[l, 2 + m + k] * ek
+                d1 += moments[l, 2 + 2 * m + k] * ek
+                d2 += moments[l, 2 + 3 * m + k] * ek
+            residual[plane * m + l] += n_l * d0 + c_g * d1 + c_w * d2
+
+
 @no_alloc_kernel
 def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i,
                    m_i, q_i, out, residual, aux):
@@ -184,37 +243,8 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     stiff = bp[STIFFENING] != 0.0
     cc0 = cd0 = cdd0 = cc1 = cd1 = cdd1 = cc2 = cd2 = 0.0
     if stiff:
-        for plane in range(2):
-            for l in range(m):
-                x0 = x1 = x2 = y0 = y1 = y2 = z0 = z1 = z2 = 0.0     # D eta, D eta', D eta''
-                for k in range(m):
-                    b0, b1, b2 = moments[l, 2 + m + k], moments[l, 2 + 2 * m + k], \
-                        moments[l, 2 + 3 * m + k]
-                    i = plane * m + k
-                    ek, edk, eddk = eta[i], eta_d[i], eta_dd[i]
-                    x0 += b0 * ek
-                    x1 += b1 * ek
-                    x2 += b2 * ek
-                    y0 += b0 * edk
-                    y1 += b1 * edk
-                    y2 += b2 * edk
-                    z0 += b0 * eddk
-                    z1 += b1 * eddk
-                    z2 += b2 * eddk
-                el, edl = eta[plane * m + l], eta_d[plane * m + l]
-                cc0 += 0.5 * el * x0
-                cd0 += edl * x0
-                cdd0 += edl * y0 + el * z0
-                cc1 += 0.5 * el * x1
-                cd1 += edl * x1
-                cdd1 += edl * y1 + el * z1
-                cc2 += 0.5 * el * x2
-                cd2 += edl * x2
-                if sums:
-                    for which, (d0, d1, d2) in enumerate(((x0, x1, x2), (y0, y1, y2),
-                                                          (z0, z1, z2))):
-                        row = foreshortening_row(m, which, plane) + l
-                        aux[row, 0], aux[row, 1], aux[row, 2] = d0, d1, d2
+        cc0, cd0, cdd0, cc1, cd1, cdd1, cc2, cd2 = _foreshortening_sums(moments, eta, eta_d,
+                                                                        eta_dd, aux, sums)
     # s, s', s'' and the second moments Pi (per unit mu, in the frame; with the foreshortening
     # -c e1 to first order in c: s_x = L^2/2 - C1, Pi_xx = L^3/3 - 2 C2)
     s0, s1, s2 = 0.5 * length * length - cc1, pv, pw
@@ -331,15 +361,7 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
         n_l = -(qo0 * e10 + qo1 * e11 + qo2 * e12)
         c_g = mu * gm0
         c_w = mu * (o1 * o1 + o2 * o2)
-        for plane in range(2):
-            for l in range(m):
-                d0 = d1 = d2 = 0.0
-                for k in range(m):
-                    ek = eta[plane * m + k]
-                    d0 += moments[l, 2 + m + k] * ek
-                    d1 += moments[l, 2 + 2 * m + k] * ek
-                    d2 += moments[l, 2 + 3 * m + k] * ek
-                residual[plane * m + l] += n_l * d0 + c_g * d1 + c_w * d2
+        _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual)
         if sums:
             r_c = coefficient_row(m)
             aux[r_c, 0], aux[r_c, 1], aux[r_c, 2] = n_l, c_g, c_w
