@@ -529,6 +529,15 @@ def _end_section_rate(t, t_dot, t_ddot):
 # ----------------------------------------------------------------------------------------------
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _stiffening_block(my, nm, i):
+    """D_i (i = 0, 1, 2; nm x nm, contiguous) of one beam from its shape matrices
+    my = [int Y Y^T | D0 | D1 | D2], each block as wide as the widest beam's modes
+    (_Problem.shape_mat)."""
+    wide = my.shape[1] // 4
+    return np.ascontiguousarray(my[:nm, (i + 1) * wide:(i + 1) * wide + nm])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     """Output point and output section of one beam (module docstring, "End kinematics"), from
     its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
@@ -556,8 +565,7 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     d0_eta = np.zeros(2 * nm)         # D0 eta per plane (the foreshortening's slopes)
     cdd_v = 0.0                       # eta'^T D0 eta': the velocity part of c''(L)
     if bp[_BSTIFF] != 0.0:
-        wide = my.shape[1] // 4
-        d0 = np.ascontiguousarray(my[:nm, wide:wide + nm])
+        d0 = _stiffening_block(my, nm, 0)
         for plane in range(2):
             e = np.ascontiguousarray(eta[plane * nm:(plane + 1) * nm])
             ed = np.ascontiguousarray(eta_dot[plane * nm:(plane + 1) * nm])
@@ -815,18 +823,16 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     geo = np.zeros((3, n2))           # D0 eta, D1 eta, D2 eta per plane
     c1 = c1_dot = c2 = c2_dot = c1_vel = 0.0
     if bp[_BSTIFF] != 0.0:
-        wide = my.shape[1] // 4
         for i in range(3):
-            d = np.ascontiguousarray(my[:nm, (i + 1) * wide:(i + 1) * wide + nm])
+            d = _stiffening_block(my, nm, i)
             geo[i, :nm] = d @ ev
             geo[i, nm:] = d @ ew
-            if i == 1:
-                c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:])
-                c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:]
-                c1_vel = dv @ (d @ dv) + dw @ (d @ dw)
-            elif i == 2:
-                c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:])
-                c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:]
+        d1 = _stiffening_block(my, nm, 1)
+        c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:])
+        c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:]
+        c1_vel = dv @ (d1 @ dv) + dw @ (d1 @ dw)
+        c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:])
+        c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:]
     s_b = np.empty(3)
     s_b[0] = mu * (length * length / 2.0 - c1)
     s_b[1] = mu * (sy @ ev)
@@ -1708,8 +1714,7 @@ def _beam_mass_center(bp, sv, my, eta):
     out = np.zeros((len(eta), 3))
     out[:, 0] = length / 2.0
     if bp[STIFFENING]:
-        wide = my.shape[1] // 4
-        d1 = my[:nm, 2 * wide:2 * wide + nm]
+        d1 = _stiffening_block(my, nm, 1)
         for plane in range(2):
             e = eta[:, plane * nm:(plane + 1) * nm]
             out[:, 0] -= 0.5 * np.einsum("tj,jk,tk->t", e, d1, e) / length
