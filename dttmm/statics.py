@@ -1,0 +1,470 @@
+"""Static equilibrium of a model: static_equilibrium(model, ...) -> StaticEquilibrium
+(docs/statics.md).
+
+At rest (every velocity zero) a model is in equilibrium exactly when its accelerations vanish:
+the accelerations are M(q)^-1 f(q) with the mass matrix M regular, so a(q) = 0 is f(q) = 0.  The
+accelerations at rest are what the solver's consistent start computes (the same transfer
+matrices as a step, with the velocities zero), so the equilibrium is found by Newton iterations
+on the model's configuration q with a(q) as the residual and its Jacobian by differences.  The
+configuration is exact (large rotations): each ball-jointed body's rotation, each beam's modal
+coordinates; a body behind a fixed hinge follows its inboard output section.  At the solution
+the Jacobian is -M^-1 K (K the tangent stiffness), so its eigenvalues are minus the squared
+circular frequencies of the small vibrations about the equilibrium: all negative means stable.
+"""
+from dataclasses import dataclass, replace
+import warnings
+
+import numpy as np
+
+from .elements import BEAM
+from .elements.hinges import BALL, FIXED, REST_ROTATION
+from .elements.kinds import JOINT_KIND
+from .elements.beam import LENGTH
+from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from .kernels import ball_chain
+from .kernels.loop import Monitor, Settings
+from .kernels.so3 import expm_so3
+from .model import Model, output_section
+from .result import _log_so3, beam_output_offset
+from . import solver
+
+__all__ = ["StaticEquilibrium", "StaticEquilibriumError", "static_equilibrium"]
+
+
+class StaticEquilibriumError(RuntimeError):
+    """No static equilibrium was found: the iterations did not converge, or the model has none
+    (a body that nothing holds, or loads that nothing balances).
+
+    Parameters
+    ----------
+    message : str
+        What went wrong, and what to do about it (the coordinate with the largest residual
+        acceleration, or the body that nothing holds).
+    """
+
+    def __init__(self, message):
+        super().__init__(message)
+
+
+@dataclass(frozen=True)
+class StaticEquilibrium:
+    """The result of ``static_equilibrium``.
+
+    Parameters
+    ----------
+    model : Model
+        The model at rest in the equilibrium configuration: ``simulate(result.model, ...)``
+        starts from it.
+    iterations : int
+        Newton iterations taken.
+    residual : float
+        The largest acceleration left at the equilibrium (rad/s^2 for rotations, m/s^2 times
+        the beam's modal scale for modal coordinates).
+    stable : bool
+        Every small vibration about the equilibrium oscillates (no squared frequency below
+        zero): False past a buckling load or for a pendulum balanced upright.
+    squared_frequencies : ndarray
+        The eigenvalues of M^-1 K about the equilibrium (K the tangent stiffness, M the mass
+        matrix), (rad/s)^2, ascending by real part; negative ones are the unstable directions,
+        zeros the neutral ones (rotations that change nothing, e.g. a hanging pendulum's spin
+        about the vertical).
+    coordinates : tuple of str
+        The configuration's coordinates, in the order of the Jacobian's columns.
+    """
+    model: Model
+    iterations: int
+    residual: float
+    stable: bool
+    squared_frequencies: np.ndarray
+    coordinates: tuple
+
+    def positions(self):
+        """The bodies' input points, mass centres and output points at the equilibrium, each
+        (n, 3), world frame, m (a beam's mass centre: its chord's midpoint, as in Result;
+        its output point on the deflected end)."""
+        m = self.model
+        n = m.n_bodies
+        off = np.concatenate([[0], np.cumsum(m.n_modes)])
+        r_in, r_c, r_o = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+        for k in range(n):
+            p = m.parent[k]
+            if p < 0:
+                r_in[k] = m.ground_position
+            elif m.attachment[k] == 0:
+                r_in[k] = r_o[p]
+            else:
+                r_in[k] = r_in[p] + m.initial_rotation[p] @ m.attachment_point[k]
+            rot = m.initial_rotation[k]
+            r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
+            r_o[k] = r_in[k] + rot @ m.body_params[k, TO_OUTPUT]
+            if m.body_kind[k] == BEAM:
+                e = m.initial_modal_coordinates[off[k]:off[k + 1]]
+                rho, _ = beam_output_offset(m.beam_params[k], rot, np.zeros(3), e,
+                                            np.zeros_like(e))
+                r_o[k] = r_in[k] + rho
+        return r_in, r_c, r_o
+
+    @property
+    def frequencies(self):
+        """The small vibrations' frequencies about the equilibrium, Hz (sqrt of the squared
+        circular frequencies over 2 pi; NaN for an unstable direction)."""
+        lam = np.real(self.squared_frequencies)
+        with np.errstate(invalid="ignore"):
+            return np.where(lam >= 0.0, np.sqrt(np.abs(lam)), np.nan) / (2.0 * np.pi)
+
+
+class _Configuration:
+    """The model's configuration as a flat vector q (each free body's rotation increment, world
+    axes; then every beam's modal coordinates), and the accelerations at rest a(q) by the
+    solver's consistent start.  Works on the kernel model (solver.kernel_model), whose extra
+    massless bodies are welded and so follow their inboard bodies."""
+
+    def __init__(self, model, where):
+        self.user = model
+        km, self.keep = solver.kernel_model(model)
+        self.model = km
+        n = km.n_bodies
+        for k in range(n):
+            kind = int(km.hinge_kind[k])
+            if kind not in (BALL, FIXED):
+                raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
+                                 f"{JOINT_KIND[kind].what}; the static solve takes ball joints "
+                                 f"and fixed hinges so far (run the model with damping to rest "
+                                 f"instead)")
+        if km.tip_pinned:
+            raise ValueError(f"{where}: the tip is pinned to the ground (a closed loop); the "
+                             f"static solve takes open chains and trees so far")
+        self.free = [k for k in range(n)
+                     if km.hinge_kind[k] == BALL and not km.ground_locked[k]]
+        self.n_rot = 3 * len(self.free)
+        self.n_eta = len(km.initial_modal_coordinates)
+        mode_off = np.concatenate([[0], np.cumsum(km.n_modes)])
+        # the scale of each coordinate: rad, or the beam's length for its modal coordinates
+        scale = np.ones(self.n_rot + self.n_eta)
+        labels = [f"{km.body_names[k]} rotation {'xyz'[i]}" for k in self.free for i in range(3)]
+        for k in range(n):
+            if km.body_kind[k] == BEAM:
+                i0, i1 = mode_off[k], mode_off[k + 1]
+                scale[self.n_rot + i0:self.n_rot + i1] = km.beam_params[k, LENGTH]
+                labels += [f"{km.body_names[k]} mode {j}" for j in range(i1 - i0)]
+        self.scale = scale
+        self.labels = tuple(labels)
+        self.mode_off = mode_off
+        self.rot0 = np.array(km.initial_rotation)
+        self.eta0 = np.array(km.initial_modal_coordinates)
+        # one workspace for every evaluation (the beams' tables do not change)
+        self.mode = solver._mode(km, "riccati", False)
+        self.ws = solver.Workspace(km)
+        self.params = solver.kernel_params(km, self.ws.beams)
+        self.settings = Settings(mode=self.mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0)
+                                 .array(), newton_max=0, newton_tol=0.0, record_every=1,
+                                 max_step_error=np.inf, stop_unconverged=False, start=False)
+        self.monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(self.n_eta),
+                               jqp=np.zeros((0, 2)), defl_pseudo=np.zeros((0, 3)),
+                               error=np.zeros(2))
+        self.fused = None
+        if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
+                and all(solver.BODY_KIND[int(c)].fused for c in km.body_kind)):
+            self.fused = (solver.run_steps_no_alloc,
+                          ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
+
+    def vector(self, rot, eta):
+        """q of a configuration given by rotations and modal coordinates (rotations relative
+        to the model's own)."""
+        q = np.zeros(self.n_rot + self.n_eta)
+        for i, k in enumerate(self.free):
+            q[3 * i:3 * i + 3] = _rotation_vector(rot[k] @ self.rot0[k].T)
+        q[self.n_rot:] = eta
+        return q
+
+    def rebase(self, q):
+        """The same configuration with the free bodies' rotations as the new reference (their
+        increments zero): the Jacobian's rotation columns are then world rotations about the
+        current configuration, and M^-1 K's eigenvalues come out right."""
+        if self.n_rot == 0:
+            return q
+        rot, _ = self.state(q)
+        self.rot0[self.free] = rot[self.free]
+        q = q.copy()
+        q[:self.n_rot] = 0.0
+        return q
+
+    def state(self, q):
+        """(rotations, modal coordinates) of q: the free bodies turned by their increments,
+        every welded body placed on its inboard output section."""
+        km = self.model
+        rot = self.rot0.copy()
+        eta = q[self.n_rot:]
+        e = np.empty((3, 3))
+        for i, k in enumerate(self.free):
+            expm_so3(np.ascontiguousarray(q[3 * i:3 * i + 3]), e)
+            rot[k] = e @ self.rot0[k]
+        zero = np.zeros(3)
+        for k in range(km.n_bodies):
+            if km.hinge_kind[k] != FIXED or km.ground_locked[k]:
+                continue
+            p = km.parent[k]
+            r0 = km.hinge_params[k, REST_ROTATION].reshape(3, 3)
+            if p < 0:
+                rot[k] = km.ground_rotation @ r0
+            else:
+                a_in, _ = output_section(km.beam_params[p], rot[p], zero,
+                                         eta[self.mode_off[p]:self.mode_off[p + 1]])
+                rot[k] = a_in @ r0
+        return rot, np.array(eta)
+
+    def accelerations(self, q):
+        """a(q): the free bodies' angular accelerations and the modal accelerations at rest."""
+        rot, eta = self.state(q)
+        st = self.ws.state
+        st.rot[:] = rot
+        st.omega[:] = 0.0
+        st.eta[:] = eta
+        st.eta_d[:] = 0.0
+        st.jqd[:] = 0.0
+        st.z[:] = 0.0
+        solver._consistent_start(self.model, self.mode, "riccati", self.fused, self.params,
+                                 self.settings, st, self.ws.sweep, self.monitor, 1.0)
+        a = np.empty(self.n_rot + self.n_eta)
+        for i, k in enumerate(self.free):
+            a[3 * i:3 * i + 3] = st.omega_dot[k]
+        a[self.n_rot:] = st.eta_acc
+        return a
+
+    def jacobian(self, q, a, central=False):
+        """da/dq by forward (or central) differences, steps 1e-7 (central: 1e-5) of each
+        coordinate's scale.  (Newton takes the central ones: M^-1 K spans five decades and
+        more where a light body or a high mode is in the model, and forward differences'
+        error, ~1e-3 of the largest entry, spoils its soft directions: measured on the
+        elastica, convergence slowed to a few percent per iteration.)"""
+        n = len(q)
+        jac = np.empty((n, n))
+        for j in range(n):
+            h = (1e-5 if central else 1e-7) * self.scale[j]
+            qp = q.copy()
+            qp[j] += h
+            if central:
+                qm = q.copy()
+                qm[j] -= h
+                jac[:, j] = (self.accelerations(qp) - self.accelerations(qm)) / (2.0 * h)
+            else:
+                jac[:, j] = (self.accelerations(qp) - a) / h
+        return jac
+
+    def result_model(self, q):
+        """The user's model at rest in configuration q."""
+        rot, eta = self.state(q)
+        user = self.user
+        return replace(user, initial_rotation=rot[self.keep],
+                       initial_angular_velocity=np.zeros((user.n_bodies, 3)),
+                       initial_modal_coordinates=eta,
+                       initial_modal_velocities=np.zeros_like(eta))
+
+
+def _rotation_vector(r):
+    return _log_so3(r)
+
+
+def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50,
+                       max_increment=0.5):
+    """The model's static equilibrium under its gravity, applied loads (at t = 0) and the
+    ground's state at t = 0, by Newton iterations on its configuration (docs/statics.md).
+
+    Parameters
+    ----------
+    model : Model
+        Built by ``build_chain`` or ``System.build``: ball joints, fixed hinges, rigid bodies
+        and beams (an open chain or tree).  Its initial rotations and modal coordinates are the
+        first guess; its velocities are ignored (the equilibrium is at rest).
+    guess : StaticEquilibrium or Model, optional
+        Start from this configuration instead (the same bodies and modes): the equilibrium
+        under a smaller load, when a load is applied in steps (continuation).
+    tol : float, optional
+        Converged when a Newton step moves no coordinate by more than tol (rad, or the beam's
+        length for its modal coordinates).  Default 1e-10.
+    max_iterations : int, optional
+        Give up after this many iterations (StaticEquilibriumError).  Default 50.
+    max_increment : float, optional
+        The largest change of any coordinate in one iteration (rad, or beam lengths); a longer
+        Newton step is shortened to it.  Default 0.5.
+
+    Returns
+    -------
+    StaticEquilibrium
+        ``.model`` at rest in the equilibrium, ``.stable``, ``.squared_frequencies`` of the
+        small vibrations about it, ``.iterations``, ``.residual``.
+
+    Raises
+    ------
+    StaticEquilibriumError
+        The iterations did not converge (apply the load in steps, passing each result as the
+        next ``guess``), or the model has no equilibrium: a body that nothing holds (no
+        gravity, load or spring acts on its rotation), or one whose loads nothing balances.
+    ValueError
+        A joint kind the static solve does not take yet (elastic hinges, joints with
+        coordinates), a pinned tip, or a guess that does not fit the model.
+
+    Warns
+    -----
+    UserWarning
+        When the equilibrium is unstable (``stable`` False): e.g. a column loaded past its
+        buckling load stays straight in equilibrium, but any disturbance makes it buckle.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
+    ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
+    ...                       to_output=[1.0, 0, 0])
+    >>> eq = dttmm.static_equilibrium(dttmm.build_chain([dttmm.BallJoint(), rod]))
+    >>> [round(float(x), 6) for x in eq.model.initial_rotation[0] @ [1.0, 0.0, 0.0]]
+    [0.0, -1.0, 0.0]
+    """
+    where = "static_equilibrium"
+    if not isinstance(model, Model):
+        raise TypeError(f"{where}: model must be a dttmm.Model (build_chain or System.build), "
+                        f"got {type(model).__name__}")
+    tol = solver._check_positive("tol", tol)
+    max_increment = solver._check_positive("max_increment", max_increment)
+    if int(max_iterations) != max_iterations or max_iterations < 1:
+        raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
+                         f"got {max_iterations!r}")
+    cfg = _Configuration(model, where)
+    q = np.zeros(len(cfg.scale))
+    if guess is not None:
+        start = guess.model if isinstance(guess, StaticEquilibrium) else guess
+        if not isinstance(start, Model) or start.n_bodies != model.n_bodies or (
+                start.initial_modal_coordinates.shape != model.initial_modal_coordinates.shape):
+            raise ValueError(f"{where}: guess must be a StaticEquilibrium or Model of the same "
+                             f"bodies and modes as the model")
+        rot_k = cfg.rot0.copy()
+        rot_k[cfg.keep] = start.initial_rotation
+        q = cfg.vector(rot_k, start.initial_modal_coordinates)
+    a = cfg.accelerations(q)
+    weight = 1.0 / cfg.scale           # residuals in rad/s^2 (modal: per beam length)
+    iterations = 0
+    converged = False
+    previous = np.inf
+    while iterations < max_iterations:
+        iterations += 1
+        q = cfg.rebase(q)
+        # M^-1 K in scaled coordinates
+        k = -cfg.jacobian(q, a, central=True) * cfg.scale[None, :] * weight[:, None]
+        r = weight * a
+        newton = np.linalg.lstsq(k, r, rcond=1e-10)[0] if len(r) else r
+        # converged: Newton's step is below tol, and what it leaves of the residual (in the
+        # directions nothing stiffens) would move the stiffest coordinate by less than tol
+        big = np.max(np.abs(np.linalg.eigvals(k)), initial=0.0) if len(r) else 0.0
+        if (np.max(np.abs(newton), initial=0.0) <= tol
+                and np.linalg.norm(k @ newton - r) <= tol * big):
+            converged = True
+            break
+        size = np.max(np.abs(newton), initial=0.0)
+        if (size <= np.sqrt(tol) and size >= 0.5 * previous
+                and np.linalg.norm(k @ newton - r) <= np.sqrt(tol) * big):
+            converged = True        # Newton has stopped converging: the residual is at its
+            break                   # round-off (with stiff modes, ~1e-6 rad/s^2)
+        previous = size
+        q, a = _damped_step(cfg, q, a, k, r, max_increment)
+    if not converged:
+        raise StaticEquilibriumError(
+            f"{where}: no convergence in {iterations} iterations (the largest acceleration "
+            f"left is {np.max(np.abs(a)):.3g}, at "
+            f"{cfg.labels[int(np.argmax(np.abs(weight * a)))]}); apply the loads in steps, "
+            f"passing each result as the next guess=, or raise "
+            f"max_iterations; a body whose loads nothing balances has no equilibrium")
+    q = cfg.rebase(q)
+    jac = cfg.jacobian(q, a, central=True)
+    _check_held(cfg, jac, where)
+    lam = np.linalg.eigvals(-jac)
+    lam = lam[np.argsort(lam.real)]
+    if np.max(np.abs(lam.imag), initial=0.0) <= 1e-9 * np.max(np.abs(lam), initial=0.0):
+        lam = np.real(lam)          # (a conservative system's are real)
+    big = np.max(np.abs(lam), initial=0.0)
+    lam = np.where(np.abs(lam) <= 1e-9 * big, 0.0, lam)     # neutral directions
+    stable = bool(np.all(np.real(lam) >= -1e-9 * big))
+    if not stable:
+        k = int(np.argmin(np.real(lam)))
+        count = int(np.sum(np.real(lam) < -1e-9 * big))
+        warnings.warn(f"{where}: the equilibrium is unstable ({count} direction(s); squared "
+                      f"frequency {np.real(lam[k]):.4g} (rad/s)^2): a disturbance grows from it "
+                      f"(e.g. a column past its buckling load)",
+                      stacklevel=2)
+    return StaticEquilibrium(model=cfg.result_model(q), iterations=iterations,
+                             residual=float(np.max(np.abs(a), initial=0.0)), stable=stable,
+                             squared_frequencies=lam, coordinates=cfg.labels)
+
+
+def _damped_step(cfg, q, a, k, r, max_increment):
+    """One damped Newton step in scaled coordinates (x = q / scale, residuals r = a / scale,
+    k = M^-1 K scaled; Deuflhard's natural monotonicity test).  The step is Newton's,
+    k^+ r (least squares), plus, where part of the residual lies in directions that nothing
+    stiffens yet (k singular there, e.g. a pendulum held out horizontally), a move along that
+    part, max_increment long, downhill (a = M^-1 f lowers the potential energy).  It is
+    halved until the residual measured by the current k shrinks, |k^+ r| (the plain norm of
+    the accelerations would not do: they span decades between light bodies and stiff modes,
+    and a Newton step may raise it), or, while a part of it lies outside k's range, its plain
+    norm.  Returns (q, a); q unchanged if no
+    step passed."""
+    big = float(np.max(np.abs(np.linalg.eigvals(k)), initial=0.0)) or 1.0
+
+    def parts(res):
+        newton = np.linalg.lstsq(k, res, rcond=1e-10)[0]
+        return newton, res - k @ newton
+
+    newton, perp = parts(r)
+    dx = newton.copy()
+    size = np.max(np.abs(perp))
+    if size > 1e-3 * np.max(np.abs(r)):
+        dx += perp * (max_increment / size)
+
+        def merit(res):             # away from the range of k: the residual itself
+            return np.linalg.norm(res)
+    else:
+        def merit(res):             # the natural monotonicity test
+            return np.linalg.norm(parts(res)[0])
+    biggest = np.max(np.abs(dx))
+    if biggest > max_increment:
+        dx *= max_increment / biggest
+    before = merit(r)
+    for _ in range(12):
+        try:
+            a_new = cfg.accelerations(q + dx * cfg.scale)
+        except solver.DivergenceError:          # a step too far: the sweep broke down
+            a_new = np.full_like(a, np.nan)
+        if np.all(np.isfinite(a_new)) and merit(a_new / cfg.scale) < before:
+            return q + dx * cfg.scale, a_new
+        dx *= 0.5
+    # no damped Newton step passed: Levenberg-Marquardt steps, (k + mu E) dx = r, mu growing
+    # tenfold (for large mu along the residual, a = M^-1 f, downhill), judged by the residual
+    mu = 1e-2 * np.linalg.norm(r) / max_increment + 1e-8 * big
+    for _ in range(20):
+        dx = np.linalg.solve(k + mu * np.eye(len(r)), r)
+        biggest = np.max(np.abs(dx))
+        if biggest > max_increment:
+            dx *= max_increment / biggest
+        try:
+            a_new = cfg.accelerations(q + dx * cfg.scale)
+        except solver.DivergenceError:
+            a_new = np.full_like(a, np.nan)
+        if np.all(np.isfinite(a_new)) and np.linalg.norm(a_new / cfg.scale) < np.linalg.norm(r):
+            return q + dx * cfg.scale, a_new
+        mu *= 10.0
+    return q, a
+
+
+def _check_held(cfg, jac, where):
+    """Refuse a body that nothing holds: all three of its rotation's directions neutral."""
+    if cfg.n_rot == 0:
+        return
+    js = jac * cfg.scale[None, :]
+    u, s, vt = np.linalg.svd(js)
+    big = s[0] if len(s) else 0.0
+    null = vt[s <= 1e-9 * big] if big > 0.0 else np.eye(len(cfg.scale))
+    for i, k in enumerate(cfg.free):
+        block = null[:, 3 * i:3 * i + 3]
+        if np.linalg.matrix_rank(block, tol=1e-6) == 3:
+            raise StaticEquilibriumError(
+                f"{where}: body '{cfg.model.body_names[k]}' is free: no gravity, load or spring "
+                f"holds its rotation about its ball joint in any direction, so every "
+                f"orientation is an equilibrium (weld it with a FixedHinge, or load it)")

@@ -1,0 +1,130 @@
+"""Static equilibrium (dttmm/statics.py, docs/statics.md) against analytic answers: a pendulum
+hanging and its small-vibration frequency, the elastica rolled up by a tip moment (and its
+convergence order in the number of elements), Euler's buckling load; and the errors."""
+import warnings
+
+import numpy as np
+import pytest
+
+import dttmm
+from dttmm import chains
+
+EI = 100.0          # N m^2: the issue's cantilever (L = 1 m)
+
+
+def rod(**kwargs):
+    return dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12], inertia_about="mass_center",
+                           to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], **kwargs)
+
+
+def cantilever(n_elements, tip_force=None, tip_torque=None, modes=2, length=1.0):
+    """n welded stiffened beam elements clamped to the ground along x, a light tip body welded
+    to the end carrying the loads (no gravity)."""
+    elements = []
+    for _ in range(n_elements):
+        elements += [dttmm.FixedHinge(),
+                     dttmm.EulerBernoulliBeam(length=length / n_elements, bending_stiffness=EI,
+                                              polar_inertia_per_length=1e-4, mass_per_length=1.0,
+                                              modes_per_plane=modes, stiffening=True)]
+    elements += [dttmm.FixedHinge(),
+                 dttmm.RigidBody(mass=1.0, inertia=[1e-2] * 3, inertia_about="mass_center",
+                                 to_mass_center=[0, 0, 0], to_output=[0, 0, 0],
+                                 force=None if tip_force is None else lambda t: tip_force,
+                                 torque=None if tip_torque is None else lambda t: tip_torque)]
+    return dttmm.build_chain(elements, gravity=(0.0, 0.0, 0.0))
+
+
+def test_pendulum_hangs_and_its_frequency_is_analytic():
+    """From horizontal (where gravity does not stiffen it at all) to hanging straight down;
+    the swing's squared frequency m g l / I_pivot = 9.81 * 0.5 / (1/3) in both planes, the
+    spin about the vertical neutral."""
+    eq = dttmm.static_equilibrium(dttmm.build_chain([dttmm.BallJoint(), rod()]))
+    axis = eq.model.initial_rotation[0] @ [1.0, 0.0, 0.0]
+    assert np.allclose(axis, [0.0, -1.0, 0.0], atol=1e-9)
+    assert eq.stable
+    assert eq.squared_frequencies[0] == 0.0
+    assert np.allclose(eq.squared_frequencies[1:], 9.81 * 0.5 * 3.0, rtol=1e-6)
+    r_in, r_c, r_o = eq.positions()
+    assert np.allclose(r_o[0], [0.0, -1.0, 0.0], atol=1e-9)
+
+
+def test_a_run_from_the_equilibrium_stays_at_rest():
+    """The three-pendulum's hanging equilibrium (13 coordinates, beam modes included) is a
+    state of rest of the dynamics too: 0.5 s of DT-TMM moves nothing by more than 1e-9 m."""
+    eq = dttmm.static_equilibrium(chains.three_pendulum())
+    assert eq.stable and eq.residual < 1e-8
+    res = dttmm.simulate(eq.model, 0.5, 1e-3)
+    drift = np.abs(res.position_output - res.position_output[0]).max()
+    assert drift < 1e-9, drift
+
+
+@pytest.mark.parametrize("lam", [0.25, 0.5])
+def test_elastica_tip_and_order(lam):
+    """A cantilever rolled up by a tip moment M = lam 2 pi EI / L (phi = M L / EI = pi / 2 and
+    pi): the tip within 1e-3 L of (L sin phi / phi, L (1 - cos phi) / phi) with 16 elements,
+    and the error falls as K^-p with p ~ 3 (measured 3.0: 2.3e-3, 2.8e-4, 3.6e-5 at pi / 2;
+    1.3e-2, 1.6e-3, 2.0e-4 at pi; each stiffened element carries its arc to third order)."""
+    phi = lam * 2.0 * np.pi
+    exact = np.array([np.sin(phi) / phi, (1.0 - np.cos(phi)) / phi, 0.0])
+    errors = []
+    counts = (4, 8, 16) if lam < 0.5 else (8, 16)
+    for k in counts:
+        guess = None
+        for step in np.linspace(0.25, lam, int(round(lam / 0.25))):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                guess = dttmm.static_equilibrium(
+                    cantilever(k, tip_torque=[0.0, 0.0, step * 2.0 * np.pi * EI]), guess=guess)
+        errors.append(np.linalg.norm(guess.positions()[2][-1] - exact))
+    assert errors[-1] < 1e-3, errors
+    order = -np.polyfit(np.log(counts), np.log(errors), 1)[0]
+    assert 2.7 < order < 3.3, (order, errors)
+
+
+def test_euler_buckling():
+    """A clamped-free column under a compressive tip load: stable just below pi^2 EI / (4 L^2),
+    flagged (warning, stable False) just above; the lowest squared frequency crosses zero
+    there, linear in the load."""
+    p_cr = np.pi ** 2 * EI / 4.0
+    below = dttmm.static_equilibrium(cantilever(1, tip_force=[-0.97 * p_cr, 0, 0], modes=4))
+    assert below.stable
+    with pytest.warns(UserWarning, match="unstable"):
+        above = dttmm.static_equilibrium(cantilever(1, tip_force=[-1.03 * p_cr, 0, 0], modes=4))
+    assert not above.stable
+    # the lowest squared frequency is linear in the load: its zero is the buckling load
+    lo, hi = below.squared_frequencies[0], above.squared_frequencies[0]
+    crossing = 0.97 + (1.03 - 0.97) * lo / (lo - hi)
+    assert abs(crossing - 1.0) < 2e-3, crossing
+
+
+def test_free_body_is_refused():
+    """Nothing holds a ball-jointed body without gravity: every orientation is an equilibrium."""
+    model = dttmm.build_chain([dttmm.BallJoint(), rod()], gravity=(0.0, 0.0, 0.0))
+    with pytest.raises(dttmm.StaticEquilibriumError, match="body0.*free"):
+        dttmm.static_equilibrium(model)
+
+
+def test_loaded_free_body_and_no_convergence_say_what_to_do():
+    """A torque that nothing balances has no equilibrium; too few iterations say so too."""
+    model = dttmm.build_chain([dttmm.BallJoint(), rod(torque=lambda t: [0.0, 0.0, 1.0])],
+                              gravity=(0.0, 0.0, 0.0))
+    with pytest.raises(dttmm.StaticEquilibriumError, match="no convergence.*guess="):
+        dttmm.static_equilibrium(model, max_iterations=10)
+    with pytest.raises(dttmm.StaticEquilibriumError, match="no convergence in 1 iter"):
+        dttmm.static_equilibrium(chains.three_pendulum(), max_iterations=1)
+
+
+def test_bad_arguments():
+    model = dttmm.build_chain([dttmm.BallJoint(), rod()])
+    with pytest.raises(ValueError, match="tol"):
+        dttmm.static_equilibrium(model, tol=-1.0)
+    with pytest.raises(ValueError, match="max_iterations"):
+        dttmm.static_equilibrium(model, max_iterations=0)
+    with pytest.raises(ValueError, match="guess"):
+        dttmm.static_equilibrium(model, guess=chains.three_pendulum())
+    with pytest.raises(TypeError, match="Model"):
+        dttmm.static_equilibrium("model.toml")
+    hinge = dttmm.build_chain([dttmm.ElasticHinge(translational_stiffness=1e5,
+                                                  rotational_stiffness=1e3), rod()])
+    with pytest.raises(ValueError, match="ball joints and fixed hinges"):
+        dttmm.static_equilibrium(hinge)
