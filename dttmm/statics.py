@@ -19,13 +19,13 @@ import numpy as np
 from .elements import BEAM
 from .elements.hinges import BALL, FIXED, REST_ROTATION
 from .elements.kinds import JOINT_KIND
-from .elements.beam import LENGTH
+from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain
 from .kernels.loop import Monitor, Settings
 from .kernels.so3 import expm_so3
 from .model import Model, output_section
-from .result import _log_so3, beam_output_offset
+from .result import _foreshortening_along, _log_so3, beam_output_offset
 from . import solver
 
 __all__ = ["StaticEquilibrium", "StaticEquilibriumError", "static_equilibrium"]
@@ -103,6 +103,30 @@ class StaticEquilibrium:
                                             np.zeros_like(e))
                 r_o[k] = r_in[k] + rho
         return r_in, r_c, r_o
+
+    def centreline(self, points_per_beam=9):
+        """Points along each body at the equilibrium, world frame, m: per body an array (p, 3),
+        a beam's at p = points_per_beam stations x_i = i L / (p - 1) of its deflected centre
+        line, r_I + A ((x - c(x)) e1 + u(x)) (docs/beam.md; c the foreshortening, zero
+        without stiffening), a rigid body's its input and output points."""
+        m = self.model
+        r_in, _, r_o = self.positions()
+        off = np.concatenate([[0], np.cumsum(m.n_modes)])
+        lines = []
+        for k in range(m.n_bodies):
+            if m.body_kind[k] != BEAM:
+                lines.append(np.array([r_in[k], r_o[k]]))
+                continue
+            row = m.beam_params[k]
+            nm = int(row[MODES])
+            x = np.linspace(0.0, row[LENGTH], int(points_per_beam))
+            y = mode_shapes(int(row[FAMILY]), row[LENGTH], nm, x)[0]
+            eta = m.initial_modal_coordinates[off[k]:off[k + 1]]
+            c = (_foreshortening_along(row, x, eta[None], np.zeros((1, len(eta))))[0][0]
+                 if row[STIFFENING] else np.zeros(len(x)))
+            local = np.stack([x - c, eta[:nm] @ y, eta[nm:] @ y], axis=1)
+            lines.append(r_in[k] + local @ m.initial_rotation[k].T)
+        return lines
 
     @property
     def frequencies(self):
@@ -330,7 +354,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
                          f"got {max_iterations!r}")
     cfg = _Configuration(model, where)
-    q = np.zeros(len(cfg.scale))
+    q = cfg.vector(cfg.rot0, cfg.eta0)
     if guess is not None:
         start = guess.model if isinstance(guess, StaticEquilibrium) else guess
         if not isinstance(start, Model) or start.n_bodies != model.n_bodies or (
@@ -351,7 +375,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         # M^-1 K in scaled coordinates
         k = -cfg.jacobian(q, a, central=True) * cfg.scale[None, :] * weight[:, None]
         r = weight * a
-        newton = np.linalg.lstsq(k, r, rcond=1e-10)[0] if len(r) else r
+        newton = np.linalg.lstsq(k, r, rcond=1e-13)[0] if len(r) else r
         # converged: Newton's step is below tol, and what it leaves of the residual (in the
         # directions nothing stiffens) would move the stiffest coordinate by less than tol
         big = np.max(np.abs(np.linalg.eigvals(k)), initial=0.0) if len(r) else 0.0
@@ -409,7 +433,7 @@ def _damped_step(cfg, q, a, k, r, max_increment):
     big = float(np.max(np.abs(np.linalg.eigvals(k)), initial=0.0)) or 1.0
 
     def parts(res):
-        newton = np.linalg.lstsq(k, res, rcond=1e-10)[0]
+        newton = np.linalg.lstsq(k, res, rcond=1e-13)[0]
         return newton, res - k @ newton
 
     newton, perp = parts(r)

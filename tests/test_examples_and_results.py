@@ -89,6 +89,25 @@ def test_the_spin_up_example(tmp_path):
     assert spin_up.main(["--elements", "1", "--t-end", "12", "--no-stiffening"]) == 1
 
 
+def test_the_elastica_example(tmp_path):
+    """examples/elastica.py rolls a 4-element cantilever up to half a turn in two load steps
+    (static solves) and writes the centre lines: 9 points per element and 2 for the tip body
+    per step, the last step's tip within 2e-2 L of the arc's (measured 1.3e-2 at 4 elements;
+    tests/test_statics.py checks the convergence)."""
+    sys.path.insert(0, str(ROOT / "examples"))
+    import elastica
+    csv = tmp_path / "elastica.csv"
+    assert elastica.main(["--elements", "4", "--steps", "2", "--lam-max", "0.5", "--csv",
+                          str(csv)]) == 0
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert csv.read_text().startswith("lam,body,x,y,z")
+    assert rows.shape == (2 * (4 * 9 + 2), 5)
+    runs = elastica.roll_up(elements=4, steps=2, lam_max=0.5)
+    tip = runs[-1][1].positions()[2][-1]
+    assert np.allclose(rows[-1, 2:], tip)
+    assert np.linalg.norm(tip - elastica.exact_tip(0.5)) < 2e-2
+
+
 @pytest.mark.parametrize("omega", [4.0, 6.0, 10.0])
 def test_spin_up_one_stiffened_element_meets_the_chain_and_the_reference(omega):
     """Issue 16: one beam element with 3 modes per plane and geometric stiffening against two
