@@ -8,8 +8,8 @@ M = lam 2 pi EI / L about z, lam = 1/steps .. 1 (--steps, --lam-max): K welded b
 that carries the moment.  Each load step starts from the last one's equilibrium
 (dttmm.static_equilibrium, guess=).  The exact centre line is a circular arc of curvature
 M / EI: the tip at (L sin phi / phi, L (1 - cos phi) / phi), phi = M L / EI = 2 pi lam, so at
-lam = 1 the beam closes into a circle.  CSV: lam, body, x, y, z (the centre line's points, m); the table
-printed: the tip and its distance from the exact tip per step.
+lam = 1 the beam closes into a circle.  CSV: lam, body, x, y, z (the centre line's points,
+m); the table printed: the tip and its distance from the exact tip per step.
 
 With the moment about a fixed world axis, the static solve flags the equilibria past about
 three quarters of a turn as unstable (a disturbance out of the plane grows: the moment does
