@@ -16,15 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .elements.beam import EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, mode_shapes
-from .elements.hinges import BALL, ELASTIC, FIXED
-from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .elements.rigid_body import MASS, TO_OUTPUT
+from .describe import describe_counts, suggested_dt
 from .scene import SceneError, load_scene
-
-_JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
-                UNIVERSAL: "universal", PRISMATIC: "prismatic"}
-_JOINT_DOF = {BALL: 3, FIXED: 0, ELASTIC: 6, REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}
 
 
 def main(argv=None):
@@ -135,71 +128,9 @@ def _run(args):
     return 0
 
 
-def describe_counts(model):
-    kinds = model.body_kind
-    return (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
-            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), "
-            f"{degrees_of_freedom(model)} degrees of freedom")
-
-
-def degrees_of_freedom(model):
-    """Each joint's own freedoms (a ball 3, an elastic hinge 6, a revolute 1, ...) plus the
-    beams' modal coordinates, less 3 for a tip pinned to the ground."""
-    return int(sum(_JOINT_DOF[int(k)] for k in model.hinge_kind) + np.sum(model.n_modes)
-               - (3 if model.tip_pinned else 0))
-
-
-def beam_frequencies(model, k):
-    """(Hz) the retained modes' own frequencies of beam k, sqrt(k_j / m_j) / 2 pi with the
-    modal stiffness and mass (docs/beam.md), per plane: (v plane, w plane)."""
-    row = model.beam_params[k]
-    m = int(row[MODES])
-    _, _, _, mass, stiff = mode_shapes(int(row[FAMILY]), row[LENGTH], m, [0.0])
-    mu = row[MASS_PER_LENGTH]
-    return tuple(np.sqrt(row[ei] * stiff / (mu * mass)) / (2 * np.pi) for ei in (EI_V, EI_W))
-
-
-def suggested_dt(model):
-    """A step that resolves the model's fastest retained motion: 20 steps per period of the
-    highest retained beam mode, and 0.02 rad per step of the fastest initial spin or of a
-    pendulum swing sqrt(g / L) over the shortest body (rounded down to 1, 2 or 5 x 10^k s)."""
-    rates = [float(np.linalg.norm(w)) for w in model.initial_angular_velocity]
-    g = float(np.linalg.norm(model.gravity))
-    lengths = [float(np.linalg.norm(model.body_params[k, TO_OUTPUT]))
-               for k in range(model.n_bodies)]
-    lengths = [x for x in lengths if x > 0]
-    if g > 0 and lengths:
-        rates.append(np.sqrt(g / min(lengths)))
-    dt = 0.02 / max(max(rates, default=0.0), 1e-3)
-    for k in np.nonzero(model.body_kind == 1)[0]:
-        f = max(float(np.max(fs)) for fs in beam_frequencies(model, k))
-        dt = min(dt, 1.0 / (20.0 * f))
-    exponent = np.floor(np.log10(dt))
-    mantissa = dt / 10 ** exponent
-    return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
-
-
 def _info(args):
     scene = load_scene(args.scene)
-    model = scene.model
-    print(f"{scene.name} ({scene.path}): {describe_counts(model)}")
-    print(f"gravity {model.gravity.tolist()} m/s^2; tip {'pinned' if model.tip_pinned else 'free'}")
-    print("bodies:")
-    for k in range(model.n_bodies):
-        kind = "beam" if model.body_kind[k] == 1 else "rigid"
-        p = model.parent[k]
-        parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
-        line = (f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
-                f"on a {_JOINT_NAMES[int(model.hinge_kind[k])]} joint "
-                f"'{model.hinge_names[k]}' to {parent}")
-        print(line)
-        if kind == "beam":
-            fv, fw = beam_frequencies(model, k)
-            print(f"  {'':<14} {int(model.beam_params[k, MODES])} modes per plane, own "
-                  f"frequencies (Hz): v {np.array2string(fv, precision=4)}, "
-                  f"w {np.array2string(fw, precision=4)}")
-    print(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
-          f"retained mode, 0.02 rad per step of the fastest spin or swing)")
+    print(f"{scene.name} ({scene.path}): {scene.model.describe()}")
     if scene.run:
         print(f"[run]: {', '.join(f'{k} = {v}' for k, v in scene.run.items())}")
     return 0

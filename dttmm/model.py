@@ -6,8 +6,9 @@ import numpy as np
 
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
-from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH,
-                            MAX_LOADED_MODES, MODES, PINNED, mode_shapes)
+from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY,
+                            FREQUENCY_CUTOFF, LENGTH, MAX_LOADED_MODES, MODES, PINNED,
+                            auto_mode_count, mode_shapes)
 from .elements._checks import derivative, finite_vector, rotation_matrix
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
@@ -266,11 +267,12 @@ class Model:
         The tip is joined to the ground by a ball joint (``tip="ball"``), else free.
     body_kind : ndarray (n,) of int
         0 rigid body, 1 beam.
-    beam_params : ndarray (n, 8)
+    beam_params : ndarray (n, 10)
         Per beam: length (m), mass per length (kg/m), EI_v and EI_w (N m^2), polar inertia
-        per length (kg m), damping ratio, modes per plane, and the mode family resolved
-        (0 pinned, 1 clamped, 2 clamped with a loaded end; elements/beam.py); zero rows for
-        rigid bodies.
+        per length (kg m), damping ratio, modes per plane, the mode family resolved
+        (0 pinned, 1 clamped, 2 clamped with a loaded end), geometric stiffening (1 or 0) and
+        the frequency cutoff of modes_per_plane="auto" (Hz; 0 for a given count;
+        elements/beam.py); zero rows for rigid bodies.
     initial_modal_coordinates : ndarray (total modes,)
         The beams' modal coordinates at t = 0, m, flat in body order (a beam's v coordinates
         first, then w).
@@ -363,6 +365,20 @@ class Model:
     def has_applied_loads(self):
         """Whether any body has an applied force or torque."""
         return any(f is not None for f in self.forces + self.torques)
+
+    def describe(self):
+        """The model in words (as ``dttmm info`` prints it).
+
+        Returns
+        -------
+        str
+            Its bodies, joints and degrees of freedom; each beam's modes with their
+            frequencies, the mode family and why the beam's ends select it, what
+            ``modes_per_plane="auto"`` kept below its cutoff, and whether geometric stiffening
+            is on; a step that resolves the fastest retained motion.
+        """
+        from .describe import describe
+        return describe(self)
 
     def ground_state(self, t):
         """(r, v, a, R, w, w_dot) of the ground frame at time t (s): position m, velocity
@@ -824,6 +840,11 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
             family = PINNED
         elif family != PINNED:
             family = CLAMPED if free_tip else CLAMPED_LOADED
+        beam_params[k, FAMILY] = family
+        if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
+            beam_params[k, MODES] = auto_mode_count(beam_params[k])
+            bv[k]["eta0"] = np.zeros(2 * int(beam_params[k, MODES]))
+            bv[k]["eta_d0"] = np.zeros(2 * int(beam_params[k, MODES]))
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
             raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "
                              f"clamped beam whose output carries loads (polynomial modes), got "

@@ -17,8 +17,8 @@ import numpy as np
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
-from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED, STIFFENING,
-                            POLAR_PER_LENGTH, DAMPING_RATIO)
+from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, LENGTH,
+                            MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                               ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -45,7 +45,8 @@ _RIGID = {"name": "str", "type": "str", "mass": "number", "inertia": "stiffness"
           "force": "profile", "torque": "profile", "joint": "table"}
 _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "number",
          "density": "number", "area": "number", "bending_stiffness": "pair",
-         "polar_inertia_per_length": "number", "modes_per_plane": "int",
+         "polar_inertia_per_length": "number", "modes_per_plane": "modes",
+         "frequency_cutoff": "number",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
          "stiffening": "bool", "initial_modal_coordinates": "list",
          "initial_modal_velocities": "list",
@@ -299,13 +300,15 @@ def _value(value, kind, where, label):
           "drives": isinstance(value, list) and len(value) == 2,
           "profile": number(value) or isinstance(value, dict)}
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
+    ok["modes"] = ok["int"] or value == "auto"
     if not ok[kind]:
         what = {"number": "a number", "int": "an integer", "bool": "true or false",
                 "str": "a string", "vector": "3 numbers", "pair": "a number or 2 numbers",
                 "list": "a list of numbers", "matrix": "a 3 x 3 matrix (3 rows of 3)",
                 "table": "a table", "bodies": "an array of tables ([[body]])",
                 "drives": "a list of two drive tables", "profile": "a number or a profile table",
-                "stiffness": "a number, 3 numbers or a 3 x 3 matrix"}[kind]
+                "stiffness": "a number, 3 numbers or a 3 x 3 matrix",
+                "modes": 'an integer or "auto"'}[kind]
         raise SceneError(f"{where}: {label}: {what}, got {value!r}")
 
 
@@ -384,6 +387,8 @@ def scene_of(model, run=None, name=None):
                 table["force_mode_family"] = True
             if row[STIFFENING]:
                 table["stiffening"] = True
+            if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
+                table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
             eta = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
             eta_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
             if np.any(eta):

@@ -128,3 +128,4 @@ def test_bad_arguments():
                                                   rotational_stiffness=1e3), rod()])
     with pytest.raises(ValueError, match="ball joints and fixed hinges"):
         dttmm.static_equilibrium(hinge)
+

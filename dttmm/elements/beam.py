@@ -122,8 +122,29 @@ def _loaded_modes(n_modes):
 
 # layout of one row of Model.beam_params
 (LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY,
- STIFFENING) = range(9)
-BEAM_PARAM_SIZE = 9
+ STIFFENING, FREQUENCY_CUTOFF) = range(10)
+BEAM_PARAM_SIZE = 10
+MAX_AUTO_MODES = 10   # modes_per_plane="auto" keeps at most this many (6 for loaded-end modes)
+
+
+def bending_frequencies(beam_row, n_modes=None):
+    """(Hz) the first n_modes (default: the row's) bending frequencies of a beam row's resolved
+    family, sqrt(k_j / m_j) / 2 pi (docs/beam.md, "Mode shapes"), per plane: (v, w)."""
+    m = int(beam_row[MODES]) if n_modes is None else int(n_modes)
+    _, _, _, mass, stiff = mode_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], m, [0.0])
+    mu = beam_row[MASS_PER_LENGTH]
+    return tuple(np.sqrt(beam_row[ei] * stiff / (mu * mass)) / (2 * np.pi) for ei in (EI_V, EI_W))
+
+
+def auto_mode_count(beam_row):
+    """modes_per_plane="auto": how many modes per plane to keep, every mode whose frequency in
+    either plane is at or below the row's FREQUENCY_CUTOFF (Hz), at least one, at most
+    MAX_AUTO_MODES (MAX_LOADED_MODES for the loaded-end family, whose Ritz frequencies are taken
+    from its largest basis, the best estimates).  Needs the family resolved."""
+    cap = MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+    fv, fw = bending_frequencies(beam_row, cap)
+    below = int(np.sum(np.minimum(fv, fw) <= beam_row[FREQUENCY_CUTOFF]))
+    return min(max(below, 1), cap)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,10 +176,12 @@ class EulerBernoulliBeam:
         rho, kg/m^3 (> 0), with area: mu = density * area.
     area : float, optional
         Cross-section area, m^2 (> 0), with density.
-    modes_per_plane : int, optional
+    modes_per_plane : int or "auto", optional
         Number of bending modes in each plane, >= 1 (default 1); at most 6 for a clamped beam
         whose output carries loads (its polynomial modes).  The beam has 2 x modes_per_plane
-        modal coordinates.
+        modal coordinates.  "auto": every mode whose frequency (in either plane, of the family
+        the beam's ends select) is at or below frequency_cutoff, at least 1, at most 10 (6 for
+        polynomial modes); ``Model.describe()`` says what was kept.
     damping_ratio : float, optional
         Modal damping ratio zeta (>= 0, default 0), dimensionless: each mode's damping
         c_k = 2 zeta omega_k m_k, acting in the beam's (rotating) frame.
@@ -183,6 +206,10 @@ class EulerBernoulliBeam:
         Initial world-frame angular velocity of the frame, rad/s, as for ``RigidBody``.
     name : str, optional
         The body's name, as for ``RigidBody`` (default "": ``body{k}``).
+    frequency_cutoff : float, optional
+        Hz (> 0), with modes_per_plane="auto" (and only then): the highest frequency to keep.
+        A motion resolved by a step dt needs about 20 steps per period: 1 / (20 dt) keeps what
+        that step resolves.
     stiffening : bool, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
@@ -197,7 +224,9 @@ class EulerBernoulliBeam:
         At build time, naming the beam (its name and index) and the argument: a length,
         stiffness, polar inertia, mass per length, density or area that is not a finite
         number > 0; mass_per_length given with density or area, or neither; modes_per_plane
-        not an integer >= 1 (or above 6 for loaded-end modes); a negative damping ratio; an
+        not an integer >= 1 (or above 6 for loaded-end modes) or "auto", "auto" without a
+        frequency_cutoff > 0 or with initial modal coordinates, a frequency_cutoff with a
+        fixed mode count; a negative damping ratio; an
         unknown mode family, or one that contradicts the beam's ends; initial modal
         coordinates or velocities without 2 x modes_per_plane finite entries; a bad rotation
         or angular velocity; stiffening not a bool.
@@ -228,6 +257,7 @@ class EulerBernoulliBeam:
     angular_velocity: object = None
     name: str = ""
     stiffening: bool = False
+    frequency_cutoff: float = None
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -253,14 +283,29 @@ class EulerBernoulliBeam:
             finite_scalar(who, "bending_stiffness", v, positive=True)
         polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
                               positive=True)
-        if int(self.modes_per_plane) != self.modes_per_plane or self.modes_per_plane < 1:
-            raise ValueError(f"{who}: modes_per_plane must be an integer >= 1, "
+        auto = isinstance(self.modes_per_plane, str) and self.modes_per_plane == "auto"
+        if auto:
+            if self.frequency_cutoff is None:
+                raise ValueError(f"{who}: modes_per_plane='auto' keeps the modes below "
+                                 f"frequency_cutoff (Hz), which is missing (e.g. 1 / (20 dt) for "
+                                 f"the step you will run)")
+            cutoff = finite_scalar(who, "frequency_cutoff", self.frequency_cutoff, positive=True)
+            for arg in ("initial_modal_coordinates", "initial_modal_velocities"):
+                if getattr(self, arg) is not None:
+                    raise ValueError(f"{who}: {arg} needs a fixed modes_per_plane (with 'auto' "
+                                     f"the count is known only when the model is built)")
+        elif (isinstance(self.modes_per_plane, str) or isinstance(self.modes_per_plane, bool)
+              or int(self.modes_per_plane) != self.modes_per_plane or self.modes_per_plane < 1):
+            raise ValueError(f"{who}: modes_per_plane must be an integer >= 1 or 'auto', "
                              f"got {self.modes_per_plane!r}")
+        elif self.frequency_cutoff is not None:
+            raise ValueError(f"{who}: frequency_cutoff applies to modes_per_plane='auto' only "
+                             f"(this beam keeps {self.modes_per_plane} modes per plane)")
         zeta = finite_scalar(who, "damping_ratio", self.damping_ratio, nonnegative=True)
         if self.mode_family not in MODE_FAMILY_NAMES:
             raise ValueError(f"{who}: mode_family must be one of {sorted(MODE_FAMILY_NAMES)}, "
                              f"got {self.mode_family!r}")
-        n_coord = 2 * int(self.modes_per_plane)
+        n_coord = 0 if auto else 2 * int(self.modes_per_plane)
         given = (("initial_modal_coordinates", self.initial_modal_coordinates),
                  ("initial_modal_velocities", self.initial_modal_velocities))
         eta0, eta_d0 = (np.zeros(n_coord) if v is None
@@ -277,7 +322,9 @@ class EulerBernoulliBeam:
         row = np.zeros(BEAM_PARAM_SIZE)
         row[LENGTH], row[MASS_PER_LENGTH], row[EI_V], row[EI_W] = length, mu, ei[0], ei[1]
         row[POLAR_PER_LENGTH], row[DAMPING_RATIO] = polar, zeta
-        row[MODES], row[FAMILY] = int(self.modes_per_plane), MODE_FAMILY_NAMES[self.mode_family]
+        row[MODES] = 0 if auto else int(self.modes_per_plane)   # "auto": set at the build
+        row[FREQUENCY_CUTOFF] = cutoff if auto else 0.0
+        row[FAMILY] = MODE_FAMILY_NAMES[self.mode_family]
         if not isinstance(self.stiffening, (bool, np.bool_)):
             raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")
         row[STIFFENING] = float(self.stiffening)

@@ -1,0 +1,108 @@
+"""What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
+import numpy as np
+
+from .elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, FREQUENCY_CUTOFF,
+                            MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
+                            bending_frequencies)
+from .elements.hinges import BALL, ELASTIC, FIXED
+from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.rigid_body import MASS, TO_OUTPUT
+
+JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
+               UNIVERSAL: "universal", PRISMATIC: "prismatic"}
+JOINT_DOF = {BALL: 3, FIXED: 0, ELASTIC: 6, REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}
+_FAMILY_WHY = {
+    PINNED: "pinned (sine modes in the chord frame): both ends are moment-free",
+    CLAMPED: "clamped (the clamped-free eigenfunctions): the input section holds the frame and "
+             "the output is the free tip",
+    CLAMPED_LOADED: "clamped with a loaded end (polynomial Ritz modes): the input section holds "
+                    "the frame and the output carries loads"}
+
+
+def describe_counts(model):
+    """'n bodies (r rigid, b beams), d degrees of freedom'."""
+    kinds = model.body_kind
+    return (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
+            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), "
+            f"{degrees_of_freedom(model)} degrees of freedom")
+
+
+def degrees_of_freedom(model):
+    """Each joint's own freedoms (a ball 3, an elastic hinge 6, a revolute 1, ...) plus the
+    beams' modal coordinates, less 3 for a tip pinned to the ground."""
+    return int(sum(JOINT_DOF[int(k)] for k in model.hinge_kind) + np.sum(model.n_modes)
+               - (3 if model.tip_pinned else 0))
+
+
+def beam_frequencies(model, k):
+    """(Hz) the retained modes' own frequencies of beam k, sqrt(k_j / m_j) / 2 pi with the
+    modal stiffness and mass (docs/beam.md), per plane: (v plane, w plane)."""
+    return bending_frequencies(model.beam_params[k])
+
+
+def suggested_dt(model):
+    """A step that resolves the model's fastest retained motion: 20 steps per period of the
+    highest retained beam mode, and 0.02 rad per step of the fastest initial spin or of a
+    pendulum swing sqrt(g / L) over the shortest body (rounded down to 1, 2 or 5 x 10^k s)."""
+    rates = [float(np.linalg.norm(w)) for w in model.initial_angular_velocity]
+    g = float(np.linalg.norm(model.gravity))
+    lengths = [float(np.linalg.norm(model.body_params[k, TO_OUTPUT]))
+               for k in range(model.n_bodies)]
+    lengths = [x for x in lengths if x > 0]
+    if g > 0 and lengths:
+        rates.append(np.sqrt(g / min(lengths)))
+    dt = 0.02 / max(max(rates, default=0.0), 1e-3)
+    for k in np.nonzero(model.body_kind == 1)[0]:
+        f = max(float(np.max(fs)) for fs in beam_frequencies(model, k))
+        dt = min(dt, 1.0 / (20.0 * f))
+    exponent = np.floor(np.log10(dt))
+    mantissa = dt / 10 ** exponent
+    return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
+
+
+def _beam_lines(model, k):
+    row = model.beam_params[k]
+    m = int(row[MODES])
+    fv, fw = beam_frequencies(model, k)
+    lines = [f"{m} mode{'s' if m > 1 else ''} per plane, own frequencies (Hz): "
+             f"v {np.array2string(fv, precision=4)}, w {np.array2string(fw, precision=4)}",
+             f"mode family {_FAMILY_WHY[int(row[FAMILY])]}"]
+    cutoff = row[FREQUENCY_CUTOFF]
+    if cutoff > 0.0:
+        # auto_mode_count's measure: the frequencies of the family's largest basis
+        cap = MAX_LOADED_MODES if int(row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+        spectrum = np.minimum(*bending_frequencies(row, cap))
+        why = f"modes_per_plane='auto': kept the modes at or below {cutoff:.4g} Hz"
+        if m < cap and spectrum[m] > cutoff:
+            why += f" (the next at {spectrum[m]:.4g} Hz)"
+        else:
+            why += f" (at least one, at most {cap})"
+        if int(row[FAMILY]) == CLAMPED_LOADED:
+            why += (f"; frequencies of the {cap}-mode basis: with {m} the polynomial modes' "
+                    f"are higher (Ritz)")
+        lines.append(why)
+    lines.append("geometric stiffening on" if row[STIFFENING] else
+                 "geometric stiffening off (the paper's beam)")
+    return lines
+
+
+def describe(model):
+    """The model in words: its counts, gravity and tip, every body with its joint and parent,
+    each beam's modes (their frequencies, the family and why, what modes_per_plane='auto'
+    kept), and a step that resolves it."""
+    out = [describe_counts(model),
+           f"gravity {model.gravity.tolist()} m/s^2; tip "
+           f"{'pinned' if model.tip_pinned else 'free'}",
+           "bodies:"]
+    for k in range(model.n_bodies):
+        kind = "beam" if model.body_kind[k] == 1 else "rigid"
+        p = model.parent[k]
+        parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
+        out.append(f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
+                   f"on a {JOINT_NAMES[int(model.hinge_kind[k])]} joint "
+                   f"'{model.hinge_names[k]}' to {parent}")
+        if kind == "beam":
+            out += [f"  {'':<14} {line}" for line in _beam_lines(model, k)]
+    out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
+               f"retained mode, 0.02 rad per step of the fastest spin or swing)")
+    return "\n".join(out)
