@@ -23,7 +23,8 @@ from .elements import BEAM
 from .elements.beam import EI_V, EI_W, MASS_PER_LENGTH, DAMPING_RATIO, MODES
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .elements.rigid_body import TO_MASS_CENTER
-from .result import _drive_spring_energy
+from .model import output_section
+from .result import _drive_spring_energy, beam_output_offset
 
 
 class EnergyBalance:
@@ -46,6 +47,9 @@ class EnergyBalance:
                                  f"{model.hinge_names[k]!r} follows a beam; its damper's work "
                                  f"is not counted yet")
         self.roots = [k for k in range(n) if model.parent[k] < 0]
+        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+        self.loaded_beams = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
+                             and (model.forces[k] is not None or model.torques[k] is not None)]
         # the beams' modal damping coefficients c_k = 2 zeta omega_k m_k, flat like eta
         c = []
         factors = beams[5]
@@ -85,7 +89,13 @@ class EnergyBalance:
         if model.has_applied_loads:
             l_ic = model.body_params[:, TO_MASS_CENTER]
             v_c = res.velocity_input + np.cross(w, np.einsum("tkij,kj->tki", res.rotation, l_ic))
-            p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w)
+            w_load = w
+            if self.loaded_beams:   # a beam's end load: at its output point, on its end section
+                v_c, w_load = v_c.copy(), w.copy()
+                for k, off in self.loaded_beams:
+                    v_c[:, k], w_load[:, k] = _beam_end_rates(
+                        model.beam_params[k], res, k, off)
+            p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w_load)
         if res.joint_coordinates is not None:
             p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
         for k in self.elastic:
@@ -140,3 +150,16 @@ class EnergyBalance:
                     f"{self.limit:g} (W: the work of loads, drives, dampers and a moving ground; "
                     f"a smaller dt, or rtol, keeps it)")
         return None
+
+
+def _beam_end_rates(row, res, k, offset):
+    """(T, 3) each: the velocity of beam k's output point and the angular velocity of its end
+    section (docs/beam.md, "End sections"), where its applied end load works."""
+    m2 = 2 * int(row[MODES])
+    eta = res.modal_coordinates[:, offset:offset + m2]
+    eta_dot = res.modal_velocities[:, offset:offset + m2]
+    rot, w = res.rotation[:, k], res.angular_velocity[:, k]
+    _, rate = beam_output_offset(row, rot, w, eta, eta_dot)
+    w_o = np.array([output_section(row, rot[t], w[t], eta[t], eta_dot[t])[1]
+                    for t in range(len(rot))])
+    return res.velocity_input[:, k] + rate, w_o

@@ -253,9 +253,11 @@ class Model:
         The body's rotation is fixed to the ground frame by fixed hinges (through rigid bodies
         only): it is not integrated (docs/solver.md, "Bodies locked to the ground").
     forces : tuple
-        Per body: None or f(t) -> the applied world force at the mass centre, N.
+        Per body: None or f(t) -> the applied world force at the mass centre, N (for a beam:
+        at its output end, ``end_force``).
     torques : tuple
-        Per body: None or f(t) -> the applied world torque, N m.
+        Per body: None or f(t) -> the applied world torque, N m (for a beam: on its output
+        end section, ``end_torque``).
     body_names : tuple of str
         The bodies' names (``body{k}`` for a body without one).
     hinge_names : tuple of str
@@ -360,6 +362,13 @@ class Model:
         """True when every hinge is moment-free (a ball joint): the reduced [a; q] transfer
         applies (elements/kinds.py)."""
         return all(JOINT_KIND[int(c)].moment_free for c in self.hinge_kind)
+
+    @property
+    def has_beam_end_torque(self):
+        """Whether a beam carries an applied end torque (its modal equations then depend on its
+        end section's rotation, and it runs in the general loop: docs/beam.md)."""
+        return any(self.torques[k] is not None for k in range(self.n_bodies)
+                   if self.body_kind[k] == BEAM)
 
     @property
     def has_applied_loads(self):
@@ -825,14 +834,19 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         who = bodies[k].label(k)
         input_free = kinds[k] == BALL
         leaf = not children[k]
-        free_tip = leaf and tip == "free"
+        # an applied end load (docs/beam.md, "Loads on the beam") loads the output: the free
+        # tip's eigenfunctions carry none, and a torque needs the sections' rotations
+        loaded = bv[k]["force"] is not None or bv[k]["torque"] is not None
+        free_tip = leaf and tip == "free" and not loaded
         # a leaf's output is the tip (free or pinned); otherwise every joint there moment-free
-        output_free = leaf or all(kinds[c] == BALL for c in children[k])
+        output_free = ((leaf or all(kinds[c] == BALL for c in children[k]))
+                       and bv[k]["torque"] is None)
         family = int(beam_params[k, FAMILY])
         if family == PINNED and not (input_free and output_free):
             raise ValueError(f"{who}: mode_family 'pinned' needs moment-free ends (a ball joint "
-                             f"or the tip at both ends); a fixed or elastic hinge holds this "
-                             f"beam: use 'clamped' (or 'auto')")
+                             f"or the tip at both ends, no end_torque); a fixed or elastic "
+                             f"hinge, or an end torque, holds this beam: use 'clamped' (or "
+                             f"'auto')")
         if family == CLAMPED and input_free and output_free and not bv[k]["force_mode_family"]:
             raise ValueError(f"{who}: mode_family 'clamped' contradicts the moment-free ends of "
                              f"the beam (pass force_mode_family=True to insist)")

@@ -594,7 +594,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
     # rest the general loop (kernels/step.py); each records what its scheme defines
     fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-             and scheme == "newmark"
+             and scheme == "newmark" and not model.has_beam_end_torque
              and all(BODY_KIND[int(c)].fused for c in model.body_kind))
     if fused and mode == kstep.RICCATI_TREE:
         loop_name, runner = "ball-tree", run_steps_no_alloc

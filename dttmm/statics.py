@@ -188,6 +188,7 @@ class _Configuration:
                                error=np.zeros(2))
         self.fused = None
         if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
+                and not km.has_beam_end_torque
                 and all(solver.BODY_KIND[int(c)].fused for c in km.body_kind)):
             self.fused = (solver.run_steps_no_alloc,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))

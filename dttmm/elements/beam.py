@@ -7,11 +7,12 @@ w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffen
 its small polar inertia is kept for the frame's spin about x.
 """
 from dataclasses import dataclass
+from typing import Callable, Optional
 
 import numpy as np
 from scipy.linalg import eigh
 
-from ._checks import finite_scalar, finite_vector, rotation_matrix
+from ._checks import finite_scalar, finite_vector, optional_function, rotation_matrix
 
 PINNED = 0            # sin(k pi x / L) in the chord frame: between moment-free ends
 CLAMPED = 1           # clamped-free eigenfunctions in the input section's frame: a free tip
@@ -210,6 +211,14 @@ class EulerBernoulliBeam:
         Hz (> 0), with modes_per_plane="auto" (and only then): the highest frequency to keep.
         A motion resolved by a step dt needs about 20 steps per period: 1 / (20 dt) keeps what
         that step resolves.
+    end_force : callable, optional
+        end_force(t) -> 3 numbers: a world-frame force applied at the beam's output end at
+        time t (s), N (docs/beam.md, "Loads on the beam").  None (default): none.
+    end_torque : callable, optional
+        end_torque(t) -> 3 numbers: a world-frame torque applied to the beam's output end
+        section, N m.  None (default): none.  A loaded output takes the clamped family's
+        loaded-end modes (the free-tip eigenfunctions carry no end load; a torque also rules
+        out the pinned family, whose sections' rotations are not modelled).
     stiffening : bool, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
@@ -258,6 +267,8 @@ class EulerBernoulliBeam:
     name: str = ""
     stiffening: bool = False
     frequency_cutoff: float = None
+    end_force: Optional[Callable[[float], object]] = None
+    end_torque: Optional[Callable[[float], object]] = None
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -329,6 +340,8 @@ class EulerBernoulliBeam:
             raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")
         row[STIFFENING] = float(self.stiffening)
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
-                    j_i=j_c + shift, force=None, torque=None, rotation=rotation, omega=omega,
+                    j_i=j_c + shift, force=optional_function(who, "end_force", self.end_force),
+                    torque=optional_function(who, "end_torque", self.end_torque),
+                    rotation=rotation, omega=omega,
                     beam=row, eta0=eta0, eta_d0=eta_d0,
                     force_mode_family=bool(self.force_mode_family))

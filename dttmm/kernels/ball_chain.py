@@ -259,7 +259,8 @@ def _iterate(loop, run, s, it):
         if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = (i1 - i0) // 2
-            tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m])
+            tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
+                      force[s, k], torque[s, k])    # (the end load: docs/beam.md)
             beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,
                           w3[k], w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
                           eta_dd_star[i0:i1], loop.beam_work, v, pmap[k], eta_map[i0:i1])

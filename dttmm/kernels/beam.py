@@ -146,14 +146,17 @@ def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
 
 
 @no_alloc_kernel
-def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, a_i,
-                   m_i, q_i, out, residual, aux):
+def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
+                   eta_d, eta_dd, a_i, m_i, q_i, out, residual, aux):
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end force's generalized forces (an end moment's: add_end_moment, at a fixed
     hinge at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the
     modal integrals [int Y_k, int x Y_k, int Y_k Y_l] (solver.beam_tables); ends (m, 2):
-    Y_k(L), Y_k'(L); factors (m, 2): modal mass over mu and modal stiffness over EI.  aux (4, 3)
+    Y_k(L), Y_k'(L); factors (m, 2): modal mass over mu and modal stiffness over EI;
+    end_force, end_torque (3,): the applied force F and torque T at the output end, world
+    (docs/beam.md, "Loads on the beam"; they add to q_O and m_O, and the net end force
+    q_O - F is what the modal equations and the axial force see).  aux (4, 3)
     receives what the analytic columns of the linearization need (beam_transfer): the first
     mass moment S = int mu rho, rho_L = r_O - r_I, and zeros (add_end_moment's A J_l(theta_O)
     e2, e3); given the rows of aux_rows(m) (beam_transfer's base evaluation), also the sums the
@@ -344,7 +347,10 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
     out[6] = m_i[0] - (r1 * qo2 - r2 * qo1) + sm0 - (s_wd * e10 + s_w * (w1 * e12 - w2 * e11))
     out[7] = m_i[1] - (r2 * qo0 - r0 * qo2) + sm1 - (s_wd * e11 + s_w * (w2 * e10 - w0 * e12))
     out[8] = m_i[2] - (r0 * qo1 - r1 * qo0) + sm2 - (s_wd * e12 + s_w * (w0 * e11 - w1 * e10))
-    out[9], out[10], out[11] = qo0, qo1, qo2
+    # the applied end load (docs/beam.md, "Loads on the beam"): q_O gains F, m_O gains T; the
+    # outboard's net pull q_O - F = q_I + int f stays in qo below (modal terms, N_L)
+    out[6], out[7], out[8] = out[6] + end_torque[0], out[7] + end_torque[1], out[8] + end_torque[2]
+    out[9], out[10], out[11] = qo0 + end_force[0], qo1 + end_force[1], qo2 + end_force[2]
     aux[0, 0], aux[0, 1], aux[0, 2] = s0, s1, s2
     aux[2:4] = 0.0
     # generalized forces of the outboard's -q_O (at O) and -m_O (docs/beam.md, modal equations)
@@ -369,11 +375,12 @@ def beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, 
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def add_end_moment(ends, eta, rot, out, residual, aux):
+def add_end_moment(ends, eta, rot, out, residual, aux, end_torque):
     """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
     on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
     Y_k'(L), residual_w,k -= m_O . (A J_l e2) Y_k'(L), J_l = J_l(theta_O); aux[2], aux[3] =
-    A J_l e2, A J_l e3.  out, residual, aux: beam_relations'.  (Kept out of beam_relations,
+    A J_l e2, A J_l e3; with an applied end torque T (end_torque) the net m_O - T.  out,
+    residual, aux, end_torque: beam_relations'.  (Kept out of beam_relations,
     whose loops LLVM optimizes better without this branch's allocations: measured 0.34 against
     0.25 us per evaluation.)"""
     m = ends.shape[0]
@@ -384,11 +391,17 @@ def add_end_moment(ends, eta, rot, out, residual, aux):
         aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
     mv = mw = 0.0
     for i in range(3):
-        mv += out[6 + i] * aux[3, i]
-        mw -= out[6 + i] * aux[2, i]
+        mv += (out[6 + i] - end_torque[i]) * aux[3, i]
+        mw -= (out[6 + i] - end_torque[i]) * aux[2, i]
     for k in range(m):
         residual[k] += mv * ends[k, 1]
         residual[m + k] += mw * ends[k, 1]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _any(v):
+    """Whether a 3-vector has a nonzero entry (an applied end torque)."""
+    return v[0] != 0.0 or v[1] != 0.0 or v[2] != 0.0
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -461,12 +474,13 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
-    tables = (moments, ends, factors); outboard = (welded, R_rel, rotation at t_n, w1):
+    tables = (moments, ends, factors, end_force, end_torque) (the applied end load, world:
+    beam_relations); outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
     (at the start: the end section's angular acceleration).  work: (24 + 2 n) scratch, which
     holds the state (the returned rotation is a view on it)."""
-    moments, ends, factors = tables
+    moments, ends, factors, end_force, end_torque = tables
     welded, r_rel, rot_out_n, w1_out = outboard
     n = residual.shape[0]
     wd = x[3:6]
@@ -483,10 +497,10 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for i in range(3):
             phi[i] = phi_star[i] + (wd[i] - wd_star[i]) / c1
         _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
-    beam_relations(bp, moments, ends, factors, gravity, rot, w, wd, eta, eta_d, eta_dd, x[0:3],
-                   x[6:9], x[9:12], out, residual, aux)
-    if welded:
-        add_end_moment(ends, eta, rot, out, residual, aux)
+    beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
+                   eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
+    if welded or _any(end_torque):
+        add_end_moment(ends, eta, rot, out, residual, aux, end_torque)
     independent, dw1 = history
     if independent and not start:
         m = ends.shape[0]
@@ -691,7 +705,7 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
       d m_O = -s Y_k(L) g x q_O - rho_L x d q_O + s g x F_k - Q_k x G,
       d residual_(plane', l) = M_lk g'.G + Y_l(L) g'.d q_O  (+ r 2 zeta omega_k M_k + s K_k on
       the diagonal: damping and stiffness).  scratch: 6 entries."""
-    moments, ends, factors = tables
+    moments, ends, factors = tables[0], tables[1], tables[2]
     mu, ei_v, ei_w, zeta = bp[1], bp[2], bp[3], bp[5]
     stiff = bp[STIFFENING] != 0.0
     m = ends.shape[0]
@@ -844,13 +858,17 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     eta' = c3 eta + w3e.  tables, outboard, history: see _evaluate."""
     welded = outboard[0]
     ends = tables[1]
+    # an end moment works on the modes: at a weld (the outboard's couple) or under an applied
+    # end torque; then the modal equations depend on m_I and their w', eta'' columns are
+    # differenced (add_end_moment)
+    end_moment = welded or _any(tables[4])
     n = eta_dd_star.shape[0]
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
     nw = 24 + 2 * n
     na = 3 * aux_rows(n // 2)
     block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 15)
+                     + 18)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -870,24 +888,27 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     modal = block[o:o + n * n].reshape((n, n))
     o += n * n
     lam = block[o:o + 9].reshape((3, 3))
-    columns_scratch = block[o + 9:]
+    columns_scratch = block[o + 9:o + 15]
+    q_net = block[o + 15:o + 18]
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
     rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
                     c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
-    _affine_columns(bp, tables[0], ends, welded, rot, aux, d_o, d_r)
-    # w' and eta'' columns written out unless the output carries a moment (welded) or its own
-    # history (the paper's scheme); there, forward differences below
-    analytic = not welded and not (history[0] and not start)
+    _affine_columns(bp, tables[0], ends, end_moment, rot, aux, d_o, d_r)
+    # w' and eta'' columns written out unless the output carries a moment (welded, or an
+    # applied end torque) or its own history (the paper's scheme); there, forward differences
+    analytic = not end_moment and not (history[0] and not start)
     if analytic:
         w = w_n if start else work[21:24]
         s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)
         left_jacobian(phi_star, lam)
-        _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, o0[9:12], aux, d_o, d_r,
+        for i in range(3):              # the outboard's net pull (an applied end force apart)
+            q_net[i] = o0[9 + i] - tables[3][i]
+        _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, q_net, aux, d_o, d_r,
                        columns_scratch)
-        _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], o0[9:12], gravity,
+        _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], q_net, gravity,
                           aux, d_o, d_r)
     xp[:] = x0
     for c in range(3, nx):
@@ -912,7 +933,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # [E_z, e_r] = -d_r[:, 12:]^-1 [d_r[:, :12], r0].  rhs holds the columns of z in the order
     # a_I, w', q_I, the constant, m_I: without an end moment (not welded) the modal equations do
     # not depend on m_I (_affine_columns), and those three columns stay out of the solve.
-    n_rhs = 13 if welded else 10
+    n_rhs = 13 if end_moment else 10
     for r in range(n):
         for c in range(12):
             rhs[r, _rhs_column(c)] = -d_r[r, c]
@@ -996,14 +1017,17 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     for i in range(n):
         x0[12 + i] = eta_dd_star[i]
     _step_state(phi_star, c1, c3, w3, rot_n, eta_dd_star, w1e, w3e, e, rot, w, eta, eta_d)
-    beam_relations(bp, moments, ends, tables[2], gravity, rot, w, wd_star, eta, eta_d,
-                   eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
+    beam_relations(bp, moments, ends, tables[2], tables[3], tables[4], gravity, rot, w, wd_star,
+                   eta, eta_d, eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp, moments, ends, False, rot, aux, d_o, d_r)
     left_jacobian(phi_star, lam)
-    _modal_columns(bp, tables, rot, w, wd_star, s_c, r_c, o0[9:12], aux, d_o, d_r, scratch)
-    _rotation_columns(bp, ends, rot, lam, w, wd_star, s_c, r_c, a_i, o0[9:12], gravity, aux,
+    q_net = work[3][3:6]                     # the outboard's net pull (an end force apart)
+    for i in range(3):
+        q_net[i] = o0[9 + i] - tables[3][i]
+    _modal_columns(bp, tables, rot, w, wd_star, s_c, r_c, q_net, aux, d_o, d_r, scratch)
+    _rotation_columns(bp, ends, rot, lam, w, wd_star, s_c, r_c, a_i, q_net, gravity, aux,
                       d_o, d_r)
     # rows m_O (d_o 6:9) and the modal residuals (d_r) in the unknowns y = [w', eta''] (columns
     # 3:6, 12:): K (y - y*) = -(B (z - z*) + c), z = [a_I; q_I] (columns 0:3, 9:12), so

@@ -273,7 +273,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             kout = k + 1 if welded else k
             outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
                         wd[kout] - c1 * phi_star[kout])
-            tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m])
+            tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
+                      force[k], torque[k])          # (the end load: docs/beam.md)
             history = (independent, w1_st[k + 1] - w1_st[k])
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],

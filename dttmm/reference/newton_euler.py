@@ -990,9 +990,13 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
             mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
                 beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, gravity)
+            # an applied end force F and torque T (docs/beam.md, "Loads on the beam") act at
+            # the output point and on the end section: F in Newton, rho_O x F + T about I,
+            # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
             weight = mass * gravity + forces[k]
             bn = weight - _cross(w, _cross(w, h)) + newton_v
-            be = -_cross(w, j_w @ w) + _cross(h, gravity) + euler_v + torques[k]
+            be = (-_cross(w, j_w @ w) + _cross(h, gravity) + euler_v + torques[k]
+                  + _cross(rho_o[k], forces[k]))
             ce = e_col0 + o
             for j in range(nm2):
                 for i in range(3):
@@ -1002,6 +1006,8 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                     s[ce + j, ca + i] = ap[i, j]      # modal:  (A P)^T a + (A G)^T alpha
                     s[ce + j, cal + i] = ag[i, j]
                 b[ce + j] = modal[j]
+                for i in range(3):
+                    b[ce + j] += b_r[k, i, j] * forces[k, i] + b_t[k, i, j] * torques[k, i]
             for j in range(nm):                       # modal mass, one block per plane
                 for i in range(nm):
                     s[ce + j, ce + i] = m_yy[j, i]

@@ -1,0 +1,129 @@
+"""Loads on beams (docs/beam.md, "Loads on the beam"): a force and a torque applied at a beam's
+output end, world axes, functions of time.  Against the analytic cantilever, the elastica, the
+Newton-Euler reference (order 2), and the energy balance (their work counted)."""
+import warnings
+
+import numpy as np
+import pytest
+
+import dttmm
+from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion, build_chain,
+                   simulate, simulate_reference, static_equilibrium)
+
+EI, L = 100.0, 1.0
+
+
+def cantilever(n_elements=1, force=None, torque=None, modes=2, stiffening=True, **beam):
+    """n welded elements clamped along x, the loads at the last one's free end, no gravity."""
+    parts = []
+    for k in range(n_elements):
+        last = k == n_elements - 1
+        parts += [FixedHinge(), EulerBernoulliBeam(
+            length=L / n_elements, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, modes_per_plane=modes, stiffening=stiffening,
+            end_force=(lambda t: force) if last and force is not None else None,
+            end_torque=(lambda t: torque) if last and torque is not None else None, **beam)]
+    return build_chain(parts, gravity=[0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("n_elements", [1, 3])
+def test_small_tip_loads_bend_the_cantilever_as_euler_bernoulli_says(n_elements):
+    """A tip force P along y: v(L) = P L^3 / (3 EI), slope P L^2 / (2 EI); a tip torque M about z:
+    v(L) = M L^2 / (2 EI), slope M L / EI; out of the plane (w) the same.  The loaded end takes
+    the polynomial modes, which hold these cubics exactly (one element or three); loads of
+    1e-4 of the buckling scale keep the foreshortening's second order below 1e-7 relative."""
+    p, m = 1e-3, 1e-3
+    for force, torque, want_v, want_w in (
+            ([0.0, p, 0.0], None, p * L ** 3 / (3 * EI), 0.0),
+            ([0.0, 0.0, p], None, 0.0, p * L ** 3 / (3 * EI)),
+            (None, [0.0, 0.0, m], m * L ** 2 / (2 * EI), 0.0),
+            (None, [0.0, -m, 0.0], 0.0, m * L ** 2 / (2 * EI))):
+        model = cantilever(n_elements, force, torque)
+        assert model.beam_params[-1, 7] == 2           # the loaded-end family, chosen for the load
+        tip = static_equilibrium(model).positions()[2][-1]
+        assert abs(tip[1] - want_v) < 1e-6 * max(abs(want_v), 1e-6), (tip, want_v)
+        assert abs(tip[2] - want_w) < 1e-6 * max(abs(want_w), 1e-6), (tip, want_w)
+
+
+def test_elastica_by_an_end_torque_on_the_beam():
+    """The elastica of tests/test_statics.py with the moment on the last element's end instead
+    of a tip body: the same tip within 2e-4 L of the arc at phi = pi / 2 (8 elements: 2.8e-4
+    with the tip body; the body's own small rotation apart, the same equations)."""
+    phi = np.pi / 2
+    guess = None
+    for lam in (0.5, 1.0):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            guess = static_equilibrium(cantilever(8, torque=[0.0, 0.0, lam * phi * EI / L]),
+                                       guess=guess)
+    exact = np.array([np.sin(phi) / phi, (1.0 - np.cos(phi)) / phi, 0.0]) * L
+    assert np.linalg.norm(guess.positions()[2][-1] - exact) < 4e-4
+
+
+def _ramp(t):
+    """0 -> 1 over the first second with zero rate at both ends (t^2 (3 - 2 t)): a load switched
+    on suddenly rings the elements' highest modes (hundreds of rad/s here), which no dt of this
+    test resolves, and their phase error swamps the order (measured with the torque switched on
+    at t = 0: errors 2.1e-4, 1.4e-4 and 2.8e-4 m at dt 4e-3, 2e-3 and 1e-3)."""
+    return t * t * (3.0 - 2.0 * t) if t < 1.0 else 1.0
+
+
+def _driven_loaded_cantilever():
+    """A soft stiffened cantilever (two welded elements) on a hub driven about z, gravity -y,
+    a time-varying end force (with a compressive part along the beam) and end torque, ramped
+    on."""
+    def angle(t):
+        return 1.5 * t * t
+    hub = PrescribedMotion.spin_about_axis([0, 0, 1], angle, lambda t: 3.0 * t, lambda t: 3.0)
+    parts = []
+    for k in range(2):
+        parts += [FixedHinge(), EulerBernoulliBeam(
+            length=0.5, mass_per_length=1.0, bending_stiffness=[3.0, 4.0],
+            polar_inertia_per_length=1e-3, modes_per_plane=2, stiffening=True,
+            end_force=(lambda t: _ramp(t) * np.array([-0.5 * np.cos(3 * t),
+                                                      0.4 * np.sin(2 * t), 0.3])) if k else None,
+            end_torque=(lambda t: _ramp(t) * np.array([0.05, -0.1 * t, 0.2 * np.cos(t)]))
+            if k else None)]
+    return build_chain(parts, gravity=[0.0, -9.81, 0.0], ground=Ground(motion=hub))
+
+
+def test_end_loads_converge_to_the_reference_at_order_2():
+    """DT-TMM against the Newton-Euler reference (which adds the loads to its own Newton,
+    Euler and modal rows: F, rho_O x F + T, B_r^T F + B_t^T T); output points at t = 1 s,
+    dt 4e-3 / 2e-3 / 1e-3: fitted order 2 +- 0.2."""
+    model = _driven_loaded_cantilever()
+    t = np.linspace(0.0, 1.0, 11)
+    ref = simulate_reference(model, 1.0, rtol=1e-11, atol=1e-13, t_eval=t)
+    steps = np.array([4e-3, 2e-3, 1e-3])
+    errors = [np.abs(simulate(model, 1.0, h, t_eval=t).position_output[-1]
+                     - ref.position_output[-1]).max() for h in steps]
+    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert abs(slope - 2.0) < 0.2, (errors, slope)
+    assert errors[-1] < 1e-4, errors
+
+
+def test_end_loads_work_is_counted_in_the_energy_balance():
+    """E - E(0) - W, W the work of the end loads (F . v_O + T . w_O), the hub's drive and
+    gravity's none, closes at order 2 in dt (the gap at dt 1e-3 a quarter of dt 2e-3's)."""
+    model = _driven_loaded_cantilever()
+    gaps = []
+    for h in (2e-3, 1e-3):
+        res = simulate(model, 1.0, h, max_energy_error=1.0)
+        gaps.append(res.info["energy_balance_error"])
+    assert gaps[1] < 1e-4 and gaps[0] / gaps[1] > 3.0, gaps
+
+
+def test_bad_end_loads_are_refused_naming_the_beam():
+    with pytest.raises(ValueError, match="'arm'.*end_force"):
+        build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, end_force=[0.0, 1.0, 0.0], name="arm")])
+    with pytest.raises(ValueError, match="'arm'.*end_torque"):
+        build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, end_torque=lambda t: [0.0, 1.0], name="arm")])
+    with pytest.raises(ValueError, match="'arm'.*pinned.*end torque"):
+        build_chain([dttmm.BallJoint(), EulerBernoulliBeam(
+            length=1.0, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, mode_family="pinned",
+            end_torque=lambda t: [0.0, 0.0, 1.0], name="arm")])
