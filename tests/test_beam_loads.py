@@ -127,3 +127,21 @@ def test_bad_end_loads_are_refused_naming_the_beam():
             length=1.0, bending_stiffness=EI, mass_per_length=1.0,
             polar_inertia_per_length=1e-3, mode_family="pinned",
             end_torque=lambda t: [0.0, 0.0, 1.0], name="arm")])
+
+
+def test_end_loads_in_a_scene_round_trip(tmp_path):
+    """A scene's beam takes end_force and end_torque as profiles, and save_scene writes them
+    back: the same arrays and the same loads."""
+    from dttmm.profiles import profile
+    from dttmm.scene import load_scene, save_scene
+    ramp = profile({"profile": "ramp", "value": [0.0, 0.0, 2.0], "duration": 1.0})
+    model = build_chain([FixedHinge(), EulerBernoulliBeam(
+        length=1.0, bending_stiffness=EI, mass_per_length=1.0, polar_inertia_per_length=1e-3,
+        modes_per_plane=2,
+        end_force=profile({"profile": "constant", "value": [0.0, -1.0, 0.0]}),
+        end_torque=ramp, name="arm")])
+    save_scene(model, tmp_path / "loaded.toml")
+    again = load_scene(tmp_path / "loaded.toml").model
+    assert np.array_equal(again.beam_params, model.beam_params)
+    assert np.allclose(again.forces[0](0.3), [0.0, -1.0, 0.0])
+    assert np.allclose(again.torques[0](0.5), [0.0, 0.0, 1.0])
