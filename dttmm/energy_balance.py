@@ -20,7 +20,8 @@ where loads act), so it costs about the positions' price per step.
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import EI_V, EI_W, MASS_PER_LENGTH, DAMPING_RATIO, MODES
+from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
+                            STIFFENING, foreshortening_integrals, mode_shapes)
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .elements.rigid_body import TO_MASS_CENTER
 from .model import output_section
@@ -50,6 +51,8 @@ class EnergyBalance:
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
         self.loaded_beams = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
                              and (model.forces[k] is not None or model.torques[k] is not None)]
+        self.line_loaded = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
+                            and model.line_loads[k] is not None]
         # the beams' modal damping coefficients c_k = 2 zeta omega_k m_k, flat like eta
         c = []
         factors = beams[5]
@@ -72,10 +75,10 @@ class EnergyBalance:
             e -= _drive_spring_energy(self.model, res.joint_coordinates[-1:], 1)[0]
         return e, res.kinetic[-1]
 
-    def power(self, res, values, force, torque):
+    def power(self, res, values, force, torque, line_load):
         """(T,) the power of everything outside E at each row of res (its times t):
         values, the rows' kernel state restricted to the model's bodies (defl, defl_rate);
-        force, torque (T, n, 3) the applied loads at those times."""
+        force, torque, line_load (T, n, 3) the applied loads at those times."""
         model = self.model
         t = res.t
         p = np.zeros(len(t))
@@ -96,6 +99,9 @@ class EnergyBalance:
                     v_c[:, k], w_load[:, k] = _beam_end_rates(
                         model.beam_params[k], res, k, off)
             p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w_load)
+        for k, off in self.line_loaded:         # a distributed load p: p . int v(x) dx
+            p += np.einsum("ti,ti->t", line_load[:, k],
+                           _beam_line_velocity(model.beam_params[k], res, k, off))
         if res.joint_coordinates is not None:
             p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
         for k in self.elastic:
@@ -125,17 +131,17 @@ class EnergyBalance:
                 p += np.einsum("ti,ti->t", f, v_g) + np.einsum("ti,ti->t", m, w_g)
         return p
 
-    def start(self, values, force, torque):
+    def start(self, values, force, torque, line_load):
         """The balance at t = 0 from the initial state's row."""
         res, mapped = self.result_of(values, [0])
         self.e0, self.largest_kinetic = self.energy(res)
-        self.p_last = self.power(res, mapped, force, torque)[0]
+        self.p_last = self.power(res, mapped, force, torque, line_load)[0]
 
-    def chunk(self, values, steps, h, force, torque):
+    def chunk(self, values, steps, h, force, torque, line_load):
         """Add a chunk of every-step rows (its steps' ends); returns the broken balance's
         message, or None."""
         res, mapped = self.result_of(values, steps)
-        p = self.power(res, mapped, force, torque)
+        p = self.power(res, mapped, force, torque, line_load)
         self.work += 0.5 * h * (self.p_last + p[0] + np.sum(p[:-1] + p[1:]))
         self.p_last = p[-1]
         last = {key: v[-1:] for key, v in values.items()}
@@ -163,3 +169,31 @@ def _beam_end_rates(row, res, k, offset):
     w_o = np.array([output_section(row, rot[t], w[t], eta[t], eta_dot[t])[1]
                     for t in range(len(rot))])
     return res.velocity_input[:, k] + rate, w_o
+
+
+def _beam_line_velocity(row, res, k, offset):
+    """(T, 3): int_0^L v(x) dx of beam k, the velocity a distributed load works on:
+    L v_I + w x (A s) + A s', s = (L^2 / 2 - C1, P . eta_v, P . eta_w) its first moment in the
+    frame (docs/beam.md, "The integrals in the frame"; C1 = int c, the foreshortening's)."""
+    m = int(row[MODES])
+    length, family = row[LENGTH], int(row[FAMILY])
+    t, wt = np.polynomial.legendre.leggauss(2 * m + 10)
+    x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
+    p = mode_shapes(family, length, m, x)[0] @ wt                     # int Y_k
+    eta = res.modal_coordinates[:, offset:offset + 2 * m]
+    eta_dot = res.modal_velocities[:, offset:offset + 2 * m]
+    s = np.zeros((len(eta), 3))
+    s_dot = np.zeros((len(eta), 3))
+    s[:, 0] = 0.5 * length * length
+    if row[STIFFENING]:
+        d1 = foreshortening_integrals(family, length, m)[1]
+        for plane in range(2):
+            e, ed = eta[:, plane * m:(plane + 1) * m], eta_dot[:, plane * m:(plane + 1) * m]
+            s[:, 0] -= 0.5 * np.einsum("tj,jk,tk->t", e, d1, e)
+            s_dot[:, 0] -= np.einsum("tj,jk,tk->t", ed, d1, e)
+    s[:, 1], s[:, 2] = eta[:, :m] @ p, eta[:, m:] @ p
+    s_dot[:, 1], s_dot[:, 2] = eta_dot[:, :m] @ p, eta_dot[:, m:] @ p
+    rot, w = res.rotation[:, k], res.angular_velocity[:, k]
+    a_s = np.einsum("tij,tj->ti", rot, s)
+    return (length * res.velocity_input[:, k] + np.cross(w, a_s)
+            + np.einsum("tij,tj->ti", rot, s_dot))

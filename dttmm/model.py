@@ -258,6 +258,9 @@ class Model:
     torques : tuple
         Per body: None or f(t) -> the applied world torque, N m (for a beam: on its output
         end section, ``end_torque``).
+    line_loads : tuple
+        Per body: None or f(t) -> a beam's distributed load per length, world, N/m
+        (``distributed_load``); None for a rigid body.
     body_names : tuple of str
         The bodies' names (``body{k}`` for a body without one).
     hinge_names : tuple of str
@@ -314,6 +317,7 @@ class Model:
     ground_locked: np.ndarray        # (n,) bool: rotation fixed to the ground frame by fixed hinges
     forces: tuple                    # per body: None or f(t) -> world force at the mass centre
     torques: tuple                   # per body: None or f(t) -> world torque
+    line_loads: tuple                # per body: None or f(t) -> a beam's distributed load, N/m
     body_names: tuple
     hinge_names: tuple
     body_mass_center_inertia: np.ndarray  # (n, 3, 3) J_C in body axes (for energies)
@@ -373,7 +377,7 @@ class Model:
     @property
     def has_applied_loads(self):
         """Whether any body has an applied force or torque."""
-        return any(f is not None for f in self.forces + self.torques)
+        return any(f is not None for f in self.forces + self.torques + self.line_loads)
 
     def describe(self):
         """The model in words (as ``dttmm info`` prints it).
@@ -760,6 +764,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
         ground_locked=locked,
         forces=tuple(v["force"] for v in bv),
         torques=tuple(v["torque"] for v in bv),
+        line_loads=tuple(v.get("line_load") for v in bv),
         body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
         hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
         body_mass_center_inertia=np.array([v["j_c"] for v in bv]),

@@ -49,7 +49,7 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "frequency_cutoff": "number",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
          "stiffening": "bool", "initial_modal_coordinates": "list",
-         "end_force": "profile", "end_torque": "profile",
+         "end_force": "profile", "end_torque": "profile", "distributed_load": "profile",
          "initial_modal_velocities": "list",
          "rotation": "matrix", "angular_velocity": "vector", "joint": "table"}
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
@@ -206,7 +206,7 @@ def _body(table, i, where):
                          f"parent: type = 'ball', 'fixed', 'elastic', 'revolute', 'universal' "
                          f"or 'prismatic')")
     args = {k: v for k, v in table.items() if k not in ("type", "joint")}
-    for key in ("force", "torque", "end_force", "end_torque"):
+    for key in ("force", "torque", "end_force", "end_torque", "distributed_load"):
         if key in args:
             args[key] = _profile(args[key], where, f"{label} key '{key}'")
     if "points" in args:
@@ -390,7 +390,8 @@ def scene_of(model, run=None, name=None):
                 table["stiffening"] = True
             if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
                 table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
-            for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k])):
+            for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k]),
+                           ("distributed_load", model.line_loads[k])):
                 if f is not None:
                     if not isinstance(f, Profile):
                         raise ValueError(f"save_scene: {who}'s {key} is a Python function; "

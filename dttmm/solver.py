@@ -256,7 +256,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     loop's own sweep (fused: its (runner, loop)) or kernels/step.py::initial_accelerations."""
     n = model.n_bodies
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
-    force, torque = _loads(model, [0.0])
+    force, torque, line_load = _loads(model, [0.0])
     joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
         with compile_notice():
@@ -264,12 +264,14 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 status = _fused_start(*fused, Run(
                     params, settings._replace(newton_max=0, start=True), state, sweep,
                     Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                           force=force, torque=torque, joint_input=joint_input),
+                           force=force, torque=torque, line_load=line_load,
+                           joint_input=joint_input),
                     _record(0, n, len(state.eta)), monitor))
             else:
                 status = kstep.initial_accelerations(params, settings, state, sweep,
                                                      (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                     force[0], torque[0], joint_input[0])
+                                                     force[0], torque[0], line_load[0],
+                                                     joint_input[0])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -349,18 +351,16 @@ def _mode(model, method, full_state):
 
 
 def _loads(model, times):
-    """(steps, n, 3) applied forces and torques at the given times."""
+    """(steps, n, 3) each: the applied forces, torques and beams' distributed loads at the given
+    times."""
     n = model.n_bodies
-    force = np.zeros((len(times), n, 3))
-    torque = np.zeros((len(times), n, 3))
+    out = np.zeros((3, len(times), n, 3))
     for k in range(n):
-        f, tq = model.forces[k], model.torques[k]
-        for i, t in enumerate(times):
-            if f is not None:
-                force[i, k] = f(t)
-            if tq is not None:
-                torque[i, k] = tq(t)
-    return force, torque
+        for which, fn in enumerate((model.forces[k], model.torques[k], model.line_loads[k])):
+            if fn is not None:
+                for i, t in enumerate(times):
+                    out[which, i, k] = fn(t)
+    return out[0], out[1], out[2]
 
 
 def _ground(model, times):
@@ -650,7 +650,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(size + 1))
     no_loads = not model.has_applied_loads
     if no_loads:
-        force, torque = np.zeros((size, n, 3)), np.zeros((size, n, 3))
+        force, torque, line_load = (np.zeros((size, n, 3)) for _ in range(3))
     every = sampling if isinstance(sampling, int) else size + 1
     balance = None
     if max_energy_error is not None:            # every step's state, for the balance
@@ -664,9 +664,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         balance = EnergyBalance(user_model, max_energy_error, result_of,
                                 beam_tables(user_model))
         start_values = dict(state._asdict(), **history_values)
-        f0, tq0 = _loads(model, [done * dt])
+        f0, tq0, ll0 = _loads(model, [done * dt])
         balance.start({key: start_values[key][None] for key in keys}, f0[:, keep],
-                      tq0[:, keep])
+                      tq0[:, keep], ll0[:, keep])
     rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys)
     joint_input = np.zeros((size, n, 2, 3))
     joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
@@ -685,11 +685,11 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         else:
             ga, gr, gw, gwd = _ground(model, times)
             ga, gw, gwd = ga[1:], gw[1:], gwd[1:]
-        f, tq = (force, torque) if no_loads else _loads(
+        f, tq, ll = (force, torque, line_load) if no_loads else _loads(
             model, mid_times if scheme == "energy_momentum" else times[1:])
         ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
         return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], force=f[:m],
-                      torque=tq[:m], joint_input=ji[:m])
+                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m])
 
     def run_chunk(inputs, h, every, first_step, t_first, step_limit=max_step_error):
         """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds
@@ -755,7 +755,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             if balance is not None:
                 broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
                                        done + np.arange(1, m + 1), dt,
-                                       inputs.force[:, keep], inputs.torque[:, keep])
+                                       inputs.force[:, keep], inputs.torque[:, keep],
+                                       inputs.line_load[:, keep])
                 if broken:
                     raise DivergenceError(done + m, (done + m) * dt, broken, partial(done + m))
             done += m
@@ -1095,7 +1096,8 @@ def kernel_model(model):
         return model, np.arange(n)
     names = ("body_params", "hinge_kind", "hinge_params", "body_kind", "beam_params",
              "initial_rotation", "initial_angular_velocity", "ground_locked", "forces",
-             "torques", "body_names", "hinge_names", "body_mass_center_inertia", "drives")
+             "torques", "line_loads", "body_names", "hinge_names", "body_mass_center_inertia",
+             "drives")
     rows = {name: [] for name in names}
     parent, keep, hub, offsets = [], [], {}, {}
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -1108,7 +1110,8 @@ def kernel_model(model):
         row = dict(body_params=body_params, hinge_kind=FIXED, hinge_params=identity,
                    body_kind=RIGID, beam_params=np.zeros_like(model.beam_params[0]),
                    initial_rotation=rot, initial_angular_velocity=omega, ground_locked=locked,
-                   forces=None, torques=None, body_names=body_name, hinge_names=hinge_name,
+                   forces=None, torques=None, line_loads=None, body_names=body_name,
+                   hinge_names=hinge_name,
                    body_mass_center_inertia=np.zeros((3, 3)), drives=())
         for name in names:
             rows[name].append(row[name])
@@ -1143,8 +1146,8 @@ def kernel_model(model):
             hub[k] = add_massless(keep[k], np.zeros(3), rot, omega, False,
                                   f"{model.body_names[k]} end section",
                                   f"{model.body_names[k]} end weld")
-    arrays = {name: (tuple(v) if name in ("forces", "torques", "body_names", "hinge_names",
-                                          "drives")
+    arrays = {name: (tuple(v) if name in ("forces", "torques", "line_loads", "body_names",
+                                          "hinge_names", "drives")
                      else np.array(v)) for name, v in rows.items()}
     parent = np.array(parent, dtype=np.int64)
     attachment_point = np.zeros((len(parent), 3))

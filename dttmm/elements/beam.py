@@ -219,6 +219,10 @@ class EulerBernoulliBeam:
         section, N m.  None (default): none.  A loaded output takes the clamped family's
         loaded-end modes (the free-tip eigenfunctions carry no end load; a torque also rules
         out the pinned family, whose sections' rotations are not modelled).
+    distributed_load : callable, optional
+        distributed_load(t) -> 3 numbers: a uniform world-frame load per length along the
+        beam at time t (s), N/m (docs/beam.md, "Loads on the beam"; it acts like gravity on
+        this beam alone).  None (default): none.
     stiffening : bool, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
@@ -269,6 +273,7 @@ class EulerBernoulliBeam:
     frequency_cutoff: float = None
     end_force: Optional[Callable[[float], object]] = None
     end_torque: Optional[Callable[[float], object]] = None
+    distributed_load: Optional[Callable[[float], object]] = None
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -342,6 +347,8 @@ class EulerBernoulliBeam:
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
                     j_i=j_c + shift, force=optional_function(who, "end_force", self.end_force),
                     torque=optional_function(who, "end_torque", self.end_torque),
+                    line_load=optional_function(who, "distributed_load",
+                                                self.distributed_load),
                     rotation=rotation, omega=omega,
                     beam=row, eta0=eta0, eta_d0=eta_d0,
                     force_mode_family=bool(self.force_mode_family))

@@ -243,7 +243,7 @@ def _iterate(loop, run, s, it):
     s_mat, p_vec, t_inv, t_vec, aq = sweep.red_s, sweep.red_p, sweep.red_tinv, sweep.red_t, \
         sweep.red_aq
     body_params, gravity, rot = params.body_params, params.gravity, state.rot
-    force, torque = inputs.force, inputs.torque
+    force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta_map = state.eta_map
     n = body_params.shape[0]
@@ -260,7 +260,7 @@ def _iterate(loop, run, s, it):
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = (i1 - i0) // 2
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
-                      force[s, k], torque[s, k])    # (the end load: docs/beam.md)
+                      force[s, k], torque[s, k], line_load[s, k])   # (docs/beam.md)
             beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,
                           w3[k], w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
                           eta_dd_star[i0:i1], loop.beam_work, v, pmap[k], eta_map[i0:i1])

@@ -399,6 +399,15 @@ def add_end_moment(ends, eta, rot, out, residual, aux, end_torque):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _beam_gravity(bp, gravity, line_load, out):
+    """out = g + p / mu: a uniform distributed load p (N/m, world) acts on the beam exactly as
+    gravity does, so the beam's relations and columns take it as part of g (docs/beam.md,
+    "Loads on the beam")."""
+    for i in range(3):
+        out[i] = gravity[i] + line_load[i] / bp[1]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def _any(v):
     """Whether a 3-vector has a nonzero entry (an applied end torque)."""
     return v[0] != 0.0 or v[1] != 0.0 or v[2] != 0.0
@@ -474,13 +483,15 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
-    tables = (moments, ends, factors, end_force, end_torque) (the applied end load, world:
-    beam_relations); outboard = (welded, R_rel, rotation at t_n, w1):
+    tables = (moments, ends, factors, end_force, end_torque, line_load) (the applied loads,
+    world: beam_relations; the distributed load is already in gravity, _beam_gravity);
+    outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
     (at the start: the end section's angular acceleration).  work: (24 + 2 n) scratch, which
     holds the state (the returned rotation is a view on it)."""
-    moments, ends, factors, end_force, end_torque = tables
+    moments, ends, factors, end_force, end_torque = tables[0], tables[1], tables[2], tables[3], \
+        tables[4]
     welded, r_rel, rot_out_n, w1_out = outboard
     n = residual.shape[0]
     wd = x[3:6]
@@ -868,7 +879,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     nw = 24 + 2 * n
     na = 3 * aux_rows(n // 2)
     block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 18)
+                     + 21)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -890,9 +901,11 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     lam = block[o:o + 9].reshape((3, 3))
     columns_scratch = block[o + 9:o + 15]
     q_net = block[o + 15:o + 18]
+    g_beam = block[o + 18:o + 21]
+    _beam_gravity(bp, gravity, tables[5], g_beam)
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
-    rot = _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+    rot = _evaluate(bp, tables, outboard, history, g_beam, start, rot_n, phi_star, wd_star, c1,
                     c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
@@ -908,7 +921,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
             q_net[i] = o0[9 + i] - tables[3][i]
         _modal_columns(bp, tables, rot, w, x0[3:6], s_c, r_c, q_net, aux, d_o, d_r,
                        columns_scratch)
-        _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], q_net, gravity,
+        _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], q_net, g_beam,
                           aux, d_o, d_r)
     xp[:] = x0
     for c in range(3, nx):
@@ -921,7 +934,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         # (measured: the stiff cantilever's accelerations agree to 1e-10 after the first steps)
         step = 1e-3 * (1.0 + abs(x0[c]))
         xp[c] = x0[c] + step
-        _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
+        _evaluate(bp, tables, outboard, history, g_beam, start, rot_n, phi_star, wd_star, c1,
                   c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, xp, op, rp, aux_fd, work_fd)
         xp[c] = x0[c]
         for r in range(12):
@@ -1017,7 +1030,9 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     for i in range(n):
         x0[12 + i] = eta_dd_star[i]
     _step_state(phi_star, c1, c3, w3, rot_n, eta_dd_star, w1e, w3e, e, rot, w, eta, eta_d)
-    beam_relations(bp, moments, ends, tables[2], tables[3], tables[4], gravity, rot, w, wd_star,
+    g_beam = work[3][6:9]                    # gravity and the distributed load per unit mass
+    _beam_gravity(bp, gravity, tables[5], g_beam)
+    beam_relations(bp, moments, ends, tables[2], tables[3], tables[4], g_beam, rot, w, wd_star,
                    eta, eta_d, eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
@@ -1027,7 +1042,7 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     for i in range(3):
         q_net[i] = o0[9 + i] - tables[3][i]
     _modal_columns(bp, tables, rot, w, wd_star, s_c, r_c, q_net, aux, d_o, d_r, scratch)
-    _rotation_columns(bp, ends, rot, lam, w, wd_star, s_c, r_c, a_i, q_net, gravity, aux,
+    _rotation_columns(bp, ends, rot, lam, w, wd_star, s_c, r_c, a_i, q_net, g_beam, aux,
                       d_o, d_r)
     # rows m_O (d_o 6:9) and the modal residuals (d_r) in the unknowns y = [w', eta''] (columns
     # 3:6, 12:): K (y - y*) = -(B (z - z*) + c), z = [a_I; q_I] (columns 0:3, 9:12), so

@@ -197,7 +197,7 @@ def fused_coefficients(h, coef):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
-                    at_start, rot, w3, modal, stations, joints):
+                    line_load, at_start, rot, w3, modal, stations, joints):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots; returns 0, or j + 1 for an element j (2k: hinge k, 2k + 1: body k) of a
     kind this loop does not know.  at_start: the consistent-start solve, where the phi slots
@@ -274,7 +274,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
                         wd[kout] - c1 * phi_star[kout])
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
-                      force[k], torque[k])          # (the end load: docs/beam.md)
+                      force[k], torque[k], line_load[k])    # (the loads: docs/beam.md)
             history = (independent, w1_st[k + 1] - w1_st[k])
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
@@ -364,14 +364,15 @@ def _solve_tree(sw, parent, root_f, z):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def initial_accelerations(params, settings, state, sweep, ground, force, torque, joint_input):
+def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
+                          joint_input):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
-    force, torque (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates' inputs at t = 0
-    (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.  Returns the status:
-    0, a singularity code (sweep.py), or
+    force, torque, line_load (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates'
+    inputs at t = 0 (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.
+    Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
     g_acc, g_rot, g_w, g_wd = ground
@@ -388,7 +389,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     modal = (eta, state.eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
              state.eta_map)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
-                              np.zeros(state.z.shape), force, torque, True, rot, zero3, modal,
+                              np.zeros(state.z.shape), force, torque, line_load, True, rot,
+                              zero3, modal,
                               (False, np.zeros((n + 1, 3)), zero3),
                               (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
                                joint_input[:, :, 2].copy(), joint_input[:, :, 0].copy()))
@@ -678,7 +680,8 @@ def _iterate(loop, run, s, it):
     joints = (run.settings.mode == RICCATI_JOINTS, loop.joints[2], loop.joints[3],
               loop.joints[4], inputs.joint_input[s, :, :, 0])
     unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
-                              loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s], False,
+                              loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s],
+                              inputs.line_load[s], False,
                               state.rot, loop.w3, modal, stations, joints)
     if unknown != 0:
         return UNSUPPORTED, unknown, 0.0

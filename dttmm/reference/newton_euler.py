@@ -958,7 +958,8 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
 def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, rho_att,
               acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
               beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
-              n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, topology, joints):
+              n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
+              joints):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
@@ -988,14 +989,16 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
+            # a distributed load p per length acts as gravity does: g + p / mu on this beam
+            g_k = gravity + line_loads[k] / beam_params[k, _BMU]
             mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
-                beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, gravity)
+                beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, g_k)
             # an applied end force F and torque T (docs/beam.md, "Loads on the beam") act at
             # the output point and on the end section: F in Newton, rho_O x F + T about I,
             # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
-            weight = mass * gravity + forces[k]
+            weight = mass * g_k + forces[k]
             bn = weight - _cross(w, _cross(w, h)) + newton_v
-            be = (-_cross(w, j_w @ w) + _cross(h, gravity) + euler_v + torques[k]
+            be = (-_cross(w, j_w @ w) + _cross(h, g_k) + euler_v + torques[k]
                   + _cross(rho_o[k], forces[k]))
             ce = e_col0 + o
             for j in range(nm2):
@@ -1188,7 +1191,7 @@ def _solve_least_tip_force(s, b, t_col):
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     t_col, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
-                    topology, attachment_point, joints):
+                    line_loads, topology, attachment_point, joints):
     """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
     body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, per joint
     coordinate (joints) its acceleration q'' and the joint loads' generalized force s_i . N
@@ -1205,7 +1208,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
                      rho_att, acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params,
                      body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                      f_col, m_col, t_col, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
-                     torques, topology, joints)
+                     torques, line_loads, topology, joints)
     if t_col >= 0:
         x = _solve_least_tip_force(s, b, t_col)
     else:
@@ -1246,16 +1249,16 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
 @numba.njit(cache=True, fastmath=CONTRACT)
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col,
-               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology,
-               attachment_point, joints):
+               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,
+               topology, attachment_point, joints):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
     modal coordinates of all beams, their rates, joint coordinates, their rates]."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
      b_r, coord_acc, _, rho_att, acc_v_att) = _solve_dynamics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, t_col, n_unknowns,
-        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, topology, attachment_point,
-        joints)
+        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
+        attachment_point, joints)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):
@@ -1396,6 +1399,8 @@ class _Problem:
         self.n_unknowns = c
         self.forces = np.zeros((n, 3))
         self.torques = np.zeros((n, 3))
+        self.line_loads = np.zeros((n, 3))
+        self._line_load_fns = [(k, f) for k, f in enumerate(model.line_loads) if f is not None]
         self._force_fns = [(k, f) for k, f in enumerate(model.forces) if f is not None]
         self._torque_fns = [(k, f) for k, f in enumerate(model.torques) if f is not None]
         # the tree: each body's parent and its children (CSR: child_list[child_start[k]:
@@ -1485,16 +1490,20 @@ class _Problem:
             self.forces[k] = f(t)
         for k, f in self._torque_fns:
             self.torques[k] = f(t)
-        return r_g, v_g, a_g, rot_g, w_g, wd_g, self.forces, self.torques
+        for k, f in self._line_load_fns:
+            self.line_loads[k] = f(t)
+        return (r_g, v_g, a_g, rot_g, w_g, wd_g, self.forces, self.torques,
+                self.line_loads)
 
     def _args(self, y, t):
-        r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques = self.time_inputs(t)
+        r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads = self.time_inputs(t)
         y = self.joint_inputs(t, y)
         return (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.t_col, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
-                wd_g, forces, torques, self.topology, self.attachment_point, self.joints)
+                wd_g, forces, torques, line_loads, self.topology, self.attachment_point,
+                self.joints)
 
     def rhs(self, t, y):
         return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
