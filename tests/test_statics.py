@@ -81,15 +81,27 @@ def test_elastica_tip_and_order(lam):
     assert 2.7 < order < 3.3, (order, errors)
 
 
-def test_euler_buckling():
+def _column(load, on):
+    """A clamped-free column along x, compressed at its tip by `load` N: through a tip body
+    (cantilever) or as the beam's own end force (docs/beam.md, "Loads on the beam")."""
+    if on == "tip body":
+        return cantilever(1, tip_force=[-load, 0, 0], modes=4)
+    return dttmm.build_chain([dttmm.FixedHinge(), dttmm.EulerBernoulliBeam(
+        length=1.0, bending_stiffness=EI, polar_inertia_per_length=1e-4, mass_per_length=1.0,
+        modes_per_plane=4, stiffening=True, end_force=lambda t: [-load, 0.0, 0.0])],
+        gravity=(0.0, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("on", ["tip body", "end force"])
+def test_euler_buckling(on):
     """A clamped-free column under a compressive tip load: stable just below pi^2 EI / (4 L^2),
     flagged (warning, stable False) just above; the lowest squared frequency crosses zero
     there, linear in the load."""
     p_cr = np.pi ** 2 * EI / 4.0
-    below = dttmm.static_equilibrium(cantilever(1, tip_force=[-0.97 * p_cr, 0, 0], modes=4))
+    below = dttmm.static_equilibrium(_column(0.97 * p_cr, on))
     assert below.stable
     with pytest.warns(UserWarning, match="unstable"):
-        above = dttmm.static_equilibrium(cantilever(1, tip_force=[-1.03 * p_cr, 0, 0], modes=4))
+        above = dttmm.static_equilibrium(_column(1.03 * p_cr, on))
     assert not above.stable
     # the lowest squared frequency is linear in the load: its zero is the buckling load
     lo, hi = below.squared_frequencies[0], above.squared_frequencies[0]
