@@ -342,7 +342,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
     ...                       to_output=[1.0, 0, 0])
     >>> eq = dttmm.static_equilibrium(dttmm.build_chain([dttmm.BallJoint(), rod]))
-    >>> [round(float(x), 6) for x in eq.model.initial_rotation[0] @ [1.0, 0.0, 0.0]]
+    >>> [round(float(x), 6) + 0.0 for x in eq.model.initial_rotation[0] @ [1.0, 0.0, 0.0]]
     [0.0, -1.0, 0.0]
     """
     where = "static_equilibrium"
