@@ -18,7 +18,8 @@ from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, foreshortening_integrals, mode_shapes
 from .elements.drives import FORCE, MOTION
-from .elements.hinges import COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0, REST_ROTATION
+from .elements.hinges import (AXIS_1, COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0,
+                              REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree
@@ -133,6 +134,30 @@ class Workspace:
             joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
             joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
         self.beams = beam_tables(model)
+        _initial_slides(model, self.state)
+
+
+def _initial_slides(model, state):
+    """A prismatic joint's slide d = u q and its rate u q' + w_p x d at t = 0 (u the axis in
+    world, w_p the parent's output section's angular velocity; kernels/joint.py::joint_frame),
+    which the loops keep in state.defl from the first step on: the t = 0 sample (and the
+    energies, positions) then place the body where its coordinate says."""
+    for k in range(model.n_bodies):
+        if model.hinge_kind[k] != PRISMATIC:
+            continue
+        p = model.parent[k]
+        if p < 0:
+            rot_p, w_p = model.ground_rotation, model.ground_state(0.0)[4]
+        else:
+            off = int(np.sum(model.n_modes[:p]))
+            rot_p, w_p = output_section(
+                model.beam_params[p], model.initial_rotation[p],
+                model.initial_angular_velocity[p],
+                model.initial_modal_coordinates[off:off + model.n_modes[p]],
+                model.initial_modal_velocities[off:off + model.n_modes[p]])
+        u = rot_p @ model.hinge_params[k, AXIS_1]
+        state.defl[k] = u * model.hinge_params[k, COORDINATE_0][0]
+        state.defl_rate[k] = u * model.hinge_params[k, RATE_0][0] + np.cross(w_p, state.defl[k])
 
 
 def kernel_params(model, beams=None):

@@ -6,8 +6,9 @@ the accelerations are M(q)^-1 f(q) with the mass matrix M regular, so a(q) = 0 i
 accelerations at rest are what the solver's consistent start computes (the same transfer
 matrices as a step, with the velocities zero), so the equilibrium is found by Newton iterations
 on the model's configuration q with a(q) as the residual and its Jacobian by differences.  The
-configuration is exact (large rotations): each ball-jointed body's rotation, each beam's modal
-coordinates; a body behind a fixed hinge follows its inboard output section.  At the solution
+configuration is exact (large rotations): each ball-jointed body's rotation, each joint
+coordinate, each beam's modal coordinates; a body behind a fixed hinge follows its inboard
+output section.  At the solution
 the Jacobian is -M^-1 K (K the tangent stiffness), so its eigenvalues are minus the squared
 circular frequencies of the small vibrations about the equilibrium: all negative means stable.
 """
@@ -17,12 +18,15 @@ import warnings
 import numpy as np
 
 from .elements import BEAM
-from .elements.hinges import BALL, FIXED, REST_ROTATION
+from .elements.drives import MOTION
+from .elements.hinges import AXIS_1, BALL, COORDINATE_0, FIXED, RATE_0, REST_ROTATION
+from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain
 from .kernels.loop import Monitor, Settings
+from .kernels.joint import joint_frame, n_coordinates
 from .kernels.so3 import expm_so3
 from .model import Model, output_section
 from .result import _foreshortening_along, _log_so3, beam_output_offset
@@ -89,11 +93,17 @@ class StaticEquilibrium:
         for k in range(n):
             p = m.parent[k]
             if p < 0:
-                r_in[k] = m.ground_position
+                r_in[k], rot_p = m.ground_position, m.ground_rotation
             elif m.attachment[k] == 0:
                 r_in[k] = r_o[p]
+                rot_p = output_section(m.beam_params[p], m.initial_rotation[p], np.zeros(3),
+                                       m.initial_modal_coordinates[off[p]:off[p + 1]])[0]
             else:
                 r_in[k] = r_in[p] + m.initial_rotation[p] @ m.attachment_point[k]
+                rot_p = m.initial_rotation[p]
+            if m.hinge_kind[k] == PRISMATIC:          # the slide along the joint's axis
+                r_in[k] = r_in[k] + rot_p @ m.hinge_params[k, AXIS_1] * \
+                    m.hinge_params[k, COORDINATE_0][0]
             rot = m.initial_rotation[k]
             r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
             r_o[k] = r_in[k] + rot @ m.body_params[k, TO_OUTPUT]
@@ -139,9 +149,10 @@ class StaticEquilibrium:
 
 class _Configuration:
     """The model's configuration as a flat vector q (each free body's rotation increment, world
-    axes; then every beam's modal coordinates), and the accelerations at rest a(q) by the
-    solver's consistent start.  Works on the kernel model (solver.kernel_model), whose extra
-    massless bodies are welded and so follow their inboard bodies."""
+    axes; each joint coordinate that no motion prescribes; then every beam's modal
+    coordinates), and the accelerations at rest a(q) by the solver's consistent start.  Works on
+    the kernel model (solver.kernel_model), whose extra massless bodies are welded and so follow
+    their inboard bodies."""
 
     def __init__(self, model, where):
         self.user = model
@@ -150,26 +161,34 @@ class _Configuration:
         n = km.n_bodies
         for k in range(n):
             kind = int(km.hinge_kind[k])
-            if kind not in (BALL, FIXED):
+            if kind not in (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC):
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
-                                 f"{JOINT_KIND[kind].what}; the static solve takes ball joints "
-                                 f"and fixed hinges so far (run the model with damping to rest "
-                                 f"instead)")
+                                 f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "
+                                 f"fixed hinges and joints with coordinates so far (run the "
+                                 f"model with damping to rest instead)")
         if km.tip_pinned:
             raise ValueError(f"{where}: the tip is pinned to the ground (a closed loop); the "
                              f"static solve takes open chains and trees so far")
         self.free = [k for k in range(n)
                      if km.hinge_kind[k] == BALL and not km.ground_locked[k]]
         self.n_rot = 3 * len(self.free)
+        # joint coordinates: free unless a motion prescribes them (then held at their value)
+        self.coords = [(k, i) for k in range(n) for i in range(n_coordinates(km.hinge_kind[k]))
+                       if not (km.drives[k] and km.drives[k][i] is not None
+                               and km.drives[k][i]["kind"] == MOTION)]
+        self.n_q = len(self.coords)
+        self.jq0 = np.array(km.hinge_params[:, COORDINATE_0])
         self.n_eta = len(km.initial_modal_coordinates)
         mode_off = np.concatenate([[0], np.cumsum(km.n_modes)])
         # the scale of each coordinate: rad, or the beam's length for its modal coordinates
-        scale = np.ones(self.n_rot + self.n_eta)
+        self.e0 = self.n_rot + self.n_q                  # where the modal coordinates start
+        scale = np.ones(self.e0 + self.n_eta)           # rad, m (a slide), beam lengths
         labels = [f"{km.body_names[k]} rotation {'xyz'[i]}" for k in self.free for i in range(3)]
+        labels += [f"{km.hinge_names[k]} coordinate {i + 1}" for k, i in self.coords]
         for k in range(n):
             if km.body_kind[k] == BEAM:
                 i0, i1 = mode_off[k], mode_off[k + 1]
-                scale[self.n_rot + i0:self.n_rot + i1] = km.beam_params[k, LENGTH]
+                scale[self.e0 + i0:self.e0 + i1] = km.beam_params[k, LENGTH]
                 labels += [f"{km.body_names[k]} mode {j}" for j in range(i1 - i0)]
         self.scale = scale
         self.labels = tuple(labels)
@@ -184,8 +203,8 @@ class _Configuration:
                                  .array(), newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)
         self.monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(self.n_eta),
-                               jqp=np.zeros((0, 2)), defl_pseudo=np.zeros((0, 3)),
-                               error=np.zeros(2))
+                               jqp=np.zeros((n if solver.has_coordinates(km) else 0, 2)),
+                               defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
         self.fused = None
         if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
                 and not km.has_beam_end_torque
@@ -193,13 +212,15 @@ class _Configuration:
             self.fused = (solver.run_steps_no_alloc,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
 
-    def vector(self, rot, eta):
-        """q of a configuration given by rotations and modal coordinates (rotations relative
-        to the model's own)."""
-        q = np.zeros(self.n_rot + self.n_eta)
+    def vector(self, rot, jq, eta):
+        """q of a configuration given by rotations, joint coordinates (n, 2) and modal
+        coordinates (rotations relative to the model's own)."""
+        q = np.zeros(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
             q[3 * i:3 * i + 3] = _rotation_vector(rot[k] @ self.rot0[k].T)
-        q[self.n_rot:] = eta
+        for j, (k, i) in enumerate(self.coords):
+            q[self.n_rot + j] = jq[k, i]
+        q[self.e0:] = eta
         return q
 
     def rebase(self, q):
@@ -208,52 +229,67 @@ class _Configuration:
         current configuration, and M^-1 K's eigenvalues come out right."""
         if self.n_rot == 0:
             return q
-        rot, _ = self.state(q)
+        rot = self.state(q)[0]
         self.rot0[self.free] = rot[self.free]
         q = q.copy()
         q[:self.n_rot] = 0.0
         return q
 
     def state(self, q):
-        """(rotations, modal coordinates) of q: the free bodies turned by their increments,
-        every welded body placed on its inboard output section."""
+        """(rotations, joint coordinates (n, 2), modal coordinates) of q: the free bodies
+        turned by their increments, every welded body placed on its inboard output section,
+        a body behind a joint with coordinates on its joint's frame (kernels/joint.py)."""
         km = self.model
         rot = self.rot0.copy()
-        eta = q[self.n_rot:]
+        jq = self.jq0.copy()
+        for j, (k, i) in enumerate(self.coords):
+            jq[k, i] = q[self.n_rot + j]
+        eta = q[self.e0:]
         e = np.empty((3, 3))
         for i, k in enumerate(self.free):
             expm_so3(np.ascontiguousarray(q[3 * i:3 * i + 3]), e)
             rot[k] = e @ self.rot0[k]
         zero = np.zeros(3)
+        w, wd, d, d_rate = (np.zeros(3) for _ in range(4))
         for k in range(km.n_bodies):
-            if km.hinge_kind[k] != FIXED or km.ground_locked[k]:
+            kind = int(km.hinge_kind[k])
+            if kind in (BALL,) or (kind == FIXED and km.ground_locked[k]):
                 continue
             p = km.parent[k]
-            r0 = km.hinge_params[k, REST_ROTATION].reshape(3, 3)
             if p < 0:
-                rot[k] = km.ground_rotation @ r0
+                a_in = km.ground_rotation
             else:
                 a_in, _ = output_section(km.beam_params[p], rot[p], zero,
                                          eta[self.mode_off[p]:self.mode_off[p + 1]])
-                rot[k] = a_in @ r0
-        return rot, np.array(eta)
+            if kind == FIXED:
+                rot[k] = a_in @ km.hinge_params[k, REST_ROTATION].reshape(3, 3)
+            else:
+                out = np.empty((3, 3))
+                joint_frame(kind, np.array(km.hinge_params[k]), np.ascontiguousarray(a_in),
+                            zero, zero, jq[k].copy(), np.zeros(2), np.zeros(2), out, w, wd, d,
+                            d_rate)
+                rot[k] = out
+        return rot, jq, np.array(eta)
 
     def accelerations(self, q):
         """a(q): the free bodies' angular accelerations and the modal accelerations at rest."""
-        rot, eta = self.state(q)
+        rot, jq, eta = self.state(q)
         st = self.ws.state
         st.rot[:] = rot
         st.omega[:] = 0.0
+        st.jq[:] = jq
         st.eta[:] = eta
         st.eta_d[:] = 0.0
         st.jqd[:] = 0.0
         st.z[:] = 0.0
         solver._consistent_start(self.model, self.mode, "riccati", self.fused, self.params,
                                  self.settings, st, self.ws.sweep, self.monitor, 1.0)
-        a = np.empty(self.n_rot + self.n_eta)
+        a = np.empty(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
             a[3 * i:3 * i + 3] = st.omega_dot[k]
-        a[self.n_rot:] = st.eta_acc
+        for j, (k, i) in enumerate(self.coords):
+            a[self.n_rot + j] = st.jqdd[k, i]
+        a[self.e0:] = st.eta_acc
         return a
 
     def jacobian(self, q, a, central=False):
@@ -278,11 +314,14 @@ class _Configuration:
 
     def result_model(self, q):
         """The user's model at rest in configuration q."""
-        rot, eta = self.state(q)
+        rot, jq, eta = self.state(q)
         user = self.user
+        hinge_params = np.array(user.hinge_params)
+        hinge_params[:, COORDINATE_0] = jq[self.keep]
+        hinge_params[:, RATE_0] = 0.0
         return replace(user, initial_rotation=rot[self.keep],
                        initial_angular_velocity=np.zeros((user.n_bodies, 3)),
-                       initial_modal_coordinates=eta,
+                       hinge_params=hinge_params, initial_modal_coordinates=eta,
                        initial_modal_velocities=np.zeros_like(eta))
 
 
@@ -298,9 +337,11 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     Parameters
     ----------
     model : Model
-        Built by ``build_chain`` or ``System.build``: ball joints, fixed hinges, rigid bodies
-        and beams (an open chain or tree).  Its initial rotations and modal coordinates are the
-        first guess; its velocities are ignored (the equilibrium is at rest).
+        Built by ``build_chain`` or ``System.build``: ball joints, fixed hinges, joints with
+        coordinates (a coordinate that a JointMotion prescribes is held at its value at t = 0),
+        rigid bodies and beams (an open chain or tree).  Its initial rotations, joint
+        coordinates and modal coordinates are the first guess; its velocities are ignored
+        (the equilibrium is at rest).
     guess : StaticEquilibrium or Model, optional
         Start from this configuration instead (the same bodies and modes): the equilibrium
         under a smaller load, when a load is applied in steps (continuation).
@@ -326,8 +367,8 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         next ``guess``), or the model has no equilibrium: a body that nothing holds (no
         gravity, load or spring acts on its rotation), or one whose loads nothing balances.
     ValueError
-        A joint kind the static solve does not take yet (elastic hinges, joints with
-        coordinates), a pinned tip, or a guess that does not fit the model.
+        A joint kind the static solve does not take yet (elastic hinges), a pinned tip, or a
+        guess that does not fit the model.
 
     Warns
     -----
@@ -355,7 +396,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
                          f"got {max_iterations!r}")
     cfg = _Configuration(model, where)
-    q = cfg.vector(cfg.rot0, cfg.eta0)
+    q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0)
     if guess is not None:
         start = guess.model if isinstance(guess, StaticEquilibrium) else guess
         if not isinstance(start, Model) or start.n_bodies != model.n_bodies or (
@@ -364,7 +405,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
                              f"bodies and modes as the model")
         rot_k = cfg.rot0.copy()
         rot_k[cfg.keep] = start.initial_rotation
-        q = cfg.vector(rot_k, start.initial_modal_coordinates)
+        jq = cfg.jq0.copy()
+        jq[cfg.keep] = start.hinge_params[:, COORDINATE_0]
+        q = cfg.vector(rot_k, jq, start.initial_modal_coordinates)
     a = cfg.accelerations(q)
     weight = 1.0 / cfg.scale           # residuals in rad/s^2 (modal: per beam length)
     iterations = 0

@@ -181,3 +181,16 @@ def test_the_arm_example(tmp_path):
     direct = subprocess.run([sys.executable, str(script), "--t-end", "0.01", "--dt", "1e-3",
                              "--method", "direct"], capture_output=True, text=True)
     assert direct.returncode == 2 and "method='direct'" in direct.stderr
+
+
+def test_the_first_sample_places_a_slid_body_where_its_coordinate_says():
+    """A prismatic joint that starts at position 0.3 m: the t = 0 sample has the body at 0.3 m,
+    as every later one does (the loops keep the slide in the state's deflection; it was zero
+    in the first sample until stop 23)."""
+    import dttmm
+    body = dttmm.RigidBody(mass=0.5, inertia=[0.01] * 3, inertia_about="mass_center")
+    model = dttmm.build_chain([dttmm.PrismaticJoint(
+        axis=[1, 0, 0], position=0.3, drive=dttmm.SpringDamper(50.0, 0.0, rest=0.3)), body],
+        gravity=[0, 0, 0])
+    res = dttmm.simulate(model, 0.01, 1e-3)
+    assert np.allclose(res.position_input[:, 0], [0.3, 0.0, 0.0], atol=1e-12)

@@ -109,6 +109,42 @@ def test_euler_buckling(on):
     assert abs(crossing - 1.0) < 2e-3, crossing
 
 
+def test_spring_loaded_revolute_link_is_analytic():
+    """A link on a revolute joint about z with a torsional spring (k = 15 N m/rad, rest 0),
+    under gravity -y: k theta + m g l_c cos theta = 0 (solved by brentq), and the squared
+    frequency (k - m g l_c sin theta) / I_pivot of the small swing; the joint coordinate is a
+    coordinate of the solve (measured: the angle to 1e-14 rad)."""
+    from scipy.optimize import brentq
+    mass, l_c, i_c, k = 2.0, 0.5, 1.0 / 6.0, 15.0
+    link = dttmm.RigidBody(mass=mass, inertia=[1e-3, i_c, i_c], inertia_about="mass_center",
+                           to_mass_center=[l_c, 0, 0], to_output=[1.0, 0, 0])
+    model = dttmm.build_chain([dttmm.RevoluteJoint(axis=[0, 0, 1], drive=dttmm.SpringDamper(
+        stiffness=k, damping=0.1, rest=0.0)), link], gravity=[0, -9.81, 0])
+    eq = dttmm.static_equilibrium(model)
+    exact = brentq(lambda x: k * x + mass * 9.81 * l_c * np.cos(x), -np.pi / 2, 0.0)
+    assert eq.coordinates == ("RevoluteJoint0 coordinate 1",)
+    assert abs(eq.model.hinge_params[0, 51] - exact) < 1e-10
+    omega2 = (k - mass * 9.81 * l_c * np.sin(exact)) / (i_c + mass * l_c ** 2)
+    assert np.allclose(eq.squared_frequencies, [omega2], rtol=1e-7)
+
+
+def test_arm_on_joints_with_coordinates_hangs():
+    """The arm of examples/arm.py without its drive: joint 2 hangs link 2 straight down
+    (-pi / 2), the prismatic spring stretches by m g / k = 0.5 * 9.81 / 50 m, joint 1 (about the
+    vertical) is neutral; DT-TMM from the equilibrium moves nothing by 1e-9 m over 0.5 s.  With
+    joint 1's angle prescribed (a JointMotion) and link 2 flexible, joint 1 is held, not solved."""
+    eq = dttmm.static_equilibrium(chains.arm(undriven=True))
+    q = eq.model.hinge_params[:, 51]
+    assert abs(q[1] + np.pi / 2) < 1e-9 and abs(q[3] - 0.5 * 9.81 / 50.0) < 1e-12, q
+    assert eq.stable and eq.squared_frequencies[0] == 0.0
+    res = dttmm.simulate(eq.model, 0.5, 1e-3)
+    assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
+    assert np.allclose(res.position_output[0], eq.positions()[2], atol=1e-12)
+    held = dttmm.static_equilibrium(chains.arm(drive="motion", flexible=True))
+    assert "joint1 coordinate 1" not in held.coordinates
+    assert "link2 mode 0" in held.coordinates and held.residual < 1e-9
+
+
 def test_free_body_is_refused():
     """Nothing holds a ball-jointed body without gravity: every orientation is an equilibrium."""
     model = dttmm.build_chain([dttmm.BallJoint(), rod()], gravity=(0.0, 0.0, 0.0))
@@ -138,6 +174,6 @@ def test_bad_arguments():
         dttmm.static_equilibrium("model.toml")
     hinge = dttmm.build_chain([dttmm.ElasticHinge(translational_stiffness=1e5,
                                                   rotational_stiffness=1e3), rod()])
-    with pytest.raises(ValueError, match="ball joints and fixed hinges"):
+    with pytest.raises(ValueError, match="elastic.*ball joints, fixed hinges and joints with"):
         dttmm.static_equilibrium(hinge)
 
