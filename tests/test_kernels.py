@@ -224,11 +224,13 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
     m = (mode_off[k + 1] - mode_off[k]) // 2
     n = 2 * m
-    # an applied end force (docs/beam.md, "Loads on the beam"): the written-out columns take the
-    # outboard's net pull (with an end torque they are differenced: test_end_torque_...)
+    # applied loads (docs/beam.md, "Loads on the beam"): an end force (the written-out columns
+    # take the outboard's net pull), an end torque in one case (the w' and eta'' columns are
+    # then differenced), a distributed load (part of gravity for the beam: _beam_gravity)
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],
               np.array([3.0, -2.0, 1.5]),
-              np.array([0.5, 2.0, -1.0]) if system.endswith("torque") else np.zeros(3))
+              np.array([0.5, 2.0, -1.0]) if system.endswith("torque") else np.zeros(3),
+              np.array([0.7, -1.1, 0.4]))         # and a distributed load (N/m)
     gen = np.random.default_rng(11)
     h = 1e-4
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
@@ -247,9 +249,14 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     u, eta_map = np.empty((12, 13)), np.empty((n, 13))
     beam_transfer(*args, z_star, eta_dd_star, u, eta_map)
 
+    # _evaluate takes gravity with the distributed load in it (g + p / mu, as beam_transfer
+    # hands it on)
+    g_beam = model.gravity + tables[5] / bp[k, 1]
+    evaluate_args = args[:4] + (g_beam,) + args[5:]
+
     def relations(x):
         out, res = np.empty(12), np.empty(n)
-        _evaluate(*args, x, out, res, np.empty((4, 3)), np.empty(24 + 2 * n))
+        _evaluate(*evaluate_args, x, out, res, np.empty((4, 3)), np.empty(24 + 2 * n))
         return np.concatenate([out, res])
 
     x0 = np.concatenate([z_star, eta_dd_star])
@@ -406,7 +413,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     k, m = 1, 2
     n = 2 * m
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],
-              np.array([3.0, -2.0, 1.5]), np.zeros(3))
+              np.array([3.0, -2.0, 1.5]), np.zeros(3), np.array([0.7, -1.1, 0.4]))
     gen = np.random.default_rng(5)
     h = 1e-3
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
