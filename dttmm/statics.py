@@ -325,6 +325,16 @@ class _Configuration:
                        initial_modal_velocities=np.zeros_like(eta))
 
 
+def _positive(where, name, value):
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: {name} must be a number, got {value!r}") from None
+    if not np.isfinite(x) or x <= 0.0:
+        raise ValueError(f"{where}: {name} must be finite and > 0, got {value!r}")
+    return x
+
+
 def _rotation_vector(r):
     return _log_so3(r)
 
@@ -390,8 +400,8 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     if not isinstance(model, Model):
         raise TypeError(f"{where}: model must be a dttmm.Model (build_chain or System.build), "
                         f"got {type(model).__name__}")
-    tol = solver._check_positive("tol", tol)
-    max_increment = solver._check_positive("max_increment", max_increment)
+    tol, max_increment = (_positive(where, name, v) for name, v in
+                          (("tol", tol), ("max_increment", max_increment)))
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
                          f"got {max_iterations!r}")
