@@ -168,7 +168,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         ground = (np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3))
         status = kstep.initial_accelerations(kernel_params(odd, ws.beams), settings, ws.state,
                                              ws.sweep, ground, np.zeros((2, 3)),
-                                             np.zeros((2, 3)), np.zeros((2, 2, 3)))
+                                             np.zeros((2, 3)), np.zeros((2, 3)),
+                                             np.zeros((2, 2, 3)))
         assert status == -element
 
 
