@@ -2,6 +2,7 @@
 
     dttmm run SCENE.toml [--t-end S] [--dt S] [--method M] [--scheme S] [--record-dt S]
                          [--out FILE.npz] [--csv FILE] [--plots DIR] [--animate FILE.gif]
+                         [--static-start]
     dttmm info SCENE.toml          bodies, joints, degrees of freedom, beams' modes, a dt
     dttmm example [NAME]           the shipped scenes; NAME: write NAME.toml here
 
@@ -43,6 +44,8 @@ def main(argv=None):
     run.add_argument("--checkpoint", help="write the final state to FILE.npz (to resume)")
     run.add_argument("--resume", help="continue from a checkpoint file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--static-start", action="store_true",
+                     help="start at rest in the static equilibrium (dttmm.static_equilibrium)")
     info = sub.add_parser("info", help="describe a scene file")
     info.add_argument("scene")
     example = sub.add_parser("example", help="list the shipped scenes, or write one here")
@@ -77,6 +80,17 @@ def _run(args):
     t_end, dt = options.pop("t_end"), options.pop("dt")
     resume = Checkpoint.load(args.resume) if args.resume else None
     model = scene.model
+    if args.static_start:
+        from .statics import StaticEquilibriumError, static_equilibrium
+        try:
+            eq = static_equilibrium(model)
+        except (StaticEquilibriumError, ValueError) as err:
+            print(f"dttmm: {err}", file=sys.stderr)
+            return 1
+        model = eq.model
+        print(f"static equilibrium in {eq.iterations} iterations ("
+              f"{'stable' if eq.stable else 'UNSTABLE'}; lowest frequencies (Hz): "
+              f"{', '.join(f'{f:.4g}' for f in eq.frequencies[:3])})")
     steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
              else f"dt = {dt:g} s")
     print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, {steps}")
@@ -119,11 +133,11 @@ def _run(args):
         print(f"wrote {args.checkpoint} (continue with --resume {args.checkpoint})")
     if args.plots:
         from .plots import run_figures
-        for path in run_figures(res, scene.model, args.plots, title=scene.name):
+        for path in run_figures(res, model, args.plots, title=scene.name):
             print(f"wrote {path}")
     if args.animate:
         from .plots import animate
-        animate(res, scene.model, args.animate, title=scene.name)
+        animate(res, model, args.animate, title=scene.name)
         print(f"wrote {args.animate}")
     return 0
 

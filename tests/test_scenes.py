@@ -11,6 +11,7 @@ import pytest
 from dttmm.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.cli import main, shipped_scenes
 from dttmm.model import Model
+from dttmm.result import Result
 from dttmm.profiles import KINDS, profile
 from dttmm.scene import SceneError, load_scene, save_scene
 
@@ -186,6 +187,17 @@ def test_info_prints_the_model(capsys):
     assert main(["info", str(shipped_scenes()["three_pendulum"])]) == 0
     out = capsys.readouterr().out
     assert "13 degrees of freedom" in out and "24.96" in out and "suggested dt: 0.0005 s" in out
+
+
+def test_run_from_the_static_equilibrium(tmp_path, capsys):
+    """dttmm run --static-start: the three-pendulum hangs at rest (its equilibrium is stable) and
+    the run from there keeps its output points to 1e-9 m."""
+    out = tmp_path / "rest.npz"
+    assert main(["run", str(shipped_scenes()["three_pendulum"]), "--t-end", "0.05",
+                 "--static-start", "--no-progress", "--out", str(out)]) == 0
+    assert "static equilibrium in" in capsys.readouterr().out
+    res = Result.load_npz(out)
+    assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
 
 
 def test_example_lists_and_writes_the_shipped_scenes(tmp_path, capsys):
