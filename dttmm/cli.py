@@ -88,9 +88,12 @@ def _run(args):
             print(f"dttmm: {err}", file=sys.stderr)
             return 1
         model = eq.model
+        freqs = eq.frequencies
+        moving = [f for f in freqs if f > 0.0]
         print(f"static equilibrium in {eq.iterations} iterations ("
-              f"{'stable' if eq.stable else 'UNSTABLE'}; lowest frequencies (Hz): "
-              f"{', '.join(f'{f:.4g}' for f in eq.frequencies[:3])})")
+              f"{'stable' if eq.stable else 'UNSTABLE'}; {int(np.sum(freqs == 0.0))} neutral "
+              f"directions; lowest frequencies (Hz): "
+              f"{', '.join(f'{f:.4g}' for f in moving[:3])})")
     steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
              else f"dt = {dt:g} s")
     print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, {steps}")
