@@ -51,7 +51,9 @@ class EnergyBalance:
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
         self.loaded_beams = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
                              and (model.forces[k] is not None or model.torques[k] is not None)]
-        self.line_loaded = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
+        # a distributed load's beams, with their constant modal integrals int Y_k and D1
+        self.line_loaded = [(k, offsets[k], *_first_moment_integrals(model.beam_params[k]))
+                            for k in range(n) if model.body_kind[k] == BEAM
                             and model.line_loads[k] is not None]
         # the beams' modal damping coefficients c_k = 2 zeta omega_k m_k, flat like eta
         c = []
@@ -99,9 +101,9 @@ class EnergyBalance:
                     v_c[:, k], w_load[:, k] = _beam_end_rates(
                         model.beam_params[k], res, k, off)
             p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w_load)
-        for k, off in self.line_loaded:         # a distributed load p: p . int v(x) dx
+        for k, off, p_k, d1 in self.line_loaded:    # a distributed load p: p . int v(x) dx
             p += np.einsum("ti,ti->t", line_load[:, k],
-                           _beam_line_velocity(model.beam_params[k], res, k, off))
+                           _beam_line_velocity(model.beam_params[k], res, k, off, p_k, d1))
         if res.joint_coordinates is not None:
             p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
         for k in self.elastic:
@@ -171,22 +173,31 @@ def _beam_end_rates(row, res, k, offset):
     return res.velocity_input[:, k] + rate, w_o
 
 
-def _beam_line_velocity(row, res, k, offset):
-    """(T, 3): int_0^L v(x) dx of beam k, the velocity a distributed load works on:
-    L v_I + w x (A s) + A s', s = (L^2 / 2 - C1, P . eta_v, P . eta_w) its first moment in the
-    frame (docs/beam.md, "The integrals in the frame"; C1 = int c, the foreshortening's)."""
+def _first_moment_integrals(row):
+    """(P, D1) of a beam row: P_k = int Y_k (Gauss-Legendre, exact for its modes as in
+    solver.beam_tables) and the foreshortening's D1 (None without stiffening)."""
     m = int(row[MODES])
     length, family = row[LENGTH], int(row[FAMILY])
     t, wt = np.polynomial.legendre.leggauss(2 * m + 10)
     x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
-    p = mode_shapes(family, length, m, x)[0] @ wt                     # int Y_k
+    p = mode_shapes(family, length, m, x)[0] @ wt
+    d1 = foreshortening_integrals(family, length, m)[1] if row[STIFFENING] else None
+    return p, d1
+
+
+def _beam_line_velocity(row, res, k, offset, p, d1):
+    """(T, 3): int_0^L v(x) dx of beam k, the velocity a distributed load works on:
+    L v_I + w x (A s) + A s', s = (L^2 / 2 - C1, P . eta_v, P . eta_w) its first moment in the
+    frame (docs/beam.md, "The integrals in the frame"; C1 = int c, the foreshortening's);
+    p, d1: _first_moment_integrals(row)."""
+    m = int(row[MODES])
+    length = row[LENGTH]
     eta = res.modal_coordinates[:, offset:offset + 2 * m]
     eta_dot = res.modal_velocities[:, offset:offset + 2 * m]
     s = np.zeros((len(eta), 3))
     s_dot = np.zeros((len(eta), 3))
     s[:, 0] = 0.5 * length * length
-    if row[STIFFENING]:
-        d1 = foreshortening_integrals(family, length, m)[1]
+    if d1 is not None:
         for plane in range(2):
             e, ed = eta[:, plane * m:(plane + 1) * m], eta_dot[:, plane * m:(plane + 1) * m]
             s[:, 0] -= 0.5 * np.einsum("tj,jk,tk->t", e, d1, e)

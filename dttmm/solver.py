@@ -352,13 +352,14 @@ def _fused_start(runner, loop, run):
     return 0 if info[0] == OK else _NOT_FINITE_START
 
 
-def _check_positive(name, value):
+def _check_positive(name, value, where="simulate"):
+    """value as a float, finite and > 0, or a ValueError naming `where` and the argument."""
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"simulate: {name} must be a number, got {value!r}") from None
+        raise ValueError(f"{where}: {name} must be a number, got {value!r}") from None
     if not np.isfinite(x) or x <= 0.0:
-        raise ValueError(f"simulate: {name} must be finite and > 0, got {value!r}")
+        raise ValueError(f"{where}: {name} must be finite and > 0, got {value!r}")
     return x
 
 

@@ -217,7 +217,7 @@ class _Configuration:
         coordinates (rotations relative to the model's own)."""
         q = np.zeros(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
-            q[3 * i:3 * i + 3] = _rotation_vector(rot[k] @ self.rot0[k].T)
+            q[3 * i:3 * i + 3] = _log_so3(rot[k] @ self.rot0[k].T)
         for j, (k, i) in enumerate(self.coords):
             q[self.n_rot + j] = jq[k, i]
         q[self.e0:] = eta
@@ -292,24 +292,20 @@ class _Configuration:
         a[self.e0:] = st.eta_acc
         return a
 
-    def jacobian(self, q, a, central=False):
-        """da/dq by forward (or central) differences, steps 1e-7 (central: 1e-5) of each
-        coordinate's scale.  (Newton takes the central ones: M^-1 K spans five decades and
-        more where a light body or a high mode is in the model, and forward differences'
-        error, ~1e-3 of the largest entry, spoils its soft directions: measured on the
-        elastica, convergence slowed to a few percent per iteration.)"""
+    def jacobian(self, q):
+        """da/dq by central differences, steps 1e-5 of each coordinate's scale.  (Not forward
+        ones: M^-1 K spans five decades and more where a light body or a high mode is in the
+        model, and forward differences' error, ~1e-3 of the largest entry, spoils its soft
+        directions: measured on the elastica, convergence slowed to a few percent per
+        iteration.)"""
         n = len(q)
         jac = np.empty((n, n))
         for j in range(n):
-            h = (1e-5 if central else 1e-7) * self.scale[j]
-            qp = q.copy()
+            h = 1e-5 * self.scale[j]
+            qp, qm = q.copy(), q.copy()
             qp[j] += h
-            if central:
-                qm = q.copy()
-                qm[j] -= h
-                jac[:, j] = (self.accelerations(qp) - self.accelerations(qm)) / (2.0 * h)
-            else:
-                jac[:, j] = (self.accelerations(qp) - a) / h
+            qm[j] -= h
+            jac[:, j] = (self.accelerations(qp) - self.accelerations(qm)) / (2.0 * h)
         return jac
 
     def result_model(self, q):
@@ -323,20 +319,6 @@ class _Configuration:
                        initial_angular_velocity=np.zeros((user.n_bodies, 3)),
                        hinge_params=hinge_params, initial_modal_coordinates=eta,
                        initial_modal_velocities=np.zeros_like(eta))
-
-
-def _positive(where, name, value):
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{where}: {name} must be a number, got {value!r}") from None
-    if not np.isfinite(x) or x <= 0.0:
-        raise ValueError(f"{where}: {name} must be finite and > 0, got {value!r}")
-    return x
-
-
-def _rotation_vector(r):
-    return _log_so3(r)
 
 
 def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50,
@@ -400,8 +382,8 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     if not isinstance(model, Model):
         raise TypeError(f"{where}: model must be a dttmm.Model (build_chain or System.build), "
                         f"got {type(model).__name__}")
-    tol, max_increment = (_positive(where, name, v) for name, v in
-                          (("tol", tol), ("max_increment", max_increment)))
+    tol = solver._check_positive("tol", tol, where)
+    max_increment = solver._check_positive("max_increment", max_increment, where)
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
                          f"got {max_iterations!r}")
@@ -427,7 +409,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         iterations += 1
         q = cfg.rebase(q)
         # M^-1 K in scaled coordinates
-        k = -cfg.jacobian(q, a, central=True) * cfg.scale[None, :] * weight[:, None]
+        k = -cfg.jacobian(q) * cfg.scale[None, :] * weight[:, None]
         r = weight * a
         newton = np.linalg.lstsq(k, r, rcond=1e-13)[0] if len(r) else r
         # converged: Newton's step is below tol, and what it leaves of the residual (in the
@@ -443,7 +425,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             converged = True        # Newton has stopped converging: the residual is at its
             break                   # round-off (with stiff modes, ~1e-6 rad/s^2)
         previous = size
-        q, a = _damped_step(cfg, q, a, k, r, max_increment)
+        q, a = _damped_step(cfg, q, a, k, r, big, max_increment)
     if not converged:
         raise StaticEquilibriumError(
             f"{where}: no convergence in {iterations} iterations (the largest acceleration "
@@ -452,7 +434,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             f"passing each result as the next guess=, or raise "
             f"max_iterations; a body whose loads nothing balances has no equilibrium")
     q = cfg.rebase(q)
-    jac = cfg.jacobian(q, a, central=True)
+    jac = cfg.jacobian(q)
     _check_held(cfg, jac, where)
     lam = np.linalg.eigvals(-jac)
     lam = lam[np.argsort(lam.real)]
@@ -473,7 +455,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
                              squared_frequencies=lam, coordinates=cfg.labels)
 
 
-def _damped_step(cfg, q, a, k, r, max_increment):
+def _damped_step(cfg, q, a, k, r, big, max_increment):
     """One damped Newton step in scaled coordinates (x = q / scale, residuals r = a / scale,
     k = M^-1 K scaled; Deuflhard's natural monotonicity test).  The step is Newton's,
     k^+ r (least squares), plus, where part of the residual lies in directions that nothing
@@ -484,7 +466,7 @@ def _damped_step(cfg, q, a, k, r, max_increment):
     and a Newton step may raise it), or, while a part of it lies outside k's range, its plain
     norm.  Returns (q, a); q unchanged if no
     step passed."""
-    big = float(np.max(np.abs(np.linalg.eigvals(k)), initial=0.0)) or 1.0
+    big = float(big) or 1.0                  # k's largest eigenvalue (the caller's)
 
     def parts(res):
         newton = np.linalg.lstsq(k, res, rcond=1e-13)[0]

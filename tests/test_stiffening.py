@@ -6,7 +6,7 @@ import pytest
 
 from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate
 from dttmm.chains import three_pendulum
-from dttmm.reference.newton_euler import simulate_reference
+from helpers import fitted_order, output_errors_against_reference
 
 
 def test_the_three_pendulums_stiff_beam_barely_feels_it():
@@ -55,12 +55,9 @@ def test_stiffened_beam_converges_to_the_reference_at_order_2(system):
     end section's differenced columns); positions at t = 1 s, fitted order 2 +- 0.2."""
     model = three_pendulum(2, stiffening=True) if system == "three_pendulum" \
         else _hub_cantilever()
-    t = np.linspace(0.0, 1.0, 11)
-    ref = simulate_reference(model, 1.0, rtol=1e-11, atol=1e-13, t_eval=t)
     steps = np.array([4e-3, 2e-3, 1e-3])
-    errors = [np.abs(simulate(model, 1.0, h, t_eval=t).position_output[-1]
-                     - ref.position_output[-1]).max() for h in steps]
-    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    errors = output_errors_against_reference(model, steps)
+    slope = fitted_order(steps, errors)
     assert abs(slope - 2.0) < 0.2, (errors, slope)
 
 
