@@ -3,7 +3,7 @@ import numpy as np
 
 from .elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, FREQUENCY_CUTOFF,
                             MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
-                            bending_frequencies)
+                            TORSION_MODES, bending_frequencies, torsion_frequencies)
 from .elements.hinges import BALL, ELASTIC, FIXED
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import MASS, TO_OUTPUT
@@ -53,7 +53,8 @@ def suggested_dt(model):
         rates.append(np.sqrt(g / min(lengths)))
     dt = 0.02 / max(max(rates, default=0.0), 1e-3)
     for k in np.nonzero(model.body_kind == 1)[0]:
-        f = max(float(np.max(fs)) for fs in beam_frequencies(model, k))
+        f = max(float(np.max(fs, initial=0.0)) for fs in beam_frequencies(model, k)
+                + (torsion_frequencies(model.beam_params[k]),))
         dt = min(dt, 1.0 / (20.0 * f))
     exponent = np.floor(np.log10(dt))
     mantissa = dt / 10 ** exponent
@@ -81,6 +82,10 @@ def _beam_lines(model, k):
             why += (f"; frequencies of the {cap}-mode basis: with {m} the polynomial modes' "
                     f"are higher (Ritz)")
         lines.append(why)
+    mt = int(row[TORSION_MODES])
+    lines.append(f"{mt} twist mode{'s' if mt > 1 else ''}, own frequencies (Hz): "
+                 f"{np.array2string(torsion_frequencies(row), precision=4)}" if mt else
+                 "no twist (torsion_modes 0)")
     lines.append("geometric stiffening on" if row[STIFFENING] else
                  "geometric stiffening off (the paper's beam)")
     return lines
@@ -89,7 +94,7 @@ def _beam_lines(model, k):
 def describe(model):
     """The model in words: its counts, gravity and tip, every body with its joint and parent,
     each beam's modes (their frequencies, the family and why, what modes_per_plane='auto'
-    kept), and a step that resolves it."""
+    kept, the twist modes), and a step that resolves it."""
     out = [describe_counts(model),
            f"gravity {model.gravity.tolist()} m/s^2; tip "
            f"{'pinned' if model.tip_pinned else 'free'}",

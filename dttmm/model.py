@@ -8,7 +8,8 @@ from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY,
                             FREQUENCY_CUTOFF, LENGTH, MAX_LOADED_MODES, MODES, PINNED,
-                            auto_mode_count, mode_shapes)
+                            TORSION_MODES, auto_mode_count, modal_size, mode_shapes,
+                            torsion_shapes)
 from .elements._checks import derivative, finite_vector, rotation_matrix
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
@@ -353,8 +354,16 @@ class Model:
 
     @property
     def n_modes(self):
-        """(n,) modal coordinates of each body: 2 x modes per plane for a beam, 0 if rigid."""
-        return np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES], 0).astype(np.int64)
+        """(n,) modal coordinates of each body: 2 x modes per plane plus the twist modes for a
+        beam (elements/beam.py::modal_size), 0 if rigid."""
+        return np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES]
+                        + self.beam_params[:, TORSION_MODES], 0).astype(np.int64)
+
+    @property
+    def has_twist(self):
+        """Whether a beam has twist modes (it runs in the general loop: docs/beam.md,
+        "Torsion")."""
+        return bool(np.any((self.body_kind == BEAM) & (self.beam_params[:, TORSION_MODES] > 0)))
 
     @property
     def has_beams(self):
@@ -373,6 +382,13 @@ class Model:
         end section's rotation, and it runs in the general loop: docs/beam.md)."""
         return any(self.torques[k] is not None for k in range(self.n_bodies)
                    if self.body_kind[k] == BEAM)
+
+    @property
+    def needs_general_loop(self):
+        """Whether a beam's w' and eta'' columns are differenced in every step (an end torque,
+        or twist modes), so the model runs in the general loop, not the fused one
+        (kernels/beam.py::beam_transfer)."""
+        return self.has_beam_end_torque or self.has_twist
 
     @property
     def has_applied_loads(self):
@@ -808,16 +824,19 @@ def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
     """Rotation and world angular velocity of a body's output section: the body's own for a
-    rigid body; for a beam A_O = A exp(theta_O^), theta_O = [0, -w'(L), v'(L)], and
+    rigid body; for a beam A_O = A exp(theta_O^), theta_O = [psi(L), -w'(L), v'(L)], and
     w_O = w + A J_l(theta_O) theta_O' (docs/beam.md, "End sections")."""
-    m = int(beam_row[MODES])
+    m, mt = int(beam_row[MODES]), int(beam_row[TORSION_MODES])
     if m == 0 or eta is None:
         return rotation, omega
-    eta_dot = np.zeros(2 * m) if eta_dot is None else eta_dot
-    _, dy, _, _, _ = mode_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], m, [beam_row[LENGTH]])
-    slope = dy[:, 0]
-    theta = np.array([0.0, -slope @ eta[m:], slope @ eta[:m]])
-    theta_dot = np.array([0.0, -slope @ eta_dot[m:], slope @ eta_dot[:m]])
+    eta_dot = np.zeros(2 * m + mt) if eta_dot is None else eta_dot
+    family, length = int(beam_row[FAMILY]), beam_row[LENGTH]
+    slope = mode_shapes(family, length, m, [length])[1][:, 0]
+    twist = torsion_shapes(family, length, mt, [length])[0][:, 0]
+
+    def angles(e):
+        return np.array([twist @ e[2 * m:2 * m + mt], -slope @ e[m:2 * m], slope @ e[:m]])
+    theta, theta_dot = angles(eta), angles(eta_dot)
     e, jl = np.empty((3, 3)), np.empty((3, 3))
     expm_so3(theta, e)
     left_jacobian(theta, jl)
@@ -862,8 +881,8 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         beam_params[k, FAMILY] = family
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
             beam_params[k, MODES] = auto_mode_count(beam_params[k])
-            bv[k]["eta0"] = np.zeros(2 * int(beam_params[k, MODES]))
-            bv[k]["eta_d0"] = np.zeros(2 * int(beam_params[k, MODES]))
+            bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
+            bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
             raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "
                              f"clamped beam whose output carries loads (polynomial modes), got "

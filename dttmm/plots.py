@@ -155,7 +155,7 @@ def centerlines(result, model, points=12):
             local = np.zeros((len(result.t), points, 3))
             local[:, :, 0] = x
             local[:, :, 1] = eta[:, :m] @ y
-            local[:, :, 2] = eta[:, m:] @ y
+            local[:, :, 2] = eta[:, m:2 * m] @ y
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
         else:
             s = np.linspace(0.0, 1.0, points)[None, :, None]

@@ -5,8 +5,9 @@ import json
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
-                            POLAR_PER_LENGTH, STIFFENING, foreshortening, mode_shapes)
+from .elements.beam import (EI_V, EI_W, FAMILY, GJ, LENGTH, MASS_PER_LENGTH, MODES,
+                            POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
+                            mode_shapes, torsion_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -385,7 +386,8 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     """Kinetic energy (int 1/2 mu |r'|^2 dx + 1/2 j_p L (w . A e1)^2) and potential energy
     (-int mu g . r dx + sum 1/2 k eta^2) of one beam (docs/beam.md), by quadrature, for T states
-    at once: a (T, 3, 3), w, r_in, v_in (T, 3), eta, eta_dot (T, 2 m)."""
+    at once: a (T, 3, 3), w, r_in, v_in (T, 3), eta, eta_dot (T, 2 m + mt), the twist's
+    energy too (docs/beam.md, "Torsion")."""
     length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
     x = 0.5 * length * (_GL_X + 1.0)
     wq = 0.5 * length * _GL_W
@@ -402,10 +404,21 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + u_dot @ a_t
     spin = np.einsum("ti,ti->t", w, a[:, :, 0])
     kinetic = 0.5 * mu * (np.sum(vel * vel, axis=2) @ wq)
-    kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
+    mt = int(row[TORSION_MODES])
+    if mt:
+        # the sections spin by w . A e1 + psi' (docs/beam.md, "Torsion"):
+        # T = 1/2 j_p int (w . A e1 + psi')^2, V = 1/2 G J int psi'^2
+        psi, dpsi = torsion_shapes(int(row[FAMILY]), length, mt, x)[:2]
+        twist, twist_rate = eta[:, 2 * nm:2 * nm + mt] @ dpsi, eta_dot[:, 2 * nm:2 * nm + mt] @ psi
+        section_spin = spin[:, None] + twist_rate
+        kinetic += 0.5 * row[POLAR_PER_LENGTH] * (section_spin * section_spin) @ wq
+    else:
+        twist = np.zeros((len(eta), len(x)))
+        kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
     potential = -mu * (((r_in[:, None, :] + rho) @ gravity) @ wq)
     potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
                         + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
+    potential += 0.5 * row[GJ] * (twist * twist) @ wq
     if row[STIFFENING]:
         # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
         # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
@@ -557,11 +570,11 @@ def beam_midpoint_deflection(model, result, body):
     p_mid = np.zeros((len(eta), 3))
     p_mid[:, 0] = 0.5 * length
     p_mid[:, 1] = eta[:, :nm] @ y[:, 0]
-    p_mid[:, 2] = eta[:, nm:] @ y[:, 0]
+    p_mid[:, 2] = eta[:, nm:2 * nm] @ y[:, 0]
     p_out = np.zeros((len(eta), 3))
     p_out[:, 0] = length
     p_out[:, 1] = eta[:, :nm] @ y[:, 1]
-    p_out[:, 2] = eta[:, nm:] @ y[:, 1]
+    p_out[:, 2] = eta[:, nm:2 * nm] @ y[:, 1]
     chord = np.einsum("tij,tj->ti", rot, p_out)
     e1 = chord / np.linalg.norm(chord, axis=1, keepdims=True)
     d = np.einsum("tij,tj->ti", rot, p_mid - 0.5 * p_out)

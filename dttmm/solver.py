@@ -16,7 +16,8 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
-from .elements.beam import FAMILY, LENGTH, MODES, foreshortening_integrals, mode_shapes
+from .elements.beam import (FAMILY, LENGTH, MODES, TORSION_MODES, foreshortening_integrals,
+                            mode_shapes, torsion_shapes)
 from .elements.drives import FORCE, MOTION
 from .elements.hinges import (AXIS_1, COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0,
                               REST_ROTATION)
@@ -243,11 +244,15 @@ def beam_tables(model):
     [int Y_j, int x Y_j, int Y_j Y_0, .., int Y_j Y_(m-1)] over [0, L], by Gauss-Legendre
     quadrature exact to rounding for the mode families (kernels/beam.py::quadrature_size), then
     the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
-    (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each."""
+    (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each.  ends[k, m:m + mt]
+    is beam k's twist table (docs/beam.md, "Torsion"; kernels/beam.py::twist_relations):
+    [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
+    max_rows = max(1, int((model.beam_params[:, MODES] + model.beam_params[:, TORSION_MODES])
+                          .max()))
     moments = np.zeros((n, max_modes, 4 * max_modes + 2))
-    ends = np.zeros((n, max_modes, 2))
+    ends = np.zeros((n, max_rows, 4))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):
         if model.body_kind[k] == BEAM:
@@ -264,6 +269,12 @@ def beam_tables(model):
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
             factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness
+            mt = int(model.beam_params[k, TORSION_MODES])
+            if mt:
+                xt, wt = gauss_points(length, quadrature_size(mt))
+                psi = torsion_shapes(family, length, mt, xt)[0]
+                psi_l, _, t_mass, t_stiff = torsion_shapes(family, length, mt, [length])
+                ends[k, m:m + mt] = np.column_stack([psi_l[:, 0], psi @ wt, t_mass, t_stiff])
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
     return (np.array(model.body_kind), np.array(model.beam_params), moments, mode_off, ends,
             factors)
@@ -620,7 +631,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
     # rest the general loop (kernels/step.py); each records what its scheme defines
     fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-             and scheme == "newmark" and not model.has_beam_end_torque
+             and scheme == "newmark" and not model.needs_general_loop
              and all(BODY_KIND[int(c)].fused for c in model.body_kind))
     if fused and mode == kstep.RICCATI_TREE:
         loop_name, runner = "ball-tree", run_steps_no_alloc
@@ -1222,7 +1233,9 @@ def _beam_tips(model):
         row = model.beam_params[k]
         length, nm = row[LENGTH], int(row[MODES])
         y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
-        tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y))
+        psi = torsion_shapes(int(row[FAMILY]), length, int(row[TORSION_MODES]),
+                             [length])[0][:, 0]
+        tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y, psi))
     return tips
 
 
@@ -1230,10 +1243,15 @@ def _beam_beyond_its_length(model, tips, eta):
     """The cause, if a beam's tip deflection exceeds its length (checked after every chunk of
     steps): the modal beam is a small-deflection model, and such a deflection only comes from a
     run gone wrong; "" otherwise."""
-    for name, length, part, y in tips:
+    for name, length, part, y, psi in tips:
         e = eta[part]
         nm = len(y)
-        tip = float(np.hypot(e[:nm] @ y, e[nm:] @ y))
+        twist = float(e[2 * nm:] @ psi)
+        if not abs(twist) <= np.pi:
+            return (f"the tip section of beam '{name}' twists by {twist:.3g} rad, more than half "
+                    f"a turn: the modal twist describes small angles, so the run has gone wrong "
+                    f"(a step too large for the motion, or an unstable model)")
+        tip = float(np.hypot(e[:nm] @ y, e[nm:2 * nm] @ y))
         if not tip <= length:
             return (f"the tip of beam '{name}' deflects {tip:.3g} m, more than the beam's "
                     f"length, {length:g} m: the modal beam describes small deflections, so the "
@@ -1248,7 +1266,9 @@ def _failure_cause(model, mode, info, monitor, settings):
     if code == ERROR_ESTIMATE:
         return (f"the step's local error estimate, {monitor.error[1]:.3g} (rad or m), exceeds "
                 f"max_step_error = {settings.max_step_error:g}: the step is too large for the "
-                f"motion (take a smaller dt), or the motion runs away (an unstable model)")
+                f"motion (take a smaller dt), or the motion runs away (an unstable model; "
+                f"or, if a smaller dt stops as early, the undamped rule's own growth on stiff "
+                f"modes the step does not resolve: rho_inf=0.9 damps them)")
     if code == UNCONVERGED:
         return (f"the energy-momentum step's Newton iterations did not converge to newton_tol "
                 f"= {settings.newton_tol:g} in {settings.newton_max} iterations, so it "

@@ -134,7 +134,7 @@ class StaticEquilibrium:
             eta = m.initial_modal_coordinates[off[k]:off[k + 1]]
             c = (_foreshortening_along(row, x, eta[None], np.zeros((1, len(eta))))[0][0]
                  if row[STIFFENING] else np.zeros(len(x)))
-            local = np.stack([x - c, eta[:nm] @ y, eta[nm:] @ y], axis=1)
+            local = np.stack([x - c, eta[:nm] @ y, eta[nm:2 * nm] @ y], axis=1)
             lines.append(r_in[k] + local @ m.initial_rotation[k].T)
         return lines
 
@@ -207,7 +207,7 @@ class _Configuration:
                                defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
         self.fused = None
         if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
-                and not km.has_beam_end_torque
+                and not km.needs_general_loop
                 and all(solver.BODY_KIND[int(c)].fused for c in km.body_kind)):
             self.fused = (solver.run_steps_no_alloc,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))

@@ -197,16 +197,19 @@ def test_small_solve_matches_lapack_and_flags_singular():
     assert np.isnan(x).all()
 
 
-def _stiffened_cantilever():
-    """One clamped beam (free tip) on a hub: geometric stiffening on, the clamped family."""
+def _stiffened_cantilever(twist=0):
+    """One clamped beam (free tip) on a hub: geometric stiffening on, the clamped family; with
+    twist > 0 that many twist modes (docs/beam.md, "Torsion")."""
     from dttmm import EulerBernoulliBeam, FixedHinge, build_chain
     return build_chain([FixedHinge(), EulerBernoulliBeam(
         length=2.0, mass_per_length=3.0, bending_stiffness=[40.0, 60.0],
-        polar_inertia_per_length=0.01, modes_per_plane=3, stiffening=True)])
+        polar_inertia_per_length=0.01, modes_per_plane=3, stiffening=True, torsion_modes=twist,
+        torsional_stiffness=25.0 if twist else None)])
 
 
 @pytest.mark.parametrize("start", [False, True])
-@pytest.mark.parametrize("system", ["three_pendulum", "cantilever", "cantilever, end torque"])
+@pytest.mark.parametrize("system", ["three_pendulum", "cantilever", "cantilever, end torque",
+                                    "twisting cantilever", "twisting cantilever, end torque"])
 def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system):
     """The beam's transfer (every column written out where the output carries no moment:
     _affine_columns, _modal_columns, _rotation_columns) against central differences of its exact
@@ -214,23 +217,27 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     (docs/beam.md).  Measured: 7e-12 (u) and 2.5e-11 (eta_map) relative, the central
     differences' own error; the kernel with its w' and eta'' columns forward-differenced gave
     7e-11 here.  With an applied end torque the modal equations feel the end section's
-    rotation and m_I (add_end_moment), and the w' and eta'' columns are differenced."""
+    rotation and m_I (add_end_moment), and the w' and eta'' columns are differenced; so they
+    are for a beam with twist modes (twist_relations), whose rows' a_I, m_I, q_I columns at
+    an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
     from dttmm.kernels.beam import _evaluate, beam_transfer
     from dttmm.solver import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
-                if system == "three_pendulum" else (_stiffened_cantilever(), 0))
+                if system == "three_pendulum"
+                else (_stiffened_cantilever(2 if system.startswith("twist") else 0), 0))
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
     assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
-    m = (mode_off[k + 1] - mode_off[k]) // 2
-    n = 2 * m
+    m = int(bp[k, 6])
+    n = mode_off[k + 1] - mode_off[k]           # 2 m bending, then the twist
     # applied loads (docs/beam.md, "Loads on the beam"): an end force (the written-out columns
     # take the outboard's net pull), an end torque in one case (the w' and eta'' columns are
     # then differenced), a distributed load (part of gravity for the beam: _beam_gravity)
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],
               np.array([3.0, -2.0, 1.5]),
               np.array([0.5, 2.0, -1.0]) if system.endswith("torque") else np.zeros(3),
-              np.array([0.7, -1.1, 0.4]))         # and a distributed load (N/m)
+              np.array([0.7, -1.1, 0.4]),         # and a distributed load (N/m)
+              ends[k, m:n - m])                   # the twist table
     gen = np.random.default_rng(11)
     h = 1e-4
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
@@ -270,7 +277,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     u_fd = jac[:12, :12] + jac[:12, 12:] @ e_z
     # (with an end torque the w' and eta'' columns are forward differences, whose error is
     # 1e-8 here: measured 1.8e-8 (u) and 1.7e-8 (eta_map); written out, 7e-12)
-    tol = 1e-7 if system.endswith("torque") else 1e-9
+    tol = 1e-7 if system.endswith("torque") or system.startswith("twist") else 1e-9
     for name, got, want in (("u", u[:, :12], u_fd), ("eta_map", eta_map[:, :12], e_z)):
         scale = np.abs(want).max(axis=1, keepdims=True) + 1e-300
         assert np.abs((got - want) / scale).max() < tol, name
@@ -413,7 +420,8 @@ def test_beam_ball_map_folds_the_beam_transfer():
     k, m = 1, 2
     n = 2 * m
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],
-              np.array([3.0, -2.0, 1.5]), np.zeros(3), np.array([0.7, -1.1, 0.4]))
+              np.array([3.0, -2.0, 1.5]), np.zeros(3), np.array([0.7, -1.1, 0.4]),
+              ends[k, m:m])                       # (no twist)
     gen = np.random.default_rng(5)
     h = 1e-3
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)

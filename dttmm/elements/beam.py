@@ -2,9 +2,10 @@
 
 Floating frame at the input end I, x along the reference axis (the chord I -> O); a section at
 x sits at r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
-w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffening on request
-(docs/beam.md); the section's rotary inertia is left out (Euler-Bernoulli, like the paper), but
-its small polar inertia is kept for the frame's spin about x.
+w = sum_k Y_k(x) eta_w[k]; the sections twist by psi = sum_k Psi_k(x) eta_t[k] on request
+(torsion_modes); no axial deformation yet; geometric stiffening on request (docs/beam.md).
+The section's rotary inertia is left out (Euler-Bernoulli, like the paper), but its small
+polar inertia is kept for the frame's (and the twist's) spin about x.
 """
 from dataclasses import dataclass
 from typing import Callable, Optional
@@ -123,8 +124,67 @@ def _loaded_modes(n_modes):
 
 # layout of one row of Model.beam_params
 (LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY,
- STIFFENING, FREQUENCY_CUTOFF) = range(10)
-BEAM_PARAM_SIZE = 10
+ STIFFENING, FREQUENCY_CUTOFF, TORSION_MODES, GJ) = range(12)
+BEAM_PARAM_SIZE = 12
+
+
+def modal_size(beam_row):
+    """How many modal coordinates a beam row has: 2 x modes_per_plane bending (v, then w), then
+    torsion_modes twist coordinates (docs/beam.md, "Torsion")."""
+    return 2 * int(beam_row[MODES]) + int(beam_row[TORSION_MODES])
+
+
+def torsion_shapes(family, length, n_modes, x):
+    """(Psi, Psi') of the first n_modes twist shapes at the points x, each (n_modes, len(x)),
+    and the modal mass and stiffness factors (m_k / j_p, k_k / GJ), each (n_modes,)
+    (docs/beam.md, "Torsion").  Psi_k(0) = 0 (the twist is measured from the frame, which is
+    the input section's about x) and int_0^L Psi_j Psi_k dx = L delta_jk.  A free or
+    moment-free output (families PINNED, CLAMPED): the clamped-free eigenfunctions
+    sqrt(2) sin((2k - 1) pi x / (2 L)); an output that carries loads (CLAMPED_LOADED): the Ritz
+    eigenvectors in the polynomial space x/L .. (x/L)^n, which holds the uniform twist an end
+    torque makes."""
+    x = np.asarray(x, dtype=float)
+    psi, dpsi = np.empty((n_modes, x.size)), np.empty((n_modes, x.size))
+    mass, stiff = np.full(n_modes, float(length)), np.empty(n_modes)
+    if family == CLAMPED_LOADED:
+        coef, lam = _loaded_twist_modes(n_modes)
+        t = x / length
+        for j in range(n_modes):
+            psi[j] = dpsi[j] = 0.0
+            for i in range(coef.shape[0]):       # (x/L)^(i+1) and its derivative
+                p = i + 1
+                psi[j] += coef[i, j] * t ** p
+                dpsi[j] += coef[i, j] * p * t ** (p - 1) / length
+            stiff[j] = lam[j] / length
+    else:
+        for j in range(n_modes):
+            b = (2 * j + 1) * np.pi / (2 * length)
+            psi[j] = np.sqrt(2.0) * np.sin(b * x)
+            dpsi[j] = np.sqrt(2.0) * b * np.cos(b * x)
+            stiff[j] = length * b * b
+    return psi, dpsi, mass, stiff
+
+
+def _loaded_twist_modes(n_modes):
+    """Coefficients c (n, n) of the loaded-end twist modes Psi_j = sum_i c_ij (x/L)^(i+1) on a
+    unit length and their eigenvalues lam_j (GJ Psi'' = -lam j_p Psi there): the Ritz
+    eigenvectors of the shaft fixed at x = 0 in the space x .. x^n, normalized to
+    int_0^1 Psi_j^2 = 1 and Psi_j(1) > 0."""
+    p = np.arange(1, n_modes + 1)
+    mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                          # int t^(p_i + p_j)
+    stiff = np.outer(p, p) / (p[:, None] + p[None, :] - 1.0)              # int Psi_i' Psi_j'
+    lam, coef = eigh(stiff, mass)
+    coef = coef / np.sqrt(np.einsum("ij,ik,kj->j", coef, mass, coef))
+    coef = coef * np.sign(coef.sum(axis=0))
+    return coef, lam
+
+
+def torsion_frequencies(beam_row, n_modes=None):
+    """(Hz) the first n_modes (default: the row's) twist frequencies of a beam row's resolved
+    family, sqrt(k_j GJ / (m_j j_p)) / 2 pi (docs/beam.md, "Torsion")."""
+    n = int(beam_row[TORSION_MODES]) if n_modes is None else int(n_modes)
+    _, _, mass, stiff = torsion_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], n, [0.0])
+    return np.sqrt(beam_row[GJ] * stiff / (beam_row[POLAR_PER_LENGTH] * mass)) / (2 * np.pi)
 MAX_AUTO_MODES = 10   # modes_per_plane="auto" keeps at most this many (6 for loaded-end modes)
 
 
@@ -155,7 +215,8 @@ class EulerBernoulliBeam:
     Floating frame at the input end I, x along the reference axis (the chord I -> O for the
     pinned family, the input section's tangent for the clamped ones); a section at x sits at
     r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
-    w = sum_k Y_k(x) eta_w[k].  No axial or torsional deformation; geometric stiffening on
+    w = sum_k Y_k(x) eta_w[k]; the sections twist by psi = sum_k Psi_k(x) eta_t[k] with
+    torsion_modes >= 1.  No axial deformation yet; geometric stiffening on
     request (``stiffening``); the section's rotary inertia is left out, its polar inertia
     kept for the frame's spin about x.  The arguments are checked when the model is built
     (``System.build`` or ``build_chain``), not here.
@@ -196,11 +257,11 @@ class EulerBernoulliBeam:
     force_mode_family : bool, optional
         Accept "clamped" between moment-free ends, e.g. after a ball joint (admissible but slow
         to converge: each shape carries a spurious input moment).  Default False.
-    initial_modal_coordinates : array_like of 2 x modes_per_plane, optional
+    initial_modal_coordinates : array_like of 2 x modes_per_plane + torsion_modes, optional
         eta at t = 0, m (the mode shapes have unit amplitude): the v coordinates, then the w
-        coordinates.  None (default): zero (undeformed).
-    initial_modal_velocities : array_like of 2 x modes_per_plane, optional
-        eta' at t = 0, m/s, in the same order.  None (default): zero.
+        coordinates, then the twist coordinates (rad).  None (default): zero (undeformed).
+    initial_modal_velocities : array_like of 2 x modes_per_plane + torsion_modes, optional
+        eta' at t = 0, m/s (rad/s for the twist), in the same order.  None (default): zero.
     rotation : array_like (3, 3), optional
         Initial frame rotation (body to world), as for ``RigidBody``.
     angular_velocity : array_like of 3, optional
@@ -231,6 +292,13 @@ class EulerBernoulliBeam:
         centreline is inextensible, so a beam held at both ends (e.g. pinned between fixed
         points) would lock; turn it on for beams that spin, carry a tip mass, or hang.
 
+    torsion_modes : int, optional
+        Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist).
+        docs/beam.md, "Torsion".  A beam with twist runs in the general loop.
+    torsional_stiffness : float, optional
+        G J, N m^2 (> 0); needed with torsion_modes >= 1 (with 0 it is kept and unused: the
+        twist switched off).
+
     Raises
     ------
     ValueError
@@ -241,8 +309,10 @@ class EulerBernoulliBeam:
         frequency_cutoff > 0 or with initial modal coordinates, a frequency_cutoff with a
         fixed mode count; a negative damping ratio; an
         unknown mode family, or one that contradicts the beam's ends; initial modal
-        coordinates or velocities without 2 x modes_per_plane finite entries; a bad rotation
-        or angular velocity; stiffening not a bool.
+        coordinates or velocities without 2 x modes_per_plane + torsion_modes finite entries;
+        a bad rotation or angular velocity; stiffening not a bool; torsion_modes not an
+        integer in 0 .. 6, or >= 1 without a torsional_stiffness; a torsional_stiffness that
+        is not a finite number > 0.
 
     Examples
     --------
@@ -274,6 +344,8 @@ class EulerBernoulliBeam:
     end_force: Optional[Callable[[float], object]] = None
     end_torque: Optional[Callable[[float], object]] = None
     distributed_load: Optional[Callable[[float], object]] = None
+    torsional_stiffness: float = None
+    torsion_modes: int = 0
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -321,7 +393,20 @@ class EulerBernoulliBeam:
         if self.mode_family not in MODE_FAMILY_NAMES:
             raise ValueError(f"{who}: mode_family must be one of {sorted(MODE_FAMILY_NAMES)}, "
                              f"got {self.mode_family!r}")
-        n_coord = 0 if auto else 2 * int(self.modes_per_plane)
+        if (isinstance(self.torsion_modes, (str, bool)) or not np.isscalar(self.torsion_modes)
+                or int(self.torsion_modes) != self.torsion_modes or self.torsion_modes < 0):
+            raise ValueError(f"{who}: torsion_modes must be an integer >= 0 (0: no twist), "
+                             f"got {self.torsion_modes!r}")
+        n_twist = int(self.torsion_modes)
+        if n_twist > MAX_LOADED_MODES:
+            raise ValueError(f"{who}: torsion_modes is at most {MAX_LOADED_MODES}, got {n_twist}")
+        if n_twist and self.torsional_stiffness is None:
+            raise ValueError(f"{who}: torsion_modes={n_twist} needs torsional_stiffness (G J, "
+                             f"N m^2)")
+        # (a G J with no twist modes is kept and unused: the twist switched off)
+        gj = (0.0 if self.torsional_stiffness is None else
+              finite_scalar(who, "torsional_stiffness", self.torsional_stiffness, positive=True))
+        n_coord = 0 if auto else 2 * int(self.modes_per_plane) + n_twist
         given = (("initial_modal_coordinates", self.initial_modal_coordinates),
                  ("initial_modal_velocities", self.initial_modal_velocities))
         eta0, eta_d0 = (np.zeros(n_coord) if v is None
@@ -340,6 +425,7 @@ class EulerBernoulliBeam:
         row[POLAR_PER_LENGTH], row[DAMPING_RATIO] = polar, zeta
         row[MODES] = 0 if auto else int(self.modes_per_plane)   # "auto": set at the build
         row[FREQUENCY_CUTOFF] = cutoff if auto else 0.0
+        row[TORSION_MODES], row[GJ] = n_twist, gj
         row[FAMILY] = MODE_FAMILY_NAMES[self.mode_family]
         if not isinstance(self.stiffening, (bool, np.bool_)):
             raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")

@@ -258,7 +258,7 @@ def _iterate(loop, run, s, it):
             wd[i] = c1 * phi[i] + w1[k, i]
         if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
             i0, i1 = mode_off[k], mode_off[k + 1]
-            m = (i1 - i0) // 2
+            m = (i1 - i0) // 2              # (no twist here: Model.has_twist runs general)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[s, k], torque[s, k], line_load[s, k])   # (docs/beam.md)
             beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,

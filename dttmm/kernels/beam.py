@@ -16,7 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from ..elements.beam import STIFFENING
+from ..elements.beam import GJ, STIFFENING
 from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
@@ -375,27 +375,83 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def add_end_moment(ends, eta, rot, out, residual, aux, end_torque):
+def add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque):
     """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
     on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
-    Y_k'(L), residual_w,k -= m_O . (A J_l e2) Y_k'(L), J_l = J_l(theta_O); aux[2], aux[3] =
+    Y_k'(L), residual_w,k -= m_O . (A J_l e2) Y_k'(L), residual_t,k += m_O . (A J_l e1)
+    Psi_k(L) (the twist, docs/beam.md "Torsion"), J_l = J_l(theta_O); aux[2], aux[3] =
     A J_l e2, A J_l e3; with an applied end torque T (end_torque) the net m_O - T.  out,
-    residual, aux, end_torque: beam_relations'.  (Kept out of beam_relations,
-    whose loops LLVM optimizes better without this branch's allocations: measured 0.34 against
-    0.25 us per evaluation.)"""
+    residual, aux, end_torque: beam_relations'; torsion: the twist table (twist_relations).
+    (Kept out of beam_relations, whose loops LLVM optimizes better without this branch's
+    allocations: measured 0.34 against 0.25 us per evaluation.)"""
     m = ends.shape[0]
     jl = np.empty((3, 3))
-    left_jacobian(end_angles(ends, eta), jl)
+    left_jacobian(end_angles(ends, torsion, eta), jl)
     for i in range(3):
         aux[2, i] = rot[i, 0] * jl[0, 1] + rot[i, 1] * jl[1, 1] + rot[i, 2] * jl[2, 1]
         aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
-    mv = mw = 0.0
+    mv = mw = mt = 0.0
     for i in range(3):
-        mv += (out[6 + i] - end_torque[i]) * aux[3, i]
-        mw -= (out[6 + i] - end_torque[i]) * aux[2, i]
+        m_net = out[6 + i] - end_torque[i]
+        mv += m_net * aux[3, i]
+        mw -= m_net * aux[2, i]
+        mt += m_net * (rot[i, 0] * jl[0, 0] + rot[i, 1] * jl[1, 0] + rot[i, 2] * jl[2, 0])
     for k in range(m):
         residual[k] += mv * ends[k, 1]
         residual[m + k] += mw * ends[k, 1]
+    for k in range(torsion.shape[0]):
+        residual[2 * m + k] += mt * torsion[k, 0]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, m, out, residual):
+    """The twist's share of the relations (docs/beam.md, "Torsion"), after beam_relations: the
+    sections spin by w . A e1 + psi', psi = sum_k Psi_k(x) eta_t,k (eta[2 m:]), with
+    T = 1/2 j_p int (w . A e1 + psi')^2 dx and V = 1/2 G J int psi'^2 dx, so
+      residual_t,k = j_p (P_k alpha_x + L psi_k'') + c_k psi_k' + k_k psi_k
+                     (+ the end moment's m_O . (A J_l e1) Psi_k(L): add_end_moment),
+      m_O -= j_p (P . psi'') A e1 + j_p (P . psi') w x A e1   (the rate of the sections' spin
+                                                              momentum beyond the frame's),
+    alpha_x = w' . A e1, P_k = int Psi_k, int Psi_j Psi_k = L delta_jk, m_k = j_p L,
+    k_k = G J int Psi_k'^2, c_k = 2 zeta omega_k m_k.  torsion (mt, 4): Psi_k(L), P_k,
+    m_k / j_p, k_k / G J (solver.beam_tables)."""
+    j_p, zeta, gj = bp[4], bp[5], bp[GJ]
+    e0, e1, e2 = rot[0, 0], rot[1, 0], rot[2, 0]
+    alpha_x = wd[0] * e0 + wd[1] * e1 + wd[2] * e2
+    p_dd = p_d = 0.0
+    for k in range(torsion.shape[0]):
+        r = 2 * m + k
+        p_k = torsion[k, 1]
+        p_d += p_k * eta_d[r]
+        p_dd += p_k * eta_dd[r]
+        modal_mass = j_p * torsion[k, 2]
+        stiffness = gj * torsion[k, 3]
+        damping = 2.0 * zeta * np.sqrt(stiffness / modal_mass) * modal_mass
+        residual[r] = (j_p * p_k * alpha_x + modal_mass * eta_dd[r] + damping * eta_d[r]
+                       + stiffness * eta[r])
+    s_dd, s_d = j_p * p_dd, j_p * p_d
+    out[6] -= s_dd * e0 + s_d * (w[1] * e2 - w[2] * e1)
+    out[7] -= s_dd * e1 + s_d * (w[2] * e0 - w[0] * e2)
+    out[8] -= s_dd * e2 + s_d * (w[0] * e1 - w[1] * e0)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r):
+    """The twist rows' a_I, m_I, q_I columns at an end moment (add_end_moment): residual_t,k
+    depends on them through m_O only, d r_t,k = Psi_k(L) (A J_l e1) . d m_O (d_o's rows 6:9,
+    _affine_columns)."""
+    m = ends.shape[0]
+    jl = np.empty((3, 3))
+    left_jacobian(end_angles(ends, torsion, eta), jl)
+    g0 = rot[0, 0] * jl[0, 0] + rot[0, 1] * jl[1, 0] + rot[0, 2] * jl[2, 0]
+    g1 = rot[1, 0] * jl[0, 0] + rot[1, 1] * jl[1, 0] + rot[1, 2] * jl[2, 0]
+    g2 = rot[2, 0] * jl[0, 0] + rot[2, 1] * jl[1, 0] + rot[2, 2] * jl[2, 0]
+    for c in range(12):
+        if 3 <= c < 6:
+            continue
+        dm = g0 * d_o[6, c] + g1 * d_o[7, c] + g2 * d_o[8, c]
+        for k in range(torsion.shape[0]):
+            d_r[2 * m + k, c] = torsion[k, 0] * dm
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -427,32 +483,35 @@ def end_foreshortening(moments, eta):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def end_angles(ends, eta):
-    """theta_O = [0, -w'(L), v'(L)]: the output section's rotation vector in the frame, from
-    the modal coordinates (or their rates) and the end slopes Y_k'(L) (docs/beam.md)."""
+def end_angles(ends, torsion, eta):
+    """theta_O = [psi(L), -w'(L), v'(L)]: the output section's rotation vector in the frame,
+    from the modal coordinates (or their rates), the end slopes Y_k'(L) and the end twists
+    Psi_k(L) (torsion[:, 0]; docs/beam.md, "End sections" and "Torsion")."""
     m = ends.shape[0]
     theta = np.zeros(3)
     for k in range(m):
         theta[1] -= ends[k, 1] * eta[m + k]
         theta[2] += ends[k, 1] * eta[k]
+    for k in range(torsion.shape[0]):
+        theta[0] += torsion[k, 0] * eta[2 * m + k]
     return theta
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def end_section(ends, eta, rot, out):
+def end_section(ends, torsion, eta, rot, out):
     """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
-    expm_so3(end_angles(ends, eta), e)
+    expm_so3(end_angles(ends, torsion, eta), e)
     out[:, :] = rot @ e
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd):
+def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd):
     """w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the output
     section (the consistent start; d J_l / dt by a central difference along theta')."""
-    th = end_angles(ends, eta)
-    th_d = end_angles(ends, eta_d)
-    th_dd = end_angles(ends, eta_dd)
+    th = end_angles(ends, torsion, eta)
+    th_d = end_angles(ends, torsion, eta_d)
+    th_dd = end_angles(ends, torsion, eta_dd)
     jl = np.empty((3, 3))
     left_jacobian(th, jl)
     jp = np.empty((3, 3))
@@ -483,8 +542,9 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
-    tables = (moments, ends, factors, end_force, end_torque, line_load) (the applied loads,
-    world: beam_relations; the distributed load is already in gravity, _beam_gravity);
+    tables = (moments, ends, factors, end_force, end_torque, line_load, torsion) (the applied
+    loads, world: beam_relations; the distributed load is already in gravity, _beam_gravity;
+    torsion: the twist table, twist_relations);
     outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
@@ -492,6 +552,7 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     holds the state (the returned rotation is a view on it)."""
     moments, ends, factors, end_force, end_torque = tables[0], tables[1], tables[2], tables[3], \
         tables[4]
+    torsion = tables[6]
     welded, r_rel, rot_out_n, w1_out = outboard
     n = residual.shape[0]
     wd = x[3:6]
@@ -510,8 +571,11 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
     beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
                    eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
+    if torsion.shape[0]:
+        twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, ends.shape[0], out,
+                        residual)
     if welded or _any(end_torque):
-        add_end_moment(ends, eta, rot, out, residual, aux, end_torque)
+        add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque)
     independent, dw1 = history
     if independent and not start:
         m = ends.shape[0]
@@ -525,10 +589,11 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
             out[i] = x[i] + c1 * (aux[1, i] - rho_l_n) + dw1[i]
     if welded:
         if start:
-            out[3:6] = _end_section_angular_acceleration(ends, rot, w, wd, eta, eta_d, eta_dd)
+            out[3:6] = _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d,
+                                                         eta_dd)
         else:
             a_o = np.empty((3, 3))
-            end_section(ends, eta, rot, a_o)
+            end_section(ends, torsion, eta, rot, a_o)
             phi_out = np.empty(3)
             log_so3(a_o @ r_rel @ rot_out_n.T, phi_out)
             out[3:6] = c1 * phi_out + w1_out
@@ -873,6 +938,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # end torque; then the modal equations depend on m_I and their w', eta'' columns are
     # differenced (add_end_moment)
     end_moment = welded or _any(tables[4])
+    twist = tables[6].shape[0] > 0
     n = eta_dd_star.shape[0]
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
@@ -910,9 +976,12 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp, tables[0], ends, end_moment, rot, aux, d_o, d_r)
+    if twist and end_moment:
+        _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r)
     # w' and eta'' columns written out unless the output carries a moment (welded, or an
-    # applied end torque) or its own history (the paper's scheme); there, forward differences
-    analytic = not end_moment and not (history[0] and not start)
+    # applied end torque), the beam twists (docs/beam.md, "Torsion") or the output has its own
+    # history (the paper's scheme); there, forward differences
+    analytic = not end_moment and not twist and not (history[0] and not start)
     if analytic:
         w = w_n if start else work[21:24]
         s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)

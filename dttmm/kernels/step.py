@@ -26,6 +26,7 @@ from numba import njit
 
 from . import CONTRACT, loop_piece
 from ..elements import BEAM, RIGID
+from ..elements.beam import MODES
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -266,7 +267,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         kind[jh + 1] = TRANSFER
         if body_kind[k] == BEAM:
             i0, i1 = mode_off[k], mode_off[k + 1]
-            m = (i1 - i0) // 2
+            m = int(beam_params[k, MODES])              # then i1 - i0 - 2 m twist coordinates
             zs = z_star[jh + 1].copy()
             zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
             welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
@@ -274,7 +275,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
                         wd[kout] - c1 * phi_star[kout])
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
-                      force[k], torque[k], line_load[k])    # (the loads: docs/beam.md)
+                      force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
+                      beam_ends[k, m:i1 - i0 - m])          # the twist table (solver.beam_tables)
             history = (independent, w1_st[k + 1] - w1_st[k])
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
@@ -461,13 +463,13 @@ def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w
 @njit(cache=True, fastmath=CONTRACT)
 def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame welded to beam k's end section (rest: the weld's R0) from the beam's frame and
-    modal coordinates (docs/beam.md, "End sections"): A_O = A exp(theta^) R0, theta = [0,
+    modal coordinates (docs/beam.md, "End sections"): A_O = A exp(theta^) R0, theta = [psi(L),
     -w'(L), v'(L)]; w_O = w + A J_l(theta) theta'; w_O' = w' + w x (A J_l theta') +
     A (J_l theta'' + J_l' theta'), J_l' theta' = theta' x (theta x theta') / 6 (J_l = E +
     theta^ / 2 + theta^ theta^ / 6 + ..; the rest is of higher order in the end slope)."""
     mode_off, ends = beams[3], beams[4]
     i0 = mode_off[k]
-    m = (mode_off[k + 1] - i0) // 2
+    m = int(beams[1][k, MODES])
     th = np.zeros(3)
     th_d = np.zeros(3)
     th_dd = np.zeros(3)
@@ -479,6 +481,11 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
         th_d[2] += y * eta_d[i0 + j]
         th_dd[1] -= y * eta_dd[i0 + m + j]
         th_dd[2] += y * eta_dd[i0 + j]
+    for j in range(mode_off[k + 1] - i0 - 2 * m):       # the twist (docs/beam.md, "Torsion")
+        y = ends[k, m + j, 0]
+        th[0] += y * eta[i0 + 2 * m + j]
+        th_d[0] += y * eta_d[i0 + 2 * m + j]
+        th_dd[0] += y * eta_dd[i0 + 2 * m + j]
     e = np.empty((3, 3))
     expm_so3(th, e)
     rot_out[:, :] = rot @ e @ rest

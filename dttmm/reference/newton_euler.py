@@ -12,7 +12,7 @@ angular velocity w_k.  A body behind a fixed hinge is welded to its inboard neig
 SECTION: A_k = A_O,{k-1} R0, w_k = w_O,{k-1} (the ground frame for k = 0), where the output
 section of a rigid body is the body itself and that of a beam is its deflected end section
 (docs/beam.md, "End sections"):
-    A_O = A exp(theta_O^),  theta_O = [0, -w'(L), v'(L)],  w_O = w + A J_l(theta_O) theta_O'.
+    A_O = A exp(theta_O^),  theta_O = [psi(L), -w'(L), v'(L)],  w_O = w + A J_l(theta_O) theta_O'.
 Each elastic hinge carries its world deflection d_k and its rate.  Positions and velocities
 follow from the ground point by kinematics,
     r_in_k = r_O,{k-1} + d_k,   r_O,k = r_in_k + rho_O,k,
@@ -170,6 +170,16 @@ equations of the kinetic and potential energy to second order in eta, whose term
 dttmm.result.chain_energies counts by its own quadrature of c(x).  (The energies in
 dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
+Torsion (docs/beam.md; a beam's TORSION_MODES): the sections twist by psi(x) = Psi(x) . eta_t
+(the beam's last coordinates) about the frame's x axis and spin by w . A e1 + psi', with
+T = 1/2 j_p int (w . A e1 + psi')^2 and V = 1/2 G J int psi'^2 (twist_shape_constants, closed
+forms).  The Euler row about I gains j_p (int Psi)^T eta_t'' A e1 (a column of A G, so the
+twist rows get the transposed (A e1 j_p int Psi)^T alpha) and the velocity term
+-j_p (int Psi . eta_t') w x A e1; the twist rows have the mass j_p int Psi_k^2, stiffness
+G J int Psi_k'^2 and the damping of the bending modes' rule; the end section's rotation
+theta_O gains psi(L) in its first entry, so B_t gains the columns A J_l e1 Psi_k(L) and the
+outboard's couple works on the twist through them.
+
 The right-hand side is numba-compiled; the Python wrapper only evaluates the ground motion and
 the applied loads at time t and hands them to the kernel as arrays.
 """
@@ -182,8 +192,9 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
 from ..elements import BEAM
-from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH,
-                             MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING)
+from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ,
+                             LENGTH, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING,
+                             TORSION_MODES)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
                                FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -209,6 +220,7 @@ _CR = C_ROTATION.start
 _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
+_BTWIST, _BGJ = TORSION_MODES, GJ
 _AX1 = AXIS_1.start
 _AX2 = AXIS_2.start
 _REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
@@ -299,6 +311,37 @@ def beam_shape_constants(beam_row, n_points=None):
     else:
         raise ValueError(f"simulate_reference: unknown beam mode family {family}")
     return vec, mat
+
+
+def twist_shape_constants(beam_row):
+    """The twist's shape constants of one beam (module docstring, "Torsion"): a
+    (N_SHAPE_ROWS, mt) array with rows _SY = int Psi_k, _YL = Psi_k(L), _MF = int Psi_k^2 and
+    _KF = int Psi_k'^2 (the rest zero), in closed form: for a moment-free output (families
+    pinned and clamped) Psi_k = sqrt(2) sin(b x), b = (2k - 1) pi / (2 L); for a loaded output
+    the Ritz modes of the shaft fixed at 0 in the monomials (x/L)^1 .. (x/L)^mt, every integral a
+    polynomial moment."""
+    length, mt, family = float(beam_row[LENGTH]), int(beam_row[TORSION_MODES]), \
+        int(beam_row[FAMILY])
+    vec = np.zeros((N_SHAPE_ROWS, mt))
+    if mt == 0:
+        return vec
+    if family == CLAMPED_LOADED:
+        p = np.arange(1, mt + 1, dtype=float)
+        gram = 1.0 / (p[:, None] + p[None, :] + 1.0)
+        lam, c = eigh(np.outer(p, p) / (p[:, None] + p[None, :] - 1.0), gram)
+        c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, gram, c))
+        c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
+        vec[_SY] = length * (c.T @ (1.0 / (p + 1.0)))
+        vec[_YL] = c.sum(axis=0)
+        vec[_MF] = length * np.einsum("ij,ik,kj->j", c, gram, c)
+        vec[_KF] = lam / length
+    else:
+        b = (2.0 * np.arange(1, mt + 1) - 1.0) * math.pi / (2.0 * length)
+        vec[_SY] = math.sqrt(2.0) / b                 # sqrt(2) (1 - cos(b L)) / b, cos(b L) = 0
+        vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
+        vec[_MF] = length
+        vec[_KF] = length * b * b
+    return vec
 
 
 def stiffening_matrices(beam_row):
@@ -538,6 +581,12 @@ def _stiffening_block(my, nm, i):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _modal_size(bp):
+    """A beam's modal coordinates: v and w bending, then the twist."""
+    return 2 * int(bp[_BMODES]) + int(bp[_BTWIST])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     """Output point and output section of one beam (module docstring, "End kinematics"), from
     its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
@@ -546,10 +595,16 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     moves back by the foreshortening c(L) = 1/2 eta^T D0 eta along e1 (module docstring), so
     B_r gains -A e1 (D0 eta)^T and the velocity terms its rates."""
     nm = int(bp[_BMODES])
+    nt = int(bp[_BTWIST])
+    tw = sv.shape[1] // 2             # the twist's columns of sv (_Problem.shape_vec)
+    nb = 2 * nm + nt
     u_l = np.zeros(3)                 # u(L), body frame
     ud_l = np.zeros(3)                # u'(L) (time derivative)
-    th = np.zeros(3)                  # theta_O = [0, -w'(L), v'(L)]
+    th = np.zeros(3)                  # theta_O = [psi(L), -w'(L), v'(L)]
     thd = np.zeros(3)
+    for j in range(nt):
+        th[0] += sv[_YL, tw + j] * eta[2 * nm + j]
+        thd[0] += sv[_YL, tw + j] * eta_dot[2 * nm + j]
     for j in range(nm):
         yl, dyl = sv[_YL, j], sv[_DYL, j]
         u_l[1] += yl * eta[j]
@@ -583,8 +638,10 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     w_o = w + ajt
     acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud) - cdd_v * a[:, 0]
     alpha_v = _cross(w, ajt) + a @ (_left_jacobian_derivative(th, thd) @ thd)
-    br = np.zeros((3, 2 * nm))
-    d = np.zeros((3, 2 * nm))
+    br = np.zeros((3, nb))
+    d = np.zeros((3, nb))
+    for j in range(nt):
+        d[0, 2 * nm + j] = sv[_YL, tw + j]
     for j in range(nm):
         br[1, j] = sv[_YL, j]
         br[2, nm + j] = sv[_YL, j]
@@ -746,7 +803,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         r_in[k] = r_prev + defl[k]
         v_in[k] = v_prev + defl_rate[k]
         if body_kind[k] == _BEAM:
-            nm2 = 2 * int(beam_params[k, _BMODES])
+            nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
                 beam_params[k], shape_vec[k], shape_mat[k], rot[k], omega[k],
@@ -804,7 +861,10 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     length = bp[_BL]
     mu = bp[_BMU]
     nm = int(bp[_BMODES])
+    nt = int(bp[_BTWIST])
+    tw = sv.shape[1] // 2             # the twist's columns of sv (_Problem.shape_vec)
     n2 = 2 * nm
+    nb = n2 + nt
     sy = sv[_SY, :nm]
     ty = sv[_TY, :nm]
     myy = np.ascontiguousarray(my[:nm, :nm])
@@ -820,19 +880,19 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     # the foreshortening -c(x) e1 to first order in c (module docstring, "Geometric
     # stiffening"): C1 = int c, C2 = int x c = 1/2 eta^T (D1, D2) eta, their rates, and
     # eta'^T D1 eta' (the velocity part of C1'')
-    geo = np.zeros((3, n2))           # D0 eta, D1 eta, D2 eta per plane
+    geo = np.zeros((3, nb))           # D0 eta, D1 eta, D2 eta per plane (none for the twist)
     c1 = c1_dot = c2 = c2_dot = c1_vel = 0.0
     if bp[_BSTIFF] != 0.0:
         for i in range(3):
             d = _stiffening_block(my, nm, i)
             geo[i, :nm] = d @ ev
-            geo[i, nm:] = d @ ew
+            geo[i, nm:n2] = d @ ew
         d1 = _stiffening_block(my, nm, 1)
-        c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:])
-        c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:]
+        c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:n2])
+        c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:n2]
         c1_vel = dv @ (d1 @ dv) + dw @ (d1 @ dw)
-        c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:])
-        c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:]
+        c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:n2])
+        c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:n2]
     s_b = np.empty(3)
     s_b[0] = mu * (length * length / 2.0 - c1)
     s_b[1] = mu * (sy @ ev)
@@ -849,8 +909,12 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     for i in range(3):
         j_b[i, i] += tr
     j_b[0, 0] += bp[_BJP] * length                 # polar spin inertia J_p = diag(j_p L, 0, 0)
-    p_b = np.zeros((3, n2))                        # int mu Phi
-    g_b = np.zeros((3, n2))                        # int mu p^ Phi
+    p_b = np.zeros((3, nb))                        # int mu Phi
+    g_b = np.zeros((3, nb))                        # int mu p^ Phi; the twist's j_p int Psi e1
+    p_t = 0.0                                      # j_p int psi' (the twist's spin momentum)
+    for j in range(nt):
+        g_b[0, n2 + j] = bp[_BJP] * sv[_SY, tw + j]
+        p_t += bp[_BJP] * sv[_SY, tw + j] * eta_dot[n2 + j]
     for j in range(nm):
         p_b[1, j] = mu * sy[j]
         p_b[2, nm + j] = mu * sy[j]
@@ -877,14 +941,19 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     ud = ap @ eta_dot - mu * c1_dot * e1           # A int mu p' dx
     # the velocity terms; A int mu p'' = A P eta'' - mu (eta'^T D1 eta' + (D1 eta)^T eta'') e1
     newton_v = -2.0 * _cross(w, ud) + mu * c1_vel * e1
-    euler_v = -(a @ cor_b)
+    euler_v = -(a @ cor_b) - p_t * _cross(w, e1)  # and the twist's spin momentum turning
     # modal right-hand side
     ww2 = w_b[0] * w_b[0] + w_b[1] * w_b[1] + w_b[2] * w_b[2]
     mm = np.outer(w_b, w_b)                        # w^ w^ = w w^T - |w|^2 E
     for i in range(3):
         mm[i, i] -= ww2
     g_w = ap.T @ gravity                           # (A P)^T g
-    modal = np.empty(n2)
+    modal = np.empty(nb)
+    for j in range(nt):                            # the twist: -c psi' - k psi
+        m_t = bp[_BJP] * sv[_MF, tw + j]
+        k_t = bp[_BGJ] * sv[_KF, tw + j]
+        modal[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
+                         - k_t * eta[n2 + j])
     for j in range(nm):
         m_k = mu * sv[_MF, j]
         kv = bp[_BEIV] * sv[_KF, j]
@@ -985,7 +1054,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         geo = np.zeros((3, 0))
         if body_kind[k] == _BEAM:
             nm = int(beam_params[k, _BMODES])
-            nm2 = 2 * nm
+            nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
@@ -1015,6 +1084,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 for i in range(nm):
                     s[ce + j, ce + i] = m_yy[j, i]
                     s[ce + nm + j, ce + nm + i] = m_yy[j, i]
+            tw = shape_vec.shape[2] // 2
+            for j in range(2 * nm, nm2):              # the twist's, j_p int Psi_j^2
+                s[ce + j, ce + j] = beam_params[k, _BJP] * shape_vec[k, _MF, tw + j - 2 * nm]
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
@@ -1105,7 +1177,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             else:
                 kp = parent[k]
                 hpo = _hat(rho_att[k])
-                pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
                 pce = e_col0 + m_off[kp]
                 for i in range(3):
                     s[r + i, 6 * kp + i] = -1.0
@@ -1122,7 +1194,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         b[r + i] = wd_g[i]
                     else:
                         kp = parent[k]
-                        pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                        pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
                         pce = e_col0 + m_off[kp]
                         s[r + i, 6 * kp + 3 + i] = -1.0
                         for j in range(pn2):
@@ -1136,7 +1208,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                                 rot[k], omega[k], defl[k], qd, np.zeros((3, 0)), 0, f_col,
                                 m_col, joints)
                 else:
-                    pn2 = 2 * int(beam_params[kp, _BMODES]) if body_kind[kp] == _BEAM else 0
+                    pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
                     _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_o[kp],
                                 omega_o[kp], alpha_v[kp], rot[k], omega[k], defl[k], qd,
                                 np.ascontiguousarray(b_t[kp, :, :pn2]), e_col0 + m_off[kp],
@@ -1146,7 +1218,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         # point (F_t = q at the tip station, uniform convention), and a_O = 0 there
         k = n - 1
         ha = _hat(rho_o[k])
-        nm2 = 2 * int(beam_params[k, _BMODES]) if body_kind[k] == _BEAM else 0
+        nm2 = _modal_size(beam_params[k]) if body_kind[k] == _BEAM else 0
         ce = e_col0 + m_off[k]
         for i in range(3):
             s[6 * k + i, t_col + i] = 1.0
@@ -1283,7 +1355,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             else:
                 a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
                 if body_kind[kp] == _BEAM:
-                    nm2 = 2 * int(beam_params[kp, _BMODES])
+                    nm2 = _modal_size(beam_params[kp])
                     br = np.ascontiguousarray(b_r[kp, :, :nm2])
                     a_att = a_att + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
             dy[o + 3:o + 6] = acc[k] - a_att
@@ -1344,12 +1416,16 @@ class _Problem:
                                  f"{self.beam_params[k, FAMILY]}")
         # shape constants of every beam, padded to the widest beam (module docstring)
         mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
-        self.shape_vec = np.zeros((n, N_SHAPE_ROWS, mmax))
+        tmax = max([0] + [int(self.beam_params[k, TORSION_MODES]) for k in beams])
+        tw = max(mmax, tmax)        # bending in columns :m, the twist in tw:tw + mt
+        self.shape_vec = np.zeros((n, N_SHAPE_ROWS, 2 * tw))
         self.shape_mat = np.zeros((n, mmax, 4 * mmax))   # int Y Y^T, then D0, D1, D2
         for k in beams:
             vec, mat = beam_shape_constants(self.beam_params[k])
             m = vec.shape[1]
             self.shape_vec[k, :, :m] = vec
+            twist = twist_shape_constants(self.beam_params[k])
+            self.shape_vec[k, :, tw:tw + twist.shape[1]] = twist
             self.shape_mat[k, :m, :m] = mat
             for i, d in enumerate(stiffening_matrices(self.beam_params[k])):
                 self.shape_mat[k, :m, (i + 1) * mmax:(i + 1) * mmax + m] = d
