@@ -20,8 +20,9 @@ where loads act), so it costs about the positions' price per step.
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
-                            STIFFENING, foreshortening_integrals, mode_shapes)
+from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ, LENGTH, LOAD_AXES,
+                            MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
+                            foreshortening_integrals, modal_size, mode_shapes)
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .elements.rigid_body import TO_MASS_CENTER
 from .model import output_section
@@ -62,11 +63,14 @@ class EnergyBalance:
             if model.body_kind[k] != BEAM:
                 continue
             row = model.beam_params[k]
-            m = int(row[MODES])
+            m, mt = int(row[MODES]), int(row[TORSION_MODES])
             for ei in (row[EI_V], row[EI_W]):           # the v coordinates first, then w
                 mass = row[MASS_PER_LENGTH] * factors[k, :m, 0]
                 stiffness = ei * factors[k, :m, 1]
                 c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(stiffness * mass))
+            twist = beams[4][k, m:m + mt]               # then the twist (solver.beam_tables)
+            c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(row[GJ] * twist[:, 3]
+                                                        * row[POLAR_PER_LENGTH] * twist[:, 2]))
         self.modal_damping = np.array(c)
 
     def energy(self, res):
@@ -97,12 +101,19 @@ class EnergyBalance:
             w_load = w
             if self.loaded_beams:   # a beam's end load: at its output point, on its end section
                 v_c, w_load = v_c.copy(), w.copy()
+                force, torque = force.copy(), torque.copy()
                 for k, off in self.loaded_beams:
-                    v_c[:, k], w_load[:, k] = _beam_end_rates(
+                    v_c[:, k], w_load[:, k], a_o = _beam_end_rates(
                         model.beam_params[k], res, k, off)
+                    if model.beam_params[k, LOAD_AXES]:     # followers: in the section's axes
+                        force[:, k] = np.einsum("tij,tj->ti", a_o, force[:, k])
+                        torque[:, k] = np.einsum("tij,tj->ti", a_o, torque[:, k])
             p += np.einsum("tki,tki->t", force, v_c) + np.einsum("tki,tki->t", torque, w_load)
         for k, off, p_k, d1 in self.line_loaded:    # a distributed load p: p . int v(x) dx
-            p += np.einsum("ti,ti->t", line_load[:, k],
+            load = line_load[:, k]
+            if model.beam_params[k, LOAD_AXES]:         # a follower: in the frame's axes
+                load = np.einsum("tij,tj->ti", res.rotation[:, k], load)
+            p += np.einsum("ti,ti->t", load,
                            _beam_line_velocity(model.beam_params[k], res, k, off, p_k, d1))
         if res.joint_coordinates is not None:
             p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
@@ -162,15 +173,16 @@ class EnergyBalance:
 
 def _beam_end_rates(row, res, k, offset):
     """(T, 3) each: the velocity of beam k's output point and the angular velocity of its end
-    section (docs/beam.md, "End sections"), where its applied end load works."""
-    m2 = 2 * int(row[MODES])
-    eta = res.modal_coordinates[:, offset:offset + m2]
-    eta_dot = res.modal_velocities[:, offset:offset + m2]
+    section (docs/beam.md, "End sections"), where its applied end load works, and (T, 3, 3)
+    the end section's rotation."""
+    n = modal_size(row)
+    eta = res.modal_coordinates[:, offset:offset + n]
+    eta_dot = res.modal_velocities[:, offset:offset + n]
     rot, w = res.rotation[:, k], res.angular_velocity[:, k]
     _, rate = beam_output_offset(row, rot, w, eta, eta_dot)
-    w_o = np.array([output_section(row, rot[t], w[t], eta[t], eta_dot[t])[1]
-                    for t in range(len(rot))])
-    return res.velocity_input[:, k] + rate, w_o
+    sections = [output_section(row, rot[t], w[t], eta[t], eta_dot[t]) for t in range(len(rot))]
+    return (res.velocity_input[:, k] + rate, np.array([s[1] for s in sections]),
+            np.array([s[0] for s in sections]))
 
 
 def _first_moment_integrals(row):

@@ -7,8 +7,8 @@ import numpy as np
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
 from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY,
-                            FREQUENCY_CUTOFF, LENGTH, MAX_LOADED_MODES, MODES, PINNED,
-                            TORSION_MODES, auto_mode_count, modal_size, mode_shapes,
+                            FREQUENCY_CUTOFF, LENGTH, LOAD_AXES, MAX_LOADED_MODES, MODES,
+                            PINNED, TORSION_MODES, auto_mode_count, modal_size, mode_shapes,
                             torsion_shapes)
 from .elements._checks import derivative, finite_vector, rotation_matrix
 from .elements.hinges import pack_hinge
@@ -386,9 +386,17 @@ class Model:
     @property
     def needs_general_loop(self):
         """Whether a beam's w' and eta'' columns are differenced in every step (an end torque,
-        or twist modes), so the model runs in the general loop, not the fused one
+        twist modes or loads in body axes), so the model runs in the general loop, not the fused one
         (kernels/beam.py::beam_transfer)."""
-        return self.has_beam_end_torque or self.has_twist
+        return self.has_beam_end_torque or self.has_twist or self.has_follower_loads
+
+    @property
+    def has_follower_loads(self):
+        """Whether a beam carries loads in its own axes (load_axes="body": they turn with it,
+        so its w' and eta'' columns are differenced: docs/beam.md, "Loads on the beam")."""
+        return any(self.beam_params[k, LOAD_AXES] != 0.0 and any(
+            f is not None for f in (self.forces[k], self.torques[k], self.line_loads[k]))
+            for k in range(self.n_bodies) if self.body_kind[k] == BEAM)
 
     @property
     def has_applied_loads(self):

@@ -18,8 +18,8 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
 from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ, LENGTH,
-                            MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING,
-                            TORSION_MODES)
+                            LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
+                            STIFFENING, TORSION_MODES)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                               ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -50,6 +50,7 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "frequency_cutoff": "number",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
          "stiffening": "bool", "torsion_modes": "int", "torsional_stiffness": "number",
+         "load_axes": "str",
          "initial_modal_coordinates": "list",
          "end_force": "profile", "end_torque": "profile", "distributed_load": "profile",
          "initial_modal_velocities": "list",
@@ -394,6 +395,8 @@ def scene_of(model, run=None, name=None):
                 table["torsion_modes"] = int(row[TORSION_MODES])
             if row[GJ] > 0.0:
                 table["torsional_stiffness"] = row[GJ]
+            if row[LOAD_AXES]:
+                table["load_axes"] = "body"
             if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
                 table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
             for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k]),

@@ -66,10 +66,12 @@ class StaticEquilibrium:
         the beam's modal scale for modal coordinates).
     stable : bool
         Every small vibration about the equilibrium oscillates (no squared frequency below
-        zero): False past a buckling load or for a pendulum balanced upright.
+        zero, none complex): False past a buckling load, for a pendulum balanced upright, or
+        past a follower load's flutter load (complex pairs).
     squared_frequencies : ndarray
         The eigenvalues of M^-1 K about the equilibrium (K the tangent stiffness, M the mass
-        matrix), (rad/s)^2, ascending by real part; negative ones are the unstable directions,
+        matrix), (rad/s)^2, ascending by real part; negative ones are the unstable directions
+        (complex pairs, under non-conservative loads, fluttering ones),
         zeros the neutral ones (rotations that change nothing, e.g. a hanging pendulum's spin
         about the vertical).
     coordinates : tuple of str
@@ -141,10 +143,14 @@ class StaticEquilibrium:
     @property
     def frequencies(self):
         """The small vibrations' frequencies about the equilibrium, Hz (sqrt of the squared
-        circular frequencies over 2 pi; NaN for an unstable direction)."""
-        lam = np.real(self.squared_frequencies)
+        circular frequencies over 2 pi; NaN for an unstable direction, fluttering ones
+        included)."""
+        lam = np.asarray(self.squared_frequencies)
+        big = np.max(np.abs(lam), initial=0.0)
+        real = np.real(lam)
+        ok = (real >= 0.0) & (np.abs(np.imag(lam)) <= 1e-6 * big)
         with np.errstate(invalid="ignore"):
-            return np.where(lam >= 0.0, np.sqrt(np.abs(lam)), np.nan) / (2.0 * np.pi)
+            return np.where(ok, np.sqrt(np.abs(real)), np.nan) / (2.0 * np.pi)
 
 
 class _Configuration:
@@ -442,14 +448,21 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         lam = np.real(lam)          # (a conservative system's are real)
     big = np.max(np.abs(lam), initial=0.0)
     lam = np.where(np.abs(lam) <= 1e-9 * big, 0.0, lam)     # neutral directions
-    stable = bool(np.all(np.real(lam) >= -1e-9 * big))
+    # unstable: a squared frequency below zero (divergence, e.g. buckling), or a complex
+    # pair (flutter: non-conservative loads, e.g. a follower force; s^2 = -lam then has a root
+    # with a positive real part), beyond the central differences' ~1e-8 error in J
+    diverging = np.real(lam) < -1e-9 * big
+    fluttering = np.abs(np.imag(lam)) > 1e-6 * big
+    stable = not bool(np.any(diverging | fluttering))
     if not stable:
         k = int(np.argmin(np.real(lam)))
-        count = int(np.sum(np.real(lam) < -1e-9 * big))
-        warnings.warn(f"{where}: the equilibrium is unstable ({count} direction(s); squared "
-                      f"frequency {np.real(lam[k]):.4g} (rad/s)^2): a disturbance grows from it "
-                      f"(e.g. a column past its buckling load)",
-                      stacklevel=2)
+        kind = (f"{int(np.sum(diverging))} direction(s); squared frequency "
+                f"{np.real(lam[k]):.4g} (rad/s)^2" if np.any(diverging) else
+                f"{int(np.sum(fluttering))} complex squared frequencies (flutter), e.g. "
+                f"{lam[np.argmax(np.abs(np.imag(lam)))]:.4g} (rad/s)^2")
+        warnings.warn(f"{where}: the equilibrium is unstable ({kind}): a disturbance grows "
+                      f"from it (e.g. a column past its buckling load, or under a follower "
+                      f"force past its flutter load)", stacklevel=2)
     return StaticEquilibrium(model=cfg.result_model(q), iterations=iterations,
                              residual=float(np.max(np.abs(a), initial=0.0)), stable=stable,
                              squared_frequencies=lam, coordinates=cfg.labels)

@@ -92,6 +92,51 @@ def test_elastica_by_an_end_torque_on_the_beam():
     assert np.linalg.norm(guess.positions()[2][-1] - exact) < 4e-4
 
 
+def test_a_follower_torque_rolls_the_same_circle():
+    """A tip moment about the end section's own z axis (load_axes="body") is the world-axes
+    moment about z while the beam bends in the xy plane: the same equilibrium (8 elements,
+    phi = pi / 2 in two load steps), to 1e-9 m."""
+    tips = []
+    for axes in ("world", "body"):
+        guess = None
+        for lam in (0.5, 1.0):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                torque = [0.0, 0.0, lam * np.pi / 2 * EI / L]
+                guess = static_equilibrium(cantilever(8, torque=torque, load_axes=axes),
+                                           guess=guess)
+        tips.append(guess.positions()[2][-1])
+    assert np.linalg.norm(tips[0] - tips[1]) < 1e-9, tips
+
+
+def becks_column(load):
+    """Beck's column: a clamped-free column of 3 welded elements (3 modes per plane each)
+    under a follower force at its tip, compressive along the end section's tangent."""
+    return cantilever(3, force=[-load, 0.0, 0.0], modes=3, load_axes="body")
+
+
+@pytest.mark.parametrize("fraction, stable", [(0.99, True), (1.01, False)])
+def test_a_follower_force_makes_the_column_flutter_at_becks_load(fraction, stable):
+    """Beck's column (a tangential follower force at the free end, non-conservative) does not
+    buckle; its two lowest bending frequencies meet and turn complex (flutter) at
+    P = 20.05 EI / L^2 (Beck 1952; Timoshenko & Gere).  The static solve's small vibrations:
+    stable at 0.99 of it, flutter (complex squared frequencies, flagged unstable, warned) at
+    1.01 (measured by bisection: 20.058 EI / L^2, 4e-4 above; one element with 4 modes:
+    20.40)."""
+    load = fraction * 20.05 * EI / L ** 2
+    if stable:
+        st = static_equilibrium(becks_column(load))
+        assert np.all(np.isreal(st.squared_frequencies))
+    else:
+        with pytest.warns(UserWarning, match="flutter"):
+            st = static_equilibrium(becks_column(load))
+        lowest = st.squared_frequencies[0]
+        assert abs(lowest.imag) > 0.01 * abs(lowest), lowest
+    assert st.stable == stable
+    # the straight column is the equilibrium either way (the force stays along it)
+    assert np.abs(st.positions()[2][-1] - [L, 0.0, 0.0]).max() < 1e-12
+
+
 def _ramp(t):
     """0 -> 1 over the first second with zero rate at both ends (t^2 (3 - 2 t)): a load switched
     on suddenly rings the elements' highest modes (hundreds of rad/s here), which no dt of this
@@ -100,10 +145,11 @@ def _ramp(t):
     return t * t * (3.0 - 2.0 * t) if t < 1.0 else 1.0
 
 
-def _driven_loaded_cantilever():
+def _driven_loaded_cantilever(load_axes="world"):
     """A soft stiffened cantilever (two welded elements) on a hub driven about z, gravity -y,
     a time-varying end force (with a compressive part along the beam) and end torque on the
-    outer element, a distributed load on the inner one, ramped on."""
+    outer element, a distributed load on the inner one, ramped on; in world axes or, with
+    load_axes="body", following the end section and the frame."""
     def angle(t):
         return 1.5 * t * t
     hub = PrescribedMotion.spin_about_axis([0, 0, 1], angle, lambda t: 3.0 * t, lambda t: 3.0)
@@ -117,16 +163,17 @@ def _driven_loaded_cantilever():
             end_torque=(lambda t: _ramp(t) * np.array([0.05, -0.1 * t, 0.2 * np.cos(t)]))
             if k else None,
             distributed_load=(lambda t: _ramp(t) * np.array([0.3, 0.5 * np.sin(2 * t), -0.4]))
-            if k == 0 else None)]
+            if k == 0 else None, load_axes=load_axes)]
     return build_chain(parts, gravity=[0.0, -9.81, 0.0], ground=Ground(motion=hub))
 
 
-def test_end_loads_converge_to_the_reference_at_order_2():
+@pytest.mark.parametrize("load_axes", ["world", "body"])
+def test_end_loads_converge_to_the_reference_at_order_2(load_axes):
     """DT-TMM against the Newton-Euler reference (which adds the loads to its own Newton,
     Euler and modal rows: F, rho_O x F + T, B_r^T F + B_t^T T, and the distributed load p
-    as g + p / mu in the beam's terms); output points at t = 1 s, dt 4e-3 / 2e-3 / 1e-3:
-    fitted order 2 +- 0.2."""
-    model = _driven_loaded_cantilever()
+    as g + p / mu in the beam's terms; followers turned by A_O and A first); output points
+    at t = 1 s, dt 4e-3 / 2e-3 / 1e-3: fitted order 2 +- 0.2."""
+    model = _driven_loaded_cantilever(load_axes)
     steps = np.array([4e-3, 2e-3, 1e-3])
     errors = output_errors_against_reference(model, steps)
     slope = fitted_order(steps, errors)
@@ -134,10 +181,12 @@ def test_end_loads_converge_to_the_reference_at_order_2():
     assert errors[-1] < 1e-4, errors
 
 
-def test_end_loads_work_is_counted_in_the_energy_balance():
-    """E - E(0) - W, W the work of the loads (F . v_O + T . w_O, p . int v dx) and of the
-    hub's drive, closes at order 2 in dt (the gap at dt 1e-3 a quarter of dt 2e-3's)."""
-    model = _driven_loaded_cantilever()
+@pytest.mark.parametrize("load_axes", ["world", "body"])
+def test_end_loads_work_is_counted_in_the_energy_balance(load_axes):
+    """E - E(0) - W, W the work of the loads (F . v_O + T . w_O, p . int v dx, followers
+    turned into the world first) and of the hub's drive, closes at order 2 in dt (the gap at
+    dt 1e-3 a quarter of dt 2e-3's)."""
+    model = _driven_loaded_cantilever(load_axes)
     gaps = []
     for h in (2e-3, 1e-3):
         res = simulate(model, 1.0, h, max_energy_error=1.0)
@@ -154,6 +203,10 @@ def test_bad_end_loads_are_refused_naming_the_beam():
         build_chain([FixedHinge(), EulerBernoulliBeam(
             length=1.0, bending_stiffness=EI, mass_per_length=1.0,
             polar_inertia_per_length=1e-3, end_torque=lambda t: [0.0, 1.0], name="arm")])
+    with pytest.raises(ValueError, match="'arm'.*load_axes must be 'world' or 'body'"):
+        build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, load_axes="local", name="arm")])
     with pytest.raises(ValueError, match="'arm'.*pinned.*end torque"):
         build_chain([dttmm.BallJoint(), EulerBernoulliBeam(
             length=1.0, bending_stiffness=EI, mass_per_length=1.0,

@@ -124,8 +124,9 @@ def _loaded_modes(n_modes):
 
 # layout of one row of Model.beam_params
 (LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY,
- STIFFENING, FREQUENCY_CUTOFF, TORSION_MODES, GJ) = range(12)
-BEAM_PARAM_SIZE = 12
+ STIFFENING, FREQUENCY_CUTOFF, TORSION_MODES, GJ, LOAD_AXES) = range(13)
+BEAM_PARAM_SIZE = 13
+LOAD_AXES_NAMES = {"world": 0.0, "body": 1.0}   # the applied loads' axes (docs/beam.md)
 
 
 def modal_size(beam_row):
@@ -284,6 +285,10 @@ class EulerBernoulliBeam:
         distributed_load(t) -> 3 numbers: a uniform world-frame load per length along the
         beam at time t (s), N/m (docs/beam.md, "Loads on the beam"; it acts like gravity on
         this beam alone).  None (default): none.
+    load_axes : {"world", "body"}, optional
+        The axes of end_force, end_torque and distributed_load: "world" (default), or "body":
+        followers, the end loads in the output end section's axes (they turn with it, e.g. a
+        thrust along the tip's tangent), the distributed load in the beam frame's.
     stiffening : bool, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
@@ -312,7 +317,7 @@ class EulerBernoulliBeam:
         coordinates or velocities without 2 x modes_per_plane + torsion_modes finite entries;
         a bad rotation or angular velocity; stiffening not a bool; torsion_modes not an
         integer in 0 .. 6, or >= 1 without a torsional_stiffness; a torsional_stiffness that
-        is not a finite number > 0.
+        is not a finite number > 0; load_axes not "world" or "body".
 
     Examples
     --------
@@ -346,6 +351,7 @@ class EulerBernoulliBeam:
     distributed_load: Optional[Callable[[float], object]] = None
     torsional_stiffness: float = None
     torsion_modes: int = 0
+    load_axes: str = "world"
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -426,6 +432,10 @@ class EulerBernoulliBeam:
         row[MODES] = 0 if auto else int(self.modes_per_plane)   # "auto": set at the build
         row[FREQUENCY_CUTOFF] = cutoff if auto else 0.0
         row[TORSION_MODES], row[GJ] = n_twist, gj
+        if not isinstance(self.load_axes, str) or self.load_axes not in LOAD_AXES_NAMES:
+            raise ValueError(f"{who}: load_axes must be 'world' or 'body', got "
+                             f"{self.load_axes!r}")
+        row[LOAD_AXES] = LOAD_AXES_NAMES[self.load_axes]
         row[FAMILY] = MODE_FAMILY_NAMES[self.mode_family]
         if not isinstance(self.stiffening, (bool, np.bool_)):
             raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")

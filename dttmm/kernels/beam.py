@@ -16,7 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from ..elements.beam import GJ, STIFFENING
+from ..elements.beam import GJ, LOAD_AXES, STIFFENING
 from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
@@ -455,6 +455,16 @@ def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _follower_loads(bp, tables, eta, rot, gravity):
+    """World components of body-axes loads (load_axes="body", docs/beam.md "Loads on the
+    beam"): (A_O F, A_O T, g + A p / mu), A_O the output end section's rotation
+    (end_section), A the frame's."""
+    a_o = np.empty((3, 3))
+    end_section(tables[1], tables[6], eta, rot, a_o)
+    return a_o @ tables[3], a_o @ tables[4], gravity + rot @ tables[5] / bp[1]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def _beam_gravity(bp, gravity, line_load, out):
     """out = g + p / mu: a uniform distributed load p (N/m, world) acts on the beam exactly as
     gravity does, so the beam's relations and columns take it as part of g (docs/beam.md,
@@ -569,6 +579,10 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for i in range(3):
             phi[i] = phi_star[i] + (wd[i] - wd_star[i]) / c1
         _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
+    if bp[LOAD_AXES] != 0.0:
+        # followers (docs/beam.md, "Loads on the beam"): the end loads in the end section's
+        # axes, the distributed load in the frame's (gravity arrives without it: beam_transfer)
+        end_force, end_torque, gravity = _follower_loads(bp, tables, eta, rot, gravity)
     beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
                    eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
     if torsion.shape[0]:
@@ -968,7 +982,11 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     columns_scratch = block[o + 9:o + 15]
     q_net = block[o + 15:o + 18]
     g_beam = block[o + 18:o + 21]
-    _beam_gravity(bp, gravity, tables[5], g_beam)
+    follower = bp[LOAD_AXES] != 0.0
+    if follower:                 # the distributed load turns with the frame: _evaluate adds it
+        g_beam[:] = gravity
+    else:
+        _beam_gravity(bp, gravity, tables[5], g_beam)
     x0[0:12] = z_star
     x0[12:] = eta_dd_star
     rot = _evaluate(bp, tables, outboard, history, g_beam, start, rot_n, phi_star, wd_star, c1,
@@ -979,9 +997,11 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     if twist and end_moment:
         _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r)
     # w' and eta'' columns written out unless the output carries a moment (welded, or an
-    # applied end torque), the beam twists (docs/beam.md, "Torsion") or the output has its own
-    # history (the paper's scheme); there, forward differences
-    analytic = not end_moment and not twist and not (history[0] and not start)
+    # applied end torque), the beam twists (docs/beam.md, "Torsion"), its loads follow it
+    # (load_axes="body") or the output has its own history (the paper's scheme); there,
+    # forward differences
+    analytic = (not end_moment and not twist and not follower
+                and not (history[0] and not start))
     if analytic:
         w = w_n if start else work[21:24]
         s_c, r_c = (0.0, 0.0) if start else (1.0 / c1, c3 / c1)

@@ -180,6 +180,10 @@ G J int Psi_k'^2 and the damping of the bending modes' rule; the end section's r
 theta_O gains psi(L) in its first entry, so B_t gains the columns A J_l e1 Psi_k(L) and the
 outboard's couple works on the twist through them.
 
+Loads in body axes (a beam's LOAD_AXES, docs/beam.md "Loads on the beam"): the end force and
+torque are turned by the output section's rotation A_O, the distributed load by the frame's A,
+before they enter the rows above (followers).
+
 The right-hand side is numba-compiled; the Python wrapper only evaluates the ground motion and
 the applied loads at time t and hands them to the kernel as arrays.
 """
@@ -193,8 +197,8 @@ from scipy.linalg import eigh
 
 from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ,
-                             LENGTH, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH, STIFFENING,
-                             TORSION_MODES)
+                             LENGTH, LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED,
+                             POLAR_PER_LENGTH, STIFFENING, TORSION_MODES)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
                                FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -220,7 +224,7 @@ _CR = C_ROTATION.start
 _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
-_BTWIST, _BGJ = TORSION_MODES, GJ
+_BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
 _AX1 = AXIS_1.start
 _AX2 = AXIS_2.start
 _REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
@@ -1058,17 +1062,20 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
             eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
-            # a distributed load p per length acts as gravity does: g + p / mu on this beam
-            g_k = gravity + line_loads[k] / beam_params[k, _BMU]
+            # a distributed load p per length acts as gravity does: g + p / mu on this beam;
+            # loads in body axes (followers) turn with the end section (F, T) and the frame (p)
+            f_k, t_k, p_k = forces[k], torques[k], line_loads[k]
+            if beam_params[k, _BAXES] != 0.0:
+                f_k, t_k, p_k = rot_o[k] @ f_k, rot_o[k] @ t_k, a @ p_k
+            g_k = gravity + p_k / beam_params[k, _BMU]
             mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
                 beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, g_k)
             # an applied end force F and torque T (docs/beam.md, "Loads on the beam") act at
             # the output point and on the end section: F in Newton, rho_O x F + T about I,
             # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
-            weight = mass * g_k + forces[k]
+            weight = mass * g_k + f_k
             bn = weight - _cross(w, _cross(w, h)) + newton_v
-            be = (-_cross(w, j_w @ w) + _cross(h, g_k) + euler_v + torques[k]
-                  + _cross(rho_o[k], forces[k]))
+            be = (-_cross(w, j_w @ w) + _cross(h, g_k) + euler_v + t_k + _cross(rho_o[k], f_k))
             ce = e_col0 + o
             for j in range(nm2):
                 for i in range(3):
@@ -1079,7 +1086,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                     s[ce + j, cal + i] = ag[i, j]
                 b[ce + j] = modal[j]
                 for i in range(3):
-                    b[ce + j] += b_r[k, i, j] * forces[k, i] + b_t[k, i, j] * torques[k, i]
+                    b[ce + j] += b_r[k, i, j] * f_k[i] + b_t[k, i, j] * t_k[i]
             for j in range(nm):                       # modal mass, one block per plane
                 for i in range(nm):
                     s[ce + j, ce + i] = m_yy[j, i]
