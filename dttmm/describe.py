@@ -3,7 +3,8 @@ import numpy as np
 
 from .elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, FREQUENCY_CUTOFF,
                             MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
-                            TORSION_MODES, bending_frequencies, torsion_frequencies)
+                            AXIAL_MODES, TORSION_MODES, axial_frequencies, bending_frequencies,
+                            torsion_frequencies)
 from .elements.hinges import BALL, ELASTIC, FIXED
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import MASS, TO_OUTPUT
@@ -54,7 +55,8 @@ def suggested_dt(model):
     dt = 0.02 / max(max(rates, default=0.0), 1e-3)
     for k in np.nonzero(model.body_kind == 1)[0]:
         f = max(float(np.max(fs, initial=0.0)) for fs in beam_frequencies(model, k)
-                + (torsion_frequencies(model.beam_params[k]),))
+                + (torsion_frequencies(model.beam_params[k]),
+                   axial_frequencies(model.beam_params[k])))
         dt = min(dt, 1.0 / (20.0 * f))
     exponent = np.floor(np.log10(dt))
     mantissa = dt / 10 ** exponent
@@ -82,10 +84,13 @@ def _beam_lines(model, k):
             why += (f"; frequencies of the {cap}-mode basis: with {m} the polynomial modes' "
                     f"are higher (Ritz)")
         lines.append(why)
-    mt = int(row[TORSION_MODES])
+    mt, ma = int(row[TORSION_MODES]), int(row[AXIAL_MODES])
     lines.append(f"{mt} twist mode{'s' if mt > 1 else ''}, own frequencies (Hz): "
                  f"{np.array2string(torsion_frequencies(row), precision=4)}" if mt else
                  "no twist (torsion_modes 0)")
+    lines.append(f"{ma} stretch mode{'s' if ma > 1 else ''}, own frequencies (Hz): "
+                 f"{np.array2string(axial_frequencies(row), precision=4)}" if ma else
+                 "no stretch (axial_modes 0)")
     lines.append("geometric stiffening on" if row[STIFFENING] else
                  "geometric stiffening off (the paper's beam)")
     return lines

@@ -20,9 +20,10 @@ where loads act), so it costs about the positions' price per step.
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ, LENGTH, LOAD_AXES,
-                            MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
-                            foreshortening_integrals, modal_size, mode_shapes)
+from .elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, GJ, LENGTH,
+                            LOAD_AXES, MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING,
+                            TORSION_MODES, foreshortening_integrals, modal_size, mode_shapes,
+                            stretch_along)
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .elements.rigid_body import TO_MASS_CENTER
 from .model import output_section
@@ -71,6 +72,9 @@ class EnergyBalance:
             twist = beams[4][k, m:m + mt]               # then the twist (solver.beam_tables)
             c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(row[GJ] * twist[:, 3]
                                                         * row[POLAR_PER_LENGTH] * twist[:, 2]))
+            stretch = beams[4][k, m + mt:m + mt + int(row[AXIAL_MODES])]    # and the stretch
+            c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(row[EA] * stretch[:, 4]
+                                                        * row[MASS_PER_LENGTH] * stretch[:, 3]))
         self.modal_damping = np.array(c)
 
     def energy(self, res):
@@ -216,6 +220,14 @@ def _beam_line_velocity(row, res, k, offset, p, d1):
             s_dot[:, 0] -= np.einsum("tj,jk,tk->t", ed, d1, e)
     s[:, 1], s[:, 2] = eta[:, :m] @ p, eta[:, m:] @ p
     s_dot[:, 1], s_dot[:, 2] = eta_dot[:, :m] @ p, eta_dot[:, m:] @ p
+    ma = int(row[AXIAL_MODES])
+    if ma:          # the stretch: s_x gains int u_x = (int U) . xi ("Stretch")
+        t, wt = np.polynomial.legendre.leggauss(ma + 10)
+        x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
+        full = slice(offset + modal_size(row) - ma, offset + modal_size(row))
+        p_a = stretch_along(row, np.eye(ma), x) @ wt
+        s[:, 0] += res.modal_coordinates[:, full] @ p_a
+        s_dot[:, 0] += res.modal_velocities[:, full] @ p_a
     rot, w = res.rotation[:, k], res.angular_velocity[:, k]
     a_s = np.einsum("tij,tj->ti", rot, s)
     return (length * res.velocity_input[:, k] + np.cross(w, a_s)

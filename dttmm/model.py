@@ -6,9 +6,10 @@ import numpy as np
 
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
-from .elements.beam import (AUTO, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED, FAMILY,
-                            FREQUENCY_CUTOFF, LENGTH, LOAD_AXES, MAX_LOADED_MODES, MODES,
-                            PINNED, TORSION_MODES, auto_mode_count, modal_size, mode_shapes,
+from .elements.beam import (AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
+                            FAMILY, FREQUENCY_CUTOFF, LENGTH, LOAD_AXES, MAX_LOADED_MODES, MODES,
+                            PINNED, TORSION_MODES, auto_mode_count, auto_part_count,
+                            axial_frequencies, modal_size, mode_shapes, torsion_frequencies,
                             torsion_shapes)
 from .elements._checks import derivative, finite_vector, rotation_matrix
 from .elements.hinges import pack_hinge
@@ -354,10 +355,11 @@ class Model:
 
     @property
     def n_modes(self):
-        """(n,) modal coordinates of each body: 2 x modes per plane plus the twist modes for a
-        beam (elements/beam.py::modal_size), 0 if rigid."""
+        """(n,) modal coordinates of each body: 2 x modes per plane plus the twist and stretch
+        modes for a beam (elements/beam.py::modal_size), 0 if rigid."""
         return np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES]
-                        + self.beam_params[:, TORSION_MODES], 0).astype(np.int64)
+                        + self.beam_params[:, TORSION_MODES] + self.beam_params[:, AXIAL_MODES],
+                        0).astype(np.int64)
 
     @property
     def has_twist(self):
@@ -388,7 +390,13 @@ class Model:
         """Whether a beam's w' and eta'' columns are differenced in every step (an end torque,
         twist modes or loads in body axes), so the model runs in the general loop, not the fused one
         (kernels/beam.py::beam_transfer)."""
-        return self.has_beam_end_torque or self.has_twist or self.has_follower_loads
+        return (self.has_beam_end_torque or self.has_twist or self.has_stretch
+                or self.has_follower_loads)
+
+    @property
+    def has_stretch(self):
+        """Whether a beam has stretch modes (docs/beam.md, "Stretch")."""
+        return bool(np.any((self.body_kind == BEAM) & (self.beam_params[:, AXIAL_MODES] > 0)))
 
     @property
     def has_follower_loads(self):
@@ -889,6 +897,10 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         beam_params[k, FAMILY] = family
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
             beam_params[k, MODES] = auto_mode_count(beam_params[k])
+            for part, frequencies in ((TORSION_MODES, torsion_frequencies),
+                                      (AXIAL_MODES, axial_frequencies)):
+                if beam_params[k, part] == AUTO:           # "auto" twist or stretch
+                    beam_params[k, part] = auto_part_count(beam_params[k], frequencies)
             bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
             bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes
+from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes, stretch_along
 
 
 def _plt():
@@ -153,7 +153,7 @@ def centerlines(result, model, points=12):
             y = mode_shapes(int(row[FAMILY]), length, m, x)[0]
             eta = result.modal_coordinates[:, offsets[k]:offsets[k + 1]]
             local = np.zeros((len(result.t), points, 3))
-            local[:, :, 0] = x
+            local[:, :, 0] = x + stretch_along(row, eta, x)
             local[:, :, 1] = eta[:, :m] @ y
             local[:, :, 2] = eta[:, m:2 * m] @ y
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)

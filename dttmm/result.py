@@ -5,9 +5,9 @@ import json
 import numpy as np
 
 from .elements import BEAM
-from .elements.beam import (EI_V, EI_W, FAMILY, GJ, LENGTH, MASS_PER_LENGTH, MODES,
-                            POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
-                            mode_shapes, torsion_shapes)
+from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, FAMILY, GJ, LENGTH, MASS_PER_LENGTH,
+                            MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
+                            mode_shapes, stretch_along, torsion_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -396,9 +396,11 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     p[:, :, 0] = x
     p[:, :, 1] = eta[:, :nm] @ y
     p[:, :, 2] = eta[:, nm:2 * nm] @ y
+    p[:, :, 0] += stretch_along(row, eta, x)                # the stretch u_x (docs/beam.md)
     u_dot = np.zeros_like(p)
     u_dot[:, :, 1] = eta_dot[:, :nm] @ y
     u_dot[:, :, 2] = eta_dot[:, nm:2 * nm] @ y
+    u_dot[:, :, 0] = stretch_along(row, eta_dot, x)
     a_t = np.swapaxes(a, 1, 2)
     rho = p @ a_t                                          # A p, every state and point
     vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + u_dot @ a_t
@@ -419,6 +421,10 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
                         + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
     potential += 0.5 * row[GJ] * (twist * twist) @ wq
+    ma = int(row[AXIAL_MODES])
+    if ma:      # V gains 1/2 E A int u_x'^2 ("Stretch")
+        strain = eta[:, eta.shape[1] - ma:] @ torsion_shapes(int(row[FAMILY]), length, ma, x)[1]
+        potential += 0.5 * row[EA] * (strain * strain) @ wq
     if row[STIFFENING]:
         # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
         # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
@@ -591,13 +597,16 @@ def beam_midpoint_deflection(model, result, body):
 def beam_output_offset(row, rotation, omega, eta, eta_dot):
     """World offset r_O - r_I = A ((L - c(L)) e1 + u(L)) of a beam's output point and its rate
     w x (r_O - r_I) + A (u'(L) - c'(L) e1) (docs/beam.md, "End sections"; c(L) the
-    foreshortening, "Geometric stiffening", zero without it); any leading axes (T states)."""
+    foreshortening, "Geometric stiffening", zero without it; u(L) with the stretch u_x(L),
+    "Stretch"); any leading axes (T states)."""
     length, nm = row[LENGTH], int(row[MODES])
     y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
     eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
     c, c_dot = foreshortening(row, eta, eta_dot)
-    p = np.stack([length - c, eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y], axis=-1)
-    p_dot = np.stack([-c_dot, eta_dot[..., :nm] @ y, eta_dot[..., nm:2 * nm] @ y], axis=-1)
+    u_l, u_l_dot = (stretch_along(row, e, [length])[..., 0] for e in (eta, eta_dot))
+    p = np.stack([length - c + u_l, eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y], axis=-1)
+    p_dot = np.stack([u_l_dot - c_dot, eta_dot[..., :nm] @ y, eta_dot[..., nm:2 * nm] @ y],
+                     axis=-1)
     rho = np.einsum("...ij,...j->...i", rotation, p)
     return rho, np.cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 

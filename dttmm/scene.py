@@ -19,7 +19,7 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
                        UniversalJoint)
 from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ, LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
-                            STIFFENING, TORSION_MODES)
+                            STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                               ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -50,7 +50,7 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "frequency_cutoff": "number",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
          "stiffening": "bool", "torsion_modes": "int", "torsional_stiffness": "number",
-         "load_axes": "str",
+         "load_axes": "str", "axial_modes": "int", "axial_stiffness": "number",
          "initial_modal_coordinates": "list",
          "end_force": "profile", "end_torque": "profile", "distributed_load": "profile",
          "initial_modal_velocities": "list",
@@ -397,6 +397,10 @@ def scene_of(model, run=None, name=None):
                 table["torsional_stiffness"] = row[GJ]
             if row[LOAD_AXES]:
                 table["load_axes"] = "body"
+            if row[AXIAL_MODES]:
+                table["axial_modes"] = int(row[AXIAL_MODES])
+            if row[EA] > 0.0:
+                table["axial_stiffness"] = row[EA]
             if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
                 table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
             for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k]),

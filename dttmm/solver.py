@@ -16,8 +16,8 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
-from .elements.beam import (FAMILY, LENGTH, MODES, TORSION_MODES, foreshortening_integrals,
-                            mode_shapes, torsion_shapes)
+from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
+                            foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements.drives import FORCE, MOTION
 from .elements.hinges import (AXIS_1, COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0,
                               REST_ROTATION)
@@ -246,13 +246,16 @@ def beam_tables(model):
     the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
     (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each.  ends[k, m:m + mt]
     is beam k's twist table (docs/beam.md, "Torsion"; kernels/beam.py::twist_relations):
-    [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j."""
+    [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j, and
+    ends[k, m + mt:m + mt + ma] its stretch table ("Stretch"; beam_relations): [U_j(L),
+    int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
+    (ma)]."""
     n = model.n_bodies
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
-    max_rows = max(1, int((model.beam_params[:, MODES] + model.beam_params[:, TORSION_MODES])
-                          .max()))
+    bp = model.beam_params
+    max_rows = max(1, int((bp[:, MODES] + bp[:, TORSION_MODES] + bp[:, AXIAL_MODES]).max()))
     moments = np.zeros((n, max_modes, 4 * max_modes + 2))
-    ends = np.zeros((n, max_rows, 4))
+    ends = np.zeros((n, max_rows, 5 + max_modes + int(bp[:, AXIAL_MODES].max())))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):
         if model.body_kind[k] == BEAM:
@@ -274,7 +277,21 @@ def beam_tables(model):
                 xt, wt = gauss_points(length, quadrature_size(mt))
                 psi = torsion_shapes(family, length, mt, xt)[0]
                 psi_l, _, t_mass, t_stiff = torsion_shapes(family, length, mt, [length])
-                ends[k, m:m + mt] = np.column_stack([psi_l[:, 0], psi @ wt, t_mass, t_stiff])
+                ends[k, m:m + mt, :4] = np.column_stack([psi_l[:, 0], psi @ wt, t_mass, t_stiff])
+            ma = int(model.beam_params[k, AXIAL_MODES])
+            if ma:
+                # the stretch: U_j(L), int U_j, int x U_j, m_j / mu, k_j / E A, then
+                # int U_j Y_l (l < m) and int U_j U_l (l < ma) (docs/beam.md, "Stretch")
+                xa, wa = gauss_points(length, quadrature_size(max(m, ma)))
+                u = torsion_shapes(family, length, ma, xa)[0]
+                y_a = mode_shapes(family, length, m, xa)[0]
+                u_l, _, a_mass, a_stiff = torsion_shapes(family, length, ma, [length])
+                r = m + mt
+                ends[k, r:r + ma, :5] = np.column_stack([u_l[:, 0], u @ wa, u @ (wa * xa),
+                                                         a_mass, a_stiff])
+                ends[k, r:r + ma, 5:5 + m] = (u * wa) @ y_a.T
+                gram = (u * wa) @ u.T
+                ends[k, r:r + ma, 5 + m:5 + m + ma] = 0.5 * (gram + gram.T)
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
     return (np.array(model.body_kind), np.array(model.beam_params), moments, mode_off, ends,
             factors)
@@ -1246,7 +1263,7 @@ def _beam_beyond_its_length(model, tips, eta):
     for name, length, part, y, psi in tips:
         e = eta[part]
         nm = len(y)
-        twist = float(e[2 * nm:] @ psi)
+        twist = float(e[2 * nm:2 * nm + len(psi)] @ psi)
         if not abs(twist) <= np.pi:
             return (f"the tip section of beam '{name}' twists by {twist:.3g} rad, more than half "
                     f"a turn: the modal twist describes small angles, so the run has gone wrong "

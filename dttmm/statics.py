@@ -22,7 +22,7 @@ from .elements.drives import MOTION
 from .elements.hinges import AXIS_1, BALL, COORDINATE_0, FIXED, RATE_0, REST_ROTATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import JOINT_KIND
-from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes
+from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain
 from .kernels.loop import Monitor, Settings
@@ -136,7 +136,8 @@ class StaticEquilibrium:
             eta = m.initial_modal_coordinates[off[k]:off[k + 1]]
             c = (_foreshortening_along(row, x, eta[None], np.zeros((1, len(eta))))[0][0]
                  if row[STIFFENING] else np.zeros(len(x)))
-            local = np.stack([x - c, eta[:nm] @ y, eta[nm:2 * nm] @ y], axis=1)
+            local = np.stack([x - c + stretch_along(row, eta, x), eta[:nm] @ y,
+                              eta[nm:2 * nm] @ y], axis=1)
             lines.append(r_in[k] + local @ m.initial_rotation[k].T)
         return lines
 

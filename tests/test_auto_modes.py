@@ -38,3 +38,25 @@ def test_auto_modes_keep_what_is_below_the_cutoff_and_say_why(tmp_path):
         dttmm.build_chain([dttmm.FixedHinge(), dttmm.EulerBernoulliBeam(
             length=1.0, bending_stiffness=EI, mass_per_length=1.0,
             polar_inertia_per_length=1e-4, modes_per_plane=2, frequency_cutoff=10.0)])
+
+
+def test_auto_twist_and_stretch_keep_their_modes_below_the_cutoff():
+    """torsion_modes="auto" and axial_modes="auto" (with modes_per_plane="auto") keep every
+    twist and stretch mode at or below frequency_cutoff, maybe none: a clamped-free shaft
+    (twist 55.9, 167.7, 279.5 Hz; stretch 39.5, 118.6, 197.6 Hz)."""
+    from dttmm import EulerBernoulliBeam, FixedHinge, build_chain
+
+    def shaft(cutoff, **kw):
+        return build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, mass_per_length=2.0, bending_stiffness=1e3, polar_inertia_per_length=1e-3,
+            modes_per_plane="auto", frequency_cutoff=cutoff, torsion_modes="auto",
+            torsional_stiffness=50.0, axial_modes="auto", axial_stiffness=5e4, name="shaft",
+            **kw)], gravity=[0.0, 0.0, 0.0])
+    for cutoff, twist, stretch in ((30.0, 0, 0), (60.0, 1, 1), (200.0, 2, 3)):
+        model = shaft(cutoff)
+        assert tuple(model.beam_params[0, [10, 13]]) == (twist, stretch), cutoff
+        assert model.n_modes[0] == 2 * model.beam_params[0, 6] + twist + stretch
+    with pytest.raises(ValueError, match="'shaft'.*torsion_modes='auto'.*modes_per_plane='auto'"):
+        build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, mass_per_length=2.0, bending_stiffness=1e3, polar_inertia_per_length=1e-3,
+            torsion_modes="auto", torsional_stiffness=50.0, name="shaft")])

@@ -197,19 +197,22 @@ def test_small_solve_matches_lapack_and_flags_singular():
     assert np.isnan(x).all()
 
 
-def _stiffened_cantilever(twist=0):
+def _stiffened_cantilever(twist=0, stretch=0):
     """One clamped beam (free tip) on a hub: geometric stiffening on, the clamped family; with
-    twist > 0 that many twist modes (docs/beam.md, "Torsion")."""
+    twist > 0 that many twist modes (docs/beam.md, "Torsion"), stretch > 0 stretch modes
+    ("Stretch")."""
     from dttmm import EulerBernoulliBeam, FixedHinge, build_chain
     return build_chain([FixedHinge(), EulerBernoulliBeam(
         length=2.0, mass_per_length=3.0, bending_stiffness=[40.0, 60.0],
         polar_inertia_per_length=0.01, modes_per_plane=3, stiffening=True, torsion_modes=twist,
-        torsional_stiffness=25.0 if twist else None)])
+        torsional_stiffness=25.0 if twist else None, axial_modes=stretch,
+        axial_stiffness=900.0 if stretch else None)])
 
 
 @pytest.mark.parametrize("start", [False, True])
 @pytest.mark.parametrize("system", ["three_pendulum", "cantilever", "cantilever, end torque",
-                                    "twisting cantilever", "twisting cantilever, end torque"])
+                                    "twisting cantilever", "twisting cantilever, end torque",
+                                    "stretching cantilever", "stretching cantilever, end torque"])
 def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system):
     """The beam's transfer (every column written out where the output carries no moment:
     _affine_columns, _modal_columns, _rotation_columns) against central differences of its exact
@@ -225,11 +228,12 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     from dttmm.solver import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
-                else (_stiffened_cantilever(2 if system.startswith("twist") else 0), 0))
+                else (_stiffened_cantilever(2 if system.startswith("twist") else 0,
+                                            2 if system.startswith("stretch") else 0), 0))
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
     assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
-    m = int(bp[k, 6])
-    n = mode_off[k + 1] - mode_off[k]           # 2 m bending, then the twist
+    m, mt = int(bp[k, 6]), int(bp[k, 10])
+    n = mode_off[k + 1] - mode_off[k]           # 2 m bending, then the twist, the stretch
     # applied loads (docs/beam.md, "Loads on the beam"): an end force (the written-out columns
     # take the outboard's net pull), an end torque in one case (the w' and eta'' columns are
     # then differenced), a distributed load (part of gravity for the beam: _beam_gravity)
@@ -237,7 +241,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
               np.array([3.0, -2.0, 1.5]),
               np.array([0.5, 2.0, -1.0]) if system.endswith("torque") else np.zeros(3),
               np.array([0.7, -1.1, 0.4]),         # and a distributed load (N/m)
-              ends[k, m:n - m])                   # the twist table
+              ends[k, m:m + mt], ends[k, m + mt:n - m])   # the twist and stretch tables
     gen = np.random.default_rng(11)
     h = 1e-4
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)
@@ -277,14 +281,19 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     u_fd = jac[:12, :12] + jac[:12, 12:] @ e_z
     # (with an end torque the w' and eta'' columns are forward differences, whose error is
     # 1e-8 here: measured 1.8e-8 (u) and 1.7e-8 (eta_map); written out, 7e-12)
-    tol = 1e-7 if system.endswith("torque") or system.startswith("twist") else 1e-9
+    # (with stretch modes, 1e-6: their eta_map rows are ~200 times smaller than the bending
+    # rows they couple to (largest entries 1.4 against 285), so the forward differences' 1e-8
+    # in the coupled solve shows as 3.8e-7 of those rows (measured; 2e-8 in the others))
+    tol = (1e-6 if system.startswith("stretch") else
+           1e-7 if system.endswith("torque") or system.startswith("twist") else 1e-9)
     for name, got, want in (("u", u[:, :12], u_fd), ("eta_map", eta_map[:, :12], e_z)):
         scale = np.abs(want).max(axis=1, keepdims=True) + 1e-300
         assert np.abs((got - want) / scale).max() < tol, name
 
 
-@pytest.mark.parametrize("family, m, stiffening", [(0, 2, 1), (1, 3, 1), (2, 2, 0), (2, 4, 1)])
-def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
+@pytest.mark.parametrize("family, m, stiffening, stretch", [
+    (0, 2, 1, 0), (1, 3, 1, 0), (2, 2, 0, 0), (2, 4, 1, 0), (1, 3, 1, 2), (2, 2, 0, 3)])
+def test_beam_relations_match_a_direct_quadrature(family, m, stiffening, stretch):
     """beam_relations writes the integrals along the beam with the modal integrals in the
     beam's frame (docs/beam.md, "The integrals in the frame").  Here every integral is taken
     directly, as docs/beam.md states it, by 40-point Gauss-Legendre quadrature of the line load
@@ -297,8 +306,11 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
     with the rigid x e1 and the rigid line load only); the residuals gain
     int N(x) Y_k' u'(x) dx with the axial force N(x) = -e1 . q_O + int_x^L e1 . f_rigid
     (f_rigid = mu (g - a_I - w' x x e1 - w x (w x x e1))), each N(x) by its own quadrature over
-    [x, L]."""
-    from dttmm.elements.beam import BEAM_PARAM_SIZE, mode_shapes
+    [x, L].  With stretch modes (docs/beam.md, "Stretch") the sections also move by
+    u_x = U . xi along e1, exactly in every integral, and the stretch rows are
+    -int U_j e1 . f + damping + stiffness + (q_O . e1) U_j(L)."""
+    from dttmm.elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EA, mode_shapes,
+                                     torsion_shapes)
     from dttmm.kernels.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES, SUM_U, SUM_V,
                                     aux_rows, beam_relations)
     from dttmm.solver import beam_tables
@@ -307,10 +319,11 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
     length, mu, ei_v, ei_w, j_p, zeta = 1.3, 2.1, 40.0, 55.0, 0.02, 0.04
     bp = np.zeros(BEAM_PARAM_SIZE)
     bp[:9] = length, mu, ei_v, ei_w, j_p, zeta, m, family, stiffening
+    bp[AXIAL_MODES], bp[EA] = stretch, 700.0
     model = SimpleNamespace(n_bodies=1, body_kind=np.array([1]), beam_params=bp[None, :],
-                            n_modes=np.array([2 * m]))
+                            n_modes=np.array([2 * m + stretch]))
     _, _, moments, _, ends, factors = beam_tables(model)
-    n = 2 * m
+    n = 2 * m + stretch
     rot = Rotation.from_rotvec(gen.normal(size=3)).as_matrix()
     w, wd, a_i, m_i, q_i, g = (gen.normal(size=3) for _ in range(6))
     eta, eta_d, eta_dd = (gen.normal(size=n) * s for s in (0.05, 0.5, 5.0))
@@ -318,16 +331,20 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
     # an applied end force F and torque T (docs/beam.md, "Loads on the beam"): q_O and m_O gain
     # them; the modal equations and the axial force see the outboard's net pull q_O - F
     f_end, t_end = gen.normal(size=3), gen.normal(size=3)
-    beam_relations(bp, moments[0], ends[0], factors[0], f_end, t_end, g, rot, w, wd, eta, eta_d,
-                   eta_dd, a_i, m_i, q_i, out, res, aux)
+    beam_relations(bp, moments[0], ends[0, :m], factors[0], f_end, t_end, g, rot, w, wd, eta,
+                   eta_d, eta_dd, a_i, m_i, q_i, out, res, aux, ends[0, m:m + stretch])
 
     t, wt = np.polynomial.legendre.leggauss(40)
     x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
     y = mode_shapes(family, length, m, x)[0]                       # (m, points)
     e1, e2, e3 = rot[:, 0], rot[:, 1], rot[:, 2]
 
-    def world(c):                                                  # frame (v, w) -> world
-        return np.outer(y.T @ c[:m], e2) + np.outer(y.T @ c[m:], e3)
+    u_shape, _, u_mass, u_stiff = torsion_shapes(family, length, stretch, x)   # the stretch's
+    u_end = torsion_shapes(family, length, stretch, [length])[0][:, 0]
+
+    def world(c):                                          # frame (v, w, u_x) -> world
+        return (np.outer(y.T @ c[:m], e2) + np.outer(y.T @ c[m:2 * m], e3)
+                + np.outer(u_shape.T @ c[2 * m:], e1))
     rho = np.outer(x, e1) + world(eta)
     vel, acc = world(eta_d), world(eta_dd)                         # A u', A u''
     r_dd = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho)) + 2 * np.cross(w, vel)
@@ -352,10 +369,13 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
     f_rigid = mu * (g - a_i - np.cross(wd, np.outer(x, e1))
                     - np.cross(w, np.cross(w, np.outer(x, e1))))
     q_o = q_i + wt @ (f - mu * fore_acc)
-    end_u = (ends[0, :m, 0] @ eta_d[:m]) * e2 + (ends[0, :m, 0] @ eta_d[m:]) * e3 - c_d_l * e1
-    end_v = (ends[0, :m, 0] @ eta_dd[:m]) * e2 + (ends[0, :m, 0] @ eta_dd[m:]) * e3 - c_dd_l * e1
-    rho_l = (length - c_l) * e1 + (ends[0, :m, 0] @ eta[:m]) * e2 \
-        + (ends[0, :m, 0] @ eta[m:]) * e3
+    y_l = ends[0, :m, 0]
+
+    def at_end(c):                                         # u(L) (frame v, w, u_x) in the world
+        return (y_l @ c[:m]) * e2 + (y_l @ c[m:2 * m]) * e3 + (u_end @ c[2 * m:]) * e1
+    end_u = at_end(eta_d) - c_d_l * e1
+    end_v = at_end(eta_dd) - c_dd_l * e1
+    rho_l = (length - c_l) * e1 + at_end(eta)
     jp_w = j_p * length * np.outer(e1, e1)
     m_o = m_i - np.cross(rho_l, q_o) + wt @ np.cross(rho, f) - (jp_w @ wd
                                                                 + np.cross(w, jp_w @ w))
@@ -369,6 +389,11 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening):
             omega = np.sqrt(stiffness / mass_k[k])
             res_want[i] = (-(wt * y[k]) @ (f @ e) + 2 * zeta * omega * mass_k[k] * eta_d[i]
                            + stiffness * eta[i] + (q_o @ e) * ends[0, k, 0])
+    for j in range(stretch):
+        i = 2 * m + j
+        modal_mass, stiffness = mu * u_mass[j], 700.0 * u_stiff[j]
+        res_want[i] = (-(wt * u_shape[j]) @ (f @ e1) + 2 * zeta * np.sqrt(stiffness * modal_mass)
+                       * eta_d[i] + stiffness * eta[i] + (q_o @ e1) * u_end[j])
     if stiffening:
         dy = mode_shapes(family, length, m, x)[1]
         axial = np.empty_like(x)
@@ -421,7 +446,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     n = 2 * m
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],
               np.array([3.0, -2.0, 1.5]), np.zeros(3), np.array([0.7, -1.1, 0.4]),
-              ends[k, m:m])                       # (no twist)
+              ends[k, m:m], ends[k, m:m])         # (no twist, no stretch)
     gen = np.random.default_rng(5)
     h = 1e-3
     c1, c3 = 1 / (0.25 * h * h), 0.5 / (0.25 * h)

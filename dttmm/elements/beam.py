@@ -3,7 +3,8 @@
 Floating frame at the input end I, x along the reference axis (the chord I -> O); a section at
 x sits at r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
 w = sum_k Y_k(x) eta_w[k]; the sections twist by psi = sum_k Psi_k(x) eta_t[k] on request
-(torsion_modes); no axial deformation yet; geometric stiffening on request (docs/beam.md).
+(torsion_modes), and the centreline stretches by u_x = sum_k U_k(x) eta_a[k] on request
+(axial_modes); geometric stiffening on request (docs/beam.md).
 The section's rotary inertia is left out (Euler-Bernoulli, like the paper), but its small
 polar inertia is kept for the frame's (and the twist's) spin about x.
 """
@@ -124,22 +125,25 @@ def _loaded_modes(n_modes):
 
 # layout of one row of Model.beam_params
 (LENGTH, MASS_PER_LENGTH, EI_V, EI_W, POLAR_PER_LENGTH, DAMPING_RATIO, MODES, FAMILY,
- STIFFENING, FREQUENCY_CUTOFF, TORSION_MODES, GJ, LOAD_AXES) = range(13)
-BEAM_PARAM_SIZE = 13
+ STIFFENING, FREQUENCY_CUTOFF, TORSION_MODES, GJ, LOAD_AXES, AXIAL_MODES, EA) = range(15)
+BEAM_PARAM_SIZE = 15
 LOAD_AXES_NAMES = {"world": 0.0, "body": 1.0}   # the applied loads' axes (docs/beam.md)
 
 
 def modal_size(beam_row):
     """How many modal coordinates a beam row has: 2 x modes_per_plane bending (v, then w), then
-    torsion_modes twist coordinates (docs/beam.md, "Torsion")."""
-    return 2 * int(beam_row[MODES]) + int(beam_row[TORSION_MODES])
+    torsion_modes twist coordinates (docs/beam.md, "Torsion"), then axial_modes stretch
+    coordinates ("Stretch")."""
+    return 2 * int(beam_row[MODES]) + int(beam_row[TORSION_MODES]) + int(beam_row[AXIAL_MODES])
 
 
 def torsion_shapes(family, length, n_modes, x):
     """(Psi, Psi') of the first n_modes twist shapes at the points x, each (n_modes, len(x)),
     and the modal mass and stiffness factors (m_k / j_p, k_k / GJ), each (n_modes,)
-    (docs/beam.md, "Torsion").  Psi_k(0) = 0 (the twist is measured from the frame, which is
-    the input section's about x) and int_0^L Psi_j Psi_k dx = L delta_jk.  A free or
+    (docs/beam.md, "Torsion"); the stretch's shapes too (the same operator: E A u'' = mu u'',
+    with m_k / mu and k_k / E A; "Stretch").  Psi_k(0) = 0 (the twist is measured from the
+    frame, which is the input section's about x) and int_0^L Psi_j Psi_k dx = L delta_jk.  A
+    free or
     moment-free output (families PINNED, CLAMPED): the clamped-free eigenfunctions
     sqrt(2) sin((2k - 1) pi x / (2 L)); an output that carries loads (CLAMPED_LOADED): the Ritz
     eigenvectors in the polynomial space x/L .. (x/L)^n, which holds the uniform twist an end
@@ -164,6 +168,24 @@ def torsion_shapes(family, length, n_modes, x):
             dpsi[j] = np.sqrt(2.0) * b * np.cos(b * x)
             stiff[j] = length * b * b
     return psi, dpsi, mass, stiff
+
+
+def stretch_along(beam_row, eta, x):
+    """u_x(x) = U(x) . xi, the stretch of a beam row's centreline at the points x (docs/beam.md,
+    "Stretch"), for eta (..., modal_size) (any leading axes; xi its last axial_modes entries):
+    (..., len(x)); zeros without stretch modes."""
+    eta = np.asarray(eta, dtype=float)
+    ma = int(beam_row[AXIAL_MODES])
+    shapes = torsion_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], ma, x)[0]   # (ma, len(x))
+    return eta[..., eta.shape[-1] - ma:] @ shapes
+
+
+def axial_frequencies(beam_row, n_modes=None):
+    """(Hz) the first n_modes (default: the row's) stretch frequencies of a beam row's resolved
+    family, sqrt(k_j E A / (m_j mu)) / 2 pi (docs/beam.md, "Stretch": the twist's shapes)."""
+    n = int(beam_row[AXIAL_MODES]) if n_modes is None else int(n_modes)
+    _, _, mass, stiff = torsion_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], n, [0.0])
+    return np.sqrt(beam_row[EA] * stiff / (beam_row[MASS_PER_LENGTH] * mass)) / (2 * np.pi)
 
 
 def _loaded_twist_modes(n_modes):
@@ -209,6 +231,40 @@ def auto_mode_count(beam_row):
     return min(max(below, 1), cap)
 
 
+def auto_part_count(beam_row, frequencies):
+    """torsion_modes or axial_modes "auto": how many twist or stretch modes to keep, every one
+    whose frequency (frequencies(row, n), Hz, of the resolved family) is at or below the row's
+    FREQUENCY_CUTOFF, none at least (the part then stays off), MAX_LOADED_MODES at most (the
+    frequencies of the largest basis: the best estimates for the Ritz modes)."""
+    return int(np.sum(frequencies(beam_row, MAX_LOADED_MODES) <= beam_row[FREQUENCY_CUTOFF]))
+
+
+def _part(who, modes_arg, modes, stiffness_arg, stiffness, what, unit, auto):
+    """(count, stiffness) of the twist or the stretch, checked: an integer 0 .. 6 of modes
+    (or "auto" with modes_per_plane="auto": count AUTO, resolved at the build by
+    auto_part_count), and a finite stiffness > 0 where there are modes (one without modes is
+    kept, unused: the part switched off)."""
+    if isinstance(modes, str) and modes == "auto":
+        if not auto:
+            raise ValueError(f"{who}: {modes_arg}='auto' keeps the {what} modes at or below "
+                             f"frequency_cutoff: give modes_per_plane='auto' and a "
+                             f"frequency_cutoff too")
+        if stiffness is None:
+            raise ValueError(f"{who}: {modes_arg}='auto' needs {stiffness_arg} ({unit})")
+        return AUTO, finite_scalar(who, stiffness_arg, stiffness, positive=True)
+    if (isinstance(modes, (str, bool)) or not np.isscalar(modes) or int(modes) != modes
+            or modes < 0):
+        raise ValueError(f"{who}: {modes_arg} must be an integer >= 0 (0: no {what}) or "
+                         f"'auto', got {modes!r}")
+    count = int(modes)
+    if count > MAX_LOADED_MODES:
+        raise ValueError(f"{who}: {modes_arg} is at most {MAX_LOADED_MODES}, got {count}")
+    if count and stiffness is None:
+        raise ValueError(f"{who}: {modes_arg}={count} needs {stiffness_arg} ({unit})")
+    return count, (0.0 if stiffness is None else
+                   finite_scalar(who, stiffness_arg, stiffness, positive=True))
+
+
 @dataclass(frozen=True, eq=False)
 class EulerBernoulliBeam:
     """A uniform Euler-Bernoulli beam with modal bending in two planes (docs/beam.md).
@@ -217,7 +273,8 @@ class EulerBernoulliBeam:
     pinned family, the input section's tangent for the clamped ones); a section at x sits at
     r(x) = r_I + A (x e1 + u(x)), u = [0, v, w], v = sum_k Y_k(x) eta_v[k],
     w = sum_k Y_k(x) eta_w[k]; the sections twist by psi = sum_k Psi_k(x) eta_t[k] with
-    torsion_modes >= 1.  No axial deformation yet; geometric stiffening on
+    torsion_modes >= 1, and the centreline stretches with axial_modes >= 1 (u gains
+    u_x = sum_k U_k(x) eta_a[k]).  Geometric stiffening on
     request (``stiffening``); the section's rotary inertia is left out, its polar inertia
     kept for the frame's spin about x.  The arguments are checked when the model is built
     (``System.build`` or ``build_chain``), not here.
@@ -258,10 +315,11 @@ class EulerBernoulliBeam:
     force_mode_family : bool, optional
         Accept "clamped" between moment-free ends, e.g. after a ball joint (admissible but slow
         to converge: each shape carries a spurious input moment).  Default False.
-    initial_modal_coordinates : array_like of 2 x modes_per_plane + torsion_modes, optional
+    initial_modal_coordinates : array_like of 2 x modes_per_plane + torsion_modes + axial_modes
         eta at t = 0, m (the mode shapes have unit amplitude): the v coordinates, then the w
-        coordinates, then the twist coordinates (rad).  None (default): zero (undeformed).
-    initial_modal_velocities : array_like of 2 x modes_per_plane + torsion_modes, optional
+        coordinates, the twist coordinates (rad), the stretch coordinates (m).  None
+        (default): zero (undeformed).
+    initial_modal_velocities : array_like of as many, optional
         eta' at t = 0, m/s (rad/s for the twist), in the same order.  None (default): zero.
     rotation : array_like (3, 3), optional
         Initial frame rotation (body to world), as for ``RigidBody``.
@@ -297,9 +355,16 @@ class EulerBernoulliBeam:
         centreline is inextensible, so a beam held at both ends (e.g. pinned between fixed
         points) would lock; turn it on for beams that spin, carry a tip mass, or hang.
 
-    torsion_modes : int, optional
-        Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist).
+    torsion_modes : int or "auto", optional
+        Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist); "auto"
+        (with modes_per_plane="auto"): those at or below frequency_cutoff, maybe none.
         docs/beam.md, "Torsion".  A beam with twist runs in the general loop.
+    axial_modes : int or "auto", optional
+        Number of stretch modes (axial displacement along the frame's x), >= 0, at most 6
+        (default 0: the centreline does not stretch); "auto" as for torsion_modes.
+        docs/beam.md, "Stretch".  A beam with stretch runs in the general loop.
+    axial_stiffness : float, optional
+        E A, N (> 0); needed with axial_modes >= 1 (with 0 it is kept and unused).
     torsional_stiffness : float, optional
         G J, N m^2 (> 0); needed with torsion_modes >= 1 (with 0 it is kept and unused: the
         twist switched off).
@@ -314,10 +379,11 @@ class EulerBernoulliBeam:
         frequency_cutoff > 0 or with initial modal coordinates, a frequency_cutoff with a
         fixed mode count; a negative damping ratio; an
         unknown mode family, or one that contradicts the beam's ends; initial modal
-        coordinates or velocities without 2 x modes_per_plane + torsion_modes finite entries;
-        a bad rotation or angular velocity; stiffening not a bool; torsion_modes not an
-        integer in 0 .. 6, or >= 1 without a torsional_stiffness; a torsional_stiffness that
-        is not a finite number > 0; load_axes not "world" or "body".
+        coordinates or velocities without 2 x modes_per_plane + torsion_modes + axial_modes
+        finite entries; a bad rotation or angular velocity; stiffening not a bool;
+        torsion_modes or axial_modes not an integer in 0 .. 6, or >= 1 without its stiffness;
+        a torsional_stiffness or axial_stiffness that is not a finite number > 0; load_axes not
+        "world" or "body".
 
     Examples
     --------
@@ -352,6 +418,8 @@ class EulerBernoulliBeam:
     torsional_stiffness: float = None
     torsion_modes: int = 0
     load_axes: str = "world"
+    axial_stiffness: float = None
+    axial_modes: int = 0
 
     def label(self, index=None):
         where = f"body {index}" if index is not None else "body"
@@ -399,20 +467,11 @@ class EulerBernoulliBeam:
         if self.mode_family not in MODE_FAMILY_NAMES:
             raise ValueError(f"{who}: mode_family must be one of {sorted(MODE_FAMILY_NAMES)}, "
                              f"got {self.mode_family!r}")
-        if (isinstance(self.torsion_modes, (str, bool)) or not np.isscalar(self.torsion_modes)
-                or int(self.torsion_modes) != self.torsion_modes or self.torsion_modes < 0):
-            raise ValueError(f"{who}: torsion_modes must be an integer >= 0 (0: no twist), "
-                             f"got {self.torsion_modes!r}")
-        n_twist = int(self.torsion_modes)
-        if n_twist > MAX_LOADED_MODES:
-            raise ValueError(f"{who}: torsion_modes is at most {MAX_LOADED_MODES}, got {n_twist}")
-        if n_twist and self.torsional_stiffness is None:
-            raise ValueError(f"{who}: torsion_modes={n_twist} needs torsional_stiffness (G J, "
-                             f"N m^2)")
-        # (a G J with no twist modes is kept and unused: the twist switched off)
-        gj = (0.0 if self.torsional_stiffness is None else
-              finite_scalar(who, "torsional_stiffness", self.torsional_stiffness, positive=True))
-        n_coord = 0 if auto else 2 * int(self.modes_per_plane) + n_twist
+        n_twist, gj = _part(who, "torsion_modes", self.torsion_modes, "torsional_stiffness",
+                            self.torsional_stiffness, "twist", "G J, N m^2", auto)
+        n_axial, ea = _part(who, "axial_modes", self.axial_modes, "axial_stiffness",
+                            self.axial_stiffness, "stretch", "E A, N", auto)
+        n_coord = 0 if auto else 2 * int(self.modes_per_plane) + n_twist + n_axial
         given = (("initial_modal_coordinates", self.initial_modal_coordinates),
                  ("initial_modal_velocities", self.initial_modal_velocities))
         eta0, eta_d0 = (np.zeros(n_coord) if v is None
@@ -432,6 +491,7 @@ class EulerBernoulliBeam:
         row[MODES] = 0 if auto else int(self.modes_per_plane)   # "auto": set at the build
         row[FREQUENCY_CUTOFF] = cutoff if auto else 0.0
         row[TORSION_MODES], row[GJ] = n_twist, gj
+        row[AXIAL_MODES], row[EA] = n_axial, ea
         if not isinstance(self.load_axes, str) or self.load_axes not in LOAD_AXES_NAMES:
             raise ValueError(f"{who}: load_axes must be 'world' or 'body', got "
                              f"{self.load_axes!r}")

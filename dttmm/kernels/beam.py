@@ -16,7 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from ..elements.beam import GJ, LOAD_AXES, STIFFENING
+from ..elements.beam import EA, GJ, LOAD_AXES, STIFFENING
 from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
@@ -147,7 +147,7 @@ def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
 
 @no_alloc_kernel
 def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
-                   eta_d, eta_dd, a_i, m_i, q_i, out, residual, aux):
+                   eta_d, eta_dd, a_i, m_i, q_i, out, residual, aux, axial):
     """The beam's exact relations in a given state (docs/beam.md):
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end force's generalized forces (an end moment's: add_end_moment, at a fixed
@@ -173,7 +173,11 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
                                        + Q_k''),   Q_k = int Y_k rho = [X_k, (M eta_v)_k,
                                                                         (M eta_w)_k]
     (f the line load, gravity minus inertia).  Written in scalars: it runs 3 + n + 1 times per
-    beam and step where columns are differenced."""
+    beam and step where columns are differenced.
+    axial (ma, 5 + m + ma): the stretch table (solver.beam_tables; docs/beam.md, "Stretch"):
+    with ma > 0 the last ma coordinates xi stretch the centreline, rho = (x + U . xi) e1 + ...,
+    and every integral above gains its terms exactly (s_x, Pi, C, H, Q_k's first entry, the
+    output point), and the stretch's own rows follow the bending rows' rule with e1."""
     length, mu, ei_v, ei_w, j_p, zeta = bp[0], bp[1], bp[2], bp[3], bp[4], bp[5]
     m = ends.shape[0]
     e10, e11, e12 = rot[0, 0], rot[1, 0], rot[2, 0]
@@ -195,6 +199,35 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     pv = pw = pdv = pdw = pddv = pddw = 0.0
     xv = xw = xdv = xdw = xddv = xddw = 0.0
     vv = vw = ww = dvv = dvw = dwv = dww = hx = 0.0
+    # the stretch xi = eta[na:] (docs/beam.md, "Stretch"): its sums P_a . xi, X_a . xi (and
+    # rates), xi^T M_aa xi, xi'^T M_aa xi, and xi's products with the bending coordinates
+    ma = axial.shape[0]
+    na = eta.shape[0] - ma
+    pa = pda = pdda = xa = xda = aa = daa = 0.0
+    av = aw = dav = daw = vda = wda = hav = haw = vha = wha = 0.0
+    for j in range(ma):
+        e, ed, edd = eta[na + j], eta_d[na + j], eta_dd[na + j]
+        pa += axial[j, 1] * e
+        pda += axial[j, 1] * ed
+        pdda += axial[j, 1] * edd
+        xa += axial[j, 2] * e
+        xda += axial[j, 2] * ed
+        for i in range(ma):
+            g = axial[j, 5 + m + i]
+            aa += e * g * eta[na + i]
+            daa += ed * g * eta[na + i]
+        for l in range(m):
+            g = axial[j, 5 + l]
+            av += e * g * eta[l]                 # int u_x v, int u_x w
+            aw += e * g * eta[m + l]
+            dav += ed * g * eta[l]               # int u_x' v, int u_x' w
+            daw += ed * g * eta[m + l]
+            vda += e * g * eta_d[l]              # int u_x v', int u_x w'
+            wda += e * g * eta_d[m + l]
+            hav += edd * g * eta[l]              # int u_x'' v, int u_x'' w
+            haw += edd * g * eta[m + l]
+            vha += e * g * eta_dd[l]             # int u_x v'', int u_x w''
+            wha += e * g * eta_dd[m + l]
     for k in range(m):
         p_k, x_k = moments[k, 0], moments[k, 1]
         ev, ew, edv, edw = eta[k], eta[m + k], eta_d[k], eta_d[m + k]
@@ -222,24 +255,31 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
         dwv += edw * mv
         dww += edw * mw
         hx += ev * mddw - ew * mddv
-        # int Y_k f / mu in the frame (docstring); q: Q_k, u: Q_k', v: Q_k''
-        q0, q1, q2 = x_k, mv, mw
+        # int Y_k f / mu in the frame (docstring); q: Q_k, u: Q_k', v: Q_k''; the stretch adds
+        # (M_ka xi, M_ka xi', M_ka xi'') to their first entries
+        ka = kda = kdda = 0.0
+        for j in range(ma):
+            g = axial[j, 5 + k]
+            ka += g * eta[na + j]
+            kda += g * eta_d[na + j]
+            kdda += g * eta_dd[na + j]
+        q0, q1, q2 = x_k + ka, mv, mw
         oq0, oq1, oq2 = o1 * q2 - o2 * q1, o2 * q0 - o0 * q2, o0 * q1 - o1 * q0
-        f1 = (p_k * gm1 - (al2 * q0 - al0 * q2) - (o2 * oq0 - o0 * oq2) - 2.0 * (-o0 * mdw)
-              - mddv)
-        f2 = (p_k * gm2 - (al0 * q1 - al1 * q0) - (o0 * oq1 - o1 * oq0) - 2.0 * (o0 * mdv)
-              - mddw)
+        f1 = (p_k * gm1 - (al2 * q0 - al0 * q2) - (o2 * oq0 - o0 * oq2)
+              - 2.0 * (o2 * kda - o0 * mdw) - mddv)
+        f2 = (p_k * gm2 - (al0 * q1 - al1 * q0) - (o0 * oq1 - o1 * oq0)
+              - 2.0 * (o0 * mdv - o1 * kda) - mddw)
         residual[k] = -mu * f1
         residual[m + k] = -mu * f2
         if sums:
             f0 = (p_k * gm0 - (al1 * q2 - al2 * q1) - (o1 * oq2 - o2 * oq1)
-                  - 2.0 * (o1 * mdw - o2 * mdv))
+                  - 2.0 * (o1 * mdw - o2 * mdv) - kdda)
             for i in range(3):
                 c0, c1, c2 = rot[i, 0], rot[i, 1], rot[i, 2]
                 aux[SUM_MODES + k, i] = mu * (c0 * f0 + c1 * f1 + c2 * f2)          # F_k
                 aux[SUM_MODES + m + k, i] = mu * (c0 * q0 + c1 * q1 + c2 * q2)      # Q_k
-                aux[SUM_MODES + 2 * m + k, i] = mu * (c1 * mdv + c2 * mdw)
-                aux[SUM_MODES + 3 * m + k, i] = mu * (c1 * mddv + c2 * mddw)
+                aux[SUM_MODES + 2 * m + k, i] = mu * (c0 * kda + c1 * mdv + c2 * mdw)
+                aux[SUM_MODES + 3 * m + k, i] = mu * (c0 * kdda + c1 * mddv + c2 * mddw)
     # the foreshortening c(x) = 1/2 int_0^x (v'^2 + w'^2) (docs/beam.md, "Geometric
     # stiffening"): C0 = c(L), C1 = int c, C2 = int x c = 1/2 eta^T (D0, D1, D2) eta over both
     # planes, and their rates (D symmetric: C' = eta'^T D eta, C'' = eta'^T D eta' + eta^T D eta'')
@@ -250,16 +290,18 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
                                                                         eta_dd, aux, sums)
     # s, s', s'' and the second moments Pi (per unit mu, in the frame; with the foreshortening
     # -c e1 to first order in c: s_x = L^2/2 - C1, Pi_xx = L^3/3 - 2 C2)
-    s0, s1, s2 = 0.5 * length * length - cc1, pv, pw
-    sd0, sdd0 = -cd1, -cdd1
-    pxx = length * length * length / 3.0 - 2.0 * cc2
+    # (the stretch: s_x += P_a . xi, Pi_xx += 2 X_a . xi + xi^T M_aa xi, Pi_xv += int u_x v, ..)
+    s0, s1, s2 = 0.5 * length * length - cc1 + pa, pv, pw
+    sd0, sdd0 = -cd1 + pda, -cdd1 + pdda
+    pxx = length * length * length / 3.0 - 2.0 * cc2 + 2.0 * xa + aa
     # J = tr(Pi) E - Pi
     j00, j11, j22 = vv + ww, pxx + ww, pxx + vv
-    j01, j02, j12 = -xv, -xw, -vw
-    # C = int rho' rho^T (its first row (-C2', 0, 0)), H = int rho x rho'' (c adds nothing)
-    c00 = -cd2
-    c10, c11, c12, c20, c21, c22 = xdv, dvv, dvw, xdw, dwv, dww
-    h0, h1, h2 = hx, -xddw, xddv
+    j01, j02, j12 = -(xv + av), -(xw + aw), -vw
+    # C = int rho' rho^T (its first row (-C2', 0, 0) without stretch), H = int rho x rho''
+    # (c adds nothing)
+    c00, c01, c02 = -cd2 + xda + daa, dav, daw
+    c10, c11, c12, c20, c21, c22 = xdv + vda, dvv, dvw, xdw + wda, dwv, dww
+    h0, h1, h2 = hx, -xddw + haw - wha, xddv + vha - hav
     # int f / mu: L gamma - (alpha x s + omega x (omega x s) + 2 omega x s' + s''), s' = (sd0,
     # pdv, pdw), s'' = (sdd0, pddv, pddw)
     os0, os1, os2 = o1 * s2 - o2 * s1, o2 * s0 - o0 * s2, o0 * s1 - o1 * s0
@@ -274,7 +316,7 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     jo1 = j01 * o0 + j11 * o1 + j12 * o2
     jo2 = j02 * o0 + j12 * o1 + j22 * o2
     tr_c = c00 + c11 + c22
-    co0 = c00 * o0
+    co0 = c00 * o0 + c01 * o1 + c02 * o2
     co1 = c10 * o0 + c11 * o1 + c12 * o2
     co2 = c20 * o0 + c21 * o1 + c22 * o2
     mb0 = (s1 * gm2 - s2 * gm1 - (j00 * al0 + j01 * al1 + j02 * al2) - (o1 * jo2 - o2 * jo1)
@@ -301,8 +343,8 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
             aux[SUM_J + i, 1] = c0 * j01 + c1 * j11 + c2 * j12
             aux[SUM_J + i, 2] = c0 * j02 + c1 * j12 + c2 * j22
             aux[SUM_C + i, 0] = c0 * c00 + c1 * c10 + c2 * c20
-            aux[SUM_C + i, 1] = c1 * c11 + c2 * c21
-            aux[SUM_C + i, 2] = c1 * c12 + c2 * c22
+            aux[SUM_C + i, 1] = c0 * c01 + c1 * c11 + c2 * c21
+            aux[SUM_C + i, 2] = c0 * c02 + c1 * c12 + c2 * c22
         for base in (SUM_J, SUM_C):
             for i in range(3):
                 b0, b1, b2 = aux[base + i, 0], aux[base + i, 1], aux[base + i, 2]
@@ -310,6 +352,37 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
                     aux[base + i, j] = mu * (b0 * rot[j, 0] + b1 * rot[j, 1] + b2 * rot[j, 2])
     s0, s1, s2 = (mu * (e10 * s0 + e20 * s1 + e30 * s2), mu * (e11 * s0 + e21 * s1 + e31 * s2),
                   mu * (e12 * s0 + e22 * s1 + e32 * s2))
+    # the stretch's rows (docs/beam.md, "Stretch"): -mu e1 . int U_j f / mu (frame), with
+    # Q_a,j = int U_j rho = [X_a,j + (M_aa xi)_j, (M_av eta_v)_j, (M_av eta_w)_j] and its rates,
+    # plus damping and stiffness (the end force's share below, with q_O)
+    uaL = uadL = uaddL = 0.0
+    for j in range(ma):
+        e, ed, edd = eta[na + j], eta_d[na + j], eta_dd[na + j]
+        uaL += axial[j, 0] * e
+        uadL += axial[j, 0] * ed
+        uaddL += axial[j, 0] * edd
+        q0, q1, q2 = axial[j, 2], 0.0, 0.0
+        u1 = u2 = v0 = v1 = v2 = u0 = 0.0
+        for i in range(ma):
+            g = axial[j, 5 + m + i]
+            q0 += g * eta[na + i]
+            u0 += g * eta_d[na + i]
+            v0 += g * eta_dd[na + i]
+        for l in range(m):
+            g = axial[j, 5 + l]
+            q1 += g * eta[l]
+            q2 += g * eta[m + l]
+            u1 += g * eta_d[l]
+            u2 += g * eta_d[m + l]
+            v1 += g * eta_dd[l]
+            v2 += g * eta_dd[m + l]
+        oq1, oq2 = o2 * q0 - o0 * q2, o0 * q1 - o1 * q0
+        f0 = (axial[j, 1] * gm0 - (al1 * q2 - al2 * q1) - (o1 * oq2 - o2 * oq1)
+              - 2.0 * (o1 * u2 - o2 * u1) - v0)
+        modal_mass = mu * axial[j, 3]
+        stiffness = bp[EA] * axial[j, 4]
+        residual[na + j] = (-mu * f0 + 2.0 * zeta * np.sqrt(stiffness * modal_mass) * ed
+                            + stiffness * e)
     for k in range(m):
         modal_mass = mu * factors[k, 0]
         for r, ei in ((k, ei_v), (m + k, ei_w)):
@@ -321,20 +394,22 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     # (in scalars: this tail runs once per evaluation, where small temporaries would cost more
     # than the arithmetic)
     for i in range(3):                                                       # rho_L
-        aux[1, i] = (length - cc0) * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]
+        aux[1, i] = (length - cc0 + uaL) * rot[i, 0] + v_l * rot[i, 1] + w_l * rot[i, 2]
     r0, r1, r2 = aux[1, 0], aux[1, 1], aux[1, 2]
     qo0, qo1, qo2 = q_i[0] + sf0, q_i[1] + sf1, q_i[2] + sf2
     jp = j_p * length
     s_wd = jp * (e10 * wd0 + e11 * wd1 + e12 * wd2)
     s_w = jp * (e10 * w0 + e11 * w1 + e12 * w2)
     wr0, wr1, wr2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0      # w x rho_L
-    # A rho_L' and A rho_L'' in the frame's rates (u(L) and the foreshortening -c(L) e1)
-    d0 = -cd0 * e10 + vd_l * rot[0, 1] + wd_l * rot[0, 2]
-    d1 = -cd0 * e11 + vd_l * rot[1, 1] + wd_l * rot[1, 2]
-    d2 = -cd0 * e12 + vd_l * rot[2, 1] + wd_l * rot[2, 2]
-    dd0 = -cdd0 * e10 + vdd_l * rot[0, 1] + wdd_l * rot[0, 2]
-    dd1 = -cdd0 * e11 + vdd_l * rot[1, 1] + wdd_l * rot[1, 2]
-    dd2 = -cdd0 * e12 + vdd_l * rot[2, 1] + wdd_l * rot[2, 2]
+    # A rho_L' and A rho_L'' in the frame's rates (u(L), the stretch u_x(L) and the
+    # foreshortening -c(L) e1)
+    xd_l, xdd_l = uadL - cd0, uaddL - cdd0
+    d0 = xd_l * e10 + vd_l * rot[0, 1] + wd_l * rot[0, 2]
+    d1 = xd_l * e11 + vd_l * rot[1, 1] + wd_l * rot[1, 2]
+    d2 = xd_l * e12 + vd_l * rot[2, 1] + wd_l * rot[2, 2]
+    dd0 = xdd_l * e10 + vdd_l * rot[0, 1] + wdd_l * rot[0, 2]
+    dd1 = xdd_l * e11 + vdd_l * rot[1, 1] + wdd_l * rot[1, 2]
+    dd2 = xdd_l * e12 + vdd_l * rot[2, 1] + wdd_l * rot[2, 2]
     if sums:
         aux[END_U, 0], aux[END_U, 1], aux[END_U, 2] = d0, d1, d2
         aux[END_V, 0], aux[END_V, 1], aux[END_V, 2] = dd0, dd1, dd2
@@ -359,6 +434,10 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     for k in range(m):
         residual[k] += q2 * ends[k, 0]
         residual[m + k] += q3 * ends[k, 0]
+    if ma:
+        q1 = qo0 * e10 + qo1 * e11 + qo2 * e12          # the stretch's: dr_O / dxi_j = e1 U_j(L)
+        for j in range(ma):
+            residual[na + j] += q1 * axial[j, 0]
     if stiff:
         # geometric stiffening (docs/beam.md, "Geometric stiffening"): the generalized forces of
         # the foreshortening, residual += G eta, G = N_L D0 + mu gamma_x D1
@@ -433,6 +512,23 @@ def twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, m, out, residua
     out[6] -= s_dd * e0 + s_d * (w[1] * e2 - w[2] * e1)
     out[7] -= s_dd * e1 + s_d * (w[2] * e0 - w[0] * e2)
     out[8] -= s_dd * e2 + s_d * (w[0] * e1 - w[1] * e0)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _stretch_affine_columns(bp, axial, rot, d_r):
+    """The stretch rows' a_I and q_I columns (docs/beam.md, "Stretch"): like a bending row's
+    with e1, d r_a,j = (mu int U_j - M_b U_j(L)) e1 . da + U_j(L) e1 . dq (the inertia through
+    g - a_I and the end force through q_O); no m_I column (the stretch does not turn the end
+    section)."""
+    mass = bp[1] * bp[0]
+    n = d_r.shape[0]
+    ma = axial.shape[0]
+    for j in range(ma):
+        row = n - ma + j
+        u_l = axial[j, 0]
+        for c in range(3):
+            d_r[row, c] = (bp[1] * axial[j, 1] - mass * u_l) * rot[c, 0]
+            d_r[row, 9 + c] = u_l * rot[c, 0]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -552,9 +648,10 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
     x = [a_I, w', m_I, q_I, eta''] (the integrator's relations, docs/solver.md).
-    tables = (moments, ends, factors, end_force, end_torque, line_load, torsion) (the applied
-    loads, world: beam_relations; the distributed load is already in gravity, _beam_gravity;
-    torsion: the twist table, twist_relations);
+    tables = (moments, ends, factors, end_force, end_torque, line_load, torsion, axial) (the
+    applied loads, world: beam_relations; the distributed load is already in gravity,
+    _beam_gravity; torsion: the twist table, twist_relations; axial: the stretch table,
+    beam_relations);
     outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
@@ -584,7 +681,7 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         # axes, the distributed load in the frame's (gravity arrives without it: beam_transfer)
         end_force, end_torque, gravity = _follower_loads(bp, tables, eta, rot, gravity)
     beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
-                   eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux)
+                   eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux, tables[7])
     if torsion.shape[0]:
         twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, ends.shape[0], out,
                         residual)
@@ -598,6 +695,9 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
             v_l += ends[k, 0] * eta_n[k]
             w_l += ends[k, 0] * eta_n[m + k]
         c_l = end_foreshortening(moments, eta_n) if bp[STIFFENING] != 0.0 else 0.0
+        axial = tables[7]
+        for j in range(axial.shape[0]):             # the stretch u_x(L) at t_n
+            c_l -= axial[j, 0] * eta_n[n - axial.shape[0] + j]
         for i in range(3):
             rho_l_n = (bp[0] - c_l) * rot_n[i, 0] + v_l * rot_n[i, 1] + w_l * rot_n[i, 2]
             out[i] = x[i] + c1 * (aux[1, i] - rho_l_n) + dw1[i]
@@ -953,6 +1053,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # differenced (add_end_moment)
     end_moment = welded or _any(tables[4])
     twist = tables[6].shape[0] > 0
+    stretch = tables[7].shape[0] > 0
     n = eta_dd_star.shape[0]
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
@@ -996,11 +1097,13 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     _affine_columns(bp, tables[0], ends, end_moment, rot, aux, d_o, d_r)
     if twist and end_moment:
         _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r)
+    if stretch:
+        _stretch_affine_columns(bp, tables[7], rot, d_r)
     # w' and eta'' columns written out unless the output carries a moment (welded, or an
     # applied end torque), the beam twists (docs/beam.md, "Torsion"), its loads follow it
     # (load_axes="body") or the output has its own history (the paper's scheme); there,
     # forward differences
-    analytic = (not end_moment and not twist and not follower
+    analytic = (not end_moment and not twist and not stretch and not follower
                 and not (history[0] and not start))
     if analytic:
         w = w_n if start else work[21:24]
@@ -1122,7 +1225,7 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     g_beam = work[3][6:9]                    # gravity and the distributed load per unit mass
     _beam_gravity(bp, gravity, tables[5], g_beam)
     beam_relations(bp, moments, ends, tables[2], tables[3], tables[4], g_beam, rot, w, wd_star,
-                   eta, eta_d, eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux)
+                   eta, eta_d, eta_dd_star, a_i, x0[6:9], q_i, o0, r0, aux, ends[:0])
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp, moments, ends, False, rot, aux, d_o, d_r)

@@ -26,7 +26,7 @@ from numba import njit
 
 from . import CONTRACT, loop_piece
 from ..elements import BEAM, RIGID
-from ..elements.beam import MODES
+from ..elements.beam import MODES, TORSION_MODES
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -267,7 +267,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         kind[jh + 1] = TRANSFER
         if body_kind[k] == BEAM:
             i0, i1 = mode_off[k], mode_off[k + 1]
-            m = int(beam_params[k, MODES])              # then i1 - i0 - 2 m twist coordinates
+            m = int(beam_params[k, MODES])
+            mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
             zs = z_star[jh + 1].copy()
             zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
             welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
@@ -276,7 +277,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                         wd[kout] - c1 * phi_star[kout])
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
-                      beam_ends[k, m:i1 - i0 - m])          # the twist table (solver.beam_tables)
+                      beam_ends[k, m:m + mt],               # the twist and stretch tables
+                      beam_ends[k, m + mt:i1 - i0 - m])     # (solver.beam_tables)
             history = (independent, w1_st[k + 1] - w1_st[k])
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
@@ -481,7 +483,7 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
         th_d[2] += y * eta_d[i0 + j]
         th_dd[1] -= y * eta_dd[i0 + m + j]
         th_dd[2] += y * eta_dd[i0 + j]
-    for j in range(mode_off[k + 1] - i0 - 2 * m):       # the twist (docs/beam.md, "Torsion")
+    for j in range(int(beams[1][k, TORSION_MODES])):    # the twist (docs/beam.md, "Torsion")
         y = ends[k, m + j, 0]
         th[0] += y * eta[i0 + 2 * m + j]
         th_d[0] += y * eta_d[i0 + 2 * m + j]

@@ -180,6 +180,14 @@ G J int Psi_k'^2 and the damping of the bending modes' rule; the end section's r
 theta_O gains psi(L) in its first entry, so B_t gains the columns A J_l e1 Psi_k(L) and the
 outboard's couple works on the twist through them.
 
+Stretch (docs/beam.md; a beam's AXIAL_MODES): the sections also move along the frame's x by
+u_x(x) = U(x) . xi (the beam's last coordinates), exactly: p = (x + u_x - c, v, w), so s, Q,
+C and the columns of P and G gain their terms (int U_j, int x U_j, int U_j^2 and the products
+int U_j Y_l: stretch_shape_constants, the twist's closed-form shapes), the modal rows' first
+moments int Y_j p_x, the Coriolis terms 2 int mu Phi_j . (w x u') their u_x' parts, and the
+stretch rows are e1 . int mu U_j (g - r'') with mass mu int U_j^2 and stiffness
+E A int U_j'^2; r_O gains A e1 u_x(L) (B_r's columns A e1 U_j(L)).
+
 Loads in body axes (a beam's LOAD_AXES, docs/beam.md "Loads on the beam"): the end force and
 torque are turned by the output section's rotation A_O, the distributed load by the frame's A,
 before they enter the rows above (followers).
@@ -198,7 +206,7 @@ from scipy.linalg import eigh
 from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ,
                              LENGTH, LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED,
-                             POLAR_PER_LENGTH, STIFFENING, TORSION_MODES)
+                             POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
                                FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
@@ -225,6 +233,7 @@ _BEAM = BEAM
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
+_BSTRETCH, _BEA = AXIAL_MODES, EA
 _AX1 = AXIS_1.start
 _AX2 = AXIS_2.start
 _REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
@@ -345,6 +354,50 @@ def twist_shape_constants(beam_row):
         vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
         vec[_MF] = length
         vec[_KF] = length * b * b
+    return vec
+
+
+def stretch_shape_constants(beam_row):
+    """The stretch's shape constants of one beam (module docstring, "Stretch"): a
+    (N_SHAPE_ROWS + m, ma) array with rows _SY = int U_j, _TY = int x U_j, _YL = U_j(L),
+    _MF = int U_j^2, _KF = int U_j'^2 and, from row N_SHAPE_ROWS on, int U_j Y_l (l < m, the
+    bending shapes).  The shapes are the twist's (the same operator), in closed form
+    (twist_shape_constants); the products with Y_l by Gauss-Legendre quadrature of this
+    module's own bending shapes (quadrature_points(max(m, ma)) points)."""
+    length, m, ma, family = float(beam_row[LENGTH]), int(beam_row[MODES]), \
+        int(beam_row[AXIAL_MODES]), int(beam_row[FAMILY])
+    vec = np.zeros((N_SHAPE_ROWS + m, ma))
+    if ma == 0:
+        return vec
+    xg, wg = np.polynomial.legendre.leggauss(quadrature_points(max(m, ma)))
+    x, wq = 0.5 * length * (xg + 1.0), 0.5 * length * wg
+    t = x / length
+    if family == CLAMPED_LOADED:
+        p = np.arange(1, ma + 1, dtype=float)
+        gram = 1.0 / (p[:, None] + p[None, :] + 1.0)
+        lam, c = eigh(np.outer(p, p) / (p[:, None] + p[None, :] - 1.0), gram)
+        c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, gram, c))
+        c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
+        u = c.T @ t[None, :] ** p[:, None]
+        vec[_SY] = length * (c.T @ (1.0 / (p + 1.0)))
+        vec[_TY] = length * length * (c.T @ (1.0 / (p + 2.0)))
+        vec[_YL] = c.sum(axis=0)
+        vec[_MF] = length * np.einsum("ij,ik,kj->j", c, gram, c)
+        vec[_KF] = lam / length
+        pb = np.arange(2, m + 2, dtype=float)
+        y = loaded_mode_coefficients(m)[0].T @ t[None, :] ** pb[:, None]
+    else:
+        b = (2.0 * np.arange(1, ma + 1) - 1.0) * math.pi / (2.0 * length)
+        u = math.sqrt(2.0) * np.sin(np.outer(b, x))
+        vec[_SY] = math.sqrt(2.0) / b                 # cos(b L) = 0
+        vec[_TY] = math.sqrt(2.0) * np.sin(b * length) / (b * b)
+        vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
+        vec[_MF] = length
+        vec[_KF] = length * b * b
+        k = np.arange(1, m + 1)[:, None]
+        y = (np.sin(k * math.pi * x[None, :] / length) if family == PINNED
+             else clamped_shapes(length, m, x)[0])
+    vec[N_SHAPE_ROWS:] = (y * wq) @ u.T
     return vec
 
 
@@ -586,8 +639,8 @@ def _stiffening_block(my, nm, i):
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _modal_size(bp):
-    """A beam's modal coordinates: v and w bending, then the twist."""
-    return 2 * int(bp[_BMODES]) + int(bp[_BTWIST])
+    """A beam's modal coordinates: v and w bending, then the twist, then the stretch."""
+    return 2 * int(bp[_BMODES]) + int(bp[_BTWIST]) + int(bp[_BSTRETCH])
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
@@ -599,9 +652,9 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     moves back by the foreshortening c(L) = 1/2 eta^T D0 eta along e1 (module docstring), so
     B_r gains -A e1 (D0 eta)^T and the velocity terms its rates."""
     nm = int(bp[_BMODES])
-    nt = int(bp[_BTWIST])
-    tw = sv.shape[1] // 2             # the twist's columns of sv (_Problem.shape_vec)
-    nb = 2 * nm + nt
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3             # the twist's columns of sv (_Problem.shape_vec)
+    nb = 2 * nm + nt + na
     u_l = np.zeros(3)                 # u(L), body frame
     ud_l = np.zeros(3)                # u'(L) (time derivative)
     th = np.zeros(3)                  # theta_O = [psi(L), -w'(L), v'(L)]
@@ -609,6 +662,9 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     for j in range(nt):
         th[0] += sv[_YL, tw + j] * eta[2 * nm + j]
         thd[0] += sv[_YL, tw + j] * eta_dot[2 * nm + j]
+    for j in range(na):               # the stretch u_x(L)
+        u_l[0] += sv[_YL, 2 * tw + j] * eta[2 * nm + nt + j]
+        ud_l[0] += sv[_YL, 2 * tw + j] * eta_dot[2 * nm + nt + j]
     for j in range(nm):
         yl, dyl = sv[_YL, j], sv[_DYL, j]
         u_l[1] += yl * eta[j]
@@ -646,6 +702,8 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     d = np.zeros((3, nb))
     for j in range(nt):
         d[0, 2 * nm + j] = sv[_YL, tw + j]
+    for j in range(na):
+        br[0, 2 * nm + nt + j] = sv[_YL, 2 * tw + j]
     for j in range(nm):
         br[1, j] = sv[_YL, j]
         br[2, nm + j] = sv[_YL, j]
@@ -865,10 +923,21 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     length = bp[_BL]
     mu = bp[_BMU]
     nm = int(bp[_BMODES])
-    nt = int(bp[_BTWIST])
-    tw = sv.shape[1] // 2             # the twist's columns of sv (_Problem.shape_vec)
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3             # the twist's columns of sv (_Problem.shape_vec)
     n2 = 2 * nm
-    nb = n2 + nt
+    nb = n2 + nt + na
+    sa = n2 + nt                      # the stretch's first coordinate
+    # the stretch xi (module docstring, "Stretch"): int U_j, int x U_j, int U_j^2 and the
+    # products int U_j Y_l, M_av (na x nm); p = (x + U . xi, v, w)
+    pa = np.ascontiguousarray(sv[_SY, 2 * tw:2 * tw + na])
+    xa = np.ascontiguousarray(sv[_TY, 2 * tw:2 * tw + na])
+    maa = np.ascontiguousarray(sv[_MF, 2 * tw:2 * tw + na])
+    mav = np.ascontiguousarray(sv[N_SHAPE_ROWS:N_SHAPE_ROWS + nm, 2 * tw:2 * tw + na].T)
+    xi = np.ascontiguousarray(eta[sa:nb])
+    xid = np.ascontiguousarray(eta_dot[sa:nb])
+    mva_xi = mav.T @ xi                # int Y_l u_x, int Y_l u_x' (per bending mode)
+    mva_xid = mav.T @ xid
     sy = sv[_SY, :nm]
     ty = sv[_TY, :nm]
     myy = np.ascontiguousarray(my[:nm, :nm])
@@ -898,13 +967,13 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:n2])
         c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:n2]
     s_b = np.empty(3)
-    s_b[0] = mu * (length * length / 2.0 - c1)
+    s_b[0] = mu * (length * length / 2.0 - c1 + pa @ xi)
     s_b[1] = mu * (sy @ ev)
     s_b[2] = mu * (sy @ ew)
     q = np.empty((3, 3))                           # int mu p p^T
-    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2)
-    q[0, 1] = q[1, 0] = mu * (ty @ ev)
-    q[0, 2] = q[2, 0] = mu * (ty @ ew)
+    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2 + 2.0 * (xa @ xi) + xi @ (maa * xi))
+    q[0, 1] = q[1, 0] = mu * (ty @ ev + mva_xi @ ev)
+    q[0, 2] = q[2, 0] = mu * (ty @ ew + mva_xi @ ew)
     q[1, 1] = mu * (ev @ mev)
     q[1, 2] = q[2, 1] = mu * (ev @ mew)
     q[2, 2] = mu * (ew @ mew)
@@ -922,14 +991,22 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     for j in range(nm):
         p_b[1, j] = mu * sy[j]
         p_b[2, nm + j] = mu * sy[j]
-        g_b[2, j] = mu * ty[j]                     # p x (Y_j e2) = Y_j (-w, 0, x)
+        g_b[2, j] = mu * (ty[j] + mva_xi[j])       # p x (Y_j e2) = Y_j (-w, 0, x + u_x)
         g_b[0, j] = -mu * mew[j]
-        g_b[1, nm + j] = -mu * ty[j]               # p x (Y_j e3) = Y_j (v, -x, 0)
+        g_b[1, nm + j] = -mu * (ty[j] + mva_xi[j])  # p x (Y_j e3) = Y_j (v, -(x + u_x), 0)
         g_b[0, nm + j] = mu * mev[j]
+    mav_v, mav_w = mav @ ev, mav @ ew              # int U_j v, int U_j w
+    mav_dv, mav_dw = mav @ dv, mav @ dw
+    for j in range(na):
+        p_b[0, sa + j] = mu * pa[j]
+        g_b[1, sa + j] = mu * mav_w[j]             # p x (U_j e1) = U_j (0, w, -v)
+        g_b[2, sa + j] = -mu * mav_v[j]
     c = np.zeros((3, 3))                           # int mu p' p^T
-    c[0, 0] = -mu * c2_dot
-    c[1, 0] = mu * (ty @ dv)
-    c[2, 0] = mu * (ty @ dw)
+    c[0, 0] = mu * (-c2_dot + xa @ xid + xid @ (maa * xi))
+    c[0, 1] = mu * (xid @ mav_v)
+    c[0, 2] = mu * (xid @ mav_w)
+    c[1, 0] = mu * (ty @ dv + mva_xi @ dv)
+    c[2, 0] = mu * (ty @ dw + mva_xi @ dw)
     c[1, 1] = mu * (dv @ mev)
     c[1, 2] = mu * (dv @ mew)
     c[2, 1] = mu * (dw @ mev)
@@ -964,12 +1041,22 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         kw = bp[_BEIW] * sv[_KF, j]
         cv = 2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k
         cw = 2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k
-        cent_v = mu * (ty[j] * mm[1, 0] + mm[1, 1] * mev[j] + mm[1, 2] * mew[j])
-        cent_w = mu * (ty[j] * mm[2, 0] + mm[2, 1] * mev[j] + mm[2, 2] * mew[j])
-        cori_v = -2.0 * mu * w_b[0] * mdw[j]       # 2 int mu Y_j e2 . (w_b x Phi eta')
-        cori_w = 2.0 * mu * w_b[0] * mdv[j]
+        x_j = ty[j] + mva_xi[j]                   # int Y_j (x + u_x)
+        cent_v = mu * (x_j * mm[1, 0] + mm[1, 1] * mev[j] + mm[1, 2] * mew[j])
+        cent_w = mu * (x_j * mm[2, 0] + mm[2, 1] * mev[j] + mm[2, 2] * mew[j])
+        # 2 int mu Y_j e2 . (w_b x u'), u' = (u_x', v', w')
+        cori_v = 2.0 * mu * (w_b[2] * mva_xid[j] - w_b[0] * mdw[j])
+        cori_w = 2.0 * mu * (w_b[0] * mdv[j] - w_b[1] * mva_xid[j])
         modal[j] = g_w[j] - cent_v - cori_v - cv * dv[j] - kv * ev[j]
         modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw[j] - kw * ew[j]
+    for j in range(na):                            # the stretch: e1 . int mu U_j (...)
+        m_a = mu * maa[j]
+        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
+        cent_a = mu * ((xa[j] + maa[j] * xi[j]) * mm[0, 0] + mm[0, 1] * mav_v[j]
+                       + mm[0, 2] * mav_w[j])
+        cori_a = 2.0 * mu * (w_b[1] * mav_dw[j] - w_b[2] * mav_dv[j])
+        modal[sa + j] = (g_w[sa + j] - cent_a - cori_a
+                         - 2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * xid[j] - k_a * xi[j])
     # geometric stiffening: + mu e1.(g - a_I) D1 eta + mu (w_y^2 + w_z^2) D2 eta on the left
     # (module docstring; N_L D0 eta is the end force's work through B_r); the a_I term goes to
     # the matrix (_assemble, with geo), the rest here
@@ -1091,9 +1178,13 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 for i in range(nm):
                     s[ce + j, ce + i] = m_yy[j, i]
                     s[ce + nm + j, ce + nm + i] = m_yy[j, i]
-            tw = shape_vec.shape[2] // 2
-            for j in range(2 * nm, nm2):              # the twist's, j_p int Psi_j^2
+            tw = shape_vec.shape[2] // 3
+            nt = int(beam_params[k, _BTWIST])
+            for j in range(2 * nm, 2 * nm + nt):      # the twist's, j_p int Psi_j^2
                 s[ce + j, ce + j] = beam_params[k, _BJP] * shape_vec[k, _MF, tw + j - 2 * nm]
+            for j in range(2 * nm + nt, nm2):         # the stretch's, mu int U_j^2
+                s[ce + j, ce + j] = (beam_params[k, _BMU]
+                                     * shape_vec[k, _MF, 2 * tw + j - 2 * nm - nt])
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
@@ -1424,15 +1515,20 @@ class _Problem:
         # shape constants of every beam, padded to the widest beam (module docstring)
         mmax = max([1] + [int(self.beam_params[k, MODES]) for k in beams])
         tmax = max([0] + [int(self.beam_params[k, TORSION_MODES]) for k in beams])
-        tw = max(mmax, tmax)        # bending in columns :m, the twist in tw:tw + mt
-        self.shape_vec = np.zeros((n, N_SHAPE_ROWS, 2 * tw))
+        amax = max([0] + [int(self.beam_params[k, AXIAL_MODES]) for k in beams])
+        # bending in columns :m, the twist in tw:tw + mt, the stretch in 2 tw:2 tw + ma (with
+        # its products with the bending shapes in rows N_SHAPE_ROWS + l)
+        tw = max(mmax, tmax, amax)
+        self.shape_vec = np.zeros((n, N_SHAPE_ROWS + mmax, 3 * tw))
         self.shape_mat = np.zeros((n, mmax, 4 * mmax))   # int Y Y^T, then D0, D1, D2
         for k in beams:
             vec, mat = beam_shape_constants(self.beam_params[k])
             m = vec.shape[1]
-            self.shape_vec[k, :, :m] = vec
+            self.shape_vec[k, :N_SHAPE_ROWS, :m] = vec
             twist = twist_shape_constants(self.beam_params[k])
-            self.shape_vec[k, :, tw:tw + twist.shape[1]] = twist
+            self.shape_vec[k, :N_SHAPE_ROWS, tw:tw + twist.shape[1]] = twist
+            stretch = stretch_shape_constants(self.beam_params[k])
+            self.shape_vec[k, :stretch.shape[0], 2 * tw:2 * tw + stretch.shape[1]] = stretch
             self.shape_mat[k, :m, :m] = mat
             for i, d in enumerate(stiffening_matrices(self.beam_params[k])):
                 self.shape_mat[k, :m, (i + 1) * mmax:(i + 1) * mmax + m] = d
@@ -1818,4 +1914,9 @@ def _beam_mass_center(bp, sv, my, eta):
             out[:, 0] -= 0.5 * np.einsum("tj,jk,tk->t", e, d1, e) / length
     out[:, 1] = eta[:, :nm] @ sy / length
     out[:, 2] = eta[:, nm:2 * nm] @ sy / length
+    na = int(bp[AXIAL_MODES])                      # the stretch: s_x gains int U . xi
+    if na:
+        tw = sv.shape[1] // 3
+        first = 2 * nm + int(bp[TORSION_MODES])
+        out[:, 0] += eta[:, first:first + na] @ sv[_SY, 2 * tw:2 * tw + na] / length
     return out
