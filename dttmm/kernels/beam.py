@@ -361,12 +361,13 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
         uaL += axial[j, 0] * e
         uadL += axial[j, 0] * ed
         uaddL += axial[j, 0] * edd
+        # (only the e1 component is needed: Q_a,j, the y and z entries of Q_a,j', the x entry
+        # of Q_a,j'')
         q0, q1, q2 = axial[j, 2], 0.0, 0.0
-        u1 = u2 = v0 = v1 = v2 = u0 = 0.0
+        u1 = u2 = v0 = 0.0
         for i in range(ma):
             g = axial[j, 5 + m + i]
             q0 += g * eta[na + i]
-            u0 += g * eta_d[na + i]
             v0 += g * eta_dd[na + i]
         for l in range(m):
             g = axial[j, 5 + l]
@@ -374,8 +375,6 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
             q2 += g * eta[m + l]
             u1 += g * eta_d[l]
             u2 += g * eta_d[m + l]
-            v1 += g * eta_dd[l]
-            v2 += g * eta_dd[m + l]
         oq1, oq2 = o2 * q0 - o0 * q2, o0 * q1 - o1 * q0
         f0 = (axial[j, 1] * gm0 - (al1 * q2 - al2 * q1) - (o1 * oq2 - o2 * oq1)
               - 2.0 * (o1 * u2 - o2 * u1) - v0)
@@ -435,9 +434,9 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
         residual[k] += q2 * ends[k, 0]
         residual[m + k] += q3 * ends[k, 0]
     if ma:
-        q1 = qo0 * e10 + qo1 * e11 + qo2 * e12          # the stretch's: dr_O / dxi_j = e1 U_j(L)
+        pull = qo0 * e10 + qo1 * e11 + qo2 * e12        # the stretch's: dr_O / dxi_j = e1 U_j(L)
         for j in range(ma):
-            residual[na + j] += q1 * axial[j, 0]
+            residual[na + j] += pull * axial[j, 0]
     if stiff:
         # geometric stiffening (docs/beam.md, "Geometric stiffening"): the generalized forces of
         # the foreshortening, residual += G eta, G = N_L D0 + mu gamma_x D1
