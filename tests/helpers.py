@@ -55,3 +55,24 @@ def fitted_frequencies(t, x, count, span=0.05):
                 costs = [np.linalg.norm(fit(omega[:k] + [g] + omega[k + 1:])) for g in grid]
                 omega[k] = grid[int(np.argmin(costs))]
     return np.sort(omega)
+
+
+def driven_arm_on_two_elements(**beam):
+    """Two welded stiffened elements with 2 modes per plane and 2 twist modes on a hub driven
+    about z, a body on an arm welded to the tip (its weight twists the beam), gravity -z;
+    beam: further EulerBernoulliBeam arguments for both elements (e.g. stretch modes).  The
+    order tests of test_torsion and test_stretch."""
+    from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion, RigidBody,
+                       build_chain)
+    hub = PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: 1.5 * t * t, lambda t: 3.0 * t,
+                                           lambda t: 3.0)
+    parts = []
+    for _ in range(2):
+        parts += [FixedHinge(), EulerBernoulliBeam(
+            length=0.5, mass_per_length=1.0, bending_stiffness=[30.0, 40.0],
+            polar_inertia_per_length=5e-3, modes_per_plane=2, torsion_modes=2,
+            torsional_stiffness=2.0, stiffening=True, **beam)]
+    arm = RigidBody(mass=0.2, inertia=np.diag([1e-3, 2e-3, 2e-3]), inertia_about="mass_center",
+                    to_mass_center=(0.0, 0.2, 0.0), to_output=(0.0, 0.2, 0.0))
+    parts += [FixedHinge(), arm]
+    return build_chain(parts, gravity=[0.0, 0.0, -9.81], ground=Ground(motion=hub))

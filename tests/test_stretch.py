@@ -7,10 +7,10 @@ its linearization, are in tests/test_kernels.py.)"""
 import numpy as np
 import pytest
 
-from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion, RigidBody,
-                   build_chain, simulate, static_equilibrium)
+from dttmm import (EulerBernoulliBeam, FixedHinge, RigidBody, build_chain, simulate,
+                   static_equilibrium)
 from dttmm.elements.beam import stretch_along
-from helpers import fitted_order, output_errors_against_reference
+from helpers import driven_arm_on_two_elements, fitted_order, output_errors_against_reference
 
 L, MU, EA = 1.0, 2.0, 5e4
 
@@ -56,29 +56,12 @@ def test_end_force_stretches_the_rod_by_f_l_over_ea(n_elements):
     assert np.allclose(ends, pull * L / EA / n_elements, rtol=1e-9), ends
 
 
-def _driven_stretching_arm():
-    """Two welded elements with stretch, twist and stiffening on a hub driven about z, a body
-    on an arm welded to the tip, gravity -z (test_torsion's, with 2 stretch modes each)."""
-    hub = PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: 1.5 * t * t, lambda t: 3.0 * t,
-                                           lambda t: 3.0)
-    parts = []
-    for _ in range(2):
-        parts += [FixedHinge(), EulerBernoulliBeam(
-            length=0.5, mass_per_length=1.0, bending_stiffness=[30.0, 40.0],
-            polar_inertia_per_length=5e-3, modes_per_plane=2, torsion_modes=2,
-            torsional_stiffness=2.0, axial_modes=2, axial_stiffness=2000.0, stiffening=True)]
-    arm = RigidBody(mass=0.2, inertia=np.diag([1e-3, 2e-3, 2e-3]), inertia_about="mass_center",
-                    to_mass_center=(0.0, 0.2, 0.0), to_output=(0.0, 0.2, 0.0))
-    parts += [FixedHinge(), arm]
-    return build_chain(parts, gravity=[0.0, 0.0, -9.81], ground=Ground(motion=hub))
-
-
 def test_stretch_converges_to_the_reference_at_order_2():
     """Issue 16: DT-TMM against the Newton-Euler reference on a beam with stretch, torsion and
     stiffening under a driven hub (the reference's own stretch terms: its P, G, Q, C columns
     and rows, closed-form shape constants); output points at t = 1 s, dt 1e-3 .. 1.25e-4:
     fitted order 2 +- 0.2 (measured 2.10: 5.5e-5, 1.1e-5, 2.3e-6, 7.4e-7 m)."""
-    model = _driven_stretching_arm()
+    model = driven_arm_on_two_elements(axial_modes=2, axial_stiffness=2000.0)
     steps = np.array([1e-3, 5e-4, 2.5e-4, 1.25e-4])
     errors = output_errors_against_reference(model, steps)
     slope = fitted_order(steps, errors)

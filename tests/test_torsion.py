@@ -8,7 +8,8 @@ import pytest
 from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion, RigidBody,
                    build_chain, simulate, static_equilibrium)
 from dttmm.elements.beam import FAMILY, LENGTH, torsion_shapes
-from helpers import fitted_frequencies, fitted_order, output_errors_against_reference
+from helpers import (driven_arm_on_two_elements, fitted_frequencies, fitted_order,
+                     output_errors_against_reference)
 
 L, MU, JP, GJ = 1.0, 2.0, 1e-3, 50.0
 
@@ -82,23 +83,6 @@ def test_end_torque_twists_the_shaft_uniformly(n_elements):
     assert abs(angle - (n_elements - 1) * want) < 1e-8, angle
 
 
-def _driven_twisting_arm():
-    """Two welded elements with twist, stiffening, on a hub driven about z, and a body on an arm
-    welded to the tip (its weight twists the beam), gravity -z."""
-    hub = PrescribedMotion.spin_about_axis([0, 0, 1], lambda t: 1.5 * t * t, lambda t: 3.0 * t,
-                                           lambda t: 3.0)
-    parts = []
-    for _ in range(2):
-        parts += [FixedHinge(), EulerBernoulliBeam(
-            length=0.5, mass_per_length=1.0, bending_stiffness=[30.0, 40.0],
-            polar_inertia_per_length=5e-3, modes_per_plane=2, torsion_modes=2,
-            torsional_stiffness=2.0, stiffening=True)]
-    arm = RigidBody(mass=0.2, inertia=np.diag([1e-3, 2e-3, 2e-3]), inertia_about="mass_center",
-                    to_mass_center=(0.0, 0.2, 0.0), to_output=(0.0, 0.2, 0.0))
-    parts += [FixedHinge(), arm]
-    return build_chain(parts, gravity=[0.0, 0.0, -9.81], ground=Ground(motion=hub))
-
-
 def test_twist_converges_to_the_reference_at_order_2():
     """DT-TMM against the Newton-Euler reference (its own twist rows, the Euler row's
     j_p int Psi coupling and B_t's columns A J_l e1 Psi(L)); output points at t = 1 s,
@@ -106,7 +90,7 @@ def test_twist_converges_to_the_reference_at_order_2():
     rings the elements' second bending modes, 2400 rad/s, which the coarser steps do not
     resolve: the errors' ratios wander between 2.7 and 5 from step to step, the same with
     the twist switched off; without stiffening they are 3.9 to 4.5.)"""
-    model = _driven_twisting_arm()
+    model = driven_arm_on_two_elements()
     steps = np.array([1e-3, 5e-4, 2.5e-4, 1.25e-4])
     errors = output_errors_against_reference(model, steps)
     slope = fitted_order(steps, errors)

@@ -326,44 +326,53 @@ def beam_shape_constants(beam_row, n_points=None):
     return vec, mat
 
 
-def twist_shape_constants(beam_row):
-    """The twist's shape constants of one beam (module docstring, "Torsion"): a
-    (N_SHAPE_ROWS, mt) array with rows _SY = int Psi_k, _YL = Psi_k(L), _MF = int Psi_k^2 and
-    _KF = int Psi_k'^2 (the rest zero), in closed form: for a moment-free output (families
-    pinned and clamped) Psi_k = sqrt(2) sin(b x), b = (2k - 1) pi / (2 L); for a loaded output
-    the Ritz modes of the shaft fixed at 0 in the monomials (x/L)^1 .. (x/L)^mt, every integral a
-    polynomial moment."""
-    length, mt, family = float(beam_row[LENGTH]), int(beam_row[TORSION_MODES]), \
-        int(beam_row[FAMILY])
-    vec = np.zeros((N_SHAPE_ROWS, mt))
-    if mt == 0:
-        return vec
+def shaft_shape_constants(length, family, count, x=None):
+    """The closed-form shape constants of a second-order (twist or stretch) field on a beam:
+    a (N_SHAPE_ROWS, count) array with rows _SY = int U_j, _TY = int x U_j, _YL = U_j(L),
+    _MF = int U_j^2, _KF = int U_j'^2 (module docstring, "Torsion" and "Stretch"), and the
+    shapes U_j at the points x (count, len(x)) if given.  For a moment-free output (families
+    pinned and clamped) U_j = sqrt(2) sin(b x), b = (2j - 1) pi / (2 L); for a loaded output the
+    Ritz modes of the field fixed at 0 in the monomials (x/L)^1 .. (x/L)^count, every integral
+    a polynomial moment."""
+    vec = np.zeros((N_SHAPE_ROWS, count))
+    x = np.zeros(0) if x is None else np.asarray(x, dtype=float)
+    if count == 0:
+        return vec, np.zeros((0, x.size))
     if family == CLAMPED_LOADED:
-        p = np.arange(1, mt + 1, dtype=float)
+        p = np.arange(1, count + 1, dtype=float)
         gram = 1.0 / (p[:, None] + p[None, :] + 1.0)
         lam, c = eigh(np.outer(p, p) / (p[:, None] + p[None, :] - 1.0), gram)
         c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, gram, c))
         c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
         vec[_SY] = length * (c.T @ (1.0 / (p + 1.0)))
+        vec[_TY] = length * length * (c.T @ (1.0 / (p + 2.0)))
         vec[_YL] = c.sum(axis=0)
         vec[_MF] = length * np.einsum("ij,ik,kj->j", c, gram, c)
         vec[_KF] = lam / length
-    else:
-        b = (2.0 * np.arange(1, mt + 1) - 1.0) * math.pi / (2.0 * length)
-        vec[_SY] = math.sqrt(2.0) / b                 # sqrt(2) (1 - cos(b L)) / b, cos(b L) = 0
-        vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
-        vec[_MF] = length
-        vec[_KF] = length * b * b
-    return vec
+        return vec, c.T @ (x / length)[None, :] ** p[:, None]
+    b = (2.0 * np.arange(1, count + 1) - 1.0) * math.pi / (2.0 * length)
+    vec[_SY] = math.sqrt(2.0) / b                 # sqrt(2) (1 - cos(b L)) / b, cos(b L) = 0
+    vec[_TY] = math.sqrt(2.0) * np.sin(b * length) / (b * b)
+    vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
+    vec[_MF] = length
+    vec[_KF] = length * b * b
+    return vec, math.sqrt(2.0) * np.sin(np.outer(b, x))
+
+
+def twist_shape_constants(beam_row):
+    """The twist's shape constants of one beam (module docstring, "Torsion"):
+    shaft_shape_constants with its torsion_modes (rows _SY = int Psi_k, _YL = Psi_k(L),
+    _MF = int Psi_k^2, _KF = int Psi_k'^2 used)."""
+    return shaft_shape_constants(float(beam_row[LENGTH]), int(beam_row[FAMILY]),
+                                 int(beam_row[TORSION_MODES]))[0]
 
 
 def stretch_shape_constants(beam_row):
     """The stretch's shape constants of one beam (module docstring, "Stretch"): a
-    (N_SHAPE_ROWS + m, ma) array with rows _SY = int U_j, _TY = int x U_j, _YL = U_j(L),
-    _MF = int U_j^2, _KF = int U_j'^2 and, from row N_SHAPE_ROWS on, int U_j Y_l (l < m, the
-    bending shapes).  The shapes are the twist's (the same operator), in closed form
-    (twist_shape_constants); the products with Y_l by Gauss-Legendre quadrature of this
-    module's own bending shapes (quadrature_points(max(m, ma)) points)."""
+    (N_SHAPE_ROWS + m, ma) array with the rows of shaft_shape_constants (the twist's shapes:
+    the same operator) and, from row N_SHAPE_ROWS on, int U_j Y_l (l < m, the bending shapes),
+    by Gauss-Legendre quadrature of this module's own bending shapes
+    (quadrature_points(max(m, ma)) points)."""
     length, m, ma, family = float(beam_row[LENGTH]), int(beam_row[MODES]), \
         int(beam_row[AXIAL_MODES]), int(beam_row[FAMILY])
     vec = np.zeros((N_SHAPE_ROWS + m, ma))
@@ -371,32 +380,14 @@ def stretch_shape_constants(beam_row):
         return vec
     xg, wg = np.polynomial.legendre.leggauss(quadrature_points(max(m, ma)))
     x, wq = 0.5 * length * (xg + 1.0), 0.5 * length * wg
-    t = x / length
+    vec[:N_SHAPE_ROWS], u = shaft_shape_constants(length, family, ma, x)
     if family == CLAMPED_LOADED:
-        p = np.arange(1, ma + 1, dtype=float)
-        gram = 1.0 / (p[:, None] + p[None, :] + 1.0)
-        lam, c = eigh(np.outer(p, p) / (p[:, None] + p[None, :] - 1.0), gram)
-        c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, gram, c))
-        c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
-        u = c.T @ t[None, :] ** p[:, None]
-        vec[_SY] = length * (c.T @ (1.0 / (p + 1.0)))
-        vec[_TY] = length * length * (c.T @ (1.0 / (p + 2.0)))
-        vec[_YL] = c.sum(axis=0)
-        vec[_MF] = length * np.einsum("ij,ik,kj->j", c, gram, c)
-        vec[_KF] = lam / length
         pb = np.arange(2, m + 2, dtype=float)
-        y = loaded_mode_coefficients(m)[0].T @ t[None, :] ** pb[:, None]
+        y = loaded_mode_coefficients(m)[0].T @ (x / length)[None, :] ** pb[:, None]
+    elif family == PINNED:
+        y = np.sin(np.arange(1, m + 1)[:, None] * math.pi * x[None, :] / length)
     else:
-        b = (2.0 * np.arange(1, ma + 1) - 1.0) * math.pi / (2.0 * length)
-        u = math.sqrt(2.0) * np.sin(np.outer(b, x))
-        vec[_SY] = math.sqrt(2.0) / b                 # cos(b L) = 0
-        vec[_TY] = math.sqrt(2.0) * np.sin(b * length) / (b * b)
-        vec[_YL] = math.sqrt(2.0) * np.sin(b * length)
-        vec[_MF] = length
-        vec[_KF] = length * b * b
-        k = np.arange(1, m + 1)[:, None]
-        y = (np.sin(k * math.pi * x[None, :] / length) if family == PINNED
-             else clamped_shapes(length, m, x)[0])
+        y = clamped_shapes(length, m, x)[0]
     vec[N_SHAPE_ROWS:] = (y * wq) @ u.T
     return vec
 
