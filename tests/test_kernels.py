@@ -212,23 +212,26 @@ def _stiffened_cantilever(twist=0, stretch=0):
 @pytest.mark.parametrize("start", [False, True])
 @pytest.mark.parametrize("system", ["three_pendulum", "cantilever", "cantilever, end torque",
                                     "twisting cantilever", "twisting cantilever, end torque",
-                                    "stretching cantilever", "stretching cantilever, end torque"])
+                                    "stretching cantilever", "stretching cantilever, end torque",
+                                    "welded cantilever", "welded cantilever, end torque",
+                                    "welded twisting cantilever"])
 def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system):
     """The beam's transfer (every column written out where the output carries no moment:
     _affine_columns, _modal_columns, _rotation_columns) against central differences of its exact
     relations (_evaluate) in every unknown, eliminated through the modal equations the same way
     (docs/beam.md).  Measured: 7e-12 (u) and 2.5e-11 (eta_map) relative, the central
     differences' own error; the kernel with its w' and eta'' columns forward-differenced gave
-    7e-11 here.  With an applied end torque the modal equations feel the end section's
-    rotation and m_I (add_end_moment), and the w' and eta'' columns are differenced; so they
-    are for a beam with twist modes (twist_relations), whose rows' a_I, m_I, q_I columns at
-    an end moment are _twist_end_columns'."""
+    7e-11 here.  With an end moment (a weld, or an applied end torque) the modal equations
+    feel the end section's rotation and m_I (add_end_moment: _end_moment_columns), and a weld's
+    output slot is the welded body's angular acceleration.  A beam with twist modes
+    (twist_relations) or stretch modes has its w' and eta'' columns differenced; its twist
+    rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
     from dttmm.kernels.beam import _evaluate, beam_transfer
     from dttmm.solver import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
-                else (_stiffened_cantilever(2 if system.startswith("twist") else 0,
+                else (_stiffened_cantilever(2 if "twist" in system else 0,
                                             2 if system.startswith("stretch") else 0), 0))
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
     assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
@@ -254,7 +257,20 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     eta_dd_star = gen.normal(size=n) * 10
     w1e, w3e = eta_dd_star - c1 * (eta_n + 1e-8), gen.normal(size=n) * 1e-2
     z_star = np.concatenate([gen.normal(size=3), wd_star, np.zeros(3), gen.normal(size=3)])
-    args = (bp[k], tables, (False, np.eye(3), np.eye(3), np.zeros(3)), (False, np.zeros(3)),
+    outboard = (False, np.eye(3), np.eye(3), np.zeros(3))
+    if system.startswith("welded"):
+        # a body welded to the output (fixed hinge, relative rotation r_rel): its rotation slot
+        # is c1 phi_out + w1 with exp(phi_out^) A_out,n = A_O r_rel; A_out,n a little behind
+        # the guess's A_O r_rel, w1 such that the slot holds an acceleration ~10
+        from dttmm.kernels.beam import end_section
+        rot_star = Rotation.from_rotvec(phi_star).as_matrix() @ rot_n
+        a_o = np.empty((3, 3))
+        end_section(ends[k, :m], ends[k, m:m + mt], (eta_dd_star - w1e) / c1, rot_star, a_o)
+        r_rel = Rotation.from_rotvec([0.3, 0.1, -0.5]).as_matrix()
+        back = gen.normal(size=3) * 1e-4
+        rot_out_n = Rotation.from_rotvec(-back).as_matrix() @ a_o @ r_rel
+        outboard = (True, r_rel, rot_out_n, gen.normal(size=3) * 10 - c1 * back)
+    args = (bp[k], tables, outboard, (False, np.zeros(3)),
             model.gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, eta_n,
             eta_d_n)
     u, eta_map = np.empty((12, 13)), np.empty((n, 13))
@@ -267,13 +283,19 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
 
     def relations(x):
         out, res = np.empty(12), np.empty(n)
-        _evaluate(*evaluate_args, x, out, res, np.empty((4, 3)), np.empty(24 + 2 * n))
+        _evaluate(*evaluate_args, x, out, res, np.empty((4, 3)), np.empty(66 + 2 * n))
         return np.concatenate([out, res])
 
     x0 = np.concatenate([z_star, eta_dd_star])
+    # central differences of 1e-4 (relative), 1e-2 where the output carries a moment: there the
+    # differences' rounding dominates (the end moment's rows, and a weld's rotation slot
+    # c1 log(...), c1 = 4e8), measured 2e-8 (1e-5 in the slot) at 1e-4, 4e-10 (3e-8) at 1e-2;
+    # the relations are affine in a_I, m_I, q_I and in w', eta'' up to terms of 1 / c1
+    moment = system.startswith("welded") or system.endswith("torque")
+    fd_step = 1e-2 if moment else 1e-4
     jac = np.empty((12 + n, 12 + n))
     for c in range(12 + n):
-        step = 1e-4 * (1.0 + abs(x0[c]))
+        step = fd_step * (1.0 + abs(x0[c]))
         e = np.zeros(12 + n)
         e[c] = step
         jac[:, c] = (relations(x0 + e) - relations(x0 - e)) / (2 * step)
@@ -284,8 +306,13 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     # (with stretch modes, 1e-6: their eta_map rows are ~200 times smaller than the bending
     # rows they couple to (largest entries 1.4 against 285), so the forward differences' 1e-8
     # in the coupled solve shows as 3.8e-7 of those rows (measured; 2e-8 in the others))
-    tol = (1e-6 if system.startswith("stretch") else
-           1e-7 if system.endswith("torque") or system.startswith("twist") else 1e-9)
+    # (a weld's rotation slot: 1e-7, its differences' 3e-8 above; 3e-6 where the kernel
+    # differences it itself (a twisting beam), whose forward steps of 1e-3 meet the same
+    # rounding: measured 1.8e-6)
+    tol = (3e-6 if system == "welded twisting cantilever" else
+           1e-6 if system.startswith("stretch") else
+           1e-7 if "twist" in system or system.startswith("welded") else 1e-9)
+
     for name, got, want in (("u", u[:, :12], u_fd), ("eta_map", eta_map[:, :12], e_z)):
         scale = np.abs(want).max(axis=1, keepdims=True) + 1e-300
         assert np.abs((got - want) / scale).max() < tol, name

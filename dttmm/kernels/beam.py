@@ -21,7 +21,7 @@ from . import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
                    t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
-from .so3 import expm_so3, left_jacobian, log_so3
+from .so3 import expm_so3, left_jacobian, left_jacobian_derivative, log_so3
 
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
 # int mu A u', int mu A u'', int mu rho x A u''; A u'(L), A u''(L); J = int mu (|rho|^2 E -
@@ -453,18 +453,20 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque):
+def add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque, scratch):
     """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
     on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
     Y_k'(L), residual_w,k -= m_O . (A J_l e2) Y_k'(L), residual_t,k += m_O . (A J_l e1)
     Psi_k(L) (the twist, docs/beam.md "Torsion"), J_l = J_l(theta_O); aux[2], aux[3] =
     A J_l e2, A J_l e3; with an applied end torque T (end_torque) the net m_O - T.  out,
-    residual, aux, end_torque: beam_relations'; torsion: the twist table (twist_relations).
-    (Kept out of beam_relations, whose loops LLVM optimizes better without this branch's
-    allocations: measured 0.34 against 0.25 us per evaluation.)"""
+    residual, aux, end_torque: beam_relations'; torsion: the twist table (twist_relations);
+    scratch: 12 entries.  (Kept out of beam_relations, whose loops LLVM optimizes better
+    without this branch: measured 0.34 against 0.25 us per evaluation.)"""
     m = ends.shape[0]
-    jl = np.empty((3, 3))
-    left_jacobian(end_angles(ends, torsion, eta), jl)
+    theta = scratch[0:3]
+    jl = scratch[3:12].reshape((3, 3))
+    _end_angles_into(ends, torsion, eta, theta)
+    left_jacobian(theta, jl)
     for i in range(3):
         aux[2, i] = rot[i, 0] * jl[0, 1] + rot[i, 1] * jl[1, 1] + rot[i, 2] * jl[2, 1]
         aux[3, i] = rot[i, 0] * jl[0, 2] + rot[i, 1] * jl[1, 2] + rot[i, 2] * jl[2, 2]
@@ -592,14 +594,21 @@ def end_angles(ends, torsion, eta):
     """theta_O = [psi(L), -w'(L), v'(L)]: the output section's rotation vector in the frame,
     from the modal coordinates (or their rates), the end slopes Y_k'(L) and the end twists
     Psi_k(L) (torsion[:, 0]; docs/beam.md, "End sections" and "Torsion")."""
+    theta = np.empty(3)
+    _end_angles_into(ends, torsion, eta, theta)
+    return theta
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _end_angles_into(ends, torsion, eta, theta):
+    """theta = end_angles(ends, torsion, eta), into a given 3-vector."""
     m = ends.shape[0]
-    theta = np.zeros(3)
+    theta[0] = theta[1] = theta[2] = 0.0
     for k in range(m):
         theta[1] -= ends[k, 1] * eta[m + k]
         theta[2] += ends[k, 1] * eta[k]
     for k in range(torsion.shape[0]):
         theta[0] += torsion[k, 0] * eta[2 * m + k]
-    return theta
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -654,8 +663,8 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
-    (at the start: the end section's angular acceleration).  work: (24 + 2 n) scratch, which
-    holds the state (the returned rotation is a view on it)."""
+    (at the start: the end section's angular acceleration).  work: (66 + 2 n) scratch, which
+    holds the state (the returned rotation is a view on it) and the end moment's scratch."""
     moments, ends, factors, end_force, end_torque = tables[0], tables[1], tables[2], tables[3], \
         tables[4]
     torsion = tables[6]
@@ -684,8 +693,9 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     if torsion.shape[0]:
         twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, ends.shape[0], out,
                         residual)
+    scratch = work[24 + 2 * n:66 + 2 * n]
     if welded or _any(end_torque):
-        add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque)
+        add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque, scratch)
     independent, dw1 = history
     if independent and not start:
         m = ends.shape[0]
@@ -705,11 +715,21 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
             out[3:6] = _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d,
                                                          eta_dd)
         else:
-            a_o = np.empty((3, 3))
-            end_section(ends, torsion, eta, rot, a_o)
-            phi_out = np.empty(3)
-            log_so3(a_o @ r_rel @ rot_out_n.T, phi_out)
-            out[3:6] = c1 * phi_out + w1_out
+            # A_O = A exp(theta_O^), phi_out = log(A_O R_rel A_out,n^T)
+            theta, e = scratch[0:3], scratch[12:21].reshape((3, 3))
+            a_o, rel = scratch[21:30].reshape((3, 3)), scratch[30:39].reshape((3, 3))
+            phi_out = scratch[39:42]
+            _end_angles_into(ends, torsion, eta, theta)
+            expm_so3(theta, e)
+            mm3_into(rot, e, a_o)
+            mm3_into(a_o, r_rel, e)
+            for i in range(3):
+                for j in range(3):
+                    rel[i, j] = (e[i, 0] * rot_out_n[j, 0] + e[i, 1] * rot_out_n[j, 1]
+                                 + e[i, 2] * rot_out_n[j, 2])
+            log_so3(rel, phi_out)
+            for i in range(3):
+                out[3 + i] = c1 * phi_out[i] + w1_out[i]
     return rot
 
 
@@ -954,6 +974,84 @@ def _modal_columns(bp, tables, rot, w, wd, s, r, q_o, aux, d_o, d_r, scratch):
                                                     + coef[2] * moments[l, 2 + 3 * m + k])
 
 
+@no_alloc_kernel
+def _end_moment_columns(ends, eta, rot, lam, s, start, m_net, welded, phi_out, aux, d_o, d_r,
+                        scratch):
+    """The end moment's share of the w' (3:6) and eta'' (12 + p) columns (docs/beam.md, "The
+    end moment's columns"), after _modal_columns and _rotation_columns have filled d_o's m_O
+    rows: add_end_moment's r_v,k += Y_k'(L) m . a3, r_w,k -= Y_k'(L) m . a2, a_i = A J_l e_i,
+    J_l = J_l(theta_O), m = m_O - T (m_net), change by
+      d/dw'_j:    Y_k'(L) (dm_O/dw'_j . a3 + s (a3 x m) . Lam e_j)     (A turns by s Lam dw')
+      d/deta''_p: Y_k'(L) (dm_O/deta''_p . a3 + s m . A DJ_l[theta_p] e3)
+    (w alike with a2 and the sign), theta_p = d theta_O / d eta_p (e3 Y_p'(L) in the v plane,
+    -e2 Y_p'(L) in the w plane).  welded: the output's rotation slot c1 phi_out + w1 with
+    J_l(phi_out) dphi_out = s Lam dw' + A J_l theta_p s deta''_p (A_out = A exp(theta_O^) R_rel),
+    so its columns are J_l(phi_out)^-1 Lam and J_l(phi_out)^-1 A J_l theta_p (c1 s = 1); at
+    the start I and A J_l theta_p.  eta: the modal coordinates at the guess; scratch: 30."""
+    m = ends.shape[0]
+    a2, a3 = aux[2], aux[3]
+    theta, delta = scratch[0:3], scratch[3:6]
+    dj = scratch[6:15].reshape((3, 3))
+    jinv = scratch[15:24].reshape((3, 3))
+    tmp = scratch[24:30]
+    theta[0] = theta[1] = theta[2] = 0.0           # theta_O (no twist here)
+    for k in range(m):
+        theta[1] -= ends[k, 1] * eta[m + k]
+        theta[2] += ends[k, 1] * eta[k]
+    # the w' columns
+    x3 = t_cross((a3[0], a3[1], a3[2]), (m_net[0], m_net[1], m_net[2]))
+    x2 = t_cross((a2[0], a2[1], a2[2]), (m_net[0], m_net[1], m_net[2]))
+    for j in range(3):
+        dv = dw = 0.0
+        for i in range(3):
+            dv += d_o[6 + i, 3 + j] * a3[i] + s * x3[i] * lam[i, j]
+            dw -= d_o[6 + i, 3 + j] * a2[i] + s * x2[i] * lam[i, j]
+        for k in range(m):
+            d_r[k, 3 + j] += ends[k, 1] * dv
+            d_r[m + k, 3 + j] += ends[k, 1] * dw
+    # the eta'' columns
+    for p in range(2 * m):
+        col = 12 + p
+        dy = ends[p % m, 1]
+        delta[0] = 0.0
+        delta[1] = -dy if p >= m else 0.0
+        delta[2] = dy if p < m else 0.0
+        left_jacobian_derivative(theta, delta, dj)
+        dv = dw = 0.0
+        for i in range(3):
+            b2 = rot[i, 0] * dj[0, 1] + rot[i, 1] * dj[1, 1] + rot[i, 2] * dj[2, 1]
+            b3 = rot[i, 0] * dj[0, 2] + rot[i, 1] * dj[1, 2] + rot[i, 2] * dj[2, 2]
+            dv += d_o[6 + i, col] * a3[i] + s * m_net[i] * b3
+            dw -= d_o[6 + i, col] * a2[i] + s * m_net[i] * b2
+        for k in range(m):
+            d_r[k, col] += ends[k, 1] * dv
+            d_r[m + k, col] += ends[k, 1] * dw
+    if not welded:
+        return
+    # the output's rotation slot
+    if start:
+        for i in range(3):
+            for j in range(3):
+                jinv[i, j] = 1.0 if i == j else 0.0
+    else:
+        left_jacobian(phi_out, dj)
+        inv = t_inverse(t_of_mat(dj))[1]
+        for i in range(3):
+            for j in range(3):
+                jinv[i, j] = inv[3 * i + j]
+    for i in range(3):
+        for j in range(3):
+            d_o[3 + i, 3 + j] = (lam[0, j] * jinv[i, 0] + lam[1, j] * jinv[i, 1]
+                                 + lam[2, j] * jinv[i, 2]) if not start else jinv[i, j]
+    for i in range(3):
+        tmp[i] = jinv[i, 0] * a3[0] + jinv[i, 1] * a3[1] + jinv[i, 2] * a3[2]
+        tmp[3 + i] = -(jinv[i, 0] * a2[0] + jinv[i, 1] * a2[1] + jinv[i, 2] * a2[2])
+    for k in range(m):
+        for i in range(3):
+            d_o[3 + i, 12 + k] = ends[k, 1] * tmp[i]
+            d_o[3 + i, 12 + m + k] = ends[k, 1] * tmp[3 + i]
+
+
 @njit(cache=True, fastmath=CONTRACT)
 def _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o, col):
     """The foreshortening's share of an eta'' column (docs/beam.md, "Geometric stiffening"):
@@ -1056,10 +1154,10 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     n = eta_dd_star.shape[0]
     nx = 12 + n
     # every array of the linearization carved out of one block (one allocation per call)
-    nw = 24 + 2 * n
+    nw = 66 + 2 * n
     na = 3 * aux_rows(n // 2)
     block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 21)
+                     + 57)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -1082,6 +1180,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     columns_scratch = block[o + 9:o + 15]
     q_net = block[o + 15:o + 18]
     g_beam = block[o + 18:o + 21]
+    moment_scratch = block[o + 21:o + 57]      # _end_moment_columns' (30), m_net, phi_out
     follower = bp[LOAD_AXES] != 0.0
     if follower:                 # the distributed load turns with the frame: _evaluate adds it
         g_beam[:] = gravity
@@ -1098,11 +1197,10 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r)
     if stretch:
         _stretch_affine_columns(bp, tables[7], rot, d_r)
-    # w' and eta'' columns written out unless the output carries a moment (welded, or an
-    # applied end torque), the beam twists (docs/beam.md, "Torsion"), its loads follow it
-    # (load_axes="body") or the output has its own history (the paper's scheme); there,
-    # forward differences
-    analytic = (not end_moment and not twist and not stretch and not follower
+    # w' and eta'' columns written out unless the beam twists (docs/beam.md, "Torsion") or
+    # stretches, its loads follow it (load_axes="body") or the output has its own history (the
+    # paper's scheme); there, forward differences
+    analytic = (not twist and not stretch and not follower
                 and not (history[0] and not start))
     if analytic:
         w = w_n if start else work[21:24]
@@ -1114,6 +1212,13 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
                        columns_scratch)
         _rotation_columns(bp, ends, rot, lam, w, x0[3:6], s_c, r_c, x0[0:3], q_net, g_beam,
                           aux, d_o, d_r)
+        if end_moment:      # a weld's or an applied end torque's moment on the modes
+            m_net, phi_out = moment_scratch[30:33], moment_scratch[33:36]
+            for i in range(3):
+                m_net[i] = o0[6 + i] - tables[4][i]
+                phi_out[i] = (o0[3 + i] - outboard[3][i]) / c1
+            _end_moment_columns(ends, eta_n if start else work[24:24 + n], rot, lam, s_c, start,
+                                m_net, welded, phi_out, aux, d_o, d_r, moment_scratch[:30])
     xp[:] = x0
     for c in range(3, nx):
         if 6 <= c < 12 or analytic:
@@ -1155,7 +1260,7 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     # depend on eta'' where the columns are written out (_modal_columns: it is w' itself)
     for r in range(12):
         const = o0[r]
-        through_modes = not (analytic and 3 <= r < 6)
+        through_modes = not (analytic and not welded and 3 <= r < 6)
         for c in range(12):
             acc = d_o[r, c]
             rc = _rhs_column(c)

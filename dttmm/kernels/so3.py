@@ -73,6 +73,44 @@ def left_jacobian(phi, out):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def left_jacobian_derivative(phi, delta, out):
+    """out = D J_l(phi)[delta], the derivative of J_l along delta (docs/beam.md, "The end
+    moment's columns"): with J_l = I + b phi^ + c phi^^, b = (1 - cos t)/t^2,
+    c = (t - sin t)/t^3, t = |phi|, and beta = b'(t)/t, gamma = c'(t)/t,
+      D = b delta^ + c (delta^ phi^ + phi^ delta^) + (phi . delta) (beta phi^ + gamma phi^^),
+    delta^ phi^ = phi delta^T - (phi . delta) I.  Series below t^2 = 1e-2 (four terms; the
+    closed forms of beta and gamma lose eps / t^4 to cancellation)."""
+    th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    if th2 < 1e-2:
+        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
+        c = 1.0 / 6.0 - th2 / 120.0 * (1.0 - th2 / 42.0 * (1.0 - th2 / 72.0))
+        beta = -1.0 / 12.0 + th2 / 180.0 - th2 * th2 / 6720.0 + th2 * th2 * th2 / 453600.0
+        gamma = -1.0 / 60.0 + th2 / 1260.0 - th2 * th2 / 60480.0 + th2 * th2 * th2 / 4989600.0
+    else:
+        th = np.sqrt(th2)
+        cos_t, sin_t = np.cos(th), np.sin(th)
+        b = (1.0 - cos_t) / th2
+        c = (th - sin_t) / (th2 * th)
+        beta = (th * sin_t - 2.0 * (1.0 - cos_t)) / (th2 * th2)
+        gamma = (1.0 - cos_t) / (th2 * th2) - 3.0 * (th - sin_t) / (th2 * th2 * th)
+    pd = phi[0] * delta[0] + phi[1] * delta[1] + phi[2] * delta[2]
+    g = pd * gamma
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = c * (phi[i] * delta[j] + delta[i] * phi[j]) + g * phi[i] * phi[j]
+        out[i, i] -= 2.0 * c * pd + g * th2
+    v0 = b * delta[0] + pd * beta * phi[0]
+    v1 = b * delta[1] + pd * beta * phi[1]
+    v2 = b * delta[2] + pd * beta * phi[2]
+    out[0, 1] -= v2
+    out[0, 2] += v1
+    out[1, 0] += v2
+    out[1, 2] -= v0
+    out[2, 0] -= v1
+    out[2, 1] += v0
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def log_so3(r, out):
     """out = the rotation vector of r (angle in [0, pi))."""
     c = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)

@@ -52,6 +52,19 @@ def _station_basis(split, s_mat, p_vec, basis, offset):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _station_state(split, s_mat, p_vec, e, z):
+    """z = basis e + offset (_station_basis) without the basis: z_e = e, z_f = S e + P."""
+    f_idx = F_IDX[split]
+    e_idx = E_IDX[split]
+    for r in range(6):
+        x = p_vec[r]
+        for c in range(6):
+            x += s_mat[r, c] * e[c]
+        z[f_idx[r]] = x
+        z[e_idx[r]] = e[r]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def _tip_system(basis, offset, tip_pinned):
     """W e = rhs for the tip: m = 0 and q = 0 (free), or a = 0 and m = 0 (joined to the ground by
     a ball joint)."""
@@ -92,6 +105,75 @@ def _moment_force_system(basis, offset, target):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _riccati_transfer(u, f_idx, e_idx, s, p, s_new, p_new, t_inv, t_vec, work):
+    """One affine element of the full Riccati sweep (docs/assembly.md): with the element's
+    blocks U_ff, U_fe, U_ef, U_ee and constants c_f, c_e in the station's split (f_idx, e_idx)
+    and the inboard f = S e + P,
+      T = U_ef S + U_ee,  t = U_ef P + c_e,  S' = (U_ff S + U_fe) T^-1,  P' = U_ff P + c_f - S' t,
+    so that e_in = T^-1 (e_out - t) on the way back.  In loops on the 6 x 6 blocks (no BLAS or
+    LAPACK call, no allocation: work is 6 x 13); False if T is singular (a zero pivot)."""
+    # work[:, :6] = T, work[:, 6:12] = I (becomes T^-1), work[:, 12] = U_ff S + U_fe's scratch
+    for r in range(6):
+        er = e_idx[r]
+        tv = u[er, 12]
+        for c in range(6):
+            x = u[er, e_idx[c]]
+            for k in range(6):
+                x += u[er, f_idx[k]] * s[k, c]
+            work[r, c] = x
+            work[r, 6 + c] = 1.0 if r == c else 0.0
+        for k in range(6):
+            tv += u[er, f_idx[k]] * p[k]
+        t_vec[r] = tv
+    # Gauss-Jordan with partial pivoting on [T | I]
+    for c in range(6):
+        piv = c
+        for r in range(c + 1, 6):
+            if abs(work[r, c]) > abs(work[piv, c]):
+                piv = r
+        if work[piv, c] == 0.0:
+            return False
+        if piv != c:
+            for j in range(12):
+                work[c, j], work[piv, j] = work[piv, j], work[c, j]
+        inv = 1.0 / work[c, c]
+        for j in range(c, 12):
+            work[c, j] *= inv
+        for r in range(6):
+            if r != c:
+                f = work[r, c]
+                if f != 0.0:
+                    for j in range(c, 12):
+                        work[r, j] -= f * work[c, j]
+    for r in range(6):
+        for c in range(6):
+            t_inv[r, c] = work[r, 6 + c]
+    # S' = (U_ff S + U_fe) T^-1, P' = U_ff P + c_f - S' t
+    for r in range(6):
+        fr = f_idx[r]
+        for c in range(6):
+            x = u[fr, e_idx[c]]
+            for k in range(6):
+                x += u[fr, f_idx[k]] * s[k, c]
+            work[c, 12] = x
+        pv = u[fr, 12]
+        for k in range(6):
+            pv += u[fr, f_idx[k]] * p[k]
+        for c in range(6):
+            x = 0.0
+            for k in range(6):
+                x += work[k, 12] * t_inv[k, c]
+            s_new[r, c] = x
+        p_new[r] = pv
+    for r in range(6):
+        x = p_new[r]
+        for k in range(6):
+            x -= s_new[r, k] * t_vec[k]
+        p_new[r] = x
+    return True
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, t_inv, t_vec,
                  g_mat, g_vec, z):
     """Solve one step; returns 0, or j + 1 if element j (or the tip, j = n_el) is singular.
@@ -105,6 +187,7 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     n_el = kind.shape[0]
     basis = np.empty((12, 6))
     offset = np.empty(12)
+    work = np.empty((6, 13))
     split[0] = SPLIT_B
     s_mat[0, :, :] = 0.0
     p_vec[0, :] = root_f
@@ -118,33 +201,10 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
             s_mat[j + 1] = s_mat[j]
             p_vec[j + 1] = p_vec[j]
         elif k == TRANSFER:
-            u_ff = np.empty((6, 6))
-            u_fe = np.empty((6, 6))
-            u_ef = np.empty((6, 6))
-            u_ee = np.empty((6, 6))
-            cf = np.empty(6)
-            ce = np.empty(6)
-            for r in range(6):
-                cf[r] = u[j, f_idx[r], 12]
-                ce[r] = u[j, e_idx[r], 12]
-                for c in range(6):
-                    u_ff[r, c] = u[j, f_idx[r], f_idx[c]]
-                    u_fe[r, c] = u[j, f_idx[r], e_idx[c]]
-                    u_ef[r, c] = u[j, e_idx[r], f_idx[c]]
-                    u_ee[r, c] = u[j, e_idx[r], e_idx[c]]
-            s = s_mat[j]
-            p = p_vec[j]
-            t = u_ef @ s + u_ee
-            if abs(np.linalg.det(t)) == 0.0:
-                return j + 1
-            ti = np.linalg.inv(t)
-            tv = u_ef @ p + ce
-            s_new = (u_ff @ s + u_fe) @ ti
             split[j + 1] = sp
-            s_mat[j + 1] = s_new
-            p_vec[j + 1] = u_ff @ p + cf - s_new @ tv
-            t_inv[j] = ti
-            t_vec[j] = tv
+            if not _riccati_transfer(u[j], F_IDX[sp], E_IDX[sp], s_mat[j], p_vec[j],
+                                     s_mat[j + 1], p_vec[j + 1], t_inv[j], t_vec[j], work):
+                return j + 1
         else:
             _station_basis(sp, s_mat[j], p_vec[j], basis, offset)
             if k == BALL:
@@ -174,22 +234,24 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     solved, e = _solve_tip(w, rhs, tip_pinned)
     if not solved:
         return n_el + 1
-    z[n_el] = basis @ e + offset
+    _station_state(split[n_el], s_mat[n_el], p_vec[n_el], e, z[n_el])
+    e_in = np.empty(6)
     for j in range(n_el - 1, -1, -1):
         k = kind[j]
-        sp = split[j]
-        e_idx = E_IDX[sp]
-        e_out = np.empty(6)
+        e_out = E_IDX[split[j + 1]]
         for r in range(6):
-            e_out[r] = z[j + 1, E_IDX[split[j + 1]][r]]
-        if k == IDENTITY:
-            e = e_out
-        elif k == TRANSFER:
-            e = t_inv[j] @ (e_out - t_vec[j])
-        else:
-            e = g_vec[j] + g_mat[j] @ z[j + 1, 9:12]
-        _station_basis(sp, s_mat[j], p_vec[j], basis, offset)
-        z[j] = basis @ e + offset
+            if k == IDENTITY:
+                x = z[j + 1, e_out[r]]
+            elif k == TRANSFER:         # e_in = T^-1 (e_out - t)
+                x = 0.0
+                for c in range(6):
+                    x += t_inv[j, r, c] * (z[j + 1, e_out[c]] - t_vec[j, c])
+            else:                       # a ball joint or LOCKED: e = g + G q_out
+                x = g_vec[j, r]
+                for c in range(3):
+                    x += g_mat[j, r, c] * z[j + 1, 9 + c]
+            e_in[r] = x
+        _station_state(split[j], s_mat[j], p_vec[j], e_in, z[j])
     return 0
 
 
