@@ -34,7 +34,7 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
     joins body 2 to the ground at the origin.  All along +x at rest, except body 6 with angular
     velocity tip_angular_velocity ([0, 0.1, 0] rad/s).  stiffness_factor multiplies the beam's
     modulus (a stiff variant for the stability study); stiffening: the beam's geometric
-    stiffening (docs/beam.md)."""
+    stiffening (docs/beam.md; off by default here: the paper's beam, the main job's)."""
     from .elements import EulerBernoulliBeam
     side = 0.02
     area = side * side

@@ -91,8 +91,14 @@ def _beam_lines(model, k):
     lines.append(f"{ma} stretch mode{'s' if ma > 1 else ''}, own frequencies (Hz): "
                  f"{np.array2string(axial_frequencies(row), precision=4)}" if ma else
                  "no stretch (axial_modes 0)")
-    lines.append("geometric stiffening on" if row[STIFFENING] else
-                 "geometric stiffening off (the paper's beam)")
+    if row[STIFFENING]:
+        lines.append("geometric stiffening on")
+    elif model.tip_pinned and not ma:
+        lines.append("geometric stiffening off (the paper's beam; the default for a beam without "
+                     "stretch modes in a closed loop, whose inextensible centreline held between "
+                     "fixed points could not bow)")
+    else:
+        lines.append("geometric stiffening off (the paper's beam)")
     return lines
 
 

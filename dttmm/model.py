@@ -8,7 +8,7 @@ from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
 from .elements.beam import (AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             FAMILY, FREQUENCY_CUTOFF, LENGTH, LOAD_AXES, MAX_LOADED_MODES, MODES,
-                            PINNED, TORSION_MODES, auto_mode_count, auto_part_count,
+                            PINNED, STIFFENING, TORSION_MODES, auto_mode_count, auto_part_count,
                             axial_frequencies, modal_size, mode_shapes, torsion_frequencies,
                             torsion_shapes)
 from .elements._checks import derivative, finite_vector, rotation_matrix
@@ -903,6 +903,11 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
                     beam_params[k, part] = auto_part_count(beam_params[k], frequencies)
             bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
             bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
+        if beam_params[k, STIFFENING] == AUTO:
+            # stiffening=None: on, unless an inextensible beam (no stretch modes) sits in a
+            # closed loop (the tip pinned), where held between fixed points it would lock
+            beam_params[k, STIFFENING] = float(not (tip == "ball"
+                                                    and beam_params[k, AXIAL_MODES] == 0))
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
             raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "
                              f"clamped beam whose output carries loads (polynomial modes), got "

@@ -389,8 +389,7 @@ def scene_of(model, run=None, name=None):
                          mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
             if row[FAMILY] != PINNED and ball_ends:
                 table["force_mode_family"] = True
-            if row[STIFFENING]:
-                table["stiffening"] = True
+            table["stiffening"] = bool(row[STIFFENING])     # (on by default)
             if row[TORSION_MODES]:
                 table["torsion_modes"] = int(row[TORSION_MODES])
             if row[GJ] > 0.0:

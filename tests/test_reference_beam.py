@@ -23,6 +23,9 @@ def link(**kw):
 
 
 def beam(modes=3, ei=EI, **kw):
+    # the paper's beam (no geometric stiffening): this file's closed-form responses and
+    # quadrature energies are the unstiffened beam's (tests/test_stiffening.py has its own)
+    kw.setdefault("stiffening", False)
     return EulerBernoulliBeam(length=L, mass_per_length=MU, bending_stiffness=ei,
                               polar_inertia_per_length=JP, modes_per_plane=modes, **kw)
 

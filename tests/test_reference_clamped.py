@@ -29,6 +29,10 @@ ROOTS = np.array([1.87510406871196, 4.69409113297418, 7.85475743823761])
 
 
 def beam(length, modes, ei=EI, **kw):
+    # the paper's beam (no geometric stiffening) unless a test asks: this file's textbook
+    # frequencies, quadrature energies and weld kinematics are the unstiffened beam's (the
+    # stiffened one's checks: tests/test_stiffening.py, test_torsion.py, test_stretch.py)
+    kw.setdefault("stiffening", False)
     return EulerBernoulliBeam(length=length, mass_per_length=MU, bending_stiffness=ei,
                               polar_inertia_per_length=JP, modes_per_plane=modes, **kw)
 

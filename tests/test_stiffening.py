@@ -64,8 +64,29 @@ def test_stiffened_beam_converges_to_the_reference_at_order_2(system):
 def test_stiffening_must_be_a_bool():
     beam = EulerBernoulliBeam(length=1.0, mass_per_length=1.0, bending_stiffness=1.0,
                               polar_inertia_per_length=1e-3, stiffening="yes", name="b")
-    with pytest.raises(ValueError, match="'b'.*stiffening must be True or False"):
+    with pytest.raises(ValueError, match="'b'.*stiffening must be True, False or None"):
         build_chain([FixedHinge(), beam])
+
+
+def test_stiffening_is_on_by_default_except_where_it_would_lock():
+    """stiffening=None (the default) resolves at the build: on for a cantilever and for a beam
+    in a chain with a free tip; off for a beam without stretch modes in a closed loop (the tip
+    pinned), where its inextensible centreline could not bow, and describe() says why; on there
+    with stretch modes, or when asked for."""
+    from dttmm import BallJoint
+    from dttmm.elements.beam import STIFFENING
+
+    def beam(**kw):
+        return EulerBernoulliBeam(length=1.0, mass_per_length=1.0, bending_stiffness=10.0,
+                                  polar_inertia_per_length=1e-3, **kw)
+    assert build_chain([FixedHinge(), beam()]).beam_params[0, STIFFENING] == 1.0
+    assert build_chain([BallJoint(), beam()]).beam_params[0, STIFFENING] == 1.0
+    closed = build_chain([BallJoint(), beam()], tip="ball")
+    assert closed.beam_params[0, STIFFENING] == 0.0
+    assert "default for a beam without stretch modes in a closed loop" in closed.describe()
+    for kw in (dict(axial_modes=1, axial_stiffness=1e6), dict(stiffening=True)):
+        assert build_chain([BallJoint(), beam(**kw)], tip="ball").beam_params[0, STIFFENING] == 1.0
+    assert build_chain([FixedHinge(), beam(stiffening=False)]).beam_params[0, STIFFENING] == 0.0
 
 
 def _flexible_pendulum(elements, modes, stiffening):

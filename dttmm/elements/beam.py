@@ -347,13 +347,15 @@ class EulerBernoulliBeam:
         The axes of end_force, end_torque and distributed_load: "world" (default), or "body":
         followers, the end loads in the output end section's axes (they turn with it, e.g. a
         thrust along the tip's tangent), the distributed load in the beam frame's.
-    stiffening : bool, optional
+    stiffening : bool or None, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
         the energy, so inertia (centrifugal loads included), gravity and the end loads stiffen
-        or soften the bending modes.  Default False for now: without axial modes the
-        centreline is inextensible, so a beam held at both ends (e.g. pinned between fixed
-        points) would lock; turn it on for beams that spin, carry a tip mass, or hang.
+        or soften the bending modes.  None (default): on, except for a beam without stretch
+        modes in a closed loop (a chain whose tip is pinned): its centreline is then
+        inextensible, and held between fixed points it could not bow, so there it stays off
+        (the paper's beam) unless asked for; ``model.describe()`` says which.  False: the
+        paper's beam.
 
     torsion_modes : int or "auto", optional
         Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist); "auto"
@@ -410,7 +412,7 @@ class EulerBernoulliBeam:
     rotation: object = None
     angular_velocity: object = None
     name: str = ""
-    stiffening: bool = False
+    stiffening: Optional[bool] = None
     frequency_cutoff: float = None
     end_force: Optional[Callable[[float], object]] = None
     end_torque: Optional[Callable[[float], object]] = None
@@ -497,9 +499,11 @@ class EulerBernoulliBeam:
                              f"{self.load_axes!r}")
         row[LOAD_AXES] = LOAD_AXES_NAMES[self.load_axes]
         row[FAMILY] = MODE_FAMILY_NAMES[self.mode_family]
-        if not isinstance(self.stiffening, (bool, np.bool_)):
-            raise ValueError(f"{who}: stiffening must be True or False, got {self.stiffening!r}")
-        row[STIFFENING] = float(self.stiffening)
+        if self.stiffening is not None and not isinstance(self.stiffening, (bool, np.bool_)):
+            raise ValueError(f"{who}: stiffening must be True, False or None (on unless the beam "
+                             f"would lock: the default), got {self.stiffening!r}")
+        # None: AUTO, resolved by build_chain (model.py::_resolve_mode_families)
+        row[STIFFENING] = AUTO if self.stiffening is None else float(self.stiffening)
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
                     j_i=j_c + shift, force=optional_function(who, "end_force", self.end_force),
                     torque=optional_function(who, "end_torque", self.end_torque),
