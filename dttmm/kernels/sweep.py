@@ -193,8 +193,6 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     p_vec[0, :] = root_f
     for j in range(n_el):
         sp = split[j]
-        f_idx = F_IDX[sp]
-        e_idx = E_IDX[sp]
         k = kind[j]
         if k == IDENTITY:
             split[j + 1] = sp
