@@ -84,6 +84,9 @@ def _beam_lines(model, k):
             why += (f"; frequencies of the {cap}-mode basis: with {m} the polynomial modes' "
                     f"are higher (Ritz)")
         lines.append(why)
+        reasons = model.frequency_cutoff_reasons
+        if k < len(reasons) and reasons[k]:
+            lines.append(f"the cutoff: {reasons[k]}")
     mt, ma = int(row[TORSION_MODES]), int(row[AXIAL_MODES])
     lines.append(f"{mt} twist mode{'s' if mt > 1 else ''}, own frequencies (Hz): "
                  f"{np.array2string(torsion_frequencies(row), precision=4)}" if mt else

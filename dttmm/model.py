@@ -7,11 +7,13 @@ import numpy as np
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
 from .elements.beam import (AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
-                            FAMILY, FREQUENCY_CUTOFF, LENGTH, LOAD_AXES, MAX_LOADED_MODES, MODES,
-                            PINNED, STIFFENING, TORSION_MODES, auto_mode_count, auto_part_count,
+                            FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
+                            MAX_LOADED_MODES, MODES, PINNED, STIFFENING, TORSION_MODES,
+                            auto_mode_count, auto_part_count,
                             axial_frequencies, modal_size, mode_shapes, torsion_frequencies,
                             torsion_shapes)
-from .elements._checks import derivative, finite_vector, rotation_matrix
+from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
+from .elements.drives import MOTION
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              body_kind_of, joint_kind_of, names)
@@ -295,6 +297,10 @@ class Model:
         (``RigidBody.points``).
     attachment_point : ndarray (n, 3)
         That point in the parent's frame from its input point, m (zero for the ground).
+    frequency_cutoff_reasons : tuple of str
+        Per body: where the cutoff of a beam with ``modes_per_plane="auto"`` and no
+        ``frequency_cutoff`` came from (the build's step and the drives' bandwidth); "" for
+        every other body.
 
     Examples
     --------
@@ -338,6 +344,7 @@ class Model:
                                      # j-th named point (RigidBody.points)
     attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
                                      # point, m (zero for the ground)
+    frequency_cutoff_reasons: tuple = ()  # per body: where a derived "auto" cutoff came from
 
     def __post_init__(self):
         # frozen through and through: the arrays cannot be written either (a negative mass
@@ -514,7 +521,7 @@ class System:
         self._entries.append((body, joint, parent, at))
         return body
 
-    def build(self, tip="free") -> "Model":
+    def build(self, tip="free", step=None, duration=None) -> "Model":
         """Validate and freeze into a Model.
 
         Parameters
@@ -523,6 +530,10 @@ class System:
             "free" (default) or, for a chain only, "ball": the last body's output point is
             joined to the ground by a ball joint where it starts (a fixed point; e.g. a simply
             supported beam).
+        step, duration : float, optional
+            The time step (s) and the length (s) of the runs the model is for: a beam with
+            ``modes_per_plane="auto"`` and no ``frequency_cutoff`` keeps the modes at or below
+            a cutoff derived from them (``build_chain``).
 
         Returns
         -------
@@ -542,11 +553,12 @@ class System:
             against its ends, a rotation or angular velocity contradicting the joint before a
             body, a ball-joint body with no inertia about its hinge-to-hinge axis.
         """
-        return _freeze(*_resolve_topology(self._entries), self.gravity, self.ground, tip)
+        return _freeze(*_resolve_topology(self._entries), self.gravity, self.ground, tip,
+                       step, duration)
 
 
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
-                tip="free") -> "Model":
+                tip="free", step=None, duration=None) -> "Model":
     """Validate a chain described root to tip and freeze it into a Model (a System whose every
     body hangs from the output point of the one before it; the same model as ``System.add``
     body by body).
@@ -568,6 +580,17 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
     tip : {"free", "ball"}, optional
         "free" (default), or "ball": the tip body's output point is joined to the ground by a
         ball-and-socket joint where it starts (a fixed point; e.g. a simply supported beam).
+    step : float, optional
+        The time step the model will run at, s.  A beam with ``modes_per_plane="auto"`` and
+        no ``frequency_cutoff`` keeps the modes at or below 1 / (20 step) Hz (what the step
+        resolves, about 20 steps per period), lowered, with ``duration``, to ten times the
+        drives' bandwidth: the frequency below which 99% of the energy of the prescribed
+        motions' accelerations (the ground's, JointMotion drives') lies over [0, duration]
+        (modes well above what drives the system follow it quasi-statically).  Gravity and
+        initial conditions excite every mode; where they matter, give frequency_cutoff.
+        ``model.describe()`` says which cutoff was kept and why.
+    duration : float, optional
+        The runs' length, s (with step): the span over which the drives' bandwidth is taken.
 
     Returns
     -------
@@ -611,7 +634,8 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
             raise ValueError(f"Chain: element {2 * k + 1} must be a body ({names(BODY_KINDS)}), "
                              f"got {type(b).__name__}")
     parents = [-1] + list(range(len(bodies) - 1))
-    return _freeze(bodies, hinges, parents, [0] * len(bodies), gravity, ground, tip)
+    return _freeze(bodies, hinges, parents, [0] * len(bodies), gravity, ground, tip, step,
+                   duration)
 
 
 def _resolve_topology(entries):
@@ -696,7 +720,7 @@ def _who(body, index=None):
     return f"{type(body).__name__} '{name}'{where}" if name else f"{type(body).__name__}{where}"
 
 
-def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
+def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, duration=None):
     """Validate every element and the system, and freeze them into a Model.  bodies, hinges:
     in topological order; parents[k] < k the parent body of body k (-1: the ground); attach[k]
     its attachment point on the parent (0: the output point, j: the parent's j-th named
@@ -745,7 +769,12 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
                              f"output end")
         attachment_point[k] = (bv[p]["l_io"] if attachment[k] == 0
                                else list(bv[p]["points"].values())[attachment[k] - 1])
-    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip)
+    derived = None
+    from_step = (body_kind == BEAM) & (beam_params[:, FREQUENCY_CUTOFF] == FROM_STEP)
+    if np.any(from_step):
+        derived = _derived_cutoff(step, duration, ground, hv, bodies, beam_params)
+    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip,
+                           None if derived is None else derived[0])
     _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
     rotations = np.zeros((n, 3, 3))
@@ -809,6 +838,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip):
         attachment=attachment,
         attachment_point=attachment_point,
         drives=tuple(v.get("drives", ()) for v in hv),
+        frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
     )
 
 
@@ -859,7 +889,64 @@ def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
     return rotation @ e, omega + rotation @ jl @ theta_dot
 
 
-def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip):
+def _derived_cutoff(step, duration, ground, hv, bodies, beam_params):
+    """(cutoff, why) for the beams with modes_per_plane="auto" and no frequency_cutoff
+    (build_chain's step and duration): 1 / (20 step) Hz, lowered to ten times the drives'
+    bandwidth over [0, duration] where the model has prescribed motions that vary."""
+    if step is None:
+        k = int(np.nonzero(beam_params[:, FREQUENCY_CUTOFF] == FROM_STEP)[0][0])
+        raise ValueError(f"{bodies[k].label(k)}: modes_per_plane='auto' without a "
+                         f"frequency_cutoff takes its cutoff from the step the model will run "
+                         f"at: build it with step=dt (and duration=t_end, to bound it by the "
+                         f"drives' bandwidth), or give frequency_cutoff (Hz)")
+    step = finite_scalar("System", "step", step, positive=True)
+    f_step = 1.0 / (20.0 * step)
+    why = f"from the step {step:g} s: 1 / (20 step) = {f_step:.4g} Hz"
+    if duration is None:
+        return f_step, why
+    duration = finite_scalar("System", "duration", duration, positive=True)
+    bandwidth = drives_bandwidth(step, duration, ground.motion,
+                                 [d for v in hv for d in v.get("drives", ())
+                                  if d is not None and d["kind"] == MOTION])
+    if bandwidth is None:
+        return f_step, why + " (no prescribed motion varies to bound it)"
+    if 10.0 * bandwidth < f_step:
+        return 10.0 * bandwidth, (f"ten times the drives' bandwidth, {bandwidth:.4g} Hz (99% of "
+                                  f"their acceleration's energy below it over {duration:g} s; "
+                                  f"the step {step:g} s would resolve {f_step:.4g} Hz)")
+    return f_step, why + f" (below ten times the drives' bandwidth, {bandwidth:.4g} Hz)"
+
+
+def drives_bandwidth(step, duration, ground_motion, motions, max_samples=1 << 15):
+    """The drives' bandwidth, Hz: the largest, over the ground's acceleration and angular
+    acceleration components and each JointMotion's acceleration sampled every step over
+    [0, duration] (at most max_samples points), of the frequency below which 99% of the
+    signal's energy (its spectrum's, mean removed) lies; None when no prescribed motion varies
+    (no motion, or constant accelerations)."""
+    n = int(min(max_samples, np.floor(duration / step) + 1))
+    t = np.linspace(0.0, duration, n)
+    signals = []
+    if ground_motion is not None:
+        states = [ground_motion(ti) for ti in t]
+        signals += list(np.array([s[2] for s in states]).T)
+        signals += list(np.array([s[5] for s in states]).T)
+    for drive in motions:
+        acceleration = drive["function"][2]
+        signals.append(np.array([float(acceleration(ti)) for ti in t]))
+    best = None
+    for s in signals:
+        s = np.asarray(s, dtype=float) - np.mean(s)
+        if not np.any(np.abs(s) > 1e-12 * (1.0 + np.max(np.abs(s)))):
+            continue
+        power = np.abs(np.fft.rfft(s)) ** 2
+        share = np.cumsum(power) / np.sum(power)
+        f99 = np.fft.rfftfreq(n, t[1] - t[0])[int(np.searchsorted(share, 0.99))]
+        best = f99 if best is None else max(best, f99)
+    return best
+
+
+def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip,
+                           derived_cutoff=None):
     """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
     pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
     the input section's frame, with the clamped-free eigenfunctions when the output is the free
@@ -895,6 +982,8 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         elif family != PINNED:
             family = CLAMPED if free_tip else CLAMPED_LOADED
         beam_params[k, FAMILY] = family
+        if beam_params[k, FREQUENCY_CUTOFF] == FROM_STEP:   # derived (build_chain's step)
+            beam_params[k, FREQUENCY_CUTOFF] = derived_cutoff
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
             beam_params[k, MODES] = auto_mode_count(beam_params[k])
             for part, frequencies in ((TORSION_MODES, torsion_frequencies),

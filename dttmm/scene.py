@@ -22,7 +22,8 @@ from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
-                              ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
+                              DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
+                              REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from .model import Ground, Model, PrescribedMotion, System
@@ -62,7 +63,8 @@ _JOINTS = {
     "elastic": (ElasticHinge, {"translational_stiffness": "stiffness",
                                "rotational_stiffness": "stiffness",
                                "translational_damping": "stiffness",
-                               "rotational_damping": "stiffness", "rotation": "matrix"}),
+                               "rotational_damping": "stiffness", "rotation": "matrix",
+                               "deflection": "vector"}),
     "revolute": (RevoluteJoint, {"axis": "vector", "angle": "number", "rate": "number",
                                  "drive": "table"}),
     "universal": (UniversalJoint, {"axis1": "vector", "axis2": "vector", "angles": "pair",
@@ -155,12 +157,14 @@ def scene_from_dict(data, where="scene"):
     for i, table in enumerate(bodies):
         body, joint, parent, at = _body(table, i, where)
         system.add(body, joint, parent=parent, at=at)
-    try:
-        model = system.build(tip=tip)
-    except ValueError as err:
-        raise SceneError(f"{where}: {err}") from None
     run = data.get("run", {})
     _keys(run, _RUN, where, "[run]")
+    try:
+        # the run's step and length: a beam with modes_per_plane = "auto" and no
+        # frequency_cutoff derives its cutoff from them (build_chain)
+        model = system.build(tip=tip, step=run.get("dt"), duration=run.get("t_end"))
+    except ValueError as err:
+        raise SceneError(f"{where}: {err}") from None
     return Scene(name=header.get("name", Path(where).stem), model=model, run=dict(run),
                  path=where)
 
@@ -466,6 +470,8 @@ def _joint_table(model, k, who):
                      translational_damping=h[C_TRANSLATION].reshape(3, 3).tolist(),
                      rotational_damping=h[C_ROTATION].reshape(3, 3).tolist(),
                      rotation=rest.tolist())
+        if np.any(h[DEFLECTION_0]):
+            table["deflection"] = h[DEFLECTION_0].tolist()
     elif kind in (REVOLUTE, PRISMATIC):
         coordinate = "angle" if kind == REVOLUTE else "position"
         table.update(axis=h[AXIS_1].tolist(), **{coordinate: h[COORDINATE_0][0]},

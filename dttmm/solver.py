@@ -19,8 +19,8 @@ from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements.drives import FORCE, MOTION
-from .elements.hinges import (AXIS_1, COORDINATE_0, ELASTIC, FIXED, HINGE_PARAM_SIZE, RATE_0,
-                              REST_ROTATION)
+from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
+                              HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree
@@ -136,6 +136,8 @@ class Workspace:
             joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
         self.beams = beam_tables(model)
         _initial_slides(model, self.state)
+        for k in np.nonzero(model.hinge_kind == ELASTIC)[0]:
+            self.state.defl[k] = model.hinge_params[k, DEFLECTION_0]   # (its rate starts at 0)
 
 
 def _initial_slides(model, state):
@@ -1209,7 +1211,8 @@ def kernel_model(model):
     attachment_point[inner] = arrays["body_params"][parent[inner]][:, TO_OUTPUT]
     return replace(model, n_bodies=len(parent), parent=parent,
                    attachment=np.zeros(len(parent), dtype=np.int64),
-                   attachment_point=attachment_point, **arrays), np.array(keep)
+                   attachment_point=attachment_point, frequency_cutoff_reasons=(),
+                   **arrays), np.array(keep)
 
 
 _DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "

@@ -7,8 +7,8 @@ accelerations at rest are what the solver's consistent start computes (the same 
 matrices as a step, with the velocities zero), so the equilibrium is found by Newton iterations
 on the model's configuration q with a(q) as the residual and its Jacobian by differences.  The
 configuration is exact (large rotations): each ball-jointed body's rotation, each joint
-coordinate, each beam's modal coordinates; a body behind a fixed hinge follows its inboard
-output section.  At the solution
+coordinate, each elastic hinge's deflection (and its outboard body's rotation), each beam's
+modal coordinates; a body behind a fixed hinge follows its inboard output section.  At the solution
 the Jacobian is -M^-1 K (K the tangent stiffness), so its eigenvalues are minus the squared
 circular frequencies of the small vibrations about the equilibrium: all negative means stable.
 """
@@ -19,7 +19,8 @@ import numpy as np
 
 from .elements import BEAM
 from .elements.drives import MOTION
-from .elements.hinges import AXIS_1, BALL, COORDINATE_0, FIXED, RATE_0, REST_ROTATION
+from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
+                              REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
@@ -106,6 +107,8 @@ class StaticEquilibrium:
             if m.hinge_kind[k] == PRISMATIC:          # the slide along the joint's axis
                 r_in[k] = r_in[k] + rot_p @ m.hinge_params[k, AXIS_1] * \
                     m.hinge_params[k, COORDINATE_0][0]
+            elif m.hinge_kind[k] == ELASTIC:          # the hinge's deflection (world)
+                r_in[k] = r_in[k] + m.hinge_params[k, DEFLECTION_0]
             rot = m.initial_rotation[k]
             r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
             r_o[k] = r_in[k] + rot @ m.body_params[k, TO_OUTPUT]
@@ -156,7 +159,8 @@ class StaticEquilibrium:
 
 class _Configuration:
     """The model's configuration as a flat vector q (each free body's rotation increment, world
-    axes; each joint coordinate that no motion prescribes; then every beam's modal
+    axes: behind a ball joint or an elastic hinge; each joint coordinate that no motion
+    prescribes; each elastic hinge's deflection, world, m; then every beam's modal
     coordinates), and the accelerations at rest a(q) by the solver's consistent start.  Works on
     the kernel model (solver.kernel_model), whose extra massless bodies are welded and so follow
     their inboard bodies."""
@@ -168,16 +172,16 @@ class _Configuration:
         n = km.n_bodies
         for k in range(n):
             kind = int(km.hinge_kind[k])
-            if kind not in (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC):
+            if kind not in (BALL, FIXED, ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC):
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
                                  f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "
-                                 f"fixed hinges and joints with coordinates so far (run the "
-                                 f"model with damping to rest instead)")
+                                 f"fixed and elastic hinges and joints with coordinates so far "
+                                 f"(run the model with damping to rest instead)")
         if km.tip_pinned:
             raise ValueError(f"{where}: the tip is pinned to the ground (a closed loop); the "
                              f"static solve takes open chains and trees so far")
         self.free = [k for k in range(n)
-                     if km.hinge_kind[k] == BALL and not km.ground_locked[k]]
+                     if km.hinge_kind[k] in (BALL, ELASTIC) and not km.ground_locked[k]]
         self.n_rot = 3 * len(self.free)
         # joint coordinates: free unless a motion prescribes them (then held at their value)
         self.coords = [(k, i) for k in range(n) for i in range(n_coordinates(km.hinge_kind[k]))
@@ -185,13 +189,21 @@ class _Configuration:
                                and km.drives[k][i]["kind"] == MOTION)]
         self.n_q = len(self.coords)
         self.jq0 = np.array(km.hinge_params[:, COORDINATE_0])
+        # elastic hinges' deflections (world, m): after the joint coordinates
+        self.elastic = [k for k in range(n) if km.hinge_kind[k] == ELASTIC]
+        self.d0 = self.n_rot + self.n_q
+        self.defl0 = np.where((km.hinge_kind == ELASTIC)[:, None],
+                              km.hinge_params[:, DEFLECTION_0], 0.0)
         self.n_eta = len(km.initial_modal_coordinates)
         mode_off = np.concatenate([[0], np.cumsum(km.n_modes)])
-        # the scale of each coordinate: rad, or the beam's length for its modal coordinates
-        self.e0 = self.n_rot + self.n_q                  # where the modal coordinates start
-        scale = np.ones(self.e0 + self.n_eta)           # rad, m (a slide), beam lengths
+        # the scale of each coordinate: rad, m, or the beam's length for its modal coordinates
+        self.e0 = self.d0 + 3 * len(self.elastic)       # where the modal coordinates start
+        scale = np.ones(self.e0 + self.n_eta)           # rad, m (a slide, a deflection),
+        #                                                 beam lengths
         labels = [f"{km.body_names[k]} rotation {'xyz'[i]}" for k in self.free for i in range(3)]
         labels += [f"{km.hinge_names[k]} coordinate {i + 1}" for k, i in self.coords]
+        labels += [f"{km.hinge_names[k]} deflection {'xyz'[i]}" for k in self.elastic
+                   for i in range(3)]
         for k in range(n):
             if km.body_kind[k] == BEAM:
                 i0, i1 = mode_off[k], mode_off[k + 1]
@@ -219,14 +231,16 @@ class _Configuration:
             self.fused = (solver.run_steps_no_alloc,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
 
-    def vector(self, rot, jq, eta):
-        """q of a configuration given by rotations, joint coordinates (n, 2) and modal
-        coordinates (rotations relative to the model's own)."""
+    def vector(self, rot, jq, eta, defl):
+        """q of a configuration given by rotations, joint coordinates (n, 2), modal
+        coordinates and hinge deflections (n, 3) (rotations relative to the model's own)."""
         q = np.zeros(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
             q[3 * i:3 * i + 3] = _log_so3(rot[k] @ self.rot0[k].T)
         for j, (k, i) in enumerate(self.coords):
             q[self.n_rot + j] = jq[k, i]
+        for j, k in enumerate(self.elastic):
+            q[self.d0 + 3 * j:self.d0 + 3 * j + 3] = defl[k]
         q[self.e0:] = eta
         return q
 
@@ -243,14 +257,18 @@ class _Configuration:
         return q
 
     def state(self, q):
-        """(rotations, joint coordinates (n, 2), modal coordinates) of q: the free bodies
-        turned by their increments, every welded body placed on its inboard output section,
-        a body behind a joint with coordinates on its joint's frame (kernels/joint.py)."""
+        """(rotations, joint coordinates (n, 2), modal coordinates, hinge deflections (n, 3))
+        of q: the free bodies turned by their increments, every welded body placed on its
+        inboard output section, a body behind a joint with coordinates on its joint's frame
+        (kernels/joint.py)."""
         km = self.model
         rot = self.rot0.copy()
         jq = self.jq0.copy()
         for j, (k, i) in enumerate(self.coords):
             jq[k, i] = q[self.n_rot + j]
+        defl = np.zeros((km.n_bodies, 3))
+        for j, k in enumerate(self.elastic):
+            defl[k] = q[self.d0 + 3 * j:self.d0 + 3 * j + 3]
         eta = q[self.e0:]
         e = np.empty((3, 3))
         for i, k in enumerate(self.free):
@@ -260,7 +278,7 @@ class _Configuration:
         w, wd, d, d_rate = (np.zeros(3) for _ in range(4))
         for k in range(km.n_bodies):
             kind = int(km.hinge_kind[k])
-            if kind in (BALL,) or (kind == FIXED and km.ground_locked[k]):
+            if kind in (BALL, ELASTIC) or (kind == FIXED and km.ground_locked[k]):
                 continue
             p = km.parent[k]
             if p < 0:
@@ -276,11 +294,12 @@ class _Configuration:
                             zero, zero, jq[k].copy(), np.zeros(2), np.zeros(2), out, w, wd, d,
                             d_rate)
                 rot[k] = out
-        return rot, jq, np.array(eta)
+        return rot, jq, np.array(eta), defl
 
     def accelerations(self, q):
-        """a(q): the free bodies' angular accelerations and the modal accelerations at rest."""
-        rot, jq, eta = self.state(q)
+        """a(q): the free bodies' angular accelerations, the free joint coordinates' and
+        elastic deflections' accelerations and the modal accelerations at rest."""
+        rot, jq, eta, defl = self.state(q)
         st = self.ws.state
         st.rot[:] = rot
         st.omega[:] = 0.0
@@ -288,6 +307,9 @@ class _Configuration:
         st.eta[:] = eta
         st.eta_d[:] = 0.0
         st.jqd[:] = 0.0
+        for k in self.elastic:
+            st.defl[k] = defl[k]
+            st.defl_rate[k] = 0.0
         st.z[:] = 0.0
         solver._consistent_start(self.model, self.mode, "riccati", self.fused, self.params,
                                  self.settings, st, self.ws.sweep, self.monitor, 1.0)
@@ -296,6 +318,8 @@ class _Configuration:
             a[3 * i:3 * i + 3] = st.omega_dot[k]
         for j, (k, i) in enumerate(self.coords):
             a[self.n_rot + j] = st.jqdd[k, i]
+        for j, k in enumerate(self.elastic):
+            a[self.d0 + 3 * j:self.d0 + 3 * j + 3] = st.defl_acc[k]
         a[self.e0:] = st.eta_acc
         return a
 
@@ -317,11 +341,13 @@ class _Configuration:
 
     def result_model(self, q):
         """The user's model at rest in configuration q."""
-        rot, jq, eta = self.state(q)
+        rot, jq, eta, defl = self.state(q)
         user = self.user
         hinge_params = np.array(user.hinge_params)
         hinge_params[:, COORDINATE_0] = jq[self.keep]
         hinge_params[:, RATE_0] = 0.0
+        elastic = user.hinge_kind == ELASTIC
+        hinge_params[elastic, DEFLECTION_0] = defl[self.keep][elastic]
         return replace(user, initial_rotation=rot[self.keep],
                        initial_angular_velocity=np.zeros((user.n_bodies, 3)),
                        hinge_params=hinge_params, initial_modal_coordinates=eta,
@@ -336,7 +362,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     Parameters
     ----------
     model : Model
-        Built by ``build_chain`` or ``System.build``: ball joints, fixed hinges, joints with
+        Built by ``build_chain`` or ``System.build``: ball joints, fixed and elastic hinges
+        (the equilibrium's deflections are the result model's ``ElasticHinge.deflection``),
+        joints with
         coordinates (a coordinate that a JointMotion prescribes is held at its value at t = 0),
         rigid bodies and beams (an open chain or tree).  Its initial rotations, joint
         coordinates and modal coordinates are the first guess; its velocities are ignored
@@ -366,8 +394,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         next ``guess``), or the model has no equilibrium: a body that nothing holds (no
         gravity, load or spring acts on its rotation), or one whose loads nothing balances.
     ValueError
-        A joint kind the static solve does not take yet (elastic hinges), a pinned tip, or a
-        guess that does not fit the model.
+        A pinned tip (a closed loop), or a guess that does not fit the model.
 
     Warns
     -----
@@ -395,7 +422,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
                          f"got {max_iterations!r}")
     cfg = _Configuration(model, where)
-    q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0)
+    q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0, cfg.defl0)
     if guess is not None:
         start = guess.model if isinstance(guess, StaticEquilibrium) else guess
         if not isinstance(start, Model) or start.n_bodies != model.n_bodies or (
@@ -406,7 +433,10 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         rot_k[cfg.keep] = start.initial_rotation
         jq = cfg.jq0.copy()
         jq[cfg.keep] = start.hinge_params[:, COORDINATE_0]
-        q = cfg.vector(rot_k, jq, start.initial_modal_coordinates)
+        defl = cfg.defl0.copy()
+        defl[cfg.keep] = np.where((start.hinge_kind == ELASTIC)[:, None],
+                                  start.hinge_params[:, DEFLECTION_0], 0.0)
+        q = cfg.vector(rot_k, jq, start.initial_modal_coordinates, defl)
     a = cfg.accelerations(q)
     weight = 1.0 / cfg.scale           # residuals in rad/s^2 (modal: per beam length)
     iterations = 0

@@ -128,6 +128,36 @@ def test_spring_loaded_revolute_link_is_analytic():
     assert np.allclose(eq.squared_frequencies, [omega2], rtol=1e-7)
 
 
+def test_link_on_an_elastic_hinge_is_analytic():
+    """A link on an elastic hinge at the ground (translational spring k_t = 2000 N/m, rotational
+    K_r = diag(30, 30, 15) N m/rad), under gravity -y: the hinge deflects by m g / k_t down and
+    turns by theta about z with k_r,z theta + m g l_c cos theta = 0 (the spring's moment about
+    the deflected hinge point); the deflection is a coordinate of the solve and the result's
+    ElasticHinge.deflection, which a scene keeps; DT-TMM from the equilibrium moves nothing by
+    1e-9 m over 0.5 s."""
+    from scipy.optimize import brentq
+    from dttmm.scene import scene_from_dict, scene_of
+    mass, l_c, i_c, k_t, k_z = 2.0, 0.5, 1.0 / 6.0, 2000.0, 15.0
+    link = dttmm.RigidBody(mass=mass, inertia=[1e-3, i_c, i_c], inertia_about="mass_center",
+                           to_mass_center=[l_c, 0, 0], to_output=[1.0, 0, 0])
+    hinge = dttmm.ElasticHinge(translational_stiffness=k_t, rotational_stiffness=[30, 30, k_z],
+                               rotational_damping=0.1)
+    model = dttmm.build_chain([hinge, link], gravity=[0, -9.81, 0])
+    eq = dttmm.static_equilibrium(model)
+    assert "ElasticHinge0 deflection y" in eq.coordinates and eq.stable
+    d = eq.model.hinge_params[0, 45:48]
+    assert np.abs(d - [0.0, -mass * 9.81 / k_t, 0.0]).max() < 1e-12, d
+    theta = brentq(lambda x: k_z * x + mass * 9.81 * l_c * np.cos(x), -np.pi / 2, 0.0)
+    x_axis = eq.model.initial_rotation[0] @ [1.0, 0, 0]
+    assert abs(np.arctan2(x_axis[1], x_axis[0]) - theta) < 1e-10
+    res = dttmm.simulate(eq.model, 0.5, 1e-3)
+    assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
+    assert np.allclose(res.position_input[0, 0], d, atol=1e-15)
+    assert np.allclose(res.position_output[0], eq.positions()[2], atol=1e-12)
+    again = scene_from_dict(scene_of(eq.model)).model
+    assert np.array_equal(again.hinge_params[0, 45:48], d)
+
+
 def test_arm_on_joints_with_coordinates_hangs():
     """The arm of examples/arm.py without its drive: joint 2 hangs link 2 straight down
     (-pi / 2), the prismatic spring stretches by m g / k = 0.5 * 9.81 / 50 m, joint 1 (about the

@@ -50,6 +50,8 @@ def test_named_body_is_named():
      ["ElasticHinge", "hinge 1", "rotational_stiffness"]),
     (ElasticHinge(1.0, 1.0, rotational_damping=-1.0), ["hinge 1", "rotational_damping"]),
     (ElasticHinge(1.0, np.nan), ["hinge 1", "rotational_stiffness"]),
+    (ElasticHinge(1.0, 1.0, deflection=[0.0, np.inf, 0.0]), ["hinge 1", "deflection"]),
+    (ElasticHinge(1.0, 1.0, deflection=[0.0, 1.0]), ["hinge 1", "deflection"]),
     (FixedHinge(rotation=np.ones((3, 3))), ["FixedHinge", "hinge 1", "rotation"]),
 ])
 def test_bad_hinge_parameters(hinge, words):

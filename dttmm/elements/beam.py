@@ -209,6 +209,7 @@ def torsion_frequencies(beam_row, n_modes=None):
     _, _, mass, stiff = torsion_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], n, [0.0])
     return np.sqrt(beam_row[GJ] * stiff / (beam_row[POLAR_PER_LENGTH] * mass)) / (2 * np.pi)
 MAX_AUTO_MODES = 10   # modes_per_plane="auto" keeps at most this many (6 for loaded-end modes)
+FROM_STEP = -1.0      # FREQUENCY_CUTOFF of "auto" without a cutoff: the build derives it
 
 
 def bending_frequencies(beam_row, n_modes=None):
@@ -329,8 +330,10 @@ class EulerBernoulliBeam:
         The body's name, as for ``RigidBody`` (default "": ``body{k}``).
     frequency_cutoff : float, optional
         Hz (> 0), with modes_per_plane="auto" (and only then): the highest frequency to keep.
-        A motion resolved by a step dt needs about 20 steps per period: 1 / (20 dt) keeps what
-        that step resolves.
+        None (default) with "auto": derived when the model is built with ``step=`` (and
+        ``duration=``): what the step resolves, 1 / (20 step) (about 20 steps per period),
+        lowered to ten times the drives' bandwidth (``build_chain``, docs/beam.md "Mode
+        shapes").
     end_force : callable, optional
         end_force(t) -> 3 numbers: a world-frame force applied at the beam's output end at
         time t (s), N (docs/beam.md, "Loads on the beam").  None (default): none.
@@ -449,11 +452,10 @@ class EulerBernoulliBeam:
                               positive=True)
         auto = isinstance(self.modes_per_plane, str) and self.modes_per_plane == "auto"
         if auto:
-            if self.frequency_cutoff is None:
-                raise ValueError(f"{who}: modes_per_plane='auto' keeps the modes below "
-                                 f"frequency_cutoff (Hz), which is missing (e.g. 1 / (20 dt) for "
-                                 f"the step you will run)")
-            cutoff = finite_scalar(who, "frequency_cutoff", self.frequency_cutoff, positive=True)
+            # no cutoff: FROM_STEP, derived by the build from its step= (model.py)
+            cutoff = (FROM_STEP if self.frequency_cutoff is None else
+                      finite_scalar(who, "frequency_cutoff", self.frequency_cutoff,
+                                    positive=True))
             for arg in ("initial_modal_coordinates", "initial_modal_velocities"):
                 if getattr(self, arg) is not None:
                     raise ValueError(f"{who}: {arg} needs a fixed modes_per_plane (with 'auto' "

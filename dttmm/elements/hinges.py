@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import matrix3, rotation_matrix, symmetric_positive
+from ._checks import finite_vector, matrix3, rotation_matrix, symmetric_positive
 
 BALL, FIXED, ELASTIC = 0, 1, 2        # Model.hinge_kind (declared in kinds.py)
 
@@ -20,6 +20,8 @@ C_ROTATION = slice(36, 45)         # N m s/rad
 AXIS_1 = slice(45, 48)             # joints with coordinates (joints.py): the (first) axis,
 AXIS_2 = slice(48, 51)             # parent frame; a universal joint's second, child frame
 COORDINATE_0 = slice(51, 53)       # their coordinates (rad or m) and rates at t = 0
+DEFLECTION_0 = slice(45, 48)       # an elastic hinge's deflection d at t = 0 (world, m), in
+#                                    the axis slots, which an elastic hinge has no use for
 RATE_0 = slice(53, 55)
 HINGE_PARAM_SIZE = 55
 
@@ -110,7 +112,8 @@ class ElasticHinge:
         m (couple on the outboard side, about its input point)
                                              = -A_in (K_r psi + C_r A_in^T (w_out - w_in)).
 
-    The hinge starts undeflected (d = 0); the outboard body starts in the inboard frame turned
+    The hinge starts at the given deflection (``deflection``; d = 0 by default, or where
+    ``static_equilibrium`` left it); the outboard body starts in the inboard frame turned
     by R0 unless it is given a rotation of its own (``RigidBody.rotation``).  Stiffnesses are
     scalars (times the identity), 3 diagonal entries or symmetric positive definite 3x3
     matrices; dampings likewise but may be zero (positive semidefinite).  Newmark scheme only.
@@ -131,6 +134,9 @@ class ElasticHinge:
     name : str, optional
         The hinge's name, in messages and ``Model.hinge_names`` (default "":
         ``ElasticHinge{k}``).
+    deflection : array_like of 3, optional
+        d at t = 0, world frame, m (the outboard input point's offset from the inboard output
+        point; its rate starts at zero).  None (default): undeflected.
 
     Raises
     ------
@@ -138,7 +144,8 @@ class ElasticHinge:
         At build time, naming the hinge (its name and index) and the argument: a stiffness or
         damping that is not a scalar, 3 entries or a 3x3 matrix, has non-finite entries, is
         not symmetric, or is not positive definite (stiffness) or semidefinite (damping); a
-        rotation that is not a proper rotation matrix.
+        rotation that is not a proper rotation matrix; a deflection that is not 3 finite
+        numbers.
 
     Examples
     --------
@@ -152,6 +159,7 @@ class ElasticHinge:
     rotational_damping: object = 0.0
     rotation: object = None
     name: str = ""
+    deflection: object = None
     kind = ELASTIC
 
     def validated(self, index=None):
@@ -168,7 +176,9 @@ class ElasticHinge:
         c_r = symmetric_positive(who, "rotational_damping",
                                  matrix3(who, "rotational_damping", self.rotational_damping),
                                  semidefinite=True)
-        return dict(rotation=r, k_t=k_t, c_t=c_t, k_r=k_r, c_r=c_r)
+        d0 = (np.zeros(3) if self.deflection is None
+              else finite_vector(who, "deflection", self.deflection, size=3))
+        return dict(rotation=r, k_t=k_t, c_t=c_t, k_r=k_r, c_r=c_r, d0=d0)
 
 
 def _label(hinge, index):
@@ -184,6 +194,8 @@ def pack_hinge(v):
     row[C_TRANSLATION] = v["c_t"].reshape(-1)
     row[K_ROTATION] = v["k_r"].reshape(-1)
     row[C_ROTATION] = v["c_r"].reshape(-1)
+    if "d0" in v:
+        row[DEFLECTION_0] = v["d0"]
     if "axis1" in v:
         row[AXIS_1] = v["axis1"]
         row[AXIS_2] = v["axis2"]

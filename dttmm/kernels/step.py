@@ -30,7 +30,7 @@ from ..elements.beam import MODES, TORSION_MODES
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .beam import beam_transfer
+from .beam import beam_transfer, end_angles
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
@@ -470,24 +470,12 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
     A (J_l theta'' + J_l' theta'), J_l' theta' = theta' x (theta x theta') / 6 (J_l = E +
     theta^ / 2 + theta^ theta^ / 6 + ..; the rest is of higher order in the end slope)."""
     mode_off, ends = beams[3], beams[4]
-    i0 = mode_off[k]
+    i0, i1 = mode_off[k], mode_off[k + 1]
     m = int(beams[1][k, MODES])
-    th = np.zeros(3)
-    th_d = np.zeros(3)
-    th_dd = np.zeros(3)
-    for j in range(m):
-        y = ends[k, j, 1]
-        th[1] -= y * eta[i0 + m + j]
-        th[2] += y * eta[i0 + j]
-        th_d[1] -= y * eta_d[i0 + m + j]
-        th_d[2] += y * eta_d[i0 + j]
-        th_dd[1] -= y * eta_dd[i0 + m + j]
-        th_dd[2] += y * eta_dd[i0 + j]
-    for j in range(int(beams[1][k, TORSION_MODES])):    # the twist (docs/beam.md, "Torsion")
-        y = ends[k, m + j, 0]
-        th[0] += y * eta[i0 + 2 * m + j]
-        th_d[0] += y * eta_d[i0 + 2 * m + j]
-        th_dd[0] += y * eta_dd[i0 + 2 * m + j]
+    bending, twist = ends[k, :m], ends[k, m:m + int(beams[1][k, TORSION_MODES])]
+    th = end_angles(bending, twist, eta[i0:i1])
+    th_d = end_angles(bending, twist, eta_d[i0:i1])
+    th_dd = end_angles(bending, twist, eta_dd[i0:i1])
     e = np.empty((3, 3))
     expm_so3(th, e)
     rot_out[:, :] = rot @ e @ rest
