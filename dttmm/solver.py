@@ -135,17 +135,19 @@ class Workspace:
             joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
             joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
         self.beams = beam_tables(model)
-        _initial_slides(model, self.state)
-        for k in np.nonzero(model.hinge_kind == ELASTIC)[0]:
-            self.state.defl[k] = model.hinge_params[k, DEFLECTION_0]   # (its rate starts at 0)
+        _initial_deflections(model, self.state)
 
 
-def _initial_slides(model, state):
-    """A prismatic joint's slide d = u q and its rate u q' + w_p x d at t = 0 (u the axis in
-    world, w_p the parent's output section's angular velocity; kernels/joint.py::joint_frame),
-    which the loops keep in state.defl from the first step on: the t = 0 sample (and the
-    energies, positions) then place the body where its coordinate says."""
+def _initial_deflections(model, state):
+    """state.defl at t = 0, the offset of each body's input point from its parent's output
+    point, which the loops keep from the first step on (the t = 0 sample, the energies and
+    positions then place the body where the model says): an elastic hinge's given deflection
+    (ElasticHinge.deflection; its rate starts at zero), and a prismatic joint's slide d = u q
+    with its rate u q' + w_p x d (u the axis in world, w_p the parent's output section's
+    angular velocity; kernels/joint.py::joint_frame)."""
     for k in range(model.n_bodies):
+        if model.hinge_kind[k] == ELASTIC:
+            state.defl[k] = model.hinge_params[k, DEFLECTION_0]
         if model.hinge_kind[k] != PRISMATIC:
             continue
         p = model.parent[k]

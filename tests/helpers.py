@@ -76,3 +76,18 @@ def driven_arm_on_two_elements(**beam):
                     to_mass_center=(0.0, 0.2, 0.0), to_output=(0.0, 0.2, 0.0))
     parts += [FixedHinge(), arm]
     return build_chain(parts, gravity=[0.0, 0.0, -9.81], ground=Ground(motion=hub))
+
+
+def energy_gaps_with_an_arm(beam, gravity, steps=(1e-3, 5e-4), t_end=0.5):
+    """A cantilever of `beam` with a 0.5 kg body on an arm welded across its tip (its mass
+    centre 0.3 m off the axis), released under `gravity`, run t_end at each step: per run the
+    largest change of kinetic plus potential energy over the largest kinetic energy, and the
+    runs.  The energy tests of test_torsion and test_stretch."""
+    from dttmm import FixedHinge, RigidBody, build_chain, simulate
+    arm = RigidBody(mass=0.5, inertia=np.diag([1e-3, 2e-3, 2e-3]), inertia_about="mass_center",
+                    to_mass_center=(0.0, 0.3, 0.0), to_output=(0.0, 0.3, 0.0))
+    model = build_chain([FixedHinge(), beam, FixedHinge(), arm], gravity=gravity)
+    runs = [simulate(model, t_end, h) for h in steps]
+    gaps = [np.abs(r.kinetic + r.potential - r.kinetic[0] - r.potential[0]).max()
+            / r.kinetic.max() for r in runs]
+    return gaps, runs

@@ -994,10 +994,7 @@ def _end_moment_columns(ends, eta, rot, lam, s, start, m_net, welded, phi_out, a
     dj = scratch[6:15].reshape((3, 3))
     jinv = scratch[15:24].reshape((3, 3))
     tmp = scratch[24:30]
-    theta[0] = theta[1] = theta[2] = 0.0           # theta_O (no twist here)
-    for k in range(m):
-        theta[1] -= ends[k, 1] * eta[m + k]
-        theta[2] += ends[k, 1] * eta[k]
+    _end_angles_into(ends, ends[:0], eta, theta)     # theta_O (no twist here)
     # the w' columns
     x3 = t_cross((a3[0], a3[1], a3[2]), (m_net[0], m_net[1], m_net[2]))
     x2 = t_cross((a2[0], a2[1], a2[2]), (m_net[0], m_net[1], m_net[2]))
