@@ -246,7 +246,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     (twist_relations) or stretch modes has its w' and eta'' columns differenced; its twist
     rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
-    from dttmm.kernels.beam import _evaluate, beam_transfer
+    from dttmm.kernels.beam import _evaluate, beam_transfer, transfer_work_size
     from dttmm.solver import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
@@ -293,7 +293,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
             model.gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, eta_n,
             eta_d_n)
     u, eta_map = np.empty((12, 13)), np.empty((n, 13))
-    beam_transfer(*args, z_star, eta_dd_star, u, eta_map)
+    beam_transfer(*args, z_star, eta_dd_star, u, eta_map, np.empty(transfer_work_size(n)))
 
     # _evaluate takes gravity with the distributed load in it (g + p / mu, as beam_transfer
     # hands it on)
@@ -302,7 +302,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
 
     def relations(x):
         out, res = np.empty(12), np.empty(n)
-        _evaluate(*evaluate_args, x, out, res, np.empty((4, 3)), np.empty(66 + 2 * n))
+        _evaluate(*evaluate_args, x, out, res, np.empty((4, 3)), np.empty(75 + 2 * n))
         return np.concatenate([out, res])
 
     x0 = np.concatenate([z_star, eta_dd_star])
@@ -483,7 +483,8 @@ def test_beam_ball_map_folds_the_beam_transfer():
     eta'' recovered from the input station with the folded w'.  Measured: 2e-15 (v), 1e-14
     (pmap) and 4e-16 (eta map) relative to each row's largest entry."""
     from dttmm.chains import three_pendulum
-    from dttmm.kernels.beam import ball_map_work_shape, beam_ball_map, beam_transfer
+    from dttmm.kernels.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
+                                    transfer_work_size)
     from dttmm.kernels.sweep import fold_ball_body
     from dttmm.solver import Workspace
     model = three_pendulum(2, damping_ratio=0.03)
@@ -508,7 +509,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     u, eta_map = np.empty((12, 13)), np.empty((n, 13))
     beam_transfer(bp[k], tables, (False, np.eye(3), np.eye(3), np.zeros(3)), (False, np.zeros(3)),
                   model.gravity, False, rot_n, phi_star, wd_star, c1, c3, w3, w, w1e, w3e, eta_n,
-                  eta_d_n, z_star, eta_dd_star, u, eta_map)
+                  eta_d_n, z_star, eta_dd_star, u, eta_map, np.empty(transfer_work_size(n)))
     v_want, p_want = np.empty((6, 7)), np.empty((3, 7))
     fold_ball_body(u, v_want, p_want)
     # eta'' = eta_map [a, w', 0, q; 1] with w' = p_want [a; q; 1]

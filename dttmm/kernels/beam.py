@@ -533,13 +533,14 @@ def _stretch_affine_columns(bp, axial, rot, d_r):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r):
+def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r, scratch):
     """The twist rows' a_I, m_I, q_I columns at an end moment (add_end_moment): residual_t,k
     depends on them through m_O only, d r_t,k = Psi_k(L) (A J_l e1) . d m_O (d_o's rows 6:9,
-    _affine_columns)."""
+    _affine_columns).  scratch: 12 entries."""
     m = ends.shape[0]
-    jl = np.empty((3, 3))
-    left_jacobian(end_angles(ends, torsion, eta), jl)
+    theta, jl = scratch[0:3], scratch[3:12].reshape((3, 3))
+    _end_angles_into(ends, torsion, eta, theta)
+    left_jacobian(theta, jl)
     g0 = rot[0, 0] * jl[0, 0] + rot[0, 1] * jl[1, 0] + rot[0, 2] * jl[2, 0]
     g1 = rot[1, 0] * jl[0, 0] + rot[1, 1] * jl[1, 0] + rot[1, 2] * jl[2, 0]
     g2 = rot[2, 0] * jl[0, 0] + rot[2, 1] * jl[1, 0] + rot[2, 2] * jl[2, 0]
@@ -552,13 +553,19 @@ def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _follower_loads(bp, tables, eta, rot, gravity):
+def _follower_loads(bp, tables, eta, rot, gravity, out, scratch):
     """World components of body-axes loads (load_axes="body", docs/beam.md "Loads on the
-    beam"): (A_O F, A_O T, g + A p / mu), A_O the output end section's rotation
-    (end_section), A the frame's."""
-    a_o = np.empty((3, 3))
-    end_section(tables[1], tables[6], eta, rot, a_o)
-    return a_o @ tables[3], a_o @ tables[4], gravity + rot @ tables[5] / bp[1]
+    beam") into out's rows: A_O F, A_O T, g + A p / mu, A_O = A exp(theta_O^) the output end
+    section's rotation (end_section), A the frame's.  scratch: 12 entries."""
+    theta, e = scratch[0:3], scratch[3:12].reshape((3, 3))
+    _end_angles_into(tables[1], tables[6], eta, theta)
+    expm_so3(theta, e)
+    a_o = t_mm(t_of_mat(rot), t_of_mat(e))
+    f, t, p = tables[3], tables[4], tables[5]
+    for i in range(3):
+        out[0, i] = a_o[3 * i] * f[0] + a_o[3 * i + 1] * f[1] + a_o[3 * i + 2] * f[2]
+        out[1, i] = a_o[3 * i] * t[0] + a_o[3 * i + 1] * t[1] + a_o[3 * i + 2] * t[2]
+        out[2, i] = gravity[i] + (rot[i, 0] * p[0] + rot[i, 1] * p[1] + rot[i, 2] * p[2]) / bp[1]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -620,21 +627,35 @@ def end_section(ends, torsion, eta, rot, out):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd):
-    """w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the output
-    section (the consistent start; d J_l / dt by a central difference along theta')."""
-    th = end_angles(ends, torsion, eta)
-    th_d = end_angles(ends, torsion, eta_d)
-    th_dd = end_angles(ends, torsion, eta_dd)
-    jl = np.empty((3, 3))
+def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, out,
+                                      scratch):
+    """out = w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the
+    output section (the consistent start; d J_l / dt by a central difference along theta').
+    scratch: 39 entries."""
+    th, th_d, th_dd, x = scratch[0:3], scratch[3:6], scratch[6:9], scratch[9:12]
+    jl, jp, jm = (scratch[12:21].reshape((3, 3)), scratch[21:30].reshape((3, 3)),
+                  scratch[30:39].reshape((3, 3)))
+    _end_angles_into(ends, torsion, eta, th)
+    _end_angles_into(ends, torsion, eta_d, th_d)
+    _end_angles_into(ends, torsion, eta_dd, th_dd)
     left_jacobian(th, jl)
-    jp = np.empty((3, 3))
-    jm = np.empty((3, 3))
     eps = 1e-6
-    left_jacobian(th + eps * th_d, jp)
-    left_jacobian(th - eps * th_d, jm)
-    jl_dot_thd = (jp - jm) @ th_d / (2.0 * eps)
-    return wd + np.cross(w, rot @ (jl @ th_d)) + rot @ (jl @ th_dd + jl_dot_thd)
+    for i in range(3):
+        x[i] = th[i] + eps * th_d[i]
+    left_jacobian(x, jp)
+    for i in range(3):
+        x[i] = th[i] - eps * th_d[i]
+    left_jacobian(x, jm)
+    j = t_of_mat(jl)
+    a = t_of_mat(rot)
+    v = t_mv(a, t_mv(j, t_of_vec(th_d)))                        # A J_l theta'
+    dj = t_lin9(0.5 / eps, t_of_mat(jp), -0.5 / eps, t_of_mat(jm))
+    inner = t_mv(j, t_of_vec(th_dd))
+    extra = t_mv(dj, t_of_vec(th_d))
+    y = t_mv(a, (inner[0] + extra[0], inner[1] + extra[1], inner[2] + extra[2]))
+    wv = t_cross(t_of_vec(w), v)
+    for i in range(3):
+        out[i] = wd[i] + wv[i] + y[i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -663,8 +684,9 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
     outboard = (welded, R_rel, rotation at t_n, w1):
     with a fixed hinge at the output (welded), the output's rotation slot is the outboard body's
     angular acceleration, c1 phi_out + w1 with A_out,n+1 = exp(phi_out^) A_out,n = A_O R_rel
-    (at the start: the end section's angular acceleration).  work: (66 + 2 n) scratch, which
-    holds the state (the returned rotation is a view on it) and the end moment's scratch."""
+    (at the start: the end section's angular acceleration).  work: (75 + 2 n) scratch, which
+    holds the state (the rotation in work[9:18]), the end moment's scratch and the
+    follower loads (beam_transfer)."""
     moments, ends, factors, end_force, end_torque = tables[0], tables[1], tables[2], tables[3], \
         tables[4]
     torsion = tables[6]
@@ -684,16 +706,18 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
         for i in range(3):
             phi[i] = phi_star[i] + (wd[i] - wd_star[i]) / c1
         _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
+    scratch = work[24 + 2 * n:66 + 2 * n]
     if bp[LOAD_AXES] != 0.0:
         # followers (docs/beam.md, "Loads on the beam"): the end loads in the end section's
         # axes, the distributed load in the frame's (gravity arrives without it: beam_transfer)
-        end_force, end_torque, gravity = _follower_loads(bp, tables, eta, rot, gravity)
+        loads = work[66 + 2 * n:75 + 2 * n].reshape((3, 3))
+        _follower_loads(bp, tables, eta, rot, gravity, loads, scratch)
+        end_force, end_torque, gravity = loads[0], loads[1], loads[2]
     beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
                    eta_d, eta_dd, x[0:3], x[6:9], x[9:12], out, residual, aux, tables[7])
     if torsion.shape[0]:
         twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, ends.shape[0], out,
                         residual)
-    scratch = work[24 + 2 * n:66 + 2 * n]
     if welded or _any(end_torque):
         add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque, scratch)
     independent, dw1 = history
@@ -712,8 +736,8 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
             out[i] = x[i] + c1 * (aux[1, i] - rho_l_n) + dw1[i]
     if welded:
         if start:
-            out[3:6] = _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d,
-                                                         eta_dd)
+            _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd,
+                                              out[3:6], scratch)
         else:
             # A_O = A exp(theta_O^), phi_out = log(A_O R_rel A_out,n^T)
             theta, e = scratch[0:3], scratch[12:21].reshape((3, 3))
@@ -730,7 +754,6 @@ def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd
             log_so3(rel, phi_out)
             for i in range(3):
                 out[3 + i] = c1 * phi_out[i] + w1_out[i]
-    return rot
 
 
 @no_alloc_kernel
@@ -1122,20 +1145,20 @@ def _solve_in_place(a, b, n_rhs):
             b[k, c] = s * inv
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def _rhs_column(c):
-    """Column of z (a_I 0:3, w' 3:6, m_I 6:9, q_I 9:12) in beam_transfer's modal right-hand
-    sides, ordered a_I, w', q_I, the constant (9), m_I (10:13)."""
-    if c < 6:
-        return c
-    return c + 4 if c < 9 else c - 3
+@njit(cache=True)
+def transfer_work_size(n):
+    """The length of beam_transfer's work block for a beam of n modal coordinates."""
+    nx, nw, na = 12 + n, 75 + 2 * n, 3 * aux_rows(n // 2)
+    return 2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n + 57
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
-                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map):
+                  c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map, block):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
-    (n x 13) with eta'' = eta_map [z_I; 1], linearized about (z_star, eta_dd_star).
+    (n x 13) with eta'' = eta_map [z_I; 1], linearized about (z_star, eta_dd_star); z_star's
+    rotation slots are not read (the guess there is wd_star).  block: the work, at least
+    transfer_work_size(n) long (nothing is allocated: the general loop passes its own).
 
     start: the consistent-start solve (rotation, rates and modal state fixed, w' and eta''
     free).  Otherwise phi = phi* + (w' - wd*) / c1, w = c3 phi + w3, eta = (eta'' - w1e) / c1,
@@ -1150,11 +1173,9 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     stretch = tables[7].shape[0] > 0
     n = eta_dd_star.shape[0]
     nx = 12 + n
-    # every array of the linearization carved out of one block (one allocation per call)
-    nw = 66 + 2 * n
+    # every array of the linearization carved out of the one block
+    nw = 75 + 2 * n
     na = 3 * aux_rows(n // 2)
-    block = np.empty(2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n
-                     + 57)
     x0, xp = block[0:nx], block[nx:2 * nx]
     o = 2 * nx
     o0, op, r0, rp = block[o:o + 12], block[o + 12:o + 24], block[o + 24:o + 24 + n], \
@@ -1180,18 +1201,23 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     moment_scratch = block[o + 21:o + 57]      # _end_moment_columns' (30), m_net, phi_out
     follower = bp[LOAD_AXES] != 0.0
     if follower:                 # the distributed load turns with the frame: _evaluate adds it
-        g_beam[:] = gravity
+        for i in range(3):
+            g_beam[i] = gravity[i]
     else:
         _beam_gravity(bp, gravity, tables[5], g_beam)
-    x0[0:12] = z_star
-    x0[12:] = eta_dd_star
-    rot = _evaluate(bp, tables, outboard, history, g_beam, start, rot_n, phi_star, wd_star, c1,
-                    c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
+    for i in range(12):         # (element by element: a slice copy needs numba's runtime)
+        x0[i] = wd_star[i - 3] if 3 <= i < 6 else z_star[i]
+    for i in range(n):
+        x0[12 + i] = eta_dd_star[i]
+    _evaluate(bp, tables, outboard, history, g_beam, start, rot_n, phi_star, wd_star, c1,
+              c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, x0, o0, r0, aux, work)
+    rot = rot_n if start else work[9:18].reshape((3, 3))      # (the state _evaluate left)
     d_o[:, :] = 0.0
     d_r[:, :] = 0.0
     _affine_columns(bp, tables[0], ends, end_moment, rot, aux, d_o, d_r)
     if twist and end_moment:
-        _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r)
+        _twist_end_columns(ends, tables[6], eta_n if start else work[24:24 + n], rot, d_o, d_r,
+                           moment_scratch[:12])
     if stretch:
         _stretch_affine_columns(bp, tables[7], rot, d_r)
     # w' and eta'' columns written out unless the beam twists (docs/beam.md, "Torsion") or
@@ -1216,7 +1242,8 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
                 phi_out[i] = (o0[3 + i] - outboard[3][i]) / c1
             _end_moment_columns(ends, eta_n if start else work[24:24 + n], rot, lam, s_c, start,
                                 m_net, welded, phi_out, aux, d_o, d_r, moment_scratch[:30])
-    xp[:] = x0
+    for i in range(nx):
+        xp[i] = x0[i]
     for c in range(3, nx):
         if 6 <= c < 12 or analytic:
             continue                     # a_I, m_I, q_I (_affine_columns), the rest where
@@ -1235,40 +1262,37 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         for r in range(n):
             d_r[r, c] = (rp[r] - r0[r]) / step
     # modal equations r0 + d_r[:, :12] dz + d_r[:, 12:] dy = 0, solved for dy (dz = z - z*):
-    # eta'' = eta_map [z; 1] with eta_map = [E_z, eta''* - E_z z*] and
-    # [E_z, e_r] = -d_r[:, 12:]^-1 [d_r[:, :12], r0].  rhs holds the columns of z in the order
-    # a_I, w', q_I, the constant, m_I: without an end moment (not welded) the modal equations do
-    # not depend on m_I (_affine_columns), and those three columns stay out of the solve.
-    n_rhs = 13 if end_moment else 10
+    # X = -d_r[:, 12:]^-1 [d_r[:, :12], r0] (rhs, the columns of z then the constant), so
+    # eta'' = eta_map [z; 1] with eta_map = [X_z, eta''* + x_c - X_z z*]
     for r in range(n):
         for c in range(12):
-            rhs[r, _rhs_column(c)] = -d_r[r, c]
-        rhs[r, 9] = -r0[r]
-    modal[:, :] = d_r[:, 12:]
-    _solve_in_place(modal, rhs, n_rhs)
+            rhs[r, c] = -d_r[r, c]
+        rhs[r, 12] = -r0[r]
+        for c in range(n):
+            modal[r, c] = d_r[r, 12 + c]
+    _solve_in_place(modal, rhs, 13)
     for r in range(n):
-        e0 = eta_dd_star[r] + rhs[r, 9]
+        e0 = eta_dd_star[r] + rhs[r, 12]
         for c in range(12):
-            e = rhs[r, _rhs_column(c)] if _rhs_column(c) < n_rhs else 0.0
-            eta_map[r, c] = e
-            e0 -= e * z_star[c]
+            eta_map[r, c] = rhs[r, c]
+            e0 -= rhs[r, c] * x0[c]
         eta_map[r, 12] = e0
-    # outputs: o0 + d_o[:, :12] dz + d_o[:, 12:] dy  =  u [z; 1]; the w' slot's rows do not
-    # depend on eta'' where the columns are written out (_modal_columns: it is w' itself)
+    # outputs: o0 + d_o[:, :12] dz + d_o[:, 12:] dy  =  u [z; 1], by rows (the inner loop along
+    # a row of rhs: measured twice as fast as the column-by-column sums); a zero entry of d_o's
+    # modal columns (the w' slot's rows where the columns are written out and the output is not
+    # welded: _modal_columns) skips its row of rhs
     for r in range(12):
-        const = o0[r]
-        through_modes = not (analytic and not welded and 3 <= r < 6)
         for c in range(12):
-            acc = d_o[r, c]
-            rc = _rhs_column(c)
-            if through_modes and rc < n_rhs:
-                for i in range(n):
-                    acc += d_o[r, 12 + i] * rhs[i, rc]
-            u[r, c] = acc
-            const -= acc * z_star[c]
-        if through_modes:
-            for i in range(n):
-                const += d_o[r, 12 + i] * rhs[i, 9]
+            u[r, c] = d_o[r, c]
+        u[r, 12] = o0[r]
+        for i in range(n):
+            f = d_o[r, 12 + i]
+            if f != 0.0:
+                for c in range(13):
+                    u[r, c] += f * rhs[i, c]
+        const = u[r, 12]
+        for c in range(12):
+            const -= u[r, c] * x0[c]
         u[r, 12] = const
 
 

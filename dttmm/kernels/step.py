@@ -30,7 +30,7 @@ from ..elements.beam import MODES, TORSION_MODES
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .beam import beam_transfer, end_angles
+from .beam import beam_transfer, end_angles, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
@@ -224,7 +224,11 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     kind, u = sweep.kind, sweep.u
     n = body_params.shape[0]
-    load = np.empty(3)
+    load, w1_out, dw1 = np.empty(3), np.empty(3), np.empty(3)
+    most_modes = 0
+    for k in range(n):
+        most_modes = max(most_modes, mode_off[k + 1] - mode_off[k])
+    beam_work = np.empty(transfer_work_size(most_modes))    # (one block for every beam)
     for k in range(n):
         jh = 2 * k
         hk = hinge_kind[k]
@@ -269,21 +273,21 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = int(beam_params[k, MODES])
             mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
-            zs = z_star[jh + 1].copy()
-            zs[3:6] = wd[k]                           # the guess in angular-acceleration slots
             welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
             kout = k + 1 if welded else k
-            outboard = (welded, hinge_params[kout, 0:9].copy().reshape((3, 3)), rot[kout],
-                        wd[kout] - c1 * phi_star[kout])
+            for i in range(3):
+                w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
+                dw1[i] = w1_st[k + 1, i] - w1_st[k, i]
+            outboard = (welded, hinge_params[kout, 0:9].reshape((3, 3)), rot[kout], w1_out)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
                       beam_ends[k, m:m + mt],               # the twist and stretch tables
                       beam_ends[k, m + mt:i1 - i0 - m])     # (solver.beam_tables)
-            history = (independent, w1_st[k + 1] - w1_st[k])
+            history = (independent, dw1)
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
-                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], zs, eta_dd_star[i0:i1],
-                          u[jh + 1], eta_map[i0:i1])
+                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z_star[jh + 1],
+                          eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
         elif body_kind[k] == RIGID:
             for i in range(3):
                 load[i] = body_params[k, 0] * params.gravity[i] + force[k, i]
