@@ -277,8 +277,8 @@ def main(argv=None):
         fig[f"rigid_chain_{n}_us_per_step"] = us
     for n, us in zip(beam_sizes, beams):
         fig[f"beam_chain_{n}_us_per_step"] = us
-    # a beam element welded by fixed hinges (the general loop) against one between ball joints
-    # (the fused loop), per element and step: issue 16's 2x target for the welded element
+    # a beam element welded by fixed hinges (the fused welded-chain loop) against one between
+    # ball joints (the fused ball-chain loop), per element and step: issue 16's 2x target
     for n in (3, 10, 30, 100):
         steps = max(50, min(1000, 6000 // n))
         fig[f"welded_beam_{n}_us_per_element_step"] = median_us_per_step(

@@ -23,7 +23,7 @@ from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import ball_chain, em_step, tree
+from .kernels import ball_chain, em_step, tree, weld_chain
 from .kernels import step as kstep
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Monitor, Params, Record, Run, Settings, State,
@@ -654,6 +654,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
              and scheme == "newmark" and not model.needs_general_loop
              and all(BODY_KIND[int(c)].fused for c in model.body_kind))
+    # a chain of beams welded end to end from the ground (fixed hinges, a free tip): the fused
+    # welded-chain loop (kernels/weld_chain.py)
+    welded = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme == "newmark"
+              and model.is_chain and not model.tip_pinned and n > 0
+              and all(int(c) == BEAM for c in model.body_kind)
+              and all(int(h) == FIXED for h in model.hinge_kind)
+              and not any(model.ground_locked[1:]))
     if fused and mode == kstep.RICCATI_TREE:
         loop_name, runner = "ball-tree", run_steps_no_alloc
         loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
@@ -676,6 +683,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         keys.append("v_c")
     elif fused:
         ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
+    elif welded:
+        loop_name, runner = "welded-chain", run_steps_no_alloc
+        loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
     else:
         loop_name, runner = "general", run_steps
         loop = kstep.general_loop(n, len(state.eta), dt, coef, histories)

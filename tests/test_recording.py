@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
-from dttmm.chains import arm, five_link_tree, rigid_chain, three_pendulum, unit_link
+from dttmm.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
+                          unit_link)
 
 ROOT = Path(__file__).resolve().parents[1]
 STATE = ("t", "rotation", "angular_velocity", "angular_acceleration", "force", "moment",
@@ -27,6 +28,7 @@ def _elastic_chain():
     ("three-pendulum (fused chain)", three_pendulum, {}),
     ("tree (fused tree)", five_link_tree, {}),
     ("elastic hinge (general loop)", _elastic_chain, {}),
+    ("welded beams (fused welded chain)", lambda: stiff_cantilever(3), {}),
     ("rigid arm, motion drive (joints, Newton iterations)", lambda: arm(drive="motion"), {}),
     ("energy-momentum", lambda: rigid_chain(3), {"scheme": "energy_momentum"}),
 ])

@@ -1,0 +1,211 @@
+"""The time loop fused for chains of beam elements welded end to end by fixed hinges, the first
+to the ground (docs/assembly.md, "The fused welded-chain step").
+
+The same step as the general loop (kernels/step.py) in RICCATI_FULL mode (Newmark scheme), as
+a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each beam's
+12 x 13 transfer in angular-acceleration slots (kernels/beam.py::beam_transfer, into one
+scratch matrix) goes straight into its full Riccati step (sweep.py::_riccati_transfer, the
+station split [a, w'] | [m, q] of a chain from the ground), and the way back recovers each
+body's rotation increment and modal accelerations.  Nothing else of the general loop's
+per-body work runs: no guess kinematics (the beam evaluates its own state), no station copies,
+no element kinds.  Results agree with the general loop to rounding
+(tests/test_weld_chain.py).
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from . import CONTRACT, loop_piece
+from .ball_chain import _adopt, _ground_increment, _update
+from .ball_chain import _predict as _predict_offsets
+from .beam import transfer_work_size
+from .beam import beam_transfer
+from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
+from .step import fused_coefficients
+from .sweep import E_IDX, F_IDX, SPLIT_B, _riccati_transfer
+from ..elements.beam import MODES, TORSION_MODES
+
+# The loop's own scratch (allocated by weld_loop; the skeleton is compiled with numba's
+# reference counting, as the general loop's: beam_transfer takes views of the tables).
+WeldLoop = namedtuple("WeldLoop", [
+    "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
+    "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)
+    "mats",             # (7, 3, 3) scratch; [2], [5] for _update, [6] for the ground's increment
+    "vecs",             # (6, 3) w, w', the weld's offset w1_out, zero, the ground's increment
+    "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
+    "stations",         # (n + 1, 12) [a, w', m, q] at each body's input, then the tip's output
+    "riccati",          # (s (n + 1, 6, 6), p (n + 1, 6), T^-1 (n, 6, 6), t (n, 6))
+    "transfer",         # (12, 13) one beam's transfer; its work (6, 13) for the Riccati step
+    "root",             # (6,) the ground station's [a, w']
+    "beam_work",        # beam_transfer's work block (transfer_work_size)
+])
+
+
+def weld_loop(n, mode_off, h, coef, z):
+    """The welded-chain loop's scratch for n beams whose modal coordinates start at mode_off,
+    its stations' guess from the stations' states z (the general loop's layout: z[2k + 1] body
+    k's input, z[2n] the tip)."""
+    most = int(np.max(np.diff(mode_off))) if n else 0
+    stations = np.zeros((n + 1, 12))
+    stations[:n] = z[1:2 * n:2]
+    stations[n] = z[2 * n]
+    return WeldLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)), np.zeros((7, 3, 3)),
+                    np.zeros((6, 3)), np.zeros((5, int(mode_off[-1]))), stations,
+                    (np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 6)), np.zeros((n, 6, 6)),
+                     np.zeros((n, 6))),
+                    (np.zeros((12, 13)), np.zeros((6, 13))), np.zeros(6),
+                    np.zeros(transfer_work_size(most)))
+
+
+@loop_piece
+def _predict(loop, run, s, _):
+    """The fused ball chain's predictor (phi*, the offsets of every rotation and modal
+    coordinate), then the bodies locked to the ground (the first beam) follow the ground's
+    increment exactly, as in the general loop: phi* = phi_g, w1 = g_w' - c1 phi_g,
+    w3 = g_w - c3 phi_g; and the root's known [a, w']."""
+    _predict_offsets(loop, run, s, 0)
+    inputs = run.inputs
+    c1, c3 = loop.coefficients[0], loop.coefficients[1]
+    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    phi_g = loop.vecs[4]
+    _ground_increment(inputs.g_rot, s, loop.mats[6], phi_g)
+    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
+    locked = run.params.locked
+    for k in range(locked.shape[0]):
+        if locked[k]:
+            for i in range(3):
+                phi_star[k, i] = phi_g[i]
+                w1[k, i] = g_wd[i] - c1 * phi_g[i]
+                w3[k, i] = g_w[i] - c3 * phi_g[i]
+    for i in range(3):
+        loop.root[i] = inputs.g_acc[s, i]
+        loop.root[3 + i] = g_wd[i]
+
+
+@loop_piece
+def _iterate(loop, run, s, it):
+    """One forward pass (each beam's transfer about the guess, its Riccati step) and one
+    backward pass (the stations, then each body's phi and modal accelerations); returns
+    (status, detail, change)."""
+    params, state, inputs = run.params, run.state, run.inputs
+    c1, c3 = loop.coefficients[0], loop.coefficients[1]
+    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
+        loop.per_body[3]
+    w, wd, w1_out, zero3 = loop.vecs[0], loop.vecs[1], loop.vecs[2], loop.vecs[3]
+    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
+                                         loop.per_mode[4])
+    s_mat, p_vec, t_inv, t_vec = loop.riccati
+    u, work = loop.transfer
+    z = loop.stations
+    _, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    eta, eta_d, eta_map = state.eta, state.eta_d, state.eta_map
+    force, torque, line_load = inputs.force[s], inputs.torque[s], inputs.line_load[s]
+    f_idx, e_idx = F_IDX[SPLIT_B], E_IDX[SPLIT_B]
+    n = phi_star.shape[0]
+    for r in range(6):
+        p_vec[0, r] = loop.root[r]
+        for c in range(6):
+            s_mat[0, r, c] = 0.0
+    for k in range(n):
+        i0, i1 = mode_off[k], mode_off[k + 1]
+        m = int(beam_params[k, MODES])
+        mt = int(beam_params[k, TORSION_MODES])
+        for i in range(3):
+            w[i] = c3 * phi_star[k, i] + w3[k, i]
+            wd[i] = c1 * phi_star[k, i] + w1[k, i]
+        welded = k + 1 < n                      # the next beam on the output's fixed hinge
+        kout = k + 1 if welded else k
+        for i in range(3):
+            w1_out[i] = w1[kout, i]             # (its w' = c1 phi_out + w1_out)
+        outboard = (welded, params.hinge_params[kout, 0:9].reshape((3, 3)), state.rot[kout],
+                    w1_out)
+        tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
+                  force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
+                  beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/step.py)
+        beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity, False,
+                      state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
+                      eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u, eta_map[i0:i1],
+                      loop.beam_work)
+        for r in range(12):
+            for c in range(13):
+                if not np.isfinite(u[r, c]):
+                    return NOT_FINITE, 0, 0.0
+        if not _riccati_transfer(u, f_idx, e_idx, s_mat[k], p_vec[k], s_mat[k + 1],
+                                 p_vec[k + 1], t_inv[k], t_vec[k], work):
+            return SINGULAR, 2 * k + 2, 0.0
+    # the free tip: [m, q] = 0, [a, w'] = P_n; then e_in = T^-1 (e_out - t), f = S e + P
+    for r in range(6):
+        z[n, r] = p_vec[n, r]
+        z[n, 6 + r] = 0.0
+    change = 0.0
+    for k in range(n - 1, -1, -1):
+        for r in range(6):
+            x = 0.0
+            for c in range(6):
+                x += t_inv[k, r, c] * (z[k + 1, 6 + c] - t_vec[k, c])
+            z[k, 6 + r] = x
+        for r in range(6):
+            x = p_vec[k, r]
+            for c in range(6):
+                x += s_mat[k, r, c] * z[k, 6 + c]
+            z[k, r] = x
+        for i in range(3):                      # back from w' = c1 phi + w1
+            x = (z[k, 3 + i] - w1[k, i]) / c1
+            phi_new[k, i] = x
+            change = max(change, abs(x - phi_star[k, i]))
+        for i in range(mode_off[k], mode_off[k + 1]):
+            e = eta_map[i, 12]
+            for c in range(12):
+                e += eta_map[i, c] * z[k, c]
+            eta_dd_new[i] = e
+            change = max(change, abs(e - eta_dd_star[i]) / c1)
+    if not np.isfinite(change):
+        return NOT_FINITE, 0, change
+    return OK, 0, change
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _write_stations(stations, phi, phi_g, z):
+    """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
+    ground point, z[2k + 1] and z[2k + 2] body k's input and output (the same station across a
+    fixed hinge), each with the body's phi in its rotation slots (the ground's at z[0])."""
+    n = phi.shape[0]
+    for j in range(12):
+        z[0, j] = stations[0, j]
+    for i in range(3):
+        z[0, 3 + i] = phi_g[i]
+    for k in range(n):
+        for j in range(12):
+            z[2 * k + 1, j] = stations[k, j]
+            z[2 * k + 2, j] = stations[k + 1, j]
+        for i in range(3):
+            z[2 * k + 1, 3 + i] = phi[k, i]
+            z[2 * k + 2, 3 + i] = phi[k, i]
+
+
+@loop_piece
+def _record(loop, run, s, slot):
+    state, rec = run.state, run.rec
+    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], rec.z[slot])
+    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
+    for k in range(rot.shape[0]):
+        for i in range(3):
+            rec.omega[slot, k, i] = omega[k, i]
+            rec.omega_dot[slot, k, i] = omega_dot[k, i]
+            for j in range(3):
+                rec.rot[slot, k, i, j] = rot[k, i, j]
+    for i in range(state.eta.shape[0]):
+        rec.eta[slot, i] = state.eta[i]
+        rec.eta_d[slot, i] = state.eta_d[i]
+
+
+@loop_piece
+def _finish(loop, run, n_steps, _):
+    """The stations' states z after the chunk's last step (the general loop's layout)."""
+    if n_steps > 0:
+        _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], run.state.z)
+
+
+loop_variant(WeldLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+             record=_record, finish=_finish)
