@@ -5,7 +5,7 @@ path's: the rigid-chain tests against the reference, conservation and analytic c
 through it.)"""
 import numpy as np
 import pytest
-from helpers import rot_z
+from helpers import fused_and_general, rot_z
 
 from dttmm import BallJoint, DivergenceError, Ground, PrescribedMotion, RigidBody, build_chain, \
     simulate
@@ -14,12 +14,7 @@ from dttmm.chains import rigid_chain, three_pendulum, unit_link
 
 
 def _both_loops(monkeypatch, model, t_end, dt, **kwargs):
-    fused = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", False)
-    general = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", True)
-    assert fused.info["loop"] == "ball-chain" and general.info["loop"] == "general"
-    return fused, general
+    return fused_and_general(monkeypatch, model, t_end, dt, "ball-chain", **kwargs)
 
 
 def _assert_same(fused, general, rtol=1e-9, beams=False):

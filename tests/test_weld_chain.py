@@ -4,10 +4,10 @@ rounding, on every beam feature the fused loop covers.  (The welded beam's physi
 elsewhere: the clamped-beam, twist, stretch, load and elastica tests run through this loop.)"""
 import numpy as np
 import pytest
+from helpers import fused_and_general
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion,
                    RigidBody, build_chain, simulate)
-from dttmm import solver
 from dttmm.chains import stiff_cantilever
 
 HUB = PrescribedMotion.spin_about_axis([0, 0, 1], angle=lambda t: 0.5 * t * t, rate=lambda t: t,
@@ -15,12 +15,7 @@ HUB = PrescribedMotion.spin_about_axis([0, 0, 1], angle=lambda t: 0.5 * t * t, r
 
 
 def _both_loops(monkeypatch, model, t_end, dt, **kwargs):
-    fused = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", False)
-    general = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", True)
-    assert fused.info["loop"] == "welded-chain" and general.info["loop"] == "general"
-    return fused, general
+    return fused_and_general(monkeypatch, model, t_end, dt, "welded-chain", **kwargs)
 
 
 def _assert_same(fused, general, rtol=1e-9, rtol_acceleration=1e-7):

@@ -360,12 +360,10 @@ def _update(loop, run, s, _):
     return finite
 
 
-@loop_piece
-def _record(loop, run, s, slot):
-    state, rec = run.state, run.rec
-    phi_g = loop.vecs[4]
-    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
-    _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, rec.z[slot])
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def record_state(state, rec, slot):
+    """The bodies' rotations, angular velocities and accelerations and the modal coordinates
+    and rates into the record's slot (every fused loop's _record; its stations apart)."""
     rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
     for k in range(rot.shape[0]):
         for i in range(3):
@@ -376,6 +374,14 @@ def _record(loop, run, s, slot):
     for i in range(state.eta.shape[0]):
         rec.eta[slot, i] = state.eta[i]
         rec.eta_d[slot, i] = state.eta_d[i]
+
+
+@loop_piece
+def _record(loop, run, s, slot):
+    phi_g = loop.vecs[4]
+    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
+    _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, run.rec.z[slot])
+    record_state(run.state, run.rec, slot)
 
 
 @loop_piece

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import loop_piece
 from ..elements import BEAM, RIGID
-from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map,
+from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
                          recover_body)
 from .beam import ball_map_work_shape, beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -126,18 +126,8 @@ def _write(loop, run, s, z):
 
 @loop_piece
 def _record(loop, run, s, slot):
-    state, rec = run.state, run.rec
-    _write(loop, run, s, rec.z[slot])
-    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
-    for k in range(rot.shape[0]):
-        for i in range(3):
-            rec.omega[slot, k, i] = omega[k, i]
-            rec.omega_dot[slot, k, i] = omega_dot[k, i]
-            for j in range(3):
-                rec.rot[slot, k, i, j] = rot[k, i, j]
-    for i in range(state.eta.shape[0]):
-        rec.eta[slot, i] = state.eta[i]
-        rec.eta_d[slot, i] = state.eta_d[i]
+    _write(loop, run, s, run.rec.z[slot])
+    record_state(run.state, run.rec, slot)
 
 
 @loop_piece

@@ -17,12 +17,11 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT, loop_piece
-from .ball_chain import _adopt, _ground_increment, _update
+from .ball_chain import _adopt, _ground_increment, _update, record_state
 from .ball_chain import _predict as _predict_offsets
-from .beam import transfer_work_size
-from .beam import beam_transfer
+from .beam import beam_transfer, transfer_work_size
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
-from .step import fused_coefficients
+from .step import _all_finite, fused_coefficients
 from .sweep import E_IDX, F_IDX, SPLIT_B, _riccati_transfer
 from ..elements.beam import MODES, TORSION_MODES
 
@@ -32,7 +31,7 @@ WeldLoop = namedtuple("WeldLoop", [
     "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
     "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)
     "mats",             # (7, 3, 3) scratch; [2], [5] for _update, [6] for the ground's increment
-    "vecs",             # (6, 3) w, w', the weld's offset w1_out, zero, the ground's increment
+    "vecs",             # (5, 3) w, w', the weld's offset w1_out, zero, the ground's increment
     "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
     "stations",         # (n + 1, 12) [a, w', m, q] at each body's input, then the tip's output
     "riccati",          # (s (n + 1, 6, 6), p (n + 1, 6), T^-1 (n, 6, 6), t (n, 6))
@@ -51,7 +50,7 @@ def weld_loop(n, mode_off, h, coef, z):
     stations[:n] = z[1:2 * n:2]
     stations[n] = z[2 * n]
     return WeldLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)), np.zeros((7, 3, 3)),
-                    np.zeros((6, 3)), np.zeros((5, int(mode_off[-1]))), stations,
+                    np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))), stations,
                     (np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 6)), np.zeros((n, 6, 6)),
                      np.zeros((n, 6))),
                     (np.zeros((12, 13)), np.zeros((6, 13))), np.zeros(6),
@@ -127,10 +126,8 @@ def _iterate(loop, run, s, it):
                       state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
                       eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u, eta_map[i0:i1],
                       loop.beam_work)
-        for r in range(12):
-            for c in range(13):
-                if not np.isfinite(u[r, c]):
-                    return NOT_FINITE, 0, 0.0
+        if not _all_finite(u):
+            return NOT_FINITE, 0, 0.0
         if not _riccati_transfer(u, f_idx, e_idx, s_mat[k], p_vec[k], s_mat[k + 1],
                                  p_vec[k + 1], t_inv[k], t_vec[k], work):
             return SINGULAR, 2 * k + 2, 0.0
@@ -186,18 +183,8 @@ def _write_stations(stations, phi, phi_g, z):
 
 @loop_piece
 def _record(loop, run, s, slot):
-    state, rec = run.state, run.rec
-    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], rec.z[slot])
-    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
-    for k in range(rot.shape[0]):
-        for i in range(3):
-            rec.omega[slot, k, i] = omega[k, i]
-            rec.omega_dot[slot, k, i] = omega_dot[k, i]
-            for j in range(3):
-                rec.rot[slot, k, i, j] = rot[k, i, j]
-    for i in range(state.eta.shape[0]):
-        rec.eta[slot, i] = state.eta[i]
-        rec.eta_d[slot, i] = state.eta_d[i]
+    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], run.rec.z[slot])
+    record_state(run.state, run.rec, slot)
 
 
 @loop_piece
