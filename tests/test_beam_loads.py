@@ -216,6 +216,23 @@ def test_bad_end_loads_are_refused_naming_the_beam():
             end_torque=lambda t: [0.0, 0.0, 1.0], name="arm")])
 
 
+@pytest.mark.parametrize("bad, match", [
+    (dict(distributed_load=[0.0, 0.0, 1.0]), "distributed_load must be a function of time"),
+    (dict(distributed_load=lambda t: [0.0, 1.0]), r"distributed_load\(0\) must have 3 entries"),
+    (dict(distributed_load=lambda t: [0.0, np.nan, 1.0]), r"distributed_load\(0\) contains NaN"),
+    (dict(modes_per_plane=0), "modes_per_plane must be an integer >= 1"),
+    (dict(modes_per_plane=-2), "modes_per_plane must be an integer >= 1"),
+    (dict(modes_per_plane=2.5), "modes_per_plane must be an integer >= 1"),
+])
+def test_bad_distributed_load_and_mode_count_are_refused_naming_the_beam(bad, match):
+    """Issue 16's bad input: a distributed load of the wrong shape, a zero, negative or
+    fractional bending mode count, each refused at the build, naming the beam."""
+    with pytest.raises(ValueError, match="'arm'.*" + match):
+        build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, bending_stiffness=EI, mass_per_length=1.0,
+            polar_inertia_per_length=1e-3, name="arm", **bad)])
+
+
 def test_end_loads_in_a_scene_round_trip(tmp_path):
     """A scene's beam takes end_force and end_torque as profiles, and save_scene writes them
     back: the same arrays and the same loads."""

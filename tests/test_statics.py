@@ -81,6 +81,26 @@ def test_elastica_tip_and_order(lam):
     assert 2.7 < order < 3.3, (order, errors)
 
 
+def test_elastica_closes_into_a_circle():
+    """M = 2 pi EI / L (phi = 2 pi), 16 elements, the load in quarter turns: the tip back at
+    the root (the analytic (L sin phi / phi, L (1 - cos phi) / phi) = 0) within 1e-3 L, and,
+    since that point alone is fixed by symmetry, every centre-line point within 1e-3 L of the
+    circle of radius L / (2 pi) through the root (measured: tip 1.3e-8 m, centre line 5.2e-4
+    m)."""
+    guess = None
+    for step in (0.25, 0.5, 0.75, 1.0):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            guess = dttmm.static_equilibrium(
+                cantilever(16, tip_torque=[0.0, 0.0, step * 2.0 * np.pi * EI]), guess=guess)
+    assert np.linalg.norm(guess.positions()[2][-1]) < 1e-3
+    radius = 1.0 / (2.0 * np.pi)
+    points = np.concatenate(guess.centreline())
+    off_circle = np.abs(np.linalg.norm(points - [0.0, radius, 0.0], axis=1) - radius)
+    assert off_circle.max() < 1e-3, off_circle.max()
+    assert np.ptp(points[:, 1]) > 1.9 * radius       # it went round, not stayed straight
+
+
 def _column(load, on):
     """A clamped-free column along x, compressed at its tip by `load` N: through a tip body
     (cantilever) or as the beam's own end force (docs/beam.md, "Loads on the beam")."""
