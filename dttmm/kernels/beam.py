@@ -1029,20 +1029,28 @@ def _end_moment_columns(ends, eta, rot, lam, s, start, m_net, welded, phi_out, a
         for k in range(m):
             d_r[k, 3 + j] += ends[k, 1] * dv
             d_r[m + k, 3 + j] += ends[k, 1] * dw
-    # the eta'' columns
+    # the eta'' columns: DJ_l is linear in theta_p = Y_p'(L) (e3 or -e2), so the two
+    # directions' s m . A DJ_l[e_d] e_i = s (A^T m) . DJ_l[e_d] e_i serve every mode
+    for i in range(3):
+        tmp[i] = s * (rot[0, i] * m_net[0] + rot[1, i] * m_net[1] + rot[2, i] * m_net[2])
+    delta[0] = delta[1] = 0.0
+    delta[2] = 1.0
+    left_jacobian_derivative(theta, delta, dj)              # the v plane: theta_p = e3 Y_p'
+    kv3 = tmp[0] * dj[0, 2] + tmp[1] * dj[1, 2] + tmp[2] * dj[2, 2]
+    kv2 = tmp[0] * dj[0, 1] + tmp[1] * dj[1, 1] + tmp[2] * dj[2, 1]
+    delta[1] = -1.0
+    delta[2] = 0.0
+    left_jacobian_derivative(theta, delta, dj)              # the w plane: theta_p = -e2 Y_p'
+    kw3 = tmp[0] * dj[0, 2] + tmp[1] * dj[1, 2] + tmp[2] * dj[2, 2]
+    kw2 = tmp[0] * dj[0, 1] + tmp[1] * dj[1, 1] + tmp[2] * dj[2, 1]
     for p in range(2 * m):
         col = 12 + p
         dy = ends[p % m, 1]
-        delta[0] = 0.0
-        delta[1] = -dy if p >= m else 0.0
-        delta[2] = dy if p < m else 0.0
-        left_jacobian_derivative(theta, delta, dj)
-        dv = dw = 0.0
+        dv = dy * (kw3 if p >= m else kv3)
+        dw = -dy * (kw2 if p >= m else kv2)
         for i in range(3):
-            b2 = rot[i, 0] * dj[0, 1] + rot[i, 1] * dj[1, 1] + rot[i, 2] * dj[2, 1]
-            b3 = rot[i, 0] * dj[0, 2] + rot[i, 1] * dj[1, 2] + rot[i, 2] * dj[2, 2]
-            dv += d_o[6 + i, col] * a3[i] + s * m_net[i] * b3
-            dw -= d_o[6 + i, col] * a2[i] + s * m_net[i] * b2
+            dv += d_o[6 + i, col] * a3[i]
+            dw -= d_o[6 + i, col] * a2[i]
         for k in range(m):
             d_r[k, col] += ends[k, 1] * dv
             d_r[m + k, col] += ends[k, 1] * dw

@@ -4,7 +4,7 @@ to the ground (docs/assembly.md, "The fused welded-chain step").
 The same step as the general loop (kernels/step.py) in RICCATI_FULL mode (Newmark scheme), as
 a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each beam's
 12 x 13 transfer in angular-acceleration slots (kernels/beam.py::beam_transfer, into one
-scratch matrix) goes straight into its full Riccati step (sweep.py::_riccati_transfer, the
+scratch matrix) goes straight into its full Riccati step (sweep.py::riccati_step, the
 station split [a, w'] | [m, q] of a chain from the ground), and the way back recovers each
 body's rotation increment and modal accelerations.  Nothing else of the general loop's
 per-body work runs: no guess kinematics (the beam evaluates its own state), no station copies,
@@ -22,7 +22,7 @@ from .ball_chain import _predict as _predict_offsets
 from .beam import beam_transfer, transfer_work_size
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
 from .step import _all_finite, fused_coefficients
-from .sweep import E_IDX, F_IDX, SPLIT_B, _riccati_transfer
+from .sweep import riccati_step
 from ..elements.beam import MODES, TORSION_MODES
 
 # The loop's own scratch (allocated by weld_loop; the skeleton is compiled with numba's
@@ -100,7 +100,6 @@ def _iterate(loop, run, s, it):
     _, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta, eta_d, eta_map = state.eta, state.eta_d, state.eta_map
     force, torque, line_load = inputs.force[s], inputs.torque[s], inputs.line_load[s]
-    f_idx, e_idx = F_IDX[SPLIT_B], E_IDX[SPLIT_B]
     n = phi_star.shape[0]
     for r in range(6):
         p_vec[0, r] = loop.root[r]
@@ -128,8 +127,8 @@ def _iterate(loop, run, s, it):
                       loop.beam_work)
         if not _all_finite(u):
             return NOT_FINITE, 0, 0.0
-        if not _riccati_transfer(u, f_idx, e_idx, s_mat[k], p_vec[k], s_mat[k + 1],
-                                 p_vec[k + 1], t_inv[k], t_vec[k], work):
+        if not riccati_step(u, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
+                            t_vec[k], work):
             return SINGULAR, 2 * k + 2, 0.0
     # the free tip: [m, q] = 0, [a, w'] = P_n; then e_in = T^-1 (e_out - t), f = S e + P
     for r in range(6):
