@@ -12,6 +12,7 @@ modal coordinates; a body behind a fixed hinge follows its inboard output sectio
 the Jacobian is -M^-1 K (K the tangent stiffness), so its eigenvalues are minus the squared
 circular frequencies of the small vibrations about the equilibrium: all negative means stable.
 """
+from collections import namedtuple
 from dataclasses import dataclass, replace
 import warnings
 
@@ -89,35 +90,7 @@ class StaticEquilibrium:
         """The bodies' input points, mass centres and output points at the equilibrium, each
         (n, 3), world frame, m (a beam's mass centre: its chord's midpoint, as in Result;
         its output point on the deflected end)."""
-        m = self.model
-        n = m.n_bodies
-        off = np.concatenate([[0], np.cumsum(m.n_modes)])
-        r_in, r_c, r_o = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-        for k in range(n):
-            p = m.parent[k]
-            if p < 0:
-                r_in[k], rot_p = m.ground_position, m.ground_rotation
-            elif m.attachment[k] == 0:
-                r_in[k] = r_o[p]
-                rot_p = output_section(m.beam_params[p], m.initial_rotation[p], np.zeros(3),
-                                       m.initial_modal_coordinates[off[p]:off[p + 1]])[0]
-            else:
-                r_in[k] = r_in[p] + m.initial_rotation[p] @ m.attachment_point[k]
-                rot_p = m.initial_rotation[p]
-            if m.hinge_kind[k] == PRISMATIC:          # the slide along the joint's axis
-                r_in[k] = r_in[k] + rot_p @ m.hinge_params[k, AXIS_1] * \
-                    m.hinge_params[k, COORDINATE_0][0]
-            elif m.hinge_kind[k] == ELASTIC:          # the hinge's deflection (world)
-                r_in[k] = r_in[k] + m.hinge_params[k, DEFLECTION_0]
-            rot = m.initial_rotation[k]
-            r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
-            r_o[k] = r_in[k] + rot @ m.body_params[k, TO_OUTPUT]
-            if m.body_kind[k] == BEAM:
-                e = m.initial_modal_coordinates[off[k]:off[k + 1]]
-                rho, _ = beam_output_offset(m.beam_params[k], rot, np.zeros(3), e,
-                                            np.zeros_like(e))
-                r_o[k] = r_in[k] + rho
-        return r_in, r_c, r_o
+        return _positions(self.model)
 
     def centreline(self, points_per_beam=9):
         """Points along each body at the equilibrium, world frame, m: per body an array (p, 3),
@@ -157,6 +130,38 @@ class StaticEquilibrium:
             return np.where(ok, np.sqrt(np.abs(real)), np.nan) / (2.0 * np.pi)
 
 
+def _positions(m):
+    """(r_in, r_c, r_o), each (n, 3): a model's bodies' input points, mass centres and output
+    points in its initial configuration (StaticEquilibrium.positions)."""
+    n = m.n_bodies
+    off = np.concatenate([[0], np.cumsum(m.n_modes)])
+    r_in, r_c, r_o = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    for k in range(n):
+        p = m.parent[k]
+        if p < 0:
+            r_in[k], rot_p = m.ground_position, m.ground_rotation
+        elif m.attachment[k] == 0:
+            r_in[k] = r_o[p]
+            rot_p = output_section(m.beam_params[p], m.initial_rotation[p], np.zeros(3),
+                                   m.initial_modal_coordinates[off[p]:off[p + 1]])[0]
+        else:
+            r_in[k] = r_in[p] + m.initial_rotation[p] @ m.attachment_point[k]
+            rot_p = m.initial_rotation[p]
+        if m.hinge_kind[k] == PRISMATIC:          # the slide along the joint's axis
+            r_in[k] = r_in[k] + rot_p @ m.hinge_params[k, AXIS_1] * \
+                m.hinge_params[k, COORDINATE_0][0]
+        elif m.hinge_kind[k] == ELASTIC:          # the hinge's deflection (world)
+            r_in[k] = r_in[k] + m.hinge_params[k, DEFLECTION_0]
+        rot = m.initial_rotation[k]
+        r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
+        r_o[k] = r_in[k] + rot @ m.body_params[k, TO_OUTPUT]
+        if m.body_kind[k] == BEAM:
+            e = m.initial_modal_coordinates[off[k]:off[k + 1]]
+            rho, _ = beam_output_offset(m.beam_params[k], rot, np.zeros(3), e, np.zeros_like(e))
+            r_o[k] = r_in[k] + rho
+    return r_in, r_c, r_o
+
+
 class _Configuration:
     """The model's configuration as a flat vector q (each free body's rotation increment, world
     axes: behind a ball joint or an elastic hinge; each joint coordinate that no motion
@@ -177,9 +182,6 @@ class _Configuration:
                                  f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "
                                  f"fixed and elastic hinges and joints with coordinates so far "
                                  f"(run the model with damping to rest instead)")
-        if km.tip_pinned:
-            raise ValueError(f"{where}: the tip is pinned to the ground (a closed loop); the "
-                             f"static solve takes open chains and trees so far")
         self.free = [k for k in range(n)
                      if km.hinge_kind[k] in (BALL, ELASTIC) and not km.ground_locked[k]]
         self.n_rot = 3 * len(self.free)
@@ -212,6 +214,9 @@ class _Configuration:
         self.scale = scale
         self.labels = tuple(labels)
         self.mode_off = mode_off
+        # a tip joined to the ground (a closed loop): its output point stays where it starts,
+        # the constraint closure(q) = 0 beside a(q) = 0 (docs/statics.md, "Closed loops")
+        self.pin = _positions(model)[2][-1] if km.tip_pinned else None
         self.rot0 = np.array(km.initial_rotation)
         self.eta0 = np.array(km.initial_modal_coordinates)
         # one workspace for every evaluation (the beams' tables do not change)
@@ -339,6 +344,21 @@ class _Configuration:
             jac[:, j] = (self.accelerations(qp) - self.accelerations(qm)) / (2.0 * h)
         return jac
 
+    def closure(self, q):
+        """The pinned tip's output point less its pin, world, m (a closed loop's constraint)."""
+        return _positions(self.result_model(q))[2][-1] - self.pin
+
+    def closure_jacobian(self, q):
+        """d closure / dq (3 x n) by central differences, as jacobian's."""
+        jac = np.empty((3, len(q)))
+        for j in range(len(q)):
+            h = 1e-5 * self.scale[j]
+            qp, qm = q.copy(), q.copy()
+            qp[j] += h
+            qm[j] -= h
+            jac[:, j] = (self.closure(qp) - self.closure(qm)) / (2.0 * h)
+        return jac
+
     def result_model(self, q):
         """The user's model at rest in configuration q."""
         rot, jq, eta, defl = self.state(q)
@@ -366,7 +386,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         (the equilibrium's deflections are the result model's ``ElasticHinge.deflection``),
         joints with
         coordinates (a coordinate that a JointMotion prescribes is held at its value at t = 0),
-        rigid bodies and beams (an open chain or tree).  Its initial rotations, joint
+        rigid bodies and beams, in an open chain or tree, or a chain whose tip is pinned to
+        the ground (``tip="ball"``, a closed loop: the tip stays on its pin, where it starts;
+        docs/statics.md, "Closed loops").  Its initial rotations, joint
         coordinates and modal coordinates are the first guess; its velocities are ignored
         (the equilibrium is at rest).
     guess : StaticEquilibrium or Model, optional
@@ -394,7 +416,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         next ``guess``), or the model has no equilibrium: a body that nothing holds (no
         gravity, load or spring acts on its rotation), or one whose loads nothing balances.
     ValueError
-        A pinned tip (a closed loop), or a guess that does not fit the model.
+        A guess that does not fit the model.
 
     Warns
     -----
@@ -448,7 +470,12 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         # M^-1 K in scaled coordinates
         k = -cfg.jacobian(q) * cfg.scale[None, :] * weight[:, None]
         r = weight * a
-        newton = np.linalg.lstsq(k, r, rcond=1e-13)[0] if len(r) else r
+        if cfg.pin is None:
+            newton = np.linalg.lstsq(k, r, rcond=1e-13)[0] if len(r) else r
+        else:               # a closed loop: Newton's step along the loop's tangent space
+            loop = _closed_loop(cfg, q)
+            newton = loop.restore + loop.tangent @ np.linalg.lstsq(
+                k @ loop.tangent, r - k @ loop.restore, rcond=LOOP_RCOND)[0]
         # converged: Newton's step is below tol, and what it leaves of the residual (in the
         # directions nothing stiffens) would move the stiffest coordinate by less than tol
         big = np.max(np.abs(np.linalg.eigvals(k)), initial=0.0) if len(r) else 0.0
@@ -462,18 +489,35 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             converged = True        # Newton has stopped converging: the residual is at its
             break                   # round-off (with stiff modes, ~1e-6 rad/s^2)
         previous = size
-        q, a = _damped_step(cfg, q, a, k, r, big, max_increment)
+        if cfg.pin is None:
+            q_new, a = _damped_step(cfg, q, a, k, r, big, max_increment)
+        else:
+            q_new, a = _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment)
+        if np.array_equal(q_new, q):
+            break                   # no step passed: nothing more to gain by iterating
+        q = q_new
     if not converged:
         raise StaticEquilibriumError(
             f"{where}: no convergence in {iterations} iterations (the largest acceleration "
             f"left is {np.max(np.abs(a)):.3g}, at "
             f"{cfg.labels[int(np.argmax(np.abs(weight * a)))]}); apply the loads in steps, "
             f"passing each result as the next guess=, or raise "
-            f"max_iterations; a body whose loads nothing balances has no equilibrium")
+            f"max_iterations; a body whose loads nothing balances has no equilibrium"
+            + ("; in a closed loop, beam elements without stretch modes keep their length, "
+               "so a chain of them held straight between its pins cannot sag: give them "
+               "axial_modes and axial_stiffness" if cfg.pin is not None else ""))
     q = cfg.rebase(q)
     jac = cfg.jacobian(q)
-    _check_held(cfg, jac, where)
-    lam = np.linalg.eigvals(-jac)
+    if cfg.pin is None:
+        _check_held(cfg, jac, where)
+        lam = np.linalg.eigvals(-jac)
+    else:
+        # the small vibrations keep the loop closed: dq = N y along its tangent space, where
+        # J N = N C (a(q) stays in it), so the squared frequencies are -C's eigenvalues
+        tangent = _closed_loop(cfg, q).tangent
+        _check_held(cfg, jac, where, tangent)
+        scaled = jac * cfg.scale[None, :] * weight[:, None]
+        lam = np.linalg.eigvals(-(tangent.T @ scaled @ tangent))
     lam = lam[np.argsort(lam.real)]
     if np.max(np.abs(lam.imag), initial=0.0) <= 1e-9 * np.max(np.abs(lam), initial=0.0):
         lam = np.real(lam)          # (a conservative system's are real)
@@ -557,14 +601,72 @@ def _damped_step(cfg, q, a, k, r, big, max_increment):
     return q, a
 
 
-def _check_held(cfg, jac, where):
-    """Refuse a body that nothing holds: all three of its rotation's directions neutral."""
+# A closed loop's least-squares solves along its tangent space, (k N)^+, drop singular values
+# below LOOP_RCOND of the largest (an open chain's keep 1e-13): a link's spin about its own axis
+# is neutral, its singular value the central differences' noise (~1e-11 of the largest,
+# measured on a four-bar), and off the loop's tangent space (a step opens the loop at second
+# order) the residual has a part along it that 1e-13 blows up by 1e4 and more.
+LOOP_RCOND = 1e-9
+_ClosedLoop = namedtuple("_ClosedLoop", "tangent restore to_closure")
+
+
+def _closed_loop(cfg, q):
+    """The closed loop's linearized constraint at q, in scaled coordinates x = q / scale: G =
+    d closure / dx (3 x n), G = U S V^T; tangent (n x m): an orthonormal basis of G's null
+    space (the moves that keep the tip on its pin); restore = -G^+ closure(q), the least move
+    that closes the loop; to_closure = G^+ (n x 3).  Singular values below 1e-7 of the
+    largest count as zero: an inextensible beam between the pins cannot move its tip along
+    its chord, so that row of G vanishes."""
+    g = cfg.closure(q)
+    gj = cfg.closure_jacobian(q) * cfg.scale[None, :]
+    u, s, vt = np.linalg.svd(gj)
+    rank = int(np.sum(s > 1e-7 * s[0])) if s.size and s[0] > 0.0 else 0
+    pinv = vt[:rank].T @ (u[:, :rank].T / s[:rank, None])
+    return _ClosedLoop(vt[rank:].T, -pinv @ g, pinv)
+
+
+def _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment):
+    """A closed loop's damped Newton step: newton (restore + tangent y), no coordinate moved by
+    more than max_increment, halved until the natural monotonicity test, with the loop's
+    closure added, passes: |(k N)^+ r_new| + |G^+ closure_new| below the same at q (each in
+    scaled coordinates, so they add; (k N)^+ with LOOP_RCOND).  Returns (q, a); q unchanged
+    if no step passed."""
+    reduced = k @ loop.tangent
+
+    def merit(res, q_new):
+        y = np.linalg.lstsq(reduced, res, rcond=LOOP_RCOND)[0]
+        return np.linalg.norm(y) + np.linalg.norm(loop.to_closure @ cfg.closure(q_new))
+
+    dx = newton.copy()
+    biggest = np.max(np.abs(dx), initial=0.0)
+    if biggest > max_increment:
+        dx *= max_increment / biggest
+    before = merit(r, q)
+    for _ in range(12):
+        q_new = q + dx * cfg.scale
+        try:
+            a_new = cfg.accelerations(q_new)
+        except solver.DivergenceError:
+            a_new = np.full_like(a, np.nan)
+        if np.all(np.isfinite(a_new)) and merit(a_new / cfg.scale, q_new) < before:
+            return q_new, a_new
+        dx *= 0.5
+    return q, a
+
+
+def _check_held(cfg, jac, where, tangent=None):
+    """Refuse a body that nothing holds: all three of its rotation's directions neutral (in a
+    closed loop, among the directions that keep it closed: tangent's columns, scaled)."""
     if cfg.n_rot == 0:
         return
     js = jac * cfg.scale[None, :]
+    if tangent is not None:
+        js = js @ tangent
     u, s, vt = np.linalg.svd(js)
     big = s[0] if len(s) else 0.0
-    null = vt[s <= 1e-9 * big] if big > 0.0 else np.eye(len(cfg.scale))
+    null = vt[s <= 1e-9 * big] if big > 0.0 else np.eye(js.shape[1])
+    if tangent is not None:
+        null = null @ tangent.T
     for i, k in enumerate(cfg.free):
         block = null[:, 3 * i:3 * i + 3]
         if np.linalg.matrix_rank(block, tol=1e-6) == 3:

@@ -222,7 +222,86 @@ def test_bad_arguments():
         dttmm.static_equilibrium(model, guess=chains.three_pendulum())
     with pytest.raises(TypeError, match="Model"):
         dttmm.static_equilibrium("model.toml")
-    loop = dttmm.build_chain([dttmm.BallJoint(), rod(), dttmm.BallJoint(), rod()], tip="ball")
-    with pytest.raises(ValueError, match="pinned to the ground \\(a closed loop\\)"):
-        dttmm.static_equilibrium(loop)
 
+
+
+def _rz(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _bar(length, mass, angle):
+    """A uniform rod along its x axis, turned by angle about z."""
+    j = mass * length ** 2 / 12.0
+    return dttmm.RigidBody(mass=mass, inertia=[1e-4 * mass, j, j], inertia_about="mass_center",
+                           to_mass_center=[length / 2, 0, 0], to_output=[length, 0, 0],
+                           rotation=_rz(angle))
+
+
+def test_four_bar_hangs_and_swings_at_its_analytic_frequency():
+    """A closed loop: a parallelogram four-bar of ball-jointed rods (cranks l = 1 m, m = 1 kg;
+    coupler 1.5 m, M = 2 kg; its tip pinned where it starts, tip="ball") from cranks 0.6 rad
+    off the vertical: the cranks hang straight down, the tip stays on its pin, the swing's
+    squared frequency is (m + M) g l / (2 m l^2 / 3 + M l^2) (the coupler translates), three
+    spins are neutral, and DT-TMM from the equilibrium stays at rest."""
+    l, d, m, big_m, start = 1.0, 1.5, 1.0, 2.0, 0.6
+    model = dttmm.build_chain([dttmm.BallJoint(), _bar(l, m, start - np.pi / 2),
+                               dttmm.BallJoint(), _bar(d, big_m, 0.0),
+                               dttmm.BallJoint(), _bar(l, m, start + np.pi / 2)],
+                              gravity=(0.0, -9.81, 0.0), tip="ball")
+    pin = np.array([d, 0.0, 0.0])
+    eq = dttmm.static_equilibrium(model)
+    r_o = eq.positions()[2]
+    assert np.abs(r_o - [[0.0, -l, 0.0], [d, -l, 0.0], pin]).max() < 1e-9, r_o
+    assert eq.stable
+    swing = (m + big_m) * 9.81 * l / (2.0 * m * l ** 2 / 3.0 + big_m * l ** 2)
+    lam = eq.squared_frequencies
+    assert np.sum(lam == 0.0) == 3, lam
+    assert np.min(np.abs(lam / swing - 1.0)) < 1e-6, (lam, swing)
+    res = dttmm.simulate(eq.model, 0.5, 1e-3)
+    assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
+
+
+@pytest.mark.parametrize("elements, stretch, tolerance", [(1, False, 5e-4), (4, True, 1e-5)])
+def test_beam_between_pins_sags_as_the_simply_supported_beam(elements, stretch, tolerance):
+    """A closed loop: a beam (L = 2 m) on a ball joint with its tip pinned, under gravity: the
+    midspan sags by 5 mu g L^4 / (384 EI) (one element of the pinned family, 3 modes: 2.7e-4
+    below it, the series' fifth-order term left out; four welded elements with stretch modes
+    and EA / EI = 100 / m^2, so the sag's membrane force is negligible: 3.6e-7), and the first
+    two bending frequencies in each plane are the simply supported beam's, (n pi / L)^2
+    sqrt(EI / mu) (measured 4e-7 and 1.4e-4)."""
+    length, ei, mu = 2.0, 5e4, 3.0
+    parts = [dttmm.BallJoint()]
+    for k in range(elements):
+        parts += [dttmm.FixedHinge()] if k else []
+        parts.append(dttmm.EulerBernoulliBeam(
+            length=length / elements, mass_per_length=mu, bending_stiffness=ei,
+            polar_inertia_per_length=1e-3, modes_per_plane=3,
+            **(dict(axial_modes=2, axial_stiffness=100.0 * ei) if stretch else {})))
+    eq = dttmm.static_equilibrium(dttmm.build_chain(parts, gravity=(0.0, -9.81, 0.0),
+                                                    tip="ball"))
+    assert eq.stable
+    points = np.concatenate(eq.centreline(points_per_beam=9))
+    mid = points[np.argmin(np.abs(points[:, 0] - length / 2))]
+    sag = 5.0 * mu * 9.81 * length ** 4 / (384.0 * ei)
+    assert abs(mid[0] - length / 2) < 1e-6 and abs(-mid[1] / sag - 1.0) < tolerance, mid
+    assert np.abs(eq.positions()[2][-1] - [length, 0.0, 0.0]).max() < 1e-12
+    first = (np.pi / length) ** 4 * ei / mu
+    lam = eq.squared_frequencies
+    assert lam[0] == 0.0                           # the spin about the chord
+    assert np.allclose(lam[1:5], [first, first, 16 * first, 16 * first], rtol=2e-4), lam
+
+
+def test_a_straight_inextensible_chain_between_pins_is_explained():
+    """Welded elements without stretch modes, held straight between pins exactly their length
+    apart, cannot sag (the closure holds only at second order along the chord): the solve
+    stops and says to give them stretch modes."""
+    parts = [dttmm.BallJoint()]
+    for k in range(4):
+        parts += [dttmm.FixedHinge()] if k else []
+        parts.append(dttmm.EulerBernoulliBeam(length=0.5, mass_per_length=3.0,
+                                              bending_stiffness=50.0,
+                                              polar_inertia_per_length=1e-3, modes_per_plane=3))
+    model = dttmm.build_chain(parts, gravity=(0.0, -9.81, 0.0), tip="ball")
+    with pytest.raises(dttmm.StaticEquilibriumError, match="closed loop.*axial_modes"):
+        dttmm.static_equilibrium(model)
