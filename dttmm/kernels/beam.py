@@ -629,29 +629,21 @@ def end_section(ends, torsion, eta, rot, out):
 @njit(cache=True, fastmath=CONTRACT)
 def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, out,
                                       scratch):
-    """out = w'_O = w' + w x (A J_l theta') + A (J_l theta'' + (d J_l / dt) theta') of the
-    output section (the consistent start; d J_l / dt by a central difference along theta').
-    scratch: 39 entries."""
-    th, th_d, th_dd, x = scratch[0:3], scratch[3:6], scratch[6:9], scratch[9:12]
-    jl, jp, jm = (scratch[12:21].reshape((3, 3)), scratch[21:30].reshape((3, 3)),
-                  scratch[30:39].reshape((3, 3)))
+    """out = w'_O = w' + w x (A J_l theta') + A (J_l theta'' + DJ_l(theta)[theta'] theta') of
+    the output section (the consistent start; so3.left_jacobian_derivative).  scratch: 39
+    entries."""
+    th, th_d, th_dd = scratch[0:3], scratch[3:6], scratch[6:9]
+    jl, dj = scratch[12:21].reshape((3, 3)), scratch[21:30].reshape((3, 3))
     _end_angles_into(ends, torsion, eta, th)
     _end_angles_into(ends, torsion, eta_d, th_d)
     _end_angles_into(ends, torsion, eta_dd, th_dd)
     left_jacobian(th, jl)
-    eps = 1e-6
-    for i in range(3):
-        x[i] = th[i] + eps * th_d[i]
-    left_jacobian(x, jp)
-    for i in range(3):
-        x[i] = th[i] - eps * th_d[i]
-    left_jacobian(x, jm)
+    left_jacobian_derivative(th, th_d, dj)
     j = t_of_mat(jl)
     a = t_of_mat(rot)
     v = t_mv(a, t_mv(j, t_of_vec(th_d)))                        # A J_l theta'
-    dj = t_lin9(0.5 / eps, t_of_mat(jp), -0.5 / eps, t_of_mat(jm))
     inner = t_mv(j, t_of_vec(th_dd))
-    extra = t_mv(dj, t_of_vec(th_d))
+    extra = t_mv(t_of_mat(dj), t_of_vec(th_d))
     y = t_mv(a, (inner[0] + extra[0], inner[1] + extra[1], inner[2] + extra[2]))
     wv = t_cross(t_of_vec(w), v)
     for i in range(3):
