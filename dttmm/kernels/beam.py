@@ -630,24 +630,47 @@ def end_section(ends, torsion, eta, rot, out):
 def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, out,
                                       scratch):
     """out = w'_O = w' + w x (A J_l theta') + A (J_l theta'' + DJ_l(theta)[theta'] theta') of
-    the output section (the consistent start; so3.left_jacobian_derivative).  scratch: 39
-    entries."""
-    th, th_d, th_dd = scratch[0:3], scratch[3:6], scratch[6:9]
+    the output section (docs/beam.md, "End sections"; so3.left_jacobian_derivative).  scratch:
+    39 entries; it leaves theta_O, theta_O' in scratch[0:6], J_l theta_O' in scratch[9:12] and
+    J_l(theta_O) in scratch[12:21] (end_section_motion takes them)."""
+    th, th_d, th_dd, v = scratch[0:3], scratch[3:6], scratch[6:9], scratch[9:12]
     jl, dj = scratch[12:21].reshape((3, 3)), scratch[21:30].reshape((3, 3))
+    y, av = scratch[30:33], scratch[33:36]
     _end_angles_into(ends, torsion, eta, th)
     _end_angles_into(ends, torsion, eta_d, th_d)
     _end_angles_into(ends, torsion, eta_dd, th_dd)
     left_jacobian(th, jl)
     left_jacobian_derivative(th, th_d, dj)
-    j = t_of_mat(jl)
-    a = t_of_mat(rot)
-    v = t_mv(a, t_mv(j, t_of_vec(th_d)))                        # A J_l theta'
-    inner = t_mv(j, t_of_vec(th_dd))
-    extra = t_mv(t_of_mat(dj), t_of_vec(th_d))
-    y = t_mv(a, (inner[0] + extra[0], inner[1] + extra[1], inner[2] + extra[2]))
-    wv = t_cross(t_of_vec(w), v)
     for i in range(3):
-        out[i] = wd[i] + wv[i] + y[i]
+        v[i] = jl[i, 0] * th_d[0] + jl[i, 1] * th_d[1] + jl[i, 2] * th_d[2]
+        y[i] = (jl[i, 0] * th_dd[0] + jl[i, 1] * th_dd[1] + jl[i, 2] * th_dd[2]
+                + dj[i, 0] * th_d[0] + dj[i, 1] * th_d[1] + dj[i, 2] * th_d[2])
+    for i in range(3):                                          # A J_l theta'
+        av[i] = rot[i, 0] * v[0] + rot[i, 1] * v[1] + rot[i, 2] * v[2]
+    out[0] = wd[0] + w[1] * av[2] - w[2] * av[1]
+    out[1] = wd[1] + w[2] * av[0] - w[0] * av[2]
+    out[2] = wd[2] + w[0] * av[1] - w[1] * av[0]
+    for i in range(3):
+        out[i] += rot[i, 0] * y[0] + rot[i, 1] * y[1] + rot[i, 2] * y[2]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def end_section_motion(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, rest, rot_out, w_out,
+                       wd_out, scratch):
+    """The motion of a frame welded to the output section (docs/beam.md, "End sections"):
+    rot_out = A exp(theta_O^) R_rel, w_out = w + A J_l(theta_O) theta_O', wd_out = w'_O
+    (_end_section_angular_acceleration, whose theta_O and J_l theta_O' it takes from the
+    scratch), from the beam's frame (rot, w, wd) and modal state; rest: R_rel.  scratch: 48
+    entries (nothing is allocated)."""
+    _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, wd_out,
+                                      scratch[:39])
+    th, v = scratch[0:3], scratch[9:12]
+    e, a_o = scratch[21:30].reshape((3, 3)), scratch[39:48].reshape((3, 3))
+    expm_so3(th, e)
+    mm3_into(rot, e, a_o)
+    mm3_into(a_o, rest, rot_out)
+    for i in range(3):
+        w_out[i] = w[i] + rot[i, 0] * v[0] + rot[i, 1] * v[1] + rot[i, 2] * v[2]
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -30,13 +30,13 @@ from ..elements.beam import MODES, TORSION_MODES
 from ..elements.hinges import BALL, ELASTIC, FIXED
 from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .beam import beam_transfer, end_angles, transfer_work_size
+from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .mat3 import inv3, matmul_into
-from .so3 import expm_so3, left_jacobian, left_jacobian_derivative, log_so3
+from .so3 import expm_so3, left_jacobian, log_so3
 from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
                     riccati_full, riccati_reduced, riccati_tree_full, riccati_tree_reduced,
                     write_tree_stations)
@@ -469,31 +469,17 @@ def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w
 @njit(cache=True, fastmath=CONTRACT)
 def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame welded to beam k's end section (rest: the weld's R0) from the beam's frame and
-    modal coordinates (docs/beam.md, "End sections"): A_O = A exp(theta^) R0, theta = [psi(L),
-    -w'(L), v'(L)]; w_O = w + A J_l(theta) theta'; w_O' = w' + w x (A J_l theta') +
-    A (J_l theta'' + DJ_l(theta)[theta'] theta') (so3.left_jacobian_derivative: exact; its
+    modal coordinates (docs/beam.md, "End sections"; beam.end_section_motion): A_O = A
+    exp(theta^) R0, theta = [psi(L), -w'(L), v'(L)]; w_O = w + A J_l(theta) theta';
+    w_O' = w' + w x (A J_l theta') + A (J_l theta'' + DJ_l(theta)[theta'] theta') (exact; its
     leading term theta' x (theta x theta') / 6 alone left the twisting arm of
     tests/test_torsion.py an energy error of 4e-5 that did not fall with dt)."""
     mode_off, ends = beams[3], beams[4]
     i0, i1 = mode_off[k], mode_off[k + 1]
     m = int(beams[1][k, MODES])
     bending, twist = ends[k, :m], ends[k, m:m + int(beams[1][k, TORSION_MODES])]
-    th = end_angles(bending, twist, eta[i0:i1])
-    th_d = end_angles(bending, twist, eta_d[i0:i1])
-    th_dd = end_angles(bending, twist, eta_dd[i0:i1])
-    e = np.empty((3, 3))
-    expm_so3(th, e)
-    rot_out[:, :] = rot @ e @ rest
-    jl = np.empty((3, 3))
-    left_jacobian(th, jl)
-    rate = rot @ (jl @ th_d)
-    dj = np.empty((3, 3))
-    left_jacobian_derivative(th, th_d, dj)
-    acc = rot @ (jl @ th_dd + dj @ th_d)
-    w_out[:] = w + rate
-    wd_out[0] = wd[0] + w[1] * rate[2] - w[2] * rate[1] + acc[0]
-    wd_out[1] = wd[1] + w[2] * rate[0] - w[0] * rate[2] + acc[1]
-    wd_out[2] = wd[2] + w[0] * rate[1] - w[1] * rate[0] + acc[2]
+    end_section_motion(bending, twist, rot, w, wd, eta[i0:i1], eta_d[i0:i1], eta_dd[i0:i1],
+                       rest, rot_out, w_out, wd_out, np.empty(48))
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -501,9 +487,10 @@ def _welded(params, mode, k):
     """In the full-state tree sweep, a body welded to another (a fixed hinge; not to the ground)
     is not integrated on its own: its frame is its parent's (R0), or the end section's of a
     parent beam (solver.kernel_model's end section: the parent frame of a joint with
-    coordinates or an elastic hinge there); in a chain's full-state sweep, likewise a rigid
-    body welded to a beam's end (rotating beam no. 2's arm: integrated on its own, its
-    angular acceleration alternated from step to step and grew away at rho_inf = 1).
+    coordinates or an elastic hinge there); in a chain's full-state sweep, likewise a body
+    welded to a beam's end (rotating beam no. 2's arm, or the next element of a welded chain:
+    integrated on its own, its angular acceleration alternated from step to step and grew
+    away at rho_inf = 1).
     Integrated on its own, a body whose parent's rotation is set at position level (a joint
     child, a beam's end) would drift from it, and differencing a rotation held at position level
     with the trapezoidal rule's relations leaves a step-to-step mode in the acceleration that
@@ -512,10 +499,9 @@ def _welded(params, mode, k):
         return False
     if mode == RICCATI_JOINTS:
         return True
-    # in a chain's full-state sweep, a rigid body on a beam's end (a beam's own frame on the
-    # end of another keeps its integration: the fused welded-chain loop's, docs/assembly.md)
-    return (mode == RICCATI_FULL and params.beams[0][params.parent[k]] == BEAM
-            and params.beams[0][k] != BEAM)
+    # in a chain's full-state sweep, a body on a beam's end (as the fused welded-chain loop's
+    # beams, kernels/weld_chain.py::_follow_welds)
+    return mode == RICCATI_FULL and params.beams[0][params.parent[k]] == BEAM
 
 
 @njit(cache=True, fastmath=CONTRACT)

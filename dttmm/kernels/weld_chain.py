@@ -17,10 +17,14 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT, loop_piece
-from .ball_chain import _adopt, _ground_increment, _update, record_state
+from .ball_chain import _adopt as _adopt_solution
+from .ball_chain import _ground_increment, record_state
+from .ball_chain import _update as _update_integrated
 from .ball_chain import _predict as _predict_offsets
-from .beam import beam_transfer, transfer_work_size
+from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
+from .mat3 import mm3_into
+from .so3 import expm_so3, log_so3
 from .step import _all_finite, fused_coefficients
 from .sweep import riccati_step
 from ..elements.beam import MODES, TORSION_MODES
@@ -38,6 +42,8 @@ WeldLoop = namedtuple("WeldLoop", [
     "transfer",         # (12, 13) one beam's transfer; its work (6, 13) for the Riccati step
     "root",             # (6,) the ground station's [a, w']
     "beam_work",        # beam_transfer's work block (transfer_work_size)
+    "follow",           # _follow_welds' scratch: ((2, total modes) eta, eta' at the guess,
+    #                     (3, 3, 3) A_p*, A*, A* A_n^T, (4, 3) w_p*, w_p'*, w*, w'*, (48,))
 ])
 
 
@@ -54,7 +60,9 @@ def weld_loop(n, mode_off, h, coef, z):
                     (np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 6)), np.zeros((n, 6, 6)),
                      np.zeros((n, 6))),
                     (np.zeros((12, 13)), np.zeros((6, 13))), np.zeros(6),
-                    np.zeros(transfer_work_size(most)))
+                    np.zeros(transfer_work_size(most)),
+                    (np.zeros((2, int(mode_off[-1]))), np.zeros((3, 3, 3)), np.zeros((4, 3)),
+                     np.zeros(48)))
 
 
 @loop_piece
@@ -80,6 +88,52 @@ def _predict(loop, run, s, _):
     for i in range(3):
         loop.root[i] = inputs.g_acc[s, i]
         loop.root[3 + i] = g_wd[i]
+    _follow_welds(loop, run)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _follow_welds(loop, run):
+    """Every beam after the first follows its inboard's end section at the guess
+    (docs/beam.md, "End sections"; kernels/step.py::_welded_guess): from the inboard's guess
+    (A_p* = exp(phi_p*^) A_p,n, w_p* = c3 phi_p* + w3_p, w_p'* = c1 phi_p* + w1_p, eta* =
+    (eta''* - w1e) / c1, eta'* = c3 eta* + w3e) the section's A*, w*, w'*
+    (beam.end_section_motion); then phi* = log(A* A_n^T), and the offsets w1 = w'* - c1 phi*,
+    w3 = w* - c3 phi*, so that the weld's slot is w'* there.  In order from the root: each
+    beam's guess is its inboard's."""
+    params, state = run.params, run.state
+    c1, c3 = loop.coefficients[0], loop.coefficients[1]
+    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    w1e, w3e, eta_dd_star = loop.per_mode[0], loop.per_mode[1], loop.per_mode[3]
+    modal, mats, vecs, scratch = loop.follow
+    rot_p, rot_k, rel = mats[0], mats[1], mats[2]
+    w_p, wd_p, w_k, wd_k = vecs[0], vecs[1], vecs[2], vecs[3]
+    _, beam_params, _, mode_off, beam_ends, _ = params.beams
+    rot = state.rot
+    for k in range(1, phi_star.shape[0]):
+        p = k - 1
+        expm_so3(phi_star[p], rel)
+        mm3_into(rel, rot[p], rot_p)
+        for i in range(3):
+            w_p[i] = c3 * phi_star[p, i] + w3[p, i]
+            wd_p[i] = c1 * phi_star[p, i] + w1[p, i]
+        i0, i1 = mode_off[p], mode_off[p + 1]
+        for i in range(i0, i1):
+            modal[0, i] = (eta_dd_star[i] - w1e[i]) / c1
+            modal[1, i] = c3 * modal[0, i] + w3e[i]
+        m = int(beam_params[p, MODES])
+        mt = int(beam_params[p, TORSION_MODES])
+        end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot_p, w_p, wd_p,
+                           modal[0, i0:i1], modal[1, i0:i1], eta_dd_star[i0:i1],
+                           params.hinge_params[k, 0:9].reshape((3, 3)), rot_k, w_k, wd_k,
+                           scratch)
+        for i in range(3):
+            for j in range(3):
+                rel[i, j] = (rot_k[i, 0] * rot[k, j, 0] + rot_k[i, 1] * rot[k, j, 1]
+                             + rot_k[i, 2] * rot[k, j, 2])
+        log_so3(rel, phi_star[k])
+        for i in range(3):
+            w1[k, i] = wd_k[i] - c1 * phi_star[k, i]
+            w3[k, i] = w_k[i] - c3 * phi_star[k, i]
 
 
 @loop_piece
@@ -159,6 +213,41 @@ def _iterate(loop, run, s, it):
     if not np.isfinite(change):
         return NOT_FINITE, 0, change
     return OK, 0, change
+
+
+@loop_piece
+def _adopt(loop, run, s, it):
+    """The latest solution becomes the guess (the fused ball chain's), the welded beams follow
+    their inboard sections at it."""
+    _adopt_solution(loop, run, s, it)
+    _follow_welds(loop, run)
+
+
+@loop_piece
+def _update(loop, run, s, _):
+    """The fused ball chain's update (rotations, rates, modal coordinates), then every beam
+    after the first takes its inboard's end section's motion at t_n+1 (beam.end_section_motion),
+    its pseudo-acceleration its angular acceleration (as step.py's welded bodies); every rate
+    finite?"""
+    finite = _update_integrated(loop, run, s, 0)
+    params, state = run.params, run.state
+    _, beam_params, _, mode_off, beam_ends, _ = params.beams
+    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
+    scratch = loop.follow[3]
+    for k in range(1, rot.shape[0]):
+        p = k - 1
+        i0, i1 = mode_off[p], mode_off[p + 1]
+        m = int(beam_params[p, MODES])
+        mt = int(beam_params[p, TORSION_MODES])
+        end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot[p], omega[p],
+                           omega_dot[p], state.eta[i0:i1], state.eta_d[i0:i1],
+                           state.eta_acc[i0:i1], params.hinge_params[k, 0:9].reshape((3, 3)),
+                           rot[k], omega[k], omega_dot[k], scratch)
+        for i in range(3):
+            state.pseudo[k, i] = omega_dot[k, i]
+            if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
+                finite = False
+    return finite
 
 
 @njit(cache=True, fastmath=CONTRACT)
