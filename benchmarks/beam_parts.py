@@ -14,6 +14,10 @@ Measured (stop 24, 9 pairs of 3000 steps): plain 24.9 us, stiffening 1.02x, twis
 stiffening + twist 1.37x, stretch 1.36x, all three 1.57x, end torque 1.29x.  The parts'
 own arithmetic is small; most of the cost is the differenced w' and eta'' columns they
 switch on (the end torque's 1.29x has the same cause).
+
+Measured again 2026-11-26 (5 pairs, a test run beside it), the element now in the fused
+welded-chain loop with the end moment's columns written out: plain 16.2 us, stiffening 1.04x,
+twist 1.34x, stiffening + twist 1.45x, stretch 1.47x, all three 1.79x, end torque 1.12x.
 """
 import argparse
 import sys
