@@ -225,15 +225,23 @@ def _adopt(loop, run, s, it):
 
 @loop_piece
 def _update(loop, run, s, _):
-    """The fused ball chain's update (rotations, rates, modal coordinates), then every beam
-    after the first takes its inboard's end section's motion at t_n+1 (beam.end_section_motion),
-    its pseudo-acceleration its angular acceleration (as step.py's welded bodies); every rate
-    finite?"""
+    """The fused ball chain's update (rotations, rates, modal coordinates); then a beam locked
+    to the ground takes the ground's motion at t_n+1 (A = R_g A_rel, w = w_g, w' = w_g', as
+    the general loop's locked bodies: the trapezoidal rule's relations on the ground's
+    increments would alternate from step to step), and every beam after the first its
+    inboard's end section's motion (beam.end_section_motion), its pseudo-acceleration its
+    angular acceleration (as step.py's welded bodies); every rate finite?"""
     finite = _update_integrated(loop, run, s, 0)
-    params, state = run.params, run.state
+    params, state, inputs = run.params, run.state, run.inputs
     _, beam_params, _, mode_off, beam_ends, _ = params.beams
     rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
     scratch = loop.follow[3]
+    for k in range(rot.shape[0]):
+        if params.locked[k]:
+            mm3_into(inputs.g_rot[s + 1], params.lock_rel[k], rot[k])
+            for i in range(3):
+                omega[k, i] = inputs.g_w[s, i]
+                omega_dot[k, i] = inputs.g_wd[s, i]
     for k in range(1, rot.shape[0]):
         p = k - 1
         i0, i1 = mode_off[p], mode_off[p + 1]
