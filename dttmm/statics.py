@@ -334,15 +334,7 @@ class _Configuration:
         model, and forward differences' error, ~1e-3 of the largest entry, spoils its soft
         directions: measured on the elastica, convergence slowed to a few percent per
         iteration.)"""
-        n = len(q)
-        jac = np.empty((n, n))
-        for j in range(n):
-            h = 1e-5 * self.scale[j]
-            qp, qm = q.copy(), q.copy()
-            qp[j] += h
-            qm[j] -= h
-            jac[:, j] = (self.accelerations(qp) - self.accelerations(qm)) / (2.0 * h)
-        return jac
+        return self._central_differences(self.accelerations, q, len(q))
 
     def closure(self, q):
         """The pinned tip's output point less its pin, world, m (a closed loop's constraint)."""
@@ -350,13 +342,17 @@ class _Configuration:
 
     def closure_jacobian(self, q):
         """d closure / dq (3 x n) by central differences, as jacobian's."""
-        jac = np.empty((3, len(q)))
+        return self._central_differences(self.closure, q, 3)
+
+    def _central_differences(self, f, q, rows):
+        """df/dq (rows x n) by central differences, steps 1e-5 of each coordinate's scale."""
+        jac = np.empty((rows, len(q)))
         for j in range(len(q)):
             h = 1e-5 * self.scale[j]
             qp, qm = q.copy(), q.copy()
             qp[j] += h
             qm[j] -= h
-            jac[:, j] = (self.closure(qp) - self.closure(qm)) / (2.0 * h)
+            jac[:, j] = (f(qp) - f(qm)) / (2.0 * h)
         return jac
 
     def result_model(self, q):
