@@ -455,11 +455,12 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         defl[cfg.keep] = np.where((start.hinge_kind == ELASTIC)[:, None],
                                   start.hinge_params[:, DEFLECTION_0], 0.0)
         q = cfg.vector(rot_k, jq, start.initial_modal_coordinates, defl)
-    a = cfg.accelerations(q)
+    a = a0 = cfg.accelerations(q)
     weight = 1.0 / cfg.scale           # residuals in rad/s^2 (modal: per beam length)
     iterations = 0
     converged = False
     previous = np.inf
+    tau = None
     while iterations < max_iterations:
         iterations += 1
         q = cfg.rebase(q)
@@ -477,7 +478,10 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         big = np.max(np.abs(np.linalg.eigvals(k)), initial=0.0) if len(r) else 0.0
         if (np.max(np.abs(newton), initial=0.0) <= tol
                 and np.linalg.norm(k @ newton - r) <= tol * big):
-            converged = True
+            converged = True        # the last Newton step still taken: its error, ~tol^2
+            a_last = _accelerations_or_nan(cfg, q + newton * cfg.scale)
+            if np.all(np.isfinite(a_last)):
+                q, a = q + newton * cfg.scale, a_last
             break
         size = np.max(np.abs(newton), initial=0.0)
         if (size <= np.sqrt(tol) and size >= 0.5 * previous
@@ -486,23 +490,36 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             break                   # round-off (with stiff modes, ~1e-6 rad/s^2)
         previous = size
         if cfg.pin is None:
-            q_new, a = _damped_step(cfg, q, a, k, r, big, max_increment)
+            if tau is None:         # the settling flow's first step: at most max_increment
+                tau = max_increment / max(np.max(np.abs(r)), 1e-300)
+            q_new, a, tau, took_newton = _settling_step(cfg, q, a, k, r, newton, tau,
+                                                        max_increment)
+            if not took_newton:     # (Newton's stall test above judges Newton's steps only)
+                previous = np.inf
         else:
             q_new, a = _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment)
         if np.array_equal(q_new, q):
             break                   # no step passed: nothing more to gain by iterating
         q = q_new
     if not converged:
+        start, left = np.max(np.abs(weight * a0)), np.max(np.abs(weight * a))
+        if left > 0.5 * start and iterations >= 10:
+            hint = (f"the residual has not fallen ({start:.3g} at the start): the model seems "
+                    f"to have no equilibrium it can settle into (a body whose loads nothing "
+                    f"balances, e.g. a torque on a ball-jointed body without gravity or "
+                    f"spring); if one exists away from this start, pass it as guess=")
+        else:
+            hint = (f"it fell from {start:.3g} at the start: raise max_iterations, or apply "
+                    f"the loads in steps, passing each result as the next guess=")
         raise StaticEquilibriumError(
             f"{where}: no convergence in {iterations} iterations (the largest acceleration "
             f"left is {np.max(np.abs(a)):.3g}, at "
-            f"{cfg.labels[int(np.argmax(np.abs(weight * a)))]}); apply the loads in steps, "
-            f"passing each result as the next guess=, or raise "
-            f"max_iterations; a body whose loads nothing balances has no equilibrium"
+            f"{cfg.labels[int(np.argmax(np.abs(weight * a)))]}); {hint}"
             + ("; in a closed loop, beam elements without stretch modes keep their length, "
                "so a chain of them held straight between its pins cannot sag: give them "
                "axial_modes and axial_stiffness" if cfg.pin is not None else ""))
     q = cfg.rebase(q)
+    _check_within_validity(cfg, q, where)
     jac = cfg.jacobian(q)
     if cfg.pin is None:
         _check_held(cfg, jac, where)
@@ -539,62 +556,51 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
                              squared_frequencies=lam, coordinates=cfg.labels)
 
 
-def _damped_step(cfg, q, a, k, r, big, max_increment):
-    """One damped Newton step in scaled coordinates (x = q / scale, residuals r = a / scale,
-    k = M^-1 K scaled; Deuflhard's natural monotonicity test).  The step is Newton's,
-    k^+ r (least squares), plus, where part of the residual lies in directions that nothing
-    stiffens yet (k singular there, e.g. a pendulum held out horizontally), a move along that
-    part, max_increment long, downhill (a = M^-1 f lowers the potential energy).  It is
-    halved until the residual measured by the current k shrinks, |k^+ r| (the plain norm of
-    the accelerations would not do: they span decades between light bodies and stiff modes,
-    and a Newton step may raise it), or, while a part of it lies outside k's range, its plain
-    norm.  Returns (q, a); q unchanged if no
+def _settling_step(cfg, q, a, k, r, newton, tau, max_increment):
+    """One step toward an open system's equilibrium, in scaled coordinates (x = q / scale,
+    residuals r = a / scale, k = -da/dx; docs/statics.md, "Getting there").  Newton's step
+    k^+ r where the residual lies in k's range, the step moves no coordinate by more than
+    max_increment and it passes Deuflhard's natural monotonicity test |k^+ r_new| < |k^+ r|;
+    otherwise one implicit Euler step of the settling flow dx/ds = r(x), the model's motion
+    with its own mass matrix as the damping (a = M^-1 f: the potential energy falls along it,
+    to a stable equilibrium):
+
+        (I / tau + k) dx = r,
+
+    its pseudo-time step tau held to a local error (tau / 2) |r_new - r| of at most
+    max_increment (the difference from the explicit step), as an adaptive ODE solver does:
+    where the flow has settled, tau grows (at most tenfold a step) and the step becomes
+    Newton's.  A step whose sweep breaks down or whose error is too large is retried with a
+    shorter tau.  Returns (q, a, tau, whether Newton's step was taken), q unchanged when no
     step passed."""
-    big = float(big) or 1.0                  # k's largest eigenvalue (the caller's)
-
-    def parts(res):
-        newton = np.linalg.lstsq(k, res, rcond=1e-13)[0]
-        return newton, res - k @ newton
-
-    newton, perp = parts(r)
-    dx = newton.copy()
-    size = np.max(np.abs(perp))
-    if size > 1e-3 * np.max(np.abs(r)):
-        dx += perp * (max_increment / size)
-
-        def merit(res):             # away from the range of k: the residual itself
-            return np.linalg.norm(res)
-    else:
-        def merit(res):             # the natural monotonicity test
-            return np.linalg.norm(parts(res)[0])
-    biggest = np.max(np.abs(dx))
-    if biggest > max_increment:
-        dx *= max_increment / biggest
-    before = merit(r)
-    for _ in range(12):
-        try:
-            a_new = cfg.accelerations(q + dx * cfg.scale)
-        except solver.DivergenceError:          # a step too far: the sweep broke down
-            a_new = np.full_like(a, np.nan)
-        if np.all(np.isfinite(a_new)) and merit(a_new / cfg.scale) < before:
-            return q + dx * cfg.scale, a_new
-        dx *= 0.5
-    # no damped Newton step passed: Levenberg-Marquardt steps, (k + mu E) dx = r, mu growing
-    # tenfold (for large mu along the residual, a = M^-1 f, downhill), judged by the residual
-    mu = 1e-2 * np.linalg.norm(r) / max_increment + 1e-8 * big
-    for _ in range(20):
-        dx = np.linalg.solve(k + mu * np.eye(len(r)), r)
-        biggest = np.max(np.abs(dx))
+    size = np.max(np.abs(newton), initial=0.0)
+    outside = np.max(np.abs(r - k @ newton), initial=0.0)
+    if 0.0 < size <= max_increment and outside <= 1e-3 * np.max(np.abs(r)):
+        a_new = _accelerations_or_nan(cfg, q + newton * cfg.scale)
+        if (np.all(np.isfinite(a_new)) and np.linalg.norm(np.linalg.lstsq(
+                k, a_new / cfg.scale, rcond=1e-13)[0]) < np.linalg.norm(newton)):
+            return q + newton * cfg.scale, a_new, 10.0 * tau, True
+    eye = np.eye(len(r))
+    for _ in range(30):
+        dx = np.linalg.lstsq(eye / tau + k, r, rcond=1e-13)[0]
+        biggest = np.max(np.abs(dx), initial=0.0)
         if biggest > max_increment:
             dx *= max_increment / biggest
-        try:
-            a_new = cfg.accelerations(q + dx * cfg.scale)
-        except solver.DivergenceError:
-            a_new = np.full_like(a, np.nan)
-        if np.all(np.isfinite(a_new)) and np.linalg.norm(a_new / cfg.scale) < np.linalg.norm(r):
-            return q + dx * cfg.scale, a_new
-        mu *= 10.0
-    return q, a
+        a_new = _accelerations_or_nan(cfg, q + dx * cfg.scale)
+        error = 0.5 * tau * np.max(np.abs(a_new / cfg.scale - r))
+        if np.isfinite(error) and error <= max_increment:
+            grow = 10.0 if error == 0.0 else min(10.0, 0.9 * np.sqrt(max_increment / error))
+            return q + dx * cfg.scale, a_new, tau * max(grow, 1.0), False
+        tau *= 0.25 if not np.isfinite(error) else max(0.2, 0.9 * np.sqrt(max_increment / error))
+    return q, a, tau, False
+
+
+def _accelerations_or_nan(cfg, q):
+    """a(q), or NaN where the sweep breaks down (a step too far)."""
+    try:
+        return cfg.accelerations(q)
+    except solver.DivergenceError:
+        return np.full(len(q), np.nan)
 
 
 # A closed loop's least-squares solves along its tangent space, (k N)^+, drop singular values
@@ -648,6 +654,24 @@ def _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment):
             return q_new, a_new
         dx *= 0.5
     return q, a
+
+
+def _check_within_validity(cfg, q, where):
+    """Refuse an equilibrium that bends a beam beyond what its modal description holds: a tip
+    deflection larger than the beam's length, or a twist beyond half a turn (the time loop's
+    check, solver._beam_beyond_its_length); such a configuration solves the modal equations
+    but is no beam's shape (one element rolled into a full circle puts its tip 5.6 m from a
+    1 m beam's root)."""
+    model = cfg.result_model(q)
+    cause = solver._beam_beyond_its_length(model, solver._beam_tips(model),
+                                           model.initial_modal_coordinates)
+    if cause:
+        cause = cause.split(":")[0]
+        raise StaticEquilibriumError(
+            f"{where}: the equilibrium found is outside the beam model's validity ({cause}): "
+            f"the modal beam describes moderate deflections of each element; split the beam "
+            f"into several elements welded end to end by FixedHinge (each then bends less), "
+            f"and apply large loads in steps, passing each result as the next guess=")
 
 
 def _check_held(cfg, jac, where, tangent=None):

@@ -305,3 +305,46 @@ def test_a_straight_inextensible_chain_between_pins_is_explained():
     model = dttmm.build_chain(parts, gravity=(0.0, -9.81, 0.0), tip="ball")
     with pytest.raises(dttmm.StaticEquilibriumError, match="closed loop.*axial_modes"):
         dttmm.static_equilibrium(model)
+
+
+@pytest.mark.parametrize("links", [2, 3, 10])
+def test_ball_chains_settle_from_the_horizontal(links):
+    """A chain of uniform links held out horizontally (where gravity stiffens nothing and
+    Newton's step is undefined) settles to hanging straight down: the tip at -links m to
+    1e-9 m, stable, its lowest squared frequency positive.  Before the settling flow
+    (docs/statics.md, "Getting there") the 2-link chain of the README stalled at a residual of
+    1.27 rad/s^2, whatever max_iterations."""
+    link = lambda **kw: dttmm.RigidBody(mass=1.0, inertia=[1 / 6, 5 / 12, 5 / 12],
+                                        inertia_about="input", to_mass_center=[0.5, 0, 0],
+                                        to_output=[1, 0, 0], **kw)
+    parts = []
+    for _ in range(links):
+        parts += [dttmm.BallJoint(), link()]
+    eq = dttmm.static_equilibrium(dttmm.build_chain(parts, gravity=[0, -9.81, 0]))
+    assert np.allclose(eq.positions()[2][-1], [0.0, -links, 0.0], atol=1e-9)
+    assert eq.stable and eq.iterations < 30
+    assert eq.squared_frequencies[eq.squared_frequencies > 0].min() > 0.1
+
+
+@pytest.mark.parametrize("name", ["rigid_chain", "tree", "arm", "cantilever"])
+def test_the_shipped_scenes_reach_their_equilibrium(name):
+    """dttmm run --static-start's solve on the shipped scenes (rigid_chain and tree start
+    horizontal): it converges, and DT-TMM from it stays at rest (1e-9 m over 0.05 s)."""
+    from dttmm.scene import load_scene
+    from dttmm.cli import shipped_scenes
+    model = load_scene(shipped_scenes()[name]).model
+    eq = dttmm.static_equilibrium(model)
+    assert eq.residual < 1e-8
+    if name in ("rigid_chain", "tree"):
+        res = dttmm.simulate(eq.model, 0.05, 1e-3)
+        assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
+
+
+def test_an_element_bent_beyond_its_validity_is_refused():
+    """One modal element rolled up by M = 2 pi EI / L solves the modal equations with its tip
+    at (-5.58, 3.14) m for a 1 m beam: refused (the time loop's check), naming the beam and
+    saying to split it; at a quarter turn (tip deflection 0.79 L) it is returned."""
+    one = lambda lam: cantilever(1, tip_torque=[0.0, 0.0, lam * 2.0 * np.pi * EI])
+    with pytest.raises(dttmm.StaticEquilibriumError, match="body0.*deflects 3.14 m.*split"):
+        dttmm.static_equilibrium(one(1.0))
+    assert dttmm.static_equilibrium(one(0.25)).positions()[2][-1][0] > 0.0
