@@ -134,7 +134,10 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
         link2 = EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
                                    bending_stiffness=2.5e10 * side ** 4 / 12.0,
                                    polar_inertia_per_length=3300.0 * area * side * side / 6.0,
-                                   name="link2")
+                                   modes_per_plane=1, name="link2")
+        # (one mode: with the default's two (the second at 88 Hz) the joints' order tests at
+        # dt 5e-4 and 2.5e-4 s measured order 1.5, outside the asymptotic range; describe()
+        # shows what one mode leaves out: 17% on the first frequency)
     else:
         link2 = unit_link(name="link2")
     system = System(gravity=gravity)

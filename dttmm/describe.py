@@ -1,13 +1,15 @@
 """What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
 import numpy as np
 
-from .elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, FREQUENCY_CUTOFF,
-                            MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
+from .elements.beam import (ACCURACY, ACCURATE, CLAMPED, CLAMPED_LOADED, FAMILY,
+                            FREQUENCY_CUTOFF, MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED,
+                            STIFFENING,
                             AXIAL_MODES, TORSION_MODES, axial_frequencies, bending_frequencies,
-                            torsion_frequencies)
+                            torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import MASS, TO_OUTPUT
+from .model import outboard_masses
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
                UNIVERSAL: "universal", PRISMATIC: "prismatic"}
@@ -70,7 +72,21 @@ def _beam_lines(model, k):
     lines = [f"{m} mode{'s' if m > 1 else ''} per plane, own frequencies (Hz): "
              f"v {np.array2string(fv, precision=4)}, w {np.array2string(fw, precision=4)}",
              f"mode family {_FAMILY_WHY[int(row[FAMILY])]}"]
+    children = [[] for _ in range(model.n_bodies)]
+    for c, p in enumerate(model.parent):
+        if p >= 0:
+            children[p].append(c)
+    end_mass = outboard_masses(model.body_params[:, MASS], children)[k]
+    freq, defl = truncation_errors(row, m, end_mass)
+    on = (f", with {end_mass:.4g} kg beyond its output as an end mass"
+          if int(row[FAMILY]) == CLAMPED_LOADED else "")
+    lines.append(f"estimated truncation error{on}: first frequency {freq:+.2%}, static "
+                 f"deflection {defl:+.2%} (against the family's largest basis; docs/beam.md, "
+                 f"'How many modes')")
     cutoff = row[FREQUENCY_CUTOFF]
+    if cutoff == ACCURATE:
+        lines.append(f"modes_per_plane=None (default): the fewest modes with both estimates "
+                     f"within {ACCURACY:.1%}")
     if cutoff > 0.0:
         # auto_mode_count's measure: the frequencies of the family's largest basis
         cap = MAX_LOADED_MODES if int(row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES

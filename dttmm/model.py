@@ -6,10 +6,10 @@ import numpy as np
 
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
 from .elements.joints import rotation_about
-from .elements.beam import (AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
+from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
                             MAX_LOADED_MODES, MODES, PINNED, STIFFENING, TORSION_MODES,
-                            auto_mode_count, auto_part_count,
+                            accurate_mode_count, auto_mode_count, auto_part_count,
                             axial_frequencies, modal_size, mode_shapes, torsion_frequencies,
                             torsion_shapes)
 from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
@@ -955,6 +955,7 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
     insists).  An elastic hinge at the input clamps the beam elastically (the frame is the input
     section's, as after a fixed hinge); one at the output loads it (loaded-end modes)."""
     n = len(bodies)
+    end_mass = outboard_masses([v["mass"] for v in bv], children)
     for k in range(n):
         if body_kind[k] != BEAM:
             continue
@@ -984,8 +985,13 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         beam_params[k, FAMILY] = family
         if beam_params[k, FREQUENCY_CUTOFF] == FROM_STEP:   # derived (build_chain's step)
             beam_params[k, FREQUENCY_CUTOFF] = derived_cutoff
+        if beam_params[k, FREQUENCY_CUTOFF] == ACCURATE:    # modes_per_plane=None
+            beam_params[k, MODES] = accurate_mode_count(beam_params[k], end_mass[k])
+            bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
+            bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
-            beam_params[k, MODES] = auto_mode_count(beam_params[k])
+            beam_params[k, MODES] = max(auto_mode_count(beam_params[k]),
+                                        accurate_mode_count(beam_params[k], end_mass[k]))
             for part, frequencies in ((TORSION_MODES, torsion_frequencies),
                                       (AXIAL_MODES, axial_frequencies)):
                 if beam_params[k, part] == AUTO:           # "auto" twist or stretch
@@ -1002,6 +1008,15 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
                              f"clamped beam whose output carries loads (polynomial modes), got "
                              f"{int(beam_params[k, MODES])}")
         beam_params[k, FAMILY] = family
+
+
+def outboard_masses(masses, children):
+    """Per body: the mass of everything attached beyond it (its descendants), kg; a child's
+    index is above its parent's."""
+    total = np.array(masses, dtype=float)
+    for k in range(len(total) - 1, -1, -1):
+        total[k] += sum(total[c] for c in children[k])
+    return total - np.array(masses, dtype=float)
 
 
 def _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment):

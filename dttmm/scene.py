@@ -17,7 +17,8 @@ import numpy as np
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        UniversalJoint)
-from .elements.beam import (DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ, LENGTH,
+from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
+                            LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
@@ -406,6 +407,8 @@ def scene_of(model, run=None, name=None):
                 table["axial_stiffness"] = row[EA]
             if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
                 table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
+            elif row[FREQUENCY_CUTOFF] == ACCURATE:     # the default: counted again the same
+                del table["modes_per_plane"]
             for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k]),
                            ("distributed_load", model.line_loads[k])):
                 if f is not None:

@@ -9,6 +9,7 @@ The section's rotary inertia is left out (Euler-Bernoulli, like the paper), but 
 polar inertia is kept for the frame's (and the twist's) spin about x.
 """
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Callable, Optional
 
 import numpy as np
@@ -210,6 +211,53 @@ def torsion_frequencies(beam_row, n_modes=None):
     return np.sqrt(beam_row[GJ] * stiff / (beam_row[POLAR_PER_LENGTH] * mass)) / (2 * np.pi)
 MAX_AUTO_MODES = 10   # modes_per_plane="auto" keeps at most this many (6 for loaded-end modes)
 FROM_STEP = -1.0      # FREQUENCY_CUTOFF of "auto" without a cutoff: the build derives it
+ACCURATE = -2.0       # FREQUENCY_CUTOFF of modes_per_plane=None: the build counts by ACCURACY
+ACCURACY = 5e-3       # modes_per_plane=None (default): each beam's estimated truncation error
+#                       (first frequency, static deflection; truncation_errors) at most this
+
+
+def truncation_errors(beam_row, n_modes, end_mass=0.0):
+    """(first bending frequency, largest static deflection) of n_modes per plane, relative
+    to the family's largest basis (MAX_LOADED_MODES, else MAX_AUTO_MODES): the Ritz problem of
+    the beam alone with its family's ends, the loaded-end family's output carrying end_mass
+    (kg: what hangs on it, as a point mass), under a uniform load along its length plus that
+    mass's weight (docs/beam.md, "How many modes").  Both are ratios of the same beam's
+    numbers, so they depend on the family, n_modes and end_mass / (mu L) only."""
+    family = int(beam_row[FAMILY])
+    ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
+        if family == CLAMPED_LOADED else 0.0
+    cap = MAX_LOADED_MODES if family == CLAMPED_LOADED else MAX_AUTO_MODES
+    n = min(int(n_modes), cap)
+    ratio = float(f"{ratio:.2g}")               # (a cache key: 2 digits are plenty here)
+    f, d = _unit_beam_statics(family, n, ratio)
+    f_ref, d_ref = _unit_beam_statics(family, cap, ratio)
+    return f / f_ref - 1.0, d / d_ref - 1.0
+
+
+@lru_cache(maxsize=4096)
+def _unit_beam_statics(family, n_modes, end_ratio):
+    """(first circular frequency, largest deflection) of a unit beam (L = mu = EI = 1) of the
+    family with n_modes, an end mass end_ratio at its output (loaded-end family), under a unit
+    uniform load and that mass's unit weight."""
+    xg, wg = np.polynomial.legendre.leggauss(24)
+    x, w = 0.5 * (xg + 1.0), 0.5 * wg
+    along = np.linspace(0.0, 1.0, 101)
+    y, _, _, mass, stiff = mode_shapes(family, 1.0, n_modes, np.concatenate([x, along, [1.0]]))
+    tip = y[:, -1]
+    m = np.diag(mass) + end_ratio * np.outer(tip, tip)
+    first = eigh(np.diag(stiff), m, eigvals_only=True, subset_by_index=[0, 0])[0]
+    eta = (y[:, :len(x)] @ w + end_ratio * tip) / stiff
+    return float(np.sqrt(first)), float(np.max(np.abs(eta @ y[:, len(x):-1])))
+
+
+def accurate_mode_count(beam_row, end_mass=0.0):
+    """modes_per_plane=None: the fewest modes per plane whose truncation_errors are both at
+    most ACCURACY (the largest basis if none is).  Needs the family resolved."""
+    cap = MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+    for n in range(1, cap + 1):
+        if max(abs(e) for e in truncation_errors(beam_row, n, end_mass)) <= ACCURACY:
+            return n
+    return cap
 
 
 def bending_frequencies(beam_row, n_modes=None):
@@ -297,12 +345,15 @@ class EulerBernoulliBeam:
         rho, kg/m^3 (> 0), with area: mu = density * area.
     area : float, optional
         Cross-section area, m^2 (> 0), with density.
-    modes_per_plane : int or "auto", optional
-        Number of bending modes in each plane, >= 1 (default 1); at most 6 for a clamped beam
-        whose output carries loads (its polynomial modes).  The beam has 2 x modes_per_plane
-        modal coordinates.  "auto": every mode whose frequency (in either plane, of the family
-        the beam's ends select) is at or below frequency_cutoff, at least 1, at most 10 (6 for
-        polynomial modes); ``Model.describe()`` says what was kept.
+    modes_per_plane : int, "auto" or None, optional
+        Number of bending modes in each plane, >= 1; at most 6 for a clamped beam whose output
+        carries loads (its polynomial modes).  The beam has 2 x modes_per_plane modal
+        coordinates.  None (default): the fewest whose estimated truncation error (first
+        frequency and static deflection of the beam with what hangs on it) is at most 0.5%,
+        counted at the build (docs/beam.md, "How many modes"; or the count that given initial
+        modal coordinates imply).  "auto": every mode whose frequency (in either plane, of the
+        family the beam's ends select) is at or below frequency_cutoff, at least the default's
+        count, at most 10 (6 for polynomial modes); ``Model.describe()`` says what was kept.
     damping_ratio : float, optional
         Modal damping ratio zeta (>= 0, default 0), dimensionless: each mode's damping
         c_k = 2 zeta omega_k m_k, acting in the beam's (rotating) frame.
@@ -406,7 +457,7 @@ class EulerBernoulliBeam:
     mass_per_length: float = None
     density: float = None
     area: float = None
-    modes_per_plane: int = 1
+    modes_per_plane: object = None
     damping_ratio: float = 0.0
     mode_family: str = "auto"
     force_mode_family: bool = False
@@ -451,6 +502,11 @@ class EulerBernoulliBeam:
         polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
                               positive=True)
         auto = isinstance(self.modes_per_plane, str) and self.modes_per_plane == "auto"
+        accurate = self.modes_per_plane is None      # the default: counted at the build
+        if accurate and self.frequency_cutoff is not None:
+            raise ValueError(f"{who}: frequency_cutoff applies to modes_per_plane='auto' only "
+                             f"(the default, None, keeps as many modes as the beam needs for "
+                             f"{ACCURACY:.1%} accuracy)")
         if auto:
             # no cutoff: FROM_STEP, derived by the build from its step= (model.py)
             cutoff = (FROM_STEP if self.frequency_cutoff is None else
@@ -460,10 +516,14 @@ class EulerBernoulliBeam:
                 if getattr(self, arg) is not None:
                     raise ValueError(f"{who}: {arg} needs a fixed modes_per_plane (with 'auto' "
                                      f"the count is known only when the model is built)")
-        elif (isinstance(self.modes_per_plane, str) or isinstance(self.modes_per_plane, bool)
+        elif accurate:
+            pass
+        elif (isinstance(self.modes_per_plane, (str, bool, np.bool_))
+              or not isinstance(self.modes_per_plane, (int, float, np.integer, np.floating))
               or int(self.modes_per_plane) != self.modes_per_plane or self.modes_per_plane < 1):
-            raise ValueError(f"{who}: modes_per_plane must be an integer >= 1 or 'auto', "
-                             f"got {self.modes_per_plane!r}")
+            raise ValueError(f"{who}: modes_per_plane must be an integer >= 1, 'auto' or None "
+                             f"(the default: as many as {ACCURACY:.1%} accuracy needs), got "
+                             f"{self.modes_per_plane!r}")
         elif self.frequency_cutoff is not None:
             raise ValueError(f"{who}: frequency_cutoff applies to modes_per_plane='auto' only "
                              f"(this beam keeps {self.modes_per_plane} modes per plane)")
@@ -475,7 +535,20 @@ class EulerBernoulliBeam:
                             self.torsional_stiffness, "twist", "G J, N m^2", auto)
         n_axial, ea = _part(who, "axial_modes", self.axial_modes, "axial_stiffness",
                             self.axial_stiffness, "stretch", "E A, N", auto)
-        n_coord = 0 if auto else 2 * int(self.modes_per_plane) + n_twist + n_axial
+        per_plane = self.modes_per_plane
+        if accurate:
+            # initial modal coordinates given: their size says how many modes; otherwise the
+            # build counts them (model.py::_resolve_mode_families, accurate_mode_count)
+            given = [np.size(v) for v in (self.initial_modal_coordinates,
+                                          self.initial_modal_velocities) if v is not None]
+            bending = (given[0] - n_twist - n_axial) if given else 0
+            if given and (bending < 2 or bending % 2):
+                raise ValueError(f"{who}: initial_modal_coordinates must have 2 x "
+                                 f"modes_per_plane + torsion_modes + axial_modes entries; give "
+                                 f"modes_per_plane with them (got {given[0]} entries)")
+            per_plane = bending // 2 if given else None
+            accurate = per_plane is None
+        n_coord = 0 if (auto or accurate) else 2 * int(per_plane) + n_twist + n_axial
         given = (("initial_modal_coordinates", self.initial_modal_coordinates),
                  ("initial_modal_velocities", self.initial_modal_velocities))
         eta0, eta_d0 = (np.zeros(n_coord) if v is None
@@ -492,8 +565,9 @@ class EulerBernoulliBeam:
         row = np.zeros(BEAM_PARAM_SIZE)
         row[LENGTH], row[MASS_PER_LENGTH], row[EI_V], row[EI_W] = length, mu, ei[0], ei[1]
         row[POLAR_PER_LENGTH], row[DAMPING_RATIO] = polar, zeta
-        row[MODES] = 0 if auto else int(self.modes_per_plane)   # "auto": set at the build
-        row[FREQUENCY_CUTOFF] = cutoff if auto else 0.0
+        # "auto" and None: set at the build
+        row[MODES] = 0 if (auto or accurate) else int(per_plane)
+        row[FREQUENCY_CUTOFF] = cutoff if auto else (ACCURATE if accurate else 0.0)
         row[TORSION_MODES], row[GJ] = n_twist, gj
         row[AXIAL_MODES], row[EA] = n_axial, ea
         if not isinstance(self.load_axes, str) or self.load_axes not in LOAD_AXES_NAMES:
