@@ -8,7 +8,7 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
 from .model import Ground, Model, PrescribedMotion, System, build_chain
 from .recording import Checkpoint
 from .result import Result
-from .solver import DivergenceError, load_stream, simulate
+from .solver import DivergenceError, UnresolvedMotionWarning, load_stream, simulate
 from .statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
 from .parameter_sweep import SweepTable, sweep
@@ -22,5 +22,6 @@ __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "Elasti
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
            "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain",
            "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
-           "DivergenceError", "static_equilibrium", "StaticEquilibrium", "StaticEquilibriumError",
+           "DivergenceError", "UnresolvedMotionWarning", "static_equilibrium",
+           "StaticEquilibrium", "StaticEquilibriumError",
            "sweep", "SweepTable", "__version__"]

@@ -78,6 +78,9 @@ def checked_times(t_eval):
     times = np.atleast_1d(np.asarray(t_eval, dtype=float))
     if times.ndim != 1 or not np.all(np.isfinite(times)):
         raise ValueError("simulate: t_eval must be a 1-d array of finite times, s")
+    if times.size == 0:
+        raise ValueError("simulate: t_eval is empty: give the times to record (s), or leave "
+                         "it out for the default samples")
     return times
 
 

@@ -51,6 +51,8 @@ def main(argv=None):
     example = sub.add_parser("example", help="list the shipped scenes, or write one here")
     example.add_argument("name", nargs="?")
     example.add_argument("--to", default=".", help="directory to write NAME.toml into")
+    example.add_argument("--force", action="store_true",
+                         help="overwrite NAME.toml if it exists")
     args = ap.parse_args(argv)
     try:
         return {"run": _run, "info": _info, "example": _example}[args.command](args)
@@ -78,7 +80,15 @@ def _run(args):
     if args.record_dt is not None or "rtol" in options:
         options.pop("record_every", None)
     t_end, dt = options.pop("t_end"), options.pop("dt")
-    resume = Checkpoint.load(args.resume) if args.resume else None
+    problem = _output_problem(args)
+    if problem:
+        print(f"dttmm: {problem}", file=sys.stderr)
+        return 2
+    try:
+        resume = Checkpoint.load(args.resume) if args.resume else None
+    except ValueError as err:
+        print(f"dttmm: --resume: {err}", file=sys.stderr)
+        return 2
     model = scene.model
     if args.static_start:
         from .statics import StaticEquilibriumError, static_equilibrium
@@ -86,7 +96,7 @@ def _run(args):
             eq = static_equilibrium(model)
         except (StaticEquilibriumError, ValueError) as err:
             print(f"dttmm: {err}", file=sys.stderr)
-            return 1
+            return 2
         model = eq.model
         freqs = eq.frequencies
         moving = [f for f in freqs if f > 0.0]
@@ -94,6 +104,10 @@ def _run(args):
               f"{'stable' if eq.stable else 'UNSTABLE'}; {int(np.sum(freqs == 0.0))} neutral "
               f"directions; lowest frequencies (Hz): "
               f"{', '.join(f'{f:.4g}' for f in moving[:3])})")
+    from .energy_balance import does_work
+    worked = does_work(model)
+    if worked and "rtol" not in options and "max_energy_error" not in options:
+        options["max_energy_error"] = 1e300     # kept, to show the balance, never to stop
     steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
              else f"dt = {dt:g} s")
     print(f"{scene.path}: {describe_counts(model)}; t_end = {t_end:g} s, {steps}")
@@ -117,18 +131,28 @@ def _run(args):
     print(f"ran {res.n_steps} steps in {res.wall_time:.3g} s (loop {res.info['loop']}, "
           f"{res.info['mode']}); {len(res.t)} samples; largest step error estimate "
           f"{res.info.get('step_error_max', 0.0):.2g}")
-    print(f"energy: largest kinetic {scale:.4g} J, total changed by "
-          f"{abs(energy[-1] - energy[0]):.3g} J ({abs(energy[-1] - energy[0]) / scale:.2g} of it)")
-    if "energy_balance_error" in res.info:
-        print(f"energy balance (the work of loads, drives, dampers and the ground counted): "
-              f"closes to {res.info['energy_balance_error']:.2g} of the largest kinetic energy")
+    change = float(energy[-1] - energy[0])
+    if res.energy_work is not None:
+        gap = change - float(res.energy_work[-1])
+        print(f"energy: largest kinetic {scale:.4g} J; the total changed by {change:.4g} J, "
+              f"the work done on the system (loads, drives, dampers, ground) is "
+              f"{float(res.energy_work[-1]):.4g} J: energy balance E - E(0) - W = {gap:.3g} J "
+              f"({abs(gap) / scale:.2g} of the largest kinetic energy; at worst "
+              f"{res.info['energy_balance_error']:.2g})")
+    elif worked:
+        print(f"energy: largest kinetic {scale:.4g} J; the total changed by {change:.4g} J, "
+              f"including the work done on the system (not tracked with adaptive steps)")
+    else:
+        print(f"energy: largest kinetic {scale:.4g} J; the total (nothing works on the "
+              f"system) changed by {change:.3g} J ({abs(change) / scale:.2g} of the largest "
+              f"kinetic energy)")
     if args.out:
         res.save_npz(args.out)
         print(f"wrote {args.out}")
     if args.csv:
         res.save_csv(args.csv)
         print(f"wrote {args.csv}")
-    if args.checkpoint and res.checkpoint is None:
+    if args.checkpoint and not res.checkpoint:
         print("dttmm: no checkpoint written: an adaptive run has no step grid to resume on",
               file=sys.stderr)
     elif args.checkpoint:
@@ -143,6 +167,25 @@ def _run(args):
         animate(res, model, args.animate, title=scene.name)
         print(f"wrote {args.animate}")
     return 0
+
+
+def _output_problem(args):
+    """What is wrong with run's file arguments, checked before the run ("" if nothing): an
+    output into a directory that does not exist, an animation that is neither .gif nor .mp4,
+    a plots directory that is a file, a --resume file that does not exist."""
+    for flag, path in (("--out", args.out), ("--csv", args.csv),
+                       ("--checkpoint", args.checkpoint), ("--animate", args.animate)):
+        if path and not Path(path).resolve().parent.is_dir():
+            return f"{flag} {path}: the directory {str(Path(path).parent)!r} does not exist"
+        if path and Path(path).is_dir():
+            return f"{flag} {path}: is a directory; give a file name"
+    if args.animate and Path(args.animate).suffix not in (".gif", ".mp4"):
+        return f"--animate {args.animate}: write a .gif or an .mp4"
+    if args.plots and Path(args.plots).exists() and not Path(args.plots).is_dir():
+        return f"--plots {args.plots}: is a file; give a directory"
+    if args.resume and not Path(args.resume).is_file():
+        return f"--resume {args.resume}: no such file"
+    return ""
 
 
 def _info(args):
@@ -172,6 +215,13 @@ def _example(args):
               file=sys.stderr)
         return 2
     target = Path(args.to) / f"{args.name}.toml"
+    if not Path(args.to).is_dir():
+        print(f"dttmm: --to {args.to}: no such directory", file=sys.stderr)
+        return 2
+    if target.exists() and not args.force:
+        print(f"dttmm: {target} exists (an edited copy?): not overwritten; pass --force to "
+              f"replace it, or --to another directory", file=sys.stderr)
+        return 2
     shutil.copyfile(scenes[args.name], target)
     print(f"wrote {target}; run it: dttmm run {target}")
     return 0

@@ -30,6 +30,19 @@ from .model import output_section
 from .result import _drive_spring_energy, beam_output_offset
 
 
+def does_work(model):
+    """Whether anything outside the total energy works on the model (applied or distributed
+    loads, joint drives, dampers of elastic hinges or beams, a moving ground): then the total
+    changes by that work, and only the balance E - E(0) - W measures the integrator."""
+    damped = any(model.hinge_kind[k] == ELASTIC and (
+        np.any(model.hinge_params[k, C_TRANSLATION]) or np.any(model.hinge_params[k, C_ROTATION]))
+        for k in range(model.n_bodies))
+    return bool(model.has_applied_loads or any(d is not None for ds in model.drives for d in ds)
+                or damped or np.any(model.beam_params[:, DAMPING_RATIO] > 0.0)
+                or model.ground_motion is not None
+                or any(f is not None for f in model.line_loads))
+
+
 class EnergyBalance:
     """The running balance of one run.  result_of(values, steps) -> (Result, the rows
     restricted to the model's bodies) for rows of the kernels' recorded state (solver._result);
@@ -159,7 +172,10 @@ class EnergyBalance:
         message, or None."""
         res, mapped = self.result_of(values, steps)
         p = self.power(res, mapped, force, torque, line_load)
-        self.work += 0.5 * h * (self.p_last + p[0] + np.sum(p[:-1] + p[1:]))
+        # W after each step of the chunk (the trapezoidal rule, step by step)
+        self.chunk_work = self.work + 0.5 * h * np.cumsum(
+            np.concatenate([[self.p_last + p[0]], p[:-1] + p[1:]]))
+        self.work = float(self.chunk_work[-1])
         self.p_last = p[-1]
         last = {key: v[-1:] for key, v in values.items()}
         e, kinetic = self.energy(self.result_of(last, steps[-1:])[0])

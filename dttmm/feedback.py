@@ -43,10 +43,11 @@ class Progress:
     PROGRESS_AFTER seconds.  enabled: None (default) shows it only when stderr is a terminal,
     True always, False never."""
 
-    def __init__(self, n_steps, enabled=None, what="dttmm"):
+    def __init__(self, n_steps, enabled=None, what="dttmm", unit="step"):
         if enabled is None:
             enabled = sys.stderr.isatty()
         self.enabled, self.n_steps, self.what = bool(enabled), n_steps, what
+        self.unit = unit
         self._first = None          # (time, steps) after the first chunk (which may compile)
         self._bar = None
 
@@ -64,7 +65,7 @@ class Progress:
             if (self.n_steps - done0) / max(rate, 1e-9) < PROGRESS_AFTER:
                 return
             from tqdm import tqdm
-            self._bar = tqdm(total=self.n_steps, initial=done, desc=self.what, unit="step",
+            self._bar = tqdm(total=self.n_steps, initial=done, desc=self.what, unit=self.unit,
                              leave=False, file=sys.stderr)
         else:
             self._bar.update(done - self._bar.n)

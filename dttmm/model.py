@@ -728,6 +728,14 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     if tip not in ("free", "ball"):
         raise ValueError(f"System: tip must be 'free' or 'ball', got {tip!r}")
     n = len(bodies)
+    for k, element in enumerate(list(bodies) + list(hinges)):
+        name = getattr(element, "name", "")
+        if not isinstance(name, str):
+            raise ValueError(f"{type(element).__name__} ({'body' if k < n else 'hinge'} "
+                             f"{k if k < n else k - n}): name must be a string, got {name!r}")
+        if k < n and name == "ground":
+            raise ValueError(f"{type(element).__name__} (body {k}): the name {name!r} is the "
+                             f"ground's (parent='ground' means the ground): choose another")
     parent = np.array(parents, dtype=np.int64)
     attachment = np.array(attach, dtype=np.int64)
     chain = bool(np.all(parent == np.arange(n) - 1) and np.all(attachment == 0))

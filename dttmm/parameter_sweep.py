@@ -13,6 +13,7 @@ run on a worker is the same computation as in this process, so the table equals 
 import itertools
 import os
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -36,6 +37,9 @@ class SweepTable:
         The whole sweep's wall-clock time, s.
     engine : str
         The engine the runs went to: "dask", "processes" or "serial".
+    failures : list of (dict, str), optional
+        The runs that failed: their parameters and the error (type and message); their rows'
+        outputs are NaN.
 
     Attributes
     ----------
@@ -47,6 +51,8 @@ class SweepTable:
         s, the whole sweep.
     engine : str
         "dask", "processes" or "serial".
+    failures : list of (dict, str)
+        As given (empty when every run finished).
 
     Raises
     ------
@@ -62,11 +68,13 @@ class SweepTable:
     (2, [-0.9, -0.8])
     """
 
-    def __init__(self, rows, parameters, outputs, wall_time, engine):
+    def __init__(self, rows, parameters, outputs, wall_time, engine, failures=()):
         self.parameters, self.outputs = list(parameters), list(outputs)
-        self.columns = {name: np.array([row[name] for row in rows])
+        self.columns = {name: np.array([row.get(name, np.nan) if name in self.outputs
+                                        else row[name] for row in rows])
                         for name in self.parameters + self.outputs}
         self.wall_time, self.engine = wall_time, engine
+        self.failures = list(failures)
 
     def __len__(self):
         return len(next(iter(self.columns.values()))) if self.columns else 0
@@ -75,7 +83,8 @@ class SweepTable:
         return self.columns[name]
 
     def __repr__(self):
-        return (f"SweepTable({len(self)} runs; parameters {self.parameters}; outputs "
+        failed = f", {len(self.failures)} failed" if self.failures else ""
+        return (f"SweepTable({len(self)} runs{failed}; parameters {self.parameters}; outputs "
                 f"{self.outputs}; {self.wall_time:.3g} s on {self.engine})")
 
     def save_csv(self, path):
@@ -100,29 +109,44 @@ def final_points(result, model):
             for i, c in enumerate("xyz")}
 
 
+FAILED = "__failed__"     # a failed run's row: its parameters and this key, the error
+
+
 def _run_one(make_model, parameters, t_end, dt, outputs, options):
-    """One run, on whichever process it lands: the model, the run, its outputs."""
+    """One run, on whichever process it lands: the model, the run, its outputs; a run that
+    raises returns its parameters and the error instead (the sweep keeps the others)."""
     from .solver import simulate
-    model = make_model(**parameters)
-    result = simulate(model, t_end, dt, progress=False, **options)
-    values = outputs(result, model)
-    clash = sorted(set(values) & set(parameters))
-    if clash:
-        raise ValueError(f"sweep: outputs {clash} have the names of parameters; name them "
-                         f"apart (a column each)")
-    return dict(parameters, **{k: float(v) for k, v in values.items()})
+    try:
+        model = make_model(**parameters)
+        result = simulate(model, t_end, dt, progress=False, **options)
+        values = outputs(result, model)
+        clash = sorted(set(values) & set(parameters))
+        if clash:
+            raise ValueError(f"sweep: outputs {clash} have the names of parameters; name them "
+                             f"apart (a column each)")
+        return dict(parameters, **{k: float(v) for k, v in values.items()})
+    except Exception as err:            # reported with its parameter set by sweep
+        return dict(parameters, **{FAILED: f"{type(err).__name__}: {err}"})
 
 
 def _grid(parameters):
     """A list of dicts as it is; a dict of lists as their product (every combination)."""
     if isinstance(parameters, dict):
         names = list(parameters)
+        for n in names:
+            if isinstance(parameters[n], (str, bytes)) or not hasattr(parameters[n], "__len__"):
+                raise ValueError(f"sweep: parameter {n!r} must be a list of values, got "
+                                 f"{parameters[n]!r} (one value: [{parameters[n]!r}])")
         empty = [n for n in names if len(parameters[n]) == 0]
         if not names or empty:
             raise ValueError(f"sweep: every parameter needs at least one value; "
                              f"{empty or 'no parameters'} given none")
         return [dict(zip(names, values))
                 for values in itertools.product(*(parameters[n] for n in names))]
+    if not isinstance(parameters, (list, tuple)) or not all(isinstance(p, dict)
+                                                          for p in parameters):
+        raise ValueError(f"sweep: parameters must be a dict of lists, or a non-empty list of "
+                         f"dicts with the same keys, got {type(parameters).__name__}")
     runs = [dict(p) for p in parameters]
     if not runs or any(set(r) != set(runs[0]) for r in runs):
         raise ValueError("sweep: parameters must be a dict of lists, or a non-empty list of "
@@ -170,8 +194,16 @@ def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="da
     ------
     ValueError
         parameters neither a dict of lists nor a non-empty list of dicts with the same keys;
-        an unknown engine; and anything a run raises (``simulate``'s ValueError or
-        ``DivergenceError``, make_model's or outputs' errors), from the worker.
+        an unknown engine.
+    RuntimeError
+        Every run failed (the first one's parameters and error).
+
+    Warns
+    -----
+    UserWarning
+        Some runs failed (``simulate``'s ValueError or ``DivergenceError``, make_model's or
+        outputs' errors): the table keeps the others, the failed rows' outputs are NaN, and
+        ``table.failures`` lists each failed parameter set with its error.
 
     Examples
     --------
@@ -194,8 +226,16 @@ def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="da
         except ImportError:
             engine = "processes"
     if engine == "dask":
-        cluster = None if scheduler else LocalCluster(n_workers=n_workers, threads_per_worker=1,
-                                                      processes=True, dashboard_address=None)
+        try:
+            cluster = None if scheduler else LocalCluster(
+                n_workers=n_workers, threads_per_worker=1, processes=True,
+                dashboard_address=None)
+        except Exception as err:
+            raise RuntimeError(
+                f"sweep: dask could not start its local workers ({type(err).__name__}: {err}); "
+                f"a script that sweeps on dask must run the sweep under "
+                f"'if __name__ == \"__main__\":' (the workers import the script), or pass "
+                f"engine='processes' or 'serial'") from err
         client = Client(scheduler or cluster)
         try:
             futures = client.map(_run_one, [make_model] * len(runs), runs,
@@ -216,5 +256,19 @@ def sweep(make_model, parameters, t_end, dt, *, outputs=final_points, engine="da
         raise ValueError(f"sweep: engine must be 'dask', 'processes' or 'serial', got "
                          f"{engine!r}")
     names = list(runs[0])
-    return SweepTable(rows, names, [k for k in rows[0] if k not in names],
-                      time.perf_counter() - t0, engine)
+    failures = [({n: row[n] for n in names}, row[FAILED]) for row in rows if FAILED in row]
+    done = [row for row in rows if FAILED not in row]
+    if not done:
+        params, error = failures[0]
+        raise RuntimeError(f"sweep: every run failed; the first, {_label(params)}: {error}")
+    if failures:
+        warnings.warn(f"sweep: {len(failures)} of {len(rows)} runs failed; their outputs are NaN "
+                      f"and table.failures lists each ("
+                      + "; ".join(f"{_label(p)}: {e}" for p, e in failures[:3])
+                      + ("; ..." if len(failures) > 3 else "") + ")", stacklevel=2)
+    return SweepTable(rows, names, [k for k in done[0] if k not in names],
+                      time.perf_counter() - t0, engine, failures)
+
+
+def _label(parameters):
+    return ", ".join(f"{k}={v!r}" for k, v in parameters.items())

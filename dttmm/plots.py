@@ -10,10 +10,12 @@
     animate(result, model, path)            a 3D animation, GIF (Pillow) or MP4 (ffmpeg)
 """
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes, stretch_along
+from .feedback import Progress
 
 
 def _plt():
@@ -79,16 +81,41 @@ def plot_angles(result, ax=None, title=None):
                           title or "x-y-z angles (unwrapped)")
 
 
+def _column_labels(result, key, letter, count):
+    """The columns' legend names from result.info[key] (solver.column_names), else letter1,
+    letter2, ..."""
+    names = (result.info or {}).get(key)
+    return list(names) if names is not None and len(names) == count else [
+        f"{letter}{j + 1}" for j in range(count)]
+
+
+def _style(j):
+    """Line j's colour and dash: the 10 colours of the cycle, then again dashed, dotted, ...
+    (no two lines of up to 40 look alike)."""
+    return dict(color=f"C{j % 10}", linestyle=("-", "--", ":", "-.")[(j // 10) % 4])
+
+
 def plot_energy(result, ax=None, title=None):
     """Kinetic, potential and total energy (J), and the total's change from t = 0 on an axis
-    of its own (a drift of 1e-9 J is invisible beside energies of joules)."""
+    of its own (a drift of 1e-9 J is invisible beside energies of joules); where the run kept
+    the energy balance (result.energy_work), the balance E - E(0) - W beside it, W the work
+    of loads, drives, dampers and a moving ground."""
     fig, axes = _axes(ax, 2)
     axes[0].plot(result.t, result.kinetic, label="kinetic")
     axes[0].plot(result.t, result.potential, label="potential")
     axes[0].plot(result.t, result.total_energy, label="total")
     axes[0].set_ylabel("energy (J)")
-    axes[1].plot(result.t, result.total_energy - result.total_energy[0], color="k")
-    axes[1].set_ylabel("total - total(0) (J)")
+    change = result.total_energy - result.total_energy[0]
+    if result.energy_work is None:
+        axes[1].plot(result.t, change, color="k")
+        axes[1].set_ylabel("total - total(0) (J)")
+    else:       # the work done on the system apart: what is left is the integrator's error
+        axes[1].plot(result.t, change, color="0.6", linestyle="--",
+                     label="E - E(0): with the work done on it")
+        axes[1].plot(result.t, change - result.energy_work, color="k",
+                     label="balance E - E(0) - W")
+        axes[1].set_ylabel("energy change (J)")
+        axes[1].legend(fontsize="small")
     return _finish(fig, axes, title or "energy", legend_columns=1)
 
 
@@ -97,9 +124,11 @@ def plot_joints(result, ax=None, title=None):
     if result.joint_coordinates is None:
         raise ValueError("plot_joints: the result has no joints with coordinates")
     fig, axes = _axes(ax, 2)
-    for j in range(result.joint_coordinates.shape[1]):
-        axes[0].plot(result.t, result.joint_coordinates[:, j], label=f"q{j + 1}")
-        axes[1].plot(result.t, result.drive_force[:, j], label=f"q{j + 1}")
+    names = _column_labels(result, "coordinate_names", "q", result.joint_coordinates.shape[1])
+    for j, name in enumerate(names):
+        style = _style(j)
+        axes[0].plot(result.t, result.joint_coordinates[:, j], label=name, **style)
+        axes[1].plot(result.t, result.drive_force[:, j], label=name, **style)
     axes[0].set_ylabel("coordinate (rad or m)")
     axes[1].set_ylabel("drive force (N m or N)")
     return _finish(fig, axes, title or "joints")
@@ -110,8 +139,9 @@ def plot_modal(result, ax=None, title=None):
     if result.modal_coordinates is None:
         raise ValueError("plot_modal: the result has no beams")
     fig, axes = _axes(ax, 1)
-    for j in range(result.modal_coordinates.shape[1]):
-        axes[0].plot(result.t, result.modal_coordinates[:, j], label=f"eta{j + 1}")
+    names = _column_labels(result, "modal_names", "eta", result.modal_coordinates.shape[1])
+    for j, name in enumerate(names):
+        axes[0].plot(result.t, result.modal_coordinates[:, j], label=name, **_style(j))
     axes[0].set_ylabel("modal coordinate (m)")
     return _finish(fig, axes, title or "beams' modal coordinates")
 
@@ -166,15 +196,20 @@ def centerlines(result, model, points=12):
     return out
 
 
-def animate(result, model, path, title="", frames=150, fps=25):
+def animate(result, model, path, title="", frames=150, fps=25, progress=None):
     """A 3D animation of the run (each body a line through its points, a beam its deflected
-    centreline) to path: .gif (Pillow, with matplotlib) or .mp4 (ffmpeg needed)."""
+    centreline) to path: .gif (Pillow, with matplotlib) or .mp4 (ffmpeg needed).  The axes
+    are drawn once and each frame draws only the bodies and the time over them (blitting); a
+    GIF's frames share the first frame's palette.  progress: a bar over the frames (None:
+    when stderr is a terminal)."""
     plt = _plt()
     from matplotlib import animation
     path = Path(path)
     if path.suffix not in (".gif", ".mp4"):
         raise ValueError(f"animate: {path}: write a .gif or an .mp4")
-    lines = centerlines(result, model)
+    pick = np.unique(np.linspace(0, len(result.t) - 1, min(frames, len(result.t))).astype(int))
+    lines = centerlines(_samples(result, pick), model)
+    pick = np.arange(len(pick))
     # the world axis against gravity is drawn upwards (matplotlib's z)
     g = np.asarray(model.gravity, dtype=float)
     up = int(np.argmax(np.abs(g))) if np.any(g) else 2
@@ -182,7 +217,8 @@ def animate(result, model, path, title="", frames=150, fps=25):
     sign = np.array([1.0, 1.0, -1.0 if g[up] > 0 else 1.0])
     lines = lines[..., order] * sign
     labels = [f"{'-' if sign[j] < 0 else ''}{'xyz'[order[j]]} (m)" for j in range(3)]
-    pick = np.unique(np.linspace(0, len(result.t) - 1, min(frames, len(result.t))).astype(int))
+    times = result.t[np.unique(np.linspace(0, len(result.t) - 1,
+                                           min(frames, len(result.t))).astype(int))]
     lo, hi = lines.reshape(-1, 3).min(axis=0), lines.reshape(-1, 3).max(axis=0)
     mid, half = 0.5 * (lo + hi), 0.5 * max(float(np.max(hi - lo)), 1e-9) * 1.1
     fig = plt.figure(figsize=(6, 6))
@@ -199,12 +235,57 @@ def animate(result, model, path, title="", frames=150, fps=25):
         i = pick[j]
         for k, line in enumerate(drawn):
             line.set_data_3d(lines[i, k, :, 0], lines[i, k, :, 1], lines[i, k, :, 2])
-        stamp.set_text(f"{title + ': ' if title else ''}t = {result.t[i]:.3f} s")
+        stamp.set_text(f"{title + ': ' if title else ''}t = {times[i]:.3f} s")
         return drawn
 
-    anim = animation.FuncAnimation(fig, frame, frames=len(pick), interval=1000 / fps)
-    writer = (animation.PillowWriter(fps=fps) if path.suffix == ".gif"
-              else animation.FFMpegWriter(fps=fps))
-    anim.save(path, writer=writer)
-    plt.close(fig)
+    bar = Progress(len(pick), progress, what="animation", unit="frame")
+    try:
+        if path.suffix == ".gif":
+            _write_gif(fig, ax, drawn + [stamp], frame, len(pick), fps, path, bar)
+        else:
+            anim = animation.FuncAnimation(fig, frame, frames=len(pick), interval=1000 / fps)
+            anim.save(path, writer=animation.FFMpegWriter(fps=fps),
+                      progress_callback=lambda i, n: bar.update(i + 1))
+    finally:
+        bar.close()
+        plt.close(fig)
     return path
+
+
+def _samples(result, pick):
+    """The result restricted to the samples pick (what centerlines needs, for the frames
+    only)."""
+    keep = {name: getattr(result, name)[pick] for name in
+            ("t", "rotation", "position_input", "position_mass_center", "position_output")}
+    if result.modal_coordinates is not None:
+        keep["modal_coordinates"] = result.modal_coordinates[pick]
+    return SimpleNamespace(**keep, modal_velocities=None)
+
+
+def _write_gif(fig, ax, artists, frame, n_frames, fps, path, bar):
+    """The frames as a GIF: the figure drawn once without the artists (the axes, the panes,
+    the ticks: most of a 3D frame's cost), then per frame that background restored and only
+    the artists drawn over it (their 3D projection is the axes' own, fixed); quantized to the
+    first frame's palette (Pillow)."""
+    from PIL import Image
+    canvas = fig.canvas
+    for a in artists:
+        a.set_visible(False)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    for a in artists:
+        a.set_visible(True)
+    images, palette = [], None
+    for j in range(n_frames):
+        frame(j)
+        canvas.restore_region(background)
+        for a in artists:
+            a.axes.draw_artist(a) if a.axes is not None else fig.draw_artist(a)
+        rgb = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(),
+                               "raw", "RGBA", 0, 1).convert("RGB")
+        if palette is None:
+            palette = rgb.quantize(colors=255, method=Image.Quantize.MEDIANCUT)
+        images.append(rgb.quantize(palette=palette, dither=Image.Dither.NONE))
+        bar.update(j + 1)
+    images[0].save(path, save_all=True, append_images=images[1:],
+                   duration=int(round(1000 / fps)), loop=0)

@@ -1,6 +1,7 @@
 """What a DT-TMM run keeps: its samples, gathered as the kernels write them (a block of rows per
 chunk, no copy per sample), and its checkpoint, everything a run carries from one step to the
 next, to continue it later bit for bit (docs/solver.md, "Steps and records")."""
+import hashlib
 import json
 import os
 from dataclasses import dataclass
@@ -95,9 +96,23 @@ class SampleStream:
         if os.path.exists(path) and not os.path.isdir(path):
             raise ValueError(f"simulate: stream must name a directory, and {path!r} is a file")
         os.makedirs(path, exist_ok=True)
+        # a stream already there is replaced; anything else in the directory is left alone,
+        # and a directory holding other files is refused (they might be a user's)
+        ours = {cls.INDEX, "_steps.bin", "_times.bin"}
+        if os.path.isfile(os.path.join(path, cls.INDEX)):
+            try:
+                with open(os.path.join(path, cls.INDEX)) as fh:
+                    ours |= {f"{key}.bin" for key in json.load(fh).get("layout", {})}
+            except (OSError, ValueError):
+                pass
+        others = sorted(set(os.listdir(path)) - ours - {cls.INDEX + ".new"})
+        if others:
+            raise ValueError(f"simulate: the stream directory {path!r} holds files that are not "
+                             f"a stream's ({', '.join(others[:3])}"
+                             f"{', ...' if len(others) > 3 else ''}): give a new or empty "
+                             f"directory")
         for name in os.listdir(path):
-            if name == cls.INDEX or name.endswith(".bin"):
-                os.remove(os.path.join(path, name))
+            os.remove(os.path.join(path, name))
         stream = cls(path, dict(keys=list(keys), dt=dt, info=info))
         stream._write_index()
         return stream
@@ -149,6 +164,71 @@ class SampleStream:
         times = (np.fromfile(self._file("_times"), dtype=np.float64, count=rows).tolist()
                  if os.path.exists(self._file("_times")) else [])
         return steps, times
+
+
+def model_fingerprint(model):
+    """A short digest of what defines a model (every array field's dtype, shape and bytes,
+    every other field's repr, functions by their qualified names): a checkpoint or a stream
+    carries its model's and refuses another (docs/solver.md, "Steps and records")."""
+    cached = getattr(model, "__dict__", {}).get("_fingerprint")
+    if cached is not None:          # (a Model is frozen: its digest is computed once)
+        return cached
+    digest = hashlib.sha256()
+
+    def feed(value):
+        if isinstance(value, np.ndarray):
+            digest.update(f"{value.dtype.str}{value.shape}".encode())
+            digest.update(np.ascontiguousarray(value).tobytes())
+        elif isinstance(value, (list, tuple)):
+            digest.update(f"[{len(value)}".encode())
+            for v in value:
+                feed(v)
+        elif isinstance(value, dict):
+            for key in sorted(value, key=str):
+                digest.update(str(key).encode())
+                feed(value[key])
+        elif callable(value):
+            digest.update(getattr(value, "__qualname__", type(value).__name__).encode())
+        else:
+            digest.update(repr(value).encode())
+
+    from dataclasses import fields
+    for f in fields(model):
+        digest.update(f.name.encode())
+        feed(getattr(model, f.name))
+    fingerprint = digest.hexdigest()[:16]
+    if hasattr(model, "__dict__"):
+        object.__setattr__(model, "_fingerprint", fingerprint)
+    return fingerprint
+
+
+def _checkpoint_digest(step, h, run, counters, arrays):
+    """sha256 of a checkpoint's content: an edited file is refused at load."""
+    digest = hashlib.sha256(json.dumps([int(step), repr(float(h)), run,
+                                        [int(c) for c in counters]],
+                                       sort_keys=True, default=str).encode())
+    for a in arrays:
+        digest.update(f"{a.dtype.str}{a.shape}".encode())
+        digest.update(np.ascontiguousarray(a).tobytes())
+    return digest.hexdigest()
+
+
+class NoCheckpoint:
+    """What ``result.checkpoint`` holds for a run that cannot be continued (adaptive steps,
+    a Richardson extrapolation): false like None, but passed as ``resume=`` it says why
+    instead of the run starting again at t = 0."""
+
+    def __init__(self, why):
+        self.why = why
+
+    def __bool__(self):
+        return False
+
+    def __repr__(self):
+        return f"NoCheckpoint({self.why!r})"
+
+    def save(self, path):
+        raise ValueError(f"Checkpoint.save: {self.why}")
 
 
 def leaves(structure):
@@ -208,6 +288,8 @@ class Checkpoint:
         """
         np.savez_compressed(path, step=self.step, h=self.h, run=json.dumps(self.run),
                             counters=np.array(self.counters),
+                            digest=_checkpoint_digest(self.step, self.h, self.run, self.counters,
+                                                      self.arrays),
                             **{f"a{i}": a for i, a in enumerate(self.arrays)})
 
     @classmethod
@@ -223,16 +305,33 @@ class Checkpoint:
         -------
         Checkpoint
         """
-        with np.load(path, allow_pickle=False) as data:
-            n = sum(1 for name in data.files if name.startswith("a"))
-            return cls(step=int(data["step"]), h=float(data["h"]),
-                       run=json.loads(str(data["run"])),
-                       arrays=tuple(data[f"a{i}"] for i in range(n)),
-                       counters=tuple(int(c) for c in data["counters"]))
+        where = f"Checkpoint.load({str(path)!r})"
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                n = sum(1 for name in data.files if name.startswith("a"))
+                step, h = int(data["step"]), float(data["h"])
+                run = json.loads(str(data["run"]))
+                arrays = tuple(data[f"a{i}"] for i in range(n))
+                counters = tuple(int(c) for c in data["counters"])
+                digest = str(data["digest"])
+        except FileNotFoundError:
+            raise ValueError(f"{where}: no such file") from None
+        except Exception as err:            # truncated, not a .npz, a foreign .npz
+            raise ValueError(f"{where}: not a checkpoint written by Checkpoint.save "
+                             f"({type(err).__name__}: {err})") from None
+        if digest != _checkpoint_digest(step, h, run, counters, arrays):
+            raise ValueError(f"{where}: the file's content does not match the digest written "
+                             f"with it: it was changed after Checkpoint.save wrote it")
+        return cls(step=step, h=h, run=run, arrays=arrays, counters=counters)
 
     def restore(self, structures, run):
         """Copy the arrays into a new run's structures (state, sweep, loop, monitor), after
         checking that the run is the one this checkpoint continues."""
+        mine = self.run.get("model_fingerprint")
+        if mine is not None and run.get("model_fingerprint") != mine:
+            raise ValueError("simulate(resume=...): the checkpoint was written by a run of "
+                             "another model (its fingerprint differs: masses, dimensions, "
+                             "joints or loads changed): resume with the model that wrote it")
         for key, value in self.run.items():
             if run.get(key) != value:
                 raise ValueError(f"simulate(resume=...): the checkpoint was written by a run "
@@ -248,6 +347,8 @@ class Checkpoint:
 
     @classmethod
     def of(cls, step, h, run, structures, counters):
-        return cls(step=int(step), h=float(h), run=dict(run),
-                   arrays=tuple(a.copy() for a in leaves(structures)),
+        arrays = tuple(a.copy() for a in leaves(structures))
+        for a in arrays:
+            a.flags.writeable = False
+        return cls(step=int(step), h=float(h), run=dict(run), arrays=arrays,
                    counters=tuple(int(c) for c in counters))

@@ -17,7 +17,8 @@ FIELDS = (
     "method", "t", "position_input", "position_mass_center", "position_output", "rotation",
     "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
     "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
-    "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint")
+    "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint",
+    "energy_work")
 # computed from the stored state on first use, when the solver leaves them to its derivation
 DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
            "kinetic", "potential")
@@ -101,6 +102,11 @@ class Result:
         prescribed motion, the force the motion needs); None without such joints.
     body_names : tuple of str (n,) or None
         The bodies' names (columns of save_csv).
+    energy_work : ndarray (T,) or None
+        J: the work W done on the system since t = 0 by loads, drives, dampers and a moving
+        ground, at each sample, where the run kept the energy balance (``max_energy_error``;
+        ``dttmm run`` keeps it for driven scenes): E - E(0) - W is the integrator's own error.
+        None otherwise.
     wall_time : float
         s: the run's wall-clock time.
     n_steps : int
@@ -144,7 +150,7 @@ class Result:
             for name in DERIVED:
                 if values.get(name) is None:
                     del full[name]
-        object.__setattr__(self, "_values", full)
+        object.__setattr__(self, "_values", {k: _read_only(v) for k, v in full.items()})
         object.__setattr__(self, "_derivation", derivation)
 
     def __getattr__(self, name):
@@ -152,7 +158,8 @@ class Result:
         if name in values:
             return values[name]
         if name in DERIVED:
-            values.update(object.__getattribute__(self, "_derivation")(name))
+            values.update({k: _read_only(v) for k, v in
+                           object.__getattribute__(self, "_derivation")(name).items()})
             if name in values:
                 return values[name]
         raise AttributeError(f"Result has no field {name!r}")
@@ -274,15 +281,28 @@ class Result:
 
         Raises
         ------
-        KeyError
-            A file without the entries save_npz writes (method, wall_time, n_steps, info).
+        ValueError
+            A file that is missing, truncated, not a .npz, or a .npz without the entries
+            save_npz writes (method, t, wall_time, n_steps, info), naming the file.
         """
-        with np.load(path, allow_pickle=False) as data:
-            values = {k: data[k] for k in data.files if k in FIELDS}
-        values["method"] = str(values["method"])
-        values["wall_time"] = float(values["wall_time"])
-        values["n_steps"] = int(values["n_steps"])
-        values["info"] = json.loads(str(values["info"]))
+        where = f"Result.load_npz({str(path)!r})"
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                values = {k: data[k] for k in data.files if k in FIELDS}
+            missing = [k for k in ("method", "t", "wall_time", "n_steps", "info")
+                       if k not in values]
+            if missing:
+                raise ValueError(f"no {', '.join(missing)} in it: not written by "
+                                 f"Result.save_npz")
+            values["method"] = str(values["method"])
+            values["wall_time"] = float(values["wall_time"])
+            values["n_steps"] = int(values["n_steps"])
+            values["info"] = json.loads(str(values["info"]))
+        except FileNotFoundError:
+            raise ValueError(f"{where}: no such file") from None
+        except Exception as err:        # truncated, not a zip, pickled objects, bad JSON
+            raise ValueError(f"{where}: not a result written by Result.save_npz "
+                             f"({type(err).__name__}: {err})") from None
         if "body_names" in values:
             values["body_names"] = tuple(str(x) for x in values["body_names"])
         return cls(**values)
@@ -310,6 +330,15 @@ class Result:
             w = csv.writer(fh)
             w.writerow(head)
             w.writerows(rows.tolist())
+
+
+def _read_only(value):
+    """An array as a read-only view (a Result's arrays cannot be written: positions and
+    energies are derived from the stored state when first read); anything else as it is."""
+    if isinstance(value, np.ndarray) and value.flags.writeable:
+        value = value.view()
+        value.flags.writeable = False
+    return value
 
 
 def _restored(values):

@@ -8,6 +8,7 @@ the prescribed ground motion, applied loads and joint drives for each chunk, jud
 and collects the recorded samples (recording.py).
 """
 import time
+import warnings
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
@@ -33,8 +34,10 @@ from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
 from .model import Model, output_section
 from .energy_balance import EnergyBalance
-from .recording import Checkpoint, Recording, SampleStream
-from .result import Result, beam_output_offset, chain_energies, point_positions
+from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
+                        model_fingerprint)
+from .result import (Result, _drive_spring_energy, beam_output_offset, chain_energies,
+                     point_positions)
 
 METHODS = ("riccati", "direct")
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
@@ -74,6 +77,29 @@ class DivergenceError(RuntimeError):
         self.partial = partial
 
 
+# simulate flags a run whose fastest body turns by more than this per step (rad): the
+# trapezoidal rule's phase error, about (w dt)^2 / 12 per radian, passes 1% there
+# (docs/solver.md, "Steps that cannot resolve the motion")
+MAX_TURN_PER_STEP = 0.35
+
+
+class UnresolvedMotionWarning(UserWarning):
+    """A fixed-step run whose step does not resolve its motion: a body turned by more than
+    MAX_TURN_PER_STEP (0.35 rad) in one step, where the trapezoidal rule's phase error passes
+    1% per radian; the result may be far off without any other sign (docs/solver.md, "Steps
+    that cannot resolve the motion").  ``result.info["turn_per_step_max"]`` holds the
+    largest turn per step (rad).
+
+    Parameters
+    ----------
+    message : str
+        The body, its rate, the step and the step that would resolve it.
+    """
+
+    def __init__(self, message):
+        super().__init__(message)
+
+
 @dataclass(frozen=True)
 class Integrator:
     """Generalized-alpha coefficients (Chung and Hulbert 1993) from the spectral radius at
@@ -86,8 +112,11 @@ class Integrator:
 
     @classmethod
     def from_rho_inf(cls, rho_inf):
-        r = float(rho_inf)
-        if not (np.isfinite(r) and 0.0 <= r <= 1.0):
+        try:
+            r = float(rho_inf)
+        except (TypeError, ValueError):
+            r = np.nan
+        if isinstance(rho_inf, (bool, np.bool_)) or not (np.isfinite(r) and 0.0 <= r <= 1.0):
             raise ValueError(f"simulate: rho_inf must be in [0, 1], got {rho_inf!r}")
         alpha_m = (2.0 * r - 1.0) / (r + 1.0)
         alpha_f = r / (r + 1.0)
@@ -225,20 +254,31 @@ def _joint_inputs(model, times, state=None, dt=0.0):
         for i, d in enumerate(drives):
             if d is None or d["kind"] not in (FORCE, MOTION):
                 continue
+            who = f"the drive of '{model.hinge_names[k]}' (coordinate {i + 1})"
             for j, t in enumerate(times):
                 if d["kind"] == MOTION:
-                    out[j, k, i] = [float(np.squeeze(f(t))) for f in d["function"]]
+                    out[j, k, i] = [_drive_number(f(t), who, t) for f in d["function"]]
                 else:
                     q, qd, qdd = state.jq[k, i], state.jqd[k, i], state.jqdd[k, i]
                     if t > 0.0:
                         q, qd = q + dt * qd + 0.5 * dt * dt * qdd, qd + dt * qdd
-                    value = float(np.squeeze(d["function"](t, q, qd)))
-                    if not np.isfinite(value):
-                        raise DivergenceError(int(round(t / dt)) if dt else 0, t,
-                                              f"the drive of {model.hinge_names[k]} "
-                                              f"(coordinate {i}) returned {value} at t = {t:g}")
-                    out[j, k, i, 0] = value
+                    out[j, k, i, 0] = _drive_number(d["function"](t, q, qd), who, t)
     return out
+
+
+def _drive_number(value, who, t):
+    """A drive function's value as a float, or UserFunctionError naming the drive and t: one
+    finite number (not text, not several)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or np.size(value) != 1:
+        raise UserFunctionError(t, f"{who} returned {value!r} at t = {t:.6g} s: it must return "
+                                f"one number")
+    try:
+        x = float(np.squeeze(value))
+    except (TypeError, ValueError):
+        x = np.nan
+    if not np.isfinite(x):
+        raise UserFunctionError(t, f"{who} returned {value!r} at t = {t:.6g} s (not finite)")
+    return x
 
 
 def beam_tables(model):
@@ -395,6 +435,19 @@ def _check_positive(name, value, where="simulate"):
     return x
 
 
+def _check_count(name, value, minimum, where="simulate"):
+    """value as an int >= minimum, or a ValueError naming `where` and the argument (a bool,
+    a string, NaN, inf or a fraction is refused, not converted)."""
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                      np.floating))
+            or not np.isfinite(value) or int(value) != value or value < minimum):
+        raise ValueError(f"{where}: {name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan
+
+
 def _mode(model, method, full_state):
     if method not in METHODS:
         raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
@@ -416,9 +469,35 @@ def _loads(model, times):
     for k in range(n):
         for which, fn in enumerate((model.forces[k], model.torques[k], model.line_loads[k])):
             if fn is not None:
-                for i, t in enumerate(times):
-                    out[which, i, k] = fn(t)
+                i = 0
+                try:
+                    for i, t in enumerate(times):
+                        out[which, i, k] = fn(t)
+                except Exception as err:
+                    raise UserFunctionError(times[i], f"the {_LOAD_NAMES[which]} of body "
+                                            f"'{model.body_names[k]}' failed at t = "
+                                            f"{times[i]:.6g} s ({type(err).__name__}: {err}); "
+                                            f"it must return 3 finite numbers") from None
+                bad = ~np.isfinite(out[which, :, k]).all(axis=1)
+                if bad.any():
+                    i = int(np.argmax(bad))
+                    raise UserFunctionError(times[i], f"the {_LOAD_NAMES[which]} of body "
+                                            f"'{model.body_names[k]}' returned "
+                                            f"{out[which, i, k].tolist()} at t = "
+                                            f"{times[i]:.6g} s (not finite)")
     return out[0], out[1], out[2]
+
+
+_LOAD_NAMES = ("force (N)", "torque (N m)", "distributed load (N/m)")
+
+
+class UserFunctionError(ValueError):
+    """A user's function (a load, a drive, the ground's motion) failed or returned a value
+    that is not finite during a run (simulate turns it into DivergenceError with the step)."""
+
+    def __init__(self, t, message):
+        super().__init__(message)
+        self.t = float(t)
 
 
 def _ground(model, times):
@@ -429,8 +508,19 @@ def _ground(model, times):
     if model.ground_motion is None:             # at rest: one frame for every time
         rot[:] = model.ground_rotation
         return acc, rot, w, wd
-    for i, t in enumerate(times):
-        _, _, acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
+    i = 0
+    try:
+        for i, t in enumerate(times):
+            _, _, acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
+    except Exception as err:
+        raise UserFunctionError(times[i], f"the ground's motion failed at t = {times[i]:.6g} s "
+                                f"({type(err).__name__}: {err})") from None
+    bad = ~(np.isfinite(acc).all(axis=1) & np.isfinite(rot).all(axis=(1, 2))
+            & np.isfinite(w).all(axis=1) & np.isfinite(wd).all(axis=1))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise UserFunctionError(times[i], f"the ground's motion is not finite at t = "
+                                f"{times[i]:.6g} s")
     return acc, rot, w, wd
 
 
@@ -574,8 +664,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     elif dt is None:
         raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
     dt = _check_positive("dt", dt)
+    if t_end / dt > MAX_STEPS:
+        raise ValueError(f"simulate: dt = {dt:g} s makes {t_end / dt:.3g} steps of t_end = "
+                         f"{t_end:g} s (more than {MAX_STEPS:.0e}): dt is in seconds")
     n_steps, dt = _steps(t_end, dt)
     start = 0
+    if isinstance(resume, NoCheckpoint):
+        raise ValueError(f"simulate(resume=...): {resume.why}")
     if resume is not None:
         if not isinstance(resume, Checkpoint):
             raise ValueError(f"simulate: resume must be a Checkpoint (result.checkpoint or "
@@ -601,15 +696,31 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         newton_iterations = (20 if scheme == "energy_momentum"
                              else 8 if isinstance(model, Model) and _iterates(model, full_state)
                              else 0)
-    if int(newton_iterations) != newton_iterations or newton_iterations < 0:
-        raise ValueError(f"simulate: newton_iterations must be an integer >= 0, "
-                         f"got {newton_iterations!r}")
-    newton_tol = float(newton_tol)
+    newton_iterations = _check_count("newton_iterations", newton_iterations, 0)
+    try:
+        newton_tol = float(newton_tol)
+    except (TypeError, ValueError):
+        newton_tol = np.nan
+    if not (np.isfinite(newton_tol) and newton_tol >= 0.0):
+        raise ValueError(f"simulate: newton_tol must be a finite number >= 0 (rad or m), got "
+                         f"{newton_tol!r}")
+    Integrator.from_rho_inf(rho_inf)            # (checked here, before any run)
+    if scheme == "energy_momentum" and float(rho_inf) != 1.0:
+        raise ValueError(f"simulate: scheme='energy_momentum' conserves energy and takes no "
+                         f"numerical damping: rho_inf must be 1, got {rho_inf!r}")
+    for name, value in (("full_state", full_state), ("richardson", richardson)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
     max_step_error = (np.inf if max_step_error is None
                       else _check_positive("max_step_error", max_step_error))
     if max_energy_error is not None:
         max_energy_error = _check_positive("max_energy_error", max_energy_error)
     if richardson:
+        for name, value in (("stream", stream), ("max_energy_error", max_energy_error)):
+            if value is not None:
+                raise ValueError(f"simulate: richardson=True and {name} do not combine (the "
+                                 f"result is the extrapolation of two runs, not one run's "
+                                 f"samples or energy); run without richardson for {name}")
         if scheme != "newmark":
             raise ValueError(f"simulate: richardson=True needs scheme='newmark' (the "
                              f"{scheme!r} scheme's properties would not survive the "
@@ -691,7 +802,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         loop = kstep.general_loop(n, len(state.eta), dt, coef, histories)
         if scheme == "paper":
             keys += ["v_st", "v_c"]
-    run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name)
+    run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name,
+                    model_fingerprint=model_fingerprint(user_model))
     if scheme == "energy_momentum":
         run_info.update(forces="step means (about t - dt/2)")
     else:
@@ -721,6 +833,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         force, torque, line_load = (np.zeros((size, n, 3)) for _ in range(3))
     every = sampling if isinstance(sampling, int) else size + 1
     balance = None
+    work_steps, work_values = [np.array([start])], [np.zeros(1)]   # W at every step (balance)
     if max_energy_error is not None:            # every step's state, for the balance
         every = 1
 
@@ -794,15 +907,23 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         result = _result(user_model, recording, dt, 0.0, n_steps,
                          dict(run_info, newton_iterations_used=int(info[2]),
                               newton_unconverged_steps=int(info[4]),
-                              step_error_max=largest))
+                              step_error_max=largest),
+                         NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
+                                      "lie on no grid to continue on; run again to a later "
+                                      "t_end, or use fixed steps (dt) to resume"))
         return result.replace(wall_time=time.perf_counter() - wall0)
 
     bar = Progress(n_steps - done, progress)
+    fastest = _fastest_rate(state.omega[None])      # (rad/s, body) over the samples
     try:
         while done < n_steps:
             m, every = _next_chunk(done, n_steps, sampling, size)
             times = (done + np.arange(m + 1)) * dt
-            inputs = inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
+            try:
+                inputs = inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
+            except UserFunctionError as err:
+                step = max(int(round(err.t / dt)), done + 1)
+                raise DivergenceError(step, err.t, str(err), partial(done)) from None
             run_chunk(inputs, dt, 1 if balance else every, done, (done + 1) * dt)
             n_rec = int(info[3])
             if balance is not None and n_rec:       # the samples asked for, from every step's
@@ -820,6 +941,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                     cause += "; " + _DIRECT_HINT
                 raise DivergenceError(step, step * dt, cause, partial(step - 1))
             max_newton = max(max_newton, int(info[2]))
+            if n_rec:
+                fastest = max(fastest, _fastest_rate(rec.omega[:n_rec]), key=lambda f: f[0])
             if balance is not None:
                 broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
                                        done + np.arange(1, m + 1), dt,
@@ -827,6 +950,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                                        inputs.line_load[:, keep])
                 if broken:
                     raise DivergenceError(done + m, (done + m) * dt, broken, partial(done + m))
+                work_steps.append(done + np.arange(1, m + 1))
+                work_values.append(balance.chunk_work)
             done += m
             bar.update(done)
             runaway = _beam_beyond_its_length(model, beam_tips, state.eta)
@@ -839,12 +964,30 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     checkpoint = Checkpoint.of(n_steps, dt, dict(run_info, method=method, bodies=n,
                                                  newton_iterations=int(newton_iterations)),
                                structures, (max_newton, info[4]))
+    turn = fastest[0] * dt
+    if turn > MAX_TURN_PER_STEP:
+        warnings.warn(UnresolvedMotionWarning(
+            f"simulate: the step does not resolve the motion: body "
+            f"'{model.body_names[fastest[1]]}' turns by up to {turn:.3g} rad per step "
+            f"({fastest[0]:.4g} rad/s at dt = {dt:g} s), where the trapezoidal rule's phase "
+            f"error, about (w dt)^2 / 12 per radian ({turn ** 2 / 12:.1%} here), may leave "
+            f"the result far off; take dt <= {MAX_TURN_PER_STEP / fastest[0]:.2g} s, or "
+            f"rtol= for steps chosen by the error"), stacklevel=2)
     result = _result(user_model, recording, dt, 0.0, n_steps,
                      dict(run_info, newton_iterations_used=max_newton,
                           newton_unconverged_steps=int(info[4]),
-                          step_error_max=float(monitor.error[0]),
+                          step_error_max=float(monitor.error[0]), turn_per_step_max=turn,
                           **({} if balance is None else
                              {"energy_balance_error": balance.worst})), checkpoint)
+    if balance is not None:                     # W at the samples
+        work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
+                         np.concatenate(work_values))
+        if result.joint_coordinates is not None:
+            # the balance counts the drives' springs in their work, the Result's potential
+            # holds their energy: W here is the rest (total - total(0) - W is the balance)
+            spring = _drive_spring_energy(user_model, result.joint_coordinates, len(work))
+            work = work + spring - spring[0]
+        result = result.replace(energy_work=work)
     return result.replace(wall_time=time.perf_counter() - wall0)
 
 
@@ -868,14 +1011,30 @@ def load_stream(model, path):
     Raises
     ------
     ValueError
-        No stream in the directory, or one of another model (its number of bodies).
+        No stream in the directory, a damaged one, or one of another model (its number of
+        bodies, or its fingerprint: recording.model_fingerprint).
     """
-    recording = Recording.from_stream(path)
-    meta = recording.stream.meta
-    arrays = recording.arrays()
+    if not isinstance(model, Model):
+        raise ValueError(f"load_stream: model must be the Model the run simulated, got "
+                         f"{type(model).__name__}")
+    try:
+        recording = Recording.from_stream(path)
+        meta = recording.stream.meta
+        arrays = recording.arrays()
+    except ValueError as err:
+        if str(err).startswith("load_stream"):
+            raise
+        raise ValueError(f"load_stream: the stream in {str(path)!r} is damaged ({err})") from None
+    except (OSError, KeyError, TypeError) as err:
+        raise ValueError(f"load_stream: the stream in {str(path)!r} is damaged or not a "
+                         f"stream's ({type(err).__name__}: {err})") from None
     if len(recording.steps) and arrays["rot"].shape[1] != model.n_bodies:
         raise ValueError(f"load_stream: the stream in {str(path)!r} holds "
                          f"{arrays['rot'].shape[1]} bodies; the model has {model.n_bodies}")
+    written = meta.get("info", {}).get("model_fingerprint")
+    if written is not None and written != model_fingerprint(model):
+        raise ValueError(f"load_stream: the stream in {str(path)!r} was written by a run of "
+                         f"another model (its fingerprint differs): load it with that model")
     return _result(model, recording, meta["dt"], 0.0, recording.last_step, dict(meta["info"]))
 
 
@@ -911,7 +1070,11 @@ def _adaptive_loop(model, control, targets, structures, loop, coef, inputs_for, 
             if lands:
                 times[-1] = target
             # a step above the tolerance stops the segment at once (the skeleton's own check)
-            run_chunk(inputs_for(times, times[:-1] + 0.5 * h, h), h, m + 1, taken, times[1],
+            try:
+                inputs = inputs_for(times, times[:-1] + 0.5 * h, h)
+            except UserFunctionError as err:
+                raise DivergenceError(taken + 1, err.t, str(err), partial(taken)) from None
+            run_chunk(inputs, h, m + 1, taken, times[1],
                       min(settings.max_step_error, control.step_limit(h)))
             over = info[0] == ERROR_ESTIMATE and monitor.error[0] <= settings.max_step_error
             failed = (info[0] != OK and not over) or bool(
@@ -966,10 +1129,7 @@ def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
         raise ValueError(f"simulate: give one of record_every, record_dt and t_eval, got "
                          f"{' and '.join(given)}")
     if record_every is not None:
-        if int(record_every) != record_every or record_every < 1:
-            raise ValueError(f"simulate: record_every must be an integer >= 1 (steps), got "
-                             f"{record_every!r}")
-        return int(record_every)
+        return _check_count("record_every", record_every, 1)
     if record_dt is not None:
         record_dt = _check_positive("record_dt", record_dt)
         return max(1, int(round(record_dt / h)))
@@ -987,6 +1147,16 @@ def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
                              f"{n_steps * h:g}] s")
         return steps[steps > start].astype(np.int64)
     return max(1, -(-(n_steps - start) // MAX_SAMPLES))
+
+
+def _fastest_rate(omega):
+    """(the largest |w| over the samples omega (m, n, 3), rad/s; its body): what
+    MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
+    if omega.shape[1] == 0:
+        return (0.0, 0)
+    rates = np.sqrt(np.einsum("mki,mki->mk", omega, omega)).max(axis=0)
+    k = int(np.argmax(rates))
+    return (float(rates[k]), k)
 
 
 def _next_chunk(done, n_steps, sampling, size):
@@ -1342,7 +1512,9 @@ def richardson_extrapolation(coarse, fine):
                 newton_unconverged_steps=coarse.info.get("newton_unconverged_steps", 0)
                 + fine.info.get("newton_unconverged_steps", 0))
     return coarse.replace(wall_time=coarse.wall_time + fine.wall_time,
-                          n_steps=coarse.n_steps + fine.n_steps, info=info, checkpoint=None,
+                          n_steps=coarse.n_steps + fine.n_steps, info=info,
+                          checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=True) "
+                                                  "keeps no checkpoint: it combines two runs"),
                           **fields)
 
 
@@ -1371,6 +1543,23 @@ def _sum_before(x):
     out = np.zeros_like(x)
     np.cumsum(x[:, :-1], axis=1, out=out[:, 1:])
     return out
+
+
+def column_names(model):
+    """{"coordinate_names": the joint coordinates' columns (the joint's name, and its
+    coordinate's number where it has two), "modal_names": the modal coordinates' (the beam's
+    name, the plane or part and the mode's number)}: the legends of Result.plot_joints and
+    plot_modal (kept in Result.info)."""
+    joints = [model.hinge_names[k] + (f" {i + 1}" if len(model.drives[k]) > 1 else "")
+              for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    modal = []
+    for k in np.nonzero(model.body_kind == BEAM)[0]:
+        row, name = model.beam_params[k], model.body_names[k]
+        m = int(row[MODES])
+        modal += [f"{name} {plane}{j + 1}" for plane in ("v", "w") for j in range(m)]
+        modal += [f"{name} twist{j + 1}" for j in range(int(row[TORSION_MODES]))]
+        modal += [f"{name} stretch{j + 1}" for j in range(int(row[AXIAL_MODES]))]
+    return dict(coordinate_names=joints, modal_names=modal)
 
 
 def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
@@ -1404,6 +1593,7 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
         return derived
 
     loads = values["z"]                     # every body's input [m; q]
+    info = dict(info, **column_names(model))
     return Result(method="dttmm", t=t, rotation=rot, angular_velocity=omega,
                   angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
                   moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,

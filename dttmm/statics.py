@@ -436,9 +436,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
                         f"got {type(model).__name__}")
     tol = solver._check_positive("tol", tol, where)
     max_increment = solver._check_positive("max_increment", max_increment, where)
-    if int(max_iterations) != max_iterations or max_iterations < 1:
-        raise ValueError(f"{where}: max_iterations must be an integer >= 1, "
-                         f"got {max_iterations!r}")
+    max_iterations = solver._check_count("max_iterations", max_iterations, 1, where)
     cfg = _Configuration(model, where)
     q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0, cfg.defl0)
     if guess is not None:

@@ -33,6 +33,28 @@ def test_a_sweep_refuses_ragged_parameters():
         dttmm.sweep(rigid_chain, {"n_links": [2]}, 0.1, 1e-3, engine="threads")
     with pytest.raises(ValueError, match="at least one value"):
         dttmm.sweep(rigid_chain, {"n_links": []}, 0.1, 1e-3, engine="serial")
-    with pytest.raises(ValueError, match=r"outputs \['n_links'\] have the names of parameters"):
+    with pytest.raises(RuntimeError, match=r"every run failed.*outputs \['n_links'\] have the "
+                                           r"names of parameters"):
         dttmm.sweep(rigid_chain, {"n_links": [2]}, 0.1, 1e-3, engine="serial",
                     outputs=lambda result, model: {"n_links": 1.0})
+
+
+@pytest.mark.parametrize("engine", ["serial", "processes", "dask"])
+def test_a_failing_run_keeps_the_others(engine):
+    """One run of three fails (a step far too large for its fast spin stops it): the table
+    keeps the two that finished, the failed row's outputs are NaN, table.failures names its
+    parameter set and error, and a warning says so (before, the sweep raised and the finished
+    runs were lost)."""
+    if engine == "dask":
+        pytest.importorskip("dask.distributed")
+    runs = [{"n_links": 2, "tip_angular_velocity": (0.0, 0.0, w)} for w in (0.1, 4000.0, 0.2)]
+    with pytest.warns(UserWarning, match="1 of 3 runs failed.*4000"):
+        table = dttmm.sweep(rigid_chain, runs, 0.05, 1e-3, engine=engine, n_workers=2)
+    assert len(table) == 3 and len(table.failures) == 1
+    assert np.isnan(table["link2.x"][1]) and np.isfinite(table["link2.x"][[0, 2]]).all()
+    assert table.failures[0][0]["tip_angular_velocity"] == (0.0, 0.0, 4000.0)
+    assert "DivergenceError" in table.failures[0][1]
+    with pytest.raises(ValueError, match="parameter 'n_links' must be a list"):
+        dttmm.sweep(rigid_chain, {"n_links": 2}, 0.1, 1e-3, engine="serial")
+    with pytest.raises(ValueError, match="dict of lists"):
+        dttmm.sweep(rigid_chain, 2.0, 0.1, 1e-3, engine="serial")

@@ -4,11 +4,20 @@ import numpy as np
 
 
 def finite_vector(element, argument, value, size=3):
+    raw = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
+    if raw.dtype.kind in "USb" or (raw.dtype == object and any(
+            isinstance(x, (str, bytes, bool, np.bool_)) for x in raw.reshape(-1))):
+        raise ValueError(f"{element}: {argument} must be a vector of {size} numbers, "
+                         f"got {value!r}")
     try:
-        v = np.array(value, dtype=float).reshape(-1)
+        v = np.array(value, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{element}: {argument} must be a vector of {size} numbers, "
                          f"got {value!r}") from None
+    if v.ndim > 1:
+        raise ValueError(f"{element}: {argument} must be a flat vector of {size} numbers, got "
+                         f"shape {v.shape}")
+    v = v.reshape(-1)
     if v.size != size:
         raise ValueError(f"{element}: {argument} must have {size} entries, got {v.size}")
     if not np.all(np.isfinite(v)):
@@ -17,6 +26,8 @@ def finite_vector(element, argument, value, size=3):
 
 
 def finite_scalar(element, argument, value, positive=False, nonnegative=False):
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ValueError(f"{element}: {argument} must be a number, got {value!r}")
     try:
         x = float(value)
     except (TypeError, ValueError):
