@@ -1154,9 +1154,9 @@ def _fastest_rate(omega):
     MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
     if omega.shape[1] == 0:
         return (0.0, 0)
-    rates = np.sqrt(np.einsum("mki,mki->mk", omega, omega)).max(axis=0)
-    k = int(np.argmax(rates))
-    return (float(rates[k]), k)
+    squares = np.einsum("mki,mki->mk", omega, omega).max(axis=0)
+    k = int(np.argmax(squares))
+    return (float(np.sqrt(squares[k])), k)
 
 
 def _next_chunk(done, n_steps, sampling, size):

@@ -58,3 +58,20 @@ def test_a_failing_run_keeps_the_others(engine):
         dttmm.sweep(rigid_chain, {"n_links": 2}, 0.1, 1e-3, engine="serial")
     with pytest.raises(ValueError, match="dict of lists"):
         dttmm.sweep(rigid_chain, 2.0, 0.1, 1e-3, engine="serial")
+
+
+def test_a_dask_sweep_in_a_script_without_a_main_guard_says_so(tmp_path):
+    """dask's workers import the script that started them: without a main guard they start
+    the sweep again and fail, which dask reports as "Nanny failed to start"; the sweep says
+    what to do instead."""
+    pytest.importorskip("dask.distributed")
+    import subprocess
+    import sys
+    script = tmp_path / "sweep_script.py"
+    script.write_text("import dttmm\nfrom dttmm.chains import rigid_chain\n"
+                      "dttmm.sweep(rigid_chain, {'n_links': [2]}, 0.01, 1e-3, engine='dask',\n"
+                      "            n_workers=1)\n")
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         cwd=tmp_path, timeout=300)
+    assert run.returncode != 0
+    assert "if __name__ == \"__main__\":" in run.stderr.splitlines()[-1]
