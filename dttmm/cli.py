@@ -2,9 +2,9 @@
 
     dttmm run SCENE.toml [--t-end S] [--dt S] [--method M] [--scheme S] [--record-dt S]
                          [--out FILE.npz] [--csv FILE] [--plots DIR] [--animate FILE.gif]
-                         [--static-start]
+                         [--static-start] [--no-energy-balance]
     dttmm info SCENE.toml          bodies, joints, degrees of freedom, beams' modes, a dt
-    dttmm example [NAME]           the shipped scenes; NAME: write NAME.toml here
+    dttmm example [NAME] [--force] the shipped scenes; NAME: write NAME.toml here
 
 Also `python -m dttmm ...`.  Exit status 0, or 2 with a one-line message for a bad scene or
 argument, 1 for a run that stopped (DivergenceError).
@@ -44,6 +44,9 @@ def main(argv=None):
     run.add_argument("--checkpoint", help="write the final state to FILE.npz (to resume)")
     run.add_argument("--resume", help="continue from a checkpoint file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--no-energy-balance", action="store_true",
+                     help="a driven or loaded scene: do not keep the energy balance (it "
+                          "derives every step's velocities: 1.2-3.5x the run's time)")
     run.add_argument("--static-start", action="store_true",
                      help="start at rest in the static equilibrium (dttmm.static_equilibrium)")
     info = sub.add_parser("info", help="describe a scene file")
@@ -106,7 +109,8 @@ def _run(args):
               f"{', '.join(f'{f:.4g}' for f in moving[:3])})")
     from .energy_balance import does_work
     worked = does_work(model)
-    if worked and "rtol" not in options and "max_energy_error" not in options:
+    if (worked and "rtol" not in options and "max_energy_error" not in options
+            and not args.no_energy_balance):
         options["max_energy_error"] = 1e300     # kept, to show the balance, never to stop
     steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
              else f"dt = {dt:g} s")
@@ -141,7 +145,8 @@ def _run(args):
               f"{res.info['energy_balance_error']:.2g})")
     elif worked:
         print(f"energy: largest kinetic {scale:.4g} J; the total changed by {change:.4g} J, "
-              f"including the work done on the system (not tracked with adaptive steps)")
+              f"including the work done on the system (not tracked: adaptive steps or "
+              f"--no-energy-balance)")
     else:
         print(f"energy: largest kinetic {scale:.4g} J; the total (nothing works on the "
               f"system) changed by {change:.3g} J ({abs(change) / scale:.2g} of the largest "

@@ -410,7 +410,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     StaticEquilibriumError
         The iterations did not converge (apply the load in steps, passing each result as the
         next ``guess``), or the model has no equilibrium: a body that nothing holds (no
-        gravity, load or spring acts on its rotation), or one whose loads nothing balances.
+        gravity, load or spring acts on its rotation), or one whose loads nothing balances;
+        or the equilibrium found bends a beam beyond its modal description's validity (a tip
+        deflection above its length, a twist beyond half a turn: split it into elements).
     ValueError
         A guess that does not fit the model.
 
