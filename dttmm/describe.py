@@ -1,10 +1,9 @@
 """What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
 import numpy as np
 
-from .elements.beam import (ACCURACY, ACCURATE, CLAMPED, CLAMPED_LOADED, FAMILY,
-                            FREQUENCY_CUTOFF, MAX_AUTO_MODES, MAX_LOADED_MODES, MODES, PINNED,
-                            STIFFENING,
-                            AXIAL_MODES, TORSION_MODES, axial_frequencies, bending_frequencies,
+from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, FAMILY,
+                            FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING, TORSION_MODES,
+                            axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -65,18 +64,13 @@ def suggested_dt(model):
     return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
 
 
-def _beam_lines(model, k):
+def _beam_lines(model, k, end_mass):
     row = model.beam_params[k]
     m = int(row[MODES])
     fv, fw = beam_frequencies(model, k)
     lines = [f"{m} mode{'s' if m > 1 else ''} per plane, own frequencies (Hz): "
              f"v {np.array2string(fv, precision=4)}, w {np.array2string(fw, precision=4)}",
              f"mode family {_FAMILY_WHY[int(row[FAMILY])]}"]
-    children = [[] for _ in range(model.n_bodies)]
-    for c, p in enumerate(model.parent):
-        if p >= 0:
-            children[p].append(c)
-    end_mass = outboard_masses(model.body_params[:, MASS], children)[k]
     freq, defl = truncation_errors(row, m, end_mass)
     on = (f", with {end_mass:.4g} kg beyond its output as an end mass"
           if int(row[FAMILY]) == CLAMPED_LOADED else "")
@@ -89,7 +83,7 @@ def _beam_lines(model, k):
                      f"within {ACCURACY:.1%}")
     if cutoff > 0.0:
         # auto_mode_count's measure: the frequencies of the family's largest basis
-        cap = MAX_LOADED_MODES if int(row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+        cap = largest_basis(row)
         spectrum = np.minimum(*bending_frequencies(row, cap))
         why = f"modes_per_plane='auto': kept the modes at or below {cutoff:.4g} Hz"
         if m < cap and spectrum[m] > cutoff:
@@ -129,6 +123,7 @@ def describe(model):
            f"gravity {model.gravity.tolist()} m/s^2; tip "
            f"{'pinned' if model.tip_pinned else 'free'}",
            "bodies:"]
+    end_masses = outboard_masses(model.body_params[:, MASS], model.parent)
     for k in range(model.n_bodies):
         kind = "beam" if model.body_kind[k] == 1 else "rigid"
         p = model.parent[k]
@@ -137,7 +132,7 @@ def describe(model):
                    f"on a {JOINT_NAMES[int(model.hinge_kind[k])]} joint "
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
-            out += [f"  {'':<14} {line}" for line in _beam_lines(model, k)]
+            out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode, 0.02 rad per step of the fastest spin or swing)")
     return "\n".join(out)

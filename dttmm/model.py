@@ -781,7 +781,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     from_step = (body_kind == BEAM) & (beam_params[:, FREQUENCY_CUTOFF] == FROM_STEP)
     if np.any(from_step):
         derived = _derived_cutoff(step, duration, ground, hv, bodies, beam_params)
-    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip,
+    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, tip,
                            None if derived is None else derived[0])
     _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
@@ -953,7 +953,7 @@ def drives_bandwidth(step, duration, ground_motion, motions, max_samples=1 << 15
     return best
 
 
-def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, tip,
+def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, tip,
                            derived_cutoff=None):
     """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
     pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
@@ -963,7 +963,7 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
     insists).  An elastic hinge at the input clamps the beam elastically (the frame is the input
     section's, as after a fixed hinge); one at the output loads it (loaded-end modes)."""
     n = len(bodies)
-    end_mass = outboard_masses([v["mass"] for v in bv], children)
+    end_mass = outboard_masses([v["mass"] for v in bv], parent)
     for k in range(n):
         if body_kind[k] != BEAM:
             continue
@@ -1018,12 +1018,13 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, children, 
         beam_params[k, FAMILY] = family
 
 
-def outboard_masses(masses, children):
+def outboard_masses(masses, parent):
     """Per body: the mass of everything attached beyond it (its descendants), kg; a child's
-    index is above its parent's."""
+    index is above its parent's (parent[k] < k, -1 for the ground)."""
     total = np.array(masses, dtype=float)
     for k in range(len(total) - 1, -1, -1):
-        total[k] += sum(total[c] for c in children[k])
+        if parent[k] >= 0:
+            total[parent[k]] += total[k]
     return total - np.array(masses, dtype=float)
 
 

@@ -259,7 +259,7 @@ def _samples(result, pick):
             ("t", "rotation", "position_input", "position_mass_center", "position_output")}
     if result.modal_coordinates is not None:
         keep["modal_coordinates"] = result.modal_coordinates[pick]
-    return SimpleNamespace(**keep, modal_velocities=None)
+    return SimpleNamespace(**keep)
 
 
 def _write_gif(fig, ax, artists, frame, n_frames, fps, path, bar):

@@ -4,7 +4,7 @@ next, to continue it later bit for bit (docs/solver.md, "Steps and records")."""
 import hashlib
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -192,7 +192,6 @@ def model_fingerprint(model):
         else:
             digest.update(repr(value).encode())
 
-    from dataclasses import fields
     for f in fields(model):
         digest.update(f.name.encode())
         feed(getattr(model, f.name))

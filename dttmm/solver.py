@@ -19,6 +19,7 @@ from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
+from .elements._checks import is_text
 from .elements.drives import FORCE, MOTION
 from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
@@ -269,7 +270,7 @@ def _joint_inputs(model, times, state=None, dt=0.0):
 def _drive_number(value, who, t):
     """A drive function's value as a float, or UserFunctionError naming the drive and t: one
     finite number (not text, not several)."""
-    if isinstance(value, (str, bytes, bool, np.bool_)) or np.size(value) != 1:
+    if is_text(value) or np.size(value) != 1:
         raise UserFunctionError(t, f"{who} returned {value!r} at t = {t:.6g} s: it must return "
                                 f"one number")
     try:
@@ -704,7 +705,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if not (np.isfinite(newton_tol) and newton_tol >= 0.0):
         raise ValueError(f"simulate: newton_tol must be a finite number >= 0 (rad or m), got "
                          f"{newton_tol!r}")
-    Integrator.from_rho_inf(rho_inf)            # (checked here, before any run)
+    integrator = Integrator.from_rho_inf(rho_inf)       # (checked here, before any run)
     if scheme == "energy_momentum" and float(rho_inf) != 1.0:
         raise ValueError(f"simulate: scheme='energy_momentum' conserves energy and takes no "
                          f"numerical damping: rho_inf must be 1, got {rho_inf!r}")
@@ -744,7 +745,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     user_model = model
     model, keep = kernel_model(user_model)
     mode = _mode(model, method, full_state)
-    coef = Integrator.from_rho_inf(rho_inf).array()
+    coef = integrator.array()
 
     ws = Workspace(model)
     state = ws.state

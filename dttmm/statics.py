@@ -646,10 +646,7 @@ def _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment):
     before = merit(r, q)
     for _ in range(12):
         q_new = q + dx * cfg.scale
-        try:
-            a_new = cfg.accelerations(q_new)
-        except solver.DivergenceError:
-            a_new = np.full_like(a, np.nan)
+        a_new = _accelerations_or_nan(cfg, q_new)
         if np.all(np.isfinite(a_new)) and merit(a_new / cfg.scale, q_new) < before:
             return q_new, a_new
         dx *= 0.5

@@ -3,10 +3,20 @@ argument."""
 import numpy as np
 
 
+def is_text(value):
+    """A string, bytes or bool, or an array or list holding one: what a number must not be
+    silently made of ('1.5' -> 1.5, True -> 1.0)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        return True
+    if isinstance(value, (int, float, np.number)):      # (the common case, per drive call)
+        return False
+    raw = value if isinstance(value, np.ndarray) else np.asarray(value, dtype=object)
+    return raw.dtype.kind in "USb" or (raw.dtype == object and raw.ndim > 0 and any(
+        isinstance(x, (str, bytes, bool, np.bool_)) for x in raw.reshape(-1)))
+
+
 def finite_vector(element, argument, value, size=3):
-    raw = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
-    if raw.dtype.kind in "USb" or (raw.dtype == object and any(
-            isinstance(x, (str, bytes, bool, np.bool_)) for x in raw.reshape(-1))):
+    if is_text(value):
         raise ValueError(f"{element}: {argument} must be a vector of {size} numbers, "
                          f"got {value!r}")
     try:
@@ -26,7 +36,7 @@ def finite_vector(element, argument, value, size=3):
 
 
 def finite_scalar(element, argument, value, positive=False, nonnegative=False):
-    if isinstance(value, (str, bytes, bool, np.bool_)):
+    if is_text(value):
         raise ValueError(f"{element}: {argument} must be a number, got {value!r}")
     try:
         x = float(value)

@@ -216,6 +216,12 @@ ACCURACY = 5e-3       # modes_per_plane=None (default): each beam's estimated tr
 #                       (first frequency, static deflection; truncation_errors) at most this
 
 
+def largest_basis(beam_row):
+    """The most modes per plane a beam row's resolved family takes: MAX_LOADED_MODES for the
+    loaded-end polynomial modes, else MAX_AUTO_MODES."""
+    return MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+
+
 def truncation_errors(beam_row, n_modes, end_mass=0.0):
     """(first bending frequency, largest static deflection) of n_modes per plane, relative
     to the family's largest basis (MAX_LOADED_MODES, else MAX_AUTO_MODES): the Ritz problem of
@@ -226,7 +232,7 @@ def truncation_errors(beam_row, n_modes, end_mass=0.0):
     family = int(beam_row[FAMILY])
     ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
         if family == CLAMPED_LOADED else 0.0
-    cap = MAX_LOADED_MODES if family == CLAMPED_LOADED else MAX_AUTO_MODES
+    cap = largest_basis(beam_row)
     n = min(int(n_modes), cap)
     ratio = float(f"{ratio:.2g}")               # (a cache key: 2 digits are plenty here)
     f, d = _unit_beam_statics(family, n, ratio)
@@ -253,7 +259,7 @@ def _unit_beam_statics(family, n_modes, end_ratio):
 def accurate_mode_count(beam_row, end_mass=0.0):
     """modes_per_plane=None: the fewest modes per plane whose truncation_errors are both at
     most ACCURACY (the largest basis if none is).  Needs the family resolved."""
-    cap = MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+    cap = largest_basis(beam_row)
     for n in range(1, cap + 1):
         if max(abs(e) for e in truncation_errors(beam_row, n, end_mass)) <= ACCURACY:
             return n
@@ -274,7 +280,7 @@ def auto_mode_count(beam_row):
     either plane is at or below the row's FREQUENCY_CUTOFF (Hz), at least one, at most
     MAX_AUTO_MODES (MAX_LOADED_MODES for the loaded-end family, whose Ritz frequencies are taken
     from its largest basis, the best estimates).  Needs the family resolved."""
-    cap = MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
+    cap = largest_basis(beam_row)
     fv, fw = bending_frequencies(beam_row, cap)
     below = int(np.sum(np.minimum(fv, fw) <= beam_row[FREQUENCY_CUTOFF]))
     return min(max(below, 1), cap)

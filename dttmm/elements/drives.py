@@ -11,20 +11,13 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ._checks import derivative, finite_scalar
+from ._checks import derivative, finite_scalar, is_text
 
 FORCE, SPRING_DAMPER, MOTION = 0, 1, 2      # Model.drive_kind (-1: no drive)
 
 
-def _is_text(value):
-    """A string, bytes or bool (or an array of them): what a number must not be silently
-    made of ('1.5' -> 1.5, True -> 1.0)."""
-    return isinstance(value, (str, bytes, bool, np.bool_)) or (
-        isinstance(value, np.ndarray) and value.dtype.kind in "USb")
-
-
 def _scalar_of(who, argument, value):
-    if _is_text(value):
+    if is_text(value):
         raise ValueError(f"{who}: {argument} must return a number, got {value!r} (text)")
     try:
         a = np.asarray(value, dtype=float)
