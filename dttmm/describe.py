@@ -8,6 +8,7 @@ from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LO
 from .elements.hinges import BALL, ELASTIC, FIXED
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import MASS, TO_OUTPUT
+from .closures import describe_closures
 from .model import outboard_masses
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
@@ -24,9 +25,20 @@ _FAMILY_WHY = {
 def describe_counts(model):
     """'n bodies (r rigid, b beams), d degrees of freedom'."""
     kinds = model.body_kind
-    return (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
-            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), "
-            f"{degrees_of_freedom(model)} degrees of freedom")
+    head = (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
+            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), ")
+    if model.n_closures == 0 or model.tip_pinned:
+        return head + f"{degrees_of_freedom(model)} degrees of freedom"
+    rows = int(sum(CLOSURE_ROWS[int(k)] for k in model.closure_kind))
+    tree = degrees_of_freedom(model)
+    return head + (f"{tree} degrees of freedom in the tree, {model.n_closures} closing "
+                   f"joint{'s' if model.n_closures > 1 else ''} with {rows} constraint "
+                   f"equations (mobility at least {tree - rows}; more where constraints are "
+                   f"redundant, as a planar loop's spatial joints are)")
+
+
+# the constraint equations of each closing joint kind (closures.py): 6 less its freedoms
+CLOSURE_ROWS = {BALL: 3, FIXED: 6, REVOLUTE: 5, UNIVERSAL: 4, PRISMATIC: 5}
 
 
 def degrees_of_freedom(model):
@@ -133,6 +145,8 @@ def describe(model):
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]
+    if model.n_closures and not model.tip_pinned:
+        out += ["closing joints:"] + [f"  {line}" for line in describe_closures(model)]
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode, 0.02 rad per step of the fastest spin or swing)")
     return "\n".join(out)

@@ -1,10 +1,10 @@
 """The chain description: built from elements, validated once, frozen into flat arrays."""
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Optional, Sequence
 
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL
+from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL, BallJoint
 from .elements.joints import rotation_about
 from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
@@ -19,6 +19,7 @@ from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KIN
                              body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
 from .kernels.so3 import expm_so3, left_jacobian
+from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
 
 
 class PrescribedMotion:
@@ -272,8 +273,6 @@ class Model:
         without one).
     body_mass_center_inertia : ndarray (n, 3, 3)
         J_C, the inertia about the mass centre in body axes, kg m^2 (for the energies).
-    tip_pinned : bool
-        The tip is joined to the ground by a ball joint (``tip="ball"``), else free.
     body_kind : ndarray (n,) of int
         0 rigid body, 1 beam.
     beam_params : ndarray (n, 10)
@@ -301,6 +300,11 @@ class Model:
         Per body: where the cutoff of a beam with ``modes_per_plane="auto"`` and no
         ``frequency_cutoff`` came from (the build's step and the drives' bandwidth); "" for
         every other body.
+    closure_kind, closure_body, closure_point, closure_on_end, closure_params, closure_names
+        The loop-closing joints (``System.close``; m of them): kind (m,), the two sides' bodies
+        (m, 2; -1 the ground), each side's point in its frame (m, 2, 3; the ground's in the
+        ground frame), whether it is a beam's output end (m, 2), a hinge_params row (m, 55:
+        R0 and the axes) and names (dttmm/closures.py, docs/loops.md).  Empty for a tree.
 
     Examples
     --------
@@ -329,7 +333,6 @@ class Model:
     body_names: tuple
     hinge_names: tuple
     body_mass_center_inertia: np.ndarray  # (n, 3, 3) J_C in body axes (for energies)
-    tip_pinned: bool                 # the tip is joined to the ground by a ball joint (else free)
     body_kind: np.ndarray            # (n,) RIGID / BEAM
     beam_params: np.ndarray          # (n, BEAM_PARAM_SIZE), zero rows for rigid bodies; for a
                                      # beam, body_params holds the undeformed beam as a rigid body
@@ -345,6 +348,13 @@ class Model:
     attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
                                      # point, m (zero for the ground)
     frequency_cutoff_reasons: tuple = ()  # per body: where a derived "auto" cutoff came from
+    # the loop-closing joints (closures.py): m rows
+    closure_kind: np.ndarray = field(default_factory=lambda: empty_table()["closure_kind"])
+    closure_body: np.ndarray = field(default_factory=lambda: empty_table()["closure_body"])
+    closure_point: np.ndarray = field(default_factory=lambda: empty_table()["closure_point"])
+    closure_on_end: np.ndarray = field(default_factory=lambda: empty_table()["closure_on_end"])
+    closure_params: np.ndarray = field(default_factory=lambda: empty_table()["closure_params"])
+    closure_names: tuple = ()
 
     def __post_init__(self):
         # frozen through and through: the arrays cannot be written either (a negative mass
@@ -353,6 +363,17 @@ class Model:
             value = getattr(self, f.name)
             if isinstance(value, np.ndarray):
                 value.flags.writeable = False
+
+    @property
+    def tip_pinned(self):
+        """Whether the loops are one ball joint from a chain's tip to a fixed ground
+        (``tip="ball"``): the one closure the DT-TMM sweeps run so far (closures.py)."""
+        return is_pinned_tip(self)
+
+    @property
+    def n_closures(self):
+        """The number of loop-closing joints."""
+        return len(self.closure_kind)
 
     @property
     def is_chain(self):
@@ -492,6 +513,7 @@ class System:
         self.gravity = gravity
         self.ground = ground
         self._entries = []          # (body, joint, parent, at) as added
+        self._closures = []         # (joint, a, b, at_a, at_b) as closed
 
     def add(self, body, joint, parent=None, at=None):
         """Join body to parent by joint.
@@ -520,6 +542,58 @@ class System:
         """
         self._entries.append((body, joint, parent, at))
         return body
+
+    def close(self, joint, a, b="ground", at_a=None, at_b=None):
+        """Close a loop: join a point of side a to a point of side b by joint, beside the tree
+        (docs/loops.md).
+
+        The bodies' frames at t = 0 define the joint's rest: a revolute, universal or fixed
+        joint's relative rotation R0 is read from them (at the joint's given angles), a
+        prismatic joint's coordinate is measured between its points.  Nothing is checked here:
+        ``build`` validates the joint and its sides.
+
+        Parameters
+        ----------
+        joint : BallJoint, FixedHinge, RevoluteJoint, UniversalJoint or PrismaticJoint
+            The closing joint.  Side a plays a tree joint's parent (axis, axis1 are in a's
+            frame; the slide runs along a's axis), side b its child (a universal joint's axis2
+            is in b's frame; the joint's force and couple act on b).
+        a, b : body, str
+            A body of the system, its name, or "ground" (b defaults to the ground).
+        at_a, at_b : str or array_like of 3, optional
+            Where on each side: None or "output" (the output point; a beam's output end),
+            "input" (the input point), a rigid body's named point, or a point in the body's
+            frame from its input point (rigid bodies).  On the ground: a world position, or
+            None for where the other side's point starts.
+
+        Returns
+        -------
+        joint
+            The joint, as given.
+
+        Examples
+        --------
+        A four-bar: two cranks on the ground joined by a coupler whose far end is pinned to
+        the second crank's tip.
+
+        >>> import dttmm
+        >>> def bar(name, length, **kw):
+        ...     return dttmm.RigidBody(mass=1.0, inertia=[1e-3, length ** 2 / 12, length ** 2 / 12],
+        ...                            inertia_about="mass_center",
+        ...                            to_mass_center=[length / 2, 0, 0], to_output=[length, 0, 0],
+        ...                            name=name, **kw)
+        >>> up = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]       # bar's x along world y
+        >>> system = dttmm.System(gravity=[0, -9.81, 0])
+        >>> left = system.add(bar("left", 1.0, rotation=up), dttmm.RevoluteJoint(axis=[0, 0, 1]))
+        >>> top = system.add(bar("top", 1.0), dttmm.RevoluteJoint(axis=[0, 0, 1]), parent=left)
+        >>> right = system.add(bar("right", 1.0, rotation=up), dttmm.RevoluteJoint(axis=[0, 0, 1]),
+        ...                    parent="ground", at=None)
+        >>> _ = system.close(dttmm.RevoluteJoint(axis=[0, 0, 1]), "top", "ground", at_b=[1, 1, 0])
+        >>> system.build().n_closures
+        1
+        """
+        self._closures.append((joint, a, b, at_a, at_b))
+        return joint
 
     def build(self, tip="free", step=None, duration=None) -> "Model":
         """Validate and freeze into a Model.
@@ -553,8 +627,9 @@ class System:
             against its ends, a rotation or angular velocity contradicting the joint before a
             body, a ball-joint body with no inertia about its hinge-to-hinge axis.
         """
-        return _freeze(*_resolve_topology(self._entries), self.gravity, self.ground, tip,
-                       step, duration)
+        bodies, joints, parents, attach = _resolve_topology(self._entries)
+        return _freeze(bodies, joints, parents, attach, self.gravity, self.ground, tip, step,
+                       duration, closures=self._closures)
 
 
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
@@ -663,7 +738,7 @@ def _resolve_topology(entries):
             by_name[body.name] = i
     parent_of = []
     for i, (body, _, parent, _) in enumerate(entries):
-        if parent is None:
+        if parent is None or (isinstance(parent, str) and parent == "ground"):
             parent_of.append(-1)
         elif isinstance(parent, str):
             if parent not in by_name:
@@ -720,11 +795,13 @@ def _who(body, index=None):
     return f"{type(body).__name__} '{name}'{where}" if name else f"{type(body).__name__}{where}"
 
 
-def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, duration=None):
+def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, duration=None,
+            closures=()):
     """Validate every element and the system, and freeze them into a Model.  bodies, hinges:
     in topological order; parents[k] < k the parent body of body k (-1: the ground); attach[k]
     its attachment point on the parent (0: the output point, j: the parent's j-th named
-    point)."""
+    point); closures: the loop-closing joints as System.close took them (tip="ball" adds one
+    from the last body's output point to the ground)."""
     if tip not in ("free", "ball"):
         raise ValueError(f"System: tip must be 'free' or 'ball', got {tip!r}")
     n = len(bodies)
@@ -741,7 +818,11 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     chain = bool(np.all(parent == np.arange(n) - 1) and np.all(attachment == 0))
     if tip == "ball" and not chain:
         raise ValueError("System: tip='ball' joins the last body of a chain to the ground; this "
-                         "system is a tree")
+                         "system is a tree: close its loops with System.close(joint, body, "
+                         "'ground')")
+    if tip == "ball" and ground.motion is not None:
+        raise ValueError("System: tip='ball' pins the tip to a point of the ground, and loops on "
+                         "a moving ground do not run in DT-TMM yet")
     g = finite_vector("System", "gravity", gravity)
     if not isinstance(ground, Ground):
         raise ValueError("System: ground must be a Ground")
@@ -781,7 +862,11 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     from_step = (body_kind == BEAM) & (beam_params[:, FREQUENCY_CUTOFF] == FROM_STEP)
     if np.any(from_step):
         derived = _derived_cutoff(step, duration, ground, hv, bodies, beam_params)
-    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, tip,
+    closures = list(closures)
+    if tip == "ball":
+        closures.append((BallJoint(name="tip"), bodies[-1], "ground", None, None))
+    loops = loop_membership(closures, bodies, parent)
+    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, loops,
                            None if derived is None else derived[0])
     _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
@@ -819,7 +904,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         rotations[k], omegas[k] = rot, om
     beams = [k for k in range(n) if body_kind[k] == BEAM]
 
-    return Model(
+    tree = Model(
         n_bodies=n,
         body_params=np.array([pack_body(v) for v in bv]),
         hinge_kind=kinds,
@@ -837,7 +922,6 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
         hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
         body_mass_center_inertia=np.array([v["j_c"] for v in bv]),
-        tip_pinned=tip == "ball",
         body_kind=body_kind,
         beam_params=beam_params,
         initial_modal_coordinates=np.concatenate([np.zeros(0)] + [bv[k]["eta0"] for k in beams]),
@@ -848,6 +932,11 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         drives=tuple(v.get("drives", ()) for v in hv),
         frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
     )
+    if not closures:
+        return tree
+    index_of = {id(b): k for k, b in enumerate(bodies)}
+    named = [dict(v.get("points") or {}) for v in bv]
+    return replace(tree, **closure_rows(tree, closures, index_of, named))
 
 
 def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
@@ -953,7 +1042,7 @@ def drives_bandwidth(step, duration, ground_motion, motions, max_samples=1 << 15
     return best
 
 
-def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, tip,
+def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, loops,
                            derived_cutoff=None):
     """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
     pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
@@ -961,8 +1050,12 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
     tip and the loaded-end polynomial modes when it carries loads.  An explicit choice that
     contradicts the hinges is refused (clamped between moment-free ends only if the user
     insists).  An elastic hinge at the input clamps the beam elastically (the frame is the input
-    section's, as after a fixed hinge); one at the output loads it (loaded-end modes)."""
+    section's, as after a fixed hinge); one at the output loads it (loaded-end modes).
+    loops = (in_loop, closed_output, output_moment) per body (closures.loop_membership): a
+    closing joint at a beam's output end holds it like a child's joint (a ball joint:
+    moment-free)."""
     n = len(bodies)
+    in_loop, closed_output, output_moment = loops
     end_mass = outboard_masses([v["mass"] for v in bv], parent)
     for k in range(n):
         if body_kind[k] != BEAM:
@@ -973,10 +1066,10 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
         # an applied end load (docs/beam.md, "Loads on the beam") loads the output: the free
         # tip's eigenfunctions carry none, and a torque needs the sections' rotations
         loaded = bv[k]["force"] is not None or bv[k]["torque"] is not None
-        free_tip = leaf and tip == "free" and not loaded
+        free_tip = leaf and not closed_output[k] and not loaded
         # a leaf's output is the tip (free or pinned); otherwise every joint there moment-free
         output_free = ((leaf or all(kinds[c] == BALL for c in children[k]))
-                       and bv[k]["torque"] is None)
+                       and bv[k]["torque"] is None and not output_moment[k])
         family = int(beam_params[k, FAMILY])
         if family == PINNED and not (input_free and output_free):
             raise ValueError(f"{who}: mode_family 'pinned' needs moment-free ends (a ball joint "
@@ -1009,7 +1102,7 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
         if beam_params[k, STIFFENING] == AUTO:
             # stiffening=None: on, unless an inextensible beam (no stretch modes) sits in a
             # closed loop (the tip pinned), where held between fixed points it would lock
-            beam_params[k, STIFFENING] = float(not (tip == "ball"
+            beam_params[k, STIFFENING] = float(not (in_loop[k]
                                                     and beam_params[k, AXIAL_MODES] == 0))
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
             raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "

@@ -33,6 +33,7 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
+from .closures import check_runs_in_sweeps
 from .model import Model, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -1185,7 +1186,9 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
-    the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree)."""
+    the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); of the closed
+    loops, a chain's tip pinned to a fixed ground (closures.check_runs_in_sweeps)."""
+    check_runs_in_sweeps(model, "simulate")
     if full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
     elif not model.is_chain:
@@ -1392,7 +1395,9 @@ def kernel_model(model):
     attachment_point = np.zeros((len(parent), 3))
     inner = parent >= 0
     attachment_point[inner] = arrays["body_params"][parent[inner]][:, TO_OUTPUT]
-    return replace(model, n_bodies=len(parent), parent=parent,
+    body = np.array(model.closure_body)             # the closing joints' sides, renumbered
+    body[body >= 0] = np.array(keep)[body[body >= 0]]
+    return replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
                    attachment=np.zeros(len(parent), dtype=np.int64),
                    attachment_point=attachment_point, frequency_cutoff_reasons=(),
                    **arrays), np.array(keep)

@@ -18,6 +18,7 @@ import warnings
 
 import numpy as np
 
+from .closures import check_runs_in_sweeps
 from .elements import BEAM
 from .elements.drives import MOTION
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
@@ -439,6 +440,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     tol = solver._check_positive("tol", tol, where)
     max_increment = solver._check_positive("max_increment", max_increment, where)
     max_iterations = solver._check_count("max_iterations", max_iterations, 1, where)
+    check_runs_in_sweeps(model, where)
     cfg = _Configuration(model, where)
     q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0, cfg.defl0)
     if guess is not None:
