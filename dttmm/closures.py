@@ -203,12 +203,6 @@ def closure_rows(model, entries, index_of, named):
         if ka == kb:
             raise ValueError(f"{label}: closes {_side_name(model, ka)} to itself; a closing "
                              f"joint joins two different bodies (or a body and the ground)")
-        ga = GROUND if ka == GROUND else group[ka]
-        gb = GROUND if kb == GROUND else group[kb]
-        if ga == gb:
-            raise ValueError(f"{label}: {_side_name(model, ka)} and {_side_name(model, kb)} are "
-                             f"welded to each other by fixed hinges (one rigid unit): a joint "
-                             f"between them closes no loop")
         v = joint.validated(c)
         drives = v.get("drives", ())
         if any(d is not None for d in drives):
@@ -225,6 +219,13 @@ def closure_rows(model, entries, index_of, named):
             p = side_a[2]
             side_b = (model.ground_rotation.T @ (p - model.ground_position), False, p,
                       model.ground_rotation)
+        # two points of one rigid unit (a beam's output end moves on its own)
+        ga = GROUND if ka == GROUND else (-2 - ka if side_a[1] else group[ka])
+        gb = GROUND if kb == GROUND else (-2 - kb if side_b[1] else group[kb])
+        if ga == gb:
+            raise ValueError(f"{label}: {_side_name(model, ka)} and {_side_name(model, kb)} are "
+                             f"welded to each other by fixed hinges (one rigid unit): a joint "
+                             f"between them closes no loop")
         f_a, f_b = side_a[3], side_b[3]
         v = dict(v)
         if kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC):
@@ -349,3 +350,316 @@ def check_runs_in_sweeps(model, who):
         raise ValueError(f"{who}: closure '{model.closure_names[0]}' (the tip's ball joint) is "
                          f"open by {gap:.3g} m at t = 0: its ground point must be where the tip "
                          f"starts (at_b=None)")
+
+
+# ----------------------------------------------------------------------------------------------
+# The closing joints' constraints and assembly (docs/loops.md, "Constraints", "Assembly")
+# ----------------------------------------------------------------------------------------------
+
+def _perpendiculars(n):
+    """Two unit vectors completing the unit vector n to a right-handed frame (n, p1, p2)."""
+    p1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    p1 /= np.linalg.norm(p1)
+    return p1, np.cross(n, p1)
+
+
+def constraint_directions(model, c):
+    """The closing joint c's scalar constraints (closure_rows' count, CLOSURE_ROWS in
+    describe.py), in the sides' own frames:
+        points: [(frame, e)], the rows e . (p_b - p_a) = 0 with e fixed in side a's frame
+                (frame "a") or in the world (frame "w");
+        dots:   [(x, y)], the rows (F_a x) . (F_b y) = 0, x fixed in a's frame, y in b's.
+    ball: the three world components of the gap; fixed and prismatic: the relative rotation's
+    three dots (F_a R0 e_i) . (F_b e_j), (i, j) = (2, 3), (3, 1), (1, 2); revolute: the axis
+    F_b R0^T n kept perpendicular to a's two directions across n; universal: n1 . n2 = 0;
+    prismatic: the gap across a's axis."""
+    kind, row = int(model.closure_kind[c]), model.closure_params[c]
+    r0 = row[0:9].reshape(3, 3)
+    n1, n2 = row[45:48], row[48:51]
+    e = np.eye(3)
+    points = [("w", e[i]) for i in range(3)]
+    dots = []
+    if kind == PRISMATIC:
+        points = [("a", p) for p in _perpendiculars(n1)]
+    if kind in (FIXED, PRISMATIC):
+        dots = [(r0 @ e[i], e[j]) for i, j in ((1, 2), (2, 0), (0, 1))]
+    elif kind == REVOLUTE:
+        dots = [(p, r0.T @ n1) for p in _perpendiculars(n1)]
+    elif kind == UNIVERSAL:
+        dots = [(n1, n2)]
+    return points, dots
+
+
+def tree_state(model, theta, q, omega, qd):
+    """The tree's kinematics from its coordinates: theta (n, 3), each free body's rotation
+    change (A = exp(theta^) A_0, a ball joint's or an elastic hinge's body), q (n, 2) the
+    joints' coordinates, omega (n, 3) the free bodies' angular velocities, qd (n, 2) the
+    joints' rates (rows of other bodies unused).  Returns (rot, w, r_in, v_in, rot_o, w_o, r_o,
+    v_o), each (n, ...): rotations, angular velocities, input points and their velocities, and
+    the output sections and points (a beam's deflected end; the beams' modal coordinates and
+    rates and the elastic hinges' deflections are the model's)."""
+    from .model import output_section
+    from .result import beam_output_offset
+    from .kernels.so3 import expm_so3
+    n = model.n_bodies
+    off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    rot, w = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    r_in, v_in = np.zeros((n, 3)), np.zeros((n, 3))
+    rot_o, w_o = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    r_o, v_o = np.zeros((n, 3)), np.zeros((n, 3))
+    r_g, v_g, _, rot_g, w_g, _ = model.ground_state(0.0)
+    e3 = np.empty((3, 3))
+    for k in range(n):
+        p, kind, h = model.parent[k], int(model.hinge_kind[k]), model.hinge_params[k]
+        if p < 0:
+            r_att, v_att, f_in, w_in = r_g, v_g, rot_g, w_g
+        elif model.attachment[k] == 0:
+            r_att, v_att, f_in, w_in = r_o[p], v_o[p], rot_o[p], w_o[p]
+        else:
+            arm = rot[p] @ model.attachment_point[k]
+            r_att, v_att = r_in[p] + arm, v_in[p] + np.cross(w[p], arm)
+            f_in, w_in = rot[p], w[p]
+        r0 = h[0:9].reshape(3, 3)
+        n1, n2 = h[45:48], h[48:51]
+        d, d_rate = np.zeros(3), np.zeros(3)
+        if kind == FIXED:
+            rot[k], w[k] = f_in @ r0, w_in
+        elif kind == REVOLUTE:
+            rot[k] = f_in @ rotation_about(n1, q[k, 0]) @ r0
+            w[k] = w_in + (f_in @ n1) * qd[k, 0]
+        elif kind == UNIVERSAL:
+            rot[k] = f_in @ rotation_about(n1, q[k, 0]) @ r0 @ rotation_about(n2, q[k, 1])
+            w[k] = w_in + (f_in @ n1) * qd[k, 0] + (rot[k] @ n2) * qd[k, 1]
+        elif kind == PRISMATIC:
+            rot[k], w[k] = f_in @ r0, w_in
+            u = f_in @ n1
+            d, d_rate = u * q[k, 0], np.cross(w_in, u * q[k, 0]) + u * qd[k, 0]
+        else:                                    # ball joint, elastic hinge: free rotation
+            expm_so3(np.ascontiguousarray(theta[k], dtype=float), e3)
+            rot[k], w[k] = e3 @ model.initial_rotation[k], omega[k]
+            if kind != BALL:
+                d = model.hinge_params[k, 45:48]      # the elastic deflection, as given
+        r_in[k], v_in[k] = r_att + d, v_att + d_rate
+        if model.body_kind[k] == BEAM:
+            eta = model.initial_modal_coordinates[off[k]:off[k + 1]]
+            eta_d = model.initial_modal_velocities[off[k]:off[k + 1]]
+            rot_o[k], w_o[k] = output_section(model.beam_params[k], rot[k], w[k], eta, eta_d)
+            rho, rho_rate = beam_output_offset(model.beam_params[k], rot[k], w[k], eta, eta_d)
+        else:
+            rot_o[k], w_o[k] = rot[k], w[k]
+            rho = rot[k] @ model.body_params[k, TO_OUTPUT]
+            rho_rate = np.cross(w[k], rho)
+        r_o[k], v_o[k] = r_in[k] + rho, v_in[k] + rho_rate
+    return rot, w, r_in, v_in, rot_o, w_o, r_o, v_o
+
+
+def _side_motion(model, state, c, s):
+    """(point, its velocity, frame, its angular velocity) of closing joint c's side s."""
+    rot, w, r_in, v_in, rot_o, w_o, r_o, v_o = state
+    k, local = model.closure_body[c, s], model.closure_point[c, s]
+    if k == GROUND:
+        r_g, v_g, _, rot_g, w_g, _ = model.ground_state(0.0)
+        arm = rot_g @ local
+        return r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
+    if model.closure_on_end[c, s]:
+        return r_o[k], v_o[k], rot_o[k], w_o[k]
+    arm = rot[k] @ local
+    return r_in[k] + arm, v_in[k] + np.cross(w[k], arm), rot[k], w[k]
+
+
+def closure_residuals(model, state):
+    """(g, g') over every closing joint's scalar constraints (constraint_directions), at the
+    tree's state (tree_state): positions (m, or dimensionless for the dots) and their rates,
+    and the index of the closing joint of each row."""
+    g, gd, owner = [], [], []
+    for c in range(model.n_closures):
+        p_a, v_a, f_a, w_a = _side_motion(model, state, c, 0)
+        p_b, v_b, f_b, w_b = _side_motion(model, state, c, 1)
+        points, dots = constraint_directions(model, c)
+        for frame, e in points:
+            if frame == "a":
+                e = f_a @ e
+                g.append(e @ (p_b - p_a))
+                gd.append(np.cross(w_a, e) @ (p_b - p_a) + e @ (v_b - v_a))
+            else:
+                g.append(e @ (p_b - p_a))
+                gd.append(e @ (v_b - v_a))
+            owner.append(c)
+        for x, y in dots:
+            x, y = f_a @ x, f_b @ y
+            g.append(x @ y)
+            gd.append((w_b - w_a) @ np.cross(y, x))
+            owner.append(c)
+    return np.array(g), np.array(gd), np.array(owner, dtype=np.int64)
+
+
+def _coordinates(model, keep):
+    """The assembly's variables: per body, ("rot", k, i) for a free body's rotation (a ball
+    joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
+    whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
+    coordinate always)."""
+    from .elements.drives import MOTION
+    from .elements.joints import coordinate_count
+    names = set(keep)
+    unknown = names - set(model.hinge_names) - set(model.body_names)
+    if unknown:
+        raise ValueError(f"assemble: keep names no joint or body of the model: "
+                         f"{', '.join(sorted(map(str, unknown)))} (joints: "
+                         f"{', '.join(model.hinge_names)})")
+    variables, kept = [], []
+    for k in range(model.n_bodies):
+        kind = int(model.hinge_kind[k])
+        named = model.hinge_names[k] in names or model.body_names[k] in names
+        if kind in (REVOLUTE, UNIVERSAL, PRISMATIC):
+            for i in range(coordinate_count(kind)):
+                drive = model.drives[k][i] if len(model.drives[k]) > i else None
+                variables.append(("q", k, i))
+                kept.append(named or (drive is not None and drive["kind"] == MOTION))
+        elif kind != FIXED:
+            for i in range(3):
+                variables.append(("rot", k, i))
+                kept.append(named)
+    return variables, np.array(kept, dtype=bool)
+
+
+def _state_of(model, variables, x, xd):
+    n = model.n_bodies
+    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53])
+    omega, qd = np.array(model.initial_angular_velocity), np.array(model.hinge_params[:, 53:55])
+    for (what, k, i), value, rate in zip(variables, x, xd):
+        if what == "q":
+            q[k, i], qd[k, i] = value, rate
+        else:
+            theta[k, i], omega[k, i] = value, rate
+    return tree_state(model, theta, q, omega, qd)
+
+
+def loop_residuals(model):
+    """How far each closing joint is from holding at t = 0 (docs/loops.md, "Constraints").
+
+    Parameters
+    ----------
+    model : Model
+        A model with closing joints (``System.close``).
+
+    Returns
+    -------
+    positions, rates : ndarray (closing joints,)
+        Each joint's largest position residual (its gaps in m, its dots dimensionless) and
+        largest rate residual (m/s, rad/s).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> positions, rates = dttmm.loop_residuals(model)  # doctest: +SKIP
+    """
+    g, gd, owner = closure_residuals(model, tree_state(
+        model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, 51:53],
+        model.initial_angular_velocity, model.hinge_params[:, 53:55]))
+    pos, vel = np.zeros(model.n_closures), np.zeros(model.n_closures)
+    np.maximum.at(pos, owner, np.abs(g))
+    np.maximum.at(vel, owner, np.abs(gd))
+    return pos, vel
+
+
+def assemble(model, keep=(), tol=1e-12, max_iterations=30):
+    """Close every loop at t = 0 (docs/loops.md, "Assembly"): move the tree's coordinates the
+    least (in the least-squares sense) that makes every closing joint hold, then the rates the
+    least that makes the loops' velocities consistent.
+
+    Parameters
+    ----------
+    model : Model
+        A model with closing joints (``System.close``); one without is returned as it is.
+    keep : sequence of str, optional
+        Joints (or their bodies, by name) whose coordinates and rates are given and stay: a
+        crank's angle and rate.  A prescribed motion's coordinates always stay.
+    tol : float, optional
+        The residual the closure must reach, m and rad (default 1e-12, times the model's
+        reach in metres where that is above 1).
+    max_iterations : int, optional
+        Gauss-Newton iterations for the positions (default 30).
+
+    Returns
+    -------
+    Model
+        The same model with its initial rotations, angular velocities and joint coordinates
+        and rates moved onto the loops (``loop_residuals`` reports what is left).
+
+    Raises
+    ------
+    ValueError
+        A loop that cannot close (a rod too short, a kept coordinate that forbids it), naming
+        the closing joint and its remaining gap; keep naming nothing of the model.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> assembled = dttmm.assemble(model, keep=["crank"])  # doctest: +SKIP
+    >>> dttmm.loop_residuals(assembled)  # doctest: +SKIP
+    """
+    from dataclasses import replace
+    if model.n_closures == 0:
+        return model
+    variables, kept = _coordinates(model, keep)
+    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                  for what, k, i in variables])
+    xd = np.array([model.hinge_params[k, 53 + i] if what == "q"
+                   else model.initial_angular_velocity[k, i] for what, k, i in variables])
+    free = np.nonzero(~kept)[0]
+    scale = max(1.0, float(np.abs(model.body_params[:, TO_OUTPUT]).sum()))
+    limit = tol * scale
+
+    def residual(values):
+        return closure_residuals(model, _state_of(model, variables, values, xd))[0]
+
+    g = residual(x)
+    history = [np.abs(g).max()]
+    step = 1e-7
+    for _ in range(max_iterations):
+        if history[-1] <= limit:
+            break
+        jac = np.zeros((g.size, free.size))
+        for j, col in enumerate(free):
+            up, down = x.copy(), x.copy()
+            up[col] += step
+            down[col] -= step
+            jac[:, j] = (residual(up) - residual(down)) / (2 * step)
+        x[free] -= np.linalg.pinv(jac, rcond=1e-10) @ g
+        g = residual(x)
+        history.append(np.abs(g).max())
+        if len(history) > 6 and history[-1] > 0.5 * history[-6]:
+            break                               # stalled: the loop cannot close
+    owner = closure_residuals(model, _state_of(model, variables, x, xd))[2]
+    if history[-1] > limit:
+        worst = int(owner[np.argmax(np.abs(g))])
+        gaps = np.zeros(model.n_closures)
+        np.maximum.at(gaps, owner, np.abs(g))
+        raise ValueError(f"assemble: closing joint '{model.closure_names[worst]}' cannot close: "
+                         f"a gap of {gaps[worst]:.4g} (m or rad) is left after "
+                         f"{len(history) - 1} iterations (from {history[0]:.4g}); the loop's "
+                         f"bodies cannot reach (a link too short or too long), or a kept "
+                         f"coordinate forbids it")
+    # the rates: the loops' velocity residual is linear in them, g' = G xd + g'_0
+    def rate_residual(rates):
+        return closure_residuals(model, _state_of(model, variables, x, rates))[1]
+    gd = rate_residual(xd)
+    if free.size and np.abs(gd).max() > limit:
+        jac = np.zeros((gd.size, free.size))
+        for j, col in enumerate(free):
+            unit = xd.copy()
+            unit[col] += 1.0
+            jac[:, j] = rate_residual(unit) - gd
+        xd[free] -= np.linalg.pinv(jac, rcond=1e-10) @ gd
+        gd = rate_residual(xd)
+    if np.abs(gd).max() > 1e-9 * max(1.0, float(np.abs(xd).max()) * scale):
+        worst = int(owner[np.argmax(np.abs(gd))])
+        raise ValueError(f"assemble: the kept rates move closing joint "
+                         f"'{model.closure_names[worst]}' apart at {np.abs(gd).max():.4g} (m/s or "
+                         f"rad/s); keep fewer rates")
+    rot, w = _state_of(model, variables, x, xd)[:2]
+    hinge = np.array(model.hinge_params)
+    for (what, k, i), value, rate in zip(variables, x, xd):
+        if what == "q":
+            hinge[k, 51 + i], hinge[k, 53 + i] = value, rate
+    return replace(model, initial_rotation=rot, initial_angular_velocity=w, hinge_params=hinge)
