@@ -58,6 +58,8 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "initial_modal_velocities": "list",
          "rotation": "matrix", "angular_velocity": "vector", "joint": "table"}
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
+_CLOSE_COMMON = {"type": "str", "name": "str", "a": "str", "b": "str", "at_a": "point",
+                 "at_b": "point"}
 _JOINTS = {
     "ball": (BallJoint, {}),
     "fixed": (FixedHinge, {"rotation": "matrix"}),
@@ -143,8 +145,8 @@ def scene_from_dict(data, where="scene"):
     SceneError
         As ``load_scene``.
     """
-    _keys(data, {"model": "table", "ground": "table", "body": "bodies", "run": "table"},
-          where, "the file")
+    _keys(data, {"model": "table", "ground": "table", "body": "bodies", "close": "bodies",
+                 "run": "table"}, where, "the file")
     header = data.get("model", {})
     _keys(header, _MODEL, where, "[model]")
     tip = header.get("tip", "free")
@@ -158,6 +160,16 @@ def scene_from_dict(data, where="scene"):
     for i, table in enumerate(bodies):
         body, joint, parent, at = _body(table, i, where)
         system.add(body, joint, parent=parent, at=at)
+    for i, table in enumerate(data.get("close", [])):
+        label = f"[[close]] {i + 1}"
+        _keys(table, dict(_CLOSE_COMMON, **_JOINTS.get(table.get("type"), (None, {}))[1]),
+              where, label)
+        for key in ("a", "type"):
+            if key not in table:
+                raise SceneError(f"{where}: {label} needs the key '{key}'")
+        joint = _joint(table, where, label, _CLOSE_COMMON)[0]
+        system.close(joint, table["a"], table.get("b", "ground"), at_a=table.get("at_a"),
+                     at_b=table.get("at_b"))
     run = data.get("run", {})
     _keys(run, _RUN, where, "[run]")
     try:
@@ -231,15 +243,15 @@ def _body(table, i, where):
     return body, joint, parent, at
 
 
-def _joint(table, where, label):
+def _joint(table, where, label, common=_JOINT_COMMON):
     kind = table.get("type")
     if kind not in _JOINTS:
         raise SceneError(f"{where}: {label} key 'type': one of {', '.join(_JOINTS)}, got "
                          f"{kind!r}" if "type" in table else
                          f"{where}: {label} needs the key 'type' (one of {', '.join(_JOINTS)})")
     cls, own = _JOINTS[kind]
-    _keys(table, dict(_JOINT_COMMON, **own), where, label)
-    args = {k: v for k, v in table.items() if k not in _JOINT_COMMON or k == "name"}
+    _keys(table, dict(common, **own), where, label)
+    args = {k: v for k, v in table.items() if k not in common or k == "name"}
     if "drive" in args:
         args["drive"] = _drive(args["drive"], where, f"{label} key 'drive'")
     if "drives" in args:
@@ -308,6 +320,7 @@ def _value(value, kind, where, label):
           "table": isinstance(value, dict), "bodies": isinstance(value, list),
           "drives": isinstance(value, list) and len(value) == 2,
           "profile": number(value) or isinstance(value, dict)}
+    ok["point"] = ok["str"] or ok["vector"]
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
     ok["modes"] = ok["int"] or value == "auto"
     if not ok[kind]:
@@ -449,9 +462,41 @@ def scene_of(model, run=None, name=None):
         table["joint"] = _joint_table(model, k, who)
         bodies.append(table)
     data["body"] = bodies
+    if model.n_closures and not model.tip_pinned:
+        data["close"] = [_close_table(model, c) for c in range(model.n_closures)]
     if run:
         data["run"] = dict(run)
     return data
+
+
+def _close_table(model, c):
+    """A [[close]] table of closing joint c (docs/loops.md): its kind, sides, points and axes
+    (its rest rotation is read again from the frames at t = 0)."""
+    kind = int(model.closure_kind[c])
+    h = model.closure_params[c]
+    table = {"type": {BALL: "ball", FIXED: "fixed", REVOLUTE: "revolute",
+                      UNIVERSAL: "universal", PRISMATIC: "prismatic"}[kind],
+             "name": model.closure_names[c]}
+    for s, side in enumerate("ab"):
+        k = int(model.closure_body[c, s])
+        table[side] = "ground" if k < 0 else model.body_names[k]
+        local = model.closure_point[c, s]
+        if k < 0:
+            point = model.ground_position + model.ground_rotation @ local
+        elif model.closure_on_end[c, s]:
+            point = "output"
+        else:
+            point = local
+        table[f"at_{side}"] = point if isinstance(point, str) else np.asarray(point).tolist()
+    if kind in (REVOLUTE, PRISMATIC):
+        table["axis"] = h[AXIS_1].tolist()
+    if kind == REVOLUTE and h[COORDINATE_0][0] != 0.0:
+        table["angle"] = float(h[COORDINATE_0][0])
+    if kind == UNIVERSAL:
+        table["axis1"], table["axis2"] = h[AXIS_1].tolist(), h[AXIS_2].tolist()
+        if np.any(h[COORDINATE_0] != 0.0):
+            table["angles"] = h[COORDINATE_0].tolist()
+    return table
 
 
 def _joint_table(model, k, who):

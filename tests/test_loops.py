@@ -155,3 +155,25 @@ def test_a_closure_on_a_moving_ground_and_tip_ball_on_a_tree_say_what_to_do():
     system = four_bar()
     with pytest.raises(ValueError, match="System.close"):
         system.build(tip="ball")
+
+
+def test_closing_joints_in_scene_files_round_trip():
+    """[[close]] tables build the same closure table as System.close, and save_scene writes
+    them back (the rest rotation read again from the saved frames)."""
+    from dttmm.scene import scene_from_dict, scene_of
+    system = four_bar()
+    system.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "right", "ground")
+    model = system.build()
+    data = scene_of(model, name="four_bar")
+    assert data["close"] == [{"type": "revolute", "name": "pin", "a": "right", "b": "ground",
+                              "at_a": [1.0, 0.0, 0.0], "at_b": [1.0, 0.0, 0.0],
+                              "axis": [0.0, 0.0, 1.0]}]
+    again = scene_from_dict(data).model
+    for name in ("closure_kind", "closure_body", "closure_point", "closure_on_end",
+                 "closure_params"):
+        assert np.allclose(getattr(again, name), getattr(model, name), rtol=0, atol=1e-15)
+    bad = dict(data, close=[{"type": "revolute", "a": "right", "axis": [0, 0, 0]}])
+    with pytest.raises(ValueError, match=r"\[\[close\]\] 1.*axis must be a nonzero"):
+        scene_from_dict(bad, "four_bar.toml")
+    with pytest.raises(ValueError, match=r"\[\[close\]\] 1: unknown key 'parent'"):
+        scene_from_dict(dict(data, close=[{"type": "ball", "a": "right", "parent": "x"}]))
