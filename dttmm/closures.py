@@ -32,7 +32,7 @@ prismatic joint's coordinate is measured from its points.
 """
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
+from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
 from .elements.hinges import AXIS_1, HINGE_PARAM_SIZE, pack_hinge
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
@@ -333,23 +333,40 @@ def describe_closures(model):
 
 
 
-def check_runs_in_sweeps(model, who):
-    """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet: any
-    but one ball joint from a chain's tip to a fixed ground, and that one with a gap at t = 0
-    (the sweeps hold the tip where it starts)."""
+def check_runs_in_sweeps(model, who, time_step=False):
+    """Refuse, before a DT-TMM run (time_step) or static solve, the loops its sweeps do not
+    close yet, naming them: the time step closes loops of rigid bodies on a fixed ground
+    (kernels/closure.py), and a chain's tip joined to a fixed ground by a ball joint anywhere;
+    statics only the latter.  The pinned tip must start on its pin (the sweeps hold it where it
+    starts)."""
     if model.n_closures == 0:
         return
-    if not model.tip_pinned:
-        lines = "; ".join(describe_closures(model))
-        raise ValueError(f"{who}: the model's loops ({lines}) do not run in DT-TMM yet: of the "
-                         f"closed loops its sweeps close a chain's tip joined to a fixed ground "
-                         f"by a ball joint (tip='ball'); the Newton-Euler reference runs every "
-                         f"loop (dttmm.simulate_reference)")
-    gap = closure_gaps(model)[0]
-    if gap > 1e-9:
-        raise ValueError(f"{who}: closure '{model.closure_names[0]}' (the tip's ball joint) is "
-                         f"open by {gap:.3g} m at t = 0: its ground point must be where the tip "
-                         f"starts (at_b=None)")
+    if model.tip_pinned:
+        gap = closure_gaps(model)[0]
+        if gap > 1e-9:
+            raise ValueError(f"{who}: closure '{model.closure_names[0]}' (the tip's ball joint) "
+                             f"is open by {gap:.3g} m at t = 0: its ground point must be where "
+                             f"the tip starts (at_b=None)")
+        return
+    lines = "; ".join(describe_closures(model))
+    if not time_step:
+        raise ValueError(f"{who}: the model's loops ({lines}) do not run here yet: of the closed "
+                         f"loops it closes a chain's tip joined to a fixed ground by a ball "
+                         f"joint (tip='ball'); dttmm.simulate runs loops of rigid bodies, and "
+                         f"the Newton-Euler reference every loop (dttmm.simulate_reference)")
+    why = None
+    if np.any(model.body_kind == BEAM):
+        k = int(np.nonzero(model.body_kind == BEAM)[0][0])
+        why = f"body '{model.body_names[k]}' is a beam"
+    elif np.any(model.hinge_kind == ELASTIC):
+        k = int(np.nonzero(model.hinge_kind == ELASTIC)[0][0])
+        why = f"hinge '{model.hinge_names[k]}' is elastic"
+    elif model.ground_motion is not None:
+        why = "the ground moves"
+    if why is not None:
+        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM with rigid bodies on "
+                         f"a fixed ground so far, and {why}; the Newton-Euler reference runs "
+                         f"them (dttmm.simulate_reference)")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -147,6 +147,9 @@ def describe(model):
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]
     if model.n_closures and not model.tip_pinned:
         out += ["closing joints:"] + [f"  {line}" for line in describe_closures(model)]
+        out.append("  (simulate: held at acceleration level in every Newton iteration, up to 16 "
+                   "by default, positions and rates projected back onto the loops after every "
+                   "step; docs/loops.md)")
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode, 0.02 rad per step of the fastest spin or swing)")
     return "\n".join(out)

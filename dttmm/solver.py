@@ -27,13 +27,14 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree, weld_chain
 from .kernels import step as kstep
+from .kernels.closure import DOT, GAP_A, GAP_WORLD, Loops
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Monitor, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
-from .closures import check_runs_in_sweeps
+from .closures import assemble, check_runs_in_sweeps, constraint_directions, loop_residuals
 from .model import Model, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -164,7 +165,7 @@ class Workspace:
             dir_o=np.zeros((n_st, 12)), port_s=np.zeros((n, 3, 3)), port_p=np.zeros((n, 3)),
             aq_out=np.zeros((n, 6)), tree_s=np.zeros((n, 6, 6)), tree_p=np.zeros((n, 6)),
             joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
-            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
+            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)), tree_load=np.zeros((n, 6)))
         self.beams = beam_tables(model)
         _initial_deflections(model, self.state)
 
@@ -227,11 +228,47 @@ def has_coordinates(model):
     return bool(np.isin(model.hinge_kind, (REVOLUTE, UNIVERSAL, PRISMATIC)).any())
 
 
+def has_loops(model):
+    """Closing joints other than a chain's pinned tip (kernels/closure.py)."""
+    return model.n_closures > 0 and not model.tip_pinned
+
+
 def full_tree(model, full_state=False):
     """Whether the model runs in the full-state tree sweep (mode "riccati-joints",
-    docs/assembly.md "Trees with joints"): joints with coordinates anywhere, a tree with fixed
-    hinges, or a tree asked to run in full state; ball-joint trees otherwise run reduced."""
-    return has_coordinates(model) or (not model.is_chain and (full_state or not model.all_ball))
+    docs/assembly.md "Trees with joints"): joints with coordinates anywhere, closing joints, a
+    tree with fixed hinges, or a tree asked to run in full state; ball-joint trees otherwise
+    run reduced."""
+    return (has_coordinates(model) or has_loops(model)
+            or (not model.is_chain and (full_state or not model.all_ball)))
+
+
+def loop_tables(model):
+    """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
+    kernel model's numbering, with their scratch; no rows without loops."""
+    rows = []
+    n = model.n_bodies
+    if has_loops(model):
+        for c in range(model.n_closures):
+            points, dots = constraint_directions(model, c)
+            rows += [(GAP_WORLD if frame == "w" else GAP_A, c, e, np.zeros(3))
+                     for frame, e in points]
+            rows += [(DOT, c, x, y) for x, y in dots]
+    m = model.n_closures if rows else 0
+    r = len(rows)
+    point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
+    body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
+    point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
+    return Loops(kind=np.array([x[0] for x in rows], dtype=np.int64),
+                 owner=np.array([x[1] for x in rows], dtype=np.int64),
+                 v1=np.array([x[2] for x in rows], dtype=float).reshape(r, 3),
+                 v2=np.array([x[3] for x in rows], dtype=float).reshape(r, 3),
+                 body=body, point=point, ground=np.array(model.ground_position, dtype=float),
+                 ground_rot=np.array(model.ground_rotation, dtype=float), targets=np.zeros(r),
+                 port_load=np.zeros((n, 6)), z_save=np.zeros((r + 1, 2 * n + 1, 12)),
+                 nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
+                 delassus=np.zeros((r, r)), lam=np.zeros(r), values=np.zeros((r + 1, r)),
+                 r_out=np.zeros((n, 3)), v_out=np.zeros((n, 3)), g=np.zeros(r),
+                 gd=np.zeros(r), stats=np.zeros(4))
 
 
 def _iterates(model, full_state):
@@ -240,6 +277,8 @@ def _iterates(model, full_state):
     to newton_tol by default (without iterations a flexible link there is not stable).  Asked of
     the kernels' model (kernel_model: an end section is welded to its beam)."""
     model = kernel_model(model)[0]
+    if has_loops(model):            # closing joints: held at position level by the iterations
+        return True
     return has_coordinates(model) or (full_tree(model, full_state) and any(
         model.hinge_kind[k] == FIXED and model.parent[k] >= 0
         and model.body_kind[model.parent[k]] == BEAM for k in range(model.n_bodies)))
@@ -350,9 +389,12 @@ def _steps(t_end, dt):
     return n, (dt if abs(n * dt - t_end) <= 1e-9 * dt else t_end / n)
 
 
-def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt):
+def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
+                      loops=None):
     """The accelerations at t = 0 (docs/solver.md, "Consistent start") into state: by the fused
-    loop's own sweep (fused: its (runner, loop)) or kernels/step.py::initial_accelerations."""
+    loop's own sweep (fused: its (runner, loop)) or kernels/step.py::initial_accelerations,
+    with the closing joints (loops: loop_tables) held at acceleration level."""
+    loops = loop_tables(model) if loops is None else loops
     n = model.n_bodies
     g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
     force, torque, line_load = _loads(model, [0.0])
@@ -370,7 +412,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 status = kstep.initial_accelerations(params, settings, state, sweep,
                                                      (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                                                      force[0], torque[0], line_load[0],
-                                                     joint_input[0])
+                                                     joint_input[0], loops)
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -646,6 +688,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     wall0 = time.perf_counter()
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
+    if has_loops(model) and max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
+        check_runs_in_sweeps(model, "simulate", time_step=True)
+        model = assemble(model)         # the loops closed at t = 0 first (docs/loops.md)
     t_end = _check_positive("t_end", t_end)
     adaptive = rtol is not None
     if adaptive:
@@ -696,6 +741,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
     if newton_iterations is None:
         newton_iterations = (20 if scheme == "energy_momentum"
+                             else 16 if isinstance(model, Model) and has_loops(model)
                              else 8 if isinstance(model, Model) and _iterates(model, full_state)
                              else 0)
     newton_iterations = _check_count("newton_iterations", newton_iterations, 0)
@@ -781,9 +827,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         loop_name, runner = "ball-chain", run_steps_no_alloc
         loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
 
+    loops = loop_tables(model)
     if resume is None:
         _consistent_start(model, mode, method, (runner, loop) if fused else None, params,
-                          settings, state, ws.sweep, monitor, dt)
+                          settings, state, ws.sweep, monitor, dt, loops)
     histories = _station_histories(model, state, scheme == "paper")
     state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -801,7 +848,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
     else:
         loop_name, runner = "general", run_steps
-        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories)
+        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops)
         if scheme == "paper":
             keys += ["v_st", "v_c"]
     run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name,
@@ -980,7 +1027,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                           newton_unconverged_steps=int(info[4]),
                           step_error_max=float(monitor.error[0]), turn_per_step_max=turn,
                           **({} if balance is None else
-                             {"energy_balance_error": balance.worst})), checkpoint)
+                             {"energy_balance_error": balance.worst}),
+                          **({} if not len(loops.kind) else
+                             {"loop_position_residual": float(loops.stats[3]),
+                              "loop_rate_residual": float(loops.stats[2]),
+                              "loop_position_residual_unprojected": float(loops.stats[0]),
+                              "loop_rate_residual_unprojected": float(loops.stats[1])})),
+                     checkpoint)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
                          np.concatenate(work_values))
@@ -1188,7 +1241,10 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
     the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); of the closed
     loops, a chain's tip pinned to a fixed ground (closures.check_runs_in_sweeps)."""
-    check_runs_in_sweeps(model, "simulate")
+    check_runs_in_sweeps(model, "simulate", time_step=True)
+    if has_loops(model) and (scheme != "newmark" or method != "riccati"):
+        raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
+                         f"method='riccati' so far, got scheme={scheme!r}, method={method!r}")
     if full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
     elif not model.is_chain:

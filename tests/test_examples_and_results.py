@@ -219,3 +219,22 @@ def test_rotating_beam_mass_one_element_meets_the_reference_and_the_chain():
     assert np.abs(one - ref).max() < 1e-6, np.abs(one - ref).max(axis=0)
     chain = spun_up(8, 2, 1)[1]
     assert np.abs(one - chain).max() < 7e-3, np.abs(one - chain).max(axis=0)
+
+
+def test_the_closed_loop_examples(tmp_path):
+    """examples/slider_crank.py and examples/four_bar.py run DT-TMM on their loops and write
+    their CSV columns (issue 29); the slider-crank also on the reference."""
+    sys.path.insert(0, str(ROOT / "examples"))
+    import four_bar
+    import slider_crank
+    csv = tmp_path / "sc.csv"
+    assert slider_crank.main(["--t-end", "0.05", "--dt", "1e-3", "--csv", str(csv)]) == 0
+    lines = csv.read_text().splitlines()
+    assert lines[0] == "t,slider_x,slider_vx,crank_angle,crank_rate" and len(lines) == 52
+    assert slider_crank.main(["--t-end", "0.05", "--solver", "reference"]) == 0
+    csv = tmp_path / "fb.csv"
+    assert four_bar.main(["--n", "2", "--t-end", "0.1", "--dt", "1e-3", "--csv", str(csv),
+                          "--plots", str(tmp_path)]) == 0
+    assert csv.read_text().startswith("t,B0_x,B0_y,B0_vx,B0_vy")
+    assert (tmp_path / "four_bar.png").exists()
+    assert four_bar.main(["--n", "0"]) == 2

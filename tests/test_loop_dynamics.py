@@ -4,33 +4,9 @@ the Newton-Euler reference."""
 import numpy as np
 import pytest
 
-import dttmm
-from dttmm import RevoluteJoint, RigidBody, System
 from dttmm.loop_dynamics import loop_accelerations
+from dttmm.mechanisms import n_four_bar, slider_crank
 from dttmm.reference.newton_euler import _Problem
-
-from helpers import rot_z
-from test_reference_loops import iftomm_slider_crank
-
-
-def tilted_four_bar(n, theta, rate):
-    """The N-four-bar with its vertical bars turned clockwise by theta from up, turning at
-    theta' = rate (every vertical bar at -rate about z), assembled keeping the first bar."""
-    def bar(name, rotation):
-        return RigidBody(mass=1.0, inertia=[1e-3, 1 / 12, 1 / 12], inertia_about="mass_center",
-                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], rotation=rotation,
-                         name=name)
-    z = [0, 0, 1.0]
-    system = System(gravity=[0, -9.81, 0])
-    system.add(bar("v0", rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
-    inboard = "v0"
-    for i in range(1, n + 1):
-        system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z), parent=inboard)
-        system.add(bar(f"v{i}", rot_z(-np.pi / 2 - theta)), RevoluteJoint(axis=z),
-                   parent=f"h{i}")
-        system.close(RevoluteJoint(axis=z, name=f"O{i}"), f"v{i}", "ground")
-        inboard = f"h{i}"
-    return dttmm.assemble(system.build(), keep=["O0"])
 
 
 @pytest.mark.parametrize("n", [1, 3])
@@ -39,7 +15,7 @@ def test_the_sweep_with_closing_joints_gives_the_parallelogram_its_exact_acceler
     vertical bar turns at -theta'' about z, every horizontal bar not at all, whatever the
     redundant closing joints' multipliers."""
     theta, rate = 0.7, 1.3
-    model = tilted_four_bar(n, theta, rate)
+    model = n_four_bar(n, theta, rate)
     out = loop_accelerations(model)
     exact = 9.81 * ((n + 1) / 2 + n) * np.sin(theta) / ((n + 1) / 3 + n)
     names = model.body_names
@@ -55,7 +31,7 @@ def test_the_sweep_with_closing_joints_agrees_with_the_reference(tree):
     prismatic joints, a prismatic or a universal joint closing): every body's angular
     acceleration, input-point acceleration and joint acceleration as the reference's right-hand
     side gives them, to 1e-10 (measured 4e-12)."""
-    model = iftomm_slider_crank(tree)
+    model = slider_crank(tree)
     out = loop_accelerations(model)
     prob = _Problem(model)
     ref = prob.evaluate(0.0, prob.initial_state())

@@ -2,49 +2,12 @@
 values, exact reductions, two spanning trees of one mechanism, and assembly."""
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import dttmm
-from dttmm import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, System, UniversalJoint,
-                   simulate_reference)
+from dttmm import BallJoint, RevoluteJoint, RigidBody, System, simulate_reference
+from dttmm.mechanisms import n_four_bar, parallelogram, slider_crank
 
 from helpers import rot_z
-
-
-def _frame(x_axis, z_hint):
-    x = np.asarray(x_axis, float) / np.linalg.norm(x_axis)
-    y = np.cross(z_hint, x)
-    y /= np.linalg.norm(y)
-    return np.column_stack([x, y, np.cross(x, y)])
-
-
-def iftomm_slider_crank(tree="slider on the rod"):
-    """The IFToMM spatial slider-crank (issue 29's data), from two spanning trees: the slider
-    hanging from the rod by the universal joint and closed to the ground by its prismatic
-    joint, or sliding on the ground (its point C offset from the ground point A) and closed to
-    the rod by the universal joint."""
-    a, b, c = np.array([0, 0.1, 0.12]), np.array([0, 0.1, 0.2]), np.array([0.2, 0, 0])
-    system = System(gravity=[0, 0, -9.81], ground=dttmm.Ground(position=a))
-    system.add(RigidBody(mass=0.12, inertia=[1e-4, 1e-4, 1e-5], inertia_about="mass_center",
-                         to_mass_center=[0, 0, 0.04], to_output=[0, 0, 0.08], name="crank",
-                         rotation=np.eye(3)), RevoluteJoint(axis=[1, 0, 0], rate=6.0, name="A"))
-    rod_frame = _frame(c - b, [0, 0, 1.0])
-    system.add(RigidBody(mass=0.5, inertia=[4e-4, 4e-3, 4e-3], inertia_about="mass_center",
-                         to_mass_center=[0.15, 0, 0], to_output=[0.3, 0, 0],
-                         rotation=rod_frame, name="rod"), BallJoint(name="B"), parent="crank")
-    across = rod_frame.T @ (np.array([0, -2, 1.0]) / np.sqrt(5))     # in the rod's frame
-    if tree == "slider on the rod":
-        system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
-                             name="slider", rotation=np.eye(3)),
-                   UniversalJoint(axis1=across, axis2=[1, 0, 0], name="C"), parent="rod")
-        system.close(PrismaticJoint(axis=[1, 0, 0], name="slide"), "ground", "slider",
-                     at_a=[0, 0, 0])
-    else:
-        system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
-                             to_mass_center=-a, to_output=-a, name="slider"),
-                   PrismaticJoint(axis=[1, 0, 0], position=0.2, name="slide"))
-        system.close(UniversalJoint(axis1=[1, 0, 0], axis2=across, name="C"), "slider", "rod")
-    return dttmm.assemble(system.build(), keep=["A"])
 
 
 def test_slider_crank_energy_is_the_published_value_and_two_trees_agree():
@@ -54,7 +17,7 @@ def test_slider_crank_energy_is_the_published_value_and_two_trees_agree():
     t = np.linspace(0.0, 5.0, 251)
     runs = {}
     for tree in ("slider on the rod", "slider on the ground"):
-        model = iftomm_slider_crank(tree)
+        model = slider_crank(tree)
         positions, rates = dttmm.loop_residuals(model)
         assert positions.max() < 1e-15 and rates.max() < 1e-15
         runs[tree] = result = simulate_reference(model, 5.0, t_eval=t)
@@ -66,36 +29,6 @@ def test_slider_crank_energy_is_the_published_value_and_two_trees_agree():
     assert np.abs(on_rod[:, 1:]).max() < 1e-10              # on its slide, the x axis
     assert np.abs(on_rod - on_ground).max() < 1e-9
     assert 0.12 < on_rod[:, 0].min() and on_rod[:, 0].max() < 0.36       # it moves
-
-
-def n_four_bar(n):
-    """The N-four-bar (issue 29's A02): the tree is the first vertical bar on the ground point,
-    the horizontal bars end to end, each further vertical bar hanging down from a horizontal
-    bar's end; each is closed to the ground at (i, 0) by a revolute joint."""
-    def bar(name, rotation):
-        return RigidBody(mass=1.0, inertia=[1e-3, 1 / 12, 1 / 12], inertia_about="mass_center",
-                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], rotation=rotation,
-                         name=name)
-    z = [0, 0, 1.0]
-    system = System(gravity=[0, -9.81, 0])
-    system.add(bar("v0", rot_z(np.pi / 2)), RevoluteJoint(axis=z, rate=-1.0, name="O0"))
-    inboard = "v0"
-    for i in range(1, n + 1):
-        system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z), parent=inboard)
-        system.add(bar(f"v{i}", rot_z(-np.pi / 2)), RevoluteJoint(axis=z), parent=f"h{i}")
-        system.close(RevoluteJoint(axis=z, name=f"O{i}"), f"v{i}", "ground")
-        inboard = f"h{i}"
-    return dttmm.assemble(system.build(), keep=["O0"])
-
-
-def parallelogram(n, t):
-    """B_0 = (sin th, cos th) of the exact one-degree-of-freedom reduction: the vertical bars
-    turn alike by th (clockwise from up), the horizontal bars translate; I th'' = c g sin th with
-    I = (n + 1) / 3 + n (about the pivots, and the translating bars) and c = (n + 1) / 2 + n."""
-    inertia, c = (n + 1) / 3 + n, (n + 1) / 2 + n
-    sol = solve_ivp(lambda _, y: [y[1], 9.81 * c * np.sin(y[0]) / inertia], (0, t[-1]),
-                    [0.0, 1.0], method="DOP853", rtol=1e-13, atol=1e-14, t_eval=t)
-    return np.stack([np.sin(sol.y[0]), np.cos(sol.y[0])], axis=1)
 
 
 def test_n_four_bar_follows_the_parallelogram_through_its_flat_positions():

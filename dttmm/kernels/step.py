@@ -32,6 +32,8 @@ from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
+from .closure import (guess_points, project_positions, project_rates, solve_with_loops,
+                      tree_points)
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -164,13 +166,15 @@ GeneralLoop = namedtuple("GeneralLoop", [
                                     # c_a, c_p, w1_st, w1_c), see general_loop
     "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 2) each: the joint
                                     # coordinates' offsets and guess (kernels/joint.py)
+    "loops",                        # the closing joints and their scratch (kernels/closure.py)
 ])
 
 
-def general_loop(n, n_eta, h, coef, histories):
+def general_loop(n, n_eta, h, coef, histories, loops):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
     paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (solver._station_histories);
-    the loop adds the w1 offsets of every station point and mass centre."""
+    the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
+    joints (kernels/closure.py::Loops; no rows without them)."""
     c1, _ = _coefficients_py(h, coef)
     guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
                   np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)))
@@ -180,7 +184,7 @@ def general_loop(n, n_eta, h, coef, histories):
                        np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
                        np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                        tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
-                       tuple(np.zeros((n, 2)) for _ in range(5)))
+                       tuple(np.zeros((n, 2)) for _ in range(5)), loops)
 
 
 def _coefficients_py(h, coef):
@@ -314,7 +318,7 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     if mode == RICCATI_JOINTS:
         return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
                                  parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
-                                 sw.joint_tau, z)
+                                 sw.joint_tau, z, sw.tree_load)
     if mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
                             sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
@@ -373,13 +377,14 @@ def _solve_tree(sw, parent, root_f, z):
 
 @njit(cache=True, fastmath=CONTRACT)
 def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
-                          joint_input):
+                          joint_input, loops):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
     force, torque, line_load (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates'
     inputs at t = 0 (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.
+    loops: the closing joints (kernels/closure.py), held at acceleration level.
     Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
@@ -419,8 +424,13 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
-                        state.z)
+    if loops.kind.shape[0] > 0:
+        tree_points(params, rot, omega, state.jq, state.jqd, loops)
+        status = solve_with_loops(params, sweep, root_f, loops, rot, omega,
+                                  np.zeros(loops.kind.shape[0]), state.z)
+    else:
+        status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
+                            state.z)
     _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
     for k in range(n):
         for i in range(n_coordinates(hinge_kind[k])):
@@ -681,8 +691,14 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(run.sweep.u):
         return NOT_FINITE, 0, 0.0
-    status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
-                        loop.root_f, z)
+    loops = loop.loops
+    if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
+        guess_points(params, loops, loop.guess, loop.joints[2], loop.joints[3])
+        status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
+                                  loop.guess.w, loops.targets, z)
+    else:
+        status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
+                            loop.root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
@@ -834,6 +850,9 @@ def _update(loop, run, s, _):
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
+    if loop.loops.kind.shape[0] > 0:    # back onto the loops (kernels/closure.py)
+        project_positions(params, loop.loops, state)
+        project_rates(params, loop.loops, state)
     return finite
 
 

@@ -1,0 +1,146 @@
+"""Closed-loop mechanisms of the benchmark libraries, as models (docs/loops.md).
+
+    model = slider_crank()          # the IFToMM spatial slider-crank, assembled
+    model = n_four_bar(2)           # the IFToMM / MBS library's N-four-bar (A02), assembled
+
+Each is a spanning tree plus closing joints (``System.close``), assembled at t = 0 keeping the
+joint whose rate the benchmark gives.
+"""
+import numpy as np
+
+from .closures import assemble
+from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
+from .model import Ground, System
+
+
+def _frame(x_axis, z_hint):
+    """A right-handed frame whose x axis is along x_axis and whose z axis leans to z_hint."""
+    x = np.asarray(x_axis, dtype=float) / np.linalg.norm(x_axis)
+    y = np.cross(z_hint, x)
+    y /= np.linalg.norm(y)
+    return np.column_stack([x, y, np.cross(x, y)])
+
+
+def _rot_z(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def slider_crank(tree="slider on the rod", crank_rate=6.0):
+    """The IFToMM spatial slider-crank (SI units; gravity (0, 0, -9.81)).
+
+    Crank: a revolute joint "A" to the ground at A = (0, 0.1, 0.12) about world x, 0.08 m
+    long, along +z at t = 0, 0.12 kg, inertia about its mass centre diag(1e-4, 1e-4, 1e-5)
+    (x the joint's axis, z along the crank).  Rod: a ball joint "B" at the crank's end
+    B = (0, 0.1, 0.2), 0.3 m to C = (0.2, 0, 0), 0.5 kg, inertia 4e-4 along it and 4e-3
+    across.  Slider: 2 kg, inertia diag(1e-4, 1e-4, 1e-4), on a prismatic joint "slide" along
+    world x through the origin and a universal joint "C" to the rod (first axis world x in the
+    slider, second in the rod across it and x, (0, -2, 1) / sqrt 5 at t = 0).  The crank turns
+    at crank_rate (rad/s) at t = 0, the rest consistent with it (assembled keeping "A"); its
+    energy is then 0.76643568 J (z = 0 the datum).
+
+    Parameters
+    ----------
+    tree : {"slider on the rod", "slider on the ground"}
+        The spanning tree: the slider hanging from the rod by the universal joint, closed to
+        the ground by its prismatic joint (default), or sliding on the ground (its point C
+        offset from the ground point A) and closed to the rod by the universal joint.
+    crank_rate : float
+        The crank's rate at t = 0, rad/s (default 6).
+
+    Returns
+    -------
+    Model
+        Bodies "crank", "rod", "slider".
+
+    Examples
+    --------
+    >>> from dttmm.mechanisms import slider_crank
+    >>> slider_crank().n_closures
+    1
+    """
+    a, b, c = np.array([0, 0.1, 0.12]), np.array([0, 0.1, 0.2]), np.array([0.2, 0, 0])
+    system = System(gravity=[0, 0, -9.81], ground=Ground(position=a))
+    system.add(RigidBody(mass=0.12, inertia=[1e-4, 1e-4, 1e-5], inertia_about="mass_center",
+                         to_mass_center=[0, 0, 0.04], to_output=[0, 0, 0.08], name="crank",
+                         rotation=np.eye(3)),
+               RevoluteJoint(axis=[1, 0, 0], rate=crank_rate, name="A"))
+    rod_frame = _frame(c - b, [0, 0, 1.0])
+    system.add(RigidBody(mass=0.5, inertia=[4e-4, 4e-3, 4e-3], inertia_about="mass_center",
+                         to_mass_center=[0.15, 0, 0], to_output=[0.3, 0, 0],
+                         rotation=rod_frame, name="rod"), BallJoint(name="B"), parent="crank")
+    across = rod_frame.T @ (np.array([0, -2, 1.0]) / np.sqrt(5))     # in the rod's frame
+    if tree == "slider on the rod":
+        system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
+                             name="slider", rotation=np.eye(3)),
+                   UniversalJoint(axis1=across, axis2=[1, 0, 0], name="C"), parent="rod")
+        system.close(PrismaticJoint(axis=[1, 0, 0], name="slide"), "ground", "slider",
+                     at_a=[0, 0, 0])
+    elif tree == "slider on the ground":
+        system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
+                             to_mass_center=-a, to_output=-a, name="slider"),
+                   PrismaticJoint(axis=[1, 0, 0], position=0.2, name="slide"))
+        system.close(UniversalJoint(axis1=[1, 0, 0], axis2=across, name="C"), "slider", "rod")
+    else:
+        raise ValueError(f"slider_crank: tree must be 'slider on the rod' or 'slider on the "
+                         f"ground', got {tree!r}")
+    return assemble(system.build(), keep=["A"])
+
+
+def n_four_bar(n=2, theta=0.0, rate=1.0):
+    """The N-four-bar (IFToMM / MBS benchmark library A02): 2n + 1 uniform bars, 1 m and 1 kg
+    each (1/12 kg m^2 about the joint axis), n + 1 vertical bars on revolute joints to the
+    ground at (i, 0) and n horizontal bars on revolute joints between their tops; axes along
+    world z, gravity -9.81 along y.  The tree is the first vertical bar "v0" on the ground point
+    (joint "O0"), the horizontal bars "h1".. end to end, each further vertical bar "v1".. hanging
+    from a horizontal bar's end; each is closed to the ground at (i, 0) by a revolute joint
+    "O1"...
+
+    Parameters
+    ----------
+    n : int
+        The number of horizontal bars (default 2).
+    theta : float
+        The vertical bars' angle from up, clockwise, rad (default 0: upright).
+    rate : float
+        theta' at t = 0, rad/s (default 1: the top of the first bar, B_0, moves at (1, 0) m/s
+        when upright; every vertical bar turns at -rate about z), the rest assembled.
+
+    Returns
+    -------
+    Model
+
+    Examples
+    --------
+    >>> from dttmm.mechanisms import n_four_bar
+    >>> n_four_bar(2).n_closures
+    2
+    """
+    def bar(name, rotation):
+        return RigidBody(mass=1.0, inertia=[1e-3, 1 / 12, 1 / 12], inertia_about="mass_center",
+                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], rotation=rotation,
+                         name=name)
+    z = [0, 0, 1.0]
+    system = System(gravity=[0, -9.81, 0])
+    system.add(bar("v0", _rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
+    inboard = "v0"
+    for i in range(1, n + 1):
+        system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"), parent=inboard)
+        system.add(bar(f"v{i}", _rot_z(-np.pi / 2 - theta)), RevoluteJoint(axis=z, name=f"B{i}"),
+                   parent=f"h{i}")
+        system.close(RevoluteJoint(axis=z, name=f"O{i}"), f"v{i}", "ground")
+        inboard = f"h{i}"
+    return assemble(system.build(), keep=["O0"])
+
+
+def parallelogram(n, t, theta=0.0, rate=1.0):
+    """B_0(t) = (sin th, cos th) of the N-four-bar's exact one-degree-of-freedom reduction: the
+    vertical bars turn alike by th (clockwise from up), the horizontal bars translate, so
+    I th'' = 9.81 c sin th with I = (n + 1) / 3 + n and c = (n + 1) / 2 + n (scipy's DOP853 at
+    rtol 1e-13)."""
+    from scipy.integrate import solve_ivp
+    inertia, c = (n + 1) / 3 + n, (n + 1) / 2 + n
+    t = np.asarray(t, dtype=float)
+    sol = solve_ivp(lambda _, y: [y[1], 9.81 * c * np.sin(y[0]) / inertia], (0, t[-1]),
+                    [theta, rate], method="DOP853", rtol=1e-13, atol=1e-14, t_eval=t)
+    return np.stack([np.sin(sol.y[0]), np.cos(sol.y[0])], axis=1)
