@@ -144,3 +144,91 @@ def parallelogram(n, t, theta=0.0, rate=1.0):
     sol = solve_ivp(lambda _, y: [y[1], 9.81 * c * np.sin(y[0]) / inertia], (0, t[-1]),
                     [theta, rate], method="DOP853", rtol=1e-13, atol=1e-14, t_eval=t)
     return np.stack([np.sin(sol.y[0]), np.cos(sol.y[0])], axis=1)
+
+
+STEWART_BASE_ANGLES = (-10.0, 10.0, 110.0, 130.0, 230.0, 250.0)        # deg, about z from +x
+STEWART_PLATFORM_ANGLES = (-50.0, 50.0, 70.0, 170.0, 190.0, 290.0)
+
+
+def stewart_reference_slide(i, t):
+    """Leg i's (0-based) reference slide s_i(t) = +-0.05 (1 - cos 2 pi t), m (+ for legs 1, 3, 5;
+    - for 2, 4, 6), with its rate and acceleration."""
+    sign = 1.0 if i % 2 == 0 else -1.0
+    w = 2.0 * np.pi
+    return (sign * 0.05 * (1.0 - np.cos(w * t)), sign * 0.05 * w * np.sin(w * t),
+            sign * 0.05 * w * w * np.cos(w * t))
+
+
+def stewart_platform(drive="motion"):
+    """A Stewart platform (issue 29's data; SI units, gravity -9.81 along z).
+
+    Six legs; leg i joins the base point b_i (radius 1, z = 0, angle beta_i) to the platform
+    point p_i (radius 0.5 in the platform's plane, angle pi_i), STEWART_BASE_ANGLES and
+    STEWART_PLATFORM_ANGLES.  Platform: 10 kg, inertia about its centre diag(0.5, 0.5, 0.8),
+    centre (0, 0, 1), as the world at t = 0.  Each leg: a lower body "lower{i}" (2 kg, mass
+    centre 0.3 m from b_i along the leg, inertia 0.002 along it and 0.06 across) on a universal
+    joint "U{i}" at b_i (first axis world z, second across z and the leg), an upper body
+    "upper{i}" (1 kg, mass centre 0.3 m from p_i along the leg, inertia 0.001 along, 0.03 across)
+    on a prismatic joint "P{i}" along the leg, and a ball joint at p_i.  The tree: a base welded
+    to the ground carries the six b_i as named points; the platform hangs from leg 1's upper
+    body by its ball joint; legs 2-6 close on it by ball joints "S2".."S6" (5 loops, 6 degrees
+    of freedom).
+
+    Parameters
+    ----------
+    drive : {"motion", "force", "free"}
+        "motion": each slide follows stewart_reference_slide from rest; "force": each slide
+        is pushed by 2e4 (s_ref - s) - 500 s' N (a Python JointForce); "free": no drive.
+
+    Returns
+    -------
+    Model
+    """
+    from .elements import FixedHinge, JointForce, JointMotion
+    beta = np.radians(STEWART_BASE_ANGLES)
+    gamma = np.radians(STEWART_PLATFORM_ANGLES)
+    b = np.stack([np.cos(beta), np.sin(beta), np.zeros(6)], axis=1)
+    centre = np.array([0.0, 0.0, 1.0])
+    p = centre + 0.5 * np.stack([np.cos(gamma), np.sin(gamma), np.zeros(6)], axis=1)
+    system = System(gravity=[0, 0, -9.81])
+    system.add(RigidBody(mass=1.0, inertia=[1.0, 1.0, 1.0], inertia_about="mass_center",
+                         name="base",
+                         points={f"b{i + 1}": b[i] for i in range(6)}),
+               FixedHinge(name="base weld"))
+    for i in range(6):
+        leg = p[i] - b[i]
+        length = float(np.linalg.norm(leg))
+        frame = _frame(leg, [0, 0, 1.0])
+        across = np.cross([0, 0, 1.0], leg)
+        across /= np.linalg.norm(across)
+        if drive == "motion":
+            d = JointMotion(position=lambda t, i=i: stewart_reference_slide(i, t)[0],
+                            velocity=lambda t, i=i: stewart_reference_slide(i, t)[1],
+                            acceleration=lambda t, i=i: stewart_reference_slide(i, t)[2])
+        elif drive == "force":
+            d = JointForce(lambda t, q, qd, i=i: 2e4 * (stewart_reference_slide(i, t)[0] - q)
+                           - 500.0 * qd)
+        elif drive == "free":
+            d = None
+        else:
+            raise ValueError(f"stewart_platform: drive must be 'motion', 'force' or 'free', got "
+                             f"{drive!r}")
+        system.add(RigidBody(mass=2.0, inertia=[0.002, 0.06, 0.06], inertia_about="mass_center",
+                             to_mass_center=[0.3, 0, 0], to_output=[0.0, 0, 0], rotation=frame,
+                             name=f"lower{i + 1}"),
+                   UniversalJoint(axis1=[0, 0, 1.0], axis2=frame.T @ across, name=f"U{i + 1}"),
+                   parent="base", at=f"b{i + 1}")
+        system.add(RigidBody(mass=1.0, inertia=[0.001, 0.03, 0.03], inertia_about="mass_center",
+                             to_mass_center=[length - 0.3, 0, 0], to_output=[length, 0, 0],
+                             rotation=frame, name=f"upper{i + 1}"),
+                   PrismaticJoint(axis=[1.0, 0, 0], drive=d, name=f"P{i + 1}"),
+                   parent=f"lower{i + 1}")
+    system.add(RigidBody(mass=10.0, inertia=[0.5, 0.5, 0.8], inertia_about="mass_center",
+                         to_mass_center=centre - p[0], to_output=centre - p[0],
+                         rotation=np.eye(3), name="platform",
+                         points={f"p{i + 1}": p[i] - p[0] for i in range(1, 6)}),
+               BallJoint(name="S1"), parent="upper1")
+    for i in range(1, 6):
+        system.close(BallJoint(name=f"S{i + 1}"), f"upper{i + 1}", "platform",
+                     at_b=f"p{i + 1}")
+    return assemble(system.build())

@@ -222,7 +222,7 @@ def test_rotating_beam_mass_one_element_meets_the_reference_and_the_chain():
 
 
 def test_the_closed_loop_examples(tmp_path):
-    """examples/slider_crank.py and examples/four_bar.py run DT-TMM on their loops and write
+    """examples/slider_crank.py, four_bar.py and stewart.py run DT-TMM on their loops and write
     their CSV columns (issue 29); the slider-crank also on the reference."""
     sys.path.insert(0, str(ROOT / "examples"))
     import four_bar
@@ -238,3 +238,7 @@ def test_the_closed_loop_examples(tmp_path):
     assert csv.read_text().startswith("t,B0_x,B0_y,B0_vx,B0_vy")
     assert (tmp_path / "four_bar.png").exists()
     assert four_bar.main(["--n", "0"]) == 2
+    import stewart
+    csv = tmp_path / "st.csv"
+    assert stewart.main(["--t-end", "0.02", "--dt", "1e-3", "--csv", str(csv)]) == 0
+    assert csv.read_text().startswith("t,x,y,z,qw,qx,qy,qz,f1,f2,f3,f4,f5,f6")
