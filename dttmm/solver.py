@@ -165,7 +165,7 @@ class Workspace:
             dir_o=np.zeros((n_st, 12)), port_s=np.zeros((n, 3, 3)), port_p=np.zeros((n, 3)),
             aq_out=np.zeros((n, 6)), tree_s=np.zeros((n, 6, 6)), tree_p=np.zeros((n, 6)),
             joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
-            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)), tree_load=np.zeros((n, 6)))
+            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
         self.beams = beam_tables(model)
         _initial_deflections(model, self.state)
 
@@ -268,7 +268,10 @@ def loop_tables(model):
                  nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
                  delassus=np.zeros((r, r)), lam=np.zeros(r), values=np.zeros((r + 1, r)),
                  r_out=np.zeros((n, 3)), v_out=np.zeros((n, 3)), g=np.zeros(r),
-                 gd=np.zeros(r), stats=np.zeros(4))
+                 gd=np.zeros(r), loads=np.zeros((r + 1, n, 6)),
+                 p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
+                 h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
+                 free_store=np.zeros((n, 4), dtype=np.int64), stats=np.zeros(4))
 
 
 def _iterates(model, full_state):

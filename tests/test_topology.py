@@ -160,7 +160,7 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     # the kernels, bypassing the check: the consistent start reports the element
     from dttmm.kernels import step as kstep
     from dttmm.kernels.loop import Settings
-    from dttmm.solver import Workspace, kernel_params
+    from dttmm.solver import Workspace, kernel_params, loop_tables
     for odd, element in ((odd_body, 4), (odd_hinge, 3)):
         ws = Workspace(odd)
         settings = Settings(kstep.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
@@ -169,7 +169,7 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         status = kstep.initial_accelerations(kernel_params(odd, ws.beams), settings, ws.state,
                                              ws.sweep, ground, np.zeros((2, 3)),
                                              np.zeros((2, 3)), np.zeros((2, 3)),
-                                             np.zeros((2, 2, 3)))
+                                             np.zeros((2, 2, 3)), loop_tables(odd))
         assert status == -element
 
 

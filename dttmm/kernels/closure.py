@@ -4,8 +4,9 @@ The tree's full-state sweep (sweep.py::riccati_tree_full) is linear in the loads
 stations.  Each scalar constraint r of a closing joint acts through one multiplier lam_r, its
 loads on the sides' output stations the constraint's Jacobian transposed (a gap row: a force
 lam_r e on side b at its point, -lam_r e on side a at the same point; a dot row: a couple
-lam_r (y x x) on b, its opposite on a).  One sweep without them and one per row with
-lam_r = 1 give the stations as affine functions of the multipliers; the rows' values
+lam_r (y x x) on b, its opposite on a).  One sweep of the step with a P column per row
+(sweep_columns: the Riccati matrices once) gives the stations as affine functions of the
+multipliers; the rows' values
 
     gap (e world):   e . (a_b - a_a)
     gap (e in a):    e . (a_b - a_a) + (e x d) . alpha_a + (w_a x (w_a x e)) . d + 2 (w_a x e) . d'
@@ -30,7 +31,8 @@ from ..elements.hinges import AXIS_1
 from ..elements.joints import PRISMATIC
 from .joint import n_coordinates
 from .so3 import expm_so3
-from .sweep import riccati_tree_full
+from .joint import FREE, PRESCRIBED
+from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 
 GROUND = -1
 GAP_WORLD, GAP_A, DOT = 0, 1, 2
@@ -50,6 +52,9 @@ Loops = namedtuple("Loops", [
     "delassus", "lam", "values",     # (R, R), (R,), (R + 1, R)
     "r_out", "v_out",                # (n, 3) each: the output points' positions, velocities
     "g", "gd",                       # (R,) the rows' positions and rates
+    "loads", "p_col", "port_col",    # (R + 1, n, 6), (R + 1, 2n + 1, 6), (R + 1, n, 6):
+    "h_store", "k_store", "free_store",   # sweep_columns' scratch: (n, 3, 6), (R + 1, n, 3),
+                                     # (n, 4) int
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
@@ -58,6 +63,7 @@ Loops = namedtuple("Loops", [
 AXIS_1_START = AXIS_1.start
 POSITION_PROJECTIONS = 4     # Gauss-Newton projections of the positions after a step, at most
 POSITION_TOL = 1e-13         # m, rad: where they stop
+RATE_TOL = 1e-13             # m/s, rad/s: the rates' projection's
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -205,46 +211,47 @@ def _least_solve(a, b):
 
 @njit(cache=True, fastmath=CONTRACT)
 def solve_with_loops(params, sweep, root_f, loops, rot, w, targets, z):
-    """The sweep with the closing joints' multipliers (the module docstring): the base sweep
-    and one per row into loops.z_save, nu_save, tau_save (angular-acceleration slots), the
-    Delassus matrix of the rows' values, the multipliers holding the rows at targets, and
-    their superposition into z, sweep.joint_nu and joint_tau.  rot, w: the bodies' rotations
-    and angular velocities the rows are written at.  Returns the sweep's status."""
+    """The sweep with the closing joints' multipliers (the module docstring): the step and
+    every row's response to its unit multiplier in one sweep (sweep_columns) into
+    loops.z_save, nu_save, tau_save (angular-acceleration slots; column 0 the step without
+    multipliers, column j + 1 row j's response), the Delassus matrix of the rows' values, the
+    multipliers holding the rows at targets, and their superposition into z, sweep.joint_nu
+    and joint_tau.  rot, w: the bodies' rotations and angular velocities the rows are written
+    at.  Returns the sweep's status."""
     n = rot.shape[0]
     n_rows = loops.kind.shape[0]
     sw = sweep
-    acc = np.empty((n, 3))
-    alpha = np.empty((n, 3))
+    loops.loads[0] = 0.0
+    for r in range(n_rows):
+        _unit_loads(params, loops, rot, w, r)
+        loops.loads[r + 1] = loops.port_load
+    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
+                           sw.s, loops.p_col, sw.tree_s, loops.port_col, loops.h_store,
+                           loops.k_store, loops.free_store, loops.z_save, loops.nu_save,
+                           loops.tau_save, loops.loads)
+    if status != 0:
+        return status
+    acc = np.zeros((n, 3))
+    alpha = np.zeros((n, 3))
+    kappa = np.empty(n_rows)
+    row_values(params, loops, rot, w, acc, alpha, kappa)     # the rows' velocity terms
     for j in range(n_rows + 1):
-        if j == 0:
-            loops.port_load[:, :] = 0.0
-        else:
-            _unit_loads(params, loops, rot, w, j - 1)
-        status = riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof,
-                                   sw.joint_tau_nu, params.parent, root_f, sw.s, sw.p,
-                                   sw.tree_s, sw.tree_p, sw.joint_nu, sw.joint_tau, z,
-                                   loops.port_load)
-        if status != 0:
-            return status
-        loops.z_save[j] = z
-        loops.nu_save[j] = sw.joint_nu
-        loops.tau_save[j] = sw.joint_tau
         for k in range(n):
-            acc[k] = z[2 * k + 2, 0:3]
-            alpha[k] = z[2 * k + 1, 3:6]
+            acc[k] = loops.z_save[j, 2 * k + 2, 0:3]
+            alpha[k] = loops.z_save[j, 2 * k + 1, 3:6]
         row_values(params, loops, rot, w, acc, alpha, loops.values[j])
     for r in range(n_rows):
         for j in range(n_rows):
-            loops.delassus[r, j] = loops.values[j + 1, r] - loops.values[0, r]
+            loops.delassus[r, j] = loops.values[j + 1, r] - kappa[r]
     lam = _least_solve(loops.delassus, targets - loops.values[0])
     loops.lam[:] = lam
     z[:, :] = loops.z_save[0]
     sw.joint_nu[:, :] = loops.nu_save[0]
     sw.joint_tau[:, :] = loops.tau_save[0]
     for j in range(n_rows):
-        z += lam[j] * (loops.z_save[j + 1] - loops.z_save[0])
-        sw.joint_nu[:, :] += lam[j] * (loops.nu_save[j + 1] - loops.nu_save[0])
-        sw.joint_tau[:, :] += lam[j] * (loops.tau_save[j + 1] - loops.tau_save[0])
+        z += lam[j] * loops.z_save[j + 1]
+        sw.joint_nu[:, :] += lam[j] * loops.nu_save[j + 1]
+        sw.joint_tau[:, :] += lam[j] * loops.tau_save[j + 1]
     return 0
 
 
@@ -263,38 +270,24 @@ def _add_rates(params, loops, state, j, f):
     n = state.rot.shape[0]
     for k in range(n):
         for i in range(3):
-            state.omega[k, i] += f * (loops.z_save[j + 1, 2 * k + 1, 3 + i]
-                                      - loops.z_save[0, 2 * k + 1, 3 + i])
+            state.omega[k, i] += f * loops.z_save[j + 1, 2 * k + 1, 3 + i]
         for i in range(n_coordinates(params.hinge_kind[k])):
-            state.jqd[k, i] += f * (loops.nu_save[j + 1, k, i] - loops.nu_save[0, k, i])
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def _field_size(loops, j):
-    """The largest w' or q'' of row j's response (its unit multiplier's)."""
-    size = 0.0
-    for k in range(loops.z_save.shape[1]):
-        for i in range(3, 6):
-            size = max(size, abs(loops.z_save[j + 1, k, i] - loops.z_save[0, k, i]))
-    for k in range(loops.nu_save.shape[1]):
-        for i in range(3):
-            size = max(size, abs(loops.nu_save[j + 1, k, i] - loops.nu_save[0, k, i]))
-    return size
+            state.jqd[k, i] += f * loops.nu_save[j + 1, k, i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _move(params, loops, state, j, f, e3):
     """Turn every body by f times row j's response of w' (A <- exp(f dw'^) A) and move every
-    joint coordinate by f times its response of q''; a slide's offset follows."""
+    joint coordinate by f times its response of q''."""
     n = state.rot.shape[0]
     phi = np.empty(3)
     for k in range(n):
         for i in range(3):
-            phi[i] = f * (loops.z_save[j + 1, 2 * k + 1, 3 + i] - loops.z_save[0, 2 * k + 1, 3 + i])
+            phi[i] = f * loops.z_save[j + 1, 2 * k + 1, 3 + i]
         expm_so3(phi, e3)
         state.rot[k] = e3 @ state.rot[k]
         for i in range(n_coordinates(params.hinge_kind[k])):
-            state.jq[k, i] += f * (loops.nu_save[j + 1, k, i] - loops.nu_save[0, k, i])
+            state.jq[k, i] += f * loops.nu_save[j + 1, k, i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -311,77 +304,277 @@ def _slides(params, loops, state):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def project_positions(params, loops, state):
-    """After a step: the configuration moved onto the loops along the step's responses to unit
-    multipliers (x <- x + sum_j mu_j dx_j, dx_j row j's response of w' and q'' taken as a
-    rotation and a coordinate change: the least change in the metric of the step's own
-    matrix), by Gauss-Newton on the rows' positions (their Jacobian along each response by a
-    difference of 1e-7 rad or m), until they are below POSITION_TOL or after
-    POSITION_PROJECTIONS; records the largest position residual before (loops.stats[0])."""
-    n_rows = loops.kind.shape[0]
-    e3 = np.empty((3, 3))
-    g0 = np.empty(n_rows)
-    for it in range(POSITION_PROJECTIONS + 1):
-        tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
-        row_positions(params, loops, state.rot, state.omega)
-        largest = 0.0
-        for r in range(n_rows):
-            largest = max(largest, abs(loops.g[r]))
-        if it == 0:
-            loops.stats[0] = max(loops.stats[0], largest)
-        if largest <= POSITION_TOL or it == POSITION_PROJECTIONS:
-            break
-        g0[:] = loops.g
-        for j in range(n_rows):
-            size = _field_size(loops, j)
-            eps = 1e-7 / size if size > 0.0 else 0.0
-            if eps == 0.0:
-                loops.delassus[:, j] = 0.0
-                continue
-            _move(params, loops, state, j, eps, e3)
-            tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
-            row_positions(params, loops, state.rot, state.omega)
-            for r in range(n_rows):
-                loops.delassus[r, j] = (loops.g[r] - g0[r]) / eps
-            _move(params, loops, state, j, -eps, e3)
-        mu = _least_solve(loops.delassus, -g0)
-        for j in range(n_rows):
-            _move(params, loops, state, j, mu[j], e3)
-        _slides(params, loops, state)
-    loops.stats[3] = max(loops.stats[3], largest)
+def _residuals(params, loops, state):
+    """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
+    tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
+    row_positions(params, loops, state.rot, state.omega)
+    largest_g, largest_gd = 0.0, 0.0
+    for r in range(loops.kind.shape[0]):
+        largest_g = max(largest_g, abs(loops.g[r]))
+        largest_gd = max(largest_gd, abs(loops.gd[r]))
+    return largest_g, largest_gd
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def project_rates(params, loops, state):
-    """After a step: the rows' positions and rates at the new state (loops.stats), then the
-    rates projected onto the loops along the step's responses to unit multipliers: every
-    body's angular velocity and every joint coordinate's rate change by sum_j mu_j dv_j, dv_j
-    the sweep's response of w' and q'' to row j (the least change in the metric of the step's
-    own matrix), consistent with each other (the joints' kinematics are linear in the rates);
-    the rows' rates are linear in the rates, so V[:, j] = g'(dv_j) - g'(0) is exact and
-    V mu = -g' holds them at zero in one solve."""
+def project_onto_loops(params, loops, state):
+    """After a step: the configuration and the rates moved back onto the loops along the step's
+    responses to unit multipliers, dx_j (row j's response of w' and q'', the least change in
+    the metric of the step's own matrix; consistent across the joints, whose kinematics are
+    linear in the rates and, to first order, in the increments).  The rows' rates are linear
+    in the rates, so V[:, j] = g'(dx_j) - g'(0) (the tree's kinematics, O(n) per row) is
+    exact, and it is also the rows' positions' Jacobian along dx_j: Gauss-Newton with V moves
+    the configuration, x <- x + sum_j mu_j dx_j, V mu = -g, until |g| <= POSITION_TOL (at most
+    POSITION_PROJECTIONS times), then V mu = -g' moves the rates, twice at most.  Records the
+    largest residuals before and after (loops.stats)."""
     n_rows = loops.kind.shape[0]
-    tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
-    row_positions(params, loops, state.rot, state.omega)
-    largest_gd = 0.0
-    for r in range(n_rows):
-        largest_gd = max(largest_gd, abs(loops.gd[r]))
-    loops.stats[1] = max(loops.stats[1], largest_gd)
-    gd0 = loops.gd.copy()
-    for j in range(n_rows):             # V, column by column (the row's response alone)
+    e3 = np.empty((3, 3))
+    g0, gd0 = _residuals(params, loops, state)
+    loops.stats[0] = max(loops.stats[0], g0)
+    loops.stats[1] = max(loops.stats[1], gd0)
+    base = loops.gd.copy()
+    for j in range(n_rows):                 # V, column by column
         _add_rates(params, loops, state, j, 1.0)
         tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
         row_positions(params, loops, state.rot, state.omega)
         for r in range(n_rows):
-            loops.delassus[r, j] = loops.gd[r] - gd0[r]
+            loops.delassus[r, j] = loops.gd[r] - base[r]
         _add_rates(params, loops, state, j, -1.0)
-    mu = _least_solve(loops.delassus, -gd0)
-    for j in range(n_rows):
-        _add_rates(params, loops, state, j, mu[j])
-    tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
-    row_positions(params, loops, state.rot, state.omega)
-    after = 0.0
-    for r in range(n_rows):
-        after = max(after, abs(loops.gd[r]))
-    loops.stats[2] = max(loops.stats[2], after)
-    _slides(params, loops, state)
+    largest = g0
+    for _ in range(POSITION_PROJECTIONS):
+        if largest <= POSITION_TOL:
+            break
+        mu = _least_solve(loops.delassus, -loops.g)
+        for j in range(n_rows):
+            _move(params, loops, state, j, mu[j], e3)
+        _slides(params, loops, state)
+        largest, _ = _residuals(params, loops, state)
+    loops.stats[3] = max(loops.stats[3], largest)
+    rates = 0.0
+    for _ in range(2):
+        _, rates = _residuals(params, loops, state)
+        if rates <= RATE_TOL:
+            break
+        mu = _least_solve(loops.delassus, -loops.gd)
+        for j in range(n_rows):
+            _add_rates(params, loops, state, j, mu[j])
+        _slides(params, loops, state)
+        _, rates = _residuals(params, loops, state)
+    loops.stats[2] = max(loops.stats[2], rates)
+
+
+# The tree's full-state sweep with many load columns (sweep.py::riccati_tree_full, "Trees in
+# full state"): the Riccati matrices S once, a P per column.  Column 0 carries the transfers'
+# affine parts, the drives' and prescribed motions' values and the ground's motion (the step
+# itself); every other column only its loads at the output stations (a unit multiplier's
+# response: the same linear step, homogeneous).  Per element:
+#   T = U_ee - S_O U_fe,  S_I = T^-1 (S_O U_ff - U_ef),  P_I,c = T^-1 (S_O u_f,c + P_O,c - u_e,c)
+# (u_c = u for column 0, zero otherwise); per joint, with y_c = S_O c'_c + P_O,c,
+#   k_c = D^-1 (tau0_F,c - Bl_F^T y_c),  P_J,c = Psi (y_c + G k_c)
+# and in the recovery nu_F,c = k_c - D^-1 Bl_F^T S_O Phi f_I,c.
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def sweep_columns(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, port_s,
+                  port_p, h_store, k_store, free_store, z_col, nu_col, tau_col, loads):
+    """The full-state tree sweep for loads.shape[0] columns at once (the comment above).
+    loads (C, n, 6): each column's loads at the bodies' output stations (e = [m, q]); p_col
+    (C, 2n + 1, 6), port_p (C, n, 6), h_store (n, 3, 6), k_store (C, n, 3), free_store (n, 4)
+    scratch; writes each column's stations z_col (C, 2n + 1, 12), joints' nu_col and tau_col
+    (C, n, 3).  Returns 0, or j + 1 for the element j whose elimination is singular (a LOCKED
+    element, which only the consistent start of an elastic hinge has, is refused as one)."""
+    n = parent.shape[0]
+    n_col = loads.shape[0]
+    port_s[:, :, :] = 0.0
+    port_p[:, :, :] = loads
+    t = np.empty((6, 6))
+    x = np.empty((6, 6 + n_col))
+    d = np.empty((3, 3))
+    rhs = np.empty((3, 6 + n_col))
+    g = np.empty((6, 3))
+    for k in range(n - 1, -1, -1):
+        jb, jh = 2 * k + 1, 2 * k
+        # the body: T and S_I, and every column's P_I, in one solve
+        ub = u[jb]
+        s_o = port_s[k]
+        for i in range(6):
+            for j in range(6):
+                tv = ub[6 + i, 6 + j]
+                xv = -ub[6 + i, j]
+                for m in range(6):
+                    tv -= s_o[i, m] * ub[m, 6 + j]
+                    xv += s_o[i, m] * ub[m, j]
+                t[i, j] = tv
+                x[i, j] = xv
+            for c in range(n_col):
+                pv = port_p[c, k, i]
+                if c == 0:
+                    pv -= ub[6 + i, 12]
+                    for m in range(6):
+                        pv += s_o[i, m] * ub[m, 12]
+                x[i, 6 + c] = pv
+        if not _gauss_solve(t, x, 6, 6 + n_col):
+            return jb + 1
+        for i in range(6):
+            for j in range(6):
+                s_mat[jb, i, j] = x[i, j]
+            for c in range(n_col):
+                p_col[c, jb, i] = x[i, 6 + c]
+        kd = kind[jh]
+        if kd == IDENTITY:
+            s_mat[jh] = s_mat[jb]
+            for c in range(n_col):
+                p_col[c, jh] = p_col[c, jb]
+        elif kd == TRANSFER:
+            uh = u[jh]
+            s_o = s_mat[jb]
+            for i in range(6):
+                for j in range(6):
+                    tv = uh[6 + i, 6 + j]
+                    xv = -uh[6 + i, j]
+                    for m in range(6):
+                        tv -= s_o[i, m] * uh[m, 6 + j]
+                        xv += s_o[i, m] * uh[m, j]
+                    t[i, j] = tv
+                    x[i, j] = xv
+                for c in range(n_col):
+                    pv = p_col[c, jb, i]
+                    if c == 0:
+                        pv -= uh[6 + i, 12]
+                        for m in range(6):
+                            pv += s_o[i, m] * uh[m, 12]
+                    x[i, 6 + c] = pv
+            if not _gauss_solve(t, x, 6, 6 + n_col):
+                return jh + 1
+            for i in range(6):
+                for j in range(6):
+                    s_mat[jh, i, j] = x[i, j]
+                for c in range(n_col):
+                    p_col[c, jh, i] = x[i, 6 + c]
+        elif kd == JOINT:
+            uh = u[jh]
+            s_o = s_mat[jb]
+            mf = 0
+            for c3 in range(3):
+                if joint_dof[k, c3] == FREE:
+                    free_store[k, mf] = c3
+                    mf += 1
+            free_store[k, 3] = mf
+            s_phi = _mm(s_o, uh[0:6, 0:6])
+            for a in range(mf):
+                ca = free_store[k, a]
+                for i in range(6):
+                    gv = 0.0
+                    for m in range(6):
+                        gv += s_o[i, m] * uh[m, 6 + ca]
+                    g[i, a] = gv
+            # y_c = S_O c'_c + P_O,c: the affine part c' (prescribed coordinates too) in column 0
+            y = np.empty((n_col, 6))
+            for c in range(n_col):
+                for i in range(6):
+                    y[c, i] = p_col[c, jb, i]
+            for i in range(6):
+                ci = uh[i, 12]
+                for c3 in range(3):
+                    if joint_dof[k, c3] == PRESCRIBED:
+                        ci += uh[i, 6 + c3] * joint_drive[k, c3, 2]
+                for m in range(6):
+                    y[0, m] += s_o[m, i] * ci
+            for a in range(mf):
+                ca = free_store[k, a]
+                for j in range(6):
+                    xv = 0.0
+                    for i in range(6):
+                        xv += uh[6 + i, ca] * s_phi[i, j]
+                    rhs[a, j] = xv
+                for c in range(n_col):
+                    r = joint_drive[k, ca, 0] if c == 0 else 0.0
+                    for i in range(6):
+                        r -= uh[6 + i, ca] * y[c, i]
+                    rhs[a, 6 + c] = r
+                for b in range(mf):
+                    xv = 0.0
+                    for i in range(6):
+                        xv += uh[6 + i, ca] * g[i, b]
+                    d[a, b] = xv - (joint_drive[k, ca, 1] if a == b else 0.0)
+            if mf > 0 and not _gauss_solve(d, rhs, mf, 6 + n_col):
+                return jh + 1
+            psi = uh[6:12, 6:12]
+            s_e = s_phi.copy()
+            for a in range(mf):
+                for j in range(6):
+                    h_store[k, a, j] = rhs[a, j]
+                for c in range(n_col):
+                    k_store[c, k, a] = rhs[a, 6 + c]
+            for i in range(6):
+                for a in range(mf):
+                    for j in range(6):
+                        s_e[i, j] -= g[i, a] * rhs[a, j]
+            s_mat[jh] = _mm(psi, s_e)
+            for c in range(n_col):
+                p_e = y[c].copy()
+                for i in range(6):
+                    for a in range(mf):
+                        p_e[i] += g[i, a] * rhs[a, 6 + c]
+                p_col[c, jh] = _mv(psi, p_e)
+        else:
+            return jh + 1
+        p = parent[k]
+        if p >= 0:
+            port_s[p] += s_mat[jh]
+            for c in range(n_col):
+                port_p[c, p] += p_col[c, jh]
+    # the recovery, root to leaves, column by column
+    f_i = np.empty(6)
+    f_o = np.empty(6)
+    for c in range(n_col):
+        z = z_col[c]
+        z[:, :] = 0.0
+        if c == 0:
+            z[0, 0:6] = root_f
+        for k in range(n):
+            jb, jh = 2 * k + 1, 2 * k
+            p = parent[k]
+            st = 0 if p < 0 else 2 * p + 2
+            f_i[:] = z[st, 0:6]
+            if p < 0:
+                z[0, 6:12] += _mv(s_mat[jh], f_i) + p_col[c, jh]
+            kd = kind[jh]
+            if kd == IDENTITY:
+                f_o[:] = f_i
+            elif kd == TRANSFER:
+                zi = np.empty(12)
+                zi[0:6] = f_i
+                zi[6:12] = _mv(s_mat[jh], f_i) + p_col[c, jh]
+                f_o[:] = _mv(u[jh, 0:6, 0:12], zi)
+                if c == 0:
+                    f_o += u[jh, 0:6, 12]
+            else:                       # JOINT
+                for c3 in range(3):
+                    nu_col[c, k, c3] = (joint_drive[k, c3, 2] if c == 0 and
+                                        joint_dof[k, c3] == PRESCRIBED else 0.0)
+                mf = free_store[k, 3]
+                for a in range(mf):
+                    xv = k_store[c, k, a]
+                    for j in range(6):
+                        xv -= h_store[k, a, j] * f_i[j]
+                    nu_col[c, k, free_store[k, a]] = xv
+                f_o[:] = _mv(u[jh, 0:6, 0:6], f_i)
+                if c == 0:
+                    f_o += u[jh, 0:6, 12]
+                for c3 in range(3):
+                    if joint_dof[k, c3] != 0:
+                        for i in range(6):
+                            f_o[i] += u[jh, i, 6 + c3] * nu_col[c, k, c3]
+            z[jb, 0:6] = f_o
+            z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_col[c, jb]
+            if kd == JOINT:
+                for c3 in range(3):
+                    xv = 0.0
+                    if joint_dof[k, c3] != 0:
+                        for i in range(6):
+                            xv += u[jh, 6 + i, c3] * z[jb, 6 + i]
+                    tau_col[c, k, c3] = xv
+            z[jb + 1] = _mv(u[jb, :, 0:12], z[jb])
+            if c == 0:
+                z[jb + 1] += u[jb, :, 12]
+    return 0

@@ -79,8 +79,6 @@ Sweep = namedtuple("Sweep", [
     "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/tree.py)
     "tree_s", "tree_p",                              # full-state tree sweep (sweep.py)
     "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints (kernels/joint.py)
-    "tree_load",                                     # (n, 6) zeros: no loads at the output
-                                                     # points but the children's
 ])
 
 Inputs = namedtuple("Inputs", [

@@ -32,8 +32,7 @@ from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
-from .closure import (guess_points, project_positions, project_rates, solve_with_loops,
-                      tree_points)
+from .closure import guess_points, project_onto_loops, solve_with_loops, tree_points
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -318,7 +317,7 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     if mode == RICCATI_JOINTS:
         return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
                                  parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
-                                 sw.joint_tau, z, sw.tree_load)
+                                 sw.joint_tau, z)
     if mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
                             sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
@@ -851,8 +850,7 @@ def _update(loop, run, s, _):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
     if loop.loops.kind.shape[0] > 0:    # back onto the loops (kernels/closure.py)
-        project_positions(params, loop.loops, state)
-        project_rates(params, loop.loops, state)
+        project_onto_loops(params, loop.loops, state)
     return finite
 
 

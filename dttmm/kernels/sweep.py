@@ -776,23 +776,22 @@ def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
 
 @njit(cache=True, fastmath=CONTRACT)
 def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root_f, s_mat,
-                      p_vec, port_s, port_p, joint_nu, joint_tau, z, port_load):
+                      p_vec, port_s, port_p, joint_nu, joint_tau, z):
     """The full-state sweep of a tree (the comment above): kind, u (2n elements: 2k hinge k,
     2k + 1 body k), parent (n,), root_f (6,) the ground's [a, alpha].  Scratch: s_mat (2n + 1,
     6, 6), p_vec (2n + 1, 6) (s[2k]: hinge k's inboard relation, s[2k + 1]: body k's input),
     port_s, port_p (n, 6, 6), (n, 6).  Writes every station into z, each joint's nu (its
     coordinates' q'', or a ball joint's relative angular acceleration) into joint_nu and its
-    generalized forces Bl . e_O into joint_tau.  port_load (n, 6): loads [m, q] each body
-    exerts at its output point besides its children's (a closing joint's multipliers,
-    kernels/closure.py; zero otherwise), added to its output station's P.  Returns 0, or j + 1
-    for the element j whose elimination is singular."""
+    generalized forces Bl . e_O into joint_tau.  Returns 0, or j + 1 for the element j whose
+    elimination is singular (kernels/closure.py::sweep_columns is this sweep for many load
+    columns at once)."""
     n = parent.shape[0]
     free = np.zeros(3, dtype=np.int64)
     h_mat = np.empty((3, 6))
     k0 = np.empty(3)
     g = np.empty((6, 3))
     port_s[:, :, :] = 0.0
-    port_p[:, :] = port_load
+    port_p[:, :] = 0.0
     for k in range(n - 1, -1, -1):
         jb, jh = 2 * k + 1, 2 * k
         if not _element_to_inboard(u[jb], port_s[k], port_p[k], s_mat[jb], p_vec[jb]):
