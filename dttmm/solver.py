@@ -280,7 +280,7 @@ def _iterates(model, full_state):
     to newton_tol by default (without iterations a flexible link there is not stable).  Asked of
     the kernels' model (kernel_model: an end section is welded to its beam)."""
     model = kernel_model(model)[0]
-    if has_loops(model):            # closing joints: held at position level by the iterations
+    if has_loops(model):            # closing joints: their rows converge with the iterations
         return True
     return has_coordinates(model) or (full_tree(model, full_state) and any(
         model.hinge_kind[k] == FIXED and model.parent[k] >= 0
