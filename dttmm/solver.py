@@ -274,6 +274,17 @@ def loop_tables(model):
                  free_store=np.zeros((n, 4), dtype=np.int64), stats=np.zeros(4))
 
 
+def _loop_info(loops):
+    """A run's info on its closing joints (kernels/closure.py::Loops.stats): the largest
+    residuals after any step's projections, and before them; nothing without loops."""
+    if not len(loops.kind):
+        return {}
+    return {"loop_position_residual": float(loops.stats[3]),
+            "loop_rate_residual": float(loops.stats[2]),
+            "loop_position_residual_unprojected": float(loops.stats[0]),
+            "loop_rate_residual_unprojected": float(loops.stats[1])}
+
+
 def _iterates(model, full_state):
     """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
     Jacobian exact only to O(dt) terms (kernels/joint.py, step.py::_welded): their steps iterate
@@ -959,7 +970,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         result = _result(user_model, recording, dt, 0.0, n_steps,
                          dict(run_info, newton_iterations_used=int(info[2]),
                               newton_unconverged_steps=int(info[4]),
-                              step_error_max=largest),
+                              step_error_max=largest, **_loop_info(loops)),
                          NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
                                       "lie on no grid to continue on; run again to a later "
                                       "t_end, or use fixed steps (dt) to resume"))
@@ -1031,11 +1042,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                           step_error_max=float(monitor.error[0]), turn_per_step_max=turn,
                           **({} if balance is None else
                              {"energy_balance_error": balance.worst}),
-                          **({} if not len(loops.kind) else
-                             {"loop_position_residual": float(loops.stats[3]),
-                              "loop_rate_residual": float(loops.stats[2]),
-                              "loop_position_residual_unprojected": float(loops.stats[0]),
-                              "loop_rate_residual_unprojected": float(loops.stats[1])})),
+                          **_loop_info(loops)),
                      checkpoint)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
