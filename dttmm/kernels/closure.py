@@ -16,9 +16,10 @@ multipliers; the rows' values
 are held at zero, the constraints' second derivatives (acceleration level, as the consistent
 start and the pinned tip hold theirs).  After the step the configuration and then the rates
 are projected back onto the loops along the step's own responses to unit multipliers
-(project_positions, project_rates), so that every step ends with its loops closed.
+(project_onto_loops), so that every step ends with its loops closed.
 
-Scope (refused before a run otherwise, solver._check_loops): rigid bodies, a fixed ground;
+Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies, a fixed
+ground;
 every joint kind in the tree.
 """
 from collections import namedtuple
@@ -29,9 +30,8 @@ from numba import njit
 from . import CONTRACT
 from ..elements.hinges import AXIS_1
 from ..elements.joints import PRISMATIC
-from .joint import n_coordinates
+from .joint import FREE, PRESCRIBED, n_coordinates
 from .so3 import expm_so3
-from .joint import FREE, PRESCRIBED
 from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 
 GROUND = -1
