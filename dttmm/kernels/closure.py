@@ -19,8 +19,7 @@ are projected back onto the loops along the step's own responses to unit multipl
 (project_onto_loops), so that every step ends with its loops closed.
 
 Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies, a fixed
-ground;
-every joint kind in the tree.
+ground; every joint kind in the tree.
 """
 from collections import namedtuple
 
