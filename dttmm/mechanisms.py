@@ -159,7 +159,7 @@ def stewart_reference_slide(i, t):
             sign * 0.05 * w * w * np.cos(w * t))
 
 
-def stewart_platform(drive="motion"):
+def stewart_platform(drive="motion", gravity=(0.0, 0.0, -9.81), slide_rates=None):
     """A Stewart platform (issue 29's data; SI units, gravity -9.81 along z).
 
     Six legs; leg i joins the base point b_i (radius 1, z = 0, angle beta_i) to the platform
@@ -179,6 +179,11 @@ def stewart_platform(drive="motion"):
     drive : {"motion", "force", "free"}
         "motion": each slide follows stewart_reference_slide from rest; "force": each slide
         is pushed by 2e4 (s_ref - s) - 500 s' N (a Python JointForce); "free": no drive.
+    gravity : array_like of 3
+        m/s^2 (default (0, 0, -9.81)).
+    slide_rates : sequence of 6 float, optional
+        The slides' rates at t = 0 (m/s; free drives), the rest assembled consistent with them
+        (a least-change projection, so they come out close to, not exactly, these).
 
     Returns
     -------
@@ -190,7 +195,7 @@ def stewart_platform(drive="motion"):
     b = np.stack([np.cos(beta), np.sin(beta), np.zeros(6)], axis=1)
     centre = np.array([0.0, 0.0, 1.0])
     p = centre + 0.5 * np.stack([np.cos(gamma), np.sin(gamma), np.zeros(6)], axis=1)
-    system = System(gravity=[0, 0, -9.81])
+    system = System(gravity=gravity)
     system.add(RigidBody(mass=1.0, inertia=[1.0, 1.0, 1.0], inertia_about="mass_center",
                          name="base",
                          points={f"b{i + 1}": b[i] for i in range(6)}),
@@ -221,7 +226,8 @@ def stewart_platform(drive="motion"):
         system.add(RigidBody(mass=1.0, inertia=[0.001, 0.03, 0.03], inertia_about="mass_center",
                              to_mass_center=[length - 0.3, 0, 0], to_output=[length, 0, 0],
                              rotation=frame, name=f"upper{i + 1}"),
-                   PrismaticJoint(axis=[1.0, 0, 0], drive=d, name=f"P{i + 1}"),
+                   PrismaticJoint(axis=[1.0, 0, 0], drive=d, name=f"P{i + 1}",
+                                  rate=0.0 if slide_rates is None else slide_rates[i]),
                    parent=f"lower{i + 1}")
     system.add(RigidBody(mass=10.0, inertia=[0.5, 0.5, 0.8], inertia_about="mass_center",
                          to_mass_center=centre - p[0], to_output=centre - p[0],

@@ -373,6 +373,38 @@ def project_onto_loops(params, loops, state):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _element_columns(u, s_o, p_o, s_i, p_i, t, x):
+    """Through an affine element z_O = U z_I + u: S_I and every column's P_I from the outboard
+    S_O and P_O (C, 6), in one solve of T (the comment above; column 0 takes u's affine part);
+    t (6, 6), x (6, 6 + C) scratch.  False if T is singular."""
+    n_col = p_o.shape[0]
+    for i in range(6):
+        for j in range(6):
+            tv = u[6 + i, 6 + j]
+            xv = -u[6 + i, j]
+            for m in range(6):
+                tv -= s_o[i, m] * u[m, 6 + j]
+                xv += s_o[i, m] * u[m, j]
+            t[i, j] = tv
+            x[i, j] = xv
+        for c in range(n_col):
+            pv = p_o[c, i]
+            if c == 0:
+                pv -= u[6 + i, 12]
+                for m in range(6):
+                    pv += s_o[i, m] * u[m, 12]
+            x[i, 6 + c] = pv
+    if not _gauss_solve(t, x, 6, 6 + n_col):
+        return False
+    for i in range(6):
+        for j in range(6):
+            s_i[i, j] = x[i, j]
+        for c in range(n_col):
+            p_i[c, i] = x[i, 6 + c]
+    return True
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def sweep_columns(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, port_s,
                   port_p, h_store, k_store, free_store, z_col, nu_col, tau_col, loads):
     """The full-state tree sweep for loads.shape[0] columns at once (the comment above).
@@ -393,62 +425,17 @@ def sweep_columns(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col,
     for k in range(n - 1, -1, -1):
         jb, jh = 2 * k + 1, 2 * k
         # the body: T and S_I, and every column's P_I, in one solve
-        ub = u[jb]
-        s_o = port_s[k]
-        for i in range(6):
-            for j in range(6):
-                tv = ub[6 + i, 6 + j]
-                xv = -ub[6 + i, j]
-                for m in range(6):
-                    tv -= s_o[i, m] * ub[m, 6 + j]
-                    xv += s_o[i, m] * ub[m, j]
-                t[i, j] = tv
-                x[i, j] = xv
-            for c in range(n_col):
-                pv = port_p[c, k, i]
-                if c == 0:
-                    pv -= ub[6 + i, 12]
-                    for m in range(6):
-                        pv += s_o[i, m] * ub[m, 12]
-                x[i, 6 + c] = pv
-        if not _gauss_solve(t, x, 6, 6 + n_col):
+        if not _element_columns(u[jb], port_s[k], port_p[:, k], s_mat[jb], p_col[:, jb], t, x):
             return jb + 1
-        for i in range(6):
-            for j in range(6):
-                s_mat[jb, i, j] = x[i, j]
-            for c in range(n_col):
-                p_col[c, jb, i] = x[i, 6 + c]
         kd = kind[jh]
         if kd == IDENTITY:
             s_mat[jh] = s_mat[jb]
             for c in range(n_col):
                 p_col[c, jh] = p_col[c, jb]
         elif kd == TRANSFER:
-            uh = u[jh]
-            s_o = s_mat[jb]
-            for i in range(6):
-                for j in range(6):
-                    tv = uh[6 + i, 6 + j]
-                    xv = -uh[6 + i, j]
-                    for m in range(6):
-                        tv -= s_o[i, m] * uh[m, 6 + j]
-                        xv += s_o[i, m] * uh[m, j]
-                    t[i, j] = tv
-                    x[i, j] = xv
-                for c in range(n_col):
-                    pv = p_col[c, jb, i]
-                    if c == 0:
-                        pv -= uh[6 + i, 12]
-                        for m in range(6):
-                            pv += s_o[i, m] * uh[m, 12]
-                    x[i, 6 + c] = pv
-            if not _gauss_solve(t, x, 6, 6 + n_col):
+            if not _element_columns(u[jh], s_mat[jb], p_col[:, jb], s_mat[jh], p_col[:, jh], t,
+                                    x):
                 return jh + 1
-            for i in range(6):
-                for j in range(6):
-                    s_mat[jh, i, j] = x[i, j]
-                for c in range(n_col):
-                    p_col[c, jh, i] = x[i, 6 + c]
         elif kd == JOINT:
             uh = u[jh]
             s_o = s_mat[jb]
