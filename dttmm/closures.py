@@ -112,23 +112,16 @@ def loop_membership(entries, bodies, parent):
     return in_loop, closed_output, output_moment
 
 
-def start_frames(model):
-    """Per body at t = 0: input point r_in, rotation A, output point r_o and output section A_o
-    (a beam's deflected end; a rigid body's own frame), from the tree's kinematics."""
-    from .statics import _positions        # (statics imports the model module)
-    from .model import output_section
-    r_in, _, r_o = _positions(model)
-    off = np.concatenate([[0], np.cumsum(model.n_modes)])
-    a_o = np.array([output_section(model.beam_params[k], model.initial_rotation[k], np.zeros(3),
-                                   model.initial_modal_coordinates[off[k]:off[k + 1]])[0]
-                    for k in range(model.n_bodies)]).reshape(model.n_bodies, 3, 3)
-    return r_in, model.initial_rotation, r_o, a_o
+def start_state(model):
+    """The tree's kinematics at t = 0 (tree_state at the model's own coordinates and rates)."""
+    return tree_state(model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, 51:53],
+                      model.initial_angular_velocity, model.hinge_params[:, 53:55])
 
 
 def _side(model, k, at, who, argument, frames, named):
     """(point in the side's frame, on a beam's end, world point, world frame) at t = 0 of side
     k's point at (None for the ground: placed later)."""
-    r_in, rot, r_o, a_o = frames
+    rot, _, r_in, _, a_o, _, r_o, _ = frames
     if k == GROUND:
         if at is None:
             return None
@@ -184,7 +177,7 @@ def closure_rows(model, entries, index_of, named):
     rows = empty_table()
     if not entries:
         return rows
-    frames = start_frames(model)
+    frames = start_state(model)
     group = _weld_group(model)
     kinds, bodies, points, ends, params, names = [], [], [], [], [], []
     for c, (joint, a, b, at_a, at_b) in enumerate(entries):
@@ -283,22 +276,13 @@ def is_pinned_tip(model):
     return bool(on_output)
 
 
-def closure_points(model, frames=None):
+def closure_points(model):
     """(p_a, p_b, F_a, F_b) at t = 0 of every closing joint: world points (m) and frames."""
-    r_in, rot, r_o, a_o = start_frames(model) if frames is None else frames
-    m = len(model.closure_kind)
-    p = np.zeros((m, 2, 3))
-    f = np.zeros((m, 2, 3, 3))
-    for c in range(m):
-        for s in range(2):
-            k, local = model.closure_body[c, s], model.closure_point[c, s]
-            if k == GROUND:
-                f[c, s] = model.ground_rotation
-                p[c, s] = model.ground_position + model.ground_rotation @ local
-            elif model.closure_on_end[c, s]:
-                f[c, s], p[c, s] = a_o[k], r_o[k]
-            else:
-                f[c, s], p[c, s] = rot[k], r_in[k] + rot[k] @ local
+    state = start_state(model)
+    sides = [[_side_motion(model, state, c, s) for s in range(2)]
+             for c in range(model.n_closures)]
+    p = np.array([[side[0] for side in pair] for pair in sides]).reshape(-1, 2, 3)
+    f = np.array([[side[2] for side in pair] for pair in sides]).reshape(-1, 2, 3, 3)
     return p[:, 0], p[:, 1], f[:, 0], f[:, 1]
 
 
@@ -405,6 +389,31 @@ def constraint_directions(model, c):
     elif kind == UNIVERSAL:
         dots = [(n1, n2)]
     return points, dots
+
+
+GAP_WORLD, GAP_A, DOT = 0, 1, 2     # constraint_rows' kinds (kernels/closure.py, the reference)
+
+
+def constraint_rows(model, closures=None):
+    """The closing joints' scalar constraints as flat rows (constraint_directions; closures:
+    which closing joints, default all): kind (R,) GAP_WORLD (e along a world axis), GAP_A (e
+    fixed in side a's frame) or DOT, the closing joint of each (R,), e or x (R, 3) and y (R, 3;
+    zero for a gap)."""
+    kind, owner, v1, v2 = [], [], [], []
+    for c in range(model.n_closures) if closures is None else closures:
+        points, dots = constraint_directions(model, c)
+        for frame, e in points:
+            kind.append(GAP_WORLD if frame == "w" else GAP_A)
+            owner.append(c)
+            v1.append(e)
+            v2.append(np.zeros(3))
+        for x, y in dots:
+            kind.append(DOT)
+            owner.append(c)
+            v1.append(x)
+            v2.append(y)
+    return (np.array(kind, dtype=np.int64), np.array(owner, dtype=np.int64),
+            np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3))
 
 
 def tree_state(model, theta, q, omega, qd):
@@ -570,9 +579,7 @@ def loop_residuals(model):
     >>> import dttmm
     >>> positions, rates = dttmm.loop_residuals(model)  # doctest: +SKIP
     """
-    g, gd, owner = closure_residuals(model, tree_state(
-        model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, 51:53],
-        model.initial_angular_velocity, model.hinge_params[:, 53:55]))
+    g, gd, owner = closure_residuals(model, start_state(model))
     pos, vel = np.zeros(model.n_closures), np.zeros(model.n_closures)
     np.maximum.at(pos, owner, np.abs(g))
     np.maximum.at(vel, owner, np.abs(gd))

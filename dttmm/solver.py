@@ -27,14 +27,14 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree, weld_chain
 from .kernels import step as kstep
-from .kernels.closure import DOT, GAP_A, GAP_WORLD, Loops
+from .kernels.closure import Loops
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Monitor, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
-from .closures import assemble, check_runs_in_sweeps, constraint_directions, loop_residuals
+from .closures import assemble, check_runs_in_sweeps, constraint_rows, loop_residuals
 from .model import Model, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -245,26 +245,17 @@ def full_tree(model, full_state=False):
 def loop_tables(model):
     """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
     kernel model's numbering, with their scratch; no rows without loops."""
-    rows = []
     n = model.n_bodies
-    if has_loops(model):
-        for c in range(model.n_closures):
-            points, dots = constraint_directions(model, c)
-            rows += [(GAP_WORLD if frame == "w" else GAP_A, c, e, np.zeros(3))
-                     for frame, e in points]
-            rows += [(DOT, c, x, y) for x, y in dots]
-    m = model.n_closures if rows else 0
-    r = len(rows)
+    kind, owner, v1, v2 = constraint_rows(model, None if has_loops(model) else ())
+    m = model.n_closures if len(kind) else 0
+    r = len(kind)
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
     point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
-    return Loops(kind=np.array([x[0] for x in rows], dtype=np.int64),
-                 owner=np.array([x[1] for x in rows], dtype=np.int64),
-                 v1=np.array([x[2] for x in rows], dtype=float).reshape(r, 3),
-                 v2=np.array([x[3] for x in rows], dtype=float).reshape(r, 3),
+    return Loops(kind=kind, owner=owner, v1=v1, v2=v2,
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
-                 ground_rot=np.array(model.ground_rotation, dtype=float), targets=np.zeros(r),
-                 port_load=np.zeros((n, 6)), z_save=np.zeros((r + 1, 2 * n + 1, 12)),
+                 ground_rot=np.array(model.ground_rotation, dtype=float),
+                 z_save=np.zeros((r + 1, 2 * n + 1, 12)),
                  nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
                  delassus=np.zeros((r, r)), lam=np.zeros(r), values=np.zeros((r + 1, r)),
                  r_out=np.zeros((n, 3)), v_out=np.zeros((n, 3)), g=np.zeros(r),

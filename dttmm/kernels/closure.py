@@ -27,14 +27,13 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT
+from ..closures import DOT, GAP_A, GAP_WORLD
 from ..elements.hinges import AXIS_1
 from ..elements.joints import PRISMATIC
 from .joint import FREE, PRESCRIBED, n_coordinates
 from .so3 import expm_so3
 from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 
-GROUND = -1
-GAP_WORLD, GAP_A, DOT = 0, 1, 2
 
 # the closing joints as the loop reads them, and the loop's scratch for them (solver.
 # loop_tables): rows (R) and closing joints (m) in the kernel model's numbering
@@ -45,8 +44,6 @@ Loops = namedtuple("Loops", [
                                      # body's frame from its input point; the ground's: world,
                                      # from the ground point)
     "ground", "ground_rot",          # (3,), (3, 3) the ground point and frame (a fixed ground)
-    "targets",                       # (R,) the rows' targets (zero: acceleration level)
-    "port_load",                     # (n, 6) scratch: the multipliers' loads on the stations
     "z_save", "nu_save", "tau_save",  # (R + 1, ...) each sweep's stations and joints
     "delassus", "lam", "values",     # (R, R), (R,), (R + 1, R)
     "r_out", "v_out",                # (n, 3) each: the output points' positions, velocities
@@ -165,9 +162,10 @@ def row_values(params, loops, rot, w, acc, alpha, out):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _unit_loads(params, loops, rot, w, r):
-    """loops.port_load: the loads of row r's unit multiplier on its sides' output stations,
+    """loops.loads[r + 1]: the loads of row r's unit multiplier on its sides' output stations,
     e = -[couple about O; force] (a station's e is what its body exerts outboard)."""
-    loops.port_load[:, :] = 0.0
+    load = loops.loads[r + 1]
+    load[:, :] = 0.0
     c = loops.owner[r]
     ka, p_a, _, arm_a, f_a, _ = _side(params, loops, rot, w, c, 0)
     kb, p_b, _, arm_b, f_b, _ = _side(params, loops, rot, w, c, 1)
@@ -177,21 +175,21 @@ def _unit_loads(params, loops, rot, w, r):
         couple = _cross(y, x)
         for i in range(3):
             if kb >= 0:
-                loops.port_load[kb, i] -= couple[i]
+                load[kb, i] -= couple[i]
             if ka >= 0:
-                loops.port_load[ka, i] += couple[i]
+                load[ka, i] += couple[i]
         return
     e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
     if kb >= 0:                         # e on b at p_b
         m = _cross(arm_b, e)
         for i in range(3):
-            loops.port_load[kb, i] -= m[i]
-            loops.port_load[kb, 3 + i] -= e[i]
+            load[kb, i] -= m[i]
+            load[kb, 3 + i] -= e[i]
     if ka >= 0:                         # -e on a at p_b: arm from a's output point
         m = _cross(arm_a + (p_b - p_a), e)
         for i in range(3):
-            loops.port_load[ka, i] += m[i]
-            loops.port_load[ka, 3 + i] += e[i]
+            load[ka, i] += m[i]
+            load[ka, 3 + i] += e[i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -209,21 +207,21 @@ def _least_solve(a, b):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def solve_with_loops(params, sweep, root_f, loops, rot, w, targets, z):
+def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     """The sweep with the closing joints' multipliers (the module docstring): the step and
     every row's response to its unit multiplier in one sweep (sweep_columns) into
     loops.z_save, nu_save, tau_save (angular-acceleration slots; column 0 the step without
     multipliers, column j + 1 row j's response), the Delassus matrix of the rows' values, the
-    multipliers holding the rows at targets, and their superposition into z, sweep.joint_nu
-    and joint_tau.  rot, w: the bodies' rotations and angular velocities the rows are written
-    at.  Returns the sweep's status."""
+    multipliers holding the rows at zero (acceleration level), and their superposition into z,
+    sweep.joint_nu and joint_tau.  rot, w: the bodies' rotations and angular velocities the
+    rows are written at, with their points in loops.r_out, v_out (tree_points).  Returns the
+    sweep's status."""
     n = rot.shape[0]
     n_rows = loops.kind.shape[0]
     sw = sweep
     loops.loads[0] = 0.0
     for r in range(n_rows):
         _unit_loads(params, loops, rot, w, r)
-        loops.loads[r + 1] = loops.port_load
     status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
                            sw.s, loops.p_col, sw.tree_s, loops.port_col, loops.h_store,
                            loops.k_store, loops.free_store, loops.z_save, loops.nu_save,
@@ -242,7 +240,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, targets, z):
     for r in range(n_rows):
         for j in range(n_rows):
             loops.delassus[r, j] = loops.values[j + 1, r] - kappa[r]
-    lam = _least_solve(loops.delassus, targets - loops.values[0])
+    lam = _least_solve(loops.delassus, -loops.values[0])
     loops.lam[:] = lam
     z[:, :] = loops.z_save[0]
     sw.joint_nu[:, :] = loops.nu_save[0]
@@ -252,14 +250,6 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, targets, z):
         sw.joint_nu[:, :] += lam[j] * loops.nu_save[j + 1]
         sw.joint_tau[:, :] += lam[j] * loops.tau_save[j + 1]
     return 0
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def guess_points(params, loops, guess, jq_star, jqd_star):
-    """The closing joints' points at the step's guess (rotations guess.rot, angular
-    velocities guess.w, the joints' coordinates and rates), where the rows' velocity terms and
-    the multipliers' arms are taken in a Newton iteration."""
-    tree_points(params, guess.rot, guess.w, jq_star, jqd_star, loops)
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -32,7 +32,7 @@ from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
-from .closure import guess_points, project_onto_loops, solve_with_loops, tree_points
+from .closure import project_onto_loops, solve_with_loops, tree_points
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -425,8 +425,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f[3:6] = g_wd
     if loops.kind.shape[0] > 0:
         tree_points(params, rot, omega, state.jq, state.jqd, loops)
-        status = solve_with_loops(params, sweep, root_f, loops, rot, omega,
-                                  np.zeros(loops.kind.shape[0]), state.z)
+        status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
     else:
         status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
                             state.z)
@@ -692,9 +691,10 @@ def _iterate(loop, run, s, it):
         return NOT_FINITE, 0, 0.0
     loops = loop.loops
     if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
-        guess_points(params, loops, loop.guess, loop.joints[2], loop.joints[3])
+        # the rows' velocity terms and the multipliers' arms at the guess
+        tree_points(params, loop.guess.rot, loop.guess.w, loop.joints[2], loop.joints[3], loops)
         status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
-                                  loop.guess.w, loops.targets, z)
+                                  loop.guess.w, z)
     else:
         status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
                             loop.root_f, z)

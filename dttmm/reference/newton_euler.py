@@ -229,7 +229,7 @@ from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
 from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
-from ..closures import assemble, constraint_directions, loop_residuals
+from ..closures import DOT, GAP_A, GAP_WORLD, assemble, constraint_rows, loop_residuals
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
@@ -246,6 +246,7 @@ _CT = C_TRANSLATION.start
 _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
+_DOT, _GAP_A, _GAP_WORLD = DOT, GAP_A, GAP_WORLD
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
@@ -1384,7 +1385,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             kb, points[c, 1], end_b, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
             alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g)
         zero = np.zeros(3)
-        if kind[r] == 2:                    # (F_a x) . (F_b y) = 0
+        if kind[r] == _DOT:                 # (F_a x) . (F_b y) = 0
             x = f_a @ v1[r]
             y = f_b @ v2[r]
             cv = _cross(y, x)
@@ -1399,13 +1400,13 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
                              body_kind, beam_params)
             directions[r] = cv
         else:                               # e . (p_b - p_a) = 0
-            e = v1[r] if kind[r] == 0 else f_a @ v1[r]
+            e = v1[r] if kind[r] == _GAP_WORLD else f_a @ v1[r]
             d = p_b - p_a
             dd = v_b - v_a
             g = e @ d
             gd = e @ dd
             kappa = e @ (acc_b - acc_a)
-            if kind[r] == 1:                # e turns with side a: its rates enter
+            if kind[r] == _GAP_A:           # e turns with side a: its rates enter
                 we = _cross(w_a, e)
                 gd += we @ d
                 kappa += _cross(w_a, we) @ d + 2.0 * (we @ dd)
@@ -1495,7 +1496,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     closure_load = np.zeros((loops[5].shape[0], 6))
     for r in range(n_rows):
         lam = x[loops[0] + r]
-        at = 3 if loops[1][r] == 2 else 0
+        at = 3 if loops[1][r] == _DOT else 0
         for i in range(3):
             closure_load[loops[2][r], at + i] += lam * directions[r, i]
     n = body_params.shape[0]
@@ -1593,24 +1594,10 @@ LOOP_DAMPING = 20.0
 
 def _loop_rows(model, col0):
     """The closing joints as the kernels read them (_closure_rows): (first multiplier column,
-    per row its kind (0 a gap along a world axis, 1 along an axis of side a, 2 a dot), its
-    closing joint, x or e, y, then per closing joint its sides' bodies, points and end flags,
-    and the stabilization's gains)."""
-    kinds, owner, v1, v2 = [], [], [], []
-    for c in range(model.n_closures):
-        points, dots = constraint_directions(model, c)
-        for frame, e in points:
-            kinds.append(0 if frame == "w" else 1)
-            owner.append(c)
-            v1.append(e)
-            v2.append(np.zeros(3))
-        for x, y in dots:
-            kinds.append(2)
-            owner.append(c)
-            v1.append(x)
-            v2.append(y)
-    return (col0, np.array(kinds, dtype=np.int64), np.array(owner, dtype=np.int64),
-            np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3),
+    per row its kind (closures.GAP_WORLD, GAP_A or DOT), its closing joint, x or e, y, then per
+    closing joint its sides' bodies, points and end flags, and the stabilization's gains)."""
+    kind, owner, v1, v2 = constraint_rows(model)
+    return (col0, kind, owner, v1, v2,
             np.array(model.closure_body, dtype=np.int64).reshape(-1, 2),
             np.array(model.closure_point, dtype=float).reshape(-1, 2, 3),
             np.array(model.closure_on_end, dtype=np.int64).reshape(-1, 2),
