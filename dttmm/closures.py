@@ -319,9 +319,9 @@ def describe_closures(model):
 
 def check_runs_in_sweeps(model, who, time_step=False):
     """Refuse, before a DT-TMM run (time_step) or static solve, the loops its sweeps do not
-    close yet, naming them: the time step closes loops of rigid bodies on a fixed ground
-    (kernels/closure.py), and a chain's tip joined to a fixed ground by a ball joint anywhere;
-    statics only the latter.  The pinned tip must start on its pin (the sweeps hold it where it
+    close yet, naming them: the time step closes loops of rigid bodies and beams (at their
+    output ends) on a fixed ground without elastic hinges (kernels/closure.py), and a chain's
+    tip joined to a fixed ground by a ball joint anywhere; statics only the latter.  The pinned tip must start on its pin (the sweeps hold it where it
     starts)."""
     if model.n_closures == 0:
         return
@@ -339,18 +339,25 @@ def check_runs_in_sweeps(model, who, time_step=False):
                          f"joint (tip='ball'); dttmm.simulate runs loops of rigid bodies, and "
                          f"the Newton-Euler reference every loop (dttmm.simulate_reference)")
     why = None
-    if np.any(model.body_kind == BEAM):
-        k = int(np.nonzero(model.body_kind == BEAM)[0][0])
-        why = f"body '{model.body_names[k]}' is a beam"
-    elif np.any(model.hinge_kind == ELASTIC):
+    beam_input = [(c, s) for c in range(model.n_closures) for s in range(2)
+                  if model.closure_body[c, s] >= 0 and not model.closure_on_end[c, s]
+                  and model.body_kind[model.closure_body[c, s]] == BEAM]
+    if beam_input:
+        c, s = beam_input[0]
+        raise ValueError(f"{who}: closure '{model.closure_names[c]}' joins beam "
+                         f"'{model.body_names[model.closure_body[c, s]]}' at its input end: "
+                         f"DT-TMM closes loops at a beam's output end (or at a point of the "
+                         f"body the beam hangs from); the Newton-Euler reference runs it "
+                         f"(dttmm.simulate_reference)")
+    if np.any(model.hinge_kind == ELASTIC):
         k = int(np.nonzero(model.hinge_kind == ELASTIC)[0][0])
         why = f"hinge '{model.hinge_names[k]}' is elastic"
     elif model.ground_motion is not None:
         why = "the ground moves"
     if why is not None:
-        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM with rigid bodies on "
-                         f"a fixed ground so far, and {why}; the Newton-Euler reference runs "
-                         f"them (dttmm.simulate_reference)")
+        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM with rigid bodies "
+                         f"and beams on a fixed ground so far, and {why}; the Newton-Euler "
+                         f"reference runs them (dttmm.simulate_reference)")
 
 
 # ----------------------------------------------------------------------------------------------

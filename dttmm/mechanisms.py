@@ -238,3 +238,60 @@ def stewart_platform(drive="motion", gravity=(0.0, 0.0, -9.81), slide_rates=None
         system.close(BallJoint(name=f"S{i + 1}"), f"upper{i + 1}", "platform",
                      at_b=f"p{i + 1}")
     return assemble(system.build())
+
+
+FLEXIBLE_CRANK_RATE = 150.0          # rad/s, seed 000's prescribed crank speed
+
+
+def flexible_slider_crank(elements=1, modes=3, axial_modes=1, crank_rate=FLEXIBLE_CRANK_RATE,
+                          crank_mass=0.1):
+    """The flexible slider-crank of seed 000 (section 1.4; planar, no gravity; SI units).
+
+    Crank OA: a rigid bar 0.15 m long on a revolute joint "O" about world z at the origin,
+    turned at a prescribed crank_rate (rad/s, counterclockwise) from theta = 0 (A on +x);
+    crank_mass (kg, uniform bar; the benchmark leaves it open, and under the prescribed motion
+    only the drive's torque depends on it).  Rod AB: an Euler-Bernoulli beam of steel, 0.3 m,
+    circular section d = 6 mm (E = 2e11 Pa, rho = 7870 kg/m^3, so mu = 0.2225 kg/m, EI = 12.72
+    N m^2, EA = 5.65e6 N), stretching (axial_modes), on a revolute joint "A" about z at the
+    crank's end, made of `elements` beams welded end to end ("rod1".., each with `modes` bending
+    modes per plane).  Slider B: a point mass of half the rod's mass, "slider", on a prismatic
+    joint "slide" along world x; the rod's output end is closed to it by a revolute joint "B"
+    about z.  At t = 0 the rod lies straight along +x with rigid-body velocities (assembled
+    keeping the crank's drive).
+
+    Returns
+    -------
+    Model
+        Bodies "crank", "rod1".. "rod{elements}", "slider".
+    """
+    from .elements import EulerBernoulliBeam, FixedHinge, JointMotion
+    crank, rod = 0.15, 0.3
+    d = 6e-3
+    area, second_moment = np.pi * d * d / 4, np.pi * d ** 4 / 64
+    density, young = 7870.0, 2e11
+    mu = density * area
+    z = [0, 0, 1.0]
+    system = System(gravity=[0, 0, 0])
+    drive = JointMotion(position=lambda t: crank_rate * t, velocity=lambda t: crank_rate,
+                        acceleration=lambda t: 0.0)
+    system.add(RigidBody(mass=crank_mass, inertia=[1e-6, crank_mass * crank ** 2 / 12,
+                                                   crank_mass * crank ** 2 / 12],
+                         inertia_about="mass_center", to_mass_center=[crank / 2, 0, 0],
+                         to_output=[crank, 0, 0], rotation=np.eye(3), name="crank"),
+               RevoluteJoint(axis=z, drive=drive, name="O"))
+    length = rod / elements
+    for i in range(elements):
+        beam = EulerBernoulliBeam(length=length, density=density, area=area,
+                                  bending_stiffness=young * second_moment,
+                                  polar_inertia_per_length=density * 2 * second_moment,
+                                  modes_per_plane=modes, axial_modes=axial_modes,
+                                  axial_stiffness=young * area, rotation=np.eye(3),
+                                  name=f"rod{i + 1}")
+        joint = RevoluteJoint(axis=z, name="A") if i == 0 else FixedHinge(name=f"weld{i}")
+        system.add(beam, joint, parent="crank" if i == 0 else f"rod{i}")
+    slider_mass = 0.5 * mu * rod
+    system.add(RigidBody(mass=slider_mass, inertia=[1e-9] * 3, inertia_about="mass_center",
+                         name="slider", rotation=np.eye(3)),
+               PrismaticJoint(axis=[1.0, 0, 0], position=crank + rod, name="slide"))
+    system.close(RevoluteJoint(axis=z, name="B"), f"rod{elements}", "slider")
+    return assemble(system.build(), keep=["O"])

@@ -262,7 +262,8 @@ def loop_tables(model):
                  gd=np.zeros(r), loads=np.zeros((r + 1, n, 6)),
                  p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
                  h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
-                 free_store=np.zeros((n, 4), dtype=np.int64), stats=np.zeros(4))
+                 free_store=np.zeros((n, 4), dtype=np.int64),
+                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), stats=np.zeros(4))
 
 
 def _loop_info(loops):
@@ -1381,8 +1382,17 @@ def kernel_model(model):
         if model.parent[c] >= 0:
             children[model.parent[c]].append(c)
 
+    # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
+    # side is the end section (kernels/closure.py reads rigid sides only)
+    closed_ends = set()
+    if model.n_closures and not model.tip_pinned:
+        on_end = np.asarray(model.closure_on_end, dtype=bool)
+        closed_ends = {int(k) for k in np.asarray(model.closure_body)[on_end]}
+
     def needs_section(k):
         hinges = [int(model.hinge_kind[c]) for c in children[k]]
+        if k in closed_ends:
+            return True
         if model.body_kind[k] != BEAM or not hinges:
             return False
         if any(h in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC) for h in hinges):
@@ -1452,8 +1462,10 @@ def kernel_model(model):
     attachment_point = np.zeros((len(parent), 3))
     inner = parent >= 0
     attachment_point[inner] = arrays["body_params"][parent[inner]][:, TO_OUTPUT]
-    body = np.array(model.closure_body)             # the closing joints' sides, renumbered
-    body[body >= 0] = np.array(keep)[body[body >= 0]]
+    body = np.array(model.closure_body)             # the closing joints' sides, renumbered:
+    for c, s in zip(*np.nonzero(body >= 0)):        # a beam's output end to its end section
+        k = int(body[c, s])
+        body[c, s] = hub[k] if k in closed_ends and model.closure_on_end[c, s] else keep[k]
     return replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
                    attachment=np.zeros(len(parent), dtype=np.int64),
                    attachment_point=attachment_point, frequency_cutoff_reasons=(),

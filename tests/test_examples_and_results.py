@@ -222,8 +222,9 @@ def test_rotating_beam_mass_one_element_meets_the_reference_and_the_chain():
 
 
 def test_the_closed_loop_examples(tmp_path):
-    """examples/slider_crank.py, four_bar.py and stewart.py run DT-TMM on their loops and write
-    their CSV columns (issue 29); the slider-crank also on the reference."""
+    """examples/slider_crank.py, four_bar.py, stewart.py and flexible_slider_crank.py run DT-TMM
+    on their loops and write their CSV columns (issue 29); the slider-crank also on the
+    reference."""
     sys.path.insert(0, str(ROOT / "examples"))
     import four_bar
     import slider_crank
@@ -242,3 +243,11 @@ def test_the_closed_loop_examples(tmp_path):
     csv = tmp_path / "st.csv"
     assert stewart.main(["--t-end", "0.02", "--dt", "1e-3", "--csv", str(csv)]) == 0
     assert csv.read_text().startswith("t,x,y,z,qw,qx,qy,qz,f1,f2,f3,f4,f5,f6")
+    import flexible_slider_crank
+    csv = tmp_path / "fsc.csv"
+    assert flexible_slider_crank.main(["--t-end", "0.002", "--csv", str(csv), "--elements", "2",
+                                       "--plots", str(tmp_path)]) == 0
+    lines = csv.read_text().splitlines()
+    assert lines[0] == "t,mid_deflection,half_elongation,slider_x" and len(lines) == 22
+    assert (tmp_path / "flexible_slider_crank.png").exists()
+    assert flexible_slider_crank.main(["--elements", "0"]) == 2

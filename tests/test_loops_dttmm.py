@@ -58,18 +58,19 @@ def test_n_four_bar_stays_on_the_parallelogram_through_its_flat_positions():
     assert result.info["loop_position_residual"] < 1e-10
 
 
-def test_loops_on_beams_are_refused_before_the_run_naming_the_body():
-    beam = dttmm.EulerBernoulliBeam(length=1.0, mass_per_length=1.0, bending_stiffness=100.0,
-                                    polar_inertia_per_length=1e-4, name="beam")
+def test_loops_with_an_elastic_hinge_are_refused_before_the_run_naming_the_hinge():
     system = System()
     link = system.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
                                 to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="link"),
                       BallJoint())
-    system.add(beam, BallJoint(), parent=link)
-    system.close(BallJoint(), "beam", "ground", at_b=[2.0, 0.0, 0.0])
-    system.close(BallJoint(), "link", "ground")
-    with pytest.raises(ValueError, match="rigid bodies on a fixed ground so far, and body "
-                                         "'beam' is a beam"):
+    system.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
+                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="arm"),
+               dttmm.ElasticHinge(translational_stiffness=1e6, rotational_stiffness=1e3,
+                                  name="spring"), parent=link)
+    system.close(dttmm.UniversalJoint(axis1=[0, 0, 1.0], axis2=[0, 1.0, 0]), "arm", "ground",
+                 at_b=[2.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="rigid bodies and beams on a fixed ground so far, and "
+                                         "hinge 'spring' is elastic"):
         simulate(system.build(), 0.1, 1e-3)
 
 

@@ -28,9 +28,12 @@ from numba import njit
 
 from . import CONTRACT
 from ..closures import DOT, GAP_A, GAP_WORLD
-from ..elements.hinges import AXIS_1
+from ..elements import BEAM
+from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
+from ..elements.hinges import AXIS_1, FIXED
 from ..elements.joints import PRISMATIC
-from .joint import FREE, PRESCRIBED, n_coordinates
+from .beam import end_section_motion
+from .joint import FREE, PRESCRIBED, joint_frame, n_coordinates
 from .so3 import expm_so3
 from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 
@@ -51,6 +54,7 @@ Loops = namedtuple("Loops", [
     "loads", "p_col", "port_col",    # (R + 1, n, 6), (R + 1, 2n + 1, 6), (R + 1, n, 6):
     "h_store", "k_store", "free_store",   # sweep_columns' scratch: (n, 3, 6), (R + 1, n, 3),
                                      # (n, 4) int
+    "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
@@ -69,11 +73,45 @@ def _cross(a, b):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def tree_points(params, rot, w, jq, jqd, loops):
+def _beam_offset(params, k, rot, w, eta, eta_d):
+    """Beam k's output point from its input point, rho = A p and its rate w x rho + A p', with
+    p = [L - c(L) + u_x(L), v(L), w(L)] (docs/beam.md, "End sections": c(L) the
+    foreshortening with geometric stiffening, beam.end_foreshortening; u_x(L) the stretch;
+    result.beam_output_offset in Python)."""
+    bp, moments, mode_off, ends = params.beams[1][k], params.beams[2][k], params.beams[3], \
+        params.beams[4][k]
+    i0 = mode_off[k]
+    m, mt, ma = int(bp[MODES]), int(bp[TORSION_MODES]), int(bp[AXIAL_MODES])
+    p = np.zeros(3)
+    p_d = np.zeros(3)
+    p[0] = bp[LENGTH]
+    for j in range(m):
+        for plane in range(2):
+            p[1 + plane] += ends[j, 0] * eta[i0 + plane * m + j]
+            p_d[1 + plane] += ends[j, 0] * eta_d[i0 + plane * m + j]
+    if bp[STIFFENING] != 0.0:       # c = 1/2 eta^T D0 eta per plane, c' = eta'^T D0 eta
+        for plane in range(2):
+            for a in range(m):
+                for b in range(m):
+                    d0 = moments[a, 2 + m + b]
+                    ea = eta[i0 + plane * m + a]
+                    p[0] -= 0.5 * ea * d0 * eta[i0 + plane * m + b]
+                    p_d[0] -= eta_d[i0 + plane * m + a] * d0 * eta[i0 + plane * m + b]
+    for j in range(ma):
+        i = i0 + 2 * m + mt + j
+        p[0] += ends[m + mt + j, 0] * eta[i]
+        p_d[0] += ends[m + mt + j, 0] * eta_d[i]
+    rho = rot[k] @ p
+    return rho, _cross(w[k], rho) + rot[k] @ p_d
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops):
     """Every body's output point and its velocity (loops.r_out, v_out) from the rotations,
-    angular velocities and joint coordinates and rates: r_in = r_out,P + d (a slide's
-    d = A_P n q), r_out = r_in + A l_IO (rigid bodies; the kernel model hangs every child at
-    its parent's output point)."""
+    angular velocities, joint coordinates and rates and the beams' modal coordinates and rates:
+    r_in = r_out,P + d (a slide's d = A_P n q), r_out = r_in + A l_IO (a rigid body) or
+    r_in + rho (a beam's deflected end, _beam_offset); the kernel model hangs every child at
+    its parent's output point."""
     n = rot.shape[0]
     for k in range(n):
         p = params.parent[k]
@@ -92,9 +130,13 @@ def tree_points(params, rot, w, jq, jqd, loops):
             d = u * jq[k, 0]
             r += d
             v += _cross(w_p, d) + u * jqd[k, 0]
-        arm = rot[k] @ params.body_params[k, 4:7]
+        if params.beams[0][k] == BEAM:
+            arm, arm_rate = _beam_offset(params, k, rot, w, eta, eta_d)
+        else:
+            arm = rot[k] @ params.body_params[k, 4:7]
+            arm_rate = _cross(w[k], arm)
         loops.r_out[k] = r + arm
-        loops.v_out[k] = v + _cross(w[k], arm)
+        loops.v_out[k] = v + arm_rate
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -253,21 +295,80 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _modal_responses(params, loops, eta_map):
+    """loops.eta_col[j]: row j's response of the beams' eta'' (eta'' = eta_map [z_I; 1] at the
+    beam's input station, step.py::_modal_accelerations; homogeneous: its linear part)."""
+    body_kind, mode_off = params.beams[0], params.beams[3]
+    for j in range(loops.kind.shape[0]):
+        z = loops.z_save[j + 1]
+        for k in range(body_kind.shape[0]):
+            if body_kind[k] == BEAM:
+                for i in range(mode_off[k], mode_off[k + 1]):
+                    v = 0.0
+                    for c in range(12):
+                        v += eta_map[i, c] * z[2 * k + 1, c]
+                    loops.eta_col[j, i] = v
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _dependent_frames(params, loops, state):
+    """Every body whose frame follows its parent's, from the parent's (root to leaves, as
+    step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's offset
+    too), a welded body's as the parent's (R0) or its beam's end section's (beam.
+    end_section_motion)."""
+    zero = np.zeros(3)
+    scratch = np.empty(48)
+    body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
+        params.beams[1]
+    for k in range(state.rot.shape[0]):
+        hk = params.hinge_kind[k]
+        p = params.parent[k]
+        if p < 0:
+            rot_p, w_p, wd_p = loops.ground_rot, zero, zero
+        else:
+            rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
+        if n_coordinates(hk) > 0:
+            joint_frame(hk, params.hinge_params[k], rot_p, w_p, wd_p, state.jq[k],
+                        state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
+                        state.omega_dot[k], state.defl[k], state.defl_rate[k])
+        elif hk == FIXED and p >= 0 and not params.locked[k]:
+            rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
+            if body_kind[p] == BEAM:
+                i0, i1 = mode_off[p], mode_off[p + 1]
+                m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
+                end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
+                                   state.eta[i0:i1], state.eta_d[i0:i1], state.eta_acc[i0:i1],
+                                   rest, state.rot[k], state.omega[k], state.omega_dot[k],
+                                   scratch)
+            else:
+                state.rot[k] = rot_p @ rest
+                state.omega[k] = w_p
+                state.omega_dot[k] = wd_p
+        else:
+            continue
+        state.pseudo[k] = state.omega_dot[k]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def _add_rates(params, loops, state, j, f):
-    """Every body's angular velocity and joint coordinate's rate += f times row j's response
-    (the sweep's response of w' and q'' to row j's unit multiplier)."""
+    """The free bodies' angular velocities, the joint coordinates' and the modal coordinates'
+    rates += f times row j's response (of w', q'' and eta''), the dependent frames after them."""
     n = state.rot.shape[0]
     for k in range(n):
         for i in range(3):
             state.omega[k, i] += f * loops.z_save[j + 1, 2 * k + 1, 3 + i]
         for i in range(n_coordinates(params.hinge_kind[k])):
             state.jqd[k, i] += f * loops.nu_save[j + 1, k, i]
+    for i in range(state.eta_d.shape[0]):
+        state.eta_d[i] += f * loops.eta_col[j, i]
+    _dependent_frames(params, loops, state)
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _move(params, loops, state, j, f, e3):
     """Turn every body by f times row j's response of w' (A <- exp(f dw'^) A) and move every
-    joint coordinate by f times its response of q''."""
+    joint and modal coordinate by f times its response of q'' and eta'' (the dependent frames
+    follow in _dependent_frames)."""
     n = state.rot.shape[0]
     phi = np.empty(3)
     for k in range(n):
@@ -277,25 +378,15 @@ def _move(params, loops, state, j, f, e3):
         state.rot[k] = e3 @ state.rot[k]
         for i in range(n_coordinates(params.hinge_kind[k])):
             state.jq[k, i] += f * loops.nu_save[j + 1, k, i]
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def _slides(params, loops, state):
-    """Every slide's offset d = u q and rate d' = w_P x d + u q' from the state (joint.py)."""
-    for k in range(state.rot.shape[0]):
-        if params.hinge_kind[k] == PRISMATIC:
-            p = params.parent[k]
-            rot_p = loops.ground_rot if p < 0 else state.rot[p]
-            u = rot_p @ params.hinge_params[k, AXIS_1_START:AXIS_1_START + 3]
-            w_p = np.zeros(3) if p < 0 else state.omega[p]
-            state.defl[k] = u * state.jq[k, 0]
-            state.defl_rate[k] = _cross(w_p, state.defl[k]) + u * state.jqd[k, 0]
+    for i in range(state.eta.shape[0]):
+        state.eta[i] += f * loops.eta_col[j, i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
-    tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
+    tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
+                loops)
     row_positions(params, loops, state.rot, state.omega)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(loops.kind.shape[0]):
@@ -317,14 +408,14 @@ def project_onto_loops(params, loops, state):
     largest residuals before and after (loops.stats)."""
     n_rows = loops.kind.shape[0]
     e3 = np.empty((3, 3))
+    _modal_responses(params, loops, state.eta_map)
     g0, gd0 = _residuals(params, loops, state)
     loops.stats[0] = max(loops.stats[0], g0)
     loops.stats[1] = max(loops.stats[1], gd0)
     base = loops.gd.copy()
     for j in range(n_rows):                 # V, column by column
         _add_rates(params, loops, state, j, 1.0)
-        tree_points(params, state.rot, state.omega, state.jq, state.jqd, loops)
-        row_positions(params, loops, state.rot, state.omega)
+        _residuals(params, loops, state)
         for r in range(n_rows):
             loops.delassus[r, j] = loops.gd[r] - base[r]
         _add_rates(params, loops, state, j, -1.0)
@@ -335,7 +426,7 @@ def project_onto_loops(params, loops, state):
         mu = _least_solve(loops.delassus, -loops.g)
         for j in range(n_rows):
             _move(params, loops, state, j, mu[j], e3)
-        _slides(params, loops, state)
+        _dependent_frames(params, loops, state)
         largest, _ = _residuals(params, loops, state)
     loops.stats[3] = max(loops.stats[3], largest)
     rates = 0.0
@@ -346,7 +437,6 @@ def project_onto_loops(params, loops, state):
         mu = _least_solve(loops.delassus, -loops.gd)
         for j in range(n_rows):
             _add_rates(params, loops, state, j, mu[j])
-        _slides(params, loops, state)
         _, rates = _residuals(params, loops, state)
     loops.stats[2] = max(loops.stats[2], rates)
 
