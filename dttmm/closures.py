@@ -321,8 +321,8 @@ def check_runs_in_sweeps(model, who, time_step=False):
     """Refuse, before a DT-TMM run (time_step) or static solve, the loops its sweeps do not
     close yet, naming them: the time step closes loops of rigid bodies and beams (at their
     output ends) on a fixed ground without elastic hinges (kernels/closure.py), and a chain's
-    tip joined to a fixed ground by a ball joint anywhere; statics only the latter.  The pinned tip must start on its pin (the sweeps hold it where it
-    starts)."""
+    tip joined to a fixed ground by a ball joint anywhere; statics only the latter.  The
+    pinned tip must start on its pin (the sweeps hold it where it starts)."""
     if model.n_closures == 0:
         return
     if model.tip_pinned:
