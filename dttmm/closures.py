@@ -317,12 +317,12 @@ def describe_closures(model):
 
 
 
-def check_runs_in_sweeps(model, who, time_step=False):
-    """Refuse, before a DT-TMM run (time_step) or static solve, the loops its sweeps do not
-    close yet, naming them: the time step closes loops of rigid bodies and beams (at their
-    output ends) on a fixed ground without elastic hinges (kernels/closure.py), and a chain's
-    tip joined to a fixed ground by a ball joint anywhere; statics only the latter.  The
-    pinned tip must start on its pin (the sweeps hold it where it starts)."""
+def check_runs_in_sweeps(model, who):
+    """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet,
+    naming them: loops of rigid bodies and beams (at their output ends) on a fixed ground
+    without elastic hinges (kernels/closure.py), and a chain's tip joined to a fixed ground by
+    a ball joint anywhere.  The pinned tip must start on its pin (the sweeps hold it where it
+    starts)."""
     if model.n_closures == 0:
         return
     if model.tip_pinned:
@@ -333,11 +333,6 @@ def check_runs_in_sweeps(model, who, time_step=False):
                              f"the tip starts (at_b=None)")
         return
     lines = "; ".join(describe_closures(model))
-    if not time_step:
-        raise ValueError(f"{who}: the model's loops ({lines}) do not run here yet: of the closed "
-                         f"loops it closes a chain's tip joined to a fixed ground by a ball "
-                         f"joint (tip='ball'); dttmm.simulate runs loops of rigid bodies, and "
-                         f"the Newton-Euler reference every loop (dttmm.simulate_reference)")
     why = None
     beam_input = [(c, s) for c in range(model.n_closures) for s in range(2)
                   if model.closure_body[c, s] >= 0 and not model.closure_on_end[c, s]
@@ -593,6 +588,48 @@ def loop_residuals(model):
     return pos, vel
 
 
+def check_drives_move(model, who):
+    """Refuse a prescribed motion (JointMotion) on a joint coordinate the loops lock: one that
+    the other coordinates cannot follow, with the other prescribed motions held, without
+    opening a closing joint (the loops' rate Jacobian G, g' = G x' + g'_0, is exact: a unit
+    rate of the driven coordinate that no rates of the others compensate, |G_o y + G_d| > 0
+    at the least-squares y, is locked).  The ValueError names the joint, its coordinate and
+    the closing joints that lock it."""
+    from .elements.drives import MOTION
+    if model.n_closures == 0:
+        return
+    variables, _ = _coordinates(model, ())
+    driven = [j for j, (what, k, i) in enumerate(variables)
+              if what == "q" and len(model.drives[k]) > i and model.drives[k][i] is not None
+              and model.drives[k][i]["kind"] == MOTION]
+    if not driven:
+        return
+    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                  for what, k, i in variables])
+    xd = np.zeros(len(variables))
+    base = closure_residuals(model, _state_of(model, variables, x, xd))
+    jac = np.zeros((base[1].size, len(variables)))
+    for j in range(len(variables)):
+        unit = xd.copy()
+        unit[j] = 1.0
+        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base[1]
+    others = [j for j in range(len(variables)) if j not in driven]
+    for j in driven:
+        column = jac[:, j]
+        y = np.linalg.lstsq(jac[:, others], -column, rcond=1e-10)[0] if others else []
+        left = column + (jac[:, others] @ y if others else 0.0)
+        if np.abs(left).max() > 1e-6 * max(1.0, np.abs(column).max()):
+            _, k, i = variables[j]
+            names = sorted({model.closure_names[c] for c in base[2][np.abs(left) > 1e-6
+                                                                      * np.abs(left).max()]})
+            raise ValueError(f"{who}: the prescribed motion of joint '{model.hinge_names[k]}' "
+                             f"(coordinate {i + 1}) cannot move: closing joint(s) "
+                             f"{', '.join(repr(n) for n in names)} lock it (with the other "
+                             f"prescribed motions held, no motion of the rest keeps the loops "
+                             f"closed); drive a coordinate the loops leave free, or drop the "
+                             f"drive")
+
+
 def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     """Close every loop at t = 0 (docs/loops.md, "Assembly"): move the tree's coordinates the
     least (in the least-squares sense) that makes every closing joint hold, then the rates the
@@ -632,6 +669,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     from dataclasses import replace
     if model.n_closures == 0:
         return model
+    check_drives_move(model, "assemble")
     variables, kept = _coordinates(model, keep)
     x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
                   for what, k, i in variables])

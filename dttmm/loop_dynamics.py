@@ -32,7 +32,7 @@ def loop_accelerations(model):
     from .kernels.closure import row_values
     from .kernels.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
-        solver.check_runs_in_sweeps(model, "loop_accelerations", time_step=True)
+        solver.check_runs_in_sweeps(model, "loop_accelerations")
     km, keep = solver.kernel_model(model)
     mode = solver._mode(km, "riccati", True)
     settings = Settings(mode=mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0).array(),

@@ -18,7 +18,7 @@ FIELDS = (
     "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
     "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
     "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint",
-    "energy_work")
+    "energy_work", "closure_force", "closure_moment")
 # computed from the stored state on first use, when the solver leaves them to its derivation
 DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
            "kinetic", "potential")
@@ -100,6 +100,10 @@ class Result:
         joint's in its own order: coordinates (rad or m), rates (rad/s or m/s), and the
         generalized force (N m or N) each coordinate's drive applies on the child (for a
         prescribed motion, the force the motion needs); None without such joints.
+    closure_force, closure_moment : ndarray (T, closing joints, 3) or None
+        What each closing joint (``System.close``, in the order closed) exerts on its side b,
+        world axes: the force (N) and the couple about b's point (N m); side a receives the
+        opposite.  None without closing joints.
     body_names : tuple of str (n,) or None
         The bodies' names (columns of save_csv).
     energy_work : ndarray (T,) or None

@@ -34,7 +34,8 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
-from .closures import assemble, check_runs_in_sweeps, constraint_rows, loop_residuals
+from .closures import (assemble, check_drives_move, check_runs_in_sweeps, constraint_rows,
+                       loop_residuals)
 from .model import Model, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -263,7 +264,8 @@ def loop_tables(model):
                  p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
                  h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
                  free_store=np.zeros((n, 4), dtype=np.int64),
-                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), stats=np.zeros(4))
+                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 6)),
+                 stats=np.zeros(4))
 
 
 def _loop_info(loops):
@@ -443,9 +445,10 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     state.defl_pseudo[:] = state.defl_acc
 
 
-def _record(n_rec_max, n, n_eta, v_st=False, v_c=False):
+def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
     """Where a chunk's samples are written (kernels/loop.py::Record): n_rec_max of each; the
-    paper scheme's station velocities and the mass-centre velocities only where recorded."""
+    paper scheme's station velocities, the mass-centre velocities and the closing joints'
+    wrenches only where recorded."""
     return Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                   omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
                   defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
@@ -453,7 +456,8 @@ def _record(n_rec_max, n, n_eta, v_st=False, v_c=False):
                   v_st=np.zeros((n_rec_max if v_st else 1, n + 1, 3)),
                   v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
                   jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
-                  jtau=np.zeros((n_rec_max, n, 2)))
+                  jtau=np.zeros((n_rec_max, n, 2)),
+                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 6)))
 
 
 _NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations not finite
@@ -694,9 +698,11 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     wall0 = time.perf_counter()
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
-    if has_loops(model) and max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
-        check_runs_in_sweeps(model, "simulate", time_step=True)
-        model = assemble(model)         # the loops closed at t = 0 first (docs/loops.md)
+    if has_loops(model):
+        check_drives_move(model, "simulate")
+        if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
+            check_runs_in_sweeps(model, "simulate")
+            model = assemble(model)     # the loops closed at t = 0 first (docs/loops.md)
     t_end = _check_positive("t_end", t_end)
     adaptive = rtol is not None
     if adaptive:
@@ -843,6 +849,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
     if mode == kstep.RICCATI_JOINTS:
         keys += ["jq", "jqd", "jtau"]
+    if len(loops.kind):
+        keys.append("closure_wrench")
     if scheme == "energy_momentum":
         loop_name, loop, runner = "energy-momentum", em_step.energy_momentum_loop(n), run_steps
         state.v_c[:] = _initial_mass_center_velocities(model, state.rot, state.omega)
@@ -870,7 +878,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         resume.restore(structures, dict(run_info, method=method, bodies=n,
                                         newton_iterations=int(newton_iterations)))
         counters, done = resume.counters, resume.step
-    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4])
+    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4],
+                          closure_wrench=loops.wrench)
     recording = Recording(keys, keep, None if stream is None else SampleStream.create(
         stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)))
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
@@ -903,7 +912,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         f0, tq0, ll0 = _loads(model, [done * dt])
         balance.start({key: start_values[key][None] for key in keys}, f0[:, keep],
                       tq0[:, keep], ll0[:, keep])
-    rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys)
+    rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys,
+                  loops.wrench.shape[0] if "closure_wrench" in keys else 0)
     joint_input = np.zeros((size, n, 2, 3))
     joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
                             for ds in model.drives for d in ds)
@@ -1243,7 +1253,7 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
     the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); of the closed
     loops, a chain's tip pinned to a fixed ground (closures.check_runs_in_sweeps)."""
-    check_runs_in_sweeps(model, "simulate", time_step=True)
+    check_runs_in_sweeps(model, "simulate")
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):
         raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
                          f"method='riccati' so far, got scheme={scheme!r}, method={method!r}")
@@ -1573,7 +1583,7 @@ def richardson_extrapolation(coarse, fine):
     names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
              "angular_acceleration", "force", "moment", "kinetic", "potential",
              "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
-             "joint_rates", "drive_force")
+             "joint_rates", "drive_force", "closure_force", "closure_moment")
     fields = {name: combine(name) for name in names}
     u, _, vt = np.linalg.svd(combine("rotation"))       # nearest rotation: the polar factor
     u[..., :, 2] *= np.sign(np.linalg.det(u @ vt))[..., None]
@@ -1650,6 +1660,9 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
         for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
                           ("drive_force", "jtau")):
             joints[name] = np.stack([values[key][:, k, i] for k, i in columns], axis=1)
+    if "closure_wrench" in values:
+        joints["closure_force"] = values["closure_wrench"][:, :, :3]
+        joints["closure_moment"] = values["closure_wrench"][:, :, 3:]
     derived = {}
 
     def derivation(name):

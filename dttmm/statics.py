@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 
-from .closures import check_runs_in_sweeps
+from .closures import check_runs_in_sweeps, closure_residuals, start_state
 from .elements import BEAM
 from .elements.drives import MOTION
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
@@ -215,8 +215,10 @@ class _Configuration:
         self.scale = scale
         self.labels = tuple(labels)
         self.mode_off = mode_off
-        # a tip joined to the ground (a closed loop): its output point stays where it starts,
-        # the constraint closure(q) = 0 beside a(q) = 0 (docs/statics.md, "Closed loops")
+        # closed loops: the constraint closure(q) = 0 beside a(q) = 0 (docs/statics.md,
+        # "Closed loops"): a tip joined to the ground stays where it starts; closing joints
+        # hold their rows (closures.closure_residuals)
+        self.closed = model.n_closures > 0
         self.pin = _positions(model)[2][-1] if km.tip_pinned else None
         self.rot0 = np.array(km.initial_rotation)
         self.eta0 = np.array(km.initial_modal_coordinates)
@@ -338,12 +340,17 @@ class _Configuration:
         return self._central_differences(self.accelerations, q, len(q))
 
     def closure(self, q):
-        """The pinned tip's output point less its pin, world, m (a closed loop's constraint)."""
-        return _positions(self.result_model(q))[2][-1] - self.pin
+        """The closed loops' constraints at q: the pinned tip's output point less its pin,
+        world, m; or every closing joint's rows (closures.closure_residuals: gaps, m, and
+        dots)."""
+        model = self.result_model(q)
+        if self.pin is not None:
+            return _positions(model)[2][-1] - self.pin
+        return closure_residuals(model, start_state(model))[0]
 
     def closure_jacobian(self, q):
-        """d closure / dq (3 x n) by central differences, as jacobian's."""
-        return self._central_differences(self.closure, q, 3)
+        """d closure / dq (rows x n) by central differences, as jacobian's."""
+        return self._central_differences(self.closure, q, len(self.closure(q)))
 
     def _central_differences(self, f, q, rows):
         """df/dq (rows x n) by central differences, steps 1e-5 of each coordinate's scale."""
@@ -383,9 +390,11 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         (the equilibrium's deflections are the result model's ``ElasticHinge.deflection``),
         joints with
         coordinates (a coordinate that a JointMotion prescribes is held at its value at t = 0),
-        rigid bodies and beams, in an open chain or tree, or a chain whose tip is pinned to
-        the ground (``tip="ball"``, a closed loop: the tip stays on its pin, where it starts;
-        docs/statics.md, "Closed loops").  Its initial rotations, joint
+        rigid bodies and beams, in an open chain or tree, a chain whose tip is pinned to
+        the ground (``tip="ball"``: the tip stays on its pin, where it starts) or a tree with
+        closing joints (``System.close``, on a fixed ground, without elastic hinges; the
+        model assembled, ``dttmm.assemble``): closed loops (docs/statics.md, "Closed
+        loops").  Its initial rotations, joint
         coordinates and modal coordinates are the first guess; its velocities are ignored
         (the equilibrium is at rest).
     guess : StaticEquilibrium or Model, optional
@@ -469,7 +478,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         # M^-1 K in scaled coordinates
         k = -cfg.jacobian(q) * cfg.scale[None, :] * weight[:, None]
         r = weight * a
-        if cfg.pin is None:
+        if not cfg.closed:
             newton = np.linalg.lstsq(k, r, rcond=1e-13)[0] if len(r) else r
         else:               # a closed loop: Newton's step along the loop's tangent space
             loop = _closed_loop(cfg, q)
@@ -491,7 +500,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             converged = True        # Newton has stopped converging: the residual is at its
             break                   # round-off (with stiff modes, ~1e-6 rad/s^2)
         previous = size
-        if cfg.pin is None:
+        if not cfg.closed:
             if tau is None:         # the settling flow's first step: at most max_increment
                 tau = max_increment / max(np.max(np.abs(r)), 1e-300)
             q_new, a, tau, took_newton = _settling_step(cfg, q, a, k, r, newton, tau,
@@ -519,11 +528,11 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
             f"{cfg.labels[int(np.argmax(np.abs(weight * a)))]}); {hint}"
             + ("; in a closed loop, beam elements without stretch modes keep their length, "
                "so a chain of them held straight between its pins cannot sag: give them "
-               "axial_modes and axial_stiffness" if cfg.pin is not None else ""))
+               "axial_modes and axial_stiffness" if cfg.closed else ""))
     q = cfg.rebase(q)
     _check_within_validity(cfg, q, where)
     jac = cfg.jacobian(q)
-    if cfg.pin is None:
+    if not cfg.closed:
         _check_held(cfg, jac, where)
         lam = np.linalg.eigvals(-jac)
     else:

@@ -102,13 +102,19 @@ def test_a_closing_joint_reads_its_rest_from_the_frames_at_the_start():
     assert np.isclose(gaps[2], np.hypot(0.5, 1.0))          # (0, 0) against (0.5, 1)
 
 
-def test_statics_refuses_the_loops_it_does_not_close_yet_and_says_what_does():
+def test_the_closed_four_bar_is_described_and_an_elastic_loop_refused_by_statics():
     system = four_bar()
     system.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "right", "ground")
     model = system.build()
-    with pytest.raises(ValueError, match="'pin'.*do not run here yet.*dttmm.simulate runs "
-                                         "loops of rigid bodies.*simulate_reference"):
-        dttmm.static_equilibrium(model)
+    soft = four_bar()
+    soft.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
+                       to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="tail"),
+             dttmm.ElasticHinge(translational_stiffness=1e6, rotational_stiffness=1e3,
+                                name="spring"), parent="right")
+    soft.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "tail", "ground")
+    with pytest.raises(ValueError, match="'pin'.*run in DT-TMM with rigid bodies and beams on "
+                                         "a fixed ground so far, and hinge 'spring' is elastic"):
+        dttmm.static_equilibrium(soft.build())
     text = model.describe()
     assert "closure 0 'pin': a revolute joint from 'right' at [1.0, 0.0, 0.0] to the ground" \
         in text
@@ -177,3 +183,34 @@ def test_closing_joints_in_scene_files_round_trip():
         scene_from_dict(bad, "four_bar.toml")
     with pytest.raises(ValueError, match=r"\[\[close\]\] 1: unknown key 'parent'"):
         scene_from_dict(dict(data, close=[{"type": "ball", "a": "right", "parent": "x"}]))
+
+
+def _crank(rate):
+    return dttmm.JointMotion(position=lambda t: rate * t, velocity=lambda t: rate,
+                             acceleration=lambda t: 0.0)
+
+
+def test_a_drive_on_a_joint_the_loop_locks_is_refused_naming_it():
+    """A prescribed motion the loop cannot follow (issue 29's bad input): the four-bar's left
+    crank driven and its coupler's joint driven too (one freedom, two motions), or a joint
+    the loop holds still; assemble, simulate and the reference refuse it, naming the joint
+    and the closing joint.  One drive on the crank is accepted."""
+    def system(drive_top):
+        s = System(gravity=[0, -9.81, 0])
+        left = s.add(bar("left", rotation=UP),
+                     RevoluteJoint(axis=[0, 0, 1], drive=_crank(1.0), name="crank"))
+        top = s.add(bar("top", rotation=np.eye(3)),
+                    RevoluteJoint(axis=[0, 0, 1], name="elbow",
+                                  drive=_crank(0.5) if drive_top else None), parent=left)
+        s.add(bar("right", rotation=rot_z(-np.pi / 2)), RevoluteJoint(axis=[0, 0, 1]),
+              parent=top)
+        s.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "right", "ground")
+        return s.build()
+    dttmm.assemble(system(False))                   # one drive: accepted
+    model = system(True)
+    for run in (dttmm.assemble, lambda m: simulate(m, 0.01, 1e-3),
+                lambda m: dttmm.simulate_reference(m, 0.01)):
+        with pytest.raises(ValueError, match="prescribed motion of joint '(crank|elbow)' "
+                                             r"\(coordinate 1\) cannot move: closing joint\(s\) "
+                                             "'pin' lock it"):
+            run(model)

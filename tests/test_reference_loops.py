@@ -57,8 +57,8 @@ def test_a_bar_pinned_at_both_ends_hangs_half_its_weight_on_each_pin():
                BallJoint())
     system.close(BallJoint(name="far"), "bar", "ground")
     result = simulate_reference(system.build(), 0.5, t_eval=[0.0, 0.5])
-    assert np.allclose(result.info["closure_force"][:, 0], [0.0, -9.81, 0.0], atol=1e-9)
-    assert np.abs(result.info["closure_moment"]).max() < 1e-12
+    assert np.allclose(result.closure_force[:, 0], [0.0, -9.81, 0.0], atol=1e-9)
+    assert np.abs(result.closure_moment).max() < 1e-12
     assert np.allclose(result.force[:, 0], [0.0, 9.81, 0.0], atol=1e-9)
     assert np.abs(result.position_output[-1] - [2.0, 0, 0]).max() < 1e-12
 

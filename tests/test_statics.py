@@ -350,3 +350,56 @@ def test_an_element_bent_beyond_its_validity_is_refused():
     with pytest.raises(dttmm.StaticEquilibriumError, match="body0.*deflects 3.14 m.*split"):
         dttmm.static_equilibrium(one(1.0))
     assert dttmm.static_equilibrium(one(0.25)).positions()[2][-1][0] > 0.0
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
+    """The N-four-bar (closing revolute joints, dttmm.mechanisms.n_four_bar; redundant spatial
+    rows of a planar loop) from its vertical bars 3 rad off upright: they hang straight down
+    (B_0 at (0, -1)), the horizontal bars above them, and its one swing has the exact
+    reduction's squared frequency g c / I, I = (n + 1) / 3 + n, c = (n + 1) / 2 + n
+    (mechanisms.parallelogram); DT-TMM from the equilibrium stays at rest."""
+    from dttmm.mechanisms import n_four_bar
+    eq = dttmm.static_equilibrium(n_four_bar(n, theta=3.0, rate=0.0))
+    r_o = eq.positions()[2]
+    assert np.abs(r_o[0] - [0.0, -1.0, 0.0]).max() < 1e-9, r_o[0]
+    assert eq.stable
+    swing = 9.81 * ((n + 1) / 2 + n) / ((n + 1) / 3 + n)
+    lam = eq.squared_frequencies[eq.squared_frequencies != 0.0]
+    assert len(lam) == 1 and abs(lam[0] / swing - 1.0) < 1e-6, (eq.squared_frequencies, swing)
+    res = dttmm.simulate(eq.model, 0.2, 1e-3)
+    assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
+
+
+def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
+    """The IFToMM spatial slider-crank under gravity (closed by its prismatic joint): its
+    potential, g (0.12 (0.12 + 0.04 cos th) + 0.5 (0.12 + 0.08 cos th) / 2), is least with the
+    crank hanging down, th = pi, where the slider sits at x = sqrt(0.3^2 - 0.1^2 - 0.04^2) =
+    0.28 m; the one small vibration's frequency equals the reference's swing from 0.01 rad off
+    (its period measured over 2 s)."""
+    from dttmm.mechanisms import slider_crank
+    from helpers import crossing_period
+    model = slider_crank(crank_rate=0.0)
+    eq = dttmm.static_equilibrium(dttmm.assemble(_with_crank(model, 2.5), keep=["A"]))
+    crank_tip, slider = eq.positions()[2][0], eq.positions()[0][2]
+    assert np.abs(crank_tip - [0.0, 0.1, 0.04]).max() < 1e-9, crank_tip
+    assert abs(slider[0] - 0.28) < 1e-9, slider
+    assert eq.stable
+    lam = eq.squared_frequencies[eq.squared_frequencies != 0.0]
+    assert len(lam) == 1, eq.squared_frequencies
+    t = np.linspace(0.0, 2.0, 2001)
+    swing = dttmm.simulate_reference(
+        dttmm.assemble(_with_crank(eq.model, np.pi + 0.01), keep=["A"]), 2.0, t_eval=t,
+        rtol=1e-10, atol=1e-12)
+    period = crossing_period(t, swing.joint_coordinates[:, 0])
+    assert abs((2 * np.pi / period) ** 2 / lam[0] - 1.0) < 2e-3, (period, lam)
+
+
+def _with_crank(model, angle):
+    """The model with the crank's joint coordinate set to angle (rad), at rest."""
+    from dataclasses import replace
+    hinge_params = np.array(model.hinge_params)
+    hinge_params[0, 51] = angle
+    hinge_params[:, 53:55] = 0.0
+    return replace(model, hinge_params=hinge_params,
+                   initial_angular_velocity=np.zeros((model.n_bodies, 3)))

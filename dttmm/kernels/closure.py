@@ -55,6 +55,8 @@ Loops = namedtuple("Loops", [
     "h_store", "k_store", "free_store",   # sweep_columns' scratch: (n, 3, 6), (R + 1, n, 3),
                                      # (n, 4) int
     "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
+    "wrench",                        # (m, 6) each closing joint's force and couple on side b
+                                     # (world; the couple about its point) from loops.lam
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
@@ -249,6 +251,27 @@ def _least_solve(a, b):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def closure_wrenches(params, loops, rot):
+    """loops.wrench: each closing joint's force and couple on side b (world axes; the couple
+    about b's point) from the multipliers loops.lam: a gap row's lam e, a dot row's couple
+    lam (y x x) (the module docstring), with the rows' directions at the rotations rot."""
+    loops.wrench[:, :] = 0.0
+    for r in range(loops.kind.shape[0]):
+        c = loops.owner[r]
+        ka, kb = loops.body[c, 0], loops.body[c, 1]
+        f_a = loops.ground_rot if ka < 0 else rot[ka]
+        if loops.kind[r] == DOT:
+            f_b = loops.ground_rot if kb < 0 else rot[kb]
+            couple = _cross(f_b @ loops.v2[r], f_a @ loops.v1[r])
+            for i in range(3):
+                loops.wrench[c, 3 + i] += loops.lam[r] * couple[i]
+        else:
+            e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
+            for i in range(3):
+                loops.wrench[c, i] += loops.lam[r] * e[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     """The sweep with the closing joints' multipliers (the module docstring): the step and
     every row's response to its unit multiplier in one sweep (sweep_columns) into
@@ -284,6 +307,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
             loops.delassus[r, j] = loops.values[j + 1, r] - kappa[r]
     lam = _least_solve(loops.delassus, -loops.values[0])
     loops.lam[:] = lam
+    closure_wrenches(params, loops, rot)
     z[:, :] = loops.z_save[0]
     sw.joint_nu[:, :] = loops.nu_save[0]
     sw.joint_tau[:, :] = loops.tau_save[0]

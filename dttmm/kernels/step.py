@@ -871,6 +871,8 @@ def _record(loop, run, s, slot):
     rec.jq[slot] = state.jq
     rec.jqd[slot] = state.jqd
     rec.jtau[slot] = state.jtau
+    if loop.loops.kind.shape[0] > 0:
+        rec.closure_wrench[slot] = loop.loops.wrench
     if loop.histories[0]:
         rec.v_st[slot] = loop.histories[1]
         rec.v_c[slot] = loop.histories[4]

@@ -229,7 +229,8 @@ from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
 from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
-from ..closures import DOT, GAP_A, GAP_WORLD, assemble, constraint_rows, loop_residuals
+from ..closures import (DOT, GAP_A, GAP_WORLD, assemble, check_drives_move, constraint_rows,
+                        loop_residuals)
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
@@ -1947,6 +1948,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     assembly = None
     if model.n_closures:
+        check_drives_move(model, "simulate_reference")
         before = [float(np.max(r, initial=0.0)) for r in loop_residuals(model)]
         if max(before) > 1e-10:          # close the loops first (closures.assemble)
             model = assemble(model)
@@ -2020,8 +2022,9 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   angular_velocity=omega, angular_acceleration=alpha, force=force, moment=moment,
                   kinetic=kinetic, potential=potential, wall_time=wall, n_steps=n_steps,
                   info={"nfev": nfev, "n_state": prob.n_state, "n_unknowns": prob.n_unknowns,
-                        **({"assembly": assembly, "closure_force": closure_load[:, :, :3],
-                            "closure_moment": closure_load[:, :, 3:]} if assembly else {})},
+                        **({"assembly": assembly} if assembly else {})},
+                  closure_force=closure_load[:, :, :3] if assembly else None,
+                  closure_moment=closure_load[:, :, 3:] if assembly else None,
                   velocity_input=v_in,
                   modal_coordinates=eta if nm > 0 else None,
                   modal_velocities=eta_dot if nm > 0 else None,
