@@ -11,6 +11,7 @@ import numpy as np
 from .closures import assemble
 from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
 from .model import Ground, System
+from .profiles import profile
 
 
 def _frame(x_axis, z_hint):
@@ -206,10 +207,12 @@ def stewart_platform(drive="motion", gravity=(0.0, 0.0, -9.81), slide_rates=None
         frame = _frame(leg, [0, 0, 1.0])
         across = np.cross([0, 0, 1.0], leg)
         across /= np.linalg.norm(across)
-        if drive == "motion":
-            d = JointMotion(position=lambda t, i=i: stewart_reference_slide(i, t)[0],
-                            velocity=lambda t, i=i: stewart_reference_slide(i, t)[1],
-                            acceleration=lambda t, i=i: stewart_reference_slide(i, t)[2])
+        if drive == "motion":           # a profile, so that the model saves to a scene
+            sign = 1.0 if i % 2 == 0 else -1.0
+            slide = profile({"profile": "sine", "amplitude": -0.05 * sign,
+                             "angular_frequency": 2.0 * np.pi, "phase": 0.5 * np.pi,
+                             "offset": 0.05 * sign})
+            d = JointMotion(position=slide, velocity=slide.rate, acceleration=slide.acceleration)
         elif drive == "force":
             d = JointForce(lambda t, q, qd, i=i: 2e4 * (stewart_reference_slide(i, t)[0] - q)
                            - 500.0 * qd)
@@ -272,8 +275,8 @@ def flexible_slider_crank(elements=1, modes=3, axial_modes=1, crank_rate=FLEXIBL
     mu = density * area
     z = [0, 0, 1.0]
     system = System(gravity=[0, 0, 0])
-    drive = JointMotion(position=lambda t: crank_rate * t, velocity=lambda t: crank_rate,
-                        acceleration=lambda t: 0.0)
+    angle = profile({"profile": "linear", "slope": float(crank_rate)})    # (saves to a scene)
+    drive = JointMotion(position=angle, velocity=angle.rate, acceleration=angle.acceleration)
     system.add(RigidBody(mass=crank_mass, inertia=[1e-6, crank_mass * crank ** 2 / 12,
                                                    crank_mass * crank ** 2 / 12],
                          inertia_about="mass_center", to_mass_center=[crank / 2, 0, 0],

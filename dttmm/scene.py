@@ -624,6 +624,8 @@ def to_toml(data):
             table(key, data[key])
     for body in data.get("body", []):
         table("body", body, array=True)
+    for closing in data.get("close", []):
+        table("close", closing, array=True)
     if "run" in data:
         table("run", data["run"])
     return "\n".join(lines).lstrip() + "\n"
