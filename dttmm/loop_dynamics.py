@@ -29,7 +29,7 @@ def loop_accelerations(model):
         Loops the time step does not close yet (beams, elastic hinges, a moving ground).
     """
     from . import solver
-    from .kernels.closure import row_values
+    from .kernels.closure import row_residuals
     from .kernels.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
         solver.check_runs_in_sweeps(model, "loop_accelerations")
@@ -49,9 +49,7 @@ def loop_accelerations(model):
     st = ws.state
     residual = np.zeros(len(loops.kind))
     if len(loops.kind):
-        row_values(params, loops, st.rot, st.omega,
-                   np.ascontiguousarray(st.z[2:2 * n + 1:2, 0:3]),
-                   np.ascontiguousarray(st.z[1:2 * n:2, 3:6]), residual)
+        row_residuals(loops, st.z, residual)
     return {"input_acceleration": st.z[2 * keep + 1, 0:3].copy(),
             "angular_acceleration": st.z[2 * keep + 1, 3:6].copy(),
             "joint_acceleration": st.jqdd[keep].copy(), "multipliers": loops.lam.copy(),

@@ -88,7 +88,7 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0):
     return assemble(system.build(), keep=["A"])
 
 
-def n_four_bar(n=2, theta=0.0, rate=1.0):
+def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     """The N-four-bar (IFToMM / MBS benchmark library A02): 2n + 1 uniform bars, 1 m and 1 kg
     each (1/12 kg m^2 about the joint axis), n + 1 vertical bars on revolute joints to the
     ground at (i, 0) and n horizontal bars on revolute joints between their tops; axes along
@@ -106,6 +106,12 @@ def n_four_bar(n=2, theta=0.0, rate=1.0):
     rate : float
         theta' at t = 0, rad/s (default 1: the top of the first bar, B_0, moves at (1, 0) m/s
         when upright; every vertical bar turns at -rate about z), the rest assembled.
+    tree : {"chain", "ground"}
+        The spanning tree: "chain" (default) as above, every loop through v0; "ground": a base
+        welded to the ground carries every vertical bar "v0".. "v{n}" on its joint "O{i}" at
+        (i, 0), each horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed
+        to v{i}'s top by a revolute joint "B{i}": each loop is then local (its sweep columns
+        pass four bars, kernels/closure.py), the cost linear in n.
 
     Returns
     -------
@@ -123,6 +129,23 @@ def n_four_bar(n=2, theta=0.0, rate=1.0):
                          name=name)
     z = [0, 0, 1.0]
     system = System(gravity=[0, -9.81, 0])
+    if tree == "ground":
+        from .elements import FixedHinge
+        system.add(RigidBody(mass=1.0, inertia=[1.0, 1.0, 1.0], inertia_about="mass_center",
+                             name="base", points={f"O{i}": [float(i), 0, 0]
+                                                  for i in range(n + 1)}),
+                   FixedHinge(name="base weld"))
+        for i in range(n + 1):
+            system.add(bar(f"v{i}", _rot_z(np.pi / 2 - theta)),
+                       RevoluteJoint(axis=z, rate=-rate if i == 0 else 0.0, name=f"O{i}"),
+                       parent="base", at=f"O{i}")
+        for i in range(1, n + 1):
+            system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"),
+                       parent=f"v{i - 1}")
+            system.close(RevoluteJoint(axis=z, name=f"B{i}"), f"h{i}", f"v{i}")
+        return assemble(system.build(), keep=["O0"])
+    if tree != "chain":
+        raise ValueError(f"n_four_bar: tree must be 'chain' or 'ground', got {tree!r}")
     system.add(bar("v0", _rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
     inboard = "v0"
     for i in range(1, n + 1):

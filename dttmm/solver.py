@@ -243,9 +243,42 @@ def full_tree(model, full_state=False):
             or (not model.is_chain and (full_state or not model.all_ball)))
 
 
+# loops with more rows than this whose rows' matrices are banded (half the rows wide at most)
+# are solved by a regularized banded LU, fewer by the truncated SVD
+# (kernels/closure.py::_rows_solve; at 50 rows the SVD costs 1.3 ms, the band's LU ~10 us)
+BANDED_ROWS = 20
+
+
+def _column_bodies(model, loaded):
+    """(up, active) of a column loaded at the bodies `loaded` (kernels/closure.py): its active
+    bodies are the subtrees of its loaded bodies' topmost moving ancestors (below the ground
+    and the bodies locked to it, whose kinematics a load does not change), where its response
+    is not zero; up adds the loaded bodies' other ancestors, which its upward sweep passes
+    too (their loads, for the step's own recovery)."""
+    parent, locked = model.parent, np.asarray(model.ground_locked, dtype=bool)
+    up, tops = set(), set()
+    for b in loaded:
+        k = int(b)
+        top = None if locked[k] else k
+        while k >= 0:
+            up.add(k)
+            if not locked[k]:
+                top = k
+            k = int(parent[k])
+        if top is not None:
+            tops.add(top)
+    active = np.zeros(model.n_bodies, dtype=bool)
+    for k in range(model.n_bodies):           # (parents come first)
+        p = int(parent[k])
+        active[k] = k in tops or (p >= 0 and active[p])
+    return up | set(np.nonzero(active)[0].tolist()), active
+
+
 def loop_tables(model):
     """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
-    kernel model's numbering, with their scratch; no rows without loops."""
+    kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
+    sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
+    _column_bodies."""
     n = model.n_bodies
     kind, owner, v1, v2 = constraint_rows(model, None if has_loops(model) else ())
     m = model.n_closures if len(kind) else 0
@@ -253,17 +286,53 @@ def loop_tables(model):
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
     point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
+    act = np.zeros((r + 1, n), dtype=bool)
+    act[0] = True
+    ups = [[] for _ in range(n)]
+    act_idx = []
+    act_ptr = [0, 0]
+    per_closure = {}
+    for row in range(r):
+        c = int(owner[row])
+        if c not in per_closure:
+            per_closure[c] = _column_bodies(model, [b for b in body[c] if b >= 0])
+        up, active = per_closure[c]
+        act[row + 1] = active
+        for k in sorted(up):
+            ups[k].append(row + 1)
+        act_idx.extend(np.nonzero(active)[0].tolist())
+        act_ptr.append(len(act_idx))
+    up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
+    sides = body[owner] if r else np.zeros((0, 2), dtype=np.int64)     # (R, 2), -1 ground
+    reach = np.concatenate([act, np.zeros((r + 1, 1), dtype=bool)], axis=1)[1:][:, sides]
+    colrows = [np.nonzero(hit.any(axis=1))[0].tolist() for hit in reach]     # (R, R, 2)
+    col_body = np.full((r + 1, 2), -1, dtype=np.int64)
+    col_body[1:] = body[owner] if r else col_body[1:]
+    # the rows' matrices' band (row q of column j's rows): solved banded where it is narrow
+    lower = max([q - j for j, rows in enumerate(colrows) for q in rows], default=0)
+    upper = max([j - q for j, rows in enumerate(colrows) for q in rows], default=0)
+    banded = r > BANDED_ROWS and 2 * (lower + upper + 1) <= r
     return Loops(kind=kind, owner=owner, v1=v1, v2=v2,
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
+                 coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
                  z_save=np.zeros((r + 1, 2 * n + 1, 12)),
                  nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
-                 delassus=np.zeros((r, r)), lam=np.zeros(r), values=np.zeros((r + 1, r)),
+                 delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
                  r_out=np.zeros((n, 3)), v_out=np.zeros((n, 3)), g=np.zeros(r),
-                 gd=np.zeros(r), loads=np.zeros((r + 1, n, 6)),
+                 gd=np.zeros(r), col_body=col_body, col_load=np.zeros((r + 1, 2, 6)),
+                 up_ptr=up_ptr, up_idx=np.array([c for u in ups for c in u], dtype=np.int64),
+                 act_ptr=np.array(act_ptr, dtype=np.int64),
+                 act_idx=np.array(act_idx, dtype=np.int64), act=act,
+                 all_bodies=np.arange(n, dtype=np.int64),
+                 all_rows=np.arange(r, dtype=np.int64),
+                 band=np.array([lower, upper] if banded else [-1, -1], dtype=np.int64),
+                 colrow_ptr=np.cumsum([0] + [len(c) for c in colrows]).astype(np.int64),
+                 colrow_idx=np.array([q for c in colrows for q in c], dtype=np.int64),
                  p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
                  h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
                  free_store=np.zeros((n, 4), dtype=np.int64),
+                 p_comb=np.zeros((2 * n + 1, 6)), k_comb=np.zeros((n, 3)),
                  eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 6)),
                  stats=np.zeros(4))
 

@@ -3,23 +3,28 @@
 The tree's full-state sweep (sweep.py::riccati_tree_full) is linear in the loads at its
 stations.  Each scalar constraint r of a closing joint acts through one multiplier lam_r, its
 loads on the sides' output stations the constraint's Jacobian transposed (a gap row: a force
-lam_r e on side b at its point, -lam_r e on side a at the same point; a dot row: a couple
-lam_r (y x x) on b, its opposite on a).  One sweep of the step with a P column per row
-(sweep_columns: the Riccati matrices once) gives the stations as affine functions of the
-multipliers; the rows' values
+lam_r e on side b at its point, -lam_r e on side a at a's point; a dot row: a couple
+lam_r (y x x) on b, its opposite on a).  One sweep carries the step and a P column per row
+(sweep_columns: the Riccati matrices once; a row's column only over the bodies its loads
+reach), so that the stations are affine functions of the multipliers; the rows' values
 
     gap (e world):   e . (a_b - a_a)
     gap (e in a):    e . (a_b - a_a) + (e x d) . alpha_a + (w_a x (w_a x e)) . d + 2 (w_a x e) . d'
     dot:             (y x x) . (alpha_b - alpha_a) + (w_b - w_a) . ((w_b x y) x x + y x (w_a x x))
 
-(a point's acceleration a = a_O + alpha x arm + w x (w x arm) from its body's output station)
+(a point's acceleration a = a_O + alpha x arm + w x (w x arm) from its body's output station;
+_row_coefficients writes them as the Jacobian applied to the stations plus velocity terms)
 are held at zero, the constraints' second derivatives (acceleration level, as the consistent
 start and the pinned tip hold theirs).  After the step the configuration and then the rates
 are projected back onto the loops along the step's own responses to unit multipliers
 (project_onto_loops), so that every step ends with its loops closed.
 
-Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies, a fixed
-ground; every joint kind in the tree.
+A row's response is zero outside the subtrees of its loaded bodies' topmost moving ancestors
+(its active bodies, solver._column_bodies): below a fixed ground, a loop that closes near it
+costs the sweep, the Delassus matrix and the projection only its own bodies.
+
+Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies and beams
+(closed at their output ends), a fixed ground; every joint kind in the tree.
 """
 from collections import namedtuple
 
@@ -47,13 +52,27 @@ Loops = namedtuple("Loops", [
                                      # body's frame from its input point; the ground's: world,
                                      # from the ground point)
     "ground", "ground_rot",          # (3,), (3, 3) the ground point and frame (a fixed ground)
-    "z_save", "nu_save", "tau_save",  # (R + 1, ...) each sweep's stations and joints
-    "delassus", "lam", "values",     # (R, R), (R,), (R + 1, R)
+    "coef", "kappa",                 # (R, 4, 3), (R,): the rows' Jacobian and velocity terms
+                                     # (_row_coefficients)
+    "z_save", "nu_save", "tau_save",  # (R + 1, ...) column 0's and each row's response's
+                                     # stations and joints (on the row's active bodies only)
+    "delassus", "lam", "rhs",        # (R, R), (R,), (R,)
     "r_out", "v_out",                # (n, 3) each: the output points' positions, velocities
     "g", "gd",                       # (R,) the rows' positions and rates
-    "loads", "p_col", "port_col",    # (R + 1, n, 6), (R + 1, 2n + 1, 6), (R + 1, n, 6):
-    "h_store", "k_store", "free_store",   # sweep_columns' scratch: (n, 3, 6), (R + 1, n, 3),
-                                     # (n, 4) int
+    "col_body", "col_load",          # (R + 1, 2), (R + 1, 2, 6): each column's loaded output
+                                     # stations (-1: none) and station loads
+    "up_ptr", "up_idx",              # CSR over the bodies: the columns c >= 1 whose sweep
+                                     # passes each body (its active bodies and their ancestors)
+    "act_ptr", "act_idx", "act",     # CSR over the columns (R + 2,): each column's active
+                                     # bodies in tree order; (R + 1, n) the same as a mask
+    "all_bodies", "all_rows",        # (n,) 0 .. n - 1, (R,) 0 .. R - 1
+    "band",                          # (2,) the rows' matrices' lower and upper bandwidths
+                                     # where a banded solve pays (_rows_solve), else -1
+    "colrow_ptr", "colrow_idx",      # CSR over the rows' columns: the rows with a side body
+                                     # among each column's active bodies
+    "p_col", "port_col",             # (R + 1, 2n + 1, 6), (R + 1, n, 6): sweep_columns' scratch,
+    "h_store", "k_store", "free_store",   # (n, 3, 6), (R + 1, n, 3), (n, 4) int
+    "p_comb", "k_comb",              # (2n + 1, 6), (n, 3): the multipliers' superposition
     "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
     "wrench",                        # (m, 6) each closing joint's force and couple on side b
                                      # (world; the couple about its point) from loops.lam
@@ -108,14 +127,15 @@ def _beam_offset(params, k, rot, w, eta, eta_d):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops):
-    """Every body's output point and its velocity (loops.r_out, v_out) from the rotations,
-    angular velocities, joint coordinates and rates and the beams' modal coordinates and rates:
-    r_in = r_out,P + d (a slide's d = A_P n q), r_out = r_in + A l_IO (a rigid body) or
-    r_in + rho (a beam's deflected end, _beam_offset); the kernel model hangs every child at
-    its parent's output point."""
-    n = rot.shape[0]
-    for k in range(n):
+def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
+    """The output point and its velocity (loops.r_out, v_out) of the given bodies (in tree
+    order; the others' are read as they are) from the rotations, angular velocities, joint
+    coordinates and rates and the beams' modal coordinates and rates: r_in = r_out,P + d (a
+    slide's d = A_P n q), r_out = r_in + A l_IO (a rigid body) or r_in + rho (a beam's
+    deflected end, _beam_offset); the kernel model hangs every child at its parent's output
+    point."""
+    for q in range(bodies.shape[0]):
+        k = bodies[q]
         p = params.parent[k]
         if p < 0:
             r = loops.ground.copy()
@@ -154,9 +174,11 @@ def _side(params, loops, rot, w, c, s):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def row_positions(params, loops, rot, w):
-    """The rows' positions g and rates g' (loops.g, gd) at the points loops.r_out, v_out."""
-    for r in range(loops.kind.shape[0]):
+def row_positions(params, loops, rot, w, rows):
+    """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
+    v_out."""
+    for q in range(rows.shape[0]):
+        r = rows[q]
         c = loops.owner[r]
         _, p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, c, 0)
         _, p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, c, 1)
@@ -175,72 +197,90 @@ def row_positions(params, loops, rot, w):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def row_values(params, loops, rot, w, acc, alpha, out):
-    """Every row's value (the module docstring) from the output stations' accelerations acc
-    (n, 3) and the bodies' angular accelerations alpha (n, 3)."""
+def _row_coefficients(params, loops, rot, w):
+    """The rows' Jacobian at the points loops.r_out, v_out (tree_points) and the rotations and
+    angular velocities rot, w: row r's value (the module docstring) is
+        kappa_r + coef[r, 0] . a_a + coef[r, 1] . alpha_a + coef[r, 2] . a_b + coef[r, 3] . alpha_b
+    (a the side body's output station's acceleration, alpha its angular acceleration), its rate
+    the same linear form of the velocities without kappa, and its unit multiplier's loads on
+    the sides' output stations are -[coef alpha; coef a] (the Jacobian transposed):
+        gap:  a_a: -e, alpha_a: -(arm_a x e) (+ e x d, e in a's frame), a_b: e, alpha_b: arm_b x e
+        dot:  alpha_a: -(y x x), alpha_b: y x x
+    with arm the point from its body's output point and d = p_b - p_a."""
     for r in range(loops.kind.shape[0]):
         c = loops.owner[r]
-        ka, p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, c, 0)
-        kb, p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, c, 1)
-        acc_a, al_a, acc_b, al_b = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-        if ka >= 0:
-            al_a = alpha[ka]
-            acc_a = acc[ka] + _cross(al_a, arm_a) + _cross(w_a, _cross(w_a, arm_a))
-        if kb >= 0:
-            al_b = alpha[kb]
-            acc_b = acc[kb] + _cross(al_b, arm_b) + _cross(w_b, _cross(w_b, arm_b))
+        _, p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, c, 0)
+        _, p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, c, 1)
+        co = loops.coef[r]
         if loops.kind[r] == DOT:
             x = f_a @ loops.v1[r]
             y = f_b @ loops.v2[r]
-            out[r] = (_cross(y, x) @ (al_b - al_a)
-                      + (w_b - w_a) @ (_cross(_cross(w_b, y), x) + _cross(y, _cross(w_a, x))))
-        else:
-            e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
-            out[r] = e @ (acc_b - acc_a)
-            if loops.kind[r] == GAP_A:
-                d = p_b - p_a
-                we = _cross(w_a, e)
-                out[r] += (_cross(e, d) @ al_a + _cross(w_a, we) @ d
-                           + 2.0 * (we @ (v_b - v_a)))
+            yx = _cross(y, x)
+            for i in range(3):
+                co[0, i] = 0.0
+                co[1, i] = -yx[i]
+                co[2, i] = 0.0
+                co[3, i] = yx[i]
+            loops.kappa[r] = (w_b - w_a) @ (_cross(_cross(w_b, y), x)
+                                            + _cross(y, _cross(w_a, x)))
+            continue
+        e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
+        ma, mb = _cross(arm_a, e), _cross(arm_b, e)
+        for i in range(3):
+            co[0, i] = -e[i]
+            co[1, i] = -ma[i]
+            co[2, i] = e[i]
+            co[3, i] = mb[i]
+        kappa = e @ (_cross(w_b, _cross(w_b, arm_b)) - _cross(w_a, _cross(w_a, arm_a)))
+        if loops.kind[r] == GAP_A:
+            d = p_b - p_a
+            ed = _cross(e, d)
+            for i in range(3):
+                co[1, i] += ed[i]
+            we = _cross(w_a, e)
+            kappa += _cross(w_a, we) @ d + 2.0 * (we @ (v_b - v_a))
+        loops.kappa[r] = kappa
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _unit_loads(params, loops, rot, w, r):
-    """loops.loads[r + 1]: the loads of row r's unit multiplier on its sides' output stations,
-    e = -[couple about O; force] (a station's e is what its body exerts outboard)."""
-    load = loops.loads[r + 1]
-    load[:, :] = 0.0
+def _row_value(loops, r, z, act):
+    """Row r's linear part, coef . (a, alpha), at the stations z (2n + 1, 12) of a column
+    whose active bodies are act (elsewhere its response is zero)."""
+    v = 0.0
     c = loops.owner[r]
-    ka, p_a, _, arm_a, f_a, _ = _side(params, loops, rot, w, c, 0)
-    kb, p_b, _, arm_b, f_b, _ = _side(params, loops, rot, w, c, 1)
-    if loops.kind[r] == DOT:
-        x = f_a @ loops.v1[r]
-        y = f_b @ loops.v2[r]
-        couple = _cross(y, x)
-        for i in range(3):
-            if kb >= 0:
-                load[kb, i] -= couple[i]
-            if ka >= 0:
-                load[ka, i] += couple[i]
-        return
-    e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
-    if kb >= 0:                         # e on b at p_b
-        m = _cross(arm_b, e)
-        for i in range(3):
-            load[kb, i] -= m[i]
-            load[kb, 3 + i] -= e[i]
-    if ka >= 0:                         # -e on a at p_b: arm from a's output point
-        m = _cross(arm_a + (p_b - p_a), e)
-        for i in range(3):
-            load[ka, i] += m[i]
-            load[ka, 3 + i] += e[i]
+    for s in range(2):
+        k = loops.body[c, s]
+        if k >= 0 and act[k]:
+            for i in range(3):
+                v += (loops.coef[r, 2 * s, i] * z[2 * k + 2, i]
+                      + loops.coef[r, 2 * s + 1, i] * z[2 * k + 1, 3 + i])
+    return v
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _least_solve(a, b):
-    """The least-norm x of a x = b by a truncated SVD (relative 1e-10)."""
-    u, sv, vt = np.linalg.svd(a)
-    x = np.zeros(a.shape[1])
+def row_residuals(loops, z, out):
+    """Every row's value kappa + J (a, alpha) at the stations z (2n + 1, 12) of the whole
+    tree, with the Jacobian of the last solve (_row_coefficients)."""
+    for r in range(loops.kind.shape[0]):
+        out[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _column_loads(loops):
+    """Each row's unit multiplier's station loads (column r + 1): -[coef alpha; coef a] on each
+    side's output station (_row_coefficients)."""
+    for r in range(loops.kind.shape[0]):
+        for s in range(2):
+            for i in range(3):
+                loops.col_load[r + 1, s, i] = -loops.coef[r, 2 * s + 1, i]
+                loops.col_load[r + 1, s, 3 + i] = -loops.coef[r, 2 * s, i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _least_apply(u, sv, vt, b):
+    """The least-norm x of a x = b from a's SVD a = u diag(sv) vt, truncated at relative
+    1e-10."""
+    x = np.zeros(vt.shape[1])
     if sv.shape[0] == 0:
         return x
     ub = u.T @ b
@@ -248,6 +288,82 @@ def _least_solve(a, b):
         if sv[i] > 1e-10 * sv[0]:
             x += (ub[i] / sv[i]) * vt[i]
     return x
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _least_solve(a, b):
+    """The least-norm x of a x = b by a truncated SVD (relative 1e-10)."""
+    u, sv, vt = np.linalg.svd(a)
+    return _least_apply(u, sv, vt, b)
+
+
+BAND_REGULARIZATION = 1e-12     # of the largest diagonal entry, added to the diagonal
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _band_factor(a, lower, upper, piv):
+    """a <- its LU factors with partial pivoting, a banded matrix of lower and upper bandwidths
+    (kept dense; the factors fill only lower and lower + upper bands), after adding
+    BAND_REGULARIZATION times its largest diagonal entry to the diagonal: the rows a planar
+    loop's spatial joints make redundant are zero rows and columns of the Delassus matrix
+    (their multipliers come out zero), and where rows are redundant in general the motion does
+    not depend on how the multipliers split (D = J A J^T: its null space is J^T's).  O(R l (l +
+    u)) for R rows, where the truncated SVD is O(R^3)."""
+    m = a.shape[0]
+    big = 0.0
+    for i in range(m):
+        big = max(big, abs(a[i, i]))
+    eps = BAND_REGULARIZATION * big if big > 0.0 else 1e-300
+    for i in range(m):
+        a[i, i] += eps
+    for k in range(m):
+        last = min(m - 1, k + lower)
+        best, at = abs(a[k, k]), k
+        for i in range(k + 1, last + 1):
+            if abs(a[i, k]) > best:
+                best, at = abs(a[i, k]), i
+        piv[k] = at
+        right = min(m - 1, k + lower + upper)
+        if at != k:
+            for j in range(k, right + 1):
+                a[k, j], a[at, j] = a[at, j], a[k, j]
+        if a[k, k] == 0.0:
+            a[k, k] = eps
+        for i in range(k + 1, last + 1):
+            f = a[i, k] / a[k, k]
+            a[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, right + 1):
+                    a[i, j] -= f * a[k, j]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _band_apply(lu, lower, upper, piv, b):
+    """x with A x = b from _band_factor's factors."""
+    m = lu.shape[0]
+    x = b.copy()
+    for k in range(m):
+        if piv[k] != k:
+            x[k], x[piv[k]] = x[piv[k]], x[k]
+        for i in range(k + 1, min(m - 1, k + lower) + 1):
+            x[i] -= lu[i, k] * x[k]
+    for k in range(m - 1, -1, -1):
+        for j in range(k + 1, min(m - 1, k + lower + upper) + 1):
+            x[k] -= lu[k, j] * x[j]
+        x[k] /= lu[k, k]
+    return x
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _rows_solve(loops, a, b):
+    """The multipliers of a x = b for the rows' matrix a (the Delassus matrix or V): the
+    truncated SVD (_least_solve), or where loops.band holds its bandwidths (many rows, a
+    narrow band) the regularized banded LU (_band_factor; a is overwritten)."""
+    if loops.band[0] < 0:
+        return _least_solve(a, b)
+    piv = np.empty(a.shape[0], dtype=np.int64)
+    _band_factor(a, loops.band[0], loops.band[1], piv)
+    return _band_apply(a, loops.band[0], loops.band[1], piv, b)
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -272,60 +388,85 @@ def closure_wrenches(params, loops, rot):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _delassus(loops):
+    """loops.delassus[r, j]: row r's value in row j's response (column j + 1), from the stored
+    responses and the rows' Jacobian (_row_value); zero where row r's bodies are not among
+    column j + 1's active bodies."""
+    n_rows = loops.kind.shape[0]
+    loops.delassus[:, :] = 0.0
+    for j in range(n_rows):
+        z, act = loops.z_save[j + 1], loops.act[j + 1]
+        for q in range(loops.colrow_ptr[j], loops.colrow_ptr[j + 1]):
+            r = loops.colrow_idx[q]
+            loops.delassus[r, j] = _row_value(loops, r, z, act)
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
-    """The sweep with the closing joints' multipliers (the module docstring): the step and
-    every row's response to its unit multiplier in one sweep (sweep_columns) into
-    loops.z_save, nu_save, tau_save (angular-acceleration slots; column 0 the step without
-    multipliers, column j + 1 row j's response), the Delassus matrix of the rows' values, the
-    multipliers holding the rows at zero (acceleration level), and their superposition into z,
-    sweep.joint_nu and joint_tau.  rot, w: the bodies' rotations and angular velocities the
-    rows are written at, with their points in loops.r_out, v_out (tree_points).  Returns the
-    sweep's status."""
+    """The sweep with the closing joints' multipliers (the module docstring).  rot, w: the
+    bodies' rotations and angular velocities the rows are written at, with their points in
+    loops.r_out, v_out (tree_points).  One upward sweep carries the step (column 0) and each
+    row's unit multiplier (column r + 1) over the bodies that column reaches (sweep_columns);
+    column 0 is recovered over the tree, each row's column over its active bodies only
+    (recover_column: elsewhere its response is zero), into loops.z_save, nu_save, tau_save.
+    The Delassus matrix of the rows' values (_delassus), the multipliers holding the rows at
+    zero (acceleration level), then the step with the multipliers' loads, recovered once
+    over the tree into z, sweep.joint_nu, joint_tau (P and k superposed, P_c = 0 where
+    column c does not pass).  Returns the sweep's status."""
     n = rot.shape[0]
     n_rows = loops.kind.shape[0]
     sw = sweep
-    loops.loads[0] = 0.0
-    for r in range(n_rows):
-        _unit_loads(params, loops, rot, w, r)
-    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
-                           sw.s, loops.p_col, sw.tree_s, loops.port_col, loops.h_store,
-                           loops.k_store, loops.free_store, loops.z_save, loops.nu_save,
-                           loops.tau_save, loops.loads)
+    _row_coefficients(params, loops, rot, w)
+    _column_loads(loops)
+    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, sw.s,
+                           sw.tree_s, loops)
     if status != 0:
         return status
-    acc = np.zeros((n, 3))
-    alpha = np.zeros((n, 3))
-    kappa = np.empty(n_rows)
-    row_values(params, loops, rot, w, acc, alpha, kappa)     # the rows' velocity terms
-    for j in range(n_rows + 1):
-        for k in range(n):
-            acc[k] = loops.z_save[j, 2 * k + 2, 0:3]
-            alpha[k] = loops.z_save[j, 2 * k + 1, 3:6]
-        row_values(params, loops, rot, w, acc, alpha, loops.values[j])
+    recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
+                   sw.s, loops.p_col[0], loops.k_store[0], loops.h_store, loops.free_store,
+                   loops.z_save[0], loops.nu_save[0], loops.tau_save[0], True,
+                   loops.all_bodies, loops.act[0])
+    for c in range(1, n_rows + 1):
+        recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
+                       sw.s, loops.p_col[c], loops.k_store[c], loops.h_store,
+                       loops.free_store, loops.z_save[c], loops.nu_save[c], loops.tau_save[c],
+                       False, loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
+                       loops.act[c])
+    _delassus(loops)
     for r in range(n_rows):
-        for j in range(n_rows):
-            loops.delassus[r, j] = loops.values[j + 1, r] - kappa[r]
-    lam = _least_solve(loops.delassus, -loops.values[0])
-    loops.lam[:] = lam
+        loops.rhs[r] = -(loops.kappa[r] + _row_value(loops, r, loops.z_save[0], loops.act[0]))
+    loops.lam[:] = _rows_solve(loops, loops.delassus, loops.rhs)
+    # the step with the multipliers' loads: P and k superposed, one recovery over the tree
+    p_comb, k_comb = loops.p_comb, loops.k_comb
+    p_comb[:, :] = loops.p_col[0]
+    k_comb[:, :] = loops.k_store[0]
+    for k in range(n):
+        for q in range(loops.up_ptr[k], loops.up_ptr[k + 1]):
+            c = loops.up_idx[q]
+            f = loops.lam[c - 1]
+            for i in range(6):
+                p_comb[2 * k, i] += f * loops.p_col[c, 2 * k, i]
+                p_comb[2 * k + 1, i] += f * loops.p_col[c, 2 * k + 1, i]
+            for i in range(3):
+                k_comb[k, i] += f * loops.k_store[c, k, i]
+    recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f, sw.s,
+                   p_comb, k_comb, loops.h_store, loops.free_store, z, sw.joint_nu,
+                   sw.joint_tau, True, loops.all_bodies, loops.act[0])
     closure_wrenches(params, loops, rot)
-    z[:, :] = loops.z_save[0]
-    sw.joint_nu[:, :] = loops.nu_save[0]
-    sw.joint_tau[:, :] = loops.tau_save[0]
-    for j in range(n_rows):
-        z += lam[j] * loops.z_save[j + 1]
-        sw.joint_nu[:, :] += lam[j] * loops.nu_save[j + 1]
-        sw.joint_tau[:, :] += lam[j] * loops.tau_save[j + 1]
     return 0
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _modal_responses(params, loops, eta_map):
     """loops.eta_col[j]: row j's response of the beams' eta'' (eta'' = eta_map [z_I; 1] at the
-    beam's input station, step.py::_modal_accelerations; homogeneous: its linear part)."""
+    beam's input station, step.py::_modal_accelerations; homogeneous: its linear part), on its
+    active beams (zero elsewhere)."""
     body_kind, mode_off = params.beams[0], params.beams[3]
+    loops.eta_col[:, :] = 0.0
     for j in range(loops.kind.shape[0]):
         z = loops.z_save[j + 1]
-        for k in range(body_kind.shape[0]):
+        for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
+            k = loops.act_idx[q]
             if body_kind[k] == BEAM:
                 for i in range(mode_off[k], mode_off[k + 1]):
                     v = 0.0
@@ -335,16 +476,17 @@ def _modal_responses(params, loops, eta_map):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _dependent_frames(params, loops, state):
-    """Every body whose frame follows its parent's, from the parent's (root to leaves, as
-    step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's offset
-    too), a welded body's as the parent's (R0) or its beam's end section's (beam.
+def _dependent_frames(params, loops, state, bodies):
+    """Every given body (in tree order) whose frame follows its parent's, from the parent's
+    (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's
+    offset too), a welded body's as the parent's (R0) or its beam's end section's (beam.
     end_section_motion)."""
     zero = np.zeros(3)
     scratch = np.empty(48)
     body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
         params.beams[1]
-    for k in range(state.rot.shape[0]):
+    for q in range(bodies.shape[0]):
+        k = bodies[q]
         hk = params.hinge_kind[k]
         p = params.parent[k]
         if p < 0:
@@ -375,43 +517,46 @@ def _dependent_frames(params, loops, state):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _add_rates(params, loops, state, j, f):
-    """The free bodies' angular velocities, the joint coordinates' and the modal coordinates'
-    rates += f times row j's response (of w', q'' and eta''), the dependent frames after them."""
-    n = state.rot.shape[0]
-    for k in range(n):
+    """The angular velocities, the joint coordinates' and the modal coordinates' rates += f
+    times row j's response (of w', q'' and eta'') on its active bodies (the dependent frames
+    are rebuilt after, _dependent_frames)."""
+    mode_off = params.beams[3]
+    z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
+    for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
+        k = loops.act_idx[q]
         for i in range(3):
-            state.omega[k, i] += f * loops.z_save[j + 1, 2 * k + 1, 3 + i]
+            state.omega[k, i] += f * z[2 * k + 1, 3 + i]
         for i in range(n_coordinates(params.hinge_kind[k])):
-            state.jqd[k, i] += f * loops.nu_save[j + 1, k, i]
-    for i in range(state.eta_d.shape[0]):
-        state.eta_d[i] += f * loops.eta_col[j, i]
-    _dependent_frames(params, loops, state)
+            state.jqd[k, i] += f * nu[k, i]
+        for i in range(mode_off[k], mode_off[k + 1]):
+            state.eta_d[i] += f * loops.eta_col[j, i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _move(params, loops, state, j, f, e3):
-    """Turn every body by f times row j's response of w' (A <- exp(f dw'^) A) and move every
-    joint and modal coordinate by f times its response of q'' and eta'' (the dependent frames
-    follow in _dependent_frames)."""
-    n = state.rot.shape[0]
-    phi = np.empty(3)
-    for k in range(n):
+def _move(params, loops, state, j, f, e3, phi):
+    """Turn every active body of row j by f times its response of w' (A <- exp(f dw'^) A) and
+    move its joint and modal coordinates by f times their response of q'' and eta'' (the
+    dependent frames are rebuilt after, _dependent_frames); e3 (3, 3), phi (3,) scratch."""
+    mode_off = params.beams[3]
+    z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
+    for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
+        k = loops.act_idx[q]
         for i in range(3):
-            phi[i] = f * loops.z_save[j + 1, 2 * k + 1, 3 + i]
+            phi[i] = f * z[2 * k + 1, 3 + i]
         expm_so3(phi, e3)
         state.rot[k] = e3 @ state.rot[k]
         for i in range(n_coordinates(params.hinge_kind[k])):
-            state.jq[k, i] += f * loops.nu_save[j + 1, k, i]
-    for i in range(state.eta.shape[0]):
-        state.eta[i] += f * loops.eta_col[j, i]
+            state.jq[k, i] += f * nu[k, i]
+        for i in range(mode_off[k], mode_off[k + 1]):
+            state.eta[i] += f * loops.eta_col[j, i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                loops)
-    row_positions(params, loops, state.rot, state.omega)
+                loops, loops.all_bodies)
+    row_positions(params, loops, state.rot, state.omega, loops.all_rows)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(loops.kind.shape[0]):
         largest_g = max(largest_g, abs(loops.g[r]))
@@ -422,35 +567,55 @@ def _residuals(params, loops, state):
 @njit(cache=True, fastmath=CONTRACT)
 def project_onto_loops(params, loops, state):
     """After a step: the configuration and the rates moved back onto the loops along the step's
-    responses to unit multipliers, dx_j (row j's response of w' and q'', the least change in
-    the metric of the step's own matrix; consistent across the joints, whose kinematics are
-    linear in the rates and, to first order, in the increments).  The rows' rates are linear
-    in the rates, so V[:, j] = g'(dx_j) - g'(0) (the tree's kinematics, O(n) per row) is
-    exact, and it is also the rows' positions' Jacobian along dx_j: Gauss-Newton with V moves
-    the configuration, x <- x + sum_j mu_j dx_j, V mu = -g, until |g| <= POSITION_TOL (at most
-    POSITION_PROJECTIONS times), then V mu = -g' moves the rates, twice at most.  Records the
-    largest residuals before and after (loops.stats)."""
+    responses to unit multipliers, dx_j (row j's response of w', q'' and eta'' on its active
+    bodies: the least change in the metric of the step's own matrix; consistent across the
+    joints, whose kinematics are linear in the rates and, to first order, in the increments).
+    The rows' rates are the rows' Jacobian applied to the velocities, and dx_j taken as rates
+    changes the side points' velocities by its stations' response, so V[:, j] = J z_j, the
+    Delassus matrix written with the Jacobian at the state (_row_coefficients, _delassus): exact
+    for the rates, and the positions' Jacobian along dx_j taken as increments.  One SVD of V;
+    Gauss-Newton moves the configuration, x <- x + sum_j mu_j dx_j, V mu = -g, until
+    |g| <= POSITION_TOL (at most POSITION_PROJECTIONS times), then V mu = -g' moves the rates,
+    twice at most; the dependent frames are rebuilt after each move.  Records the largest
+    residuals before and after (loops.stats)."""
     n_rows = loops.kind.shape[0]
     e3 = np.empty((3, 3))
+    phi = np.empty(3)
     _modal_responses(params, loops, state.eta_map)
     g0, gd0 = _residuals(params, loops, state)
     loops.stats[0] = max(loops.stats[0], g0)
     loops.stats[1] = max(loops.stats[1], gd0)
+    # V, column by column, over each row's active bodies and the rows they carry
     base = loops.gd.copy()
-    for j in range(n_rows):                 # V, column by column
-        _add_rates(params, loops, state, j, 1.0)
-        _residuals(params, loops, state)
-        for r in range(n_rows):
-            loops.delassus[r, j] = loops.gd[r] - base[r]
-        _add_rates(params, loops, state, j, -1.0)
+    v = loops.delassus
+    v[:, :] = 0.0
+    for j in range(n_rows):
+        bodies = loops.act_idx[loops.act_ptr[j + 1]:loops.act_ptr[j + 2]]
+        rows = loops.colrow_idx[loops.colrow_ptr[j]:loops.colrow_ptr[j + 1]]
+        for f in (1.0, -1.0):
+            _add_rates(params, loops, state, j, f)
+            _dependent_frames(params, loops, state, bodies)
+            tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
+                        state.eta_d, loops, bodies)
+            if f > 0.0:
+                row_positions(params, loops, state.rot, state.omega, rows)
+                for q in range(rows.shape[0]):
+                    v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
+    loops.gd[:] = base
+    banded = loops.band[0] >= 0
+    piv = np.empty(n_rows, dtype=np.int64)
+    if banded:
+        _band_factor(v, loops.band[0], loops.band[1], piv)
+    u, sv, vt = np.linalg.svd(np.eye(1) if banded else v)
     largest = g0
     for _ in range(POSITION_PROJECTIONS):
         if largest <= POSITION_TOL:
             break
-        mu = _least_solve(loops.delassus, -loops.g)
+        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, -loops.g) if banded
+              else _least_apply(u, sv, vt, -loops.g))
         for j in range(n_rows):
-            _move(params, loops, state, j, mu[j], e3)
-        _dependent_frames(params, loops, state)
+            _move(params, loops, state, j, mu[j], e3, phi)
+        _dependent_frames(params, loops, state, loops.all_bodies)
         largest, _ = _residuals(params, loops, state)
     loops.stats[3] = max(loops.stats[3], largest)
     rates = 0.0
@@ -458,9 +623,11 @@ def project_onto_loops(params, loops, state):
         _, rates = _residuals(params, loops, state)
         if rates <= RATE_TOL:
             break
-        mu = _least_solve(loops.delassus, -loops.gd)
+        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, -loops.gd) if banded
+              else _least_apply(u, sv, vt, -loops.gd))
         for j in range(n_rows):
             _add_rates(params, loops, state, j, mu[j])
+        _dependent_frames(params, loops, state, loops.all_bodies)
         _, rates = _residuals(params, loops, state)
     loops.stats[2] = max(loops.stats[2], rates)
 
@@ -469,7 +636,8 @@ def project_onto_loops(params, loops, state):
 # full state"): the Riccati matrices S once, a P per column.  Column 0 carries the transfers'
 # affine parts, the drives' and prescribed motions' values and the ground's motion (the step
 # itself); every other column only its loads at the output stations (a unit multiplier's
-# response: the same linear step, homogeneous).  Per element:
+# response: the same linear step, homogeneous), and only on the bodies it passes (P is zero
+# elsewhere: loops.up_ptr, up_idx).  Per element:
 #   T = U_ee - S_O U_fe,  S_I = T^-1 (S_O U_ff - U_ef),  P_I,c = T^-1 (S_O u_f,c + P_O,c - u_e,c)
 # (u_c = u for column 0, zero otherwise); per joint, with y_c = S_O c'_c + P_O,c,
 #   k_c = D^-1 (tau0_F,c - Bl_F^T y_c),  P_J,c = Psi (y_c + G k_c)
@@ -509,74 +677,97 @@ def _element_columns(u, s_o, p_o, s_i, p_i, t, x):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def sweep_columns(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, port_s,
-                  port_p, h_store, k_store, free_store, z_col, nu_col, tau_col, loads):
-    """The full-state tree sweep for loads.shape[0] columns at once (the comment above).
-    loads (C, n, 6): each column's loads at the bodies' output stations (e = [m, q]); p_col
-    (C, 2n + 1, 6), port_p (C, n, 6), h_store (n, 3, 6), k_store (C, n, 3), free_store (n, 4)
-    scratch; writes each column's stations z_col (C, 2n + 1, 12), joints' nu_col and tau_col
-    (C, n, 3).  Returns 0, or j + 1 for the element j whose elimination is singular (a LOCKED
-    element, which only the consistent start of an elastic hinge has, is refused as one)."""
+def sweep_columns(kind, u, joint_dof, joint_drive, parent, s_mat, port_s, loops):
+    """The upward half of the full-state tree sweep for the step (column 0, every element) and
+    each row's unit multiplier (column r + 1, on the bodies its sweep passes: loops.up_ptr,
+    up_idx; the comment above): S for every element into s_mat, each column's P into
+    loops.p_col and each joint's k into loops.k_store (h and the free coordinates into
+    loops.h_store, free_store).  A column's loads are loops.col_load at loops.col_body's output
+    stations.  port_s (n, 6, 6) scratch.  Returns 0, or j + 1 for the element j whose
+    elimination is singular (a LOCKED element, which only the consistent start of an elastic
+    hinge has, is refused as one)."""
     n = parent.shape[0]
-    n_col = loads.shape[0]
-    port_s[:, :, :] = 0.0
-    port_p[:, :, :] = loads
+    p_col, port_p, up_ptr, up_idx = loops.p_col, loops.port_col, loops.up_ptr, loops.up_idx
+    most = 1
+    for k in range(n):
+        most = max(most, 1 + up_ptr[k + 1] - up_ptr[k])
+        port_s[k] = 0.0
+        port_p[0, k] = 0.0
+        for q in range(up_ptr[k], up_ptr[k + 1]):
+            port_p[up_idx[q], k] = 0.0
+    for c in range(1, loops.col_body.shape[0]):
+        for side in range(2):
+            kb = loops.col_body[c, side]
+            if kb >= 0:
+                port_p[c, kb] += loops.col_load[c, side]
+    cols = np.empty(most, dtype=np.int64)
+    p_o = np.empty((most, 6))
+    p_i = np.empty((most, 6))
     t = np.empty((6, 6))
-    x = np.empty((6, 6 + n_col))
+    x = np.empty((6, 6 + most))
     d = np.empty((3, 3))
-    rhs = np.empty((3, 6 + n_col))
+    rhs = np.empty((3, 6 + most))
     g = np.empty((6, 3))
+    y = np.empty((most, 6))
     for k in range(n - 1, -1, -1):
         jb, jh = 2 * k + 1, 2 * k
+        m = 1 + up_ptr[k + 1] - up_ptr[k]
+        cols[0] = 0
+        for q in range(up_ptr[k], up_ptr[k + 1]):
+            cols[1 + q - up_ptr[k]] = up_idx[q]
         # the body: T and S_I, and every column's P_I, in one solve
-        if not _element_columns(u[jb], port_s[k], port_p[:, k], s_mat[jb], p_col[:, jb], t, x):
+        for a in range(m):
+            p_o[a] = port_p[cols[a], k]
+        if not _element_columns(u[jb], port_s[k], p_o[:m], s_mat[jb], p_i[:m], t, x[:, :6 + m]):
             return jb + 1
+        for a in range(m):
+            p_col[cols[a], jb] = p_i[a]
         kd = kind[jh]
         if kd == IDENTITY:
             s_mat[jh] = s_mat[jb]
-            for c in range(n_col):
-                p_col[c, jh] = p_col[c, jb]
+            for a in range(m):
+                p_col[cols[a], jh] = p_col[cols[a], jb]
         elif kd == TRANSFER:
-            if not _element_columns(u[jh], s_mat[jb], p_col[:, jb], s_mat[jh], p_col[:, jh], t,
-                                    x):
+            if not _element_columns(u[jh], s_mat[jb], p_i[:m], s_mat[jh], p_o[:m], t,
+                                    x[:, :6 + m]):
                 return jh + 1
+            for a in range(m):
+                p_col[cols[a], jh] = p_o[a]
         elif kd == JOINT:
             uh = u[jh]
             s_o = s_mat[jb]
             mf = 0
             for c3 in range(3):
                 if joint_dof[k, c3] == FREE:
-                    free_store[k, mf] = c3
+                    loops.free_store[k, mf] = c3
                     mf += 1
-            free_store[k, 3] = mf
+            loops.free_store[k, 3] = mf
             s_phi = _mm(s_o, uh[0:6, 0:6])
             for a in range(mf):
-                ca = free_store[k, a]
+                ca = loops.free_store[k, a]
                 for i in range(6):
                     gv = 0.0
-                    for m in range(6):
-                        gv += s_o[i, m] * uh[m, 6 + ca]
+                    for j in range(6):
+                        gv += s_o[i, j] * uh[j, 6 + ca]
                     g[i, a] = gv
             # y_c = S_O c'_c + P_O,c: the affine part c' (prescribed coordinates too) in column 0
-            y = np.empty((n_col, 6))
-            for c in range(n_col):
-                for i in range(6):
-                    y[c, i] = p_col[c, jb, i]
+            for a in range(m):
+                y[a] = p_i[a]
             for i in range(6):
                 ci = uh[i, 12]
                 for c3 in range(3):
                     if joint_dof[k, c3] == PRESCRIBED:
                         ci += uh[i, 6 + c3] * joint_drive[k, c3, 2]
-                for m in range(6):
-                    y[0, m] += s_o[m, i] * ci
+                for j in range(6):
+                    y[0, j] += s_o[j, i] * ci
             for a in range(mf):
-                ca = free_store[k, a]
+                ca = loops.free_store[k, a]
                 for j in range(6):
                     xv = 0.0
                     for i in range(6):
                         xv += uh[6 + i, ca] * s_phi[i, j]
                     rhs[a, j] = xv
-                for c in range(n_col):
+                for c in range(m):
                     r = joint_drive[k, ca, 0] if c == 0 else 0.0
                     for i in range(6):
                         r -= uh[6 + i, ca] * y[c, i]
@@ -586,85 +777,101 @@ def sweep_columns(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col,
                     for i in range(6):
                         xv += uh[6 + i, ca] * g[i, b]
                     d[a, b] = xv - (joint_drive[k, ca, 1] if a == b else 0.0)
-            if mf > 0 and not _gauss_solve(d, rhs, mf, 6 + n_col):
+            if mf > 0 and not _gauss_solve(d, rhs, mf, 6 + m):
                 return jh + 1
             psi = uh[6:12, 6:12]
             s_e = s_phi.copy()
             for a in range(mf):
                 for j in range(6):
-                    h_store[k, a, j] = rhs[a, j]
-                for c in range(n_col):
-                    k_store[c, k, a] = rhs[a, 6 + c]
+                    loops.h_store[k, a, j] = rhs[a, j]
+                for c in range(m):
+                    loops.k_store[cols[c], k, a] = rhs[a, 6 + c]
             for i in range(6):
                 for a in range(mf):
                     for j in range(6):
                         s_e[i, j] -= g[i, a] * rhs[a, j]
             s_mat[jh] = _mm(psi, s_e)
-            for c in range(n_col):
+            for c in range(m):
                 p_e = y[c].copy()
                 for i in range(6):
                     for a in range(mf):
                         p_e[i] += g[i, a] * rhs[a, 6 + c]
-                p_col[c, jh] = _mv(psi, p_e)
+                p_col[cols[c], jh] = _mv(psi, p_e)
         else:
             return jh + 1
         p = parent[k]
         if p >= 0:
             port_s[p] += s_mat[jh]
-            for c in range(n_col):
-                port_p[c, p] += p_col[c, jh]
-    # the recovery, root to leaves, column by column
+            for a in range(m):
+                port_p[cols[a], p] += p_col[cols[a], jh]
+    return 0
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, k_col,
+                   h_store, free_store, z, nu, tau, affine, bodies, act):
+    """The downward half for one column (P p_col (2n + 1, 6), joints' k k_col (n, 3)): the
+    stations z, the joints' nu and tau of the given bodies, in tree order.  affine: the step
+    (the transfers' affine parts, the drives' values, the ground's motion root_f; every body);
+    otherwise a homogeneous response, whose kinematics are zero at a parent outside act (the
+    bodies of bodies)."""
     f_i = np.empty(6)
     f_o = np.empty(6)
-    for c in range(n_col):
-        z = z_col[c]
-        z[:, :] = 0.0
-        if c == 0:
-            z[0, 0:6] = root_f
-        for k in range(n):
-            jb, jh = 2 * k + 1, 2 * k
-            p = parent[k]
-            st = 0 if p < 0 else 2 * p + 2
-            f_i[:] = z[st, 0:6]
-            if p < 0:
-                z[0, 6:12] += _mv(s_mat[jh], f_i) + p_col[c, jh]
-            kd = kind[jh]
-            if kd == IDENTITY:
-                f_o[:] = f_i
-            elif kd == TRANSFER:
-                zi = np.empty(12)
-                zi[0:6] = f_i
-                zi[6:12] = _mv(s_mat[jh], f_i) + p_col[c, jh]
-                f_o[:] = _mv(u[jh, 0:6, 0:12], zi)
-                if c == 0:
-                    f_o += u[jh, 0:6, 12]
-            else:                       # JOINT
-                for c3 in range(3):
-                    nu_col[c, k, c3] = (joint_drive[k, c3, 2] if c == 0 and
-                                        joint_dof[k, c3] == PRESCRIBED else 0.0)
-                mf = free_store[k, 3]
-                for a in range(mf):
-                    xv = k_store[c, k, a]
-                    for j in range(6):
-                        xv -= h_store[k, a, j] * f_i[j]
-                    nu_col[c, k, free_store[k, a]] = xv
-                f_o[:] = _mv(u[jh, 0:6, 0:6], f_i)
-                if c == 0:
-                    f_o += u[jh, 0:6, 12]
-                for c3 in range(3):
-                    if joint_dof[k, c3] != 0:
-                        for i in range(6):
-                            f_o[i] += u[jh, i, 6 + c3] * nu_col[c, k, c3]
-            z[jb, 0:6] = f_o
-            z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_col[c, jb]
-            if kd == JOINT:
-                for c3 in range(3):
-                    xv = 0.0
-                    if joint_dof[k, c3] != 0:
-                        for i in range(6):
-                            xv += u[jh, 6 + i, c3] * z[jb, 6 + i]
-                    tau_col[c, k, c3] = xv
-            z[jb + 1] = _mv(u[jb, :, 0:12], z[jb])
-            if c == 0:
-                z[jb + 1] += u[jb, :, 12]
+    zi = np.empty(12)
+    if affine:
+        z[0, 0:6] = root_f
+        z[0, 6:12] = 0.0
+    for q in range(bodies.shape[0]):
+        k = bodies[q]
+        jb, jh = 2 * k + 1, 2 * k
+        p = parent[k]
+        if p < 0:
+            if affine:
+                f_i[:] = z[0, 0:6]
+            else:
+                f_i[:] = 0.0
+        elif affine or act[p]:
+            f_i[:] = z[2 * p + 2, 0:6]
+        else:
+            f_i[:] = 0.0
+        if p < 0 and affine:
+            z[0, 6:12] += _mv(s_mat[jh], f_i) + p_col[jh]
+        kd = kind[jh]
+        if kd == IDENTITY:
+            f_o[:] = f_i
+        elif kd == TRANSFER:
+            zi[0:6] = f_i
+            zi[6:12] = _mv(s_mat[jh], f_i) + p_col[jh]
+            f_o[:] = _mv(u[jh, 0:6, 0:12], zi)
+            if affine:
+                f_o += u[jh, 0:6, 12]
+        else:                           # JOINT
+            for c3 in range(3):
+                nu[k, c3] = (joint_drive[k, c3, 2] if affine and
+                             joint_dof[k, c3] == PRESCRIBED else 0.0)
+            mf = free_store[k, 3]
+            for a in range(mf):
+                xv = k_col[k, a]
+                for j in range(6):
+                    xv -= h_store[k, a, j] * f_i[j]
+                nu[k, free_store[k, a]] = xv
+            f_o[:] = _mv(u[jh, 0:6, 0:6], f_i)
+            if affine:
+                f_o += u[jh, 0:6, 12]
+            for c3 in range(3):
+                if joint_dof[k, c3] != 0:
+                    for i in range(6):
+                        f_o[i] += u[jh, i, 6 + c3] * nu[k, c3]
+        z[jb, 0:6] = f_o
+        z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_col[jb]
+        if kd == JOINT:
+            for c3 in range(3):
+                xv = 0.0
+                if joint_dof[k, c3] != 0:
+                    for i in range(6):
+                        xv += u[jh, 6 + i, c3] * z[jb, 6 + i]
+                tau[k, c3] = xv
+        z[jb + 1] = _mv(u[jb, :, 0:12], z[jb])
+        if affine:
+            z[jb + 1] += u[jb, :, 12]
     return 0

@@ -424,7 +424,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
     if loops.kind.shape[0] > 0:
-        tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d, loops)
+        tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d, loops,
+                    loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
     else:
         status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
@@ -695,7 +696,7 @@ def _iterate(loop, run, s, it):
         # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e)
         eta_g = (loop.eta_dd_star - loop.w1e) / c1
         tree_points(params, loop.guess.rot, loop.guess.w, loop.joints[2], loop.joints[3], eta_g,
-                    c3 * eta_g + loop.w3e, loops)
+                    c3 * eta_g + loop.w3e, loops, loops.all_bodies)
         status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
                                   loop.guess.w, z)
     else:
