@@ -1,0 +1,91 @@
+"""Per-step cost of closed loops against the same bodies opened into a tree (issue 29).
+
+    python benchmarks/loops.py [--quick] [--json FILE]
+
+For each mechanism (the IFToMM slider-crank, the Stewart platform with its slides prescribed,
+the N-four-bar on its chain and its ground spanning trees) the model with its closing joints
+and the same model with them removed ("opened": the tree alone, which falls freely) are timed
+in turn in one process, A B A B ..., each a run of fixed steps at dt = 1e-3 after a warm-up;
+the cost of a step is the difference of a long and a short run over the steps between (no
+setup), the best of 3 pairs.  The N-four-bar's cost exponent on its ground tree is fitted over
+N.  --quick: fewer sizes and steps (the CI's smoke run).  Not a test: nothing is asserted.
+"""
+import argparse
+import json
+import time
+from dataclasses import replace
+
+import numpy as np
+
+import dttmm
+from dttmm.closures import empty_table
+from dttmm.mechanisms import n_four_bar, slider_crank, stewart_platform
+
+
+def opened(model):
+    """The model without its closing joints."""
+    return replace(model, **empty_table())
+
+
+def step_cost(model, steps, dt=1e-3):
+    """Seconds per step: (long run - short run) / (steps between)."""
+    short, long_ = max(2, steps // 10), steps
+    t0 = time.perf_counter()
+    dttmm.simulate(model, short * dt, dt, record_every=short)
+    t1 = time.perf_counter()
+    dttmm.simulate(model, long_ * dt, dt, record_every=long_)
+    t2 = time.perf_counter()
+    return ((t2 - t1) - (t1 - t0)) / (long_ - short)
+
+
+def measure(model, steps, pairs=3):
+    """(with loops, opened) seconds per step, the best of `pairs` interleaved pairs."""
+    tree = opened(model)
+    for m in (model, tree):
+        dttmm.simulate(m, 2e-3, 1e-3)                  # compile or load, warm up
+    a, b = [], []
+    for _ in range(pairs):
+        a.append(step_cost(model, steps))
+        b.append(step_cost(tree, steps))
+    return min(a), min(b)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    ap.add_argument("--json", help="write the figures to this file")
+    args = ap.parse_args(argv)
+    sizes = (2, 10) if args.quick else (2, 10, 40, 160)
+    cases = [("slider-crank", slider_crank(), 400), ("Stewart platform", stewart_platform(), 200)]
+    for n in sizes:
+        if n <= 40:
+            cases.append((f"{n}-four-bar, chain tree", n_four_bar(n), 200 if n < 40 else 40))
+        cases.append((f"{n}-four-bar, ground tree", n_four_bar(n, tree="ground"),
+                      max(20, 4000 // (5 * n))))
+    if args.quick:
+        cases = [(name, m, max(20, steps // 10)) for name, m, steps in cases]
+    rows = []
+    print(f"{'model':<28} {'rows':>5} {'loops us/step':>14} {'opened us/step':>15} {'ratio':>7}")
+    for name, model, steps in cases:
+        with_loops, tree = measure(model, steps, 1 if args.quick else 3)
+        rows_count = len(dttmm.closures.constraint_rows(model)[0])
+        rows.append(dict(model=name, rows=rows_count, loops_us=with_loops * 1e6,
+                         opened_us=tree * 1e6, ratio=with_loops / tree))
+        print(f"{name:<28} {rows_count:>5} {with_loops * 1e6:>14.0f} {tree * 1e6:>15.0f} "
+              f"{with_loops / tree:>7.1f}", flush=True)
+    ground = [(int(r["model"].split("-")[0]), r["loops_us"]) for r in rows
+              if r["model"].endswith("ground tree")]
+    if len(ground) >= 2:
+        n, us = np.array(ground, dtype=float).T
+        exponent = np.polyfit(np.log(n[n >= 10] if np.sum(n >= 10) >= 2 else n),
+                              np.log(us[n >= 10] if np.sum(n >= 10) >= 2 else us), 1)[0]
+        print(f"N-four-bar on its ground tree: cost ~ N^{exponent:.2f}")
+        rows.append(dict(model="four-bar exponent (ground tree)", exponent=exponent))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
