@@ -103,3 +103,8 @@ def fused_and_general(monkeypatch, model, t_end, dt, loop, **kwargs):
     monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", True)
     assert fused.info["loop"] == loop and general.info["loop"] == "general"
     return fused, general
+
+
+def rot_y(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
