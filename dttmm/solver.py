@@ -1320,8 +1320,8 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
-    the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); of the closed
-    loops, a chain's tip pinned to a fixed ground (closures.check_runs_in_sweeps)."""
+    the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); closed loops of
+    rigid bodies and beams on a fixed ground (closures.check_runs_in_sweeps)."""
     check_runs_in_sweeps(model, "simulate")
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):
         raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
