@@ -131,11 +131,14 @@ def _loop_reach(model):
     """How far the closing joints' sweep columns reach (solver.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
     from . import solver
+    from .closures import constraint_rows
     km = solver.kernel_model(model)[0]
-    loops = solver.loop_tables(km)
-    rows = len(loops.kind)
-    reach = np.diff(loops.act_ptr[1:]).mean() if rows else 0.0
-    solve = ("a banded LU" if loops.band[0] >= 0 else "a truncated SVD")
+    owner = constraint_rows(km)[1]
+    body = np.array(km.closure_body, dtype=np.int64).reshape(-1, 2)
+    _, _, _, act_ptr, _, band = solver.loop_columns(km, owner, body)
+    rows = len(owner)
+    reach = np.diff(act_ptr[1:]).mean() if rows else 0.0
+    solve = "a banded LU" if band[0] >= 0 else "a truncated SVD"
     return (f"(each of the {rows} rows' sweep columns passes {reach:.3g} of the {km.n_bodies} "
             f"bodies of the kernel model on average, the rows solved by {solve}: loops that "
             f"close near the ground, on a spanning tree of short paths, cost least)")

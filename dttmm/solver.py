@@ -274,18 +274,14 @@ def _column_bodies(model, loaded):
     return up | set(np.nonzero(active)[0].tolist()), active
 
 
-def loop_tables(model):
-    """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
-    kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
-    sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
-    _column_bodies."""
-    n = model.n_bodies
-    kind, owner, v1, v2 = constraint_rows(model, None if has_loops(model) else ())
-    m = model.n_closures if len(kind) else 0
-    r = len(kind)
-    point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
-    body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
-    point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
+def loop_columns(model, owner, body):
+    """Where each row's sweep column runs (kernels/closure.py): (act (R + 1, n) the active bodies
+    per column, column 0 all; ups, per body the columns c >= 1 its upward sweep passes; act_idx
+    and act_ptr, each column's active bodies in tree order; colrows, per row's column the rows
+    with a side body among its active bodies; (lower, upper) the rows' matrices' bandwidths, or
+    (-1, -1) where the truncated SVD solves them).  owner: each row's closing joint; body
+    (m, 2): the closing joints' sides (-1 the ground), in the kernel model's numbering."""
+    n, r = model.n_bodies, len(owner)
     act = np.zeros((r + 1, n), dtype=bool)
     act[0] = True
     ups = [[] for _ in range(n)]
@@ -302,16 +298,32 @@ def loop_tables(model):
             ups[k].append(row + 1)
         act_idx.extend(np.nonzero(active)[0].tolist())
         act_ptr.append(len(act_idx))
-    up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
-    sides = body[owner] if r else np.zeros((0, 2), dtype=np.int64)     # (R, 2), -1 ground
+    sides = body[np.asarray(owner, dtype=np.int64)]                   # (R, 2), -1 the ground
     reach = np.concatenate([act, np.zeros((r + 1, 1), dtype=bool)], axis=1)[1:][:, sides]
     colrows = [np.nonzero(hit.any(axis=1))[0].tolist() for hit in reach]     # (R, R, 2)
-    col_body = np.full((r + 1, 2), -1, dtype=np.int64)
-    col_body[1:] = body[owner] if r else col_body[1:]
     # the rows' matrices' band (row q of column j's rows): solved banded where it is narrow
     lower = max([q - j for j, rows in enumerate(colrows) for q in rows], default=0)
     upper = max([j - q for j, rows in enumerate(colrows) for q in rows], default=0)
-    banded = r > BANDED_ROWS and 2 * (lower + upper + 1) <= r
+    band = (lower, upper) if r > BANDED_ROWS and 2 * (lower + upper + 1) <= r else (-1, -1)
+    return act, ups, act_idx, act_ptr, colrows, band
+
+
+def loop_tables(model):
+    """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
+    kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
+    sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
+    loop_columns."""
+    n = model.n_bodies
+    kind, owner, v1, v2 = constraint_rows(model, None if has_loops(model) else ())
+    m = model.n_closures if len(kind) else 0
+    r = len(kind)
+    point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
+    body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
+    point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
+    act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body)
+    up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
+    col_body = np.full((r + 1, 2), -1, dtype=np.int64)
+    col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
     return Loops(kind=kind, owner=owner, v1=v1, v2=v2,
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
@@ -326,7 +338,7 @@ def loop_tables(model):
                  act_idx=np.array(act_idx, dtype=np.int64), act=act,
                  all_bodies=np.arange(n, dtype=np.int64),
                  all_rows=np.arange(r, dtype=np.int64),
-                 band=np.array([lower, upper] if banded else [-1, -1], dtype=np.int64),
+                 band=np.array(band, dtype=np.int64),
                  colrow_ptr=np.cumsum([0] + [len(c) for c in colrows]).astype(np.int64),
                  colrow_idx=np.array([q for c in colrows for q in c], dtype=np.int64),
                  p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
@@ -768,10 +780,11 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     if has_loops(model):
-        check_drives_move(model, "simulate")
         if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
             check_runs_in_sweeps(model, "simulate")
-            model = assemble(model)     # the loops closed at t = 0 first (docs/loops.md)
+            model = assemble(model)     # the loops closed at t = 0 first (docs/loops.md; it
+        else:                           # refuses a drive the loops lock)
+            check_drives_move(model, "simulate")
     t_end = _check_positive("t_end", t_end)
     adaptive = rtol is not None
     if adaptive:

@@ -348,9 +348,9 @@ class _Configuration:
             return _positions(model)[2][-1] - self.pin
         return closure_residuals(model, start_state(model))[0]
 
-    def closure_jacobian(self, q):
+    def closure_jacobian(self, q, rows):
         """d closure / dq (rows x n) by central differences, as jacobian's."""
-        return self._central_differences(self.closure, q, len(self.closure(q)))
+        return self._central_differences(self.closure, q, rows)
 
     def _central_differences(self, f, q, rows):
         """df/dq (rows x n) by central differences, steps 1e-5 of each coordinate's scale."""
@@ -631,7 +631,7 @@ def _closed_loop(cfg, q):
     largest count as zero: an inextensible beam between the pins cannot move its tip along
     its chord, so that row of G vanishes."""
     g = cfg.closure(q)
-    gj = cfg.closure_jacobian(q) * cfg.scale[None, :]
+    gj = cfg.closure_jacobian(q, len(g)) * cfg.scale[None, :]
     u, s, vt = np.linalg.svd(gj)
     rank = int(np.sum(s > 1e-7 * s[0])) if s.size and s[0] > 0.0 else 0
     pinv = vt[:rank].T @ (u[:, :rank].T / s[:rank, None])

@@ -570,11 +570,12 @@ def project_onto_loops(params, loops, state):
     responses to unit multipliers, dx_j (row j's response of w', q'' and eta'' on its active
     bodies: the least change in the metric of the step's own matrix; consistent across the
     joints, whose kinematics are linear in the rates and, to first order, in the increments).
-    The rows' rates are the rows' Jacobian applied to the velocities, and dx_j taken as rates
-    changes the side points' velocities by its stations' response, so V[:, j] = J z_j, the
-    Delassus matrix written with the Jacobian at the state (_row_coefficients, _delassus): exact
-    for the rates, and the positions' Jacobian along dx_j taken as increments.  One SVD of V;
-    Gauss-Newton moves the configuration, x <- x + sum_j mu_j dx_j, V mu = -g, until
+    The rows' rates are linear in the rates, so V[:, j] = g'(x' + dx_j) - g'(x') (the tree's
+    kinematics over row j's active bodies, for the rows they carry: tree_points, row_positions)
+    is exact for the rates, and the positions' Jacobian along dx_j taken as increments.  (Not
+    the Delassus matrix J z_j: the step's responses carry its O(w h) terms; docs/loops.md.)  V
+    factored once (the banded LU or the SVD, as _rows_solve chooses); Gauss-Newton moves the
+    configuration, x <- x + sum_j mu_j dx_j, V mu = -g, until
     |g| <= POSITION_TOL (at most POSITION_PROJECTIONS times), then V mu = -g' moves the rates,
     twice at most; the dependent frames are rebuilt after each move.  Records the largest
     residuals before and after (loops.stats)."""
