@@ -46,9 +46,9 @@ def median_us_per_step(model, steps, repeats, **kw):
 
 
 @njit
-def _repeat_solve(repeats, mode, tip_pinned, sweep, root, z):
+def _repeat_solve(repeats, mode, tip_pinned, parent, sweep, root, z):
     for _ in range(repeats):
-        kstep.solve_step(mode, tip_pinned, sweep, root, z)
+        kstep.solve_step(mode, tip_pinned, parent, sweep, root, z)
 
 
 def floor_us_per_step(model, repeats=20000):
@@ -67,7 +67,8 @@ def floor_us_per_step(model, repeats=20000):
         else:
             sweep.kind[j] = {BALL: kstep.EL_BALL, FIXED: kstep.IDENTITY}.get(
                 int(chain.hinge_kind[j // 2]), kstep.TRANSFER)
-    args = (_mode(chain, "riccati", False), chain.tip_pinned, sweep, np.zeros(6), ws.state.z)
+    args = (_mode(chain, "riccati", False), chain.tip_pinned, chain.parent, sweep, np.zeros(6),
+            ws.state.z)
     _repeat_solve(10, *args)
     t0 = time.perf_counter()
     _repeat_solve(repeats, *args)
