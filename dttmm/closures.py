@@ -36,6 +36,7 @@ from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.hinges import AXIS_1, HINGE_PARAM_SIZE, pack_hinge
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
+from .elements.drives import FORCE, MOTION
 from .elements.rigid_body import TO_OUTPUT
 
 GROUND = -1
@@ -49,7 +50,7 @@ def empty_table():
                 closure_point=np.zeros((0, 2, 3)),
                 closure_on_end=np.zeros((0, 2), dtype=bool),
                 closure_params=np.zeros((0, HINGE_PARAM_SIZE)),
-                closure_names=())
+                closure_names=(), closure_drives=())
 
 
 def _side_name(model, k):
@@ -173,13 +174,13 @@ def closure_rows(model, entries, index_of, named):
     a side that is not in the system, a joint that closes a body to itself, to a body welded
     to it or the ground to itself, a point the side does not have, an axis that is zero or
     not finite, axes that are not perpendicular at the start, a rotation that contradicts the
-    bodies' frames and a drive (closing joints carry none yet)."""
+    bodies' frames, and a drive other than a prescribed motion (JointMotion)."""
     rows = empty_table()
     if not entries:
         return rows
     frames = start_state(model)
     group = _weld_group(model)
-    kinds, bodies, points, ends, params, names = [], [], [], [], [], []
+    kinds, bodies, points, ends, params, names, all_drives = [], [], [], [], [], [], []
     for c, (joint, a, b, at_a, at_b) in enumerate(entries):
         kind = joint_kind_of(joint)
         label = (f"{type(joint).__name__} '{joint.name}' (closure {c})" if
@@ -197,11 +198,14 @@ def closure_rows(model, entries, index_of, named):
             raise ValueError(f"{label}: closes {_side_name(model, ka)} to itself; a closing "
                              f"joint joins two different bodies (or a body and the ground)")
         v = joint.validated(c)
-        drives = v.get("drives", ())
-        if any(d is not None for d in drives):
-            raise ValueError(f"{label}: drives on closing joints do not run yet; drive a joint "
-                             f"of the tree instead (choose the spanning tree so that it holds "
-                             f"the driven joint)")
+        drives = tuple(v.get("drives", ()))
+        for i, d in enumerate(drives):
+            if d is not None and d["kind"] != MOTION:
+                raise ValueError(f"{label}: coordinate {i + 1}: a closing joint's coordinate "
+                                 f"takes a prescribed motion (JointMotion) so far, not a "
+                                 f"{'JointForce' if d['kind'] == FORCE else 'SpringDamper'}; "
+                                 f"put the driven joint in the tree (choose the spanning tree "
+                                 f"so that it holds the joint)")
         side_a = _side(model, ka, at_a, label, "at_a", frames, named)
         side_b = _side(model, kb, at_b, label, "at_b", frames, named)
         if side_a is None:                # the ground's point: where b's starts
@@ -225,7 +229,7 @@ def closure_rows(model, entries, index_of, named):
             n1, n2 = v["axis1"], v["axis2"]
             q1, q2 = v["q0"]
             if kind.code == PRISMATIC:
-                if q1 != 0.0:
+                if q1 != 0.0 and drives[0] is None:
                     raise ValueError(f"{label}: a closing prismatic joint's position is "
                                      f"measured between its points; leave position 0")
                 q1 = float((f_a @ n1) @ (side_b[2] - side_a[2]))
@@ -253,12 +257,13 @@ def closure_rows(model, entries, index_of, named):
         ends.append((side_a[1], side_b[1]))
         params.append(pack_hinge(v))
         names.append(joint.name or f"{HINGE_KIND_NAMES[kind.code]}_closure{c}")
+        all_drives.append(drives)
     return dict(closure_kind=np.array(kinds, dtype=np.int64),
                 closure_body=np.array(bodies, dtype=np.int64).reshape(-1, 2),
                 closure_point=np.array(points, dtype=float).reshape(-1, 2, 3),
                 closure_on_end=np.array(ends, dtype=bool).reshape(-1, 2),
                 closure_params=np.array(params).reshape(-1, HINGE_PARAM_SIZE),
-                closure_names=tuple(names))
+                closure_names=tuple(names), closure_drives=tuple(all_drives))
 
 
 def is_pinned_tip(model):
@@ -311,8 +316,12 @@ def describe_closures(model):
             else:
                 point = np.round(model.closure_point[c, s], 6).tolist()
                 sides.append(f"'{model.body_names[k]}' at {point}")
+        driven = [str(i + 1) for i, d in enumerate(model.closure_drives[c]
+                                                    if model.closure_drives else ()) if d]
         lines.append(f"closure {c} '{model.closure_names[c]}': {JOINT_KIND[int(kind)].what} "
-                     f"from {sides[0]} to {sides[1]}")
+                     f"from {sides[0]} to {sides[1]}"
+                     + (f", coordinate {', '.join(driven)} prescribed (JointMotion; its force in "
+                        f"Result.closure_drive_force)" if driven else ""))
     return lines
 
 
@@ -393,29 +402,102 @@ def constraint_directions(model, c):
     return points, dots
 
 
-GAP_WORLD, GAP_A, DOT = 0, 1, 2     # constraint_rows' kinds (kernels/closure.py, the reference)
+# constraint_rows' kinds (kernels/closure.py, the reference): gaps e . (p_b - p_a) with e fixed
+# in the world or in a's frame, dots (F_a x) . (F_b y), and a driven coordinate's angle about
+# an axis fixed in a's or in b's frame (driven_directions)
+GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B = 0, 1, 2, 3, 4
+
+
+def driven_directions(model, c):
+    """The rows of closing joint c's driven coordinates (JointMotion): [(i, kind, v1, v2, v3)]
+    for coordinate i.  A slide is the gap along a's axis (GAP_A, e = n); an angle is
+        q = atan2(n . (x x y), x . y),  q' = n . (w_b - w_a)
+    with x = F_a v1, y = F_b v2 and the axis n = F v3 (F_a: ANGLE_A, F_b: ANGLE_B):
+        revolute:      x = u, y = R0^T u (u across n), n in a
+        universal q1:  x = R0 n2, y = n2, n1 in a;   q2: x = n1, y = R0^T n1, n2 in b
+    (F_b = F_a Rot(n1, q1) R0 Rot(n2, q2); docs/loops.md, "Drives on closing joints")."""
+    kind, row = int(model.closure_kind[c]), model.closure_params[c]
+    r0 = row[0:9].reshape(3, 3)
+    n1, n2 = row[45:48], row[48:51]
+    zero = np.zeros(3)
+    rows = []
+    for i, d in enumerate(model.closure_drives[c] if model.closure_drives else ()):
+        if d is None:
+            continue
+        if kind == PRISMATIC:
+            rows.append((i, GAP_A, n1, zero, zero))
+        elif kind == REVOLUTE:
+            u = _perpendiculars(n1)[0]
+            rows.append((i, ANGLE_A, u, r0.T @ u, n1))
+        elif i == 0:
+            rows.append((i, ANGLE_A, r0 @ n2, n2, n1))
+        else:
+            rows.append((i, ANGLE_B, n1, r0.T @ n1, n2))
+    return rows
 
 
 def constraint_rows(model, closures=None):
-    """The closing joints' scalar constraints as flat rows (constraint_directions; closures:
-    which closing joints, default all): kind (R,) GAP_WORLD (e along a world axis), GAP_A (e
-    fixed in side a's frame) or DOT, the closing joint of each (R,), e or x (R, 3) and y (R, 3;
-    zero for a gap)."""
-    kind, owner, v1, v2 = [], [], [], []
+    """The closing joints' scalar constraints as flat rows (constraint_directions, then each
+    joint's driven coordinates, driven_directions; closures: which closing joints, default
+    all): kind (R,) GAP_WORLD, GAP_A, DOT, ANGLE_A or ANGLE_B, the closing joint of each (R,),
+    v1 (e or x), v2 (y; zero for a gap), v3 (an angle's axis) (R, 3) each, and the driven
+    coordinate of each (R,; -1 for a constraint of the joint itself)."""
+    kind, owner, v1, v2, v3, coordinate = [], [], [], [], [], []
+    zero = np.zeros(3)
+
+    def add(k, c, a, b, n, i):
+        kind.append(k)
+        owner.append(c)
+        v1.append(a)
+        v2.append(b)
+        v3.append(n)
+        coordinate.append(i)
+
     for c in range(model.n_closures) if closures is None else closures:
         points, dots = constraint_directions(model, c)
         for frame, e in points:
-            kind.append(GAP_WORLD if frame == "w" else GAP_A)
-            owner.append(c)
-            v1.append(e)
-            v2.append(np.zeros(3))
+            add(GAP_WORLD if frame == "w" else GAP_A, c, e, zero, zero, -1)
         for x, y in dots:
-            kind.append(DOT)
-            owner.append(c)
-            v1.append(x)
-            v2.append(y)
+            add(DOT, c, x, y, zero, -1)
+        for i, k, a, b, n in driven_directions(model, c):
+            add(k, c, a, b, n, i)
     return (np.array(kind, dtype=np.int64), np.array(owner, dtype=np.int64),
-            np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3))
+            np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3),
+            np.array(v3, dtype=float).reshape(-1, 3), np.array(coordinate, dtype=np.int64))
+
+
+def closure_targets(model, times):
+    """(len(times), R, 3): each row's target (value, rate, acceleration) at the times, R and the
+    rows' order as constraint_rows: a driven coordinate's prescribed motion, zero for the
+    constraints.  A function's failure or a value that is not finite: ValueError naming the
+    closing joint and its coordinate."""
+    _, owner, _, _, _, coordinate = constraint_rows(model)
+    out = np.zeros((len(times), len(owner), 3))
+    for r in np.nonzero(coordinate >= 0)[0]:
+        c, i = owner[r], coordinate[r]
+        functions = model.closure_drives[c][i]["function"]
+        who = f"the prescribed motion of closing joint '{model.closure_names[c]}' " \
+              f"(coordinate {i + 1})"
+        for j, t in enumerate(times):
+            for m, f in enumerate(functions):
+                try:
+                    value = float(np.asarray(f(t), dtype=float).reshape(-1)[0])
+                except Exception as err:
+                    raise ValueError(f"{who} failed at t = {t:g} s: {err}") from None
+                if not np.isfinite(value):
+                    raise ValueError(f"{who} returned {value} at t = {t:g} s (not finite)")
+                out[j, r, m] = value
+    return out
+
+
+def has_closure_drives(model):
+    """Whether any closing joint's coordinate is driven."""
+    return any(d is not None for ds in model.closure_drives for d in ds)
+
+
+def wrap_angle(a):
+    """a folded into [-pi, pi)."""
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def tree_state(model, theta, q, omega, qd):
@@ -495,11 +577,14 @@ def _side_motion(model, state, c, s):
     return r_in[k] + arm, v_in[k] + np.cross(w[k], arm), rot[k], w[k]
 
 
-def closure_residuals(model, state):
-    """(g, g') over every closing joint's scalar constraints (constraint_directions), at the
-    tree's state (tree_state): positions (m, or dimensionless for the dots) and their rates,
-    and the index of the closing joint of each row."""
+def closure_residuals(model, state, t=0.0):
+    """(g, g') over every closing joint's rows (constraint_rows: its constraints, then its
+    driven coordinates less their prescribed motion at time t), at the tree's state
+    (tree_state): positions (m, or dimensionless for the dots, rad for the angles) and their
+    rates, and the index of the closing joint of each row."""
     g, gd, owner = [], [], []
+    targets = closure_targets(model, [t])[0] if has_closure_drives(model) else None
+    r = 0
     for c in range(model.n_closures):
         p_a, v_a, f_a, w_a = _side_motion(model, state, c, 0)
         p_b, v_b, f_b, w_b = _side_motion(model, state, c, 1)
@@ -518,6 +603,22 @@ def closure_residuals(model, state):
             g.append(x @ y)
             gd.append((w_b - w_a) @ np.cross(y, x))
             owner.append(c)
+        r += len(points) + len(dots)
+        for _, kind, v1, v2, v3 in driven_directions(model, c):
+            if kind == GAP_A:
+                e = f_a @ v1
+                value = e @ (p_b - p_a)
+                rate = np.cross(w_a, e) @ (p_b - p_a) + e @ (v_b - v_a)
+            else:
+                x, y = f_a @ v1, f_b @ v2
+                n = (f_a if kind == ANGLE_A else f_b) @ v3
+                value = np.arctan2(n @ np.cross(x, y), x @ y)
+                rate = n @ (w_b - w_a)
+            value -= targets[r, 0]
+            g.append(wrap_angle(value) if kind != GAP_A else value)
+            gd.append(rate - targets[r, 1])
+            owner.append(c)
+            r += 1
     return np.array(g), np.array(gd), np.array(owner, dtype=np.int64)
 
 
@@ -526,7 +627,6 @@ def _coordinates(model, keep):
     joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
     whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
     coordinate always)."""
-    from .elements.drives import MOTION
     from .elements.joints import coordinate_count
     names = set(keep)
     unknown = names - set(model.hinge_names) - set(model.body_names)
@@ -593,16 +693,19 @@ def check_drives_move(model, who):
     the other coordinates cannot follow, with the other prescribed motions held, without
     opening a closing joint (the loops' rate Jacobian G, g' = G x' + g'_0, is exact: a unit
     rate of the driven coordinate that no rates of the others compensate, |G_o y + G_d| > 0
-    at the least-squares y, is locked).  The ValueError names the joint, its coordinate and
-    the closing joints that lock it."""
-    from .elements.drives import MOTION
-    if model.n_closures == 0:
+    at the least-squares y, is locked); a closing joint's driven coordinate likewise (its row
+    of G at 1, the others at 0: |G_o y - e_d| > 0).  The ValueError names the joint, its
+    coordinate and the closing joints that lock it.  A model that passed is not checked again
+    (it is frozen; the check costs tens of ms on a Stewart platform, more than a short run)."""
+    if model.n_closures == 0 or getattr(model, "_drives_move", False):
         return
     variables, _ = _coordinates(model, ())
     driven = [j for j, (what, k, i) in enumerate(variables)
               if what == "q" and len(model.drives[k]) > i and model.drives[k][i] is not None
               and model.drives[k][i]["kind"] == MOTION]
-    if not driven:
+    _, owner, _, _, _, coordinate = constraint_rows(model)
+    driven_rows = np.nonzero(coordinate >= 0)[0]
+    if not driven and not len(driven_rows):
         return
     x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
                   for what, k, i in variables])
@@ -614,20 +717,41 @@ def check_drives_move(model, who):
         unit[j] = 1.0
         jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base[1]
     others = [j for j in range(len(variables)) if j not in driven]
+
+    def left_over(column):
+        """column + G_o y at the least-squares y: what the free coordinates cannot make up."""
+        if not others:
+            return column
+        y = np.linalg.lstsq(jac[:, others], -column, rcond=1e-10)[0]
+        return column + jac[:, others] @ y
+
+    def locking(left):
+        return ", ".join(repr(n) for n in sorted(
+            {model.closure_names[c] for c in base[2][np.abs(left) > 1e-6 * np.abs(left).max()]}))
+
     for j in driven:
         column = jac[:, j]
-        y = np.linalg.lstsq(jac[:, others], -column, rcond=1e-10)[0] if others else []
-        left = column + (jac[:, others] @ y if others else 0.0)
+        left = left_over(column)
         if np.abs(left).max() > 1e-6 * max(1.0, np.abs(column).max()):
             _, k, i = variables[j]
-            names = sorted({model.closure_names[c] for c in base[2][np.abs(left) > 1e-6
-                                                                      * np.abs(left).max()]})
             raise ValueError(f"{who}: the prescribed motion of joint '{model.hinge_names[k]}' "
                              f"(coordinate {i + 1}) cannot move: closing joint(s) "
-                             f"{', '.join(repr(n) for n in names)} lock it (with the other "
-                             f"prescribed motions held, no motion of the rest keeps the loops "
-                             f"closed); drive a coordinate the loops leave free, or drop the "
-                             f"drive")
+                             f"{locking(left)} lock it (with the other prescribed motions "
+                             f"held, no motion of the rest keeps the loops closed); drive a "
+                             f"coordinate the loops leave free, or drop the drive")
+    for r in driven_rows:
+        unit = np.zeros(len(base[1]))
+        unit[r] = -1.0
+        left = left_over(unit)
+        if np.abs(left).max() > 1e-6:
+            raise ValueError(f"{who}: the prescribed motion of closing joint "
+                             f"'{model.closure_names[owner[r]]}' (coordinate "
+                             f"{coordinate[r] + 1}) cannot move: closing joint(s) "
+                             f"{locking(left)} lock it (with the other prescribed motions "
+                             f"held, no motion of the tree keeps the loops closed); drive a "
+                             f"coordinate the loops leave free, or drop the drive")
+    if hasattr(model, "__dict__"):
+        object.__setattr__(model, "_drives_move", True)
 
 
 def assemble(model, keep=(), tol=1e-12, max_iterations=30):

@@ -27,7 +27,7 @@ def _rot_z(angle):
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def slider_crank(tree="slider on the rod", crank_rate=6.0):
+def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
     """The IFToMM spatial slider-crank (SI units; gravity (0, 0, -9.81)).
 
     Crank: a revolute joint "A" to the ground at A = (0, 0.1, 0.12) about world x, 0.08 m
@@ -48,6 +48,10 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0):
         offset from the ground point A) and closed to the rod by the universal joint.
     crank_rate : float
         The crank's rate at t = 0, rad/s (default 6).
+    slide : JointMotion, optional
+        A prescribed motion of the slide (the slider's x, m), on the joint "slide" whichever
+        the tree (a closing joint on the first); the start is then assembled keeping it, not
+        the crank (default None: the slide is free).
 
     Returns
     -------
@@ -75,17 +79,18 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0):
         system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
                              name="slider", rotation=np.eye(3)),
                    UniversalJoint(axis1=across, axis2=[1, 0, 0], name="C"), parent="rod")
-        system.close(PrismaticJoint(axis=[1, 0, 0], name="slide"), "ground", "slider",
-                     at_a=[0, 0, 0])
+        system.close(PrismaticJoint(axis=[1, 0, 0], name="slide", drive=slide), "ground",
+                     "slider", at_a=[0, 0, 0])
     elif tree == "slider on the ground":
         system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
                              to_mass_center=-a, to_output=-a, name="slider"),
-                   PrismaticJoint(axis=[1, 0, 0], position=0.2, name="slide"))
+                   PrismaticJoint(axis=[1, 0, 0], position=0.2 if slide is None else 0.0,
+                                  name="slide", drive=slide))
         system.close(UniversalJoint(axis1=[1, 0, 0], axis2=across, name="C"), "slider", "rod")
     else:
         raise ValueError(f"slider_crank: tree must be 'slider on the rod' or 'slider on the "
                          f"ground', got {tree!r}")
-    return assemble(system.build(), keep=["A"])
+    return assemble(system.build(), keep=["A"] if slide is None else [])
 
 
 def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):

@@ -18,7 +18,7 @@ FIELDS = (
     "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
     "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
     "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint",
-    "energy_work", "closure_force", "closure_moment")
+    "energy_work", "closure_force", "closure_moment", "closure_drive_force")
 # computed from the stored state on first use, when the solver leaves them to its derivation
 DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
            "kinetic", "potential")
@@ -104,6 +104,10 @@ class Result:
         What each closing joint (``System.close``, in the order closed) exerts on its side b,
         world axes: the force (N) and the couple about b's point (N m); side a receives the
         opposite.  None without closing joints.
+    closure_drive_force : ndarray (T, closing joints, 2) or None
+        The generalized force (N m about the axis, or N along a slide) each closing joint's
+        prescribed motion applies on side b, per coordinate (0 for a coordinate without a
+        drive; it is also in closure_moment or closure_force).  None without such drives.
     body_names : tuple of str (n,) or None
         The bodies' names (columns of save_csv).
     energy_work : ndarray (T,) or None

@@ -27,7 +27,7 @@ from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, C
                               REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
-from .model import Ground, Model, PrescribedMotion, System
+from .model import Ground, Model, PrescribedMotion, System, children_of
 from .profiles import Profile, ProfileForce, profile
 
 Scene = namedtuple("Scene", ["name", "model", "run", "path"])
@@ -386,8 +386,7 @@ def scene_of(model, run=None, name=None):
         data["ground"] = {"position": model.ground_position.tolist(),
                           "rotation": model.ground_rotation.tolist()}
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
-    children = [[c for c in range(model.n_bodies) if model.parent[c] == k]
-                for k in range(model.n_bodies)]
+    children = children_of(model.parent)
     named = [sorted({int(model.attachment[c]) for c in children[k] if model.attachment[c]})
              for k in range(model.n_bodies)]
     bodies = []
@@ -496,6 +495,12 @@ def _close_table(model, c):
         table["axis1"], table["axis2"] = h[AXIS_1].tolist(), h[AXIS_2].tolist()
         if np.any(h[COORDINATE_0] != 0.0):
             table["angles"] = h[COORDINATE_0].tolist()
+    drives = model.closure_drives[c] if model.closure_drives else ()
+    who = f"closing joint '{model.closure_names[c]}'"
+    if kind in (REVOLUTE, PRISMATIC) and drives and drives[0] is not None:
+        table["drive"] = _drive_table(drives[0], who)
+    if kind == UNIVERSAL and any(d is not None for d in drives):
+        table["drives"] = [_drive_table(d, who) for d in drives]
     return table
 
 

@@ -34,9 +34,9 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
-from .closures import (assemble, check_drives_move, check_runs_in_sweeps, constraint_rows,
-                       loop_residuals)
-from .model import Model, output_section
+from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_targets,
+                       constraint_rows, has_closure_drives, loop_residuals)
+from .model import Model, children_of, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
                         model_fingerprint)
@@ -314,7 +314,8 @@ def loop_tables(model):
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
     loop_columns."""
     n = model.n_bodies
-    kind, owner, v1, v2 = constraint_rows(model, None if has_loops(model) else ())
+    kind, owner, v1, v2, v3, coordinate = constraint_rows(model,
+                                                          None if has_loops(model) else ())
     m = model.n_closures if len(kind) else 0
     r = len(kind)
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
@@ -324,7 +325,8 @@ def loop_tables(model):
     up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
     col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
-    return Loops(kind=kind, owner=owner, v1=v1, v2=v2,
+    return Loops(kind=kind, owner=owner, v1=v1, v2=v2, v3=v3, target=np.zeros((r, 3)),
+                 coordinate=coordinate,
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
                  coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
@@ -345,7 +347,7 @@ def loop_tables(model):
                  h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
                  free_store=np.zeros((n, 4), dtype=np.int64),
                  p_comb=np.zeros((2 * n + 1, 6)), k_comb=np.zeros((n, 3)),
-                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 6)),
+                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 8)),
                  stats=np.zeros(4))
 
 
@@ -495,9 +497,12 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                     params, settings._replace(newton_max=0, start=True), state, sweep,
                     Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
                            force=force, torque=torque, line_load=line_load,
-                           joint_input=joint_input),
+                           joint_input=joint_input,
+                           closure_target=np.zeros((1, len(loops.kind), 3))),
                     _record(0, n, len(state.eta)), monitor))
             else:
+                if has_closure_drives(model):       # a driven closing coordinate's q''(0)
+                    loops.target[:, :] = closure_targets(model, [0.0])[0]
                 status = kstep.initial_accelerations(params, settings, state, sweep,
                                                      (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                                                      force[0], torque[0], line_load[0],
@@ -538,7 +543,7 @@ def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
                   v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
                   jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
                   jtau=np.zeros((n_rec_max, n, 2)),
-                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 6)))
+                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 8)))
 
 
 _NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations not finite
@@ -997,6 +1002,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys,
                   loops.wrench.shape[0] if "closure_wrench" in keys else 0)
     joint_input = np.zeros((size, n, 2, 3))
+    closure_target = np.zeros((size, len(loops.kind), 3))
+    targets_vary = has_closure_drives(model)
     joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
                             for ds in model.drives for d in ds)
     info = np.zeros(5, dtype=np.int64)
@@ -1016,8 +1023,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         f, tq, ll = (force, torque, line_load) if no_loads else _loads(
             model, mid_times if scheme == "energy_momentum" else times[1:])
         ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
+        ct = closure_targets(model, times[1:]) if targets_vary else closure_target
         return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], force=f[:m],
-                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m])
+                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
+                      closure_target=ct[:m])
 
     def run_chunk(inputs, h, every, first_step, t_first, step_limit=max_step_error):
         """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds
@@ -1469,10 +1478,7 @@ def kernel_model(model):
     The mass, momentum and energy of both are zero; a chain without them is the model itself."""
     n = model.n_bodies
     chain = model.is_chain
-    children = [[] for _ in range(n)]
-    for c in range(n):
-        if model.parent[c] >= 0:
-            children[model.parent[c]].append(c)
+    children = children_of(model.parent)
 
     # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
     # side is the end section (kernels/closure.py reads rigid sides only)
@@ -1665,7 +1671,8 @@ def richardson_extrapolation(coarse, fine):
     names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
              "angular_acceleration", "force", "moment", "kinetic", "potential",
              "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
-             "joint_rates", "drive_force", "closure_force", "closure_moment")
+             "joint_rates", "drive_force", "closure_force", "closure_moment",
+             "closure_drive_force")
     fields = {name: combine(name) for name in names}
     u, _, vt = np.linalg.svd(combine("rotation"))       # nearest rotation: the polar factor
     u[..., :, 2] *= np.sign(np.linalg.det(u @ vt))[..., None]
@@ -1744,7 +1751,9 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
             joints[name] = np.stack([values[key][:, k, i] for k, i in columns], axis=1)
     if "closure_wrench" in values:
         joints["closure_force"] = values["closure_wrench"][:, :, :3]
-        joints["closure_moment"] = values["closure_wrench"][:, :, 3:]
+        joints["closure_moment"] = values["closure_wrench"][:, :, 3:6]
+        if has_closure_drives(model):
+            joints["closure_drive_force"] = values["closure_wrench"][:, :, 6:8]
     derived = {}
 
     def derivation(name):

@@ -4,20 +4,24 @@ The tree's full-state sweep (sweep.py::riccati_tree_full) is linear in the loads
 stations.  Each scalar constraint r of a closing joint acts through one multiplier lam_r, its
 loads on the sides' output stations the constraint's Jacobian transposed (a gap row: a force
 lam_r e on side b at its point, -lam_r e on side a at a's point; a dot row: a couple
-lam_r (y x x) on b, its opposite on a).  One sweep carries the step and a P column per row
+lam_r (y x x) on b, its opposite on a; the angle row of a driven coordinate: a couple lam_r n
+on b, its opposite on a, n the axis).  One sweep carries the step and a P column per row
 (sweep_columns: the Riccati matrices once; a row's column only over the bodies its loads
 reach), so that the stations are affine functions of the multipliers; the rows' values
 
     gap (e world):   e . (a_b - a_a)
     gap (e in a):    e . (a_b - a_a) + (e x d) . alpha_a + (w_a x (w_a x e)) . d + 2 (w_a x e) . d'
     dot:             (y x x) . (alpha_b - alpha_a) + (w_b - w_a) . ((w_b x y) x x + y x (w_a x x))
+    angle:           n . (alpha_b - alpha_a) + (w_s x n) . (w_b - w_a)   (n fixed in side s)
 
 (a point's acceleration a = a_O + alpha x arm + w x (w x arm) from its body's output station;
 _row_coefficients writes them as the Jacobian applied to the stations plus velocity terms)
 are held at zero, the constraints' second derivatives (acceleration level, as the consistent
-start and the pinned tip hold theirs).  After the step the configuration and then the rates
-are projected back onto the loops along the step's own responses to unit multipliers
-(project_onto_loops), so that every step ends with its loops closed.
+start and the pinned tip hold theirs), a driven coordinate's at its prescribed acceleration
+(loops.target; its position and rate at its motion's in the projection).  After the step the
+configuration and then the rates are projected back onto the loops along the step's own
+responses to unit multipliers (project_onto_loops), so that every step ends with its loops
+closed.
 
 A row's response is zero outside the subtrees of its loaded bodies' topmost moving ancestors
 (its active bodies, solver._column_bodies): below a fixed ground, a loop that closes near it
@@ -32,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT
-from ..closures import DOT, GAP_A, GAP_WORLD
+from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
 from ..elements import BEAM
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ..elements.hinges import AXIS_1, FIXED
@@ -46,8 +50,13 @@ from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 # the closing joints as the loop reads them, and the loop's scratch for them (solver.
 # loop_tables): rows (R) and closing joints (m) in the kernel model's numbering
 Loops = namedtuple("Loops", [
-    "kind", "owner", "v1", "v2",     # (R,), (R,), (R, 3), (R, 3): GAP_WORLD / GAP_A / DOT, its
-                                     # closing joint, e (or x, in a's frame) and y (b's frame)
+    "kind", "owner", "v1", "v2",     # (R,), (R,), (R, 3), (R, 3): GAP_WORLD / GAP_A / DOT /
+                                     # ANGLE_A / ANGLE_B, its closing joint, e (or x, in a's
+                                     # frame) and y (b's frame)
+    "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions);
+                                     # (R, 3) the step's targets (value, rate, acceleration):
+                                     # a driven coordinate's motion at the step's end, else 0;
+                                     # (R,) the joint's coordinate a row drives (-1: none)
     "body", "point",                 # (m, 2), (m, 2, 3): the sides' bodies and points (in the
                                      # body's frame from its input point; the ground's: world,
                                      # from the ground point)
@@ -74,8 +83,9 @@ Loops = namedtuple("Loops", [
     "h_store", "k_store", "free_store",   # (n, 3, 6), (R + 1, n, 3), (n, 4) int
     "p_comb", "k_comb",              # (2n + 1, 6), (n, 3): the multipliers' superposition
     "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
-    "wrench",                        # (m, 6) each closing joint's force and couple on side b
-                                     # (world; the couple about its point) from loops.lam
+    "wrench",                        # (m, 8) each closing joint's force and couple on side b
+                                     # (world; the couple about its point) from loops.lam,
+                                     # then its drives' generalized forces (coordinates 1, 2)
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
@@ -176,12 +186,21 @@ def _side(params, loops, rot, w, c, s):
 @njit(cache=True, fastmath=CONTRACT)
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
-    v_out."""
+    v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""
     for q in range(rows.shape[0]):
         r = rows[q]
         c = loops.owner[r]
         _, p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, c, 0)
         _, p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, c, 1)
+        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
+            # q = atan2(n . (x x y), x . y), q' = n . (w_b - w_a)
+            x = f_a @ loops.v1[r]
+            y = f_b @ loops.v2[r]
+            n = (f_a if loops.kind[r] == ANGLE_A else f_b) @ loops.v3[r]
+            angle = np.arctan2(n @ _cross(x, y), x @ y) - loops.target[r, 0]
+            loops.g[r] = (angle + np.pi) % (2.0 * np.pi) - np.pi
+            loops.gd[r] = n @ (w_b - w_a) - loops.target[r, 1]
+            continue
         if loops.kind[r] == DOT:
             x = f_a @ loops.v1[r]
             y = f_b @ loops.v2[r]
@@ -190,8 +209,8 @@ def row_positions(params, loops, rot, w, rows):
         else:
             e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
             d = p_b - p_a
-            loops.g[r] = e @ d
-            loops.gd[r] = e @ (v_b - v_a)
+            loops.g[r] = e @ d - loops.target[r, 0]
+            loops.gd[r] = e @ (v_b - v_a) - loops.target[r, 1]
             if loops.kind[r] == GAP_A:
                 loops.gd[r] += _cross(w_a, e) @ d
 
@@ -206,12 +225,23 @@ def _row_coefficients(params, loops, rot, w):
     the sides' output stations are -[coef alpha; coef a] (the Jacobian transposed):
         gap:  a_a: -e, alpha_a: -(arm_a x e) (+ e x d, e in a's frame), a_b: e, alpha_b: arm_b x e
         dot:  alpha_a: -(y x x), alpha_b: y x x
+        angle: alpha_a: -n, alpha_b: n, kappa = (w_s x n) . (w_b - w_a), s the side holding n
     with arm the point from its body's output point and d = p_b - p_a."""
     for r in range(loops.kind.shape[0]):
         c = loops.owner[r]
         _, p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, c, 0)
         _, p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, c, 1)
         co = loops.coef[r]
+        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
+            a_side = loops.kind[r] == ANGLE_A
+            n = (f_a if a_side else f_b) @ loops.v3[r]
+            for i in range(3):
+                co[0, i] = 0.0
+                co[1, i] = -n[i]
+                co[2, i] = 0.0
+                co[3, i] = n[i]
+            loops.kappa[r] = _cross(w_a if a_side else w_b, n) @ (w_b - w_a)
+            continue
         if loops.kind[r] == DOT:
             x = f_a @ loops.v1[r]
             y = f_b @ loops.v2[r]
@@ -260,9 +290,10 @@ def _row_value(loops, r, z, act):
 @njit(cache=True, fastmath=CONTRACT)
 def row_residuals(loops, z, out):
     """Every row's value kappa + J (a, alpha) at the stations z (2n + 1, 12) of the whole
-    tree, with the Jacobian of the last solve (_row_coefficients)."""
+    tree, with the Jacobian of the last solve (_row_coefficients), less its target (a driven
+    coordinate's prescribed acceleration)."""
     for r in range(loops.kind.shape[0]):
-        out[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0])
+        out[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0]) - loops.target[r, 2]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -370,13 +401,22 @@ def _rows_solve(loops, a, b):
 def closure_wrenches(params, loops, rot):
     """loops.wrench: each closing joint's force and couple on side b (world axes; the couple
     about b's point) from the multipliers loops.lam: a gap row's lam e, a dot row's couple
-    lam (y x x) (the module docstring), with the rows' directions at the rotations rot."""
+    lam (y x x), an angle's couple lam n (the module docstring), with the rows' directions at
+    the rotations rot; a driven coordinate's row's lam is also its drive's generalized force
+    (loops.wrench[c, 6 + i] for coordinate i: a couple about the axis, or a force along it)."""
     loops.wrench[:, :] = 0.0
     for r in range(loops.kind.shape[0]):
         c = loops.owner[r]
+        if loops.coordinate[r] >= 0:
+            loops.wrench[c, 6 + loops.coordinate[r]] = loops.lam[r]
         ka, kb = loops.body[c, 0], loops.body[c, 1]
         f_a = loops.ground_rot if ka < 0 else rot[ka]
-        if loops.kind[r] == DOT:
+        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
+            f_n = f_a if loops.kind[r] == ANGLE_A else (loops.ground_rot if kb < 0 else rot[kb])
+            n = f_n @ loops.v3[r]
+            for i in range(3):
+                loops.wrench[c, 3 + i] += loops.lam[r] * n[i]
+        elif loops.kind[r] == DOT:
             f_b = loops.ground_rot if kb < 0 else rot[kb]
             couple = _cross(f_b @ loops.v2[r], f_a @ loops.v1[r])
             for i in range(3):
@@ -434,7 +474,8 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                        loops.act[c])
     _delassus(loops)
     for r in range(n_rows):
-        loops.rhs[r] = -(loops.kappa[r] + _row_value(loops, r, loops.z_save[0], loops.act[0]))
+        loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
+                                             + _row_value(loops, r, loops.z_save[0], loops.act[0]))
     loops.lam[:] = _rows_solve(loops, loops.delassus, loops.rhs)
     # the step with the multipliers' loads: P and k superposed, one recovery over the tree
     p_comb, k_comb = loops.p_comb, loops.k_comb

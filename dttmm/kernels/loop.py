@@ -87,13 +87,16 @@ Inputs = namedtuple("Inputs", [
     "line_load",                       # (m, n, 3) a beam's distributed load per length, world
     "joint_input",                     # (m, n, 2, 3) per joint coordinate at t_{s+1}: a
                                        # prescribed motion's (q, q', q''), a JointForce's value
+    "closure_target",                  # (m, R, 3) per closing joints' row at t_{s+1}: a driven
+                                       # coordinate's (q, q', q''), else 0 (closures.py)
 ])
 
 Record = namedtuple("Record", [
     "rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d",
     "v_st", "v_c",      # the paper's scheme's point velocities; the EM scheme's mass centres
     "jq", "jqd", "jtau",  # joint coordinates, rates, generalized forces
-    "closure_wrench",   # (m, 6) the closing joints' force and couple on side b (world)
+    "closure_wrench",   # (m, 8) the closing joints' force and couple on side b (world), and
+                        # their drives' generalized forces
 ])
 
 Monitor = namedtuple("Monitor", [

@@ -692,6 +692,7 @@ def _iterate(loop, run, s, it):
         return NOT_FINITE, 0, 0.0
     loops = loop.loops
     if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
+        loops.target[:, :] = inputs.closure_target[s]
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
         # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e)
         eta_g = (loop.eta_dd_star - loop.w1e) / c1
@@ -854,6 +855,7 @@ def _update(loop, run, s, _):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
     if loop.loops.kind.shape[0] > 0:    # back onto the loops (kernels/closure.py)
+        loop.loops.target[:, :] = inputs.closure_target[s]
         project_onto_loops(params, loop.loops, state)
     return finite
 

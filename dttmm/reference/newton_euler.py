@@ -74,7 +74,11 @@ and the row
     g'' + 2 W g' + W^2 g = 0                                 (Baumgarte, W = LOOP_DAMPING)
 linear in the accelerations:  for a gap e . (a_b - a_a) (+ with e turning with a:
 (alpha_a x e) . d + (w_a x (w_a x e)) . d + 2 (w_a x e) . d', d = p_b - p_a), for a dot
-(alpha_b - alpha_a) . (y x x) + (w_b - w_a) . ((w_b x y) x x + y x (w_a x x)).  The system is
+(alpha_b - alpha_a) . (y x x) + (w_b - w_a) . ((w_b x y) x x + y x (w_a x x)).  A closing
+joint's coordinate driven by a prescribed motion s(t) adds its row (closures.driven_directions:
+a slide's gap along a's axis, or an angle atan2(n . (x x y), x . y) with the rate n . (w_b -
+w_a) and the acceleration n . (alpha_b - alpha_a) + (w_s x n) . (w_b - w_a), its multiplier a
+couple lam n on b), held as (g - s)'' + 2 W (g - s)' + W^2 (g - s) = 0.  The system is
 solved by eliminating the tree first and then the multipliers from the Delassus matrix by a
 truncated SVD (_solve_least_closure_force): the least multipliers, where constraints are
 redundant (a planar loop of spatial revolute joints; a chain straight between two fixed points,
@@ -229,8 +233,8 @@ from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
 from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
-from ..closures import (DOT, GAP_A, GAP_WORLD, assemble, check_drives_move, constraint_rows,
-                        loop_residuals)
+from ..closures import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, assemble, check_drives_move,
+                        constraint_rows, has_closure_drives, loop_residuals)
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
@@ -247,7 +251,7 @@ _CT = C_TRANSLATION.start
 _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
-_DOT, _GAP_A, _GAP_WORLD = DOT, GAP_A, GAP_WORLD
+_DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B = DOT, GAP_A, GAP_WORLD, ANGLE_A, ANGLE_B
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
@@ -1372,7 +1376,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
     accelerations) and, in the dynamic rows, the column -J^T of its multiplier (the joint's
     force and couple do no work on what the joint allows).  Returns the world direction of
     every row's multiplier on side b (a force for a gap, a couple for a dot)."""
-    col0, kind, owner, v1, v2, bodies, points, ends, gains = loops
+    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _ = loops
     directions = np.zeros((kind.shape[0], 3))
     for r in range(kind.shape[0]):
         c = owner[r]
@@ -1386,7 +1390,21 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             kb, points[c, 1], end_b, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
             alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g)
         zero = np.zeros(3)
-        if kind[r] == _DOT:                 # (F_a x) . (F_b y) = 0
+        if kind[r] == _ANGLE_A or kind[r] == _ANGLE_B:   # a driven angle, n . (w_b - w_a)
+            x = f_a @ v1[r]
+            y = f_b @ v2[r]
+            n = (f_a if kind[r] == _ANGLE_A else f_b) @ v3[r]
+            dw = w_b - w_a
+            g = np.arctan2(n @ _cross(x, y), x @ y) - target[r, 0]
+            g = (g + np.pi) % (2.0 * np.pi) - np.pi
+            gd = n @ dw
+            kappa = _cross(w_a if kind[r] == _ANGLE_A else w_b, n) @ dw + n @ (al_b - al_a)
+            _closure_columns(s, row, kb, end_b, zero, n, n, 1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            directions[r] = n
+        elif kind[r] == _DOT:               # (F_a x) . (F_b y) = 0
             x = f_a @ v1[r]
             y = f_b @ v2[r]
             cv = _cross(y, x)
@@ -1420,6 +1438,10 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             _closure_columns(s, row, ka, end_a, e, _cross(arm_a, e), zero, -1.0, b_r, b_t,
                              e_col0, m_off, body_kind, beam_params)
             directions[r] = e
+            g -= target[r, 0]
+        # a driven coordinate's row: (g - s)'' + 2 zeta W (g - s)' + W^2 (g - s) = 0
+        gd -= target[r, 1]
+        kappa -= target[r, 2]
         b[row] = -(kappa + gains[0] * gd + gains[1] * g)
         for j in range(col0):
             s[j, row] = -s[row, j]
@@ -1493,11 +1515,14 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     else:
         directions = np.zeros((0, 3))
         x = np.linalg.solve(s, b)
-    # each closing joint's force and couple on side b (world; the couple a pure one)
-    closure_load = np.zeros((loops[5].shape[0], 6))
+    # each closing joint's force and couple on side b (world; the couple a pure one), then its
+    # drives' generalized forces (a driven coordinate's row's multiplier)
+    closure_load = np.zeros((loops[5].shape[0], 8))
     for r in range(n_rows):
         lam = x[loops[0] + r]
-        at = 3 if loops[1][r] == _DOT else 0
+        if loops[11][r] >= 0:
+            closure_load[loops[2][r], 6 + loops[11][r]] = lam
+        at = 0 if loops[1][r] == _GAP_A or loops[1][r] == _GAP_WORLD else 3
         for i in range(3):
             closure_load[loops[2][r], at + i] += lam * directions[r, i]
     n = body_params.shape[0]
@@ -1597,12 +1622,13 @@ def _loop_rows(model, col0):
     """The closing joints as the kernels read them (_closure_rows): (first multiplier column,
     per row its kind (closures.GAP_WORLD, GAP_A or DOT), its closing joint, x or e, y, then per
     closing joint its sides' bodies, points and end flags, and the stabilization's gains)."""
-    kind, owner, v1, v2 = constraint_rows(model)
+    kind, owner, v1, v2, v3, coordinate = constraint_rows(model)
     return (col0, kind, owner, v1, v2,
             np.array(model.closure_body, dtype=np.int64).reshape(-1, 2),
             np.array(model.closure_point, dtype=float).reshape(-1, 2, 3),
             np.array(model.closure_on_end, dtype=np.int64).reshape(-1, 2),
-            np.array([2.0 * LOOP_DAMPING, LOOP_DAMPING ** 2]))
+            np.array([2.0 * LOOP_DAMPING, LOOP_DAMPING ** 2]), v3, np.zeros((len(kind), 3)),
+            coordinate)
 
 
 class _Problem:
@@ -1706,6 +1732,12 @@ class _Problem:
         self.c_col0 = c
         c += nq
         self.loops = _loop_rows(model, c)
+        # the rows of closing joints' driven coordinates: their motions fill loops' targets
+        _, owner, _, _, _, coordinate = constraint_rows(model)
+        self._closure_motions = [(r, model.closure_drives[owner[r]][coordinate[r]]["function"],
+                                  f"closing joint '{model.closure_names[owner[r]]}', "
+                                  f"coordinate {coordinate[r] + 1}")
+                                 for r in np.nonzero(coordinate >= 0)[0]]
         c += self.loops[1].shape[0]
         self.n_unknowns = c
         self.forces = np.zeros((n, 3))
@@ -1809,6 +1841,15 @@ class _Problem:
     def _args(self, y, t):
         r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads = self.time_inputs(t)
         y = self.joint_inputs(t, y)
+        target = self.loops[10]
+        for r, functions, who in self._closure_motions:
+            for i, (what, f) in enumerate(zip(("position", "velocity", "acceleration"),
+                                              functions)):
+                a = np.asarray(f(t), dtype=float)
+                if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
+                    raise ValueError(f"simulate_reference: {who}: prescribed {what} returned "
+                                     f"{f(t)!r} at t = {t:.17g} (need one finite number)")
+                target[r, i] = float(a.reshape(-1)[0])
         return (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
@@ -1992,7 +2033,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     q_rec = np.empty((nt, nq))
     qd_rec = np.empty((nt, nq))
     drive = np.empty((nt, nq))
-    closure_load = np.empty((nt, model.n_closures, 6))
+    closure_load = np.empty((nt, model.n_closures, 8))
     for i, t in enumerate(t_eval):
         out = prob.evaluate(t, ys[i])
         closure_load[i] = out[17]
@@ -2025,7 +2066,9 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   info={"nfev": nfev, "n_state": prob.n_state, "n_unknowns": prob.n_unknowns,
                         **({"assembly": assembly} if assembly else {})},
                   closure_force=closure_load[:, :, :3] if assembly else None,
-                  closure_moment=closure_load[:, :, 3:] if assembly else None,
+                  closure_moment=closure_load[:, :, 3:6] if assembly else None,
+                  closure_drive_force=(closure_load[:, :, 6:] if assembly
+                                       and has_closure_drives(model) else None),
                   velocity_input=v_in,
                   modal_coordinates=eta if nm > 0 else None,
                   modal_velocities=eta_dot if nm > 0 else None,
