@@ -30,13 +30,15 @@ its output end, the ground frame) the joint holds, as a tree joint (docs/joints.
 R0 is read from the bodies' frames at t = 0 (at the joint's given angles, default 0); a
 prismatic joint's coordinate is measured from its points.
 """
+from collections import namedtuple
+
 import numpy as np
 
 from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
 from .elements.hinges import AXIS_1, HINGE_PARAM_SIZE, pack_hinge
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
-from .elements.drives import FORCE, MOTION
+from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.rigid_body import TO_OUTPUT
 
 GROUND = -1
@@ -174,7 +176,7 @@ def closure_rows(model, entries, index_of, named):
     a side that is not in the system, a joint that closes a body to itself, to a body welded
     to it or the ground to itself, a point the side does not have, an axis that is zero or
     not finite, axes that are not perpendicular at the start, a rotation that contradicts the
-    bodies' frames, and a drive other than a prescribed motion (JointMotion)."""
+    bodies' frames, and a JointForce drive."""
     rows = empty_table()
     if not entries:
         return rows
@@ -200,12 +202,11 @@ def closure_rows(model, entries, index_of, named):
         v = joint.validated(c)
         drives = tuple(v.get("drives", ()))
         for i, d in enumerate(drives):
-            if d is not None and d["kind"] != MOTION:
+            if d is not None and d["kind"] == FORCE:
                 raise ValueError(f"{label}: coordinate {i + 1}: a closing joint's coordinate "
-                                 f"takes a prescribed motion (JointMotion) so far, not a "
-                                 f"{'JointForce' if d['kind'] == FORCE else 'SpringDamper'}; "
-                                 f"put the driven joint in the tree (choose the spanning tree "
-                                 f"so that it holds the joint)")
+                                 f"takes a prescribed motion (JointMotion) or a SpringDamper so "
+                                 f"far, not a JointForce; put the driven joint in the tree "
+                                 f"(choose the spanning tree so that it holds the joint)")
         side_a = _side(model, ka, at_a, label, "at_a", frames, named)
         side_b = _side(model, kb, at_b, label, "at_b", frames, named)
         if side_a is None:                # the ground's point: where b's starts
@@ -316,12 +317,15 @@ def describe_closures(model):
             else:
                 point = np.round(model.closure_point[c, s], 6).tolist()
                 sides.append(f"'{model.body_names[k]}' at {point}")
-        driven = [str(i + 1) for i, d in enumerate(model.closure_drives[c]
-                                                    if model.closure_drives else ()) if d]
+        drives = [f"coordinate {i + 1} " + ("prescribed (JointMotion)" if d["kind"] == MOTION
+                                             else f"on a spring-damper (k = {d['stiffness']:g}, "
+                                                  f"c = {d['damping']:g})")
+                  for i, d in enumerate(model.closure_drives[c] if model.closure_drives else ())
+                  if d]
         lines.append(f"closure {c} '{model.closure_names[c]}': {JOINT_KIND[int(kind)].what} "
                      f"from {sides[0]} to {sides[1]}"
-                     + (f", coordinate {', '.join(driven)} prescribed (JointMotion; its force in "
-                        f"Result.closure_drive_force)" if driven else ""))
+                     + (f", {', '.join(drives)} (its force: Result.closure_drive_force)"
+                        if drives else ""))
     return lines
 
 
@@ -409,8 +413,9 @@ GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B = 0, 1, 2, 3, 4
 
 
 def driven_directions(model, c):
-    """The rows of closing joint c's driven coordinates (JointMotion): [(i, kind, v1, v2, v3)]
-    for coordinate i.  A slide is the gap along a's axis (GAP_A, e = n); an angle is
+    """The rows of closing joint c's driven coordinates (JointMotion or SpringDamper): [(i,
+    kind, v1, v2, v3)] for coordinate i.  A slide is the gap along a's axis (GAP_A, e = n); an
+    angle is
         q = atan2(n . (x x y), x . y),  q' = n . (w_b - w_a)
     with x = F_a v1, y = F_b v2 and the axis n = F v3 (F_a: ANGLE_A, F_b: ANGLE_B):
         revolute:      x = u, y = R0^T u (u across n), n in a
@@ -436,13 +441,17 @@ def driven_directions(model, c):
     return rows
 
 
+Rows = namedtuple("Rows", ["kind", "owner", "v1", "v2", "v3", "coordinate", "law"])
+
+
 def constraint_rows(model, closures=None):
-    """The closing joints' scalar constraints as flat rows (constraint_directions, then each
-    joint's driven coordinates, driven_directions; closures: which closing joints, default
-    all): kind (R,) GAP_WORLD, GAP_A, DOT, ANGLE_A or ANGLE_B, the closing joint of each (R,),
-    v1 (e or x), v2 (y; zero for a gap), v3 (an angle's axis) (R, 3) each, and the driven
-    coordinate of each (R,; -1 for a constraint of the joint itself)."""
-    kind, owner, v1, v2, v3, coordinate = [], [], [], [], [], []
+    """The closing joints' scalar rows (constraint_directions, then each joint's driven
+    coordinates, driven_directions; closures: which closing joints, default all), a Rows of
+    flat arrays: kind (R,) GAP_WORLD, GAP_A, DOT, ANGLE_A or ANGLE_B, the closing joint of
+    each (R,), v1 (e or x), v2 (y; zero for a gap), v3 (an angle's axis) (R, 3) each, the
+    driven coordinate of each (R,; -1 for a constraint of the joint itself) and its drive's law
+    (R, 3): [kind (elements/drives.py; -1 for none), stiffness, damping]."""
+    kind, owner, v1, v2, v3, coordinate, law = [], [], [], [], [], [], []
     zero = np.zeros(3)
 
     def add(k, c, a, b, n, i):
@@ -452,6 +461,8 @@ def constraint_rows(model, closures=None):
         v2.append(b)
         v3.append(n)
         coordinate.append(i)
+        d = model.closure_drives[c][i] if i >= 0 else None
+        law.append([-1.0, 0.0, 0.0] if d is None else [d["kind"], d["stiffness"], d["damping"]])
 
     for c in range(model.n_closures) if closures is None else closures:
         points, dots = constraint_directions(model, c)
@@ -461,20 +472,25 @@ def constraint_rows(model, closures=None):
             add(DOT, c, x, y, zero, -1)
         for i, k, a, b, n in driven_directions(model, c):
             add(k, c, a, b, n, i)
-    return (np.array(kind, dtype=np.int64), np.array(owner, dtype=np.int64),
-            np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3),
-            np.array(v3, dtype=float).reshape(-1, 3), np.array(coordinate, dtype=np.int64))
+    return Rows(np.array(kind, dtype=np.int64), np.array(owner, dtype=np.int64),
+                np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3),
+                np.array(v3, dtype=float).reshape(-1, 3), np.array(coordinate, dtype=np.int64),
+                np.array(law, dtype=float).reshape(-1, 3))
 
 
 def closure_targets(model, times):
     """(len(times), R, 3): each row's target (value, rate, acceleration) at the times, R and the
-    rows' order as constraint_rows: a driven coordinate's prescribed motion, zero for the
-    constraints.  A function's failure or a value that is not finite: ValueError naming the
-    closing joint and its coordinate."""
-    _, owner, _, _, _, coordinate = constraint_rows(model)
+    rows' order as constraint_rows: a driven coordinate's prescribed motion, a SpringDamper's
+    rest (its row's value is then q - rest), zero for the constraints.  A function's failure or
+    a value that is not finite: ValueError naming the closing joint and its coordinate."""
+    rows = constraint_rows(model)
+    owner, coordinate = rows.owner, rows.coordinate
     out = np.zeros((len(times), len(owner), 3))
     for r in np.nonzero(coordinate >= 0)[0]:
         c, i = owner[r], coordinate[r]
+        if model.closure_drives[c][i]["kind"] == SPRING_DAMPER:
+            out[:, r, 0] = model.closure_drives[c][i]["rest"]
+            continue
         functions = model.closure_drives[c][i]["function"]
         who = f"the prescribed motion of closing joint '{model.closure_names[c]}' " \
               f"(coordinate {i + 1})"
@@ -579,7 +595,8 @@ def _side_motion(model, state, c, s):
 
 def closure_residuals(model, state, t=0.0):
     """(g, g') over every closing joint's rows (constraint_rows: its constraints, then its
-    driven coordinates less their prescribed motion at time t), at the tree's state
+    driven coordinates less their prescribed motion at time t; 0 for a SpringDamper's, which
+    constrains nothing), at the tree's state
     (tree_state): positions (m, or dimensionless for the dots, rad for the angles) and their
     rates, and the index of the closing joint of each row."""
     g, gd, owner = [], [], []
@@ -604,7 +621,13 @@ def closure_residuals(model, state, t=0.0):
             gd.append((w_b - w_a) @ np.cross(y, x))
             owner.append(c)
         r += len(points) + len(dots)
-        for _, kind, v1, v2, v3 in driven_directions(model, c):
+        for i, kind, v1, v2, v3 in driven_directions(model, c):
+            if model.closure_drives[c][i]["kind"] != MOTION:     # a spring: no constraint
+                g.append(0.0)
+                gd.append(0.0)
+                owner.append(c)
+                r += 1
+                continue
             if kind == GAP_A:
                 e = f_a @ v1
                 value = e @ (p_b - p_a)
@@ -703,8 +726,9 @@ def check_drives_move(model, who):
     driven = [j for j, (what, k, i) in enumerate(variables)
               if what == "q" and len(model.drives[k]) > i and model.drives[k][i] is not None
               and model.drives[k][i]["kind"] == MOTION]
-    _, owner, _, _, _, coordinate = constraint_rows(model)
-    driven_rows = np.nonzero(coordinate >= 0)[0]
+    rows = constraint_rows(model)
+    owner, coordinate = rows.owner, rows.coordinate
+    driven_rows = np.nonzero(rows.law[:, 0] == MOTION)[0]
     if not driven and not len(driven_rows):
         return
     x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0

@@ -135,13 +135,9 @@ class EnergyBalance:
                            _beam_line_velocity(model.beam_params[k], res, k, off, p_k, d1))
         if res.joint_coordinates is not None:
             p += np.einsum("tj,tj->t", res.drive_force, res.joint_rates)
-        if res.closure_drive_force is not None:     # a closing joint's prescribed motion: its
-            for c, drives in enumerate(model.closure_drives):   # force times the motion's rate
-                for i, d in enumerate(drives):
-                    if d is not None:
-                        rate = np.array([float(np.asarray(d["function"][1](ti)).reshape(-1)[0])
-                                         for ti in t])
-                        p += res.closure_drive_force[:, c, i] * rate
+        if res.closure_drive_force is not None:     # a closing joint's drives: their forces
+            rates = values["closure_wrench"][:, :, 8:10]    # times their coordinates' rates
+            p += np.einsum("tci,tci->t", res.closure_drive_force, rates)
         for k in self.elastic:
             h = model.hinge_params[k]
             inb = model.parent[k]

@@ -314,8 +314,8 @@ def loop_tables(model):
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
     loop_columns."""
     n = model.n_bodies
-    kind, owner, v1, v2, v3, coordinate = constraint_rows(model,
-                                                          None if has_loops(model) else ())
+    kind, owner, v1, v2, v3, coordinate, law = constraint_rows(
+        model, None if has_loops(model) else ())
     m = model.n_closures if len(kind) else 0
     r = len(kind)
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
@@ -326,7 +326,7 @@ def loop_tables(model):
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
     col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
     return Loops(kind=kind, owner=owner, v1=v1, v2=v2, v3=v3, target=np.zeros((r, 3)),
-                 coordinate=coordinate,
+                 coordinate=coordinate, law=law, acc=np.zeros(r), step_coef=np.zeros(2),
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
                  coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
@@ -347,7 +347,7 @@ def loop_tables(model):
                  h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
                  free_store=np.zeros((n, 4), dtype=np.int64),
                  p_comb=np.zeros((2 * n + 1, 6)), k_comb=np.zeros((n, 3)),
-                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 8)),
+                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 10)),
                  stats=np.zeros(4))
 
 
@@ -501,12 +501,17 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                            closure_target=np.zeros((1, len(loops.kind), 3))),
                     _record(0, n, len(state.eta)), monitor))
             else:
-                if has_closure_drives(model):       # a driven closing coordinate's q''(0)
-                    loops.target[:, :] = closure_targets(model, [0.0])[0]
+                if has_closure_drives(model):       # a driven closing coordinate's q''(0),
+                    loops.target[:, :] = closure_targets(model, [0.0])[0]  # a spring's rest
+                    loops.step_coef[:] = 0.0        # the springs' forces explicit
+
                 status = kstep.initial_accelerations(params, settings, state, sweep,
                                                      (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                                                      force[0], torque[0], line_load[0],
                                                      joint_input[0], loops)
+                for r in np.nonzero(loops.coordinate >= 0)[0]:   # the drives' rates at t = 0
+                    loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = (
+                        loops.target[r, 1] if loops.law[r, 0] == MOTION else loops.gd[r])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -543,7 +548,7 @@ def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
                   v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
                   jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
                   jtau=np.zeros((n_rec_max, n, 2)),
-                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 8)))
+                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 10)))
 
 
 _NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations not finite

@@ -38,6 +38,7 @@ from numba import njit
 from . import CONTRACT
 from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
 from ..elements import BEAM
+from ..elements.drives import SPRING_DAMPER
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ..elements.hinges import AXIS_1, FIXED
 from ..elements.joints import PRISMATIC
@@ -55,8 +56,14 @@ Loops = namedtuple("Loops", [
                                      # frame) and y (b's frame)
     "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions);
                                      # (R, 3) the step's targets (value, rate, acceleration):
-                                     # a driven coordinate's motion at the step's end, else 0;
-                                     # (R,) the joint's coordinate a row drives (-1: none)
+                                     # a driven coordinate's motion at the step's end, a
+                                     # spring's rest, else 0; (R,) the joint's coordinate a row
+                                     # drives (-1: none)
+    "law", "acc", "step_coef",       # (R, 3) a row's drive [kind, stiffness, damping] (kind
+                                     # -1: none; a SpringDamper's row is a force, no
+                                     # constraint); (R,) each row's acceleration in the last
+                                     # solve; (2,) [1 / c1, c3 / c1] of the step (0: the
+                                     # consistent start, springs explicit)
     "body", "point",                 # (m, 2), (m, 2, 3): the sides' bodies and points (in the
                                      # body's frame from its input point; the ground's: world,
                                      # from the ground point)
@@ -83,9 +90,10 @@ Loops = namedtuple("Loops", [
     "h_store", "k_store", "free_store",   # (n, 3, 6), (R + 1, n, 3), (n, 4) int
     "p_comb", "k_comb",              # (2n + 1, 6), (n, 3): the multipliers' superposition
     "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
-    "wrench",                        # (m, 8) each closing joint's force and couple on side b
+    "wrench",                        # (m, 10) each closing joint's force and couple on side b
                                      # (world; the couple about its point) from loops.lam,
-                                     # then its drives' generalized forces (coordinates 1, 2)
+                                     # then its drives' generalized forces and their
+                                     # coordinates' rates (coordinates 1, 2)
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
@@ -476,6 +484,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     for r in range(n_rows):
         loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
                                              + _row_value(loops, r, loops.z_save[0], loops.act[0]))
+    _spring_rows(params, loops, rot, w)
     loops.lam[:] = _rows_solve(loops, loops.delassus, loops.rhs)
     # the step with the multipliers' loads: P and k superposed, one recovery over the tree
     p_comb, k_comb = loops.p_comb, loops.k_comb
@@ -493,8 +502,37 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f, sw.s,
                    p_comb, k_comb, loops.h_store, loops.free_store, z, sw.joint_nu,
                    sw.joint_tau, True, loops.all_bodies, loops.act[0])
+    for r in range(n_rows):
+        loops.acc[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0])
     closure_wrenches(params, loops, rot)
     return 0
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _spring_rows(params, loops, rot, w):
+    """A SpringDamper's row is its force, lam = -k (q - rest) - c q' at the step's end, not a
+    constraint: with q, q' at the guess (row_positions: g = q - rest, g' = q') and their change
+    with the row's acceleration, dq = da / c1, dq' = (c3 / c1) da from the guess's a_g
+    (loops.acc, the last solve's),
+        lam + K (a - a_g) = F0,   F0 = -k g - c g',   K = (k + c c3) / c1,
+    its Delassus row scaled by K plus the unit diagonal, its right side F0 + K (a_g - b) (b the
+    row's value without multipliers); K = 0 at the consistent start (the force explicit)."""
+    springs = False
+    for r in range(loops.kind.shape[0]):
+        springs = springs or loops.law[r, 0] == SPRING_DAMPER
+    if not springs:
+        return
+    row_positions(params, loops, rot, w, loops.all_rows)
+    for r in range(loops.kind.shape[0]):
+        if loops.law[r, 0] != SPRING_DAMPER:
+            continue
+        k, c = loops.law[r, 1], loops.law[r, 2]
+        stiff = k * loops.step_coef[0] + c * loops.step_coef[1]
+        b = loops.target[r, 2] - loops.rhs[r]
+        for j in range(loops.kind.shape[0]):
+            loops.delassus[r, j] *= stiff
+        loops.delassus[r, r] += 1.0
+        loops.rhs[r] = -k * loops.g[r] - c * loops.gd[r] + stiff * (loops.acc[r] - b)
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -600,9 +638,20 @@ def _residuals(params, loops, state):
     row_positions(params, loops, state.rot, state.omega, loops.all_rows)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(loops.kind.shape[0]):
-        largest_g = max(largest_g, abs(loops.g[r]))
-        largest_gd = max(largest_gd, abs(loops.gd[r]))
+        if loops.law[r, 0] != SPRING_DAMPER:       # a spring's row constrains nothing
+            largest_g = max(largest_g, abs(loops.g[r]))
+            largest_gd = max(largest_gd, abs(loops.gd[r]))
     return largest_g, largest_gd
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _constrained(loops, values):
+    """-values with a spring's rows 0 (the projection moves nothing for them)."""
+    out = -values
+    for r in range(loops.kind.shape[0]):
+        if loops.law[r, 0] == SPRING_DAMPER:
+            out[r] = 0.0
+    return out
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -644,6 +693,11 @@ def project_onto_loops(params, loops, state):
                 for q in range(rows.shape[0]):
                     v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
     loops.gd[:] = base
+    for r in range(n_rows):             # a spring's row: mu_r = 0
+        if loops.law[r, 0] == SPRING_DAMPER:
+            v[r, :] = 0.0
+            v[:, r] = 0.0
+            v[r, r] = 1.0
     banded = loops.band[0] >= 0
     piv = np.empty(n_rows, dtype=np.int64)
     if banded:
@@ -653,8 +707,8 @@ def project_onto_loops(params, loops, state):
     for _ in range(POSITION_PROJECTIONS):
         if largest <= POSITION_TOL:
             break
-        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, -loops.g) if banded
-              else _least_apply(u, sv, vt, -loops.g))
+        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, _constrained(loops, loops.g))
+              if banded else _least_apply(u, sv, vt, _constrained(loops, loops.g)))
         for j in range(n_rows):
             _move(params, loops, state, j, mu[j], e3, phi)
         _dependent_frames(params, loops, state, loops.all_bodies)
@@ -665,13 +719,16 @@ def project_onto_loops(params, loops, state):
         _, rates = _residuals(params, loops, state)
         if rates <= RATE_TOL:
             break
-        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, -loops.gd) if banded
-              else _least_apply(u, sv, vt, -loops.gd))
+        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, _constrained(loops, loops.gd))
+              if banded else _least_apply(u, sv, vt, _constrained(loops, loops.gd)))
         for j in range(n_rows):
             _add_rates(params, loops, state, j, mu[j])
         _dependent_frames(params, loops, state, loops.all_bodies)
         _, rates = _residuals(params, loops, state)
     loops.stats[2] = max(loops.stats[2], rates)
+    for r in range(n_rows):             # the driven coordinates' rates (the drives' power)
+        if loops.coordinate[r] >= 0:
+            loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = loops.gd[r] + loops.target[r, 1]
 
 
 # The tree's full-state sweep with many load columns (sweep.py::riccati_tree_full, "Trees in

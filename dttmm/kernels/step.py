@@ -693,6 +693,8 @@ def _iterate(loop, run, s, it):
     loops = loop.loops
     if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
         loops.target[:, :] = inputs.closure_target[s]
+        loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
+        loops.step_coef[1] = c3 / c1
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
         # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e)
         eta_g = (loop.eta_dd_star - loop.w1e) / c1

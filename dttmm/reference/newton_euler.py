@@ -78,7 +78,8 @@ linear in the accelerations:  for a gap e . (a_b - a_a) (+ with e turning with a
 joint's coordinate driven by a prescribed motion s(t) adds its row (closures.driven_directions:
 a slide's gap along a's axis, or an angle atan2(n . (x x y), x . y) with the rate n . (w_b -
 w_a) and the acceleration n . (alpha_b - alpha_a) + (w_s x n) . (w_b - w_a), its multiplier a
-couple lam n on b), held as (g - s)'' + 2 W (g - s)' + W^2 (g - s) = 0.  The system is
+couple lam n on b), held as (g - s)'' + 2 W (g - s)' + W^2 (g - s) = 0; a SpringDamper's row
+is its force instead, lam = -k (q - rest) - c q' from the state.  The system is
 solved by eliminating the tree first and then the multipliers from the Delassus matrix by a
 truncated SVD (_solve_least_closure_force): the least multipliers, where constraints are
 redundant (a planar loop of spatial revolute joints; a chain straight between two fixed points,
@@ -252,6 +253,7 @@ _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
 _DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B = DOT, GAP_A, GAP_WORLD, ANGLE_A, ANGLE_B
+_SPRING_DAMPER = SPRING_DAMPER
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
@@ -1376,7 +1378,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
     accelerations) and, in the dynamic rows, the column -J^T of its multiplier (the joint's
     force and couple do no work on what the joint allows).  Returns the world direction of
     every row's multiplier on side b (a force for a gap, a couple for a dot)."""
-    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _ = loops
+    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _, law = loops
     directions = np.zeros((kind.shape[0], 3))
     for r in range(kind.shape[0]):
         c = owner[r]
@@ -1445,6 +1447,11 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
         b[row] = -(kappa + gains[0] * gd + gains[1] * g)
         for j in range(col0):
             s[j, row] = -s[row, j]
+        if law[r, 0] == _SPRING_DAMPER:     # a spring's row: lam = -k (q - rest) - c q'
+            for j in range(col0):
+                s[row, j] = 0.0
+            s[row, row] = 1.0
+            b[row] = -law[r, 1] * g - law[r, 2] * gd
     return directions
 
 
@@ -1458,7 +1465,8 @@ def _solve_least_closure_force(s, b, col0, count):
     """Solve S x = b with the closing joints' multipliers in x[col0:col0 + count] (module
     docstring, "Loops"): the tree's system first, x = x0 - X lam with S_tree x0 = b_tree and
     S_tree X = (the multipliers' columns), then the constraints J x = b_c give the Delassus
-    system (J X) lam = J x0 - b_c, solved by a truncated SVD: of the multipliers that satisfy
+    system (J X - S_cc) lam = J x0 - b_c (S_cc: a closing joint's spring's row, lam_r = F),
+    solved by a truncated SVD: of the multipliers that satisfy
     it, the least (closing joints may be redundant, as a planar loop's spatial joints are, and a
     chain straight between two fixed points leaves its tension indeterminate: the DT-TMM
     sweeps' choice at a pinned tip), and a loop passing a singular position (a flat
@@ -1470,7 +1478,8 @@ def _solve_least_closure_force(s, b, col0, count):
     rhs[:, 1:] = s[:col0, col0:col0 + count]
     sol = np.linalg.solve(tree, rhs)
     jac = np.ascontiguousarray(s[col0:col0 + count, :col0])
-    delassus = jac @ np.ascontiguousarray(sol[:, 1:])
+    # a spring's row is lam_r = F (its S_cc 1, its J 0; a constraint's S_cc 0)
+    delassus = jac @ np.ascontiguousarray(sol[:, 1:]) - s[col0:col0 + count, col0:col0 + count]
     target = jac @ np.ascontiguousarray(sol[:, 0]) - b[col0:col0 + count]
     u, sv, vt = np.linalg.svd(delassus)
     lam = np.zeros(count)
@@ -1622,13 +1631,13 @@ def _loop_rows(model, col0):
     """The closing joints as the kernels read them (_closure_rows): (first multiplier column,
     per row its kind (closures.GAP_WORLD, GAP_A or DOT), its closing joint, x or e, y, then per
     closing joint its sides' bodies, points and end flags, and the stabilization's gains)."""
-    kind, owner, v1, v2, v3, coordinate = constraint_rows(model)
+    kind, owner, v1, v2, v3, coordinate, law = constraint_rows(model)
     return (col0, kind, owner, v1, v2,
             np.array(model.closure_body, dtype=np.int64).reshape(-1, 2),
             np.array(model.closure_point, dtype=float).reshape(-1, 2, 3),
             np.array(model.closure_on_end, dtype=np.int64).reshape(-1, 2),
             np.array([2.0 * LOOP_DAMPING, LOOP_DAMPING ** 2]), v3, np.zeros((len(kind), 3)),
-            coordinate)
+            coordinate, law)
 
 
 class _Problem:
@@ -1733,11 +1742,14 @@ class _Problem:
         c += nq
         self.loops = _loop_rows(model, c)
         # the rows of closing joints' driven coordinates: their motions fill loops' targets
-        _, owner, _, _, _, coordinate = constraint_rows(model)
+        rows = constraint_rows(model)
+        owner, coordinate = rows.owner, rows.coordinate
         self._closure_motions = [(r, model.closure_drives[owner[r]][coordinate[r]]["function"],
                                   f"closing joint '{model.closure_names[owner[r]]}', "
                                   f"coordinate {coordinate[r] + 1}")
-                                 for r in np.nonzero(coordinate >= 0)[0]]
+                                 for r in np.nonzero(rows.law[:, 0] == MOTION)[0]]
+        for r in np.nonzero(rows.law[:, 0] == SPRING_DAMPER)[0]:   # its row's value: q - rest
+            self.loops[10][r, 0] = model.closure_drives[owner[r]][coordinate[r]]["rest"]
         c += self.loops[1].shape[0]
         self.n_unknowns = c
         self.forces = np.zeros((n, 3))
