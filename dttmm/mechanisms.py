@@ -93,6 +93,13 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
     return assemble(system.build(), keep=["A"] if slide is None else [])
 
 
+def _bar(name, rotation):
+    """One of the N-four-bar's bars: 1 m, 1 kg, 1/12 kg m^2 about its mass centre across it."""
+    return RigidBody(mass=1.0, inertia=[1e-3, 1 / 12, 1 / 12], inertia_about="mass_center",
+                     to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], rotation=rotation,
+                     name=name)
+
+
 def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     """The N-four-bar (IFToMM / MBS benchmark library A02): 2n + 1 uniform bars, 1 m and 1 kg
     each (1/12 kg m^2 about the joint axis), n + 1 vertical bars on revolute joints to the
@@ -128,10 +135,7 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     >>> n_four_bar(2).n_closures
     2
     """
-    def bar(name, rotation):
-        return RigidBody(mass=1.0, inertia=[1e-3, 1 / 12, 1 / 12], inertia_about="mass_center",
-                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], rotation=rotation,
-                         name=name)
+    bar = _bar
     z = [0, 0, 1.0]
     system = System(gravity=[0, -9.81, 0])
     if tree == "ground":
