@@ -230,10 +230,14 @@ def closure_rows(model, entries, index_of, named):
             n1, n2 = v["axis1"], v["axis2"]
             q1, q2 = v["q0"]
             if kind.code == PRISMATIC:
-                if q1 != 0.0 and drives[0] is None:
+                if q1 != 0.0 and (drives[0] is None or drives[0]["kind"] != MOTION):
                     raise ValueError(f"{label}: a closing prismatic joint's position is "
                                      f"measured between its points; leave position 0")
                 q1 = float((f_a @ n1) @ (side_b[2] - side_a[2]))
+                if (drives and drives[0] is not None and drives[0]["kind"] == SPRING_DAMPER
+                        and getattr(joint.drive, "rest", 0.0) is None):
+                    # a spring's rest by default: the slide measured between the points
+                    drives = (dict(drives[0], rest=q1),) + drives[1:]
                 v["q0"] = np.array([q1, 0.0])
             r1 = rotation_about(n1, q1) if kind.code != PRISMATIC else np.eye(3)
             r2 = rotation_about(n2, q2) if kind.code == UNIVERSAL else np.eye(3)

@@ -9,6 +9,7 @@ joint whose rate the benchmark gives.
 import numpy as np
 
 from .closures import assemble
+from .elements.drives import JointMotion
 from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
 from .model import Ground, System
 from .profiles import profile
@@ -48,10 +49,10 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
         offset from the ground point A) and closed to the rod by the universal joint.
     crank_rate : float
         The crank's rate at t = 0, rad/s (default 6).
-    slide : JointMotion, optional
-        A prescribed motion of the slide (the slider's x, m), on the joint "slide" whichever
-        the tree (a closing joint on the first); the start is then assembled keeping it, not
-        the crank (default None: the slide is free).
+    slide : JointMotion or SpringDamper, optional
+        A drive of the slide (the slider's x, m), on the joint "slide" whichever the tree (a
+        closing joint on the first); with a prescribed motion the start is assembled keeping
+        it, not the crank (default None: the slide is free).
 
     Returns
     -------
@@ -64,6 +65,7 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
     >>> slider_crank().n_closures
     1
     """
+    prescribed = isinstance(slide, JointMotion)
     a, b, c = np.array([0, 0.1, 0.12]), np.array([0, 0.1, 0.2]), np.array([0.2, 0, 0])
     system = System(gravity=[0, 0, -9.81], ground=Ground(position=a))
     system.add(RigidBody(mass=0.12, inertia=[1e-4, 1e-4, 1e-5], inertia_about="mass_center",
@@ -84,13 +86,13 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
     elif tree == "slider on the ground":
         system.add(RigidBody(mass=2.0, inertia=[1e-4] * 3, inertia_about="mass_center",
                              to_mass_center=-a, to_output=-a, name="slider"),
-                   PrismaticJoint(axis=[1, 0, 0], position=0.2 if slide is None else 0.0,
+                   PrismaticJoint(axis=[1, 0, 0], position=0.0 if prescribed else 0.2,
                                   name="slide", drive=slide))
         system.close(UniversalJoint(axis1=[1, 0, 0], axis2=across, name="C"), "slider", "rod")
     else:
         raise ValueError(f"slider_crank: tree must be 'slider on the rod' or 'slider on the "
                          f"ground', got {tree!r}")
-    return assemble(system.build(), keep=["A"] if slide is None else [])
+    return assemble(system.build(), keep=[] if prescribed else ["A"])
 
 
 def _bar(name, rotation):

@@ -504,7 +504,6 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 if has_closure_drives(model):       # a driven closing coordinate's q''(0),
                     loops.target[:, :] = closure_targets(model, [0.0])[0]  # a spring's rest
                     loops.step_coef[:] = 0.0        # the springs' forces explicit
-
                 status = kstep.initial_accelerations(params, settings, state, sweep,
                                                      (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                                                      force[0], torque[0], line_load[0],

@@ -95,8 +95,8 @@ Record = namedtuple("Record", [
     "rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d",
     "v_st", "v_c",      # the paper's scheme's point velocities; the EM scheme's mass centres
     "jq", "jqd", "jtau",  # joint coordinates, rates, generalized forces
-    "closure_wrench",   # (m, 8) the closing joints' force and couple on side b (world), and
-                        # their drives' generalized forces
+    "closure_wrench",   # (m, 10) the closing joints' force and couple on side b (world),
+                        # their drives' generalized forces and their coordinates' rates
 ])
 
 Monitor = namedtuple("Monitor", [
