@@ -482,12 +482,13 @@ def constraint_rows(model, closures=None):
                 np.array(law, dtype=float).reshape(-1, 3))
 
 
-def closure_targets(model, times):
+def closure_targets(model, times, rows=None):
     """(len(times), R, 3): each row's target (value, rate, acceleration) at the times, R and the
     rows' order as constraint_rows: a driven coordinate's prescribed motion, a SpringDamper's
     rest (its row's value is then q - rest), zero for the constraints.  A function's failure or
-    a value that is not finite: ValueError naming the closing joint and its coordinate."""
-    rows = constraint_rows(model)
+    a value that is not finite: ValueError naming the closing joint and its coordinate.  rows:
+    constraint_rows(model), when the caller has them."""
+    rows = constraint_rows(model) if rows is None else rows
     owner, coordinate = rows.owner, rows.coordinate
     out = np.zeros((len(times), len(owner), 3))
     for r in np.nonzero(coordinate >= 0)[0]:
@@ -600,53 +601,35 @@ def _side_motion(model, state, c, s):
 def closure_residuals(model, state, t=0.0):
     """(g, g') over every closing joint's rows (constraint_rows: its constraints, then its
     driven coordinates less their prescribed motion at time t; 0 for a SpringDamper's, which
-    constrains nothing), at the tree's state
-    (tree_state): positions (m, or dimensionless for the dots, rad for the angles) and their
-    rates, and the index of the closing joint of each row."""
-    g, gd, owner = [], [], []
-    targets = closure_targets(model, [t])[0] if has_closure_drives(model) else None
-    r = 0
-    for c in range(model.n_closures):
-        p_a, v_a, f_a, w_a = _side_motion(model, state, c, 0)
-        p_b, v_b, f_b, w_b = _side_motion(model, state, c, 1)
-        points, dots = constraint_directions(model, c)
-        for frame, e in points:
-            if frame == "a":
-                e = f_a @ e
-                g.append(e @ (p_b - p_a))
-                gd.append(np.cross(w_a, e) @ (p_b - p_a) + e @ (v_b - v_a))
-            else:
-                g.append(e @ (p_b - p_a))
-                gd.append(e @ (v_b - v_a))
-            owner.append(c)
-        for x, y in dots:
-            x, y = f_a @ x, f_b @ y
-            g.append(x @ y)
-            gd.append((w_b - w_a) @ np.cross(y, x))
-            owner.append(c)
-        r += len(points) + len(dots)
-        for i, kind, v1, v2, v3 in driven_directions(model, c):
-            if model.closure_drives[c][i]["kind"] != MOTION:     # a spring: no constraint
-                g.append(0.0)
-                gd.append(0.0)
-                owner.append(c)
-                r += 1
-                continue
-            if kind == GAP_A:
-                e = f_a @ v1
-                value = e @ (p_b - p_a)
-                rate = np.cross(w_a, e) @ (p_b - p_a) + e @ (v_b - v_a)
-            else:
-                x, y = f_a @ v1, f_b @ v2
-                n = (f_a if kind == ANGLE_A else f_b) @ v3
-                value = np.arctan2(n @ np.cross(x, y), x @ y)
-                rate = n @ (w_b - w_a)
-            value -= targets[r, 0]
-            g.append(wrap_angle(value) if kind != GAP_A else value)
-            gd.append(rate - targets[r, 1])
-            owner.append(c)
-            r += 1
-    return np.array(g), np.array(gd), np.array(owner, dtype=np.int64)
+    constrains nothing), at the tree's state (tree_state): positions (m, or dimensionless for
+    the dots, rad for the angles) and their rates, and the index of the closing joint of each
+    row."""
+    rows = constraint_rows(model)
+    targets = (closure_targets(model, [t], rows)[0] if has_closure_drives(model)
+               else np.zeros((len(rows.kind), 3)))
+    sides = [(_side_motion(model, state, c, 0), _side_motion(model, state, c, 1))
+             for c in range(model.n_closures)]
+    g, gd = np.zeros(len(rows.kind)), np.zeros(len(rows.kind))
+    for r, kind in enumerate(rows.kind):
+        if rows.law[r, 0] == SPRING_DAMPER:             # a spring: no constraint
+            continue
+        (p_a, v_a, f_a, w_a), (p_b, v_b, f_b, w_b) = sides[rows.owner[r]]
+        if kind == DOT:
+            x, y = f_a @ rows.v1[r], f_b @ rows.v2[r]
+            g[r], gd[r] = x @ y, (w_b - w_a) @ np.cross(y, x)
+        elif kind in (ANGLE_A, ANGLE_B):
+            x, y = f_a @ rows.v1[r], f_b @ rows.v2[r]
+            n = (f_a if kind == ANGLE_A else f_b) @ rows.v3[r]
+            g[r] = wrap_angle(np.arctan2(n @ np.cross(x, y), x @ y) - targets[r, 0])
+            gd[r] = n @ (w_b - w_a) - targets[r, 1]
+        elif kind == GAP_A:                             # e turns with side a
+            e = f_a @ rows.v1[r]
+            g[r] = e @ (p_b - p_a) - targets[r, 0]
+            gd[r] = np.cross(w_a, e) @ (p_b - p_a) + e @ (v_b - v_a) - targets[r, 1]
+        else:
+            e = rows.v1[r]
+            g[r], gd[r] = e @ (p_b - p_a), e @ (v_b - v_a)
+    return g, gd, rows.owner
 
 
 def _coordinates(model, keep):

@@ -137,7 +137,6 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     >>> n_four_bar(2).n_closures
     2
     """
-    bar = _bar
     z = [0, 0, 1.0]
     system = System(gravity=[0, -9.81, 0])
     if tree == "ground":
@@ -147,21 +146,21 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
                                                   for i in range(n + 1)}),
                    FixedHinge(name="base weld"))
         for i in range(n + 1):
-            system.add(bar(f"v{i}", _rot_z(np.pi / 2 - theta)),
+            system.add(_bar(f"v{i}", _rot_z(np.pi / 2 - theta)),
                        RevoluteJoint(axis=z, rate=-rate if i == 0 else 0.0, name=f"O{i}"),
                        parent="base", at=f"O{i}")
         for i in range(1, n + 1):
-            system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"),
+            system.add(_bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"),
                        parent=f"v{i - 1}")
             system.close(RevoluteJoint(axis=z, name=f"B{i}"), f"h{i}", f"v{i}")
         return assemble(system.build(), keep=["O0"])
     if tree != "chain":
         raise ValueError(f"n_four_bar: tree must be 'chain' or 'ground', got {tree!r}")
-    system.add(bar("v0", _rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
+    system.add(_bar("v0", _rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
     inboard = "v0"
     for i in range(1, n + 1):
-        system.add(bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"), parent=inboard)
-        system.add(bar(f"v{i}", _rot_z(-np.pi / 2 - theta)), RevoluteJoint(axis=z, name=f"B{i}"),
+        system.add(_bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"), parent=inboard)
+        system.add(_bar(f"v{i}", _rot_z(-np.pi / 2 - theta)), RevoluteJoint(axis=z, name=f"B{i}"),
                    parent=f"h{i}")
         system.close(RevoluteJoint(axis=z, name=f"O{i}"), f"v{i}", "ground")
         inboard = f"h{i}"

@@ -306,8 +306,8 @@ class Model:
         ground frame), whether it is a beam's output end (m, 2), a hinge_params row (m, 55:
         R0 and the axes) and names (dttmm/closures.py, docs/loops.md).  Empty for a tree.
     closure_drives : tuple
-        Per closing joint, per coordinate, its drive as ``drives`` (a prescribed motion) or
-        None.
+        Per closing joint, per coordinate, its drive as ``drives`` (a prescribed motion or a
+        spring-damper) or None.
 
     Examples
     --------

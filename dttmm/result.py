@@ -106,8 +106,9 @@ class Result:
         opposite.  None without closing joints.
     closure_drive_force : ndarray (T, closing joints, 2) or None
         The generalized force (N m about the axis, or N along a slide) each closing joint's
-        prescribed motion applies on side b, per coordinate (0 for a coordinate without a
-        drive; it is also in closure_moment or closure_force).  None without such drives.
+        drive (a prescribed motion or a spring-damper) applies on side b, per coordinate (0
+        for a coordinate without a drive; it is also in closure_moment or closure_force).
+        None without such drives.
     body_names : tuple of str (n,) or None
         The bodies' names (columns of save_csv).
     energy_work : ndarray (T,) or None

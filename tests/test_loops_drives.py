@@ -63,13 +63,12 @@ def _four_bar(drive, rate=0.0, root_drive=None):
     """One loop of the N-four-bar (mechanisms.n_four_bar's bars, upright, turning at `rate`
     clockwise), closed to the ground at (1, 0) by the revolute joint "O1" with the given drive
     (and root_drive on the tree's "O0")."""
-    bar = _bar
     z = [0, 0, 1.0]
     system = System(gravity=[0, -9.81, 0])
-    system.add(bar("v0", rot_z(np.pi / 2)),
+    system.add(_bar("v0", rot_z(np.pi / 2)),
                RevoluteJoint(axis=z, rate=-rate, drive=root_drive, name="O0"))
-    system.add(bar("h1", np.eye(3)), RevoluteJoint(axis=z, name="H1"), parent="v0")
-    system.add(bar("v1", rot_z(-np.pi / 2)), RevoluteJoint(axis=z, name="B1"), parent="h1")
+    system.add(_bar("h1", np.eye(3)), RevoluteJoint(axis=z, name="H1"), parent="v0")
+    system.add(_bar("v1", rot_z(-np.pi / 2)), RevoluteJoint(axis=z, name="B1"), parent="h1")
     system.close(RevoluteJoint(axis=z, name="O1", drive=drive), "v1", "ground")
     return assemble(system.build(), keep=["O0"] if rate else [])
 
