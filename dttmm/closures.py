@@ -175,8 +175,8 @@ def closure_rows(model, entries, index_of, named):
     body's named points (RigidBody.points, {} for the rest).  ValueError naming the joint for
     a side that is not in the system, a joint that closes a body to itself, to a body welded
     to it or the ground to itself, a point the side does not have, an axis that is zero or
-    not finite, axes that are not perpendicular at the start, a rotation that contradicts the
-    bodies' frames, and a JointForce drive."""
+    not finite, axes that are not perpendicular at the start, and a rotation that contradicts
+    the bodies' frames."""
     rows = empty_table()
     if not entries:
         return rows
@@ -201,12 +201,6 @@ def closure_rows(model, entries, index_of, named):
                              f"joint joins two different bodies (or a body and the ground)")
         v = joint.validated(c)
         drives = tuple(v.get("drives", ()))
-        for i, d in enumerate(drives):
-            if d is not None and d["kind"] == FORCE:
-                raise ValueError(f"{label}: coordinate {i + 1}: a closing joint's coordinate "
-                                 f"takes a prescribed motion (JointMotion) or a SpringDamper so "
-                                 f"far, not a JointForce; put the driven joint in the tree "
-                                 f"(choose the spanning tree so that it holds the joint)")
         side_a = _side(model, ka, at_a, label, "at_a", frames, named)
         side_b = _side(model, kb, at_b, label, "at_b", frames, named)
         if side_a is None:                # the ground's point: where b's starts
@@ -322,6 +316,8 @@ def describe_closures(model):
                 point = np.round(model.closure_point[c, s], 6).tolist()
                 sides.append(f"'{model.body_names[k]}' at {point}")
         drives = [f"coordinate {i + 1} " + ("prescribed (JointMotion)" if d["kind"] == MOTION
+                                             else "driven by a force (JointForce)"
+                                             if d["kind"] == FORCE
                                              else f"on a spring-damper (k = {d['stiffness']:g}, "
                                                   f"c = {d['damping']:g})")
                   for i, d in enumerate(model.closure_drives[c] if model.closure_drives else ())
@@ -496,6 +492,8 @@ def closure_targets(model, times, rows=None):
         if model.closure_drives[c][i]["kind"] == SPRING_DAMPER:
             out[:, r, 0] = model.closure_drives[c][i]["rest"]
             continue
+        if model.closure_drives[c][i]["kind"] == FORCE:     # its value: the solver's (state)
+            continue
         functions = model.closure_drives[c][i]["function"]
         who = f"the prescribed motion of closing joint '{model.closure_names[c]}' " \
               f"(coordinate {i + 1})"
@@ -508,6 +506,19 @@ def closure_targets(model, times, rows=None):
                 if not np.isfinite(value):
                     raise ValueError(f"{who} returned {value} at t = {t:g} s (not finite)")
                 out[j, r, m] = value
+    return out
+
+
+def closure_forces(model, rows=None):
+    """[(row, f, who)]: each closing joint's coordinate driven by a JointForce f(t, q, q'),
+    its row in constraint_rows' order (rows: theirs, when the caller has them) and how messages
+    name it.  Its q is the row's value (an angle's in [-pi, pi)), q' its rate."""
+    rows = constraint_rows(model) if rows is None else rows
+    out = []
+    for r in np.nonzero(rows.law[:, 0] == FORCE)[0]:
+        c, i = rows.owner[r], rows.coordinate[r]
+        out.append((int(r), model.closure_drives[c][i]["function"],
+                    f"the drive of closing joint '{model.closure_names[c]}' (coordinate {i + 1})"))
     return out
 
 
@@ -600,10 +611,10 @@ def _side_motion(model, state, c, s):
 
 def closure_residuals(model, state, t=0.0):
     """(g, g') over every closing joint's rows (constraint_rows: its constraints, then its
-    driven coordinates less their prescribed motion at time t; 0 for a SpringDamper's, which
-    constrains nothing), at the tree's state (tree_state): positions (m, or dimensionless for
-    the dots, rad for the angles) and their rates, and the index of the closing joint of each
-    row."""
+    driven coordinates less their prescribed motion at time t; 0 for a SpringDamper's or a
+    JointForce's, which constrain nothing), at the tree's state (tree_state): positions (m,
+    or dimensionless for the dots, rad for the angles) and their rates, and the index of the
+    closing joint of each row."""
     rows = constraint_rows(model)
     targets = (closure_targets(model, [t], rows)[0] if has_closure_drives(model)
                else np.zeros((len(rows.kind), 3)))
@@ -611,7 +622,7 @@ def closure_residuals(model, state, t=0.0):
              for c in range(model.n_closures)]
     g, gd = np.zeros(len(rows.kind)), np.zeros(len(rows.kind))
     for r, kind in enumerate(rows.kind):
-        if rows.law[r, 0] == SPRING_DAMPER:             # a spring: no constraint
+        if rows.law[r, 0] in (SPRING_DAMPER, FORCE):    # a drive's force: no constraint
             continue
         (p_a, v_a, f_a, w_a), (p_b, v_b, f_b, w_b) = sides[rows.owner[r]]
         if kind == DOT:

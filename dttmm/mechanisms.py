@@ -49,7 +49,7 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
         offset from the ground point A) and closed to the rod by the universal joint.
     crank_rate : float
         The crank's rate at t = 0, rad/s (default 6).
-    slide : JointMotion or SpringDamper, optional
+    slide : JointMotion, SpringDamper or JointForce, optional
         A drive of the slide (the slider's x, m), on the joint "slide" whichever the tree (a
         closing joint on the first); with a prescribed motion the start is assembled keeping
         it, not the crank (default None: the slide is free).

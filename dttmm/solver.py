@@ -34,8 +34,8 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, compile_notice
-from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_targets,
-                       constraint_rows, has_closure_drives, loop_residuals)
+from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
+                       closure_targets, constraint_rows, has_closure_drives, loop_residuals)
 from .model import Model, children_of, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -504,10 +504,19 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 if has_closure_drives(model):       # a driven closing coordinate's q''(0),
                     loops.target[:, :] = closure_targets(model, [0.0])[0]  # a spring's rest
                     loops.step_coef[:] = 0.0        # the springs' forces explicit
-                status = kstep.initial_accelerations(params, settings, state, sweep,
-                                                     (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                     force[0], torque[0], line_load[0],
-                                                     joint_input[0], loops)
+
+                def start():
+                    return kstep.initial_accelerations(params, settings, state, sweep,
+                                                       (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                                                       force[0], torque[0], line_load[0],
+                                                       joint_input[0], loops)
+                status = start()
+                forces = closure_forces(model)
+                if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
+                    for r, law, who in forces:  # force rows leave q, q' in loops.g, gd
+                        loops.target[r, 2] = _drive_number(law(0.0, loops.g[r], loops.gd[r]),
+                                                           who, 0.0)
+                    status = start()
                 for r in np.nonzero(loops.coordinate >= 0)[0]:   # the drives' rates at t = 0
                     loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = (
                         loops.target[r, 1] if loops.law[r, 0] == MOTION else loops.gd[r])
@@ -978,7 +987,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
 
     # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
     # one step per chunk
-    force_drives = any(d is not None and d["kind"] == FORCE for ds in model.drives for d in ds)
+    closing_forces = closure_forces(model) if len(loops.kind) else []
+    force_drives = closing_forces or any(d is not None and d["kind"] == FORCE
+                                         for ds in model.drives for d in ds)
     size = 1 if force_drives else CHUNK
     static_ground = model.ground_motion is None
     if static_ground:
@@ -1028,6 +1039,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             model, mid_times if scheme == "energy_momentum" else times[1:])
         ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
         ct = closure_targets(model, times[1:]) if targets_vary else closure_target
+        for r, law, who in closing_forces:  # f(t, q, q') at the predictor from the last
+            q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its projection)
+            ct[0, r, 2] = _drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # and q''
+                                            qd + h * qdd), who, times[1])
         return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], force=f[:m],
                       torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
                       closure_target=ct[:m])

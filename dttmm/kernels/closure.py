@@ -38,12 +38,13 @@ from numba import njit
 from . import CONTRACT
 from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
 from ..elements import BEAM
-from ..elements.drives import SPRING_DAMPER
+from ..elements.drives import FORCE, SPRING_DAMPER
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ..elements.hinges import AXIS_1, FIXED
 from ..elements.joints import PRISMATIC
 from .beam import end_section_motion
 from .joint import FREE, PRESCRIBED, joint_frame, n_coordinates
+from .mat3 import t_cross, t_lin3, t_mv
 from .so3 import expm_so3
 from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
 
@@ -57,13 +58,13 @@ Loops = namedtuple("Loops", [
     "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions);
                                      # (R, 3) the step's targets (value, rate, acceleration):
                                      # a driven coordinate's motion at the step's end, a
-                                     # spring's rest, else 0; (R,) the joint's coordinate a row
-                                     # drives (-1: none)
+                                     # spring's rest, a JointForce's value (in [2]), else 0;
+                                     # (R,) the joint's coordinate a row drives (-1: none)
     "law", "acc", "step_coef",       # (R, 3) a row's drive [kind, stiffness, damping] (kind
-                                     # -1: none; a SpringDamper's row is a force, no
-                                     # constraint); (R,) each row's acceleration in the last
-                                     # solve; (2,) [1 / c1, c3 / c1] of the step (0: the
-                                     # consistent start, springs explicit)
+                                     # -1: none; a SpringDamper's or a JointForce's row is a
+                                     # force, no constraint); (R,) each row's acceleration
+                                     # in the last solve; (2,) [1 / c1, c3 / c1] of the step
+                                     # (0: the consistent start, springs explicit)
     "body", "point",                 # (m, 2), (m, 2, 3): the sides' bodies and points (in the
                                      # body's frame from its input point; the ground's: world,
                                      # from the ground point)
@@ -105,43 +106,85 @@ POSITION_TOL = 1e-13         # m, rad: where they stop
 RATE_TOL = 1e-13             # m/s, rad/s: the rates' projection's
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+# The rows' geometry on values (kernels/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames as
+# row-major 9-tuples): no array is allocated and no named tuple is passed per row, each of which
+# costs a pair of atomic reference counts per array it holds (measured on the slider-crank and
+# the Stewart platform: _side alone, with the model's and the loops' tuples as arguments, took a
+# fifth of the step in reference counting).
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _v3(a, i):
+    """Row i of an (m, 3) array as a 3-tuple."""
+    return (a[i, 0], a[i, 1], a[i, 2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _m9(a, k):
+    """a[k] of an (n, 3, 3) array as a row-major 9-tuple."""
+    return (a[k, 0, 0], a[k, 0, 1], a[k, 0, 2], a[k, 1, 0], a[k, 1, 1], a[k, 1, 2],
+            a[k, 2, 0], a[k, 2, 1], a[k, 2, 2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _dot(x, y):
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _add(x, y):
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _neg(x):
+    return (-x[0], -x[1], -x[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _sub(x, y):
+    return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _beam_offset(params, k, rot, w, eta, eta_d):
+def _frame(rot, ground_rot, k):
+    """Body k's frame (the ground's for k < 0) as a 9-tuple."""
+    if k < 0:
+        return (ground_rot[0, 0], ground_rot[0, 1], ground_rot[0, 2], ground_rot[1, 0],
+                ground_rot[1, 1], ground_rot[1, 2], ground_rot[2, 0], ground_rot[2, 1],
+                ground_rot[2, 2])
+    return _m9(rot, k)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _beam_offset(beams, k, rot, w, eta, eta_d):
     """Beam k's output point from its input point, rho = A p and its rate w x rho + A p', with
     p = [L - c(L) + u_x(L), v(L), w(L)] (docs/beam.md, "End sections": c(L) the
     foreshortening with geometric stiffening, beam.end_foreshortening; u_x(L) the stretch;
-    result.beam_output_offset in Python)."""
-    bp, moments, mode_off, ends = params.beams[1][k], params.beams[2][k], params.beams[3], \
-        params.beams[4][k]
+    result.beam_output_offset in Python); beams: the kernel model's beam tables."""
+    bp, moments, mode_off, ends = beams[1], beams[2], beams[3], beams[4]
     i0 = mode_off[k]
-    m, mt, ma = int(bp[MODES]), int(bp[TORSION_MODES]), int(bp[AXIAL_MODES])
-    p = np.zeros(3)
-    p_d = np.zeros(3)
-    p[0] = bp[LENGTH]
+    m, mt, ma = int(bp[k, MODES]), int(bp[k, TORSION_MODES]), int(bp[k, AXIAL_MODES])
+    px, py, pz = bp[k, LENGTH], 0.0, 0.0
+    dx, dy, dz = 0.0, 0.0, 0.0
     for j in range(m):
-        for plane in range(2):
-            p[1 + plane] += ends[j, 0] * eta[i0 + plane * m + j]
-            p_d[1 + plane] += ends[j, 0] * eta_d[i0 + plane * m + j]
-    if bp[STIFFENING] != 0.0:       # c = 1/2 eta^T D0 eta per plane, c' = eta'^T D0 eta
+        py += ends[k, j, 0] * eta[i0 + j]
+        pz += ends[k, j, 0] * eta[i0 + m + j]
+        dy += ends[k, j, 0] * eta_d[i0 + j]
+        dz += ends[k, j, 0] * eta_d[i0 + m + j]
+    if bp[k, STIFFENING] != 0.0:    # c = 1/2 eta^T D0 eta per plane, c' = eta'^T D0 eta
         for plane in range(2):
             for a in range(m):
                 for b in range(m):
-                    d0 = moments[a, 2 + m + b]
+                    d0 = moments[k, a, 2 + m + b]
                     ea = eta[i0 + plane * m + a]
-                    p[0] -= 0.5 * ea * d0 * eta[i0 + plane * m + b]
-                    p_d[0] -= eta_d[i0 + plane * m + a] * d0 * eta[i0 + plane * m + b]
+                    px -= 0.5 * ea * d0 * eta[i0 + plane * m + b]
+                    dx -= eta_d[i0 + plane * m + a] * d0 * eta[i0 + plane * m + b]
     for j in range(ma):
         i = i0 + 2 * m + mt + j
-        p[0] += ends[m + mt + j, 0] * eta[i]
-        p_d[0] += ends[m + mt + j, 0] * eta_d[i]
-    rho = rot[k] @ p
-    return rho, _cross(w[k], rho) + rot[k] @ p_d
+        px += ends[k, m + mt + j, 0] * eta[i]
+        dx += ends[k, m + mt + j, 0] * eta_d[i]
+    f = _m9(rot, k)
+    rho = t_mv(f, (px, py, pz))
+    return rho, _add(t_cross(_v3(w, k), rho), t_mv(f, (dx, dy, dz)))
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -152,75 +195,89 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
     slide's d = A_P n q), r_out = r_in + A l_IO (a rigid body) or r_in + rho (a beam's
     deflected end, _beam_offset); the kernel model hangs every child at its parent's output
     point."""
+    parent, hinge_kind, hinge_params, body_params = (params.parent, params.hinge_kind,
+                                                     params.hinge_params, params.body_params)
+    beams, r_out, v_out = params.beams, loops.r_out, loops.v_out
+    body_kind = beams[0]
     for q in range(bodies.shape[0]):
         k = bodies[q]
-        p = params.parent[k]
+        p = parent[k]
         if p < 0:
-            r = loops.ground.copy()
-            v = np.zeros(3)
-            rot_p = loops.ground_rot
-            w_p = np.zeros(3)
+            r = (loops.ground[0], loops.ground[1], loops.ground[2])
+            v = (0.0, 0.0, 0.0)
         else:
-            r = loops.r_out[p].copy()
-            v = loops.v_out[p].copy()
-            rot_p = rot[p]
-            w_p = w[p]
-        if params.hinge_kind[k] == PRISMATIC:
-            u = rot_p @ params.hinge_params[k, AXIS_1_START:AXIS_1_START + 3]
-            d = u * jq[k, 0]
-            r += d
-            v += _cross(w_p, d) + u * jqd[k, 0]
-        if params.beams[0][k] == BEAM:
-            arm, arm_rate = _beam_offset(params, k, rot, w, eta, eta_d)
+            r = _v3(r_out, p)
+            v = _v3(v_out, p)
+        if hinge_kind[k] == PRISMATIC:
+            f_p = _frame(rot, loops.ground_rot, p)
+            u = t_mv(f_p, (hinge_params[k, AXIS_1_START], hinge_params[k, AXIS_1_START + 1],
+                           hinge_params[k, AXIS_1_START + 2]))
+            d = t_lin3(jq[k, 0], u, 0.0, u)
+            r = _add(r, d)
+            w_p = (0.0, 0.0, 0.0) if p < 0 else _v3(w, p)
+            v = _add(v, t_lin3(1.0, t_cross(w_p, d), jqd[k, 0], u))
+        if body_kind[k] == BEAM:
+            arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
         else:
-            arm = rot[k] @ params.body_params[k, 4:7]
-            arm_rate = _cross(w[k], arm)
-        loops.r_out[k] = r + arm
-        loops.v_out[k] = v + arm_rate
+            arm = t_mv(_m9(rot, k), (body_params[k, 4], body_params[k, 5], body_params[k, 6]))
+            arm_rate = t_cross(_v3(w, k), arm)
+        for i in range(3):
+            r_out[k, i] = r[i] + arm[i]
+            v_out[k, i] = v[i] + arm_rate[i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _side(params, loops, rot, w, c, s):
-    """(body, point, velocity, arm from the body's output point, frame, angular velocity) of
-    closing joint c's side s."""
-    k = loops.body[c, s]
-    local = loops.point[c, s]
+def _side(body, point, ground, ground_rot, body_params, r_out, v_out, rot, w, c, s):
+    """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
+    joint c's side s (loops.body, point, ground, ground_rot; the model's body_params; the
+    output points r_out, v_out; the bodies' rot, w), as tuples."""
+    k = body[c, s]
+    local = (point[c, s, 0], point[c, s, 1], point[c, s, 2])
     if k < 0:
-        return k, loops.ground + local, np.zeros(3), local, loops.ground_rot, np.zeros(3)
-    arm = rot[k] @ (local - params.body_params[k, 4:7])
-    return (k, loops.r_out[k] + arm, loops.v_out[k] + _cross(w[k], arm), arm, rot[k], w[k])
+        zero = (0.0, 0.0, 0.0)
+        return (_add((ground[0], ground[1], ground[2]), local), zero, local,
+                _frame(rot, ground_rot, k), zero)
+    f = _m9(rot, k)
+    w_k = _v3(w, k)
+    arm = t_mv(f, _sub(local, (body_params[k, 4], body_params[k, 5], body_params[k, 6])))
+    return (_add(_v3(r_out, k), arm), _add(_v3(v_out, k), t_cross(w_k, arm)), arm, f, w_k)
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
     v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""
+    body, point, ground, ground_rot = loops.body, loops.point, loops.ground, loops.ground_rot
+    body_params, r_out, v_out = params.body_params, loops.r_out, loops.v_out
+    kind, owner, v1, v2, v3 = loops.kind, loops.owner, loops.v1, loops.v2, loops.v3
+    target, g, gd = loops.target, loops.g, loops.gd
     for q in range(rows.shape[0]):
         r = rows[q]
-        c = loops.owner[r]
-        _, p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, c, 0)
-        _, p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, c, 1)
-        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
+        c = owner[r]
+        p_a, v_a, _, f_a, w_a = _side(body, point, ground, ground_rot, body_params, r_out,
+                                      v_out, rot, w, c, 0)
+        p_b, v_b, _, f_b, w_b = _side(body, point, ground, ground_rot, body_params, r_out,
+                                      v_out, rot, w, c, 1)
+        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
             # q = atan2(n . (x x y), x . y), q' = n . (w_b - w_a)
-            x = f_a @ loops.v1[r]
-            y = f_b @ loops.v2[r]
-            n = (f_a if loops.kind[r] == ANGLE_A else f_b) @ loops.v3[r]
-            angle = np.arctan2(n @ _cross(x, y), x @ y) - loops.target[r, 0]
-            loops.g[r] = (angle + np.pi) % (2.0 * np.pi) - np.pi
-            loops.gd[r] = n @ (w_b - w_a) - loops.target[r, 1]
-            continue
-        if loops.kind[r] == DOT:
-            x = f_a @ loops.v1[r]
-            y = f_b @ loops.v2[r]
-            loops.g[r] = x @ y
-            loops.gd[r] = (w_b - w_a) @ _cross(y, x)
+            x = t_mv(f_a, _v3(v1, r))
+            y = t_mv(f_b, _v3(v2, r))
+            n = t_mv(f_a if kind[r] == ANGLE_A else f_b, _v3(v3, r))
+            angle = np.arctan2(_dot(n, t_cross(x, y)), _dot(x, y)) - target[r, 0]
+            g[r] = (angle + np.pi) % (2.0 * np.pi) - np.pi
+            gd[r] = _dot(n, _sub(w_b, w_a)) - target[r, 1]
+        elif kind[r] == DOT:
+            x = t_mv(f_a, _v3(v1, r))
+            y = t_mv(f_b, _v3(v2, r))
+            g[r] = _dot(x, y)
+            gd[r] = _dot(_sub(w_b, w_a), t_cross(y, x))
         else:
-            e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
-            d = p_b - p_a
-            loops.g[r] = e @ d - loops.target[r, 0]
-            loops.gd[r] = e @ (v_b - v_a) - loops.target[r, 1]
-            if loops.kind[r] == GAP_A:
-                loops.gd[r] += _cross(w_a, e) @ d
+            e = _v3(v1, r) if kind[r] == GAP_WORLD else t_mv(f_a, _v3(v1, r))
+            d = _sub(p_b, p_a)
+            g[r] = _dot(e, d) - target[r, 0]
+            gd[r] = _dot(e, _sub(v_b, v_a)) - target[r, 1]
+            if kind[r] == GAP_A:
+                gd[r] += _dot(t_cross(w_a, e), d)
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -235,49 +292,44 @@ def _row_coefficients(params, loops, rot, w):
         dot:  alpha_a: -(y x x), alpha_b: y x x
         angle: alpha_a: -n, alpha_b: n, kappa = (w_s x n) . (w_b - w_a), s the side holding n
     with arm the point from its body's output point and d = p_b - p_a."""
-    for r in range(loops.kind.shape[0]):
-        c = loops.owner[r]
-        _, p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, c, 0)
-        _, p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, c, 1)
-        co = loops.coef[r]
-        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
-            a_side = loops.kind[r] == ANGLE_A
-            n = (f_a if a_side else f_b) @ loops.v3[r]
+    body, point, ground, ground_rot = loops.body, loops.point, loops.ground, loops.ground_rot
+    body_params, r_out, v_out = params.body_params, loops.r_out, loops.v_out
+    kind, owner, v1, v2, v3 = loops.kind, loops.owner, loops.v1, loops.v2, loops.v3
+    coef, kappa_out = loops.coef, loops.kappa
+    zero = (0.0, 0.0, 0.0)
+    for r in range(kind.shape[0]):
+        c = owner[r]
+        p_a, v_a, arm_a, f_a, w_a = _side(body, point, ground, ground_rot, body_params, r_out,
+                                          v_out, rot, w, c, 0)
+        p_b, v_b, arm_b, f_b, w_b = _side(body, point, ground, ground_rot, body_params, r_out,
+                                          v_out, rot, w, c, 1)
+        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
+            a_side = kind[r] == ANGLE_A
+            n = t_mv(f_a if a_side else f_b, _v3(v3, r))
+            rows = (zero, _neg(n), zero, n)
+            kappa = _dot(t_cross(w_a if a_side else w_b, n), _sub(w_b, w_a))
+        elif kind[r] == DOT:
+            x = t_mv(f_a, _v3(v1, r))
+            y = t_mv(f_b, _v3(v2, r))
+            yx = t_cross(y, x)
+            rows = (zero, _neg(yx), zero, yx)
+            kappa = _dot(_sub(w_b, w_a), _add(t_cross(t_cross(w_b, y), x),
+                                              t_cross(y, t_cross(w_a, x))))
+        else:
+            e = _v3(v1, r) if kind[r] == GAP_WORLD else t_mv(f_a, _v3(v1, r))
+            ma = t_cross(arm_a, e)
+            kappa = _dot(e, _sub(t_cross(w_b, t_cross(w_b, arm_b)),
+                                 t_cross(w_a, t_cross(w_a, arm_a))))
+            if kind[r] == GAP_A:
+                d = _sub(p_b, p_a)
+                ma = _sub(ma, t_cross(e, d))
+                we = t_cross(w_a, e)
+                kappa += _dot(t_cross(w_a, we), d) + 2.0 * _dot(we, _sub(v_b, v_a))
+            rows = (_neg(e), _neg(ma), e, t_cross(arm_b, e))
+        for j in range(4):
             for i in range(3):
-                co[0, i] = 0.0
-                co[1, i] = -n[i]
-                co[2, i] = 0.0
-                co[3, i] = n[i]
-            loops.kappa[r] = _cross(w_a if a_side else w_b, n) @ (w_b - w_a)
-            continue
-        if loops.kind[r] == DOT:
-            x = f_a @ loops.v1[r]
-            y = f_b @ loops.v2[r]
-            yx = _cross(y, x)
-            for i in range(3):
-                co[0, i] = 0.0
-                co[1, i] = -yx[i]
-                co[2, i] = 0.0
-                co[3, i] = yx[i]
-            loops.kappa[r] = (w_b - w_a) @ (_cross(_cross(w_b, y), x)
-                                            + _cross(y, _cross(w_a, x)))
-            continue
-        e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
-        ma, mb = _cross(arm_a, e), _cross(arm_b, e)
-        for i in range(3):
-            co[0, i] = -e[i]
-            co[1, i] = -ma[i]
-            co[2, i] = e[i]
-            co[3, i] = mb[i]
-        kappa = e @ (_cross(w_b, _cross(w_b, arm_b)) - _cross(w_a, _cross(w_a, arm_a)))
-        if loops.kind[r] == GAP_A:
-            d = p_b - p_a
-            ed = _cross(e, d)
-            for i in range(3):
-                co[1, i] += ed[i]
-            we = _cross(w_a, e)
-            kappa += _cross(w_a, we) @ d + 2.0 * (we @ (v_b - v_a))
-        loops.kappa[r] = kappa
+                coef[r, j, i] = rows[j][i]
+        kappa_out[r] = kappa
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -412,27 +464,26 @@ def closure_wrenches(params, loops, rot):
     lam (y x x), an angle's couple lam n (the module docstring), with the rows' directions at
     the rotations rot; a driven coordinate's row's lam is also its drive's generalized force
     (loops.wrench[c, 6 + i] for coordinate i: a couple about the axis, or a force along it)."""
-    loops.wrench[:, :] = 0.0
-    for r in range(loops.kind.shape[0]):
+    wrench, kind, lam = loops.wrench, loops.kind, loops.lam
+    wrench[:, :] = 0.0
+    for r in range(kind.shape[0]):
         c = loops.owner[r]
         if loops.coordinate[r] >= 0:
-            loops.wrench[c, 6 + loops.coordinate[r]] = loops.lam[r]
-        ka, kb = loops.body[c, 0], loops.body[c, 1]
-        f_a = loops.ground_rot if ka < 0 else rot[ka]
-        if loops.kind[r] == ANGLE_A or loops.kind[r] == ANGLE_B:
-            f_n = f_a if loops.kind[r] == ANGLE_A else (loops.ground_rot if kb < 0 else rot[kb])
-            n = f_n @ loops.v3[r]
+            wrench[c, 6 + loops.coordinate[r]] = lam[r]
+        f_a = _frame(rot, loops.ground_rot, loops.body[c, 0])
+        f_b = _frame(rot, loops.ground_rot, loops.body[c, 1])
+        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
+            n = t_mv(f_a if kind[r] == ANGLE_A else f_b, _v3(loops.v3, r))
             for i in range(3):
-                loops.wrench[c, 3 + i] += loops.lam[r] * n[i]
-        elif loops.kind[r] == DOT:
-            f_b = loops.ground_rot if kb < 0 else rot[kb]
-            couple = _cross(f_b @ loops.v2[r], f_a @ loops.v1[r])
+                wrench[c, 3 + i] += lam[r] * n[i]
+        elif kind[r] == DOT:
+            couple = t_cross(t_mv(f_b, _v3(loops.v2, r)), t_mv(f_a, _v3(loops.v1, r)))
             for i in range(3):
-                loops.wrench[c, 3 + i] += loops.lam[r] * couple[i]
+                wrench[c, 3 + i] += lam[r] * couple[i]
         else:
-            e = loops.v1[r] if loops.kind[r] == GAP_WORLD else f_a @ loops.v1[r]
+            e = _v3(loops.v1, r) if kind[r] == GAP_WORLD else t_mv(f_a, _v3(loops.v1, r))
             for i in range(3):
-                loops.wrench[c, i] += loops.lam[r] * e[i]
+                wrench[c, i] += lam[r] * e[i]
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -484,7 +535,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     for r in range(n_rows):
         loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
                                              + _row_value(loops, r, loops.z_save[0], loops.act[0]))
-    _spring_rows(params, loops, rot, w)
+    _force_rows(params, loops, rot, w)
     loops.lam[:] = _rows_solve(loops, loops.delassus, loops.rhs)
     # the step with the multipliers' loads: P and k superposed, one recovery over the tree
     p_comb, k_comb = loops.p_comb, loops.k_comb
@@ -508,23 +559,32 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     return 0
 
 
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _is_force(law, r):
+    """Whether row r is a drive's force (a SpringDamper's or a JointForce's), not a
+    constraint."""
+    return law[r, 0] == SPRING_DAMPER or law[r, 0] == FORCE
+
+
 @njit(cache=True, fastmath=CONTRACT)
-def _spring_rows(params, loops, rot, w):
-    """A SpringDamper's row is its force, lam = -k (q - rest) - c q' at the step's end, not a
-    constraint: with q, q' at the guess (row_positions: g = q - rest, g' = q') and their change
-    with the row's acceleration, dq = da / c1, dq' = (c3 / c1) da from the guess's a_g
-    (loops.acc, the last solve's),
+def _force_rows(params, loops, rot, w):
+    """A drive's row is its force, not a constraint.  A SpringDamper's, lam = -k (q - rest) -
+    c q' at the step's end: with q, q' at the guess (row_positions: g = q - rest, g' = q') and
+    their change with the row's acceleration, dq = da / c1, dq' = (c3 / c1) da from the guess's
+    a_g (loops.acc, the last solve's),
         lam + K (a - a_g) = F0,   F0 = -k g - c g',   K = (k + c c3) / c1,
     its Delassus row scaled by K plus the unit diagonal, its right side F0 + K (a_g - b) (b the
-    row's value without multipliers); K = 0 at the consistent start (the force explicit)."""
-    springs = False
+    row's value without multipliers); K = 0 at the consistent start (the force explicit).  A
+    JointForce's (k = c = 0): lam = F, its value in loops.target[r, 2] (solver: f(t, q, q')
+    at the predictor, as a tree joint's), its row the unit row."""
+    forces = False
     for r in range(loops.kind.shape[0]):
-        springs = springs or loops.law[r, 0] == SPRING_DAMPER
-    if not springs:
+        forces = forces or _is_force(loops.law, r)
+    if not forces:
         return
     row_positions(params, loops, rot, w, loops.all_rows)
     for r in range(loops.kind.shape[0]):
-        if loops.law[r, 0] != SPRING_DAMPER:
+        if not _is_force(loops.law, r):
             continue
         k, c = loops.law[r, 1], loops.law[r, 2]
         stiff = k * loops.step_coef[0] + c * loops.step_coef[1]
@@ -532,7 +592,9 @@ def _spring_rows(params, loops, rot, w):
         for j in range(loops.kind.shape[0]):
             loops.delassus[r, j] *= stiff
         loops.delassus[r, r] += 1.0
-        loops.rhs[r] = -k * loops.g[r] - c * loops.gd[r] + stiff * (loops.acc[r] - b)
+        # (a spring's target[r, 2] is 0: closure_targets)
+        loops.rhs[r] = (loops.target[r, 2] - k * loops.g[r] - c * loops.gd[r]
+                        + stiff * (loops.acc[r] - b))
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -577,8 +639,8 @@ def _dependent_frames(params, loops, state, bodies):
                         state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
         elif hk == FIXED and p >= 0 and not params.locked[k]:
-            rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
             if body_kind[p] == BEAM:
+                rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
                 i0, i1 = mode_off[p], mode_off[p + 1]
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
@@ -586,7 +648,11 @@ def _dependent_frames(params, loops, state, bodies):
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
             else:
-                state.rot[k] = rot_p @ rest
+                hp = params.hinge_params       # A = A_P R0, R0 row-major in hp[k, 0:9]
+                for i in range(3):
+                    for j in range(3):
+                        state.rot[k, i, j] = (rot_p[i, 0] * hp[k, j] + rot_p[i, 1] * hp[k, 3 + j]
+                                              + rot_p[i, 2] * hp[k, 6 + j])
                 state.omega[k] = w_p
                 state.omega_dot[k] = wd_p
         else:
@@ -623,7 +689,11 @@ def _move(params, loops, state, j, f, e3, phi):
         for i in range(3):
             phi[i] = f * z[2 * k + 1, 3 + i]
         expm_so3(phi, e3)
-        state.rot[k] = e3 @ state.rot[k]
+        rot_k = _m9(state.rot, k)
+        for a in range(3):
+            for b in range(3):
+                state.rot[k, a, b] = (e3[a, 0] * rot_k[b] + e3[a, 1] * rot_k[3 + b]
+                                      + e3[a, 2] * rot_k[6 + b])
         for i in range(n_coordinates(params.hinge_kind[k])):
             state.jq[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
@@ -638,7 +708,7 @@ def _residuals(params, loops, state):
     row_positions(params, loops, state.rot, state.omega, loops.all_rows)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(loops.kind.shape[0]):
-        if loops.law[r, 0] != SPRING_DAMPER:       # a spring's row constrains nothing
+        if not _is_force(loops.law, r):           # a drive's force constrains nothing
             largest_g = max(largest_g, abs(loops.g[r]))
             largest_gd = max(largest_gd, abs(loops.gd[r]))
     return largest_g, largest_gd
@@ -646,10 +716,10 @@ def _residuals(params, loops, state):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _constrained(loops, values):
-    """-values with a spring's rows 0 (the projection moves nothing for them)."""
+    """-values with a drive's force's rows 0 (the projection moves nothing for them)."""
     out = -values
     for r in range(loops.kind.shape[0]):
-        if loops.law[r, 0] == SPRING_DAMPER:
+        if _is_force(loops.law, r):
             out[r] = 0.0
     return out
 
@@ -693,8 +763,8 @@ def project_onto_loops(params, loops, state):
                 for q in range(rows.shape[0]):
                     v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
     loops.gd[:] = base
-    for r in range(n_rows):             # a spring's row: mu_r = 0
-        if loops.law[r, 0] == SPRING_DAMPER:
+    for r in range(n_rows):             # a drive's force's row: mu_r = 0
+        if _is_force(loops.law, r):
             v[r, :] = 0.0
             v[:, r] = 0.0
             v[r, r] = 1.0
@@ -906,6 +976,15 @@ def sweep_columns(kind, u, joint_dof, joint_drive, parent, s_mat, port_s, loops)
     return 0
 
 
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _row_mv(a, i, x, m):
+    """Row i of a's first m columns times x[:m]."""
+    v = 0.0
+    for j in range(m):
+        v += a[i, j] * x[j]
+    return v
+
+
 @njit(cache=True, fastmath=CONTRACT)
 def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, k_col,
                    h_store, free_store, z, nu, tau, affine, bodies, act):
@@ -934,16 +1013,18 @@ def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col
         else:
             f_i[:] = 0.0
         if p < 0 and affine:
-            z[0, 6:12] += _mv(s_mat[jh], f_i) + p_col[jh]
+            for i in range(6):
+                z[0, 6 + i] += _row_mv(s_mat[jh], i, f_i, 6) + p_col[jh, i]
         kd = kind[jh]
         if kd == IDENTITY:
             f_o[:] = f_i
         elif kd == TRANSFER:
-            zi[0:6] = f_i
-            zi[6:12] = _mv(s_mat[jh], f_i) + p_col[jh]
-            f_o[:] = _mv(u[jh, 0:6, 0:12], zi)
-            if affine:
-                f_o += u[jh, 0:6, 12]
+            s_h, u_h = s_mat[jh], u[jh]
+            for i in range(6):
+                zi[i] = f_i[i]
+                zi[6 + i] = _row_mv(s_h, i, f_i, 6) + p_col[jh, i]
+            for i in range(6):
+                f_o[i] = _row_mv(u_h, i, zi, 12) + (u_h[i, 12] if affine else 0.0)
         else:                           # JOINT
             for c3 in range(3):
                 nu[k, c3] = (joint_drive[k, c3, 2] if affine and
@@ -954,15 +1035,17 @@ def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col
                 for j in range(6):
                     xv -= h_store[k, a, j] * f_i[j]
                 nu[k, free_store[k, a]] = xv
-            f_o[:] = _mv(u[jh, 0:6, 0:6], f_i)
-            if affine:
-                f_o += u[jh, 0:6, 12]
+            u_h = u[jh]
+            for i in range(6):
+                f_o[i] = _row_mv(u_h, i, f_i, 6) + (u_h[i, 12] if affine else 0.0)
             for c3 in range(3):
                 if joint_dof[k, c3] != 0:
                     for i in range(6):
                         f_o[i] += u[jh, i, 6 + c3] * nu[k, c3]
-        z[jb, 0:6] = f_o
-        z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_col[jb]
+        s_b = s_mat[jb]
+        for i in range(6):
+            z[jb, i] = f_o[i]
+            z[jb, 6 + i] = _row_mv(s_b, i, f_o, 6) + p_col[jb, i]
         if kd == JOINT:
             for c3 in range(3):
                 xv = 0.0
@@ -970,7 +1053,7 @@ def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col
                     for i in range(6):
                         xv += u[jh, 6 + i, c3] * z[jb, 6 + i]
                 tau[k, c3] = xv
-        z[jb + 1] = _mv(u[jb, :, 0:12], z[jb])
-        if affine:
-            z[jb + 1] += u[jb, :, 12]
+        zb, u_b = z[jb], u[jb]
+        for i in range(12):
+            z[jb + 1, i] = _row_mv(u_b, i, zb, 12) + (u_b[i, 12] if affine else 0.0)
     return 0

@@ -79,7 +79,8 @@ joint's coordinate driven by a prescribed motion s(t) adds its row (closures.dri
 a slide's gap along a's axis, or an angle atan2(n . (x x y), x . y) with the rate n . (w_b -
 w_a) and the acceleration n . (alpha_b - alpha_a) + (w_s x n) . (w_b - w_a), its multiplier a
 couple lam n on b), held as (g - s)'' + 2 W (g - s)' + W^2 (g - s) = 0; a SpringDamper's row
-is its force instead, lam = -k (q - rest) - c q' from the state.  The system is
+is its force instead, lam = -k (q - rest) - c q' from the state, and a JointForce's lam = f(t,
+q, q') (q, q' the row's values, which one evaluation of the state finds first).  The system is
 solved by eliminating the tree first and then the multipliers from the Delassus matrix by a
 truncated SVD (_solve_least_closure_force): the least multipliers, where constraints are
 redundant (a planar loop of spatial revolute joints; a chain straight between two fixed points,
@@ -254,6 +255,7 @@ _CR = C_ROTATION.start
 _BEAM = BEAM
 _DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B = DOT, GAP_A, GAP_WORLD, ANGLE_A, ANGLE_B
 _SPRING_DAMPER = SPRING_DAMPER
+_FORCE = FORCE
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
@@ -1378,7 +1380,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
     accelerations) and, in the dynamic rows, the column -J^T of its multiplier (the joint's
     force and couple do no work on what the joint allows).  Returns the world direction of
     every row's multiplier on side b (a force for a gap, a couple for a dot)."""
-    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _, law = loops
+    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _, law, values = loops
     directions = np.zeros((kind.shape[0], 3))
     for r in range(kind.shape[0]):
         c = owner[r]
@@ -1447,11 +1449,15 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
         b[row] = -(kappa + gains[0] * gd + gains[1] * g)
         for j in range(col0):
             s[j, row] = -s[row, j]
-        if law[r, 0] == _SPRING_DAMPER:     # a spring's row: lam = -k (q - rest) - c q'
+        values[r, 0] = g                    # (a JointForce's row: q and q' themselves)
+        values[r, 1] = gd
+        if law[r, 0] == _SPRING_DAMPER or law[r, 0] == _FORCE:
+            # a drive's row is its force: lam = -k (q - rest) - c q' (a spring), or
+            # lam = f(t, q, q') in target[r, 2] (a JointForce; _Problem._args)
             for j in range(col0):
                 s[row, j] = 0.0
             s[row, row] = 1.0
-            b[row] = -law[r, 1] * g - law[r, 2] * gd
+            b[row] = target[r, 2] - law[r, 1] * g - law[r, 2] * gd
     return directions
 
 
@@ -1630,14 +1636,16 @@ LOOP_DAMPING = 20.0
 def _loop_rows(model, col0):
     """The closing joints as the kernels read them (_closure_rows): (first multiplier column,
     per row its kind (closures.GAP_WORLD, GAP_A or DOT), its closing joint, x or e, y, then per
-    closing joint its sides' bodies, points and end flags, and the stabilization's gains)."""
+    closing joint its sides' bodies, points and end flags, the stabilization's gains, per row
+    its angle axis, its targets, its driven coordinate, its drive's law, and its (g, g') as the
+    last evaluation found them)."""
     kind, owner, v1, v2, v3, coordinate, law = constraint_rows(model)
     return (col0, kind, owner, v1, v2,
             np.array(model.closure_body, dtype=np.int64).reshape(-1, 2),
             np.array(model.closure_point, dtype=float).reshape(-1, 2, 3),
             np.array(model.closure_on_end, dtype=np.int64).reshape(-1, 2),
             np.array([2.0 * LOOP_DAMPING, LOOP_DAMPING ** 2]), v3, np.zeros((len(kind), 3)),
-            coordinate, law)
+            coordinate, law, np.zeros((len(kind), 2)))
 
 
 class _Problem:
@@ -1748,6 +1756,10 @@ class _Problem:
                                   f"closing joint '{model.closure_names[owner[r]]}', "
                                   f"coordinate {coordinate[r] + 1}")
                                  for r in np.nonzero(rows.law[:, 0] == MOTION)[0]]
+        self._closure_forces = [(r, model.closure_drives[owner[r]][coordinate[r]]["function"],
+                                 f"closing joint '{model.closure_names[owner[r]]}', "
+                                 f"coordinate {coordinate[r] + 1}")
+                                for r in np.nonzero(rows.law[:, 0] == FORCE)[0]]
         for r in np.nonzero(rows.law[:, 0] == SPRING_DAMPER)[0]:   # its row's value: q - rest
             self.loops[10][r, 0] = model.closure_drives[owner[r]][coordinate[r]]["rest"]
         c += self.loops[1].shape[0]
@@ -1862,12 +1874,24 @@ class _Problem:
                     raise ValueError(f"simulate_reference: {who}: prescribed {what} returned "
                                      f"{f(t)!r} at t = {t:.17g} (need one finite number)")
                 target[r, i] = float(a.reshape(-1)[0])
-        return (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
+        args = (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.loops, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
                 wd_g, forces, torques, line_loads, self.topology, self.attachment_point,
                 self.joints)
+        if self._closure_forces:    # a closing JointForce: f(t, q, q') at this state's q, q',
+            _solve_dynamics(*args)  # which one evaluation leaves in loops[13]
+            values = self.loops[13]
+            for r, f, who in self._closure_forces:
+                value = f(t, values[r, 0], values[r, 1])
+                a = np.asarray(value, dtype=float)
+                if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
+                    raise ValueError(f"simulate_reference: {who}: drive function(t, q, q_dot) "
+                                     f"returned {value!r} at t = {t:.17g} (need one finite "
+                                     f"number)")
+                target[r, 2] = float(a.reshape(-1)[0])
+        return args
 
     def rhs(self, t, y):
         return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
