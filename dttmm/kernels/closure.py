@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from . import CONTRACT, no_alloc_kernel
 from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
 from ..elements import BEAM
 from ..elements.drives import FORCE, SPRING_DAMPER
@@ -144,7 +144,7 @@ def _sub(x, y):
     return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _frame(rot, ground_rot, k):
     """Body k's frame (the ground's for k < 0) as a 9-tuple."""
     if k < 0:
@@ -154,7 +154,7 @@ def _frame(rot, ground_rot, k):
     return _m9(rot, k)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _beam_offset(beams, k, rot, w, eta, eta_d):
     """Beam k's output point from its input point, rho = A p and its rate w x rho + A p', with
     p = [L - c(L) + u_x(L), v(L), w(L)] (docs/beam.md, "End sections": c(L) the
@@ -187,7 +187,7 @@ def _beam_offset(beams, k, rot, w, eta, eta_d):
     return rho, _add(t_cross(_v3(w, k), rho), t_mv(f, (dx, dy, dz)))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
     """The output point and its velocity (loops.r_out, v_out) of the given bodies (in tree
     order; the others' are read as they are) from the rotations, angular velocities, joint
@@ -226,7 +226,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
             v_out[k, i] = v[i] + arm_rate[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _side(body, point, ground, ground_rot, body_params, r_out, v_out, rot, w, c, s):
     """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
     joint c's side s (loops.body, point, ground, ground_rot; the model's body_params; the
@@ -243,7 +243,7 @@ def _side(body, point, ground, ground_rot, body_params, r_out, v_out, rot, w, c,
     return (_add(_v3(r_out, k), arm), _add(_v3(v_out, k), t_cross(w_k, arm)), arm, f, w_k)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
     v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""
@@ -280,7 +280,7 @@ def row_positions(params, loops, rot, w, rows):
                 gd[r] += _dot(t_cross(w_a, e), d)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _row_coefficients(params, loops, rot, w):
     """The rows' Jacobian at the points loops.r_out, v_out (tree_points) and the rotations and
     angular velocities rot, w: row r's value (the module docstring) is
@@ -332,7 +332,7 @@ def _row_coefficients(params, loops, rot, w):
         kappa_out[r] = kappa
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _row_value(loops, r, z, act):
     """Row r's linear part, coef . (a, alpha), at the stations z (2n + 1, 12) of a column
     whose active bodies are act (elsewhere its response is zero)."""
@@ -347,7 +347,7 @@ def _row_value(loops, r, z, act):
     return v
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def row_residuals(loops, z, out):
     """Every row's value kappa + J (a, alpha) at the stations z (2n + 1, 12) of the whole
     tree, with the Jacobian of the last solve (_row_coefficients), less its target (a driven
@@ -356,7 +356,7 @@ def row_residuals(loops, z, out):
         out[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0]) - loops.target[r, 2]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _column_loads(loops):
     """Each row's unit multiplier's station loads (column r + 1): -[coef alpha; coef a] on each
     side's output station (_row_coefficients)."""
@@ -391,7 +391,7 @@ def _least_solve(a, b):
 BAND_REGULARIZATION = 1e-12     # of the largest diagonal entry, added to the diagonal
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _band_factor(a, lower, upper, piv):
     """a <- its LU factors with partial pivoting, a banded matrix of lower and upper bandwidths
     (kept dense; the factors fill only lower and lower + upper bands), after adding
@@ -457,7 +457,7 @@ def _rows_solve(loops, a, b):
     return _band_apply(a, loops.band[0], loops.band[1], piv, b)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def closure_wrenches(params, loops, rot):
     """loops.wrench: each closing joint's force and couple on side b (world axes; the couple
     about b's point) from the multipliers loops.lam: a gap row's lam e, a dot row's couple
@@ -486,7 +486,7 @@ def closure_wrenches(params, loops, rot):
                 wrench[c, i] += lam[r] * e[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _delassus(loops):
     """loops.delassus[r, j]: row r's value in row j's response (column j + 1), from the stored
     responses and the rows' Jacobian (_row_value); zero where row r's bodies are not among
@@ -566,7 +566,7 @@ def _is_force(law, r):
     return law[r, 0] == SPRING_DAMPER or law[r, 0] == FORCE
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _force_rows(params, loops, rot, w):
     """A drive's row is its force, not a constraint.  A SpringDamper's, lam = -k (q - rest) -
     c q' at the step's end: with q, q' at the guess (row_positions: g = q - rest, g' = q') and
@@ -597,7 +597,7 @@ def _force_rows(params, loops, rot, w):
                         + stiff * (loops.acc[r] - b))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _modal_responses(params, loops, eta_map):
     """loops.eta_col[j]: row j's response of the beams' eta'' (eta'' = eta_map [z_I; 1] at the
     beam's input station, step.py::_modal_accelerations; homogeneous: its linear part), on its
@@ -616,14 +616,16 @@ def _modal_responses(params, loops, eta_map):
                     loops.eta_col[j, i] = v
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def _dependent_frames(params, loops, state, bodies):
+@no_alloc_kernel
+def _dependent_frames(params, loops, state, bodies, work):
     """Every given body (in tree order) whose frame follows its parent's, from the parent's
     (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's
     offset too), a welded body's as the parent's (R0) or its beam's end section's (beam.
-    end_section_motion)."""
-    zero = np.zeros(3)
-    scratch = np.empty(48)
+    end_section_motion).  work: (60,) scratch (nothing is allocated)."""
+    scratch = work[0:48]
+    rest = work[48:57].reshape((3, 3))
+    zero = work[57:60]
+    zero[:] = 0.0
     body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
         params.beams[1]
     for q in range(bodies.shape[0]):
@@ -640,7 +642,9 @@ def _dependent_frames(params, loops, state, bodies):
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
         elif hk == FIXED and p >= 0 and not params.locked[k]:
             if body_kind[p] == BEAM:
-                rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
+                for i in range(3):
+                    for j in range(3):
+                        rest[i, j] = params.hinge_params[k, 3 * i + j]
                 i0, i1 = mode_off[p], mode_off[p + 1]
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
@@ -653,14 +657,16 @@ def _dependent_frames(params, loops, state, bodies):
                     for j in range(3):
                         state.rot[k, i, j] = (rot_p[i, 0] * hp[k, j] + rot_p[i, 1] * hp[k, 3 + j]
                                               + rot_p[i, 2] * hp[k, 6 + j])
-                state.omega[k] = w_p
-                state.omega_dot[k] = wd_p
+                for i in range(3):
+                    state.omega[k, i] = w_p[i]
+                    state.omega_dot[k, i] = wd_p[i]
         else:
             continue
-        state.pseudo[k] = state.omega_dot[k]
+        for i in range(3):
+            state.pseudo[k, i] = state.omega_dot[k, i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _add_rates(params, loops, state, j, f):
     """The angular velocities, the joint coordinates' and the modal coordinates' rates += f
     times row j's response (of w', q'' and eta'') on its active bodies (the dependent frames
@@ -677,7 +683,7 @@ def _add_rates(params, loops, state, j, f):
             state.eta_d[i] += f * loops.eta_col[j, i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _move(params, loops, state, j, f, e3, phi):
     """Turn every active body of row j by f times its response of w' (A <- exp(f dw'^) A) and
     move its joint and modal coordinates by f times their response of q'' and eta'' (the
@@ -700,7 +706,7 @@ def _move(params, loops, state, j, f, e3, phi):
             state.eta[i] += f * loops.eta_col[j, i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
@@ -742,6 +748,7 @@ def project_onto_loops(params, loops, state):
     n_rows = loops.kind.shape[0]
     e3 = np.empty((3, 3))
     phi = np.empty(3)
+    work = np.empty(60)
     _modal_responses(params, loops, state.eta_map)
     g0, gd0 = _residuals(params, loops, state)
     loops.stats[0] = max(loops.stats[0], g0)
@@ -755,7 +762,7 @@ def project_onto_loops(params, loops, state):
         rows = loops.colrow_idx[loops.colrow_ptr[j]:loops.colrow_ptr[j + 1]]
         for f in (1.0, -1.0):
             _add_rates(params, loops, state, j, f)
-            _dependent_frames(params, loops, state, bodies)
+            _dependent_frames(params, loops, state, bodies, work)
             tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
                         state.eta_d, loops, bodies)
             if f > 0.0:
@@ -781,7 +788,7 @@ def project_onto_loops(params, loops, state):
               if banded else _least_apply(u, sv, vt, _constrained(loops, loops.g)))
         for j in range(n_rows):
             _move(params, loops, state, j, mu[j], e3, phi)
-        _dependent_frames(params, loops, state, loops.all_bodies)
+        _dependent_frames(params, loops, state, loops.all_bodies, work)
         largest, _ = _residuals(params, loops, state)
     loops.stats[3] = max(loops.stats[3], largest)
     rates = 0.0
@@ -793,7 +800,7 @@ def project_onto_loops(params, loops, state):
               if banded else _least_apply(u, sv, vt, _constrained(loops, loops.gd)))
         for j in range(n_rows):
             _add_rates(params, loops, state, j, mu[j])
-        _dependent_frames(params, loops, state, loops.all_bodies)
+        _dependent_frames(params, loops, state, loops.all_bodies, work)
         _, rates = _residuals(params, loops, state)
     loops.stats[2] = max(loops.stats[2], rates)
     for r in range(n_rows):             # the driven coordinates' rates (the drives' power)

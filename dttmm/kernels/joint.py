@@ -21,7 +21,8 @@ from . import CONTRACT
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import AXIS_1, AXIS_2, BALL
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .so3 import expm_so3
+from .mat3 import t_cross, t_lin3, t_mm, t_mv
+from .so3 import SERIES_BELOW
 
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
 
@@ -33,45 +34,73 @@ def _cross(a, b):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _rot_about(axis, angle):
-    e = np.empty((3, 3))
-    expm_so3(axis * angle, e)
-    return e
+def _t_exp(phi):
+    """exp(phi^) as a row-major 9-tuple (so3.expm_so3's Rodrigues formula and series, on
+    values)."""
+    th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    if th2 < SERIES_BELOW:
+        a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0))
+        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
+    else:
+        th = np.sqrt(th2)
+        a = np.sin(th) / th
+        b = (1.0 - np.cos(th)) / th2
+    d = 1.0 - b * th2
+    return (b * phi[0] * phi[0] + d, b * phi[0] * phi[1] - a * phi[2],
+            b * phi[0] * phi[2] + a * phi[1], b * phi[1] * phi[0] + a * phi[2],
+            b * phi[1] * phi[1] + d, b * phi[1] * phi[2] - a * phi[0],
+            b * phi[2] * phi[0] - a * phi[1], b * phi[2] * phi[1] + a * phi[0],
+            b * phi[2] * phi[2] + d)
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     """The child's rotation, angular velocity and acceleration (world) behind a joint with
     coordinates, from its parent's attachment frame (rot_p, w_p, wd_p) and the coordinates
-    q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prismatic child's input point
+    q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prescribed child's input point
     relative to the attachment point, and its rate (zero for the others).  Returns the
-    coordinates' world directions (3, 2): u1 (and v2 of a universal joint)."""
-    r0 = hp[0:9].copy().reshape((3, 3))
-    n1 = hp[AXIS_1].copy()
-    dirs = np.zeros((3, 2))
-    u1 = rot_p @ n1
-    dirs[:, 0] = u1
-    d[:] = 0.0
-    d_rate[:] = 0.0
+    coordinates' world directions u1 and v2 (a universal joint's second; zero for the others)
+    as 3-tuples.  Allocates nothing (kernels/mat3.py's tuple algebra)."""
+    r0 = (hp[0], hp[1], hp[2], hp[3], hp[4], hp[5], hp[6], hp[7], hp[8])
+    a1 = AXIS_1.start
+    n1 = (hp[a1], hp[a1 + 1], hp[a1 + 2])
+    f_p = (rot_p[0, 0], rot_p[0, 1], rot_p[0, 2], rot_p[1, 0], rot_p[1, 1], rot_p[1, 2],
+           rot_p[2, 0], rot_p[2, 1], rot_p[2, 2])
+    wp = (w_p[0], w_p[1], w_p[2])
+    u1 = t_mv(f_p, n1)
+    v2 = (0.0, 0.0, 0.0)
+    d_out = (0.0, 0.0, 0.0)
+    d_rate_out = (0.0, 0.0, 0.0)
     if kind == REVOLUTE:
-        rot[:, :] = rot_p @ _rot_about(n1, q[0]) @ r0
-        w[:] = w_p + u1 * qd[0]
-        wd[:] = wd_p + u1 * qdd[0] + _cross(w_p, u1) * qd[0]
+        f = t_mm(t_mm(f_p, _t_exp(t_lin3(q[0], n1, 0.0, n1))), r0)
+        w_out = t_lin3(1.0, wp, qd[0], u1)
+        wd_out = t_lin3(1.0, t_lin3(1.0, (wd_p[0], wd_p[1], wd_p[2]), qdd[0], u1), qd[0],
+                        t_cross(wp, u1))
     elif kind == UNIVERSAL:
-        n2 = hp[AXIS_2].copy()
-        rot[:, :] = rot_p @ _rot_about(n1, q[0]) @ r0 @ _rot_about(n2, q[1])
-        v2 = rot @ n2
-        dirs[:, 1] = v2
-        w[:] = w_p + u1 * qd[0] + v2 * qd[1]
-        wd[:] = (wd_p + u1 * qdd[0] + v2 * qdd[1] + _cross(w_p, u1) * qd[0]
-                 + _cross(w_p + u1 * qd[0], v2) * qd[1])
+        a2 = AXIS_2.start
+        n2 = (hp[a2], hp[a2 + 1], hp[a2 + 2])
+        f = t_mm(t_mm(t_mm(f_p, _t_exp(t_lin3(q[0], n1, 0.0, n1))), r0),
+                 _t_exp(t_lin3(q[1], n2, 0.0, n2)))
+        v2 = t_mv(f, n2)
+        w_out = t_lin3(1.0, t_lin3(1.0, wp, qd[0], u1), qd[1], v2)
+        # wd = wd_P + u1 q1'' + v2 q2'' + (w_P x u1) q1' + ((w_P + u1 q1') x v2) q2'
+        wd_out = t_lin3(1.0, t_lin3(1.0, (wd_p[0], wd_p[1], wd_p[2]), qdd[0], u1), qdd[1], v2)
+        wd_out = t_lin3(1.0, t_lin3(1.0, wd_out, qd[0], t_cross(wp, u1)), qd[1],
+                        t_cross(t_lin3(1.0, wp, qd[0], u1), v2))
     else:   # PRISMATIC
-        rot[:, :] = rot_p @ r0
-        w[:] = w_p
-        wd[:] = wd_p
-        d[:] = u1 * q[0]
-        d_rate[:] = u1 * qd[0] + _cross(w_p, d)
-    return dirs
+        f = t_mm(f_p, r0)
+        w_out = wp
+        wd_out = (wd_p[0], wd_p[1], wd_p[2])
+        d_out = t_lin3(q[0], u1, 0.0, u1)
+        d_rate_out = t_lin3(qd[0], u1, 1.0, t_cross(wp, d_out))
+    for i in range(3):
+        for j in range(3):
+            rot[i, j] = f[3 * i + j]
+        w[i] = w_out[i]
+        wd[i] = wd_out[i]
+        d[i] = d_out[i]
+        d_rate[i] = d_rate_out[i]
+    return u1, v2
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -132,8 +161,12 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
     wd = np.empty(3)
     d = np.empty(3)
     d_rate = np.empty(3)
-    dirs = joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
-    u1 = dirs[:, 0].copy()
+    u1_t, v2_t = joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
+    u1 = np.array(u1_t)
+    dirs = np.zeros((3, 2))
+    for i in range(3):
+        dirs[i, 0] = u1_t[i]
+        dirs[i, 1] = v2_t[i]
     m = n_coordinates(kind)
     for i in range(m):
         if drive[i, 0] == MOTION:
