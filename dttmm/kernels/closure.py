@@ -107,39 +107,40 @@ RATE_TOL = 1e-13             # m/s, rad/s: the rates' projection's
 
 
 # The rows' geometry on values (kernels/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames as
-# row-major 9-tuples): no array is allocated and no named tuple is passed per row, each of which
-# costs a pair of atomic reference counts per array it holds (measured on the slider-crank and
-# the Stewart platform: _side alone, with the model's and the loops' tuples as arguments, took a
-# fifth of the step in reference counting).
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+# row-major 9-tuples), and the helpers below compiled without numba's reference counting
+# (no_alloc_kernel): nothing is allocated per row, and no view or argument costs its pair of
+# atomic counts (measured on the slider-crank and the Stewart platform: _side alone, counting
+# the model's and the loops' named tuples at every call, took a fifth of the step; docs/loops.md,
+# "What runs loops").
+@njit(cache=True, fastmath=CONTRACT)
 def _v3(a, i):
     """Row i of an (m, 3) array as a 3-tuple."""
     return (a[i, 0], a[i, 1], a[i, 2])
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _m9(a, k):
     """a[k] of an (n, 3, 3) array as a row-major 9-tuple."""
     return (a[k, 0, 0], a[k, 0, 1], a[k, 0, 2], a[k, 1, 0], a[k, 1, 1], a[k, 1, 2],
             a[k, 2, 0], a[k, 2, 1], a[k, 2, 2])
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _dot(x, y):
     return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _add(x, y):
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _neg(x):
     return (-x[0], -x[1], -x[2])
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _sub(x, y):
     return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
 
@@ -227,37 +228,35 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
 
 
 @no_alloc_kernel
-def _side(body, point, ground, ground_rot, body_params, r_out, v_out, rot, w, c, s):
+def _side(params, loops, rot, w, c, s):
     """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
-    joint c's side s (loops.body, point, ground, ground_rot; the model's body_params; the
-    output points r_out, v_out; the bodies' rot, w), as tuples."""
-    k = body[c, s]
+    joint c's side s, at the output points loops.r_out, v_out and the bodies' rot, w, as
+    tuples."""
+    k = loops.body[c, s]
+    point, ground = loops.point, loops.ground
     local = (point[c, s, 0], point[c, s, 1], point[c, s, 2])
     if k < 0:
         zero = (0.0, 0.0, 0.0)
         return (_add((ground[0], ground[1], ground[2]), local), zero, local,
-                _frame(rot, ground_rot, k), zero)
+                _frame(rot, loops.ground_rot, k), zero)
     f = _m9(rot, k)
     w_k = _v3(w, k)
-    arm = t_mv(f, _sub(local, (body_params[k, 4], body_params[k, 5], body_params[k, 6])))
-    return (_add(_v3(r_out, k), arm), _add(_v3(v_out, k), t_cross(w_k, arm)), arm, f, w_k)
+    centre = params.body_params
+    arm = t_mv(f, _sub(local, (centre[k, 4], centre[k, 5], centre[k, 6])))
+    return (_add(_v3(loops.r_out, k), arm), _add(_v3(loops.v_out, k), t_cross(w_k, arm)), arm,
+            f, w_k)
 
 
 @no_alloc_kernel
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
     v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""
-    body, point, ground, ground_rot = loops.body, loops.point, loops.ground, loops.ground_rot
-    body_params, r_out, v_out = params.body_params, loops.r_out, loops.v_out
-    kind, owner, v1, v2, v3 = loops.kind, loops.owner, loops.v1, loops.v2, loops.v3
+    kind, v1, v2, v3 = loops.kind, loops.v1, loops.v2, loops.v3
     target, g, gd = loops.target, loops.g, loops.gd
     for q in range(rows.shape[0]):
         r = rows[q]
-        c = owner[r]
-        p_a, v_a, _, f_a, w_a = _side(body, point, ground, ground_rot, body_params, r_out,
-                                      v_out, rot, w, c, 0)
-        p_b, v_b, _, f_b, w_b = _side(body, point, ground, ground_rot, body_params, r_out,
-                                      v_out, rot, w, c, 1)
+        p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
+        p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
         if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
             # q = atan2(n . (x x y), x . y), q' = n . (w_b - w_a)
             x = t_mv(f_a, _v3(v1, r))
@@ -292,17 +291,11 @@ def _row_coefficients(params, loops, rot, w):
         dot:  alpha_a: -(y x x), alpha_b: y x x
         angle: alpha_a: -n, alpha_b: n, kappa = (w_s x n) . (w_b - w_a), s the side holding n
     with arm the point from its body's output point and d = p_b - p_a."""
-    body, point, ground, ground_rot = loops.body, loops.point, loops.ground, loops.ground_rot
-    body_params, r_out, v_out = params.body_params, loops.r_out, loops.v_out
-    kind, owner, v1, v2, v3 = loops.kind, loops.owner, loops.v1, loops.v2, loops.v3
-    coef, kappa_out = loops.coef, loops.kappa
+    kind, v1, v2, v3 = loops.kind, loops.v1, loops.v2, loops.v3
     zero = (0.0, 0.0, 0.0)
     for r in range(kind.shape[0]):
-        c = owner[r]
-        p_a, v_a, arm_a, f_a, w_a = _side(body, point, ground, ground_rot, body_params, r_out,
-                                          v_out, rot, w, c, 0)
-        p_b, v_b, arm_b, f_b, w_b = _side(body, point, ground, ground_rot, body_params, r_out,
-                                          v_out, rot, w, c, 1)
+        p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
+        p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
         if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
             a_side = kind[r] == ANGLE_A
             n = t_mv(f_a if a_side else f_b, _v3(v3, r))
@@ -328,8 +321,8 @@ def _row_coefficients(params, loops, rot, w):
             rows = (_neg(e), _neg(ma), e, t_cross(arm_b, e))
         for j in range(4):
             for i in range(3):
-                coef[r, j, i] = rows[j][i]
-        kappa_out[r] = kappa
+                loops.coef[r, j, i] = rows[j][i]
+        loops.kappa[r] = kappa
 
 
 @no_alloc_kernel
@@ -559,7 +552,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     return 0
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _is_force(law, r):
     """Whether row r is a drive's force (a SpringDamper's or a JointForce's), not a
     constraint."""
@@ -983,7 +976,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, parent, s_mat, port_s, loops)
     return 0
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
+@njit(cache=True, fastmath=CONTRACT)
 def _row_mv(a, i, x, m):
     """Row i of a's first m columns times x[:m]."""
     v = 0.0

@@ -22,7 +22,7 @@ from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import AXIS_1, AXIS_2, BALL
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .mat3 import t_cross, t_lin3, t_mm, t_mv
-from .so3 import SERIES_BELOW
+from .so3 import exp_coefficients
 
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
 
@@ -38,13 +38,7 @@ def _t_exp(phi):
     """exp(phi^) as a row-major 9-tuple (so3.expm_so3's Rodrigues formula and series, on
     values)."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < SERIES_BELOW:
-        a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0))
-        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
-    else:
-        th = np.sqrt(th2)
-        a = np.sin(th) / th
-        b = (1.0 - np.cos(th)) / th2
+    a, b = exp_coefficients(th2)
     d = 1.0 - b * th2
     return (b * phi[0] * phi[0] + d, b * phi[0] * phi[1] - a * phi[2],
             b * phi[0] * phi[2] + a * phi[1], b * phi[1] * phi[0] + a * phi[2],

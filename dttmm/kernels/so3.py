@@ -47,14 +47,19 @@ def _identity_plus(a, b, phi, th2, out):
 def expm_so3(phi, out):
     """out = exp(phi^), Rodrigues' formula (series below |phi| = 1e-2)."""
     th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
-    if th2 < SERIES_BELOW:
-        a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0))
-        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0))
-    else:
-        th = np.sqrt(th2)
-        a = np.sin(th) / th
-        b = (1.0 - np.cos(th)) / th2
+    a, b = exp_coefficients(th2)
     _identity_plus(a, b, phi, th2, out)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def exp_coefficients(th2):
+    """(sin t / t, (1 - cos t) / t^2) at t^2 = th2, exp(phi^) = I + a phi^ + b phi^ phi^ (their
+    series below th2 = SERIES_BELOW)."""
+    if th2 < SERIES_BELOW:
+        return (1.0 - th2 / 6.0 * (1.0 - th2 / 20.0 * (1.0 - th2 / 42.0)),
+                0.5 - th2 / 24.0 * (1.0 - th2 / 30.0 * (1.0 - th2 / 56.0)))
+    th = np.sqrt(th2)
+    return np.sin(th) / th, (1.0 - np.cos(th)) / th2
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
