@@ -51,7 +51,7 @@ def _t_exp(phi):
 def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     """The child's rotation, angular velocity and acceleration (world) behind a joint with
     coordinates, from its parent's attachment frame (rot_p, w_p, wd_p) and the coordinates
-    q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prescribed child's input point
+    q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prismatic child's input point
     relative to the attachment point, and its rate (zero for the others).  Returns the
     coordinates' world directions u1 and v2 (a universal joint's second; zero for the others)
     as 3-tuples.  Allocates nothing (kernels/mat3.py's tuple algebra)."""
