@@ -63,12 +63,12 @@ def main(argv=None):
         # (at least 100 steps: a run's setup, ~0.2 s at N = 160, must not enter the difference)
         cases.append((f"{n}-four-bar, ground tree", n_four_bar(n, tree="ground"),
                       max(100, 4000 // (5 * n))))
-    if args.quick:
-        cases = [(name, m, max(20, steps // 10)) for name, m, steps in cases]
+    if args.quick:      # (at least 50 steps: with fewer a run's setup enters the difference)
+        cases = [(name, m, max(50, steps // 4)) for name, m, steps in cases]
     rows = []
     print(f"{'model':<28} {'rows':>5} {'loops us/step':>14} {'opened us/step':>15} {'ratio':>7}")
     for name, model, steps in cases:
-        with_loops, tree = measure(model, steps, 1 if args.quick else 3)
+        with_loops, tree = measure(model, steps, 2 if args.quick else 3)
         rows_count = len(dttmm.closures.constraint_rows(model)[0])
         rows.append(dict(model=name, rows=rows_count, loops_us=with_loops * 1e6,
                          opened_us=tree * 1e6, ratio=with_loops / tree))
