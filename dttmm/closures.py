@@ -483,7 +483,8 @@ def closure_targets(model, times, rows=None):
     rows' order as constraint_rows: a driven coordinate's prescribed motion, a SpringDamper's
     rest (its row's value is then q - rest), zero for the constraints.  A function's failure or
     a value that is not finite: ValueError naming the closing joint and its coordinate.  rows:
-    constraint_rows(model), when the caller has them."""
+    constraint_rows(model) (or the kernels' Loops, which carries its owner and coordinate),
+    when the caller has them."""
     rows = constraint_rows(model) if rows is None else rows
     owner, coordinate = rows.owner, rows.coordinate
     out = np.zeros((len(times), len(owner), 3))
@@ -511,8 +512,9 @@ def closure_targets(model, times, rows=None):
 
 def closure_forces(model, rows=None):
     """[(row, f, who)]: each closing joint's coordinate driven by a JointForce f(t, q, q'),
-    its row in constraint_rows' order (rows: theirs, when the caller has them) and how messages
-    name it.  Its q is the row's value (an angle's in [-pi, pi)), q' its rate."""
+    its row in constraint_rows' order and how messages name it.  Its q is the row's value (an
+    angle's in [-pi, pi)), q' its rate.  rows: constraint_rows' table (or the kernels' Loops,
+    which carries its law, owner and coordinate), when the caller has it."""
     rows = constraint_rows(model) if rows is None else rows
     out = []
     for r in np.nonzero(rows.law[:, 0] == FORCE)[0]:

@@ -501,8 +501,8 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                            closure_target=np.zeros((1, len(loops.kind), 3))),
                     _record(0, n, len(state.eta)), monitor))
             else:
-                if has_closure_drives(model):       # a driven closing coordinate's q''(0),
-                    loops.target[:, :] = closure_targets(model, [0.0])[0]  # a spring's rest
+                if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
+                    loops.target[:, :] = closure_targets(model, [0.0], loops)[0]  # spring's rest
                     loops.step_coef[:] = 0.0        # the springs' forces explicit
 
                 def start():
@@ -511,7 +511,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                                                        force[0], torque[0], line_load[0],
                                                        joint_input[0], loops)
                 status = start()
-                forces = closure_forces(model)
+                forces = closure_forces(model, loops)
                 if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
                     for r, law, who in forces:  # force rows leave q, q' in loops.g, gd
                         loops.target[r, 2] = _drive_number(law(0.0, loops.g[r], loops.gd[r]),
@@ -987,7 +987,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
 
     # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
     # one step per chunk
-    closing_forces = closure_forces(model) if len(loops.kind) else []
+    closing_forces = closure_forces(model, loops)
     force_drives = closing_forces or any(d is not None and d["kind"] == FORCE
                                          for ds in model.drives for d in ds)
     size = 1 if force_drives else CHUNK
@@ -1038,7 +1038,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         f, tq, ll = (force, torque, line_load) if no_loads else _loads(
             model, mid_times if scheme == "energy_momentum" else times[1:])
         ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
-        ct = closure_targets(model, times[1:]) if targets_vary else closure_target
+        ct = closure_targets(model, times[1:], loops) if targets_vary else closure_target
         for r, law, who in closing_forces:  # f(t, q, q') at the predictor from the last
             q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its projection)
             ct[0, r, 2] = _drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # and q''

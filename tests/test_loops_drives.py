@@ -216,9 +216,23 @@ def test_a_spring_damper_on_a_closing_joint_against_the_exact_reduction():
     closure_drive_force: 1.1e-5 N m of the reduction's at 5e-4), and undamped the energy
     balance (E plus the spring's work) closes at order 2 (6.2e-6, 1.7e-6 of the largest
     kinetic energy at dt = 1e-3, 5e-4)."""
+    _closing_torque_against_the_reduction(
+        SpringDamper(stiffness=50.0, damping=2.0), SpringDamper(stiffness=50.0),
+        lambda t: 0.0 * t, error_tol=5e-7, torque_tol=3e-5, gap_tol=3e-6)
+
+
+def _closing_torque_against_the_reduction(drive, undamped, forcing, error_tol, torque_tol,
+                                          gap_tol):
+    """The one-loop four-bar with `drive` on its closing revolute joint, a torque -50 q - 2 q'
+    + forcing(t) (N m), against the parallelogram's exact reduction with that torque over 3 s:
+    DT-TMM at order 2 (dt = 2e-3, 1e-3, 5e-4; below error_tol m at the finest, the loop closed
+    to 1e-10 m), its torque (Result.closure_drive_force) the law's at the exact angle to
+    torque_tol, the reference within 1e-10 m; with the model's `undamped` drive instead, the
+    energy balance closes at order 2, below gap_tol of the largest kinetic energy at dt =
+    5e-4.  Returns the model, the reference's run and the exact torque."""
     t = np.linspace(0.0, 3.0, 31)
-    exact, rate = _spring_parallelogram(t, 50.0, 2.0)
-    model = _four_bar(SpringDamper(stiffness=50.0, damping=2.0), rate=1.0)
+    exact, rate = _spring_parallelogram(t, 50.0, 2.0, forcing)
+    model = _four_bar(drive, rate=1.0)
     steps, errors = [2e-3, 1e-3, 5e-4], []
     for dt in steps:
         run = simulate(model, 3.0, dt, t_eval=t)
@@ -226,16 +240,17 @@ def test_a_spring_damper_on_a_closing_joint_against_the_exact_reduction():
         assert run.info["loop_position_residual"] < 1e-10
     order = fitted_order(steps, errors)
     assert abs(order - 2.0) < 0.2, (errors, order)
-    assert errors[-1] < 5e-7
+    assert errors[-1] < error_tol
     theta = np.arctan2(exact[:, 0], exact[:, 1])
-    torque = -50.0 * theta - 2.0 * rate
-    assert np.abs(run.closure_drive_force[:, 0, 0] - torque).max() < 3e-5
+    torque = -50.0 * theta - 2.0 * rate + forcing(t)
+    assert np.abs(run.closure_drive_force[:, 0, 0] - torque).max() < torque_tol
     ref = simulate_reference(model, 3.0, t_eval=t, rtol=1e-11, atol=1e-13)
     assert np.abs(ref.position_output[:, 0, :2] - exact).max() < 1e-10
-    free = _four_bar(SpringDamper(stiffness=50.0), rate=1.0)
+    free = _four_bar(undamped, rate=1.0)
     gaps = [simulate(free, 3.0, dt, max_energy_error=1e-3).info["energy_balance_error"]
             for dt in (1e-3, 5e-4)]
-    assert gaps[1] < 3e-6 and gaps[0] / gaps[1] > 3.2, gaps
+    assert gaps[1] < gap_tol and gaps[0] / gaps[1] > 3.2, gaps
+    return model, ref, torque
 
 
 def test_a_spring_on_the_closing_slide_acts_as_on_the_tree_slide():
@@ -282,29 +297,12 @@ def test_a_joint_force_on_a_closing_joint_against_the_exact_reduction():
     the law's at the exact angle to 5.9e-6 N m at 5e-4, the reference meets the reduction to
     2.0e-12 m and 1.1e-10 N m, the energy balance counts the drive's work (5.2e-6, 1.3e-6 of
     the largest kinetic energy at dt = 1e-3, 5e-4) and describe() names the drive."""
-    t = np.linspace(0.0, 3.0, 31)
-    exact, rate = _spring_parallelogram(t, 50.0, 2.0, _forcing)
-    law = JointForce(lambda s, q, qd: -50.0 * q - 2.0 * qd + _forcing(s))
-    model = _four_bar(law, rate=1.0)
+    model, ref, torque = _closing_torque_against_the_reduction(
+        JointForce(lambda s, q, qd: -50.0 * q - 2.0 * qd + _forcing(s)),
+        JointForce(lambda s, q, qd: -50.0 * q + _forcing(s)), _forcing,
+        error_tol=3e-7, torque_tol=1e-5, gap_tol=2e-6)
     assert "coordinate 1 driven by a force (JointForce)" in model.describe()
-    steps, errors = [2e-3, 1e-3, 5e-4], []
-    for dt in steps:
-        run = simulate(model, 3.0, dt, t_eval=t)
-        errors.append(np.abs(run.position_output[:, 0, :2] - exact).max())
-        assert run.info["loop_position_residual"] < 1e-10
-    order = fitted_order(steps, errors)
-    assert abs(order - 2.0) < 0.2, (errors, order)
-    assert errors[-1] < 3e-7
-    theta = np.arctan2(exact[:, 0], exact[:, 1])
-    torque = -50.0 * theta - 2.0 * rate + _forcing(t)
-    assert np.abs(run.closure_drive_force[:, 0, 0] - torque).max() < 1e-5
-    ref = simulate_reference(model, 3.0, t_eval=t, rtol=1e-11, atol=1e-13)
-    assert np.abs(ref.position_output[:, 0, :2] - exact).max() < 1e-10
     assert np.abs(ref.closure_drive_force[:, 0, 0] - torque).max() < 1e-9
-    free = _four_bar(JointForce(lambda s, q, qd: -50.0 * q + _forcing(s)), rate=1.0)
-    gaps = [simulate(free, 3.0, dt, max_energy_error=1e-3).info["energy_balance_error"]
-            for dt in (1e-3, 5e-4)]
-    assert gaps[1] < 2e-6 and gaps[0] / gaps[1] > 3.2, gaps
 
 
 def test_a_joint_force_on_the_closing_slide_acts_as_on_the_tree_slide():

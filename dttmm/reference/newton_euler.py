@@ -236,7 +236,7 @@ from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
 from ..closures import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, assemble, check_drives_move,
-                        constraint_rows, has_closure_drives, loop_residuals)
+                        closure_forces, constraint_rows, has_closure_drives, loop_residuals)
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
@@ -1648,6 +1648,15 @@ def _loop_rows(model, col0):
             coordinate, law, np.zeros((len(kind), 2)))
 
 
+def _finite_number(value, who, what, t):
+    """A user function's value as a float; ValueError naming who returned what otherwise."""
+    a = np.asarray(value, dtype=float)
+    if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
+        raise ValueError(f"simulate_reference: {who}: {what} returned {value!r} at "
+                         f"t = {t:.17g} (need one finite number)")
+    return float(a.reshape(-1)[0])
+
+
 class _Problem:
     """Index bookkeeping and the per-time evaluation of ground motion, applied loads and joint
     drives."""
@@ -1756,10 +1765,7 @@ class _Problem:
                                   f"closing joint '{model.closure_names[owner[r]]}', "
                                   f"coordinate {coordinate[r] + 1}")
                                  for r in np.nonzero(rows.law[:, 0] == MOTION)[0]]
-        self._closure_forces = [(r, model.closure_drives[owner[r]][coordinate[r]]["function"],
-                                 f"closing joint '{model.closure_names[owner[r]]}', "
-                                 f"coordinate {coordinate[r] + 1}")
-                                for r in np.nonzero(rows.law[:, 0] == FORCE)[0]]
+        self._closure_forces = closure_forces(model, rows)
         for r in np.nonzero(rows.law[:, 0] == SPRING_DAMPER)[0]:   # its row's value: q - rest
             self.loops[10][r, 0] = model.closure_drives[owner[r]][coordinate[r]]["rest"]
         c += self.loops[1].shape[0]
@@ -1824,11 +1830,7 @@ class _Problem:
 
     def _number(self, c, what, t, value):
         """A drive's value as a float; ValueError naming the joint and coordinate otherwise."""
-        a = np.asarray(value, dtype=float)
-        if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
-            raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: {what} returned "
-                             f"{value!r} at t = {t:.17g} (need one finite number)")
-        return float(a.reshape(-1)[0])
+        return _finite_number(value, self.coordinate_label(c), what, t)
 
     def joint_inputs(self, t, y):
         """The state with every prescribed coordinate and rate taken from its motion at time t,
@@ -1869,11 +1871,7 @@ class _Problem:
         for r, functions, who in self._closure_motions:
             for i, (what, f) in enumerate(zip(("position", "velocity", "acceleration"),
                                               functions)):
-                a = np.asarray(f(t), dtype=float)
-                if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
-                    raise ValueError(f"simulate_reference: {who}: prescribed {what} returned "
-                                     f"{f(t)!r} at t = {t:.17g} (need one finite number)")
-                target[r, i] = float(a.reshape(-1)[0])
+                target[r, i] = _finite_number(f(t), who, f"prescribed {what}", t)
         args = (y, self.body_params, self.kinds, self.hinge_params, self.body_kind,
                 self.beam_params, self.shape_vec, self.shape_mat, self.q_off, self.w_off,
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
@@ -1884,13 +1882,8 @@ class _Problem:
             _solve_dynamics(*args)  # which one evaluation leaves in loops[13]
             values = self.loops[13]
             for r, f, who in self._closure_forces:
-                value = f(t, values[r, 0], values[r, 1])
-                a = np.asarray(value, dtype=float)
-                if a.size != 1 or not np.isfinite(a.reshape(-1)[0]):
-                    raise ValueError(f"simulate_reference: {who}: drive function(t, q, q_dot) "
-                                     f"returned {value!r} at t = {t:.17g} (need one finite "
-                                     f"number)")
-                target[r, 2] = float(a.reshape(-1)[0])
+                target[r, 2] = _finite_number(f(t, values[r, 0], values[r, 1]), who,
+                                              "drive function(t, q, q_dot)", t)
         return args
 
     def rhs(self, t, y):
