@@ -34,7 +34,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
+from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
 from .elements.hinges import AXIS_1, HINGE_PARAM_SIZE, pack_hinge
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
@@ -332,9 +332,9 @@ def describe_closures(model):
 
 def check_runs_in_sweeps(model, who):
     """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet,
-    naming them: loops of rigid bodies and beams (at their output ends) on a fixed ground
-    without elastic hinges (kernels/closure.py), and a chain's tip joined to a fixed ground by
-    a ball joint anywhere.  The pinned tip must start on its pin (the sweeps hold it where it
+    naming them: loops of rigid bodies, beams (at their output ends) and elastic hinges on a
+    fixed ground (kernels/closure.py), and a chain's tip joined to a fixed ground by a ball
+    joint anywhere.  The pinned tip must start on its pin (the sweeps hold it where it
     starts)."""
     if model.n_closures == 0:
         return
@@ -346,7 +346,6 @@ def check_runs_in_sweeps(model, who):
                              f"the tip starts (at_b=None)")
         return
     lines = "; ".join(describe_closures(model))
-    why = None
     beam_input = [(c, s) for c in range(model.n_closures) for s in range(2)
                   if model.closure_body[c, s] >= 0 and not model.closure_on_end[c, s]
                   and model.body_kind[model.closure_body[c, s]] == BEAM]
@@ -357,15 +356,10 @@ def check_runs_in_sweeps(model, who):
                          f"DT-TMM closes loops at a beam's output end (or at a point of the "
                          f"body the beam hangs from); the Newton-Euler reference runs it "
                          f"(dttmm.simulate_reference)")
-    if np.any(model.hinge_kind == ELASTIC):
-        k = int(np.nonzero(model.hinge_kind == ELASTIC)[0][0])
-        why = f"hinge '{model.hinge_names[k]}' is elastic"
-    elif model.ground_motion is not None:
-        why = "the ground moves"
-    if why is not None:
-        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM with rigid bodies "
-                         f"and beams on a fixed ground so far, and {why}; the Newton-Euler "
-                         f"reference runs them (dttmm.simulate_reference)")
+    if model.ground_motion is not None:
+        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM on a fixed ground "
+                         f"so far, and the ground moves; the Newton-Euler reference runs them "
+                         f"(dttmm.simulate_reference)")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -157,8 +157,9 @@ def describe(model):
         kind = "beam" if model.body_kind[k] == 1 else "rigid"
         p = model.parent[k]
         parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
+        joint = JOINT_NAMES[int(model.hinge_kind[k])]
         out.append(f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
-                   f"on a {JOINT_NAMES[int(model.hinge_kind[k])]} joint "
+                   f"on {'an' if joint[0] in 'aeiou' else 'a'} {joint} joint "
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]

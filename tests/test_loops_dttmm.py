@@ -58,20 +58,53 @@ def test_n_four_bar_stays_on_the_parallelogram_through_its_flat_positions():
     assert result.info["loop_position_residual"] < 1e-10
 
 
-def test_loops_with_an_elastic_hinge_are_refused_before_the_run_naming_the_hinge():
-    system = System()
-    link = system.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
-                                to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="link"),
-                      BallJoint())
+def _loop_through_an_elastic_hinge(damping):
+    """A link on a ball joint to the ground, an arm on an elastic hinge (a 100 rad/s
+    suspension) to it, the arm's end closed to the ground by a universal joint; under gravity,
+    the link turning at 1 rad/s about z."""
+    system = System(gravity=[0.0, 0.0, -9.81])
+    system.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
+                         to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="link",
+                         angular_velocity=[0.0, 0.0, 1.0]), BallJoint())
     system.add(RigidBody(mass=1.0, inertia=[1e-3, 0.1, 0.1], inertia_about="mass_center",
                          to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0], name="arm"),
-               dttmm.ElasticHinge(translational_stiffness=1e6, rotational_stiffness=1e3,
-                                  name="spring"), parent=link)
+               dttmm.ElasticHinge(translational_stiffness=1e4, rotational_stiffness=1e2,
+                                  translational_damping=20.0 * damping,
+                                  rotational_damping=0.5 * damping, name="spring"),
+               parent="link")
     system.close(dttmm.UniversalJoint(axis1=[0, 0, 1.0], axis2=[0, 1.0, 0]), "arm", "ground",
                  at_b=[2.0, 0.0, 0.0])
-    with pytest.raises(ValueError, match="rigid bodies and beams on a fixed ground so far, and "
-                                         "hinge 'spring' is elastic"):
-        simulate(system.build(), 0.1, 1e-3)
+    return system.build()
+
+
+def test_a_loop_through_an_elastic_hinge_converges_to_the_reference_and_keeps_its_energy():
+    """An elastic hinge in a loop's tree (docs/loops.md, "Elastic hinges in a loop's tree"):
+    damped, every body's end point and the closing joint's force converge to the reference at
+    order 2 over 0.2 s (measured 4.1e-6, 1.0e-6, 2.6e-7 m and 1.9e-3, 4.7e-4, 1.2e-4 N of 7.9
+    N at dt = 1e-3, 5e-4, 2.5e-4), the loop closed after every step; undamped, the energy
+    holds at order 2 over 2 s (1.9e-5, 5.0e-6 of the largest kinetic energy at dt = 1e-3,
+    5e-4)."""
+    model = _loop_through_an_elastic_hinge(damping=1.0)
+    t_end = 0.2
+    ref = simulate_reference(model, t_end, t_eval=[0.0, t_end], rtol=1e-10, atol=1e-12)
+    steps, errors, force_errors = [1e-3, 5e-4, 2.5e-4], [], []
+    for dt in steps:
+        result = simulate(model, t_end, dt, t_eval=[0.0, t_end])
+        errors.append(np.abs(result.position_output[-1] - ref.position_output[-1]).max())
+        force_errors.append(np.abs(result.closure_force[-1] - ref.closure_force[-1]).max())
+        assert result.info["loop_position_residual"] < 1e-10
+        assert result.info["loop_rate_residual"] < 1e-10
+    assert abs(fitted_order(steps, errors) - 2.0) < 0.2, errors
+    assert abs(fitted_order(steps, force_errors) - 2.0) < 0.2, force_errors
+    assert errors[-1] < 5e-7
+    assert force_errors[-1] < 3e-5 * np.abs(ref.closure_force[-1]).max()
+    free = _loop_through_an_elastic_hinge(damping=0.0)
+    drifts = []
+    for dt in (1e-3, 5e-4):
+        result = simulate(free, 2.0, dt)
+        energy = result.kinetic + result.potential
+        drifts.append(np.abs(energy - energy[0]).max() / result.kinetic.max())
+    assert drifts[1] < 1e-5 and 3.0 < drifts[0] / drifts[1] < 5.0, drifts
 
 
 def test_stewart_platform_against_the_reference_with_both_drives():

@@ -112,6 +112,24 @@ def test_elastic_hinge_frequency(offset):
     assert abs(np.abs(angle).max() / (0.01 / omega) - 1) < 5e-3
 
 
+def test_elastic_hinge_starts_at_its_given_deflection():
+    """A body on an elastic hinge whose springs act at its mass centre, started at the given
+    deflection d0 (ElasticHinge.deflection) without gravity, oscillates as d0 cos(w t), w =
+    sqrt(k / m), in the reference and in DT-TMM (the reference used to start it at d = 0)."""
+    from dttmm import simulate
+    k, mass, d0 = 1e3, 2.0, np.array([0.01, -0.004, 0.002])
+    hinge = ElasticHinge(translational_stiffness=k, rotational_stiffness=10.0, deflection=d0)
+    body = RigidBody(mass=mass, inertia=[0.1, 0.2, 0.3], inertia_about="mass_center",
+                     to_mass_center=[0, 0, 0], to_output=[0.5, 0, 0])
+    model = build_chain([hinge, body], gravity=[0, 0, 0])
+    t = np.linspace(0.0, 0.5, 11)
+    exact = np.cos(np.sqrt(k / mass) * t)[:, None] * d0 + [0.5, 0.0, 0.0]
+    ref = simulate_reference(model, 0.5, t_eval=t, rtol=1e-10, atol=1e-12)
+    assert np.abs(ref.position_output[:, 0] - exact).max() < 1e-8
+    dttmm = simulate(model, 0.5, 1e-4, t_eval=t)
+    assert np.abs(dttmm.position_output[:, 0] - exact).max() < 1e-5 * np.abs(d0).max()
+
+
 # --------------------------------------------------------------------------------------------
 # conservation laws and constraints
 # --------------------------------------------------------------------------------------------

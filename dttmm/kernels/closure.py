@@ -40,13 +40,13 @@ from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
 from ..elements import BEAM
 from ..elements.drives import FORCE, SPRING_DAMPER
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
-from ..elements.hinges import AXIS_1, FIXED
+from ..elements.hinges import AXIS_1, ELASTIC, FIXED
 from ..elements.joints import PRISMATIC
 from .beam import end_section_motion
 from .joint import FREE, PRESCRIBED, joint_frame, n_coordinates
 from .mat3 import t_cross, t_lin3, t_mv
 from .so3 import expm_so3
-from .sweep import IDENTITY, JOINT, TRANSFER, _gauss_solve, _mm, _mv
+from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
 
 
 # the closing joints as the loop reads them, and the loop's scratch for them (solver.
@@ -189,13 +189,14 @@ def _beam_offset(beams, k, rot, w, eta, eta_d):
 
 
 @no_alloc_kernel
-def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
+def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bodies):
     """The output point and its velocity (loops.r_out, v_out) of the given bodies (in tree
     order; the others' are read as they are) from the rotations, angular velocities, joint
-    coordinates and rates and the beams' modal coordinates and rates: r_in = r_out,P + d (a
-    slide's d = A_P n q), r_out = r_in + A l_IO (a rigid body) or r_in + rho (a beam's
-    deflected end, _beam_offset); the kernel model hangs every child at its parent's output
-    point."""
+    coordinates and rates, the elastic hinges' deflections and rates and the beams' modal
+    coordinates and rates: r_in = r_out,P + d (a slide's d = A_P n q, an elastic hinge's its
+    deflection d, world, v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
+    r_in + rho (a beam's deflected end, _beam_offset); the kernel model hangs every child at
+    its parent's output point."""
     parent, hinge_kind, hinge_params, body_params = (params.parent, params.hinge_kind,
                                                      params.hinge_params, params.body_params)
     beams, r_out, v_out = params.beams, loops.r_out, loops.v_out
@@ -217,6 +218,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, loops, bodies):
             r = _add(r, d)
             w_p = (0.0, 0.0, 0.0) if p < 0 else _v3(w, p)
             v = _add(v, t_lin3(1.0, t_cross(w_p, d), jqd[k, 0], u))
+        elif hinge_kind[k] == ELASTIC:
+            r = _add(r, _v3(defl, k))
+            v = _add(v, _v3(defl_rate, k))
         if body_kind[k] == BEAM:
             arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
         else:
@@ -510,20 +514,24 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     sw = sweep
     _row_coefficients(params, loops, rot, w)
     _column_loads(loops)
-    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, sw.s,
-                           sw.tree_s, loops)
+    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
+                           params.parent, sw.s, sw.tree_s, loops)
     if status != 0:
         return status
-    recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
-                   sw.s, loops.p_col[0], loops.k_store[0], loops.h_store, loops.free_store,
-                   loops.z_save[0], loops.nu_save[0], loops.tau_save[0], True,
-                   loops.all_bodies, loops.act[0])
+    status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
+                            params.parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
+                            loops.h_store, loops.free_store, loops.z_save[0], loops.nu_save[0],
+                            loops.tau_save[0], True, loops.all_bodies, loops.act[0])
     for c in range(1, n_rows + 1):
-        recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f,
-                       sw.s, loops.p_col[c], loops.k_store[c], loops.h_store,
-                       loops.free_store, loops.z_save[c], loops.nu_save[c], loops.tau_save[c],
-                       False, loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
-                       loops.act[c])
+        if status == 0:
+            status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
+                                    sw.known_loads, params.parent, root_f, sw.s, loops.p_col[c],
+                                    loops.k_store[c], loops.h_store, loops.free_store,
+                                    loops.z_save[c], loops.nu_save[c], loops.tau_save[c], False,
+                                    loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
+                                    loops.act[c])
+    if status != 0:
+        return status
     _delassus(loops)
     for r in range(n_rows):
         loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
@@ -543,9 +551,12 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                 p_comb[2 * k + 1, i] += f * loops.p_col[c, 2 * k + 1, i]
             for i in range(3):
                 k_comb[k, i] += f * loops.k_store[c, k, i]
-    recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, params.parent, root_f, sw.s,
-                   p_comb, k_comb, loops.h_store, loops.free_store, z, sw.joint_nu,
-                   sw.joint_tau, True, loops.all_bodies, loops.act[0])
+    status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
+                            params.parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
+                            loops.free_store, z, sw.joint_nu, sw.joint_tau, True,
+                            loops.all_bodies, loops.act[0])
+    if status != 0:
+        return status
     for r in range(n_rows):
         loops.acc[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0])
     closure_wrenches(params, loops, rot)
@@ -660,16 +671,29 @@ def _dependent_frames(params, loops, state, bodies, work):
 
 
 @no_alloc_kernel
+def _deflection_response(params, loops, z, j, k, i):
+    """Row j's response of elastic hinge k's d''_i: its outboard input station's acceleration
+    less its inboard output station's (v_in = v_out,P + d', step.py::_update; station 0 the
+    ground, a parent outside the row's active bodies does not move)."""
+    p = params.parent[k]
+    inboard = 0.0 if p < 0 or not loops.act[j + 1, p] else z[2 * p + 2, i]
+    return z[2 * k + 1, i] - inboard
+
+
+@no_alloc_kernel
 def _add_rates(params, loops, state, j, f):
-    """The angular velocities, the joint coordinates' and the modal coordinates' rates += f
-    times row j's response (of w', q'' and eta'') on its active bodies (the dependent frames
-    are rebuilt after, _dependent_frames)."""
+    """The angular velocities, the joint coordinates', the elastic hinges' deflections' and
+    the modal coordinates' rates += f times row j's response (of w', q'', d'' and eta'') on
+    its active bodies (the dependent frames are rebuilt after, _dependent_frames)."""
     mode_off = params.beams[3]
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
         for i in range(3):
             state.omega[k, i] += f * z[2 * k + 1, 3 + i]
+        if params.hinge_kind[k] == ELASTIC:
+            for i in range(3):
+                state.defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(n_coordinates(params.hinge_kind[k])):
             state.jqd[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
@@ -679,12 +703,16 @@ def _add_rates(params, loops, state, j, f):
 @no_alloc_kernel
 def _move(params, loops, state, j, f, e3, phi):
     """Turn every active body of row j by f times its response of w' (A <- exp(f dw'^) A) and
-    move its joint and modal coordinates by f times their response of q'' and eta'' (the
-    dependent frames are rebuilt after, _dependent_frames); e3 (3, 3), phi (3,) scratch."""
+    move its joint coordinates, elastic deflection and modal coordinates by f times their
+    response of q'', d'' and eta'' (the dependent frames are rebuilt after,
+    _dependent_frames); e3 (3, 3), phi (3,) scratch."""
     mode_off = params.beams[3]
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
+        if params.hinge_kind[k] == ELASTIC:
+            for i in range(3):
+                state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):
             phi[i] = f * z[2 * k + 1, 3 + i]
         expm_so3(phi, e3)
@@ -703,7 +731,7 @@ def _move(params, loops, state, j, f, e3, phi):
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                loops, loops.all_bodies)
+                state.defl, state.defl_rate, loops, loops.all_bodies)
     row_positions(params, loops, state.rot, state.omega, loops.all_rows)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(loops.kind.shape[0]):
@@ -757,7 +785,7 @@ def project_onto_loops(params, loops, state):
             _add_rates(params, loops, state, j, f)
             _dependent_frames(params, loops, state, bodies, work)
             tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
-                        state.eta_d, loops, bodies)
+                        state.eta_d, state.defl, state.defl_rate, loops, bodies)
             if f > 0.0:
                 row_positions(params, loops, state.rot, state.omega, rows)
                 for q in range(rows.shape[0]):
@@ -846,15 +874,16 @@ def _element_columns(u, s_o, p_o, s_i, p_i, t, x):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def sweep_columns(kind, u, joint_dof, joint_drive, parent, s_mat, port_s, loops):
+def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, port_s, loops):
     """The upward half of the full-state tree sweep for the step (column 0, every element) and
     each row's unit multiplier (column r + 1, on the bodies its sweep passes: loops.up_ptr,
     up_idx; the comment above): S for every element into s_mat, each column's P into
     loops.p_col and each joint's k into loops.k_store (h and the free coordinates into
     loops.h_store, free_store).  A column's loads are loops.col_load at loops.col_body's output
-    stations.  port_s (n, 6, 6) scratch.  Returns 0, or j + 1 for the element j whose
-    elimination is singular (a LOCKED element, which only the consistent start of an elastic
-    hinge has, is refused as one)."""
+    stations.  A LOCKED element (an elastic hinge at the consistent start: its loads known,
+    known_loads, its outboard motion free) passes no impedance and, in column 0, its known
+    inboard loads (sweep.py::riccati_tree_full).  port_s (n, 6, 6) scratch.  Returns 0, or
+    j + 1 for the element j whose elimination is singular."""
     n = parent.shape[0]
     p_col, port_p, up_ptr, up_idx = loops.p_col, loops.port_col, loops.up_ptr, loops.up_idx
     most = 1
@@ -902,6 +931,11 @@ def sweep_columns(kind, u, joint_dof, joint_drive, parent, s_mat, port_s, loops)
                 return jh + 1
             for a in range(m):
                 p_col[cols[a], jh] = p_o[a]
+        elif kd == LOCKED:
+            s_mat[jh] = 0.0
+            for a in range(m):
+                for i in range(6):
+                    p_col[cols[a], jh, i] = known_loads[jh, i] if cols[a] == 0 else 0.0
         elif kd == JOINT:
             uh = u[jh]
             s_o = s_mat[jb]
@@ -986,10 +1020,12 @@ def _row_mv(a, i, x, m):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col, k_col,
-                   h_store, free_store, z, nu, tau, affine, bodies, act):
+def recover_column(kind, u, joint_dof, joint_drive, known_loads, parent, root_f, s_mat, p_col,
+                   k_col, h_store, free_store, z, nu, tau, affine, bodies, act):
     """The downward half for one column (P p_col (2n + 1, 6), joints' k k_col (n, 3)): the
-    stations z, the joints' nu and tau of the given bodies, in tree order.  affine: the step
+    stations z, the joints' nu and tau of the given bodies, in tree order (a LOCKED
+    element's outboard input station from its known outboard loads, in the step's column:
+    S_I f = e_known - P_I).  affine: the step
     (the transfers' affine parts, the drives' values, the ground's motion root_f; every body);
     otherwise a homogeneous response, whose kinematics are zero at a parent outside act (the
     bodies of bodies)."""
@@ -1025,6 +1061,14 @@ def recover_column(kind, u, joint_dof, joint_drive, parent, root_f, s_mat, p_col
                 zi[6 + i] = _row_mv(s_h, i, f_i, 6) + p_col[jh, i]
             for i in range(6):
                 f_o[i] = _row_mv(u_h, i, zi, 12) + (u_h[i, 12] if affine else 0.0)
+        elif kd == LOCKED:
+            a6 = s_mat[jb].copy()
+            x = np.empty((6, 1))
+            for i in range(6):
+                x[i, 0] = (known_loads[jh, 6 + i] if affine else 0.0) - p_col[jb, i]
+            if not _gauss_solve(a6, x, 6, 1):
+                return jh + 1
+            f_o[:] = x[:, 0]
         else:                           # JOINT
             for c3 in range(3):
                 nu[k, c3] = (joint_drive[k, c3, 2] if affine and

@@ -424,8 +424,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
     if loops.kind.shape[0] > 0:
-        tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d, loops,
-                    loops.all_bodies)
+        tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
+                    state.defl, state.defl_rate, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
     else:
         status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
@@ -696,10 +696,18 @@ def _iterate(loop, run, s, it):
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         loops.step_coef[1] = c3 / c1
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
-        # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e)
+        # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
+        # hinges' deflections likewise from their stations' guess, as _update)
         eta_g = (loop.eta_dd_star - loop.w1e) / c1
+        defl_g = np.zeros_like(state.defl)
+        for k in range(defl_g.shape[0]):
+            if params.hinge_kind[k] == ELASTIC:
+                st = 2 * params.parent[k] + 2          # the inboard station (0: the ground)
+                defl_g[k] = (loop.z_star[2 * k + 1, 0:3] - loop.z_star[st, 0:3]
+                             - loop.w1d[k]) / c1
         tree_points(params, loop.guess.rot, loop.guess.w, loop.joints[2], loop.joints[3], eta_g,
-                    c3 * eta_g + loop.w3e, loops, loops.all_bodies)
+                    c3 * eta_g + loop.w3e, defl_g, c3 * defl_g + loop.w3d, loops,
+                    loops.all_bodies)
         status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
                                   loop.guess.w, z)
     else:

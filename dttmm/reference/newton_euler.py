@@ -229,8 +229,9 @@ from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W,
                              LENGTH, LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED,
                              POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
-from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0, ELASTIC,
-                               FIXED, K_ROTATION, K_TRANSLATION, RATE_0, REST_ROTATION)
+from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0,
+                               DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
+                               REST_ROTATION)
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
 from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -1818,6 +1819,8 @@ class _Problem:
             if self.q_off[k] >= 0:
                 y[self.q_off[k]:self.q_off[k] + 4] = rotation_to_quaternion(m.initial_rotation[k])
                 y[self.w_off[k]:self.w_off[k] + 3] = m.initial_angular_velocity[k]
+            if self.d_off[k] >= 0:          # an elastic hinge's deflection (its rate: 0)
+                y[self.d_off[k]:self.d_off[k] + 3] = self.hinge_params[k, DEFLECTION_0]
         nm = self.n_modal
         if nm > 0:
             y[self.e0:self.e0 + nm] = np.asarray(m.initial_modal_coordinates, dtype=float)
