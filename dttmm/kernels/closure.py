@@ -389,6 +389,23 @@ BAND_REGULARIZATION = 1e-12     # of the largest diagonal entry, added to the di
 
 
 @no_alloc_kernel
+def _clear_rows_matrix(loops, a):
+    """a <- 0 where the rows' solve reads it: within the band and its LU fill (columns i -
+    lower .. i + lower + upper of row i) where loops.band holds the bandwidths, everywhere
+    otherwise (O(R l), not O(R^2), for the banded solve's many rows)."""
+    m = a.shape[0]
+    lower, upper = loops.band[0], loops.band[1]
+    if lower < 0:
+        for i in range(m):
+            for j in range(m):
+                a[i, j] = 0.0
+        return
+    for i in range(m):
+        for j in range(max(0, i - lower), min(m, i + lower + upper + 1)):
+            a[i, j] = 0.0
+
+
+@no_alloc_kernel
 def _band_factor(a, lower, upper, piv):
     """a <- its LU factors with partial pivoting, a banded matrix of lower and upper bandwidths
     (kept dense; the factors fill only lower and lower + upper bands), after adding
@@ -489,7 +506,7 @@ def _delassus(loops):
     responses and the rows' Jacobian (_row_value); zero where row r's bodies are not among
     column j + 1's active bodies."""
     n_rows = loops.kind.shape[0]
-    loops.delassus[:, :] = 0.0
+    _clear_rows_matrix(loops, loops.delassus)
     for j in range(n_rows):
         z, act = loops.z_save[j + 1], loops.act[j + 1]
         for q in range(loops.colrow_ptr[j], loops.colrow_ptr[j + 1]):
@@ -518,10 +535,11 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                            params.parent, sw.s, sw.tree_s, loops)
     if status != 0:
         return status
+    work = np.empty((9, 12))
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
                             params.parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
                             loops.h_store, loops.free_store, loops.z_save[0], loops.nu_save[0],
-                            loops.tau_save[0], True, loops.all_bodies, loops.act[0])
+                            loops.tau_save[0], True, loops.all_bodies, loops.act[0], work)
     for c in range(1, n_rows + 1):
         if status == 0:
             status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
@@ -529,7 +547,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                                     loops.k_store[c], loops.h_store, loops.free_store,
                                     loops.z_save[c], loops.nu_save[c], loops.tau_save[c], False,
                                     loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
-                                    loops.act[c])
+                                    loops.act[c], work)
     if status != 0:
         return status
     _delassus(loops)
@@ -554,7 +572,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
                             params.parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
                             loops.free_store, z, sw.joint_nu, sw.joint_tau, True,
-                            loops.all_bodies, loops.act[0])
+                            loops.all_bodies, loops.act[0], work)
     if status != 0:
         return status
     for r in range(n_rows):
@@ -777,7 +795,7 @@ def project_onto_loops(params, loops, state):
     # V, column by column, over each row's active bodies and the rows they carry
     base = loops.gd.copy()
     v = loops.delassus
-    v[:, :] = 0.0
+    _clear_rows_matrix(loops, v)
     for j in range(n_rows):
         bodies = loops.act_idx[loops.act_ptr[j + 1]:loops.act_ptr[j + 2]]
         rows = loops.colrow_idx[loops.colrow_ptr[j]:loops.colrow_ptr[j + 1]]
@@ -1019,41 +1037,41 @@ def _row_mv(a, i, x, m):
     return v
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@no_alloc_kernel
 def recover_column(kind, u, joint_dof, joint_drive, known_loads, parent, root_f, s_mat, p_col,
-                   k_col, h_store, free_store, z, nu, tau, affine, bodies, act):
+                   k_col, h_store, free_store, z, nu, tau, affine, bodies, act, work):
     """The downward half for one column (P p_col (2n + 1, 6), joints' k k_col (n, 3)): the
     stations z, the joints' nu and tau of the given bodies, in tree order (a LOCKED
     element's outboard input station from its known outboard loads, in the step's column:
     S_I f = e_known - P_I).  affine: the step
     (the transfers' affine parts, the drives' values, the ground's motion root_f; every body);
     otherwise a homogeneous response, whose kinematics are zero at a parent outside act (the
-    bodies of bodies)."""
-    f_i = np.empty(6)
-    f_o = np.empty(6)
-    zi = np.empty(12)
+    bodies of bodies).  work (9, 12) scratch: nothing is allocated."""
+    f_i = work[0, 0:6]
+    f_o = work[0, 6:12]
+    zi = work[1]
     if affine:
-        z[0, 0:6] = root_f
-        z[0, 6:12] = 0.0
+        for i in range(6):
+            z[0, i] = root_f[i]
+            z[0, 6 + i] = 0.0
     for q in range(bodies.shape[0]):
         k = bodies[q]
         jb, jh = 2 * k + 1, 2 * k
         p = parent[k]
-        if p < 0:
-            if affine:
-                f_i[:] = z[0, 0:6]
+        for i in range(6):
+            if p < 0:
+                f_i[i] = z[0, i] if affine else 0.0
+            elif affine or act[p]:
+                f_i[i] = z[2 * p + 2, i]
             else:
-                f_i[:] = 0.0
-        elif affine or act[p]:
-            f_i[:] = z[2 * p + 2, 0:6]
-        else:
-            f_i[:] = 0.0
+                f_i[i] = 0.0
         if p < 0 and affine:
             for i in range(6):
                 z[0, 6 + i] += _row_mv(s_mat[jh], i, f_i, 6) + p_col[jh, i]
         kd = kind[jh]
         if kd == IDENTITY:
-            f_o[:] = f_i
+            for i in range(6):
+                f_o[i] = f_i[i]
         elif kd == TRANSFER:
             s_h, u_h = s_mat[jh], u[jh]
             for i in range(6):
@@ -1062,13 +1080,16 @@ def recover_column(kind, u, joint_dof, joint_drive, known_loads, parent, root_f,
             for i in range(6):
                 f_o[i] = _row_mv(u_h, i, zi, 12) + (u_h[i, 12] if affine else 0.0)
         elif kd == LOCKED:
-            a6 = s_mat[jb].copy()
-            x = np.empty((6, 1))
+            a6 = work[2:8, 0:6]
+            x = work[2:8, 6:7]
             for i in range(6):
+                for j in range(6):
+                    a6[i, j] = s_mat[jb, i, j]
                 x[i, 0] = (known_loads[jh, 6 + i] if affine else 0.0) - p_col[jb, i]
             if not _gauss_solve(a6, x, 6, 1):
                 return jh + 1
-            f_o[:] = x[:, 0]
+            for i in range(6):
+                f_o[i] = x[i, 0]
         else:                           # JOINT
             for c3 in range(3):
                 nu[k, c3] = (joint_drive[k, c3, 2] if affine and
