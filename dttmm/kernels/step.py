@@ -95,6 +95,16 @@ def _advance_history(h, coef, x, v, acc, p):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _hinge_deflection(params, z, w1d, c1, k):
+    """Elastic hinge k's deflection d (world) at the step's end from its stations'
+    accelerations: a_in - a_out,P = c1 d + w1d (docs/solver.md), the inboard station the
+    parent's output (0: the ground)."""
+    i_in, i_p = 2 * k + 1, 2 * params.parent[k] + 2
+    return ((z[i_in, 0] - z[i_p, 0] - w1d[k, 0]) / c1, (z[i_in, 1] - z[i_p, 1] - w1d[k, 1]) / c1,
+            (z[i_in, 2] - z[i_p, 2] - w1d[k, 2]) / c1)
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     """A body's rotation, angular velocity and acceleration at the end of the step as functions
     of its world rotation increment phi, with their derivatives (docs/solver.md):
@@ -166,6 +176,8 @@ GeneralLoop = namedtuple("GeneralLoop", [
     "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 2) each: the joint
                                     # coordinates' offsets and guess (kernels/joint.py)
     "loops",                        # the closing joints and their scratch (kernels/closure.py)
+    "at_guess",                     # (eta, eta', d, d') at the guess, for the loops' rows:
+                                    # (total modes,) twice, (n, 3) twice (_iterate)
 ])
 
 
@@ -183,7 +195,8 @@ def general_loop(n, n_eta, h, coef, histories, loops):
                        np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
                        np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                        tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
-                       tuple(np.zeros((n, 2)) for _ in range(5)), loops)
+                       tuple(np.zeros((n, 2)) for _ in range(5)), loops,
+                       (np.zeros(n_eta), np.zeros(n_eta), np.zeros((n, 3)), np.zeros((n, 3))))
 
 
 def _coefficients_py(h, coef):
@@ -698,16 +711,18 @@ def _iterate(loop, run, s, it):
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
         # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
         # hinges' deflections likewise from their stations' guess, as _update)
-        eta_g = (loop.eta_dd_star - loop.w1e) / c1
-        defl_g = np.zeros_like(state.defl)
+        eta_g, eta_d_g, defl_g, defl_rate_g = loop.at_guess
+        for i in range(eta_g.shape[0]):
+            eta_g[i] = (loop.eta_dd_star[i] - loop.w1e[i]) / c1
+            eta_d_g[i] = c3 * eta_g[i] + loop.w3e[i]
         for k in range(defl_g.shape[0]):
             if params.hinge_kind[k] == ELASTIC:
-                st = 2 * params.parent[k] + 2          # the inboard station (0: the ground)
-                defl_g[k] = (loop.z_star[2 * k + 1, 0:3] - loop.z_star[st, 0:3]
-                             - loop.w1d[k]) / c1
+                d = _hinge_deflection(params, loop.z_star, loop.w1d, c1, k)
+                for i in range(3):
+                    defl_g[k, i] = d[i]
+                    defl_rate_g[k, i] = c3 * d[i] + loop.w3d[k, i]
         tree_points(params, loop.guess.rot, loop.guess.w, loop.joints[2], loop.joints[3], eta_g,
-                    c3 * eta_g + loop.w3e, defl_g, c3 * defl_g + loop.w3d, loops,
-                    loops.all_bodies)
+                    eta_d_g, defl_g, defl_rate_g, loops, loops.all_bodies)
         status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
                                   loop.guess.w, z)
     else:
@@ -815,6 +830,7 @@ def _update(loop, run, s, _):
             finite = False
     w1q = loop.joints[0]
     x = np.zeros(2)
+    x_defl = np.zeros(3)
     for k in range(n):
         phi = z[2 * k + 1, 3:6]
         hk = params.hinge_kind[k]
@@ -855,12 +871,13 @@ def _update(loop, run, s, _):
             loop.rot_prev[:, :] = rot[k]
             matmul_into(e3, loop.rot_prev, rot[k])
         if params.hinge_kind[k] == ELASTIC:
-            st = 2 * params.parent[k] + 2          # the inboard station (0: the ground)
-            d_new = (z[2 * k + 1, 0:3] - z[st, 0:3] - loop.w1d[k]) / c1
-            x = d_new - defl[k]
-            _advance_history(h, coef, x, state.defl_rate[k], state.defl_acc[k],
+            d_new = _hinge_deflection(params, z, loop.w1d, c1, k)
+            for i in range(3):
+                x_defl[i] = d_new[i] - defl[k, i]
+            _advance_history(h, coef, x_defl, state.defl_rate[k], state.defl_acc[k],
                              state.defl_pseudo[k])
-            defl[k] = d_new
+            for i in range(3):
+                defl[k, i] = d_new[i]
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
