@@ -12,7 +12,7 @@ arrays on the Model (``closure_*``); this module builds and checks it, and gives
 points' positions and frames at t = 0.
 
 Per closing joint c (elements/kinds.py codes, as ``Model.hinge_kind``):
-    closure_kind[c]       BALL, FIXED, REVOLUTE, UNIVERSAL or PRISMATIC
+    closure_kind[c]       BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC or ELASTIC
     closure_body[c]       (a, b): body indices, -1 for the ground
     closure_point[c, s]   side s's point in its frame from its input point, m (the ground's:
                           in the ground frame from the ground point)
@@ -28,21 +28,25 @@ its output end, the ground frame) the joint holds, as a tree joint (docs/joints.
     universal:  p_b = p_a,  F_b = F_a Rot(n1, q1) R0 Rot(n2, q2)
     prismatic:  p_b = p_a + F_a n q,  F_b = F_a R0
 R0 is read from the bodies' frames at t = 0 (at the joint's given angles, default 0); a
-prismatic joint's coordinate is measured from its points.
+prismatic joint's coordinate is measured from its points.  An elastic hinge holds nothing: its
+springs and dampers act across the deflection d = F_a^T (p_b - p_a) and the rotation
+psi = log(F_a^T F_b R0^T), both in a's frame (R0: the frames' at t = 0 unless given), as a tree
+elastic hinge's (docs/loops.md, "An elastic hinge closing a loop").
 """
 from collections import namedtuple
 
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
-from .elements.hinges import AXIS_1, HINGE_PARAM_SIZE, pack_hinge
+from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
+from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
+                              K_TRANSLATION, REST_ROTATION, pack_hinge)
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
 from .elements.drives import FORCE, MOTION, SPRING_DAMPER
 from .elements.rigid_body import TO_OUTPUT
 
 GROUND = -1
-CLOSING_KINDS = (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC)
+CLOSING_KINDS = (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC, ELASTIC)
 
 
 def empty_table():
@@ -111,7 +115,8 @@ def loop_membership(entries, bodies, parent):
         for k, at in ((ka, at_a), (kb, at_b)):
             if k >= 0 and (at is None or (isinstance(at, str) and at == "output")):
                 closed_output[k] = True
-                output_moment[k] |= not isinstance(joint, BallJoint)
+                output_moment[k] |= not isinstance(joint, BallJoint)   # (an elastic
+                # hinge's couple too)
     return in_loop, closed_output, output_moment
 
 
@@ -243,6 +248,14 @@ def closure_rows(model, entries, index_of, named):
                                  f"be perpendicular at the start; at t = 0 they make "
                                  f"{angle:.4g} deg")
             v["qd0"] = np.zeros(2)
+        elif kind.code == ELASTIC:
+            if joint.deflection is not None:
+                raise ValueError(f"{label}: a closing elastic hinge's deflection is measured "
+                                 f"between its points (at_a, at_b); leave deflection None")
+            if joint.rotation is None:      # the rest rotation: the frames' at the start
+                v["rotation"] = f_a.T @ f_b
+            for part, k, c_ in (("translational", "k_t", "c_t"), ("rotational", "k_r", "c_r")):
+                _principal_axes(label, part, v[k], v[c_])
         else:
             relative = f_a.T @ f_b
             if kind.code == FIXED and getattr(joint, "rotation", None) is not None and \
@@ -263,6 +276,55 @@ def closure_rows(model, entries, index_of, named):
                 closure_on_end=np.array(ends, dtype=bool).reshape(-1, 2),
                 closure_params=np.array(params).reshape(-1, HINGE_PARAM_SIZE),
                 closure_names=tuple(names), closure_drives=tuple(all_drives))
+
+
+def _principal_axes(label, part, k, c):
+    """(axes (3, 3) as columns, stiffnesses (3,), dampings (3,)): a closing elastic hinge's
+    spring K and damper C (part: "translational" or "rotational") in their common principal
+    axes (each a row of the loop's table: spring_directions).  ValueError naming the hinge
+    when the damper does not share the spring's axes (K C != C K)."""
+    stiffness, damping = f"{part}_stiffness", f"{part}_damping"
+    scale = max(float(np.max(np.abs(k))), 1e-300)
+    c_scale = max(float(np.max(np.abs(c))), 1e-300)
+    if np.max(np.abs(k @ c - c @ k)) > 1e-9 * scale * c_scale:
+        raise ValueError(f"{label}: {damping} must share the principal axes of {stiffness} in "
+                         f"a closing elastic hinge (its springs and dampers act along common "
+                         f"axes; K C = C K): give a scalar, 3 entries, or a matrix with the "
+                         f"spring's axes")
+    # a generic combination's eigenvectors diagonalize both commuting matrices
+    _, axes = np.linalg.eigh(k / scale + (np.sqrt(2.0) - 1.0) * c / c_scale)
+    if np.linalg.det(axes) < 0.0:
+        axes[:, 2] = -axes[:, 2]
+    return axes, np.einsum("ji,jk,ki->i", axes, k, axes), np.einsum("ji,jk,ki->i", axes, c, axes)
+
+
+def spring_directions(model, c):
+    """The rows of closing elastic hinge c (docs/loops.md, "An elastic hinge closing a loop"),
+    each a force (a SpringDamper's law), none a constraint: [(kind, v1, v2, v3, stiffness,
+    damping)], along the common principal axes n_i of its spring and damper (in a's frame):
+        GAP_A:      g = n_i . F_a^T (p_b - p_a)             (v1 = n_i)
+        ROTATION_A: g = n_i . log(F_a^T F_b R0^T)           (v1, v2 = R0's first two columns,
+                    g' = n_i . F_a^T (w_b - w_a)             v3 = n_i)
+    each row's force lam = -k_i g - c_i g' (its couple n_i lam, its force n_i lam on b), so
+    that the hinge's force and couple on b are -F_a (K_t d + C_t d'), -F_a (K_r psi + C_r
+    F_a^T (w_b - w_a)) with d = F_a^T (p_b - p_a), d' its rate in a's frame."""
+    if int(model.closure_kind[c]) != ELASTIC:
+        return []
+    row = model.closure_params[c]
+    r0 = row[REST_ROTATION].reshape(3, 3)
+    label = f"closing elastic hinge '{model.closure_names[c]}'"
+    zero = np.zeros(3)
+    rows = []
+    for part, kind, k_slot, c_slot in (("translational", GAP_A, K_TRANSLATION, C_TRANSLATION),
+                                       ("rotational", ROTATION_A, K_ROTATION, C_ROTATION)):
+        axes, k, damping = _principal_axes(label, part, row[k_slot].reshape(3, 3),
+                                           row[c_slot].reshape(3, 3))
+        for i in range(3):
+            if kind == GAP_A:
+                rows.append((GAP_A, axes[:, i], zero, zero, k[i], damping[i]))
+            else:
+                rows.append((ROTATION_A, r0[:, 0], r0[:, 1], axes[:, i], k[i], damping[i]))
+    return rows
 
 
 def is_pinned_tip(model):
@@ -301,6 +363,60 @@ def closure_gaps(model):
     return np.linalg.norm(gap, axis=1)
 
 
+def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground):
+    """(p, v, F, w) of closing joint c's side s at T recorded states: its point, the point's
+    velocity, the side's frame and angular velocity, (T, ...) each.  rotation, omega, r_in,
+    v_in: (T, n, ...) the bodies'; eta, eta_dot (T, total modes) the beams' (None without
+    beams); ground: (r, v, rot, w) of the ground frame, (T, ...) each."""
+    from .model import output_section
+    from .result import beam_output_offset
+    k, local = model.closure_body[c, s], model.closure_point[c, s]
+    if k == GROUND:
+        r_g, v_g, rot_g, w_g = ground
+        arm = rot_g @ local
+        return r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
+    rot, w = rotation[:, k], omega[:, k]
+    if model.closure_on_end[c, s]:      # a beam's output end: its deflected end section
+        row = model.beam_params[k]
+        i0 = int(np.sum(model.n_modes[:k]))
+        e, e_d = eta[:, i0:i0 + model.n_modes[k]], eta_dot[:, i0:i0 + model.n_modes[k]]
+        rho, rate = beam_output_offset(row, rot, w, e, e_d)
+        sections = [output_section(row, rot[t], w[t], e[t], e_d[t]) for t in range(len(rot))]
+        return (r_in[:, k] + rho, v_in[:, k] + rate, np.array([f for f, _ in sections]),
+                np.array([w_o for _, w_o in sections]))
+    arm = rot @ local
+    return r_in[:, k] + arm, v_in[:, k] + np.cross(w, arm), rot, w
+
+
+def elastic_closure_terms(model, rotation, omega, r_in, v_in, eta, eta_dot, ground):
+    """(strain, power), (T,) each: the closing elastic hinges' spring energy
+    1/2 d . K_t d + 1/2 psi . K_r psi and their dampers' power -(d' . C_t d' + w_r . C_r w_r),
+    with d = F_a^T (p_b - p_a), d' = F_a^T (v_b - v_a - w_a x (p_b - p_a)) its rate in a's
+    frame, psi = log(F_a^T F_b R0^T), w_r = F_a^T (w_b - w_a) (docs/loops.md, "An elastic
+    hinge closing a loop"); arguments as side_motions'."""
+    from .result import _log_so3
+    n_t = len(rotation)
+    strain, power = np.zeros(n_t), np.zeros(n_t)
+    for c in np.nonzero(model.closure_kind == ELASTIC)[0]:
+        h = model.closure_params[c]
+        (p_a, v_a, f_a, w_a), (p_b, v_b, f_b, w_b) = (
+            side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground)
+            for s in range(2))
+        gap = p_b - p_a
+        d = np.einsum("tji,tj->ti", f_a, gap)
+        d_rate = np.einsum("tji,tj->ti", f_a, v_b - v_a - np.cross(w_a, gap))
+        w_r = np.einsum("tji,tj->ti", f_a, w_b - w_a)
+        r0 = h[REST_ROTATION].reshape(3, 3)
+        psi = np.array([_log_so3(f_a[t].T @ f_b[t] @ r0.T) for t in range(n_t)]).reshape(n_t, 3)
+        k_t, k_r = h[K_TRANSLATION].reshape(3, 3), h[K_ROTATION].reshape(3, 3)
+        c_t, c_r = h[C_TRANSLATION].reshape(3, 3), h[C_ROTATION].reshape(3, 3)
+        strain += 0.5 * (np.einsum("ti,ij,tj->t", d, k_t, d)
+                         + np.einsum("ti,ij,tj->t", psi, k_r, psi))
+        power -= (np.einsum("ti,ij,tj->t", d_rate, c_t, d_rate)
+                  + np.einsum("ti,ij,tj->t", w_r, c_r, w_r))
+    return strain, power
+
+
 def describe_closures(model):
     """Lines for describe(): each closing joint, its sides and points."""
     lines = []
@@ -322,9 +438,18 @@ def describe_closures(model):
                                                   f"c = {d['damping']:g})")
                   for i, d in enumerate(model.closure_drives[c] if model.closure_drives else ())
                   if d]
+        if kind == ELASTIC:         # its springs along their principal axes (spring_directions)
+            h = model.closure_params[c]
+            k_t, k_r = (np.linalg.eigvalsh(h[slot].reshape(3, 3))
+                        for slot in (K_TRANSLATION, K_ROTATION))
+            drives = [f"springs of {', '.join(f'{k:.4g}' for k in k_t)} N/m and "
+                      f"{', '.join(f'{k:.4g}' for k in k_r)} N m/rad along their axes, at rest "
+                      f"with its points together and its frames at R0 (it constrains nothing; "
+                      f"its force and couple: Result.closure_force, closure_moment)"]
         lines.append(f"closure {c} '{model.closure_names[c]}': {JOINT_KIND[int(kind)].what} "
                      f"from {sides[0]} to {sides[1]}"
-                     + (f", {', '.join(drives)} (its force: Result.closure_drive_force)"
+                     + (f", {drives[0]}" if kind == ELASTIC else
+                        f", {', '.join(drives)} (its force: Result.closure_drive_force)"
                         if drives else ""))
     return lines
 
@@ -382,8 +507,11 @@ def constraint_directions(model, c):
     ball: the three world components of the gap; fixed and prismatic: the relative rotation's
     three dots (F_a R0 e_i) . (F_b e_j), (i, j) = (2, 3), (3, 1), (1, 2); revolute: the axis
     F_b R0^T n kept perpendicular to a's two directions across n; universal: n1 . n2 = 0;
-    prismatic: the gap across a's axis."""
+    prismatic: the gap across a's axis; elastic: none (its rows are forces:
+    spring_directions)."""
     kind, row = int(model.closure_kind[c]), model.closure_params[c]
+    if kind == ELASTIC:
+        return [], []
     r0 = row[0:9].reshape(3, 3)
     n1, n2 = row[45:48], row[48:51]
     e = np.eye(3)
@@ -401,9 +529,10 @@ def constraint_directions(model, c):
 
 
 # constraint_rows' kinds (kernels/closure.py, the reference): gaps e . (p_b - p_a) with e fixed
-# in the world or in a's frame, dots (F_a x) . (F_b y), and a driven coordinate's angle about
-# an axis fixed in a's or in b's frame (driven_directions)
-GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B = 0, 1, 2, 3, 4
+# in the world or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an
+# axis fixed in a's or in b's frame (driven_directions), and an elastic hinge's rotation about
+# an axis fixed in a's frame (spring_directions)
+GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B, ROTATION_A = 0, 1, 2, 3, 4, 5
 
 
 def driven_directions(model, c):
@@ -440,15 +569,16 @@ Rows = namedtuple("Rows", ["kind", "owner", "v1", "v2", "v3", "coordinate", "law
 
 def constraint_rows(model, closures=None):
     """The closing joints' scalar rows (constraint_directions, then each joint's driven
-    coordinates, driven_directions; closures: which closing joints, default all), a Rows of
-    flat arrays: kind (R,) GAP_WORLD, GAP_A, DOT, ANGLE_A or ANGLE_B, the closing joint of
+    coordinates, driven_directions, or an elastic hinge's springs, spring_directions; closures:
+    which closing joints, default all), a Rows of flat arrays: kind (R,) GAP_WORLD, GAP_A,
+    DOT, ANGLE_A, ANGLE_B or ROTATION_A, the closing joint of
     each (R,), v1 (e or x), v2 (y; zero for a gap), v3 (an angle's axis) (R, 3) each, the
     driven coordinate of each (R,; -1 for a constraint of the joint itself) and its drive's law
     (R, 3): [kind (elements/drives.py; -1 for none), stiffness, damping]."""
     kind, owner, v1, v2, v3, coordinate, law = [], [], [], [], [], [], []
     zero = np.zeros(3)
 
-    def add(k, c, a, b, n, i):
+    def add(k, c, a, b, n, i, spring=None):
         kind.append(k)
         owner.append(c)
         v1.append(a)
@@ -456,7 +586,8 @@ def constraint_rows(model, closures=None):
         v3.append(n)
         coordinate.append(i)
         d = model.closure_drives[c][i] if i >= 0 else None
-        law.append([-1.0, 0.0, 0.0] if d is None else [d["kind"], d["stiffness"], d["damping"]])
+        law.append([SPRING_DAMPER, *spring] if spring is not None else
+                   [-1.0, 0.0, 0.0] if d is None else [d["kind"], d["stiffness"], d["damping"]])
 
     for c in range(model.n_closures) if closures is None else closures:
         points, dots = constraint_directions(model, c)
@@ -466,6 +597,8 @@ def constraint_rows(model, closures=None):
             add(DOT, c, x, y, zero, -1)
         for i, k, a, b, n in driven_directions(model, c):
             add(k, c, a, b, n, i)
+        for k, a, b, n, stiffness, damping in spring_directions(model, c):
+            add(k, c, a, b, n, -1, (stiffness, damping))
     return Rows(np.array(kind, dtype=np.int64), np.array(owner, dtype=np.int64),
                 np.array(v1, dtype=float).reshape(-1, 3), np.array(v2, dtype=float).reshape(-1, 3),
                 np.array(v3, dtype=float).reshape(-1, 3), np.array(coordinate, dtype=np.int64),

@@ -38,7 +38,7 @@ def describe_counts(model):
 
 
 # the constraint equations of each closing joint kind (closures.py): 6 less its freedoms
-CLOSURE_ROWS = {BALL: 3, FIXED: 6, REVOLUTE: 5, UNIVERSAL: 4, PRISMATIC: 5}
+CLOSURE_ROWS = {BALL: 3, FIXED: 6, REVOLUTE: 5, UNIVERSAL: 4, PRISMATIC: 5, ELASTIC: 0}
 
 
 def degrees_of_freedom(model):
@@ -159,7 +159,7 @@ def describe(model):
         parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
         joint = JOINT_NAMES[int(model.hinge_kind[k])]
         out.append(f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
-                   f"on {'an' if joint[0] in 'aeiou' else 'a'} {joint} joint "
+                   f"on {'an' if joint[0] in 'aeio' else 'a'} {joint} joint "
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]

@@ -7,7 +7,9 @@ kinetic energy so far, W the work done on the system since t = 0:
       + sum Q_j q'_j                                  joint drives (springs, dampers, forces,
                                                       prescribed motions: their generalized force)
       - sum (A^T (d' - w_in x d)) . C_t A^T d'          elastic hinges' dampers (inboard axes A:
-            + w_rel . C_r w_rel                       the force pair's moment works on w_in)
+            + w_rel . C_r w_rel                       the force pair's moment works on w_in;
+                                                      a closing one's: closures.
+                                                      elastic_closure_terms)
       - sum 2 zeta omega_k m_k eta'_k^2               beams' modal damping
       + F_0 . v_g + (M_0 + d_0 x F_0) . w_g           a moving ground, through each root's load
 
@@ -25,6 +27,7 @@ from .elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, 
                             TORSION_MODES, foreshortening_integrals, modal_size, mode_shapes,
                             stretch_along)
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
+from .closures import elastic_closure_terms
 from .elements.rigid_body import TO_MASS_CENTER
 from .model import output_section
 from .result import _drive_spring_energy, beam_output_offset
@@ -34,9 +37,11 @@ def does_work(model):
     """Whether anything outside the total energy works on the model (applied or distributed
     loads, joint drives, dampers of elastic hinges or beams, a moving ground): then the total
     changes by that work, and only the balance E - E(0) - W measures the integrator."""
-    damped = any(model.hinge_kind[k] == ELASTIC and (
-        np.any(model.hinge_params[k, C_TRANSLATION]) or np.any(model.hinge_params[k, C_ROTATION]))
-        for k in range(model.n_bodies))
+    damped = any(kinds[k] == ELASTIC and (np.any(params[k, C_TRANSLATION])
+                                          or np.any(params[k, C_ROTATION]))
+                 for kinds, params in ((model.hinge_kind, model.hinge_params),
+                                       (model.closure_kind, model.closure_params))
+                 for k in range(len(kinds)))
     return bool(model.has_applied_loads or any(d is not None for ds in model.drives for d in ds)
                 or any(d is not None for ds in model.closure_drives for d in ds)
                 or damped or np.any(model.beam_params[:, DAMPING_RATIO] > 0.0)
@@ -64,6 +69,9 @@ class EnergyBalance:
                                  f"{model.hinge_names[k]!r} follows a beam; its damper's work "
                                  f"is not counted yet")
         self.roots = [k for k in range(n) if model.parent[k] < 0]
+        self.closing_dampers = any(np.any(model.closure_params[c, C_TRANSLATION])
+                                   or np.any(model.closure_params[c, C_ROTATION])
+                                   for c in np.nonzero(model.closure_kind == ELASTIC)[0])
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
         self.loaded_beams = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
                              and (model.forces[k] is not None or model.torques[k] is not None)]
@@ -155,6 +163,12 @@ class EnergyBalance:
             c_t, c_r = h[C_TRANSLATION].reshape(3, 3), h[C_ROTATION].reshape(3, 3)
             p -= np.einsum("ti,ij,tj->t", rel_b, c_t, dd_b) + np.einsum("ti,ij,tj->t", w_b, c_r,
                                                                          w_b)
+        if self.closing_dampers:    # (loops run in DT-TMM on a fixed ground)
+            zero = np.zeros((len(t), 3))
+            r_g = np.broadcast_to(model.ground_position, (len(t), 3))
+            p += elastic_closure_terms(model, res.rotation, w, res.position_input,
+                                       res.velocity_input, res.modal_coordinates,
+                                       res.modal_velocities, (r_g, zero, g_rot, zero))[1]
         if self.modal_damping.size and np.any(self.modal_damping):
             p -= (res.modal_velocities ** 2) @ self.modal_damping
         if model.ground_motion is not None:

@@ -501,7 +501,7 @@ def _output_section(*args):
 
 
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
-                   eta=None, eta_dot=None, joint_coordinates=None):
+                   eta=None, eta_dot=None, joint_coordinates=None, ground_position=None):
     """Kinetic and potential energy of one state, or of T states at once, from positions and
     velocities alone.
 
@@ -516,7 +516,9 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     energy (docs/beam.md).  joint_coordinates: the coordinates q of the joints with coordinates,
     flat in hinge order (as Result.joint_coordinates); given, the potential counts
     1/2 k (q - rest)^2 of every SpringDamper drive (docs/joints.md, "Drives"); None (default):
-    no drive springs are counted.
+    no drive springs are counted.  The potential counts the closing elastic hinges' springs
+    (closures.elastic_closure_terms); ground_position (3,) or (T, 3): the ground point at this
+    time (default: the model's), where a closing joint meets the ground.
     """
     rotation = np.asarray(rotation, dtype=float)
     single = rotation.ndim == 3
@@ -568,6 +570,13 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                 psi = _log_so3(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
+    if np.any(model.closure_kind == ELASTIC):
+        from .closures import elastic_closure_terms
+        r_g = np.broadcast_to(np.asarray(model.ground_position if ground_position is None
+                                         else ground_position, dtype=float), (n_t, 3))
+        zero = np.zeros((n_t, 3))
+        potential += elastic_closure_terms(model, rotation, omega, r_in, v_in, eta, eta_dot,
+                                           (r_g, zero, ground_rot, zero))[0]
     if joint_coordinates is not None:
         potential += _drive_spring_energy(model, joint_coordinates, n_t)
     if single:

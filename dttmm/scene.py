@@ -470,12 +470,18 @@ def scene_of(model, run=None, name=None):
 
 def _close_table(model, c):
     """A [[close]] table of closing joint c (docs/loops.md): its kind, sides, points and axes
-    (its rest rotation is read again from the frames at t = 0)."""
+    (its rest rotation is read again from the frames at t = 0; an elastic hinge's is written)."""
     kind = int(model.closure_kind[c])
     h = model.closure_params[c]
     table = {"type": {BALL: "ball", FIXED: "fixed", REVOLUTE: "revolute",
-                      UNIVERSAL: "universal", PRISMATIC: "prismatic"}[kind],
+                      UNIVERSAL: "universal", PRISMATIC: "prismatic", ELASTIC: "elastic"}[kind],
              "name": model.closure_names[c]}
+    if kind == ELASTIC:         # its springs, and its rest rotation as built
+        table.update(translational_stiffness=h[K_TRANSLATION].reshape(3, 3).tolist(),
+                     rotational_stiffness=h[K_ROTATION].reshape(3, 3).tolist(),
+                     translational_damping=h[C_TRANSLATION].reshape(3, 3).tolist(),
+                     rotational_damping=h[C_ROTATION].reshape(3, 3).tolist(),
+                     rotation=h[REST_ROTATION].reshape(3, 3).tolist())
     for s, side in enumerate("ab"):
         k = int(model.closure_body[c, s])
         table[side] = "ground" if k < 0 else model.body_names[k]

@@ -1781,13 +1781,15 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
             derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
                                    eta, eta_d, values.get("v_st"), values.get("v_c")))
         if name in ("kinetic", "potential") and "kinetic" not in derived:
-            grounds = (model.ground_state(ti)[3] for ti in
-                       (t if model.ground_motion is not None else t[:1]))
-            ground_rot = np.broadcast_to(np.array(list(grounds), dtype=float), (len(t), 3, 3))
+            grounds = [model.ground_state(ti) for ti in
+                       (t if model.ground_motion is not None else t[:1])]
+            ground_rot, ground_r = (np.broadcast_to(np.array([g[i] for g in grounds], dtype=float),
+                                                    (len(t),) + np.shape(grounds[0][i]))
+                                    for i in (3, 0))
             derived["kinetic"], derived["potential"] = chain_energies(
                 model, rot, omega, derived["position_input"], derived["velocity_input"],
                 values["defl"], ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
-                joint_coordinates=joints.get("joint_coordinates"))
+                joint_coordinates=joints.get("joint_coordinates"), ground_position=ground_r)
         return derived
 
     loads = values["z"]                     # every body's input [m; q]

@@ -392,9 +392,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         coordinates (a coordinate that a JointMotion prescribes is held at its value at t = 0),
         rigid bodies and beams, in an open chain or tree, a chain whose tip is pinned to
         the ground (``tip="ball"``: the tip stays on its pin, where it starts) or a tree with
-        closing joints (``System.close``, on a fixed ground, without elastic hinges; the
-        model assembled, ``dttmm.assemble``): closed loops (docs/statics.md, "Closed
-        loops").  Its initial rotations, joint
+        closing joints (``System.close``, on a fixed ground, elastic hinges in the tree or
+        closing a loop; the model assembled, ``dttmm.assemble``): closed loops
+        (docs/statics.md, "Closed loops").  Its initial rotations, joint
         coordinates and modal coordinates are the first guess; its velocities are ignored
         (the equilibrium is at rest).
     guess : StaticEquilibrium or Model, optional

@@ -4,10 +4,11 @@ The tree's full-state sweep (sweep.py::riccati_tree_full) is linear in the loads
 stations.  Each scalar constraint r of a closing joint acts through one multiplier lam_r, its
 loads on the sides' output stations the constraint's Jacobian transposed (a gap row: a force
 lam_r e on side b at its point, -lam_r e on side a at a's point; a dot row: a couple
-lam_r (y x x) on b, its opposite on a; the angle row of a driven coordinate: a couple lam_r n
-on b, its opposite on a, n the axis).  One sweep carries the step and a P column per row
-(sweep_columns: the Riccati matrices once; a row's column only over the bodies its loads
-reach), so that the stations are affine functions of the multipliers; the rows' values
+lam_r (y x x) on b, its opposite on a; the angle row of a driven coordinate or of an elastic
+hinge's rotation: a couple lam_r n on b, its opposite on a, n the axis).  One sweep carries the
+step and a P column per row (sweep_columns: the Riccati matrices once; a row's column only over
+the bodies its loads reach), so that the stations are affine functions of the multipliers; the
+rows' values
 
     gap (e world):   e . (a_b - a_a)
     gap (e in a):    e . (a_b - a_a) + (e x d) . alpha_a + (w_a x (w_a x e)) . d + 2 (w_a x e) . d'
@@ -28,7 +29,7 @@ A row's response is zero outside the subtrees of its loaded bodies' topmost movi
 costs the sweep, the Delassus matrix and the projection only its own bodies.
 
 Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies and beams
-(closed at their output ends), a fixed ground; every joint kind in the tree.
+(closed at their output ends), a fixed ground; every joint kind in the tree and closing it.
 """
 from collections import namedtuple
 
@@ -36,7 +37,7 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT, no_alloc_kernel
-from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD
+from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ..elements import BEAM
 from ..elements.drives import FORCE, SPRING_DAMPER
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
@@ -44,7 +45,7 @@ from ..elements.hinges import AXIS_1, ELASTIC, FIXED
 from ..elements.joints import PRISMATIC
 from .beam import end_section_motion
 from .joint import FREE, PRESCRIBED, joint_frame, n_coordinates
-from .mat3 import t_cross, t_lin3, t_mv
+from .mat3 import t_cross, t_lin3, t_mm, t_mmt, t_mv
 from .so3 import expm_so3
 from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
 
@@ -53,9 +54,11 @@ from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
 # loop_tables): rows (R) and closing joints (m) in the kernel model's numbering
 Loops = namedtuple("Loops", [
     "kind", "owner", "v1", "v2",     # (R,), (R,), (R, 3), (R, 3): GAP_WORLD / GAP_A / DOT /
-                                     # ANGLE_A / ANGLE_B, its closing joint, e (or x, in a's
-                                     # frame) and y (b's frame)
-    "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions);
+                                     # ANGLE_A / ANGLE_B / ROTATION_A, its closing joint, e
+                                     # (or x, in a's frame) and y (b's frame); ROTATION_A:
+                                     # R0's first two columns
+    "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions,
+                                     # spring_directions);
                                      # (R, 3) the step's targets (value, rate, acceleration):
                                      # a driven coordinate's motion at the step's end, a
                                      # spring's rest, a JointForce's value (in [2]), else 0;
@@ -251,6 +254,28 @@ def _side(params, loops, rot, w, c, s):
             f, w_k)
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def _rotation_vector(m):
+    """The rotation vector psi of the rotation m (9-tuple; exp(psi^) = m), its angle
+    atan2(|vee(m - m^T)| / 2, (tr m - 1) / 2) in [0, pi) (so3.log_so3, accurate at small
+    angles as at large)."""
+    w0, w1, w2 = m[7] - m[5], m[2] - m[6], m[3] - m[1]
+    s = 0.5 * np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    th = np.arctan2(s, 0.5 * (m[0] + m[4] + m[8] - 1.0))
+    f = 0.5 + th * th / 12.0 if th < 1e-6 else 0.5 * th / s
+    return (f * w0, f * w1, f * w2)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _relative_rotation(f_a, f_b, c1, c2):
+    """log(F_a^T F_b R0^T) (in a's frame), R0 = [c1, c2, c1 x c2] from its first two columns
+    (an elastic hinge's rest rotation, closures.spring_directions)."""
+    c3 = t_cross(c1, c2)
+    r0 = (c1[0], c2[0], c3[0], c1[1], c2[1], c3[1], c1[2], c2[2], c3[2])
+    f_at = (f_a[0], f_a[3], f_a[6], f_a[1], f_a[4], f_a[7], f_a[2], f_a[5], f_a[8])
+    return _rotation_vector(t_mm(f_at, t_mmt(f_b, r0)))
+
+
 @no_alloc_kernel
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
@@ -261,7 +286,12 @@ def row_positions(params, loops, rot, w, rows):
         r = rows[q]
         p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
         p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
-        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
+        if kind[r] == ROTATION_A:
+            # an elastic hinge's g = n . log(F_a^T F_b R0^T), g' = (F_a n) . (w_b - w_a)
+            psi = _relative_rotation(f_a, f_b, _v3(v1, r), _v3(v2, r))
+            g[r] = _dot(_v3(v3, r), psi) - target[r, 0]
+            gd[r] = _dot(t_mv(f_a, _v3(v3, r)), _sub(w_b, w_a)) - target[r, 1]
+        elif kind[r] == ANGLE_A or kind[r] == ANGLE_B:
             # q = atan2(n . (x x y), x . y), q' = n . (w_b - w_a)
             x = t_mv(f_a, _v3(v1, r))
             y = t_mv(f_b, _v3(v2, r))
@@ -294,14 +324,15 @@ def _row_coefficients(params, loops, rot, w):
         gap:  a_a: -e, alpha_a: -(arm_a x e) (+ e x d, e in a's frame), a_b: e, alpha_b: arm_b x e
         dot:  alpha_a: -(y x x), alpha_b: y x x
         angle: alpha_a: -n, alpha_b: n, kappa = (w_s x n) . (w_b - w_a), s the side holding n
+               (an elastic hinge's rotation row: s = a)
     with arm the point from its body's output point and d = p_b - p_a."""
     kind, v1, v2, v3 = loops.kind, loops.v1, loops.v2, loops.v3
     zero = (0.0, 0.0, 0.0)
     for r in range(kind.shape[0]):
         p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
         p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
-        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
-            a_side = kind[r] == ANGLE_A
+        if kind[r] == ANGLE_A or kind[r] == ANGLE_B or kind[r] == ROTATION_A:
+            a_side = kind[r] != ANGLE_B
             n = t_mv(f_a if a_side else f_b, _v3(v3, r))
             rows = (zero, _neg(n), zero, n)
             kappa = _dot(t_cross(w_a if a_side else w_b, n), _sub(w_b, w_a))
@@ -486,8 +517,8 @@ def closure_wrenches(params, loops, rot):
             wrench[c, 6 + loops.coordinate[r]] = lam[r]
         f_a = _frame(rot, loops.ground_rot, loops.body[c, 0])
         f_b = _frame(rot, loops.ground_rot, loops.body[c, 1])
-        if kind[r] == ANGLE_A or kind[r] == ANGLE_B:
-            n = t_mv(f_a if kind[r] == ANGLE_A else f_b, _v3(loops.v3, r))
+        if kind[r] == ANGLE_A or kind[r] == ANGLE_B or kind[r] == ROTATION_A:
+            n = t_mv(f_b if kind[r] == ANGLE_B else f_a, _v3(loops.v3, r))
             for i in range(3):
                 wrench[c, 3 + i] += lam[r] * n[i]
         elif kind[r] == DOT:

@@ -80,7 +80,10 @@ a slide's gap along a's axis, or an angle atan2(n . (x x y), x . y) with the rat
 w_a) and the acceleration n . (alpha_b - alpha_a) + (w_s x n) . (w_b - w_a), its multiplier a
 couple lam n on b), held as (g - s)'' + 2 W (g - s)' + W^2 (g - s) = 0; a SpringDamper's row
 is its force instead, lam = -k (q - rest) - c q' from the state, and a JointForce's lam = f(t,
-q, q') (q, q' the row's values, which one evaluation of the state finds first).  The system is
+q, q') (q, q' the row's values, which one evaluation of the state finds first).  A closing
+elastic hinge is six such spring rows (closures.spring_directions): gaps n_i . (F_a^T (p_b -
+p_a)) and rotations n_i . log(F_a^T F_b R0^T), the rates of the latter n_i . F_a^T (w_b - w_a),
+along the common principal axes n_i of its springs and dampers.  The system is
 solved by eliminating the tree first and then the multipliers from the Delassus matrix by a
 truncated SVD (_solve_least_closure_force): the least multipliers, where constraints are
 redundant (a planar loop of spatial revolute joints; a chain straight between two fixed points,
@@ -236,7 +239,8 @@ from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL, coordinate_count
 from ..elements.kinds import JOINT_KIND
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..kernels import CONTRACT
-from ..closures import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, assemble, check_drives_move,
+from ..closures import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A, assemble,
+                        check_drives_move,
                         closure_forces, constraint_rows, has_closure_drives, loop_residuals)
 from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
@@ -254,7 +258,8 @@ _CT = C_TRANSLATION.start
 _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
-_DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B = DOT, GAP_A, GAP_WORLD, ANGLE_A, ANGLE_B
+_DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B, _ROTATION_A = (DOT, GAP_A, GAP_WORLD, ANGLE_A,
+                                                            ANGLE_B, ROTATION_A)
 _SPRING_DAMPER = SPRING_DAMPER
 _FORCE = FORCE
 _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
@@ -1395,15 +1400,22 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             kb, points[c, 1], end_b, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
             alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g)
         zero = np.zeros(3)
-        if kind[r] == _ANGLE_A or kind[r] == _ANGLE_B:   # a driven angle, n . (w_b - w_a)
-            x = f_a @ v1[r]
-            y = f_b @ v2[r]
-            n = (f_a if kind[r] == _ANGLE_A else f_b) @ v3[r]
+        if kind[r] == _ANGLE_A or kind[r] == _ANGLE_B or kind[r] == _ROTATION_A:
+            # a driven angle, or an elastic hinge's rotation n . log(F_a^T F_b R0^T) about n
+            # fixed in a's frame; its rate n . (w_b - w_a)
+            n = (f_b if kind[r] == _ANGLE_B else f_a) @ v3[r]
             dw = w_b - w_a
-            g = np.arctan2(n @ _cross(x, y), x @ y) - target[r, 0]
-            g = (g + np.pi) % (2.0 * np.pi) - np.pi
+            if kind[r] == _ROTATION_A:
+                r0 = np.empty((3, 3))
+                r0[:, 0], r0[:, 1], r0[:, 2] = v1[r], v2[r], _cross(v1[r], v2[r])
+                g = v3[r] @ _log_rot(f_a.T @ f_b @ r0.T) - target[r, 0]
+            else:
+                x = f_a @ v1[r]
+                y = f_b @ v2[r]
+                g = np.arctan2(n @ _cross(x, y), x @ y) - target[r, 0]
+                g = (g + np.pi) % (2.0 * np.pi) - np.pi
             gd = n @ dw
-            kappa = _cross(w_a if kind[r] == _ANGLE_A else w_b, n) @ dw + n @ (al_b - al_a)
+            kappa = _cross(w_b if kind[r] == _ANGLE_B else w_a, n) @ dw + n @ (al_b - al_a)
             _closure_columns(s, row, kb, end_b, zero, n, n, 1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params)
             _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
@@ -1767,7 +1779,8 @@ class _Problem:
                                   f"coordinate {coordinate[r] + 1}")
                                  for r in np.nonzero(rows.law[:, 0] == MOTION)[0]]
         self._closure_forces = closure_forces(model, rows)
-        for r in np.nonzero(rows.law[:, 0] == SPRING_DAMPER)[0]:   # its row's value: q - rest
+        for r in np.nonzero((rows.law[:, 0] == SPRING_DAMPER) & (coordinate >= 0))[0]:
+            # a drive's spring: its row's value q - rest (an elastic hinge's rest is 0)
             self.loops[10][r, 0] = model.closure_drives[owner[r]][coordinate[r]]["rest"]
         c += self.loops[1].shape[0]
         self.n_unknowns = c
@@ -2077,10 +2090,12 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         y_i = prob.joint_inputs(t, ys[i])
         q_rec[i], qd_rec[i] = y_i[c0:c0 + nq], y_i[c0 + nq:c0 + 2 * nq]
         drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value)
+        ground = model.ground_state(t)
         kinetic[i], potential[i] = chain_energies(model, rk, wk, rik, vik, dk,
-                                                    ground_rotation=model.ground_state(t)[3],
+                                                    ground_rotation=ground[3],
                                                     eta=eta[i], eta_dot=eta_dot[i],
-                                                    joint_coordinates=q_rec[i] if nq else None)
+                                                    joint_coordinates=q_rec[i] if nq else None,
+                                                    ground_position=ground[0])
     r_c, r_o = point_positions(model, rot, r_in)
     for k in range(n):                          # a beam's mass centre and output point move
         if prob.body_kind[k] == BEAM:           # with its deflection
