@@ -8,7 +8,10 @@ and the same model with them removed ("opened": the tree alone, which falls free
 in turn in one process, A B A B ..., each a run of fixed steps at dt = 1e-3 after a warm-up;
 the cost of a step is the difference of a long and a short run over the steps between (no
 setup), the best of 3 pairs.  The N-four-bar's cost exponent on its ground tree is fitted over
-N.  --quick: fewer sizes and steps (the CI's smoke run).  Not a test: nothing is asserted.
+N.  Then the one loop a chain closes in its sweeps' own tip condition (build_chain(...,
+tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure run as a row of the loops'
+table, on a chain of N rods: what keeping that special case buys.  --quick: fewer sizes and
+steps (the CI's smoke run).  Not a test: nothing is asserted.
 """
 import argparse
 import json
@@ -50,6 +53,31 @@ def measure(model, steps, pairs=3):
     return min(a), min(b)
 
 
+def pinned_chain(n):
+    """N unit rods on ball joints, the first along x, each turned 0.3 rad about z from the
+    last, the tip ball-jointed to the ground where it starts, under gravity along -y."""
+    rod = dict(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12], inertia_about="mass_center",
+               to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0])
+    elements = []
+    for k in range(n):
+        c, s = np.cos(-0.3 * k), np.sin(-0.3 * k)
+        elements += [dttmm.BallJoint(), dttmm.RigidBody(**rod, rotation=[[c, -s, 0], [s, c, 0],
+                                                                          [0, 0, 1]])]
+    return dttmm.build_chain(elements, tip="ball", gravity=[0, -9.81, -1.0])
+
+
+def tip_cost(model, steps, pairs):
+    """(tip condition, loop row) seconds per step, interleaved pairs, the best of each."""
+    a, b = [], []
+    for _ in range(pairs):
+        for on, out in ((True, a), (False, b)):
+            dttmm.closures.PINNED_TIP_SWEEP = on
+            dttmm.simulate(model, 2e-3, 1e-3)          # compile or load, warm up
+            out.append(step_cost(model, steps))
+    dttmm.closures.PINNED_TIP_SWEEP = True
+    return min(a), min(b)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer sizes and steps")
@@ -82,6 +110,13 @@ def main(argv=None):
                               np.log(us[n >= 10] if np.sum(n >= 10) >= 2 else us), 1)[0]
         print(f"N-four-bar on its ground tree: cost ~ N^{exponent:.2f}")
         rows.append(dict(model="four-bar exponent (ground tree)", exponent=exponent))
+    print(f"\n{'pinned-tip chain':<28} {'tip us/step':>14} {'row us/step':>15} {'ratio':>7}")
+    for n in (3, 10) if args.quick else (3, 10, 40):
+        tip, row = tip_cost(pinned_chain(n), 50 if args.quick else 400, 2 if args.quick else 3)
+        rows.append(dict(model=f"{n}-rod pinned chain", tip_us=tip * 1e6, row_us=row * 1e6,
+                         ratio=row / tip))
+        print(f"{f'{n} rods':<28} {tip * 1e6:>14.1f} {row * 1e6:>15.1f} {row / tip:>7.1f}",
+              flush=True)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -327,11 +327,19 @@ def spring_directions(model, c):
     return rows
 
 
+# True: a chain's tip ball-jointed to a fixed ground closes in the sweeps' own tip condition
+# (is_pinned_tip); False: as a row of the loops' table, like any closing joint (the same
+# physics; benchmarks/loops.py measures what the tip condition saves, tests compare the two)
+PINNED_TIP_SWEEP = True
+
+
 def is_pinned_tip(model):
     """The closure table is one ball joint from a chain's last output point to a point of a
     fixed ground: the loop the DT-TMM sweeps close at the tip (docs/assembly.md, "A tip joined
-    to the ground"), holding it where it starts (its gap is checked before a run)."""
-    if len(model.closure_kind) != 1 or model.closure_kind[0] != BALL or not model.is_chain:
+    to the ground"), holding it where it starts (its gap is checked before a run); chosen from
+    the table, where PINNED_TIP_SWEEP is on."""
+    if (not PINNED_TIP_SWEEP or len(model.closure_kind) != 1 or model.closure_kind[0] != BALL
+            or not model.is_chain):
         return False
     (a, b), n = model.closure_body[0], model.n_bodies
     if model.ground_motion is not None or b != GROUND or a != n - 1:
@@ -455,12 +463,12 @@ def describe_closures(model):
 
 
 
-def check_runs_in_sweeps(model, who):
+def check_runs_in_sweeps(model, who, moving_ground=False):
     """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet,
-    naming them: loops of rigid bodies, beams (at their output ends) and elastic hinges on a
-    fixed ground (kernels/closure.py), and a chain's tip joined to a fixed ground by a ball
-    joint anywhere.  The pinned tip must start on its pin (the sweeps hold it where it
-    starts)."""
+    naming them: loops of rigid bodies, beams (at their output ends) and elastic hinges
+    (kernels/closure.py), on a fixed ground or, in a run (moving_ground=True), a moving one,
+    and a chain's tip joined to a fixed ground by a ball joint anywhere.  The pinned tip must
+    start on its pin (the sweeps hold it where it starts)."""
     if model.n_closures == 0:
         return
     if model.tip_pinned:
@@ -481,10 +489,10 @@ def check_runs_in_sweeps(model, who):
                          f"DT-TMM closes loops at a beam's output end (or at a point of the "
                          f"body the beam hangs from); the Newton-Euler reference runs it "
                          f"(dttmm.simulate_reference)")
-    if model.ground_motion is not None:
-        raise ValueError(f"{who}: the model's loops ({lines}) run in DT-TMM on a fixed ground "
-                         f"so far, and the ground moves; the Newton-Euler reference runs them "
-                         f"(dttmm.simulate_reference)")
+    if model.ground_motion is not None and not moving_ground:
+        raise ValueError(f"{who}: the model's loops ({lines}) are solved here on a fixed ground "
+                         f"so far, and the ground moves; simulate and the Newton-Euler "
+                         f"reference (dttmm.simulate_reference) run them")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -12,6 +12,9 @@ kinetic energy so far, W the work done on the system since t = 0:
                                                       elastic_closure_terms)
       - sum 2 zeta omega_k m_k eta'_k^2               beams' modal damping
       + F_0 . v_g + (M_0 + d_0 x F_0) . w_g           a moving ground, through each root's load
+      - F . v_b - M . w_g  (b the ground)             and each closing joint's (F, M on side b,
+      + F . v_a + (M + (p_b - p_a) x F) . w_g         the couple about p_b; v_a, v_b the ground
+                           (a the ground)             point's velocity)
 
 integrated over every step by the trapezoidal rule.  For a second-order step the balance
 closes to O(h^2); a run that breaks it (a step too large, a runaway the estimate missed) stops
@@ -27,7 +30,7 @@ from .elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, 
                             TORSION_MODES, foreshortening_integrals, modal_size, mode_shapes,
                             stretch_along)
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
-from .closures import elastic_closure_terms
+from .closures import elastic_closure_terms, side_motions
 from .elements.rigid_body import TO_MASS_CENTER
 from .model import output_section
 from .result import _drive_spring_energy, beam_output_offset
@@ -69,6 +72,8 @@ class EnergyBalance:
                                  f"{model.hinge_names[k]!r} follows a beam; its damper's work "
                                  f"is not counted yet")
         self.roots = [k for k in range(n) if model.parent[k] < 0]
+        self.grounded_closures = [c for c in range(model.n_closures)
+                                  if np.any(model.closure_body[c] < 0)]
         self.closing_dampers = any(np.any(model.closure_params[c, C_TRANSLATION])
                                    or np.any(model.closure_params[c, C_ROTATION])
                                    for c in np.nonzero(model.closure_kind == ELASTIC)[0])
@@ -163,20 +168,47 @@ class EnergyBalance:
             c_t, c_r = h[C_TRANSLATION].reshape(3, 3), h[C_ROTATION].reshape(3, 3)
             p -= np.einsum("ti,ij,tj->t", rel_b, c_t, dd_b) + np.einsum("ti,ij,tj->t", w_b, c_r,
                                                                          w_b)
-        if self.closing_dampers:    # (loops run in DT-TMM on a fixed ground)
-            zero = np.zeros((len(t), 3))
-            r_g = np.broadcast_to(model.ground_position, (len(t), 3))
+        if self.closing_dampers:
             p += elastic_closure_terms(model, res.rotation, w, res.position_input,
                                        res.velocity_input, res.modal_coordinates,
-                                       res.modal_velocities, (r_g, zero, g_rot, zero))[1]
+                                       res.modal_velocities, self._ground(t))[1]
         if self.modal_damping.size and np.any(self.modal_damping):
             p -= (res.modal_velocities ** 2) @ self.modal_damping
+        if model.ground_motion is not None and self.grounded_closures:
+            p += self._closures_ground_power(res, values, t)
         if model.ground_motion is not None:
             for k in self.roots:
                 f, m = res.force[:, k], res.moment[:, k]
                 if model.hinge_kind[k] == ELASTIC:          # the moment about the ground point
                     m = m + np.cross(values["defl"][:, k], f)
                 p += np.einsum("ti,ti->t", f, v_g) + np.einsum("ti,ti->t", m, w_g)
+        return p
+
+    def _ground(self, t):
+        """(r, v, rot, w) of the ground point and frame at the times t, (T, ...) each."""
+        grounds = [self.model.ground_state(ti) for ti in (t if self.model.ground_motion
+                                                           is not None else t[:1])]
+        return tuple(np.broadcast_to(np.array([g[i] for g in grounds]),
+                                     (len(t),) + np.shape(grounds[0][i])) for i in (0, 1, 3, 4))
+
+    def _closures_ground_power(self, res, values, t):
+        """(T,) the power a moving ground puts in through the closing joints that meet it:
+        minus the power of the joint's load on the ground (its reaction's, for side a)."""
+        model = self.model
+        ground = self._ground(t)
+        w_g = ground[3]
+        p = np.zeros(len(t))
+        for c in self.grounded_closures:
+            f, m = values["closure_wrench"][:, c, 0:3], values["closure_wrench"][:, c, 3:6]
+            (p_a, v_a, _, _), (p_b, v_b, _, _) = (side_motions(
+                model, c, s, res.rotation, res.angular_velocity, res.position_input,
+                res.velocity_input, res.modal_coordinates, res.modal_velocities, ground)
+                for s in range(2))
+            if model.closure_body[c, 1] < 0:
+                p -= np.einsum("ti,ti->t", f, v_b) + np.einsum("ti,ti->t", m, w_g)
+            else:
+                p += np.einsum("ti,ti->t", f, v_a) + np.einsum(
+                    "ti,ti->t", m + np.cross(p_b - p_a, f), w_g)
         return p
 
     def start(self, values, force, torque, line_load):

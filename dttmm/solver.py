@@ -27,7 +27,7 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree, weld_chain
 from .kernels import step as kstep
-from .kernels.closure import Loops
+from .kernels.closure import Loops, set_ground
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Monitor, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
@@ -320,7 +320,6 @@ def loop_tables(model):
     r = len(kind)
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
-    point[body < 0] = np.einsum("ij,cj->ci", model.ground_rotation, point[body < 0])
     act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body)
     up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
@@ -329,7 +328,7 @@ def loop_tables(model):
                  coordinate=coordinate, law=law, acc=np.zeros(r), step_coef=np.zeros(2),
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
-                 coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
+                 ground_motion=np.zeros((4, 3)), coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
                  z_save=np.zeros((r + 1, 2 * n + 1, 12)),
                  nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
                  delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
@@ -487,7 +486,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     with the closing joints (loops: loop_tables) held at acceleration level."""
     loops = loop_tables(model) if loops is None else loops
     n = model.n_bodies
-    g_acc, g_rot, g_w, g_wd = _ground(model, [0.0])
+    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [0.0])
     force, torque, line_load = _loads(model, [0.0])
     joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
@@ -496,11 +495,12 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 status = _fused_start(*fused, Run(
                     params, settings._replace(newton_max=0, start=True), state, sweep,
                     Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                           force=force, torque=torque, line_load=line_load,
-                           joint_input=joint_input,
+                           g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
+                           line_load=line_load, joint_input=joint_input,
                            closure_target=np.zeros((1, len(loops.kind), 3))),
                     _record(0, n, len(state.eta)), monitor))
             else:
+                set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
                 if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
                     loops.target[:, :] = closure_targets(model, [0.0], loops)[0]  # spring's rest
                     loops.step_coef[:] = 0.0        # the springs' forces explicit
@@ -654,27 +654,31 @@ class UserFunctionError(ValueError):
 
 
 def _ground(model, times):
-    """Ground acceleration, rotation, angular velocity and acceleration at the given times."""
+    """Ground acceleration, rotation, angular velocity and acceleration, and the ground
+    point's position and velocity, at the given times."""
     m = len(times)
     acc, w, wd = np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3))
+    pos, vel = np.zeros((m, 3)), np.zeros((m, 3))
     rot = np.empty((m, 3, 3))
     if model.ground_motion is None:             # at rest: one frame for every time
         rot[:] = model.ground_rotation
-        return acc, rot, w, wd
+        pos[:] = model.ground_position
+        return acc, rot, w, wd, pos, vel
     i = 0
     try:
         for i, t in enumerate(times):
-            _, _, acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
+            pos[i], vel[i], acc[i], rot[i], w[i], wd[i] = model.ground_state(t)
     except Exception as err:
         raise UserFunctionError(times[i], f"the ground's motion failed at t = {times[i]:.6g} s "
                                 f"({type(err).__name__}: {err})") from None
     bad = ~(np.isfinite(acc).all(axis=1) & np.isfinite(rot).all(axis=(1, 2))
-            & np.isfinite(w).all(axis=1) & np.isfinite(wd).all(axis=1))
+            & np.isfinite(w).all(axis=1) & np.isfinite(wd).all(axis=1)
+            & np.isfinite(pos).all(axis=1) & np.isfinite(vel).all(axis=1))
     if bad.any():
         i = int(np.argmax(bad))
         raise UserFunctionError(times[i], f"the ground's motion is not finite at t = "
                                 f"{times[i]:.6g} s")
-    return acc, rot, w, wd
+    return acc, rot, w, wd, pos, vel
 
 
 def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="riccati",
@@ -799,7 +803,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     if has_loops(model):
         if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
-            check_runs_in_sweeps(model, "simulate")
+            check_runs_in_sweeps(model, "simulate", moving_ground=True)
             model = assemble(model)     # the loops closed at t = 0 first (docs/loops.md; it
         else:                           # refuses a drive the loops lock)
             check_drives_move(model, "simulate")
@@ -993,7 +997,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     size = 1 if force_drives else CHUNK
     static_ground = model.ground_motion is None
     if static_ground:
-        g_acc, g_rot, g_w, g_wd = _ground(model, np.zeros(size + 1))
+        g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, np.zeros(size + 1))
     no_loads = not model.has_applied_loads
     if no_loads:
         force, torque, line_load = (np.zeros((size, n, 3)) for _ in range(3))
@@ -1031,10 +1035,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         ends times[1:] (the energy-momentum step's loads: at mid_times)."""
         m = len(times) - 1
         if static_ground:
-            ga, gr, gw, gwd = g_acc, g_rot, g_w, g_wd
+            ga, gr, gw, gwd, gp, gv = g_acc, g_rot, g_w, g_wd, g_pos, g_vel
         else:
-            ga, gr, gw, gwd = _ground(model, times)
-            ga, gw, gwd = ga[1:], gw[1:], gwd[1:]
+            ga, gr, gw, gwd, gp, gv = _ground(model, times)
+            ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
         f, tq, ll = (force, torque, line_load) if no_loads else _loads(
             model, mid_times if scheme == "energy_momentum" else times[1:])
         ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
@@ -1043,7 +1047,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its projection)
             ct[0, r, 2] = _drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # and q''
                                             qd + h * qdd), who, times[1])
-        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], force=f[:m],
+        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], g_pos=gp[:m],
+                      g_vel=gv[:m], force=f[:m],
                       torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
                       closure_target=ct[:m])
 
@@ -1362,8 +1367,8 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
     and paper's schemes need a fixed ground; trees and joints with coordinates run (so far) with
     the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); closed loops of
-    rigid bodies and beams on a fixed ground (closures.check_runs_in_sweeps)."""
-    check_runs_in_sweeps(model, "simulate")
+    rigid bodies and beams (closures.check_runs_in_sweeps)."""
+    check_runs_in_sweeps(model, "simulate", moving_ground=True)
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):
         raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
                          f"method='riccati' so far, got scheme={scheme!r}, method={method!r}")

@@ -25,11 +25,13 @@ responses to unit multipliers (project_onto_loops), so that every step ends with
 closed.
 
 A row's response is zero outside the subtrees of its loaded bodies' topmost moving ancestors
-(its active bodies, solver._column_bodies): below a fixed ground, a loop that closes near it
-costs the sweep, the Delassus matrix and the projection only its own bodies.
+(its active bodies, solver._column_bodies): below the ground (fixed, or moving as prescribed),
+a loop that closes near it costs the sweep, the Delassus matrix and the projection only its
+own bodies.
 
 Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies and beams
-(closed at their output ends), a fixed ground; every joint kind in the tree and closing it.
+(closed at their output ends), a fixed or moving ground (set_ground); every joint kind in the
+tree and closing it.
 """
 from collections import namedtuple
 
@@ -69,9 +71,12 @@ Loops = namedtuple("Loops", [
                                      # in the last solve; (2,) [1 / c1, c3 / c1] of the step
                                      # (0: the consistent start, springs explicit)
     "body", "point",                 # (m, 2), (m, 2, 3): the sides' bodies and points (in the
-                                     # body's frame from its input point; the ground's: world,
-                                     # from the ground point)
-    "ground", "ground_rot",          # (3,), (3, 3) the ground point and frame (a fixed ground)
+                                     # body's frame from its input point; the ground's: in the
+                                     # ground frame from the ground point)
+    "ground", "ground_rot",          # (3,), (3, 3) the ground point and frame, and (4, 3) the
+    "ground_motion",                 # point's velocity and acceleration and the frame's angular
+                                     # velocity and acceleration, where the rows are written
+                                     # (set_ground: t_{n+1} in a step, 0 at the start)
     "coef", "kappa",                 # (R, 4, 3), (R,): the rows' Jacobian and velocity terms
                                      # (_row_coefficients)
     "z_save", "nu_save", "tau_save",  # (R + 1, ...) column 0's and each row's response's
@@ -192,6 +197,21 @@ def _beam_offset(beams, k, rot, w, eta, eta_d):
 
 
 @no_alloc_kernel
+def set_ground(loops, r, v, a, rot, w, wd):
+    """The ground point's position r, velocity v and acceleration a and the ground frame's
+    rotation rot, angular velocity w and acceleration wd where the rows are next written (a
+    step's end, or t = 0): what a moving ground (Model.ground_state) brings into the rows."""
+    for i in range(3):
+        loops.ground[i] = r[i]
+        loops.ground_motion[0, i] = v[i]
+        loops.ground_motion[1, i] = a[i]
+        loops.ground_motion[2, i] = w[i]
+        loops.ground_motion[3, i] = wd[i]
+        for j in range(3):
+            loops.ground_rot[i, j] = rot[i, j]
+
+
+@no_alloc_kernel
 def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bodies):
     """The output point and its velocity (loops.r_out, v_out) of the given bodies (in tree
     order; the others' are read as they are) from the rotations, angular velocities, joint
@@ -207,9 +227,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     for q in range(bodies.shape[0]):
         k = bodies[q]
         p = parent[k]
-        if p < 0:
+        if p < 0:               # a root hangs at the ground point (moving with the ground)
             r = (loops.ground[0], loops.ground[1], loops.ground[2])
-            v = (0.0, 0.0, 0.0)
+            v = _v3(loops.ground_motion, 0)
         else:
             r = _v3(r_out, p)
             v = _v3(v_out, p)
@@ -219,7 +239,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
                            hinge_params[k, AXIS_1_START + 2]))
             d = t_lin3(jq[k, 0], u, 0.0, u)
             r = _add(r, d)
-            w_p = (0.0, 0.0, 0.0) if p < 0 else _v3(w, p)
+            w_p = _v3(loops.ground_motion, 2) if p < 0 else _v3(w, p)
             v = _add(v, t_lin3(1.0, t_cross(w_p, d), jqd[k, 0], u))
         elif hinge_kind[k] == ELASTIC:
             r = _add(r, _v3(defl, k))
@@ -238,14 +258,17 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
 def _side(params, loops, rot, w, c, s):
     """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
     joint c's side s, at the output points loops.r_out, v_out and the bodies' rot, w, as
-    tuples."""
+    tuples (the ground's: its point, frame and motion in loops.ground, ground_rot,
+    ground_motion, the arm from the ground point)."""
     k = loops.body[c, s]
     point, ground = loops.point, loops.ground
     local = (point[c, s, 0], point[c, s, 1], point[c, s, 2])
     if k < 0:
-        zero = (0.0, 0.0, 0.0)
-        return (_add((ground[0], ground[1], ground[2]), local), zero, local,
-                _frame(rot, loops.ground_rot, k), zero)
+        f = _frame(rot, loops.ground_rot, k)
+        arm = t_mv(f, local)
+        w_g = _v3(loops.ground_motion, 2)
+        return (_add((ground[0], ground[1], ground[2]), arm),
+                _add(_v3(loops.ground_motion, 0), t_cross(w_g, arm)), arm, f, w_g)
     f = _m9(rot, k)
     w_k = _v3(w, k)
     centre = params.body_params
@@ -357,6 +380,10 @@ def _row_coefficients(params, loops, rot, w):
         for j in range(4):
             for i in range(3):
                 loops.coef[r, j, i] = rows[j][i]
+        for s in range(2):      # the ground's side: its point's and frame's known accelerations
+            if loops.body[loops.owner[r], s] < 0:
+                kappa += (_dot(rows[2 * s], _v3(loops.ground_motion, 1))
+                          + _dot(rows[2 * s + 1], _v3(loops.ground_motion, 3)))
         loops.kappa[r] = kappa
 
 
@@ -677,8 +704,6 @@ def _dependent_frames(params, loops, state, bodies, work):
     end_section_motion).  work: (60,) scratch (nothing is allocated)."""
     scratch = work[0:48]
     rest = work[48:57].reshape((3, 3))
-    zero = work[57:60]
-    zero[:] = 0.0
     body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
         params.beams[1]
     for q in range(bodies.shape[0]):
@@ -686,7 +711,7 @@ def _dependent_frames(params, loops, state, bodies, work):
         hk = params.hinge_kind[k]
         p = params.parent[k]
         if p < 0:
-            rot_p, w_p, wd_p = loops.ground_rot, zero, zero
+            rot_p, w_p, wd_p = loops.ground_rot, loops.ground_motion[2], loops.ground_motion[3]
         else:
             rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
         if n_coordinates(hk) > 0:

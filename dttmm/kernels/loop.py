@@ -83,6 +83,8 @@ Sweep = namedtuple("Sweep", [
 
 Inputs = namedtuple("Inputs", [
     "g_acc", "g_rot", "g_w", "g_wd",   # ground: (m, 3) at t_{s+1}; rotations (m + 1, 3, 3) at t_s
+    "g_pos", "g_vel",                  # (m, 3) the ground point's position and velocity at
+                                       # t_{s+1} (where closing joints meet a moving ground)
     "force", "torque",                 # (m, n, 3) applied at t_{s+1} (EM: the step's means)
     "line_load",                       # (m, n, 3) a beam's distributed load per length, world
     "joint_input",                     # (m, n, 2, 3) per joint coordinate at t_{s+1}: a

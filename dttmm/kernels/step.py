@@ -32,7 +32,7 @@ from ..elements.drives import MOTION
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
-from .closure import project_onto_loops, solve_with_loops, tree_points
+from .closure import project_onto_loops, set_ground, solve_with_loops, tree_points
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -706,6 +706,8 @@ def _iterate(loop, run, s, it):
     loops = loop.loops
     if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
         loops.target[:, :] = inputs.closure_target[s]
+        set_ground(loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s], inputs.g_rot[s + 1],
+                   inputs.g_w[s], inputs.g_wd[s])       # at t_{s+1}
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         loops.step_coef[1] = c3 / c1
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
@@ -883,6 +885,8 @@ def _update(loop, run, s, _):
                 finite = False
     if loop.loops.kind.shape[0] > 0:    # back onto the loops (kernels/closure.py)
         loop.loops.target[:, :] = inputs.closure_target[s]
+        set_ground(loop.loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s],
+                   inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s])
         project_onto_loops(params, loop.loops, state)
     return finite
 
