@@ -37,7 +37,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint
+from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint,
+                       EulerBernoulliBeam)
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
 from .elements.joints import rotation_about
@@ -80,7 +81,8 @@ def _body_index(model, side, who, argument, index_of):
 
 def loop_membership(entries, bodies, parent):
     """Before the build: (in_loop, closed_output, output_moment), (n,) bools: the bodies on
-    the tree path between a closing joint's sides (from each side up to their common ancestor),
+    the tree path between a closing joint's sides (from each side up to their common ancestor;
+    a beam closed at its input end from its parent),
     those whose output point a closing joint takes, and those where that joint carries a moment
     (any but a ball joint).  Sides that name nothing are skipped here (the
     build refuses them, naming the joint)."""
@@ -103,11 +105,17 @@ def loop_membership(entries, bodies, parent):
             k = parent[k]
         return out
 
+    def start(k, at):       # a beam closed at its input end: its length is not in the loop
+        if k >= 0 and isinstance(at, str) and at == "input" and \
+                isinstance(bodies[k], EulerBernoulliBeam):
+            return parent[k]
+        return k
+
     for joint, a, b, at_a, at_b in entries:
         ka, kb = index(a), index(b)
         if ka is None or kb is None:
             continue
-        pa, pb = path(ka), path(kb)
+        pa, pb = path(start(ka, at_a)), path(start(kb, at_b))
         common = set(pa) & set(pb)
         for k in pa + pb:
             if k not in common:
@@ -436,6 +444,8 @@ def describe_closures(model):
                 sides.append("the ground")
             elif model.closure_on_end[c, s]:
                 sides.append(f"'{model.body_names[k]}' (output end)")
+            elif model.body_kind[k] == BEAM:
+                sides.append(f"'{model.body_names[k]}' (input end)")
             else:
                 point = np.round(model.closure_point[c, s], 6).tolist()
                 sides.append(f"'{model.body_names[k]}' at {point}")
@@ -465,7 +475,7 @@ def describe_closures(model):
 
 def check_runs_in_sweeps(model, who, moving_ground=False):
     """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet,
-    naming them: loops of rigid bodies, beams (at their output ends) and elastic hinges
+    naming them: loops of rigid bodies, beams (at either end) and elastic hinges
     (kernels/closure.py), on a fixed ground or, in a run (moving_ground=True), a moving one,
     and a chain's tip joined to a fixed ground by a ball joint anywhere.  The pinned tip must
     start on its pin (the sweeps hold it where it starts)."""
@@ -479,16 +489,6 @@ def check_runs_in_sweeps(model, who, moving_ground=False):
                              f"the tip starts (at_b=None)")
         return
     lines = "; ".join(describe_closures(model))
-    beam_input = [(c, s) for c in range(model.n_closures) for s in range(2)
-                  if model.closure_body[c, s] >= 0 and not model.closure_on_end[c, s]
-                  and model.body_kind[model.closure_body[c, s]] == BEAM]
-    if beam_input:
-        c, s = beam_input[0]
-        raise ValueError(f"{who}: closure '{model.closure_names[c]}' joins beam "
-                         f"'{model.body_names[model.closure_body[c, s]]}' at its input end: "
-                         f"DT-TMM closes loops at a beam's output end (or at a point of the "
-                         f"body the beam hangs from); the Newton-Euler reference runs it "
-                         f"(dttmm.simulate_reference)")
     if model.ground_motion is not None and not moving_ground:
         raise ValueError(f"{who}: the model's loops ({lines}) are solved here on a fixed ground "
                          f"so far, and the ground moves; simulate and the Newton-Euler "

@@ -907,6 +907,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     check_supported(model, scheme, method, full_state)
     user_model = model
     model, keep = kernel_model(user_model)
+    # where each body's applied loads are: a beam's stay on it where an input section stands
+    # in for its recorded state (kernel_model: the beam right after its section)
+    loaded = keep + ((user_model.body_kind == BEAM) & (model.body_kind[keep] != BEAM))
     mode = _mode(model, method, full_state)
     coef = integrator.array()
 
@@ -1016,8 +1019,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                                 beam_tables(user_model))
         start_values = dict(state._asdict(), **history_values)
         f0, tq0, ll0 = _loads(model, [done * dt])
-        balance.start({key: start_values[key][None] for key in keys}, f0[:, keep],
-                      tq0[:, keep], ll0[:, keep])
+        balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],
+                      tq0[:, loaded], ll0[:, loaded])
     rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys,
                   loops.wrench.shape[0] if "closure_wrench" in keys else 0)
     joint_input = np.zeros((size, n, 2, 3))
@@ -1126,8 +1129,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             if balance is not None:
                 broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
                                        done + np.arange(1, m + 1), dt,
-                                       inputs.force[:, keep], inputs.torque[:, keep],
-                                       inputs.line_load[:, keep])
+                                       inputs.force[:, loaded], inputs.torque[:, loaded],
+                                       inputs.line_load[:, loaded])
                 if broken:
                     raise DivergenceError(done + m, (done + m) * dt, broken, partial(done + m))
                 work_steps.append(done + np.arange(1, m + 1))
@@ -1499,17 +1502,26 @@ def kernel_model(model):
     - an attachment offset reaches from a rigid body's output point to one of its named points
       (RigidBody(points=...)); the bodies hanging there hang from its output point.  Every
       sweep then joins children at output points only.
-    The mass, momentum and energy of both are zero; a chain without them is the model itself."""
+    - an input section, where a closing joint takes a beam's input end: it takes the beam's
+      hinge (its joint, coordinates, drives, deflection) with zero length, and the beam is
+      welded to it (R0 = I), so that the closing joint's side is a rigid body at the beam's
+      input point in the beam's frame (the kernel index of the user's beam is the section's:
+      its rotation, angular velocity, input loads and joint are the section's).
+    The mass, momentum and energy of all three are zero; a chain without them is the model
+    itself."""
     n = model.n_bodies
     chain = model.is_chain
     children = children_of(model.parent)
 
     # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
     # side is the end section (kernels/closure.py reads rigid sides only)
-    closed_ends = set()
+    closed_ends, closed_inputs = set(), set()
     if model.n_closures and not model.tip_pinned:
         on_end = np.asarray(model.closure_on_end, dtype=bool)
-        closed_ends = {int(k) for k in np.asarray(model.closure_body)[on_end]}
+        sides = np.asarray(model.closure_body)
+        closed_ends = {int(k) for k in sides[on_end]}
+        closed_inputs = {int(k) for k in sides[~on_end & (sides >= 0)]
+                         if model.body_kind[k] == BEAM}
 
     def needs_section(k):
         hinges = [int(model.hinge_kind[c]) for c in children[k]]
@@ -1523,7 +1535,7 @@ def kernel_model(model):
                 and not (children[k] == [k + 1] and hinges == [FIXED]))
 
     ends = {k for k in range(n) if needs_section(k)}
-    if not ends and not np.any(model.attachment):
+    if not ends and not closed_inputs and not np.any(model.attachment):
         return model, np.arange(n)
     names = ("body_params", "hinge_kind", "hinge_params", "body_kind", "beam_params",
              "initial_rotation", "initial_angular_velocity", "ground_locked", "forces",
@@ -1564,17 +1576,30 @@ def kernel_model(model):
                     model.ground_locked[p], f"{model.body_names[p]} point {key[1]}",
                     f"{model.body_names[p]} point {key[1]} weld")
             inboard = offsets[key]
+        row = {name: getattr(model, name)[k] for name in names}
+        if k in closed_inputs:          # the input section takes the hinge, the beam a weld
+            section = dict(row, body_params=np.zeros_like(model.body_params[0]),
+                           body_kind=RIGID, beam_params=np.zeros_like(model.beam_params[0]),
+                           forces=None, torques=None, line_loads=None,
+                           body_names=f"{model.body_names[k]} input section",
+                           body_mass_center_inertia=np.zeros((3, 3)))
+            for name in names:
+                rows[name].append(section[name])
+            parent.append(inboard)
+            inboard = len(parent) - 1
+            row.update(hinge_kind=FIXED, hinge_params=identity, drives=(),
+                       hinge_names=f"{model.body_names[k]} input weld")
         for name in names:
-            rows[name].append(getattr(model, name)[k])
+            rows[name].append(row[name])
         parent.append(inboard)
-        keep.append(len(parent) - 1)
-        hub[k] = keep[k]
+        keep.append(inboard if k in closed_inputs else len(parent) - 1)
+        hub[k] = len(parent) - 1
         if k in ends:
             eta0 = model.initial_modal_coordinates[mode_off[k]:mode_off[k + 1]]
             eta_d0 = model.initial_modal_velocities[mode_off[k]:mode_off[k + 1]]
             rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
                                         model.initial_angular_velocity[k], eta0, eta_d0)
-            hub[k] = add_massless(keep[k], np.zeros(3), rot, omega, False,
+            hub[k] = add_massless(hub[k], np.zeros(3), rot, omega, False,
                                   f"{model.body_names[k]} end section",
                                   f"{model.body_names[k]} end weld")
     arrays = {name: (tuple(v) if name in ("forces", "torques", "line_loads", "body_names",
