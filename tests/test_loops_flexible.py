@@ -163,3 +163,19 @@ def test_a_loop_closed_at_a_beam_input_end_converges_to_the_reference():
             same = np.abs(twin.position_output - result.position_output).max()
     assert abs(fitted_order(steps, errors) - 2.0) < 0.2, errors
     assert errors[-1] < 1e-6 and same < 1e-10
+
+
+def test_a_loop_closed_at_a_beam_input_end_rests_where_static_equilibrium_puts_it():
+    """The static solve of the four-bar closed at the arm's input end is a rest state of the
+    reference (to 1e-12 m over 0.05 s) and the same as its twin's closed at the crank (the
+    bars standing: an unstable equilibrium, which the solve says)."""
+    rests = []
+    for at_beam in (True, False):
+        with pytest.warns(UserWarning, match="the equilibrium is unstable"):
+            model = dttmm.static_equilibrium(_square_with_an_arm(at_beam)).model
+        ref = simulate_reference(model, 0.05, t_eval=[0.0, 0.05], rtol=1e-11, atol=1e-13)
+        assert np.abs(ref.position_output - ref.position_output[0]).max() < 1e-12
+        rests.append(ref.position_output[0])
+    assert np.abs(rests[0] - rests[1]).max() < 1e-12
+    arm = _square_with_an_arm(True).body_names.index("arm")
+    assert rests[0][arm, 1] < 0.9                               # the arm hangs, bent
