@@ -3,8 +3,8 @@ flexible beams (Rui et al.), with an independent Newton-Euler reference solver."
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
-                       JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
-                       UniversalJoint)
+                       JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
+                       SpringDamper, UniversalJoint)
 from .closures import assemble, loop_residuals
 from .model import Ground, Model, PrescribedMotion, System, build_chain
 from .recording import Checkpoint
@@ -21,7 +21,8 @@ except PackageNotFoundError:        # run from a source tree that is not install
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
-           "JointMotion", "Ground", "PrescribedMotion", "Model", "System", "build_chain",
+           "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model", "System",
+           "build_chain",
            "assemble", "loop_residuals",
            "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
            "DivergenceError", "UnresolvedMotionWarning", "static_equilibrium",

@@ -108,14 +108,16 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
     its joint point) on a prismatic joint along link 3's body x through link 3's output point,
     with a 50 N/m spring and a 0.5 N s/m damper.  All along +x, joint 1 turning at 0.5 rad/s.
     drive "torque": 2 sin(pi t) N m on joint 1; "motion": joint 1's angle prescribed as
-    0.5 t + 0.2 (1 - cos 2t) rad.  flexible: link 2 is the paper's beam 4 (1 m, 20 mm square
-    section, E = 2.5e10 Pa, rho = 3300 kg/m^3).  undriven: no drive on joint 1 and no damper
+    0.5 t + 0.2 (1 - cos 2t) rad; "pd": joint 1 tracks that angle by PD feedback, kp = 200 N
+    m/rad, kd = 20 N m s/rad (a PDTracking, inside the compiled loop).  flexible: link 2 is
+    the paper's beam 4 (1 m, 20 mm square section, E = 2.5e10 Pa, rho = 3300 kg/m^3).
+    undriven: no drive on joint 1 and no damper
     (the energy test)."""
-    from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PrismaticJoint,
-                           RevoluteJoint, SpringDamper, UniversalJoint)
+    from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
+                           PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
     from .profiles import ProfileForce, profile
-    if drive not in ("torque", "motion"):
-        raise ValueError(f"arm: drive must be 'torque' or 'motion', got {drive!r}")
+    if drive not in ("torque", "motion", "pd"):
+        raise ValueError(f"arm: drive must be 'torque', 'motion' or 'pd', got {drive!r}")
     if undriven:
         first = None
     elif drive == "torque":
@@ -126,8 +128,9 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
             {"profile": "linear", "slope": 0.5},
             {"profile": "sine", "amplitude": -0.2, "angular_frequency": 2.0,
              "phase": np.pi / 2, "offset": 0.2}]})
-        first = JointMotion(position=angle, velocity=angle.rate,
-                            acceleration=angle.acceleration)
+        first = (JointMotion(position=angle, velocity=angle.rate,
+                             acceleration=angle.acceleration) if drive == "motion" else
+                 PDTracking(kp=200.0, kd=20.0, target=angle, target_rate=angle.rate))
     if flexible:
         side = 0.02
         area = side * side

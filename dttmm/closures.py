@@ -43,7 +43,7 @@ from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZ
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
 from .elements.joints import rotation_about
 from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
-from .elements.drives import FORCE, MOTION, SPRING_DAMPER
+from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.rigid_body import TO_OUTPUT
 
 GROUND = -1
@@ -214,6 +214,10 @@ def closure_rows(model, entries, index_of, named):
                              f"joint joins two different bodies (or a body and the ground)")
         v = joint.validated(c)
         drives = tuple(v.get("drives", ()))
+        if any(d is not None and d["kind"] == PD for d in drives):
+            raise ValueError(f"{label}: a closing joint's coordinate takes a JointMotion, "
+                             f"SpringDamper or JointForce so far; PDTracking runs on tree "
+                             f"joints (or give the law as a JointForce)")
         side_a = _side(model, ka, at_a, label, "at_a", frames, named)
         side_b = _side(model, kb, at_b, label, "at_b", frames, named)
         if side_a is None:                # the ground's point: where b's starts

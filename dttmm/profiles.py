@@ -268,6 +268,8 @@ class ProfileForce:
     >>> drive = dttmm.JointForce(ProfileForce(torque))
     """
 
+    of_time_only = True         # (elements/drives.py: it runs inside the compiled loop)
+
     def __init__(self, prof):
         self.profile = prof
 

@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
-                       JointMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
-                       UniversalJoint)
+                       JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
+                       SpringDamper, UniversalJoint)
 from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
                             LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
-from .elements.drives import FORCE, MOTION, SPRING_DAMPER
+from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                               DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
                               REST_ROTATION)
@@ -75,7 +75,7 @@ _JOINTS = {
     "prismatic": (PrismaticJoint, {"axis": "vector", "position": "number", "rate": "number",
                                    "drive": "table"}),
 }
-_DRIVES = ("spring_damper", "force", "motion", "none")
+_DRIVES = ("spring_damper", "force", "motion", "pd", "none")
 _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
         "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
         "record_every": "int", "record_dt": "number", "max_step_error": "number",
@@ -282,6 +282,17 @@ def _drive(table, where, label):
         if "stiffness" not in rest:
             raise SceneError(f"{where}: {label}: a spring_damper drive needs the key 'stiffness'")
         return SpringDamper(**rest)
+    if kind == "pd":            # kp (target - q) + kd (target' - q') + feedforward, profiles
+        _keys(rest, {"kp": "number", "kd": "number", "target": "profile",
+                     "feedforward": "profile"}, where, label)
+        for key in ("kp", "kd", "target"):
+            if key not in rest:
+                raise SceneError(f"{where}: {label}: a pd drive needs the key '{key}'")
+        target = _profile(rest["target"], where, f"{label} key 'target'")
+        feedforward = (_profile(rest["feedforward"], where, f"{label} key 'feedforward'")
+                       if "feedforward" in rest else None)
+        return PDTracking(kp=rest["kp"], kd=rest["kd"], target=target, target_rate=target.rate,
+                          feedforward=feedforward)
     prof = _profile(rest, where, label)
     if kind == "force":
         return JointForce(ProfileForce(prof))
@@ -555,6 +566,10 @@ def _drive_table(d, who):
         return dict(type="force", **d["function"].profile.spec())
     if d["kind"] == MOTION and isinstance(d["function"][0], Profile):
         return dict(type="motion", **d["function"][0].spec())
+    target, _, feedforward = d["function"] if d["kind"] == PD else (None, None, None)
+    if isinstance(target, Profile) and (feedforward is None or isinstance(feedforward, Profile)):
+        return dict(type="pd", kp=d["stiffness"], kd=d["damping"], target=target.spec(),
+                    **({} if feedforward is None else {"feedforward": feedforward.spec()}))
     raise ValueError(f"save_scene: the drive of the joint before {who} is a Python function; "
                      f"only profiles (dttmm.profiles) can be written")
 

@@ -20,7 +20,7 @@ from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements._checks import is_text
-from .elements.drives import FORCE, MOTION
+from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, known_force, runs_in_loop
 from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -215,12 +215,18 @@ def kernel_params(model, beams=None):
 
 def joint_drives(model):
     """(n, 2, 4): each joint coordinate's drive as the kernels read it, [kind, stiffness,
-    damping, rest], kind -1 for none (elements/drives.py)."""
+    damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
+    (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
+    part in the inputs (_joint_inputs; kernels/joint.py::drive_value)."""
     table = np.zeros((model.n_bodies, 2, 4))
     table[:, :, 0] = -1.0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
-            if d is not None:
+            if d is None:
+                continue
+            if d["kind"] == PD or (d["kind"] == FORCE and d.get("of_time")):
+                table[k, i] = [SPRING_DAMPER, d["stiffness"], d["damping"], 0.0]
+            else:
                 table[k, i] = [d["kind"], d["stiffness"], d["damping"], d["rest"]]
     return table
 
@@ -375,26 +381,37 @@ def _iterates(model, full_state):
 
 
 def _joint_inputs(model, times, state=None, dt=0.0):
-    """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q'') and a
-    JointForce's value f(t, q, q') at each time (kernels/loop.py::Inputs).  A JointForce is
-    evaluated at the coordinates the constant-acceleration predictor gives from the state
-    (one step ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the
+    """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q''), a
+    drive's force known in time (elements/drives.py::known_force) and a JointForce's value
+    f(t, q, q') at each time (kernels/loop.py::Inputs).  A JointForce of the state is evaluated
+    at the coordinates the constant-acceleration predictor gives from the state (one step
+    ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the
     transfer"."""
     out = np.zeros((len(times), model.n_bodies, 2, 3))
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
-            if d is None or d["kind"] not in (FORCE, MOTION):
+            if d is None or d["kind"] not in (FORCE, MOTION, PD):
                 continue
             who = f"the drive of '{model.hinge_names[k]}' (coordinate {i + 1})"
             for j, t in enumerate(times):
                 if d["kind"] == MOTION:
                     out[j, k, i] = [_drive_number(f(t), who, t) for f in d["function"]]
+                elif runs_in_loop(d):
+                    out[j, k, i, 0] = _drive_number(_known(d, t, who), who, t)
                 else:
                     q, qd, qdd = state.jq[k, i], state.jqd[k, i], state.jqdd[k, i]
                     if t > 0.0:
                         q, qd = q + dt * qd + 0.5 * dt * dt * qdd, qd + dt * qdd
                     out[j, k, i, 0] = _drive_number(d["function"](t, q, qd), who, t)
     return out
+
+
+def _known(d, t, who):
+    try:
+        return known_force(d, t)
+    except Exception as err:
+        raise UserFunctionError(t, f"{who} failed at t = {t:.6g} s ({type(err).__name__}: "
+                                f"{err})") from None
 
 
 def _drive_number(value, who, t):
@@ -995,8 +1012,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
     # one step per chunk
     closing_forces = closure_forces(model, loops)
-    force_drives = closing_forces or any(d is not None and d["kind"] == FORCE
-                                         for ds in model.drives for d in ds)
+    force_drives = closing_forces or not all(runs_in_loop(d) for ds in model.drives
+                                             for d in ds)
     size = 1 if force_drives else CHUNK
     static_ground = model.ground_motion is None
     if static_ground:
@@ -1026,7 +1043,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     joint_input = np.zeros((size, n, 2, 3))
     closure_target = np.zeros((size, len(loops.kind), 3))
     targets_vary = has_closure_drives(model)
-    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION)
+    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION, PD)
                             for ds in model.drives for d in ds)
     info = np.zeros(5, dtype=np.int64)
     info[4] = counters[1]

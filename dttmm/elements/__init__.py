@@ -1,7 +1,7 @@
 """The element library: bodies and joints, each a small declarative class, and their kinds
 declared once (kinds.py)."""
 from .beam import EulerBernoulliBeam
-from .drives import JointForce, JointMotion, SpringDamper
+from .drives import JointForce, JointMotion, PDTracking, SpringDamper
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
 from .joints import PRISMATIC, REVOLUTE, UNIVERSAL, PrismaticJoint, RevoluteJoint, UniversalJoint
 from .kinds import BEAM, BODY_KINDS, JOINT_KINDS, RIGID
@@ -9,5 +9,6 @@ from .rigid_body import RigidBody
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
-           "JointMotion", "BALL", "FIXED", "ELASTIC", "REVOLUTE", "UNIVERSAL", "PRISMATIC",
+           "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "REVOLUTE", "UNIVERSAL",
+           "PRISMATIC",
            "RIGID", "BEAM", "BODY_KINDS", "JOINT_KINDS"]

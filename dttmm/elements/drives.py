@@ -5,6 +5,12 @@ slide, m) or of one axis of a universal joint.  It either applies a generalized 
 about the axis, N m, or a force along it, N) on the child, with the reaction on the parent, or
 prescribes the coordinate's motion q(t), the joint then applying whatever generalized force
 that motion needs (the Result records it).
+
+Forces that are linear in (q, q') with the rest known in time run inside the compiled loop,
+chunk by chunk (kernels/joint.py::drive_value: -k (q - rest) - c q' + f(t)): a SpringDamper, a
+PDTracking (k = kp, c = kd, f = kp target + kd target' + feedforward) and a JointForce of time
+alone (a profiles.ProfileForce, a scene's force profile).  A JointForce of (t, q, q') is a
+Python function the loop calls once per step.
 """
 from dataclasses import dataclass
 from typing import Callable, Optional
@@ -13,7 +19,7 @@ import numpy as np
 
 from ._checks import derivative, finite_scalar, is_text
 
-FORCE, SPRING_DAMPER, MOTION = 0, 1, 2      # Model.drive_kind (-1: no drive)
+FORCE, SPRING_DAMPER, MOTION, PD = 0, 1, 2, 3      # a drive's kind (None: no drive)
 
 
 def _scalar_of(who, argument, value):
@@ -76,7 +82,8 @@ class JointForce:
         except TypeError as err:
             raise ValueError(f"{who}: drive function must take (t, q, q_dot): {err}") from None
         _scalar_of(who, "drive function(0, q0, q_dot0)", value)
-        return dict(kind=FORCE, function=self.function, stiffness=0.0, damping=0.0, rest=0.0)
+        return dict(kind=FORCE, function=self.function, stiffness=0.0, damping=0.0, rest=0.0,
+                    of_time=bool(getattr(self.function, "of_time_only", False)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,7 +199,98 @@ class JointMotion:
             float(np.asarray(self.velocity(0.0), dtype=float).reshape(-1)[0])
 
 
-DRIVE_CLASSES = (JointForce, SpringDamper, JointMotion)
+@dataclass(frozen=True, eq=False)
+class PDTracking:
+    """Feedback that makes the coordinate track a target, with feed-forward (docs/joints.md,
+    "Drives"):
+
+        f = kp (target(t) - q) + kd (target_rate(t) - q') + feedforward(t)
+
+    on the child (its reaction on the parent), N m (or N).  It runs inside the compiled loop,
+    implicit in q and q' as a SpringDamper (no Python call per step): the loop sees a spring
+    and damper about q = 0 and the force kp target + kd target' + feedforward, known in time.
+    ``Result.drive_force`` records f.
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain, N m/rad (or N/m), >= 0.
+    kd : float
+        Derivative gain, N m s/rad (or N s/m), >= 0.
+    target : callable
+        target(t) -> the coordinate to track at time t (s), rad (or m).
+    target_rate : callable
+        target_rate(t) -> its derivative, rad/s (or m/s).  Required, although it defaults to
+        None (a profile's is ``profile.rate``).
+    feedforward : callable, optional
+        feedforward(t) -> a force added to the feedback, N m (or N).  None (default): zero.
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint: a negative or non-finite gain; a function missing, not
+        callable, or not returning one finite number at t = 0; target_rate contradicting the
+        difference of target (as JointMotion's checks); on a closing joint (not yet).
+
+    Examples
+    --------
+    Joint 1 of the arm tracking 0.5 t + 0.2 (1 - cos 2t) rad:
+
+    >>> import numpy as np
+    >>> import dttmm
+    >>> pd = dttmm.PDTracking(kp=200.0, kd=20.0,
+    ...                       target=lambda t: 0.5 * t + 0.2 * (1 - np.cos(2 * t)),
+    ...                       target_rate=lambda t: 0.5 + 0.4 * np.sin(2 * t))
+    >>> joint = dttmm.RevoluteJoint(axis=[0, 1, 0], drive=pd)
+    """
+    kp: float
+    kd: float
+    target: Callable[[float], float]
+    target_rate: Optional[Callable[[float], float]] = None
+    feedforward: Optional[Callable[[float], float]] = None
+    kind = PD
+
+    def validated(self, who, q0, qd0):
+        kp = finite_scalar(who, "drive kp", self.kp, nonnegative=True)
+        kd = finite_scalar(who, "drive kd", self.kd, nonnegative=True)
+        for name in ("target", "target_rate") + (("feedforward",) if self.feedforward
+                                                  is not None else ()):
+            f = getattr(self, name)
+            if f is None:
+                raise ValueError(f"{who}: PDTracking needs its {name} (a function of time)")
+            if not callable(f):
+                raise ValueError(f"{who}: PDTracking {name} must be a function of time")
+            _scalar_of(who, f"PDTracking {name}(0)", f(0.0))
+        for t in (0.0, 0.37, 1.0):
+            numeric = float(derivative(lambda s: _scalar_of(who, "target", self.target(s)), t,
+                                       1e-5))
+            given = _scalar_of(who, f"PDTracking target_rate({t:g})", self.target_rate(t))
+            if abs(given - numeric) > 1e-4 * max(1.0, abs(numeric)):
+                raise ValueError(f"{who}: PDTracking target_rate({t:g}) = {given} contradicts "
+                                 f"the derivative of the target, {numeric}")
+        return dict(kind=PD, function=(self.target, self.target_rate, self.feedforward),
+                    stiffness=kp, damping=kd, rest=0.0)
+
+
+def known_force(d, t):
+    """The part of a drive's force known in time at t (module docstring): a PDTracking's
+    kp target + kd target' + feedforward, a JointForce of time alone's value; 0 otherwise."""
+    if d["kind"] == PD:
+        target, rate, feedforward = d["function"]
+        value = d["stiffness"] * target(t) + d["damping"] * rate(t)
+        return value + (feedforward(t) if feedforward is not None else 0.0)
+    if d["kind"] == FORCE and d.get("of_time"):
+        return d["function"](t, 0.0, 0.0)
+    return 0.0
+
+
+def runs_in_loop(d):
+    """Whether the drive runs inside the compiled loop's chunks (module docstring): all but a
+    JointForce of the state, which the loop calls once per step."""
+    return d is None or d["kind"] != FORCE or bool(d.get("of_time"))
+
+
+DRIVE_CLASSES = (JointForce, SpringDamper, JointMotion, PDTracking)
 
 
 def validated_drive(who, drive, q0, qd0):
@@ -200,6 +298,6 @@ def validated_drive(who, drive, q0, qd0):
     if drive is None:
         return None
     if not isinstance(drive, DRIVE_CLASSES):
-        raise ValueError(f"{who}: drive must be a JointForce, SpringDamper or JointMotion (or "
-                         f"None), got {type(drive).__name__}")
+        raise ValueError(f"{who}: drive must be a JointForce, SpringDamper, JointMotion or "
+                         f"PDTracking (or None), got {type(drive).__name__}")
     return drive.validated(who, q0, qd0)

@@ -110,10 +110,13 @@ def n_coordinates(kind):
 def drive_value(drive, given, q, qd, c1, c3, at_start):
     """(tau, d tau / d nu) of a free coordinate's drive at (q, q'), nu = q'' (q' = c3/c1 nu +
     const, q = nu / c1 + const over the step; both held at the consistent start).  drive:
-    [kind, stiffness, damping, rest] (kind -1: none); given: a FORCE drive's value (inputs)."""
+    [kind, stiffness, damping, rest] (kind -1: none); given: a FORCE drive's value, or the part
+    of a spring-damper's force known in time (a PDTracking's kp target + kd target' +
+    feedforward, a JointForce of time alone; 0 for a SpringDamper; solver.joint_drives):
+        tau = -k (q - rest) - c q' + given."""
     kind = int(drive[0])
     if kind == SPRING_DAMPER:
-        tau = -drive[1] * (q - drive[3]) - drive[2] * qd
+        tau = -drive[1] * (q - drive[3]) - drive[2] * qd + given
         slope = 0.0 if at_start else -(drive[1] + drive[2] * c3) / c1
         return tau, slope
     if kind == FORCE:

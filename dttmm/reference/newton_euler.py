@@ -133,7 +133,8 @@ force and moment) and, per coordinate, one more unknown, q_i'', and one more row
     free coordinate:        s_i . N_k = tau_i   (s_i . F_k for the slide)
     prescribed (MOTION):    q_i'' = q_p''(t)
 with s_i the coordinate's world direction (u, u1, v2; the slide's u) and tau_i the drive's
-generalized force: FORCE f(t, q, q'), SPRING_DAMPER -k (q - rest) - c q', no drive 0.  The
+generalized force: FORCE f(t, q, q'), SPRING_DAMPER -k (q - rest) - c q', PD kp (target(t) - q)
++ kd (target'(t) - q') + feedforward(t), no drive 0.  The
 virtual power of the joint loads on a relative motion is N . (w - w_P) = sum (s_i . N) q_i'
 (F . u q' for the slide, whose relative angular velocity is zero), so s_i . N is coordinate i's
 generalized force; for a prescribed coordinate it is what the solve returns (Result
@@ -231,7 +232,7 @@ from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, DAMPING_RATIO, EI_V, EI_W, FAMILY, GJ,
                              LENGTH, LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED,
                              POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
-from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
+from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                                DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
                                REST_ROTATION)
@@ -1803,7 +1804,7 @@ class _Problem:
         # the drives, evaluated in Python at every right-hand side (joint_inputs)
         self.prescribed = np.zeros(nq, dtype=np.int64)
         self.drive_value = np.zeros(nq)
-        self._motions, self._springs, self._drive_fns = [], [], []
+        self._motions, self._springs, self._drive_fns, self._pds = [], [], [], []
         for c, (k, i, d) in enumerate(self.coordinates):
             if d is None:
                 continue
@@ -1814,6 +1815,8 @@ class _Problem:
                 self._springs.append((c, d["stiffness"], d["damping"], d["rest"]))
             elif d["kind"] == FORCE:
                 self._drive_fns.append((c, d["function"]))
+            elif d["kind"] == PD:
+                self._pds.append((c, d["stiffness"], d["damping"]) + tuple(d["function"]))
             else:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
@@ -1865,6 +1868,13 @@ class _Problem:
         for c, f in self._drive_fns:
             self.drive_value[c] = self._number(c, "drive function(t, q, q_dot)", t,
                                                f(t, y[c0 + c], y[c0 + nq + c]))
+        for c, kp, kd, target, rate, feedforward in self._pds:
+            # f = kp (target - q) + kd (target' - q') + feedforward
+            self.drive_value[c] = (
+                kp * (self._number(c, "PDTracking target", t, target(t)) - y[c0 + c])
+                + kd * (self._number(c, "PDTracking target_rate", t, rate(t)) - y[c0 + nq + c])
+                + (0.0 if feedforward is None else
+                   self._number(c, "PDTracking feedforward", t, feedforward(t))))
         return y
 
     def time_inputs(self, t):
