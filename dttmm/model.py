@@ -846,8 +846,8 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
                                                                           ground.rotation)
         w_g = np.zeros(3)
 
-    bv = [b.validated(k) for k, b in enumerate(bodies)]
-    hv = [h.validated(k) for k, h in enumerate(hinges)]
+    bv = _validated(bodies)
+    hv = _validated(hinges)
     kinds = np.array([joint_kind_of(h).code for h in hinges], dtype=np.int64)
     body_kind = np.array([body_kind_of(b).code for b in bodies], dtype=np.int64)
     children = children_of(parent)
@@ -910,9 +910,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
 
     tree = Model(
         n_bodies=n,
-        body_params=np.array([pack_body(v) for v in bv]),
+        body_params=_packed(bv, pack_body),
         hinge_kind=kinds,
-        hinge_params=np.array([pack_hinge(v) for v in hv]),
+        hinge_params=_packed(hv, pack_hinge),
         gravity=g,
         ground_position=r_g,
         ground_rotation=rot_g,
@@ -1115,6 +1115,91 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
         beam_params[k, FAMILY] = family
 
 
+def _validated(elements):
+    """Each element's checked parameters (its validated(k)), each distinct set of parameters
+    checked once: a chain of 10^6 copies of one link checks one link, not 10^6 (a check is
+    ~0.3 ms of small numpy calls; the key ~5 us).  Elements with equal parameters (their
+    names aside, which only the messages read) share the result, a shallow copy each (the
+    build writes into them); the first of them is the one a message names."""
+    checked, out = {}, []
+    for k, element in enumerate(elements):
+        key = _parameters_key(element)
+        if key is None:
+            out.append(element.validated(k))
+            continue
+        try:
+            done = checked.get(key)
+        except TypeError:               # nested sequences: the deep key
+            key = _parameters_key(element, deep=True)
+            done = checked.get(key)
+        if done is None:
+            done = checked[key] = element.validated(k)
+        out.append(dict(done))
+    return out
+
+
+def _packed(checked, pack):
+    """(n, ...) rows pack(v) of the elements' checked parameters, each packed once per set of
+    the same values (_validated's copies share theirs, unless the build replaced one)."""
+    rows, done = [], {}
+    for v in checked:
+        key = tuple(map(id, v.values()))
+        row = done.get(key)
+        if row is None:
+            row = done[key] = pack(v)
+        rows.append(row)
+    return np.array(rows)
+
+
+_KEY_FIELDS = {}     # an element class's parameter fields (_parameters_key)
+_SCALARS = (float, int, str, bool, type(None))
+
+
+def _frozen(value):
+    """A hashable stand-in of a parameter's value, to any depth (functions and other objects:
+    their identity)."""
+    if type(value) in _SCALARS:
+        return value
+    if isinstance(value, (list, tuple)):
+        return ("seq",) + tuple(map(_frozen, value))
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, value.dtype.str, value.tobytes())
+    if isinstance(value, dict):
+        return ("dict",) + tuple((_frozen(k), _frozen(v)) for k, v in value.items())
+    if isinstance(value, np.generic):
+        return value.item()
+    return ("id", id(value))
+
+
+def _parameters_key(element, deep=False):
+    """A key of an element's parameters (its dataclass fields but its name), or None where
+    one cannot be made (not a dataclass).  Shallow (the common case, fast): a sequence is
+    the tuple of its items, which is not hashable where they are lists; deep: _frozen."""
+    cls = type(element)
+    names = _KEY_FIELDS.get(cls)
+    if names is None:
+        try:
+            names = tuple(f.name for f in fields(element)
+                          if f.name != "name" and not f.name.startswith("_"))
+        except TypeError:
+            return None
+        _KEY_FIELDS[cls] = names
+    if deep:
+        return (cls,) + tuple(_frozen(getattr(element, name)) for name in names)
+    key = [cls]
+    for name in names:
+        value = getattr(element, name)
+        kind = type(value)
+        if kind is list or kind is tuple:
+            value = ("seq", tuple(value))
+        elif kind is np.ndarray:
+            value = ("array", value.shape, value.dtype.str, value.tobytes())
+        elif kind not in _SCALARS:
+            value = ("id", id(value))
+        key.append(value)
+    return tuple(key)
+
+
 def children_of(parent):
     """Each body's children in order, from the parents (-1: the ground), in one pass (a scan
     of every body per body is quadratic: minutes at 10^5 bodies)."""
@@ -1140,25 +1225,37 @@ def _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment):
     its own moment equation, whose matrix is -chi1 (J_I + M l_IO^ l_IC^) (docs/rigid_body.md).
     If that matrix is singular (no inertia about the hinge-to-hinge axis) the step is undefined.
     (Checked for a leaf and for a body with one child at its output.)"""
-    n = len(bodies)
-    for k in range(n):
+    checked, leaves = [], []
+    for k in range(len(bodies)):
         leaf = not children[k]
         single = len(children[k]) == 1 and attachment[children[k][0]] == 0
         outboard_free = leaf or (single and kinds[children[k][0]] == BALL)
-        if kinds[k] != BALL or not outboard_free or body_kind[k] != RIGID:
-            continue
-        v = bv[k]
-        l_io, l_ic = v["l_io"], v["l_ic"]
-        if leaf:
-            mat = v["j_i"]       # free tip: no force at the output point
-        else:
-            mat = v["j_i"] + v["mass"] * _hat(l_io) @ _hat(l_ic)
-        s = np.linalg.svd(mat, compute_uv=False)
-        if s[-1] <= 1e-10 * max(s[0], 1e-300):
-            raise ValueError(f"{bodies[k].label(k)}: inertia: the ball-joint look-ahead is "
-                             f"singular (singular values of J_I + M l_IO^ l_IC^: {s}); the body "
-                             f"has no inertia about its hinge-to-hinge axis")
+        if kinds[k] == BALL and outboard_free and body_kind[k] == RIGID:
+            checked.append(k)
+            leaves.append(leaf)
+    if not checked:
+        return
+    # all at once (a million bodies): J_I, or J_I + M l_IO^ l_IC^ below a ball joint (a free
+    # tip takes no force at its output point)
+    j_i = np.array([bv[k]["j_i"] for k in checked])
+    mass = np.array([bv[k]["mass"] for k in checked])
+    l_io = np.array([bv[k]["l_io"] for k in checked])
+    l_ic = np.array([bv[k]["l_ic"] for k in checked])
+    arm = np.where(np.array(leaves)[:, None, None], 0.0,
+                   mass[:, None, None] * _hat(l_io) @ _hat(l_ic))
+    s = np.linalg.svd(j_i + arm, compute_uv=False)
+    bad = s[:, -1] <= 1e-10 * np.maximum(s[:, 0], 1e-300)
+    if bad.any():
+        i = int(np.argmax(bad))
+        k = checked[i]
+        raise ValueError(f"{bodies[k].label(k)}: inertia: the ball-joint look-ahead is "
+                         f"singular (singular values of J_I + M l_IO^ l_IC^: {s[i]}); the body "
+                         f"has no inertia about its hinge-to-hinge axis")
 
 
 def _hat(v):
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    """v^ of (m, 3) vectors: (m, 3, 3)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2], out[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    out[..., 1, 0], out[..., 2, 0], out[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return out

@@ -755,8 +755,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         Record at these times, s (increasing, on the step grid: multiples of dt; an adaptive
         run lands its steps on them). Give at most one of record_every, record_dt and t_eval.
         Default: every step of a run of up to 1000 steps, else every ceil(steps / 1000)-th step
-        (at most ~1000 samples; adaptive: the first segment end after each t_end / 1000). The
-        first and the final state are always recorded. Derived quantities (positions,
+        (at most ~1000 samples, and no more than about 256 MB of them: fewer for models of
+        more than ~270 bodies, the first and last state of a million; adaptive: the first
+        segment end after each t_end / 1000). The first and the final state are always
+        recorded. Derived quantities (positions,
         energies) are computed when first read (``Result``).
     full_state : bool
         Use the 13-entry state even where the reduced [a; q] form applies (a tree: the
@@ -869,7 +871,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if adaptive:
         sampling, targets = 1, adaptive_steps.sample_times(t_end, record_dt, t_eval)
     else:
-        sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start)
+        sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start,
+                             model.n_bodies)
     if scheme not in SCHEMES:
         raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
     if newton_iterations is None:
@@ -1014,7 +1017,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     closing_forces = closure_forces(model, loops)
     force_drives = closing_forces or not all(runs_in_loop(d) for ds in model.drives
                                              for d in ds)
-    size = 1 if force_drives else CHUNK
+    # a chunk's inputs and record rows hold each of its steps for every body: no more steps
+    # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
+    size = 1 if force_drives else max(1, min(CHUNK, CHUNK_BYTES // (CHUNK_STEP_BYTES * n),
+                                             CHUNK if adaptive else n_steps - done))
     static_ground = model.ground_motion is None
     if static_ground:
         g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, np.zeros(size + 1))
@@ -1318,13 +1324,21 @@ def _set_step(loop, h, coef):
 
 
 CHUNK = 1000        # steps per call of the compiled loop (their inputs are prepared per chunk)
+CHUNK_BYTES = 2 ** 27       # at most this much of a chunk's per-step inputs and records ...
+CHUNK_STEP_BYTES = 600      # ... at about this much per body and step (loads, joint inputs,
+#                             the record's rotation, rates and stations)
 MAX_SAMPLES = 1000  # simulate's default: every step up to this many, then every k-th step
+RECORD_BYTES = 2 ** 28      # ... and no more than this much of samples by default ...
+RECORD_SAMPLE_BYTES = 1000  # ... at about this much per body and sample (the record and the
+#                             Result's arrays derived from it)
 
 
-def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
+def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0, n_bodies=1):
     """The steps a run records (besides its first and its last state): every k-th step (an
     int k), or the given steps (an increasing array).  Default: every step of a run of up to
-    MAX_SAMPLES steps, else every ceil(n_steps / MAX_SAMPLES)-th."""
+    MAX_SAMPLES steps, else every ceil(n_steps / MAX_SAMPLES)-th; and no more samples than
+    RECORD_BYTES hold at RECORD_SAMPLE_BYTES per body (a million bodies: the first and the
+    last state; record_every, record_dt or t_eval ask for more)."""
     given = [name for name, v in (("record_every", record_every), ("record_dt", record_dt),
                                   ("t_eval", t_eval)) if v is not None]
     if len(given) > 1:
@@ -1348,7 +1362,8 @@ def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0):
             raise ValueError(f"simulate: t_eval must increase within [{start * h:g}, "
                              f"{n_steps * h:g}] s")
         return steps[steps > start].astype(np.int64)
-    return max(1, -(-(n_steps - start) // MAX_SAMPLES))
+    samples = max(1, min(MAX_SAMPLES, RECORD_BYTES // (RECORD_SAMPLE_BYTES * n_bodies)))
+    return max(1, -(-(n_steps - start) // samples))
 
 
 def _fastest_rate(omega):

@@ -67,7 +67,7 @@ def test_a_prescribed_motion_sets_the_start():
     (lambda: UniversalJoint([0, 0, 1], [0, 1, 0], angles=(0.1,), name="j"),
      "'j'.*angles must be a pair"),
     (lambda: RevoluteJoint([0, 0, 1], drive=lambda t: 1.0, name="j"),
-     "'j'.*drive must be a JointForce, SpringDamper or JointMotion"),
+     "'j'.*drive must be a JointForce, SpringDamper, JointMotion or PDTracking"),
     (lambda: RevoluteJoint([0, 0, 1], drive=JointForce(3.0), name="j"),
      "'j'.*drive function must be callable"),
     (lambda: RevoluteJoint([0, 0, 1], drive=JointForce(lambda t: 1.0), name="j"),

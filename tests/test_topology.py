@@ -183,3 +183,26 @@ def test_schemes_are_checked_against_the_declarations():
     beam = three_pendulum()
     with pytest.raises(ValueError, match="body 'beam4' is a beam.*covers RigidBody only"):
         simulate(beam, 0.01, 1e-3, scheme="energy_momentum")
+
+
+def test_equal_elements_are_checked_once_and_keep_their_names_and_messages(monkeypatch):
+    """The build checks each distinct set of parameters once (a million equal links: one
+    check, issue 30): five equal links, their names aside, are checked once and pack to the
+    rows each would on its own; a bad one among them is named by its own index; a matrix
+    given as nested lists (a key the shallow one cannot hash) is shared too."""
+    rod = dict(mass=1.0, inertia=[[1e-4, 0, 0], [0, 1 / 12, 0], [0, 0, 1 / 12]],
+               inertia_about="mass_center", to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0])
+    links = [RigidBody(**rod, name=f"l{k}") for k in range(5)]
+    calls = []
+    original = RigidBody.validated
+    monkeypatch.setattr(RigidBody, "validated",
+                        lambda self, index=None: calls.append(index) or original(self, index))
+    model = build_chain([x for link in links for x in (BallJoint(), link)])
+    assert calls == [0]
+    assert model.body_names == ("l0", "l1", "l2", "l3", "l4")
+    from dttmm.elements.rigid_body import pack_body
+    for k, link in enumerate(links):
+        assert np.array_equal(model.body_params[k], pack_body(original(link, k)))
+    bad = RigidBody(**dict(rod, mass=-1.0), name="bad")
+    with pytest.raises(ValueError, match=r"RigidBody 'bad' \(body 3\): mass"):
+        build_chain([x for link in links[:3] + [bad] + links[3:] for x in (BallJoint(), link)])
