@@ -134,11 +134,15 @@ class Integrator:
 class Workspace:
     """Preallocated state and scratch of one run (nothing here is shared between runs): the
     state the loops advance (kernels/loop.py::State), the assembly's scratch (Sweep) and the
-    beams' tables (beam_tables)."""
+    beams' tables (beam_tables).  fused: the run takes a fused ball-chain or ball-tree loop,
+    which reads the reduced sweep's arrays only (red_*): the full-state sweep's are left
+    empty (about 6 KB per body: a million bodies' gigabytes)."""
 
-    def __init__(self, model: Model):
+    def __init__(self, model: Model, fused=False):
         n = model.n_bodies
-        n_el, n_st = 2 * n, 2 * n + 1
+        n_st = 2 * n + 1
+        n_full = 0 if fused else n          # the full-state sweep's bodies, elements, stations
+        n_el, n_sst = 2 * n_full, (0 if fused else n_st)
         n_eta = int(model.n_modes.sum())
         z3 = lambda: np.zeros((n, 3))                               # noqa: E731
         self.state = State(
@@ -157,16 +161,18 @@ class Workspace:
             jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
-            known_loads=np.zeros((n_el, 12)), split=np.zeros(n_st, dtype=np.int64),
-            s=np.zeros((n_st, 6, 6)), p=np.zeros((n_st, 6)), tinv=np.zeros((n_el, 6, 6)),
+            known_loads=np.zeros((n_el, 12)), split=np.zeros(n_sst, dtype=np.int64),
+            s=np.zeros((n_sst, 6, 6)), p=np.zeros((n_sst, 6)), tinv=np.zeros((n_el, 6, 6)),
             t=np.zeros((n_el, 6)), g=np.zeros((n_el, 6, 3)), gv=np.zeros((n_el, 6)),
             red_v=np.zeros((n, 6, 7)), red_phi=np.zeros((n, 3, 7)), red_s=np.zeros((n + 1, 3, 3)),
             red_p=np.zeros((n + 1, 3)), red_tinv=np.zeros((n, 3, 3)), red_t=np.zeros((n, 3)),
-            red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_st, 12, 6)),
-            dir_o=np.zeros((n_st, 12)), port_s=np.zeros((n, 3, 3)), port_p=np.zeros((n, 3)),
-            aq_out=np.zeros((n, 6)), tree_s=np.zeros((n, 6, 6)), tree_p=np.zeros((n, 6)),
-            joint_dof=np.zeros((n, 3), dtype=np.int64), joint_tau_nu=np.zeros((n, 3, 3)),
-            joint_nu=np.zeros((n, 3)), joint_tau=np.zeros((n, 3)))
+            red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_sst, 12, 6)),
+            dir_o=np.zeros((n_sst, 12)), port_s=np.zeros((n_full, 3, 3)),
+            port_p=np.zeros((n_full, 3)), aq_out=np.zeros((n_full, 6)),
+            tree_s=np.zeros((n_full, 6, 6)), tree_p=np.zeros((n_full, 6)),
+            joint_dof=np.zeros((n_full, 3), dtype=np.int64),
+            joint_tau_nu=np.zeros((n_full, 3, 3)), joint_nu=np.zeros((n_full, 3)),
+            joint_tau=np.zeros((n_full, 3)))
         self.beams = beam_tables(model)
         _initial_deflections(model, self.state)
 
@@ -932,8 +938,14 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     loaded = keep + ((user_model.body_kind == BEAM) & (model.body_kind[keep] != BEAM))
     mode = _mode(model, method, full_state)
     coef = integrator.array()
+    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
+    # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
+    # rest the general loop (kernels/step.py); each records what its scheme defines
+    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+             and scheme == "newmark" and not model.needs_general_loop
+             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
 
-    ws = Workspace(model)
+    ws = Workspace(model, fused=fused)
     state = ws.state
     n = model.n_bodies
     params = kernel_params(model, ws.beams)
@@ -946,12 +958,6 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                       defl_pseudo=np.zeros((n if (model.hinge_kind == ELASTIC).any() else 0, 3)),
                       error=np.zeros(2))
 
-    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
-    # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
-    # rest the general loop (kernels/step.py); each records what its scheme defines
-    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-             and scheme == "newmark" and not model.needs_general_loop
-             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
     # a chain of beams welded end to end from the ground (fixed hinges, a free tip): the fused
     # welded-chain loop (kernels/weld_chain.py)
     welded = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme == "newmark"
