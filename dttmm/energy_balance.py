@@ -120,12 +120,8 @@ class EnergyBalance:
         t = res.t
         p = np.zeros(len(t))
         w = res.angular_velocity
-        if model.ground_motion is not None:     # (r, v, a, R, w, w') of the ground at each t
-            grounds = [model.ground_state(ti) for ti in t]
-            g_rot, v_g, w_g = (np.array([g[i] for g in grounds]) for i in (3, 1, 4))
-        else:
-            g_rot, v_g, w_g = (np.broadcast_to(x, (len(t),) + np.shape(x)) for x in (
-                model.ground_rotation, np.zeros(3), np.zeros(3)))
+        ground = self._ground(t)            # (r, v, R, w) of the ground at each t
+        _, v_g, g_rot, w_g = ground
         if model.has_applied_loads:
             l_ic = model.body_params[:, TO_MASS_CENTER]
             v_c = res.velocity_input + np.cross(w, np.einsum("tkij,kj->tki", res.rotation, l_ic))
@@ -171,11 +167,11 @@ class EnergyBalance:
         if self.closing_dampers:
             p += elastic_closure_terms(model, res.rotation, w, res.position_input,
                                        res.velocity_input, res.modal_coordinates,
-                                       res.modal_velocities, self._ground(t))[1]
+                                       res.modal_velocities, ground)[1]
         if self.modal_damping.size and np.any(self.modal_damping):
             p -= (res.modal_velocities ** 2) @ self.modal_damping
         if model.ground_motion is not None and self.grounded_closures:
-            p += self._closures_ground_power(res, values, t)
+            p += self._closures_ground_power(res, values, ground)
         if model.ground_motion is not None:
             for k in self.roots:
                 f, m = res.force[:, k], res.moment[:, k]
@@ -191,13 +187,13 @@ class EnergyBalance:
         return tuple(np.broadcast_to(np.array([g[i] for g in grounds]),
                                      (len(t),) + np.shape(grounds[0][i])) for i in (0, 1, 3, 4))
 
-    def _closures_ground_power(self, res, values, t):
+    def _closures_ground_power(self, res, values, ground):
         """(T,) the power a moving ground puts in through the closing joints that meet it:
-        minus the power of the joint's load on the ground (its reaction's, for side a)."""
+        minus the power of the joint's load on the ground (its reaction's, for side a);
+        ground: _ground's at the rows' times."""
         model = self.model
-        ground = self._ground(t)
         w_g = ground[3]
-        p = np.zeros(len(t))
+        p = np.zeros(len(res.t))
         for c in self.grounded_closures:
             f, m = values["closure_wrench"][:, c, 0:3], values["closure_wrench"][:, c, 3:6]
             (p_a, v_a, _, _), (p_b, v_b, _, _) = (side_motions(

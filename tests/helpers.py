@@ -25,6 +25,15 @@ def output_errors_against_reference(model, steps, t_end=1.0):
                    - ref.position_output[-1]).max() for h in steps]
 
 
+def energy_drift(model, t_end, dt):
+    """A DT-TMM run's largest |E - E(0)| (kinetic + potential) over its default samples, as a
+    fraction of its largest kinetic energy."""
+    from dttmm import simulate
+    result = simulate(model, t_end, dt)
+    energy = result.kinetic + result.potential
+    return np.abs(energy - energy[0]).max() / result.kinetic.max()
+
+
 def rot_z(angle):
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
