@@ -5,37 +5,87 @@ import sys
 import threading
 import time
 
-COMPILE_NOTICE_AFTER = 3.0      # s a kernel call may take before it is said to be compiling
+from numba.core import event as numba_event
+
+COMPILE_NOTICE_AFTER = 3.0      # s a compilation runs before stderr says so
+COMPILE_REPORT_EVERY = 15.0     # s between its progress lines
 PROGRESS_AFTER = 2.0            # s a run is expected to take before it shows a bar
 
-_noticed = False
+
+class _CompileWatch(numba_event.Listener):
+    """Says on stderr what is compiling and for how long (issue 30): numba announces each
+    compilation ("numba:compile" events, outermost first; a kernel loaded from numba's cache
+    announces none), and one watcher thread per process, started at the first, writes a line
+    once a compilation of dttmm's kernels has run COMPILE_NOTICE_AFTER seconds, then every
+    COMPILE_REPORT_EVERY seconds, and a last one when it ends.  Nothing per call: a run whose
+    kernels are compiled costs no thread and no timer."""
+
+    def __init__(self):
+        self.depth = 0
+        self.active = None             # (what, start time) of the outermost compilation
+        self.announced = False
+        self.next_at = 0.0              # when the watcher writes its next line
+        self.wake = threading.Condition()
+        self.thread = None
+
+    def on_start(self, event):
+        self.depth += 1
+        if self.depth > 1:
+            return
+        function = getattr(event.data.get("dispatcher"), "py_func", None)
+        if not getattr(function, "__module__", "").startswith("dttmm"):
+            return                      # (a user's own numba function: not ours to report)
+        with self.wake:
+            t0 = time.perf_counter()
+            self.active, self.announced = (function.__name__, t0), False
+            self.next_at = t0 + COMPILE_NOTICE_AFTER
+            if self.thread is None:
+                self.thread = threading.Thread(target=self._watch, daemon=True,
+                                               name="dttmm-compile-watch")
+                self.thread.start()
+            self.wake.notify()
+
+    def on_end(self, event):
+        self.depth -= 1
+        if self.depth > 0 or self.active is None:
+            return
+        with self.wake:
+            what, t0 = self.active
+            if self.announced:
+                _say(f"dttmm: compiled {what} in {time.perf_counter() - t0:.0f} s (cached for "
+                     f"later runs)")
+            self.active = None
+            self.wake.notify()
+
+    def _watch(self):
+        with self.wake:
+            while True:
+                active = self.active
+                if active is None:
+                    self.wake.wait()
+                    continue
+                self.wake.wait(max(0.0, self.next_at - time.perf_counter()))
+                now = time.perf_counter()
+                if self.active is not active or now < self.next_at:
+                    continue            # (ended, or woken early)
+                what, t0 = active
+                if not self.announced:
+                    _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
+                         f"once per machine and kind of model (later runs load them from "
+                         f"numba's cache); about a minute for chains and trees of ball joints, "
+                         f"a few for other joints on 2 cores. {now - t0:.0f} s so far")
+                    self.announced = True
+                else:
+                    _say(f"dttmm: still compiling {what}: {now - t0:.0f} s so far")
+                self.next_at += COMPILE_REPORT_EVERY
 
 
-class compile_notice:
-    """Around a first kernel call: if it has not returned after COMPILE_NOTICE_AFTER seconds it
-    is compiling, and stderr says so, once per process."""
-
-    def __enter__(self):
-        self._timer = None
-        if not _noticed:
-            self._timer = threading.Timer(COMPILE_NOTICE_AFTER, _say_compiling)
-            self._timer.daemon = True
-            self._timer.start()
-        return self
-
-    def __exit__(self, *exc):
-        if self._timer is not None:
-            self._timer.cancel()
-        return False
+def _say(text):
+    print(text, file=sys.stderr, flush=True)
 
 
-def _say_compiling():
-    global _noticed
-    _noticed = True
-    print("dttmm: compiling the numba kernels for this kind of model; this happens once (they "
-          "are cached for later runs) and takes about a minute for chains and trees of ball "
-          "joints, a few minutes for other joints, on a 2-core machine.",
-          file=sys.stderr, flush=True)
+_watch = _CompileWatch()
+numba_event.register("numba:compile", _watch)
 
 
 class Progress:

@@ -42,7 +42,7 @@ def loop_accelerations(model):
     monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
                       jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
     ws = solver.Workspace(km)
-    params = solver.kernel_params(km, ws.beams)
+    params = solver.kernel_params(km)
     loops = solver.loop_tables(km)
     solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
                              monitor, 1.0, loops)

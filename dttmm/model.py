@@ -1,5 +1,7 @@
 """The chain description: built from elements, validated once, frozen into flat arrays."""
+import functools
 from dataclasses import dataclass, field, fields, replace
+from functools import cached_property
 from typing import Optional, Sequence
 
 import numpy as np
@@ -19,6 +21,7 @@ from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KIN
                              body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
 from .kernels.so3 import expm_so3, left_jacobian
+from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
 
 
@@ -215,6 +218,24 @@ class Ground:
     motion: Optional[PrescribedMotion] = None
 
 
+def model_fact(function):
+    """A function of a frozen model (and hashable options) evaluated once per model and
+    options: its value is kept on the model, which cannot change after build() (issue 30: a
+    short run does not redo its setup).  The value is shared between calls: arrays in it are
+    read, never written, by its users (tests/test_short_runs.py checks the kernels' tables)."""
+    @functools.wraps(function)
+    def fact(model, *args):
+        facts = model.__dict__.get("_facts")
+        if facts is None:
+            facts = {}
+            object.__setattr__(model, "_facts", facts)
+        key = (function, args, closures.PINNED_TIP_SWEEP)   # (a switch of how loops run)
+        if key not in facts:
+            facts[key] = function(model, *args)
+        return facts[key]
+    return fact
+
+
 @dataclass(frozen=True, eq=False)
 class Model:
     """A frozen system: flat float arrays for the kernels plus the description it came from.
@@ -368,56 +389,68 @@ class Model:
             if isinstance(value, np.ndarray):
                 value.flags.writeable = False
 
+    def __getstate__(self):
+        # (a pickle carries the fields, not the facts derived from them: model_fact)
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        for value in state.values():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+
     @property
     def tip_pinned(self):
         """Whether the loops are one ball joint from a chain's tip to a fixed ground
         (``tip="ball"``): the one closure the DT-TMM sweeps run so far (closures.py)."""
         return is_pinned_tip(self)
 
-    @property
+    @cached_property
     def n_closures(self):
         """The number of loop-closing joints."""
         return len(self.closure_kind)
 
-    @property
+    @cached_property
     def is_chain(self):
         """Every body hangs from the output point of the body before it (or the ground)."""
         return bool(np.all(self.parent == np.arange(self.n_bodies) - 1)
                     and np.all(self.attachment == 0))
 
-    @property
+    @cached_property
     def n_modes(self):
         """(n,) modal coordinates of each body: 2 x modes per plane plus the twist and stretch
         modes for a beam (elements/beam.py::modal_size), 0 if rigid."""
-        return np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES]
-                        + self.beam_params[:, TORSION_MODES] + self.beam_params[:, AXIAL_MODES],
-                        0).astype(np.int64)
+        n_modes = np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES]
+                           + self.beam_params[:, TORSION_MODES] + self.beam_params[:, AXIAL_MODES],
+                           0).astype(np.int64)
+        n_modes.flags.writeable = False
+        return n_modes
 
-    @property
+    @cached_property
     def has_twist(self):
         """Whether a beam has twist modes (it runs in the general loop: docs/beam.md,
         "Torsion")."""
         return bool(np.any((self.body_kind == BEAM) & (self.beam_params[:, TORSION_MODES] > 0)))
 
-    @property
+    @cached_property
     def has_beams(self):
         """Whether any body is a beam."""
         return bool(np.any(self.body_kind == BEAM))
 
-    @property
+    @cached_property
     def all_ball(self):
         """True when every hinge is moment-free (a ball joint): the reduced [a; q] transfer
         applies (elements/kinds.py)."""
         return all(JOINT_KIND[int(c)].moment_free for c in self.hinge_kind)
 
-    @property
+    @cached_property
     def has_beam_end_torque(self):
         """Whether a beam carries an applied end torque (its modal equations then depend on its
         end section's rotation, and it runs in the general loop: docs/beam.md)."""
         return any(self.torques[k] is not None for k in range(self.n_bodies)
                    if self.body_kind[k] == BEAM)
 
-    @property
+    @cached_property
     def needs_general_loop(self):
         """Whether a beam's w' and eta'' columns are differenced in every step (an end torque,
         twist modes or loads in body axes), so the model runs in the general loop, not the fused one
@@ -425,12 +458,12 @@ class Model:
         return (self.has_beam_end_torque or self.has_twist or self.has_stretch
                 or self.has_follower_loads)
 
-    @property
+    @cached_property
     def has_stretch(self):
         """Whether a beam has stretch modes (docs/beam.md, "Stretch")."""
         return bool(np.any((self.body_kind == BEAM) & (self.beam_params[:, AXIAL_MODES] > 0)))
 
-    @property
+    @cached_property
     def has_follower_loads(self):
         """Whether a beam carries loads in its own axes (load_axes="body": they turn with it,
         so its w' and eta'' columns are differenced: docs/beam.md, "Loads on the beam")."""
@@ -438,7 +471,7 @@ class Model:
             f is not None for f in (self.forces[k], self.torques[k], self.line_loads[k]))
             for k in range(self.n_bodies) if self.body_kind[k] == BEAM)
 
-    @property
+    @cached_property
     def has_applied_loads(self):
         """Whether any body has an applied force or torque."""
         return any(f is not None for f in self.forces + self.torques + self.line_loads)

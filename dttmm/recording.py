@@ -230,13 +230,15 @@ class NoCheckpoint:
         raise ValueError(f"Checkpoint.save: {self.why}")
 
 
-def leaves(structure):
+def leaves(structure, out=None):
     """The arrays of nested tuples (the kernels' named tuples), depth first, in order."""
-    if isinstance(structure, np.ndarray):
-        return [structure]
-    if isinstance(structure, tuple):
-        return [a for part in structure for a in leaves(part)]
-    return []
+    out = [] if out is None else out
+    for part in structure:
+        if isinstance(part, np.ndarray):
+            out.append(part)
+        elif isinstance(part, tuple):
+            leaves(part, out)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -259,7 +261,8 @@ class Checkpoint:
         What a continued run must match (scheme, method, mode, loop, dt, bodies, Newton
         iterations).
     arrays : tuple of ndarray
-        Copies of the run's arrays, in ``leaves((state, sweep, loop, monitor))`` order.
+        The run's arrays as it ended (read-only), in ``leaves((state, sweep, loop, monitor))``
+        order.
     counters : tuple of int
         (most Newton iterations used, unconverged steps).
 
@@ -270,7 +273,7 @@ class Checkpoint:
     step: int
     h: float
     run: dict           # what the continued run must match: scheme, method, mode, loop, ...
-    arrays: tuple       # leaves((state, sweep, loop, monitor)), copied
+    arrays: tuple       # leaves((state, sweep, loop, monitor)), read-only
     counters: tuple     # (most Newton iterations used, unconverged steps)
 
     @property
@@ -346,7 +349,9 @@ class Checkpoint:
 
     @classmethod
     def of(cls, step, h, run, structures, counters):
-        arrays = tuple(a.copy() for a in leaves(structures))
+        """The checkpoint of a run that has ended: its own arrays, made read-only (the run is
+        over and nothing writes them again; no copy: a million bodies' state is not doubled)."""
+        arrays = tuple(leaves(structures))
         for a in arrays:
             a.flags.writeable = False
         return cls(step=int(step), h=float(h), run=dict(run), arrays=arrays,

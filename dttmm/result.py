@@ -186,6 +186,15 @@ class Result:
         closure over the model."""
         return (_restored, ({name: getattr(self, name) for name in FIELDS},))
 
+    def _timed(self, wall_time):
+        """This Result with its wall_time set (a solver's last act: no other field changes, so
+        nothing is checked or copied again)."""
+        timed = object.__new__(Result)
+        object.__setattr__(timed, "_values", dict(object.__getattribute__(self, "_values"),
+                                                  wall_time=float(wall_time)))
+        object.__setattr__(timed, "_derivation", object.__getattribute__(self, "_derivation"))
+        return timed
+
     def replace(self, **changes):
         """A copy with some fields changed.
 

@@ -9,7 +9,6 @@ and collects the recorded samples (recording.py).
 """
 import time
 import warnings
-from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -33,10 +32,10 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
                            Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
-from .feedback import Progress, compile_notice
+from .feedback import Progress
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
-from .model import Model, children_of, output_section
+from .model import Model, children_of, model_fact, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
                         model_fingerprint)
@@ -204,14 +203,16 @@ def _initial_deflections(model, state):
         state.defl_rate[k] = u * model.hinge_params[k, RATE_0][0] + np.cross(w_p, state.defl[k])
 
 
-def kernel_params(model, beams=None):
-    """The frozen model's arrays as the kernels read them (kernels/loop.py::Params)."""
+@model_fact
+def kernel_params(model):
+    """The frozen model's arrays as the kernels read them (kernels/loop.py::Params), once per
+    model: the kernels read them and never write them."""
     lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
     # writable copies of the model's read-only arrays (numba types read-only arrays apart, and
     # every kernel would compile twice)
     return Params(body_params=np.array(model.body_params), hinge_kind=np.array(model.hinge_kind),
                   hinge_params=np.array(model.hinge_params), gravity=np.array(model.gravity),
-                  beams=beam_tables(model) if beams is None else beams,
+                  beams=beam_tables(model),
                   locked=np.array(model.ground_locked), lock_rel=lock_rel,
                   mass_center_inertia=np.array(model.body_mass_center_inertia),
                   tip_pinned=bool(model.tip_pinned),
@@ -237,15 +238,18 @@ def joint_drives(model):
     return table
 
 
+@model_fact
 def has_coordinates(model):
     return bool(np.isin(model.hinge_kind, (REVOLUTE, UNIVERSAL, PRISMATIC)).any())
 
 
+@model_fact
 def has_loops(model):
     """Closing joints other than a chain's pinned tip (kernels/closure.py)."""
     return model.n_closures > 0 and not model.tip_pinned
 
 
+@model_fact
 def full_tree(model, full_state=False):
     """Whether the model runs in the full-state tree sweep (mode "riccati-joints",
     docs/assembly.md "Trees with joints"): joints with coordinates anywhere, closing joints, a
@@ -324,7 +328,13 @@ def loop_tables(model):
     """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
     kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
-    loop_columns."""
+    loop_columns.  Each call's own copy (a run writes its scratch) of the tables built once
+    per model."""
+    return Loops(*(a.copy() for a in _loop_tables(model)))
+
+
+@model_fact
+def _loop_tables(model):
     n = model.n_bodies
     kind, owner, v1, v2, v3, coordinate, law = constraint_rows(
         model, None if has_loops(model) else ())
@@ -333,6 +343,8 @@ def loop_tables(model):
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
     act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body)
+    nb = n if r else 0          # the rows' scratch per body (kernels/closure.py; none without
+    st = 2 * nb + 1 if r else 0  # rows: a million bodies' 900 B each)
     up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
     col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
@@ -341,23 +353,23 @@ def loop_tables(model):
                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
                  ground_rot=np.array(model.ground_rotation, dtype=float),
                  ground_motion=np.zeros((4, 3)), coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
-                 z_save=np.zeros((r + 1, 2 * n + 1, 12)),
-                 nu_save=np.zeros((r + 1, n, 3)), tau_save=np.zeros((r + 1, n, 3)),
+                 z_save=np.zeros((r + 1, st, 12)),
+                 nu_save=np.zeros((r + 1, nb, 3)), tau_save=np.zeros((r + 1, nb, 3)),
                  delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
-                 r_out=np.zeros((n, 3)), v_out=np.zeros((n, 3)), g=np.zeros(r),
+                 r_out=np.zeros((nb, 3)), v_out=np.zeros((nb, 3)), g=np.zeros(r),
                  gd=np.zeros(r), col_body=col_body, col_load=np.zeros((r + 1, 2, 6)),
                  up_ptr=up_ptr, up_idx=np.array([c for u in ups for c in u], dtype=np.int64),
                  act_ptr=np.array(act_ptr, dtype=np.int64),
                  act_idx=np.array(act_idx, dtype=np.int64), act=act,
-                 all_bodies=np.arange(n, dtype=np.int64),
+                 all_bodies=np.arange(nb, dtype=np.int64),
                  all_rows=np.arange(r, dtype=np.int64),
                  band=np.array(band, dtype=np.int64),
                  colrow_ptr=np.cumsum([0] + [len(c) for c in colrows]).astype(np.int64),
                  colrow_idx=np.array([q for c in colrows for q in c], dtype=np.int64),
-                 p_col=np.zeros((r + 1, 2 * n + 1, 6)), port_col=np.zeros((r + 1, n, 6)),
-                 h_store=np.zeros((n, 3, 6)), k_store=np.zeros((r + 1, n, 3)),
-                 free_store=np.zeros((n, 4), dtype=np.int64),
-                 p_comb=np.zeros((2 * n + 1, 6)), k_comb=np.zeros((n, 3)),
+                 p_col=np.zeros((r + 1, st, 6)), port_col=np.zeros((r + 1, nb, 6)),
+                 h_store=np.zeros((nb, 3, 6)), k_store=np.zeros((r + 1, nb, 3)),
+                 free_store=np.zeros((nb, 4), dtype=np.int64),
+                 p_comb=np.zeros((st, 6)), k_comb=np.zeros((nb, 3)),
                  eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 10)),
                  stats=np.zeros(4))
 
@@ -373,6 +385,7 @@ def _loop_info(loops):
             "loop_rate_residual_unprojected": float(loops.stats[1])}
 
 
+@model_fact
 def _iterates(model, full_state):
     """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
     Jacobian exact only to O(dt) terms (kernels/joint.py, step.py::_welded): their steps iterate
@@ -435,6 +448,7 @@ def _drive_number(value, who, t):
     return x
 
 
+@model_fact
 def beam_tables(model):
     """(body_kind, beam_params, modal integrals, offsets of each body's modal coordinates,
     [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI]) for the kernels (docs/beam.md, "Mode
@@ -513,36 +527,35 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     force, torque, line_load = _loads(model, [0.0])
     joint_input = _joint_inputs(model, [0.0], state, dt)
     try:
-        with compile_notice():
-            if fused:       # the fused loop's own sweep (compiles nothing else)
-                status = _fused_start(*fused, Run(
-                    params, settings._replace(newton_max=0, start=True), state, sweep,
-                    Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                           g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
-                           line_load=line_load, joint_input=joint_input,
-                           closure_target=np.zeros((1, len(loops.kind), 3))),
-                    _record(0, n, len(state.eta)), monitor))
-            else:
-                set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
-                if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
-                    loops.target[:, :] = closure_targets(model, [0.0], loops)[0]  # spring's rest
-                    loops.step_coef[:] = 0.0        # the springs' forces explicit
+        if fused:       # the fused loop's own sweep (compiles nothing else)
+            status = _fused_start(*fused, Run(
+                params, settings._replace(newton_max=0, start=True), state, sweep,
+                Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
+                       g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
+                       line_load=line_load, joint_input=joint_input,
+                       closure_target=np.zeros((1, len(loops.kind), 3))),
+                _record(0, n, len(state.eta)), monitor))
+        else:
+            set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
+            if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
+                loops.target[:, :] = closure_targets(model, [0.0], loops)[0]  # spring's rest
+                loops.step_coef[:] = 0.0        # the springs' forces explicit
 
-                def start():
-                    return kstep.initial_accelerations(params, settings, state, sweep,
-                                                       (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                       force[0], torque[0], line_load[0],
-                                                       joint_input[0], loops)
+            def start():
+                return kstep.initial_accelerations(params, settings, state, sweep,
+                                                   (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                                                   force[0], torque[0], line_load[0],
+                                                   joint_input[0], loops)
+            status = start()
+            forces = closure_forces(model, loops)
+            if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
+                for r, law, who in forces:  # force rows leave q, q' in loops.g, gd
+                    loops.target[r, 2] = _drive_number(law(0.0, loops.g[r], loops.gd[r]),
+                                                       who, 0.0)
                 status = start()
-                forces = closure_forces(model, loops)
-                if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
-                    for r, law, who in forces:  # force rows leave q, q' in loops.g, gd
-                        loops.target[r, 2] = _drive_number(law(0.0, loops.g[r], loops.gd[r]),
-                                                           who, 0.0)
-                    status = start()
-                for r in np.nonzero(loops.coordinate >= 0)[0]:   # the drives' rates at t = 0
-                    loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = (
-                        loops.target[r, 1] if loops.law[r, 0] == MOTION else loops.gd[r])
+            for r in np.nonzero(loops.coordinate >= 0)[0]:   # the drives' rates at t = 0
+                loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = (
+                    loops.target[r, 1] if loops.law[r, 0] == MOTION else loops.gd[r])
     except np.linalg.LinAlgError as err:
         raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
@@ -827,11 +840,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     if has_loops(model):
-        if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
-            check_runs_in_sweeps(model, "simulate", moving_ground=True)
-            model = assemble(model)     # the loops closed at t = 0 first (docs/loops.md; it
-        else:                           # refuses a drive the loops lock)
-            check_drives_move(model, "simulate")
+        model = _closed(model)
     t_end = _check_positive("t_end", t_end)
     adaptive = rtol is not None
     if adaptive:
@@ -948,7 +957,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     ws = Workspace(model, fused=fused)
     state = ws.state
     n = model.n_bodies
-    params = kernel_params(model, ws.beams)
+    params = kernel_params(model)
     settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
                         newton_tol=newton_tol, record_every=1,
                         max_step_error=max_step_error,
@@ -1016,7 +1025,6 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     recording = Recording(keys, keep, None if stream is None else SampleStream.create(
         stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)))
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
-    first = done
 
     # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
     # one step per chunk
@@ -1089,10 +1097,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         step_limit); a singular matrix found in numpy (the general loop's small solves) stops
         the run."""
         try:
-            with compile_notice() if first_step == first else nullcontext():
-                runner(loop, Run(params, settings._replace(h=h, record_every=every,
-                                                           max_step_error=step_limit),
-                                 state, ws.sweep, inputs, rec, monitor), info)
+            runner(loop, Run(params, settings._replace(h=h, record_every=every,
+                                                       max_step_error=step_limit),
+                             state, ws.sweep, inputs, rec, monitor), info)
         except np.linalg.LinAlgError as err:
             raise DivergenceError(first_step + 1, t_first, f"a matrix of the sweep is singular "
                                   f"somewhere in steps {first_step + 1}.."
@@ -1123,7 +1130,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                          NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
                                       "lie on no grid to continue on; run again to a later "
                                       "t_end, or use fixed steps (dt) to resume"))
-        return result.replace(wall_time=time.perf_counter() - wall0)
+        return result._timed(time.perf_counter() - wall0)
 
     bar = Progress(n_steps - done, progress)
     fastest = _fastest_rate(state.omega[None])      # (rad/s, body) over the samples
@@ -1202,7 +1209,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             spring = _drive_spring_energy(user_model, result.joint_coordinates, len(work))
             work = work + spring - spring[0]
         result = result.replace(energy_work=work)
-    return result.replace(wall_time=time.perf_counter() - wall0)
+    return result._timed(time.perf_counter() - wall0)
 
 
 def load_stream(model, path):
@@ -1377,7 +1384,7 @@ def _fastest_rate(omega):
     MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
     if omega.shape[1] == 0:
         return (0.0, 0)
-    squares = np.einsum("mki,mki->mk", omega, omega).max(axis=0)
+    squares = (omega * omega).sum(axis=2).max(axis=0)
     k = int(np.argmax(squares))
     return (float(np.sqrt(squares[k])), k)
 
@@ -1403,6 +1410,7 @@ _MODE_NAMES = ["riccati-full", "riccati-reduced", "direct-reduced", "direct-full
                "riccati-joints"]
 
 
+@model_fact
 def check_supported(model, scheme, method="riccati", full_state=False):
     """Refuse, before a run, what the solver does not implement for this model: an element
     kind whose declaration (elements/kinds.py) does not list the scheme; the energy-momentum
@@ -1526,12 +1534,12 @@ def _initial_mass_center_velocities(model, rot, omega):
     return v_c
 
 
+@model_fact
 def kernel_model(model):
     """The model the kernels integrate, and the kernel index of each of the model's bodies
-    (results are mapped back, recording.Recording).  Two kinds of massless rigid body, welded
-    to their
-    parent, stand in where a sweep needs a frame or a point that the model gives implicitly
-    (docs/topology.md, "What the kernels integrate"):
+    (results are mapped back, recording.Recording).  Three kinds of massless rigid body,
+    welded to their parent, stand in where a sweep needs a frame or a point that the model
+    gives implicitly (docs/topology.md, "What the kernels integrate"):
     - an end section, welded to a beam's end with zero length, carries the section's rotation
       history (docs/beam.md, "End sections") where a hinge there needs it: an elastic hinge or
       a joint with coordinates, or in a tree any hinge but a ball joint, except a lone weld on
@@ -1547,6 +1555,12 @@ def kernel_model(model):
       its rotation, angular velocity, input loads and joint are the section's).
     The mass, momentum and energy of all three are zero; a chain without them is the model
     itself."""
+    km, keep = _kernel_model(model)
+    keep.flags.writeable = False
+    return km, keep
+
+
+def _kernel_model(model):
     n = model.n_bodies
     chain = model.is_chain
     children = children_of(model.parent)
@@ -1687,6 +1701,7 @@ def _unsupported_cause(model, code, where):
     return f"simulate: {where} does not support {what}"
 
 
+@model_fact
 def _beam_tips(model):
     """Per beam: (name, length, its modal coordinates' slice, the mode shapes at its tip)."""
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -1742,6 +1757,17 @@ def _failure_cause(model, mode, info, monitor, settings):
         return _singular_cause(model, mode, int(info[2]), "step")
     return ("the state became NaN or infinite (the step is too large for the motion, or the "
             "model is unstable)")
+
+
+@model_fact
+def _closed(model):
+    """The model with its loops closed at t = 0 (docs/loops.md): itself where they are closed
+    to 1e-10, else dttmm.assemble's (which refuses a drive the loops lock), once per model."""
+    if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
+        check_runs_in_sweeps(model, "simulate", moving_ground=True)
+        return assemble(model)
+    check_drives_move(model, "simulate")
+    return model
 
 
 def richardson_extrapolation(coarse, fine):

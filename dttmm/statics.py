@@ -225,7 +225,7 @@ class _Configuration:
         # one workspace for every evaluation (the beams' tables do not change)
         self.mode = solver._mode(km, "riccati", False)
         self.ws = solver.Workspace(km)
-        self.params = solver.kernel_params(km, self.ws.beams)
+        self.params = solver.kernel_params(km)
         self.settings = Settings(mode=self.mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0)
                                  .array(), newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)

@@ -1,9 +1,11 @@
 """What a run gives back and tells its user: the last step lands on t_end, the final state is
 always recorded, wall_time covers the whole call, a progress bar on long runs, a note while the
 kernels compile, and the public names at the top level."""
+import threading
 import time
 from importlib.metadata import version
 
+import numba
 import numpy as np
 
 import dttmm
@@ -56,20 +58,38 @@ def test_a_progress_bar_on_long_runs_only(capsys, monkeypatch):
     assert capsys.readouterr().err == ""
 
 
-def test_a_note_while_kernels_compile_once(capsys, monkeypatch):
-    """A kernel call that has not returned after COMPILE_NOTICE_AFTER seconds is compiling:
-    stderr says so once per process; a quick call says nothing."""
-    monkeypatch.setattr(feedback, "_noticed", False)
-    monkeypatch.setattr(feedback, "COMPILE_NOTICE_AFTER", 0.05)
-    with feedback.compile_notice():
-        pass
+def _fresh_kernel(module):
+    """A numba function never compiled before, as if defined in `module`."""
+    def kernel(x):
+        total = 0.0
+        for i in range(x.shape[0]):
+            total += np.sin(x[i]) * np.cos(x[i]) + np.sqrt(abs(x[i]))
+        return total
+    kernel.__module__ = module
+    kernel.__name__ = kernel.__qualname__ = "fresh_kernel"
+    return numba.njit(cache=False)(kernel)
+
+
+def test_a_line_while_kernels_compile_says_what_and_how_long(capsys, monkeypatch):
+    """A compilation of dttmm's kernels that runs past COMPILE_NOTICE_AFTER seconds is said on
+    stderr with its function and the seconds so far, and when it ends; a compiled call, and a
+    compilation of a user's own numba function, say nothing (issue 30: no thread per call)."""
+    monkeypatch.setattr(feedback, "COMPILE_NOTICE_AFTER", 0.0)
+    threads = threading.active_count()
+    kernel = _fresh_kernel("dttmm.kernels.fresh")
+    kernel(np.ones(3))
+    err = capsys.readouterr().err
+    assert "compiling the numba kernels (fresh_kernel)" in err and "s so far" in err
+    assert "compiled fresh_kernel in" in err
+    kernel(np.ones(4))                                  # compiled: nothing
+    _fresh_kernel("users_module")(np.ones(3))          # not ours: nothing
     assert capsys.readouterr().err == ""
-    with feedback.compile_notice():
-        time.sleep(0.5)
-    assert "compiling the numba kernels" in capsys.readouterr().err
-    with feedback.compile_notice():
-        time.sleep(0.5)
-    assert capsys.readouterr().err == ""
+    assert threading.active_count() <= threads + 1     # one watcher per process at most
+    model = rigid_chain(2)
+    simulate(model, 0.01, 1e-3)
+    before = threading.active_count()
+    simulate(model, 0.01, 1e-3)
+    assert threading.active_count() == before
 
 
 def test_the_public_names_are_at_the_top_level():

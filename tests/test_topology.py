@@ -166,7 +166,7 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         settings = Settings(kstep.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
                             1, np.inf, False, False)
         ground = (np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3))
-        status = kstep.initial_accelerations(kernel_params(odd, ws.beams), settings, ws.state,
+        status = kstep.initial_accelerations(kernel_params(odd), settings, ws.state,
                                              ws.sweep, ground, np.zeros((2, 3)),
                                              np.zeros((2, 3)), np.zeros((2, 3)),
                                              np.zeros((2, 2, 3)), loop_tables(odd))
