@@ -236,6 +236,14 @@ def model_fact(function):
     return fact
 
 
+def kernel_array(model, name, dtype=None):
+    """The model's array `name` as the kernels take it, writable: the model's own memory where
+    it has it (Model._freeze), else a copy.  The kernels read it and never write it."""
+    own = model.__dict__.get("_kernel_arrays", {}).get(name)
+    value = np.array(getattr(model, name)) if own is None else own
+    return value if dtype is None else value.astype(dtype, copy=False)
+
+
 @dataclass(frozen=True, eq=False)
 class Model:
     """A frozen system: flat float arrays for the kernels plus the description it came from.
@@ -382,12 +390,24 @@ class Model:
     closure_drives: tuple = ()   # per closing joint, per coordinate: a drive's parameters or None
 
     def __post_init__(self):
-        # frozen through and through: the arrays cannot be written either (a negative mass
-        # written after build() would otherwise simulate); the solvers hand their kernels copies
+        self._freeze()
+
+    def _freeze(self):
+        # frozen through and through: the arrays the model shows cannot be written (a negative
+        # mass written after build() would otherwise simulate).  The kernels, which need
+        # writable arrays (numba compiles read-only ones apart), read the same memory through
+        # kernel_array: the model's own arrays are kept writable behind read-only views, so a
+        # million bodies' tables are not copied for them
+        own = {}
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, np.ndarray):
+                if value.flags.writeable and value.flags.owndata:
+                    own[f.name] = value
+                    value = value.view()
+                    object.__setattr__(self, f.name, value)
                 value.flags.writeable = False
+        object.__setattr__(self, "_kernel_arrays", own)
 
     def __getstate__(self):
         # (a pickle carries the fields, not the facts derived from them: model_fact)
@@ -395,9 +415,7 @@ class Model:
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        for value in state.values():
-            if isinstance(value, np.ndarray):
-                value.flags.writeable = False
+        self._freeze()
 
     @property
     def tip_pinned(self):

@@ -68,7 +68,10 @@ class Recording:
         Streamed: read-only memory maps of the stream's files."""
         if self.stream is not None:
             return self.stream.arrays()
-        return {key: np.concatenate(blocks) for key, blocks in self.blocks.items()}
+        for key, blocks in self.blocks.items():     # one key at a time into one block (the
+            if len(blocks) > 1:                     # samples' memory is never held twice over)
+                blocks[:] = [np.concatenate(blocks)]
+        return {key: blocks[0] for key, blocks in self.blocks.items()}
 
     @property
     def last_step(self):

@@ -35,7 +35,7 @@ from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
-from .model import Model, children_of, model_fact, output_section
+from .model import Model, children_of, kernel_array, model_fact, output_section
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
                         model_fingerprint)
@@ -134,8 +134,9 @@ class Workspace:
     """Preallocated state and scratch of one run (nothing here is shared between runs): the
     state the loops advance (kernels/loop.py::State), the assembly's scratch (Sweep) and the
     beams' tables (beam_tables).  fused: the run takes a fused ball-chain or ball-tree loop,
-    which reads the reduced sweep's arrays only (red_*): the full-state sweep's are left
-    empty (about 6 KB per body: a million bodies' gigabytes)."""
+    which reads the reduced sweep's recursion arrays only (red_s, red_p, red_tinv, red_t,
+    red_aq): the full-state sweep's and the general loop's reduced maps (red_v, red_phi) are
+    left empty (about 6.5 KB per body: a million bodies' gigabytes)."""
 
     def __init__(self, model: Model, fused=False):
         n = model.n_bodies
@@ -163,7 +164,8 @@ class Workspace:
             known_loads=np.zeros((n_el, 12)), split=np.zeros(n_sst, dtype=np.int64),
             s=np.zeros((n_sst, 6, 6)), p=np.zeros((n_sst, 6)), tinv=np.zeros((n_el, 6, 6)),
             t=np.zeros((n_el, 6)), g=np.zeros((n_el, 6, 3)), gv=np.zeros((n_el, 6)),
-            red_v=np.zeros((n, 6, 7)), red_phi=np.zeros((n, 3, 7)), red_s=np.zeros((n + 1, 3, 3)),
+            red_v=np.zeros((n_full, 6, 7)), red_phi=np.zeros((n_full, 3, 7)),
+            red_s=np.zeros((n + 1, 3, 3)),
             red_p=np.zeros((n + 1, 3)), red_tinv=np.zeros((n, 3, 3)), red_t=np.zeros((n, 3)),
             red_aq=np.zeros((n + 1, 6)), dir_z=np.zeros((n_sst, 12, 6)),
             dir_o=np.zeros((n_sst, 12)), port_s=np.zeros((n_full, 3, 3)),
@@ -208,15 +210,16 @@ def kernel_params(model):
     """The frozen model's arrays as the kernels read them (kernels/loop.py::Params), once per
     model: the kernels read them and never write them."""
     lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
-    # writable copies of the model's read-only arrays (numba types read-only arrays apart, and
-    # every kernel would compile twice)
-    return Params(body_params=np.array(model.body_params), hinge_kind=np.array(model.hinge_kind),
-                  hinge_params=np.array(model.hinge_params), gravity=np.array(model.gravity),
-                  beams=beam_tables(model),
-                  locked=np.array(model.ground_locked), lock_rel=lock_rel,
-                  mass_center_inertia=np.array(model.body_mass_center_inertia),
+    # the model's arrays writable (numba types read-only arrays apart, and every kernel would
+    # compile twice), its own memory where it has it: kernel_array
+    return Params(body_params=kernel_array(model, "body_params"),
+                  hinge_kind=kernel_array(model, "hinge_kind"),
+                  hinge_params=kernel_array(model, "hinge_params"),
+                  gravity=kernel_array(model, "gravity"), beams=beam_tables(model),
+                  locked=kernel_array(model, "ground_locked"), lock_rel=lock_rel,
+                  mass_center_inertia=kernel_array(model, "body_mass_center_inertia"),
                   tip_pinned=bool(model.tip_pinned),
-                  parent=np.array(model.parent, dtype=np.int64),
+                  parent=kernel_array(model, "parent", np.int64),
                   joint_drive=joint_drives(model))
 
 
@@ -505,8 +508,8 @@ def beam_tables(model):
                 gram = (u * wa) @ u.T
                 ends[k, r:r + ma, 5 + m:5 + m + ma] = 0.5 * (gram + gram.T)
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
-    return (np.array(model.body_kind), np.array(model.beam_params), moments, mode_off, ends,
-            factors)
+    return (kernel_array(model, "body_kind"), kernel_array(model, "beam_params"), moments,
+            mode_off, ends, factors)
 
 
 def _steps(t_end, dt):
@@ -1178,6 +1181,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                 raise DivergenceError(done, done * dt, runaway, partial(done))
     finally:
         bar.close()
+    rec = inputs = force = torque = line_load = joint_input = None  # (the chunks' buffers)
     if recording.last_step != n_steps:         # the final state is always recorded
         recording.add_state(state, history_values, n_steps)
     checkpoint = Checkpoint.of(n_steps, dt, dict(run_info, method=method, bodies=n,
