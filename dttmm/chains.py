@@ -1,4 +1,5 @@
 """Ready-made chains and trees used by the examples, tests and benchmarks."""
+import numba
 import numpy as np
 
 from .elements import BallJoint, FixedHinge, RigidBody
@@ -100,6 +101,16 @@ def binary_tree(depth, gravity=(0.0, -9.81, 0.0)):
     return system.build()
 
 
+@numba.njit
+def arm_servo(t, q, q_dot):
+    """The arm's joint-1 feedback law compiled with numba (drive "pd-njit"): kp (target - q) +
+    kd (target' - q'), kp = 200 N m/rad, kd = 20 N m s/rad, target = 0.5 t + 0.2 (1 - cos 2t)
+    rad; the same law as drive "pd"'s PDTracking."""
+    target = 0.5 * t + 0.2 * (1.0 - np.cos(2.0 * t))
+    rate = 0.5 + 0.4 * np.sin(2.0 * t)
+    return 200.0 * (target - q) + 20.0 * (rate - q_dot)
+
+
 def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=False):
     """The arm of examples/arm.py (docs/joints.md): link 1 on a revolute joint at the origin
     about world y; link 2 on a revolute joint at link 1's output point about link 1's body z;
@@ -109,17 +120,21 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
     with a 50 N/m spring and a 0.5 N s/m damper.  All along +x, joint 1 turning at 0.5 rad/s.
     drive "torque": 2 sin(pi t) N m on joint 1; "motion": joint 1's angle prescribed as
     0.5 t + 0.2 (1 - cos 2t) rad; "pd": joint 1 tracks that angle by PD feedback, kp = 200 N
-    m/rad, kd = 20 N m s/rad (a PDTracking, inside the compiled loop).  flexible: link 2 is
+    m/rad, kd = 20 N m s/rad (a PDTracking, inside the compiled loop); "pd-njit": the same
+    law written as a numba-compiled JointForce (arm_servo), also inside it.  flexible: link 2 is
     the paper's beam 4 (1 m, 20 mm square section, E = 2.5e10 Pa, rho = 3300 kg/m^3).
     undriven: no drive on joint 1 and no damper
     (the energy test)."""
     from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
                            PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
     from .profiles import ProfileForce, profile
-    if drive not in ("torque", "motion", "pd"):
-        raise ValueError(f"arm: drive must be 'torque', 'motion' or 'pd', got {drive!r}")
+    if drive not in ("torque", "motion", "pd", "pd-njit"):
+        raise ValueError(f"arm: drive must be 'torque', 'motion', 'pd' or 'pd-njit', got "
+                         f"{drive!r}")
     if undriven:
         first = None
+    elif drive == "pd-njit":
+        first = JointForce(arm_servo)
     elif drive == "torque":
         first = JointForce(ProfileForce(profile(       # 2 sin(pi t), N m
             {"profile": "sine", "amplitude": 2.0, "frequency": 0.5})))

@@ -19,7 +19,8 @@ from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements._checks import is_text
-from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, known_force, runs_in_loop
+from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
+                             known_force, runs_in_loop)
 from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -227,18 +228,31 @@ def joint_drives(model):
     """(n, 2, 4): each joint coordinate's drive as the kernels read it, [kind, stiffness,
     damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
     (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
-    part in the inputs (_joint_inputs; kernels/joint.py::drive_value)."""
+    part in the inputs (_joint_inputs; kernels/joint.py::drive_value); a compiled JointForce
+    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest."""
     table = np.zeros((model.n_bodies, 2, 4))
     table[:, :, 0] = -1.0
+    compiled = 0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
             if d is None:
                 continue
-            if d["kind"] == PD or (d["kind"] == FORCE and d.get("of_time")):
+            if d.get("compiled"):
+                table[k, i] = [COMPILED_FORCE, 0.0, 0.0, compiled]
+                compiled += 1
+            elif d["kind"] == PD or (d["kind"] == FORCE and d.get("of_time")):
                 table[k, i] = [SPRING_DAMPER, d["stiffness"], d["damping"], 0.0]
             else:
                 table[k, i] = [d["kind"], d["stiffness"], d["damping"], d["rest"]]
     return table
+
+
+@model_fact
+def compiled_forces(model):
+    """(k,) int64: the addresses of the compiled JointForces' C callbacks, in the order of
+    joint_drives (elements/drives.py::compiled_force; each process compiles its own)."""
+    return np.array([compiled_force(d["function"]).address for drives in model.drives
+                     for d in drives if d is not None and d.get("compiled")], dtype=np.int64)
 
 
 @model_fact
@@ -415,6 +429,9 @@ def _joint_inputs(model, times, state=None, dt=0.0):
             if d is None or d["kind"] not in (FORCE, MOTION, PD):
                 continue
             who = f"the drive of '{model.hinge_names[k]}' (coordinate {i + 1})"
+            if d.get("compiled"):           # (the loop calls it at the step's time)
+                out[:, k, i, 0] = times
+                continue
             for j, t in enumerate(times):
                 if d["kind"] == MOTION:
                     out[j, k, i] = [_drive_number(f(t), who, t) for f in d["function"]]
@@ -548,7 +565,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 return kstep.initial_accelerations(params, settings, state, sweep,
                                                    (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                                                    force[0], torque[0], line_load[0],
-                                                   joint_input[0], loops)
+                                                   joint_input[0], loops, compiled_forces(model))
             status = start()
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
@@ -1007,7 +1024,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
     else:
         loop_name, runner = "general", run_steps
-        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops)
+        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
+                                  compiled_forces(model).copy())    # (the run's own)
         if scheme == "paper":
             keys += ["v_st", "v_c"]
     run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name,

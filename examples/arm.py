@@ -4,14 +4,15 @@
 
 Link 1 turns on a revolute joint about world y (driven: a torque 2 sin(pi t) N m, the angle
 0.5 t + 0.2 (1 - cos 2t) rad prescribed, or PD feedback tracking that angle, kp = 200 N m/rad,
-kd = 20 N m s/rad, inside the compiled loop); link 2 on a revolute joint about link 1's z axis;
-link 3 on a universal joint (link 2's z, then link 3's y); body 4 slides along link 3's x axis
-on a 50 N/m spring with a 0.5 N s/m damper (dttmm.chains.arm).  --flexible makes link 2 the
-paper's beam 4.  The joints' coordinates carry the integration and the step is swept leaves to
-root in full state (docs/joints.md).  CSV: t, x1, y1, z1, x2, y2, z2, x3, y3, z3 (links 1-3's
-output points), x4, y4, z4 (body 4's mass centre), s4 (its slide from the start, m), tau1
-(joint 1's torque: applied, needed by the prescribed motion, or the feedback's, N m), every
-0.01 s.
+kd = 20 N m s/rad, inside the compiled loop: --drive pd as dttmm.PDTracking, --drive pd-njit
+as the same law written as an @numba.njit JointForce, dttmm.chains.arm_servo); link 2 on a
+revolute joint about link 1's z axis; link 3 on a universal joint (link 2's z, then link 3's
+y); body 4 slides along link 3's x axis on a 50 N/m spring with a 0.5 N s/m damper
+(dttmm.chains.arm).  --flexible makes link 2 the paper's beam 4.  The joints' coordinates
+carry the integration and the step is swept leaves to root in full state (docs/joints.md).
+CSV: t, x1, y1, z1, x2, y2, z2, x3, y3, z3 (links 1-3's output points), x4, y4, z4 (body 4's
+mass centre), s4 (its slide from the start, m), tau1 (joint 1's torque: applied, needed by the
+prescribed motion, or the feedback's, N m), every 0.01 s.
 """
 import argparse
 import sys
@@ -29,9 +30,10 @@ def main(argv=None):
     ap.add_argument("--dt", type=float, default=1e-4, help="time step, s (default 1e-4)")
     ap.add_argument("--method", choices=["riccati", "direct"], default="riccati",
                     help="assembly (joints with coordinates need riccati)")
-    ap.add_argument("--drive", choices=["torque", "motion", "pd"], default="torque",
+    ap.add_argument("--drive", choices=["torque", "motion", "pd", "pd-njit"], default="torque",
                     help="joint 1: a torque 2 sin(pi t) N m (default), its angle prescribed, or "
-                         "PD feedback tracking that angle")
+                         "PD feedback tracking that angle (a PDTracking, or the law as a "
+                         "numba-compiled JointForce)")
     ap.add_argument("--flexible", action="store_true", help="link 2 is the paper's beam 4")
     ap.add_argument("--csv", help="write the CSV columns above every 0.01 s")
     ap.add_argument("--plots", help="directory for the figures (PNG)")
@@ -92,7 +94,9 @@ def main(argv=None):
         ax[1, 1].set(xlabel="t, s", ylabel="N m",
                      title="Joint 1 torque (" + {"torque": "applied",
                                                  "motion": "needed by the prescribed angle",
-                                                 "pd": "the PD feedback's"}[args.drive] + ")")
+                                                 "pd": "the PD feedback's",
+                                                 "pd-njit": "the compiled PD law's"}[args.drive]
+                     + ")")
         fig.suptitle(f"Arm on revolute, universal and prismatic joints ({kind} link 2, "
                      f"drive {args.drive}; DT-TMM, dt = {args.dt:g} s)")
         fig.tight_layout()

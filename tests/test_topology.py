@@ -169,7 +169,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         status = kstep.initial_accelerations(kernel_params(odd), settings, ws.state,
                                              ws.sweep, ground, np.zeros((2, 3)),
                                              np.zeros((2, 3)), np.zeros((2, 3)),
-                                             np.zeros((2, 2, 3)), loop_tables(odd))
+                                             np.zeros((2, 2, 3)), loop_tables(odd),
+                                             np.zeros(0, dtype=np.int64))
         assert status == -element
 
 

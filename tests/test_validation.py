@@ -129,10 +129,12 @@ def test_direct_mode_fails_loudly_on_a_long_chain():
     assert np.all(np.isfinite(res.position_output))
 
 
-def test_the_model_is_read_only_and_the_kernels_see_writable_copies():
+def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
     """A negative mass written after build() must not simulate: the model's arrays refuse the
-    write.  The solvers hand their kernels writable copies, so no kernel is compiled a second
-    time for read-only arrays (numba types them apart)."""
+    write.  The solvers hand their kernels writable arrays (the model's own memory behind its
+    read-only views, model.kernel_array, or copies), so no kernel is compiled a second time
+    for read-only arrays (numba types them apart), also after a run's checkpoint has made its
+    own arrays read-only (a second run of each model)."""
     from dttmm import simulate_reference
     from dttmm.chains import arm, three_pendulum
     from dttmm.kernels import loop, step as kstep
@@ -142,6 +144,7 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_copies():
             model.body_params[0, 0] = -1.0
         with pytest.raises(ValueError, match="read-only"):
             model.gravity[1] = 0.0
+        simulate(model, 0.01, 1e-3)
         simulate(model, 0.01, 1e-3)
         simulate_reference(model, 0.01, rtol=1e-6, atol=1e-6)
     kernels = list(loop._SKELETONS.values()) + [kstep.initial_accelerations,

@@ -9,9 +9,13 @@ that motion needs (the Result records it).
 Forces that are linear in (q, q') with the rest known in time run inside the compiled loop,
 chunk by chunk (kernels/joint.py::drive_value: -k (q - rest) - c q' + f(t)): a SpringDamper, a
 PDTracking (k = kp, c = kd, f = kp target + kd target' + feedforward) and a JointForce of time
-alone (a profiles.ProfileForce, a scene's force profile).  A JointForce of (t, q, q') is a
-Python function the loop calls once per step.
+alone (a profiles.ProfileForce, a scene's force profile), and a JointForce whose function is
+numba-compiled (@numba.njit): the loop calls it at every iteration of every step, through a C
+callback of FORCE_SIGNATURE (compiled_force), linearized by differences
+(kernels/joint.py::drive_value).  A JointForce of (t, q, q') given as a Python function is
+called by the solver once per step.
 """
+import warnings
 from dataclasses import dataclass
 from typing import Callable, Optional
 
@@ -20,6 +24,31 @@ import numpy as np
 from ._checks import derivative, finite_scalar, is_text
 
 FORCE, SPRING_DAMPER, MOTION, PD = 0, 1, 2, 3      # a drive's kind (None: no drive)
+COMPILED_FORCE = 4      # (the kernels' table only: a FORCE drive whose function is compiled)
+FORCE_SIGNATURE = "float64(float64, float64, float64)"     # a compiled f(t, q, q_dot)
+
+_CALLBACKS = {}         # id(numba function) -> (it, its C callback of FORCE_SIGNATURE)
+
+
+def is_numba_function(function):
+    """Whether function is a numba-compiled (@numba.njit) function."""
+    from numba.core.registry import CPUDispatcher
+    return isinstance(function, CPUDispatcher)
+
+
+def compiled_force(function):
+    """The C callback of FORCE_SIGNATURE of a numba function f(t, q, q_dot), which the compiled
+    loop calls (kernels/joint.py::drive_value); compiled once per process and function (a
+    model pickled to another process carries the numba function, not the callback)."""
+    entry = _CALLBACKS.get(id(function))
+    if entry is None or entry[0] is not function:
+        from numba import cfunc
+        from numba.core.errors import NumbaExperimentalFeatureWarning
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            entry = _CALLBACKS[id(function)] = (function, cfunc(FORCE_SIGNATURE)(
+                function.py_func))
+    return entry[1]
 
 
 def _scalar_of(who, argument, value):
@@ -52,7 +81,10 @@ class JointForce:
     function : callable
         function(t, q, q_dot) -> one number: t in s, q in rad (or m), q_dot in rad/s (or m/s);
         returns the generalized force, N m (or N).  Called at (0, q0, q_dot0) when the model is
-        built.
+        built.  A numba-compiled function (``@numba.njit``, of three floats returning a float)
+        runs inside the compiled loop, at every Newton iteration of every step (a feedback law
+        then costs no Python per step); a Python function is called once per step, each step
+        then one compiled call (docs/joints.md, "Which drives run inside the compiled loop").
 
     Raises
     ------
@@ -69,6 +101,14 @@ class JointForce:
     >>> import dttmm
     >>> motor = dttmm.JointForce(lambda t, q, q_dot: (2.0 if t < 1.0 else 0.0) - 0.01 * q_dot)
     >>> joint = dttmm.RevoluteJoint(axis=[0, 0, 1], drive=motor)
+
+    A feedback law compiled with numba, which runs inside the compiled loop:
+
+    >>> import numba, numpy as np
+    >>> @numba.njit
+    ... def servo(t, q, q_dot):
+    ...     return 200.0 * (0.5 * np.sin(t) - q) - 20.0 * q_dot
+    >>> joint = dttmm.RevoluteJoint(axis=[0, 0, 1], drive=dttmm.JointForce(servo))
     """
     function: Callable[[float, float, float], float]
     kind = FORCE
@@ -81,9 +121,24 @@ class JointForce:
             value = self.function(0.0, q0, qd0)
         except TypeError as err:
             raise ValueError(f"{who}: drive function must take (t, q, q_dot): {err}") from None
+        except Exception as err:
+            if not is_numba_function(self.function):
+                raise
+            raise ValueError(f"{who}: drive function is a numba function that does not compile "
+                             f"as f(t, q, q_dot) of three floats ({type(err).__name__}: "
+                             f"{str(err).splitlines()[0] if str(err) else ''})") from None
         _scalar_of(who, "drive function(0, q0, q_dot0)", value)
+        compiled = is_numba_function(self.function)
+        if compiled:
+            try:
+                compiled_force(self.function)
+            except Exception as err:
+                raise ValueError(f"{who}: drive function is a numba function that does not "
+                                 f"compile with the signature {FORCE_SIGNATURE} "
+                                 f"({type(err).__name__}: {str(err).splitlines()[0]})") from None
         return dict(kind=FORCE, function=self.function, stiffness=0.0, damping=0.0, rest=0.0,
-                    of_time=bool(getattr(self.function, "of_time_only", False)))
+                    of_time=bool(getattr(self.function, "of_time_only", False)),
+                    compiled=compiled)
 
 
 @dataclass(frozen=True, eq=False)
@@ -286,8 +341,9 @@ def known_force(d, t):
 
 def runs_in_loop(d):
     """Whether the drive runs inside the compiled loop's chunks (module docstring): all but a
-    JointForce of the state, which the loop calls once per step."""
-    return d is None or d["kind"] != FORCE or bool(d.get("of_time"))
+    JointForce of the state given as a Python function, which the solver calls once per
+    step."""
+    return d is None or d["kind"] != FORCE or bool(d.get("of_time") or d.get("compiled"))
 
 
 DRIVE_CLASSES = (JointForce, SpringDamper, JointMotion, PDTracking)

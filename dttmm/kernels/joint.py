@@ -15,10 +15,12 @@ Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's incremen
 kernels/sweep.py::riccati_tree_full eliminates nu leaves to root (an articulated-body step).
 """
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core.extending import intrinsic
 
 from . import CONTRACT
-from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
+from ..elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
 from ..elements.hinges import AXIS_1, AXIS_2, BALL
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .mat3 import t_cross, t_lin3, t_mm, t_mv
@@ -106,14 +108,31 @@ def n_coordinates(kind):
     return 0
 
 
+@intrinsic
+def call_force(typingctx, address, t, q, qd):
+    """f(t, q, q') of the C function float64(float64, float64, float64) at address (an int64: a
+    compiled JointForce's callback, elements/drives.py::compiled_force): an indirect call, so
+    that the loop is compiled once for every such function (numba's first-class functions
+    would type each callback apart, or box a typed list on every call)."""
+    sig = types.float64(types.int64, types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(ir.DoubleType(), [ir.DoubleType()] * 3)
+        return builder.call(builder.inttoptr(args[0], fnty.as_pointer()), args[1:])
+    return sig, codegen
+
+
 @njit(cache=True, fastmath=CONTRACT)
-def drive_value(drive, given, q, qd, c1, c3, at_start):
+def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
     """(tau, d tau / d nu) of a free coordinate's drive at (q, q'), nu = q'' (q' = c3/c1 nu +
     const, q = nu / c1 + const over the step; both held at the consistent start).  drive:
     [kind, stiffness, damping, rest] (kind -1: none); given: a FORCE drive's value, or the part
     of a spring-damper's force known in time (a PDTracking's kp target + kd target' +
     feedforward, a JointForce of time alone; 0 for a SpringDamper; solver.joint_drives):
-        tau = -k (q - rest) - c q' + given."""
+        tau = -k (q - rest) - c q' + given.
+    A COMPILED_FORCE drive is f(t, q, q'), f the C callback at the address forces[int(rest)]
+    (a numba JointForce's, elements/drives.py::compiled_force), at the step's time t = given,
+    its slope by forward differences: d tau / d nu = (df/dq + c3 df/dq') / c1."""
     kind = int(drive[0])
     if kind == SPRING_DAMPER:
         tau = -drive[1] * (q - drive[3]) - drive[2] * qd + given
@@ -121,17 +140,28 @@ def drive_value(drive, given, q, qd, c1, c3, at_start):
         return tau, slope
     if kind == FORCE:
         return given, 0.0
+    if kind == COMPILED_FORCE:
+        address = forces[int(drive[3])]
+        tau = call_force(address, given, q, qd)
+        if at_start:
+            return tau, 0.0
+        dq = 1e-7 * (1.0 + abs(q))
+        dqd = 1e-7 * (1.0 + abs(qd))
+        f_q = (call_force(address, given, q + dq, qd) - tau) / dq
+        f_qd = (call_force(address, given, q, qd + dqd) - tau) / dqd
+        return tau, (f_q + c3 * f_qd) / c1
     return 0.0, 0.0
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1, c3, at_start,
-                        u, dof, tau_nu):
+                        u, dof, tau_nu, forces):
     """The joint's element about the guess (q, q', q'' and the parent's frame), written into
     u (12 x 13; module docstring): u[0:6, 0:6] = Phi, u[0:6, 6:9] = B (one column per
     coordinate), u[0:6, 12] = c, u[6:12, 6:12] = Psi, u[6:12, 0:3] = Bl.  dof[i]: FREE or
     PRESCRIBED per coordinate (0 past the joint's coordinates); tau_nu[i] = (tau0, tau', nu):
-    the drive's tau = tau0 + tau' nu of a free coordinate, a prescribed one's nu = q''.
+    the drive's tau = tau0 + tau' nu of a free coordinate, a prescribed one's nu = q''
+    (drive_value; forces: the compiled JointForces' callbacks' addresses).
     A ball joint is the same element with the three angular accelerations free and tau = 0.
     Jacobians hold the terms of order 1 and c3/c1 (the parent's w and q' follow nu and alpha_P
     by c3/c1); the O(1/c1) dependence of the axes on the parent's rotation is left out: the
@@ -171,7 +201,7 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
             tau_nu[i, 2] = qdd[i]
         else:
             dof[i] = FREE
-            tau, slope = drive_value(drive[i], given[i], q[i], qd[i], c1, c3, at_start)
+            tau, slope = drive_value(drive[i], given[i], q[i], qd[i], c1, c3, at_start, forces)
             tau_nu[i, 0] = tau - slope * qdd[i]
             tau_nu[i, 1] = slope
     if kind == PRISMATIC:

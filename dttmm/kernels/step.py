@@ -178,14 +178,17 @@ GeneralLoop = namedtuple("GeneralLoop", [
     "loops",                        # the closing joints and their scratch (kernels/closure.py)
     "at_guess",                     # (eta, eta', d, d') at the guess, for the loops' rows:
                                     # (total modes,) twice, (n, 3) twice (_iterate)
+    "forces",                       # (k,) int64: the compiled JointForces' C callbacks'
+                                    # addresses (kernels/joint.py::drive_value)
 ])
 
 
-def general_loop(n, n_eta, h, coef, histories, loops):
+def general_loop(n, n_eta, h, coef, histories, loops, forces):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
     paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (solver._station_histories);
     the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
-    joints (kernels/closure.py::Loops; no rows without them)."""
+    joints (kernels/closure.py::Loops; no rows without them).  forces: the compiled
+    JointForces' callbacks' addresses (solver.compiled_forces)."""
     c1, _ = _coefficients_py(h, coef)
     guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
                   np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)))
@@ -196,7 +199,8 @@ def general_loop(n, n_eta, h, coef, histories, loops):
                        np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                        tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
                        tuple(np.zeros((n, 2)) for _ in range(5)), loops,
-                       (np.zeros(n_eta), np.zeros(n_eta), np.zeros((n, 3)), np.zeros((n, 3))))
+                       (np.zeros(n_eta), np.zeros(n_eta), np.zeros((n, 3)), np.zeros((n, 3))),
+                       forces)
 
 
 def _coefficients_py(h, coef):
@@ -227,11 +231,13 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
     then each body's output) and every rigid body's mass centre (w1_c) has its own Newmark
     history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme").  joints =
-    (full_tree, q, q', q'', given): in the full-state tree sweep (RICCATI_JOINTS) ball joints and
-    joints with coordinates are JOINT elements (kernels/joint.py), linearized about the
-    coordinates' guess; given (n, 2): each JointForce drive's value over the step."""
+    (full_tree, q, q', q'', given, forces): in the full-state tree sweep (RICCATI_JOINTS) ball
+    joints and joints with coordinates are JOINT elements (kernels/joint.py), linearized about
+    the coordinates' guess; given (n, 2): each JointForce drive's value over the step (a
+    compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
+    addresses."""
     independent, w1_st, w1_c = stations
-    full_tree, q_j, qd_j, qdd_j, given = joints
+    full_tree, q_j, qd_j, qdd_j, given, forces = joints
     independent = independent and not at_start
     body_params, hinge_kind = params.body_params, params.hinge_kind
     hinge_params = params.hinge_params
@@ -257,7 +263,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
             joint_linearization(hk, hinge_params[k], params.joint_drive[k], given[k], rot_p,
                                 w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
-                                sweep.joint_dof[k], sweep.joint_tau_nu[k])
+                                sweep.joint_dof[k], sweep.joint_tau_nu[k], forces)
         elif hk == BALL:
             kind[jh] = EL_BALL
         elif hk == FIXED:
@@ -389,14 +395,15 @@ def _solve_tree(sw, parent, root_f, z):
 
 @njit(cache=True, fastmath=CONTRACT)
 def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
-                          joint_input, loops):
+                          joint_input, loops, forces):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
     force, torque, line_load (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates'
     inputs at t = 0 (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.
-    loops: the closing joints (kernels/closure.py), held at acceleration level.
+    loops: the closing joints (kernels/closure.py), held at acceleration level.  forces: the
+    compiled JointForces' callbacks' addresses (kernels/joint.py::drive_value).
     Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
@@ -418,7 +425,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
                               zero3, modal,
                               (False, np.zeros((n + 1, 3)), zero3),
                               (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
-                               joint_input[:, :, 2].copy(), joint_input[:, :, 0].copy()))
+                               joint_input[:, :, 2].copy(), joint_input[:, :, 0].copy(), forces))
     if unknown != 0:
         return -unknown
     known_loads = sweep.known_loads
@@ -694,7 +701,7 @@ def _iterate(loop, run, s, it):
     modal = (state.eta, state.eta_d, loop.w1e, loop.w3e, loop.eta_dd_star, state.eta_map)
     stations = (loop.histories[0], loop.histories[7], loop.histories[8])
     joints = (run.settings.mode == RICCATI_JOINTS, loop.joints[2], loop.joints[3],
-              loop.joints[4], inputs.joint_input[s, :, :, 0])
+              loop.joints[4], inputs.joint_input[s, :, :, 0], loop.forces)
     unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
                               loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s],
                               inputs.line_load[s], False,
