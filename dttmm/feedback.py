@@ -84,6 +84,16 @@ def _say(text):
     print(text, file=sys.stderr, flush=True)
 
 
+_noted = set()
+
+
+def note_once(key, text):
+    """Say text on stderr the first time key is noted in this process."""
+    if key not in _noted:
+        _noted.add(key)
+        _say(text)
+
+
 _watch = _CompileWatch()
 numba_event.register("numba:compile", _watch)
 

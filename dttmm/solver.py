@@ -33,7 +33,7 @@ from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTE
                            Sweep, run_steps, run_steps_no_alloc)
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
-from .feedback import Progress
+from .feedback import Progress, note_once
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
 from .model import Model, children_of, kernel_array, model_fact, output_section
@@ -1047,11 +1047,18 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)))
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
 
-    # chunks of up to CHUNK steps; a JointForce drive is evaluated in Python, one step ahead:
-    # one step per chunk
+    # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the state
+    # is evaluated in Python, one step ahead: one step per chunk (said once per process)
     closing_forces = closure_forces(model, loops)
-    force_drives = closing_forces or not all(runs_in_loop(d) for ds in model.drives
-                                             for d in ds)
+    stepwise = [f"joint '{model.hinge_names[k]}'" for k, ds in enumerate(model.drives)
+                for d in ds if not runs_in_loop(d)] + [who for _, _, who in closing_forces]
+    force_drives = bool(stepwise)
+    if stepwise:
+        note_once("stepwise", f"dttmm: a JointForce given as a Python function of the state "
+                  f"({stepwise[0]}) makes the run take one step per compiled call, several "
+                  f"times the cost of a step; on a tree joint, a function compiled with "
+                  f"@numba.njit (f(t, q, q_dot) of three floats) runs inside the loop "
+                  f"(docs/joints.md)")
     # a chunk's inputs and record rows hold each of its steps for every body: no more steps
     # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
     size = 1 if force_drives else max(1, min(CHUNK, CHUNK_BYTES // (CHUNK_STEP_BYTES * n),

@@ -193,3 +193,20 @@ def test_a_numba_joint_force_that_does_not_fit_is_refused_at_build():
             dttmm.build_chain([RevoluteJoint(axis=[0, 0, 1], name="motor",
                                              drive=dttmm.JointForce(function)),
                                RigidBody(mass=1.0, inertia=1.0, inertia_about="mass_center")])
+
+
+def test_a_python_joint_force_of_the_state_is_said_to_run_step_by_step_once(capsys,
+                                                                             monkeypatch):
+    from dttmm import feedback
+    monkeypatch.setattr(feedback, "_noted", set())
+    from dataclasses import replace
+    compiled = arm("pd-njit")
+    python = dttmm.JointForce(arm_servo.py_func).validated("joint1", 0.0, 0.5)
+    stepwise = replace(compiled, drives=((python,),) + tuple(compiled.drives[1:]))
+    simulate(compiled, 0.005, 1e-3)
+    assert capsys.readouterr().err == ""
+    simulate(stepwise, 0.005, 1e-3)
+    err = capsys.readouterr().err
+    assert "joint 'joint1'" in err and "one step per compiled call" in err and "numba" in err
+    simulate(stepwise, 0.005, 1e-3)
+    assert capsys.readouterr().err == ""
