@@ -8,7 +8,8 @@ import time
 from numba.core import event as numba_event
 
 COMPILE_NOTICE_AFTER = 3.0      # s a compilation runs before stderr says so
-COMPILE_REPORT_EVERY = 15.0     # s between its progress lines
+COMPILE_REPORT_EVERY = (5.0, 30.0)  # s between its progress reports (a terminal: one line
+                                    # rewritten in place; else lines)
 PROGRESS_AFTER = 2.0            # s a run is expected to take before it shows a bar
 
 
@@ -16,15 +17,17 @@ class _CompileWatch(numba_event.Listener):
     """Says on stderr what is compiling and for how long (issue 30): numba announces each
     compilation ("numba:compile" events, outermost first; a kernel loaded from numba's cache
     announces none), and one watcher thread per process, started at the first, writes a line
-    once a compilation of dttmm's kernels has run COMPILE_NOTICE_AFTER seconds, then every
-    COMPILE_REPORT_EVERY seconds, and a last one when it ends.  Nothing per call: a run whose
-    kernels are compiled costs no thread and no timer."""
+    once a compilation of dttmm's kernels has run COMPILE_NOTICE_AFTER seconds, then the
+    seconds so far every COMPILE_REPORT_EVERY (on a terminal one line rewritten in place), and
+    a last line when it ends.  Nothing per call: a run whose kernels are compiled costs no
+    thread and no timer."""
 
     def __init__(self):
         self.depth = 0
         self.active = None             # (what, start time) of the outermost compilation
         self.announced = False
         self.next_at = 0.0              # when the watcher writes its next line
+        self.ending = ""                # what the last line starts with ("\r": rewrite)
         self.wake = threading.Condition()
         self.thread = None
 
@@ -52,8 +55,8 @@ class _CompileWatch(numba_event.Listener):
         with self.wake:
             what, t0 = self.active
             if self.announced:
-                _say(f"dttmm: compiled {what} in {time.perf_counter() - t0:.0f} s (cached for "
-                     f"later runs)")
+                _say(f"{self.ending}dttmm: compiled {what} in {time.perf_counter() - t0:.0f} s "
+                     f"(cached for later runs)")
             self.active = None
             self.wake.notify()
 
@@ -69,15 +72,20 @@ class _CompileWatch(numba_event.Listener):
                 if self.active is not active or now < self.next_at:
                     continue            # (ended, or woken early)
                 what, t0 = active
+                terminal = sys.stderr.isatty()
                 if not self.announced:
                     _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
                          f"once per machine and kind of model (later runs load them from "
                          f"numba's cache); about a minute for chains and trees of ball joints, "
                          f"a few for other joints on 2 cores. {now - t0:.0f} s so far")
-                    self.announced = True
+                    self.announced, self.ending = True, ""
+                elif terminal:
+                    print(f"\rdttmm: still compiling {what}: {now - t0:.0f} s so far",
+                          end="", file=sys.stderr, flush=True)
+                    self.ending = "\r"
                 else:
                     _say(f"dttmm: still compiling {what}: {now - t0:.0f} s so far")
-                self.next_at += COMPILE_REPORT_EVERY
+                self.next_at += COMPILE_REPORT_EVERY[0 if terminal else 1]
 
 
 def _say(text):

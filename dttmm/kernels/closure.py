@@ -586,6 +586,9 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     column c does not pass).  Returns the sweep's status."""
     n = rot.shape[0]
     n_rows = loops.kind.shape[0]
+    # (recover_column's affine flag as run-time bools: numba compiles a function once per
+    # literal True or False it is passed)
+    step_column, unit_column = n_rows >= 0, n_rows < 0
     sw = sweep
     _row_coefficients(params, loops, rot, w)
     _column_loads(loops)
@@ -597,13 +600,15 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
                             params.parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
                             loops.h_store, loops.free_store, loops.z_save[0], loops.nu_save[0],
-                            loops.tau_save[0], True, loops.all_bodies, loops.act[0], work)
+                            loops.tau_save[0], step_column, loops.all_bodies, loops.act[0],
+                            work)
     for c in range(1, n_rows + 1):
         if status == 0:
             status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
                                     sw.known_loads, params.parent, root_f, sw.s, loops.p_col[c],
                                     loops.k_store[c], loops.h_store, loops.free_store,
-                                    loops.z_save[c], loops.nu_save[c], loops.tau_save[c], False,
+                                    loops.z_save[c], loops.nu_save[c], loops.tau_save[c],
+                                    unit_column,
                                     loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
                                     loops.act[c], work)
     if status != 0:
@@ -629,7 +634,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                 k_comb[k, i] += f * loops.k_store[c, k, i]
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
                             params.parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
-                            loops.free_store, z, sw.joint_nu, sw.joint_tau, True,
+                            loops.free_store, z, sw.joint_nu, sw.joint_tau, step_column,
                             loops.all_bodies, loops.act[0], work)
     if status != 0:
         return status

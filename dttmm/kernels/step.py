@@ -421,11 +421,15 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     modal = (eta, state.eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
              state.eta_map)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
-                              np.zeros(state.z.shape), force, torque, line_load, True, rot,
+                              np.zeros(state.z.shape), force, torque, line_load, n >= 0, rot,
                               zero3, modal,
                               (False, np.zeros((n + 1, 3)), zero3),
                               (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
-                               joint_input[:, :, 2].copy(), joint_input[:, :, 0].copy(), forces))
+                               joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces))
+    # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start a
+    # run-time bool (n >= 0), as the step's run.settings.start: numba compiles a function once
+    # per layout and per literal True or False it is passed, and _build_elements with its
+    # callees took 30-60 s cold a second time)
     if unknown != 0:
         return -unknown
     known_loads = sweep.known_loads
@@ -704,7 +708,7 @@ def _iterate(loop, run, s, it):
               loop.joints[4], inputs.joint_input[s, :, :, 0], loop.forces)
     unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
                               loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s],
-                              inputs.line_load[s], False,
+                              inputs.line_load[s], run.settings.start,     # (False)
                               state.rot, loop.w3, modal, stations, joints)
     if unknown != 0:
         return UNSUPPORTED, unknown, 0.0
