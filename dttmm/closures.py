@@ -1018,4 +1018,6 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
             hinge[k, 51 + i], hinge[k, 53 + i] = value, rate
-    return replace(model, initial_rotation=rot, initial_angular_velocity=w, hinge_params=hinge)
+    from .model import adopt_arrays
+    return adopt_arrays(replace(model, initial_rotation=rot, initial_angular_velocity=w,
+                                hinge_params=hinge), model)

@@ -1,6 +1,7 @@
 """What a run tells its user while it works: a note when the numba kernels are being compiled
 (once per machine and kind of model; later runs load them from numba's cache) and a progress
 bar on runs that take more than a couple of seconds."""
+import os
 import sys
 import threading
 import time
@@ -104,6 +105,9 @@ def note_once(key, text):
 
 _watch = _CompileWatch()
 numba_event.register("numba:compile", _watch)
+# a forked child (a process pool) has no watcher thread and may have copied the condition
+# locked: it starts afresh
+os.register_at_fork(after_in_child=lambda: _watch.__init__())
 
 
 class Progress:

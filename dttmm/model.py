@@ -236,9 +236,37 @@ def model_fact(function):
     return fact
 
 
+# the model's tables the kernels read in place (kernel_array): arrays the builders make
+KERNEL_TABLES = ("body_params", "hinge_kind", "hinge_params", "ground_locked",
+                 "body_mass_center_inertia", "parent", "body_kind", "beam_params")
+
+
+def adopt_arrays(model, source=None):
+    """Keep the kernel tables a builder made for model (KERNEL_TABLES, each owning its memory)
+    writable behind the read-only views the model shows, for kernel_array: the kernels then
+    read the model's own memory (a million bodies' tables are not copied for them).  source:
+    the model that model was replaced from; the tables it shares with it keep its memory.
+    Only the builders call it, on arrays they made (never on a caller's: it would keep a
+    writable alias into a frozen model).  Returns model."""
+    own = dict(model.__dict__.get("_kernel_arrays", {}))
+    kept = {} if source is None else source.__dict__.get("_kernel_arrays", {})
+    for name in KERNEL_TABLES:
+        value = getattr(model, name)
+        if source is not None and value is getattr(source, name) and name in kept:
+            own[name] = kept[name]
+        elif value.base is None:            # (its own memory: writable again for the kernels)
+            value.flags.writeable = True
+            view = value.view()
+            view.flags.writeable = False
+            object.__setattr__(model, name, view)
+            own[name] = value
+    object.__setattr__(model, "_kernel_arrays", own)
+    return model
+
+
 def kernel_array(model, name, dtype=None):
     """The model's array `name` as the kernels take it, writable: the model's own memory where
-    it has it (Model._freeze), else a copy.  The kernels read it and never write it."""
+    a builder kept it (adopt_arrays), else a copy.  The kernels read it and never write it."""
     own = model.__dict__.get("_kernel_arrays", {}).get(name)
     value = np.array(getattr(model, name)) if own is None else own
     return value if dtype is None else value.astype(dtype, copy=False)
@@ -390,24 +418,14 @@ class Model:
     closure_drives: tuple = ()   # per closing joint, per coordinate: a drive's parameters or None
 
     def __post_init__(self):
-        self._freeze()
-
-    def _freeze(self):
-        # frozen through and through: the arrays the model shows cannot be written (a negative
-        # mass written after build() would otherwise simulate).  The kernels, which need
-        # writable arrays (numba compiles read-only ones apart), read the same memory through
-        # kernel_array: the model's own arrays are kept writable behind read-only views, so a
-        # million bodies' tables are not copied for them
-        own = {}
+        # frozen through and through: the arrays cannot be written either (a negative mass
+        # written after build() would otherwise simulate); the kernels get writable arrays
+        # through kernel_array (adopt_arrays)
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, np.ndarray):
-                if value.flags.writeable and value.flags.owndata:
-                    own[f.name] = value
-                    value = value.view()
-                    object.__setattr__(self, f.name, value)
                 value.flags.writeable = False
-        object.__setattr__(self, "_kernel_arrays", own)
+        object.__setattr__(self, "_kernel_arrays", {})
 
     def __getstate__(self):
         # (a pickle carries the fields, not the facts derived from them: model_fact)
@@ -415,7 +433,8 @@ class Model:
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        self._freeze()
+        self.__post_init__()
+        adopt_arrays(self)          # (the unpickled arrays are its own)
 
     @property
     def tip_pinned(self):
@@ -987,11 +1006,12 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         drives=tuple(v.get("drives", ()) for v in hv),
         frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
     )
+    adopt_arrays(tree)
     if not closures:
         return tree
     index_of = {id(b): k for k, b in enumerate(bodies)}
     named = [dict(v.get("points") or {}) for v in bv]
-    return replace(tree, **closure_rows(tree, closures, index_of, named))
+    return adopt_arrays(replace(tree, **closure_rows(tree, closures, index_of, named)), tree)
 
 
 def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):

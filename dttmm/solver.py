@@ -36,7 +36,8 @@ from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, note_once
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
-from .model import Model, children_of, kernel_array, model_fact, output_section
+from .model import (Model, adopt_arrays, children_of, kernel_array, model_fact,
+                    output_section)
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
                         model_fingerprint)
@@ -307,7 +308,7 @@ def _column_bodies(model, loaded):
     return up | set(np.nonzero(active)[0].tolist()), active
 
 
-def loop_columns(model, owner, body):
+def loop_columns(model, owner, body, banded_rows=None):
     """Where each row's sweep column runs (kernels/closure.py): (act (R + 1, n) the active bodies
     per column, column 0 all; ups, per body the columns c >= 1 its upward sweep passes; act_idx
     and act_ptr, each column's active bodies in tree order; colrows, per row's column the rows
@@ -337,7 +338,8 @@ def loop_columns(model, owner, body):
     # the rows' matrices' band (row q of column j's rows): solved banded where it is narrow
     lower = max([q - j for j, rows in enumerate(colrows) for q in rows], default=0)
     upper = max([j - q for j, rows in enumerate(colrows) for q in rows], default=0)
-    band = (lower, upper) if r > BANDED_ROWS and 2 * (lower + upper + 1) <= r else (-1, -1)
+    banded_rows = BANDED_ROWS if banded_rows is None else banded_rows
+    band = (lower, upper) if r > banded_rows and 2 * (lower + upper + 1) <= r else (-1, -1)
     return act, ups, act_idx, act_ptr, colrows, band
 
 
@@ -347,11 +349,11 @@ def loop_tables(model):
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
     loop_columns.  Each call's own copy (a run writes its scratch) of the tables built once
     per model."""
-    return Loops(*(a.copy() for a in _loop_tables(model)))
+    return Loops(*(a.copy() for a in _loop_tables(model, BANDED_ROWS)))
 
 
 @model_fact
-def _loop_tables(model):
+def _loop_tables(model, banded_rows):
     n = model.n_bodies
     kind, owner, v1, v2, v3, coordinate, law = constraint_rows(
         model, None if has_loops(model) else ())
@@ -359,7 +361,7 @@ def _loop_tables(model):
     r = len(kind)
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
-    act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body)
+    act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body, banded_rows)
     nb = n if r else 0          # the rows' scratch per body (kernels/closure.py; none without
     st = 2 * nb + 1 if r else 0  # rows: a million bodies' 900 B each)
     up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
@@ -1041,6 +1043,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         resume.restore(structures, dict(run_info, method=method, bodies=n,
                                         newton_iterations=int(newton_iterations)))
         counters, done = resume.counters, resume.step
+        if loop_name == "general":      # this process's callbacks, not the checkpoint's
+            loop.forces[:] = compiled_forces(model)     # addresses (another process's, or
+                                                        # another function of the same name)
     history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4],
                           closure_wrench=loops.wrench)
     recording = Recording(keys, keep, None if stream is None else SampleStream.create(
@@ -1563,7 +1568,6 @@ def _initial_mass_center_velocities(model, rot, omega):
     return v_c
 
 
-@model_fact
 def kernel_model(model):
     """The model the kernels integrate, and the kernel index of each of the model's bodies
     (results are mapped back, recording.Recording).  Three kinds of massless rigid body,
@@ -1584,9 +1588,17 @@ def kernel_model(model):
       its rotation, angular velocity, input loads and joint are the section's).
     The mass, momentum and energy of all three are zero; a chain without them is the model
     itself."""
+    km, keep = _kernel_model_kept(model)
+    return (model if km is None else km), keep
+
+
+@model_fact
+def _kernel_model_kept(model):
+    """kernel_model's, kept on the model: None for the model itself (no reference cycle
+    through its facts, which would leave a million bodies' arrays to the cycle collector)."""
     km, keep = _kernel_model(model)
     keep.flags.writeable = False
-    return km, keep
+    return (None if km is model else km), keep
 
 
 def _kernel_model(model):
@@ -1694,10 +1706,10 @@ def _kernel_model(model):
     for c, s in zip(*np.nonzero(body >= 0)):        # a beam's output end to its end section
         k = int(body[c, s])
         body[c, s] = hub[k] if k in closed_ends and model.closure_on_end[c, s] else keep[k]
-    return replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
-                   attachment=np.zeros(len(parent), dtype=np.int64),
-                   attachment_point=attachment_point, frequency_cutoff_reasons=(),
-                   **arrays), np.array(keep)
+    return adopt_arrays(replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
+                                attachment=np.zeros(len(parent), dtype=np.int64),
+                                attachment_point=attachment_point, frequency_cutoff_reasons=(),
+                                **arrays), model), np.array(keep)
 
 
 _DIRECT_HINT = ("method='direct' multiplies the transfer matrices out and loses all accuracy on "
@@ -1788,15 +1800,21 @@ def _failure_cause(model, mode, info, monitor, settings):
             "model is unstable)")
 
 
-@model_fact
 def _closed(model):
     """The model with its loops closed at t = 0 (docs/loops.md): itself where they are closed
     to 1e-10, else dttmm.assemble's (which refuses a drive the loops lock), once per model."""
+    assembled = _assembled(model)
+    return model if assembled is None else assembled
+
+
+@model_fact
+def _assembled(model):
+    """_closed's, kept on the model: None for the model itself (no reference cycle)."""
     if max(np.max(r, initial=0.0) for r in loop_residuals(model)) > 1e-10:
         check_runs_in_sweeps(model, "simulate", moving_ground=True)
         return assemble(model)
     check_drives_move(model, "simulate")
-    return model
+    return None
 
 
 def richardson_extrapolation(coarse, fine):

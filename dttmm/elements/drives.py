@@ -15,7 +15,7 @@ callback of FORCE_SIGNATURE (compiled_force), linearized by differences
 (kernels/joint.py::drive_value).  A JointForce of (t, q, q') given as a Python function is
 called by the solver once per step.
 """
-import warnings
+import threading
 from dataclasses import dataclass
 from typing import Callable, Optional
 
@@ -28,6 +28,7 @@ COMPILED_FORCE = 4      # (the kernels' table only: a FORCE drive whose function
 FORCE_SIGNATURE = "float64(float64, float64, float64)"     # a compiled f(t, q, q_dot)
 
 _CALLBACKS = {}         # id(numba function) -> (it, its C callback of FORCE_SIGNATURE)
+_CALLBACK_LOCK = threading.Lock()
 
 
 def is_numba_function(function):
@@ -38,15 +39,18 @@ def is_numba_function(function):
 
 def compiled_force(function):
     """The C callback of FORCE_SIGNATURE of a numba function f(t, q, q_dot), which the compiled
-    loop calls (kernels/joint.py::drive_value); compiled once per process and function (a
-    model pickled to another process carries the numba function, not the callback)."""
-    entry = _CALLBACKS.get(id(function))
-    if entry is None or entry[0] is not function:
-        from numba import cfunc
-        from numba.core.errors import NumbaExperimentalFeatureWarning
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            entry = _CALLBACKS[id(function)] = (function, cfunc(FORCE_SIGNATURE)(
+    loop calls (kernels/joint.py::drive_value), compiled with the function's own options
+    (fastmath, error_model, boundscheck); once per process and function (a model pickled to
+    another process carries the numba function, not the callback), and kept for the process's
+    life (the loop holds its address).  An exception raised inside it cannot stop the loop (a C
+    callback returns a number): the loop's checks stop a run whose force is not finite."""
+    with _CALLBACK_LOCK:
+        entry = _CALLBACKS.get(id(function))
+        if entry is None:
+            from numba import cfunc
+            options = {k: v for k, v in function.targetoptions.items()
+                       if k in ("fastmath", "error_model", "boundscheck")}
+            entry = _CALLBACKS[id(function)] = (function, cfunc(FORCE_SIGNATURE, **options)(
                 function.py_func))
     return entry[1]
 
