@@ -423,13 +423,13 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
                               np.zeros(state.z.shape), force, torque, line_load, n >= 0, rot,
                               zero3, modal,
-                              (False, np.zeros((n + 1, 3)), zero3),
+                              (n < 0, np.zeros((n + 1, 3)), zero3),     # (False)
                               (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
                                joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces))
-    # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start a
-    # run-time bool (n >= 0), as the step's run.settings.start: numba compiles a function once
-    # per layout and per literal True or False it is passed, and _build_elements with its
-    # callees took 30-60 s cold a second time)
+    # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start and
+    # the stations' flag run-time bools (n >= 0, n < 0), as the step's: numba compiles a
+    # function once per layout and per literal True or False it is passed, and _build_elements
+    # with its callees took 10-60 s cold a second time)
     if unknown != 0:
         return -unknown
     known_loads = sweep.known_loads
