@@ -233,27 +233,32 @@ def joint_drives(model):
     is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest."""
     table = np.zeros((model.n_bodies, 2, 4))
     table[:, :, 0] = -1.0
-    compiled = 0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
-            if d is None:
+            if d is None or d.get("compiled"):
                 continue
-            if d.get("compiled"):
-                table[k, i] = [COMPILED_FORCE, 0.0, 0.0, compiled]
-                compiled += 1
-            elif d["kind"] == PD or (d["kind"] == FORCE and d.get("of_time")):
+            if d["kind"] == PD or (d["kind"] == FORCE and d.get("of_time")):
                 table[k, i] = [SPRING_DAMPER, d["stiffness"], d["damping"], 0.0]
             else:
                 table[k, i] = [d["kind"], d["stiffness"], d["damping"], d["rest"]]
+    for index, (k, i, _) in enumerate(_compiled_drives(model)):
+        table[k, i] = [COMPILED_FORCE, 0.0, 0.0, index]
     return table
+
+
+def _compiled_drives(model):
+    """[(joint, coordinate, drive)] of the compiled JointForces, in the order their callbacks
+    are numbered (joint_drives, compiled_forces)."""
+    return [(k, i, d) for k, drives in enumerate(model.drives) for i, d in enumerate(drives)
+            if d is not None and d.get("compiled")]
 
 
 @model_fact
 def compiled_forces(model):
-    """(k,) int64: the addresses of the compiled JointForces' C callbacks, in the order of
+    """(k,) int64: the addresses of the compiled JointForces' C callbacks, numbered as in
     joint_drives (elements/drives.py::compiled_force; each process compiles its own)."""
-    return np.array([compiled_force(d["function"]).address for drives in model.drives
-                     for d in drives if d is not None and d.get("compiled")], dtype=np.int64)
+    return np.array([compiled_force(d["function"]).address
+                     for _, _, d in _compiled_drives(model)], dtype=np.int64)
 
 
 @model_fact

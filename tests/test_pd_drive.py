@@ -39,6 +39,14 @@ def exact_angle(t):
     return 0.2 * np.sin(3.0 * t) - e
 
 
+def with_joint1_force(model, function):
+    """The arm with joint 1 driven by JointForce(function) instead (the same model otherwise:
+    its checked drive swapped in, at joint 1's initial angle 0 and rate 0.5 rad/s)."""
+    from dataclasses import replace
+    drive = dttmm.JointForce(function).validated("joint1", 0.0, 0.5)
+    return replace(model, drives=((drive,),) + tuple(model.drives[1:]))
+
+
 def test_pd_tracking_with_feedforward_against_the_closed_form():
     """The tracking error's closed form (a damped oscillator from e'(0) = 0.6 rad/s): DT-TMM
     converges to it at order 2 (measured 5.9e-7, 1.5e-7, 3.7e-8 rad at dt = 1e-3, 5e-4,
@@ -83,14 +91,12 @@ def test_the_arm_under_pd_feedback_converges_to_the_reference():
 def test_a_force_of_time_alone_runs_in_chunks_as_the_step_by_step_function_did():
     """The arm's 2 sin(pi t) torque as a profile (ProfileForce: inside the loop, in chunks) and
     as a Python JointForce of (t, q, q') (one compiled call per step): the same run to 1e-12."""
-    from dataclasses import replace
     chunked = arm("torque")
     assert chunked.drives[0][0]["of_time"]
     a = simulate(chunked, 0.5, 1e-3)
     # the same model, its drive a function with the state's signature
-    stepwise = dttmm.JointForce(lambda t, q, qd: 2.0 * np.sin(np.pi * t))
-    drives = ((stepwise.validated("joint1", 0.0, 0.5),),) + tuple(chunked.drives[1:])
-    b = simulate(replace(chunked, drives=drives), 0.5, 1e-3)
+    b = simulate(with_joint1_force(chunked, lambda t, q, qd: 2.0 * np.sin(np.pi * t)), 0.5,
+                 1e-3)
     assert np.abs(a.position_output - b.position_output).max() < 1e-12
     assert np.abs(a.drive_force - b.drive_force).max() < 1e-12
 
@@ -145,10 +151,8 @@ def test_a_numba_joint_force_runs_inside_the_loop_and_is_the_pd_law(monkeypatch)
     assert np.abs(a.position_output - b.position_output).max() < 1e-10
     assert np.abs(a.drive_force - b.drive_force).max() < 1e-8 * np.abs(a.drive_force).max()
     calls.clear()
-    from dataclasses import replace
-    python = dttmm.JointForce(arm_servo.py_func).validated("joint1", 0.0, 0.5)
-    assert not python["compiled"]
-    stepwise = replace(compiled, drives=((python,),) + tuple(compiled.drives[1:]))
+    stepwise = with_joint1_force(compiled, arm_servo.py_func)
+    assert not stepwise.drives[0][0]["compiled"]
     c = simulate(stepwise, 0.05, 1e-3)
     assert len(calls) == 50
     assert np.abs(c.position_output - b.position_output[:51]).max() < 1e-3   # (explicit)
@@ -199,10 +203,8 @@ def test_a_python_joint_force_of_the_state_is_said_to_run_step_by_step_once(caps
                                                                              monkeypatch):
     from dttmm import feedback
     monkeypatch.setattr(feedback, "_noted", set())
-    from dataclasses import replace
     compiled = arm("pd-njit")
-    python = dttmm.JointForce(arm_servo.py_func).validated("joint1", 0.0, 0.5)
-    stepwise = replace(compiled, drives=((python,),) + tuple(compiled.drives[1:]))
+    stepwise = with_joint1_force(compiled, arm_servo.py_func)
     simulate(compiled, 0.005, 1e-3)     # (compiled: a cold cache says so first)
     simulate(stepwise, 0.005, 1e-3)
     monkeypatch.setattr(feedback, "_noted", set())
