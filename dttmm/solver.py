@@ -211,7 +211,10 @@ def _initial_deflections(model, state):
 def kernel_params(model):
     """The frozen model's arrays as the kernels read them (kernels/loop.py::Params), once per
     model: the kernels read them and never write them."""
-    lock_rel = np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
+    # a locked body's rotation relative to the ground frame (read only where locked[k]; no
+    # rows without locked bodies: a million bodies' 72 MB)
+    lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
+                if model.ground_locked.any() else np.zeros((0, 3, 3)))
     # the model's arrays writable (numba types read-only arrays apart, and every kernel would
     # compile twice), its own memory where it has it: kernel_array
     return Params(body_params=kernel_array(model, "body_params"),
@@ -230,8 +233,9 @@ def joint_drives(model):
     damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
     (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
     part in the inputs (_joint_inputs; kernels/joint.py::drive_value); a compiled JointForce
-    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest."""
-    table = np.zeros((model.n_bodies, 2, 4))
+    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.  No
+    rows for a model without joints with coordinates (the kernels read a joint's row only)."""
+    table = np.zeros((model.n_bodies if has_coordinates(model) else 0, 2, 4))
     table[:, :, 0] = -1.0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
@@ -1096,7 +1100,13 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         f0, tq0, ll0 = _loads(model, [done * dt])
         balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],
                       tq0[:, loaded], ll0[:, loaded])
-    rec = _record(max(1, size // every), n, len(state.eta), scheme == "paper", "v_c" in keys,
+    # a run that samples only its ends (a million bodies by default: _sampling) records its
+    # last state from the state itself, and its chunks write no rows (the rows of a step would
+    # hold 0.4 KB per body)
+    ends_only = (not adaptive and balance is None and isinstance(sampling, int)
+                 and done + sampling - done % sampling >= n_steps)
+    rec = _record(0 if ends_only else max(1, size // every), n, len(state.eta),
+                  scheme == "paper", "v_c" in keys,
                   loops.wrench.shape[0] if "closure_wrench" in keys else 0)
     joint_input = np.zeros((size, n, 2, 3))
     closure_target = np.zeros((size, len(loops.kind), 3))
@@ -1175,6 +1185,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     try:
         while done < n_steps:
             m, every = _next_chunk(done, n_steps, sampling, size)
+            if ends_only:
+                every = m + 1
             times = (done + np.arange(m + 1)) * dt
             try:
                 inputs = inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
@@ -1219,6 +1231,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     rec = inputs = force = torque = line_load = joint_input = None  # (the chunks' buffers)
     if recording.last_step != n_steps:         # the final state is always recorded
         recording.add_state(state, history_values, n_steps)
+        fastest = max(fastest, _fastest_rate(state.omega[None]), key=lambda f: f[0])
     checkpoint = Checkpoint.of(n_steps, dt, dict(run_info, method=method, bodies=n,
                                                  newton_iterations=int(newton_iterations)),
                                structures, (max_newton, info[4]))
