@@ -814,8 +814,9 @@ def _coordinates(model, keep):
 
 def _state_of(model, variables, x, xd):
     n = model.n_bodies
-    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53])
-    omega, qd = np.array(model.initial_angular_velocity), np.array(model.hinge_params[:, 53:55])
+    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
+    omega = np.array(model.initial_angular_velocity)
+    qd = np.array(model.hinge_params[:, 53:55], order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
             q[k, i], qd[k, i] = value, rate
@@ -1014,7 +1015,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
                          f"'{model.closure_names[worst]}' apart at {np.abs(gd).max():.4g} (m/s or "
                          f"rad/s); keep fewer rates")
     rot, w = _state_of(model, variables, x, xd)[:2]
-    hinge = np.array(model.hinge_params)
+    hinge = np.array(model.hinge_params, order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
             hinge[k, 51 + i], hinge[k, 53 + i] = value, rate

@@ -264,11 +264,33 @@ def adopt_arrays(model, source=None):
     return model
 
 
+_NO_BEAM = np.zeros(BEAM_PARAM_SIZE)     # a rigid body's row of beam_params
+
+# the per-body tables a model shows as one row where every body's (joint's) row is equal
+SHARED_TABLES = ("body_params", "hinge_params", "body_mass_center_inertia", "beam_params")
+
+
+def shared_rows(table):
+    """table, or where its rows are all equal (a chain of equal links) its first row shown
+    len(table) times: a read-only view of stride 0 that reads as the table in every numpy
+    operation and holds one row (a million bodies' tables in a few hundred bytes; the kernels
+    read the one row: solver.kernel_params)."""
+    if len(table) < 2 or is_shared(table) or not (table == table[0]).all():
+        return table
+    return np.broadcast_to(table[:1].copy(), table.shape)   # (a copy: not a view of table)
+
+
+def is_shared(table):
+    """Whether table is a shared_rows view (one row shown for all)."""
+    return table.ndim > 0 and len(table) > 1 and table.strides[0] == 0
+
+
 def kernel_array(model, name, dtype=None):
     """The model's array `name` as the kernels take it, writable: the model's own memory where
     a builder kept it (adopt_arrays), else a copy.  The kernels read it and never write it."""
     own = model.__dict__.get("_kernel_arrays", {}).get(name)
-    value = np.array(getattr(model, name)) if own is None else own
+    value = np.array(getattr(model, name), order="C") if own is None else own   # (a shared
+    # table's copy: order "K" would lay its rows out along the stride-0 axis, Fortran-like)
     return value if dtype is None else value.astype(dtype, copy=False)
 
 
@@ -432,6 +454,9 @@ class Model:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
     def __setstate__(self, state):
+        state = dict(state)
+        for name in SHARED_TABLES:          # (a pickle holds every row)
+            state[name] = shared_rows(state[name])
         self.__dict__.update(state)
         self.__post_init__()
         adopt_arrays(self)          # (the unpickled arrays are its own)
@@ -921,7 +946,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     kinds = np.array([joint_kind_of(h).code for h in hinges], dtype=np.int64)
     body_kind = np.array([body_kind_of(b).code for b in bodies], dtype=np.int64)
     children = children_of(parent)
-    beam_params = np.array([v.get("beam", np.zeros(BEAM_PARAM_SIZE)) for v in bv])
+    beam_params = _packed(bv, lambda v: v.get("beam", _NO_BEAM))
+    if (body_kind == BEAM).any():           # (written per beam below: its own rows)
+        beam_params = np.array(beam_params, order="C")
     attachment_point = np.zeros((n, 3))
     for k in range(n):
         p = parent[k]
@@ -958,6 +985,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             a_in, w_in = rotations[p], omegas[p]
         locked[k] = kinds[k] == FIXED and (p < 0 or (locked[p] and body_kind[p] == RIGID))
         if kinds[k] in (REVOLUTE, UNIVERSAL, PRISMATIC):
+            hv[k] = dict(hv[k])     # (its own: _validated's dicts are shared)
             rot, om, hv[k]["rotation"] = _joint_start(kinds[k], hv[k], a_in, w_in,
                                                       bv[k]["rotation"], bv[k]["omega"],
                                                       hinges[k].__class__.__name__,
@@ -995,7 +1023,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         line_loads=tuple(v.get("line_load") for v in bv),
         body_names=tuple(b.name or f"body{k}" for k, b in enumerate(bodies)),
         hinge_names=tuple(h.name or f"{HINGE_KIND_NAMES[h.kind]}{k}" for k, h in enumerate(hinges)),
-        body_mass_center_inertia=np.array([v["j_c"] for v in bv]),
+        body_mass_center_inertia=_packed(bv, lambda v: v["j_c"]),
         body_kind=body_kind,
         beam_params=beam_params,
         initial_modal_coordinates=np.concatenate([np.zeros(0)] + [bv[k]["eta0"] for k in beams]),
@@ -1006,6 +1034,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         drives=tuple(v.get("drives", ()) for v in hv),
         frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
     )
+    tree = replace(tree, **{name: shared_rows(getattr(tree, name)) for name in SHARED_TABLES})
     adopt_arrays(tree)
     if not closures:
         return tree
@@ -1163,8 +1192,8 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
             beam_params[k, FREQUENCY_CUTOFF] = derived_cutoff
         if beam_params[k, FREQUENCY_CUTOFF] == ACCURATE:    # modes_per_plane=None
             beam_params[k, MODES] = accurate_mode_count(beam_params[k], end_mass[k])
-            bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
-            bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
+            bv[k] = dict(bv[k], eta0=np.zeros(modal_size(beam_params[k])),    # (its own dict:
+                         eta_d0=np.zeros(modal_size(beam_params[k])))       # copy on write)
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
             beam_params[k, MODES] = max(auto_mode_count(beam_params[k]),
                                         accurate_mode_count(beam_params[k], end_mass[k]))
@@ -1172,8 +1201,8 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
                                       (AXIAL_MODES, axial_frequencies)):
                 if beam_params[k, part] == AUTO:           # "auto" twist or stretch
                     beam_params[k, part] = auto_part_count(beam_params[k], frequencies)
-            bv[k]["eta0"] = np.zeros(modal_size(beam_params[k]))
-            bv[k]["eta_d0"] = np.zeros(modal_size(beam_params[k]))
+            bv[k] = dict(bv[k], eta0=np.zeros(modal_size(beam_params[k])),
+                         eta_d0=np.zeros(modal_size(beam_params[k])))
         if beam_params[k, STIFFENING] == AUTO:
             # stiffening=None: on, unless an inextensible beam (no stretch modes) sits in a
             # closed loop (the tip pinned), where held between fixed points it would lock
@@ -1190,8 +1219,9 @@ def _validated(elements):
     """Each element's checked parameters (its validated(k)), each distinct set of parameters
     checked once: a chain of 10^6 copies of one link checks one link, not 10^6 (a check is
     ~0.3 ms of small numpy calls; the key ~5 us).  Elements with equal parameters (their
-    names aside, which only the messages read) share the result, a shallow copy each (the
-    build writes into them); the first of them is the one a message names."""
+    names aside, which only the messages read) share the one dict (the build replaces an
+    element's dict where it changes one: copy on write; a million shallow copies held 0.7 GB
+    during a build); the first of them is the one a message names."""
     checked, out = {}, []
     for k, element in enumerate(elements):
         key = _parameters_key(element)
@@ -1205,20 +1235,23 @@ def _validated(elements):
             done = checked.get(key)
         if done is None:
             done = checked[key] = element.validated(k)
-        out.append(dict(done))
+        out.append(done)
     return out
 
 
 def _packed(checked, pack):
     """(n, ...) rows pack(v) of the elements' checked parameters, each packed once per set of
-    the same values (_validated's copies share theirs, unless the build replaced one)."""
+    the same values (_validated's shared dicts, unless the build replaced one); one row shown
+    n times where they are all the same (shared_rows, without making the n rows)."""
     rows, done = [], {}
     for v in checked:
-        key = tuple(map(id, v.values()))
+        key = id(v)
         row = done.get(key)
         if row is None:
-            row = done[key] = pack(v)
+            row = done[key] = np.asarray(pack(v), dtype=float)
         rows.append(row)
+    if len(rows) > 1 and all(row is rows[0] for row in done.values()):
+        return np.broadcast_to(rows[0][None].copy(), (len(rows),) + rows[0].shape)
     return np.array(rows)
 
 

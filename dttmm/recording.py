@@ -181,7 +181,12 @@ def model_fingerprint(model):
     def feed(value):
         if isinstance(value, np.ndarray):
             digest.update(f"{value.dtype.str}{value.shape}".encode())
-            digest.update(np.ascontiguousarray(value).tobytes())
+            if value.flags.c_contiguous:
+                digest.update(value.data)       # (the bytes in place, no copy)
+            else:                               # (a shared table's rows, block by block)
+                rows = max(1, (1 << 20) // max(1, value[:1].nbytes))
+                for i in range(0, len(value), rows):
+                    digest.update(np.ascontiguousarray(value[i:i + rows]).data)
         elif isinstance(value, (list, tuple)):
             digest.update(f"[{len(value)}".encode())
             for v in value:

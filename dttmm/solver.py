@@ -16,7 +16,7 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND
-from .elements.beam import (AXIAL_MODES, FAMILY, LENGTH, MODES, TORSION_MODES,
+from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
@@ -36,7 +36,7 @@ from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .feedback import Progress, note_once
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
-from .model import (Model, adopt_arrays, children_of, kernel_array, model_fact,
+from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact,
                     output_section)
 from .energy_balance import EnergyBalance
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
@@ -158,8 +158,10 @@ class Workspace:
             eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
             eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3(),
             # joints with coordinates (kernels/joint.py): q, q', q'', pseudo, generalized force
-            jq=model.hinge_params[:, COORDINATE_0].copy(),
-            jqd=model.hinge_params[:, RATE_0].copy(), jqdd=np.zeros((n, 2)),
+            jq=(model.hinge_params[:, COORDINATE_0].copy() if has_coordinates(model)
+                else np.zeros((n, 2))),
+            jqd=(model.hinge_params[:, RATE_0].copy() if has_coordinates(model)
+                 else np.zeros((n, 2))), jqdd=np.zeros((n, 2)),
             jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
@@ -216,16 +218,28 @@ def kernel_params(model):
     lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
                 if model.ground_locked.any() else np.zeros((0, 3, 3)))
     # the model's arrays writable (numba types read-only arrays apart, and every kernel would
-    # compile twice), its own memory where it has it: kernel_array
-    return Params(body_params=kernel_array(model, "body_params"),
-                  hinge_kind=kernel_array(model, "hinge_kind"),
-                  hinge_params=kernel_array(model, "hinge_params"),
-                  gravity=kernel_array(model, "gravity"), beams=beam_tables(model),
-                  locked=kernel_array(model, "ground_locked"), lock_rel=lock_rel,
-                  mass_center_inertia=kernel_array(model, "body_mass_center_inertia"),
+    # compile twice), its own memory where it has it: kernel_array; a table whose rows are all
+    # equal (model.shared_rows) as its one row, which every body (joint) reads (body_row)
+    (body_params, inertia), body_row = _rows(model, "body_params", "body_mass_center_inertia")
+    (hinge_params,), hinge_row = _rows(model, "hinge_params")
+    return Params(body_params=body_params, hinge_kind=kernel_array(model, "hinge_kind"),
+                  hinge_params=hinge_params, gravity=kernel_array(model, "gravity"),
+                  beams=beam_tables(model), locked=kernel_array(model, "ground_locked"),
+                  lock_rel=lock_rel, mass_center_inertia=inertia,
                   tip_pinned=bool(model.tip_pinned),
                   parent=kernel_array(model, "parent", np.int64),
-                  joint_drive=joint_drives(model))
+                  joint_drive=joint_drives(model), body_row=body_row, hinge_row=hinge_row)
+
+
+def _rows(model, *names):
+    """(the model's tables `names` as the kernels read them, each body's row of them): one row
+    read by every body where all the tables are shared (model.shared_rows), else every body's
+    own (their rows k)."""
+    n = model.n_bodies
+    if all(is_shared(getattr(model, name)) for name in names):
+        return (tuple(np.array(getattr(model, name)[:1], order="C") for name in names),
+                np.zeros(n, dtype=np.int64))
+    return tuple(kernel_array(model, name) for name in names), np.arange(n, dtype=np.int64)
 
 
 def joint_drives(model):
@@ -492,15 +506,16 @@ def beam_tables(model):
     [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j, and
     ends[k, m + mt:m + mt + ma] its stretch table ("Stretch"; beam_relations): [U_j(L),
     int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
-    (ma)]."""
-    n = model.n_bodies
+    (ma)].  The tables but body_kind and the offsets have no rows in a model without beams
+    (the kernels read a beam's rows only; a million rigid bodies' 0.2 GB)."""
+    n = model.n_bodies if (model.body_kind == BEAM).any() else 0
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
     bp = model.beam_params
     max_rows = max(1, int((bp[:, MODES] + bp[:, TORSION_MODES] + bp[:, AXIAL_MODES]).max()))
     moments = np.zeros((n, max_modes, 4 * max_modes + 2))
     ends = np.zeros((n, max_rows, 5 + max_modes + int(bp[:, AXIAL_MODES].max())))
     factors = np.ones((n, max_modes, 2))
-    for k in range(n):
+    for k in range(n):      # (none without beams)
         if model.body_kind[k] == BEAM:
             length = model.beam_params[k, LENGTH]
             family, m = int(model.beam_params[k, FAMILY]), int(model.beam_params[k, MODES])
@@ -536,8 +551,8 @@ def beam_tables(model):
                 gram = (u * wa) @ u.T
                 ends[k, r:r + ma, 5 + m:5 + m + ma] = 0.5 * (gram + gram.T)
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
-    return (kernel_array(model, "body_kind"), kernel_array(model, "beam_params"), moments,
-            mode_off, ends, factors)
+    beam_params = kernel_array(model, "beam_params") if n else np.zeros((0, BEAM_PARAM_SIZE))
+    return kernel_array(model, "body_kind"), beam_params, moments, mode_off, ends, factors
 
 
 def _steps(t_end, dt):
@@ -1019,7 +1034,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     histories = _station_histories(model, state, scheme == "paper")
     state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
-    keys = ["rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d"]
+    # the joints' offsets (an elastic hinge's deflection, a slide) where a joint has one (they
+    # are zero otherwise: _result's zeros, 48 B per body and sample not kept)
+    offsets = ["defl", "defl_rate"] if np.isin(model.hinge_kind, (ELASTIC, PRISMATIC)).any() else []
+    keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
     if mode == kstep.RICCATI_JOINTS:
         keys += ["jq", "jqd", "jtau"]
     if len(loops.kind):
@@ -1622,7 +1640,6 @@ def _kernel_model_kept(model):
 def _kernel_model(model):
     n = model.n_bodies
     chain = model.is_chain
-    children = children_of(model.parent)
 
     # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
     # side is the end section (kernels/closure.py reads rigid sides only)
@@ -1633,6 +1650,9 @@ def _kernel_model(model):
         closed_ends = {int(k) for k in sides[on_end]}
         closed_inputs = {int(k) for k in sides[~on_end & (sides >= 0)]
                          if model.body_kind[k] == BEAM}
+    if not (closed_ends or np.any(model.body_kind == BEAM) or np.any(model.attachment)):
+        return model, np.arange(n)      # (no end sections, no offsets: the model itself)
+    children = children_of(model.parent)
 
     def needs_section(k):
         hinges = [int(model.hinge_kind[c]) for c in children[k]]
@@ -1921,6 +1941,9 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     t = (np.asarray(recording.times) if recording.times
          else np.asarray(recording.steps, dtype=float) * h)
     rot, omega, eta, eta_d = values["rot"], values["omega"], values["eta"], values["eta_d"]
+    for key in ("defl", "defl_rate"):       # (not recorded without joints that offset)
+        if key not in values:
+            values[key] = np.broadcast_to(np.zeros(()), rot.shape[:2] + (3,))
     joints = {}
     columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
     if "jq" in values and columns:

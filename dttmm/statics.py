@@ -191,7 +191,7 @@ class _Configuration:
                        if not (km.drives[k] and km.drives[k][i] is not None
                                and km.drives[k][i]["kind"] == MOTION)]
         self.n_q = len(self.coords)
-        self.jq0 = np.array(km.hinge_params[:, COORDINATE_0])
+        self.jq0 = np.array(km.hinge_params[:, COORDINATE_0], order="C")
         # elastic hinges' deflections (world, m): after the joint coordinates
         self.elastic = [k for k in range(n) if km.hinge_kind[k] == ELASTIC]
         self.d0 = self.n_rot + self.n_q
@@ -367,7 +367,7 @@ class _Configuration:
         """The user's model at rest in configuration q."""
         rot, jq, eta, defl = self.state(q)
         user = self.user
-        hinge_params = np.array(user.hinge_params)
+        hinge_params = np.array(user.hinge_params, order="C")
         hinge_params[:, COORDINATE_0] = jq[self.keep]
         hinge_params[:, RATE_0] = 0.0
         elastic = user.hinge_kind == ELASTIC

@@ -246,7 +246,7 @@ def _iterate(loop, run, s, it):
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta_map = state.eta_map
-    n = body_params.shape[0]
+    n = rot.shape[0]
     for i in range(3):
         p_vec[0, i] = inputs.g_acc[s, i]
         for j in range(3):
@@ -268,9 +268,10 @@ def _iterate(loop, run, s, it):
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
             left_jacobian(phi, lam)
+            row = params.body_row[k]         # (the body's row of the shared table)
             for i in range(3):
-                load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
-            ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
+                load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
+            ball_body_map(body_params[row], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
                           aq[k, 3:6], load, torque[s, k], v, pmap[k])
         else:
             return UNSUPPORTED, 2 * k + 2, 0.0

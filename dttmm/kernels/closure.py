@@ -235,8 +235,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
             v = _v3(v_out, p)
         if hinge_kind[k] == PRISMATIC:
             f_p = _frame(rot, loops.ground_rot, p)
-            u = t_mv(f_p, (hinge_params[k, AXIS_1_START], hinge_params[k, AXIS_1_START + 1],
-                           hinge_params[k, AXIS_1_START + 2]))
+            hr = params.hinge_row[k]         # (the joint's row of the shared table)
+            u = t_mv(f_p, (hinge_params[hr, AXIS_1_START], hinge_params[hr, AXIS_1_START + 1],
+                           hinge_params[hr, AXIS_1_START + 2]))
             d = t_lin3(jq[k, 0], u, 0.0, u)
             r = _add(r, d)
             w_p = _v3(loops.ground_motion, 2) if p < 0 else _v3(w, p)
@@ -247,7 +248,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
         if body_kind[k] == BEAM:
             arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
         else:
-            arm = t_mv(_m9(rot, k), (body_params[k, 4], body_params[k, 5], body_params[k, 6]))
+            row = params.body_row[k]
+            arm = t_mv(_m9(rot, k), (body_params[row, 4], body_params[row, 5],
+                                     body_params[row, 6]))
             arm_rate = t_cross(_v3(w, k), arm)
         for i in range(3):
             r_out[k, i] = r[i] + arm[i]
@@ -271,8 +274,8 @@ def _side(params, loops, rot, w, c, s):
                 _add(_v3(loops.ground_motion, 0), t_cross(w_g, arm)), arm, f, w_g)
     f = _m9(rot, k)
     w_k = _v3(w, k)
-    centre = params.body_params
-    arm = t_mv(f, _sub(local, (centre[k, 4], centre[k, 5], centre[k, 6])))
+    centre, row = params.body_params, params.body_row[k]
+    arm = t_mv(f, _sub(local, (centre[row, 4], centre[row, 5], centre[row, 6])))
     return (_add(_v3(loops.r_out, k), arm), _add(_v3(loops.v_out, k), t_cross(w_k, arm)), arm,
             f, w_k)
 
@@ -719,15 +722,16 @@ def _dependent_frames(params, loops, state, bodies, work):
             rot_p, w_p, wd_p = loops.ground_rot, loops.ground_motion[2], loops.ground_motion[3]
         else:
             rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
+        hr = params.hinge_row[k]             # (the joint's row of the shared table)
         if n_coordinates(hk) > 0:
-            joint_frame(hk, params.hinge_params[k], rot_p, w_p, wd_p, state.jq[k],
+            joint_frame(hk, params.hinge_params[hr], rot_p, w_p, wd_p, state.jq[k],
                         state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
         elif hk == FIXED and p >= 0 and not params.locked[k]:
             if body_kind[p] == BEAM:
                 for i in range(3):
                     for j in range(3):
-                        rest[i, j] = params.hinge_params[k, 3 * i + j]
+                        rest[i, j] = params.hinge_params[hr, 3 * i + j]
                 i0, i1 = mode_off[p], mode_off[p + 1]
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
@@ -735,11 +739,12 @@ def _dependent_frames(params, loops, state, bodies, work):
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
             else:
-                hp = params.hinge_params       # A = A_P R0, R0 row-major in hp[k, 0:9]
+                hp = params.hinge_params       # A = A_P R0, R0 row-major in hp[hr, 0:9]
                 for i in range(3):
                     for j in range(3):
-                        state.rot[k, i, j] = (rot_p[i, 0] * hp[k, j] + rot_p[i, 1] * hp[k, 3 + j]
-                                              + rot_p[i, 2] * hp[k, 6 + j])
+                        state.rot[k, i, j] = (rot_p[i, 0] * hp[hr, j]
+                                              + rot_p[i, 1] * hp[hr, 3 + j]
+                                              + rot_p[i, 2] * hp[hr, 6 + j])
                 for i in range(3):
                     state.omega[k, i] = w_p[i]
                     state.omega_dot[k, i] = wd_p[i]

@@ -58,7 +58,7 @@ def _iterate(loop, run, s, it):
     s_half = 0.5 * h * h
     body_params, hinge_kind, kind, u = params.body_params, params.hinge_kind, sweep.kind, sweep.u
     z, z_star = state.z, loop.z_star
-    n = body_params.shape[0]
+    n = state.rot.shape[0]
     for k in range(n):
         if hinge_kind[k] == BALL:
             kind[2 * k] = EL_BALL
@@ -69,8 +69,9 @@ def _iterate(loop, run, s, it):
         if params.beams[0][k] != RIGID:
             return UNSUPPORTED, 2 * k + 2, 0.0
         kind[2 * k + 1] = TRANSFER
-        load = body_params[k, 0] * params.gravity + run.inputs.force[s, k]
-        rigid_body_transfer_em(body_params[k], params.mass_center_inertia[k], state.rot[k],
+        row = params.body_row[k]             # (the body's row of the shared tables)
+        load = body_params[row, 0] * params.gravity + run.inputs.force[s, k]
+        rigid_body_transfer_em(body_params[row], params.mass_center_inertia[row], state.rot[k],
                                state.omega[k], state.v_c[k], h, z_star[2 * k + 1], load,
                                run.inputs.torque[s, k], u[2 * k + 1])
     if not np.all(np.isfinite(u)):
@@ -103,7 +104,7 @@ def _update(loop, run, s, _):
         zi = state.z[2 * k + 1]
         em_body_kinematics(rot[k], omega[k], zi[3:6], h, rot_new, omega_new)
         # v_C,n+1 = 2 dx_C / h - v_C,n,  dx_C = dx_I + A_{n+1} l_IC - A_n l_IC
-        l_ic = run.params.body_params[k, 1:4]
+        l_ic = run.params.body_params[run.params.body_row[k], 1:4]
         dx_c = s_half * zi[0:3] + rot_new @ l_ic - rot[k] @ l_ic
         v_c[k] = (2.0 / h) * dx_c - v_c[k]
         state.omega_dot[k] = (omega_new - omega[k]) / h

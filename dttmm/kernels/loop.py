@@ -30,19 +30,24 @@ from . import CONTRACT, no_alloc_kernel
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
 
 Params = namedtuple("Params", [
-    "body_params",      # (n, BODY_PARAM_SIZE) elements/rigid_body.py
+    "body_params",      # (rows, BODY_PARAM_SIZE) elements/rigid_body.py: body k's at body_row[k]
     "hinge_kind",       # (n,) BALL / FIXED / ELASTIC: hinge k joins body k - 1 (or the ground)
-    "hinge_params",     # (n, HINGE_PARAM_SIZE) elements/hinges.py
+    "hinge_params",     # (rows, HINGE_PARAM_SIZE) elements/hinges.py: joint k's at hinge_row[k]
     "gravity",          # (3,) m/s^2
     "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors):
                         # solver.beam_tables
     "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
-    "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame
-    "mass_center_inertia",  # (n, 3, 3) J_C in body axes (the energy-momentum step)
+    "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame (no
+                        # rows without locked bodies: read where locked[k] only)
+    "mass_center_inertia",  # (rows, 3, 3) J_C in body axes at body_row[k] (the energy-
+                            # momentum step)
     "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
     "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
     "joint_drive",      # (n, 2, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
                         # none; elements/drives.py)
+    "body_row",         # (n,) int64: body k's row of body_params and mass_center_inertia, and
+    "hinge_row",        # (n,) int64: joint k's of hinge_params (one row for all where the
+                        # model's rows are all equal: model.shared_rows)
 ])
 
 Settings = namedtuple("Settings", [

@@ -245,7 +245,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     kind, u = sweep.kind, sweep.u
-    n = body_params.shape[0]
+    n = hinge_kind.shape[0]
     load, w1_out, dw1 = np.empty(3), np.empty(3), np.empty(3)
     most_modes = 0
     for k in range(n):
@@ -255,13 +255,14 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         jh = 2 * k
         hk = hinge_kind[k]
         p = params.parent[k]
+        hr, row = params.hinge_row[k], params.body_row[k]   # (their rows of the shared tables)
         if full_tree and (hk == BALL or has_coordinates(hk)):
             kind[jh] = EL_JOINT
             if p < 0:
                 rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
             else:
                 rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
-            joint_linearization(hk, hinge_params[k], params.joint_drive[k], given[k], rot_p,
+            joint_linearization(hk, hinge_params[hr], params.joint_drive[k], given[k], rot_p,
                                 w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
                                 sweep.joint_dof[k], sweep.joint_tau_nu[k], forces)
         elif hk == BALL:
@@ -283,7 +284,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             else:                           # in a tree the parent's output station holds the
                 z_in = z_star[jh + 1].copy()    # loads of all its children: the hinge's own q
                 z_in[3:6] = phi_in              # is its outboard's (a massless hinge passes it)
-            elastic_hinge_transfer(hinge_params[k], rot_in, lam_in, w_in, dw_in, rot_star[k],
+            elastic_hinge_transfer(hinge_params[hr], rot_in, lam_in, w_in, dw_in, rot_star[k],
                                    lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
                                    z_in, u[jh])
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
@@ -300,7 +301,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             for i in range(3):
                 w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
                 dw1[i] = w1_st[k + 1, i] - w1_st[k, i]
-            outboard = (welded, hinge_params[kout, 0:9].reshape((3, 3)), rot[kout], w1_out)
+            outboard = (welded, hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+                        rot[kout], w1_out)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
                       beam_ends[k, m:m + mt],               # the twist and stretch tables
@@ -312,11 +314,11 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                           eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
         elif body_kind[k] == RIGID:
             for i in range(3):
-                load[i] = body_params[k, 0] * params.gravity[i] + force[k, i]
-            rigid_body_transfer(body_params[k], rot_star[k], lam[k], dwd[k], dw[k], wd[k], w[k],
-                                z_star[jh + 1], load, torque[k], u[jh + 1])
+                load[i] = body_params[row, 0] * params.gravity[i] + force[k, i]
+            rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
+                                w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
             if independent:
-                station_history_correction(body_params[k], rot[k], rot_star[k], lam[k], dwd[k],
+                station_history_correction(body_params[row], rot[k], rot_star[k], lam[k], dwd[k],
                                            dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],
                                            w1_c[k], z_star[jh + 1], u[jh + 1])
             if not at_start:
@@ -410,7 +412,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     g_acc, g_rot, g_w, g_wd = ground
     rot, omega = state.rot, state.omega
     hinge_kind, hinge_params = params.hinge_kind, params.hinge_params
-    n = params.body_params.shape[0]
+    n = hinge_kind.shape[0]
     zero3 = np.zeros((n, 3))
     unit33 = np.zeros((n, 3, 3))
     for k in range(n):
@@ -438,8 +440,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
             p = params.parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
-            q, m_in, m_out = elastic_hinge_loads(hinge_params[k], rot_in, w_in, rot[k], omega[k],
-                                                 state.defl[k], state.defl_rate[k])
+            q, m_in, m_out = elastic_hinge_loads(hinge_params[params.hinge_row[k]], rot_in,
+                                                 w_in, rot[k], omega[k], state.defl[k],
+                                                 state.defl_rate[k])
             known_loads[2 * k, 0:3] = m_in
             known_loads[2 * k, 3:6] = q
             known_loads[2 * k, 6:9] = m_out
@@ -542,7 +545,7 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
     """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
     or the end section's of a parent beam (_end_section_frame)."""
     p = params.parent[k]
-    rest = params.hinge_params[k, 0:9].copy().reshape((3, 3))
+    rest = params.hinge_params[params.hinge_row[k], 0:9].copy().reshape((3, 3))
     if params.beams[0][p] == BEAM:
         _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
                            rot_out, w_out, wd_out)
@@ -600,7 +603,7 @@ def _predict(loop, run, s, _):
     g_rot_s, g_lam, _, _, g_dwd, phi_g = loop.ground
     independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
     z, z_star = state.z, loop.z_star
-    n = params.body_params.shape[0]
+    n = params.hinge_kind.shape[0]
     rot_now = inputs.g_rot[s + 1]
     g_rot_s[:, :] = rot_now
     rel = loop.e3
@@ -641,9 +644,9 @@ def _predict(loop, run, s, _):
                                          qdd_s[k, i:i + 1])
             p = params.parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
-            _joint_child_guess(hk, params.hinge_params[k], frame, q_s[k], qd_s[k], qdd_s[k],
-                               c1, c3, state.rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
-                               lam[k], w[k], wd[k], dw[k], dwd[k])
+            _joint_child_guess(hk, params.hinge_params[params.hinge_row[k]], frame, q_s[k],
+                               qd_s[k], qdd_s[k], c1, c3, state.rot[k], phi_star[k], w1[k],
+                               w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
         elif _welded(params, run.settings.mode, k):
             _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, state.eta, loop.eta_dd_star,
                           state.rot[k], loop.guess, w1[k], w3[k])
@@ -684,8 +687,9 @@ def _predict(loop, run, s, _):
             p = params.parent[k]
             rot_in = rot_now if p < 0 else rot_star[p]
             # (the force does not depend on the angular velocities: any will do for them)
-            q_pred, _, _ = elastic_hinge_loads(params.hinge_params[k], rot_in, g_w, rot_star[k],
-                                               g_w, d_pred, c3 * d_pred + w3d[k])
+            q_pred, _, _ = elastic_hinge_loads(params.hinge_params[params.hinge_row[k]], rot_in,
+                                               g_w, rot_star[k], g_w, d_pred,
+                                               c3 * d_pred + w3d[k])
             if p == k - 1:
                 z_star[2 * k, 9:12] = q_pred
             z_star[2 * k + 1, 9:12] = q_pred
@@ -751,11 +755,11 @@ def _iterate(loop, run, s, it):
     for i in range(eta_dd_new.shape[0]):
         change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
     qdd_s = loop.joints[4]
-    for k in range(params.body_params.shape[0]):
+    for k in range(params.hinge_kind.shape[0]):
         for i in range(n_coordinates(params.hinge_kind[k])):
             change = max(change, abs(run.sweep.joint_nu[k, i] - qdd_s[k, i]) / c1)
     g_inv = loop.g_inv
-    for k in range(params.body_params.shape[0]):
+    for k in range(params.hinge_kind.shape[0]):
         inv3(dwd[k], g_inv)
         dw0 = z[2 * k + 1, 3] - wd[k, 0]
         dw1 = z[2 * k + 1, 4] - wd[k, 1]
@@ -789,9 +793,9 @@ def _adopt(loop, run, s, it):
             p = params.parent[k]
             frame = ((inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]) if p < 0
                      else (rot_star[p], w[p], wd[p]))
-            _joint_child_guess(hk, params.hinge_params[k], frame, q_s[k], qd_s[k], qdd_s[k],
-                               c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
-                               lam[k], w[k], wd[k], dw[k], dwd[k])
+            _joint_child_guess(hk, params.hinge_params[params.hinge_row[k]], frame, q_s[k],
+                               qd_s[k], qdd_s[k], c1, c3, rot[k], phi_star[k], loop.w1[k],
+                               loop.w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
             loop.z_star[2 * k + 1, 3:6] = phi_star[k]
             loop.z_star[2 * k + 2, 3:6] = phi_star[k]
         elif _welded(params, run.settings.mode, k):
@@ -817,7 +821,7 @@ def _update(loop, run, s, _):
     rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
     defl, z, e3 = state.defl, state.z, loop.e3
     independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
-    n = body_params.shape[0]
+    n = params.hinge_kind.shape[0]
     rot_now = inputs.g_rot[s + 1]
     if independent:
         for k in range(n):
@@ -830,7 +834,7 @@ def _update(loop, run, s, _):
                 else:
                     expm_so3(z[2 * k + 1, 3:6], e3)
                     rot_new = e3 @ rot[k]
-                x_c = x_in + (rot_new - rot[k]) @ body_params[k, 1:4]
+                x_c = x_in + (rot_new - rot[k]) @ body_params[params.body_row[k], 1:4]
                 _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
             _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
     finite = True
@@ -866,9 +870,9 @@ def _update(loop, run, s, _):
                 rot_p, w_p, wd_p = rot_now, inputs.g_w[s], inputs.g_wd[s]
             else:
                 rot_p, w_p, wd_p = rot[p], omega[p], omega_dot[p]
-            joint_frame(hk, params.hinge_params[k], rot_p, w_p, wd_p, state.jq[k],
-                        state.jqd[k], state.jqdd[k], rot[k], omega[k], omega_dot[k], defl[k],
-                        state.defl_rate[k])
+            joint_frame(hk, params.hinge_params[params.hinge_row[k]], rot_p, w_p, wd_p,
+                        state.jq[k], state.jqd[k], state.jqdd[k], rot[k], omega[k], omega_dot[k],
+                        defl[k], state.defl_rate[k])
             pseudo[k] = omega_dot[k]
         elif _welded(params, run.settings.mode, k):
             _welded_frame(params, k, rot, omega, omega_dot, state.eta, state.eta_d,

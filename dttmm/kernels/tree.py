@@ -68,7 +68,7 @@ def _iterate(loop, run, s, it):
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
     eta_map = state.eta_map
-    n = body_params.shape[0]
+    n = rot.shape[0]
     _clear_ports(port_s, port_p)
     for k in range(n - 1, -1, -1):
         phi = phi_star[k]
@@ -87,9 +87,10 @@ def _iterate(loop, run, s, it):
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
             left_jacobian(phi, lam)
+            row = params.body_row[k]         # (the body's row of the shared table)
             for i in range(3):
-                load[i] = body_params[k, 0] * gravity[i] + force[s, k, i]
-            ball_body_map(body_params[k], rot_star, lam, w, wd, s_c, r_c, aq_in[k, 0:3],
+                load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
+            ball_body_map(body_params[row], rot_star, lam, w, wd, s_c, r_c, aq_in[k, 0:3],
                           aq_in[k, 3:6], load, torque[s, k], maps[k], pmap[k])
         else:
             return UNSUPPORTED, 2 * k + 2, 0.0

@@ -124,8 +124,8 @@ def _follow_welds(loop, run):
         mt = int(beam_params[p, TORSION_MODES])
         end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot_p, w_p, wd_p,
                            modal[0, i0:i1], modal[1, i0:i1], eta_dd_star[i0:i1],
-                           params.hinge_params[k, 0:9].reshape((3, 3)), rot_k, w_k, wd_k,
-                           scratch)
+                           params.hinge_params[params.hinge_row[k], 0:9].reshape((3, 3)), rot_k,
+                           w_k, wd_k, scratch)
         for i in range(3):
             for j in range(3):
                 rel[i, j] = (rot_k[i, 0] * rot[k, j, 0] + rot_k[i, 1] * rot[k, j, 1]
@@ -170,8 +170,8 @@ def _iterate(loop, run, s, it):
         kout = k + 1 if welded else k
         for i in range(3):
             w1_out[i] = w1[kout, i]             # (its w' = c1 phi_out + w1_out)
-        outboard = (welded, params.hinge_params[kout, 0:9].reshape((3, 3)), state.rot[kout],
-                    w1_out)
+        outboard = (welded, params.hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+                    state.rot[kout], w1_out)
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
                   beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/step.py)
@@ -249,7 +249,8 @@ def _update(loop, run, s, _):
         mt = int(beam_params[p, TORSION_MODES])
         end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot[p], omega[p],
                            omega_dot[p], state.eta[i0:i1], state.eta_d[i0:i1],
-                           state.eta_acc[i0:i1], params.hinge_params[k, 0:9].reshape((3, 3)),
+                           state.eta_acc[i0:i1],
+                           params.hinge_params[params.hinge_row[k], 0:9].reshape((3, 3)),
                            rot[k], omega[k], omega_dot[k], scratch)
         for i in range(3):
             state.pseudo[k, i] = omega_dot[k, i]

@@ -1682,8 +1682,8 @@ class _Problem:
         self.model = model
         self.n = n
         self.kinds = kinds
-        self.body_params = np.array(model.body_params, dtype=float)
-        self.hinge_params = np.array(model.hinge_params, dtype=float)
+        self.body_params = np.array(model.body_params, dtype=float, order="C")
+        self.hinge_params = np.array(model.hinge_params, dtype=float, order="C")
         self.gravity = np.array(model.gravity, dtype=float)
         # a quaternion and w of its own: bodies behind ball joints and elastic hinges (a fixed
         # hinge's or a joint's child follows its parent and the joint's coordinates)
@@ -1706,7 +1706,7 @@ class _Problem:
         # beams: all modal coordinates (concatenated in body order, v then w of each beam), then
         # all their rates
         self.body_kind = np.array(model.body_kind, dtype=np.int64)
-        self.beam_params = np.array(model.beam_params, dtype=float)
+        self.beam_params = np.array(model.beam_params, dtype=float, order="C")
         beams = [k for k in range(n) if self.body_kind[k] == BEAM]
         for k in beams:
             if int(self.beam_params[k, FAMILY]) not in (PINNED, CLAMPED, CLAMPED_LOADED):
