@@ -5,8 +5,9 @@
 For each size N, in a fresh process (so that its peak memory is its own): N unit rods on
 ball joints listed as the user would (distinct but equal objects), build_chain's wall time,
 then a 10-step run at dt = 1e-3 after a 2-step warm-up (the kernels compiled or loaded), its
-cost per body-step, and the process's peak resident memory.  The build's exponent is fitted
-over N.  --quick: N = 1e3 and 1e4 (the CI's smoke run).  Not a test: nothing is asserted.
+cost per body-step, and the process's peak resident memory.  The build's and the step's
+exponents are fitted over N.  --quick: N = 1e3 and 1e4 (the CI's smoke run).  Not a test:
+nothing is asserted.
 """
 import argparse
 import json
@@ -62,8 +63,10 @@ def main(argv=None):
         n = np.array([r["n"] for r in rows], dtype=float)
         t = np.array([r["build_s"] for r in rows])
         exponent = np.polyfit(np.log(n), np.log(t), 1)[0]
-        print(f"build time ~ N^{exponent:.2f}")
-        rows.append(dict(build_exponent=exponent))
+        step = np.array([r["step_us_per_body"] for r in rows]) * n      # (us per step)
+        step_exponent = np.polyfit(np.log(n), np.log(step), 1)[0]
+        print(f"build time ~ N^{exponent:.2f}, step time ~ N^{step_exponent:.2f}")
+        rows.append(dict(build_exponent=exponent, step_exponent=step_exponent))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

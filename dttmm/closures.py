@@ -815,7 +815,7 @@ def _coordinates(model, keep):
 def _state_of(model, variables, x, xd):
     n = model.n_bodies
     theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
-    omega = np.array(model.initial_angular_velocity)
+    omega = np.array(model.initial_angular_velocity, order="C")
     qd = np.array(model.hinge_params[:, 53:55], order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":

@@ -267,7 +267,8 @@ def adopt_arrays(model, source=None):
 _NO_BEAM = np.zeros(BEAM_PARAM_SIZE)     # a rigid body's row of beam_params
 
 # the per-body tables a model shows as one row where every body's (joint's) row is equal
-SHARED_TABLES = ("body_params", "hinge_params", "body_mass_center_inertia", "beam_params")
+SHARED_TABLES = ("body_params", "hinge_params", "body_mass_center_inertia", "beam_params",
+                 "initial_rotation", "initial_angular_velocity")
 
 
 def shared_rows(table):
@@ -300,7 +301,9 @@ class Model:
 
     Built by ``System.build`` or ``build_chain`` (which validate the elements), not by hand;
     every argument is also a read-only attribute of the same name, and the arrays cannot be
-    written (a value changed after the build would skip its validation).  Bodies are numbered
+    written (a value changed after the build would skip its validation).  A per-body table
+    whose rows are all equal (SHARED_TABLES: a chain of equal links) holds its one row, shown
+    for every body (shared_rows); copy one with ``np.array(table, order="C")``.  Bodies are numbered
     0..n-1, parents first; hinge k joins body parent[k] (the ground for -1) at its attachment
     point to body k.  In a chain parent[k] = k - 1, every body hangs from its parent's output
     point, and the last body's output point is the tip.  Shapes: n bodies.

@@ -16,9 +16,12 @@ _PER_BODY = ("rot", "omega", "omega_dot", "defl", "defl_rate", "jq", "jqd", "jta
 class Recording:
     """The samples of one run: each key's rows in blocks, and the steps they were taken at.
     keep: the kernels' body of each of the model's bodies.  stream: a SampleStream to write
-    the rows to instead of keeping them (simulate(..., stream=path))."""
+    the rows to instead of keeping them (simulate(..., stream=path)).  samples: how many rows
+    the run will record, where known (a fixed-step run): each key's rows are then written into
+    one array of that many rows, which is never joined (a join holds a key's rows twice); more
+    rows than that go on in blocks."""
 
-    def __init__(self, keys, keep, stream=None):
+    def __init__(self, keys, keep, stream=None, samples=None):
         self.keys = list(keys)
         self.keep = np.asarray(keep)
         self.inputs = 2 * self.keep + 1             # each body's input station
@@ -27,6 +30,8 @@ class Recording:
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
         self.stream = stream
+        self.samples = samples
+        self.rows = 0           # rows written into the arrays of `samples` rows
 
     @classmethod
     def from_stream(cls, path):
@@ -49,8 +54,16 @@ class Recording:
                 block = block[:, np.append(self.keep, len(self.keep))]
             if self.stream is not None:
                 self.stream.write(key, block)
+            elif self.samples is not None and self.rows + len(block) <= self.samples:
+                if not self.blocks[key]:
+                    self.blocks[key].append(np.empty((self.samples,) + block.shape[1:],
+                                                     block.dtype))
+                self.blocks[key][0][self.rows:self.rows + len(block)] = block
             else:
+                self._leave_samples()
                 self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
+        if self.samples is not None:
+            self.rows += len(steps)
         self.steps.extend(steps)
         self.times.extend(times)
         if self.stream is not None:
@@ -68,10 +81,28 @@ class Recording:
         Streamed: read-only memory maps of the stream's files."""
         if self.stream is not None:
             return self.stream.arrays()
-        for key, blocks in self.blocks.items():     # one key at a time into one block (the
-            if len(blocks) > 1:                     # samples' memory is never held twice over)
-                blocks[:] = [np.concatenate(blocks)]
+        self._leave_samples()
+        for key, blocks in self.blocks.items():     # one key at a time into one block, each
+            if len(blocks) > 1:                     # block released once copied (the samples'
+                joined = np.empty((sum(map(len, blocks)),) + blocks[0].shape[1:],  # memory is
+                                  blocks[0].dtype)                           # never held twice)
+                row = 0
+                while blocks:
+                    block = blocks.pop(0)
+                    joined[row:row + len(block)] = block
+                    row += len(block)
+                    del block
+                blocks.append(joined)
         return {key: blocks[0] for key, blocks in self.blocks.items()}
+
+    def _leave_samples(self):
+        """From the arrays of `samples` rows to blocks: the rows written so far become each
+        key's first block (a run that records more rows than it said, or has stopped)."""
+        if self.samples is not None:
+            for blocks in self.blocks.values():
+                if blocks:
+                    blocks[0] = blocks[0][:self.rows]
+            self.samples = None
 
     @property
     def last_step(self):

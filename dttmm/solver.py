@@ -215,8 +215,8 @@ def kernel_params(model):
     model: the kernels read them and never write them."""
     # a locked body's rotation relative to the ground frame (read only where locked[k]; no
     # rows without locked bodies: a million bodies' 72 MB)
-    lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation)
-                if model.ground_locked.any() else np.zeros((0, 3, 3)))
+    lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation,
+                          order="C") if model.ground_locked.any() else np.zeros((0, 3, 3)))
     # the model's arrays writable (numba types read-only arrays apart, and every kernel would
     # compile twice), its own memory where it has it: kernel_array; a table whose rows are all
     # equal (model.shared_rows) as its one row, which every body (joint) reads (body_row)
@@ -333,7 +333,8 @@ def _column_bodies(model, loaded):
 
 def loop_columns(model, owner, body, banded_rows=None):
     """Where each row's sweep column runs (kernels/closure.py): (act (R + 1, n) the active bodies
-    per column, column 0 all; ups, per body the columns c >= 1 its upward sweep passes; act_idx
+    per column, column 0 all; ups, body -> the columns c >= 1 its upward sweep passes (bodies
+    that pass none left out: a million empty lists held 56 MB); act_idx
     and act_ptr, each column's active bodies in tree order; colrows, per row's column the rows
     with a side body among its active bodies; (lower, upper) the rows' matrices' bandwidths, or
     (-1, -1) where the truncated SVD solves them).  owner: each row's closing joint; body
@@ -341,7 +342,7 @@ def loop_columns(model, owner, body, banded_rows=None):
     n, r = model.n_bodies, len(owner)
     act = np.zeros((r + 1, n), dtype=bool)
     act[0] = True
-    ups = [[] for _ in range(n)]
+    ups = {}
     act_idx = []
     act_ptr = [0, 0]
     per_closure = {}
@@ -352,7 +353,7 @@ def loop_columns(model, owner, body, banded_rows=None):
         up, active = per_closure[c]
         act[row + 1] = active
         for k in sorted(up):
-            ups[k].append(row + 1)
+            ups.setdefault(k, []).append(row + 1)
         act_idx.extend(np.nonzero(active)[0].tolist())
         act_ptr.append(len(act_idx))
     sides = body[np.asarray(owner, dtype=np.int64)]                   # (R, 2), -1 the ground
@@ -387,7 +388,10 @@ def _loop_tables(model, banded_rows):
     act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body, banded_rows)
     nb = n if r else 0          # the rows' scratch per body (kernels/closure.py; none without
     st = 2 * nb + 1 if r else 0  # rows: a million bodies' 900 B each)
-    up_ptr = np.cumsum([0] + [len(u) for u in ups]).astype(np.int64)
+    up_ptr = np.zeros(n + 1, dtype=np.int64)      # (body k's columns: up_idx[up_ptr[k]:..])
+    for k, u in ups.items():
+        up_ptr[k + 1] = len(u)
+    np.cumsum(up_ptr, out=up_ptr)
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
     col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
     return Loops(kind=kind, owner=owner, v1=v1, v2=v2, v3=v3, target=np.zeros((r, 3)),
@@ -400,7 +404,8 @@ def _loop_tables(model, banded_rows):
                  delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
                  r_out=np.zeros((nb, 3)), v_out=np.zeros((nb, 3)), g=np.zeros(r),
                  gd=np.zeros(r), col_body=col_body, col_load=np.zeros((r + 1, 2, 6)),
-                 up_ptr=up_ptr, up_idx=np.array([c for u in ups for c in u], dtype=np.int64),
+                 up_ptr=up_ptr, up_idx=np.array([c for k in sorted(ups) for c in ups[k]],
+                                                 dtype=np.int64),
                  act_ptr=np.array(act_ptr, dtype=np.int64),
                  act_idx=np.array(act_idx, dtype=np.int64), act=act,
                  all_bodies=np.arange(nb, dtype=np.int64),
@@ -1076,7 +1081,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4],
                           closure_wrench=loops.wrench)
     recording = Recording(keys, keep, None if stream is None else SampleStream.create(
-        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)))
+        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)),
+        None if adaptive else _sample_count(sampling, done, n_steps))
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
 
     # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the state
@@ -1447,6 +1453,17 @@ def _sampling(n_steps, h, record_every, record_dt, t_eval, start=0, n_bodies=1):
         return steps[steps > start].astype(np.int64)
     samples = max(1, min(MAX_SAMPLES, RECORD_BYTES // (RECORD_SAMPLE_BYTES * n_bodies)))
     return max(1, -(-(n_steps - start) // samples))
+
+
+def _sample_count(sampling, start, n_steps):
+    """The samples a fixed-step run from step `start` to n_steps records (_sampling's steps
+    after start, its first and its final state)."""
+    if isinstance(sampling, int):
+        inner, last = n_steps // sampling - start // sampling, n_steps % sampling == 0
+    else:
+        later = sampling[sampling > start]
+        inner, last = len(later), bool(len(later)) and later[-1] == n_steps
+    return 1 + inner + (0 if last else 1)
 
 
 def _fastest_rate(omega):

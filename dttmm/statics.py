@@ -220,7 +220,7 @@ class _Configuration:
         # hold their rows (closures.closure_residuals)
         self.closed = model.n_closures > 0
         self.pin = _positions(model)[2][-1] if km.tip_pinned else None
-        self.rot0 = np.array(km.initial_rotation)
+        self.rot0 = np.array(km.initial_rotation, order="C")
         self.eta0 = np.array(km.initial_modal_coordinates)
         # one workspace for every evaluation (the beams' tables do not change)
         self.mode = solver._mode(km, "riccati", False)

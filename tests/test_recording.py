@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
+from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate,
+                   solver)
 from dttmm.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
                           unit_link)
 
@@ -182,3 +183,22 @@ def test_a_streamed_run_holds_no_samples_in_memory(tmp_path):
     print(f"kept {kept['peak_mb']:.0f} MB, streamed {streamed['peak_mb']:.0f} MB")
     assert streamed["samples"] == kept["samples"] == 20001
     assert streamed["peak_mb"] < kept["peak_mb"] - 100
+
+
+@pytest.mark.parametrize("options", [dict(record_every=1), dict(record_every=3),
+                                     dict(record_every=10), dict(record_every=11),
+                                     dict(t_eval=[0.002, 0.005, 0.01]), dict(t_eval=[0.003]),
+                                     {}])
+def test_a_fixed_step_run_knows_how_many_samples_it_records(options):
+    """A fixed-step run writes its samples into arrays of the rows it will record
+    (solver._sample_count; recording.Recording(samples=)): the count is the samples it then
+    records, from t = 0 and from a checkpoint, so that no row is joined or left over."""
+    model = rigid_chain(3)
+    runs = [(0, simulate(model, 0.01, 1e-3, **options))]
+    if "t_eval" not in options:                 # (a checkpoint's run: its times after it)
+        first = simulate(model, 0.004, 1e-3, **options)
+        runs.append((4, simulate(model, 0.01, 1e-3, resume=first.checkpoint, **options)))
+    for start, result in runs:
+        sampling = solver._sampling(10, 1e-3, options.get("record_every"), None,
+                                    options.get("t_eval"), start, model.n_bodies)
+        assert len(result.t) == solver._sample_count(sampling, start, 10), (start, result.t)
