@@ -254,7 +254,8 @@ def adopt_arrays(model, source=None):
         value = getattr(model, name)
         if source is not None and value is getattr(source, name) and name in kept:
             own[name] = kept[name]
-        elif value.base is None:            # (its own memory: writable again for the kernels)
+        elif value.base is None and value.flags.c_contiguous:   # (its own memory, laid out
+            # as the kernels take it: writable again for them; else kernel_array copies it)
             value.flags.writeable = True
             view = value.view()
             view.flags.writeable = False

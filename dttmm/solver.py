@@ -247,9 +247,10 @@ def joint_drives(model):
     damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
     (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
     part in the inputs (_joint_inputs; kernels/joint.py::drive_value); a compiled JointForce
-    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.  No
-    rows for a model without joints with coordinates (the kernels read a joint's row only)."""
-    table = np.zeros((model.n_bodies if has_coordinates(model) else 0, 2, 4))
+    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.  One
+    row of none for a model without joints with coordinates (the kernels read a joint's row
+    only; the full-state tree sweep hands a ball joint row 0, unread)."""
+    table = np.zeros((model.n_bodies if has_coordinates(model) else 1, 2, 4))
     table[:, :, 0] = -1.0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
@@ -282,6 +283,13 @@ def compiled_forces(model):
 @model_fact
 def has_coordinates(model):
     return bool(np.isin(model.hinge_kind, (REVOLUTE, UNIVERSAL, PRISMATIC)).any())
+
+
+@model_fact
+def has_offsets(model):
+    """A joint offsets its body's input point from its parent's output point (state.defl): an
+    elastic hinge's deflection, a prismatic joint's slide."""
+    return bool(np.isin(model.hinge_kind, (ELASTIC, PRISMATIC)).any())
 
 
 @model_fact
@@ -1041,7 +1049,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
 
     # the joints' offsets (an elastic hinge's deflection, a slide) where a joint has one (they
     # are zero otherwise: _result's zeros, 48 B per body and sample not kept)
-    offsets = ["defl", "defl_rate"] if np.isin(model.hinge_kind, (ELASTIC, PRISMATIC)).any() else []
+    offsets = ["defl", "defl_rate"] if has_offsets(model) else []
     keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
     if mode == kstep.RICCATI_JOINTS:
         keys += ["jq", "jqd", "jtau"]

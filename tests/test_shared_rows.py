@@ -3,8 +3,12 @@ row of a per-body table is the same, the model shows that row for all through a 
 0 (model.shared_rows) and the kernels read the one row (solver.kernel_params: body_row,
 hinge_row).  The runs of such a model equal bit for bit those of the same model with every row
 stored, on every loop variant; and the model's memory per body falls accordingly."""
+import os
+import subprocess
+import sys
 import tracemalloc
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +17,8 @@ from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, Rig
                    build_chain, simulate)
 from dttmm.chains import binary_tree, rigid_chain
 from dttmm.model import SHARED_TABLES, is_shared
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _rod(**extra):
@@ -94,3 +100,22 @@ def test_the_tables_of_equal_links_cost_no_memory_per_body():
     tracemalloc.stop()
     assert all(is_shared(getattr(model, name)) for name in SHARED_TABLES)
     assert held < 450, f"{held:.0f} B per body"
+
+
+def test_no_kernel_reads_a_table_past_its_rows():
+    """The tables with no or one row (shared rows, the lock and joint-drive tables, the beams'
+    without beams) are read within their rows on every loop variant: the cases above and a
+    ball-joint tree on the full-state sweep, two steps each with numba's compilation off (pure
+    Python: numpy refuses an index past the end, where compiled code would read past it)."""
+    script = (
+        "import sys; sys.path.insert(0, 'tests')\n"
+        "from test_shared_rows import CASES\n"
+        "from dttmm import simulate\n"
+        "from dttmm.chains import binary_tree\n"
+        "cases = list(CASES.values()) + [(lambda: binary_tree(2), dict(full_state=True))]\n"
+        "for build, options in cases:\n"
+        "    simulate(build(), 0.002, 1e-3, **options)\n")
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    done = subprocess.run([sys.executable, "-c", script], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]

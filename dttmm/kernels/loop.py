@@ -44,7 +44,8 @@ Params = namedtuple("Params", [
     "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
     "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
     "joint_drive",      # (n, 2, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
-                        # none; elements/drives.py)
+                        # none; elements/drives.py); one row of none without joints with
+                        # coordinates (solver.joint_drives)
     "body_row",         # (n,) int64: body k's row of body_params and mass_center_inertia, and
     "hinge_row",        # (n,) int64: joint k's of hinge_params (one row for all where the
                         # model's rows are all equal: model.shared_rows)

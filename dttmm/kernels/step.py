@@ -262,7 +262,9 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
             else:
                 rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
-            joint_linearization(hk, hinge_params[hr], params.joint_drive[k], given[k], rot_p,
+            drive = params.joint_drive[k if has_coordinates(hk) else 0]   # (a ball joint's:
+            # unread, and the table has one row of none without joints with coordinates)
+            joint_linearization(hk, hinge_params[hr], drive, given[k], rot_p,
                                 w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
                                 sweep.joint_dof[k], sweep.joint_tau_nu[k], forces)
         elif hk == BALL:
