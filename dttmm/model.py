@@ -279,7 +279,13 @@ def shared_rows(table):
     read the one row: solver.kernel_params)."""
     if len(table) < 2 or is_shared(table) or not (table == table[0]).all():
         return table
-    return np.broadcast_to(table[:1].copy(), table.shape)   # (a copy: not a view of table)
+    return _shown_for_all(table[0], len(table))
+
+
+def _shown_for_all(row, n):
+    """row shown n times: a read-only (n, ...) view of stride 0 on a copy of row (not a view
+    of the table it came from, which is then free to go)."""
+    return np.broadcast_to(row[None].copy(), (n,) + row.shape)
 
 
 def is_shared(table):
@@ -1254,8 +1260,8 @@ def _packed(checked, pack):
         if row is None:
             row = done[key] = np.asarray(pack(v), dtype=float)
         rows.append(row)
-    if len(rows) > 1 and all(row is rows[0] for row in done.values()):
-        return np.broadcast_to(rows[0][None].copy(), (len(rows),) + rows[0].shape)
+    if len(rows) > 1 and len(done) == 1:
+        return _shown_for_all(rows[0], len(rows))
     return np.array(rows)
 
 

@@ -147,6 +147,10 @@ class Workspace:
         n_el, n_sst = 2 * n_full, (0 if fused else n_st)
         n_eta = int(model.n_modes.sum())
         z3 = lambda: np.zeros((n, 3))                               # noqa: E731
+        # the joints' coordinates and rates at t = 0 (zeros, untouched, without such joints)
+        jq, jqd = ((model.hinge_params[:, COORDINATE_0].copy(),
+                    model.hinge_params[:, RATE_0].copy()) if has_coordinates(model)
+                   else (np.zeros((n, 2)), np.zeros((n, 2))))
         self.state = State(
             rot=model.initial_rotation.copy(), omega=model.initial_angular_velocity.copy(),
             omega_dot=z3(), pseudo=z3(),    # pseudo: the rotation integrator's pseudo-acceleration
@@ -158,10 +162,7 @@ class Workspace:
             eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
             eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3(),
             # joints with coordinates (kernels/joint.py): q, q', q'', pseudo, generalized force
-            jq=(model.hinge_params[:, COORDINATE_0].copy() if has_coordinates(model)
-                else np.zeros((n, 2))),
-            jqd=(model.hinge_params[:, RATE_0].copy() if has_coordinates(model)
-                 else np.zeros((n, 2))), jqdd=np.zeros((n, 2)),
+            jq=jq, jqd=jqd, jqdd=np.zeros((n, 2)),
             jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
@@ -1088,9 +1089,9 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                                                         # another function of the same name)
     history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4],
                           closure_wrench=loops.wrench)
+    samples = None if adaptive else _sample_count(sampling, done, n_steps)
     recording = Recording(keys, keep, None if stream is None else SampleStream.create(
-        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)),
-        None if adaptive else _sample_count(sampling, done, n_steps))
+        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)), samples)
     recording.add_state(state, history_values, done, 0.0 if adaptive else None)
 
     # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the state
@@ -1135,8 +1136,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     # a run that samples only its ends (a million bodies by default: _sampling) records its
     # last state from the state itself, and its chunks write no rows (the rows of a step would
     # hold 0.4 KB per body)
-    ends_only = (not adaptive and balance is None and isinstance(sampling, int)
-                 and done + sampling - done % sampling >= n_steps)
+    ends_only = balance is None and samples == 2
     rec = _record(0 if ends_only else max(1, size // every), n, len(state.eta),
                   scheme == "paper", "v_c" in keys,
                   loops.wrench.shape[0] if "closure_wrench" in keys else 0)
