@@ -169,6 +169,13 @@ def describe(model):
                    "by default, positions and rates projected back onto the loops after every "
                    "step; docs/loops.md)")
         out.append("  " + _loop_reach(model))
+        from .solver import energy_not_held
+        why_not = energy_not_held(model)
+        out.append("  energy: " + ("held after every step by scaling the rates (nothing works "
+                                   "on these rigid loops; hold_energy=False steps without it)"
+                                   if why_not is None else f"not held ({why_not}): the "
+                                   "balance E - E(0) - W moves at the step's second order")
+                   + "; docs/loops.md, \"The energy held\"")
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode, 0.02 rad per step of the fastest spin or swing)")
     return "\n".join(out)

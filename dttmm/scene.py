@@ -80,7 +80,7 @@ _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
         "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
         "record_every": "int", "record_dt": "number", "max_step_error": "number",
         "full_state": "bool", "richardson": "bool", "rtol": "number", "atol": "number",
-        "max_energy_error": "number"}
+        "max_energy_error": "number", "hold_energy": "bool"}
 
 
 def load_scene(path):

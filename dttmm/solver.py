@@ -27,7 +27,7 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain, em_step, tree, weld_chain
 from .kernels import step as kstep
-from .kernels.closure import Loops, set_ground
+from .kernels.closure import Loops, set_ground, start_energy
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Monitor, Params, Record, Run, Settings, State,
                            Sweep, run_steps, run_steps_no_alloc)
@@ -38,7 +38,7 @@ from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closur
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
 from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact,
                     output_section)
-from .energy_balance import EnergyBalance
+from .energy_balance import EnergyBalance, does_work
 from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
                         model_fingerprint)
 from .result import (Result, _drive_spring_energy, beam_output_offset, chain_energies,
@@ -427,18 +427,38 @@ def _loop_tables(model, banded_rows):
                  free_store=np.zeros((nb, 4), dtype=np.int64),
                  p_comb=np.zeros((st, 6)), k_comb=np.zeros((nb, 3)),
                  eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 10)),
-                 stats=np.zeros(4))
+                 stats=np.zeros(4), energy=np.array([0.0, np.nan, 0.0]))
 
 
 def _loop_info(loops):
-    """A run's info on its closing joints (kernels/closure.py::Loops.stats): the largest
-    residuals after any step's projections, and before them; nothing without loops."""
+    """A run's info on its closing joints (kernels/closure.py::Loops.stats, energy): the
+    largest residuals after any step's projections, and before them, and where the energy is
+    held the largest relative change of the rates that held it; nothing without loops."""
     if not len(loops.kind):
         return {}
     return {"loop_position_residual": float(loops.stats[3]),
             "loop_rate_residual": float(loops.stats[2]),
             "loop_position_residual_unprojected": float(loops.stats[0]),
-            "loop_rate_residual_unprojected": float(loops.stats[1])}
+            "loop_rate_residual_unprojected": float(loops.stats[1]),
+            **({"energy_correction": float(loops.energy[2])} if loops.energy[0] else {})}
+
+
+def energy_not_held(model, rho_inf=1.0):
+    """Why the loops' projection does not hold the total energy of a run of this model
+    (docs/loops.md, "The energy held"), or None where it does: closed loops of rigid bodies on
+    which nothing works (no loads but gravity, no drives, dampers or moving ground), stepped
+    without numerical damping."""
+    if not has_loops(model):
+        return "it has no closed loops (the loops' projection holds it)"
+    if np.any(model.body_kind == BEAM):
+        return "it has beams"
+    if np.any(model.hinge_kind == ELASTIC) or np.any(np.asarray(model.closure_kind) == ELASTIC):
+        return "it has elastic hinges"
+    if does_work(model):
+        return "work is done on it (applied loads, drives, dampers or a moving ground)"
+    if float(rho_inf) != 1.0:
+        return f"numerical damping (rho_inf = {rho_inf:g} < 1) takes energy out by design"
+    return None
 
 
 @model_fact
@@ -781,7 +801,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
              scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
              record_every=None, record_dt=None, t_eval=None, full_state=False, richardson=False,
              progress=None, max_step_error=MAX_STEP_ERROR, max_energy_error=None,
-             resume=None, stream=None) -> Result:
+             hold_energy=None, resume=None, stream=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -863,6 +883,15 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         moving ground since t = 0 (checked at the end of every chunk of up to 1000 steps;
         fixed steps). ``info["energy_balance_error"]`` is the run's largest. Default None: not
         checked (it derives every step's velocities; docs/solver.md, "Energy balance").
+    hold_energy : bool, optional
+        Closed loops of rigid bodies on which nothing works (gravity, no loads, drives,
+        dampers or moving ground; rho_inf = 1): after each step's projection onto the loops,
+        every rate is scaled so that the total energy is its value at the start (the least
+        change of the rates, in the kinetic metric, that holds it; the positions keep the
+        step's own second-order error; docs/loops.md, "The energy held"). None (default): held
+        wherever it applies; False: never; True: held, or a ValueError saying why it cannot
+        be. ``info["energy_held"]`` says which, ``info["energy_correction"]`` the largest
+        relative change of the rates it made in one step.
     resume : Checkpoint, optional
         Continue the run that wrote it (``result.checkpoint``, or ``Checkpoint.load``) from
         its last step to t_end, with the same model, dt and options: the continued run takes
@@ -972,6 +1001,15 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
     max_step_error = (np.inf if max_step_error is None
                       else _check_positive("max_step_error", max_step_error))
+    if hold_energy not in (None, True, False):
+        raise ValueError(f"simulate: hold_energy must be None, True or False, got "
+                         f"{hold_energy!r}")
+    why_not_held = energy_not_held(model, rho_inf)
+    if hold_energy and why_not_held:
+        raise ValueError(f"simulate: hold_energy=True, but the loops' projection cannot hold "
+                         f"this model's energy: {why_not_held} (docs/loops.md, \"The energy "
+                         f"held\"); leave hold_energy unset")
+    hold_energy = why_not_held is None and hold_energy is not False
     if max_energy_error is not None:
         max_energy_error = _check_positive("max_energy_error", max_energy_error)
     if richardson:
@@ -994,7 +1032,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                                      rho_inf=rho_inf, newton_iterations=newton_iterations,
                                      newton_tol=newton_tol, **records,
                                      full_state=full_state, progress=progress,
-                                     max_step_error=max_step_error))
+                                     max_step_error=max_step_error, hold_energy=hold_energy))
             except DivergenceError as err:
                 raise DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
                                       f"s: {err.cause}", err.partial) from None
@@ -1045,6 +1083,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     if resume is None:
         _consistent_start(model, mode, method, (runner, loop) if fused else None, params,
                           settings, state, ws.sweep, monitor, dt, loops)
+        if hold_energy:         # the total energy the steps hold (kernels/closure.py)
+            loops.energy[:2] = 1.0, start_energy(params, loops, state)
     histories = _station_histories(model, state, scheme == "paper")
     state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -1073,6 +1113,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
             keys += ["v_st", "v_c"]
     run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name,
                     model_fingerprint=model_fingerprint(user_model))
+    if len(loops.kind):
+        run_info.update(energy_held=bool(hold_energy))
     if scheme == "energy_momentum":
         run_info.update(forces="step means (about t - dt/2)")
     else:

@@ -27,13 +27,17 @@ def main(argv=None):
     ap.add_argument("--csv", help="write t, slider_x, slider_vx, crank_angle, crank_rate "
                                   "every 1 ms")
     ap.add_argument("--plots", help="directory for the figure (PNG)")
+    ap.add_argument("--no-hold-energy", action="store_true",
+                    help="DT-TMM: step without holding the total energy (by default the rates "
+                         "are scaled after every step to hold it; docs/loops.md)")
     args = ap.parse_args(argv)
 
     model = slider_crank()
     every = max(1, int(round(1e-3 / args.dt)))
     try:
         if args.solver == "dttmm":
-            res = simulate(model, args.t_end, args.dt, record_every=every)
+            res = simulate(model, args.t_end, args.dt, record_every=every,
+                           hold_energy=False if args.no_hold_energy else None)
         else:
             n = int(round(args.t_end / 1e-3))
             res = simulate_reference(model, args.t_end, t_eval=np.linspace(0, args.t_end, n + 1))
@@ -55,6 +59,8 @@ def main(argv=None):
         info = res.info
         print(f"  loop residuals after every step: positions "
               f"{info['loop_position_residual']:.2e} m, rates {info['loop_rate_residual']:.2e} m/s")
+        print("  energy " + (f"held (rates scaled by at most {info['energy_correction']:.1e} in "
+                             f"a step)" if info["energy_held"] else "not held (--no-hold-energy)"))
     if args.csv:
         data = np.column_stack([res.t, x, vx, angle, rate])
         np.savetxt(args.csv, data, delimiter=",", comments="", fmt="%.12g",
@@ -73,7 +79,8 @@ def main(argv=None):
         ax[1].set(xlabel="t, s", ylabel="crank rate, rad/s", title="Crank angular velocity")
         ax[2].plot(res.t, (e - e[0]) / res.kinetic.max(), lw=0.9)
         ax[2].set(xlabel="t, s", ylabel="(E - E0) / max kinetic energy",
-                  title=f"Energy error ({args.solver}, dt = {args.dt:g} s)")
+                  title=f"Energy error ({args.solver}, dt = {args.dt:g} s"
+                        + (", held)" if res.info.get("energy_held") else ")"))
         ax[2].ticklabel_format(axis="y", style="sci", scilimits=(0, 0))
         fig.suptitle("IFToMM spatial slider-crank, a closed loop (free, gravity along -z)")
         fig.tight_layout()

@@ -19,7 +19,8 @@ def test_slider_crank_energy_is_the_published_value_and_two_trees_agree():
     for tree in ("slider on the rod", "slider on the ground"):
         model = slider_crank(tree)
         positions, rates = dttmm.loop_residuals(model)
-        assert positions.max() < 1e-15 and rates.max() < 1e-15
+        # closed to rounding: 2.9e-16 m and 1.1e-15 m/s with numpy 2.4 (1e-15 held before it)
+        assert positions.max() < 1e-14 and rates.max() < 1e-14
         runs[tree] = result = simulate_reference(model, 5.0, t_eval=t)
         energy = result.kinetic + result.potential
         assert abs(energy[0] - 0.76643568) < 1e-12

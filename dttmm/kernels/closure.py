@@ -106,12 +106,17 @@ Loops = namedtuple("Loops", [
     "stats",                         # (4,) the run's largest position residual after a step
                                      # (before the projection), rate residual before and after
                                      # the rates' projection, position residual after its
+    "energy",                        # (3,) [held (1) or not (0), the total energy the steps
+                                     # hold (set at the start, start_energy), the largest
+                                     # relative change of the rates its projection made]
 ])
 
 AXIS_1_START = AXIS_1.start
 POSITION_PROJECTIONS = 4     # Gauss-Newton projections of the positions after a step, at most
 POSITION_TOL = 1e-13         # m, rad: where they stop
 RATE_TOL = 1e-13             # m/s, rad/s: the rates' projection's
+ENERGY_STEP_LIMIT = 1e-3     # the energy's projection changes the rates by less than this
+                             # fraction in one step, or not at all (a state too slow to carry it)
 
 
 # The rows' geometry on values (kernels/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames as
@@ -911,6 +916,68 @@ def project_onto_loops(params, loops, state):
     for r in range(n_rows):             # the driven coordinates' rates (the drives' power)
         if loops.coordinate[r] >= 0:
             loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = loops.gd[r] + loops.target[r, 1]
+    if loops.energy[0] > 0.0:
+        _hold_energy(params, loops, state)
+
+
+@no_alloc_kernel
+def _mechanical_energy(params, loops, state):
+    """(T, V) of a model of rigid bodies (docs/loops.md, "The energy held"): every body's
+    1/2 m |v_C|^2 + 1/2 (A^T w) . J_C (A^T w) and -m g . r_C, its mass centre from its output
+    point (tree_points), r_C = r_O + A (l_IC - l_IO), v_C = v_O + w x A (l_IC - l_IO)."""
+    tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
+                state.defl, state.defl_rate, loops, loops.all_bodies)
+    bp, inertia, g = params.body_params, params.mass_center_inertia, params.gravity
+    kinetic, potential = 0.0, 0.0
+    for k in range(params.parent.shape[0]):
+        row = params.body_row[k]
+        rot_k = _m9(state.rot, k)
+        w = _v3(state.omega, k)
+        arm = t_mv(rot_k, (bp[row, 1] - bp[row, 4], bp[row, 2] - bp[row, 5],
+                           bp[row, 3] - bp[row, 6]))
+        r_c = _add(_v3(loops.r_out, k), arm)
+        v_c = _add(_v3(loops.v_out, k), t_cross(w, arm))
+        w_b = (rot_k[0] * w[0] + rot_k[3] * w[1] + rot_k[6] * w[2],     # A^T w
+               rot_k[1] * w[0] + rot_k[4] * w[1] + rot_k[7] * w[2],
+               rot_k[2] * w[0] + rot_k[5] * w[1] + rot_k[8] * w[2])
+        spin = 0.0
+        for i in range(3):
+            for j in range(3):
+                spin += w_b[i] * inertia[row, i, j] * w_b[j]
+        kinetic += 0.5 * (bp[row, 0] * _dot(v_c, v_c) + spin)
+        potential -= bp[row, 0] * (g[0] * r_c[0] + g[1] * r_c[1] + g[2] * r_c[2])
+    return kinetic, potential
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def start_energy(params, loops, state):
+    """The total energy T + V of the state (at the start of a run: the energy its steps hold,
+    loops.energy[1])."""
+    kinetic, potential = _mechanical_energy(params, loops, state)
+    return kinetic + potential
+
+
+@no_alloc_kernel
+def _hold_energy(params, loops, state):
+    """After the loops' projection (docs/loops.md, "The energy held"): every rate scaled by
+    s = sqrt((E - V) / T), so that T + V is the run's E again.  T is quadratic in the rates and
+    the rows' rates are linear in them (a fixed ground, no driven rows), so the rates stay on
+    the loops; the scaling is the least change of the rates, in the kinetic metric, that holds
+    E.  Skipped where it would change them by more than ENERGY_STEP_LIMIT (T near 0)."""
+    kinetic, potential = _mechanical_energy(params, loops, state)
+    want = loops.energy[1] - potential
+    if not (kinetic > 0.0 and want > 0.0):
+        return
+    s = np.sqrt(want / kinetic)
+    if abs(s - 1.0) > ENERGY_STEP_LIMIT:
+        return
+    loops.energy[2] = max(loops.energy[2], abs(s - 1.0))
+    for k in range(params.parent.shape[0]):
+        for i in range(3):
+            state.omega[k, i] *= s
+            state.defl_rate[k, i] *= s
+        for i in range(n_coordinates(params.hinge_kind[k])):
+            state.jqd[k, i] *= s
 
 
 # The tree's full-state sweep with many load columns (sweep.py::riccati_tree_full, "Trees in
