@@ -4,7 +4,7 @@ next, to continue it later bit for bit (docs/solver.md, "Steps and records")."""
 import hashlib
 import json
 import os
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -299,11 +299,12 @@ class Checkpoint:
     run : dict
         What a continued run must match (scheme, method, mode, loop, dt, bodies, Newton
         iterations).
-    arrays : tuple of ndarray
-        The run's arrays as it ended (read-only), in ``leaves((state, sweep, loop, monitor))``
-        order.
     counters : tuple of int
         (most Newton iterations used, unconverged steps).
+    source : tuple
+        The run's structures as it ended, (state, sweep, loop, monitor), or their arrays:
+        ``arrays`` gathers them, read-only, when first read (a run that is never resumed or
+        saved pays nothing for its checkpoint).
 
     See Also
     --------
@@ -312,12 +313,24 @@ class Checkpoint:
     step: int
     h: float
     run: dict           # what the continued run must match: scheme, method, mode, loop, ...
-    arrays: tuple       # leaves((state, sweep, loop, monitor)), read-only
     counters: tuple     # (most Newton iterations used, unconverged steps)
+    source: tuple = field(repr=False)   # (state, sweep, loop, monitor) or their arrays
 
     @property
     def t(self):
         return self.step * self.h
+
+    @property
+    def arrays(self):
+        """The run's arrays as it ended, read-only, in ``leaves((state, sweep, loop,
+        monitor))`` order (gathered once, when first read)."""
+        gathered = self.__dict__.get("_arrays")
+        if gathered is None:
+            gathered = tuple(leaves(self.source))
+            for a in gathered:          # the run is over and nothing writes them again
+                a.flags.writeable = False
+            object.__setattr__(self, "_arrays", gathered)
+        return gathered
 
     def save(self, path):
         """Write the checkpoint to path (a .npz file; Checkpoint.load reads it).
@@ -363,7 +376,7 @@ class Checkpoint:
         if digest != _checkpoint_digest(step, h, run, counters, arrays):
             raise ValueError(f"{where}: the file's content does not match the digest written "
                              f"with it: it was changed after Checkpoint.save wrote it")
-        return cls(step=step, h=h, run=run, arrays=arrays, counters=counters)
+        return cls(step=step, h=h, run=run, counters=counters, source=arrays)
 
     def restore(self, structures, run):
         """Copy the arrays into a new run's structures (state, sweep, loop, monitor), after
@@ -388,10 +401,7 @@ class Checkpoint:
 
     @classmethod
     def of(cls, step, h, run, structures, counters):
-        """The checkpoint of a run that has ended: its own arrays, made read-only (the run is
-        over and nothing writes them again; no copy: a million bodies' state is not doubled)."""
-        arrays = tuple(leaves(structures))
-        for a in arrays:
-            a.flags.writeable = False
-        return cls(step=int(step), h=float(h), run=dict(run), arrays=arrays,
-                   counters=tuple(int(c) for c in counters))
+        """The checkpoint of a run that has ended: its own arrays (read-only once read; no
+        copy: a million bodies' state is not doubled)."""
+        return cls(step=int(step), h=float(h), run=dict(run),
+                   counters=tuple(int(c) for c in counters), source=structures)

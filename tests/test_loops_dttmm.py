@@ -64,7 +64,7 @@ def test_slider_crank_keeps_its_energy_to_1e_6_at_dt_1e_4():
     assert abs(result.position_output[-1, 2, 0] - 0.24071957) < 1e-6
 
 
-@pytest.mark.long
+@pytest.mark.slow
 def test_slider_crank_over_5_s_against_the_reference():
     """Every body's end point over 5 s (101 samples) against the reference, held and not: held,
     the two spanning trees agree with it alike, at order 2 (5.4e-6, 8.6e-7 m and 5.8e-6,
@@ -226,9 +226,9 @@ def test_stewart_platform_against_the_reference_with_both_drives():
     assert np.abs(result.drive_force - ref.drive_force).max() < 1e-6 * scale
 
 
-@pytest.mark.long
+@pytest.mark.slow
 def test_stewart_platform_over_1_s_at_dt_1e_4_with_both_drives():
-    """Issue 29's figure (python -m pytest -m long): both drives, over 1 s at dt = 1e-4, the
+    """Issue 29's figure: both drives, over 1 s at dt = 1e-4, the
     platform's centre within 1e-6 m of the reference at every 0.05 s."""
     from dttmm.mechanisms import stewart_platform
     t = np.linspace(0.0, 1.0, 21)

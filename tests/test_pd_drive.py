@@ -232,5 +232,5 @@ def test_a_run_with_a_numba_joint_force_resumes_with_this_process_callbacks():
                                         and a[0] == address) else a
                    for a in half.checkpoint.arrays)
     assert sum(a is not b for a, b in zip(arrays, half.checkpoint.arrays)) == 1
-    rest = simulate(model, 0.1, 1e-3, resume=replace(half.checkpoint, arrays=arrays))
+    rest = simulate(model, 0.1, 1e-3, resume=replace(half.checkpoint, source=arrays))
     np.testing.assert_array_equal(rest.position_output[-1], whole.position_output[-1])
