@@ -225,6 +225,18 @@ class Result:
             derivation = None
         return Result(derivation=derivation, **values)
 
+    def state(self, i=-1):
+        """Sample i's state as ``dttmm.forward_dynamics`` takes it: rotation, angular_velocity,
+        and where recorded joint_coordinates, joint_rates, modal_coordinates and
+        modal_velocities (an elastic hinge's deflection is not a Result field: give it
+        yourself, or the model's initial one stands)."""
+        out = {"rotation": self.rotation[i], "angular_velocity": self.angular_velocity[i]}
+        for key in ("joint_coordinates", "joint_rates", "modal_coordinates", "modal_velocities"):
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = value[i]
+        return out
+
     @property
     def total_energy(self):
         """(T,) kinetic + potential, J."""

@@ -597,15 +597,16 @@ def _steps(t_end, dt):
 
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
-                      loops=None):
-    """The accelerations at t = 0 (docs/solver.md, "Consistent start") into state: by the fused
-    loop's own sweep (fused: its (runner, loop)) or kernels/step.py::initial_accelerations,
-    with the closing joints (loops: loop_tables) held at acceleration level."""
+                      loops=None, t=0.0):
+    """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
+    "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
+    or kernels/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
+    held at acceleration level."""
     loops = loop_tables(model) if loops is None else loops
     n = model.n_bodies
-    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [0.0])
-    force, torque, line_load = _loads(model, [0.0])
-    joint_input = _joint_inputs(model, [0.0], state, dt)
+    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [t])
+    force, torque, line_load = _loads(model, [t])
+    joint_input = _joint_inputs(model, [t], state, dt)
     try:
         if fused:       # the fused loop's own sweep (compiles nothing else)
             status = _fused_start(*fused, Run(
@@ -618,7 +619,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
         else:
             set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
             if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
-                loops.target[:, :] = closure_targets(model, [0.0], loops)[0]  # spring's rest
+                loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
                 loops.step_coef[:] = 0.0        # the springs' forces explicit
 
             def start():
@@ -630,26 +631,25 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
                 for r, law, who in forces:  # force rows leave q, q' in loops.g, gd
-                    loops.target[r, 2] = _drive_number(law(0.0, loops.g[r], loops.gd[r]),
-                                                       who, 0.0)
+                    loops.target[r, 2] = _drive_number(law(t, loops.g[r], loops.gd[r]), who, t)
                 status = start()
             for r in np.nonzero(loops.coordinate >= 0)[0]:   # the drives' rates at t = 0
                 loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = (
                     loops.target[r, 1] if loops.law[r, 0] == MOTION else loops.gd[r])
     except np.linalg.LinAlgError as err:
-        raise DivergenceError(0, 0.0, f"consistent start: a matrix of the sweep is singular "
+        raise DivergenceError(0, t, f"consistent start: a matrix of the sweep is singular "
                               f"or not finite ({err})"
                               + (f"; {_DIRECT_HINT}" if method == "direct" else "")) from None
     if status == LOST_ACCURACY:
-        raise DivergenceError(0, 0.0, "consistent start: the direct sweep lost its accuracy; "
+        raise DivergenceError(0, t, "consistent start: the direct sweep lost its accuracy; "
                               + _DIRECT_HINT)
     if status == _NOT_FINITE_START:
-        raise DivergenceError(0, 0.0, "consistent start: the accelerations are NaN or infinite "
+        raise DivergenceError(0, t, "consistent start: the accelerations are NaN or infinite "
                               "(check the model's masses, inertias and initial state)")
     if status < 0:
         raise ValueError(_unsupported_cause(model, -status, "the consistent start"))
     if status != 0:
-        raise DivergenceError(0, 0.0, _singular_cause(model, mode, status, "consistent start"))
+        raise DivergenceError(0, t, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
         state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
         if model.hinge_kind[k] == ELASTIC:

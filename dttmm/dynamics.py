@@ -1,0 +1,315 @@
+"""DT-TMM's accelerations of any state at any time: the consistent start's O(N) sweep at
+acceleration level (docs/solver.md, "Consistent start"; with closing joints, docs/loops.md,
+"The sweep with closing joints"), as a function of the state for users and checks (docs/
+dynamics.md).
+"""
+import numpy as np
+
+# the state forward_dynamics takes, as Result records it (one sample), and the kernel state's
+# field each is written to; deflection and deflection_rate: elastic hinges' (world, m, m/s)
+STATE_KEYS = ("rotation", "angular_velocity", "joint_coordinates", "joint_rates",
+              "modal_coordinates", "modal_velocities", "deflection", "deflection_rate")
+
+
+def forward_dynamics(model, t=0.0, state=None):
+    """The accelerations of a state at time t, by DT-TMM's O(N) sweep at acceleration level
+    (the step's own linearization taken at zero step: the consistent start).
+
+    Parameters
+    ----------
+    model : Model
+        Any model ``simulate`` runs with the Newmark scheme (trees, beams, joints with
+        coordinates and drives, elastic hinges, closed loops on a fixed ground).
+    t : float
+        The time, s: the ground's motion, the applied loads and the drives are taken at t.
+    state : mapping, optional
+        The state, as a Result records it at one sample (``result.state(i)``): ``rotation``
+        (n, 3, 3), ``angular_velocity`` (n, 3, rad/s), ``joint_coordinates``, ``joint_rates``
+        (total coordinates, Result's order), ``modal_coordinates``, ``modal_velocities``
+        (total modes), ``deflection``, ``deflection_rate`` (n, 3: elastic hinges', world,
+        m and m/s). A key left out keeps the model's initial state. A joint's child frame
+        follows its parent's and the joint's coordinates (a welded body its parent's): given,
+        it must agree with them (to 1e-9). With closed loops the state must close them
+        (as a Result's samples do).
+
+    Returns
+    -------
+    dict
+        ``angular_acceleration`` (n, 3, rad/s^2), ``input_acceleration`` (n, 3, m/s^2, each
+        body's input point), ``joint_acceleration`` (total coordinates, as Result's
+        joint_coordinates), ``modal_acceleration`` (total modes), ``deflection_acceleration``
+        (n, 3: elastic hinges', world), ``rotation`` and ``angular_velocity`` (the state's,
+        every frame that follows its parent's rebuilt), ``force``, ``moment`` (n, 3:
+        what the inboard side exerts on each body at its input point, N and N m about it, as
+        Result's), ``multipliers`` (the closing joints' rows, R) and ``residual`` (R: the rows'
+        accelerations after the solve, m/s^2 or rad/s^2).
+
+    Raises
+    ------
+    ValueError
+        A model the Newmark loops do not run, a state of the wrong shape, not finite, or whose
+        joint children's frames do not follow their joints' coordinates.
+    """
+    from .model import Model
+    if not isinstance(model, Model):
+        raise ValueError(f"forward_dynamics: model must be a Model, got {type(model).__name__}")
+    t = float(t)
+    if not np.isfinite(t):
+        raise ValueError(f"forward_dynamics: t must be a finite time (s), got {t!r}")
+    return _accelerations(model, t, state, True)
+
+
+def _accelerations(model, t, state, check_frames):
+    """forward_dynamics' work; check_frames: refuse given rotations of bodies whose frames
+    follow their parents' that do not agree with them (dttmm.ode gives placeholders there)."""
+    from . import solver
+    from .kernels.closure import _dependent_frames, row_residuals, set_ground
+    from .kernels.loop import Monitor, Settings
+    if model.n_closures and not model.tip_pinned:
+        solver.check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
+    solver.check_supported(model, "newmark", "riccati", True)
+    km, keep = solver.kernel_model(model)
+    mode = solver._mode(km, "riccati", True)
+    settings = Settings(mode=mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0).array(),
+                        newton_max=0, newton_tol=0.0, record_every=1, max_step_error=np.inf,
+                        stop_unconverged=False, start=False)
+    n = km.n_bodies
+    monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
+                      jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
+    ws = solver.Workspace(km)
+    params = solver.kernel_params(km)
+    loops = solver.loop_tables(km)
+    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    if state is not None:
+        _set_state(model, km, keep, columns, ws.state, state)
+        _, g_rot, g_w, g_wd, g_pos, g_vel = solver._ground(km, [t])
+        set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
+        given = ws.state.rot[keep].copy(), ws.state.omega[keep].copy()
+        _dependent_frames(params, loops, ws.state, np.arange(n, dtype=np.int64),
+                          np.zeros(60))
+        for key, rebuilt, value in (("rotation", ws.state.rot[keep], given[0]),
+                                    ("angular_velocity", ws.state.omega[keep], given[1])):
+            off = np.abs(rebuilt - value).reshape(len(keep), -1).max(axis=1)
+            if check_frames and key in state and off.max() > 1e-9 * max(1.0, np.abs(value).max()):
+                k = int(np.argmax(off))
+                raise ValueError(f"forward_dynamics: the state's {key} of body "
+                                 f"'{model.body_names[k]}' is {off[k]:.3g} off what its joint "
+                                 f"'{model.hinge_names[k]}' and its parent give (a joint's "
+                                 f"child follows its parent and the joint's coordinates)")
+    solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
+                             monitor, 0.0, loops, t=t)
+    st = ws.state
+    residual = np.zeros(len(loops.kind))
+    if len(loops.kind):
+        row_residuals(loops, st.z, residual)
+    inputs = 2 * keep + 1
+    return {"angular_acceleration": st.z[inputs, 3:6].copy(),
+            "input_acceleration": st.z[inputs, 0:3].copy(),
+            "joint_acceleration": np.array([st.jqdd[keep[k], i] for k, i in columns]),
+            "modal_acceleration": st.eta_acc.copy(),
+            "deflection_acceleration": st.defl_acc[keep].copy(),
+            "rotation": st.rot[keep].copy(), "angular_velocity": st.omega[keep].copy(),
+            "force": st.z[inputs, 9:12].copy(), "moment": st.z[inputs, 6:9].copy(),
+            "multipliers": loops.lam.copy(), "residual": residual}
+
+
+def _set_state(model, km, keep, columns, kernel_state, state):
+    """Write the given state (forward_dynamics' mapping) into the kernel model's state."""
+    unknown = sorted(set(state) - set(STATE_KEYS))
+    if unknown:
+        raise ValueError(f"forward_dynamics: the state has no {unknown[0]!r}; its keys are "
+                         f"{', '.join(STATE_KEYS)}")
+    n, n_eta = model.n_bodies, int(km.n_modes.sum())
+    shapes = {"rotation": (n, 3, 3), "angular_velocity": (n, 3), "deflection": (n, 3),
+              "deflection_rate": (n, 3), "joint_coordinates": (len(columns),),
+              "joint_rates": (len(columns),), "modal_coordinates": (n_eta,),
+              "modal_velocities": (n_eta,)}
+    values = {}
+    for key, value in state.items():
+        if value is None:
+            continue
+        value = np.asarray(value, dtype=float)
+        if value.shape != shapes[key]:
+            raise ValueError(f"forward_dynamics: state[{key!r}] must have shape "
+                             f"{shapes[key]}, got {value.shape}")
+        if not np.all(np.isfinite(value)):
+            raise ValueError(f"forward_dynamics: state[{key!r}] is not finite")
+        if key == "rotation":
+            error = np.abs(np.einsum("kji,kjl->kil", value, value) - np.eye(3)).max(axis=(1, 2))
+            if error.max() > 1e-9:
+                k = int(np.argmax(error))
+                raise ValueError(f"forward_dynamics: state['rotation'][{k}] (body "
+                                 f"'{model.body_names[k]}') is not a rotation: R^T R is "
+                                 f"{error[k]:.3g} off the identity")
+        values[key] = value
+    for key, field in (("rotation", "rot"), ("angular_velocity", "omega"),
+                       ("deflection", "defl"), ("deflection_rate", "defl_rate")):
+        if key in values:
+            getattr(kernel_state, field)[keep] = values[key]
+    for key, field in (("joint_coordinates", "jq"), ("joint_rates", "jqd")):
+        if key in values:
+            for c, (k, i) in enumerate(columns):
+                getattr(kernel_state, field)[keep[k], i] = values[key][c]
+    for key, field in (("modal_coordinates", "eta"), ("modal_velocities", "eta_d")):
+        if key in values:
+            getattr(kernel_state, field)[:] = values[key]
+
+
+class ODE:
+    """A model's equations of motion as a first-order system for any ODE integrator
+    (``scipy.integrate.solve_ivp``): ``dttmm.ode(model)`` (docs/dynamics.md, "Any
+    integrator").
+
+    The state vector y holds, in this order: for every body whose rotation is its own (on a
+    ball joint or an elastic hinge; the others follow their parents' and their joints'
+    coordinates) its unit quaternion [w, x, y, z] and its angular velocity (world, rad/s); for
+    every elastic hinge its deflection and rate (world, m, m/s); every joint coordinate, then
+    every joint rate (Result's joint_coordinates order); every modal coordinate, then every
+    modal rate.  ``names`` labels each entry, ``y0`` is the model's initial state,
+    ``fun(t, y)`` its derivative by ``forward_dynamics`` (the quaternions' rates
+    q' = 1/2 [0, w] q, world w, normalized before use; so an integrator's drift off |q| = 1
+    does not enter the dynamics), ``state(y)`` the forward_dynamics / Result layout of y,
+    ``frames(t, y)`` every body's rotation and angular velocity.
+    Closed loops are refused: an ODE integrator holds their constraints at acceleration
+    level only, and the positions drift off the loops (``simulate`` projects them back).
+    """
+
+    def __init__(self, model):
+        from .elements.hinges import BALL, ELASTIC
+        from .model import Model
+        if not isinstance(model, Model):
+            raise ValueError(f"ode: model must be a Model, got {type(model).__name__}")
+        if model.n_closures:
+            raise ValueError("ode: closed loops drift off their constraints in an ODE "
+                             "integrator (they are held at acceleration level only); "
+                             "simulate projects them back after every step")
+        self.model = model
+        n = model.n_bodies
+        self.free = np.nonzero(np.isin(model.hinge_kind, (BALL, ELASTIC)))[0]
+        self.elastic = np.nonzero(model.hinge_kind == ELASTIC)[0]
+        self.columns = [(k, i) for k in range(n) for i in range(len(model.drives[k]))]
+        n_q, n_eta = len(self.columns), int(model.n_modes.sum())
+        names = []
+        for k in self.free:
+            b = model.body_names[k]
+            names += [f"{b}.q{c}" for c in "wxyz"] + [f"{b}.w{c}" for c in "xyz"]
+        for k in self.elastic:
+            h = model.hinge_names[k]
+            names += [f"{h}.d{c}" for c in "xyz"] + [f"{h}.d'{c}" for c in "xyz"]
+        names += [f"{model.hinge_names[k]}.q{i}" for k, i in self.columns]
+        names += [f"{model.hinge_names[k]}.q{i}'" for k, i in self.columns]
+        names += [f"eta{j}" for j in range(n_eta)] + [f"eta{j}'" for j in range(n_eta)]
+        self.names = tuple(names)
+        self._sizes = (7 * len(self.free), 6 * len(self.elastic), 2 * n_q, 2 * n_eta)
+        start = forward_dynamics(model)         # the initial state, every frame rebuilt
+        self.y0 = self._pack(start["rotation"], start["angular_velocity"],
+                             _initial(model, "defl"), _initial(model, "defl_rate"),
+                             _initial(model, "jq", self.columns),
+                             _initial(model, "jqd", self.columns),
+                             np.asarray(model.initial_modal_coordinates, dtype=float),
+                             np.asarray(model.initial_modal_velocities, dtype=float))
+
+    def _pack(self, rot, omega, defl, defl_rate, q, qd, eta, eta_d):
+        from .result import rotation_to_quaternion
+        parts = []
+        for k in self.free:
+            parts += [rotation_to_quaternion(rot[k]), omega[k]]
+        for k in self.elastic:
+            parts += [defl[k], defl_rate[k]]
+        return np.concatenate(parts + [q, qd, eta, eta_d]).astype(float)
+
+    def state(self, y):
+        """The state y as forward_dynamics takes it (a body that follows its parent has its
+        initial rotation there, which the sweep's kinematics rebuild; one welded to a fixed
+        ground keeps it)."""
+        y = np.asarray(y, dtype=float)
+        n = self.model.n_bodies
+        rot = np.array(self.model.initial_rotation, dtype=float, order="C")
+        omega = np.zeros((n, 3))
+        defl, defl_rate = np.zeros((n, 3)), np.zeros((n, 3))
+        o = 0
+        for k in self.free:
+            q = y[o:o + 4] / np.linalg.norm(y[o:o + 4])
+            rot[k] = _rotation_of(q)
+            omega[k] = y[o + 4:o + 7]
+            o += 7
+        for k in self.elastic:
+            defl[k], defl_rate[k] = y[o:o + 3], y[o + 3:o + 6]
+            o += 6
+        n_q = len(self.columns)
+        q, qd = y[o:o + n_q], y[o + n_q:o + 2 * n_q]
+        o += 2 * n_q
+        n_eta = self._sizes[3] // 2
+        state = {"rotation": rot, "angular_velocity": omega, "joint_coordinates": q,
+                 "joint_rates": qd, "modal_coordinates": y[o:o + n_eta],
+                 "modal_velocities": y[o + n_eta:o + 2 * n_eta]}
+        if len(self.elastic):
+            state.update(deflection=defl, deflection_rate=defl_rate)
+        return state
+
+    def frames(self, t, y):
+        """(rotation (n, 3, 3), angular_velocity (n, 3)) of every body at (t, y), those that
+        follow their parents rebuilt from them."""
+        out = _accelerations(self.model, float(t), self.state(y), False)
+        return out["rotation"], out["angular_velocity"]
+
+    def fun(self, t, y):
+        """dy/dt at (t, y)."""
+        y = np.asarray(y, dtype=float)
+        out = _accelerations(self.model, float(t), self.state(y), False)
+        parts, o = [], 0
+        for k in self.free:
+            q, w = y[o:o + 4], y[o + 4:o + 7]
+            parts += [0.5 * np.array([-w @ q[1:], *(q[0] * w + np.cross(w, q[1:]))]),
+                      out["angular_acceleration"][k]]
+            o += 7
+        for k in self.elastic:
+            parts += [y[o + 3:o + 6], out["deflection_acceleration"][k]]
+            o += 6
+        n_q = len(self.columns)
+        parts += [y[o + n_q:o + 2 * n_q], out["joint_acceleration"]]
+        o += 2 * n_q
+        n_eta = self._sizes[3] // 2
+        parts += [y[o + n_eta:o + 2 * n_eta], out["modal_acceleration"]]
+        return np.concatenate(parts)
+
+
+def ode(model):
+    """The model's equations of motion for any ODE integrator (docs/dynamics.md, "Any
+    integrator").
+
+    Parameters
+    ----------
+    model : Model
+        A model without closed loops that ``simulate`` runs with the Newmark scheme.
+
+    Returns
+    -------
+    ODE
+        Its ``y0``, ``fun(t, y)``, ``names``, ``state(y)`` and ``frames(t, y)``, e.g.
+        ``sol = scipy.integrate.solve_ivp(system.fun, (0, 1), system.y0, method="DOP853")``.
+
+    Raises
+    ------
+    ValueError
+        A model with closed loops, or one the Newmark loops do not run.
+    """
+    return ODE(model)
+
+
+def _initial(model, field, columns=None):
+    """The model's initial value of a kernel state field (solver.Workspace), per body or per
+    joint coordinate."""
+    from . import solver
+    values = getattr(solver.Workspace(model).state, field)
+    if columns is None:
+        return values
+    return np.array([values[k, i] for k, i in columns], dtype=float)
+
+
+def _rotation_of(q):
+    """The rotation matrix of a unit quaternion [w, x, y, z]."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
