@@ -6,7 +6,7 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
                        JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
                        SpringDamper, UniversalJoint)
 from .closures import assemble, loop_residuals
-from .dynamics import forward_dynamics, ode
+from .dynamics import forward_dynamics, linearize, ode
 from .model import Ground, Model, PrescribedMotion, System, build_chain
 from .recording import Checkpoint
 from .result import Result
@@ -24,7 +24,7 @@ __all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "Elasti
            "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
            "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model", "System",
            "build_chain",
-           "assemble", "loop_residuals", "forward_dynamics", "ode",
+           "assemble", "loop_residuals", "forward_dynamics", "ode", "linearize",
            "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
            "DivergenceError", "UnresolvedMotionWarning", "static_equilibrium",
            "StaticEquilibrium", "StaticEquilibriumError",

@@ -5,6 +5,8 @@ dynamics.md).
 """
 import numpy as np
 
+from .elements import BEAM
+
 # the state forward_dynamics takes, as Result records it (one sample), and the kernel state's
 # field each is written to; deflection and deflection_rate: elastic hinges' (world, m, m/s)
 STATE_KEYS = ("rotation", "angular_velocity", "joint_coordinates", "joint_rates",
@@ -59,9 +61,10 @@ def forward_dynamics(model, t=0.0, state=None):
     return _accelerations(model, t, state, True)
 
 
-def _accelerations(model, t, state, check_frames):
+def _accelerations(model, t, state, check_frames, extra_loads=None):
     """forward_dynamics' work; check_frames: refuse given rotations of bodies whose frames
-    follow their parents' that do not agree with them (dttmm.ode gives placeholders there)."""
+    follow their parents' that do not agree with them (dttmm.ode gives placeholders there);
+    extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads."""
     from . import solver
     from .kernels.closure import _dependent_frames, row_residuals, set_ground
     from .kernels.loop import Monitor, Settings
@@ -96,8 +99,13 @@ def _accelerations(model, t, state, check_frames):
                                  f"'{model.body_names[k]}' is {off[k]:.3g} off what its joint "
                                  f"'{model.hinge_names[k]}' and its parent give (a joint's "
                                  f"child follows its parent and the joint's coordinates)")
+    if extra_loads is not None:         # onto the kernel bodies that carry each body's loads
+        loaded = keep + ((model.body_kind == BEAM) & (km.body_kind[keep] != BEAM))
+        extra = np.zeros((2, n, 3))
+        extra[:, loaded] = extra_loads
+        extra_loads = extra
     solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
-                             monitor, 0.0, loops, t=t)
+                             monitor, 0.0, loops, t=t, extra_loads=extra_loads)
     st = ws.state
     residual = np.zeros(len(loops.kind))
     if len(loops.kind):
@@ -109,6 +117,7 @@ def _accelerations(model, t, state, check_frames):
             "modal_acceleration": st.eta_acc.copy(),
             "deflection_acceleration": st.defl_acc[keep].copy(),
             "rotation": st.rot[keep].copy(), "angular_velocity": st.omega[keep].copy(),
+            "offsets": (st.defl[keep].copy(), st.defl_rate[keep].copy()),
             "force": st.z[inputs, 9:12].copy(), "moment": st.z[inputs, 6:9].copy(),
             "multipliers": loops.lam.copy(), "residual": residual}
 
@@ -313,3 +322,205 @@ def _rotation_of(q):
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+class LinearModel:
+    """x' = A x + B u, y = C x + D u about a state (``dttmm.linearize``; docs/dynamics.md,
+    "Linear models"): ``A``, ``B``, ``C``, ``D`` and the names of the ``states``, ``inputs``
+    and ``outputs``; ``difference_error`` the central differences' error estimate (the largest
+    change of any entry of A and B between steps eps and 2 eps, over 3, relative to their
+    largest entry)."""
+
+    def __init__(self, a, b, c, d, states, inputs, outputs, difference_error):
+        self.A, self.B, self.C, self.D = a, b, c, d
+        self.states, self.inputs, self.outputs = tuple(states), tuple(inputs), tuple(outputs)
+        self.difference_error = float(difference_error)
+
+    def __repr__(self):
+        return (f"LinearModel({len(self.states)} states, {len(self.inputs)} inputs, "
+                f"{len(self.outputs)} outputs)")
+
+
+DIFFERENCE_STEP = 1e-5      # linearize's central differences: rad, m, rad/s, m/s, N, N m
+
+
+def linearize(model, state=None, t=0.0):
+    """The model's linear state-space model about a state (equilibrium or not).
+
+    The states x are the configuration's perturbations, then their rates: every free rotation
+    (a body on a ball joint or an elastic hinge) turned by a small world rotation vector
+    (A <- exp(dth^) A; its rate is w, the world angular velocity), every elastic hinge's
+    deflection, every joint coordinate, every modal coordinate; then w, the deflections',
+    joint and modal rates.  The inputs u are a force (at the mass centre) and a torque (world)
+    on every body, then a torque about every revolute joint's axis and each universal joint's
+    two axes (equal and opposite on the child and the parent).  The outputs y are every
+    body's output point, world.  The accelerations' derivatives are central differences of
+    ``forward_dynamics`` (step DIFFERENCE_STEP, extrapolated with the step twice as large; the
+    error estimate is ``difference_error``); the rest is exact (dth' = w + 1/2 w x dth to first
+    order).
+
+    Parameters
+    ----------
+    model : Model
+        A model without closed loops that ``simulate`` runs with the Newmark scheme.
+    state : mapping, optional
+        The state to linearize about (as ``forward_dynamics`` takes it; ``result.state(i)``);
+        default the model's initial state.
+    t : float
+        The time, s (loads, drives and the ground's motion at t).
+
+    Returns
+    -------
+    LinearModel
+        ``A``, ``B``, ``C``, ``D`` and the names of the states, inputs and outputs.
+
+    Raises
+    ------
+    ValueError
+        A model with closed loops, or a bad state (see forward_dynamics).
+    """
+    from .elements.joints import REVOLUTE, UNIVERSAL
+    system = ODE(model)
+    t = float(t)
+    base = forward_dynamics(model, t, state)            # the state with every frame rebuilt
+    n = model.n_bodies
+    full = {"rotation": base["rotation"], "angular_velocity": base["angular_velocity"]}
+    start = system.state(system.y0)
+    for key in ("joint_coordinates", "joint_rates", "modal_coordinates", "modal_velocities",
+                "deflection", "deflection_rate"):
+        if key in start:
+            full[key] = np.array(start[key] if state is None or key not in state
+                                 else state[key], dtype=float)
+    free, elastic, columns = system.free, system.elastic, system.columns
+    n_q, n_eta = len(columns), int(model.n_modes.sum())
+    m = 3 * len(free) + 3 * len(elastic) + n_q + n_eta          # configuration coordinates
+    names = ([f"{model.body_names[k]}.th{c}" for k in free for c in "xyz"]
+             + [f"{model.hinge_names[k]}.d{c}" for k in elastic for c in "xyz"]
+             + [f"{model.hinge_names[k]}.q{i}" for k, i in columns]
+             + [f"eta{j}" for j in range(n_eta)])
+    states = names + [s + "'" for s in names]
+
+    def perturbed(j, eps):
+        """The state with coordinate j of x moved by eps."""
+        s = {key: np.array(value, dtype=float) for key, value in full.items()}
+        if j >= m:
+            j -= m
+            o = 3 * len(free)
+            if j < o:
+                s["angular_velocity"][free[j // 3], j % 3] += eps
+            elif j < o + 3 * len(elastic):
+                s["deflection_rate"][elastic[(j - o) // 3], (j - o) % 3] += eps
+            elif j < o + 3 * len(elastic) + n_q:
+                s["joint_rates"][j - o - 3 * len(elastic)] += eps
+            else:
+                s["modal_velocities"][j - o - 3 * len(elastic) - n_q] += eps
+            return s
+        o = 3 * len(free)
+        if j < o:
+            k = free[j // 3]
+            turn = np.zeros(3)
+            turn[j % 3] = eps
+            s["rotation"][k] = _turned(turn) @ s["rotation"][k]
+        elif j < o + 3 * len(elastic):
+            s["deflection"][elastic[(j - o) // 3], (j - o) % 3] += eps
+        elif j < o + 3 * len(elastic) + n_q:
+            s["joint_coordinates"][j - o - 3 * len(elastic)] += eps
+        else:
+            s["modal_coordinates"][j - o - 3 * len(elastic) - n_q] += eps
+        return s
+
+    def accelerations(out):
+        return np.concatenate([out["angular_acceleration"][free].ravel(),
+                               out["deflection_acceleration"][elastic].ravel(),
+                               out["joint_acceleration"], out["modal_acceleration"]])
+
+    def outputs(out, s):
+        """Every output point of the state s (forward_dynamics' out of it: its frames)."""
+        from .solver import _points
+        defl, defl_rate = out["offsets"]
+        eta = np.asarray(s.get("modal_coordinates", np.zeros(0)), dtype=float)
+        points = _points(model, np.zeros(1), out["rotation"][None],
+                         out["angular_velocity"][None], defl[None], defl_rate[None], eta[None],
+                         np.zeros((1, n_eta)), None, None)
+        return points["position_output"][0].ravel()
+
+    # the joints' torques as body torques: +tau n on the child, -tau n on the parent
+    joint_inputs, joint_names = [], []
+    for k in range(n):
+        kind = int(model.hinge_kind[k])
+        if kind not in (REVOLUTE, UNIVERSAL):
+            continue
+        p = model.parent[k]
+        rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
+        for i in range(2 if kind == UNIVERSAL else 1):
+            axis = _joint_axis(model, base, k, i, rot_p)
+            joint_inputs.append((k, p, axis))
+            joint_names.append(f"{model.hinge_names[k]}.torque{i}")
+    n_u = 6 * n + len(joint_inputs)
+    inputs = ([f"{model.body_names[k]}.f{c}" for k in range(n) for c in "xyz"]
+              + [f"{model.body_names[k]}.m{c}" for k in range(n) for c in "xyz"] + joint_names)
+
+    def loads(j, eps):
+        force, torque = np.zeros((n, 3)), np.zeros((n, 3))
+        if j < 3 * n:
+            force[j // 3, j % 3] = eps
+        elif j < 6 * n:
+            torque[(j - 3 * n) // 3, (j - 3 * n) % 3] = eps
+        else:
+            k, p, axis = joint_inputs[j - 6 * n]
+            torque[k] += eps * axis
+            if p >= 0:
+                torque[p] -= eps * axis
+        return force, torque
+
+    def differenced(eps):
+        da, db, dy = np.zeros((m, 2 * m)), np.zeros((m, n_u)), np.zeros((3 * n, m))
+        for j in range(2 * m):
+            up, down = perturbed(j, eps), perturbed(j, -eps)
+            plus = _accelerations(model, t, up, False)
+            minus = _accelerations(model, t, down, False)
+            da[:, j] = (accelerations(plus) - accelerations(minus)) / (2 * eps)
+            if j < m:
+                dy[:, j] = (outputs(plus, up) - outputs(minus, down)) / (2 * eps)
+        for j in range(n_u):
+            plus = _accelerations(model, t, full, False, loads(j, eps))
+            minus = _accelerations(model, t, full, False, loads(j, -eps))
+            db[:, j] = (accelerations(plus) - accelerations(minus)) / (2 * eps)
+        return da, db, dy
+
+    da1, db1, dy1 = differenced(DIFFERENCE_STEP)
+    da2, db2, dy2 = differenced(2 * DIFFERENCE_STEP)
+    da, db, dy = ((4 * x1 - x2) / 3 for x1, x2 in ((da1, da2), (db1, db2), (dy1, dy2)))
+    error = (max(np.abs(da1 - da2).max(initial=0.0), np.abs(db1 - db2).max(initial=0.0)) / 3
+             / max(np.abs(da).max(initial=0.0), np.abs(db).max(initial=0.0), 1e-300))
+    a = np.zeros((2 * m, 2 * m))
+    a[:m, m:] = np.eye(m)
+    for q, k in enumerate(free):        # dth' = w + 1/2 w x dth
+        w = full["angular_velocity"][k]
+        a[3 * q:3 * q + 3, 3 * q:3 * q + 3] = 0.5 * np.array([[0.0, -w[2], w[1]],
+                                                               [w[2], 0.0, -w[0]],
+                                                               [-w[1], w[0], 0.0]])
+    a[m:] = da
+    b = np.zeros((2 * m, n_u))
+    b[m:] = db
+    c = np.hstack([dy, np.zeros((3 * n, m))])
+    outputs_names = [f"{model.body_names[k]}.r{c}" for k in range(n) for c in "xyz"]
+    return LinearModel(a, b, c, np.zeros((3 * n, n_u)), states, inputs, outputs_names, error)
+
+
+def _turned(phi):
+    """exp(phi^), the rotation by the rotation vector phi."""
+    angle = np.linalg.norm(phi)
+    if angle == 0.0:
+        return np.eye(3)
+    k = np.array([[0.0, -phi[2], phi[1]], [phi[2], 0.0, -phi[0]], [-phi[1], phi[0], 0.0]])
+    k /= angle
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+def _joint_axis(model, base, k, i, rot_p):
+    """Joint k's axis i (world) at the state: a revolute joint's (fixed in the parent), a
+    universal joint's first (in the parent) or second (in the child)."""
+    from .elements.hinges import AXIS_1, AXIS_2
+    h = model.hinge_params[k]
+    return rot_p @ h[AXIS_1] if i == 0 else base["rotation"][k] @ h[AXIS_2]

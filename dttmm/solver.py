@@ -597,15 +597,19 @@ def _steps(t_end, dt):
 
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
-                      loops=None, t=0.0):
+                      loops=None, t=0.0, extra_loads=None):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
     or kernels/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
-    held at acceleration level."""
+    held at acceleration level.  extra_loads: (force, torque), (n, 3) each, world, added to
+    the applied loads (at the mass centres; dynamics.linearize's inputs)."""
     loops = loop_tables(model) if loops is None else loops
     n = model.n_bodies
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [t])
     force, torque, line_load = _loads(model, [t])
+    if extra_loads is not None:
+        force[0] += extra_loads[0]
+        torque[0] += extra_loads[1]
     joint_input = _joint_inputs(model, [t], state, dt)
     try:
         if fused:       # the fused loop's own sweep (compiles nothing else)

@@ -142,3 +142,94 @@ def test_any_integrator_runs_the_sweeps_equations(name, model):
             assert np.abs(state[key] - value[-1]).max() < 1e-8, key
     with pytest.raises(ValueError, match="closed loops"):
         dttmm.ode(slider_crank())
+
+
+def _hanging_double_pendulum(length=1.0, mass=1.0):
+    """Two uniform rods on ball joints hanging straight down (gravity -y), at rest."""
+    down = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # body x along -y
+    system = dttmm.System(gravity=[0.0, -9.81, 0.0])
+    for i in range(2):
+        system.add(dttmm.RigidBody(mass=mass, inertia=[1e-4, mass * length ** 2 / 12,
+                                                        mass * length ** 2 / 12],
+                                   inertia_about="mass_center", to_mass_center=[0.5 * length, 0, 0],
+                                   to_output=[length, 0, 0], rotation=down, name=f"rod{i}"),
+                   dttmm.BallJoint(), parent=None if i == 0 else "rod0")
+    return system.build()
+
+
+def test_linearize_gives_the_double_pendulums_frequencies_and_response():
+    """About the hanging double pendulum: A's eigenvalues are +-i w for the closed form's two
+    squared frequencies (M = m L^2 [[4/3, 1/2], [1/2, 1/3]], K = m g L diag(3/2, 1/2); each
+    twice, one per swing plane), equal to static_equilibrium's; a torque about z on the upper
+    rod accelerates the swing angles by M^-1 [1, 0] (B); turning the upper rod about z moves
+    both output points by e_z x (0, -1, 0) (C)."""
+    model = _hanging_double_pendulum()
+    lin = dttmm.linearize(model)
+    assert lin.A.shape == (12, 12) and lin.B.shape == (12, 12) and lin.C.shape == (6, 12)
+    assert len(lin.states) == 12 and len(lin.inputs) == 12 and len(lin.outputs) == 6
+    assert lin.difference_error < 1e-9
+    mass_matrix = np.array([[4 / 3, 0.5], [0.5, 1 / 3]])
+    exact = np.sort(np.linalg.eigvals(np.linalg.solve(mass_matrix, np.diag([1.5, 0.5])))
+                    .real) * 9.81
+    squared = np.sort(-(np.linalg.eigvals(lin.A) ** 2).real)
+    assert np.abs(squared[:4]).max() < 1e-6                 # the rods' spins: no stiffness
+    np.testing.assert_allclose(squared[4:], np.repeat(exact, 4), rtol=1e-7)
+    statics = np.sort(dttmm.static_equilibrium(model).squared_frequencies)
+    np.testing.assert_allclose(statics[2:], np.repeat(exact, 2), rtol=1e-7)
+    torque_z = lin.inputs.index("rod0.mz")
+    rows = [lin.states.index("rod0.thz'"), lin.states.index("rod1.thz'")]
+    np.testing.assert_allclose(lin.B[rows, torque_z], np.linalg.solve(mass_matrix, [1.0, 0.0]),
+                               rtol=1e-7)
+    turn = lin.states.index("rod0.thz")
+    np.testing.assert_allclose(lin.C[:, turn], [1.0, 0.0, 0.0, 1.0, 0.0, 0.0], atol=1e-8)
+
+
+def test_linearize_the_arm_as_the_reference_equations_difference():
+    """The rigid arm (revolute, revolute, universal, prismatic joints: its states are its
+    joint coordinates and rates, as the reference's) mid-run under its torque: A equals the
+    central differences of the reference's right-hand side at the same state (to 1e-6 of its
+    largest entry), and joint 1's torque input is the torque about its axis (world y) on link
+    1."""
+    model = arm("torque")
+    ref = simulate_reference(model, 0.3, t_eval=[0.0, 0.3])
+    state = ref.state(-1)
+    lin = dttmm.linearize(model, state, 0.3)
+    prob = _Problem(model)
+    y = _reference_state(prob, state)
+    jac = np.zeros((len(y), len(y)))
+    for j in range(len(y)):
+        step = np.zeros(len(y))
+        step[j] = 1e-6
+        jac[:, j] = (prob.rhs(0.3, y + step) - prob.rhs(0.3, y - step)) / 2e-6
+    assert lin.A.shape == jac.shape
+    assert np.abs(lin.A - jac).max() < 1e-6 * np.abs(jac).max()
+    np.testing.assert_allclose(lin.B[:, lin.inputs.index("joint1.torque0")],
+                               lin.B[:, lin.inputs.index("link1.my")], rtol=0, atol=1e-9)
+
+
+def test_linearize_the_cantilever_with_a_tip_mass_at_its_sag():
+    """A steel cantilever with a 0.2 kg tip mass (tests/test_auto_modes.py's), linearized about
+    its static equilibrium under gravity (static_equilibrium's model): its squared frequencies
+    are static_equilibrium's (to 1e-6) and the first within 1% of the frequency equation's
+    1 + cos b cosh b + r b (cos b sinh b - sin b cosh b) = 0."""
+    from scipy.optimize import brentq
+    e, rho, a, length, tip = 210e9, 7850.0, 0.01, 1.0, 0.2
+    ei, mu = e * a ** 4 / 12.0, rho * a * a
+    model = dttmm.build_chain([
+        dttmm.FixedHinge(),
+        dttmm.EulerBernoulliBeam(length=length, bending_stiffness=ei, mass_per_length=mu,
+                                 polar_inertia_per_length=rho * a ** 4 / 6.0, name="steel"),
+        dttmm.FixedHinge(),
+        dttmm.RigidBody(mass=tip, inertia=[1e-9] * 3, inertia_about="mass_center",
+                        to_mass_center=[0, 0, 0], to_output=[0, 0, 0])],
+        gravity=[0.0, -9.81, 0.0])
+    eq = dttmm.static_equilibrium(model)
+    lin = dttmm.linearize(eq.model)
+    squared = np.sort(-(np.linalg.eigvals(lin.A) ** 2).real)[::2]
+    statics = np.sort(np.real(eq.squared_frequencies))
+    np.testing.assert_allclose(squared, statics, rtol=1e-6)
+    r = tip / (mu * length)
+    root = brentq(lambda b: 1 + np.cos(b) * np.cosh(b)
+                  + r * b * (np.cos(b) * np.sinh(b) - np.sin(b) * np.cosh(b)), 0.5, 1.875)
+    exact = root ** 2 * np.sqrt(ei / mu) / length ** 2
+    assert abs(np.sqrt(squared[0]) / exact - 1.0) < 0.01
