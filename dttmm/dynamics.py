@@ -197,7 +197,7 @@ class ODE:
         self.free = np.nonzero(np.isin(model.hinge_kind, (BALL, ELASTIC)))[0]
         self.elastic = np.nonzero(model.hinge_kind == ELASTIC)[0]
         self.columns = [(k, i) for k in range(n) for i in range(len(model.drives[k]))]
-        n_q, n_eta = len(self.columns), int(model.n_modes.sum())
+        n_eta = int(model.n_modes.sum())
         names = []
         for k in self.free:
             b = model.body_names[k]
@@ -209,7 +209,7 @@ class ODE:
         names += [f"{model.hinge_names[k]}.q{i}'" for k, i in self.columns]
         names += [f"eta{j}" for j in range(n_eta)] + [f"eta{j}'" for j in range(n_eta)]
         self.names = tuple(names)
-        self._sizes = (7 * len(self.free), 6 * len(self.elastic), 2 * n_q, 2 * n_eta)
+        self._n_eta = n_eta
         start = forward_dynamics(model)         # the initial state, every frame rebuilt
         self.y0 = self._pack(start["rotation"], start["angular_velocity"],
                              _initial(model, "defl"), _initial(model, "defl_rate"),
@@ -248,7 +248,7 @@ class ODE:
         n_q = len(self.columns)
         q, qd = y[o:o + n_q], y[o + n_q:o + 2 * n_q]
         o += 2 * n_q
-        n_eta = self._sizes[3] // 2
+        n_eta = self._n_eta
         state = {"rotation": rot, "angular_velocity": omega, "joint_coordinates": q,
                  "joint_rates": qd, "modal_coordinates": y[o:o + n_eta],
                  "modal_velocities": y[o + n_eta:o + 2 * n_eta]}
@@ -278,7 +278,7 @@ class ODE:
         n_q = len(self.columns)
         parts += [y[o + n_q:o + 2 * n_q], out["joint_acceleration"]]
         o += 2 * n_q
-        n_eta = self._sizes[3] // 2
+        n_eta = self._n_eta
         parts += [y[o + n_eta:o + 2 * n_eta], out["modal_acceleration"]]
         return np.concatenate(parts)
 
@@ -353,11 +353,12 @@ def linearize(model, state=None, t=0.0):
     deflection, every joint coordinate, every modal coordinate; then w, the deflections',
     joint and modal rates.  The inputs u are a force (at the mass centre) and a torque (world)
     on every body, then a torque about every revolute joint's axis and each universal joint's
-    two axes (equal and opposite on the child and the parent).  The outputs y are every
-    body's output point, world.  The accelerations' derivatives are central differences of
-    ``forward_dynamics`` (step DIFFERENCE_STEP, extrapolated with the step twice as large; the
-    error estimate is ``difference_error``); the rest is exact (dth' = w + 1/2 w x dth to first
-    order).
+    two axes (equal and opposite on the child and the parent), for joints between rigid
+    bodies (next to a beam, clamp it to a rigid hub, as examples/control.py does).  The
+    outputs y are every body's output point, world.  The accelerations' derivatives are
+    central differences of ``forward_dynamics`` (step DIFFERENCE_STEP, extrapolated with the
+    step twice as large; the error estimate is ``difference_error``); the rest is exact
+    (dth' = w + 1/2 w x dth to first order).
 
     Parameters
     ----------
@@ -439,18 +440,19 @@ def linearize(model, state=None, t=0.0):
         from .solver import _points
         defl, defl_rate = out["offsets"]
         eta = np.asarray(s.get("modal_coordinates", np.zeros(0)), dtype=float)
-        points = _points(model, np.zeros(1), out["rotation"][None],
+        points = _points(model, np.array([t]), out["rotation"][None],
                          out["angular_velocity"][None], defl[None], defl_rate[None], eta[None],
                          np.zeros((1, n_eta)), None, None)
         return points["position_output"][0].ravel()
 
     # the joints' torques as body torques: +tau n on the child, -tau n on the parent
     joint_inputs, joint_names = [], []
-    for k in range(n):
+    for k in range(n):      # (between rigid bodies: a beam's end is not where a body torque is)
         kind = int(model.hinge_kind[k])
-        if kind not in (REVOLUTE, UNIVERSAL):
-            continue
         p = model.parent[k]
+        if kind not in (REVOLUTE, UNIVERSAL) or model.body_kind[k] == BEAM or (
+                p >= 0 and model.body_kind[p] == BEAM):
+            continue
         rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
         for i in range(2 if kind == UNIVERSAL else 1):
             axis = _joint_axis(model, base, k, i, rot_p)
