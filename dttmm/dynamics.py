@@ -84,16 +84,16 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
     loops = solver.loop_tables(km)
     columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
     if state is not None:
-        _set_state(model, km, keep, columns, ws.state, state)
+        _set_state(model, km, keep, columns, ws.state, state, check_frames)
         _, g_rot, g_w, g_wd, g_pos, g_vel = solver._ground(km, [t])
         set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
-        given = ws.state.rot[keep].copy(), ws.state.omega[keep].copy()
+        given = (ws.state.rot[keep].copy(), ws.state.omega[keep].copy()) if check_frames else ()
         _dependent_frames(params, loops, ws.state, np.arange(n, dtype=np.int64),
                           np.zeros(60))
-        for key, rebuilt, value in (("rotation", ws.state.rot[keep], given[0]),
-                                    ("angular_velocity", ws.state.omega[keep], given[1])):
+        for key, rebuilt, value in zip(("rotation", "angular_velocity"),
+                                       (ws.state.rot[keep], ws.state.omega[keep]), given):
             off = np.abs(rebuilt - value).reshape(len(keep), -1).max(axis=1)
-            if check_frames and key in state and off.max() > 1e-9 * max(1.0, np.abs(value).max()):
+            if key in state and off.max() > 1e-9 * max(1.0, np.abs(value).max()):
                 k = int(np.argmax(off))
                 raise ValueError(f"forward_dynamics: the state's {key} of body "
                                  f"'{model.body_names[k]}' is {off[k]:.3g} off what its joint "
@@ -122,8 +122,9 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
             "multipliers": loops.lam.copy(), "residual": residual}
 
 
-def _set_state(model, km, keep, columns, kernel_state, state):
-    """Write the given state (forward_dynamics' mapping) into the kernel model's state."""
+def _set_state(model, km, keep, columns, kernel_state, state, check=True):
+    """Write the given state (forward_dynamics' mapping) into the kernel model's state; check:
+    that each rotation is one (dttmm.ode's are, by construction)."""
     unknown = sorted(set(state) - set(STATE_KEYS))
     if unknown:
         raise ValueError(f"forward_dynamics: the state has no {unknown[0]!r}; its keys are "
@@ -143,7 +144,7 @@ def _set_state(model, km, keep, columns, kernel_state, state):
                              f"{shapes[key]}, got {value.shape}")
         if not np.all(np.isfinite(value)):
             raise ValueError(f"forward_dynamics: state[{key!r}] is not finite")
-        if key == "rotation":
+        if key == "rotation" and check:
             error = np.abs(np.einsum("kji,kjl->kil", value, value) - np.eye(3)).max(axis=(1, 2))
             if error.max() > 1e-9:
                 k = int(np.argmax(error))
@@ -267,9 +268,12 @@ class ODE:
         y = np.asarray(y, dtype=float)
         out = _accelerations(self.model, float(t), self.state(y), False)
         parts, o = [], 0
-        for k in self.free:
-            q, w = y[o:o + 4], y[o + 4:o + 7]
-            parts += [0.5 * np.array([-w @ q[1:], *(q[0] * w + np.cross(w, q[1:]))]),
+        for k in self.free:     # q' = 1/2 [0, w] q: [-w . v, q0 w + w x v]
+            (q0, v0, v1, v2), (w0, w1, w2) = y[o:o + 4], y[o + 4:o + 7]
+            parts += [0.5 * np.array([-(w0 * v0 + w1 * v1 + w2 * v2),
+                                      q0 * w0 + w1 * v2 - w2 * v1,
+                                      q0 * w1 + w2 * v0 - w0 * v2,
+                                      q0 * w2 + w0 * v1 - w1 * v0]),
                       out["angular_acceleration"][k]]
             o += 7
         for k in self.elastic:
