@@ -144,44 +144,54 @@ def test_any_integrator_runs_the_sweeps_equations(name, model):
         dttmm.ode(slider_crank())
 
 
-def _hanging_double_pendulum(length=1.0, mass=1.0):
-    """Two uniform rods on ball joints hanging straight down (gravity -y), at rest."""
+def _hanging_chain(n, length=1.0, mass=1.0):
+    """n uniform rods on ball joints hanging straight down (gravity -y), at rest."""
     down = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # body x along -y
     system = dttmm.System(gravity=[0.0, -9.81, 0.0])
-    for i in range(2):
+    for i in range(n):
         system.add(dttmm.RigidBody(mass=mass, inertia=[1e-4, mass * length ** 2 / 12,
                                                         mass * length ** 2 / 12],
                                    inertia_about="mass_center", to_mass_center=[0.5 * length, 0, 0],
                                    to_output=[length, 0, 0], rotation=down, name=f"rod{i}"),
-                   dttmm.BallJoint(), parent=None if i == 0 else "rod0")
+                   dttmm.BallJoint(), parent=None if i == 0 else f"rod{i - 1}")
     return system.build()
 
 
-def test_linearize_gives_the_double_pendulums_frequencies_and_response():
-    """About the hanging double pendulum: A's eigenvalues are +-i w for the closed form's two
-    squared frequencies (M = m L^2 [[4/3, 1/2], [1/2, 1/3]], K = m g L diag(3/2, 1/2); each
-    twice, one per swing plane), equal to static_equilibrium's; a torque about z on the upper
-    rod accelerates the swing angles by M^-1 [1, 0] (B); turning the upper rod about z moves
-    both output points by e_z x (0, -1, 0) (C)."""
-    model = _hanging_double_pendulum()
+def _chain_matrices(n):
+    """The hanging chain of n unit rods' small swings in one plane, angles from the vertical:
+    mass centre j at sum_{i<j} th_i + th_j / 2 sideways, so M = a^T a + I / 12 (a_ji = 1 for
+    i < j, 1/2 for i = j), and K = g diag(1/2 + n - 1 - i)."""
+    a = np.tril(np.ones((n, n)), -1) + 0.5 * np.eye(n)
+    return a.T @ a + np.eye(n) / 12.0, 9.81 * np.diag(0.5 + np.arange(n - 1, -1, -1.0))
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_linearize_gives_the_hanging_chains_frequencies_and_response(n):
+    """About the hanging chain of n uniform rods: A's eigenvalues are +-i w for the closed
+    form's squared frequencies (_chain_matrices; each twice, one per swing plane), equal to
+    static_equilibrium's; a torque about z on the top rod accelerates the swing angles by
+    M^-1 e_1 (B); turning the top rod about z moves every output point by e_z x (0, -1, 0)
+    (C)."""
+    model = _hanging_chain(n)
     lin = dttmm.linearize(model)
-    assert lin.A.shape == (12, 12) and lin.B.shape == (12, 12) and lin.C.shape == (6, 12)
-    assert len(lin.states) == 12 and len(lin.inputs) == 12 and len(lin.outputs) == 6
+    assert lin.A.shape == (12 * n // 2, 12 * n // 2) and lin.B.shape == (6 * n, 6 * n)
+    assert lin.C.shape == (3 * n, 6 * n) and len(lin.states) == 6 * n
     assert lin.difference_error < 1e-9
-    mass_matrix = np.array([[4 / 3, 0.5], [0.5, 1 / 3]])
-    exact = np.sort(np.linalg.eigvals(np.linalg.solve(mass_matrix, np.diag([1.5, 0.5])))
-                    .real) * 9.81
+    mass_matrix, stiffness = _chain_matrices(n)
+    exact = np.sort(np.linalg.eigvals(np.linalg.solve(mass_matrix, stiffness)).real)
     squared = np.sort(-(np.linalg.eigvals(lin.A) ** 2).real)
-    assert np.abs(squared[:4]).max() < 1e-6                 # the rods' spins: no stiffness
-    np.testing.assert_allclose(squared[4:], np.repeat(exact, 4), rtol=1e-7)
+    assert np.abs(squared[:2 * n]).max() < 1e-6                 # the rods' spins: no stiffness
+    np.testing.assert_allclose(squared[2 * n:], np.repeat(exact, 4), rtol=1e-7)
     statics = np.sort(dttmm.static_equilibrium(model).squared_frequencies)
-    np.testing.assert_allclose(statics[2:], np.repeat(exact, 2), rtol=1e-7)
+    np.testing.assert_allclose(statics[n:], np.repeat(exact, 2), rtol=1e-7)
     torque_z = lin.inputs.index("rod0.mz")
-    rows = [lin.states.index("rod0.thz'"), lin.states.index("rod1.thz'")]
-    np.testing.assert_allclose(lin.B[rows, torque_z], np.linalg.solve(mass_matrix, [1.0, 0.0]),
+    rows = [lin.states.index(f"rod{i}.thz'") for i in range(n)]
+    unit = np.zeros(n)
+    unit[0] = 1.0
+    np.testing.assert_allclose(lin.B[rows, torque_z], np.linalg.solve(mass_matrix, unit),
                                rtol=1e-7)
     turn = lin.states.index("rod0.thz")
-    np.testing.assert_allclose(lin.C[:, turn], [1.0, 0.0, 0.0, 1.0, 0.0, 0.0], atol=1e-8)
+    np.testing.assert_allclose(lin.C[:, turn], np.tile([1.0, 0.0, 0.0], n), atol=1e-8)
 
 
 def test_linearize_the_arm_as_the_reference_equations_difference():
