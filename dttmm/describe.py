@@ -5,9 +5,9 @@ from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LO
                             FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING, TORSION_MODES,
                             axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
-from .elements.hinges import BALL, ELASTIC, FIXED
+from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .elements.rigid_body import MASS, TO_OUTPUT
+from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .closures import describe_closures
 from .model import outboard_masses
 
@@ -56,8 +56,12 @@ def beam_frequencies(model, k):
 
 def suggested_dt(model):
     """A step that resolves the model's fastest retained motion: 20 steps per period of the
-    highest retained beam mode, and 0.02 rad per step of the fastest initial spin or of a
-    pendulum swing sqrt(g / L) over the shortest body (rounded down to 1, 2 or 5 x 10^k s)."""
+    highest retained beam mode and of every elastic hinge's springs against the body they
+    carry (sqrt(k / m) with its stiffest translational spring and the body's mass, sqrt(k / J)
+    with its stiffest rotational spring and the body's least inertia about the hinge: above
+    the hinge's own frequencies, which the bodies beyond it only lower), and 0.02 rad per step
+    of the fastest initial spin or of a pendulum swing sqrt(g / L) over the shortest body
+    (rounded down to 1, 2 or 5 x 10^k s)."""
     rates = [float(np.linalg.norm(w)) for w in model.initial_angular_velocity]
     g = float(np.linalg.norm(model.gravity))
     lengths = [float(np.linalg.norm(model.body_params[k, TO_OUTPUT]))
@@ -71,6 +75,13 @@ def suggested_dt(model):
                 + (torsion_frequencies(model.beam_params[k]),
                    axial_frequencies(model.beam_params[k])))
         dt = min(dt, 1.0 / (20.0 * f))
+    for k in np.nonzero(model.hinge_kind == ELASTIC)[0]:
+        h, body = model.hinge_params[k], model.body_params[k]
+        least = float(np.linalg.eigvalsh(body[INERTIA_INPUT].reshape(3, 3)).min())
+        for spring, inertia in ((h[K_TRANSLATION], float(body[MASS])), (h[K_ROTATION], least)):
+            stiffest = float(np.linalg.eigvals(spring.reshape(3, 3)).real.max())
+            if stiffest > 0.0 and inertia > 0.0:
+                dt = min(dt, 2.0 * np.pi / (20.0 * np.sqrt(stiffest / inertia)))
     exponent = np.floor(np.log10(dt))
     mantissa = dt / 10 ** exponent
     return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
@@ -177,5 +188,6 @@ def describe(model):
                                    "balance E - E(0) - W moves at the step's second order")
                    + "; docs/loops.md, \"The energy held\"")
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
-               f"retained mode, 0.02 rad per step of the fastest spin or swing)")
+               f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
+               f"swing)")
     return "\n".join(out)

@@ -151,3 +151,25 @@ def test_a_closing_elastic_hinge_rests_where_static_equilibrium_puts_it():
     assert np.abs(closed.position_output[0, 0] - tree.position_output[0, 0]).max() < 1e-9
     assert np.abs(closed.closure_force[0, 0]).max() > 1.0
     assert np.abs(closed.closure_force[0, 0] - tree.force[0, 1]).max() < 1e-7
+
+
+def test_the_suggested_step_resolves_an_elastic_hinge():
+    """describe()'s suggested dt counts an elastic hinge's springs against the body they carry
+    (it ignored them): a 1 kg body on a 1e6 N/m hinge oscillates at 159 Hz, so the step is at
+    most a twentieth of its period; the run at that step keeps the oscillation's period to
+    1% (its amplitude's zero crossings against 2 pi sqrt(m / k))."""
+    from dttmm.describe import suggested_dt
+    from helpers import crossing_period
+    system = System(gravity=[0.0, 0.0, 0.0])
+    system.add(RigidBody(mass=1.0, inertia=[0.1, 0.1, 0.1], inertia_about="mass_center",
+                         to_mass_center=[0.0, 0, 0], to_output=[0.0, 0, 0], name="body"),
+               ElasticHinge(translational_stiffness=1e6, rotational_stiffness=1e4,
+                            deflection=[1e-3, 0.0, 0.0]))
+    model = system.build()
+    period = 2 * np.pi * np.sqrt(1.0 / 1e6)
+    dt = suggested_dt(model)
+    assert dt <= period / 20 and dt >= period / 50
+    assert f"suggested dt: {dt:g} s" in model.describe()
+    result = simulate(model, 20 * period, dt)
+    measured = crossing_period(result.t, result.position_input[:, 0, 0])
+    assert abs(measured / period - 1.0) < 0.01
