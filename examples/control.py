@@ -102,15 +102,13 @@ def run_lqr(t_end, dt):
     steps = int(round(t_end / dt))
     checkpoint, parts, torques = None, [], []
     for i in range(steps):
-        if checkpoint is None:
+        if checkpoint is None:          # at rest
             state = np.zeros(len(names))
-        else:
+        else:                           # linearize's states: q, eta, then q', eta'
             last = parts[-1]
-            m = len(names) // 2
             state = np.concatenate([[last.joint_coordinates[-1, 0]],
                                     last.modal_coordinates[-1],
                                     [last.joint_rates[-1, 0]], last.modal_velocities[-1]])
-            assert len(state) == 2 * m
         held[0] = float(-gain @ (state - reference))
         torques.append(held[0])
         part = dttmm.simulate(model, (i + 1) * dt, dt / SUBSTEPS, resume=checkpoint,
