@@ -82,7 +82,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
     ws = solver.Workspace(km)
     params = solver.kernel_params(km)
     loops = solver.loop_tables(km)
-    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    columns = solver.coordinate_columns(model)
     if state is not None:
         _set_state(model, km, keep, columns, ws.state, state, check_frames)
         _, g_rot, g_w, g_wd, g_pos, g_vel = solver._ground(km, [t])
@@ -100,9 +100,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
                                  f"'{model.hinge_names[k]}' and its parent give (a joint's "
                                  f"child follows its parent and the joint's coordinates)")
     if extra_loads is not None:         # onto the kernel bodies that carry each body's loads
-        loaded = keep + ((model.body_kind == BEAM) & (km.body_kind[keep] != BEAM))
         extra = np.zeros((2, n, 3))
-        extra[:, loaded] = extra_loads
+        extra[:, solver.loaded_bodies(model, km, keep)] = extra_loads
         extra_loads = extra
     solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
                              monitor, 0.0, loops, t=t, extra_loads=extra_loads)
@@ -185,6 +184,7 @@ class ODE:
     """
 
     def __init__(self, model):
+        from . import solver
         from .elements.hinges import BALL, ELASTIC
         from .model import Model
         if not isinstance(model, Model):
@@ -194,10 +194,9 @@ class ODE:
                              "integrator (they are held at acceleration level only); "
                              "simulate projects them back after every step")
         self.model = model
-        n = model.n_bodies
         self.free = np.nonzero(np.isin(model.hinge_kind, (BALL, ELASTIC)))[0]
         self.elastic = np.nonzero(model.hinge_kind == ELASTIC)[0]
-        self.columns = [(k, i) for k in range(n) for i in range(len(model.drives[k]))]
+        self.columns = solver.coordinate_columns(model)
         n_eta = int(model.n_modes.sum())
         names = []
         for k in self.free:
@@ -212,10 +211,11 @@ class ODE:
         self.names = tuple(names)
         self._n_eta = n_eta
         start = forward_dynamics(model)         # the initial state, every frame rebuilt
-        self.y0 = self._pack(start["rotation"], start["angular_velocity"],
-                             _initial(model, "defl"), _initial(model, "defl_rate"),
-                             _initial(model, "jq", self.columns),
-                             _initial(model, "jqd", self.columns),
+        initial = solver.Workspace(model).state     # (its offsets and joint coordinates)
+        self.y0 = self._pack(start["rotation"], start["angular_velocity"], initial.defl,
+                             initial.defl_rate,
+                             np.array([initial.jq[k, i] for k, i in self.columns]),
+                             np.array([initial.jqd[k, i] for k, i in self.columns]),
                              np.asarray(model.initial_modal_coordinates, dtype=float),
                              np.asarray(model.initial_modal_velocities, dtype=float))
 
@@ -308,16 +308,6 @@ def ode(model):
         A model with closed loops, or one the Newmark loops do not run.
     """
     return ODE(model)
-
-
-def _initial(model, field, columns=None):
-    """The model's initial value of a kernel state field (solver.Workspace), per body or per
-    joint coordinate."""
-    from . import solver
-    values = getattr(solver.Workspace(model).state, field)
-    if columns is None:
-        return values
-    return np.array([values[k, i] for k, i in columns], dtype=float)
 
 
 def _rotation_of(q):

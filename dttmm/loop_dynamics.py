@@ -29,10 +29,10 @@ def loop_accelerations(model):
         Loops the time step does not close yet (beams, elastic hinges, a moving ground).
     """
     from .dynamics import forward_dynamics
+    from .solver import coordinate_columns
     out = forward_dynamics(model)
     joints = np.zeros((model.n_bodies, 2))
-    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
-    for c, (k, i) in enumerate(columns):
+    for c, (k, i) in enumerate(coordinate_columns(model)):
         joints[k, i] = out["joint_acceleration"][c]
     return {"input_acceleration": out["input_acceleration"],
             "angular_acceleration": out["angular_acceleration"],

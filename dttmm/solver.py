@@ -1044,9 +1044,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     check_supported(model, scheme, method, full_state)
     user_model = model
     model, keep = kernel_model(user_model)
-    # where each body's applied loads are: a beam's stay on it where an input section stands
-    # in for its recorded state (kernel_model: the beam right after its section)
-    loaded = keep + ((user_model.body_kind == BEAM) & (model.body_kind[keep] != BEAM))
+    loaded = loaded_bodies(user_model, model, keep)     # where each body's applied loads are
     mode = _mode(model, method, full_state)
     coef = integrator.array()
     # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
@@ -1988,13 +1986,26 @@ def _sum_before(x):
     return out
 
 
+def coordinate_columns(model):
+    """Every joint coordinate as (body, its index in the joint), in Result's
+    joint_coordinates order (Model.drives': hinge by hinge)."""
+    return [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+
+
+def loaded_bodies(model, kernel, keep):
+    """The kernel model's body that carries each of the model's bodies' applied loads: its
+    kept body (keep), but a beam's own where an input section stands in for its recorded
+    state (kernel_model: the beam right after its section)."""
+    return keep + ((model.body_kind == BEAM) & (kernel.body_kind[keep] != BEAM))
+
+
 def column_names(model):
     """{"coordinate_names": the joint coordinates' columns (the joint's name, and its
     coordinate's number where it has two), "modal_names": the modal coordinates' (the beam's
     name, the plane or part and the mode's number)}: the legends of Result.plot_joints and
     plot_modal (kept in Result.info)."""
     joints = [model.hinge_names[k] + (f" {i + 1}" if len(model.drives[k]) > 1 else "")
-              for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+              for k, i in coordinate_columns(model)]
     modal = []
     for k in np.nonzero(model.body_kind == BEAM)[0]:
         row, name = model.beam_params[k], model.body_names[k]
@@ -2016,7 +2027,7 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
         if key not in values:
             values[key] = np.broadcast_to(np.zeros(()), rot.shape[:2] + (3,))
     joints = {}
-    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    columns = coordinate_columns(model)
     if "jq" in values and columns:
         for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
                           ("drive_force", "jtau")):
