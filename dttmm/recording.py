@@ -21,11 +21,12 @@ class Recording:
     one array of that many rows, which is never joined (a join holds a key's rows twice); more
     rows than that go on in blocks."""
 
-    def __init__(self, keys, keep, stream=None, samples=None):
+    def __init__(self, keys, keep, stream=None, samples=None, identity=None):
         self.keys = list(keys)
         self.keep = np.asarray(keep)
         self.inputs = 2 * self.keep + 1             # each body's input station
-        self.identity = np.array_equal(self.keep, np.arange(len(self.keep)))
+        self.identity = (np.array_equal(self.keep, np.arange(len(self.keep))) if identity is None
+                         else identity)             # (keep is every body: a prepared run's)
         self.blocks = {key: [] for key in self.keys}
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
@@ -301,10 +302,11 @@ class Checkpoint:
         iterations).
     counters : tuple of int
         (most Newton iterations used, unconverged steps).
-    source : tuple
-        The run's structures as it ended, (state, sweep, loop, monitor), or their arrays:
-        ``arrays`` gathers them, read-only, when first read (a run that is never resumed or
-        saved pays nothing for its checkpoint).
+    source : tuple or callable
+        The run's structures as it ended, (state, sweep, loop, monitor), or their arrays, or
+        a function returning those arrays (a prepared run's copy, run_plan.py): ``arrays``
+        gathers them, read-only, when first read (a run that is never resumed or saved pays
+        nothing for its checkpoint).
 
     See Also
     --------
@@ -314,7 +316,8 @@ class Checkpoint:
     h: float
     run: dict           # what the continued run must match: scheme, method, mode, loop, ...
     counters: tuple     # (most Newton iterations used, unconverged steps)
-    source: tuple = field(repr=False)   # (state, sweep, loop, monitor) or their arrays
+    source: object = field(repr=False)  # (state, sweep, loop, monitor), their arrays or a
+    #                                     function returning them
 
     @property
     def t(self):
@@ -326,7 +329,7 @@ class Checkpoint:
         monitor))`` order (gathered once, when first read)."""
         gathered = self.__dict__.get("_arrays")
         if gathered is None:
-            gathered = tuple(leaves(self.source))
+            gathered = tuple(self.source() if callable(self.source) else leaves(self.source))
             for a in gathered:          # the run is over and nothing writes them again
                 a.flags.writeable = False
             object.__setattr__(self, "_arrays", gathered)
@@ -401,7 +404,8 @@ class Checkpoint:
 
     @classmethod
     def of(cls, step, h, run, structures, counters):
-        """The checkpoint of a run that has ended: its own arrays (read-only once read; no
-        copy: a million bodies' state is not doubled)."""
+        """The checkpoint of a run that has ended: its own arrays, or a function returning
+        their copy (read-only once read; a run of its own is not copied: a million bodies'
+        state is not doubled)."""
         return cls(step=int(step), h=float(h), run=dict(run),
                    counters=tuple(int(c) for c in counters), source=structures)

@@ -8,7 +8,6 @@ the prescribed ground motion, applied loads and joint drives for each chunk, jud
 and collects the recorded samples (recording.py).
 """
 import time
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,28 +24,27 @@ from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import ball_chain, em_step, tree, weld_chain
+from .kernels import ball_chain
 from .kernels import step as kstep
-from .kernels.closure import Loops, set_ground, start_energy
+from .kernels.closure import Loops, set_ground
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
-                           Monitor, Params, Record, Run, Settings, State,
-                           Sweep, run_steps, run_steps_no_alloc)
+                           Params, Record, Run, State,
+                           Sweep)
+# the runners the prepared runs take (read here: tests count their calls)
+from .kernels.loop import run_steps, run_steps_no_alloc     # noqa: F401
 from .kernels.beam import gauss_points, quadrature_size
 from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
-from .feedback import Progress, note_once
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
+from .methods import SWEEPS
 from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact,
                     output_section)
-from .energy_balance import EnergyBalance, does_work
-from .recording import (Checkpoint, NoCheckpoint, Recording, SampleStream,
-                        model_fingerprint)
-from .result import (Result, _drive_spring_energy, beam_output_offset, chain_energies,
+from .energy_balance import does_work
+from .recording import (NoCheckpoint, Recording, model_fingerprint)
+from .result import (Result, beam_output_offset, chain_energies,
                      point_positions)
 
-METHODS = ("riccati", "direct")
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
-SCHEMES = ("newmark", "energy_momentum", "paper")
 
 
 class DivergenceError(RuntimeError):
@@ -718,12 +716,9 @@ def _check_count(name, value, minimum, where="simulate"):
     return int(value)
 
 
-MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan
-
-
 def _mode(model, method, full_state):
-    if method not in METHODS:
-        raise ValueError(f"simulate: method must be one of {METHODS}, got {method!r}")
+    if method not in SWEEPS:
+        raise ValueError(f"simulate: method must be one of {tuple(SWEEPS)}, got {method!r}")
     reduced = model.all_ball and not full_state
     if full_tree(model, full_state):    # (check_supported has refused the rest)
         return kstep.RICCATI_JOINTS
@@ -929,416 +924,24 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         singular transfer, or NaN. Its message names the step, the time and the cause;
         ``err.partial`` holds the Result recorded before it.
     """
+    from . import drivers
+    from .run_options import run_options
+    from .run_plan import prepared_run
     wall0 = time.perf_counter()
-    if not isinstance(model, Model):
-        raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
-    if has_loops(model):
-        model = _closed(model)
-    t_end = _check_positive("t_end", t_end)
-    adaptive = rtol is not None
-    if adaptive:
-        rtol, atol = _check_positive("rtol", rtol), float(atol)
-        if not atol >= 0.0:
-            raise ValueError(f"simulate: atol must be >= 0 (rad or m), got {atol!r}")
-        for name, given, why in (("max_energy_error", max_energy_error is not None, "it is "
-                                  "checked at fixed steps"),
-                                 ("record_every", record_every is not None, "use record_dt or "
-                                  "t_eval"), ("resume", resume is not None, "resume a fixed-step "
-                                  "run"), ("richardson", richardson, "the extrapolation needs "
-                                  "fixed steps"), ("scheme", scheme != "newmark", "the estimate "
-                                  "is the Newmark scheme's")):
-            if given:
-                raise ValueError(f"simulate: adaptive steps (rtol) and {name} do not combine: "
-                                 f"{why}")
-        dt = t_end / MAX_SAMPLES if dt is None else dt
-    elif dt is None:
-        raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
-    dt = _check_positive("dt", dt)
-    if t_end / dt > MAX_STEPS:
-        raise ValueError(f"simulate: dt = {dt:g} s makes {t_end / dt:.3g} steps of t_end = "
-                         f"{t_end:g} s (more than {MAX_STEPS:.0e}): dt is in seconds")
-    n_steps, dt = _steps(t_end, dt)
-    start = 0
-    if isinstance(resume, NoCheckpoint):
-        raise ValueError(f"simulate(resume=...): {resume.why}")
-    if resume is not None:
-        if not isinstance(resume, Checkpoint):
-            raise ValueError(f"simulate: resume must be a Checkpoint (result.checkpoint or "
-                             f"dttmm.Checkpoint.load(path)), got {type(resume).__name__}")
-        if richardson:
-            raise ValueError("simulate: resume and richardson=True do not combine (the "
-                             "extrapolation needs both runs from t = 0)")
-        if abs(dt - resume.h) > 1e-12 * resume.h:
-            raise ValueError(f"simulate(resume=...): the checkpoint's runs step dt = "
-                             f"{resume.h:.17g} s; this run steps {dt:.17g} s (t_end = {t_end:g} s "
-                             f"in steps of dt): resume with the same dt and a t_end on its grid")
-        if resume.step >= n_steps:
-            raise ValueError(f"simulate(resume=...): t_end = {t_end:g} s is not after the "
-                             f"checkpoint's t = {resume.t:g} s")
-        start = resume.step
-    if adaptive:
-        sampling, targets = 1, adaptive_steps.sample_times(t_end, record_dt, t_eval)
-    else:
-        sampling = _sampling(n_steps, dt, record_every, record_dt, t_eval, start,
-                             model.n_bodies)
-    if scheme not in SCHEMES:
-        raise ValueError(f"simulate: scheme must be one of {SCHEMES}, got {scheme!r}")
-    if newton_iterations is None:
-        newton_iterations = (20 if scheme == "energy_momentum"
-                             else 16 if isinstance(model, Model) and has_loops(model)
-                             else 8 if isinstance(model, Model) and _iterates(model, full_state)
-                             else 0)
-    newton_iterations = _check_count("newton_iterations", newton_iterations, 0)
-    try:
-        newton_tol = float(newton_tol)
-    except (TypeError, ValueError):
-        newton_tol = np.nan
-    if not (np.isfinite(newton_tol) and newton_tol >= 0.0):
-        raise ValueError(f"simulate: newton_tol must be a finite number >= 0 (rad or m), got "
-                         f"{newton_tol!r}")
-    integrator = Integrator.from_rho_inf(rho_inf)       # (checked here, before any run)
-    if scheme == "energy_momentum" and float(rho_inf) != 1.0:
-        raise ValueError(f"simulate: scheme='energy_momentum' conserves energy and takes no "
-                         f"numerical damping: rho_inf must be 1, got {rho_inf!r}")
-    for name, value in (("full_state", full_state), ("richardson", richardson)):
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
-    max_step_error = (np.inf if max_step_error is None
-                      else _check_positive("max_step_error", max_step_error))
-    if hold_energy not in (None, True, False):
-        raise ValueError(f"simulate: hold_energy must be None, True or False, got "
-                         f"{hold_energy!r}")
-    why_not_held = energy_not_held(model, rho_inf)
-    if hold_energy and why_not_held:
-        raise ValueError(f"simulate: hold_energy=True, but the loops' projection cannot hold "
-                         f"this model's energy: {why_not_held} (docs/loops.md, \"The energy "
-                         f"held\"); leave hold_energy unset")
-    hold_energy = why_not_held is None and hold_energy is not False
-    if max_energy_error is not None:
-        max_energy_error = _check_positive("max_energy_error", max_energy_error)
-    if richardson:
-        for name, value in (("stream", stream), ("max_energy_error", max_energy_error)):
-            if value is not None:
-                raise ValueError(f"simulate: richardson=True and {name} do not combine (the "
-                                 f"result is the extrapolation of two runs, not one run's "
-                                 f"samples or energy); run without richardson for {name}")
-        if scheme != "newmark":
-            raise ValueError(f"simulate: richardson=True needs scheme='newmark' (the "
-                             f"{scheme!r} scheme's properties would not survive the "
-                             f"extrapolation), got scheme={scheme!r}")
-        runs = []
-        for h, factor in ((dt, 1), (0.5 * dt, 2)):
-            # (the same times: twice the steps between samples)
-            records = (dict(record_every=factor * sampling) if isinstance(sampling, int)
-                       else dict(t_eval=np.concatenate([[0.0], sampling * dt])))
-            try:
-                runs.append(simulate(model, n_steps * dt, h, method=method, scheme=scheme,
-                                     rho_inf=rho_inf, newton_iterations=newton_iterations,
-                                     newton_tol=newton_tol, **records,
-                                     full_state=full_state, progress=progress,
-                                     max_step_error=max_step_error, hold_energy=hold_energy))
-            except DivergenceError as err:
-                raise DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
-                                      f"s: {err.cause}", err.partial) from None
-        return richardson_extrapolation(*runs)
-    check_supported(model, scheme, method, full_state)
-    user_model = model
-    model, keep = kernel_model(user_model)
-    loaded = loaded_bodies(user_model, model, keep)     # where each body's applied loads are
-    mode = _mode(model, method, full_state)
-    coef = integrator.array()
-    # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take the
-    # fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme its own, the
-    # rest the general loop (kernels/step.py); each records what its scheme defines
-    fused = (FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-             and scheme == "newmark" and not model.needs_general_loop
-             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
-
-    ws = Workspace(model, fused=fused)
-    state = ws.state
-    n = model.n_bodies
-    params = kernel_params(model)
-    settings = Settings(mode=mode, h=dt, coef=coef, newton_max=int(newton_iterations),
-                        newton_tol=newton_tol, record_every=1,
-                        max_step_error=max_step_error,
-                        stop_unconverged=scheme == "energy_momentum", start=False)
-    monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
-                      jqp=np.zeros((n if has_coordinates(model) else 0, 2)),
-                      defl_pseudo=np.zeros((n if (model.hinge_kind == ELASTIC).any() else 0, 3)),
-                      error=np.zeros(2))
-
-    # a chain of beams welded end to end from the ground (fixed hinges, a free tip): the fused
-    # welded-chain loop (kernels/weld_chain.py)
-    welded = (FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme == "newmark"
-              and model.is_chain and not model.tip_pinned and n > 0
-              and all(int(c) == BEAM for c in model.body_kind)
-              and all(int(h) == FIXED for h in model.hinge_kind)
-              and not any(model.ground_locked[1:]))
-    if fused and mode == kstep.RICCATI_TREE:
-        loop_name, runner = "ball-tree", run_steps_no_alloc
-        loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
-    elif fused:
-        loop_name, runner = "ball-chain", run_steps_no_alloc
-        loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
-
-    loops = loop_tables(model)
-    if resume is None:
-        _consistent_start(model, mode, method, (runner, loop) if fused else None, params,
-                          settings, state, ws.sweep, monitor, dt, loops)
-        if hold_energy:         # the total energy the steps hold (kernels/closure.py)
-            loops.energy[:2] = 1.0, start_energy(params, loops, state)
-    histories = _station_histories(model, state, scheme == "paper")
-    state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
-
-    # the joints' offsets (an elastic hinge's deflection, a slide) where a joint has one (they
-    # are zero otherwise: _result's zeros, 48 B per body and sample not kept)
-    offsets = ["defl", "defl_rate"] if has_offsets(model) else []
-    keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
-    if mode == kstep.RICCATI_JOINTS:
-        keys += ["jq", "jqd", "jtau"]
-    if len(loops.kind):
-        keys.append("closure_wrench")
-    if scheme == "energy_momentum":
-        loop_name, loop, runner = "energy-momentum", em_step.energy_momentum_loop(n), run_steps
-        state.v_c[:] = _initial_mass_center_velocities(model, state.rot, state.omega)
-        keys.append("v_c")
-    elif fused:
-        ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
-    elif welded:
-        loop_name, runner = "welded-chain", run_steps_no_alloc
-        loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
-    else:
-        loop_name, runner = "general", run_steps
-        loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
-                                  compiled_forces(model).copy())    # (the run's own)
-        if scheme == "paper":
-            keys += ["v_st", "v_c"]
-    run_info = dict(mode=_MODE_NAMES[mode], dt=dt, scheme=scheme, loop=loop_name,
-                    model_fingerprint=model_fingerprint(user_model))
-    if len(loops.kind):
-        run_info.update(energy_held=bool(hold_energy))
-    if scheme == "energy_momentum":
-        run_info.update(forces="step means (about t - dt/2)")
-    else:
-        run_info.update(rho_inf=rho_inf)
-    structures = (state, ws.sweep, loop, monitor)
-    counters = (0, 0)
-    done = 0
-    if resume is not None:
-        resume.restore(structures, dict(run_info, method=method, bodies=n,
-                                        newton_iterations=int(newton_iterations)))
-        counters, done = resume.counters, resume.step
-        if loop_name == "general":      # this process's callbacks, not the checkpoint's
-            loop.forces[:] = compiled_forces(model)     # addresses (another process's, or
-                                                        # another function of the same name)
-    history_values = dict(v_st=histories[1], v_c=state.v_c if scheme != "paper" else histories[4],
-                          closure_wrench=loops.wrench)
-    samples = None if adaptive else _sample_count(sampling, done, n_steps)
-    recording = Recording(keys, keep, None if stream is None else SampleStream.create(
-        stream, keys, dt, dict(run_info, method=method, adaptive=adaptive)), samples)
-    recording.add_state(state, history_values, done, 0.0 if adaptive else None)
-
-    # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the state
-    # is evaluated in Python, one step ahead: one step per chunk (said once per process)
-    closing_forces = closure_forces(model, loops)
-    stepwise = [f"joint '{model.hinge_names[k]}'" for k, ds in enumerate(model.drives)
-                for d in ds if not runs_in_loop(d)] + [who for _, _, who in closing_forces]
-    force_drives = bool(stepwise)
-    if stepwise:
-        note_once("stepwise", f"dttmm: a JointForce given as a Python function of the state "
-                  f"({stepwise[0]}) makes the run take one step per compiled call, several "
-                  f"times the cost of a step; on a tree joint, a function compiled with "
-                  f"@numba.njit (f(t, q, q_dot) of three floats) runs inside the loop "
-                  f"(docs/joints.md)")
-    # a chunk's inputs and record rows hold each of its steps for every body: no more steps
-    # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
-    size = 1 if force_drives else max(1, min(CHUNK, CHUNK_BYTES // (CHUNK_STEP_BYTES * n),
-                                             CHUNK if adaptive else n_steps - done))
-    static_ground = model.ground_motion is None
-    if static_ground:
-        g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, np.zeros(size + 1))
-    no_loads = not model.has_applied_loads
-    if no_loads:
-        force, torque, line_load = (np.zeros((size, n, 3)) for _ in range(3))
-    every = sampling if isinstance(sampling, int) else size + 1
-    balance = None
-    work_steps, work_values = [np.array([start])], [np.zeros(1)]   # W at every step (balance)
-    if max_energy_error is not None:            # every step's state, for the balance
-        every = 1
-
-        def result_of(values, steps):
-            rows = Recording(keys, keep)
-            rows.add(values, steps)
-            return _result(user_model, rows, dt, 0.0, 0, {}), rows.arrays()
-
-        balance = EnergyBalance(user_model, max_energy_error, result_of,
-                                beam_tables(user_model))
-        start_values = dict(state._asdict(), **history_values)
-        f0, tq0, ll0 = _loads(model, [done * dt])
-        balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],
-                      tq0[:, loaded], ll0[:, loaded])
-    # a run that samples only its ends (a million bodies by default: _sampling) records its
-    # last state from the state itself, and its chunks write no rows (the rows of a step would
-    # hold 0.4 KB per body)
-    ends_only = balance is None and samples == 2
-    rec = _record(0 if ends_only else max(1, size // every), n, len(state.eta),
-                  scheme == "paper", "v_c" in keys,
-                  loops.wrench.shape[0] if "closure_wrench" in keys else 0)
-    joint_input = np.zeros((size, n, 2, 3))
-    closure_target = np.zeros((size, len(loops.kind), 3))
-    targets_vary = has_closure_drives(model)
-    joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION, PD)
-                            for ds in model.drives for d in ds)
-    info = np.zeros(5, dtype=np.int64)
-    info[4] = counters[1]
-    max_newton = counters[0]
-    beam_tips = _beam_tips(model)
-
-    def inputs_for(times, mid_times, h):
-        """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
-        ends times[1:] (the energy-momentum step's loads: at mid_times)."""
-        m = len(times) - 1
-        if static_ground:
-            ga, gr, gw, gwd, gp, gv = g_acc, g_rot, g_w, g_wd, g_pos, g_vel
-        else:
-            ga, gr, gw, gwd, gp, gv = _ground(model, times)
-            ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
-        f, tq, ll = (force, torque, line_load) if no_loads else _loads(
-            model, mid_times if scheme == "energy_momentum" else times[1:])
-        ji = _joint_inputs(model, times[1:], state, h) if joint_inputs_vary else joint_input
-        ct = closure_targets(model, times[1:], loops) if targets_vary else closure_target
-        for r, law, who in closing_forces:  # f(t, q, q') at the predictor from the last
-            q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its projection)
-            ct[0, r, 2] = _drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # and q''
-                                            qd + h * qdd), who, times[1])
-        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], g_pos=gp[:m],
-                      g_vel=gv[:m], force=f[:m],
-                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
-                      closure_target=ct[:m])
-
-    def run_chunk(inputs, h, every, first_step, t_first, step_limit=max_step_error):
-        """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds
-        step_limit); a singular matrix found in numpy (the general loop's small solves) stops
-        the run."""
-        try:
-            runner(loop, Run(params, settings._replace(h=h, record_every=every,
-                                                       max_step_error=step_limit),
-                             state, ws.sweep, inputs, rec, monitor), info)
-        except np.linalg.LinAlgError as err:
-            raise DivergenceError(first_step + 1, t_first, f"a matrix of the sweep is singular "
-                                  f"somewhere in steps {first_step + 1}.."
-                                  f"{first_step + len(inputs.force)} ({err}); "
-                                  f"{_DIRECT_HINT if method == 'direct' else ''}") from None
-        if info[0] == UNSUPPORTED:
-            raise ValueError(_unsupported_cause(model, int(info[2]), f"the {loop_name} loop"))
-
-    def partial(steps_taken):
-        return _result(user_model, recording, dt, time.perf_counter() - wall0, steps_taken,
-                       dict(run_info))
-
-    if adaptive:
-        control = adaptive_steps.StepControl(t_end, rtol, atol, dt)
-        n_steps, largest = _adaptive_loop(model, control, targets, structures, loop, coef,
-                                          inputs_for, run_chunk, info, monitor, settings, mode,
-                                          recording, history_values, partial, progress,
-                                          beam_tips, min(size, adaptive_steps.SEGMENT))
-        if recording.times[-1] != t_end:           # the final state is always recorded
-            recording.add_state(state, history_values, n_steps, t_end)
-        run_info.update(dt=None, dt_min=control.h_min, dt_max=control.h_max,
-                        segments_rejected=control.rejected,
-                        steps_rejected=control.rejected_steps, rtol=rtol, atol=atol)
-        result = _result(user_model, recording, dt, 0.0, n_steps,
-                         dict(run_info, newton_iterations_used=int(info[2]),
-                              newton_unconverged_steps=int(info[4]),
-                              step_error_max=largest, **_loop_info(loops)),
-                         NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
-                                      "lie on no grid to continue on; run again to a later "
-                                      "t_end, or use fixed steps (dt) to resume"))
-        return result._timed(time.perf_counter() - wall0)
-
-    bar = Progress(n_steps - done, progress)
-    fastest = _fastest_rate(state.omega[None])      # (rad/s, body) over the samples
-    try:
-        while done < n_steps:
-            m, every = _next_chunk(done, n_steps, sampling, size)
-            if ends_only:
-                every = m + 1
-            times = (done + np.arange(m + 1)) * dt
-            try:
-                inputs = inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
-            except UserFunctionError as err:
-                step = max(int(round(err.t / dt)), done + 1)
-                raise DivergenceError(step, err.t, str(err), partial(done)) from None
-            run_chunk(inputs, dt, 1 if balance else every, done, (done + 1) * dt)
-            n_rec = int(info[3])
-            if balance is not None and n_rec:       # the samples asked for, from every step's
-                picked = np.arange(every - 1, n_rec, every)
-                if len(picked):
-                    recording.add({key: getattr(rec, key)[picked] for key in keys},
-                                  done + 1 + picked)
-            elif n_rec:
-                recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
-                              done + every * np.arange(1, n_rec + 1))
-            if info[0] != OK:
-                step = done + int(info[1]) + 1
-                cause = _failure_cause(model, mode, info, monitor, settings)
-                if method == "direct" and info[0] == SINGULAR:
-                    cause += "; " + _DIRECT_HINT
-                raise DivergenceError(step, step * dt, cause, partial(step - 1))
-            max_newton = max(max_newton, int(info[2]))
-            if n_rec:
-                fastest = max(fastest, _fastest_rate(rec.omega[:n_rec]), key=lambda f: f[0])
-            if balance is not None:
-                broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
-                                       done + np.arange(1, m + 1), dt,
-                                       inputs.force[:, loaded], inputs.torque[:, loaded],
-                                       inputs.line_load[:, loaded])
-                if broken:
-                    raise DivergenceError(done + m, (done + m) * dt, broken, partial(done + m))
-                work_steps.append(done + np.arange(1, m + 1))
-                work_values.append(balance.chunk_work)
-            done += m
-            bar.update(done)
-            runaway = _beam_beyond_its_length(model, beam_tips, state.eta)
-            if runaway:
-                raise DivergenceError(done, done * dt, runaway, partial(done))
-    finally:
-        bar.close()
-    rec = inputs = force = torque = line_load = joint_input = None  # (the chunks' buffers)
-    if recording.last_step != n_steps:         # the final state is always recorded
-        recording.add_state(state, history_values, n_steps)
-        fastest = max(fastest, _fastest_rate(state.omega[None]), key=lambda f: f[0])
-    checkpoint = Checkpoint.of(n_steps, dt, dict(run_info, method=method, bodies=n,
-                                                 newton_iterations=int(newton_iterations)),
-                               structures, (max_newton, info[4]))
-    turn = fastest[0] * dt
-    if turn > MAX_TURN_PER_STEP:
-        warnings.warn(UnresolvedMotionWarning(
-            f"simulate: the step does not resolve the motion: body "
-            f"'{model.body_names[fastest[1]]}' turns by up to {turn:.3g} rad per step "
-            f"({fastest[0]:.4g} rad/s at dt = {dt:g} s), where the trapezoidal rule's phase "
-            f"error, about (w dt)^2 / 12 per radian ({turn ** 2 / 12:.1%} here), may leave "
-            f"the result far off; take dt <= {MAX_TURN_PER_STEP / fastest[0]:.2g} s, or "
-            f"rtol= for steps chosen by the error"), stacklevel=2)
-    result = _result(user_model, recording, dt, 0.0, n_steps,
-                     dict(run_info, newton_iterations_used=max_newton,
-                          newton_unconverged_steps=int(info[4]),
-                          step_error_max=float(monitor.error[0]), turn_per_step_max=turn,
-                          **({} if balance is None else
-                             {"energy_balance_error": balance.worst}),
-                          **_loop_info(loops)),
-                     checkpoint)
-    if balance is not None:                     # W at the samples
-        work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
-                         np.concatenate(work_values))
-        if result.joint_coordinates is not None:
-            # the balance counts the drives' springs in their work, the Result's potential
-            # holds their energy: W here is the rest (total - total(0) - W is the balance)
-            spring = _drive_spring_energy(user_model, result.joint_coordinates, len(work))
-            work = work + spring - spring[0]
-        result = result.replace(energy_work=work)
+    opts = run_options(model, t_end, dt, rtol=rtol, atol=atol, method=method, scheme=scheme,
+                       rho_inf=rho_inf, newton_iterations=newton_iterations,
+                       newton_tol=newton_tol, record_every=record_every, record_dt=record_dt,
+                       t_eval=t_eval, full_state=full_state, richardson=richardson,
+                       progress=progress, max_step_error=max_step_error,
+                       max_energy_error=max_energy_error, hold_energy=hold_energy,
+                       resume=resume, stream=stream)
+    if opts.richardson:
+        return drivers.richardson(opts, simulate)
+    check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
+    with prepared_run(opts) as plan:
+        run = drivers.Stepping(plan, opts, wall0)
+        result = (drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
     return result._timed(time.perf_counter() - wall0)
-
 
 def load_stream(model, path):
     """The Result of the samples a run streamed to a directory.
@@ -1385,73 +988,6 @@ def load_stream(model, path):
         raise ValueError(f"load_stream: the stream in {str(path)!r} was written by a run of "
                          f"another model (its fingerprint differs): load it with that model")
     return _result(model, recording, meta["dt"], 0.0, recording.last_step, dict(meta["info"]))
-
-
-def _adaptive_loop(model, control, targets, structures, loop, coef, inputs_for, run_chunk, info,
-                   monitor, settings, mode, recording, history_values, partial, progress,
-                   beam_tips, most):
-    """An adaptive run's segments (adaptive.py; docs/solver.md, "Adaptive steps"): save the
-    run's arrays, take up to `most` steps of the controller's h (landing on the next sample
-    time or t_end), then accept the segment or restore and retry with a smaller step.  A
-    segment that fails (estimate above max_step_error, NaN, no Newton convergence, a singular
-    transfer, a beam beyond its length) is retried with a quarter of the step; the run stops
-    with DivergenceError once the step falls below adaptive.MIN_STEP of t_end.  Returns (steps
-    taken, the largest accepted estimate); info[2] holds the most Newton iterations used."""
-    t_end = control.t_end
-    snapshot = adaptive_steps.Snapshot(structures)
-    t, taken, largest, most_newton, i_target = 0.0, 0, 0.0, 0, 0
-    every_default = t_end / MAX_SAMPLES
-    next_default = every_default
-    bar = Progress(MAX_SAMPLES, progress)
-    try:
-        while t < t_end:
-            if targets is not None:
-                while i_target < len(targets) and targets[i_target] <= t:
-                    i_target += 1
-            target = targets[i_target] if targets is not None and i_target < len(targets) \
-                else t_end
-            m, h = adaptive_steps.segment(t, control.h, target, most)
-            snapshot.save()
-            _set_step(loop, h, coef)
-            monitor.error[0] = 0.0
-            times = t + np.arange(m + 1) * h
-            lands = times[-1] >= target * (1 - 1e-12)
-            if lands:
-                times[-1] = target
-            # a step above the tolerance stops the segment at once (the skeleton's own check)
-            try:
-                inputs = inputs_for(times, times[:-1] + 0.5 * h, h)
-            except UserFunctionError as err:
-                raise DivergenceError(taken + 1, err.t, str(err), partial(taken)) from None
-            run_chunk(inputs, h, m + 1, taken, times[1],
-                      min(settings.max_step_error, control.step_limit(h)))
-            over = info[0] == ERROR_ESTIMATE and monitor.error[0] <= settings.max_step_error
-            failed = (info[0] != OK and not over) or bool(
-                _beam_beyond_its_length(model, beam_tips, structures[0].eta))
-            steps_run = m if info[0] == OK else int(info[1]) + 1
-            if control.after(float(monitor.error[0]), h, steps_run, failed):
-                t, taken = float(times[-1]), taken + m
-                largest = max(largest, float(monitor.error[0]))
-                most_newton = max(most_newton, int(info[2]))
-                if (lands and targets is not None) or (targets is None and t >= next_default):
-                    recording.add_state(structures[0], history_values, taken, t)
-                    while next_default <= t:
-                        next_default += every_default
-                bar.update(int(MAX_SAMPLES * t / t_end))
-                continue
-            cause = (f"local error estimate {monitor.error[0]:.3g} above the tolerance's "
-                     f"{control.step_limit(h):.3g} for a step of {h:.3g} s" if over
-                     else _failure_cause(model, mode, info, monitor, settings) if info[0] != OK
-                     else "a beam deflected beyond its length")
-            snapshot.restore()
-            if control.too_small:
-                raise DivergenceError(taken + 1, t, f"adaptive steps: the step fell below "
-                                      f"{adaptive_steps.MIN_STEP:g} of t_end ({control.h:.3g} s) "
-                                      f"at t = {t:.6g} s; last cause: {cause}", partial(taken))
-    finally:
-        bar.close()
-    info[2] = most_newton
-    return taken, largest
 
 
 def _set_step(loop, h, coef):
@@ -1523,7 +1059,7 @@ def _fastest_rate(omega):
     MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
     if omega.shape[1] == 0:
         return (0.0, 0)
-    squares = (omega * omega).sum(axis=2).max(axis=0)
+    squares = np.einsum("mki,mki->mk", omega, omega).max(axis=0)
     k = int(np.argmax(squares))
     return (float(np.sqrt(squares[k])), k)
 
@@ -1986,10 +1522,11 @@ def _sum_before(x):
     return out
 
 
+@model_fact
 def coordinate_columns(model):
     """Every joint coordinate as (body, its index in the joint), in Result's
     joint_coordinates order (Model.drives': hinge by hinge)."""
-    return [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    return tuple((k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k])))
 
 
 def loaded_bodies(model, kernel, keep):
@@ -2003,7 +1540,12 @@ def column_names(model):
     """{"coordinate_names": the joint coordinates' columns (the joint's name, and its
     coordinate's number where it has two), "modal_names": the modal coordinates' (the beam's
     name, the plane or part and the mode's number)}: the legends of Result.plot_joints and
-    plot_modal (kept in Result.info)."""
+    plot_modal (kept in Result.info; each call's own lists)."""
+    return {key: list(names) for key, names in _column_names(model).items()}
+
+
+@model_fact
+def _column_names(model):
     joints = [model.hinge_names[k] + (f" {i + 1}" if len(model.drives[k]) > 1 else "")
               for k, i in coordinate_columns(model)]
     modal = []
@@ -2025,7 +1567,7 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     rot, omega, eta, eta_d = values["rot"], values["omega"], values["eta"], values["eta_d"]
     for key in ("defl", "defl_rate"):       # (not recorded without joints that offset)
         if key not in values:
-            values[key] = np.broadcast_to(np.zeros(()), rot.shape[:2] + (3,))
+            values[key] = _zeros(rot.shape[:2] + (3,))
     joints = {}
     columns = coordinate_columns(model)
     if "jq" in values and columns:
@@ -2065,6 +1607,15 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
                   modal_velocities=eta_d if model.has_beams else None,
                   body_names=tuple(model.body_names), checkpoint=checkpoint,
                   derivation=derivation, **joints)
+
+
+_ZERO = np.zeros(1)
+_ZERO.flags.writeable = False
+
+
+def _zeros(shape):
+    """Zeros of the given shape, read-only, without memory of their own (strides 0)."""
+    return np.ndarray(shape, dtype=float, buffer=_ZERO, strides=(0,) * len(shape))
 
 
 def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):

@@ -7,8 +7,8 @@ import pickle
 import numpy as np
 import pytest
 
-from dttmm import simulate, solver
-from dttmm.chains import arm, rigid_chain, three_pendulum
+from dttmm import BallJoint, build_chain, simulate, solver
+from dttmm.chains import arm, rigid_chain, three_pendulum, unit_link
 from dttmm.mechanisms import n_four_bar
 from dttmm.recording import leaves
 
@@ -63,10 +63,70 @@ def test_a_second_run_does_not_rebuild_the_kernels_model(monkeypatch):
 
 
 def test_a_checkpoint_holds_the_finished_runs_arrays_read_only():
-    """No copy of the state at the end of a run (a million bodies' would double its memory):
-    the checkpoint holds the run's own arrays, which nothing writes again."""
+    """A checkpoint's arrays are read-only and resume the run: a run of its own (a large
+    model's) hands them over without a copy (a million bodies' would double its memory); a
+    run kept on its model (run_plan.py) copies them, since the next run reuses its arrays."""
     result = simulate(rigid_chain(3), 0.01, 1e-3)
     arrays = result.checkpoint.arrays
     assert arrays and not any(a.flags.writeable for a in arrays)
     resumed = simulate(rigid_chain(3), 0.02, 1e-3, resume=result.checkpoint)
     assert resumed.n_steps == 20
+
+
+KEPT = {
+    "rigid chain (fused loop)": lambda: rigid_chain(3),
+    "three-pendulum (fused, beams)": lambda: three_pendulum(),
+    "arm, compiled PD force (general loop)": lambda: arm(drive="pd-njit", flexible=True),
+    "four-bar (closed loop, energy held)": lambda: n_four_bar(2),
+}
+
+
+def _run_arrays(result):
+    return [getattr(result, key) for key in ("t", "rotation", "angular_velocity", "force",
+                                             "moment", "position_output")]
+
+
+@pytest.mark.parametrize("name", list(KEPT))
+def test_a_prepared_run_kept_on_the_model_gives_a_fresh_models_numbers(name):
+    """A model whose start calls no function of the user's keeps its prepared run (the kernels'
+    arrays after the consistent start: run_plan.py) and starts the next run from it: runs
+    with other steps and options and a resumed run in between, a run equals the same run of
+    the same system built again bit for bit, and a finished run's checkpoint is not changed
+    by the runs after it (they reuse the kept arrays, not the checkpoint's)."""
+    model = KEPT[name]()
+    first = simulate(model, 0.02, 1e-3)
+    kept = model.__dict__["_prepared_runs"]
+    assert len(kept) == 1
+    ending = [a.copy() for a in first.checkpoint.arrays]
+    simulate(model, 0.01, 5e-4, record_every=3)
+    simulate(model, 0.04, 1e-3, resume=first.checkpoint)
+    again = simulate(model, 0.02, 1e-3)
+    fresh = simulate(KEPT[name](), 0.02, 1e-3)
+    assert len(kept) == 2                   # (dt = 1e-3 and 5e-4)
+    for a, b, c in zip(_run_arrays(first), _run_arrays(again), _run_arrays(fresh)):
+        np.testing.assert_array_equal(a, c)
+        np.testing.assert_array_equal(b, c)
+    for a, b in zip(ending, first.checkpoint.arrays):
+        np.testing.assert_array_equal(a, b)
+    for a, b in zip(fresh.checkpoint.arrays, again.checkpoint.arrays):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_start_that_calls_the_users_functions_is_taken_again_each_run():
+    """A load is a function of the user's, which may read what the user changes between runs
+    (here a gain in a list): such a model's start is computed by every run, never kept, so a
+    run after the change equals a new model's run with the new gain."""
+    gain = [1.0]
+
+    def model():
+        return build_chain([BallJoint(), unit_link(force=lambda t: [0.0, 0.0, gain[0]]),
+                            BallJoint(), unit_link()])
+    changed = model()
+    before = simulate(changed, 0.01, 1e-3)
+    gain[0] = 30.0
+    after = simulate(changed, 0.01, 1e-3)
+    fresh = simulate(model(), 0.01, 1e-3)
+    assert "_prepared_runs" not in changed.__dict__ or not changed.__dict__["_prepared_runs"]
+    assert np.abs(after.position_output - before.position_output).max() > 1e-5
+    for a, b in zip(_run_arrays(after), _run_arrays(fresh)):
+        np.testing.assert_array_equal(a, b)

@@ -1,0 +1,357 @@
+"""simulate's drivers (issue 31's reshape): how a prepared run (run_plan.py) is stepped to
+t_end.  Stepping is one call's records and chunk inputs; fixed_steps runs chunks of equal steps
+(with the energy balance where asked), adaptive runs segments whose step the local error
+estimate chooses (adaptive.py), richardson extrapolates two fixed-step runs.  Each ends in the
+run's Result."""
+import time
+import warnings
+
+import numpy as np
+
+from . import adaptive as adaptive_steps
+from . import solver as s
+from .energy_balance import EnergyBalance
+from .feedback import Progress, note_once
+from .closures import closure_targets
+from .kernels.loop import ERROR_ESTIMATE, OK, SINGULAR, UNSUPPORTED, Inputs, Run
+from .recording import Checkpoint, NoCheckpoint, Recording, SampleStream
+from .result import _drive_spring_energy
+
+
+class Stepping:
+    """One simulate call on a prepared run: its records (recording.py), the prescribed inputs
+    of its chunks, the compiled loop's calls, and its Result."""
+
+    def __init__(self, plan, opts, wall0):
+        self.plan, self.opts, self.wall0 = plan, opts, wall0
+        model, state = plan.model, plan.state
+        n = model.n_bodies
+        counters, done = (0, 0), 0
+        resume = opts.resume
+        if resume is not None:
+            resume.restore(plan.structures, plan.checkpoint_run)
+            counters, done = resume.counters, resume.step
+            if plan.loop_name == "general":     # this process's callbacks, not the
+                plan.loop.forces[:] = s.compiled_forces(model)  # checkpoint's addresses
+                # (another process's, or another function of the same name)
+        self.done = done
+        self.samples = None if opts.adaptive else s._sample_count(opts.sampling, done,
+                                                                   opts.n_steps)
+        keys = plan.keys
+        self.recording = Recording(keys, plan.keep, None if opts.stream is None else
+                                   SampleStream.create(opts.stream, keys, opts.dt,
+                                                       dict(plan.run_info, method=opts.method,
+                                                            adaptive=opts.adaptive)),
+                                   self.samples, plan.keeps_every_body)
+        self.recording.add_state(state, plan.history_values, done,
+                                 0.0 if opts.adaptive else None)
+        # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the
+        # state is evaluated in Python, one step ahead: one step per chunk (said once per
+        # process)
+        stepwise = plan.stepwise
+        self.force_drives = bool(stepwise)
+        if stepwise:
+            note_once("stepwise", f"dttmm: a JointForce given as a Python function of the "
+                      f"state ({stepwise[0]}) makes the run take one step per compiled call, "
+                      f"several times the cost of a step; on a tree joint, a function compiled "
+                      f"with @numba.njit (f(t, q, q_dot) of three floats) runs inside the loop "
+                      f"(docs/joints.md)")
+        # a chunk's inputs and record rows hold each of its steps for every body: no more steps
+        # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
+        self.size = size = 1 if self.force_drives else max(1, min(
+            s.CHUNK, s.CHUNK_BYTES // (s.CHUNK_STEP_BYTES * n),
+            s.CHUNK if opts.adaptive else opts.n_steps - done))
+        self.static_ground = model.ground_motion is None
+        if self.static_ground:
+            self.ground = plan.chunk_arrays(("ground", size),
+                                       lambda: s._ground(model, np.zeros(size + 1)))
+        self.no_loads = not plan.has_loads
+        if self.no_loads:
+            self.zero_loads = plan.chunk_arrays(("loads", size), lambda: tuple(
+                np.zeros((size, n, 3)) for _ in range(3)))
+        self.joint_input = plan.chunk_arrays(("joint_input", size),
+                                        lambda: np.zeros((size, n, 2, 3)))
+        self.closure_target = plan.chunk_arrays(("closure_target", size),
+                                           lambda: np.zeros((size, len(plan.loops.kind), 3)))
+        self.info = np.zeros(5, dtype=np.int64)
+        self.info[4] = counters[1]
+        self.max_newton = counters[0]
+
+    def records(self, every, balance):
+        """Where the compiled loop writes a chunk's samples (solver._record), every every-th
+        step of chunks of up to self.size steps; a run that samples only its ends (a million
+        bodies by default: solver._sampling) records its last state from the state itself, and
+        its chunks write no rows (the rows of a step would hold 0.4 KB per body)."""
+        plan, n = self.plan, self.plan.model.n_bodies
+        ends_only = balance is None and self.samples == 2
+        shape = (0 if ends_only else max(1, self.size // every), n, len(plan.state.eta),
+                 plan.scheme.name == "paper", "v_c" in plan.keys,
+                 plan.loops.wrench.shape[0] if "closure_wrench" in plan.keys else 0)
+        return ends_only, plan.chunk_arrays(("record",) + shape, lambda: s._record(*shape))
+
+    def inputs_for(self, times, mid_times, h):
+        """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
+        ends times[1:] (the energy-momentum step's loads: at mid_times)."""
+        plan, model = self.plan, self.plan.model
+        m = len(times) - 1
+        if self.static_ground:
+            ga, gr, gw, gwd, gp, gv = self.ground
+        else:
+            ga, gr, gw, gwd, gp, gv = s._ground(model, times)
+            ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
+        f, tq, ll = self.zero_loads if self.no_loads else s._loads(
+            model, mid_times if self.opts.scheme.loads_at_midpoints else times[1:])
+        ji = (s._joint_inputs(model, times[1:], plan.state, h) if plan.joint_inputs_vary
+              else self.joint_input)
+        loops = plan.loops
+        ct = closure_targets(model, times[1:], loops) if plan.targets_vary else \
+            self.closure_target
+        for r, law, who in plan.closing_forces:  # f(t, q, q') at the predictor from the last
+            q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its
+            ct[0, r, 2] = s._drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # proj.)
+                                              qd + h * qdd), who, times[1])
+        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], g_pos=gp[:m],
+                      g_vel=gv[:m], force=f[:m],
+                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
+                      closure_target=ct[:m])
+
+    def run_chunk(self, inputs, rec, h, every, first_step, t_first, step_limit=None):
+        """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds
+        step_limit, default max_step_error); a singular matrix found in numpy (the general
+        loop's small solves) stops the run."""
+        plan, opts = self.plan, self.opts
+        step_limit = opts.max_step_error if step_limit is None else step_limit
+        try:
+            plan.runner(plan.loop, Run(plan.params, plan.settings._replace(
+                h=h, record_every=every, max_step_error=step_limit), plan.state, plan.sweep,
+                inputs, rec, plan.monitor), self.info)
+        except np.linalg.LinAlgError as err:
+            raise s.DivergenceError(
+                first_step + 1, t_first, f"a matrix of the sweep is singular somewhere in steps "
+                f"{first_step + 1}..{first_step + len(inputs.force)} ({err}); "
+                f"{s._DIRECT_HINT if opts.method == 'direct' else ''}") from None
+        if self.info[0] == UNSUPPORTED:
+            raise ValueError(s._unsupported_cause(plan.model, int(self.info[2]),
+                                                  f"the {plan.loop_name} loop"))
+
+    def partial(self, steps_taken):
+        """The Result of the samples recorded so far (a run that stops)."""
+        return s._result(self.plan.user_model, self.recording, self.opts.dt,
+                         time.perf_counter() - self.wall0, steps_taken, dict(self.plan.run_info))
+
+
+def fixed_steps(run):
+    """Chunks of equal steps to n_steps (solver._next_chunk), recorded as `sampling` asks, the
+    energy balance checked after each where asked; the Result with its checkpoint."""
+    plan, opts, recording = run.plan, run.opts, run.recording
+    model, state, info, dt = plan.model, plan.state, run.info, opts.dt
+    n_steps, sampling, keys, done = opts.n_steps, opts.sampling, plan.keys, run.done
+    every = sampling if isinstance(sampling, int) else run.size + 1
+    balance = None
+    work_steps, work_values = [np.array([done])], [np.zeros(1)]   # W at every step (balance)
+    if opts.max_energy_error is not None:           # every step's state, for the balance
+        every = 1
+
+        def result_of(values, steps):
+            rows = Recording(keys, plan.keep)
+            rows.add(values, steps)
+            return s._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
+
+        balance = EnergyBalance(plan.user_model, opts.max_energy_error, result_of,
+                                s.beam_tables(plan.user_model))
+        start_values = dict(state._asdict(), **plan.history_values)
+        f0, tq0, ll0 = s._loads(model, [done * dt])
+        loaded = plan.loaded
+        balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],
+                      tq0[:, loaded], ll0[:, loaded])
+    ends_only, rec = run.records(every, balance)
+    max_newton = run.max_newton
+    bar = Progress(n_steps - done, opts.progress)
+    fastest = s._fastest_rate(state.omega[None])      # (rad/s, body) over the samples
+    try:
+        while done < n_steps:
+            m, every = s._next_chunk(done, n_steps, sampling, run.size)
+            if ends_only:
+                every = m + 1
+            times = (done + np.arange(m + 1)) * dt
+            try:
+                inputs = run.inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
+            except s.UserFunctionError as err:
+                step = max(int(round(err.t / dt)), done + 1)
+                raise s.DivergenceError(step, err.t, str(err), run.partial(done)) from None
+            run.run_chunk(inputs, rec, dt, 1 if balance else every, done, (done + 1) * dt)
+            n_rec = int(info[3])
+            if balance is not None and n_rec:       # the samples asked for, from every step's
+                picked = np.arange(every - 1, n_rec, every)
+                if len(picked):
+                    recording.add({key: getattr(rec, key)[picked] for key in keys},
+                                  done + 1 + picked)
+            elif n_rec:
+                recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
+                              done + every * np.arange(1, n_rec + 1))
+            if info[0] != OK:
+                step = done + int(info[1]) + 1
+                cause = s._failure_cause(model, plan.mode, info, plan.monitor, plan.settings)
+                if opts.method == "direct" and info[0] == SINGULAR:
+                    cause += "; " + s._DIRECT_HINT
+                raise s.DivergenceError(step, step * dt, cause, run.partial(step - 1))
+            max_newton = max(max_newton, int(info[2]))
+            if n_rec:
+                fastest = max(fastest, s._fastest_rate(rec.omega[:n_rec]), key=lambda f: f[0])
+            if balance is not None:
+                broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
+                                       done + np.arange(1, m + 1), dt,
+                                       inputs.force[:, plan.loaded],
+                                       inputs.torque[:, plan.loaded],
+                                       inputs.line_load[:, plan.loaded])
+                if broken:
+                    raise s.DivergenceError(done + m, (done + m) * dt, broken,
+                                            run.partial(done + m))
+                work_steps.append(done + np.arange(1, m + 1))
+                work_values.append(balance.chunk_work)
+            done += m
+            bar.update(done)
+            runaway = s._beam_beyond_its_length(model, plan.beam_tips, state.eta)
+            if runaway:
+                raise s.DivergenceError(done, done * dt, runaway, run.partial(done))
+    finally:
+        bar.close()
+    rec = inputs = None                         # (the chunks' buffers)
+    if recording.last_step != n_steps:          # the final state is always recorded
+        recording.add_state(state, plan.history_values, n_steps)
+        fastest = max(fastest, s._fastest_rate(state.omega[None]), key=lambda f: f[0])
+    checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
+                               (max_newton, info[4]))
+    turn = fastest[0] * dt
+    if turn > s.MAX_TURN_PER_STEP:
+        warnings.warn(s.UnresolvedMotionWarning(
+            f"simulate: the step does not resolve the motion: body "
+            f"'{model.body_names[fastest[1]]}' turns by up to {turn:.3g} rad per step "
+            f"({fastest[0]:.4g} rad/s at dt = {dt:g} s), where the trapezoidal rule's phase "
+            f"error, about (w dt)^2 / 12 per radian ({turn ** 2 / 12:.1%} here), may leave "
+            f"the result far off; take dt <= {s.MAX_TURN_PER_STEP / fastest[0]:.2g} s, or "
+            f"rtol= for steps chosen by the error"), stacklevel=3)
+    result = s._result(plan.user_model, recording, dt, 0.0, n_steps,
+                       dict(plan.run_info, newton_iterations_used=max_newton,
+                            newton_unconverged_steps=int(info[4]),
+                            step_error_max=float(plan.monitor.error[0]),
+                            turn_per_step_max=turn,
+                            **({} if balance is None else
+                               {"energy_balance_error": balance.worst}),
+                            **s._loop_info(plan.loops)),
+                       checkpoint)
+    if balance is not None:                     # W at the samples
+        work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
+                         np.concatenate(work_values))
+        if result.joint_coordinates is not None:
+            # the balance counts the drives' springs in their work, the Result's potential
+            # holds their energy: W here is the rest (total - total(0) - W is the balance)
+            spring = _drive_spring_energy(plan.user_model, result.joint_coordinates, len(work))
+            work = work + spring - spring[0]
+        result = result.replace(energy_work=work)
+    return result
+
+
+def adaptive(run):
+    """An adaptive run's segments (adaptive.py; docs/solver.md, "Adaptive steps"): save the
+    run's arrays, take up to `most` steps of the controller's h (landing on the next sample
+    time or t_end), then accept the segment or restore and retry with a smaller step.  A
+    segment that fails (estimate above max_step_error, NaN, no Newton convergence, a singular
+    transfer, a beam beyond its length) is retried with a quarter of the step; the run stops
+    with DivergenceError once the step falls below adaptive.MIN_STEP of t_end.  The Result
+    (no checkpoint: its steps lie on no grid)."""
+    plan, opts, recording, info = run.plan, run.opts, run.recording, run.info
+    model, monitor, settings = plan.model, plan.monitor, plan.settings
+    control = adaptive_steps.StepControl(opts.t_end, opts.rtol, opts.atol, opts.dt)
+    most = min(run.size, adaptive_steps.SEGMENT)
+    _, rec = run.records(1, None)       # (every step may end a segment)
+    targets, t_end = opts.targets, control.t_end
+    snapshot = adaptive_steps.Snapshot(plan.structures)
+    t, taken, largest, most_newton, i_target = 0.0, 0, 0.0, 0, 0
+    every_default = t_end / s.MAX_SAMPLES
+    next_default = every_default
+    bar = Progress(s.MAX_SAMPLES, opts.progress)
+    try:
+        while t < t_end:
+            if targets is not None:
+                while i_target < len(targets) and targets[i_target] <= t:
+                    i_target += 1
+            target = targets[i_target] if targets is not None and i_target < len(targets) \
+                else t_end
+            m, h = adaptive_steps.segment(t, control.h, target, most)
+            snapshot.save()
+            s._set_step(plan.loop, h, opts.coef)
+            monitor.error[0] = 0.0
+            times = t + np.arange(m + 1) * h
+            lands = times[-1] >= target * (1 - 1e-12)
+            if lands:
+                times[-1] = target
+            # a step above the tolerance stops the segment at once (the skeleton's own check)
+            try:
+                inputs = run.inputs_for(times, times[:-1] + 0.5 * h, h)
+            except s.UserFunctionError as err:
+                raise s.DivergenceError(taken + 1, err.t, str(err), run.partial(taken)) from None
+            run.run_chunk(inputs, rec, h, m + 1, taken, times[1],
+                          min(settings.max_step_error, control.step_limit(h)))
+            over = info[0] == ERROR_ESTIMATE and monitor.error[0] <= settings.max_step_error
+            failed = (info[0] != OK and not over) or bool(
+                s._beam_beyond_its_length(model, plan.beam_tips, plan.state.eta))
+            steps_run = m if info[0] == OK else int(info[1]) + 1
+            if control.after(float(monitor.error[0]), h, steps_run, failed):
+                t, taken = float(times[-1]), taken + m
+                largest = max(largest, float(monitor.error[0]))
+                most_newton = max(most_newton, int(info[2]))
+                if (lands and targets is not None) or (targets is None and t >= next_default):
+                    recording.add_state(plan.state, plan.history_values, taken, t)
+                    while next_default <= t:
+                        next_default += every_default
+                bar.update(int(s.MAX_SAMPLES * t / t_end))
+                continue
+            cause = (f"local error estimate {monitor.error[0]:.3g} above the tolerance's "
+                     f"{control.step_limit(h):.3g} for a step of {h:.3g} s" if over
+                     else s._failure_cause(model, plan.mode, info, monitor, settings)
+                     if info[0] != OK else "a beam deflected beyond its length")
+            snapshot.restore()
+            if control.too_small:
+                raise s.DivergenceError(taken + 1, t, f"adaptive steps: the step fell below "
+                                        f"{adaptive_steps.MIN_STEP:g} of t_end ({control.h:.3g} "
+                                        f"s) at t = {t:.6g} s; last cause: {cause}",
+                                        run.partial(taken))
+    finally:
+        bar.close()
+    if recording.times[-1] != t_end:           # the final state is always recorded
+        recording.add_state(plan.state, plan.history_values, taken, t_end)
+    run_info = dict(plan.run_info, dt=None, dt_min=control.h_min, dt_max=control.h_max,
+                    segments_rejected=control.rejected, steps_rejected=control.rejected_steps,
+                    rtol=opts.rtol, atol=opts.atol)
+    return s._result(plan.user_model, recording, opts.dt, 0.0, taken,
+                     dict(run_info, newton_iterations_used=most_newton,
+                          newton_unconverged_steps=int(info[4]),
+                          step_error_max=largest, **s._loop_info(plan.loops)),
+                     NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
+                                  "lie on no grid to continue on; run again to a later "
+                                  "t_end, or use fixed steps (dt) to resume"))
+
+
+def richardson(opts, simulate):
+    """The Richardson extrapolation (4 y_dt/2 - y_dt) / 3 of the runs at dt and dt / 2 at the
+    recorded times (solver.richardson_extrapolation; docs/solver.md)."""
+    runs = []
+    sampling, dt, n_steps = opts.sampling, opts.dt, opts.n_steps
+    for h, factor in ((dt, 1), (0.5 * dt, 2)):
+        # (the same times: twice the steps between samples)
+        records = (dict(record_every=factor * sampling) if isinstance(sampling, int)
+                   else dict(t_eval=np.concatenate([[0.0], sampling * dt])))
+        try:
+            runs.append(simulate(opts.model, n_steps * dt, h, method=opts.method,
+                                 scheme=opts.scheme.name, rho_inf=opts.rho_inf,
+                                 newton_iterations=opts.newton_iterations,
+                                 newton_tol=opts.newton_tol, **records,
+                                 full_state=opts.full_state, progress=opts.progress,
+                                 max_step_error=(None if opts.max_step_error == np.inf
+                                                 else opts.max_step_error),
+                                 hold_energy=opts.hold_energy))
+        except s.DivergenceError as err:
+            raise s.DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
+                                    f"s: {err.cause}", err.partial) from None
+    return s.richardson_extrapolation(*runs)

@@ -1,0 +1,163 @@
+"""simulate's arguments, checked once (RunOptions): every bad argument is refused here, naming
+it, before anything is built or run.  The defaults that depend on the model (Newton iterations,
+whether the energy is held) are decided here too, so that drivers and prepared runs read one
+record of what the run is."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import adaptive as adaptive_steps
+from .methods import SWEEPS, scheme_named
+from .model import Model
+from .recording import Checkpoint, NoCheckpoint
+
+
+MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """One simulate call's arguments, checked (simulate's docstring says what each means)."""
+    model: Model                # the user's model (closed where it has loops: solver._closed)
+    t_end: float
+    dt: float                   # the step (an adaptive run's first step)
+    n_steps: int                # fixed steps: ceil(t_end / dt), dt = t_end / n_steps
+    scheme: object              # methods.Scheme
+    method: str                 # methods.SWEEPS
+    rho_inf: float
+    coef: np.ndarray = field(repr=False)   # the generalized-alpha coefficients (Integrator)
+    newton_iterations: int = 0
+    newton_tol: float = 1e-12
+    full_state: bool = False
+    max_step_error: float = np.inf
+    max_energy_error: object = None
+    hold_energy: bool = False   # resolved: held or not
+    richardson: bool = False
+    rtol: object = None         # adaptive steps where given
+    atol: float = 0.0
+    sampling: object = 1        # fixed steps: every k-th step (int) or these steps (array)
+    targets: object = None      # adaptive: the times it lands on and records (None: default)
+    progress: object = None
+    resume: object = None
+    stream: object = None
+
+    @property
+    def adaptive(self):
+        return self.rtol is not None
+
+    def plan_key(self):
+        """What a prepared run depends on (run_plan.py): the options that shape its arrays,
+        its loop variant and its start, not the run's length, records or output."""
+        return (self.dt, self.scheme.name, self.method, self.rho_inf, self.newton_iterations,
+                self.newton_tol, bool(self.full_state), self.max_step_error,
+                bool(self.hold_energy))
+
+
+def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_iterations,
+                newton_tol, record_every, record_dt, t_eval, full_state, richardson, progress,
+                max_step_error, max_energy_error, hold_energy, resume, stream):
+    """simulate's arguments checked, in the order simulate documents them (RunOptions)."""
+    from .solver import (Integrator, MAX_SAMPLES, _check_count, _check_positive, _closed,
+                         _iterates, _sampling, _steps, energy_not_held, has_loops)
+    if not isinstance(model, Model):
+        raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
+    if has_loops(model):
+        model = _closed(model)
+    t_end = _check_positive("t_end", t_end)
+    adaptive = rtol is not None
+    if adaptive:
+        rtol, atol = _check_positive("rtol", rtol), float(atol)
+        if not atol >= 0.0:
+            raise ValueError(f"simulate: atol must be >= 0 (rad or m), got {atol!r}")
+        for name, given, why in (("max_energy_error", max_energy_error is not None, "it is "
+                                  "checked at fixed steps"),
+                                 ("record_every", record_every is not None, "use record_dt or "
+                                  "t_eval"), ("resume", resume is not None, "resume a fixed-step "
+                                  "run"), ("richardson", richardson, "the extrapolation needs "
+                                  "fixed steps"), ("scheme", scheme != "newmark", "the estimate "
+                                  "is the Newmark scheme's")):
+            if given:
+                raise ValueError(f"simulate: adaptive steps (rtol) and {name} do not combine: "
+                                 f"{why}")
+        dt = t_end / MAX_SAMPLES if dt is None else dt
+    elif dt is None:
+        raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
+    dt = _check_positive("dt", dt)
+    if t_end / dt > MAX_STEPS:
+        raise ValueError(f"simulate: dt = {dt:g} s makes {t_end / dt:.3g} steps of t_end = "
+                         f"{t_end:g} s (more than {MAX_STEPS:.0e}): dt is in seconds")
+    n_steps, dt = _steps(t_end, dt)
+    if isinstance(resume, NoCheckpoint):
+        raise ValueError(f"simulate(resume=...): {resume.why}")
+    if resume is not None:
+        if not isinstance(resume, Checkpoint):
+            raise ValueError(f"simulate: resume must be a Checkpoint (result.checkpoint or "
+                             f"dttmm.Checkpoint.load(path)), got {type(resume).__name__}")
+        if richardson:
+            raise ValueError("simulate: resume and richardson=True do not combine (the "
+                             "extrapolation needs both runs from t = 0)")
+        if abs(dt - resume.h) > 1e-12 * resume.h:
+            raise ValueError(f"simulate(resume=...): the checkpoint's runs step dt = "
+                             f"{resume.h:.17g} s; this run steps {dt:.17g} s (t_end = {t_end:g} s "
+                             f"in steps of dt): resume with the same dt and a t_end on its grid")
+        if resume.step >= n_steps:
+            raise ValueError(f"simulate(resume=...): t_end = {t_end:g} s is not after the "
+                             f"checkpoint's t = {resume.t:g} s")
+    if adaptive:        # the times it lands on, or the steps it records (besides its ends)
+        sampling, targets = 1, adaptive_steps.sample_times(t_end, record_dt, t_eval)
+    else:
+        sampling, targets = _sampling(n_steps, dt, record_every, record_dt, t_eval,
+                                      0 if resume is None else resume.step, model.n_bodies), None
+    scheme = scheme_named(scheme)
+    if newton_iterations is None:
+        newton_iterations = (scheme.newton_iterations if scheme.newton_iterations is not None
+                             else 16 if has_loops(model)
+                             else 8 if _iterates(model, full_state) else 0)
+    newton_iterations = _check_count("newton_iterations", newton_iterations, 0)
+    try:
+        newton_tol = float(newton_tol)
+    except (TypeError, ValueError):
+        newton_tol = np.nan
+    if not (np.isfinite(newton_tol) and newton_tol >= 0.0):
+        raise ValueError(f"simulate: newton_tol must be a finite number >= 0 (rad or m), got "
+                         f"{newton_tol!r}")
+    coef = Integrator.from_rho_inf(rho_inf).array()     # (checked here, before any run)
+    if not scheme.damping and float(rho_inf) != 1.0:
+        raise ValueError(f"simulate: scheme={scheme.name!r} conserves energy and takes no "
+                         f"numerical damping: rho_inf must be 1, got {rho_inf!r}")
+    for name, value in (("full_state", full_state), ("richardson", richardson)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
+    max_step_error = (np.inf if max_step_error is None
+                      else _check_positive("max_step_error", max_step_error))
+    if hold_energy not in (None, True, False):
+        raise ValueError(f"simulate: hold_energy must be None, True or False, got "
+                         f"{hold_energy!r}")
+    why_not_held = energy_not_held(model, rho_inf)
+    if hold_energy and why_not_held:
+        raise ValueError(f"simulate: hold_energy=True, but the loops' projection cannot hold "
+                         f"this model's energy: {why_not_held} (docs/loops.md, \"The energy "
+                         f"held\"); leave hold_energy unset")
+    hold_energy = why_not_held is None and hold_energy is not False
+    if max_energy_error is not None:
+        max_energy_error = _check_positive("max_energy_error", max_energy_error)
+    if richardson:
+        for name, value in (("stream", stream), ("max_energy_error", max_energy_error)):
+            if value is not None:
+                raise ValueError(f"simulate: richardson=True and {name} do not combine (the "
+                                 f"result is the extrapolation of two runs, not one run's "
+                                 f"samples or energy); run without richardson for {name}")
+        if not scheme.richardson:
+            raise ValueError(f"simulate: richardson=True needs scheme='newmark' (the "
+                             f"{scheme.name!r} scheme's properties would not survive the "
+                             f"extrapolation), got scheme={scheme.name!r}")
+    if method not in SWEEPS:
+        raise ValueError(f"simulate: method must be one of {tuple(SWEEPS)}, got {method!r}")
+    return RunOptions(model=model, t_end=t_end, dt=dt, n_steps=n_steps, scheme=scheme,
+                      method=method, rho_inf=float(rho_inf), coef=coef,
+                      newton_iterations=newton_iterations, newton_tol=newton_tol,
+                      full_state=bool(full_state), max_step_error=max_step_error,
+                      max_energy_error=max_energy_error, hold_energy=hold_energy,
+                      richardson=bool(richardson), rtol=rtol, atol=float(atol),
+                      sampling=sampling, targets=targets,
+                      progress=progress, resume=resume, stream=stream)

@@ -1,0 +1,325 @@
+"""A prepared run (issue 30's short runs, issue 31's reshape): everything a run of one model with
+one set of options builds before its first step, built once.
+
+PreparedRun holds the kernel model and its tables, the mode and the loop variant the method
+table picks (methods.py), the run's preallocated arrays (state, sweep, loop, monitor: "the
+structures", the only things the compiled loop writes besides a chunk's records) and their
+values after the consistent start.  The structures' float arrays are views of one flat buffer,
+so that putting the start back before a run, or keeping a run's end for its checkpoint, is one
+copy of the buffer (a copy per array would cost ~0.5 us each, of ~100).
+
+A prepared run is kept on the model (per RunOptions.plan_key, at most KEEP of them) where its
+start is a pure function of the model and the options (no Python function of the user's is
+evaluated at t = 0: no applied loads, no moving ground, no drive but springs and compiled
+forces) and its buffer is small (KEEP_BYTES); a run then starts from the kept start instead of
+computing it.  Otherwise (and while another run uses the kept one, e.g. a drive that runs a
+simulation) each run prepares its own, as before.
+"""
+import threading
+from collections import OrderedDict
+from contextlib import contextmanager
+
+import numpy as np
+
+from .closures import has_closure_drives
+from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
+from .kernels import ball_chain, em_step, tree, weld_chain
+from .kernels import step as kstep
+from .kernels.closure import start_energy
+from .kernels.loop import Monitor, Settings
+from .recording import leaves, model_fingerprint
+
+KEEP = 8                    # prepared runs kept per model (the latest used)
+KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)
+
+
+class PreparedRun:
+    """The arrays and choices of a run of opts.model with opts' scheme, sweep, step and
+    iterations, started (the consistent start taken) and ready to step.  Built by
+    prepared_run; a run restores `started` (restart) before stepping."""
+
+    def __init__(self, opts):
+        from . import solver as s
+        scheme = opts.scheme
+        user_model = opts.model
+        model, keep = s.kernel_model(user_model)
+        self.scheme = scheme
+        self.user_model, self.model, self.keep = user_model, model, keep
+        self.loaded = s.loaded_bodies(user_model, model, keep)  # where each body's loads act
+        self.mode = mode = s._mode(model, opts.method, opts.full_state)
+        dt, coef, n = opts.dt, opts.coef, model.n_bodies
+        # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take
+        # the fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme
+        # its own, the rest the general loop (kernels/step.py); each records what its scheme
+        # defines
+        fused = (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+                 and scheme.loop == "newmark" and not model.needs_general_loop
+                 and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
+        ws = s.Workspace(model, fused=fused)
+        state = ws.state
+        self.params = params = s.kernel_params(model)
+        self.settings = settings = Settings(
+            mode=mode, h=dt, coef=coef, newton_max=int(opts.newton_iterations),
+            newton_tol=opts.newton_tol, record_every=1, max_step_error=opts.max_step_error,
+            stop_unconverged=scheme.stop_unconverged, start=False)
+        monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
+                          jqp=np.zeros((n if s.has_coordinates(model) else 0, 2)),
+                          defl_pseudo=np.zeros((n if (model.hinge_kind == s.ELASTIC).any()
+                                                else 0, 3)),
+                          error=np.zeros(2))
+        # a chain of beams welded end to end from the ground (fixed hinges, a free tip): the
+        # fused welded-chain loop (kernels/weld_chain.py)
+        welded = (s.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
+                  and model.is_chain and not model.tip_pinned and n > 0
+                  and all(int(c) == s.BEAM for c in model.body_kind)
+                  and all(int(h) == s.FIXED for h in model.hinge_kind)
+                  and not any(model.ground_locked[1:]))
+        loop = runner = None
+        if fused and mode == kstep.RICCATI_TREE:
+            loop_name, runner = "ball-tree", s.run_steps_no_alloc
+            loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
+        elif fused:
+            loop_name, runner = "ball-chain", s.run_steps_no_alloc
+            loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
+        loops = s.loop_tables(model)
+        s._consistent_start(model, mode, opts.method, (runner, loop) if fused else None, params,
+                            settings, state, ws.sweep, monitor, dt, loops)
+        if opts.hold_energy:        # the total energy the steps hold (kernels/closure.py)
+            loops.energy[:2] = 1.0, start_energy(params, loops, state)
+        histories = s._station_histories(model, state, scheme.name == "paper")
+        state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
+
+        # the joints' offsets (an elastic hinge's deflection, a slide) where a joint has one
+        # (they are zero otherwise: _result's zeros, 48 B per body and sample not kept)
+        offsets = ["defl", "defl_rate"] if s.has_offsets(model) else []
+        keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
+        if mode == kstep.RICCATI_JOINTS:
+            keys += ["jq", "jqd", "jtau"]
+        if len(loops.kind):
+            keys.append("closure_wrench")
+        if scheme.loop == "energy_momentum":
+            loop_name, runner = "energy-momentum", s.run_steps
+            loop = em_step.energy_momentum_loop(n)
+            state.v_c[:] = s._initial_mass_center_velocities(model, state.rot, state.omega)
+        elif fused:
+            ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
+        elif welded:
+            loop_name, runner = "welded-chain", s.run_steps_no_alloc
+            loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
+        else:
+            loop_name, runner = "general", s.run_steps
+            loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
+                                      s.compiled_forces(model).copy())    # (the run's own)
+        keys += list(scheme.records)
+        self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
+        self.run_info = dict(mode=s._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
+                             loop=loop_name, model_fingerprint=model_fingerprint(user_model))
+        if len(loops.kind):
+            self.run_info.update(energy_held=bool(opts.hold_energy))
+        if scheme.loads_at_midpoints:
+            self.run_info.update(forces="step means (about t - dt/2)")
+        else:
+            self.run_info.update(rho_inf=opts.rho_inf)
+        self.checkpoint_run = dict(self.run_info, method=opts.method, bodies=n,
+                                   newton_iterations=int(opts.newton_iterations))
+
+        structures = (state, ws.sweep, loop, monitor)
+        self.buffers, structures = _gathered(structures)    # most arrays: views of buffers
+        self.state, self.sweep, self.loop, self.monitor = self.structures = structures
+        self.loops = self.loop.loops if loop_name == "general" else loops
+        histories = self.loop.histories if loop_name == "general" else histories
+        self.history_values = dict(v_st=histories[1],
+                                   v_c=(self.state.v_c if scheme.name != "paper"
+                                        else histories[4]),
+                                   closure_wrench=self.loops.wrench)
+        in_buffers = {id(a) for a in leaves(structures) if a.size and any(
+            a.dtype == b.dtype and np.shares_memory(a, b) for b in self.buffers)}
+        self.others = [a for a in leaves(structures) if a.size and id(a) not in in_buffers]
+        self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        self.beam_tips = s._beam_tips(model)
+        self.closing_forces = s.closure_forces(model, self.loops)
+        # what each run's chunks evaluate in Python (drivers.Stepping.inputs_for): JointForces
+        # of the state given as Python functions (one step per chunk), the drives' and the
+        # driven closing joints' inputs, the applied loads
+        self.stepwise = [f"joint '{model.hinge_names[k]}'" for k, ds in enumerate(model.drives)
+                         for d in ds if not runs_in_loop(d)] + [
+                             who for _, _, who in self.closing_forces]
+        self.joint_inputs_vary = any(d is not None and d["kind"] in (FORCE, MOTION, PD)
+                                     for ds in model.drives for d in ds)
+        self.targets_vary = has_closure_drives(model)
+        self.has_loads = model.has_applied_loads
+        self.keeps_every_body = bool(np.array_equal(keep, np.arange(len(keep))))
+        self.lock = threading.Lock()
+        self.kept = False               # kept on the model (prepared_run)
+        self._buffers = {}              # the chunks' input and record arrays, by their shape
+
+    def restart(self):
+        """Put the structures back to their values after the start (a kept prepared run,
+        before each run)."""
+        buffers, others = self.started
+        for buffer, value in zip(self.buffers, buffers):
+            buffer[:] = value
+        for a, value in zip(self.others, others):
+            np.copyto(a, value)
+
+    def ending(self):
+        """The structures' arrays as a run left them, for its checkpoint: a kept run's copy
+        (the next run reuses its arrays), gathered when first read; a run of its own's
+        arrays themselves (a million bodies' state is not doubled)."""
+        if not self.kept:
+            return self.structures
+        return _Ending(self, [b.copy() for b in self.buffers], [a.copy() for a in self.others])
+
+    def chunk_arrays(self, key, make):
+        """Arrays of a chunk (its inputs known before the run, its records) that a kept run's
+        next call can reuse: make() once per key (their shape).  The compiled loop writes the
+        records, which the Recording copies out, and reads the inputs."""
+        if not self.kept:
+            return make()
+        if key not in self._buffers:
+            self._buffers[key] = make()
+        return self._buffers[key]
+
+
+GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
+
+
+def _root(a):
+    while isinstance(a.base, np.ndarray):
+        a = a.base
+    return a
+
+
+def _gathered(structures):
+    """(buffers, structures): every C-contiguous array of a GATHERED dtype in the nested
+    tuples replaced by a view of one flat buffer per dtype holding its values (an array whose
+    memory another leaf shares is left as it is; an array that appears twice becomes one
+    view)."""
+    arrays = leaves(structures)
+    sharing = {}
+    for a in arrays:
+        sharing.setdefault(id(_root(a)), set()).add(id(a))
+    movable = {}
+    for a in arrays:
+        if (a.dtype in GATHERED and a.flags.c_contiguous and a.size
+                and len(sharing[id(_root(a))]) == 1):
+            movable[id(a)] = a
+    buffers, views = [], {}
+    for dtype in GATHERED:
+        parts = [(key, a) for key, a in movable.items() if a.dtype == dtype]
+        buffer = np.empty(sum(a.size for _, a in parts), dtype=dtype)
+        at = 0
+        for key, a in parts:
+            views[key] = buffer[at:at + a.size].reshape(a.shape)
+            views[key][...] = a
+            at += a.size
+        buffers.append(buffer)
+
+    def rebuilt(part):
+        if isinstance(part, np.ndarray):
+            return views.get(id(part), part)
+        if isinstance(part, tuple):
+            items = [rebuilt(p) for p in part]
+            return type(part)(*items) if hasattr(part, "_fields") else tuple(items)
+        return part
+    return buffers, rebuilt(structures)
+
+
+class _Ending:
+    """A kept run's arrays as one run left them (PreparedRun.ending): copies of its buffers
+    and other arrays, the arrays themselves made when called; pickled as those arrays."""
+
+    def __init__(self, plan, copies, other_copies):
+        self.plan, self.copies, self.other_copies = plan, copies, other_copies
+
+    def __call__(self):
+        plan = self.plan
+        return _leaves_of(plan.structures, plan.buffers, self.copies, plan.others,
+                          self.other_copies)
+
+    def __reduce__(self):
+        return tuple, (tuple(self()),)
+
+
+def forget(model):
+    """Drop the prepared runs kept on a model (a test that changes how a model runs)."""
+    model.__dict__.pop("_prepared_runs", None)
+
+
+def _offset(a, buffer):
+    """a's place in buffer (a view of it), in items."""
+    return ((a.__array_interface__["data"][0] - buffer.__array_interface__["data"][0])
+            // buffer.itemsize)
+
+
+def _leaves_of(structures, buffers, copies, others, other_copies):
+    """The leaves of structures as they were when copies (of buffers) and other_copies (of
+    others) were taken: a gathered array the same view of its buffer's copy, another its copy,
+    an empty one a new empty array."""
+    kept = {id(a): c for a, c in zip(others, other_copies)}
+    out = []
+    for a in leaves(structures):
+        if id(a) in kept:
+            out.append(kept[id(a)])
+        elif a.size == 0:
+            out.append(np.empty_like(a))
+        else:
+            i = GATHERED.index(a.dtype.type)
+            at = _offset(a, buffers[i])
+            out.append(copies[i][at:at + a.size].reshape(a.shape))
+    return out
+
+
+def start_is_pure(model):
+    """Whether a run's consistent start is a function of the model alone: no Python function
+    of the user's is evaluated at t = 0 (applied loads, a moving ground, drives but springs
+    and compiled forces, driven closing joints)."""
+    if model.ground_motion is not None or model.has_applied_loads or has_closure_drives(model):
+        return False
+    return all(d is None or d["kind"] == SPRING_DAMPER or d.get("compiled")
+               for ds in model.drives for d in ds)
+
+
+_KEPT_LOCK = threading.Lock()
+
+
+@contextmanager
+def prepared_run(opts):
+    """The prepared run of opts, restarted: the one kept on the model for opts' plan_key where
+    there is one free (start_is_pure, KEEP_BYTES), else a new one (kept where it may be)."""
+    from . import closures, solver
+    model = opts.model
+    key = opts.plan_key() + (solver.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
+    #                                                                   that tests turn)
+    pure = start_is_pure(model)
+    plan = None
+    if pure:
+        with _KEPT_LOCK:
+            kept = model.__dict__.get("_prepared_runs")
+            if kept is None:
+                kept = OrderedDict()
+                object.__setattr__(model, "_prepared_runs", kept)
+            plan = kept.get(key)
+            if plan is not None:
+                kept.move_to_end(key)
+        if plan is not None and plan.lock.acquire(blocking=False):
+            try:
+                plan.restart()
+                yield plan
+            finally:
+                plan.lock.release()
+            return
+    plan = PreparedRun(opts)
+    if pure and sum(b.nbytes for b in plan.buffers) <= KEEP_BYTES:
+        with _KEPT_LOCK:
+            kept = model.__dict__["_prepared_runs"]
+            if key not in kept:
+                plan.kept = True
+                kept[key] = plan
+                while len(kept) > KEEP:
+                    kept.popitem(last=False)
+    if plan.kept:
+        with plan.lock:
+            yield plan
+    else:
+        yield plan
