@@ -93,13 +93,14 @@ def end_errors(model, res, ref, beam=None):
 
 
 def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,), richardson_dts=(),
-                   adaptive_rtols=()):
+                   adaptive_rtols=(), high_order_rtols=(), reference_methods=("RK45", "DOP853")):
     """Curves of (wall time s, error m at t_end) for DT-TMM over dts (per Newton setting, with
-    Richardson extrapolation over richardson_dts, and with adaptive steps over adaptive_rtols)
-    and for the reference over rtols (RK45, DOP853).  Every run is timed around the whole call,
-    setup and result included, on both sides."""
+    Richardson extrapolation over richardson_dts, with adaptive steps over adaptive_rtols, and
+    with the high-order scheme over high_order_rtols) and for the reference over rtols (RK45,
+    DOP853).  Every run is timed around the whole call, setup and result included, on both
+    sides; the errors against the reference at rtol 1e-13."""
     grid = np.array([0.0, t_end])
-    tight = simulate_reference(model, t_end, method="DOP853", rtol=1e-12, atol=1e-14,
+    tight = simulate_reference(model, t_end, method="DOP853", rtol=1e-13, atol=1e-15,
                                t_eval=grid)
     simulate(model, 10 * dts[-1], dts[-1])
 
@@ -120,7 +121,12 @@ def work_precision(model, t_end, dts, rtols, beam=None, newton=(0,), richardson_
     if adaptive_rtols:
         curves["dttmm_adaptive"] = [timed(simulate, model, t_end, rtol=rtol, t_eval=[t_end])
                                     for rtol in adaptive_rtols]
-    for method in ("RK45", "DOP853"):
+    if high_order_rtols:
+        simulate(model, 10 * dts[-1], rtol=1e-3, scheme="dop853")      # (compiled)
+        curves["dttmm_dop853"] = [timed(simulate, model, t_end, rtol=rtol, atol=rtol * 1e-2,
+                                        scheme="dop853", t_eval=[t_end])
+                                  for rtol in high_order_rtols]
+    for method in reference_methods:
         curves[method] = [timed(simulate_reference, model, t_end, method=method, rtol=rtol,
                                 atol=rtol * 1e-2, t_eval=grid) for rtol in rtols]
     return curves
@@ -162,6 +168,41 @@ def report_speedups(fig, prefix, curves, targets):
         fig[name + "_plain_newmark"] = ratios["dttmm_newton0"]
         if "dttmm_richardson" in ratios:
             fig[name + "_richardson"] = ratios["dttmm_richardson"]
+
+
+def high_order_chart(fig, out_dir, quick):
+    """Issue 31's work-precision chart: the three-pendulum and rigid chains of 3, 10, 30, 100
+    links over 1 s, every DT-TMM scheme against the reference (numba Newton-Euler right-hand
+    side with scipy's DOP853), errors from 1e-3 to 1e-10 m; fig gets the best DT-TMM
+    scheme's and the reference's time at 1e-6 and 1e-9 m, and their ratio."""
+    t_end = 0.5 if quick else 1.0
+    tols = [1e-3, 1e-5, 1e-7, 1e-9, 1e-11] if quick else [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8,
+                                                          1e-9, 1e-10, 1e-11, 1e-12]
+    systems = [("three_pendulum", three_pendulum(2))] + [
+        (f"chain{n}", rigid_chain(n)) for n in ((3, 10) if quick else (3, 10, 30, 100))]
+    for name, model in systems:
+        stiff = name == "three_pendulum"
+        dts = [1e-3, 5e-4, 2.5e-4] if stiff else [1e-2, 5e-3, 2.5e-3]
+        curves = work_precision(model, t_end, dts, [t for t in tols if t >= 1e-10],
+                                richardson_dts=dts, adaptive_rtols=tols[:4],
+                                high_order_rtols=tols, reference_methods=("DOP853",))
+        chart_work_precision(os.path.join(out_dir, f"work_precision_high_order_{name}.png"),
+                             f"{name.replace('_', '-')}, {t_end:g} s: every scheme", curves)
+        fig[f"high_order_{name}"] = curves
+        for target in (1e-6, 1e-9):
+            ours = {k: time_at_error(v, target) for k, v in curves.items()
+                    if k.startswith("dttmm")}
+            reached = {k: t for k, t in ours.items() if t is not None}
+            best = min(reached, key=reached.get) if reached else None
+            theirs = time_at_error(curves["DOP853"], target)
+            key = f"high_order_{name}_at_{target:.0e}m"
+            fig[key + "_best_dttmm"] = best
+            fig[key + "_best_dttmm_s"] = reached.get(best)
+            fig[key + "_reference_dop853_s"] = theirs
+            fig[key + "_speedup"] = (None if best is None or theirs is None
+                                     else theirs / reached[best])
+        print(name, {k: v for k, v in fig.items() if k.startswith(f"high_order_{name}_")},
+              flush=True)
 
 
 def chart_work_precision(path, title, curves):
@@ -264,6 +305,8 @@ def main(argv=None):
         report_speedups(fig, f"chain{n}_", c, (1e-6,))
         fig[f"work_precision_chain{n}"] = c
         print(n, {k: v for k, v in fig.items() if k.startswith(f"chain{n}_")}, flush=True)
+
+    high_order_chart(fig, out_dir, quick)
 
     sizes = [3, 10, 30, 100] if quick else [3, 10, 30, 100, 300, 1000]
     # ~0.1-0.5 s of stepping per size (shorter runs left the differences to the machine's noise)

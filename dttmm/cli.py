@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .describe import describe_counts, suggested_dt
+from .methods import SCHEMES, SWEEPS
 from .scene import SceneError, load_scene
 
 
@@ -34,8 +35,10 @@ def main(argv=None):
     run.add_argument("--max-energy-error", type=float,
                      help="stop when the energy balance breaks by more than this fraction of "
                           "the largest kinetic energy")
-    run.add_argument("--method", choices=("riccati", "direct"))
-    run.add_argument("--scheme", choices=("newmark", "energy_momentum", "paper"))
+    run.add_argument("--method", choices=tuple(SWEEPS))
+    run.add_argument("--scheme", choices=tuple(SCHEMES),
+                     help="the time-stepping scheme (dttmm/methods.py): " + "; ".join(
+                         f"{name}: {scheme.summary}" for name, scheme in SCHEMES.items()))
     run.add_argument("--record-dt", type=float, help="record every RECORD_DT s")
     run.add_argument("--out", help="write the Result to FILE.npz (Result.load_npz reads it)")
     run.add_argument("--csv", help="write t, the output points and the energies to FILE.csv")

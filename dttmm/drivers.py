@@ -13,7 +13,9 @@ from . import solver as s
 from .energy_balance import EnergyBalance
 from .feedback import Progress, note_once
 from .closures import closure_targets
-from .kernels.loop import ERROR_ESTIMATE, OK, SINGULAR, UNSUPPORTED, Inputs, Run
+from .kernels import runge_kutta as runge_kutta_kernels
+from .kernels.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Inputs, Run,
+                           _skeleton)
 from .recording import Checkpoint, NoCheckpoint, Recording, SampleStream
 from .result import _drive_spring_energy
 
@@ -331,6 +333,82 @@ def adaptive(run):
                      NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
                                   "lie on no grid to continue on; run again to a later "
                                   "t_end, or use fixed steps (dt) to resume"))
+
+
+def runge_kutta(run):
+    """The high-order scheme (kernels/runge_kutta.py; docs/integrators.md): its compiled steps
+    from t = 0 to t_end, each sample from the step's dense output (MAX_SAMPLES equally spaced
+    by default; record_dt, t_eval), in chunks of samples; the Result (no checkpoint: its steps
+    lie on no grid)."""
+    plan, opts, recording, info = run.plan, run.opts, run.recording, run.info
+    n = plan.model.n_bodies
+    rk, loop, evaluation = plan.integrator, plan.derivative_loop, plan.derivative_run
+    skeleton = _skeleton(type(plan.loop), True)
+    t_end = opts.t_end
+    if not opts.adaptive:                       # fixed steps: at the steps asked for
+        sampling = opts.sampling
+        times = (np.arange(sampling, opts.n_steps + 1, sampling) if isinstance(sampling, int)
+                 else sampling) * opts.dt
+    else:
+        times = (opts.targets if opts.targets is not None
+                 else np.arange(1, s.MAX_SAMPLES + 1) * (t_end / s.MAX_SAMPLES))
+    times = np.asarray(times, dtype=float)
+    if not len(times) or times[-1] < t_end:     # (the final state is always recorded)
+        times = np.append(times, t_end)
+    times[-1] = t_end
+    rtol = opts.rtol if opts.adaptive else 0.0      # (0: fixed steps of dt)
+    atol = max(opts.atol, ATOL_FLOOR * rtol)        # (every scale > 0: a coordinate at 0)
+    if not runge_kutta_kernels.start(loop, evaluation, info, rk, rtol, atol,
+                                     opts.dt if opts.dt_given else 0.0, t_end, skeleton):
+        why = _PASS_FAILURES.get(int(info[0]), f"status {int(info[0])}")
+        raise s.DivergenceError(0, 0.0, f"{opts.scheme.name}: the sweep failed at the initial "
+                                f"state ({why})")
+    size = max(1, min(len(times), s.CHUNK_BYTES // (s.CHUNK_STEP_BYTES * max(n, 1))))
+    n_eta = len(plan.state.eta)
+    rec = plan.chunk_arrays(("samples", size, n, n_eta), lambda: s._record(size, n, n_eta))
+    sample_steps = np.zeros(size, dtype=np.int64)
+    h_min = adaptive_steps.MIN_STEP * t_end
+    done = 0
+    bar = Progress(len(times), opts.progress)
+    try:
+        while done < len(times):
+            chunk = np.ascontiguousarray(times[done:done + size])
+            runge_kutta_kernels.steps(loop, evaluation, info, rk, chunk, rec, sample_steps,
+                                      rtol, atol, h_min, skeleton)
+            n_rec = int(info[3])
+            if n_rec:
+                recording.add({key: getattr(rec, key)[:n_rec] for key in plan.keys},
+                              sample_steps[:n_rec].tolist(), chunk[:n_rec].tolist())
+            done += n_rec
+            if info[0] != OK:
+                t, taken = float(rk.control[0]), int(rk.control[2])
+                passing = _PASS_FAILURES.get(int(info[2]), "")
+                cause = (f"the step fell below {adaptive_steps.MIN_STEP:g} of t_end "
+                         f"({rk.control[1]:.3g} s) at t = {t:.6g} s"
+                         + (f"; last cause: {passing}" if passing else "")
+                         if info[0] == ERROR_ESTIMATE else
+                         _PASS_FAILURES.get(int(info[0]), f"status {int(info[0])}"))
+                raise s.DivergenceError(taken + 1, t, f"{opts.scheme.name}: {cause}",
+                                        run.partial(taken))
+            bar.update(done)
+    finally:
+        bar.close()
+    control = rk.control
+    run_info = dict(plan.run_info, evaluations=int(control[4]))
+    if opts.adaptive:
+        run_info.update(dt=None, dt_min=float(control[6]), dt_max=float(control[7]),
+                        steps_rejected=int(control[3]), rtol=opts.rtol, atol=atol)
+    return s._result(plan.user_model, recording, opts.dt, 0.0, int(control[2]),
+                     dict(run_info, newton_iterations_used=0, newton_unconverged_steps=0),
+                     NoCheckpoint(f"a {opts.scheme.name} run keeps no checkpoint: its steps "
+                                  f"lie on no grid to continue on; run again to a later t_end, "
+                                  f"or use fixed steps (dt) to resume"))
+
+
+ATOL_FLOOR = 1e-6      # the high-order scheme's least atol, relative to rtol (atol = 0 given)
+_PASS_FAILURES = {SINGULAR: "a transfer of the sweep is singular",
+                  NOT_FINITE: "an acceleration is not finite",
+                  UNSUPPORTED: "an element kind the loop does not know"}
 
 
 def richardson(opts, simulate):

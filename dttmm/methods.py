@@ -39,6 +39,12 @@ SCHEMES = {scheme.name: scheme for scheme in (
            "history), for comparison only", adaptive=False, richardson=False, damping=True,
            newton_iterations=None, stop_unconverged=False, loads_at_midpoints=False,
            loop="general", records=("v_st", "v_c")),
+    Scheme("dop853", "Dormand and Prince's explicit Runge-Kutta of order 8 (embedded error "
+           "estimate of orders 5 and 3, dense output of order 7) on the rotation group, "
+           "compiled with the acceleration sweep; steps chosen by rtol and atol; chains and "
+           "trees of rigid bodies and beams on ball joints, a fixed ground, gravity",
+           adaptive=True, richardson=False, damping=False, newton_iterations=0,
+           stop_unconverged=False, loads_at_midpoints=False, loop="runge_kutta"),
 )}
 
 # the sweep's forms (simulate(method=...)): how each step's transfer equations are solved

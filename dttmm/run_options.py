@@ -21,6 +21,7 @@ class RunOptions:
     model: Model                # the user's model (closed where it has loops: solver._closed)
     t_end: float
     dt: float                   # the step (an adaptive run's first step)
+    dt_given: bool              # dt given (not an adaptive run's default first step)
     n_steps: int                # fixed steps: ceil(t_end / dt), dt = t_end / n_steps
     scheme: object              # methods.Scheme
     method: str                 # methods.SWEEPS
@@ -64,6 +65,7 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
     if has_loops(model):
         model = _closed(model)
     t_end = _check_positive("t_end", t_end)
+    scheme = scheme_named(scheme)
     adaptive = rtol is not None
     if adaptive:
         rtol, atol = _check_positive("rtol", rtol), float(atol)
@@ -74,14 +76,17 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
                                  ("record_every", record_every is not None, "use record_dt or "
                                   "t_eval"), ("resume", resume is not None, "resume a fixed-step "
                                   "run"), ("richardson", richardson, "the extrapolation needs "
-                                  "fixed steps"), ("scheme", scheme != "newmark", "the estimate "
-                                  "is the Newmark scheme's")):
+                                  "fixed steps"), ("scheme", not scheme.adaptive, "the scheme "
+                                  "has no error estimate; use scheme='newmark' or 'dop853'")):
             if given:
                 raise ValueError(f"simulate: adaptive steps (rtol) and {name} do not combine: "
                                  f"{why}")
+        dt_given = dt is not None
         dt = t_end / MAX_SAMPLES if dt is None else dt
     elif dt is None:
         raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
+    else:
+        dt_given = True
     dt = _check_positive("dt", dt)
     if t_end / dt > MAX_STEPS:
         raise ValueError(f"simulate: dt = {dt:g} s makes {t_end / dt:.3g} steps of t_end = "
@@ -108,7 +113,6 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
     else:
         sampling, targets = _sampling(n_steps, dt, record_every, record_dt, t_eval,
                                       0 if resume is None else resume.step, model.n_bodies), None
-    scheme = scheme_named(scheme)
     if newton_iterations is None:
         newton_iterations = (scheme.newton_iterations if scheme.newton_iterations is not None
                              else 16 if has_loops(model)
@@ -123,8 +127,8 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
                          f"{newton_tol!r}")
     coef = Integrator.from_rho_inf(rho_inf).array()     # (checked here, before any run)
     if not scheme.damping and float(rho_inf) != 1.0:
-        raise ValueError(f"simulate: scheme={scheme.name!r} conserves energy and takes no "
-                         f"numerical damping: rho_inf must be 1, got {rho_inf!r}")
+        raise ValueError(f"simulate: scheme={scheme.name!r} takes no numerical damping: "
+                         f"rho_inf must be 1, got {rho_inf!r}")
     for name, value in (("full_state", full_state), ("richardson", richardson)):
         if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
@@ -153,8 +157,8 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
                              f"extrapolation), got scheme={scheme.name!r}")
     if method not in SWEEPS:
         raise ValueError(f"simulate: method must be one of {tuple(SWEEPS)}, got {method!r}")
-    return RunOptions(model=model, t_end=t_end, dt=dt, n_steps=n_steps, scheme=scheme,
-                      method=method, rho_inf=float(rho_inf), coef=coef,
+    return RunOptions(model=model, t_end=t_end, dt=dt, dt_given=dt_given, n_steps=n_steps,
+                      scheme=scheme, method=method, rho_inf=float(rho_inf), coef=coef,
                       newton_iterations=newton_iterations, newton_tol=newton_tol,
                       full_state=bool(full_state), max_step_error=max_step_error,
                       max_energy_error=max_energy_error, hold_energy=hold_energy,

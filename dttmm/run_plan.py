@@ -23,10 +23,10 @@ import numpy as np
 
 from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
-from .kernels import ball_chain, em_step, tree, weld_chain
+from .kernels import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels import step as kstep
 from .kernels.closure import start_energy
-from .kernels.loop import Monitor, Settings
+from .kernels.loop import Monitor, Run, Settings
 from .recording import leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
@@ -53,8 +53,11 @@ class PreparedRun:
         # its own, the rest the general loop (kernels/step.py); each records what its scheme
         # defines
         fused = (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-                 and scheme.loop == "newmark" and not model.needs_general_loop
+                 and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
                  and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
+        if scheme.loop == "runge_kutta" and not fused:     # (check_supported refuses it)
+            raise ValueError(f"simulate(scheme={scheme.name!r}): the model does not run in the "
+                             f"fused ball-joint loops its stages take")
         ws = s.Workspace(model, fused=fused)
         state = ws.state
         self.params = params = s.kernel_params(model)
@@ -101,6 +104,8 @@ class PreparedRun:
             loop_name, runner = "energy-momentum", s.run_steps
             loop = em_step.energy_momentum_loop(n)
             state.v_c[:] = s._initial_mass_center_velocities(model, state.rot, state.omega)
+        elif fused and scheme.loop == "runge_kutta":
+            loop_name = f"runge-kutta ({loop_name})"
         elif fused:
             ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
         elif welded:
@@ -118,7 +123,7 @@ class PreparedRun:
             self.run_info.update(energy_held=bool(opts.hold_energy))
         if scheme.loads_at_midpoints:
             self.run_info.update(forces="step means (about t - dt/2)")
-        else:
+        elif scheme.damping:
             self.run_info.update(rho_inf=opts.rho_inf)
         self.checkpoint_run = dict(self.run_info, method=opts.method, bodies=n,
                                    newton_iterations=int(opts.newton_iterations))
@@ -136,6 +141,14 @@ class PreparedRun:
             a.dtype == b.dtype and np.shares_memory(a, b) for b in self.buffers)}
         self.others = [a for a in leaves(structures) if a.size and id(a) not in in_buffers]
         self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
+            self.derivative_run = Run(   # (s._fused_start's Run: one compiled skeleton serves)
+                params, settings._replace(newton_max=0, start=True), self.state, self.sweep,
+                s._start_inputs(model, loops), s._record(0, n, len(self.state.eta)),
+                self.monitor)
+            self.derivative_loop = ball_chain.start_loop(self.loop, self.state, self.sweep)
+            self.integrator = runge_kutta.runge_kutta_scratch(
+                n, len(self.state.eta), runge_kutta.dop853_tables())
         self.beam_tips = s._beam_tips(model)
         self.closing_forces = s.closure_forces(model, self.loops)
         # what each run's chunks evaluate in Python (drivers.Stepping.inputs_for): JointForces

@@ -20,7 +20,7 @@ from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, FAMILY, LENGTH, MODES,
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
                              known_force, runs_in_loop)
-from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
+from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -662,6 +662,18 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     state.defl_pseudo[:] = state.defl_acc
 
 
+def _start_inputs(model, loops):
+    """The Inputs of one pass of a fused loop's consistent start (_fused_start) on a fixed
+    ground with no applied loads or drives (the high-order scheme's stages)."""
+    n = model.n_bodies
+    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [0.0])
+    zeros = np.zeros((1, n, 3))
+    return Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
+                  g_pos=g_pos, g_vel=g_vel, force=zeros, torque=zeros.copy(),
+                  line_load=zeros.copy(), joint_input=np.zeros((1, n, 2, 3)),
+                  closure_target=np.zeros((1, len(loops.kind), 3)))
+
+
 def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
     """Where a chunk's samples are written (kernels/loop.py::Record): n_rec_max of each; the
     paper scheme's station velocities, the mass-centre velocities and the closing joints'
@@ -826,13 +838,21 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         "riccati" (default; stable for long and stiff chains) or "direct" (multiplies the
         transfer matrices out, as the paper does; chains only; loses accuracy on long or stiff
         chains).
-    scheme : {"newmark", "energy_momentum", "paper"}
+    scheme : {"newmark", "energy_momentum", "paper", "dop853"}
+        The table of schemes is ``dttmm.methods.SCHEMES``.
         "newmark" (default): generalized-alpha, every element and topology.
         "energy_momentum": rigid chains with ball and fixed hinges on a fixed ground; a
         second-order step that conserves the total energy and the angular momentum to
         newton_tol (docs/solver.md). "paper": the paper's scheme, for comparison only (every
         station point with its own position history; it develops a growing step-to-step
-        oscillation in long runs; docs/solver.md, "The paper's scheme").
+        oscillation in long runs; docs/solver.md, "The paper's scheme"). "dop853": the
+        explicit Runge-Kutta method of order 8 on the rotation group, compiled with the
+        acceleration sweep (docs/integrators.md): chains and trees of rigid bodies and beams
+        on ball joints, a fixed ground and gravity; with rtol its steps are chosen by its
+        embedded estimate (the local error of each coordinate within atol + rtol |y|, of each
+        rotation within atol + rtol rad; atol at least 1e-6 rtol) and its samples come from
+        its dense output; with dt alone, fixed steps of dt. Explicit: stiff beams hold its
+        steps below their stability limit.
     rho_inf : float
         Generalized-alpha spectral radius at infinite frequency, in [0, 1]; 1 (default) is the
         trapezoidal Newmark rule, smaller values damp high frequencies. Newmark scheme only.
@@ -940,7 +960,8 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
     with prepared_run(opts) as plan:
         run = drivers.Stepping(plan, opts, wall0)
-        result = (drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
+        result = (drivers.runge_kutta if opts.scheme.loop == "runge_kutta"
+                  else drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
     return result._timed(time.perf_counter() - wall0)
 
 def load_stream(model, path):
@@ -1093,12 +1114,14 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); closed loops of
     rigid bodies and beams (closures.check_runs_in_sweeps)."""
     check_runs_in_sweeps(model, "simulate", moving_ground=True)
+    if scheme == "dop853":
+        _check_runge_kutta(model, method, full_state)
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):
         raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
                          f"method='riccati' so far, got scheme={scheme!r}, method={method!r}")
     if full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
-    elif not model.is_chain:
+    elif not model.is_chain and scheme != "dop853":
         _check_tree(model, scheme, method)
     where = f"simulate(scheme='{scheme}')"
     for k in range(model.n_bodies):
@@ -1122,6 +1145,33 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     if scheme != "newmark" and model.ground_motion is not None:
         raise ValueError(f"{where}: the ground has a prescribed motion; the scheme needs a "
                          f"fixed ground (use scheme='newmark')")
+
+
+def _check_runge_kutta(model, method, full_state):
+    """The high-order scheme (kernels/runge_kutta.py) integrates the fused loops' sweep: chains
+    and trees of rigid bodies and beams on ball joints (bending modes only), on a fixed ground
+    with gravity alone (its compiled stages evaluate no function of the user's)."""
+    where = "simulate(scheme='dop853')"
+    joint = next((k for k in range(model.n_bodies) if model.hinge_kind[k] != BALL), None)
+    locked = next((k for k in range(model.n_bodies) if model.ground_locked[k]), None)
+    why = ("the model has closed loops" if has_loops(model) or model.tip_pinned
+           else f"hinge '{model.hinge_names[joint]}' is "
+                f"{JOINT_KIND[int(model.hinge_kind[joint])].what} (ball joints only)"
+           if joint is not None
+           else "method='direct' (its stages take the Riccati sweep)" if method != "riccati"
+           else "full_state=True (its stages take the reduced sweep)" if full_state
+           else "the ground has a prescribed motion" if model.ground_motion is not None
+           else "it has applied loads (functions of time, which its compiled stages cannot "
+                "call)" if model.has_applied_loads
+           else f"body '{model.body_names[locked]}' is locked to the ground"
+           if locked is not None
+           else "a beam has twist or stretch modes, an end torque or loads in body axes "
+                "(its columns are differenced: the general loop)" if model.needs_general_loop
+           else None)
+    if why is not None:
+        raise ValueError(f"{where}: {why}; the scheme runs chains and trees of rigid bodies "
+                         f"and beams on ball joints, a fixed ground and gravity; use "
+                         f"scheme='newmark' (rtol= for adaptive steps)")
 
 
 def _check_full_tree(model, scheme, method):

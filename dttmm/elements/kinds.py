@@ -16,7 +16,7 @@ from .rigid_body import RigidBody
 
 RIGID, BEAM = 0, 1      # Model.body_kind
 
-SCHEMES = ("newmark", "energy_momentum", "paper")
+SCHEMES = ("newmark", "energy_momentum", "paper", "dop853")
 
 
 @dataclass(frozen=True)
@@ -48,13 +48,14 @@ class Kind:
 
 BODY_KINDS = (
     Kind(RIGID, RigidBody, SCHEMES, fused=True, doc="docs/rigid_body.md", what="a rigid body"),
-    Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper"), fused=True, doc="docs/beam.md",
+    Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper", "dop853"), fused=True, doc="docs/beam.md",
          what="a beam"),
 )
 
 JOINT_KINDS = (
     Kind(BALL, BallJoint, SCHEMES, moment_free=True, doc="docs/hinges.md", what="a ball joint"),
-    Kind(FIXED, FixedHinge, SCHEMES, doc="docs/hinges.md", what="a fixed hinge"),
+    Kind(FIXED, FixedHinge, ("newmark", "energy_momentum", "paper"), doc="docs/hinges.md",
+         what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
     # joints with coordinates and drives (kernels/joint.py): the general loop's full-state
     # tree sweep

@@ -1,0 +1,355 @@
+"""High-order integration of the acceleration-level sweep (issue 31; docs/integrators.md):
+Dormand and Prince's explicit Runge-Kutta method of order 8 (DOP853: an embedded error
+estimate of orders 5 and 3, a dense output of order 7), compiled with the fused loops' sweep
+(kernels/ball_chain.py, tree.py), on the rotation group.
+
+The state is [theta; omega; eta; eta'] with, per body, theta the rotation vector of
+R = exp(theta^) R0 from the step's initial rotation R0 (local exponential coordinates,
+recentred after every step: R0 <- exp(theta^) R0, theta <- 0) and omega the world angular
+velocity; its derivative [J_l(theta)^-1 omega; omega'; eta'; eta''] takes the accelerations from
+one pass of the fused loop in its consistent-start form (ball_chain.start_loop: the coefficients
+(1, 0, 0, 0) make a body's rotation slot its angular acceleration, and the pass solves the
+accelerations of the given state).  Every rotation is exp of a skew matrix times an orthogonal
+one: orthogonal to rounding, whatever the tolerance.
+
+The method's coefficients are scipy's (scipy.integrate._ivp.dop853_coefficients), passed as
+tables; the error norm and step control follow Hairer, Norsett and Wanner (scipy's DOP853).
+"""
+from collections import namedtuple
+from types import FunctionType
+
+import numpy as np
+from numba import njit
+
+from . import CONTRACT
+from .ball_chain import record_state
+from .loop import ERROR_ESTIMATE, OK, UNSUPPORTED
+from .mat3 import mm3_into
+from .so3 import expm_so3
+
+N_STAGES = 12           # DOP853's stages (the 13th is the first of the next step: FSAL)
+N_EXTENDED = 16         # ... with the three of its dense output
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
+ERROR_EXPONENT = -1.0 / 8.0     # -1 / (order of the error estimate + 1)
+
+RungeKutta = namedtuple("RungeKutta", [
+    "rot0",         # (n, 3, 3) the rotations the step's local coordinates start from
+    "y",            # (N,) the state at t (theta = 0)
+    "f",            # (N,) its derivative
+    "y_new",        # (N,) the state after the step (theta from rot0)
+    "y_stage",      # (N,) a stage's state, a sample's state
+    "k",            # (16, N) the stages' derivatives (12 of the step, the next step's first,
+    #                 three of the dense output)
+    "dense",        # (7, N) the step's interpolant (scipy's F)
+    "e3",           # (2, 3, 3) scratch
+    "control",      # (8,) t, h, steps, rejected steps, evaluations, the last step rejected,
+    #                 smallest and largest step
+    "tables",       # (A (16, 16), B (12,), C (16,), E3 (13,), E5 (13,), D (4, 16))
+])
+
+
+def runge_kutta_scratch(n, n_eta, tables):
+    """The scratch of an integration of n bodies and n_eta modal coordinates."""
+    size = 6 * n + 2 * n_eta
+    return RungeKutta(np.zeros((n, 3, 3)), np.zeros(size), np.zeros(size), np.zeros(size),
+                      np.zeros(size), np.zeros((N_EXTENDED, size)), np.zeros((7, size)),
+                      np.zeros((2, 3, 3)), np.zeros(8), tables)
+
+
+def dop853_tables():
+    """scipy's DOP853 coefficients (A, B, C, E3, E5, D) as contiguous float arrays."""
+    from scipy.integrate._ivp import dop853_coefficients as c
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in (c.A, c.B, c.C, c.E3, c.E5, c.D))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def dexp_inverse(theta, omega, out, at):
+    """out[at:at + 3] = J_l(theta)^-1 omega, the rate of the rotation vector theta of
+    R = exp(theta^) R0 whose world angular velocity is omega:
+    omega - theta x omega / 2 + c (theta x (theta x omega)),
+    c = (1 - (x / 2) cot(x / 2)) / x^2, x = |theta| (its series below 1e-4 rad)."""
+    t0, t1, t2 = theta[0], theta[1], theta[2]
+    w0, w1, w2 = omega[0], omega[1], omega[2]
+    x2 = t0 * t0 + t1 * t1 + t2 * t2
+    if x2 < 1e-8:
+        c = 1.0 / 12.0 + x2 / 720.0
+    else:
+        x = np.sqrt(x2)
+        c = (1.0 - 0.5 * x * np.cos(0.5 * x) / np.sin(0.5 * x)) / x2
+    a0, a1, a2 = t1 * w2 - t2 * w1, t2 * w0 - t0 * w2, t0 * w1 - t1 * w0     # theta x omega
+    b0, b1, b2 = t1 * a2 - t2 * a1, t2 * a0 - t0 * a2, t0 * a1 - t1 * a0     # theta x a
+    out[at] = w0 - 0.5 * a0 + c * b0
+    out[at + 1] = w1 - 0.5 * a1 + c * b1
+    out[at + 2] = w2 - 0.5 * a2 + c * b2
+
+
+def _derivative(loop, run, info, rk, y, out):
+    """out = the state y's derivative; the run's state holds y (rotations, rates, modal
+    coordinates), its accelerations (state.omega_dot, state.eta_acc) and its stations
+    (state.z); False where the sweep fails (info[0] says why)."""
+    state, sweep = run.state, run.sweep
+    n, m = state.rot.shape[0], state.eta.shape[0]
+    rot0, e3 = rk.rot0, rk.e3[0]
+    w1, w3, phi_star, accel = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
+        loop.per_body[3]
+    for k in range(n):
+        expm_so3(y[3 * k:3 * k + 3], e3)
+        mm3_into(e3, rot0[k], state.rot[k])
+        for i in range(3):
+            state.omega[k, i] = y[3 * n + 3 * k + i]
+            w1[k, i] = 0.0                      # (ball_chain.start_loop)
+            w3[k, i] = state.omega[k, i]
+            phi_star[k, i] = 0.0
+    for i in range(m):
+        state.eta[i] = y[6 * n + i]
+        state.eta_d[i] = y[6 * n + m + i]
+        loop.per_mode[0, i] = -state.eta[i]
+        loop.per_mode[1, i] = state.eta_d[i]
+        loop.per_mode[3, i] = 0.0
+    sweep.red_aq[:, :] = 0.0
+    info[0] = OK
+    skeleton(loop, run, info)       # noqa: F821 (bound per loop variant: _integrator)
+    if info[0] != OK:
+        return False
+    for k in range(n):
+        dexp_inverse(y[3 * k:3 * k + 3], state.omega[k], out, 3 * k)
+        for i in range(3):
+            state.omega_dot[k, i] = accel[k, i]
+            out[3 * n + 3 * k + i] = accel[k, i]
+    for i in range(m):
+        state.eta_acc[i] = loop.per_mode[4, i]
+        out[6 * n + i] = state.eta_d[i]
+        out[6 * n + m + i] = loop.per_mode[4, i]
+    return True
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _scale(y, y_new, n_rot, rtol, atol, i):
+    """The error's scale of component i: atol + rtol max(|y|, |y_new|), and atol + rtol for a
+    rotation vector (a motion of order one radian: the rotations' local coordinates start
+    from zero each step)."""
+    if i < n_rot:
+        return atol + rtol
+    return atol + rtol * max(abs(y[i]), abs(y_new[i]))
+
+
+def _start(loop, run, info, rk, rtol, atol, first_step, t_end):
+    """rk's state from the run's (theta = 0) and its derivative; the first step: first_step
+    where given (> 0), else Hairer-Norsett-Wanner's choice from the derivative's size
+    (II.4, scipy's select_initial_step).  False where the sweep fails."""
+    state = run.state
+    n, m = state.rot.shape[0], state.eta.shape[0]
+    y, f, rot0 = rk.y, rk.f, rk.rot0
+    for k in range(n):
+        for i in range(3):
+            y[3 * k + i] = 0.0
+            y[3 * n + 3 * k + i] = state.omega[k, i]
+            for j in range(3):
+                rot0[k, i, j] = state.rot[k, i, j]
+    for i in range(m):
+        y[6 * n + i] = state.eta[i]
+        y[6 * n + m + i] = state.eta_d[i]
+    if not _derivative(loop, run, info, rk, y, f):
+        return False
+    h = first_step
+    if not h > 0.0:
+        size = y.shape[0]
+        d0, d1 = 0.0, 0.0
+        for i in range(size):
+            sc = _scale(y, y, 3 * n, rtol, atol, i)
+            d0 += (y[i] / sc) ** 2
+            d1 += (f[i] / sc) ** 2
+        d0, d1 = np.sqrt(d0 / size), np.sqrt(d1 / size)
+        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+        h0 = min(h0, t_end)
+        if not h0 > 1e-12 * t_end:
+            h0 = 1e-12 * t_end
+        for i in range(size):
+            rk.y_stage[i] = y[i] + h0 * f[i]
+        if not _derivative(loop, run, info, rk, rk.y_stage, rk.k[1]):
+            return False
+        d2 = 0.0
+        for i in range(size):
+            d2 += ((rk.k[1, i] - f[i]) / _scale(y, y, 3 * n, rtol, atol, i)) ** 2
+        d2 = np.sqrt(d2 / size) / h0
+        if max(d1, d2) <= 1e-15:
+            h1 = max(1e-6, 1e-3 * h0)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+        h = min(100.0 * h0, h1)
+    control = rk.control
+    control[0], control[1] = 0.0, h
+    control[2:6] = 0.0
+    control[6], control[7] = np.inf, 0.0
+    return True
+
+
+def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
+    """Steps from rk's t (rk.control[0]) until every time in `times` (increasing, after t; the
+    last one ends the chunk) is recorded into rec's slots (its state by the dense output, its
+    accelerations and stations by one more pass of the sweep) and sample_steps (the steps
+    taken by then).  info: [status, steps, the failing pass's status, samples recorded, passes];
+    a step is taken again with a quarter of its length where a pass fails, and the run stops
+    with ERROR_ESTIMATE once the step falls below h_min.  rtol = 0: fixed steps of rk's h (no
+    error estimate; its last step lands on the chunk's end)."""
+    a, b, c, e3_w, e5_w, d = rk.tables
+    state = run.state
+    n = state.rot.shape[0]
+    size = rk.y.shape[0]
+    y, f, y_new, y_stage, kk, dense = rk.y, rk.f, rk.y_new, rk.y_stage, rk.k, rk.dense
+    control = rk.control
+    t, h = control[0], control[1]
+    rejected_last = False
+    n_rec = 0
+    t_last = times[times.shape[0] - 1]
+    while n_rec < times.shape[0]:
+        h = min(h, t_last - t)
+        if t + h > t_last - 1e-12 * abs(t_last):      # (land on the chunk's end)
+            h = t_last - t
+        # the stages (FSAL: the first is the last step's end)
+        for i in range(size):
+            kk[0, i] = f[i]
+        failed = False
+        for s in range(1, N_STAGES + 1):
+            target = y_new if s == N_STAGES else y_stage
+            for i in range(size):
+                acc = 0.0
+                for j in range(s):
+                    acc += (b[j] if s == N_STAGES else a[s, j]) * kk[j, i]
+                target[i] = y[i] + h * acc
+            control[4] += 1.0
+            if not _derivative(loop, run, info, rk, target, kk[s]):
+                failed = True
+                break
+        err = np.inf
+        if not failed and not rtol > 0.0:   # fixed steps: every step taken, none changed
+            err = -1.0
+        elif not failed:
+            e5, e3 = 0.0, 0.0
+            for i in range(size):
+                x5, x3 = 0.0, 0.0
+                for j in range(N_STAGES + 1):
+                    x5 += e5_w[j] * kk[j, i]
+                    x3 += e3_w[j] * kk[j, i]
+                sc = _scale(y, y_new, 3 * n, rtol, atol, i)
+                e5 += (x5 / sc) ** 2
+                e3 += (x3 / sc) ** 2
+            err = 0.0 if e5 == 0.0 and e3 == 0.0 else abs(h) * e5 / np.sqrt(
+                (e5 + 0.01 * e3) * size)
+        elif info[0] == UNSUPPORTED or not rtol > 0.0:     # (fixed steps stop at once)
+            info[1], info[3] = int(control[2]), n_rec
+            control[0], control[1] = t, h
+            return
+        if not err < 1.0:
+            control[3] += 1.0
+            factor = 0.25 if failed or not rtol > 0.0 else max(
+                MIN_FACTOR, SAFETY * err ** ERROR_EXPONENT)
+            h *= factor
+            rejected_last = True
+            if h < h_min:
+                info[2] = info[0] if failed else OK
+                info[0] = ERROR_ESTIMATE
+                control[0], control[1] = t, h
+                info[1], info[3] = int(control[2]), n_rec
+                return
+            continue
+        # accepted: the samples in (t, t + h] from the dense output, before the recentring
+        t_new = t + h
+        if n_rec < times.shape[0] and times[n_rec] <= t_new:
+            for s in range(N_STAGES + 1, N_EXTENDED):
+                for i in range(size):
+                    acc = 0.0
+                    for j in range(s):
+                        acc += a[s, j] * kk[j, i]
+                    y_stage[i] = y[i] + h * acc
+                control[4] += 1.0
+                if not _derivative(loop, run, info, rk, y_stage, kk[s]):
+                    info[1], info[2], info[3] = int(control[2]), info[0], n_rec
+                    return
+            for i in range(size):
+                dy = y_new[i] - y[i]
+                dense[0, i] = dy
+                dense[1, i] = h * kk[0, i] - dy
+                dense[2, i] = 2.0 * dy - h * (kk[N_STAGES, i] + kk[0, i])
+                for r in range(4):
+                    acc = 0.0
+                    for j in range(N_EXTENDED):
+                        acc += d[r, j] * kk[j, i]
+                    dense[3 + r, i] = h * acc
+            while n_rec < times.shape[0] and times[n_rec] <= t_new:
+                x = (times[n_rec] - t) / h
+                for i in range(size):
+                    v = 0.0
+                    for r in range(6, -1, -1):
+                        v += dense[r, i]
+                        v *= x if (6 - r) % 2 == 0 else 1.0 - x
+                    y_stage[i] = y[i] + v
+                control[4] += 1.0
+                if not _derivative(loop, run, info, rk, y_stage, kk[N_STAGES + 1]):
+                    info[1], info[2], info[3] = int(control[2]), info[0], n_rec
+                    return
+                record_state(state, rec, n_rec)
+                for st in range(state.z.shape[0]):
+                    for i in range(12):
+                        rec.z[n_rec, st, i] = state.z[st, i]
+                sample_steps[n_rec] = int(control[2]) + 1
+                n_rec += 1
+        # recentre: R0 <- exp(theta^) R0, theta <- 0; the next step's first stage is this
+        # step's end, its rotation rate J_l(0)^-1 omega = omega
+        e3, before = rk.e3[0], rk.e3[1]
+        for k in range(n):
+            expm_so3(y_new[3 * k:3 * k + 3], e3)
+            for i in range(3):
+                for j in range(3):
+                    before[i, j] = rk.rot0[k, i, j]
+            mm3_into(e3, before, rk.rot0[k])
+        for i in range(size):
+            y[i] = y_new[i]
+            f[i] = kk[N_STAGES, i]
+        for k in range(n):
+            for i in range(3):
+                y[3 * k + i] = 0.0
+                f[3 * k + i] = y[3 * n + 3 * k + i]
+        control[2] += 1.0
+        control[6] = min(control[6], h)
+        control[7] = max(control[7], h)
+        t = t_new
+        factor = (1.0 if err < 0.0 else MAX_FACTOR if err == 0.0
+                  else min(MAX_FACTOR, SAFETY * err ** ERROR_EXPONENT))
+        if rejected_last:
+            factor = min(1.0, factor)
+        rejected_last = False
+        h *= factor
+    control[0], control[1] = t, h
+    info[0], info[1], info[3] = OK, int(control[2]), n_rec
+    info[4] = int(control[4])
+
+
+_INTEGRATORS = {}
+
+
+def _integrator(function, skeleton):
+    """function (_start or _steps) with _derivative bound to a loop variant's skeleton,
+    compiled (and cached) on its own, as loop.py::_skeleton binds the variants' pieces."""
+    key = (function.__name__, skeleton)
+    compiled = _INTEGRATORS.get(key)
+    if compiled is None:
+        name = f"{function.__name__}_{skeleton.__name__}"
+        env = dict(globals(), skeleton=skeleton)
+        derivative = FunctionType(_derivative.__code__, env, f"_derivative_{skeleton.__name__}")
+        derivative.__qualname__ = derivative.__name__
+        env["_derivative"] = njit(cache=True, fastmath=CONTRACT)(derivative)
+        fn = FunctionType(function.__code__, env, name)
+        fn.__qualname__ = name          # (numba's cache files are named after it)
+        fn.__doc__ = function.__doc__
+        compiled = _INTEGRATORS[key] = njit(cache=True, fastmath=CONTRACT)(fn)
+    return compiled
+
+
+def start(loop, run, info, rk, rtol, atol, first_step, t_end, skeleton):
+    return _integrator(_start, skeleton)(loop, run, info, rk, rtol, atol, first_step, t_end)
+
+
+def steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min, skeleton):
+    _integrator(_steps, skeleton)(loop, run, info, rk, times, rec, sample_steps, rtol, atol,
+                                  h_min)
