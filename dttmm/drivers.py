@@ -412,14 +412,16 @@ _PASS_FAILURES = {SINGULAR: "a transfer of the sweep is singular",
 
 
 def richardson(opts, simulate):
-    """The Richardson extrapolation (4 y_dt/2 - y_dt) / 3 of the runs at dt and dt / 2 at the
-    recorded times (solver.richardson_extrapolation; docs/solver.md)."""
+    """The Romberg extrapolation of opts.richardson runs at dt, dt/2, dt/4, ... on the even
+    powers of the step (solver.richardson_extrapolation; docs/solver.md, "Richardson
+    extrapolation"): orders 4, 6, 8 from two, three, four runs, at the recorded times."""
     runs = []
     sampling, dt, n_steps = opts.sampling, opts.dt, opts.n_steps
-    for h, factor in ((dt, 1), (0.5 * dt, 2)):
-        # (the same times: twice the steps between samples)
+    for level in range(opts.richardson):
+        factor = 2 ** level             # (the same times: factor times the steps between)
         records = (dict(record_every=factor * sampling) if isinstance(sampling, int)
                    else dict(t_eval=np.concatenate([[0.0], sampling * dt])))
+        h = dt / factor
         try:
             runs.append(simulate(opts.model, n_steps * dt, h, method=opts.method,
                                  scheme=opts.scheme.name, rho_inf=opts.rho_inf,

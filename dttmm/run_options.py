@@ -13,6 +13,7 @@ from .recording import Checkpoint, NoCheckpoint
 
 
 MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan
+MAX_LEVELS = 4          # richardson's most runs (h, h/2, h/4, h/8: order 8)
 
 
 @dataclass(frozen=True)
@@ -33,7 +34,7 @@ class RunOptions:
     max_step_error: float = np.inf
     max_energy_error: object = None
     hold_energy: bool = False   # resolved: held or not
-    richardson: bool = False
+    richardson: int = 1         # the runs extrapolated from (1: none; 2: richardson=True)
     rtol: object = None         # adaptive steps where given
     atol: float = 0.0
     sampling: object = 1        # fixed steps: every k-th step (int) or these steps (array)
@@ -129,9 +130,15 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
     if not scheme.damping and float(rho_inf) != 1.0:
         raise ValueError(f"simulate: scheme={scheme.name!r} takes no numerical damping: "
                          f"rho_inf must be 1, got {rho_inf!r}")
-    for name, value in (("full_state", full_state), ("richardson", richardson)):
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"simulate: {name} must be True or False, got {value!r}")
+    if not isinstance(full_state, (bool, np.bool_)):
+        raise ValueError(f"simulate: full_state must be True or False, got {full_state!r}")
+    if isinstance(richardson, (bool, np.bool_)):
+        richardson = 2 if richardson else 1         # (True: two runs, order 4)
+    elif not (isinstance(richardson, (int, np.integer)) and 1 <= richardson <= MAX_LEVELS):
+        raise ValueError(f"simulate: richardson must be True, False or the number of runs "
+                         f"to extrapolate from, 1 to {MAX_LEVELS} (orders 2, 4, 6, 8), got "
+                         f"{richardson!r}")
+    richardson = int(richardson)
     max_step_error = (np.inf if max_step_error is None
                       else _check_positive("max_step_error", max_step_error))
     if hold_energy not in (None, True, False):
@@ -145,7 +152,7 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
     hold_energy = why_not_held is None and hold_energy is not False
     if max_energy_error is not None:
         max_energy_error = _check_positive("max_energy_error", max_energy_error)
-    if richardson:
+    if richardson > 1:
         for name, value in (("stream", stream), ("max_energy_error", max_energy_error)):
             if value is not None:
                 raise ValueError(f"simulate: richardson=True and {name} do not combine (the "
@@ -162,6 +169,6 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
                       newton_iterations=newton_iterations, newton_tol=newton_tol,
                       full_state=bool(full_state), max_step_error=max_step_error,
                       max_energy_error=max_energy_error, hold_energy=hold_energy,
-                      richardson=bool(richardson), rtol=rtol, atol=float(atol),
+                      richardson=richardson, rtol=rtol, atol=float(atol),
                       sampling=sampling, targets=targets,
                       progress=progress, resume=resume, stream=stream)

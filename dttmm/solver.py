@@ -881,12 +881,16 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     full_state : bool
         Use the 13-entry state even where the reduced [a; q] form applies (a tree: the
         full-state tree sweep, docs/assembly.md "Trees with joints").
-    richardson : bool
-        Run at dt and dt/2 and return their Richardson extrapolation (4 y_dt/2 - y_dt) / 3 at
-        the recorded times (Newmark only): fourth-order accurate where dt resolves the motion,
-        for 3x the steps. ``info["richardson_correction_m"]`` is the largest change it made to a
-        recorded point position; wall_time and n_steps count both runs (docs/solver.md,
-        "Richardson extrapolation").
+    richardson : bool or int
+        True: run at dt and dt/2 and return their Richardson extrapolation
+        (4 y_dt/2 - y_dt) / 3 at the recorded times (Newmark only): fourth-order accurate where
+        dt resolves the motion, for 3x the steps. An int L from 2 to 4: L runs at dt, dt/2, ...
+        dt/2^(L-1), combined by Romberg's rule on the even powers of the step (orders 4, 6, 8
+        with Newton iterations to newton_tol; each run is the trapezoidal rule, stable at any
+        step, so the combination stays bounded where dt is far above a stiff beam's periods).
+        ``info["richardson_correction_m"]`` is the largest change it made to a recorded point
+        position; wall_time and n_steps count every run (docs/solver.md, "Richardson
+        extrapolation").
     progress : bool, optional
         A tqdm progress bar on stderr once the run is expected to take more than about two
         seconds: None (default) when stderr is a terminal, True always, False never.
@@ -955,7 +959,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
                        progress=progress, max_step_error=max_step_error,
                        max_energy_error=max_energy_error, hold_energy=hold_energy,
                        resume=resume, stream=stream)
-    if opts.richardson:
+    if opts.richardson > 1:
         return drivers.richardson(opts, simulate)
     check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
     with prepared_run(opts) as plan:
@@ -1510,16 +1514,28 @@ def _assembled(model):
     return None
 
 
-def richardson_extrapolation(coarse, fine):
-    """(4 fine - coarse) / 3 of two Results recorded at the same times, fine run at half the
-    step (docs/solver.md, "Richardson extrapolation"); rotations projected onto SO(3)."""
-    if coarse.t.shape != fine.t.shape or not np.allclose(coarse.t, fine.t, rtol=0, atol=1e-9):
-        raise ValueError("richardson_extrapolation: the two runs are not recorded at the same "
-                         "times")
+def richardson_extrapolation(*runs):
+    """The Romberg extrapolation of Results at steps h, h/2, h/4, ... (coarsest first), recorded
+    at the same times, on the even powers of the step: two runs give (4 y_h/2 - y_h) / 3 (order
+    4), three order 6, four order 8 (docs/solver.md, "Richardson extrapolation"); rotations
+    projected onto SO(3)."""
+    if len(runs) < 2:
+        raise ValueError("richardson_extrapolation: give at least two runs (steps h, h/2, ...)")
+    coarse, fine = runs[0], runs[-1]
+    for other in runs[1:]:
+        if coarse.t.shape != other.t.shape or not np.allclose(coarse.t, other.t, rtol=0,
+                                                              atol=1e-9):
+            raise ValueError("richardson_extrapolation: the runs are not recorded at the same "
+                             "times")
 
     def combine(name):
-        a, b = getattr(coarse, name), getattr(fine, name)
-        return None if a is None else (4.0 * b - a) / 3.0
+        table = [getattr(run, name) for run in runs]
+        if table[0] is None:
+            return None
+        for k in range(1, len(runs)):       # T[i, k] = T[i, k-1] + (T[i, k-1] - T[i-1, k-1])
+            table = [table[i] + (table[i] - table[i - 1]) / (4.0 ** k - 1.0)     # / (4^k - 1)
+                     for i in range(1, len(table))]
+        return table[0]
 
     names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
              "angular_acceleration", "force", "moment", "kinetic", "potential",
@@ -1532,16 +1548,17 @@ def richardson_extrapolation(coarse, fine):
     fields["rotation"] = u @ vt
     correction = max(float(np.abs(fields[p] - getattr(fine, p)).max())
                      for p in ("position_input", "position_mass_center", "position_output"))
-    info = dict(coarse.info, richardson=True, dt_runs=(coarse.info["dt"], fine.info["dt"]),
+    info = dict(coarse.info, richardson=True, richardson_runs=len(runs),
+                dt_runs=tuple(run.info["dt"] for run in runs),
                 richardson_correction_m=correction,
-                newton_iterations_used=max(coarse.info.get("newton_iterations_used", 0),
-                                           fine.info.get("newton_iterations_used", 0)),
-                newton_unconverged_steps=coarse.info.get("newton_unconverged_steps", 0)
-                + fine.info.get("newton_unconverged_steps", 0))
-    return coarse.replace(wall_time=coarse.wall_time + fine.wall_time,
-                          n_steps=coarse.n_steps + fine.n_steps, info=info,
-                          checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=True) "
-                                                  "keeps no checkpoint: it combines two runs"),
+                newton_iterations_used=max(run.info.get("newton_iterations_used", 0)
+                                           for run in runs),
+                newton_unconverged_steps=sum(run.info.get("newton_unconverged_steps", 0)
+                                             for run in runs))
+    return coarse.replace(wall_time=sum(run.wall_time for run in runs),
+                          n_steps=sum(run.n_steps for run in runs), info=info,
+                          checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) "
+                                                  "keeps no checkpoint: it combines runs"),
                           **fields)
 
 
