@@ -14,8 +14,7 @@ from .energy_balance import EnergyBalance
 from .feedback import Progress, note_once
 from .closures import closure_targets
 from .kernels import runge_kutta as runge_kutta_kernels
-from .kernels.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Inputs, Run,
-                           _skeleton)
+from .kernels.loop import ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Inputs, Run
 from .recording import Checkpoint, NoCheckpoint, Recording, SampleStream
 from .result import _drive_spring_energy
 
@@ -150,9 +149,9 @@ def fixed_steps(run):
     n_steps, sampling, keys, done = opts.n_steps, opts.sampling, plan.keys, run.done
     every = sampling if isinstance(sampling, int) else run.size + 1
     balance = None
-    work_steps, work_values = [np.array([done])], [np.zeros(1)]   # W at every step (balance)
     if opts.max_energy_error is not None:           # every step's state, for the balance
         every = 1
+        work_steps, work_values = [np.array([done])], [np.zeros(1)]     # W at every step
 
         def result_of(values, steps):
             rows = Recording(keys, plan.keep)
@@ -169,7 +168,8 @@ def fixed_steps(run):
     ends_only, rec = run.records(every, balance)
     max_newton = run.max_newton
     bar = Progress(n_steps - done, opts.progress)
-    fastest = s._fastest_rate(state.omega[None])      # (rad/s, body) over the samples
+    fastest = (plan.start_fastest if done == 0      # (rad/s, body) over the samples
+               else s._fastest_rate(state.omega[None]))
     try:
         while done < n_steps:
             m, every = s._next_chunk(done, n_steps, sampling, run.size)
@@ -343,7 +343,6 @@ def runge_kutta(run):
     plan, opts, recording, info = run.plan, run.opts, run.recording, run.info
     n = plan.model.n_bodies
     rk, loop, evaluation = plan.integrator, plan.derivative_loop, plan.derivative_run
-    skeleton = _skeleton(type(plan.loop), True)
     t_end = opts.t_end
     if not opts.adaptive:                       # fixed steps: at the steps asked for
         sampling = opts.sampling
@@ -359,7 +358,7 @@ def runge_kutta(run):
     rtol = opts.rtol if opts.adaptive else 0.0      # (0: fixed steps of dt)
     atol = max(opts.atol, ATOL_FLOOR * rtol)        # (every scale > 0: a coordinate at 0)
     if not runge_kutta_kernels.start(loop, evaluation, info, rk, rtol, atol,
-                                     opts.dt if opts.dt_given else 0.0, t_end, skeleton):
+                                     opts.dt if opts.dt_given else 0.0, t_end):
         why = _PASS_FAILURES.get(int(info[0]), f"status {int(info[0])}")
         raise s.DivergenceError(0, 0.0, f"{opts.scheme.name}: the sweep failed at the initial "
                                 f"state ({why})")
@@ -374,7 +373,7 @@ def runge_kutta(run):
         while done < len(times):
             chunk = np.ascontiguousarray(times[done:done + size])
             runge_kutta_kernels.steps(loop, evaluation, info, rk, chunk, rec, sample_steps,
-                                      rtol, atol, h_min, skeleton)
+                                      rtol, atol, h_min)
             n_rec = int(info[3])
             if n_rec:
                 recording.add({key: getattr(rec, key)[:n_rec] for key in plan.keys},

@@ -73,9 +73,8 @@ class Recording:
     def add_state(self, state, extra, step, t=None):
         """One sample from the state the loop advances (t = 0, the state at the end, or an
         adaptive run's segment end at time t)."""
-        values = dict(state._asdict(), **extra)
-        self.add({key: values[key][None] for key in self.keys}, [step],
-                 () if t is None else [t])
+        self.add({key: (extra[key] if key in extra else getattr(state, key))[None]
+                  for key in self.keys}, [step], () if t is None else [t])
 
     def arrays(self):
         """key -> all its rows (T, ...), in order; "z" holds the inputs' [m; q] (T, n, 6).

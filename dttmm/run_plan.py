@@ -150,6 +150,7 @@ class PreparedRun:
             self.integrator = runge_kutta.runge_kutta_scratch(
                 n, len(self.state.eta), runge_kutta.dop853_tables())
         self.beam_tips = s._beam_tips(model)
+        self.start_fastest = s._fastest_rate(self.state.omega[None])  # (drivers.fixed_steps)
         self.closing_forces = s.closure_forces(model, self.loops)
         # what each run's chunks evaluate in Python (drivers.Stepping.inputs_for): JointForces
         # of the state given as Python functions (one step per chunk), the drives' and the

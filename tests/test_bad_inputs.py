@@ -43,7 +43,7 @@ SIMULATE_ARGUMENTS = [
     (dict(richardson=True, stream="s"), "richardson=True and stream"),        # dropped
     (dict(richardson=True, max_energy_error=0.1), "richardson=True and max_energy_error"),
     (dict(full_state="no"), "full_state must be True or False"),              # coerced
-    (dict(richardson="yes"), "richardson must be True or False"),             # coerced
+    (dict(richardson="yes"), "richardson must be True, False or the number of runs"),
 ]
 
 

@@ -21,9 +21,9 @@ from types import FunctionType
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from . import CONTRACT, no_alloc_kernel
 from .ball_chain import record_state
-from .loop import ERROR_ESTIMATE, OK, UNSUPPORTED
+from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
 from .mat3 import mm3_into
 from .so3 import expm_so3
 
@@ -107,10 +107,14 @@ def _derivative(loop, run, info, rk, y, out):
         loop.per_mode[1, i] = state.eta_d[i]
         loop.per_mode[3, i] = 0.0
     sweep.red_aq[:, :] = 0.0
-    info[0] = OK
-    skeleton(loop, run, info)       # noqa: F821 (bound per loop variant: _integrator)
-    if info[0] != OK:
+    # the skeleton's consistent-start pass (loop.py::_run_steps with settings.start): one
+    # iterate, then finish writes the stations; the variant's pieces are bound by _integrator
+    status, detail, _ = iterate(loop, run, 0, 0)        # noqa: F821
+    if status != OK:
+        info[0], info[2] = status, detail
         return False
+    finish(loop, run, 1, 0)                             # noqa: F821
+    info[0] = OK
     for k in range(n):
         dexp_inverse(y[3 * k:3 * k + 3], state.omega[k], out, 3 * k)
         for i in range(3):
@@ -328,28 +332,34 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
 _INTEGRATORS = {}
 
 
-def _integrator(function, skeleton):
-    """function (_start or _steps) with _derivative bound to a loop variant's skeleton,
-    compiled (and cached) on its own, as loop.py::_skeleton binds the variants' pieces."""
-    key = (function.__name__, skeleton)
+def _integrator(function, loop_class):
+    """function (_start or _steps) with _derivative bound to a loop variant's pieces (iterate,
+    finish: inlined), compiled (and cached) on its own without numba's reference counting (it
+    allocates nothing), as loop.py::_skeleton binds them into the step's skeleton."""
+    key = (function.__name__, loop_class)
     compiled = _INTEGRATORS.get(key)
     if compiled is None:
-        name = f"{function.__name__}_{skeleton.__name__}"
-        env = dict(globals(), skeleton=skeleton)
-        derivative = FunctionType(_derivative.__code__, env, f"_derivative_{skeleton.__name__}")
+        pieces = _VARIANTS.get(loop_class)
+        if pieces is None:
+            raise TypeError(f"runge_kutta: no loop variant declares {loop_class.__name__}")
+        suffix = loop_class.__name__
+        env = dict(globals(), iterate=pieces["iterate"], finish=pieces["finish"])
+        derivative = FunctionType(_derivative.__code__, env, f"_derivative_{suffix}")
         derivative.__qualname__ = derivative.__name__
-        env["_derivative"] = njit(cache=True, fastmath=CONTRACT)(derivative)
-        fn = FunctionType(function.__code__, env, name)
-        fn.__qualname__ = name          # (numba's cache files are named after it)
+        env["_derivative"] = no_alloc_kernel(derivative)
+        fn = FunctionType(function.__code__, env, f"{function.__name__}_{suffix}")
+        fn.__qualname__ = fn.__name__   # (numba's cache files are named after it)
         fn.__doc__ = function.__doc__
-        compiled = _INTEGRATORS[key] = njit(cache=True, fastmath=CONTRACT)(fn)
+        compiled = _INTEGRATORS[key] = no_alloc_kernel(fn)
     return compiled
 
 
-def start(loop, run, info, rk, rtol, atol, first_step, t_end, skeleton):
-    return _integrator(_start, skeleton)(loop, run, info, rk, rtol, atol, first_step, t_end)
+def start(loop, run, info, rk, rtol, atol, first_step, t_end):
+    """_start for the loop's variant."""
+    return _integrator(_start, type(loop))(loop, run, info, rk, rtol, atol, first_step, t_end)
 
 
-def steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min, skeleton):
-    _integrator(_steps, skeleton)(loop, run, info, rk, times, rec, sample_steps, rtol, atol,
-                                  h_min)
+def steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
+    """_steps for the loop's variant."""
+    _integrator(_steps, type(loop))(loop, run, info, rk, times, rec, sample_steps, rtol, atol,
+                                    h_min)
