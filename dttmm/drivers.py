@@ -1,8 +1,9 @@
 """simulate's drivers (issue 31's reshape): how a prepared run (run_plan.py) is stepped to
 t_end.  Stepping is one call's records and chunk inputs; fixed_steps runs chunks of equal steps
 (with the energy balance where asked), adaptive runs segments whose step the local error
-estimate chooses (adaptive.py), richardson extrapolates two fixed-step runs.  Each ends in the
-run's Result."""
+estimate chooses (adaptive.py), runge_kutta runs the high-order scheme's compiled steps
+(kernels/runge_kutta.py), richardson extrapolates two to four fixed-step runs.  Each ends in
+the run's Result."""
 import time
 import warnings
 

@@ -4,9 +4,10 @@ one set of options builds before its first step, built once.
 PreparedRun holds the kernel model and its tables, the mode and the loop variant the method
 table picks (methods.py), the run's preallocated arrays (state, sweep, loop, monitor: "the
 structures", the only things the compiled loop writes besides a chunk's records) and their
-values after the consistent start.  The structures' float arrays are views of one flat buffer,
-so that putting the start back before a run, or keeping a run's end for its checkpoint, is one
-copy of the buffer (a copy per array would cost ~0.5 us each, of ~100).
+values after the consistent start.  The structures' arrays are views of one flat buffer per
+dtype (float64, int64), so that putting the start back before a run, or keeping a run's end
+for its checkpoint, is one copy of each buffer (a copy per array would cost ~0.5 us each, of
+~100).
 
 A prepared run is kept on the model (per RunOptions.plan_key, at most KEEP of them) where its
 start is a pure function of the model and the options (no Python function of the user's is

@@ -41,7 +41,7 @@ from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, m
                     output_section)
 from .energy_balance import does_work
 from .recording import (NoCheckpoint, Recording, model_fingerprint)
-from .result import (Result, beam_output_offset, chain_energies,
+from .result import (FIELDS, Result, beam_output_offset, chain_energies,
                      point_positions)
 
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
@@ -1538,7 +1538,7 @@ def richardson_extrapolation(*runs):
         return table[0]
 
     names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
-             "angular_acceleration", "force", "moment", "kinetic", "potential",
+             "angular_acceleration", "force", "moment",
              "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
              "joint_rates", "drive_force", "closure_force", "closure_moment",
              "closure_drive_force")
@@ -1555,11 +1555,16 @@ def richardson_extrapolation(*runs):
                                            for run in runs),
                 newton_unconverged_steps=sum(run.info.get("newton_unconverged_steps", 0)
                                              for run in runs))
-    return coarse.replace(wall_time=sum(run.wall_time for run in runs),
-                          n_steps=sum(run.n_steps for run in runs), info=info,
-                          checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) "
-                                                  "keeps no checkpoint: it combines runs"),
-                          **fields)
+    # the energies combined when first read (each run derives its own then: ~100 us a run)
+    fields.update(wall_time=sum(run.wall_time for run in runs),
+                  n_steps=sum(run.n_steps for run in runs), info=info,
+                  checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) keeps no "
+                                          "checkpoint: it combines runs"))
+    kept = {name: getattr(coarse, name) for name in FIELDS
+            if name not in fields and name not in ("kinetic", "potential")}
+    return Result(derivation=lambda name: ({name: combine(name)}
+                                           if name in ("kinetic", "potential") else {}),
+                  **kept, **fields)
 
 
 def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_ground):
