@@ -190,4 +190,24 @@ def describe(model):
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
                f"swing)")
+    out.append(_schemes_line(model))
     return "\n".join(out)
+
+
+def _schemes_line(model):
+    """Which of simulate's schemes run the model (dttmm/methods.py), and which to take for
+    tight tolerances."""
+    from .methods import SCHEMES
+    from .solver import check_supported
+    runs = []
+    for name in SCHEMES:
+        try:
+            check_supported(model, name)
+        except ValueError:
+            continue
+        runs.append(name)
+    tight = ("scheme='dop853' with rtol (order 8, explicit: docs/integrators.md)"
+             if "dop853" in runs else "richardson=3 with newton_iterations (order 6: "
+             "docs/solver.md)")
+    return (f"schemes: {', '.join(runs) or 'none'}; for tight tolerances (below ~1e-7 m) "
+            f"{tight}")

@@ -55,12 +55,20 @@ class RunOptions:
                 bool(self.hold_energy))
 
 
+def _solver():
+    from . import solver        # (solver imports this module: read at call time)
+    return solver
+
+
 def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_iterations,
                 newton_tol, record_every, record_dt, t_eval, full_state, richardson, progress,
                 max_step_error, max_energy_error, hold_energy, resume, stream):
     """simulate's arguments checked, in the order simulate documents them (RunOptions)."""
-    from .solver import (Integrator, MAX_SAMPLES, _check_count, _check_positive, _closed,
-                         _iterates, _sampling, _steps, energy_not_held, has_loops)
+    s = _solver()
+    Integrator, MAX_SAMPLES, _check_count, _check_positive, _closed = (
+        s.Integrator, s.MAX_SAMPLES, s._check_count, s._check_positive, s._closed)
+    _iterates, _sampling, _steps, energy_not_held, has_loops = (
+        s._iterates, s._sampling, s._steps, s.energy_not_held, s.has_loops)
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
     if has_loops(model):

@@ -22,6 +22,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from . import closures
 from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels import ball_chain, em_step, runge_kutta, tree, weld_chain
@@ -298,13 +299,17 @@ def start_is_pure(model):
 _KEPT_LOCK = threading.Lock()
 
 
+def _solver():
+    from . import solver        # (solver imports this module: read at call time)
+    return solver
+
+
 @contextmanager
 def prepared_run(opts):
     """The prepared run of opts, restarted: the one kept on the model for opts' plan_key where
     there is one free (start_is_pure, KEEP_BYTES), else a new one (kept where it may be)."""
-    from . import closures, solver
     model = opts.model
-    key = opts.plan_key() + (solver.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
+    key = opts.plan_key() + (_solver().FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
     #                                                                   that tests turn)
     pure = start_is_pure(model)
     plan = None

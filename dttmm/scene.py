@@ -79,7 +79,7 @@ _DRIVES = ("spring_damper", "force", "motion", "pd", "none")
 _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
         "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
         "record_every": "int", "record_dt": "number", "max_step_error": "number",
-        "full_state": "bool", "richardson": "bool", "rtol": "number", "atol": "number",
+        "full_state": "bool", "richardson": "runs", "rtol": "number", "atol": "number",
         "max_energy_error": "number", "hold_energy": "bool"}
 
 
@@ -334,6 +334,7 @@ def _value(value, kind, where, label):
     ok["point"] = ok["str"] or ok["vector"]
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
     ok["modes"] = ok["int"] or value == "auto"
+    ok["runs"] = ok["bool"] or ok["int"]
     if not ok[kind]:
         what = {"number": "a number", "int": "an integer", "bool": "true or false",
                 "str": "a string", "vector": "3 numbers", "pair": "a number or 2 numbers",
@@ -341,7 +342,8 @@ def _value(value, kind, where, label):
                 "table": "a table", "bodies": "an array of tables ([[body]])",
                 "drives": "a list of two drive tables", "profile": "a number or a profile table",
                 "stiffness": "a number, 3 numbers or a 3 x 3 matrix",
-                "modes": 'an integer or "auto"'}[kind]
+                "modes": 'an integer or "auto"',
+                "runs": "true, false or the number of runs (2 to 4)"}[kind]
         raise SceneError(f"{where}: {label}: {what}, got {value!r}")
 
 

@@ -948,9 +948,6 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         singular transfer, or NaN. Its message names the step, the time and the cause;
         ``err.partial`` holds the Result recorded before it.
     """
-    from . import drivers
-    from .run_options import run_options
-    from .run_plan import prepared_run
     wall0 = time.perf_counter()
     opts = run_options(model, t_end, dt, rtol=rtol, atol=atol, method=method, scheme=scheme,
                        rho_inf=rho_inf, newton_iterations=newton_iterations,
@@ -1728,3 +1725,10 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     r_c, r_o = point_positions(model, rot, r_in, eta)
     return dict(position_input=r_in, position_mass_center=r_c, position_output=r_o,
                 velocity_input=v_in)
+
+
+# the reshaped solver's layers (issue 31: options, prepared runs, drivers), imported last:
+# they read this module's helpers
+from . import drivers  # noqa: E402
+from .run_options import run_options  # noqa: E402
+from .run_plan import prepared_run  # noqa: E402

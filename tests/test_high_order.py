@@ -140,3 +140,12 @@ def test_what_the_scheme_does_not_run_is_refused_naming_it(make, kwargs, words):
         simulate(make(), 0.1, 1e-3, scheme="dop853", **kwargs)
     for word in words:
         assert word in str(err.value), str(err.value)
+
+
+def test_describe_says_which_schemes_run_a_model():
+    """describe() lists the schemes that run the model (the table of methods, each checked
+    against it) and the one for tight tolerances."""
+    line = rigid_chain(3).describe().splitlines()[-1]
+    assert "dop853" in line and "scheme='dop853' with rtol" in line
+    line = stiff_cantilever(3).describe().splitlines()[-1]
+    assert "dop853" not in line and "richardson=3" in line

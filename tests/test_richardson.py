@@ -151,3 +151,18 @@ def test_extrapolation_is_stable_at_steps_far_above_a_stiff_beams_periods():
 def dttmm_frequencies(model):
     from dttmm import static_equilibrium
     return static_equilibrium(model).frequencies
+
+
+def test_a_scene_takes_the_number_of_runs(tmp_path):
+    """[run] richardson = 3 in a scene file: three runs, as simulate(richardson=3)."""
+    from importlib import resources
+    from dttmm.scene import SceneError, load_scene
+    text = (resources.files("dttmm") / "scenes" / "rigid_chain.toml").read_text()
+    path = tmp_path / "chain.toml"
+    path.write_text(text.replace("dt = 0.001", "dt = 0.01\nrichardson = 3"))
+    scene = load_scene(path)
+    run = dict(scene.run, t_end=0.1)
+    assert simulate(scene.model, **run).info["richardson_runs"] == 3
+    path.write_text(text.replace("dt = 0.001", "dt = 0.01\nrichardson = \"three\""))
+    with pytest.raises(SceneError, match="richardson"):
+        load_scene(path)
