@@ -23,12 +23,14 @@ from contextlib import contextmanager
 import numpy as np
 
 from . import closures
+from . import solver as s       # (solver imports this module at its end: read at call time)
 from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels import step as kstep
 from .kernels.closure import start_energy
-from .kernels.loop import Monitor, Run, Settings
+from .kernels.loop import Monitor, Settings
+from .model import model_fact
 from .recording import leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
@@ -41,7 +43,6 @@ class PreparedRun:
     prepared_run; a run restores `started` (restart) before stepping."""
 
     def __init__(self, opts):
-        from . import solver as s
         scheme = opts.scheme
         user_model = opts.model
         model, keep = s.kernel_model(user_model)
@@ -131,7 +132,8 @@ class PreparedRun:
                                    newton_iterations=int(opts.newton_iterations))
 
         structures = (state, ws.sweep, loop, monitor)
-        self.buffers, structures = _gathered(structures)    # most arrays: views of buffers
+        # most arrays: views of buffers; layout: each leaf's place in them (None: not there)
+        self.buffers, structures, self.layout = _gathered(structures)
         self.state, self.sweep, self.loop, self.monitor = self.structures = structures
         self.loops = self.loop.loops if loop_name == "general" else loops
         histories = self.loop.histories if loop_name == "general" else histories
@@ -139,15 +141,14 @@ class PreparedRun:
                                    v_c=(self.state.v_c if scheme.name != "paper"
                                         else histories[4]),
                                    closure_wrench=self.loops.wrench)
-        in_buffers = {id(a) for a in leaves(structures) if a.size and any(
-            a.dtype == b.dtype and np.shares_memory(a, b) for b in self.buffers)}
-        self.others = [a for a in leaves(structures) if a.size and id(a) not in in_buffers]
+        self.others = [a for a, place in zip(leaves(structures), self.layout)
+                       if place is None and a.size]
         self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
         if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
-            self.derivative_run = Run(   # (s._fused_start's Run: one compiled skeleton serves)
-                params, settings._replace(newton_max=0, start=True), self.state, self.sweep,
-                s._start_inputs(model, loops), s._record(0, n, len(self.state.eta)),
-                self.monitor)
+            self.derivative_run = s.start_pass(     # (fixed ground, no loads or drives:
+                params, settings, self.state, self.sweep, self.monitor,    # check_supported)
+                s._ground(model, [0.0]), s._loads(model, [0.0]),
+                s._joint_inputs(model, [0.0]), len(loops.kind))
             self.derivative_loop = ball_chain.start_loop(self.loop, self.state, self.sweep)
             self.integrator = runge_kutta.runge_kutta_scratch(
                 n, len(self.state.eta), runge_kutta.dop853_tables())
@@ -167,7 +168,7 @@ class PreparedRun:
         self.keeps_every_body = bool(np.array_equal(keep, np.arange(len(keep))))
         self.lock = threading.Lock()
         self.kept = False               # kept on the model (prepared_run)
-        self._buffers = {}              # the chunks' input and record arrays, by their shape
+        self._chunk_arrays = {}         # the chunks' input and record arrays, by their shape
 
     def restart(self):
         """Put the structures back to their values after the start (a kept prepared run,
@@ -192,9 +193,9 @@ class PreparedRun:
         records, which the Recording copies out, and reads the inputs."""
         if not self.kept:
             return make()
-        if key not in self._buffers:
-            self._buffers[key] = make()
-        return self._buffers[key]
+        if key not in self._chunk_arrays:
+            self._chunk_arrays[key] = make()
+        return self._chunk_arrays[key]
 
 
 GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
@@ -207,29 +208,34 @@ def _root(a):
 
 
 def _gathered(structures):
-    """(buffers, structures): every C-contiguous array of a GATHERED dtype in the nested
-    tuples replaced by a view of one flat buffer per dtype holding its values (an array whose
-    memory another leaf shares is left as it is; an array that appears twice becomes one
-    view)."""
+    """(buffers, structures, layout): every C-contiguous array of a GATHERED dtype in the
+    nested tuples replaced by a view of one flat buffer per dtype holding its values (an array
+    whose memory another leaf shares is left as it is; an array that appears twice becomes one
+    view); layout: each leaf's (buffer, offset, shape) in the new structures' leaf order, None
+    for a leaf left as it is."""
     arrays = leaves(structures)
+    roots = [id(_root(a)) for a in arrays]
     sharing = {}
-    for a in arrays:
-        sharing.setdefault(id(_root(a)), set()).add(id(a))
-    movable = {}
-    for a in arrays:
-        if (a.dtype in GATHERED and a.flags.c_contiguous and a.size
-                and len(sharing[id(_root(a))]) == 1):
-            movable[id(a)] = a
-    buffers, views = [], {}
-    for dtype in GATHERED:
+    for a, root in zip(arrays, roots):
+        sharing.setdefault(root, set()).add(id(a))
+    movable = {id(a): a for a, root in zip(arrays, roots)
+               if a.dtype in GATHERED and a.flags.c_contiguous and a.size
+               and len(sharing[root]) == 1}
+    buffers, places = [], {}
+    for i, dtype in enumerate(GATHERED):
         parts = [(key, a) for key, a in movable.items() if a.dtype == dtype]
         buffer = np.empty(sum(a.size for _, a in parts), dtype=dtype)
         at = 0
         for key, a in parts:
-            views[key] = buffer[at:at + a.size].reshape(a.shape)
-            views[key][...] = a
+            buffer[at:at + a.size] = a.reshape(-1)
+            places[key] = (i, at, a.shape)
             at += a.size
         buffers.append(buffer)
+
+    def view(a):
+        i, at, shape = places[id(a)]
+        return buffers[i][at:at + a.size].reshape(shape)
+    views = {key: view(a) for key, a in movable.items()}
 
     def rebuilt(part):
         if isinstance(part, np.ndarray):
@@ -238,7 +244,7 @@ def _gathered(structures):
             items = [rebuilt(p) for p in part]
             return type(part)(*items) if hasattr(part, "_fields") else tuple(items)
         return part
-    return buffers, rebuilt(structures)
+    return buffers, rebuilt(structures), [places.get(id(a)) for a in arrays]
 
 
 class _Ending:
@@ -249,9 +255,12 @@ class _Ending:
         self.plan, self.copies, self.other_copies = plan, copies, other_copies
 
     def __call__(self):
-        plan = self.plan
-        return _leaves_of(plan.structures, plan.buffers, self.copies, plan.others,
-                          self.other_copies)
+        """The leaves of the plan's structures as they were: a gathered array the same view
+        of its buffer's copy, another its copy, an empty one a new empty array."""
+        others = iter(self.other_copies)
+        return [self.copies[place[0]][place[1]:place[1] + a.size].reshape(place[2])
+                if place is not None else next(others) if a.size else np.empty_like(a)
+                for a, place in zip(leaves(self.plan.structures), self.plan.layout)]
 
     def __reduce__(self):
         return tuple, (tuple(self()),)
@@ -262,30 +271,7 @@ def forget(model):
     model.__dict__.pop("_prepared_runs", None)
 
 
-def _offset(a, buffer):
-    """a's place in buffer (a view of it), in items."""
-    return ((a.__array_interface__["data"][0] - buffer.__array_interface__["data"][0])
-            // buffer.itemsize)
-
-
-def _leaves_of(structures, buffers, copies, others, other_copies):
-    """The leaves of structures as they were when copies (of buffers) and other_copies (of
-    others) were taken: a gathered array the same view of its buffer's copy, another its copy,
-    an empty one a new empty array."""
-    kept = {id(a): c for a, c in zip(others, other_copies)}
-    out = []
-    for a in leaves(structures):
-        if id(a) in kept:
-            out.append(kept[id(a)])
-        elif a.size == 0:
-            out.append(np.empty_like(a))
-        else:
-            i = GATHERED.index(a.dtype.type)
-            at = _offset(a, buffers[i])
-            out.append(copies[i][at:at + a.size].reshape(a.shape))
-    return out
-
-
+@model_fact
 def start_is_pure(model):
     """Whether a run's consistent start is a function of the model alone: no Python function
     of the user's is evaluated at t = 0 (applied loads, a moving ground, drives but springs
@@ -299,17 +285,12 @@ def start_is_pure(model):
 _KEPT_LOCK = threading.Lock()
 
 
-def _solver():
-    from . import solver        # (solver imports this module: read at call time)
-    return solver
-
-
 @contextmanager
 def prepared_run(opts):
     """The prepared run of opts, restarted: the one kept on the model for opts' plan_key where
     there is one free (start_is_pure, KEEP_BYTES), else a new one (kept where it may be)."""
     model = opts.model
-    key = opts.plan_key() + (_solver().FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
+    key = opts.plan_key() + (s.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
     #                                                                   that tests turn)
     pure = start_is_pure(model)
     plan = None

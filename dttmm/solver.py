@@ -611,13 +611,10 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     joint_input = _joint_inputs(model, [t], state, dt)
     try:
         if fused:       # the fused loop's own sweep (compiles nothing else)
-            status = _fused_start(*fused, Run(
-                params, settings._replace(newton_max=0, start=True), state, sweep,
-                Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                       g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
-                       line_load=line_load, joint_input=joint_input,
-                       closure_target=np.zeros((1, len(loops.kind), 3))),
-                _record(0, n, len(state.eta)), monitor))
+            status = _fused_start(*fused, start_pass(
+                params, settings, state, sweep, monitor,
+                (g_acc, g_rot, g_w, g_wd, g_pos, g_vel), (force, torque, line_load),
+                joint_input, len(loops.kind)))
         else:
             set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
             if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
@@ -662,16 +659,20 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     state.defl_pseudo[:] = state.defl_acc
 
 
-def _start_inputs(model, loops):
-    """The Inputs of one pass of a fused loop's consistent start (_fused_start) on a fixed
-    ground with no applied loads or drives (the high-order scheme's stages)."""
-    n = model.n_bodies
-    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [0.0])
-    zeros = np.zeros((1, n, 3))
-    return Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                  g_pos=g_pos, g_vel=g_vel, force=zeros, torque=zeros.copy(),
-                  line_load=zeros.copy(), joint_input=np.zeros((1, n, 2, 3)),
-                  closure_target=np.zeros((1, len(loops.kind), 3)))
+def start_pass(params, settings, state, sweep, monitor, ground, loads, joint_input,
+               n_closures):
+    """The Run of one pass of a fused loop's consistent start at one time (_fused_start; the
+    high-order scheme's stages, kernels/runge_kutta.py): ground = _ground's six (1, ...)
+    arrays, loads = _loads' three, joint_input = _joint_inputs'; no Newton iteration, no
+    record."""
+    g_acc, g_rot, g_w, g_wd, g_pos, g_vel = ground
+    force, torque, line_load = loads
+    return Run(params, settings._replace(newton_max=0, start=True), state, sweep,
+               Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
+                      g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
+                      line_load=line_load, joint_input=joint_input,
+                      closure_target=np.zeros((1, n_closures, 3))),
+               _record(0, len(state.rot), len(state.eta)), monitor)
 
 
 def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
