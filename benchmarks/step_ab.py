@@ -7,7 +7,8 @@ package imports itself relatively) into a temporary directory and imported into 
 which then alternates A and B run by run (the machine's drift between processes, which on these
 shared machines reaches 2x, then enters a pair only through the seconds between its two runs).
 
-For each system (the three-pendulum, rigid chains of 3, 100 and 1000 links) the two checkouts
+For each system (by default the three-pendulum, rigid chains of 3, 100 and 1000 links; --systems
+arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible) the two checkouts
 are timed in turn, A B A B ..., each time in a fresh process that imports that checkout's
 dttmm (warm numba cache, JIT warm-up run first).  A process measures the cost of one step as
 the difference of a long and a short run over the steps between (no setup, no recording), the
@@ -26,12 +27,15 @@ SYSTEMS = {          # name: (constructor expression, steps of the long run: ~0.
     "rigid_chain_3": ("rigid_chain(3)", 200000),
     "rigid_chain_100": ("rigid_chain(100)", 5000),
     "rigid_chain_1000": ("rigid_chain(1000)", 500),
+    "arm": ("arm(drive='motion')", 3000),                   # the general loop (joints)
+    "flexible_arm": ("arm(drive='motion', flexible=True)", 2000),   # (joints and a beam)
 }
+DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_1000"]
 
 _CHILD = r"""
 import statistics, sys
 from dttmm import simulate
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.chains import arm, rigid_chain, three_pendulum
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -99,7 +103,7 @@ def main(argv=None):
     ap.add_argument("a")
     ap.add_argument("b")
     ap.add_argument("--pairs", type=int, default=9)
-    ap.add_argument("--systems", nargs="+", default=list(SYSTEMS))
+    ap.add_argument("--systems", nargs="+", default=DEFAULT, choices=list(SYSTEMS))
     ap.add_argument("--json")
     ap.add_argument("--in-process", action="store_true",
                     help="both packages in one process, alternating run by run")

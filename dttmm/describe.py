@@ -191,7 +191,38 @@ def describe(model):
                f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
                f"swing)")
     out.append(_schemes_line(model))
+    out.append(_kernels_line(model))
     return "\n".join(out)
+
+
+# what each flag of a kernel copy stands for (kernels/features.py)
+_FEATURE_WORDS = dict(HAS_BEAMS="beams", HAS_ELASTIC_HINGES="elastic hinges",
+                      HAS_LOOPS="closing joints", HAS_STATION_HISTORIES="station histories",
+                      SWEEP_JOINTS="the full-state tree sweep", SWEEP_FULL="the full-state "
+                      "chain sweep", SWEEP_DIRECT_FULL="the direct full-state sweep",
+                      SWEEP_TREE="the reduced tree sweep", SWEEP_REDUCED="the reduced chain "
+                      "sweep", SWEEP_DIRECT_REDUCED="the direct reduced sweep")
+
+
+def _kernels_line(model):
+    """Which loop runs the model (Newmark, Riccati) and what its kernels are compiled for."""
+    from .kernels import features
+    from .methods import SCHEMES
+    from .run_plan import kernels_used
+    try:
+        loop, compiled_for = kernels_used(model, SCHEMES["newmark"])
+    except ValueError:
+        return "kernels: none run this model with the default scheme"
+    if compiled_for is None:
+        return (f"kernels: the fused {loop} loop (compiled once for every model it runs; about "
+                f"30 s the first time on 2 cores, cached after)")
+    if not features.SPECIALIZE:
+        what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
+    else:
+        what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
+    return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
+            f"about a minute the first time on 2 cores, cached after; docs/solver.md, "
+            f"\"Compile time\")")
 
 
 def _schemes_line(model):

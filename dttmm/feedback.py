@@ -41,7 +41,10 @@ class _CompileWatch(numba_event.Listener):
             return                      # (a user's own numba function: not ours to report)
         with self.wake:
             t0 = time.perf_counter()
-            self.active, self.announced = (function.__name__, t0), False
+            # (a kernel's copy for a model's features is named kernel__features,
+            # kernels/features.py: the notice names the kernel)
+            self.active = (function.__name__.split("__")[0], t0)
+            self.announced = False
             self.next_at = t0 + COMPILE_NOTICE_AFTER
             if self.thread is None:
                 self.thread = threading.Thread(target=self._watch, daemon=True,
@@ -77,8 +80,9 @@ class _CompileWatch(numba_event.Listener):
                 if not self.announced:
                     _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
                          f"once per machine and kind of model (later runs load them from "
-                         f"numba's cache); about a minute for chains and trees of ball joints, "
-                         f"a few for other joints on 2 cores. {now - t0:.0f} s so far")
+                         f"numba's cache); about a minute on 2 cores, two to three with closing "
+                         f"joints and beams (docs/solver.md, \"Compile time\"). "
+                         f"{now - t0:.0f} s so far")
                     self.announced, self.ending = True, ""
                 elif terminal:
                     print(f"\rdttmm: still compiling {what}: {now - t0:.0f} s so far",

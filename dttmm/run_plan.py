@@ -19,6 +19,7 @@ simulation) each run prepares its own, as before.
 import threading
 from collections import OrderedDict
 from contextlib import contextmanager
+from functools import partial
 
 import numpy as np
 
@@ -37,6 +38,38 @@ KEEP = 8                    # prepared runs kept per model (the latest used)
 KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)
 
 
+def runs_fused(model, mode, scheme):
+    """Whether a kernel model runs in a fused loop (kernels/ball_chain.py, kernels/tree.py):
+    rigid bodies and beams between ball joints, Newmark or the high-order scheme."""
+    return (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+            and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
+            and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
+
+
+def runs_welded(model, mode, scheme):
+    """Whether a kernel model runs in the fused welded-chain loop (kernels/weld_chain.py): a
+    chain of beams welded end to end from the ground (fixed hinges, a free tip), Newmark."""
+    return (s.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
+            and model.is_chain and not model.tip_pinned and model.n_bodies > 0
+            and all(int(c) == s.BEAM for c in model.body_kind)
+            and all(int(h) == s.FIXED for h in model.hinge_kind)
+            and not any(model.ground_locked[1:]))
+
+
+def kernels_used(model, scheme, method="riccati"):
+    """(the loop variant, the features its kernels are compiled for or None for a fused loop)
+    of a user's model run with `scheme` (dttmm/methods.py) and `method` (describe())."""
+    km, _ = s.kernel_model(model)
+    mode = s._mode(km, method, False)
+    if runs_fused(km, mode, scheme):
+        return ("ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"), None
+    if scheme.loop == "energy_momentum":
+        return "energy-momentum", s.kernel_features(km, mode)
+    if runs_welded(km, mode, scheme):
+        return "welded-chain", None
+    return "general", s.kernel_features(km, mode, scheme.name == "paper")
+
+
 class PreparedRun:
     """The arrays and choices of a run of opts.model with opts' scheme, sweep, step and
     iterations, started (the consistent start taken) and ready to step.  Built by
@@ -51,13 +84,10 @@ class PreparedRun:
         self.loaded = s.loaded_bodies(user_model, model, keep)  # where each body's loads act
         self.mode = mode = s._mode(model, opts.method, opts.full_state)
         dt, coef, n = opts.dt, opts.coef, model.n_bodies
-        # the loop variant (kernels/loop.py): rigid bodies and beams between ball joints take
-        # the fused loop (kernels/ball_chain.py, kernels/tree.py), the energy-momentum scheme
-        # its own, the rest the general loop (kernels/step.py); each records what its scheme
-        # defines
-        fused = (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
-                 and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
-                 and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
+        # the loop variant (kernels/loop.py): a fused one (kernels/ball_chain.py, tree.py,
+        # weld_chain.py), the energy-momentum scheme's, or the general loop (kernels/step.py);
+        # each records what its scheme defines
+        fused = runs_fused(model, mode, scheme)
         if scheme.loop == "runge_kutta" and not fused:     # (check_supported refuses it)
             raise ValueError(f"simulate(scheme={scheme.name!r}): the model does not run in the "
                              f"fused ball-joint loops its stages take")
@@ -73,13 +103,7 @@ class PreparedRun:
                           defl_pseudo=np.zeros((n if (model.hinge_kind == s.ELASTIC).any()
                                                 else 0, 3)),
                           error=np.zeros(2))
-        # a chain of beams welded end to end from the ground (fixed hinges, a free tip): the
-        # fused welded-chain loop (kernels/weld_chain.py)
-        welded = (s.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
-                  and model.is_chain and not model.tip_pinned and n > 0
-                  and all(int(c) == s.BEAM for c in model.body_kind)
-                  and all(int(h) == s.FIXED for h in model.hinge_kind)
-                  and not any(model.ground_locked[1:]))
+        welded = runs_welded(model, mode, scheme)
         loop = runner = None
         if fused and mode == kstep.RICCATI_TREE:
             loop_name, runner = "ball-tree", s.run_steps_no_alloc
@@ -88,8 +112,10 @@ class PreparedRun:
             loop_name, runner = "ball-chain", s.run_steps_no_alloc
             loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
         loops = s.loop_tables(model)
+        # what the general and energy-momentum loops' kernels are compiled for
+        features = s.kernel_features(model, mode, scheme.name == "paper")
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused else None, params,
-                            settings, state, ws.sweep, monitor, dt, loops)
+                            settings, state, ws.sweep, monitor, dt, loops, features=features)
         if opts.hold_energy:        # the total energy the steps hold (kernels/closure.py)
             loops.energy[:2] = 1.0, start_energy(params, loops, state)
         histories = s._station_histories(model, state, scheme.name == "paper")
@@ -104,7 +130,7 @@ class PreparedRun:
         if len(loops.kind):
             keys.append("closure_wrench")
         if scheme.loop == "energy_momentum":
-            loop_name, runner = "energy-momentum", s.run_steps
+            loop_name, runner = "energy-momentum", partial(s.run_steps, features=features)
             loop = em_step.energy_momentum_loop(n)
             state.v_c[:] = s._initial_mass_center_velocities(model, state.rot, state.omega)
         elif fused and scheme.loop == "runge_kutta":
@@ -115,7 +141,7 @@ class PreparedRun:
             loop_name, runner = "welded-chain", s.run_steps_no_alloc
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         else:
-            loop_name, runner = "general", s.run_steps
+            loop_name, runner = "general", partial(s.run_steps, features=features)
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)

@@ -27,6 +27,7 @@ from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels import ball_chain
 from .kernels import step as kstep
 from .kernels.closure import Loops, set_ground
+from .kernels.features import kept, specialized, unread_dropped
 from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                            Params, Record, Run, State,
                            Sweep)
@@ -295,6 +296,24 @@ def has_offsets(model):
 def has_loops(model):
     """Closing joints other than a chain's pinned tip (kernels/closure.py)."""
     return model.n_closures > 0 and not model.tip_pinned
+
+
+_SWEEP_FLAGS = {kstep.RICCATI_JOINTS: "SWEEP_JOINTS", kstep.RICCATI_FULL: "SWEEP_FULL",
+                kstep.DIRECT_FULL: "SWEEP_DIRECT_FULL", kstep.RICCATI_TREE: "SWEEP_TREE",
+                kstep.RICCATI_REDUCED: "SWEEP_REDUCED",
+                kstep.DIRECT_REDUCED: "SWEEP_DIRECT_REDUCED"}
+
+
+@model_fact
+def kernel_features(model, mode, stations=False):
+    """What the model's general-loop kernels are compiled for (kernels/features.py): its sweep
+    (mode), and whether it has beams, elastic hinges, closing joints, and (stations: the
+    paper's scheme) station points with their own histories."""
+    return frozenset([_SWEEP_FLAGS[mode]]
+                     + ["HAS_BEAMS"] * bool((model.body_kind == BEAM).any())
+                     + ["HAS_ELASTIC_HINGES"] * bool((model.hinge_kind == ELASTIC).any())
+                     + ["HAS_LOOPS"] * bool(len(loop_tables(model).kind))
+                     + ["HAS_STATION_HISTORIES"] * bool(stations))
 
 
 @model_fact
@@ -595,13 +614,16 @@ def _steps(t_end, dt):
 
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
-                      loops=None, t=0.0, extra_loads=None):
+                      loops=None, t=0.0, extra_loads=None, features=None):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
     or kernels/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
     held at acceleration level.  extra_loads: (force, torque), (n, 3) each, world, added to
-    the applied loads (at the mass centres; dynamics.linearize's inputs)."""
+    the applied loads (at the mass centres; dynamics.linearize's inputs).  features: what the
+    kernels are compiled for (kernel_features: by default the model's, without the paper's
+    station histories, which the start does not use)."""
     loops = loop_tables(model) if loops is None else loops
+    features = kernel_features(model, mode) if features is None else features
     n = model.n_bodies
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [t])
     force, torque, line_load = _loads(model, [t])
@@ -621,11 +643,12 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
                 loops.step_coef[:] = 0.0        # the springs' forces explicit
 
-            def start():
-                return kstep.initial_accelerations(params, settings, state, sweep,
-                                                   (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
-                                                   force[0], torque[0], line_load[0],
-                                                   joint_input[0], loops, compiled_forces(model))
+            def start():        # (what the features do not read: None, kernels/features.py)
+                return specialized(kstep.initial_accelerations, features)(
+                    params, settings, state, unread_dropped(sweep, "sweep", features),
+                    (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0], torque[0], line_load[0],
+                    joint_input[0], loops if kept("loop", "loops", features) else None,
+                    compiled_forces(model))
             status = start()
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's

@@ -39,6 +39,7 @@ import numpy as np
 from numba import njit
 
 from . import CONTRACT, no_alloc_kernel
+from .features import HAS_BEAMS, HAS_ELASTIC_HINGES
 from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ..elements import BEAM
 from ..elements.drives import FORCE, SPRING_DAMPER
@@ -250,7 +251,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
         elif hinge_kind[k] == ELASTIC:
             r = _add(r, _v3(defl, k))
             v = _add(v, _v3(defl_rate, k))
-        if body_kind[k] == BEAM:
+        if HAS_BEAMS and body_kind[k] == BEAM:
             arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
         else:
             row = params.body_row[k]
@@ -701,7 +702,7 @@ def _modal_responses(params, loops, eta_map):
         z = loops.z_save[j + 1]
         for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
             k = loops.act_idx[q]
-            if body_kind[k] == BEAM:
+            if HAS_BEAMS and body_kind[k] == BEAM:
                 for i in range(mode_off[k], mode_off[k + 1]):
                     v = 0.0
                     for c in range(12):
@@ -733,7 +734,7 @@ def _dependent_frames(params, loops, state, bodies, work):
                         state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
         elif hk == FIXED and p >= 0 and not params.locked[k]:
-            if body_kind[p] == BEAM:
+            if HAS_BEAMS and body_kind[p] == BEAM:
                 for i in range(3):
                     for j in range(3):
                         rest[i, j] = params.hinge_params[hr, 3 * i + j]
@@ -780,7 +781,7 @@ def _add_rates(params, loops, state, j, f):
         k = loops.act_idx[q]
         for i in range(3):
             state.omega[k, i] += f * z[2 * k + 1, 3 + i]
-        if params.hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(n_coordinates(params.hinge_kind[k])):
@@ -799,7 +800,7 @@ def _move(params, loops, state, j, f, e3, phi):
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
-        if params.hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):

@@ -26,6 +26,7 @@ from types import FunctionType
 from numba import njit
 
 from . import CONTRACT, no_alloc_kernel
+from .features import ALL, specialized, unread_dropped
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
 
@@ -281,10 +282,16 @@ def _skeleton(loop_class, no_alloc):
     return compiled
 
 
-def run_steps(loop, run, out_info):
+def run_steps(loop, run, out_info, features=ALL):
     """The skeleton of the loop's variant with numba's reference counting (the general and
-    energy-momentum loops, whose pieces allocate)."""
-    _skeleton(type(loop), False)(loop, run, out_info)
+    energy-momentum loops, whose pieces allocate), compiled for a model that uses `features`
+    (kernels/features.py; solver.kernel_features)."""
+    features = frozenset(features)
+    run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
+                       inputs=unread_dropped(run.inputs, "inputs", features),
+                       rec=unread_dropped(run.rec, "rec", features))
+    specialized(_skeleton(type(loop), False), features)(unread_dropped(loop, "loop", features),
+                                                        run, out_info)
 
 
 def run_steps_no_alloc(loop, run, out_info):

@@ -33,6 +33,9 @@ from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .beam import beam_transfer, end_section_motion, transfer_work_size
 from .body import rigid_body_transfer, station_history_correction
 from .closure import project_onto_loops, set_ground, solve_with_loops, tree_points
+from .features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_STATION_HISTORIES,
+                       SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
+                       SWEEP_REDUCED, SWEEP_TREE)
 from .hinge import elastic_hinge_loads, elastic_hinge_transfer
 from .joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -147,6 +150,13 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
                                      + dwd_out[i, 2] * phi_out[2])
 
 
+# a kernel copy run on a model it was not compiled for (kernels/features.py: a mistake in
+# solver.kernel_features, never the user's)
+_NOT_COMPILED_STATIONS = ("kernel compiled without the paper's station histories "
+                          "(kernels/features.py)")
+_NOT_COMPILED_SWEEP = "kernel compiled without the run's sweep (kernels/features.py)"
+
+
 @njit(cache=True, fastmath=CONTRACT)
 def _all_finite(a):
     for x in a.flat:
@@ -239,6 +249,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
     independent = independent and not at_start
+    if independent and not HAS_STATION_HISTORIES:
+        raise ValueError(_NOT_COMPILED_STATIONS)
     body_params, hinge_kind = params.body_params, params.hinge_kind
     hinge_params = params.hinge_params
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
@@ -256,7 +268,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         hk = hinge_kind[k]
         p = params.parent[k]
         hr, row = params.hinge_row[k], params.body_row[k]   # (their rows of the shared tables)
-        if full_tree and (hk == BALL or has_coordinates(hk)):
+        if SWEEP_JOINTS and full_tree and (hk == BALL or has_coordinates(hk)):
             kind[jh] = EL_JOINT
             if p < 0:
                 rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
@@ -271,9 +283,9 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             kind[jh] = EL_BALL
         elif hk == FIXED:
             kind[jh] = IDENTITY
-        elif hk == ELASTIC and at_start:
+        elif HAS_ELASTIC_HINGES and hk == ELASTIC and at_start:
             kind[jh] = LOCKED
-        elif hk == ELASTIC:
+        elif HAS_ELASTIC_HINGES and hk == ELASTIC:
             kind[jh] = TRANSFER
             if p < 0:
                 rot_in, lam_in, w_in, wd_in, dwd_in, phi_in = ground
@@ -291,10 +303,10 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                                    z_in, u[jh])
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
                                             phi_star[k])
-        else:
+        else:           # (a kind this copy was not compiled for: kernels/features.py)
             return jh + 1
         kind[jh + 1] = TRANSFER
-        if body_kind[k] == BEAM:
+        if HAS_BEAMS and body_kind[k] == BEAM:
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = int(beam_params[k, MODES])
             mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
@@ -319,7 +331,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 load[i] = body_params[row, 0] * params.gravity[i] + force[k, i]
             rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
                                 w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
-            if independent:
+            if HAS_STATION_HISTORIES and independent:
                 station_history_correction(body_params[row], rot[k], rot_star[k], lam[k], dwd[k],
                                            dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],
                                            w1_c[k], z_star[jh + 1], u[jh + 1])
@@ -337,26 +349,31 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
     bodies' parents (RICCATI_TREE; a chain's are k - 1)."""
     sw = sweep
-    if mode == RICCATI_JOINTS:
+    if SWEEP_JOINTS and mode == RICCATI_JOINTS:
         return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
                                  parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
                                  sw.joint_tau, z)
-    if mode == RICCATI_FULL:
+    if SWEEP_FULL and mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
                             sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
-    if mode == DIRECT_FULL:
+    if SWEEP_DIRECT_FULL and mode == DIRECT_FULL:
         return direct_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.dir_z,
                            sw.dir_o, sw.gv, sw.g, z)
+    if not (SWEEP_TREE or SWEEP_REDUCED or SWEEP_DIRECT_REDUCED) or mode not in (
+            RICCATI_TREE, RICCATI_REDUCED, DIRECT_REDUCED):
+        raise ValueError(_NOT_COMPILED_SWEEP)
     n = sw.red_v.shape[0]
     for k in range(n):
         fold_ball_body(sw.u[2 * k + 1], sw.red_v[k], sw.red_phi[k])
-    if mode == RICCATI_TREE:
+    if SWEEP_TREE and mode == RICCATI_TREE:
         return _solve_tree(sw, parent, root_f, z)
-    if mode == RICCATI_REDUCED:
+    if SWEEP_REDUCED and mode == RICCATI_REDUCED:
         status = riccati_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_s, sw.red_p,
                                  sw.red_tinv, sw.red_t, sw.red_aq)
-    else:
+    elif SWEEP_DIRECT_REDUCED and mode == DIRECT_REDUCED:
         status = direct_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_aq)
+    else:
+        raise ValueError(_NOT_COMPILED_SWEEP)
     if status != 0:
         return status
     red_aq, red_phi = sw.red_aq, sw.red_phi
@@ -438,7 +455,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
         return -unknown
     known_loads = sweep.known_loads
     for k in range(n):
-        if hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             p = params.parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
@@ -452,7 +469,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f = np.empty(6)
     root_f[0:3] = g_acc
     root_f[3:6] = g_wd
-    if loops.kind.shape[0] > 0:
+    if HAS_LOOPS and loops.kind.shape[0] > 0:
         tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
                     state.defl, state.defl_rate, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
@@ -548,7 +565,7 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
     or the end section's of a parent beam (_end_section_frame)."""
     p = params.parent[k]
     rest = params.hinge_params[params.hinge_row[k], 0:9].copy().reshape((3, 3))
-    if params.beams[0][p] == BEAM:
+    if HAS_BEAMS and params.beams[0][p] == BEAM:
         _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
                            rot_out, w_out, wd_out)
     else:
@@ -589,114 +606,188 @@ def _coordinates_from_nu(c1, c3, q_n, w1q, w3q, nu, q, qd, qdd):
     qdd[0] = nu
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def _ground_guess(rot_before, rot_now, g_w, g_wd, ground):
+    """The ground's motion over the step into ground = (rot, lam, w, wd, dwd, phi): its rotation
+    increment phi = log(R_{s+1} R_s^T) and left Jacobian, its rotation and rates at t_{s+1}."""
+    g_rot, g_lam, w, wd, _, phi = ground
+    rel = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = (rot_now[i, 0] * rot_before[j, 0] + rot_now[i, 1] * rot_before[j, 1]
+                         + rot_now[i, 2] * rot_before[j, 2])
+            g_rot[i, j] = rot_now[i, j]
+        w[i] = g_w[i]
+        wd[i] = g_wd[i]
+    log_so3(rel, phi)
+    left_jacobian(phi, g_lam)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_star):
+    """The modal coordinates' offsets (eta'' = c1 eta + w1e, eta' = c3 eta + w3e) and their
+    predicted accelerations eta''* (constant-acceleration predictor)."""
+    a1, a3 = _offsets(h, coef, eta_d, eta_acc, eta_p)
+    for i in range(eta.shape[0]):
+        w1e[i] = a1[i] - c1 * eta[i]
+        w3e[i] = a3[i] - c3 * eta[i]
+        eta_dd_star[i] = c1 * (eta[i] + h * eta_d[i] + 0.5 * h * h * eta_p[i]) + w1e[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _joint_guess(hk, hp, drive, given, h, coef, c1, c3, q, qd, qdd, qp, w1q, w3q, q_s, qd_s,
+                 qdd_s, frame, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
+    """A joint's coordinates' guess for the step (a prescribed motion's from its input given
+    (2, 3) at t_{s+1}, the others' by the constant-acceleration predictor), their offsets
+    w1q, w3q, and its child's guess from the parent's frame (_joint_child_guess)."""
+    x_pred = np.empty(2)
+    _offsets_into(h, coef, qd, qdd, qp, w1q, w3q, x_pred)
+    for i in range(n_coordinates(hk)):
+        if drive[i, 0] == MOTION:
+            q_s[i] = given[i, 0]
+            qd_s[i] = given[i, 1]
+            qdd_s[i] = given[i, 2]
+            dq = q_s[i] - q[i]
+            w1q[i] = qdd_s[i] - c1 * dq
+            w3q[i] = qd_s[i] - c3 * dq
+        else:
+            _coordinates_from_nu(c1, c3, q[i], w1q[i], w3q[i], c1 * x_pred[i] + w1q[i],
+                                 q_s[i:i + 1], qd_s[i:i + 1], qdd_s[i:i + 1])
+    _joint_child_guess(hk, hp, frame, q_s, qd_s, qdd_s, c1, c3, rot_n, phi, w1, w3, rot, lam, w,
+                       wd, dw, dwd)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _locked_guess(rel, ground, c1, c3, phi, rot, lam, w, wd, dw, dwd, w1, w3):
+    """A locked body moves with the ground (its rotation relative to the ground's: rel), with
+    the offsets that make w' = c1 phi + w1, w = c3 phi + w3 hold the ground's values (beams use
+    them)."""
+    g_rot, g_lam, g_w, g_wd, g_dwd, phi_g = ground
+    matmul_into(g_rot, rel, rot)
+    for i in range(3):
+        phi[i] = phi_g[i]
+        w[i] = g_w[i]
+        wd[i] = g_wd[i]
+        w1[i] = g_wd[i] - c1 * phi_g[i]
+        w3[i] = g_w[i] - c3 * phi_g[i]
+        for j in range(3):
+            lam[i, j] = g_lam[i, j]
+            dw[i, j] = c3 if i == j else 0.0
+            dwd[i, j] = g_dwd[i, j]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _deflection_offsets(h, coef, c1, c3, d, d_rate, d_acc, d_pseudo, w1d, w3d):
+    """An elastic hinge's deflection's offsets over the step (as a modal coordinate's)."""
+    a1, a3 = _offsets(h, coef, d_rate, d_acc, d_pseudo)
+    for i in range(3):
+        w1d[i] = a1[i] - c1 * d[i]
+        w3d[i] = a3[i] - c3 * d[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _station_offsets(h, coef, histories):
+    """The paper's scheme: every station point's and mass centre's offset w1_X (a_X = c1 dr_X +
+    w1_X)."""
+    _, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = histories
+    for j in range(st_v.shape[0]):
+        w1, _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
+        w1_st[j, :] = w1
+    for k in range(c_v.shape[0]):
+        w1, _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
+        w1_c[k, :] = w1
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _stations_guess(z, phi_g, phi_star, z_star):
+    """The stations' guess: the last step's states with the predicted rotation increments in
+    the phi slots."""
+    for j in range(z.shape[0]):
+        for i in range(12):
+            z_star[j, i] = z[j, i]
+    for i in range(3):
+        z_star[0, 3 + i] = phi_g[i]
+    for k in range(phi_star.shape[0]):
+        for i in range(3):
+            z_star[2 * k + 1, 3 + i] = phi_star[k, i]
+            z_star[2 * k + 2, 3 + i] = phi_star[k, i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _spring_guess(hp, rot_in, rot, w_any, d, d_rate, d_pseudo, h, c3, w3d, into_inboard, z_in,
+                  z_out):
+    """An elastic hinge's spring force at the predicted deflection into its stations' guess: an
+    O(h^3) guess, where the last step's force is only O(h) (the hinge's d x q is bilinear in
+    two unknowns).  The force does not depend on the angular velocities: any will do for them."""
+    d_pred = d + h * d_rate + 0.5 * h * h * d_pseudo
+    q_pred, _, _ = elastic_hinge_loads(hp, rot_in, w_any, rot, w_any, d_pred, c3 * d_pred + w3d)
+    for i in range(3):
+        if into_inboard:
+            z_in[9 + i] = q_pred[i]
+        z_out[9 + i] = q_pred[i]
+
+
 @loop_piece
 def _predict(loop, run, s, _):
     """The general loop's guess for step s: every body's phi* by the constant-acceleration
     predictor (a locked body's from the ground's motion), the integrator's offsets of every
     rotation, deflection, modal coordinate (and, in the paper's scheme, station point), and the
     stations' guess z_star.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1} and
-    g_rot[s], g_rot[s + 1] at t_s, t_{s+1}."""
+    g_rot[s], g_rot[s + 1] at t_s, t_{s+1}.  The array work is in called kernels, not written
+    here: each statement on arrays in a piece is compiled into the skeleton's own code
+    (docs/solver.md, "Compile time")."""
     params, state, inputs = run.params, run.state, run.inputs
     h, coef = run.settings.h, run.settings.coef
     c1, c3 = _integrator_coefficients(h, coef)
-    hinge_kind, locked, lock_rel = params.hinge_kind, params.locked, params.lock_rel
+    hinge_kind = params.hinge_kind
     phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
-    w1, w3, w1d, w3d = loop.w1, loop.w3, loop.w1d, loop.w3d
-    g_rot_s, g_lam, _, _, g_dwd, phi_g = loop.ground
-    independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
-    z, z_star = state.z, loop.z_star
-    n = params.hinge_kind.shape[0]
-    rot_now = inputs.g_rot[s + 1]
-    g_rot_s[:, :] = rot_now
-    rel = loop.e3
-    for i in range(3):
-        for j in range(3):
-            rel[i, j] = (rot_now[i, 0] * inputs.g_rot[s, j, 0]
-                         + rot_now[i, 1] * inputs.g_rot[s, j, 1]
-                         + rot_now[i, 2] * inputs.g_rot[s, j, 2])
-    log_so3(rel, phi_g)
-    left_jacobian(phi_g, g_lam)
-    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
-    loop.ground[2][:] = g_w
-    loop.ground[3][:] = g_wd
-    eta, eta_d = state.eta, state.eta_d
-    if eta.shape[0] > 0:
-        a1, a3 = _offsets(h, coef, eta_d, state.eta_acc, state.eta_p)
-        loop.w1e[:] = a1 - c1 * eta
-        loop.w3e[:] = a3 - c3 * eta
-        loop.eta_dd_star[:] = c1 * (eta + h * eta_d + 0.5 * h * h * state.eta_p) + loop.w1e
+    n = hinge_kind.shape[0]
+    rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
+    _ground_guess(inputs.g_rot[s], rot_now, g_w, g_wd, loop.ground)
+    if state.eta.shape[0] > 0:
+        _modal_guess(h, coef, c1, c3, state.eta, state.eta_d, state.eta_acc, state.eta_p,
+                     loop.w1e, loop.w3e, loop.eta_dd_star)
     for k in range(n):
         hk = hinge_kind[k]
-        if has_coordinates(hk):
+        if SWEEP_JOINTS and has_coordinates(hk):
             w1q, w3q, q_s, qd_s, qdd_s = loop.joints
-            _offsets_into(h, coef, state.jqd[k], state.jqdd[k], state.jqp[k], w1q[k], w3q[k],
-                          loop.e3[0])
-            for i in range(n_coordinates(hk)):
-                if params.joint_drive[k, i, 0] == MOTION:
-                    q_s[k, i] = inputs.joint_input[s, k, i, 0]
-                    qd_s[k, i] = inputs.joint_input[s, k, i, 1]
-                    qdd_s[k, i] = inputs.joint_input[s, k, i, 2]
-                    dq = q_s[k, i] - state.jq[k, i]
-                    w1q[k, i] = qdd_s[k, i] - c1 * dq
-                    w3q[k, i] = qd_s[k, i] - c3 * dq
-                else:
-                    dq = loop.e3[0, i]
-                    _coordinates_from_nu(c1, c3, state.jq[k, i], w1q[k, i], w3q[k, i],
-                                         c1 * dq + w1q[k, i], q_s[k, i:i + 1], qd_s[k, i:i + 1],
-                                         qdd_s[k, i:i + 1])
             p = params.parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
-            _joint_child_guess(hk, params.hinge_params[params.hinge_row[k]], frame, q_s[k],
-                               qd_s[k], qdd_s[k], c1, c3, state.rot[k], phi_star[k], w1[k],
-                               w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
+            _joint_guess(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
+                         inputs.joint_input[s, k], h, coef, c1, c3, state.jq[k], state.jqd[k],
+                         state.jqdd[k], state.jqp[k], w1q[k], w3q[k], q_s[k], qd_s[k],
+                         qdd_s[k], frame, state.rot[k], phi_star[k], loop.w1[k], loop.w3[k],
+                         rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
         elif _welded(params, run.settings.mode, k):
             _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, state.eta, loop.eta_dd_star,
-                          state.rot[k], loop.guess, w1[k], w3[k])
-        elif locked[k]:
-            phi_star[k] = phi_g
-            rot_star[k] = rot_now @ lock_rel[k]
-            lam[k] = g_lam
-            w[k] = g_w
-            wd[k] = g_wd
-            dw[k] = c3 * np.eye(3)
-            dwd[k] = g_dwd
-            w1[k] = g_wd - c1 * phi_g        # so that w' = c1 phi + w1, w = c3 phi + w3
-            w3[k] = g_w - c3 * phi_g         # hold the ground's values (beams use them)
+                          state.rot[k], loop.guess, loop.w1[k], loop.w3[k])
+        elif params.locked[k]:
+            _locked_guess(params.lock_rel[k], loop.ground, c1, c3, phi_star[k], rot_star[k],
+                          lam[k], w[k], wd[k], dw[k], dwd[k], loop.w1[k], loop.w3[k])
         else:
-            _offsets_into(h, coef, state.omega[k], state.omega_dot[k], state.pseudo[k], w1[k],
-                          w3[k], phi_star[k])   # phi* by the constant-acceleration predictor
-            _body_kinematics(c1, c3, state.rot[k], phi_star[k], w1[k], w3[k], rot_star[k],
-                             lam[k], w[k], wd[k], dw[k], dwd[k])
-        if hinge_kind[k] == ELASTIC:
-            a1, a3 = _offsets(h, coef, state.defl_rate[k], state.defl_acc[k],
-                              state.defl_pseudo[k])
-            w1d[k] = a1 - c1 * state.defl[k]
-            w3d[k] = a3 - c3 * state.defl[k]
-    if independent:
-        for j in range(n + 1):
-            w1_st[j], _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
+            _offsets_into(h, coef, state.omega[k], state.omega_dot[k], state.pseudo[k],
+                          loop.w1[k], loop.w3[k], phi_star[k])   # phi* by the predictor
+            _body_kinematics(c1, c3, state.rot[k], phi_star[k], loop.w1[k], loop.w3[k],
+                             rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
+        if HAS_ELASTIC_HINGES and hk == ELASTIC:
+            _deflection_offsets(h, coef, c1, c3, state.defl[k], state.defl_rate[k],
+                                state.defl_acc[k], state.defl_pseudo[k], loop.w1d[k],
+                                loop.w3d[k])
+    if HAS_STATION_HISTORIES and loop.histories[0]:
+        _station_offsets(h, coef, loop.histories)
+    _stations_guess(state.z, loop.ground[5], phi_star, loop.z_star)
+    if HAS_ELASTIC_HINGES:
         for k in range(n):
-            w1_c[k], _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
-    z_star[:, :] = z
-    z_star[0, 3:6] = phi_g
-    for k in range(n):
-        z_star[2 * k + 1, 3:6] = phi_star[k]
-        z_star[2 * k + 2, 3:6] = phi_star[k]
-        if hinge_kind[k] == ELASTIC:
-            # the spring force at the predicted deflection: an O(h^3) guess, where the last
-            # step's force is only O(h) (the hinge's d x q is bilinear in two unknowns)
-            d_pred = state.defl[k] + h * state.defl_rate[k] + 0.5 * h * h * state.defl_pseudo[k]
-            p = params.parent[k]
-            rot_in = rot_now if p < 0 else rot_star[p]
-            # (the force does not depend on the angular velocities: any will do for them)
-            q_pred, _, _ = elastic_hinge_loads(params.hinge_params[params.hinge_row[k]], rot_in,
-                                               g_w, rot_star[k], g_w, d_pred,
-                                               c3 * d_pred + w3d[k])
-            if p == k - 1:
-                z_star[2 * k, 9:12] = q_pred
-            z_star[2 * k + 1, 9:12] = q_pred
-    loop.root_f[0:3] = inputs.g_acc[s]
-    loop.root_f[3:6] = g_wd
+            if hinge_kind[k] == ELASTIC:
+                p = params.parent[k]
+                _spring_guess(params.hinge_params[params.hinge_row[k]],
+                              rot_now if p < 0 else rot_star[p], rot_star[k], g_w,
+                              state.defl[k],
+                              state.defl_rate[k], state.defl_pseudo[k], h, c3, loop.w3d[k],
+                              p == k - 1, loop.z_star[2 * k], loop.z_star[2 * k + 1])
+    for i in range(3):
+        loop.root_f[i] = inputs.g_acc[s, i]
+        loop.root_f[3 + i] = g_wd[i]
 
 
 @loop_piece
@@ -720,9 +811,9 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(run.sweep.u):
         return NOT_FINITE, 0, 0.0
-    loops = loop.loops
-    if loops.kind.shape[0] > 0:     # closing joints: held at acceleration level (closure.py)
-        loops.target[:, :] = inputs.closure_target[s]
+    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
+        loops = loop.loops
+        _put2(loops.target, inputs.closure_target[s])
         set_ground(loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s], inputs.g_rot[s + 1],
                    inputs.g_w[s], inputs.g_wd[s])       # at t_{s+1}
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
@@ -735,7 +826,7 @@ def _iterate(loop, run, s, it):
             eta_g[i] = (loop.eta_dd_star[i] - loop.w1e[i]) / c1
             eta_d_g[i] = c3 * eta_g[i] + loop.w3e[i]
         for k in range(defl_g.shape[0]):
-            if params.hinge_kind[k] == ELASTIC:
+            if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
                 d = _hinge_deflection(params, loop.z_star, loop.w1d, c1, k)
                 for i in range(3):
                     defl_g[k, i] = d[i]
@@ -752,7 +843,8 @@ def _iterate(loop, run, s, it):
     eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
     _modal_accelerations(params.beams, state.eta_map, z, eta_dd_new)
     # back from angular-acceleration to phi slots
-    z[0, 3:6] = loop.ground[5]
+    for i in range(3):
+        z[0, 3 + i] = loop.ground[5][i]
     change = 0.0
     for i in range(eta_dd_new.shape[0]):
         change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
@@ -774,6 +866,22 @@ def _iterate(loop, run, s, it):
     return OK, 0, change
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def _joint_adopt(hk, hp, drive, c1, c3, q, w1q, w3q, nu, q_s, qd_s, qdd_s, frame, rot_n, phi,
+                 w1, w3, rot, lam, w, wd, dw, dwd, z_in, z_out):
+    """A joint's coordinates' new guess from their accelerations nu (a prescribed motion's stays
+    as given), its child's guess from the parent's frame, and the child's phi slots."""
+    for i in range(n_coordinates(hk)):
+        if drive[i, 0] != MOTION:
+            _coordinates_from_nu(c1, c3, q[i], w1q[i], w3q[i], nu[i], q_s[i:i + 1],
+                                 qd_s[i:i + 1], qdd_s[i:i + 1])
+    _joint_child_guess(hk, hp, frame, q_s, qd_s, qdd_s, c1, c3, rot_n, phi, w1, w3, rot, lam, w,
+                       wd, dw, dwd)
+    for i in range(3):
+        z_in[3 + i] = phi[i]
+        z_out[3 + i] = phi[i]
+
+
 @loop_piece
 def _adopt(loop, run, s, it):
     """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''*."""
@@ -781,34 +889,127 @@ def _adopt(loop, run, s, it):
     z, rot = run.state.z, run.state.rot
     phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
     params, inputs = run.params, run.inputs
-    loop.z_star[:, :] = z
-    loop.eta_dd_star[:] = loop.eta_dd_new
+    z_star = loop.z_star
+    _put2(z_star, z)
+    _put1(loop.eta_dd_star, loop.eta_dd_new)
     w1q, w3q, q_s, qd_s, qdd_s = loop.joints
     for k in range(phi_star.shape[0]):
         hk = params.hinge_kind[k]
-        if has_coordinates(hk):
-            for i in range(n_coordinates(hk)):
-                if params.joint_drive[k, i, 0] != MOTION:
-                    _coordinates_from_nu(c1, c3, run.state.jq[k, i], w1q[k, i], w3q[k, i],
-                                         run.sweep.joint_nu[k, i], q_s[k, i:i + 1],
-                                         qd_s[k, i:i + 1], qdd_s[k, i:i + 1])
+        if SWEEP_JOINTS and has_coordinates(hk):
             p = params.parent[k]
             frame = ((inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]) if p < 0
                      else (rot_star[p], w[p], wd[p]))
-            _joint_child_guess(hk, params.hinge_params[params.hinge_row[k]], frame, q_s[k],
-                               qd_s[k], qdd_s[k], c1, c3, rot[k], phi_star[k], loop.w1[k],
-                               loop.w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
-            loop.z_star[2 * k + 1, 3:6] = phi_star[k]
-            loop.z_star[2 * k + 2, 3:6] = phi_star[k]
+            _joint_adopt(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
+                         c1, c3, run.state.jq[k], w1q[k], w3q[k], run.sweep.joint_nu[k],
+                         q_s[k], qd_s[k], qdd_s[k], frame, rot[k], phi_star[k], loop.w1[k],
+                         loop.w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k],
+                         z_star[2 * k + 1], z_star[2 * k + 2])
         elif _welded(params, run.settings.mode, k):
             _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, run.state.eta,
                           loop.eta_dd_star, rot[k], loop.guess, loop.w1[k], loop.w3[k])
-            loop.z_star[2 * k + 1, 3:6] = phi_star[k]
-            loop.z_star[2 * k + 2, 3:6] = phi_star[k]
+            for i in range(3):
+                z_star[2 * k + 1, 3 + i] = phi_star[k, i]
+                z_star[2 * k + 2, 3 + i] = phi_star[k, i]
         elif not params.locked[k]:
-            phi_star[k] = z[2 * k + 1, 3:6]
+            for i in range(3):
+                phi_star[k, i] = z[2 * k + 1, 3 + i]
             _body_kinematics(c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
                              lam[k], w[k], wd[k], dw[k], dwd[k])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel, body_params,
+                      body_row, histories):
+    """The paper's scheme: every station point's and rigid mass centre's history over the step
+    from its displacement, a_X = c1 dr_X + w1_X (before the bodies' rotations advance)."""
+    _, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = histories
+    e3 = np.empty((3, 3))
+    for k in range(rot.shape[0]):
+        x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
+        x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
+        if body_kind[k] != BEAM:
+            if locked[k]:
+                rot_new = rot_now @ lock_rel[k]
+            else:
+                expm_so3(z[2 * k + 1, 3:6], e3)
+                rot_new = e3 @ rot[k]
+            x_c = x_in + (rot_new - rot[k]) @ body_params[body_row[k], 1:4]
+            _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
+        _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p):
+    """The modal coordinates' histories over the step from their new accelerations; returns
+    whether every rate is finite."""
+    x = np.empty(eta.shape[0])
+    for i in range(eta.shape[0]):
+        x[i] = (eta_dd_new[i] - w1e[i]) / c1 - eta[i]
+    _advance_history(h, coef, x, eta_d, eta_acc, eta_p)
+    finite = True
+    for i in range(eta.shape[0]):
+        eta[i] = (eta_dd_new[i] - w1e[i]) / c1
+        finite = finite and np.isfinite(eta_d[i])
+    return finite
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, qp, jtau, frame,
+                   rot, w, wd, d, d_rate, pseudo):
+    """A joint's coordinates' histories over the step from their accelerations nu (a prescribed
+    motion's: as given (2, 3) at t_{s+1}), then its child's frame from the parent's new one
+    (kernels/joint.py::joint_frame)."""
+    x = np.zeros(2)
+    for i in range(n_coordinates(hk)):
+        x[i] = (nu[i] - w1q[i]) / c1
+        if drive[i, 0] == MOTION:
+            x[i] = given[i, 0] - q[i]
+    _advance_history(h, coef, x, qd, qdd, qp)
+    for i in range(n_coordinates(hk)):
+        q[i] += x[i]
+        if drive[i, 0] == MOTION:
+            q[i] = given[i, 0]
+            qd[i] = given[i, 1]
+            qdd[i] = given[i, 2]
+        jtau[i] = tau[i]
+    rot_p, w_p, wd_p = frame
+    joint_frame(hk, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
+    for i in range(3):
+        pseudo[i] = wd[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _advance_body(h, coef, phi, rot, w, wd, p, e3, rot_prev):
+    """A body integrated on its own: its angular velocity's history from its rotation increment
+    phi, and its rotation A = exp(phi^) A_n (e3, rot_prev: scratch)."""
+    _advance_history(h, coef, phi, w, wd, p)
+    expm_so3(phi, e3)
+    for i in range(3):
+        for j in range(3):
+            rot_prev[i, j] = rot[i, j]
+    matmul_into(e3, rot_prev, rot)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _locked_frame(rot_now, rel, g_w, g_wd, rot, w, wd):
+    """A locked body's frame from the ground's at the step's end."""
+    matmul_into(rot_now, rel, rot)
+    for i in range(3):
+        w[i] = g_w[i]
+        wd[i] = g_wd[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _advance_deflection(params, z, w1d, c1, k, h, coef, d, d_rate, d_acc, d_pseudo):
+    """An elastic hinge's deflection's history over the step from its stations (the hinge's
+    deflection at the step's end: _hinge_deflection)."""
+    d_new = _hinge_deflection(params, z, w1d, c1, k)
+    x = np.empty(3)
+    for i in range(3):
+        x[i] = d_new[i] - d[i]
+    _advance_history(h, coef, x, d_rate, d_acc, d_pseudo)
+    for i in range(3):
+        d[i] = d_new[i]
 
 
 @loop_piece
@@ -819,114 +1020,98 @@ def _update(loop, run, s, _):
     params, state, inputs = run.params, run.state, run.inputs
     h, coef = run.settings.h, run.settings.coef
     c1, _ = _integrator_coefficients(h, coef)
-    body_params, locked, lock_rel = params.body_params, params.locked, params.lock_rel
     rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
-    defl, z, e3 = state.defl, state.z, loop.e3
-    independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = loop.histories
+    z = state.z
     n = params.hinge_kind.shape[0]
     rot_now = inputs.g_rot[s + 1]
-    if independent:
-        for k in range(n):
-            # a_X = c1 dr_X + w1_X: each point's displacement over the step
-            x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
-            x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
-            if params.beams[0][k] != BEAM:
-                if locked[k]:
-                    rot_new = rot_now @ lock_rel[k]
-                else:
-                    expm_so3(z[2 * k + 1, 3:6], e3)
-                    rot_new = e3 @ rot[k]
-                x_c = x_in + (rot_new - rot[k]) @ body_params[params.body_row[k], 1:4]
-                _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
-            _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
+    if HAS_STATION_HISTORIES and loop.histories[0]:
+        _advance_stations(h, coef, c1, z, rot_now, rot, params.beams[0], params.locked,
+                          params.lock_rel, params.body_params, params.body_row, loop.histories)
     finite = True
-    eta = state.eta
-    if eta.shape[0] > 0:
-        eta_new = (loop.eta_dd_new - loop.w1e) / c1
-        _advance_history(h, coef, eta_new - eta, state.eta_d, state.eta_acc, state.eta_p)
-        eta[:] = eta_new
-        if not np.all(np.isfinite(state.eta_d)):
-            finite = False
-    w1q = loop.joints[0]
-    x = np.zeros(2)
-    x_defl = np.zeros(3)
+    if state.eta.shape[0] > 0:
+        finite = _advance_modal(h, coef, c1, loop.eta_dd_new, loop.w1e, state.eta, state.eta_d,
+                                state.eta_acc, state.eta_p)
     for k in range(n):
-        phi = z[2 * k + 1, 3:6]
         hk = params.hinge_kind[k]
-        if has_coordinates(hk):
+        if SWEEP_JOINTS and has_coordinates(hk):
             # the coordinates' histories, then the child's frame from its parent's new one
-            for i in range(n_coordinates(hk)):
-                x[i] = (run.sweep.joint_nu[k, i] - w1q[k, i]) / c1
-                if params.joint_drive[k, i, 0] == MOTION:
-                    x[i] = inputs.joint_input[s, k, i, 0] - state.jq[k, i]
-            _advance_history(h, coef, x, state.jqd[k], state.jqdd[k], state.jqp[k])
-            for i in range(n_coordinates(hk)):
-                state.jq[k, i] += x[i]
-                if params.joint_drive[k, i, 0] == MOTION:
-                    state.jq[k, i] = inputs.joint_input[s, k, i, 0]
-                    state.jqd[k, i] = inputs.joint_input[s, k, i, 1]
-                    state.jqdd[k, i] = inputs.joint_input[s, k, i, 2]
-                state.jtau[k, i] = run.sweep.joint_tau[k, i]
             p = params.parent[k]
-            if p < 0:
-                rot_p, w_p, wd_p = rot_now, inputs.g_w[s], inputs.g_wd[s]
-            else:
-                rot_p, w_p, wd_p = rot[p], omega[p], omega_dot[p]
-            joint_frame(hk, params.hinge_params[params.hinge_row[k]], rot_p, w_p, wd_p,
-                        state.jq[k], state.jqd[k], state.jqdd[k], rot[k], omega[k], omega_dot[k],
-                        defl[k], state.defl_rate[k])
-            pseudo[k] = omega_dot[k]
+            frame = ((rot_now, inputs.g_w[s], inputs.g_wd[s]) if p < 0
+                     else (rot[p], omega[p], omega_dot[p]))
+            _advance_joint(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
+                           inputs.joint_input[s, k], h, coef, c1, run.sweep.joint_nu[k],
+                           run.sweep.joint_tau[k], loop.joints[0][k], state.jq[k], state.jqd[k],
+                           state.jqdd[k], state.jqp[k], state.jtau[k], frame, rot[k], omega[k],
+                           omega_dot[k], state.defl[k], state.defl_rate[k], pseudo[k])
         elif _welded(params, run.settings.mode, k):
             _welded_frame(params, k, rot, omega, omega_dot, state.eta, state.eta_d,
                           state.eta_acc, rot[k], omega[k], omega_dot[k])
-            pseudo[k] = omega_dot[k]
-        elif locked[k]:
-            matmul_into(rot_now, lock_rel[k], rot[k])
-            omega[k] = inputs.g_w[s]
-            omega_dot[k] = inputs.g_wd[s]
+            _put1(pseudo[k], omega_dot[k])
+        elif params.locked[k]:
+            _locked_frame(rot_now, params.lock_rel[k], inputs.g_w[s], inputs.g_wd[s], rot[k],
+                          omega[k], omega_dot[k])
         else:
-            _advance_history(h, coef, phi, omega[k], omega_dot[k], pseudo[k])
-            expm_so3(phi, e3)
-            loop.rot_prev[:, :] = rot[k]
-            matmul_into(e3, loop.rot_prev, rot[k])
-        if params.hinge_kind[k] == ELASTIC:
-            d_new = _hinge_deflection(params, z, loop.w1d, c1, k)
-            for i in range(3):
-                x_defl[i] = d_new[i] - defl[k, i]
-            _advance_history(h, coef, x_defl, state.defl_rate[k], state.defl_acc[k],
-                             state.defl_pseudo[k])
-            for i in range(3):
-                defl[k, i] = d_new[i]
+            _advance_body(h, coef, z[2 * k + 1, 3:6], rot[k], omega[k], omega_dot[k], pseudo[k],
+                          loop.e3, loop.rot_prev)
+        if HAS_ELASTIC_HINGES and hk == ELASTIC:
+            _advance_deflection(params, z, loop.w1d, c1, k, h, coef, state.defl[k],
+                                state.defl_rate[k], state.defl_acc[k], state.defl_pseudo[k])
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    if loop.loops.kind.shape[0] > 0:    # back onto the loops (kernels/closure.py)
-        loop.loops.target[:, :] = inputs.closure_target[s]
+    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
+        _put2(loop.loops.target, inputs.closure_target[s])
         set_ground(loop.loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s],
                    inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s])
         project_onto_loops(params, loop.loops, state)
     return finite
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def _put1(dst, src):
+    """dst[:] = src (same shape), as a call: numba compiles each array assignment written in a
+    piece into the skeleton's own code (~0.5 s of its compile time each; docs/solver.md,
+    "Compile time"), a call to this once."""
+    for i in range(dst.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _put2(dst, src):
+    """dst[:, :] = src (same shape), as _put1."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _put3(dst, src):
+    """dst[:, :, :] = src (same shape), as _put1."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            for k in range(dst.shape[2]):
+                dst[i, j, k] = src[i, j, k]
+
+
 @loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
-    rec.rot[slot] = state.rot
-    rec.omega[slot] = state.omega
-    rec.omega_dot[slot] = state.omega_dot
-    rec.z[slot] = state.z
-    rec.defl[slot] = state.defl
-    rec.defl_rate[slot] = state.defl_rate
-    rec.eta[slot] = state.eta
-    rec.eta_d[slot] = state.eta_d
-    rec.jq[slot] = state.jq
-    rec.jqd[slot] = state.jqd
-    rec.jtau[slot] = state.jtau
-    if loop.loops.kind.shape[0] > 0:
-        rec.closure_wrench[slot] = loop.loops.wrench
-    if loop.histories[0]:
-        rec.v_st[slot] = loop.histories[1]
-        rec.v_c[slot] = loop.histories[4]
+    _put3(rec.rot[slot], state.rot)
+    _put2(rec.omega[slot], state.omega)
+    _put2(rec.omega_dot[slot], state.omega_dot)
+    _put2(rec.z[slot], state.z)
+    _put2(rec.defl[slot], state.defl)
+    _put2(rec.defl_rate[slot], state.defl_rate)
+    _put1(rec.eta[slot], state.eta)
+    _put1(rec.eta_d[slot], state.eta_d)
+    _put2(rec.jq[slot], state.jq)
+    _put2(rec.jqd[slot], state.jqd)
+    _put2(rec.jtau[slot], state.jtau)
+    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:
+        _put2(rec.closure_wrench[slot], loop.loops.wrench)
+    if HAS_STATION_HISTORIES and loop.histories[0]:
+        _put2(rec.v_st[slot], loop.histories[1])
+        _put2(rec.v_c[slot], loop.histories[4])
 
 
 @loop_piece
