@@ -196,8 +196,8 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
     a step is taken again with a quarter of its length where a pass fails, and the run stops
     with ERROR_ESTIMATE once the step falls below h_min.  rtol = 0: fixed steps of rk's h (no
     error estimate; its last step lands on the chunk's end)."""
-    a, b, c, e3_w, e5_w, d = rk.tables
-    state = run.state
+    a, b, _, e3_w, e5_w, d = rk.tables     # (the nodes c unread: the models it runs have no
+    state = run.state                       # time-dependent input, _check_runge_kutta)
     n = state.rot.shape[0]
     size = rk.y.shape[0]
     y, f, y_new, y_stage, kk, dense = rk.y, rk.f, rk.y_new, rk.y_stage, rk.k, rk.dense
