@@ -190,8 +190,8 @@ def describe(model):
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
                f"swing)")
-    out.append(_schemes_line(model))
     out.append(_kernels_line(model))
+    out.append(_schemes_line(model))
     return "\n".join(out)
 
 
