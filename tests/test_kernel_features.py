@@ -1,6 +1,9 @@
 """Kernels compiled for what a model uses (dttmm/kernels/features.py; docs/solver.md, "Compile
 time"): the features a model's kernels get, the code a copy drops before numba types it, the
 fields a copy takes as None, and the refusal where a copy meets a kind it was not compiled for."""
+import os
+import subprocess
+import sys
 from importlib import resources
 
 import numpy as np
@@ -202,3 +205,17 @@ def test_a_copy_runs_the_model_as_the_kernels_with_every_feature(monkeypatch):
     assert runs[True].joint_coordinates.shape == runs[False].joint_coordinates.shape
     for key in ("rotation", "angular_velocity", "joint_coordinates"):
         assert np.abs(getattr(runs[True], key) - getattr(runs[False], key)).max() < 1e-12, key
+
+
+def test_with_numba_off_the_kernels_run_as_the_one_copy():
+    """NUMBA_DISABLE_JIT=1 (debugging: the kernels as plain Python) with the copies asked for:
+    the plain functions run as the copy with every flag on, a general-loop model steps."""
+    script = ("from dttmm import chains, simulate\n"
+              "from dttmm.kernels import features\n"
+              "assert not features.SPECIALIZE\n"
+              "print(simulate(chains.arm(drive='motion'), 0.002, 1e-3).n_steps)\n")
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1", DTTMM_SPECIALIZE="1")
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split()[-1] == "2"

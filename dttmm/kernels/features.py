@@ -25,14 +25,16 @@ import os
 from functools import lru_cache
 from types import CodeType, FunctionType
 
-from numba import njit
+from numba import config, njit
 from numba.core.caching import NullCache
 from numba.core.dispatcher import Dispatcher
 
 # DTTMM_SPECIALIZE=0: every kind of model runs the one copy with every flag on (what a test
 # suite or a parameter study over many kinds of models wants: each kind would compile its own
-# copy, about a minute each on 2 cores, where the one copy compiles once in a few)
-SPECIALIZE = os.environ.get("DTTMM_SPECIALIZE", "1") != "0"
+# copy, about a minute each on 2 cores, where the one copy compiles once in a few).  With
+# numba's compilation off (NUMBA_DISABLE_JIT=1) the kernels are plain Python functions and run
+# as that one copy.
+SPECIALIZE = os.environ.get("DTTMM_SPECIALIZE", "1") != "0" and not config.DISABLE_JIT
 
 # the model's elements and the scheme (solver.kernel_features sets them from a model)
 HAS_BEAMS = True                # modal beams (body kind BEAM)
