@@ -220,8 +220,12 @@ def _kernels_line(model):
         what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
     else:
         what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
+    # (measured cold, benchmarks/compile.py: the rigid arm 56 s, with beams 71-80 s, with
+    # closing joints 120-154 s)
+    first = ("about two minutes" if "HAS_LOOPS" in compiled_for else "over a minute"
+             if "HAS_BEAMS" in compiled_for else "about a minute")
     return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
-            f"about a minute the first time on 2 cores, cached after; docs/solver.md, "
+            f"{first} the first time on 2 cores, cached after; docs/solver.md, "
             f"\"Compile time\")")
 
 
