@@ -1,6 +1,8 @@
 """Per-step cost of two checkouts of dttmm, A against B, in alternating processes.
 
-    python benchmarks/step_ab.py A_DIR B_DIR [--pairs 9] [--json FILE] [--in-process]
+    python benchmarks/step_ab.py A_DIR B_DIR [--pairs 9] [--json FILE] [--in-process] [--call]
+
+--call: the fixed cost of a simulate call (a 1-step run, us per call) instead of a step's.
 
 --in-process: both checkouts' packages are copied under other names (dttmm_a, dttmm_b; the
 package imports itself relatively) into a temporary directory and imported into one process,
@@ -49,10 +51,31 @@ print(1e6 * statistics.median(costs))
 """
 
 
-def us_per_step(checkout, system):
+# --call: a simulate call's fixed cost, a 1-step run's wall time per call (median of 5 batches
+# of 300 calls, after a warm-up)
+_CALL_CHILD = r"""
+import statistics, time
+from dttmm import simulate
+from dttmm.chains import arm, rigid_chain, three_pendulum
+model = {expr}
+for _ in range(50):
+    simulate(model, 1e-4, 1e-4)
+batches = []
+for _ in range(5):
+    t0 = time.perf_counter()
+    for _ in range(300):
+        simulate(model, 1e-4, 1e-4)
+    batches.append((time.perf_counter() - t0) / 300)
+print(1e6 * statistics.median(batches))
+"""
+
+
+def us_per_step(checkout, system, call=False):
+    """us per step of the system with the checkout's dttmm (call: us per 1-step call)."""
     expr, steps = SYSTEMS[system]
     env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout))
-    out = subprocess.run([sys.executable, "-c", _CHILD.format(expr=expr, steps=steps)],
+    child = (_CALL_CHILD if call else _CHILD).format(expr=expr, steps=steps)
+    out = subprocess.run([sys.executable, "-c", child],
                          env=env, capture_output=True, text=True, check=True,
                          cwd=os.path.abspath(checkout))
     return float(out.stdout.strip().splitlines()[-1])
@@ -107,7 +130,10 @@ def main(argv=None):
     ap.add_argument("--json")
     ap.add_argument("--in-process", action="store_true",
                     help="both packages in one process, alternating run by run")
+    ap.add_argument("--call", action="store_true",
+                    help="a call's fixed cost (a 1-step run) instead of a step's")
     args = ap.parse_args(argv)
+    unit = "us per call" if args.call else "us"
     out = {}
     if args.in_process:
         for system, (a_us, b_us) in in_process(args.a, args.b, args.systems, args.pairs).items():
@@ -124,15 +150,16 @@ def main(argv=None):
         us_per_step(args.a, system), us_per_step(args.b, system)     # fill both numba caches
         a_us, b_us, ratios = [], [], []
         for _ in range(args.pairs):
-            a_us.append(us_per_step(args.a, system))
-            b_us.append(us_per_step(args.b, system))
+            a_us.append(us_per_step(args.a, system, args.call))
+            b_us.append(us_per_step(args.b, system, args.call))
             ratios.append(a_us[-1] / b_us[-1])
         out[system] = dict(a_us_per_step=statistics.median(a_us),
                            b_us_per_step=statistics.median(b_us),
                            ratio_a_over_b=statistics.median(ratios),
                            ratio_min=min(ratios), ratio_max=max(ratios), pairs=args.pairs)
-        print(f"{system}: A {out[system]['a_us_per_step']:.3f} us, "
-              f"B {out[system]['b_us_per_step']:.3f} us, A/B {out[system]['ratio_a_over_b']:.3f} "
+        print(f"{system}: A {out[system]['a_us_per_step']:.3f} {unit}, "
+              f"B {out[system]['b_us_per_step']:.3f} {unit}, "
+              f"A/B {out[system]['ratio_a_over_b']:.3f} "
               f"(min {min(ratios):.3f}, max {max(ratios):.3f}, {args.pairs} pairs)", flush=True)
     if args.json:
         with open(args.json, "w") as fh:

@@ -24,9 +24,16 @@ class Recording:
     def __init__(self, keys, keep, stream=None, samples=None, identity=None):
         self.keys = list(keys)
         self.keep = np.asarray(keep)
-        self.inputs = 2 * self.keep + 1             # each body's input station
         self.identity = (np.array_equal(self.keep, np.arange(len(self.keep))) if identity is None
                          else identity)             # (keep is every body: a prepared run's)
+        # each key's rows of the model's bodies: "z" holds each body's input station's [m; q]
+        # (station 2k + 1), the per-body keys the kept bodies (all of them: every row)
+        every = slice(None)
+        inputs = slice(1, 2 * len(self.keep), 2) if self.identity else 2 * self.keep + 1
+        self.picks = {"z": (every, inputs, slice(6, 12))}
+        if not self.identity:
+            self.picks.update({key: (every, self.keep) for key in _PER_BODY})
+            self.picks["v_st"] = (every, np.append(self.keep, len(self.keep)))
         self.blocks = {key: [] for key in self.keys}
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
@@ -45,42 +52,59 @@ class Recording:
     def add(self, values, steps, times=()):
         """values: key -> (m, ...) rows recorded at the m given steps (and times, s, in an
         adaptive run)."""
+        picks, rows, end = self.picks, self.rows, self.rows + len(steps)
+        into = self.stream is None and self.samples is not None and end <= self.samples
         for key in self.keys:
             block = values[key]
-            if key == "z":                              # the inputs' [m; q] only
-                block = block[:, self.inputs, 6:12]
-            elif not self.identity and key in _PER_BODY:
-                block = block[:, self.keep]
-            elif not self.identity and key == "v_st":
-                block = block[:, np.append(self.keep, len(self.keep))]
+            pick = picks.get(key)
+            if pick is not None:
+                block = block[pick]
             if self.stream is not None:
                 self.stream.write(key, block)
-            elif self.samples is not None and self.rows + len(block) <= self.samples:
-                if not self.blocks[key]:
-                    self.blocks[key].append(np.empty((self.samples,) + block.shape[1:],
-                                                     block.dtype))
-                self.blocks[key][0][self.rows:self.rows + len(block)] = block
+            elif into:
+                self._samples_of(key, block[0])[rows:end] = block
             else:
                 self._leave_samples()
                 self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
         if self.samples is not None:
-            self.rows += len(steps)
+            self.rows = end
         self.steps.extend(steps)
         self.times.extend(times)
         if self.stream is not None:
             self.stream.commit(steps, times)
 
+    def _samples_of(self, key, row):
+        """The key's array of `samples` rows like row, made at its first row."""
+        blocks = self.blocks[key]
+        if not blocks:
+            blocks.append(np.empty((self.samples,) + row.shape, row.dtype))
+        return blocks[0]
+
     def add_state(self, state, extra, step, t=None):
         """One sample from the state the loop advances (t = 0, the state at the end, or an
         adaptive run's segment end at time t)."""
-        self.add({key: (extra[key] if key in extra else getattr(state, key))[None]
-                  for key in self.keys}, [step], () if t is None else [t])
+        values = {key: extra[key] if key in extra else getattr(state, key) for key in self.keys}
+        if self.stream is not None or self.samples is None or self.rows >= self.samples:
+            self.add({key: value[None] for key, value in values.items()}, [step],
+                     () if t is None else [t])
+            return
+        for key, value in values.items():       # (the row written in place: a short run's
+            pick = self.picks.get(key)          # first and last sample)
+            if pick is not None:
+                value = value[pick[1:]]
+            self._samples_of(key, value)[self.rows] = value
+        self.rows += 1
+        self.steps.append(step)
+        if t is not None:
+            self.times.append(t)
 
     def arrays(self):
         """key -> all its rows (T, ...), in order; "z" holds the inputs' [m; q] (T, n, 6).
         Streamed: read-only memory maps of the stream's files."""
         if self.stream is not None:
             return self.stream.arrays()
+        if self.samples is not None and self.rows == self.samples:     # (every row said)
+            return {key: blocks[0] for key, blocks in self.blocks.items()}
         self._leave_samples()
         for key, blocks in self.blocks.items():     # one key at a time into one block, each
             if len(blocks) > 1:                     # block released once copied (the samples'

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import adaptive as adaptive_steps
+from . import closures
 from . import solver as s       # (solver imports this module at its end: read at call time)
 from .methods import SWEEPS, scheme_named
 from .model import Model
@@ -56,9 +57,46 @@ class RunOptions:
                 bool(self.hold_energy))
 
 
+_PLAIN = (int, float, str, bool, type(None))      # arguments whose checked options are kept
+KEEP_OPTIONS = 32       # checked options kept per model (the latest calls' arguments)
+
+
 def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_iterations,
                 newton_tol, record_every, record_dt, t_eval, full_state, richardson, progress,
                 max_step_error, max_energy_error, hold_energy, resume, stream):
+    """simulate's arguments checked (RunOptions): a call with the same plain arguments (numbers,
+    strings, None; their types too: True is not 1) as one of the model's latest returns that
+    call's options, unchecked again (a short run's fixed cost); any other is checked
+    (_checked)."""
+    args = (t_end, dt, rtol, atol, method, scheme, rho_inf, newton_iterations, newton_tol,
+            record_every, record_dt, full_state, richardson, progress, max_step_error,
+            max_energy_error, hold_energy)
+    plain = (isinstance(model, Model) and t_eval is None and resume is None and stream is None
+             and all(type(a) in _PLAIN for a in args))
+    if plain:
+        key = args + tuple(map(type, args)) + (closures.PINNED_TIP_SWEEP,)  # (a switch of
+        #                                                                   how loops run)
+        kept = model.__dict__.get("_run_options")
+        if kept is not None and key in kept:
+            return kept[key]
+    opts = _checked(model, t_end, dt, rtol=rtol, atol=atol, method=method, scheme=scheme,
+                    rho_inf=rho_inf, newton_iterations=newton_iterations, newton_tol=newton_tol,
+                    record_every=record_every, record_dt=record_dt, t_eval=t_eval,
+                    full_state=full_state, richardson=richardson, progress=progress,
+                    max_step_error=max_step_error, max_energy_error=max_energy_error,
+                    hold_energy=hold_energy, resume=resume, stream=stream)
+    if plain:
+        kept = model.__dict__.get("_run_options")
+        if kept is None or len(kept) >= KEEP_OPTIONS:
+            kept = {}
+            object.__setattr__(model, "_run_options", kept)    # (a frozen Model)
+        kept[key] = opts
+    return opts
+
+
+def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_iterations,
+             newton_tol, record_every, record_dt, t_eval, full_state, richardson, progress,
+             max_step_error, max_energy_error, hold_energy, resume, stream):
     """simulate's arguments checked, in the order simulate documents them (RunOptions)."""
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")

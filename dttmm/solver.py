@@ -7,6 +7,7 @@ chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python on
 the prescribed ground motion, applied loads and joint drives for each chunk, judges segments,
 and collects the recorded samples (recording.py).
 """
+import functools
 import time
 from dataclasses import dataclass, replace
 
@@ -1105,9 +1106,9 @@ def _fastest_rate(omega):
     MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
     if omega.shape[1] == 0:
         return (0.0, 0)
-    squares = np.einsum("mki,mki->mk", omega, omega).max(axis=0)
-    k = int(np.argmax(squares))
-    return (float(np.sqrt(squares[k])), k)
+    squares = np.einsum("mki,mki->mk", omega, omega)
+    at = int(squares.argmax())          # (one reduction over samples and bodies)
+    return (float(np.sqrt(squares.flat[at])), at % omega.shape[1])
 
 
 def _next_chunk(done, n_steps, sampling, size):
@@ -1693,21 +1694,22 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
 
     loads = values["z"]                     # every body's input [m; q]
     info = dict(info, **column_names(model))
-    return Result(method="dttmm", t=t, rotation=rot, angular_velocity=omega,
+    return Result._of_run(derivation, method="dttmm", t=t, rotation=rot, angular_velocity=omega,
                   angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
                   moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
                   modal_coordinates=eta if model.has_beams else None,
                   modal_velocities=eta_d if model.has_beams else None,
-                  body_names=tuple(model.body_names), checkpoint=checkpoint,
-                  derivation=derivation, **joints)
+                  body_names=tuple(model.body_names), checkpoint=checkpoint, **joints)
 
 
 _ZERO = np.zeros(1)
 _ZERO.flags.writeable = False
 
 
+@functools.lru_cache(maxsize=64)
 def _zeros(shape):
-    """Zeros of the given shape, read-only, without memory of their own (strides 0)."""
+    """Zeros of the given shape, read-only, without memory of their own (strides 0; one array
+    per shape, shared: nothing can write it)."""
     return np.ndarray(shape, dtype=float, buffer=_ZERO, strides=(0,) * len(shape))
 
 

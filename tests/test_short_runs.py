@@ -11,6 +11,7 @@ from dttmm import BallJoint, build_chain, simulate, solver
 from dttmm.chains import arm, rigid_chain, three_pendulum, unit_link
 from dttmm.mechanisms import n_four_bar
 from dttmm.recording import leaves
+from dttmm.result import FIELDS
 
 
 MODELS = {
@@ -130,3 +131,37 @@ def test_a_start_that_calls_the_users_functions_is_taken_again_each_run():
     assert np.abs(after.position_output - before.position_output).max() > 1e-5
     for a, b in zip(_run_arrays(after), _run_arrays(fresh)):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_repeated_calls_options_are_kept_and_bad_ones_still_refused():
+    """A call with the arguments of an earlier one (same values and types) takes its checked
+    options (run_options); True and 1 are not the same argument, so a refused value is refused
+    after an accepted one that compares equal; arrays (t_eval) are checked every time."""
+    from dttmm.run_options import run_options
+    model = rigid_chain(2)
+    args = dict(rtol=None, atol=0.0, method="riccati", scheme="newmark", rho_inf=1.0,
+                newton_iterations=None, newton_tol=1e-12, record_every=None, record_dt=None,
+                t_eval=None, full_state=True, richardson=False, progress=None,
+                max_step_error=0.05, max_energy_error=None, hold_energy=None, resume=None,
+                stream=None)
+    first = run_options(model, 0.01, 1e-3, **args)
+    assert run_options(model, 0.01, 1e-3, **args) is first
+    assert run_options(model, 0.01, 2e-3, **args) is not first
+    with pytest.raises(ValueError, match="full_state must be True or False"):
+        simulate(model, 0.01, 1e-3, full_state=1)
+    simulate(model, 0.01, 1e-3, t_eval=[0.005])
+    with pytest.raises(ValueError, match="t_eval"):
+        simulate(model, 0.01, 1e-3, t_eval=[0.0055])
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_every_array_of_a_runs_result_is_read_only(name):
+    """A solver's Result makes its arrays read-only in place (Result._of_run): every array field,
+    stored or derived, refuses a write."""
+    res = simulate(MODELS[name](), 0.004, 1e-3)
+    arrays = {field: getattr(res, field) for field in FIELDS
+              if isinstance(getattr(res, field), np.ndarray)}
+    assert {"t", "rotation", "force", "moment", "position_output", "kinetic"} <= set(arrays)
+    for field, value in arrays.items():
+        with pytest.raises(ValueError, match="read-only"):
+            value[...] = 0.0
