@@ -126,7 +126,7 @@ class Stepping:
         try:
             plan.runner(plan.loop, Run(plan.params, plan.settings._replace(
                 h=h, record_every=every, max_step_error=step_limit), plan.state, plan.sweep,
-                inputs, rec, plan.monitor), self.info)
+                inputs, rec, plan.monitor), self.info, calls=plan.calls)
         except np.linalg.LinAlgError as err:
             raise s.DivergenceError(
                 first_step + 1, t_first, f"a matrix of the sweep is singular somewhere in steps "

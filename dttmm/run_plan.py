@@ -30,7 +30,7 @@ from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels import step as kstep
 from .kernels.closure import start_energy
-from .kernels.loop import Monitor, Settings
+from .kernels.loop import DirectCalls, Monitor, Settings
 from .model import model_fact
 from .recording import leaves, model_fingerprint
 
@@ -146,6 +146,7 @@ class PreparedRun:
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)
         self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
+        self.calls = DirectCalls()      # (its skeleton's calls: kernels/loop.py)
         self.run_info = dict(mode=s._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
                              loop=loop_name, model_fingerprint=model_fingerprint(user_model))
         if len(loops.kind):

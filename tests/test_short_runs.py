@@ -165,3 +165,35 @@ def test_every_array_of_a_runs_result_is_read_only(name):
     for field, value in arrays.items():
         with pytest.raises(ValueError, match="read-only"):
             value[...] = 0.0
+
+
+def test_direct_calls_go_to_the_code_numba_chose_and_only_for_the_same_types(monkeypatch):
+    """kernels/loop.py::DirectCalls: the second of two calls with arguments of the same types
+    finds numba's entry point (after which the calls go there, with the right answers); a call
+    whose varying parts change type (an int where a float was, a 2-d array where a 1-d one
+    was) goes through numba's dispatcher, which compiles a version for it."""
+    from collections import namedtuple
+
+    from numba import njit
+
+    from dttmm.kernels import loop as kloop
+    found = []
+    original = kloop._entry_point
+    monkeypatch.setattr(kloop, "_entry_point",
+                        lambda c, a: found.append(original(c, a)) or found[-1])
+    fake_run = namedtuple("FakeRun", "settings inputs rec")
+
+    @njit
+    def skeleton(loop, run, out):
+        out[0] = loop[0] + run.settings[0] + run.inputs[0].sum() + run.rec[0]
+
+    calls = kloop.DirectCalls()
+    out = np.zeros(1)
+    for i, (h, inputs) in enumerate([(1.0, np.ones(2)), (2.0, np.ones(3)), (3.0, np.ones(4)),
+                                     (4, np.ones(4)), (5.0, np.ones((2, 2)))]):
+        calls(skeleton, ((10.0,), fake_run((h,), (inputs,), (0.5,)), out))
+        assert out[0] == 10.0 + h + inputs.sum() + 0.5
+    # the entry point was looked up at the second call (the same types as the first), used at
+    # the third, and dropped at the fourth and fifth (new types: the dispatcher again)
+    assert len(found) == 1 and found[0] is not None
+    assert len(skeleton.overloads) == 3

@@ -24,6 +24,7 @@ from collections import namedtuple
 from types import FunctionType
 
 from numba import njit
+from numba._dispatcher import compute_fingerprint
 
 from . import CONTRACT, no_alloc_kernel
 from .features import ALL, specialized, unread_dropped
@@ -282,19 +283,67 @@ def _skeleton(loop_class, no_alloc):
     return compiled
 
 
-def run_steps(loop, run, out_info, features=ALL):
+def run_steps(loop, run, out_info, features=ALL, calls=None):
     """The skeleton of the loop's variant with numba's reference counting (the general and
     energy-momentum loops, whose pieces allocate), compiled for a model that uses `features`
-    (kernels/features.py; solver.kernel_features)."""
+    (kernels/features.py; solver.kernel_features).  calls: the prepared run's DirectCalls."""
     features = frozenset(features)
     run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
                        inputs=unread_dropped(run.inputs, "inputs", features),
                        rec=unread_dropped(run.rec, "rec", features))
-    specialized(_skeleton(type(loop), False), features)(unread_dropped(loop, "loop", features),
-                                                        run, out_info)
+    (calls or _call)(specialized(_skeleton(type(loop), False), features),
+                     (unread_dropped(loop, "loop", features), run, out_info))
 
 
-def run_steps_no_alloc(loop, run, out_info):
+def run_steps_no_alloc(loop, run, out_info, calls=None):
     """The skeleton of the loop's variant without numba's reference counting (the fused loops,
-    which allocate nothing; a piece that allocates fails to compile)."""
-    _skeleton(type(loop), True)(loop, run, out_info)
+    which allocate nothing; a piece that allocates fails to compile).  calls: the prepared
+    run's DirectCalls."""
+    (calls or _call)(_skeleton(type(loop), True), (loop, run, out_info))
+
+
+def _call(compiled, args):
+    compiled(*args)
+
+
+class DirectCalls:
+    """One prepared run's calls of its skeleton (solver's PreparedRun): a call like the one
+    before goes straight to the machine code numba chose for that one.
+
+    numba's dispatcher types every argument of every call before choosing the compiled code:
+    for a run's ~100 arrays in named tuples that was 13 of the 16 us a 1-step run spent in its
+    compiled call (it fingerprints each named tuple's field names; plain tuples of the same
+    arrays take 2 us).  A prepared run's structures but three (the loop variant's scratch, the
+    model's arrays, the state, the sweep's scratch, the monitor) are the same arrays from call
+    to call, written in place, never replaced: their types do not change.  The three that do
+    (settings, a chunk's inputs and its record) are fingerprinted as plain tuples (~1 us); where
+    they and the skeleton are those of the call before, the call goes to the entry point numba
+    dispatched that call to (its compiled code's, which unboxes the arguments as the dispatcher
+    would have; with one compiled version, that one; with several, the one of the arguments'
+    types, looked up once).  Anything else goes through the dispatcher, as before."""
+
+    def __init__(self):
+        self.key = self.entry = None
+
+    def __call__(self, compiled, args):
+        loop, run, out_info = args
+        key = (compiled, compute_fingerprint((tuple(run.settings), tuple(run.inputs),
+                                              tuple(run.rec), out_info)))
+        if self.entry is not None and key == self.key:
+            self.entry(*args)
+            return
+        compiled(*args)
+        self.entry = _entry_point(compiled, args) if key == self.key else None
+        self.key = key
+
+
+def _entry_point(compiled, args):
+    """The compiled code numba's dispatcher runs for these arguments, or None (numba's
+    compilation off; arguments it converts to another version's types)."""
+    overloads = getattr(compiled, "overloads", None)
+    if not overloads:
+        return None
+    if len(overloads) == 1:
+        return next(iter(overloads.values())).entry_point
+    found = overloads.get(tuple(compiled.typeof_pyval(a) for a in args))
+    return None if found is None else found.entry_point
