@@ -51,6 +51,20 @@ def _repeat_solve(repeats, mode, tip_pinned, parent, sweep, root, z):
         kstep.solve_step(mode, tip_pinned, parent, sweep, root, z)
 
 
+def us_per_call(model, steps=1, batches=5, calls=300):
+    """A simulate call's fixed cost: the wall time per call of a run of `steps` steps of
+    1e-4 s, the median of `batches` batches of `calls` calls (after a warm-up)."""
+    for _ in range(20):
+        simulate(model, steps * 1e-4, 1e-4)
+    times = []
+    for _ in range(batches):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            simulate(model, steps * 1e-4, 1e-4)
+        times.append((time.perf_counter() - t0) / calls)
+    return 1e6 * float(np.median(times))
+
+
 def floor_us_per_step(model, repeats=20000):
     """The cost of the dense products and the boundary solve alone: the step's sweep (same
     element kinds and matrix sizes, the mode simulate picks) on fixed transfers, in a compiled
@@ -281,6 +295,11 @@ def main(argv=None):
     fig["ratio_to_floor"] = paired_ratio_to_floor(three_pendulum(2), steps, 2 * repeats - 1)
     fig["rigid_chain_3_us_per_step_energy_momentum"] = median_us_per_step(
         rigid_chain(3), steps, repeats, scheme="energy_momentum")
+    # a call's fixed cost (issue 30: short runs), 1 and 10 steps
+    for name, make in (("rigid_chain_3", lambda: rigid_chain(3)),
+                       ("three_pendulum", three_pendulum)):
+        for n in (1, 10):
+            fig[f"{name}_us_per_call_{n}_steps"] = us_per_call(make(), n)
     print(json.dumps(fig, indent=1), flush=True)
 
     model = three_pendulum(2)
