@@ -21,7 +21,7 @@ from dttmm.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
-from dttmm.kernels import step as kstep
+from dttmm.kernels.stepping import step as kstep
 from dttmm.solver import Workspace, _mode, kernel_model
 from numba import njit
 

@@ -2,8 +2,8 @@
 estimate (docs/solver.md, "Adaptive steps").
 
 The compiled loop takes segments of up to SEGMENT equal steps; between segments this controller
-compares the segment's largest Zienkiewicz-Xie estimate e (kernels/loop.py::step_error: rad for
-rotations, m or modal units for the rest) with the run's tolerance and either accepts the
+compares the segment's largest Zienkiewicz-Xie estimate e (kernels/stepping/loop.py::step_error: rad
+for rotations, m or modal units for the rest) with the run's tolerance and either accepts the
 segment and sets the next step, or restores the state saved before it and retries with a
 smaller step.  The estimate is held per unit time, e / h <= tol / t_end with tol = atol + rtol:
 the local errors then add up to about tol over the run, and since e ~ h^3 for a second-order

@@ -480,8 +480,8 @@ def describe_closures(model):
 def check_runs_in_sweeps(model, who, moving_ground=False):
     """Refuse, before a DT-TMM run or static solve, the loops its sweeps do not close yet,
     naming them: loops of rigid bodies, beams (at either end) and elastic hinges
-    (kernels/closure.py), on a fixed ground or, in a run (moving_ground=True), a moving one,
-    and a chain's tip joined to a fixed ground by a ball joint anywhere.  The pinned tip must
+    (kernels/assembly/closure.py), on a fixed ground or, in a run (moving_ground=True), a moving
+    one, and a chain's tip joined to a fixed ground by a ball joint anywhere.  The pinned tip must
     start on its pin (the sweeps hold it where it starts)."""
     if model.n_closures == 0:
         return
@@ -540,8 +540,8 @@ def constraint_directions(model, c):
     return points, dots
 
 
-# constraint_rows' kinds (kernels/closure.py, the reference): gaps e . (p_b - p_a) with e fixed
-# in the world or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an
+# constraint_rows' kinds (kernels/assembly/closure.py, the reference): gaps e . (p_b - p_a) with e
+# fixed in the world or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an
 # axis fixed in a's or in b's frame (driven_directions), and an elastic hinge's rotation about
 # an axis fixed in a's frame (spring_directions)
 GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B, ROTATION_A = 0, 1, 2, 3, 4, 5
@@ -683,7 +683,7 @@ def tree_state(model, theta, q, omega, qd):
     rates and the elastic hinges' deflections are the model's)."""
     from .model import output_section
     from .result import beam_output_offset
-    from .kernels.so3 import expm_so3
+    from .kernels.algebra.so3 import expm_so3
     n = model.n_bodies
     off = np.concatenate([[0], np.cumsum(model.n_modes)])
     rot, w = np.zeros((n, 3, 3)), np.zeros((n, 3))

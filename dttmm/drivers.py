@@ -2,8 +2,8 @@
 t_end.  Stepping is one call's records and chunk inputs; fixed_steps runs chunks of equal steps
 (with the energy balance where asked), adaptive runs segments whose step the local error
 estimate chooses (adaptive.py), runge_kutta runs the high-order scheme's compiled steps
-(kernels/runge_kutta.py), richardson extrapolates two to four fixed-step runs.  Each ends in
-the run's Result."""
+(kernels/stepping/runge_kutta.py), richardson extrapolates two to four fixed-step runs.  Each ends
+in the run's Result."""
 import time
 import warnings
 
@@ -14,8 +14,9 @@ from . import solver as s
 from .energy_balance import EnergyBalance
 from .feedback import Progress, note_once
 from .closures import closure_targets
-from .kernels import runge_kutta as runge_kutta_kernels
-from .kernels.loop import ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Inputs, Run
+from .kernels.stepping import runge_kutta as runge_kutta_kernels
+from .kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
+                                    Inputs, Run)
 from .recording import Checkpoint, NoCheckpoint, Recording, SampleStream
 from .result import _drive_spring_energy
 
@@ -337,8 +338,8 @@ def adaptive(run):
 
 
 def runge_kutta(run):
-    """The high-order scheme (kernels/runge_kutta.py; docs/integrators.md): its compiled steps
-    from t = 0 to t_end, each sample from the step's dense output (MAX_SAMPLES equally spaced
+    """The high-order scheme (kernels/stepping/runge_kutta.py; docs/integrators.md): its compiled
+    steps from t = 0 to t_end, each sample from the step's dense output (MAX_SAMPLES equally spaced
     by default; record_dt, t_eval), in chunks of samples; the Result (no checkpoint: its steps
     lie on no grid)."""
     plan, opts, recording, info = run.plan, run.opts, run.recording, run.info

@@ -66,8 +66,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
     follow their parents' that do not agree with them (dttmm.ode gives placeholders there);
     extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads."""
     from . import solver
-    from .kernels.closure import _dependent_frames, row_residuals, set_ground
-    from .kernels.loop import Monitor, Settings
+    from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
+    from .kernels.stepping.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
         solver.check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
     solver.check_supported(model, "newmark", "riccati", True)

@@ -1,5 +1,5 @@
 """DT-TMM's accelerations of a model with closed loops at t = 0: the consistent start with the
-closing joints' multipliers (kernels/closure.py; docs/loops.md, "The sweep with closing
+closing joints' multipliers (kernels/assembly/closure.py; docs/loops.md, "The sweep with closing
 joints"): dttmm.forward_dynamics of the model's initial state, its joint accelerations per
 joint (n, 2).
 """

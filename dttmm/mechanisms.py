@@ -125,7 +125,7 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
         welded to the ground carries every vertical bar "v0".. "v{n}" on its joint "O{i}" at
         (i, 0), each horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed
         to v{i}'s top by a revolute joint "B{i}": each loop is then local (its sweep columns
-        pass four bars, kernels/closure.py), the cost linear in n.
+        pass four bars, kernels/assembly/closure.py), the cost linear in n.
 
     Returns
     -------

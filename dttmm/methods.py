@@ -22,7 +22,8 @@ class Scheme:
     stop_unconverged: bool      # a step whose iterations do not converge stops the run
     loads_at_midpoints: bool    # its loads are evaluated at the steps' midpoints, not ends
     loop: str                   # its loop variant family (run_plan.LOOP_BUILDERS)
-    records: tuple = ()         # what it records beyond the state (kernels/loop.py::Record)
+    records: tuple = ()         # what it records beyond the state
+    #                             (kernels/stepping/loop.py::Record)
 
 
 SCHEMES = {scheme.name: scheme for scheme in (

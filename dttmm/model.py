@@ -20,7 +20,7 @@ from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
-from .kernels.so3 import expm_so3, left_jacobian
+from .kernels.algebra.so3 import expm_so3, left_jacobian
 from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
 
@@ -526,7 +526,7 @@ class Model:
     def needs_general_loop(self):
         """Whether a beam's w' and eta'' columns are differenced in every step (an end torque,
         twist modes or loads in body axes), so the model runs in the general loop, not the fused one
-        (kernels/beam.py::beam_transfer)."""
+        (kernels/transfers/beam.py::beam_transfer)."""
         return (self.has_beam_end_torque or self.has_twist or self.has_stretch
                 or self.has_follower_loads)
 

@@ -27,10 +27,10 @@ from . import closures
 from . import solver as s       # (solver imports this module at its end: read at call time)
 from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
-from .kernels import ball_chain, em_step, runge_kutta, tree, weld_chain
-from .kernels import step as kstep
-from .kernels.closure import start_energy
-from .kernels.loop import DirectCalls, Monitor, Settings
+from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
+from .kernels.stepping import step as kstep
+from .kernels.assembly.closure import start_energy
+from .kernels.stepping.loop import DirectCalls, Monitor, Settings
 from .model import model_fact
 from .recording import leaves, model_fingerprint
 
@@ -39,16 +39,17 @@ KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few tho
 
 
 def runs_fused(model, mode, scheme):
-    """Whether a kernel model runs in a fused loop (kernels/ball_chain.py, kernels/tree.py):
-    rigid bodies and beams between ball joints, Newmark or the high-order scheme."""
+    """Whether a kernel model runs in a fused loop (kernels/stepping/ball_chain.py,
+    kernels/stepping/tree.py): rigid bodies and beams between ball joints, Newmark or the high-order
+    scheme."""
     return (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
             and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
             and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
 
 
 def runs_welded(model, mode, scheme):
-    """Whether a kernel model runs in the fused welded-chain loop (kernels/weld_chain.py): a
-    chain of beams welded end to end from the ground (fixed hinges, a free tip), Newmark."""
+    """Whether a kernel model runs in the fused welded-chain loop (kernels/stepping/weld_chain.py):
+    a chain of beams welded end to end from the ground (fixed hinges, a free tip), Newmark."""
     return (s.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
             and model.is_chain and not model.tip_pinned and model.n_bodies > 0
             and all(int(c) == s.BEAM for c in model.body_kind)
@@ -84,9 +85,9 @@ class PreparedRun:
         self.loaded = s.loaded_bodies(user_model, model, keep)  # where each body's loads act
         self.mode = mode = s._mode(model, opts.method, opts.full_state)
         dt, coef, n = opts.dt, opts.coef, model.n_bodies
-        # the loop variant (kernels/loop.py): a fused one (kernels/ball_chain.py, tree.py,
-        # weld_chain.py), the energy-momentum scheme's, or the general loop (kernels/step.py);
-        # each records what its scheme defines
+        # the loop variant (kernels/stepping/loop.py): a fused one (kernels/stepping/ball_chain.py,
+        # tree.py, weld_chain.py), the energy-momentum scheme's, or the general loop
+        # (kernels/stepping/step.py); each records what its scheme defines
         fused = runs_fused(model, mode, scheme)
         if scheme.loop == "runge_kutta" and not fused:     # (check_supported refuses it)
             raise ValueError(f"simulate(scheme={scheme.name!r}): the model does not run in the "
@@ -116,7 +117,7 @@ class PreparedRun:
         features = s.kernel_features(model, mode, scheme.name == "paper")
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused else None, params,
                             settings, state, ws.sweep, monitor, dt, loops, features=features)
-        if opts.hold_energy:        # the total energy the steps hold (kernels/closure.py)
+        if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py)
             loops.energy[:2] = 1.0, start_energy(params, loops, state)
         histories = s._station_histories(model, state, scheme.name == "paper")
         state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
@@ -146,7 +147,7 @@ class PreparedRun:
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)
         self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
-        self.calls = DirectCalls()      # (its skeleton's calls: kernels/loop.py)
+        self.calls = DirectCalls()      # (its skeleton's calls: kernels/stepping/loop.py)
         self.run_info = dict(mode=s._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
                              loop=loop_name, model_fingerprint=model_fingerprint(user_model))
         if len(loops.kind):

@@ -2,8 +2,8 @@
 simulate(model, t_end, dt | rtol, ...) -> Result.
 
 The frozen Model is read-only; all mutable state lives in a Workspace allocated once per run.
-The time loop runs in numba (one skeleton, kernels/loop.py, with the scheme's loop variant) in
-chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python only evaluates
+The time loop runs in numba (one skeleton, kernels/stepping/loop.py, with the scheme's loop variant)
+in chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python only evaluates
 the prescribed ground motion, applied loads and joint drives for each chunk, judges segments,
 and collects the recorded samples (recording.py).
 """
@@ -20,22 +20,22 @@ from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, FAMILY, LENGTH, MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
-                             known_force, runs_in_loop)
+                              known_force, runs_in_loop)
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import ball_chain
-from .kernels import step as kstep
-from .kernels.closure import Loops, set_ground
+from .kernels.stepping import ball_chain
+from .kernels.stepping import step as kstep
+from .kernels.assembly.closure import Loops, set_ground
 from .kernels.features import kept, specialized, unread_dropped
-from .kernels.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
-                           Params, Record, Run, State,
-                           Sweep)
+from .kernels.stepping.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
+                                    Params, Record, Run, State,
+                                    Sweep)
 # the runners the prepared runs take (read here: tests count their calls)
-from .kernels.loop import run_steps, run_steps_no_alloc     # noqa: F401
-from .kernels.beam import gauss_points, quadrature_size
-from .kernels.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
+from .kernels.stepping.loop import run_steps, run_steps_no_alloc     # noqa: F401
+from .kernels.transfers.beam import gauss_points, quadrature_size
+from .kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
                        closure_targets, constraint_rows, has_closure_drives, loop_residuals)
 from .methods import SWEEPS
@@ -134,8 +134,8 @@ class Integrator:
 
 class Workspace:
     """Preallocated state and scratch of one run (nothing here is shared between runs): the
-    state the loops advance (kernels/loop.py::State), the assembly's scratch (Sweep) and the
-    beams' tables (beam_tables).  fused: the run takes a fused ball-chain or ball-tree loop,
+    state the loops advance (kernels/stepping/loop.py::State), the assembly's scratch (Sweep) and
+    the beams' tables (beam_tables).  fused: the run takes a fused ball-chain or ball-tree loop,
     which reads the reduced sweep's recursion arrays only (red_s, red_p, red_tinv, red_t,
     red_aq): the full-state sweep's and the general loop's reduced maps (red_v, red_phi) are
     left empty (about 6.5 KB per body: a million bodies' gigabytes)."""
@@ -161,7 +161,8 @@ class Workspace:
             eta=model.initial_modal_coordinates.copy(),
             eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
             eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3(),
-            # joints with coordinates (kernels/joint.py): q, q', q'', pseudo, generalized force
+            # joints with coordinates (kernels/transfers/joint.py): q, q', q'', pseudo, generalized
+            # force
             jq=jq, jqd=jqd, jqdd=np.zeros((n, 2)),
             jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
         self.sweep = Sweep(
@@ -189,7 +190,7 @@ def _initial_deflections(model, state):
     positions then place the body where the model says): an elastic hinge's given deflection
     (ElasticHinge.deflection; its rate starts at zero), and a prismatic joint's slide d = u q
     with its rate u q' + w_p x d (u the axis in world, w_p the parent's output section's
-    angular velocity; kernels/joint.py::joint_frame)."""
+    angular velocity; kernels/transfers/joint.py::joint_frame)."""
     for k in range(model.n_bodies):
         if model.hinge_kind[k] == ELASTIC:
             state.defl[k] = model.hinge_params[k, DEFLECTION_0]
@@ -212,8 +213,8 @@ def _initial_deflections(model, state):
 
 @model_fact
 def kernel_params(model):
-    """The frozen model's arrays as the kernels read them (kernels/loop.py::Params), once per
-    model: the kernels read them and never write them."""
+    """The frozen model's arrays as the kernels read them (kernels/stepping/loop.py::Params), once
+    per model: the kernels read them and never write them."""
     # a locked body's rotation relative to the ground frame (read only where locked[k]; no
     # rows without locked bodies: a million bodies' 72 MB)
     lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation,
@@ -247,9 +248,9 @@ def joint_drives(model):
     """(n, 2, 4): each joint coordinate's drive as the kernels read it, [kind, stiffness,
     damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
     (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
-    part in the inputs (_joint_inputs; kernels/joint.py::drive_value); a compiled JointForce
-    is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.  One
-    row of none for a model without joints with coordinates (the kernels read a joint's row
+    part in the inputs (_joint_inputs; kernels/transfers/joint.py::drive_value); a compiled
+    JointForce is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.
+    One row of none for a model without joints with coordinates (the kernels read a joint's row
     only; the full-state tree sweep hands a ball joint row 0, unread)."""
     table = np.zeros((model.n_bodies if has_coordinates(model) else 1, 2, 4))
     table[:, :, 0] = -1.0
@@ -295,7 +296,7 @@ def has_offsets(model):
 
 @model_fact
 def has_loops(model):
-    """Closing joints other than a chain's pinned tip (kernels/closure.py)."""
+    """Closing joints other than a chain's pinned tip (kernels/assembly/closure.py)."""
     return model.n_closures > 0 and not model.tip_pinned
 
 
@@ -329,13 +330,13 @@ def full_tree(model, full_state=False):
 
 # loops with more rows than this whose rows' matrices are banded (half the rows wide at most)
 # are solved by a regularized banded LU, fewer by the truncated SVD
-# (kernels/closure.py::_rows_solve; at 50 rows the SVD costs 1.3 ms, the band's LU ~10 us)
+# (kernels/assembly/closure.py::_rows_solve; at 50 rows the SVD costs 1.3 ms, the band's LU ~10 us)
 BANDED_ROWS = 20
 
 
 def _column_bodies(model, loaded):
-    """(up, active) of a column loaded at the bodies `loaded` (kernels/closure.py): its active
-    bodies are the subtrees of its loaded bodies' topmost moving ancestors (below the ground
+    """(up, active) of a column loaded at the bodies `loaded` (kernels/assembly/closure.py): its
+    active bodies are the subtrees of its loaded bodies' topmost moving ancestors (below the ground
     and the bodies locked to it, whose kinematics a load does not change), where its response
     is not zero; up adds the loaded bodies' other ancestors, which its upward sweep passes
     too (their loads, for the step's own recovery)."""
@@ -359,8 +360,8 @@ def _column_bodies(model, loaded):
 
 
 def loop_columns(model, owner, body, banded_rows=None):
-    """Where each row's sweep column runs (kernels/closure.py): (act (R + 1, n) the active bodies
-    per column, column 0 all; ups, body -> the columns c >= 1 its upward sweep passes (bodies
+    """Where each row's sweep column runs (kernels/assembly/closure.py): (act (R + 1, n) the active
+    bodies per column, column 0 all; ups, body -> the columns c >= 1 its upward sweep passes (bodies
     that pass none left out: a million empty lists held 56 MB); act_idx
     and act_ptr, each column's active bodies in tree order; colrows, per row's column the rows
     with a side body among its active bodies; (lower, upper) the rows' matrices' bandwidths, or
@@ -395,8 +396,8 @@ def loop_columns(model, owner, body, banded_rows=None):
 
 
 def loop_tables(model):
-    """The closing joints as the general loop reads them (kernels/closure.py::Loops), in the
-    kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
+    """The closing joints as the general loop reads them (kernels/assembly/closure.py::Loops), in
+    the kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
     loop_columns.  Each call's own copy (a run writes its scratch) of the tables built once
     per model."""
@@ -413,8 +414,8 @@ def _loop_tables(model, banded_rows):
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
     act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body, banded_rows)
-    nb = n if r else 0          # the rows' scratch per body (kernels/closure.py; none without
-    st = 2 * nb + 1 if r else 0  # rows: a million bodies' 900 B each)
+    nb = n if r else 0          # the rows' scratch per body (kernels/assembly/closure.py;
+    st = 2 * nb + 1 if r else 0  # none without rows: a million bodies' 900 B each)
     up_ptr = np.zeros(n + 1, dtype=np.int64)      # (body k's columns: up_idx[up_ptr[k]:..])
     for k, u in ups.items():
         up_ptr[k + 1] = len(u)
@@ -449,7 +450,7 @@ def _loop_tables(model, banded_rows):
 
 
 def _loop_info(loops):
-    """A run's info on its closing joints (kernels/closure.py::Loops.stats, energy): the
+    """A run's info on its closing joints (kernels/assembly/closure.py::Loops.stats, energy): the
     largest residuals after any step's projections, and before them, and where the energy is
     held the largest relative change of the rates that held it; nothing without loops."""
     if not len(loops.kind):
@@ -482,9 +483,9 @@ def energy_not_held(model, rho_inf=1.0):
 @model_fact
 def _iterates(model, full_state):
     """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
-    Jacobian exact only to O(dt) terms (kernels/joint.py, step.py::_welded): their steps iterate
-    to newton_tol by default (without iterations a flexible link there is not stable).  Asked of
-    the kernels' model (kernel_model: an end section is welded to its beam)."""
+    Jacobian exact only to O(dt) terms (kernels/transfers/joint.py, step.py::_welded): their steps
+    iterate to newton_tol by default (without iterations a flexible link there is not stable).
+    Asked of the kernels' model (kernel_model: an end section is welded to its beam)."""
     model = kernel_model(model)[0]
     if has_loops(model):            # closing joints: their rows converge with the iterations
         return True
@@ -496,8 +497,8 @@ def _iterates(model, full_state):
 def _joint_inputs(model, times, state=None, dt=0.0):
     """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q''), a
     drive's force known in time (elements/drives.py::known_force) and a JointForce's value
-    f(t, q, q') at each time (kernels/loop.py::Inputs).  A JointForce of the state is evaluated
-    at the coordinates the constant-acceleration predictor gives from the state (one step
+    f(t, q, q') at each time (kernels/stepping/loop.py::Inputs).  A JointForce of the state is
+    evaluated at the coordinates the constant-acceleration predictor gives from the state (one step
     ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the
     transfer"."""
     out = np.zeros((len(times), model.n_bodies, 2, 3))
@@ -551,10 +552,10 @@ def beam_tables(model):
     [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI]) for the kernels (docs/beam.md, "Mode
     shapes" and "The integrals in the frame").  The modal integrals of beam k, moments[k, j] =
     [int Y_j, int x Y_j, int Y_j Y_0, .., int Y_j Y_(m-1)] over [0, L], by Gauss-Legendre
-    quadrature exact to rounding for the mode families (kernels/beam.py::quadrature_size), then
-    the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
+    quadrature exact to rounding for the mode families (kernels/transfers/beam.py::quadrature_size),
+    then the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
     (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each.  ends[k, m:m + mt]
-    is beam k's twist table (docs/beam.md, "Torsion"; kernels/beam.py::twist_relations):
+    is beam k's twist table (docs/beam.md, "Torsion"; kernels/transfers/beam.py::twist_relations):
     [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j, and
     ends[k, m + mt:m + mt + ma] its stretch table ("Stretch"; beam_relations): [U_j(L),
     int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
@@ -618,7 +619,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                       loops=None, t=0.0, extra_loads=None, features=None):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
-    or kernels/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
+    or kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
     held at acceleration level.  extra_loads: (force, torque), (n, 3) each, world, added to
     the applied loads (at the mass centres; dynamics.linearize's inputs).  features: what the
     kernels are compiled for (kernel_features: by default the model's, without the paper's
@@ -686,7 +687,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
 def start_pass(params, settings, state, sweep, monitor, ground, loads, joint_input,
                n_closures):
     """The Run of one pass of a fused loop's consistent start at one time (_fused_start; the
-    high-order scheme's stages, kernels/runge_kutta.py): ground = _ground's six (1, ...)
+    high-order scheme's stages, kernels/stepping/runge_kutta.py): ground = _ground's six (1, ...)
     arrays, loads = _loads' three, joint_input = _joint_inputs'; no Newton iteration, no
     record."""
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = ground
@@ -700,8 +701,8 @@ def start_pass(params, settings, state, sweep, monitor, ground, loads, joint_inp
 
 
 def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
-    """Where a chunk's samples are written (kernels/loop.py::Record): n_rec_max of each; the
-    paper scheme's station velocities, the mass-centre velocities and the closing joints'
+    """Where a chunk's samples are written (kernels/stepping/loop.py::Record): n_rec_max of each;
+    the paper scheme's station velocities, the mass-centre velocities and the closing joints'
     wrenches only where recorded."""
     return Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
                   omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
@@ -719,9 +720,10 @@ _NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations no
 
 def _fused_start(runner, loop, run):
     """The consistent start of the fused loops: their own iterate, once, at acceleration level
-    (kernels/ball_chain.py::start_loop; run.settings.start).  Leaves the stations' states in
-    state.z (angular accelerations in the phi slots) and the beams' modal accelerations in
-    state.eta_acc, as kernels/step.py::initial_accelerations does; returns its status codes."""
+    (kernels/stepping/ball_chain.py::start_loop; run.settings.start).  Leaves the stations' states
+    in state.z (angular accelerations in the phi slots) and the beams' modal accelerations in
+    state.eta_acc, as kernels/stepping/step.py::initial_accelerations does; returns its status
+    codes."""
     info = np.zeros(5, dtype=np.int64)
     runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
     run.state.eta_acc[:] = loop.per_mode[4]
@@ -1040,7 +1042,7 @@ def load_stream(model, path):
 def _set_step(loop, h, coef):
     """A new step in the loop variant's step-dependent constants (an adaptive run's segment;
     the skeleton's pieces take h itself from Settings): the fused loops' (c1, c3, 1/c1, c3/c1)
-    and the general loop's ground d(w')/d(phi) = c1 I (kernels/step.py::general_loop)."""
+    and the general loop's ground d(w')/d(phi) = c1 I (kernels/stepping/step.py::general_loop)."""
     if isinstance(loop, kstep.GeneralLoop):
         loop.ground[4][...] = kstep._coefficients_py(h, coef)[0] * np.eye(3)
     elif hasattr(loop, "coefficients"):
@@ -1174,9 +1176,9 @@ def check_supported(model, scheme, method="riccati", full_state=False):
 
 
 def _check_runge_kutta(model, method, full_state):
-    """The high-order scheme (kernels/runge_kutta.py) integrates the fused loops' sweep: chains
-    and trees of rigid bodies and beams on ball joints (bending modes only), on a fixed ground
-    with gravity alone (its compiled stages evaluate no function of the user's)."""
+    """The high-order scheme (kernels/stepping/runge_kutta.py) integrates the fused loops' sweep:
+    chains and trees of rigid bodies and beams on ball joints (bending modes only), on a fixed
+    ground with gravity alone (its compiled stages evaluate no function of the user's)."""
     where = "simulate(scheme='dop853')"
     joint = next((k for k in range(model.n_bodies) if model.hinge_kind[k] != BALL), None)
     locked = next((k for k in range(model.n_bodies) if model.ground_locked[k]), None)
@@ -1232,8 +1234,8 @@ def _first_branch(model):
 
 
 def _check_tree(model, scheme, method):
-    """Ball-joint trees run the reduced tree sweep (kernels/tree.py); full_state=True and fixed or
-    elastic hinges send a tree to the full-state sweep (_check_full_tree)."""
+    """Ball-joint trees run the reduced tree sweep (kernels/stepping/tree.py); full_state=True and
+    fixed or elastic hinges send a tree to the full-state sweep (_check_full_tree)."""
     branch = _first_branch(model)
     if method == "direct":
         raise ValueError(f"simulate: method='direct' multiplies the transfer matrices out along "
@@ -1245,7 +1247,7 @@ def _check_tree(model, scheme, method):
 
 
 def _station_histories(model, state, independent):
-    """The paper's scheme's state (kernels/step.py, advance): velocity, acceleration and
+    """The paper's scheme's state (kernels/stepping/step.py, advance): velocity, acceleration and
     pseudo-acceleration of the ground point and every body's output point ((n + 1, 3) each), and
     of every rigid body's mass centre ((n, 3)), at t = 0 from the consistent start (state.z
     holds the stations' accelerations and state.omega_dot the angular ones).  Empty unless
@@ -1323,7 +1325,7 @@ def _kernel_model(model):
     chain = model.is_chain
 
     # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
-    # side is the end section (kernels/closure.py reads rigid sides only)
+    # side is the end section (kernels/assembly/closure.py reads rigid sides only)
     closed_ends, closed_inputs = set(), set()
     if model.n_closures and not model.tip_pinned:
         on_end = np.asarray(model.closure_on_end, dtype=bool)

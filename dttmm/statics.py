@@ -27,10 +27,10 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels import ball_chain
-from .kernels.loop import Monitor, Settings
-from .kernels.joint import joint_frame, n_coordinates
-from .kernels.so3 import expm_so3
+from .kernels.stepping import ball_chain
+from .kernels.stepping.loop import Monitor, Settings
+from .kernels.transfers.joint import joint_frame, n_coordinates
+from .kernels.algebra.so3 import expm_so3
 from .model import Model, output_section
 from .result import _foreshortening_along, _log_so3, beam_output_offset
 from . import solver
@@ -268,7 +268,7 @@ class _Configuration:
         """(rotations, joint coordinates (n, 2), modal coordinates, hinge deflections (n, 3))
         of q: the free bodies turned by their increments, every welded body placed on its
         inboard output section, a body behind a joint with coordinates on its joint's frame
-        (kernels/joint.py)."""
+        (kernels/transfers/joint.py)."""
         km = self.model
         rot = self.rot0.copy()
         jq = self.jq0.copy()

@@ -1,6 +1,6 @@
-"""The fused loop for rigid bodies and beams between ball joints (kernels/ball_chain.py) against
-the general loop (kernels/step.py): the same step computed two ways, so they must agree to
-rounding, on every feature the fused loop covers.  (Its physics is checked like every other
+"""The fused loop for rigid bodies and beams between ball joints (kernels/stepping/ball_chain.py)
+against the general loop (kernels/stepping/step.py): the same step computed two ways, so they must
+agree to rounding, on every feature the fused loop covers.  (Its physics is checked like every other
 path's: the rigid-chain tests against the reference, conservation and analytic cases all run
 through it.)"""
 import numpy as np

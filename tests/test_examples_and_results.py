@@ -143,7 +143,7 @@ def test_spin_up_conserves_energy_with_the_drives_work():
     (t >= T = 15 s, where the beam's vibration still trades energy with the drive).  Measured:
     3.9e-9 over the run (9.7e-10 at dt 5e-4: order 2), 1.4e-13 after T (8.2e-9 and 7.8e-11
     while the fused welded loop recorded the clamped beam's rates by the trapezoidal rule's
-    relations on the hub's increments, kernels/weld_chain.py::_update).  (simulate's own
+    relations on the hub's increments, kernels/stepping/weld_chain.py::_update).  (simulate's own
     max_energy_error reports ~1e-5 here: it scales by the largest kinetic energy so far, ~1e-2 J
     at t = 1 s of a spin-up from rest.)"""
     sys.path.insert(0, str(ROOT / "examples"))

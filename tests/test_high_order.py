@@ -1,4 +1,4 @@
-"""The high-order scheme (simulate(scheme="dop853"); kernels/runge_kutta.py,
+"""The high-order scheme (simulate(scheme="dop853"); kernels/stepping/runge_kutta.py,
 docs/integrators.md): Dormand-Prince 8(5,3) on the rotation group, compiled with the fused
 loops' acceleration sweep.  Its order against the Newton-Euler reference, its error against
 rtol, its rotations, its energy, its dense output, and scipy's DOP853 on dttmm.ode."""

@@ -1,6 +1,6 @@
-"""DT-TMM with joints with coordinates (kernels/joint.py, the full-state tree sweep; docs/joints.md,
-"In the transfer"), checked against the independent Newton-Euler reference and against
-analytical properties: the arm of examples/arm.py (both drives, rigid and flexible), planar
+"""DT-TMM with joints with coordinates (kernels/transfers/joint.py, the full-state tree sweep;
+docs/joints.md, "In the transfer"), checked against the independent Newton-Euler reference and
+against analytical properties: the arm of examples/arm.py (both drives, rigid and flexible), planar
 revolute chains, a slider on a spring, the universal joint's forbidden rotation, energy."""
 import numpy as np
 import pytest

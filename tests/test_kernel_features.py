@@ -12,10 +12,10 @@ from numba.core import analysis, compiler, ir, ir_utils, types
 from numba.core.dispatcher import Dispatcher
 
 from dttmm import chains, solver
-from dttmm.kernels import em_step
+from dttmm.kernels.stepping import em_step
 from dttmm.kernels import features as kf
-from dttmm.kernels import loop as kloop
-from dttmm.kernels import step as kstep
+from dttmm.kernels.stepping import loop as kloop
+from dttmm.kernels.stepping import step as kstep
 from dttmm.scene import load_scene
 
 

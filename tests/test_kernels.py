@@ -4,9 +4,9 @@ import pytest
 from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
-from dttmm.kernels.body import rigid_body_transfer
-from dttmm.kernels.hinge import elastic_hinge_loads, elastic_hinge_transfer
-from dttmm.kernels.so3 import expm_so3, hat, left_jacobian, log_so3
+from dttmm.kernels.transfers.body import rigid_body_transfer
+from dttmm.kernels.transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
+from dttmm.kernels.algebra.so3 import expm_so3, hat, left_jacobian, log_so3
 
 rng = np.random.default_rng(7)
 
@@ -39,7 +39,7 @@ def test_so3_kernels_match_scipy(scale):
 
 @pytest.mark.parametrize("angle", [1e-5, 3e-3, 0.0099, 0.0101, 0.3])
 def test_so3_series_branch_is_exact_to_rounding(angle):
-    """exp and J_l switch from series to closed forms at |phi| = 1e-2 (kernels/so3.py): they
+    """exp and J_l switch from series to closed forms at |phi| = 1e-2 (kernels/algebra/so3.py): they
     match scipy's expm and J_l = int_0^1 exp(s phi^) ds (10-point Gauss-Legendre of scipy's
     expm, exact to rounding here) to 4e-16 on the series side; the closed forms lose digits to
     cancellation just above it (measured 2e-15 at 0.0101), hence 1e-14 there."""
@@ -76,7 +76,7 @@ def test_left_jacobian_derivative_matches_differences(angle):
     """DJ_l(phi)[delta] (the end moment's eta'' columns, docs/beam.md) against central
     differences of left_jacobian, on both sides of its series switch (|phi| = 0.1): measured
     1.1e-9 at most, the differences' own error."""
-    from dttmm.kernels.so3 import left_jacobian, left_jacobian_derivative
+    from dttmm.kernels.algebra.so3 import left_jacobian, left_jacobian_derivative
     gen = np.random.default_rng(3)
     phi = gen.normal(size=3)
     phi *= angle / np.linalg.norm(phi)
@@ -158,7 +158,7 @@ def test_elastic_hinge_transfer_reproduces_the_spring_law():
 
 
 def test_inv3_matches_numpy():
-    from dttmm.kernels.mat3 import inv3
+    from dttmm.kernels.algebra.mat3 import inv3
     a = rng.normal(size=(3, 3)) + 3 * np.eye(3)
     out = np.empty((3, 3))
     det = inv3(a, out)
@@ -168,11 +168,11 @@ def test_inv3_matches_numpy():
 
 
 def test_least_norm_solve3_matches_the_pseudo_inverse():
-    """The pinned tip's 3 x 3 least-norm solve (kernels/mat3.py::least_norm_solve3, a Jacobi SVD
-    that allocates nothing) against numpy's pinv with the same rcond: on full-rank, rank-2,
+    """The pinned tip's 3 x 3 least-norm solve (kernels/algebra/mat3.py::least_norm_solve3, a Jacobi
+    SVD that allocates nothing) against numpy's pinv with the same rcond: on full-rank, rank-2,
     rank-1 and zero matrices the same solution; on matrices scaled over 12 decades (some
     singular values cut off) residuals as small as numpy's."""
-    from dttmm.kernels.mat3 import least_norm_solve3
+    from dttmm.kernels.algebra.mat3 import least_norm_solve3
     rng = np.random.default_rng(3)
     for trial in range(400):
         a = rng.normal(size=(3, 3))
@@ -196,11 +196,11 @@ def test_least_norm_solve3_matches_the_pseudo_inverse():
 
 
 def test_small_solve_matches_lapack_and_flags_singular():
-    """The beam's modal systems are solved without LAPACK (kernels/beam.py, _solve_in_place):
-    it must agree with numpy's solve, pivoting included, on the first n_rhs columns of b and
-    the first n columns of a (the beam map's work rows are wider), leave the rest alone, and
-    leave NaN (for the step's finite check) on a singular matrix."""
-    from dttmm.kernels.beam import _solve_in_place
+    """The beam's modal systems are solved without LAPACK (kernels/transfers/beam.py,
+    _solve_in_place): it must agree with numpy's solve, pivoting included, on the first n_rhs
+    columns of b and the first n columns of a (the beam map's work rows are wider), leave the rest
+    alone, and leave NaN (for the step's finite check) on a singular matrix."""
+    from dttmm.kernels.transfers.beam import _solve_in_place
     rng = np.random.default_rng(7)
     for n in (2, 4, 12):
         a = rng.normal(size=(n, n))
@@ -246,7 +246,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     (twist_relations) or stretch modes has its w' and eta'' columns differenced; its twist
     rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
-    from dttmm.kernels.beam import _evaluate, beam_transfer, transfer_work_size
+    from dttmm.kernels.transfers.beam import _evaluate, beam_transfer, transfer_work_size
     from dttmm.solver import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
@@ -281,7 +281,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
         # a body welded to the output (fixed hinge, relative rotation r_rel): its rotation slot
         # is c1 phi_out + w1 with exp(phi_out^) A_out,n = A_O r_rel; A_out,n a little behind
         # the guess's A_O r_rel, w1 such that the slot holds an acceleration ~10
-        from dttmm.kernels.beam import end_section
+        from dttmm.kernels.transfers.beam import end_section
         rot_star = Rotation.from_rotvec(phi_star).as_matrix() @ rot_n
         a_o = np.empty((3, 3))
         end_section(ends[k, :m], ends[k, m:m + mt], (eta_dd_star - w1e) / c1, rot_star, a_o)
@@ -357,8 +357,8 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening, stretch
     -int U_j e1 . f + damping + stiffness + (q_O . e1) U_j(L)."""
     from dttmm.elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EA, mode_shapes,
                                      torsion_shapes)
-    from dttmm.kernels.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES, SUM_U, SUM_V,
-                                    aux_rows, beam_relations)
+    from dttmm.kernels.transfers.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES,
+                                              SUM_U, SUM_V, aux_rows, beam_relations)
     from dttmm.solver import beam_tables
     from types import SimpleNamespace
     gen = np.random.default_rng(3 + family + m)
@@ -483,9 +483,9 @@ def test_beam_ball_map_folds_the_beam_transfer():
     eta'' recovered from the input station with the folded w'.  Measured: 2e-15 (v), 1e-14
     (pmap) and 4e-16 (eta map) relative to each row's largest entry."""
     from dttmm.chains import three_pendulum
-    from dttmm.kernels.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
-                                    transfer_work_size)
-    from dttmm.kernels.sweep import fold_ball_body
+    from dttmm.kernels.transfers.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
+                                              transfer_work_size)
+    from dttmm.kernels.assembly.sweep import fold_ball_body
     from dttmm.solver import Workspace
     model = three_pendulum(2, damping_ratio=0.03)
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams

@@ -1,4 +1,4 @@
-"""Beams in closed loops in DT-TMM's step (kernels/closure.py; docs/loops.md "Beams in
+"""Beams in closed loops in DT-TMM's step (kernels/assembly/closure.py; docs/loops.md "Beams in
 loops"): the flexible slider-crank of seed 000 and a flexible four-bar closed by each joint
 kind, against the Newton-Euler reference, which shares no transfer-matrix code."""
 import sys

@@ -30,7 +30,8 @@ def test_second_order_rigid_chain():
 
 
 def test_second_order_with_a_beam():
-    """The beam's output point carries its own history too (kernels/beam.py, _evaluate)."""
+    """The beam's output point carries its own history too (kernels/transfers/beam.py,
+    _evaluate)."""
     model = three_pendulum(2)
     t_end = 0.2
     ref = simulate_reference(model, t_end, method="DOP853", rtol=1e-12, atol=1e-13,

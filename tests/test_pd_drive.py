@@ -1,7 +1,7 @@
 """Drives that run inside the compiled loop: forces linear in (q, q') with the rest known in time
 (elements/drives.py: PDTracking, a JointForce of time alone) and JointForces compiled with
-numba (kernels/joint.py::drive_value, call_force): against closed forms, the reference, and
-the per-step path they replace."""
+numba (kernels/transfers/joint.py::drive_value, call_force): against closed forms, the reference,
+and the per-step path they replace."""
 import numba
 import numpy as np
 import pytest

@@ -15,10 +15,10 @@ from dttmm.elements import BEAM
 from dttmm.elements.beam import (CLAMPED, CLAMPED_LOADED, EI_V, FAMILY, LENGTH, PINNED,
                                  mode_shapes)
 from dttmm.reference import simulate_reference
-from dttmm.reference.newton_euler import (_end_section_rate, _expm, _left_jacobian,
-                                          _left_jacobian_derivative, _so3_coefficients,
-                                          beam_shape_constants, clamped_shapes,
-                                          loaded_mode_coefficients, quadrature_points)
+from dttmm.reference.rotations import (_end_section_rate, _expm, _left_jacobian,
+                                       _left_jacobian_derivative, _so3_coefficients)
+from dttmm.reference.shapes import (beam_shape_constants, clamped_shapes,
+                                    loaded_mode_coefficients, quadrature_points)
 
 MU = 1.32
 EI = 2.5e10 * (0.02 ** 4 / 12)          # 333.3 N m^2

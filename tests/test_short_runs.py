@@ -168,15 +168,15 @@ def test_every_array_of_a_runs_result_is_read_only(name):
 
 
 def test_direct_calls_go_to_the_code_numba_chose_and_only_for_the_same_types(monkeypatch):
-    """kernels/loop.py::DirectCalls: the second of two calls with arguments of the same types
-    finds numba's entry point (after which the calls go there, with the right answers); a call
+    """kernels/stepping/loop.py::DirectCalls: the second of two calls with arguments of the same
+    types finds numba's entry point (after which the calls go there, with the right answers); a call
     whose varying parts change type (an int where a float was, a 2-d array where a 1-d one
     was) goes through numba's dispatcher, which compiles a version for it."""
     from collections import namedtuple
 
     from numba import njit
 
-    from dttmm.kernels import loop as kloop
+    from dttmm.kernels.stepping import loop as kloop
     found = []
     original = kloop._entry_point
     monkeypatch.setattr(kloop, "_entry_point",

@@ -158,8 +158,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     with pytest.raises(ValueError, match="hinge 'FixedHinge1' has kind code 9"):
         simulate(odd_hinge, 0.01, 1e-3)
     # the kernels, bypassing the check: the consistent start reports the element
-    from dttmm.kernels import step as kstep
-    from dttmm.kernels.loop import Settings
+    from dttmm.kernels.stepping import step as kstep
+    from dttmm.kernels.stepping.loop import Settings
     from dttmm.solver import Workspace, kernel_params, loop_tables
     for odd, element in ((odd_body, 4), (odd_hinge, 3)):
         ws = Workspace(odd)

@@ -104,7 +104,7 @@ def test_twist_conserves_energy():
     G J psi'^2 / 2 counted by the result's own quadrature) holds to 2e-5 of the largest
     kinetic energy at dt 1e-3, and the gap falls with dt at order 2 (measured 1.13e-5 and
     2.83e-6 at dt 1e-3 and 5e-4; the bound was 1e-5 while the arm was integrated on its own,
-    7.1e-6 then: its frame now follows the end section exactly, kernels/step.py::_welded,
+    7.1e-6 then: its frame now follows the end section exactly, kernels/stepping/step.py::_welded,
     and its mass centre meets the reference a little closer, 7.27e-6 against 7.58e-6 m)."""
     beam = EulerBernoulliBeam(length=1.0, mass_per_length=2.0, bending_stiffness=[60.0, 80.0],
                               polar_inertia_per_length=2e-3, modes_per_plane=2, torsion_modes=2,

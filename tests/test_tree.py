@@ -1,5 +1,5 @@
 """Trees of rigid bodies and beams joined by ball joints: the leaves-to-root Riccati sweep
-(kernels/tree.py) against the chain's sweep, conservation laws, and size."""
+(kernels/stepping/tree.py) against the chain's sweep, conservation laws, and size."""
 import numpy as np
 import pytest
 

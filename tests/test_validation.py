@@ -137,8 +137,8 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
     own arrays read-only (a second run of each model)."""
     from dttmm import simulate_reference
     from dttmm.chains import arm, three_pendulum
-    from dttmm.kernels import loop, step as kstep
-    from dttmm.reference import newton_euler
+    from dttmm.kernels.stepping import loop, step as kstep
+    from dttmm.reference import equations
     for model in (three_pendulum(), arm("motion")):
         with pytest.raises(ValueError, match="read-only"):
             model.body_params[0, 0] = -1.0
@@ -148,8 +148,8 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
         simulate(model, 0.01, 1e-3)
         simulate_reference(model, 0.01, rtol=1e-6, atol=1e-6)
     kernels = list(loop._SKELETONS.values()) + [kstep.initial_accelerations,
-                                                newton_euler.rhs_kernel,
-                                                newton_euler._solve_dynamics]
+                                                equations.rhs_kernel,
+                                                equations._solve_dynamics]
     for kernel in kernels:
         for signature in getattr(kernel, "signatures", []):
             assert "readonly" not in str(signature), (kernel, signature)

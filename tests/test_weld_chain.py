@@ -1,7 +1,8 @@
-"""The fused loop for chains of beams welded by fixed hinges (kernels/weld_chain.py) against the
-general loop (kernels/step.py): the same step computed two ways, so they must agree to
-rounding, on every beam feature the fused loop covers.  (The welded beam's physics is checked
-elsewhere: the clamped-beam, twist, stretch, load and elastica tests run through this loop.)"""
+"""The fused loop for chains of beams welded by fixed hinges (kernels/stepping/weld_chain.py)
+against the general loop (kernels/stepping/step.py): the same step computed two ways, so they must
+agree to rounding, on every beam feature the fused loop covers.  (The welded beam's physics is
+checked elsewhere: the clamped-beam, twist, stretch, load and elastica tests run through this
+loop.)"""
 import numpy as np
 import pytest
 from helpers import fused_and_general

@@ -7,12 +7,12 @@ prescribes the coordinate's motion q(t), the joint then applying whatever genera
 that motion needs (the Result records it).
 
 Forces that are linear in (q, q') with the rest known in time run inside the compiled loop,
-chunk by chunk (kernels/joint.py::drive_value: -k (q - rest) - c q' + f(t)): a SpringDamper, a
-PDTracking (k = kp, c = kd, f = kp target + kd target' + feedforward) and a JointForce of time
-alone (a profiles.ProfileForce, a scene's force profile), and a JointForce whose function is
-numba-compiled (@numba.njit): the loop calls it at every iteration of every step, through a C
-callback of FORCE_SIGNATURE (compiled_force), linearized by differences
-(kernels/joint.py::drive_value).  A JointForce of (t, q, q') given as a Python function is
+chunk by chunk (kernels/transfers/joint.py::drive_value: -k (q - rest) - c q' + f(t)): a
+SpringDamper, a PDTracking (k = kp, c = kd, f = kp target + kd target' + feedforward) and a
+JointForce of time alone (a profiles.ProfileForce, a scene's force profile), and a JointForce whose
+function is numba-compiled (@numba.njit): the loop calls it at every iteration of every step,
+through a C callback of FORCE_SIGNATURE (compiled_force), linearized by differences
+(kernels/transfers/joint.py::drive_value).  A JointForce of (t, q, q') given as a Python function is
 called by the solver once per step.
 """
 import threading
@@ -39,7 +39,7 @@ def is_numba_function(function):
 
 def compiled_force(function):
     """The C callback of FORCE_SIGNATURE of a numba function f(t, q, q_dot), which the compiled
-    loop calls (kernels/joint.py::drive_value), compiled with the function's own options
+    loop calls (kernels/transfers/joint.py::drive_value), compiled with the function's own options
     (fastmath, error_model, boundscheck); once per process and function (a model pickled to
     another process carries the numba function, not the callback), and kept for the process's
     life (the loop holds its address).  An exception raised inside it cannot stop the loop (a C

@@ -4,8 +4,8 @@ supports (docs/README.md, "Adding an element kind").
 The model builder, the solver and the result read these declarations, never a class or a code
 of their own: a combination a kind does not declare (a scheme, the fused loop, the direct
 sweep) is refused with a ValueError naming the element before a run starts, and every kernel's
-dispatch on the codes ends in an explicit refusal (kernels/loop.py, UNSUPPORTED) rather than
-running one kind as another.
+dispatch on the codes ends in an explicit refusal (kernels/stepping/loop.py, UNSUPPORTED) rather
+than running one kind as another.
 """
 from dataclasses import dataclass
 
@@ -27,7 +27,8 @@ class Kind:
     cls:         the element class users build it from.
     schemes:     the solver's schemes whose loops implement it (none: built, validated and run by
                  the Newton-Euler reference only, so far).
-    fused:       bodies: the fused ball-chain loop (kernels/ball_chain.py) has its reduced map.
+    fused:       bodies: the fused ball-chain loop (kernels/stepping/ball_chain.py) has its
+                 reduced map.
     moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
                  across it).
     doc:         the page that derives its equations.
@@ -57,7 +58,7 @@ JOINT_KINDS = (
     Kind(FIXED, FixedHinge, ("newmark", "energy_momentum", "paper"), doc="docs/hinges.md",
          what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
-    # joints with coordinates and drives (kernels/joint.py): the general loop's full-state
+    # joints with coordinates and drives (kernels/transfers/joint.py): the general loop's full-state
     # tree sweep
     Kind(REVOLUTE, RevoluteJoint, ("newmark",), doc="docs/joints.md", what="a revolute joint"),
     Kind(UNIVERSAL, UniversalJoint, ("newmark",), doc="docs/joints.md", what="a universal joint"),

@@ -1,4 +1,13 @@
-"""numba kernels on flat arrays: rotations, element transfer matrices, assembly sweeps, the step."""
+"""numba kernels on flat arrays, in layers, each using only those above it:
+
+  algebra/     3 x 3 algebra and rotations (mat3.py, so3.py)
+  transfers/   each element's transfer matrix over one step (body, beam, hinge, joint, em_body)
+  assembly/    one step's sweeps (sweep.py) and the closing joints held with them (closure.py)
+  stepping/    the time loops: the step skeleton (loop.py), its variants (step.py, ball_chain.py,
+               tree.py, weld_chain.py, em_step.py) and the high-order integrator (runge_kutta.py)
+
+with, here, the decorators every kernel is compiled with and features.py, the flags that
+compile a copy of the kernels per kind of model."""
 from pathlib import Path
 
 from numba import njit
@@ -15,7 +24,7 @@ def _drop_stale_caches():
     package = Path(__file__).resolve().parent.parent
     try:
         newest = max(p.stat().st_mtime for part in ("kernels", "elements", "reference")
-                     for p in (package / part).glob("*.py"))
+                     for p in (package / part).rglob("*.py"))
         for index in package.rglob("__pycache__/*.nbi"):
             if index.stat().st_mtime < newest:
                 index.unlink()
@@ -36,8 +45,8 @@ CONTRACT = {"contract"}
 
 
 def loop_piece(fn):
-    """A loop variant's piece (kernels/loop.py), inlined by numba into the skeleton: each piece
-    takes the run's structures, which a call would pass as hundreds of scalars."""
+    """A loop variant's piece (kernels/stepping/loop.py), inlined by numba into the skeleton: each
+    piece takes the run's structures, which a call would pass as hundreds of scalars."""
     return njit(cache=True, inline='always', fastmath=CONTRACT)(fn)
 
 
@@ -46,10 +55,10 @@ def no_alloc_kernel(fn):
     step's kernels that allocate nothing.  Every array argument and every view then costs no
     pair of atomic reference-count calls; numba leaves most of those in functions with loops
     and branches (the compiled beam map had ~400 such call sites).  Measured on the beam's
-    reduced map (kernels/beam.py::beam_ball_map): 1.64 against 1.96 us per call; on the fused
-    ball-chain loop (kernels/ball_chain.py::_ball_chain_steps, its scratch allocated by its
-    caller): 0.88x the time per step.  A kernel that allocates fails to compile (numba compiles
-    its callees the same way), so the option cannot hide a mistake."""
+    reduced map (kernels/transfers/beam.py::beam_ball_map): 1.64 against 1.96 us per call; on the
+    fused ball-chain loop (kernels/stepping/ball_chain.py::_ball_chain_steps, its scratch allocated
+    by its caller): 0.88x the time per step.  A kernel that allocates fails to compile (numba
+    compiles its callees the same way), so the option cannot hide a mistake."""
     return njit(cache=True, _nrt=False, fastmath=CONTRACT)(fn)
 
 

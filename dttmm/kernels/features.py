@@ -39,9 +39,9 @@ SPECIALIZE = os.environ.get("DTTMM_SPECIALIZE", "1") != "0" and not config.DISAB
 # the model's elements and the scheme (solver.kernel_features sets them from a model)
 HAS_BEAMS = True                # modal beams (body kind BEAM)
 HAS_ELASTIC_HINGES = True       # elastic hinges (hinge kind ELASTIC)
-HAS_LOOPS = True                # closing joints (kernels/closure.py)
+HAS_LOOPS = True                # closing joints (kernels/assembly/closure.py)
 HAS_STATION_HISTORIES = True    # the paper's scheme: station points with their own histories
-# the run's sweep (its mode, kernels/sweep.py): exactly one is on in a model's copy
+# the run's sweep (its mode, kernels/assembly/sweep.py): exactly one is on in a model's copy
 SWEEP_JOINTS = True             # RICCATI_JOINTS: the full-state tree sweep with joint elements
 SWEEP_FULL = True               # RICCATI_FULL: the chain's full-state Riccati sweep
 SWEEP_DIRECT_FULL = True        # DIRECT_FULL
@@ -59,12 +59,13 @@ _SHORT = dict(HAS_BEAMS="b", HAS_ELASTIC_HINGES="e", HAS_LOOPS="l", HAS_STATION_
               SWEEP_JOINTS="J", SWEEP_FULL="F", SWEEP_DIRECT_FULL="DF", SWEEP_TREE="T",
               SWEEP_REDUCED="R", SWEEP_DIRECT_REDUCED="DR")
 
-# The fields of the run's structures (kernels/loop.py, kernels/step.py::GeneralLoop) that only
-# code under a flag reads: a model's copy of the kernels takes them as None where none of their
-# flags is on, so that numba compiles the structures it does take and no more (every array a
-# structure carries is a dozen values numba passes, copies and reference-counts wherever the
-# structure goes: the general loop's structures carry ~180 arrays, and its skeleton compiled
-# in 36 s with all of them and 29 s without the 47 the rigid arm never reads).
+# The fields of the run's structures (kernels/stepping/loop.py,
+# kernels/stepping/step.py::GeneralLoop) that only code under a flag reads: a model's copy of the
+# kernels takes them as None where none of their flags is on, so that numba compiles the structures
+# it does take and no more (every array a structure carries is a dozen values numba passes, copies
+# and reference-counts wherever the structure goes: the general loop's structures carry ~180 arrays,
+# and its skeleton compiled in 36 s with all of them and 29 s without the 47 the rigid arm never
+# reads).
 READ_UNDER = {
     ("loop", "loops"): ("HAS_LOOPS",),            # the closing joints' tables and scratch
     ("loop", "at_guess"): ("HAS_LOOPS",),
@@ -72,7 +73,8 @@ READ_UNDER = {
     ("inputs", "g_pos"): ("HAS_LOOPS",),
     ("inputs", "g_vel"): ("HAS_LOOPS",),
     ("rec", "closure_wrench"): ("HAS_LOOPS",),
-    ("sweep", "split"): ("SWEEP_FULL",),           # each sweep's own scratch (kernels/sweep.py)
+    ("sweep", "split"): ("SWEEP_FULL",),           # each sweep's own scratch
+    #                                                 (kernels/assembly/sweep.py)
     ("sweep", "s"): ("SWEEP_FULL", "SWEEP_JOINTS", "HAS_LOOPS"),   # (the loops' columns:
                                                                     # closure.py)
     ("sweep", "p"): ("SWEEP_FULL", "SWEEP_JOINTS"),

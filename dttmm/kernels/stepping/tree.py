@@ -1,27 +1,28 @@
 """The fused loop variant for trees of rigid bodies and beams joined by ball joints: every
-body's reduced map (kernels/ball_chain.py::ball_body_map, kernels/beam.py::beam_ball_map) goes
-straight into the leaves-to-root sweep (kernels/sweep.py, "Trees"; docs/assembly.md, "Trees"),
-then the recovery from the root to the leaves.  Predict, adopt and update are the fused chain
-loop's (they do not depend on the topology)."""
+body's reduced map (kernels/stepping/ball_chain.py::ball_body_map,
+kernels/transfers/beam.py::beam_ball_map) goes straight into the leaves-to-root sweep
+(kernels/assembly/sweep.py, "Trees"; docs/assembly.md, "Trees"), then the recovery from the root to
+the leaves.  Predict, adopt and update are the fused chain loop's (they do not depend on the
+topology)."""
 from collections import namedtuple
 
 import numpy as np
 
-from . import loop_piece
-from ..elements import BEAM, RIGID
+from .. import loop_piece
+from ...elements import BEAM, RIGID
 from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
                          recover_body)
-from .beam import ball_map_work_shape, beam_ball_map
+from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .mat3 import mm3_into
-from .so3 import expm_so3, left_jacobian
+from ..algebra.mat3 import mm3_into
+from ..algebra.so3 import expm_so3, left_jacobian
 from .step import fused_coefficients
-from .sweep import _add_to_port, _clear_ports, tree_reduced_recover, tree_reduced_step, \
+from ..assembly.sweep import _add_to_port, _clear_ports, tree_reduced_recover, tree_reduced_step, \
     write_tree_stations
 
 
-# The fused tree loop's scratch: the fused chain loop's (kernels/ball_chain.py::FusedLoop, whose
-# predict, adopt and update pieces it shares) and the tree sweep's.
+# The fused tree loop's scratch: the fused chain loop's (kernels/stepping/ball_chain.py::FusedLoop,
+# whose predict, adopt and update pieces it shares) and the tree sweep's.
 FusedTreeLoop = namedtuple("FusedTreeLoop", [
     "coefficients", "per_body", "pmap", "v", "mats", "vecs", "per_mode", "beam_work",
     "parent",           # (n,) Model.parent
@@ -75,7 +76,7 @@ def _iterate(loop, run, s, it):
         for i in range(3):
             w[i] = c3 * phi[i] + w3[k, i]
             wd[i] = c1 * phi[i] + w1[k, i]
-        if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
+        if body_kind[k] == BEAM:                # (its own kinematics: kernels/transfers/beam.py)
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = (i1 - i0) // 2              # (no twist here: Model.has_twist runs general)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],

@@ -12,19 +12,20 @@ Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's incremen
                          Bl_i . e_O = tau_i            (the drive's generalized force, free q_i)
   drive_value          tau and d tau / d nu of a free coordinate's drive
 
-kernels/sweep.py::riccati_tree_full eliminates nu leaves to root (an articulated-body step).
+kernels/assembly/sweep.py::riccati_tree_full eliminates nu leaves to root (an articulated-body
+step).
 """
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.core.extending import intrinsic
 
-from . import CONTRACT
-from ..elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
-from ..elements.hinges import AXIS_1, AXIS_2, BALL
-from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .mat3 import t_cross, t_lin3, t_mm, t_mv
-from .so3 import exp_coefficients
+from .. import CONTRACT
+from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
+from ...elements.hinges import AXIS_1, AXIS_2, BALL
+from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mv
+from ..algebra.so3 import exp_coefficients
 
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
 
@@ -56,7 +57,7 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prismatic child's input point
     relative to the attachment point, and its rate (zero for the others).  Returns the
     coordinates' world directions u1 and v2 (a universal joint's second; zero for the others)
-    as 3-tuples.  Allocates nothing (kernels/mat3.py's tuple algebra)."""
+    as 3-tuples.  Allocates nothing (kernels/algebra/mat3.py's tuple algebra)."""
     r0 = (hp[0], hp[1], hp[2], hp[3], hp[4], hp[5], hp[6], hp[7], hp[8])
     a1 = AXIS_1.start
     n1 = (hp[a1], hp[a1 + 1], hp[a1 + 2])

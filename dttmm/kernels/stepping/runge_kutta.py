@@ -1,7 +1,7 @@
 """High-order integration of the acceleration-level sweep (issue 31; docs/integrators.md):
 Dormand and Prince's explicit Runge-Kutta method of order 8 (DOP853: an embedded error
 estimate of orders 5 and 3, a dense output of order 7), compiled with the fused loops' sweep
-(kernels/ball_chain.py, tree.py), on the rotation group.
+(kernels/stepping/ball_chain.py, tree.py), on the rotation group.
 
 The state is [theta; omega; eta; eta'] with, per body, theta the rotation vector of
 R = exp(theta^) R0 from the step's initial rotation R0 (local exponential coordinates,
@@ -21,11 +21,11 @@ from types import FunctionType
 import numpy as np
 from numba import njit
 
-from . import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, no_alloc_kernel
 from .ball_chain import record_state
 from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
-from .mat3 import mm3_into
-from .so3 import expm_so3
+from ..algebra.mat3 import mm3_into
+from ..algebra.so3 import expm_so3
 
 N_STAGES = 12           # DOP853's stages (the 13th is the first of the next step: FSAL)
 N_EXTENDED = 16         # ... with the three of its dense output

@@ -1,10 +1,10 @@
 """The time loop fused for chains of beam elements welded end to end by fixed hinges, the first
 to the ground (docs/assembly.md, "The fused welded-chain step").
 
-The same step as the general loop (kernels/step.py) in RICCATI_FULL mode (Newmark scheme), as
-a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each beam's
-12 x 13 transfer in angular-acceleration slots (kernels/beam.py::beam_transfer, into one
-scratch matrix) goes straight into its full Riccati step (sweep.py::riccati_step, the
+The same step as the general loop (kernels/stepping/step.py) in RICCATI_FULL mode (Newmark scheme),
+as a loop variant of the one skeleton (kernels/stepping/loop.py), on preallocated arrays: each
+beam's 12 x 13 transfer in angular-acceleration slots (kernels/transfers/beam.py::beam_transfer,
+into one scratch matrix) goes straight into its full Riccati step (sweep.py::riccati_step, the
 station split [a, w'] | [m, q] of a chain from the ground), and the way back recovers each
 body's rotation increment and modal accelerations.  Nothing else of the general loop's
 per-body work runs: no guess kinematics (the beam evaluates its own state), no station copies,
@@ -16,18 +16,18 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import CONTRACT, loop_piece
+from .. import CONTRACT, loop_piece
 from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
 from .ball_chain import _predict as _predict_offsets
-from .beam import beam_transfer, end_section_motion, transfer_work_size
+from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
-from .mat3 import mm3_into
-from .so3 import expm_so3, log_so3
+from ..algebra.mat3 import mm3_into
+from ..algebra.so3 import expm_so3, log_so3
 from .step import _all_finite, fused_coefficients
-from .sweep import riccati_step
-from ..elements.beam import MODES, TORSION_MODES
+from ..assembly.sweep import riccati_step
+from ...elements.beam import MODES, TORSION_MODES
 
 # The loop's own scratch (allocated by weld_loop; the skeleton is compiled with numba's
 # reference counting, as the general loop's: beam_transfer takes views of the tables).
@@ -94,8 +94,8 @@ def _predict(loop, run, s, _):
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def _follow_welds(loop, run):
     """Every beam after the first follows its inboard's end section at the guess
-    (docs/beam.md, "End sections"; kernels/step.py::_welded_guess): from the inboard's guess
-    (A_p* = exp(phi_p*^) A_p,n, w_p* = c3 phi_p* + w3_p, w_p'* = c1 phi_p* + w1_p, eta* =
+    (docs/beam.md, "End sections"; kernels/stepping/step.py::_welded_guess): from the inboard's
+    guess (A_p* = exp(phi_p*^) A_p,n, w_p* = c3 phi_p* + w3_p, w_p'* = c1 phi_p* + w1_p, eta* =
     (eta''* - w1e) / c1, eta'* = c3 eta* + w3e) the section's A*, w*, w'*
     (beam.end_section_motion); then phi* = log(A* A_n^T), and the offsets w1 = w'* - c1 phi*,
     w3 = w* - c3 phi*, so that the weld's slot is w'* there.  In order from the root: each
@@ -174,7 +174,7 @@ def _iterate(loop, run, s, it):
                     state.rot[kout], w1_out)
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
-                  beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/step.py)
+                  beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/stepping/step.py)
         beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity, False,
                       state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
                       eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u, eta_map[i0:i1],
@@ -261,8 +261,8 @@ def _update(loop, run, s, _):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _write_stations(stations, phi, phi_g, z):
-    """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
-    ground point, z[2k + 1] and z[2k + 2] body k's input and output (the same station across a
+    """The stations' states in the general loop's layout (kernels/stepping/step.py::_solve): z[0]
+    the ground point, z[2k + 1] and z[2k + 2] body k's input and output (the same station across a
     fixed hinge), each with the body's phi in its rotation slots (the ground's at z[0])."""
     n = phi.shape[0]
     for j in range(12):

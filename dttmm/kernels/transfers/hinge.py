@@ -13,9 +13,9 @@ terms in psi and d, which changes the convergence rate of Newton iterations, not
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from .. import CONTRACT
 from .body import A, CONST, M, PHI, Q
-from .so3 import hat, log_so3
+from ..algebra.so3 import hat, log_so3
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -14,11 +14,11 @@ positional arrays:
 bundled as one Run, and a loop variant's own scratch (its "loop" structure).  run_steps is the
 skeleton: predict, then Newton iterations (iterate: linearize, sweep, recover; adopt: the
 solution becomes the next guess), update, record; finish once the chunk is done.  A variant
-(the general loop in kernels/step.py, the fused ball-chain loop in kernels/ball_chain.py, the
-energy-momentum loop in kernels/em_step.py) supplies only these pieces, declared once with
-loop_variant(); each variant gets its own copy of the skeleton with its pieces inlined
-(_skeleton), so the skeleton costs nothing at run time.  A loop structure no variant declared
-is refused.
+(the general loop in kernels/stepping/step.py, the fused ball-chain loop in
+kernels/stepping/ball_chain.py, the energy-momentum loop in kernels/stepping/em_step.py) supplies
+only these pieces, declared once with loop_variant(); each variant gets its own copy of the skeleton
+with its pieces inlined (_skeleton), so the skeleton costs nothing at run time.  A loop structure no
+variant declared is refused.
 """
 from collections import namedtuple
 from types import FunctionType
@@ -26,8 +26,8 @@ from types import FunctionType
 from numba import njit
 from numba._dispatcher import compute_fingerprint
 
-from . import CONTRACT, no_alloc_kernel
-from .features import ALL, specialized, unread_dropped
+from .. import CONTRACT, no_alloc_kernel
+from ..features import ALL, specialized, unread_dropped
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
 
@@ -64,7 +64,7 @@ Settings = namedtuple("Settings", [
                         # (rad or m; inf: never)
     "stop_unconverged",  # stop (UNCONVERGED) at a step whose Newton iterations do not converge
     "start",            # the consistent start instead of steps: the fused variants' one linear
-                        # sweep at acceleration level (kernels/ball_chain.py::start_loop)
+                        # sweep at acceleration level (kernels/stepping/ball_chain.py::start_loop)
 ])
 
 State = namedtuple("State", [
@@ -84,9 +84,10 @@ Sweep = namedtuple("Sweep", [
     "split", "s", "p", "tinv", "t", "g", "gv",       # full-state Riccati sweep (sweep.py)
     "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
     "dir_z", "dir_o",                                # direct full-state sweep
-    "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/tree.py)
+    "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/stepping/tree.py)
     "tree_s", "tree_p",                              # full-state tree sweep (sweep.py)
-    "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints (kernels/joint.py)
+    "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints
+    #                                                         (kernels/transfers/joint.py)
 ])
 
 Inputs = namedtuple("Inputs", [
@@ -273,7 +274,7 @@ def _skeleton(loop_class, no_alloc):
         pieces = _VARIANTS.get(loop_class)
         if pieces is None:
             raise TypeError(f"run_steps: no loop variant declares {loop_class.__name__} "
-                            f"(kernels/loop.py::loop_variant)")
+                            f"(kernels/stepping/loop.py::loop_variant)")
         name = f"run_steps_{loop_class.__name__}" + ("_no_alloc" if no_alloc else "")
         fn = FunctionType(_run_steps.__code__, dict(globals(), **pieces), name)
         fn.__qualname__ = name          # (numba's cache files are named after it)

@@ -2,7 +2,7 @@
 "Energy-momentum scheme").
 
 Station state z = [a, b, m, q] (12 entries, then the affine 1), the same layout as the Newmark
-transfer (kernels/body.py) with step quantities in the slots:
+transfer (kernels/transfers/body.py) with step quantities in the slots:
   a = 2 dx / h^2   the station point's displacement over the step, dx, in acceleration units,
   b = 2 phi / h^2  the body's world Cayley rotation increment, A_{n+1} = cay(phi) A_n, likewise,
   m, q             the step's mean moment (about the station point) and force that the inboard
@@ -18,9 +18,9 @@ equations are (EM1-EM4):
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from .. import CONTRACT
 from .body import affine_part
-from .so3 import cayley, cayley_tangent, hat
+from ..algebra.so3 import cayley, cayley_tangent, hat
 
 A, B, M, Q = 0, 3, 6, 9
 

@@ -4,7 +4,7 @@ arithmetic."""
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from .. import CONTRACT
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -72,7 +72,7 @@ def mul_hat(a, v, out):
 # --------------------------------------------------------------------------------------------
 # The same algebra on values: 3-vectors as 3-tuples, 3 x 3 matrices as row-major 9-tuples.
 # A kernel written with these keeps its intermediates in registers (no scratch arrays that the
-# compiler must assume may alias each other); used by kernels/ball_chain.py::ball_body_map.
+# compiler must assume may alias each other); used by kernels/stepping/ball_chain.py::ball_body_map.
 # --------------------------------------------------------------------------------------------
 @njit(cache=True, fastmath=CONTRACT)
 def t_of_mat(a):

@@ -16,12 +16,12 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from ..elements.beam import EA, GJ, LOAD_AXES, STIFFENING
-from . import CONTRACT, no_alloc_kernel
+from ...elements.beam import EA, GJ, LOAD_AXES, STIFFENING
+from .. import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
-from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm, t_mul_hat, t_mv,
-                   t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
-from .so3 import expm_so3, left_jacobian, left_jacobian_derivative, log_so3
+from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm,
+                            t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
+from ..algebra.so3 import expm_so3, left_jacobian, left_jacobian_derivative, log_so3
 
 # rows of beam_relations' aux beyond the first four (docs/beam.md, "The w' and eta'' columns"):
 # int mu A u', int mu A u'', int mu rho x A u''; A u'(L), A u''(L); J = int mu (|rho|^2 E -
@@ -843,8 +843,8 @@ def _rotation_columns(bp, ends, rot, lam, w, wd, s, r, a_i, q_o, gravity, aux, d
         T     = j_p L (e1 (e1 . w') + (e1 . w) w x e1),  e1 = A e1
       d residual_(plane, l) = g^T D(Q_l, int mu Y_l U, int mu Y_l V)
                               + s (F_l x g + Y_l(L) g x q_O)^T Lam + Y_l(L) g^T d q_O.
-    On values (3- and 9-tuples, kernels/mat3.py), like kernels/ball_chain.py::ball_body_map;
-    x^ y^ = y x^T - (x . y) E throughout."""
+    On values (3- and 9-tuples, kernels/algebra/mat3.py), like
+    kernels/stepping/ball_chain.py::ball_body_map; x^ y^ = y x^T - (x . y) E throughout."""
     m = ends.shape[0]
     jp = bp[4] * bp[0]
     w_, wd_, lm = t_of_vec(w), t_of_vec(wd), t_of_mat(lam)
@@ -1340,7 +1340,7 @@ def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w
     coefficients: (c1, c3, s, r), the integrator's w' = c1 phi + w1, w = c3 phi + w3 and the
     sensitivities s = d phi / d w', r = d w / d w' of the rotation and the modal coordinates
     (1 / c1 and c3 / c1 in a step; 0 at the consistent start, where nothing but the
-    accelerations moves: kernels/ball_chain.py::start_loop).  The other arguments as for
+    accelerations moves: kernels/stepping/ball_chain.py::start_loop).  The other arguments as for
     beam_transfer (eta and eta' come from eta''* through w1e and w3e).  work: a block of at
     least ball_map_work_shape(n) (no allocation), carved by rows:
     each array below is a block of whole rows (or a row's start), which keeps it contiguous (a

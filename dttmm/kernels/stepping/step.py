@@ -15,7 +15,7 @@ exactly (no index-3 drift, no alternating mode; docs/solver.md, "stability").  T
 scheme, for comparison, gives station points their own position histories (GeneralLoop.histories;
 docs/solver.md, "The paper's scheme").
 
-This module is the general loop's pieces (kernels/loop.py: predict, iterate, adopt, update,
+This module is the general loop's pieces (kernels/stepping/loop.py: predict, iterate, adopt, update,
 record, finish) for every chain and tree, sweep and the Newmark and paper's schemes, and the
 consistent start.
 """
@@ -24,28 +24,28 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import CONTRACT, loop_piece
-from ..elements import BEAM, RIGID
-from ..elements.beam import MODES, TORSION_MODES
-from ..elements.hinges import BALL, ELASTIC, FIXED
-from ..elements.drives import MOTION
-from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .beam import beam_transfer, end_section_motion, transfer_work_size
-from .body import rigid_body_transfer, station_history_correction
-from .closure import project_onto_loops, set_ground, solve_with_loops, tree_points
-from .features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_STATION_HISTORIES,
-                       SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
-                       SWEEP_REDUCED, SWEEP_TREE)
-from .hinge import elastic_hinge_loads, elastic_hinge_transfer
-from .joint import joint_frame, joint_linearization, n_coordinates
+from .. import CONTRACT, loop_piece
+from ...elements import BEAM, RIGID
+from ...elements.beam import MODES, TORSION_MODES
+from ...elements.hinges import BALL, ELASTIC, FIXED
+from ...elements.drives import MOTION
+from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
+from ..transfers.body import rigid_body_transfer, station_history_correction
+from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
+from ..features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_STATION_HISTORIES,
+                        SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
+                        SWEEP_REDUCED, SWEEP_TREE)
+from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
+from ..transfers.joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .mat3 import inv3, matmul_into
-from .so3 import expm_so3, left_jacobian, log_so3
-from .sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced, fold_ball_body,
-                    riccati_full, riccati_reduced, riccati_tree_full, riccati_tree_reduced,
-                    write_tree_stations)
-from .sweep import BALL as EL_BALL
-from .sweep import JOINT as EL_JOINT
+from ..algebra.mat3 import inv3, matmul_into
+from ..algebra.so3 import expm_so3, left_jacobian, log_so3
+from ..assembly.sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced,
+                              fold_ball_body, riccati_full, riccati_reduced, riccati_tree_full,
+                              riccati_tree_reduced, write_tree_stations)
+from ..assembly.sweep import BALL as EL_BALL
+from ..assembly.sweep import JOINT as EL_JOINT
 
 RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE, RICCATI_JOINTS = range(6)
 
@@ -170,7 +170,7 @@ def _all_finite(a):
 # derivatives with respect to phi (docs/solver.md); (n, ...) arrays, one row per body.
 Guess = namedtuple("Guess", ["phi", "rot", "lam", "w", "wd", "dw", "dwd"])
 
-# The general loop's own scratch (allocated by the solver, kernels/step.py::general_loop):
+# The general loop's own scratch (allocated by the solver, kernels/stepping/step.py::general_loop):
 GeneralLoop = namedtuple("GeneralLoop", [
     "guess",                        # Guess
     "w1", "w3",                     # (n, 3) w' = c1 phi + w1, w = c3 phi + w3
@@ -184,12 +184,13 @@ GeneralLoop = namedtuple("GeneralLoop", [
     "histories",                    # the paper's scheme: (independent, st_v, st_a, st_p, c_v,
                                     # c_a, c_p, w1_st, w1_c), see general_loop
     "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 2) each: the joint
-                                    # coordinates' offsets and guess (kernels/joint.py)
-    "loops",                        # the closing joints and their scratch (kernels/closure.py)
+                                    # coordinates' offsets and guess (kernels/transfers/joint.py)
+    "loops",                        # the closing joints and their scratch
+    #                                 (kernels/assembly/closure.py)
     "at_guess",                     # (eta, eta', d, d') at the guess, for the loops' rows:
                                     # (total modes,) twice, (n, 3) twice (_iterate)
     "forces",                       # (k,) int64: the compiled JointForces' C callbacks'
-                                    # addresses (kernels/joint.py::drive_value)
+                                    # addresses (kernels/transfers/joint.py::drive_value)
 ])
 
 
@@ -197,7 +198,7 @@ def general_loop(n, n_eta, h, coef, histories, loops, forces):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
     paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (solver._station_histories);
     the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
-    joints (kernels/closure.py::Loops; no rows without them).  forces: the compiled
+    joints (kernels/assembly/closure.py::Loops; no rows without them).  forces: the compiled
     JointForces' callbacks' addresses (solver.compiled_forces)."""
     c1, _ = _coefficients_py(h, coef)
     guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
@@ -237,13 +238,13 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     the ground.  rot, w3: the bodies' rotations at the step's start and the integrator's offsets
     (beams).  modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
     coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
-    beam's end section (kernels/beam.py).  stations = (independent, w1_st, w1_c): in the
+    beam's end section (kernels/transfers/beam.py).  stations = (independent, w1_st, w1_c): in the
     paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
     then each body's output) and every rigid body's mass centre (w1_c) has its own Newmark
     history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme").  joints =
     (full_tree, q, q', q'', given, forces): in the full-state tree sweep (RICCATI_JOINTS) ball
-    joints and joints with coordinates are JOINT elements (kernels/joint.py), linearized about
-    the coordinates' guess; given (n, 2): each JointForce drive's value over the step (a
+    joints and joints with coordinates are JOINT elements (kernels/transfers/joint.py), linearized
+    about the coordinates' guess; given (n, 2): each JointForce drive's value over the step (a
     compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
     addresses."""
     independent, w1_st, w1_c = stations
@@ -397,7 +398,7 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _solve_tree(sw, parent, root_f, z):
-    """The reduced tree sweep (kernels/tree.py) on the folded maps, into z."""
+    """The reduced tree sweep (kernels/stepping/tree.py) on the folded maps, into z."""
     n = sw.red_v.shape[0]
     status = riccati_tree_reduced(sw.red_v, parent, root_f[0:3], sw.red_s, sw.red_p, sw.red_tinv,
                                   sw.port_s, sw.port_p, sw.red_aq, sw.aq_out)
@@ -422,9 +423,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
     force, torque, line_load (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates'
-    inputs at t = 0 (kernels/loop.py::Inputs), their accelerations come out in state.jqdd.
-    loops: the closing joints (kernels/closure.py), held at acceleration level.  forces: the
-    compiled JointForces' callbacks' addresses (kernels/joint.py::drive_value).
+    inputs at t = 0 (kernels/stepping/loop.py::Inputs), their accelerations come out in state.jqdd.
+    loops: the closing joints (kernels/assembly/closure.py), held at acceleration level.  forces:
+    the compiled JointForces' callbacks' addresses (kernels/transfers/joint.py::drive_value).
     Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
@@ -555,7 +556,7 @@ def _welded(params, mode, k):
     if mode == RICCATI_JOINTS:
         return True
     # in a chain's full-state sweep, a body on a beam's end (as the fused welded-chain loop's
-    # beams, kernels/weld_chain.py::_follow_welds)
+    # beams, kernels/stepping/weld_chain.py::_follow_welds)
     return mode == RICCATI_FULL and params.beams[0][params.parent[k]] == BEAM
 
 
@@ -958,7 +959,7 @@ def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, 
                    rot, w, wd, d, d_rate, pseudo):
     """A joint's coordinates' histories over the step from their accelerations nu (a prescribed
     motion's: as given (2, 3) at t_{s+1}), then its child's frame from the parent's new one
-    (kernels/joint.py::joint_frame)."""
+    (kernels/transfers/joint.py::joint_frame)."""
     x = np.zeros(2)
     for i in range(n_coordinates(hk)):
         x[i] = (nu[i] - w1q[i]) / c1

@@ -1,11 +1,11 @@
 """The time loop fused for chains of rigid bodies and beams joined by ball joints
 (docs/assembly.md, "The fused ball-chain step").
 
-The same step as the general loop (kernels/step.py) in RICCATI_REDUCED mode (Newmark scheme),
-as a loop variant of the one skeleton (kernels/loop.py), on preallocated arrays: each rigid
-body's reduced 6 x 7 map on [a; q; 1] is written directly in angular-acceleration slots (no
-12 x 13 transfer), and so is each beam's (kernels/beam.py::beam_ball_map); each map goes
-straight into its Riccati step.  Results agree with the general loop to rounding
+The same step as the general loop (kernels/stepping/step.py) in RICCATI_REDUCED mode (Newmark
+scheme), as a loop variant of the one skeleton (kernels/stepping/loop.py), on preallocated arrays:
+each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in angular-acceleration slots
+(no 12 x 13 transfer), and so is each beam's (kernels/transfers/beam.py::beam_ball_map); each map
+goes straight into its Riccati step.  Results agree with the general loop to rounding
 (tests/test_ball_chain.py).
 """
 from collections import namedtuple
@@ -13,16 +13,16 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ..elements import BEAM, RIGID
-from . import CONTRACT, loop_piece
-from .beam import ball_map_work_shape, beam_ball_map
-from .body import kappa_values, rigid_point_jacobian_values
-from .mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm, t_mmt,
-                   t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
-from .so3 import expm_so3, left_jacobian, log_so3
+from ...elements import BEAM, RIGID
+from .. import CONTRACT, loop_piece
+from ..transfers.beam import ball_map_work_shape, beam_ball_map
+from ..transfers.body import kappa_values, rigid_point_jacobian_values
+from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
+                            t_mmt, t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
+from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .step import _advance_history, _offsets_into, fused_coefficients
-from .sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
+from ..assembly.sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -33,7 +33,7 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
     p: body parameter row (mass, l_IC, l_IO, J_I); rot, lam: A* and J_l(phi*); w, wd: angular
     velocity and acceleration at phi*; s = 1/c1, r = c3/c1 (d w / d alpha = r I, d phi / d alpha
     = s I); load f = M g + F at the mass centre, torque applied.  Written on values
-    (kernels/mat3.py's tuples): every intermediate stays in registers."""
+    (kernels/algebra/mat3.py's tuples): every intermediate stays in registers."""
     mass = p[0]
     a = t_of_mat(rot)
     lm = t_of_mat(lam)
@@ -119,8 +119,8 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
 
 @njit(cache=True, fastmath=CONTRACT)
 def _write_stations(aq, phi, phi_g, z):
-    """The stations' states in the general loop's layout (kernels/step.py::_solve): z[0] the
-    ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
+    """The stations' states in the general loop's layout (kernels/stepping/step.py::_solve): z[0]
+    the ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
     n = phi.shape[0]
     z[:, :] = 0.0
     for i in range(3):
@@ -157,7 +157,8 @@ FusedLoop = namedtuple("FusedLoop", [
     "mats",             # (7, 3, 3) T, its numerator, exp(phi^), A*, J_l(phi*), A_n, ground rel.
     "vecs",             # (5, 3) w, w', alpha, the load, the ground's increment
     "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
-    "beam_work",        # beam_ball_map's work block (kernels/beam.py::ball_map_work_shape)
+    "beam_work",        # beam_ball_map's work block
+    #                     (kernels/transfers/beam.py::ball_map_work_shape)
 ])
 
 
@@ -256,7 +257,7 @@ def _iterate(loop, run, s, it):
         for i in range(3):
             w[i] = c3 * phi[i] + w3[k, i]
             wd[i] = c1 * phi[i] + w1[k, i]
-        if body_kind[k] == BEAM:                # (its own kinematics: kernels/beam.py)
+        if body_kind[k] == BEAM:                # (its own kinematics: kernels/transfers/beam.py)
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = (i1 - i0) // 2              # (no twist here: Model.has_twist runs general)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],

@@ -8,7 +8,7 @@ remainder below t^8 / 9! < 3e-22 there."""
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
+from .. import CONTRACT
 
 SERIES_BELOW = 1e-4       # |phi|^2 below which exp and J_l use their series (docstring)
 

@@ -9,7 +9,7 @@ transform of Horner and Pilkey).  The split changes where the boundary makes it:
   SPLIT_C  f = [m, q], e = [a, phi]   after a hinge whose loads are known (consistent start)
 Element kinds: TRANSFER (affine matrix), IDENTITY (fixed hinge), BALL (m = 0 inboard, outboard
 rotation free), LOCKED (inboard loads known, outboard motion free), JOINT (a joint with free
-coordinates, kernels/joint.py: the full-state tree sweep only).
+coordinates, kernels/transfers/joint.py: the full-state tree sweep only).
 
 Full-state direct sweep: every station as z = Z x + o in terms of a 6-parameter vector x, the
 matrices multiplied out from the root (the paper's way).  A ball joint or a LOCKED hinge swaps
@@ -21,9 +21,9 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
-from . import CONTRACT, no_alloc_kernel
-from .joint import FREE, PRESCRIBED
-from .mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
+from .. import CONTRACT, no_alloc_kernel
+from ..transfers.joint import FREE, PRESCRIBED
+from ..algebra.mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
 
 TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -492,8 +492,8 @@ def direct_reduced(v, a_root, tip_pinned, aq):
 # (docs/assembly.md, "Trees").
 #
 # Every body k has the reduced map of a body between moment-free cuts (the same as in a chain:
-# kernels/ball_chain.py::ball_body_map, kernels/beam.py::beam_ball_map, or folded from its
-# transfer, sweep.py::fold_ball_body):
+# kernels/stepping/ball_chain.py::ball_body_map, kernels/transfers/beam.py::beam_ball_map, or folded
+# from its transfer, sweep.py::fold_ball_body):
 #     [a_O; q_O] = V [a_I; q_I; 1],  V = [[V_aa, V_aq, v_a], [V_qa, V_qq, v_q]].
 # At its output point O its children hang by ball joints: each child's input point is O
 # (a_Ic = a_O) and the force body k exerts at O is the sum of the forces on the children,
@@ -646,8 +646,8 @@ def _mv(a, x):
 # f = [a, alpha] (angular-acceleration slots): e = S f + P, S = 0, P = 0 at a free end, summed
 # over the children at a parent's output point (they share its motion).  Through an element
 # z_O = U z_I + u:  T = U_ee - S_O U_fe,  S_I = T^-1 (S_O U_ff - U_ef),
-# P_I = T^-1 (S_O u_f + P_O - u_e).  Through a joint (kernels/joint.py) the free coordinates'
-# nu are eliminated as in an articulated-body step: with G = S_O B_F,
+# P_I = T^-1 (S_O u_f + P_O - u_e).  Through a joint (kernels/transfers/joint.py) the free
+# coordinates' nu are eliminated as in an articulated-body step: with G = S_O B_F,
 # D = Bl_F^T G - diag(tau'_F), y = S_O c' + P_O (c' = c + B_P nu_P, the prescribed ones),
 # nu_F = D^-1 (tau0_F - Bl_F^T y) - D^-1 Bl_F^T S_O Phi f_I, and e_I = Psi e_O.
 
@@ -783,7 +783,7 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
     port_s, port_p (n, 6, 6), (n, 6).  Writes every station into z, each joint's nu (its
     coordinates' q'', or a ball joint's relative angular acceleration) into joint_nu and its
     generalized forces Bl . e_O into joint_tau.  Returns 0, or j + 1 for the element j whose
-    elimination is singular (kernels/closure.py::sweep_columns is this sweep for many load
+    elimination is singular (kernels/assembly/closure.py::sweep_columns is this sweep for many load
     columns at once)."""
     n = parent.shape[0]
     free = np.zeros(3, dtype=np.int64)

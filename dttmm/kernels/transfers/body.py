@@ -13,9 +13,9 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 from numba import njit
 
-from . import CONTRACT
-from .mat3 import matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_outer, t_plus_diag
-from .so3 import hat
+from .. import CONTRACT
+from ..algebra.mat3 import matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_outer, t_plus_diag
+from ..algebra.so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
 CONST = 12                  # column of the affine part
@@ -286,7 +286,7 @@ def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in,
 
 @njit(cache=True, fastmath=CONTRACT)
 def kappa_values(w, wd):
-    """K = wd^ + w^ w^ = w w^T - |w|^2 E + wd^ as a 9-tuple (kernels/mat3.py), so that
+    """K = wd^ + w^ w^ = w w^T - |w|^2 E + wd^ as a 9-tuple (kernels/algebra/mat3.py), so that
     kappa(x) = wd x x + w x (w x x) = K x (the acceleration of a body point at x from the
     reference point, docs/rigid_body.md)."""
     return t_lin9(1.0, t_plus_diag(t_outer(w, w), -(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])),
@@ -309,7 +309,7 @@ def point_jacobian_values(x, u, v, w, kmat, lam, s, r):
     w (d w = r d w') and the frame's rotation (d theta = s Lam d w', x, U, V turning with it):
       -x^ - r (R(x) + 2 U^) - s (K x^ + 2 w^ U^ + V^) Lam,
     R(x) = (w x x)^ + w^ x^ = 2 x w^T - w x^T - (w . x) E, K = w'^ + w^ w^.
-    Every argument and the result on values (3- and 9-tuples, kernels/mat3.py)."""
+    Every argument and the result on values (3- and 9-tuples, kernels/algebra/mat3.py)."""
     # K x^ + 2 w^ U^ + V^,  w^ U^ = U w^T - (w . U) E
     t = t_lin9(1.0, t_mul_hat(kmat, x), 2.0, t_outer(u, w))
     t = t_lin9(1.0, t_plus_diag(t, -2.0 * (w[0] * u[0] + w[1] * u[1] + w[2] * u[2])), 1.0,

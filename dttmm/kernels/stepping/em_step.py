@@ -1,27 +1,27 @@
 """The energy-momentum scheme's loop variant (docs/solver.md, "Energy-momentum scheme").
 
-Each step solves the chain's nonlinear step equations (kernels/em_body.py) by Newton's method:
-every body's transfer is linearized about the latest guess, the same sweeps as the Newmark loop
-solve the linear chain, and the guess is updated until the rotation increments change by less
+Each step solves the chain's nonlinear step equations (kernels/transfers/em_body.py) by Newton's
+method: every body's transfer is linearized about the latest guess, the same sweeps as the Newmark
+loop solve the linear chain, and the guess is updated until the rotation increments change by less
 than newton_tol.  The converged step conserves the total energy and the angular momentum about
 any axis the external loads have no moment about, for rigid chains with ball and fixed hinges
-on a fixed ground.  The pieces below go through the one skeleton (kernels/loop.py); state.z
-holds the last step's station states [a, b, m, q] (see kernels/em_body.py), state.omega_dot
-(w_{n+1} - w_n) / h of the last step (the predictor's slope) and state.v_c each body's
-mass-centre velocity; inputs.force and inputs.torque are the applied loads' step means.
+on a fixed ground.  The pieces below go through the one skeleton (kernels/stepping/loop.py); state.z
+holds the last step's station states [a, b, m, q] (see kernels/transfers/em_body.py),
+state.omega_dot (w_{n+1} - w_n) / h of the last step (the predictor's slope) and state.v_c each
+body's mass-centre velocity; inputs.force and inputs.torque are the applied loads' step means.
 """
 from collections import namedtuple
 
 import numpy as np
 
-from . import loop_piece
-from ..elements import RIGID
-from ..elements.hinges import BALL, FIXED
-from .em_body import em_body_kinematics, rigid_body_transfer_em
+from .. import loop_piece
+from ...elements import RIGID
+from ...elements.hinges import BALL, FIXED
+from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from .step import solve_step
-from .sweep import IDENTITY, TRANSFER
-from .sweep import BALL as EL_BALL
+from ..assembly.sweep import IDENTITY, TRANSFER
+from ..assembly.sweep import BALL as EL_BALL
 
 # The energy-momentum loop's own scratch (energy_momentum_loop).
 EnergyMomentumLoop = namedtuple("EnergyMomentumLoop", [

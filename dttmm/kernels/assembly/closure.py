@@ -38,18 +38,18 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import CONTRACT, no_alloc_kernel
-from .features import HAS_BEAMS, HAS_ELASTIC_HINGES
-from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
-from ..elements import BEAM
-from ..elements.drives import FORCE, SPRING_DAMPER
-from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
-from ..elements.hinges import AXIS_1, ELASTIC, FIXED
-from ..elements.joints import PRISMATIC
-from .beam import end_section_motion
-from .joint import FREE, PRESCRIBED, joint_frame, n_coordinates
-from .mat3 import t_cross, t_lin3, t_mm, t_mmt, t_mv
-from .so3 import expm_so3
+from .. import CONTRACT, no_alloc_kernel
+from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES
+from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
+from ...elements import BEAM
+from ...elements.drives import FORCE, SPRING_DAMPER
+from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
+from ...elements.hinges import AXIS_1, ELASTIC, FIXED
+from ...elements.joints import PRISMATIC
+from ..transfers.beam import end_section_motion
+from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
+from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mmt, t_mv
+from ..algebra.so3 import expm_so3
 from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
 
 
@@ -120,8 +120,8 @@ ENERGY_STEP_LIMIT = 1e-3     # the energy's projection changes the rates by less
                              # fraction in one step, or not at all (a state too slow to carry it)
 
 
-# The rows' geometry on values (kernels/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames as
-# row-major 9-tuples), and the helpers below compiled without numba's reference counting
+# The rows' geometry on values (kernels/algebra/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames
+# as row-major 9-tuples), and the helpers below compiled without numba's reference counting
 # (no_alloc_kernel): nothing is allocated per row, and no view or argument costs its pair of
 # atomic counts (measured on the slider-crank and the Stewart platform: _side alone, counting
 # the model's and the loops' named tuples at every call, took a fifth of the step; docs/loops.md,

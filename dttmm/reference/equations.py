@@ -1,0 +1,1005 @@
+"""The reference's right-hand side: kinematics, hinge and joint laws, the global Newton-Euler
+system with its reactions and closing joints, solved at every evaluation (the formulation:
+newton_euler.py)."""
+import math
+
+import numba
+import numpy as np
+
+from ..elements.hinges import ELASTIC, FIXED
+from ..kernels import CONTRACT
+
+from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
+                   _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
+                   _DOT, _DYL, _FORCE, _GAP_A, _GAP_WORLD, _JI, _KF, _KR, _KT, _LIC, _LIO, _MASS,
+                   _MF, _PRISMATIC, _R0, _REVOLUTE, _ROTATION_A, _SPRING_DAMPER, _SY, _TY,
+                   _UNIVERSAL, _YL)
+from .rotations import (_cross, _expm, _hat, _left_jacobian, _left_jacobian_derivative, _log_rot,
+                        _mat3, _quat_to_rot, _vec3)
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _stiffening_block(my, nm, i):
+    """D_i (i = 0, 1, 2; nm x nm, contiguous) of one beam from its shape matrices
+    my = [int Y Y^T | D0 | D1 | D2], each block as wide as the widest beam's modes
+    (_Problem.shape_mat)."""
+    wide = my.shape[1] // 4
+    return np.ascontiguousarray(my[:nm, (i + 1) * wide:(i + 1) * wide + nm])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _modal_size(bp):
+    """A beam's modal coordinates: v and w bending, then the twist, then the stretch."""
+    return 2 * int(bp[_BMODES]) + int(bp[_BTWIST]) + int(bp[_BSTRETCH])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _beam_end(bp, sv, my, a, w, eta, eta_dot):
+    """Output point and output section of one beam (newton_euler.py's docstring, "End kinematics"),
+    from its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
+    velocity v_O - v_I, A_O, w_O, the velocity parts of a_O and alpha_O, B_r = A Phi(L) and
+    B_t = A J_l(theta_O) D (3 x 2n each, world).  With geometric stiffening the output point
+    moves back by the foreshortening c(L) = 1/2 eta^T D0 eta along e1 (newton_euler.py's docstring),
+    so B_r gains -A e1 (D0 eta)^T and the velocity terms its rates."""
+    nm = int(bp[_BMODES])
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3             # the twist's columns of sv (_Problem.shape_vec)
+    nb = 2 * nm + nt + na
+    u_l = np.zeros(3)                 # u(L), body frame
+    ud_l = np.zeros(3)                # u'(L) (time derivative)
+    th = np.zeros(3)                  # theta_O = [psi(L), -w'(L), v'(L)]
+    thd = np.zeros(3)
+    for j in range(nt):
+        th[0] += sv[_YL, tw + j] * eta[2 * nm + j]
+        thd[0] += sv[_YL, tw + j] * eta_dot[2 * nm + j]
+    for j in range(na):               # the stretch u_x(L)
+        u_l[0] += sv[_YL, 2 * tw + j] * eta[2 * nm + nt + j]
+        ud_l[0] += sv[_YL, 2 * tw + j] * eta_dot[2 * nm + nt + j]
+    for j in range(nm):
+        yl, dyl = sv[_YL, j], sv[_DYL, j]
+        u_l[1] += yl * eta[j]
+        u_l[2] += yl * eta[nm + j]
+        ud_l[1] += yl * eta_dot[j]
+        ud_l[2] += yl * eta_dot[nm + j]
+        th[1] -= dyl * eta[nm + j]
+        th[2] += dyl * eta[j]
+        thd[1] -= dyl * eta_dot[nm + j]
+        thd[2] += dyl * eta_dot[j]
+    p_l = u_l.copy()
+    p_l[0] += bp[_BL]
+    d0_eta = np.zeros(2 * nm)         # D0 eta per plane (the foreshortening's slopes)
+    cdd_v = 0.0                       # eta'^T D0 eta': the velocity part of c''(L)
+    if bp[_BSTIFF] != 0.0:
+        d0 = _stiffening_block(my, nm, 0)
+        for plane in range(2):
+            e = np.ascontiguousarray(eta[plane * nm:(plane + 1) * nm])
+            ed = np.ascontiguousarray(eta_dot[plane * nm:(plane + 1) * nm])
+            de = d0 @ e
+            d0_eta[plane * nm:(plane + 1) * nm] = de
+            p_l[0] -= 0.5 * (e @ de)
+            ud_l[0] -= ed @ de
+            cdd_v += ed @ (d0 @ ed)
+    rho = a @ p_l
+    aud = a @ ud_l
+    v_rel = _cross(w, rho) + aud
+    jl = _left_jacobian(th)
+    rot_o = a @ _expm(th)
+    ajt = a @ (jl @ thd)
+    w_o = w + ajt
+    acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud) - cdd_v * a[:, 0]
+    alpha_v = _cross(w, ajt) + a @ (_left_jacobian_derivative(th, thd) @ thd)
+    br = np.zeros((3, nb))
+    d = np.zeros((3, nb))
+    for j in range(nt):
+        d[0, 2 * nm + j] = sv[_YL, tw + j]
+    for j in range(na):
+        br[0, 2 * nm + nt + j] = sv[_YL, 2 * tw + j]
+    for j in range(nm):
+        br[1, j] = sv[_YL, j]
+        br[2, nm + j] = sv[_YL, j]
+        br[0, j] = -d0_eta[j]
+        br[0, nm + j] = -d0_eta[nm + j]
+        d[2, j] = sv[_DYL, j]
+        d[1, nm + j] = -sv[_DYL, j]
+    br = a @ br
+    bt = a @ (jl @ d)
+    return rho, v_rel, rot_o, w_o, acc_v, alpha_v, br, bt
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _rot_about(n, q):
+    """Rot(n, q) = exp(q n^) for a unit axis n (Rodrigues)."""
+    k = _hat(n)
+    return np.eye(3) + math.sin(q) * k + (1.0 - math.cos(q)) * (k @ k)
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_coordinates(y, joints, k, kind):
+    """(q, q') of joint k, each padded to 2 entries (newton_euler.py's docstring, "Joints with
+    coordinates"; joints = (c_off, c0, n_coord, ...): the coordinates at y[c0 + c_off[k] + i],
+    their rates at y[c0 + n_coord + c_off[k] + i])."""
+    c_off, c0, n_coord = joints[0], joints[1], joints[2]
+    q = np.zeros(2)
+    qd = np.zeros(2)
+    o = c_off[k]
+    for i in range(2 if kind == _UNIVERSAL else 1):
+        q[i] = y[c0 + o + i]
+        qd[i] = y[c0 + n_coord + o + i]
+    return q, qd
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_frame(kind, h, a_in, w_in, q, qd):
+    """Child frame behind a joint with coordinates (newton_euler.py's docstring): its rotation A,
+    angular velocity w and, for a slide, the offset d = A_P n q of its input point from the
+    attachment point and its rate d' = w_P x d + A_P n q' (zero for revolute and universal
+    joints)."""
+    n1 = _vec3(h, _AX1)
+    r0 = _mat3(h, _R0)
+    d = np.zeros(3)
+    d_rate = np.zeros(3)
+    if kind == _REVOLUTE:                   # A = A_P Rot(n, q) R0,  w = w_P + (A_P n) q'
+        rot = a_in @ _rot_about(n1, q[0]) @ r0
+        w = w_in + (a_in @ n1) * qd[0]
+    elif kind == _UNIVERSAL:                # A = A_P Rot(n1, q1) R0 Rot(n2, q2),
+        n2 = _vec3(h, _AX2)                 # w = w_P + (A_P n1) q1' + (A n2) q2'
+        rot = a_in @ _rot_about(n1, q[0]) @ r0 @ _rot_about(n2, q[1])
+        w = w_in + (a_in @ n1) * qd[0] + (rot @ n2) * qd[1]
+    else:                                   # prismatic: A = A_P R0, w = w_P, d = (A_P n) q
+        rot = a_in @ r0
+        w = w_in.copy()
+        u = a_in @ n1
+        d = u * q[0]
+        d_rate = _cross(w_in, d) + u * qd[0]
+    return rot, w, d, d_rate
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_directions(kind, h, a_in, rot):
+    """World directions s_i (columns, 3 x 2) of a joint's coordinates: the rotation axes u = A_P n
+    (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
+    (prismatic); and the number of coordinates."""
+    s = np.zeros((3, 2))
+    s[:, 0] = a_in @ _vec3(h, _AX1)
+    if kind == _UNIVERSAL:
+        s[:, 1] = rot @ _vec3(h, _AX2)
+        return s, 2
+    return s, 1
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
+    """Velocity parts of a joint's constraint rows (newton_euler.py's docstring): of the child's
+    angular acceleration, (w_P x u) q' (revolute), (w_P x u1) q1' + (w x v2) q2' (universal), 0
+    (prismatic); of its input point's acceleration relative to the attachment point's,
+    w_P x (w_P x d) + 2 w_P x u q' (prismatic), 0 otherwise."""
+    rot_v = np.zeros(3)
+    slide_v = np.zeros(3)
+    u = np.ascontiguousarray(dirs[:, 0])
+    if kind == _PRISMATIC:
+        slide_v = _cross(w_in, _cross(w_in, d)) + 2.0 * qd[0] * _cross(w_in, u)
+    else:
+        rot_v = qd[0] * _cross(w_in, u)
+        if kind == _UNIVERSAL:
+            rot_v = rot_v + qd[1] * _cross(w, np.ascontiguousarray(dirs[:, 1]))
+    return rot_v, slide_v
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
+                attachment_point, joints):
+    """Rotations, angular velocities, input-point positions / velocities and the elastic
+    deflections and slides (world) of every body, from the state and the ground motion (a
+    prismatic joint's offset d = A_P n q and its rate take the deflection's place); and each body's
+    output point and section: rho_O = r_O - r_I, A_O, w_O, the velocity parts of a_O and
+    alpha_O, (beams) B_r, B_t padded to the widest beam's 2n columns, and v_O.  Also, per body k
+    with a parent P, where its hinge attaches (newton_euler.py's docstring, "Attachment points"):
+    rho_att[k] = r_att,k - r_in,P (A_P x_k on a rigid parent, x_k = attachment_point[k] in its
+    frame; a beam parent's rho_O) and acc_v_att[k], the velocity part of a_att,k (w_P x (w_P x
+    rho_att,k) on a rigid parent, the beam's a_O velocity part); zero rows for the roots."""
+    n = body_params.shape[0]
+    n2max = 2 * shape_vec.shape[2]
+    rot = np.empty((n, 3, 3))
+    omega = np.empty((n, 3))
+    r_in = np.empty((n, 3))
+    v_in = np.empty((n, 3))
+    defl = np.zeros((n, 3))
+    defl_rate = np.zeros((n, 3))
+    rho_o = np.empty((n, 3))
+    v_o = np.empty((n, 3))
+    rot_o = np.empty((n, 3, 3))
+    omega_o = np.empty((n, 3))
+    acc_v = np.empty((n, 3))
+    alpha_v = np.zeros((n, 3))
+    b_r = np.zeros((n, 3, n2max))
+    b_t = np.zeros((n, 3, n2max))
+    rho_att = np.zeros((n, 3))
+    acc_v_att = np.zeros((n, 3))
+    parent = topology[0]
+    for k in range(n):           # parents first (Model.parent[k] < k)
+        kp = parent[k]
+        if kp < 0:               # the ground point
+            r_prev, v_prev = r_g, v_g
+        elif body_kind[kp] == _BEAM:     # a beam's one attachment point: its output point
+            rho_att[k] = rho_o[kp]
+            acc_v_att[k] = acc_v[kp]
+            r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
+        else:
+            # a rigid parent's attachment point x_k (its output point l_IO or a named point):
+            # r_att = r_in,P + A_P x_k,  v_att = v_in,P + w_P x rho_att,
+            # a_att = a_P + alpha_P x rho_att + w_P x (w_P x rho_att)
+            arm = rot[kp] @ attachment_point[k]
+            v_arm = _cross(omega[kp], arm)
+            rho_att[k] = arm
+            acc_v_att[k] = _cross(omega[kp], v_arm)
+            r_prev, v_prev = r_in[kp] + arm, v_in[kp] + v_arm
+        # the inboard frame: the parent's output section (a rigid parent's own frame, A_O = A,
+        # w_O = w, whichever of its points the hinge is at; a beam's end section), or the ground
+        if hinge_kind[k] == FIXED:   # welded to the inboard frame
+            a_in = rot_g if kp < 0 else rot_o[kp]
+            w_in = w_g if kp < 0 else omega_o[kp]
+            rot[k] = a_in @ _mat3(hinge_params[k], _R0)
+            omega[k] = w_in
+        elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard frame
+            a_in = rot_g if kp < 0 else rot_o[kp]
+            w_in = w_g if kp < 0 else omega_o[kp]
+            q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
+            rot[k], omega[k], defl[k], defl_rate[k] = _joint_frame(
+                hinge_kind[k], hinge_params[k], a_in, w_in, q, qd)
+        else:
+            rot[k] = _quat_to_rot(y[q_off[k]:q_off[k] + 4])
+            omega[k] = y[w_off[k]:w_off[k] + 3]
+        if hinge_kind[k] == ELASTIC:
+            defl[k] = y[d_off[k]:d_off[k] + 3]
+            defl_rate[k] = y[d_off[k] + 3:d_off[k] + 6]
+        r_in[k] = r_prev + defl[k]
+        v_in[k] = v_prev + defl_rate[k]
+        if body_kind[k] == _BEAM:
+            nm2 = _modal_size(beam_params[k])
+            o = m_off[k]
+            rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
+                beam_params[k], shape_vec[k], shape_mat[k], rot[k], omega[k],
+                y[e0 + o:e0 + o + nm2],
+                y[e0 + n_modal + o:e0 + n_modal + o + nm2])
+            rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
+            b_r[k, :, :nm2] = br
+            b_t[k, :, :nm2] = bt
+        else:
+            rho = rot[k] @ _vec3(body_params[k], _LIO)
+            v_rel = _cross(omega[k], rho)
+            rho_o[k], rot_o[k], omega_o[k] = rho, rot[k], omega[k]
+            acc_v[k] = _cross(omega[k], v_rel)
+        v_o[k] = v_in[k] + v_rel
+    return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
+            b_r, b_t, v_o, rho_att, acc_v_att)
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
+                   w_g, parent):
+    """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
+    the other hinges).  The hinge's inboard frame is the inboard body's output section (A_O,
+    w_O): the body itself for a rigid body, the deflected end section for a beam."""
+    n = rot.shape[0]
+    q = np.zeros((n, 3))
+    m = np.zeros((n, 3))
+    for k in range(n):
+        if hinge_kind[k] != ELASTIC:
+            continue
+        h = hinge_params[k]
+        a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
+        w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
+        d_b = a_in.T @ defl[k]
+        dd_b = a_in.T @ defl_rate[k]
+        q[k] = -(a_in @ (_mat3(h, _KT) @ d_b + _mat3(h, _CT) @ dd_b))
+        psi = _log_rot(a_in.T @ rot[k] @ _mat3(h, _R0).T)
+        w_rel_b = a_in.T @ (omega[k] - w_in)
+        m[k] = -(a_in @ (_mat3(h, _KR) @ psi + _mat3(h, _CR) @ w_rel_b))
+    return q, m
+
+
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
+    """World-frame mass properties, coupling blocks and velocity terms of one beam at its
+    current (eta, eta'), from the shape integrals sv (int Y, int x Y, ...) and my = int Y Y^T
+    (newton_euler.py's docstring).
+
+    Returns mass, h = A s (first moment about I), J = A (J_b + J_p) A^T, AP = A P and AG = A G
+    (3 x 2n), the velocity terms of the Newton and Euler rows (right-hand side), the modal
+    equations' right-hand side (gravity, velocity, damping and stiffness terms) and the modal
+    mass matrix of one plane, mu int Y Y^T (n x n)."""
+    length = bp[_BL]
+    mu = bp[_BMU]
+    nm = int(bp[_BMODES])
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3             # the twist's columns of sv (_Problem.shape_vec)
+    n2 = 2 * nm
+    nb = n2 + nt + na
+    sa = n2 + nt                      # the stretch's first coordinate
+    # the stretch xi (newton_euler.py's docstring, "Stretch"): int U_j, int x U_j, int U_j^2 and the
+    # products int U_j Y_l, M_av (na x nm); p = (x + U . xi, v, w)
+    pa = np.ascontiguousarray(sv[_SY, 2 * tw:2 * tw + na])
+    xa = np.ascontiguousarray(sv[_TY, 2 * tw:2 * tw + na])
+    maa = np.ascontiguousarray(sv[_MF, 2 * tw:2 * tw + na])
+    mav = np.ascontiguousarray(sv[N_SHAPE_ROWS:N_SHAPE_ROWS + nm, 2 * tw:2 * tw + na].T)
+    xi = np.ascontiguousarray(eta[sa:nb])
+    xid = np.ascontiguousarray(eta_dot[sa:nb])
+    mva_xi = mav.T @ xi                # int Y_l u_x, int Y_l u_x' (per bending mode)
+    mva_xid = mav.T @ xid
+    sy = sv[_SY, :nm]
+    ty = sv[_TY, :nm]
+    myy = np.ascontiguousarray(my[:nm, :nm])
+    ev = np.ascontiguousarray(eta[:nm])
+    ew = np.ascontiguousarray(eta[nm:n2])
+    dv = np.ascontiguousarray(eta_dot[:nm])
+    dw = np.ascontiguousarray(eta_dot[nm:n2])
+    mev = myy @ ev                                 # int Y v, int Y w, int Y v', int Y w'
+    mew = myy @ ew
+    mdv = myy @ dv
+    mdw = myy @ dw
+    mass = mu * length
+    # the foreshortening -c(x) e1 to first order in c (newton_euler.py's docstring, "Geometric
+    # stiffening"): C1 = int c, C2 = int x c = 1/2 eta^T (D1, D2) eta, their rates, and
+    # eta'^T D1 eta' (the velocity part of C1'')
+    geo = np.zeros((3, nb))           # D0 eta, D1 eta, D2 eta per plane (none for the twist)
+    c1 = c1_dot = c2 = c2_dot = c1_vel = 0.0
+    if bp[_BSTIFF] != 0.0:
+        for i in range(3):
+            d = _stiffening_block(my, nm, i)
+            geo[i, :nm] = d @ ev
+            geo[i, nm:n2] = d @ ew
+        d1 = _stiffening_block(my, nm, 1)
+        c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:n2])
+        c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:n2]
+        c1_vel = dv @ (d1 @ dv) + dw @ (d1 @ dw)
+        c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:n2])
+        c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:n2]
+    s_b = np.empty(3)
+    s_b[0] = mu * (length * length / 2.0 - c1 + pa @ xi)
+    s_b[1] = mu * (sy @ ev)
+    s_b[2] = mu * (sy @ ew)
+    q = np.empty((3, 3))                           # int mu p p^T
+    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2 + 2.0 * (xa @ xi) + xi @ (maa * xi))
+    q[0, 1] = q[1, 0] = mu * (ty @ ev + mva_xi @ ev)
+    q[0, 2] = q[2, 0] = mu * (ty @ ew + mva_xi @ ew)
+    q[1, 1] = mu * (ev @ mev)
+    q[1, 2] = q[2, 1] = mu * (ev @ mew)
+    q[2, 2] = mu * (ew @ mew)
+    tr = q[0, 0] + q[1, 1] + q[2, 2]
+    j_b = -q
+    for i in range(3):
+        j_b[i, i] += tr
+    j_b[0, 0] += bp[_BJP] * length                 # polar spin inertia J_p = diag(j_p L, 0, 0)
+    p_b = np.zeros((3, nb))                        # int mu Phi
+    g_b = np.zeros((3, nb))                        # int mu p^ Phi; the twist's j_p int Psi e1
+    p_t = 0.0                                      # j_p int psi' (the twist's spin momentum)
+    for j in range(nt):
+        g_b[0, n2 + j] = bp[_BJP] * sv[_SY, tw + j]
+        p_t += bp[_BJP] * sv[_SY, tw + j] * eta_dot[n2 + j]
+    for j in range(nm):
+        p_b[1, j] = mu * sy[j]
+        p_b[2, nm + j] = mu * sy[j]
+        g_b[2, j] = mu * (ty[j] + mva_xi[j])       # p x (Y_j e2) = Y_j (-w, 0, x + u_x)
+        g_b[0, j] = -mu * mew[j]
+        g_b[1, nm + j] = -mu * (ty[j] + mva_xi[j])  # p x (Y_j e3) = Y_j (v, -(x + u_x), 0)
+        g_b[0, nm + j] = mu * mev[j]
+    mav_v, mav_w = mav @ ev, mav @ ew              # int U_j v, int U_j w
+    mav_dv, mav_dw = mav @ dv, mav @ dw
+    for j in range(na):
+        p_b[0, sa + j] = mu * pa[j]
+        g_b[1, sa + j] = mu * mav_w[j]             # p x (U_j e1) = U_j (0, w, -v)
+        g_b[2, sa + j] = -mu * mav_v[j]
+    c = np.zeros((3, 3))                           # int mu p' p^T
+    c[0, 0] = mu * (-c2_dot + xa @ xid + xid @ (maa * xi))
+    c[0, 1] = mu * (xid @ mav_v)
+    c[0, 2] = mu * (xid @ mav_w)
+    c[1, 0] = mu * (ty @ dv + mva_xi @ dv)
+    c[2, 0] = mu * (ty @ dw + mva_xi @ dw)
+    c[1, 1] = mu * (dv @ mev)
+    c[1, 2] = mu * (dv @ mew)
+    c[2, 1] = mu * (dw @ mev)
+    c[2, 2] = mu * (dw @ mew)
+    w_b = a.T @ w
+    trc = c[0, 0] + c[1, 1] + c[2, 2]
+    cor_b = 2.0 * (trc * w_b - c @ w_b)            # int mu p x (2 w x u')
+    ap = a @ p_b
+    ag = a @ g_b
+    h = a @ s_b
+    j_w = a @ j_b @ a.T
+    e1 = np.ascontiguousarray(a[:, 0])
+    ud = ap @ eta_dot - mu * c1_dot * e1           # A int mu p' dx
+    # the velocity terms; A int mu p'' = A P eta'' - mu (eta'^T D1 eta' + (D1 eta)^T eta'') e1
+    newton_v = -2.0 * _cross(w, ud) + mu * c1_vel * e1
+    euler_v = -(a @ cor_b) - p_t * _cross(w, e1)  # and the twist's spin momentum turning
+    # modal right-hand side
+    ww2 = w_b[0] * w_b[0] + w_b[1] * w_b[1] + w_b[2] * w_b[2]
+    mm = np.outer(w_b, w_b)                        # w^ w^ = w w^T - |w|^2 E
+    for i in range(3):
+        mm[i, i] -= ww2
+    g_w = ap.T @ gravity                           # (A P)^T g
+    modal = np.empty(nb)
+    for j in range(nt):                            # the twist: -c psi' - k psi
+        m_t = bp[_BJP] * sv[_MF, tw + j]
+        k_t = bp[_BGJ] * sv[_KF, tw + j]
+        modal[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
+                         - k_t * eta[n2 + j])
+    for j in range(nm):
+        m_k = mu * sv[_MF, j]
+        kv = bp[_BEIV] * sv[_KF, j]
+        kw = bp[_BEIW] * sv[_KF, j]
+        cv = 2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k
+        cw = 2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k
+        x_j = ty[j] + mva_xi[j]                   # int Y_j (x + u_x)
+        cent_v = mu * (x_j * mm[1, 0] + mm[1, 1] * mev[j] + mm[1, 2] * mew[j])
+        cent_w = mu * (x_j * mm[2, 0] + mm[2, 1] * mev[j] + mm[2, 2] * mew[j])
+        # 2 int mu Y_j e2 . (w_b x u'), u' = (u_x', v', w')
+        cori_v = 2.0 * mu * (w_b[2] * mva_xid[j] - w_b[0] * mdw[j])
+        cori_w = 2.0 * mu * (w_b[0] * mdv[j] - w_b[1] * mva_xid[j])
+        modal[j] = g_w[j] - cent_v - cori_v - cv * dv[j] - kv * ev[j]
+        modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw[j] - kw * ew[j]
+    for j in range(na):                            # the stretch: e1 . int mu U_j (...)
+        m_a = mu * maa[j]
+        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
+        cent_a = mu * ((xa[j] + maa[j] * xi[j]) * mm[0, 0] + mm[0, 1] * mav_v[j]
+                       + mm[0, 2] * mav_w[j])
+        cori_a = 2.0 * mu * (w_b[1] * mav_dw[j] - w_b[2] * mav_dv[j])
+        modal[sa + j] = (g_w[sa + j] - cent_a - cori_a
+                         - 2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * xid[j] - k_a * xi[j])
+    # geometric stiffening: + mu e1.(g - a_I) D1 eta + mu (w_y^2 + w_z^2) D2 eta on the left
+    # (newton_euler.py's docstring; N_L D0 eta is the end force's work through B_r); the a_I term
+    # goes to the matrix (_assemble, with geo), the rest here
+    if bp[_BSTIFF] != 0.0:
+        known = mu * (e1 @ gravity) * geo[1] + mu * (w_b[1] ** 2 + w_b[2] ** 2) * geo[2]
+        for j in range(n2):
+            modal[j] -= known[j]
+    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy, geo
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_in, pce, f_col,
+                m_col, joints):
+    """Joint k's share of the global system (newton_euler.py's docstring, "Joints with
+    coordinates"), on top of the weld's rows that _assemble wrote (a_k = a_O,P, alpha_k =
+    alpha_O,P): each coordinate's -s_i q_i'' in the rotation rows (revolute, universal) or the
+    translation rows (slide), the velocity terms, the slide's alpha_P x d, and the coordinate rows
+        s_i . N_k (or F_k) = tau_i     (a free coordinate: the drive's generalized force)
+        q_i'' = q_p''(t)               (a prescribed coordinate),
+    both from joints[5] (drive_value).  (a_in, w_in): the parent's output section or the ground
+    frame (kp < 0); alpha_in: the velocity part of the parent's alpha_O (the ground's angular
+    acceleration for kp < 0); b_t_in, pce: the parent beam's B_t and first modal column."""
+    c_off, c_col0, prescribed, drive_value = joints[0], joints[3], joints[4], joints[5]
+    dirs, nc = _joint_directions(kind, h, a_in, rot)
+    rot_v, slide_v = _joint_velocity_terms(kind, dirs, w_in, w, d, qd)
+    rf, rm = f_col[k], m_col[k]
+    rs = rf if kind == _PRISMATIC else rm       # the rows (and reaction) a coordinate moves
+    for i in range(nc):
+        c = c_off[k] + i
+        cq = c_col0 + c
+        for j in range(3):
+            s[rs + j, cq] = -dirs[j, i]
+        if prescribed[c]:
+            s[cq, cq] = 1.0
+        else:
+            for j in range(3):
+                s[cq, rs + j] = dirs[j, i]
+        b[cq] = drive_value[c]
+    for j in range(3):
+        b[rm + j] += rot_v[j]
+        b[rf + j] += slide_v[j]
+    if kind == _PRISMATIC:
+        # a_k - ... - alpha_O,P x d = ...: on the left d^ alpha_O,P, with alpha_O,P =
+        # alpha_P + B_t eta''_P + alpha_in; alpha_in x d on the right
+        hd = _hat(d)
+        b_v = _cross(alpha_in, d)
+        for i in range(3):
+            b[rf + i] += b_v[i]
+        if kp >= 0:
+            hdb = hd @ b_t_in
+            for i in range(3):
+                for j in range(3):
+                    s[rf + i, 6 * kp + 3 + j] += hd[i, j]
+                for j in range(hdb.shape[1]):
+                    s[rf + i, pce + j] += hdb[i, j]
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, rho_att,
+              acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
+              beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
+              n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
+              joints):
+    """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
+    alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
+    force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
+    uses the same row index, so S is square.  Beam k's modal accelerations sit in the columns
+    e_col0 + m_off[k] + (0..2n-1), its modal equations in the same rows; its coordinates and
+    rates are y[e0 + m_off[k] + ...] and y[e0 + n_modal + m_off[k] + ...].  A joint with
+    coordinates has both reaction columns and its coordinates' accelerations in the columns
+    joints[3] + c_off[k] + (0, 1), its coordinate rows in the same rows (_joint_rows).  Hinge k
+    attaches at rho_att[k] from its parent's input point, with the velocity part acc_v_att[k] of
+    that point's acceleration (_kinematics; newton_euler.py's docstring, "Attachment points")."""
+    n = rot.shape[0]
+    parent, child_start, child_list = topology
+    s = np.zeros((n_unknowns, n_unknowns))
+    b = np.zeros(n_unknowns)
+    for k in range(n):
+        p = body_params[k]
+        a = rot[k]
+        w = omega[k]
+        rn, re = 6 * k, 6 * k + 3          # Newton rows, Euler rows
+        ca, cal = 6 * k, 6 * k + 3         # a_k, alpha_k columns
+        nm2 = 0
+        ce = -1
+        geo = np.zeros((3, 0))
+        if body_kind[k] == _BEAM:
+            nm = int(beam_params[k, _BMODES])
+            nm2 = _modal_size(beam_params[k])
+            o = m_off[k]
+            eta = y[e0 + o:e0 + o + nm2]
+            eta_dot = y[e0 + n_modal + o:e0 + n_modal + o + nm2]
+            # a distributed load p per length acts as gravity does: g + p / mu on this beam;
+            # loads in body axes (followers) turn with the end section (F, T) and the frame (p)
+            f_k, t_k, p_k = forces[k], torques[k], line_loads[k]
+            if beam_params[k, _BAXES] != 0.0:
+                f_k, t_k, p_k = rot_o[k] @ f_k, rot_o[k] @ t_k, a @ p_k
+            g_k = gravity + p_k / beam_params[k, _BMU]
+            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
+                beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, g_k)
+            # an applied end force F and torque T (docs/beam.md, "Loads on the beam") act at
+            # the output point and on the end section: F in Newton, rho_O x F + T about I,
+            # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
+            weight = mass * g_k + f_k
+            bn = weight - _cross(w, _cross(w, h)) + newton_v
+            be = (-_cross(w, j_w @ w) + _cross(h, g_k) + euler_v + t_k + _cross(rho_o[k], f_k))
+            ce = e_col0 + o
+            for j in range(nm2):
+                for i in range(3):
+                    # translation: + A P eta'' (and the foreshortening's -mu A e1 (D1 eta)^T)
+                    s[rn + i, ce + j] = ap[i, j] - beam_params[k, _BMU] * a[i, 0] * geo[1, j]
+                    s[re + i, ce + j] = ag[i, j]      # rotation:    + A G eta''
+                    s[ce + j, ca + i] = ap[i, j]      # modal:  (A P)^T a + (A G)^T alpha
+                    s[ce + j, cal + i] = ag[i, j]
+                b[ce + j] = modal[j]
+                for i in range(3):
+                    b[ce + j] += b_r[k, i, j] * f_k[i] + b_t[k, i, j] * t_k[i]
+            for j in range(nm):                       # modal mass, one block per plane
+                for i in range(nm):
+                    s[ce + j, ce + i] = m_yy[j, i]
+                    s[ce + nm + j, ce + nm + i] = m_yy[j, i]
+            tw = shape_vec.shape[2] // 3
+            nt = int(beam_params[k, _BTWIST])
+            for j in range(2 * nm, 2 * nm + nt):      # the twist's, j_p int Psi_j^2
+                s[ce + j, ce + j] = beam_params[k, _BJP] * shape_vec[k, _MF, tw + j - 2 * nm]
+            for j in range(2 * nm + nt, nm2):         # the stretch's, mu int U_j^2
+                s[ce + j, ce + j] = (beam_params[k, _BMU]
+                                     * shape_vec[k, _MF, 2 * tw + j - 2 * nm - nt])
+            for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
+                for i in range(3):
+                    s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
+        else:
+            mass = p[_MASS]
+            rho_c = a @ _vec3(p, _LIC)
+            h = mass * rho_c
+            j_w = a @ _mat3(p, _JI) @ a.T
+            weight = mass * gravity + forces[k]
+            # Newton: M a - hat(h) alpha - F_k + F_{k+1} = M g + f - w x (w x h) + q_k - q_{k+1}
+            bn = weight - _cross(w, _cross(w, h))
+            # Euler about I: J alpha + hat(h) a - N_k + sum_c [N_c + hat(rho_att,c + d_c) F_c]
+            #     = -w x J w + rho_c x (M g + f) + tau + m_k - sum_c [m_c + (rho_att,c + d_c) x q_c]
+            # over the children c (rho_att,c = rho_o for a chain's output point)
+            be = -_cross(w, j_w @ w) + _cross(rho_c, weight) + torques[k]
+        hc = _hat(h)
+        for i in range(3):
+            s[rn + i, ca + i] = mass
+            for j in range(3):
+                s[rn + i, cal + j] = -hc[i, j]
+                s[re + i, cal + j] = j_w[i, j]
+                s[re + i, ca + j] = hc[i, j]
+        # the inboard hinge acting on body k
+        if hinge_kind[k] == ELASTIC:
+            bn += q_el[k]
+            be += m_el[k]
+        else:
+            c = f_col[k]
+            for i in range(3):
+                s[rn + i, c + i] = -1.0
+            if m_col[k] >= 0:              # a fixed hinge or a joint with coordinates
+                c = m_col[k]
+                for i in range(3):
+                    s[re + i, c + i] = -1.0
+        # each outboard hinge c (joining a child c at its attachment point r_att,c: a beam's
+        # output point, any point of a rigid body) acting on body k: force -F_c at
+        # r_att,c + d_c, couple -N_c; a beam's modal rows get their generalized forces
+        # B_r^T F_c + B_t^T (N_c + d_c x F_c) (d_c: an elastic hinge's deflection or a slide,
+        # zero otherwise)
+        for ci in range(child_start[k], child_start[k + 1]):
+            kc = child_list[ci]
+            arm = rho_att[kc] + defl[kc]
+            if hinge_kind[kc] == ELASTIC:
+                # -q at r_att and the couple -m_in = -(m_out + d x q) about r_att; on a beam
+                # their generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
+                bn -= q_el[kc]
+                be -= m_el[kc] + _cross(arm, q_el[kc])
+                m_in = m_el[kc] + _cross(defl[kc], q_el[kc])
+                for j in range(nm2):
+                    gen = 0.0
+                    for i in range(3):
+                        gen += b_r[k, i, j] * q_el[kc, i] + b_t[k, i, j] * m_in[i]
+                    b[ce + j] -= gen
+            else:
+                c = f_col[kc]
+                ha = _hat(arm)
+                for i in range(3):
+                    s[rn + i, c + i] = 1.0
+                    for j in range(3):
+                        s[re + i, c + j] = ha[i, j]
+                    for j in range(nm2):
+                        s[ce + j, c + i] = b_r[k, i, j]
+                if hinge_kind[kc] == _PRISMATIC and nm2 > 0:
+                    # B_t^T (d x F) = B_t^T d^ F: column i gets -(d^ B_t)[i, :]
+                    hdb = _hat(defl[kc]) @ np.ascontiguousarray(b_t[k, :, :nm2])
+                    for i in range(3):
+                        for j in range(nm2):
+                            s[ce + j, c + i] -= hdb[i, j]
+                if m_col[kc] >= 0:
+                    c = m_col[kc]
+                    for i in range(3):
+                        s[re + i, c + i] = 1.0
+                        for j in range(nm2):
+                            s[ce + j, c + i] = b_t[k, i, j]
+        for i in range(3):
+            b[rn + i] = bn[i]
+            b[re + i] = be[i]
+        # constraint rows of the inboard hinge (acceleration level), P = parent[k]:
+        #     a_k = a_att,k = a_P + alpha_P x rho_att,k + B_r eta''_P + acc_v_att,k,
+        #     alpha_k = alpha_O,P (fixed hinge)
+        if hinge_kind[k] != ELASTIC:
+            r = f_col[k]
+            for i in range(3):
+                s[r + i, ca + i] = 1.0
+            if parent[k] < 0:
+                for i in range(3):
+                    b[r + i] = a_g[i]
+            else:
+                kp = parent[k]
+                hpo = _hat(rho_att[k])
+                pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                pce = e_col0 + m_off[kp]
+                for i in range(3):
+                    s[r + i, 6 * kp + i] = -1.0
+                    for j in range(3):
+                        s[r + i, 6 * kp + 3 + j] = hpo[i, j]
+                    for j in range(pn2):
+                        s[r + i, pce + j] = -b_r[kp, i, j]
+                    b[r + i] = acc_v_att[k, i]
+            if m_col[k] >= 0:
+                r = m_col[k]
+                for i in range(3):
+                    s[r + i, cal + i] = 1.0
+                    if parent[k] < 0:
+                        b[r + i] = wd_g[i]
+                    else:
+                        kp = parent[k]
+                        pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                        pce = e_col0 + m_off[kp]
+                        s[r + i, 6 * kp + 3 + i] = -1.0
+                        for j in range(pn2):
+                            s[r + i, pce + j] = -b_t[kp, i, j]
+                        b[r + i] = alpha_v[kp, i]
+            if joints[0][k] >= 0:
+                kp = parent[k]
+                _, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
+                if kp < 0:
+                    _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_g, w_g, wd_g,
+                                rot[k], omega[k], defl[k], qd, np.zeros((3, 0)), 0, f_col,
+                                m_col, joints)
+                else:
+                    pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                    _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_o[kp],
+                                omega_o[kp], alpha_v[kp], rot[k], omega[k], defl[k], qd,
+                                np.ascontiguousarray(b_t[kp, :, :pn2]), e_col0 + m_off[kp],
+                                f_col, m_col, joints)
+    return s, b
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _closure_side(k, local, on_end, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
+                  alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g):
+    """One side of a closing joint (newton_euler.py's docstring, "Loops"): its point's arm from the
+    body's input point, position, velocity and the known part of its acceleration (the velocity
+    terms; all of it on the ground), and its frame, the frame's angular velocity and the known
+    part of its angular acceleration."""
+    if k < 0:
+        arm = rot_g @ local
+        acc = a_g + _cross(wd_g, arm) + _cross(w_g, _cross(w_g, arm))
+        return arm, r_g + arm, v_g + _cross(w_g, arm), acc, rot_g, w_g, wd_g
+    if on_end:
+        return (rho_o[k], r_in[k] + rho_o[k], v_o[k], acc_v[k], rot_o[k], omega_o[k],
+                alpha_v[k])
+    arm = rot[k] @ local
+    w = omega[k]
+    return (arm, r_in[k] + arm, v_in[k] + _cross(w, arm), _cross(w, _cross(w, arm)), rot[k], w,
+            np.zeros(3))
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _closure_columns(s, row, k, on_end, coef_a, coef_alpha, coef_section, sign, b_r, b_t,
+                     e_col0, m_off, body_kind, beam_params):
+    """Add sign * (coef_a . a_k + coef_alpha . alpha_k) to a closing joint's row and, on a
+    beam's end, sign * (B_r^T coef_a + B_t^T coef_section) to its modal columns (the end's
+    point moves with B_r eta'', its section turns with B_t eta'')."""
+    if k < 0:
+        return
+    for i in range(3):
+        s[row, 6 * k + i] += sign * coef_a[i]
+        s[row, 6 * k + 3 + i] += sign * coef_alpha[i]
+    if on_end and body_kind[k] == _BEAM:
+        ce = e_col0 + m_off[k]
+        for j in range(_modal_size(beam_params[k])):
+            for i in range(3):
+                s[row, ce + j] += sign * (b_r[k, i, j] * coef_a[i]
+                                          + b_t[k, i, j] * coef_section[i])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
+                  alpha_v, b_r, b_t, e_col0, m_off, body_kind, beam_params, r_g, v_g, a_g, rot_g,
+                  w_g, wd_g):
+    """The closing joints' rows and their multipliers' columns (newton_euler.py's docstring,
+    "Loops"): per scalar constraint g (a gap e . (p_b - p_a), e fixed in the world or in side a's
+    frame, or a dot (F_a x) . (F_b y)), the row g'' + 2 zeta W g' + W^2 g = 0 (linear in the
+    accelerations) and, in the dynamic rows, the column -J^T of its multiplier (the joint's
+    force and couple do no work on what the joint allows).  Returns the world direction of
+    every row's multiplier on side b (a force for a gap, a couple for a dot)."""
+    col0, kind, owner, v1, v2, bodies, points, ends, gains, v3, target, _, law, values = loops
+    directions = np.zeros((kind.shape[0], 3))
+    for r in range(kind.shape[0]):
+        c = owner[r]
+        row = col0 + r
+        ka, kb = bodies[c, 0], bodies[c, 1]
+        end_a, end_b = ends[c, 0] != 0, ends[c, 1] != 0
+        arm_a, p_a, v_a, acc_a, f_a, w_a, al_a = _closure_side(
+            ka, points[c, 0], end_a, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
+            alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g)
+        arm_b, p_b, v_b, acc_b, f_b, w_b, al_b = _closure_side(
+            kb, points[c, 1], end_b, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
+            alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g)
+        zero = np.zeros(3)
+        if kind[r] == _ANGLE_A or kind[r] == _ANGLE_B or kind[r] == _ROTATION_A:
+            # a driven angle, or an elastic hinge's rotation n . log(F_a^T F_b R0^T) about n
+            # fixed in a's frame; its rate n . (w_b - w_a)
+            n = (f_b if kind[r] == _ANGLE_B else f_a) @ v3[r]
+            dw = w_b - w_a
+            if kind[r] == _ROTATION_A:
+                r0 = np.empty((3, 3))
+                r0[:, 0], r0[:, 1], r0[:, 2] = v1[r], v2[r], _cross(v1[r], v2[r])
+                g = v3[r] @ _log_rot(f_a.T @ f_b @ r0.T) - target[r, 0]
+            else:
+                x = f_a @ v1[r]
+                y = f_b @ v2[r]
+                g = np.arctan2(n @ _cross(x, y), x @ y) - target[r, 0]
+                g = (g + np.pi) % (2.0 * np.pi) - np.pi
+            gd = n @ dw
+            kappa = _cross(w_b if kind[r] == _ANGLE_B else w_a, n) @ dw + n @ (al_b - al_a)
+            _closure_columns(s, row, kb, end_b, zero, n, n, 1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            directions[r] = n
+        elif kind[r] == _DOT:               # (F_a x) . (F_b y) = 0
+            x = f_a @ v1[r]
+            y = f_b @ v2[r]
+            cv = _cross(y, x)
+            dw = w_b - w_a
+            g = x @ y
+            gd = dw @ cv
+            kappa = (dw @ (_cross(_cross(w_b, y), x) + _cross(y, _cross(w_a, x)))
+                     + cv @ (al_b - al_a))
+            _closure_columns(s, row, kb, end_b, zero, cv, cv, 1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            _closure_columns(s, row, ka, end_a, zero, cv, cv, -1.0, b_r, b_t, e_col0, m_off,
+                             body_kind, beam_params)
+            directions[r] = cv
+        else:                               # e . (p_b - p_a) = 0
+            e = v1[r] if kind[r] == _GAP_WORLD else f_a @ v1[r]
+            d = p_b - p_a
+            dd = v_b - v_a
+            g = e @ d
+            gd = e @ dd
+            kappa = e @ (acc_b - acc_a)
+            if kind[r] == _GAP_A:           # e turns with side a: its rates enter
+                we = _cross(w_a, e)
+                gd += we @ d
+                kappa += _cross(w_a, we) @ d + 2.0 * (we @ dd)
+                ed = _cross(e, d)           # (alpha_a x e) . d = alpha_a . (e x d)
+                kappa += ed @ al_a
+                _closure_columns(s, row, ka, end_a, zero, ed, ed, 1.0, b_r, b_t, e_col0, m_off,
+                                 body_kind, beam_params)
+            _closure_columns(s, row, kb, end_b, e, _cross(arm_b, e), zero, 1.0, b_r, b_t,
+                             e_col0, m_off, body_kind, beam_params)
+            _closure_columns(s, row, ka, end_a, e, _cross(arm_a, e), zero, -1.0, b_r, b_t,
+                             e_col0, m_off, body_kind, beam_params)
+            directions[r] = e
+            g -= target[r, 0]
+        # a driven coordinate's row: (g - s)'' + 2 zeta W (g - s)' + W^2 (g - s) = 0
+        gd -= target[r, 1]
+        kappa -= target[r, 2]
+        b[row] = -(kappa + gains[0] * gd + gains[1] * g)
+        for j in range(col0):
+            s[j, row] = -s[row, j]
+        values[r, 0] = g                    # (a JointForce's row: q and q' themselves)
+        values[r, 1] = gd
+        if law[r, 0] == _SPRING_DAMPER or law[r, 0] == _FORCE:
+            # a drive's row is its force: lam = -k (q - rest) - c q' (a spring), or
+            # lam = f(t, q, q') in target[r, 2] (a JointForce; _Problem._args)
+            for j in range(col0):
+                s[row, j] = 0.0
+            s[row, row] = 1.0
+            b[row] = target[r, 2] - law[r, 1] * g - law[r, 2] * gd
+    return directions
+
+
+# singular values of the closing joints' Delassus matrix below this fraction of its largest
+# count as zero (redundant constraints; a loop passing a singular position)
+LOOP_RCOND = 1e-10
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _solve_least_closure_force(s, b, col0, count):
+    """Solve S x = b with the closing joints' multipliers in x[col0:col0 + count] (module
+    docstring, "Loops"): the tree's system first, x = x0 - X lam with S_tree x0 = b_tree and
+    S_tree X = (the multipliers' columns), then the constraints J x = b_c give the Delassus
+    system (J X - S_cc) lam = J x0 - b_c (S_cc: a closing joint's spring's row, lam_r = F),
+    solved by a truncated SVD: of the multipliers that satisfy
+    it, the least (closing joints may be redundant, as a planar loop's spatial joints are, and a
+    chain straight between two fixed points leaves its tension indeterminate: the DT-TMM
+    sweeps' choice at a pinned tip), and a loop passing a singular position (a flat
+    parallelogram) loses the direction that becomes singular there instead of dividing by
+    it.  The accelerations do not depend on the choice."""
+    tree = np.ascontiguousarray(s[:col0, :col0])
+    rhs = np.empty((col0, count + 1))
+    rhs[:, 0] = b[:col0]
+    rhs[:, 1:] = s[:col0, col0:col0 + count]
+    sol = np.linalg.solve(tree, rhs)
+    jac = np.ascontiguousarray(s[col0:col0 + count, :col0])
+    # a spring's row is lam_r = F (its S_cc 1, its J 0; a constraint's S_cc 0)
+    delassus = jac @ np.ascontiguousarray(sol[:, 1:]) - s[col0:col0 + count, col0:col0 + count]
+    target = jac @ np.ascontiguousarray(sol[:, 0]) - b[col0:col0 + count]
+    u, sv, vt = np.linalg.svd(delassus)
+    lam = np.zeros(count)
+    ut = u.T @ target
+    for i in range(count):
+        if sv[i] > LOOP_RCOND * sv[0]:
+            lam += (ut[i] / sv[i]) * vt[i]
+    x = np.empty(col0 + count)
+    x[:col0] = sol[:, 0] - np.ascontiguousarray(sol[:, 1:]) @ lam
+    x[col0:] = lam
+    return x
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+                    shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
+                    loops, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
+                    line_loads, topology, attachment_point, joints):
+    """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
+    body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, per joint
+    coordinate (joints) its acceleration q'' and the joint loads' generalized force s_i . N
+    (s_i . F for a slide), and per hinge its attachment point's arm rho_att and the velocity part
+    of its acceleration acc_v_att (_kinematics)."""
+    (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
+     b_t, v_o, rho_att, acc_v_att) = _kinematics(
+        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
+        q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
+        attachment_point, joints)
+    q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
+                                hinge_params, rot_g, w_g, topology[0])
+    s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
+                     rho_att, acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params,
+                     body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
+                     f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
+                     torques, line_loads, topology, joints)
+    n_rows = loops[1].shape[0]
+    if n_rows > 0:
+        directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
+                                   v_o, acc_v, alpha_v, b_r, b_t, e_col0, m_off, body_kind,
+                                   beam_params, r_g, v_g, a_g, rot_g, w_g, wd_g)
+        x = _solve_least_closure_force(s, b, loops[0], n_rows)
+    else:
+        directions = np.zeros((0, 3))
+        x = np.linalg.solve(s, b)
+    # each closing joint's force and couple on side b (world; the couple a pure one), then its
+    # drives' generalized forces (a driven coordinate's row's multiplier)
+    closure_load = np.zeros((loops[5].shape[0], 8))
+    for r in range(n_rows):
+        lam = x[loops[0] + r]
+        if loops[11][r] >= 0:
+            closure_load[loops[2][r], 6 + loops[11][r]] = lam
+        at = 0 if loops[1][r] == _GAP_A or loops[1][r] == _GAP_WORLD else 3
+        for i in range(3):
+            closure_load[loops[2][r], at + i] += lam * directions[r, i]
+    n = body_params.shape[0]
+    acc = np.empty((n, 3))
+    alpha = np.empty((n, 3))
+    force = np.zeros((n, 3))
+    moment = np.zeros((n, 3))
+    for k in range(n):
+        acc[k] = x[6 * k:6 * k + 3]
+        alpha[k] = x[6 * k + 3:6 * k + 6]
+        if hinge_kind[k] == ELASTIC:
+            force[k] = q_el[k]
+            moment[k] = m_el[k]
+        else:
+            force[k] = x[f_col[k]:f_col[k] + 3]
+            if m_col[k] >= 0:
+                moment[k] = x[m_col[k]:m_col[k] + 3]
+    modal_acc = x[e_col0:e_col0 + n_modal].copy()
+    c_off, n_coord, c_col0 = joints[0], joints[2], joints[3]
+    coord_acc = x[c_col0:c_col0 + n_coord].copy()
+    generalized = np.zeros(n_coord)
+    for k in range(n):
+        if c_off[k] < 0:
+            continue
+        kp = topology[0][k]
+        a_in = rot_g if kp < 0 else rot_o[kp]
+        dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
+        load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
+        for i in range(nc):
+            generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
+                dirs[2, i] * load[2]
+    return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
+            b_r, coord_acc, generalized, rho_att, acc_v_att, closure_load)
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
+               shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
+               n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,
+               topology, attachment_point, joints):
+    """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
+    modal coordinates of all beams, their rates, joint coordinates, their rates]."""
+    (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
+     b_r, coord_acc, _, rho_att, acc_v_att, _) = _solve_dynamics(
+        y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
+        q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns,
+        gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
+        attachment_point, joints)
+    n = body_params.shape[0]
+    dy = np.zeros(y.shape[0])
+    for k in range(n):
+        if q_off[k] >= 0:
+            o = q_off[k]
+            qw, qx, qy, qz = y[o], y[o + 1], y[o + 2], y[o + 3]
+            wx, wy, wz = omega[k, 0], omega[k, 1], omega[k, 2]
+            # q' = 1/2 [0, w] (x) q  (w in the world frame, A = R(q) body to world)
+            dy[o] = -0.5 * (wx * qx + wy * qy + wz * qz)
+            dy[o + 1] = 0.5 * (qw * wx + wy * qz - wz * qy)
+            dy[o + 2] = 0.5 * (qw * wy + wz * qx - wx * qz)
+            dy[o + 3] = 0.5 * (qw * wz + wx * qy - wy * qx)
+            dy[w_off[k]:w_off[k] + 3] = alpha[k]
+        if hinge_kind[k] == ELASTIC:
+            o = d_off[k]
+            dy[o:o + 3] = y[o + 3:o + 6]
+            kp = topology[0][k]
+            # d'' = a_k - a_att,k, the attachment point's acceleration (the ground's for a root;
+            # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's end)
+            if kp < 0:
+                a_att = a_g
+            else:
+                a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
+                if body_kind[kp] == _BEAM:
+                    nm2 = _modal_size(beam_params[kp])
+                    br = np.ascontiguousarray(b_r[kp, :, :nm2])
+                    a_att = a_att + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
+            dy[o + 3:o + 6] = acc[k] - a_att
+    for i in range(n_modal):
+        dy[e0 + i] = y[e0 + n_modal + i]
+        dy[e0 + n_modal + i] = modal_acc[i]
+    c0, n_coord = joints[1], joints[2]
+    for i in range(n_coord):
+        dy[c0 + i] = y[c0 + n_coord + i]
+        dy[c0 + n_coord + i] = coord_acc[i]
+    return dy

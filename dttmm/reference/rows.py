@@ -1,0 +1,40 @@
+"""The model's row offsets and the shape constants' rows, as plain ints for the reference's kernels
+(the reference's formulation: newton_euler.py)."""
+from ..elements import BEAM
+from ..elements.beam import (DAMPING_RATIO, EI_V, EI_W, GJ, LENGTH, LOAD_AXES, MASS_PER_LENGTH,
+                             MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
+from ..elements.drives import FORCE, SPRING_DAMPER
+from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLATION,
+                               REST_ROTATION)
+from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
+from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
+
+
+# offsets into a body_params / hinge_params row, as plain ints for the kernels
+_MASS = MASS
+_LIC = TO_MASS_CENTER.start
+_LIO = TO_OUTPUT.start
+_JI = INERTIA_INPUT.start
+_R0 = REST_ROTATION.start
+_KT = K_TRANSLATION.start
+_CT = C_TRANSLATION.start
+_KR = K_ROTATION.start
+_CR = C_ROTATION.start
+_BEAM = BEAM
+_DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B, _ROTATION_A = (DOT, GAP_A, GAP_WORLD, ANGLE_A,
+                                                            ANGLE_B, ROTATION_A)
+_SPRING_DAMPER = SPRING_DAMPER
+_FORCE = FORCE
+_BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
+_BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
+_BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
+_BSTRETCH, _BEA = AXIAL_MODES, EA
+_AX1 = AXIS_1.start
+_AX2 = AXIS_2.start
+_REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
+JOINTS_WITH_COORDINATES = (REVOLUTE, UNIVERSAL, PRISMATIC)
+
+# rows of the per-beam shape constants (_Problem.shape_vec[k, row, mode])
+_SY, _TY, _YL, _DYL, _MF, _KF = range(6)
+N_SHAPE_ROWS = 6
