@@ -789,7 +789,7 @@ def _coordinates(model, keep):
     joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
     whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
     coordinate always)."""
-    from .elements.joints import coordinate_count
+    from .elements.kinds import WITH_COORDINATES, coordinate_count
     names = set(keep)
     unknown = names - set(model.hinge_names) - set(model.body_names)
     if unknown:
@@ -800,7 +800,7 @@ def _coordinates(model, keep):
     for k in range(model.n_bodies):
         kind = int(model.hinge_kind[k])
         named = model.hinge_names[k] in names or model.body_names[k] in names
-        if kind in (REVOLUTE, UNIVERSAL, PRISMATIC):
+        if kind in WITH_COORDINATES:
             for i in range(coordinate_count(kind)):
                 drive = model.drives[k][i] if len(model.drives[k]) > i else None
                 variables.append(("q", k, i))

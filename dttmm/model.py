@@ -18,7 +18,7 @@ from .elements._checks import derivative, finite_scalar, finite_vector, rotation
 from .elements.drives import MOTION
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
-                             body_kind_of, joint_kind_of, names)
+                             WITH_COORDINATES, body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
 from .kernels.algebra.so3 import expm_so3, left_jacobian
 from . import closures
@@ -994,7 +994,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         else:
             a_in, w_in = rotations[p], omegas[p]
         locked[k] = kinds[k] == FIXED and (p < 0 or (locked[p] and body_kind[p] == RIGID))
-        if kinds[k] in (REVOLUTE, UNIVERSAL, PRISMATIC):
+        if kinds[k] in WITH_COORDINATES:
             hv[k] = dict(hv[k])     # (its own: _validated's dicts are shared)
             rot, om, hv[k]["rotation"] = _joint_start(kinds[k], hv[k], a_in, w_in,
                                                       bv[k]["rotation"], bv[k]["omega"],

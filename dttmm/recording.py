@@ -62,7 +62,7 @@ class Recording:
             if self.stream is not None:
                 self.stream.write(key, block)
             elif into:
-                self._samples_of(key, block[0])[rows:end] = block
+                self._samples_of(key, block.shape[1:], block.dtype)[rows:end] = block
             else:
                 self._leave_samples()
                 self.blocks[key].append(np.array(block))     # (a copy: the kernels reuse rec)
@@ -73,11 +73,11 @@ class Recording:
         if self.stream is not None:
             self.stream.commit(steps, times)
 
-    def _samples_of(self, key, row):
-        """The key's array of `samples` rows like row, made at its first row."""
+    def _samples_of(self, key, shape, dtype):
+        """The key's array of `samples` rows of this shape and dtype, made at its first row."""
         blocks = self.blocks[key]
         if not blocks:
-            blocks.append(np.empty((self.samples,) + row.shape, row.dtype))
+            blocks.append(np.empty((self.samples,) + shape, dtype))
         return blocks[0]
 
     def add_state(self, state, extra, step, t=None):
@@ -92,7 +92,7 @@ class Recording:
             pick = self.picks.get(key)          # first and last sample)
             if pick is not None:
                 value = value[pick[1:]]
-            self._samples_of(key, value)[self.rows] = value
+            self._samples_of(key, value.shape, value.dtype)[self.rows] = value
         self.rows += 1
         self.steps.append(step)
         if t is not None:

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
-from .elements.kinds import BODY_KIND, JOINT_KIND
+from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, FAMILY, LENGTH, MODES, TORSION_MODES,
                             foreshortening_integrals, mode_shapes, torsion_shapes)
 from .elements._checks import is_text
@@ -23,7 +23,7 @@ from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, 
                               known_force, runs_in_loop)
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
                               HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
-from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.joints import PRISMATIC
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import ball_chain
 from .kernels.stepping import step as kstep
@@ -284,7 +284,7 @@ def compiled_forces(model):
 
 @model_fact
 def has_coordinates(model):
-    return bool(np.isin(model.hinge_kind, (REVOLUTE, UNIVERSAL, PRISMATIC)).any())
+    return bool(np.isin(model.hinge_kind, WITH_COORDINATES).any())
 
 
 @model_fact
@@ -1206,7 +1206,7 @@ def _check_full_tree(model, scheme, method):
     """The full-state tree sweep (full_tree) runs every joint kind, with the Newmark scheme and
     the Riccati sweep only."""
     k = next((k for k in range(model.n_bodies)
-              if model.hinge_kind[k] in (REVOLUTE, UNIVERSAL, PRISMATIC)), None)
+              if model.hinge_kind[k] in WITH_COORDINATES), None)
     if k is not None:
         what = (f"hinge '{model.hinge_names[k]}' is "
                 f"{JOINT_KIND[int(model.hinge_kind[k])].what}: joints with coordinates")
@@ -1343,7 +1343,7 @@ def _kernel_model(model):
             return True
         if model.body_kind[k] != BEAM or not hinges:
             return False
-        if any(h in (ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC) for h in hinges):
+        if any(h == ELASTIC or h in WITH_COORDINATES for h in hinges):
             return True
         return (not chain and FIXED in hinges
                 and not (children[k] == [k + 1] and hinges == [FIXED]))

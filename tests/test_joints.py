@@ -111,3 +111,21 @@ def test_what_dttmm_does_not_run_with_them_is_refused_by_name():
     with pytest.raises(ValueError, match="hinge 'joint1' is a revolute joint.*Newmark scheme.*"
                                          "scheme='newmark'"):
         simulate(arm(), 0.01, 1e-3, scheme="energy_momentum")
+
+
+def test_each_joint_kind_declares_its_coordinates_and_the_solver_and_kernels_read_them():
+    """The number of free coordinates is a fact of the kind's declaration (elements/kinds.py),
+    read by the model, the reference and the kernels alike; the arm's joints (revolute,
+    revolute, universal, prismatic) give its Result five coordinate columns."""
+    from dttmm import simulate
+    from dttmm.chains import arm
+    from dttmm.elements.kinds import JOINT_KINDS, coordinate_count
+    from dttmm.kernels.transfers.joint import n_coordinates
+    declared = {k.name: k.coordinates for k in JOINT_KINDS}
+    assert declared == {"BallJoint": 0, "FixedHinge": 0, "ElasticHinge": 0, "RevoluteJoint": 1,
+                        "UniversalJoint": 2, "PrismaticJoint": 1}
+    for kind in JOINT_KINDS:
+        assert coordinate_count(kind.code) == n_coordinates(kind.code) == kind.coordinates
+    assert coordinate_count(99) == n_coordinates(99) == 0 == n_coordinates(-1)
+    res = simulate(arm(drive="motion"), 0.002, 1e-3)
+    assert res.joint_coordinates.shape[1] == 5 == len(res.info["coordinate_names"])

@@ -258,7 +258,3 @@ def rotation_about(axis, angle):
     return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
 
 
-def coordinate_count(kind):
-    """Free coordinates of a joint kind."""
-    return {REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}.get(kind, 0)
-

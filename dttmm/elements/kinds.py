@@ -31,6 +31,8 @@ class Kind:
                  reduced map.
     moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
                  across it).
+    coordinates: joints: its free coordinates (each with its drive, its columns in a Result and
+                 its rows in the kernels: coordinate_count, kernels/transfers/joint.py).
     doc:         the page that derives its equations.
     what:        how messages describe it ("hinge 'spring' is elastic").
     """
@@ -39,6 +41,7 @@ class Kind:
     schemes: tuple
     fused: bool = False
     moment_free: bool = False
+    coordinates: int = 0
     doc: str = ""
     what: str = ""
 
@@ -60,14 +63,29 @@ JOINT_KINDS = (
     Kind(ELASTIC, ElasticHinge, ("newmark",), doc="docs/hinges.md", what="elastic"),
     # joints with coordinates and drives (kernels/transfers/joint.py): the general loop's full-state
     # tree sweep
-    Kind(REVOLUTE, RevoluteJoint, ("newmark",), doc="docs/joints.md", what="a revolute joint"),
-    Kind(UNIVERSAL, UniversalJoint, ("newmark",), doc="docs/joints.md", what="a universal joint"),
-    Kind(PRISMATIC, PrismaticJoint, ("newmark",), doc="docs/joints.md", what="a prismatic joint"),
+    Kind(REVOLUTE, RevoluteJoint, ("newmark",), coordinates=1, doc="docs/joints.md",
+         what="a revolute joint"),
+    Kind(UNIVERSAL, UniversalJoint, ("newmark",), coordinates=2, doc="docs/joints.md",
+         what="a universal joint"),
+    Kind(PRISMATIC, PrismaticJoint, ("newmark",), coordinates=1, doc="docs/joints.md",
+         what="a prismatic joint"),
 )
 
 BODY_KIND = {k.code: k for k in BODY_KINDS}
 JOINT_KIND = {k.code: k for k in JOINT_KINDS}
 HINGE_KIND_NAMES = {k.code: k.name for k in JOINT_KINDS}
+# each joint code's free coordinates, by code (a tuple the kernels index: numba reads it as a
+# constant; kernels/transfers/joint.py::n_coordinates)
+COORDINATES = tuple(JOINT_KIND[code].coordinates if code in JOINT_KIND else 0
+                    for code in range(max(JOINT_KIND) + 1))
+
+
+WITH_COORDINATES = tuple(k.code for k in JOINT_KINDS if k.coordinates)    # (their codes)
+
+
+def coordinate_count(kind):
+    """The free coordinates of a joint kind (its code), as its declaration says."""
+    return COORDINATES[kind] if 0 <= kind < len(COORDINATES) else 0
 
 
 def body_kind_of(element):

@@ -230,8 +230,7 @@ from ..elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH, MODES, PIN
                              TORSION_MODES, AXIAL_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
-from ..elements.joints import coordinate_count
-from ..elements.kinds import JOINT_KIND
+from ..elements.kinds import JOINT_KIND, coordinate_count
 from ..closures import (assemble, check_drives_move, closure_forces, constraint_rows,
                         has_closure_drives, loop_residuals)
 from ..model import Model

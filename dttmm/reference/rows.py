@@ -7,6 +7,7 @@ from ..elements.drives import FORCE, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLATION,
                                REST_ROTATION)
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from ..elements.kinds import WITH_COORDINATES
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 
@@ -33,7 +34,7 @@ _BSTRETCH, _BEA = AXIAL_MODES, EA
 _AX1 = AXIS_1.start
 _AX2 = AXIS_2.start
 _REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
-JOINTS_WITH_COORDINATES = (REVOLUTE, UNIVERSAL, PRISMATIC)
+JOINTS_WITH_COORDINATES = WITH_COORDINATES          # (elements/kinds.py)
 
 # rows of the per-beam shape constants (_Problem.shape_vec[k, row, mode])
 _SY, _TY, _YL, _DYL, _MF, _KF = range(6)

@@ -314,10 +314,10 @@ class DirectCalls:
     numba's dispatcher types every argument of every call before choosing the compiled code:
     for a run's ~100 arrays in named tuples that was 13 of the 16 us a 1-step run spent in its
     compiled call (it fingerprints each named tuple's field names; plain tuples of the same
-    arrays take 2 us).  A prepared run's structures but three (the loop variant's scratch, the
-    model's arrays, the state, the sweep's scratch, the monitor) are the same arrays from call
-    to call, written in place, never replaced: their types do not change.  The three that do
-    (settings, a chunk's inputs and its record) are fingerprinted as plain tuples (~1 us); where
+    arrays take 2 us).  All but three of a prepared run's structures (the loop variant's
+    scratch, the model's arrays, the state, the sweep's scratch, the monitor) are the same arrays
+    from call to call, written in place, never replaced: their types do not change.  The three that
+    do (settings, a chunk's inputs and its record) are fingerprinted as plain tuples (~1 us); where
     they and the skeleton are those of the call before, the call goes to the entry point numba
     dispatched that call to (its compiled code's, which unboxes the arguments as the dispatcher
     would have; with one compiled version, that one; with several, the one of the arguments'

@@ -29,7 +29,6 @@ from ...elements import BEAM, RIGID
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
 from ...elements.drives import MOTION
-from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
@@ -52,7 +51,7 @@ RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE, RICCAT
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def has_coordinates(kind):
-    return kind == REVOLUTE or kind == UNIVERSAL or kind == PRISMATIC
+    return n_coordinates(kind) > 0
 
 
 @njit(cache=True, fastmath=CONTRACT)

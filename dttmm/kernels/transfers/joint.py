@@ -24,6 +24,7 @@ from .. import CONTRACT
 from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
 from ...elements.hinges import AXIS_1, AXIS_2, BALL
 from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from ...elements.kinds import COORDINATES
 from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mv
 from ..algebra.so3 import exp_coefficients
 
@@ -102,11 +103,10 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
 
 @njit(cache=True, fastmath=CONTRACT)
 def n_coordinates(kind):
-    if kind == UNIVERSAL:
-        return 2
-    if kind == REVOLUTE or kind == PRISMATIC:
-        return 1
-    return 0
+    """The free coordinates of a joint kind, as its declaration says (elements/kinds.py)."""
+    if kind < 0 or kind >= len(COORDINATES):
+        return 0
+    return COORDINATES[kind]
 
 
 @intrinsic
