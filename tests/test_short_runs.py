@@ -197,3 +197,11 @@ def test_direct_calls_go_to_the_code_numba_chose_and_only_for_the_same_types(mon
     # the third, and dropped at the fourth and fifth (new types: the dispatcher again)
     assert len(found) == 1 and found[0] is not None
     assert len(skeleton.overloads) == 3
+    # where no entry point is found (numba's compilation off, or a converted type), the calls
+    # go through the dispatcher and the lookup is not repeated
+    monkeypatch.setattr(kloop, "_entry_point", lambda c, a: found.append(None))
+    calls = kloop.DirectCalls()
+    for _ in range(4):
+        calls(skeleton, ((10.0,), fake_run((1.0,), (np.ones(2),), (0.5,)), out))
+        assert out[0] == 13.5
+    assert found[1:] == [None]

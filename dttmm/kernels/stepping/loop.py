@@ -325,17 +325,21 @@ class DirectCalls:
 
     def __init__(self):
         self.key = self.entry = None
+        self.looked_up = False      # the entry point of self.key looked for (found or not)
 
     def __call__(self, compiled, args):
         loop, run, out_info = args
         key = (compiled, compute_fingerprint((tuple(run.settings), tuple(run.inputs),
                                               tuple(run.rec), out_info)))
-        if self.entry is not None and key == self.key:
+        if key != self.key:
+            compiled(*args)
+            self.key, self.entry, self.looked_up = key, None, False
+        elif self.entry is not None:
             self.entry(*args)
-            return
-        compiled(*args)
-        self.entry = _entry_point(compiled, args) if key == self.key else None
-        self.key = key
+        else:       # the second call of these types: look once (with several compiled
+            compiled(*args)     # versions the lookup types every argument, ~1 ms)
+            if not self.looked_up:
+                self.entry, self.looked_up = _entry_point(compiled, args), True
 
 
 def _entry_point(compiled, args):
