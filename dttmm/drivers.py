@@ -142,6 +142,14 @@ class Stepping:
         return s._result(self.plan.user_model, self.recording, self.opts.dt,
                          time.perf_counter() - self.wall0, steps_taken, dict(self.plan.run_info))
 
+    def stopped(self, step, t, cause, steps_taken):
+        """The DivergenceError of a run that stops at `step` (time t) for `cause`, with the samples
+        recorded so far and, where a stiffened beam had bent near where its second-order energy
+        stops holding, that (solver._stiffened_bend_hint)."""
+        partial = self.partial(steps_taken)
+        return s.DivergenceError(step, t, cause + s._stiffened_bend_hint(self.plan.user_model,
+                                                                          partial), partial)
+
 
 def fixed_steps(run):
     """Chunks of equal steps to n_steps (solver._next_chunk), recorded as `sampling` asks, the
@@ -198,7 +206,7 @@ def fixed_steps(run):
                 cause = s._failure_cause(model, plan.mode, info, plan.monitor, plan.settings)
                 if opts.method == "direct" and info[0] == SINGULAR:
                     cause += "; " + s._DIRECT_HINT
-                raise s.DivergenceError(step, step * dt, cause, run.partial(step - 1))
+                raise run.stopped(step, step * dt, cause, step - 1)
             max_newton = max(max_newton, int(info[2]))
             if n_rec:
                 fastest = max(fastest, s._fastest_rate(rec.omega[:n_rec]), key=lambda f: f[0])
@@ -209,15 +217,14 @@ def fixed_steps(run):
                                        inputs.torque[:, plan.loaded],
                                        inputs.line_load[:, plan.loaded])
                 if broken:
-                    raise s.DivergenceError(done + m, (done + m) * dt, broken,
-                                            run.partial(done + m))
+                    raise run.stopped(done + m, (done + m) * dt, broken, done + m)
                 work_steps.append(done + np.arange(1, m + 1))
                 work_values.append(balance.chunk_work)
             done += m
             bar.update(done)
             runaway = s._beam_beyond_its_length(model, plan.beam_tips, state.eta)
             if runaway:
-                raise s.DivergenceError(done, done * dt, runaway, run.partial(done))
+                raise run.stopped(done, done * dt, runaway, done)
     finally:
         bar.close()
     rec = inputs = None                         # (the chunks' buffers)
@@ -317,10 +324,9 @@ def adaptive(run):
                      if info[0] != OK else "a beam deflected beyond its length")
             snapshot.restore()
             if control.too_small:
-                raise s.DivergenceError(taken + 1, t, f"adaptive steps: the step fell below "
-                                        f"{adaptive_steps.MIN_STEP:g} of t_end ({control.h:.3g} "
-                                        f"s) at t = {t:.6g} s; last cause: {cause}",
-                                        run.partial(taken))
+                raise run.stopped(taken + 1, t, f"adaptive steps: the step fell below "
+                                  f"{adaptive_steps.MIN_STEP:g} of t_end ({control.h:.3g} s) at "
+                                  f"t = {t:.6g} s; last cause: {cause}", taken)
     finally:
         bar.close()
     if recording.times[-1] != t_end:           # the final state is always recorded
@@ -389,8 +395,7 @@ def runge_kutta(run):
                          + (f"; last cause: {passing}" if passing else "")
                          if info[0] == ERROR_ESTIMATE else
                          _PASS_FAILURES.get(int(info[0]), f"status {int(info[0])}"))
-                raise s.DivergenceError(taken + 1, t, f"{opts.scheme.name}: {cause}",
-                                        run.partial(taken))
+                raise run.stopped(taken + 1, t, f"{opts.scheme.name}: {cause}", taken)
             bar.update(done)
     finally:
         bar.close()

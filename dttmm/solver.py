@@ -16,8 +16,9 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
-from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, FAMILY, LENGTH, MODES, TORSION_MODES,
-                            foreshortening_integrals, mode_shapes, torsion_shapes)
+from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, FAMILY, LENGTH, MODES,
+                            STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
+                            torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
                               known_force, runs_in_loop)
@@ -1498,6 +1499,45 @@ def _beam_beyond_its_length(model, tips, eta):
                     f"first bending frequency, which the beam without geometric stiffening "
                     f"cannot carry)")
     return ""
+
+
+# The end rotation (rad, relative to the input section) at which the second-order energy of a
+# stiffened beam with loaded-end modes stops being positive, per modes per plane (docs/beam.md,
+# "Where the second-order energy stops"): the first sign change of the reference's
+# Newton-Euler system as the first of 2 welded elements bends in its first mode.
+STIFFENED_BEND_LIMIT = {1: 0.95, 2: 0.17, 3: 0.083, 4: 0.048, 5: 0.034, 6: 0.021}
+
+
+def _stiffened_bend_hint(model, partial):
+    """Why a run may have stopped, where it did: the stiffened beam with loaded-end modes bent
+    furthest, at the last sample, to within 20% of STIFFENED_BEND_LIMIT; "" where none was (or
+    nothing was recorded)."""
+    if partial is None or partial.modal_coordinates is None or not len(partial.t):
+        return ""
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    eta = partial.modal_coordinates[-1]
+    worst = None
+    for k in np.nonzero(model.body_kind == BEAM)[0]:
+        row = model.beam_params[k]
+        m = int(row[MODES])
+        if not row[STIFFENING] or int(row[FAMILY]) != CLAMPED_LOADED or m not in \
+                STIFFENED_BEND_LIMIT:
+            continue
+        slope = mode_shapes(CLAMPED_LOADED, row[LENGTH], m, [row[LENGTH]])[1][:, 0]
+        e = eta[offsets[k]:offsets[k + 1]]
+        bend = float(np.hypot(e[:m] @ slope, e[m:2 * m] @ slope))
+        share = bend / STIFFENED_BEND_LIMIT[m]
+        if share >= 0.8 and (worst is None or share > worst[0]):
+            worst = (share, model.body_names[k], bend, m)
+    if worst is None:
+        return ""
+    _, name, bend, m = worst
+    return (f"; beam '{name}' (geometric stiffening, {m} modes per plane) had bent by {bend:.2g} "
+            f"rad over its length, near the {STIFFENED_BEND_LIMIT[m]:g} rad where its second-order "
+            f"energy stops being positive (docs/beam.md, \"Where the second-order energy "
+            f"stops\"): " + ("give its elements modes_per_plane=1, or use more elements "
+                              "(each then bends less)" if m > 1 else
+                              "use more elements (each then bends less)"))
 
 
 def _failure_cause(model, mode, info, monitor, settings):

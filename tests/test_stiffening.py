@@ -122,3 +122,125 @@ def test_seed_001_pendulum_one_stiffened_element_follows_the_chain():
     assert 4e-3 < peak < 6e-3
     assert np.abs(deflection(_flexible_pendulum(1, 5, True)) - chain).max() < 0.05 * peak
     assert np.abs(deflection(_flexible_pendulum(1, 5, False)) - chain).max() > 0.5 * peak
+
+
+def _soft_pendulum(elements, modes):
+    """Issue 32's soft pendulum (Berzeri and Shabana's): a 1.2 m beam (A = 18 cm^2,
+    rho = 5540 kg/m^3, I = 1.215e-8 m^4, E = 0.7 MPa: bending a thousand times softer than the
+    gravity pull on it) on a ball joint at its root, released along +x under gravity -y, as
+    `elements` welded stiffened elements of `modes` modes per plane (None: the default)."""
+    from dttmm import BallJoint
+    length, area, rho, inertia = 1.2, 1.8e-3, 5540.0, 1.215e-8
+    parts = []
+    for i in range(elements):
+        parts += [BallJoint() if i == 0 else FixedHinge(),
+                  EulerBernoulliBeam(length=length / elements, density=rho, area=area,
+                                     bending_stiffness=0.7e6 * inertia,
+                                     polar_inertia_per_length=rho * 2 * inertia,
+                                     modes_per_plane=modes, stiffening=True, name=f"e{i + 1}")]
+    return build_chain(parts, gravity=[0.0, -9.81, 0.0])
+
+
+def _largest_bend(model, res):
+    """The largest end rotation of any element relative to its input section over the run
+    (rad; from its modal coordinates and its shapes' slopes at the tip)."""
+    from dttmm.elements.beam import FAMILY, LENGTH, MODES, mode_shapes
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    bends = []
+    for k in range(model.n_bodies):
+        row = model.beam_params[k]
+        m = int(row[MODES])
+        slope = mode_shapes(int(row[FAMILY]), row[LENGTH], m, [row[LENGTH]])[1][:, 0]
+        eta = res.modal_coordinates[:, offsets[k]:offsets[k + 1]]
+        bends.append(np.hypot(eta[:, :m] @ slope, eta[:, m:2 * m] @ slope).max())
+    return max(bends)
+
+
+def test_one_mode_per_plane_carries_the_soft_pendulum_through_its_whip():
+    """Issue 32: with one mode per plane, 32 welded stiffened elements run the soft pendulum
+    through its whip (t ~ 0.45 s) to 0.6 s, the elements bending by up to ~0.5 rad each (three
+    times where two modes per plane stop, docs/beam.md, "Where the second-order energy stops"):
+    energy within 1e-4 of the largest kinetic energy (nothing works on the system; measured
+    2.1e-5), and the tip within 1e-2 m of 24 elements' over the run (measured 6.7e-3 m, as the
+    tip whips at ~20 m/s; 32 against 64 elements, 4.6e-3 m over 1 s: docs/beam.md)."""
+    t = np.linspace(0.0, 0.6, 121)
+    model = _soft_pendulum(32, 1)
+    res = simulate(model, 0.6, 2e-4, t_eval=t)
+    energy = res.kinetic + res.potential
+    assert res.kinetic.max() > 60.0                     # (69.8 J: the whole fall is in)
+    assert np.abs(energy - energy[0]).max() < 1e-4 * res.kinetic.max()
+    assert _largest_bend(model, res) > 0.3
+    coarse = simulate(_soft_pendulum(24, 1), 0.6, 2e-4, t_eval=t)
+    assert np.abs(coarse.position_output[:, -1] - res.position_output[:, -1]).max() < 1e-2
+
+
+def test_a_soft_pendulum_stopped_at_its_whip_says_which_element_bent_too_far():
+    """Issue 32: the soft pendulum with the default two modes per plane stops as its tip whips
+    (docs/beam.md, "Where the second-order energy stops"); the message says which element had
+    bent near where its second-order energy stops being positive, and what to do."""
+    from dttmm import DivergenceError
+    with pytest.raises(DivergenceError) as stop:
+        simulate(_soft_pendulum(16, None), 0.6, 2e-4, record_dt=1e-3)
+    message = str(stop.value)
+    assert stop.value.t > 0.3, message                  # the fall before the whip runs
+    assert "second-order energy stops being positive" in message, message
+    assert "modes_per_plane=1" in message, message
+
+
+@pytest.mark.xfail(strict=True, reason="issue 32: the foreshortening's kinetic energy is kept "
+                   "to second order, which an element bent ~0.17 rad with two modes per plane "
+                   "makes indefinite (docs/beam.md, \"Where the second-order energy stops\")")
+def test_the_default_two_modes_carry_the_soft_pendulum_through_its_whip():
+    """Issue 32 (fails today): the soft pendulum of 32 elements with the default two modes per
+    plane runs through its whip to 0.6 s, its energy within 1e-4 of the largest kinetic energy."""
+    res = simulate(_soft_pendulum(32, None), 0.6, 1e-4, record_dt=1e-3)
+    energy = res.kinetic + res.potential
+    assert np.abs(energy - energy[0]).max() < 1e-4 * res.kinetic.max()
+
+
+def _reference_system_sign(model, bend):
+    """The sign of the determinant of the Newton-Euler reference's system (its mass matrix with
+    the joints' rows) at rest, with the first element bent in its first mode by `bend` rad at its
+    end."""
+    from dttmm.elements.beam import FAMILY, LENGTH, mode_shapes
+    from dttmm.reference import equations as eq
+    from dttmm.reference.newton_euler import _Problem
+    p = _Problem(model)
+    y = p.initial_state()
+    row = model.beam_params[0]
+    slope = mode_shapes(int(row[FAMILY]), row[LENGTH], 2, [row[LENGTH]])[1][0, 0]
+    y[p.e0] = bend / slope
+    args = p._args(y, 0.0)
+    (y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
+     w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns, gravity, r_g, v_g,
+     a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology, attachment_point,
+     joints) = args
+    (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
+     v_o, rho_att, acc_v_att) = eq._kinematics(
+        y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
+        w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology, attachment_point, joints)
+    q_el, m_el = eq._elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, kinds,
+                                   hinge_params, rot_g, w_g, topology[0])
+    s, _ = eq._assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
+                        rho_att, acc_v_att, q_el, m_el, body_params, kinds, hinge_params,
+                        body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
+                        f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
+                        torques, line_loads, topology, joints)
+    return np.linalg.slogdet(s)[0]
+
+
+@pytest.mark.parametrize("bend", [
+    0.1,
+    pytest.param(0.3, marks=pytest.mark.xfail(strict=True, reason="issue 32: the second-order "
+                                              "energy of two modes per plane is indefinite past "
+                                              "~0.17 rad (docs/beam.md)")),
+])
+def test_a_bent_stiffened_element_keeps_a_positive_mass(bend):
+    """The cause of the soft pendulum's stop (docs/beam.md, "Where the second-order energy
+    stops"), in the equations themselves, independently of any integrator: the kinetic energy
+    1/2 int mu |dr/dt|^2 is positive for every motion, so the system's determinant keeps the
+    sign it has at rest as an element bends.  Two welded stiffened elements of two modes per
+    plane: it does at 0.1 rad; at 0.3 rad (fails today) it has changed sign, at 0.17 rad
+    (measured)."""
+    model = _soft_pendulum(2, 2)
+    assert _reference_system_sign(model, bend) == _reference_system_sign(model, 0.0)
