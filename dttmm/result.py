@@ -463,12 +463,16 @@ def _log_so3(r):
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 
 
-def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
+def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
+                   exact_foreshortening=False):
     """Kinetic energy (int 1/2 mu |r'|^2 dx + 1/2 j_p L (w . A e1)^2) and potential energy
     (-int mu g . r dx + sum 1/2 k eta^2) of one beam (docs/beam.md), by quadrature, for T states
     at once: a (T, 3, 3), w, r_in, v_in (T, 3), eta, eta_dot (T, 2 m + mt), the twist's
-    energy too (docs/beam.md, "Torsion")."""
+    energy too (docs/beam.md, "Torsion").  exact_foreshortening: a stiffened beam's sections
+    at x + u_x - c(x) along the frame's x, c to all orders (the reference's
+    simulate_reference(exact_foreshortening=True)), instead of its terms to first order in c."""
     length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
+    exact = bool(row[STIFFENING]) and exact_foreshortening
     x = 0.5 * length * (_GL_X + 1.0)
     wq = 0.5 * length * _GL_W
     y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)      # y (m, Q)
@@ -481,6 +485,10 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     u_dot[:, :, 1] = eta_dot[:, :nm] @ y
     u_dot[:, :, 2] = eta_dot[:, nm:2 * nm] @ y
     u_dot[:, :, 0] = stretch_along(row, eta_dot, x)
+    if exact:
+        c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
+        p[:, :, 0] -= c
+        u_dot[:, :, 0] -= c_dot
     a_t = np.swapaxes(a, 1, 2)
     rho = p @ a_t                                          # A p, every state and point
     vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + u_dot @ a_t
@@ -505,7 +513,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity):
     if ma:      # V gains 1/2 E A int u_x'^2 ("Stretch")
         strain = eta[:, eta.shape[1] - ma:] @ torsion_shapes(int(row[FAMILY]), length, ma, x)[1]
         potential += 0.5 * row[EA] * (strain * strain) @ wq
-    if row[STIFFENING]:
+    if row[STIFFENING] and not exact:
         # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
         # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
         # int mu c g . A e1; c(x) = 1/2 int_0^x (v'^2 + w'^2) by its own quadrature on [0, x]
@@ -543,7 +551,8 @@ def _output_section(*args):
 
 
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
-                   eta=None, eta_dot=None, joint_coordinates=None, ground_position=None):
+                   eta=None, eta_dot=None, joint_coordinates=None, ground_position=None,
+                   exact_foreshortening=False):
     """Kinetic and potential energy of one state, or of T states at once, from positions and
     velocities alone.
 
@@ -561,6 +570,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     no drive springs are counted.  The potential counts the closing elastic hinges' springs
     (closures.elastic_closure_terms); ground_position (3,) or (T, 3): the ground point at this
     time (default: the model's), where a closing joint meets the ground.
+    exact_foreshortening: the stiffened beams' foreshortening to all orders (_beam_energies).
     """
     rotation = np.asarray(rotation, dtype=float)
     single = rotation.ndim == 3
@@ -597,7 +607,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         if model.body_kind[k] == BEAM:
             t_k, v_k = _beam_energies(model.beam_params[k], a, omega[:, k], r_in[:, k],
                                       v_in[:, k], eta[:, j0:j1], eta_dot[:, j0:j1],
-                                      model.gravity)
+                                      model.gravity, exact_foreshortening)
             kinetic += t_k
             potential += v_k
         if model.hinge_kind[k] == ELASTIC:

@@ -198,14 +198,14 @@ def test_the_default_two_modes_carry_the_soft_pendulum_through_its_whip():
     assert np.abs(energy - energy[0]).max() < 1e-4 * res.kinetic.max()
 
 
-def _reference_system_sign(model, bend):
+def _reference_system_sign(model, bend, exact=False):
     """The sign of the determinant of the Newton-Euler reference's system (its mass matrix with
     the joints' rows) at rest, with the first element bent in its first mode by `bend` rad at its
-    end."""
+    end (exact: with the foreshortening kept exactly)."""
     from dttmm.elements.beam import FAMILY, LENGTH, mode_shapes
     from dttmm.reference import equations as eq
     from dttmm.reference.newton_euler import _Problem
-    p = _Problem(model)
+    p = _Problem(model, exact)
     y = p.initial_state()
     row = model.beam_params[0]
     slope = mode_shapes(int(row[FAMILY]), row[LENGTH], 2, [row[LENGTH]])[1][0, 0]
@@ -214,7 +214,7 @@ def _reference_system_sign(model, bend):
     (y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
      w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns, gravity, r_g, v_g,
      a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology, attachment_point,
-     joints) = args
+     joints, tables) = args
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
      v_o, rho_att, acc_v_att) = eq._kinematics(
         y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
@@ -225,22 +225,59 @@ def _reference_system_sign(model, bend):
                         rho_att, acc_v_att, q_el, m_el, body_params, kinds, hinge_params,
                         body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                         f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
-                        torques, line_loads, topology, joints)
+                        torques, line_loads, topology, joints, tables)
     return np.linalg.slogdet(s)[0]
 
 
-@pytest.mark.parametrize("bend", [
-    0.1,
-    pytest.param(0.3, marks=pytest.mark.xfail(strict=True, reason="issue 32: the second-order "
-                                              "energy of two modes per plane is indefinite past "
-                                              "~0.17 rad (docs/beam.md)")),
+@pytest.mark.parametrize("bend, exact", [
+    (0.1, False),
+    pytest.param(0.3, False, marks=pytest.mark.xfail(
+        strict=True, reason="issue 32: the second-order energy of two modes per plane is "
+        "indefinite past ~0.17 rad (docs/beam.md); DT-TMM's kernels keep it so far")),
+    (0.3, True),
+    (1.0, True),
 ])
-def test_a_bent_stiffened_element_keeps_a_positive_mass(bend):
+def test_a_bent_stiffened_element_keeps_a_positive_mass(bend, exact):
     """The cause of the soft pendulum's stop (docs/beam.md, "Where the second-order energy
     stops"), in the equations themselves, independently of any integrator: the kinetic energy
     1/2 int mu |dr/dt|^2 is positive for every motion, so the system's determinant keeps the
     sign it has at rest as an element bends.  Two welded stiffened elements of two modes per
-    plane: it does at 0.1 rad; at 0.3 rad (fails today) it has changed sign, at 0.17 rad
-    (measured)."""
+    plane: with the foreshortening to second order it does at 0.1 rad, and has changed sign at
+    0.3 (at 0.17 rad, measured); kept exactly (the reference's exact_foreshortening) it does up
+    to 1 rad."""
     model = _soft_pendulum(2, 2)
-    assert _reference_system_sign(model, bend) == _reference_system_sign(model, 0.0)
+    assert _reference_system_sign(model, bend, exact) == _reference_system_sign(model, 0.0, exact)
+
+
+def test_the_exact_foreshortening_carries_the_soft_pendulum_on():
+    """Issue 32: the reference with the foreshortening kept exactly runs the soft pendulum of 8
+    elements with three modes per plane past where the second-order equations stop (their
+    mass turns singular at t = 0.035 s, measured), to 0.1 s: its energy to 1e-9 of the largest
+    kinetic energy (measured 4.7e-11 at 0.12 s), and its tip within 2e-4 m of DT-TMM's 32
+    elements of one mode per plane (measured 9.5e-5 m; 8 elements fall behind after, 9e-4 m
+    at 0.12 s)."""
+    from dttmm.reference.newton_euler import simulate_reference
+    t = np.linspace(0.0, 0.1, 11)
+    ref = simulate_reference(_soft_pendulum(8, 3), 0.1, rtol=1e-8, atol=1e-10, t_eval=t,
+                             exact_foreshortening=True)
+    energy = ref.kinetic + ref.potential
+    assert ref.kinetic.max() > 5.0
+    assert np.abs(energy - energy[0]).max() < 1e-9 * ref.kinetic.max()
+    chain = simulate(_soft_pendulum(32, 1), 0.1, 1e-4, t_eval=t)
+    assert np.abs(chain.position_output[:, -1] - ref.position_output[:, -1]).max() < 2e-4
+
+
+def test_the_exact_foreshortening_adds_nothing_where_the_beams_bend_little():
+    """The exact foreshortening's first-order parts are the second-order equations' stiffening:
+    on the stiffened three-pendulum (its beam deflects by 0.5 mm) the two references agree to
+    1e-8 m over 0.5 s (measured 3.2e-10 m), both keeping the energy to 1e-12 of the largest
+    kinetic energy (measured 2e-15)."""
+    from dttmm.chains import three_pendulum
+    from dttmm.reference.newton_euler import simulate_reference
+    t = np.linspace(0.0, 0.5, 26)
+    model = three_pendulum(2, stiffening=True)
+    runs = [simulate_reference(model, 0.5, t_eval=t, exact_foreshortening=e) for e in (False, True)]
+    for run in runs:
+        energy = run.kinetic + run.potential
+        assert np.abs(energy - energy[0]).max() < 1e-12 * run.kinetic.max()
+    assert np.abs(runs[0].position_output - runs[1].position_output).max() < 1e-8

@@ -6,9 +6,11 @@ Newton-Euler reference's right-hand side 20 s; measured from numba's compile eve
 runs a few steps of small models and leaves the compiled kernels in numba's cache (with a warm
 cache it takes a few seconds):
 
-    python tests/warm_kernels.py general    the general loop: its start, skeleton and sweeps
-    python tests/warm_kernels.py others     the fused, welded, energy-momentum and
-                                            Runge-Kutta loops and the Newton-Euler reference
+    python tests/warm_kernels.py general    the general loop's start (which the welded and
+                                            energy-momentum loops use too), skeleton and sweeps,
+                                            the welded and energy-momentum loops
+    python tests/warm_kernels.py others     the fused ball-joint loops, the Runge-Kutta loops
+                                            and the Newton-Euler reference
 """
 import os
 import sys
@@ -19,6 +21,8 @@ os.environ.setdefault("DTTMM_SPECIALIZE", "0")      # the suite's one copy (conf
 def general():
     from dttmm import chains, simulate
     simulate(chains.arm(flexible=True), 2e-3, 1e-3)
+    simulate(chains.stiff_cantilever(2), 2e-3, 1e-3)
+    simulate(chains.rigid_chain(3), 2e-3, 1e-3, scheme="energy_momentum")
 
 
 def others():
@@ -28,8 +32,6 @@ def others():
     simulate(chain, 2e-3, 1e-3)
     simulate(chains.three_pendulum(), 2e-3, 1e-3)
     simulate(chains.binary_tree(2), 2e-3, 1e-3)
-    simulate(chains.stiff_cantilever(2), 2e-3, 1e-3)
-    simulate(chain, 2e-3, 1e-3, scheme="energy_momentum")
     simulate(chain, 2e-3, scheme="dop853", rtol=1e-6)
     simulate(chains.binary_tree(2), 2e-3, scheme="dop853", rtol=1e-6)
     simulate_reference(chain, 2e-3)

@@ -309,8 +309,9 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
 
     Returns mass, h = A s (first moment about I), J = A (J_b + J_p) A^T, AP = A P and AG = A G
     (3 x 2n), the velocity terms of the Newton and Euler rows (right-hand side), the modal
-    equations' right-hand side (gravity, velocity, damping and stiffness terms) and the modal
-    mass matrix of one plane, mu int Y Y^T (n x n)."""
+    equations' right-hand side (gravity, velocity, damping and stiffness terms), the modal mass
+    matrix over all the beam's coordinates and geo (D0, D1, D2 eta per plane: the foreshortening's
+    couplings with a_I, _assemble)."""
     length = bp[_BL]
     mu = bp[_BMU]
     nm = int(bp[_BMODES])
@@ -455,7 +456,123 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         known = mu * (e1 @ gravity) * geo[1] + mu * (w_b[1] ** 2 + w_b[2] ** 2) * geo[2]
         for j in range(n2):
             modal[j] -= known[j]
-    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, mu * myy, geo
+    m_ee = np.zeros((nb, nb))                      # the modal mass: mu int Y Y^T per plane,
+    for j in range(nm):                            # j_p int Psi^2 (twist), mu int U^2 (stretch)
+        for i in range(nm):
+            m_ee[j, i] = m_ee[nm + j, nm + i] = mu * myy[j, i]
+    for j in range(nt):
+        m_ee[n2 + j, n2 + j] = bp[_BJP] * sv[_MF, tw + j]
+    for j in range(na):
+        m_ee[sa + j, sa + j] = mu * maa[j]
+    return mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
+    """_beam_terms with the foreshortening kept exactly (newton_euler.py's docstring, "Geometric
+    stiffening, exact"): every section is a point of the quadrature `table`
+    (shapes.exact_foreshortening_table) at p = (x + u_x - c, v, w) in the frame, its velocity
+    relative to the frame Phi eta' and the velocity part of its acceleration kappa =
+    -(eta_v'^T D eta_v' + eta_w'^T D eta_w') e1, with Phi's columns d p / d eta_j:
+    (-(D eta_v)_j, Y_j, 0) and (-(D eta_w)_j, 0, Y_j) for the bending, (U_j, 0, 0) for the
+    stretch, none for the twist (its terms are _beam_terms').  The mass properties are the sums
+    of mu weight over the points of p, p p^T, Phi, p^ Phi and Phi^T Phi, the Newton, Euler and
+    modal velocity terms those of -(2 w x Phi eta' + kappa), and the modal rows' right-hand side
+    Phi^T A^T g - Phi^T (w x (w x p) + 2 w x Phi eta' + kappa) - damping - stiffness.  Returns
+    what _beam_terms does, with the modal mass over all the beam's coordinates and no `geo`
+    (the foreshortening's couplings are in A P, the modal mass and the velocity terms)."""
+    length = bp[_BL]
+    mu = bp[_BMU]
+    nm = int(bp[_BMODES])
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3
+    n2 = 2 * nm
+    nb = n2 + nt + na
+    sa = n2 + nt
+    w_b = a.T @ w
+    g_b = a.T @ gravity
+    s_b = np.zeros(3)
+    pi = np.zeros((3, 3))
+    p_b = np.zeros((3, nb))
+    gg_b = np.zeros((3, nb))
+    m_ee = np.zeros((nb, nb))
+    ud_b = np.zeros(3)
+    kap_b = np.zeros(3)
+    lcor = np.zeros(3)
+    modal = np.zeros(nb)
+    phi = np.zeros((3, nb))
+    for g in range(table.shape[0]):
+        x, wt = table[g, 0], table[g, 1]
+        if wt == 0.0:                  # (a padded row: _Problem's table is the widest beam's)
+            continue
+        y = table[g, 2:2 + nm]
+        d = np.ascontiguousarray(table[g, 2 + nm:2 + nm + nm * nm]).reshape((nm, nm))
+        u = table[g, 2 + nm + nm * nm:2 + nm + nm * nm + na]
+        ev, ew = eta[:nm], eta[nm:n2]
+        dv, dw = eta_dot[:nm], eta_dot[nm:n2]
+        dev, dew = d @ ev, d @ ew
+        phi[:, :] = 0.0
+        for j in range(nm):
+            phi[0, j] = -dev[j]
+            phi[1, j] = y[j]
+            phi[0, nm + j] = -dew[j]
+            phi[2, nm + j] = y[j]
+        for j in range(na):
+            phi[0, sa + j] = u[j]
+        pos = np.empty(3)
+        pos[0] = x - 0.5 * (ev @ dev + ew @ dew)
+        pos[1] = y @ ev
+        pos[2] = y @ ew
+        for j in range(na):
+            pos[0] += u[j] * eta[sa + j]
+        vel = phi @ eta_dot
+        kap = np.zeros(3)
+        kap[0] = -(dv @ (d @ dv) + dw @ (d @ dw))
+        acc_v = _cross(w_b, _cross(w_b, pos)) + 2.0 * _cross(w_b, vel) + kap
+        f = mu * wt
+        s_b += f * pos
+        pi += f * np.outer(pos, pos)
+        p_b += f * phi
+        gg_b += f * (_hat(pos) @ phi)
+        m_ee += f * (phi.T @ phi)
+        ud_b += f * vel
+        kap_b += f * kap
+        lcor += f * _cross(pos, 2.0 * _cross(w_b, vel) + kap)
+        modal += f * (phi.T @ (g_b - acc_v))
+    mass = mu * length
+    j_b = -pi
+    tr = pi[0, 0] + pi[1, 1] + pi[2, 2]
+    for i in range(3):
+        j_b[i, i] += tr
+    j_b[0, 0] += bp[_BJP] * length                 # polar spin inertia J_p = diag(j_p L, 0, 0)
+    p_t = 0.0                                      # j_p int psi' (the twist's spin momentum)
+    for j in range(nt):
+        gg_b[0, n2 + j] = bp[_BJP] * sv[_SY, tw + j]
+        p_t += bp[_BJP] * sv[_SY, tw + j] * eta_dot[n2 + j]
+        m_ee[n2 + j, n2 + j] = bp[_BJP] * sv[_MF, tw + j]
+    e1 = np.ascontiguousarray(a[:, 0])
+    newton_v = -2.0 * _cross(w, a @ ud_b) - a @ kap_b
+    euler_v = -(a @ lcor) - p_t * _cross(w, e1)
+    for j in range(nt):                            # the twist: -c psi' - k psi
+        m_t = bp[_BJP] * sv[_MF, tw + j]
+        k_t = bp[_BGJ] * sv[_KF, tw + j]
+        modal[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
+                         - k_t * eta[n2 + j])
+    for j in range(nm):
+        m_k = mu * sv[_MF, j]
+        kv = bp[_BEIV] * sv[_KF, j]
+        kw = bp[_BEIW] * sv[_KF, j]
+        modal[j] -= (2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k * eta_dot[j]
+                     + kv * eta[j])
+        modal[nm + j] -= (2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k * eta_dot[nm + j]
+                          + kw * eta[nm + j])
+    for j in range(na):
+        m_a = mu * sv[_MF, 2 * tw + j]
+        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
+        modal[sa + j] -= (2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * eta_dot[sa + j]
+                          + k_a * eta[sa + j])
+    return (mass, a @ s_b, a @ j_b @ a.T, a @ p_b, a @ gg_b, newton_v, euler_v, modal, m_ee,
+            np.zeros((3, nb)))
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
@@ -510,7 +627,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
               acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
               beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
               n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
-              joints):
+              joints, exact):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
@@ -535,7 +652,6 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         ce = -1
         geo = np.zeros((3, 0))
         if body_kind[k] == _BEAM:
-            nm = int(beam_params[k, _BMODES])
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
@@ -546,8 +662,12 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             if beam_params[k, _BAXES] != 0.0:
                 f_k, t_k, p_k = rot_o[k] @ f_k, rot_o[k] @ t_k, a @ p_k
             g_k = gravity + p_k / beam_params[k, _BMU]
-            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_yy, geo = _beam_terms(
-                beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, g_k)
+            if exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
+                mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = _beam_terms_exact(
+                    beam_params[k], shape_vec[k], exact[k], eta, eta_dot, a, w, g_k)
+            else:
+                mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = _beam_terms(
+                    beam_params[k], shape_vec[k], shape_mat[k], eta, eta_dot, a, w, g_k)
             # an applied end force F and torque T (docs/beam.md, "Loads on the beam") act at
             # the output point and on the end section: F in Newton, rho_O x F + T about I,
             # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
@@ -565,17 +685,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 b[ce + j] = modal[j]
                 for i in range(3):
                     b[ce + j] += b_r[k, i, j] * f_k[i] + b_t[k, i, j] * t_k[i]
-            for j in range(nm):                       # modal mass, one block per plane
-                for i in range(nm):
-                    s[ce + j, ce + i] = m_yy[j, i]
-                    s[ce + nm + j, ce + nm + i] = m_yy[j, i]
-            tw = shape_vec.shape[2] // 3
-            nt = int(beam_params[k, _BTWIST])
-            for j in range(2 * nm, 2 * nm + nt):      # the twist's, j_p int Psi_j^2
-                s[ce + j, ce + j] = beam_params[k, _BJP] * shape_vec[k, _MF, tw + j - 2 * nm]
-            for j in range(2 * nm + nt, nm2):         # the stretch's, mu int U_j^2
-                s[ce + j, ce + j] = (beam_params[k, _BMU]
-                                     * shape_vec[k, _MF, 2 * tw + j - 2 * nm - nt])
+            for j in range(nm2):                      # the modal mass
+                for i in range(nm2):
+                    s[ce + j, ce + i] = m_ee[j, i]
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
@@ -884,12 +996,14 @@ def _solve_least_closure_force(s, b, col0, count):
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     loops, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
-                    line_loads, topology, attachment_point, joints):
+                    line_loads, topology, attachment_point, joints, exact):
     """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
     body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, per joint
     coordinate (joints) its acceleration q'' and the joint loads' generalized force s_i . N
     (s_i . F for a slide), and per hinge its attachment point's arm rho_att and the velocity part
-    of its acceleration acc_v_att (_kinematics)."""
+    of its acceleration acc_v_att (_kinematics).  exact: the beams' quadrature tables of the
+    exact foreshortening (shapes.exact_foreshortening_table, one per body), or no columns for the
+    second-order one (_beam_terms_exact)."""
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
      b_t, v_o, rho_att, acc_v_att) = _kinematics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
@@ -901,7 +1015,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
                      rho_att, acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params,
                      body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                      f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
-                     torques, line_loads, topology, joints)
+                     torques, line_loads, topology, joints, exact)
     n_rows = loops[1].shape[0]
     if n_rows > 0:
         directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
@@ -958,7 +1072,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,
-               topology, attachment_point, joints):
+               topology, attachment_point, joints, exact):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
     modal coordinates of all beams, their rates, joint coordinates, their rates]."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
@@ -966,7 +1080,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns,
         gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
-        attachment_point, joints)
+        attachment_point, joints, exact)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):

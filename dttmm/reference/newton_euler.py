@@ -195,6 +195,23 @@ equations of the kinetic and potential energy to second order in eta, whose term
 dttmm.result.chain_energies counts by its own quadrature of c(x).  (The energies in
 dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
+Geometric stiffening, exact (simulate_reference(exact_foreshortening=True); docs/beam.md, "Where
+the second-order energy stops"): the energies to second order in eta are not positive where an
+element's modes turn back its frame's turn, so the reference can keep c to all orders instead.
+Every section of a stiffened beam is then a point of a Gauss-Legendre rule
+(shapes.exact_foreshortening_table: x, weight, Y(x), D(x) = int_0^x Y' Y'^T, U(x)) at
+p = (x + u_x - c, v, w), with c = 1/2 (eta_v^T D eta_v + eta_w^T D eta_w) and
+d p / d eta_j = (-(D eta_v)_j, Y_j, 0), (-(D eta_w)_j, 0, Y_j) for the bending coordinates,
+(U_j, 0, 0) for the stretch: s, Q, P, G and the modal mass are the sums of mu weight p,
+p p^T, Phi, p^ Phi and Phi^T Phi over the points, the velocity terms those of
+2 w x Phi eta' + kappa (kappa = -(eta_v'^T D eta_v' + eta_w'^T D eta_w') e1, the velocity part of
+p''), and the modal rows Phi^T (A^T g - w x (w x p) - 2 w x Phi eta' - kappa) (_beam_terms_exact):
+Lagrange's equations of the kinetic energy 1/2 int mu |r'|^2 exactly, positive for every
+motion, and of the potential energy with the same sections.  The output point is the same as
+above (exact in c already), and dttmm.result.chain_energies(exact_foreshortening=True) counts
+the energies with the same sections.  The stiffening terms above (G eta, the Newton row's
+-mu A e1 (D1 eta)^T eta'') are the first-order parts of these sums.
+
 Torsion (docs/beam.md; a beam's TORSION_MODES): the sections twist by psi(x) = Psi(x) . eta_t
 (the beam's last coordinates) about the frame's x axis and spin by w . A e1 + psi', with
 T = 1/2 j_p int (w . A e1 + psi')^2 and V = 1/2 G J int psi'^2 (twist_shape_constants, closed
@@ -237,8 +254,8 @@ from ..model import Model
 from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
 
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
-from .shapes import (beam_shape_constants, stiffening_matrices, stretch_shape_constants,
-                     twist_shape_constants)
+from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
+                     stretch_shape_constants, twist_shape_constants)
 from .equations import _kinematics, _solve_dynamics, _stiffening_block, rhs_kernel
 
 
@@ -282,7 +299,7 @@ class _Problem:
     """Index bookkeeping and the per-time evaluation of ground motion, applied loads and joint
     drives."""
 
-    def __init__(self, model):
+    def __init__(self, model, exact_foreshortening=False):
         n = model.n_bodies
         # writable copies of the model's read-only arrays (numba types read-only arrays apart)
         kinds = np.array(model.hinge_kind, dtype=np.int64)
@@ -339,6 +356,15 @@ class _Problem:
             self.shape_mat[k, :m, :m] = mat
             for i, d in enumerate(stiffening_matrices(self.beam_params[k])):
                 self.shape_mat[k, :m, (i + 1) * mmax:(i + 1) * mmax + m] = d
+        # the exact foreshortening's quadrature tables (shapes.exact_foreshortening_table),
+        # padded to the longest and widest (zero weights: no contribution); no columns for the
+        # second-order foreshortening
+        tables = {k: exact_foreshortening_table(self.beam_params[k]) for k in beams
+                  if exact_foreshortening and self.beam_params[k, STIFFENING] != 0.0}
+        self.exact = np.zeros((n, max([1] + [t.shape[0] for t in tables.values()]),
+                               max([0] + [t.shape[1] for t in tables.values()])))
+        for k, table in tables.items():
+            self.exact[k, :table.shape[0], :table.shape[1]] = table
         n_modes = np.asarray(model.n_modes, dtype=np.int64)
         self.m_off = np.full(n, -1, dtype=np.int64)
         nm = 0
@@ -510,7 +536,7 @@ class _Problem:
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.loops, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
                 wd_g, forces, torques, line_loads, self.topology, self.attachment_point,
-                self.joints)
+                self.joints, self.exact)
         if self._closure_forces:    # a closing JointForce: f(t, q, q') at this state's q, q',
             _solve_dynamics(*args)  # which one evaluation leaves in loops[13]
             values = self.loops[13]
@@ -578,7 +604,8 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
     return t_end, t_eval
 
 
-def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=None):
+def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=None,
+                       exact_foreshortening=False):
     """Integrate the model with the global Newton-Euler equations and scipy's solve_ivp.
 
     An independent check of DT-TMM (docs/reference.md; the formulation is in this module's
@@ -609,6 +636,11 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         The recorded times, s: strictly increasing within [0, t_end]; default 201 points over
         [0, t_end].  Sampled from the integrator's dense output (the state at t = 0 exactly
         as given).
+    exact_foreshortening : bool
+        Stiffened beams with the foreshortening kept exactly in their kinetic and potential
+        energy (module docstring, "Geometric stiffening, exact"; docs/beam.md, "Where the
+        second-order energy stops"), by quadrature of their sections, and the energies counted
+        the same way; default False: to second order, as DT-TMM's kernels.
 
     Returns
     -------
@@ -658,7 +690,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
             check_drives_move(model, "simulate_reference")
         assembly = {"before": before,
                     "after": [float(np.max(r, initial=0.0)) for r in loop_residuals(model)]}
-    prob = _Problem(model)
+    prob = _Problem(model, bool(exact_foreshortening))
     y0 = prob.initial_state()
     n, nt = prob.n, len(t_eval)
     if prob.n_state > 0:
@@ -712,7 +744,8 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                                                     ground_rotation=ground[3],
                                                     eta=eta[i], eta_dot=eta_dot[i],
                                                     joint_coordinates=q_rec[i] if nq else None,
-                                                    ground_position=ground[0])
+                                                    ground_position=ground[0],
+                                                    exact_foreshortening=exact_foreshortening)
     r_c, r_o = point_positions(model, rot, r_in)
     for k in range(n):                          # a beam's mass centre and output point move
         if prob.body_kind[k] == BEAM:           # with its deflection

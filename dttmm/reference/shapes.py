@@ -205,3 +205,55 @@ def loaded_mode_coefficients(n_modes):
     c = c / np.sqrt(np.einsum("ij,ik,kj->j", c, m, c))
     c = c * np.where(c.sum(axis=0) < 0.0, -1.0, 1.0)
     return c, lam
+
+
+def _bending_shapes(length, family, n_modes, x):
+    """(Y, Y') of one beam's bending shapes at the points x, each (n_modes, len(x)), by this
+    module's own forms."""
+    x = np.asarray(x, dtype=float)
+    if family == PINNED:
+        b = np.arange(1, n_modes + 1)[:, None] * math.pi / length
+        return np.sin(b * x[None, :]), b * np.cos(b * x[None, :])
+    if family == CLAMPED:
+        y, dy, _ = clamped_shapes(length, n_modes, x)
+        return y, dy
+    c, _ = loaded_mode_coefficients(n_modes)
+    p = np.arange(2, n_modes + 2, dtype=float)[:, None]
+    t = (x / length)[None, :]
+    return c.T @ t ** p, c.T @ (p * t ** (p - 1.0)) / length
+
+
+def exact_foreshortening_table(beam_row, n_points=None):
+    """One beam's sections at Gauss-Legendre points, for the exact foreshortening (newton_euler.py's
+    docstring, "Geometric stiffening, exact"): a (n_points, 2 + m + m^2 + ma) array whose rows are
+    [x, weight, Y_k(x) (m), D(x) = int_0^x Y' Y'^T (m x m, row-major), U_a(x) (ma)].  D(x) by
+    polynomial moments for the loaded-end modes, else by a Gauss-Legendre rule of its own on
+    [0, x]; quadrature_points(m + ma) points by default (the integrands are polynomials of degree
+    up to 4 m + 4 for the loaded-end modes, and products of four trigonometric or hyperbolic shapes
+    otherwise)."""
+    length, nm, family = float(beam_row[LENGTH]), int(beam_row[MODES]), int(beam_row[FAMILY])
+    ma = int(beam_row[AXIAL_MODES])
+    nq = quadrature_points(nm + ma) if n_points is None else int(n_points)
+    xg, wg = np.polynomial.legendre.leggauss(nq)
+    x, wq = 0.5 * length * (xg + 1.0), 0.5 * length * wg
+    table = np.zeros((nq, 2 + nm + nm * nm + ma))
+    table[:, 0], table[:, 1] = x, wq
+    table[:, 2:2 + nm] = _bending_shapes(length, family, nm, x)[0].T
+    if family == CLAMPED_LOADED:
+        # Y_j' = (1/L) sum_i c_ij p_i t^(p_i - 1): int_0^x Y_j' Y_k' = (1/L) c^T T(t) c with
+        # T_il = p_i p_l t^(p_i + p_l - 1) / (p_i + p_l - 1), t = x / L
+        c, _ = loaded_mode_coefficients(nm)
+        p = np.arange(2, nm + 2, dtype=float)
+        q = p[:, None] + p[None, :] - 1.0
+        for g, t in enumerate(x / length):
+            d = c.T @ (np.outer(p, p) * t ** q / q) @ c / length
+            table[g, 2 + nm:2 + nm + nm * nm] = d.reshape(-1)
+    else:
+        ti, wi = np.polynomial.legendre.leggauss(nq)
+        for g, xe in enumerate(x):
+            dy = _bending_shapes(length, family, nm, 0.5 * xe * (ti + 1.0))[1]
+            d = (dy * (0.5 * xe * wi)) @ dy.T
+            table[g, 2 + nm:2 + nm + nm * nm] = d.reshape(-1)
+    if ma:
+        table[:, 2 + nm + nm * nm:] = shaft_shape_constants(length, family, ma, x)[1].T
+    return table
