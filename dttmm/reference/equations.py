@@ -302,6 +302,34 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _elastic_forces(bp, sv, eta, eta_dot):
+    """The generalized forces of one beam's springs and dampers on its coordinates, -c q' - k q
+    each: bending k = EI int Y''^2, twist G J int Psi'^2, stretch E A int U'^2, and
+    c = 2 zeta sqrt(k m) with the coordinate's modal mass m (newton_euler.py's docstring)."""
+    mu = bp[_BMU]
+    nm = int(bp[_BMODES])
+    nt, na = int(bp[_BTWIST]), int(bp[_BSTRETCH])
+    tw = sv.shape[1] // 3
+    n2 = 2 * nm
+    out = np.empty(n2 + nt + na)
+    for i in range(n2):
+        m_k = mu * sv[_MF, i % nm]
+        k = (bp[_BEIV] if i < nm else bp[_BEIW]) * sv[_KF, i % nm]
+        out[i] = -2.0 * bp[_BZETA] * math.sqrt(k / m_k) * m_k * eta_dot[i] - k * eta[i]
+    for j in range(nt):
+        m_t = bp[_BJP] * sv[_MF, tw + j]
+        k_t = bp[_BGJ] * sv[_KF, tw + j]
+        out[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
+                       - k_t * eta[n2 + j])
+    for j in range(na):
+        m_a = mu * sv[_MF, 2 * tw + j]
+        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
+        i = n2 + nt + j
+        out[i] = -2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * eta_dot[i] - k_a * eta[i]
+    return out
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     """World-frame mass properties, coupling blocks and velocity terms of one beam at its
     current (eta, eta'), from the shape integrals sv (int Y, int x Y, ...) and my = int Y Y^T
@@ -421,34 +449,21 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     for i in range(3):
         mm[i, i] -= ww2
     g_w = ap.T @ gravity                           # (A P)^T g
-    modal = np.empty(nb)
-    for j in range(nt):                            # the twist: -c psi' - k psi
-        m_t = bp[_BJP] * sv[_MF, tw + j]
-        k_t = bp[_BGJ] * sv[_KF, tw + j]
-        modal[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
-                         - k_t * eta[n2 + j])
+    modal = _elastic_forces(bp, sv, eta, eta_dot)
     for j in range(nm):
-        m_k = mu * sv[_MF, j]
-        kv = bp[_BEIV] * sv[_KF, j]
-        kw = bp[_BEIW] * sv[_KF, j]
-        cv = 2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k
-        cw = 2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k
         x_j = ty[j] + mva_xi[j]                   # int Y_j (x + u_x)
         cent_v = mu * (x_j * mm[1, 0] + mm[1, 1] * mev[j] + mm[1, 2] * mew[j])
         cent_w = mu * (x_j * mm[2, 0] + mm[2, 1] * mev[j] + mm[2, 2] * mew[j])
         # 2 int mu Y_j e2 . (w_b x u'), u' = (u_x', v', w')
         cori_v = 2.0 * mu * (w_b[2] * mva_xid[j] - w_b[0] * mdw[j])
         cori_w = 2.0 * mu * (w_b[0] * mdv[j] - w_b[1] * mva_xid[j])
-        modal[j] = g_w[j] - cent_v - cori_v - cv * dv[j] - kv * ev[j]
-        modal[nm + j] = g_w[nm + j] - cent_w - cori_w - cw * dw[j] - kw * ew[j]
+        modal[j] += g_w[j] - cent_v - cori_v
+        modal[nm + j] += g_w[nm + j] - cent_w - cori_w
     for j in range(na):                            # the stretch: e1 . int mu U_j (...)
-        m_a = mu * maa[j]
-        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
         cent_a = mu * ((xa[j] + maa[j] * xi[j]) * mm[0, 0] + mm[0, 1] * mav_v[j]
                        + mm[0, 2] * mav_w[j])
         cori_a = 2.0 * mu * (w_b[1] * mav_dw[j] - w_b[2] * mav_dv[j])
-        modal[sa + j] = (g_w[sa + j] - cent_a - cori_a
-                         - 2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * xid[j] - k_a * xi[j])
+        modal[sa + j] += g_w[sa + j] - cent_a - cori_a
     # geometric stiffening: + mu e1.(g - a_I) D1 eta + mu (w_y^2 + w_z^2) D2 eta on the left
     # (newton_euler.py's docstring; N_L D0 eta is the end force's work through B_r); the a_I term
     # goes to the matrix (_assemble, with geo), the rest here
@@ -553,24 +568,7 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
     e1 = np.ascontiguousarray(a[:, 0])
     newton_v = -2.0 * _cross(w, a @ ud_b) - a @ kap_b
     euler_v = -(a @ lcor) - p_t * _cross(w, e1)
-    for j in range(nt):                            # the twist: -c psi' - k psi
-        m_t = bp[_BJP] * sv[_MF, tw + j]
-        k_t = bp[_BGJ] * sv[_KF, tw + j]
-        modal[n2 + j] = (-2.0 * bp[_BZETA] * math.sqrt(k_t / m_t) * m_t * eta_dot[n2 + j]
-                         - k_t * eta[n2 + j])
-    for j in range(nm):
-        m_k = mu * sv[_MF, j]
-        kv = bp[_BEIV] * sv[_KF, j]
-        kw = bp[_BEIW] * sv[_KF, j]
-        modal[j] -= (2.0 * bp[_BZETA] * math.sqrt(kv / m_k) * m_k * eta_dot[j]
-                     + kv * eta[j])
-        modal[nm + j] -= (2.0 * bp[_BZETA] * math.sqrt(kw / m_k) * m_k * eta_dot[nm + j]
-                          + kw * eta[nm + j])
-    for j in range(na):
-        m_a = mu * sv[_MF, 2 * tw + j]
-        k_a = bp[_BEA] * sv[_KF, 2 * tw + j]
-        modal[sa + j] -= (2.0 * bp[_BZETA] * math.sqrt(k_a * m_a) * eta_dot[sa + j]
-                          + k_a * eta[sa + j])
+    modal += _elastic_forces(bp, sv, eta, eta_dot)
     return (mass, a @ s_b, a @ j_b @ a.T, a @ p_b, a @ gg_b, newton_v, euler_v, modal, m_ee,
             np.zeros((3, nb)))
 
