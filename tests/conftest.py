@@ -20,6 +20,9 @@ def pytest_configure(config):
     if hasattr(config, "workerinput") or not isinstance(
             getattr(config.option, "numprocesses", None), int) or config.option.numprocesses < 2:
         return
+    print("tests/warm_kernels.py: compiling the kernels most tests share, in two processes "
+          "(minutes on a fresh clone, seconds with numba's cache warm)", file=sys.stderr,
+          flush=True)
     script = str(Path(__file__).with_name("warm_kernels.py"))
     parts = [subprocess.Popen([sys.executable, script, part], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL) for part in ("general", "others")]
