@@ -128,7 +128,12 @@ def _beam_lines(model, k, end_mass):
                  f"{np.array2string(axial_frequencies(row), precision=4)}" if ma else
                  "no stretch (axial_modes 0)")
     if row[STIFFENING]:
-        lines.append("geometric stiffening on")
+        from .solver import STIFFENED_BEND_LIMIT
+        limit = STIFFENED_BEND_LIMIT.get(m) if int(row[FAMILY]) == CLAMPED_LOADED else None
+        lines.append("geometric stiffening on" + (
+            f", to second order in the modes: holds while the beam bends less than ~{limit:g} "
+            f"rad over its length with {m} modes per plane (~{STIFFENED_BEND_LIMIT[1]:g} with "
+            f"one; docs/beam.md, 'Where the second-order energy stops')" if limit else ""))
     elif model.tip_pinned and not ma:
         lines.append("geometric stiffening off (the paper's beam; the default for a beam without "
                      "stretch modes in a closed loop, whose inextensible centreline held between "

@@ -281,3 +281,13 @@ def test_the_exact_foreshortening_adds_nothing_where_the_beams_bend_little():
         energy = run.kinetic + run.potential
         assert np.abs(energy - energy[0]).max() < 1e-12 * run.kinetic.max()
     assert np.abs(runs[0].position_output - runs[1].position_output).max() < 1e-8
+
+
+def test_describe_says_how_far_a_stiffened_element_holds():
+    """A stiffened beam of loaded-end modes (welded elements) says in describe() how far it may
+    bend before its second-order energy stops holding (docs/beam.md); a pinned one, which holds
+    past where a modal element describes its deflection, does not."""
+    from dttmm.chains import three_pendulum
+    welded = _soft_pendulum(4, 2).describe()
+    assert "bends less than ~0.17 rad over its length with 2 modes per plane" in welded
+    assert "bends less than" not in three_pendulum(2, stiffening=True).describe()
