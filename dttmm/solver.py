@@ -1466,16 +1466,18 @@ def _unsupported_cause(model, code, where):
 
 @model_fact
 def _beam_tips(model):
-    """Per beam: (name, length, its modal coordinates' slice, the mode shapes at its tip)."""
+    """Per beam: (name, length, its modal coordinates' slice, the mode shapes at its tip, the
+    twist's there, the mode shapes' slopes there, its body index)."""
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     tips = []
     for k in np.nonzero(model.body_kind == BEAM)[0]:
         row = model.beam_params[k]
         length, nm = row[LENGTH], int(row[MODES])
-        y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
+        y, slope = (v[:, 0] for v in mode_shapes(int(row[FAMILY]), length, nm, [length])[:2])
         psi = torsion_shapes(int(row[FAMILY]), length, int(row[TORSION_MODES]),
                              [length])[0][:, 0]
-        tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y, psi))
+        tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y, psi,
+                     slope, k))
     return tips
 
 
@@ -1483,7 +1485,7 @@ def _beam_beyond_its_length(model, tips, eta):
     """The cause, if a beam's tip deflection exceeds its length (checked after every chunk of
     steps): the modal beam is a small-deflection model, and such a deflection only comes from a
     run gone wrong; "" otherwise."""
-    for name, length, part, y, psi in tips:
+    for name, length, part, y, psi, _, _ in tips:
         e = eta[part]
         nm = len(y)
         twist = float(e[2 * nm:2 * nm + len(psi)] @ psi)
@@ -1514,21 +1516,19 @@ def _stiffened_bend_hint(model, partial):
     nothing was recorded)."""
     if partial is None or partial.modal_coordinates is None or not len(partial.t):
         return ""
-    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     eta = partial.modal_coordinates[-1]
     worst = None
-    for k in np.nonzero(model.body_kind == BEAM)[0]:
+    for name, _, part, _, _, slope, k in _beam_tips(model):
         row = model.beam_params[k]
         m = int(row[MODES])
         if not row[STIFFENING] or int(row[FAMILY]) != CLAMPED_LOADED or m not in \
                 STIFFENED_BEND_LIMIT:
             continue
-        slope = mode_shapes(CLAMPED_LOADED, row[LENGTH], m, [row[LENGTH]])[1][:, 0]
-        e = eta[offsets[k]:offsets[k + 1]]
+        e = eta[part]
         bend = float(np.hypot(e[:m] @ slope, e[m:2 * m] @ slope))
         share = bend / STIFFENED_BEND_LIMIT[m]
         if share >= 0.8 and (worst is None or share > worst[0]):
-            worst = (share, model.body_names[k], bend, m)
+            worst = (share, name, bend, m)
     if worst is None:
         return ""
     _, name, bend, m = worst
