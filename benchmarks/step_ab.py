@@ -133,6 +133,8 @@ def main(argv=None):
     ap.add_argument("--call", action="store_true",
                     help="a call's fixed cost (a 1-step run) instead of a step's")
     args = ap.parse_args(argv)
+    if args.call and args.in_process:
+        ap.error("--call runs in separate processes only (--in-process times steps)")
     unit = "us per call" if args.call else "us"
     out = {}
     if args.in_process:

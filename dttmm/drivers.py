@@ -76,6 +76,10 @@ class Stepping:
                                         lambda: np.zeros((size, n, 2, 3)))
         self.closure_target = plan.chunk_arrays(("closure_target", size),
                                            lambda: np.zeros((size, len(plan.loops.kind), 3)))
+        # nothing prescribed varies in time: every chunk of m steps reads the same inputs
+        self.static_inputs = (self.static_ground and self.no_loads
+                              and not plan.joint_inputs_vary and not plan.targets_vary
+                              and not plan.closing_forces)
         self.info = np.zeros(5, dtype=np.int64)
         self.info[4] = counters[1]
         self.max_newton = counters[0]
@@ -91,6 +95,14 @@ class Stepping:
                  plan.scheme.name == "paper", "v_c" in plan.keys,
                  plan.loops.wrench.shape[0] if "closure_wrench" in plan.keys else 0)
         return ends_only, plan.chunk_arrays(("record",) + shape, lambda: s._record(*shape))
+
+    def chunk_inputs(self, done, m, h):
+        """The prescribed data of the m steps of h after step `done` (inputs_for): a run whose
+        inputs do not vary in time reads the same arrays each chunk (made once per length)."""
+        if self.static_inputs:
+            return self.plan.chunk_arrays(("inputs", self.size, m), lambda: self.inputs_for(
+                np.arange(m + 1) * h, None, h))
+        return self.inputs_for((done + np.arange(m + 1)) * h, (done + np.arange(m) + 0.5) * h, h)
 
     def inputs_for(self, times, mid_times, h):
         """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
@@ -125,9 +137,11 @@ class Stepping:
         plan, opts = self.plan, self.opts
         step_limit = opts.max_step_error if step_limit is None else step_limit
         try:
-            plan.runner(plan.loop, Run(plan.params, plan.settings._replace(
-                h=h, record_every=every, max_step_error=step_limit), plan.state, plan.sweep,
-                inputs, rec, plan.monitor), self.info, calls=plan.calls)
+            settings = plan.chunk_arrays(("settings", h, every, step_limit),
+                                         lambda: plan.settings._replace(
+                                             h=h, record_every=every, max_step_error=step_limit))
+            plan.runner(plan.loop, Run(plan.params, settings, plan.state, plan.sweep, inputs, rec,
+                                       plan.monitor), self.info, calls=plan.calls)
         except np.linalg.LinAlgError as err:
             raise s.DivergenceError(
                 first_step + 1, t_first, f"a matrix of the sweep is singular somewhere in steps "
@@ -185,9 +199,8 @@ def fixed_steps(run):
             m, every = s._next_chunk(done, n_steps, sampling, run.size)
             if ends_only:
                 every = m + 1
-            times = (done + np.arange(m + 1)) * dt
             try:
-                inputs = run.inputs_for(times, (done + np.arange(m) + 0.5) * dt, dt)
+                inputs = run.chunk_inputs(done, m, dt)
             except s.UserFunctionError as err:
                 step = max(int(round(err.t / dt)), done + 1)
                 raise s.DivergenceError(step, err.t, str(err), run.partial(done)) from None

@@ -40,6 +40,7 @@ class Recording:
         self.stream = stream
         self.samples = samples
         self.rows = 0           # rows written into the arrays of `samples` rows
+        self._rows_of_state = None  # (add_state's targets in those arrays)
 
     @classmethod
     def from_stream(cls, path):
@@ -83,16 +84,23 @@ class Recording:
     def add_state(self, state, extra, step, t=None):
         """One sample from the state the loop advances (t = 0, the state at the end, or an
         adaptive run's segment end at time t)."""
-        values = {key: extra[key] if key in extra else getattr(state, key) for key in self.keys}
         if self.stream is not None or self.samples is None or self.rows >= self.samples:
-            self.add({key: value[None] for key, value in values.items()}, [step],
-                     () if t is None else [t])
+            self.add({key: (extra[key] if key in extra else getattr(state, key))[None]
+                      for key in self.keys}, [step], () if t is None else [t])
             return
-        for key, value in values.items():       # (the row written in place: a short run's
-            pick = self.picks.get(key)          # first and last sample)
-            if pick is not None:
-                value = value[pick[1:]]
-            self._samples_of(key, value.shape, value.dtype)[self.rows] = value
+        if self._rows_of_state is None:         # each key's array of samples and pick, made at
+            self._rows_of_state = []            # the first row (a short run's first and last
+            for key in self.keys:               # sample are written in place)
+                value = extra[key] if key in extra else getattr(state, key)
+                pick = self.picks.get(key)
+                pick = None if pick is None else pick[1:]
+                value = value if pick is None else value[pick]
+                self._rows_of_state.append((key, key in extra, pick,
+                                            self._samples_of(key, value.shape, value.dtype)))
+        row = self.rows
+        for key, is_extra, pick, samples in self._rows_of_state:
+            value = extra[key] if is_extra else getattr(state, key)
+            samples[row] = value if pick is None else value[pick]
         self.rows += 1
         self.steps.append(step)
         if t is not None:

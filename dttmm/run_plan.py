@@ -222,10 +222,13 @@ class PreparedRun:
         if not self.kept:
             return make()
         if key not in self._chunk_arrays:
+            if len(self._chunk_arrays) >= KEEP_CHUNK_ARRAYS:    # (many run lengths or steps:
+                self._chunk_arrays.clear()                      # the latest kept, not all)
             self._chunk_arrays[key] = make()
         return self._chunk_arrays[key]
 
 
+KEEP_CHUNK_ARRAYS = 64  # a kept run's chunk arrays and settings kept (chunk_arrays)
 GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
 
 

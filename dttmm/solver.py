@@ -8,6 +8,7 @@ the prescribed ground motion, applied loads and joint drives for each chunk, jud
 and collects the recorded samples (recording.py).
 """
 import functools
+import math
 import time
 from dataclasses import dataclass, replace
 
@@ -1109,6 +1110,10 @@ def _fastest_rate(omega):
     MAX_TURN_PER_STEP judges (sampled: a spike between records can pass unseen)."""
     if omega.shape[1] == 0:
         return (0.0, 0)
+    if omega.size <= 96:                # (a few bodies' few samples: faster without numpy)
+        squares = [x * x + y * y + z * z for x, y, z in omega.reshape(-1, 3).tolist()]
+        at = squares.index(max(squares))
+        return (math.sqrt(squares[at]), at % omega.shape[1])
     squares = np.einsum("mki,mki->mk", omega, omega)
     at = int(squares.argmax())          # (one reduction over samples and bodies)
     return (float(np.sqrt(squares.flat[at])), at % omega.shape[1])

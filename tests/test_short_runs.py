@@ -205,3 +205,31 @@ def test_direct_calls_go_to_the_code_numba_chose_and_only_for_the_same_types(mon
         calls(skeleton, ((10.0,), fake_run((1.0,), (np.ones(2),), (0.5,)), out))
         assert out[0] == 13.5
     assert found[1:] == [None]
+
+
+def test_a_kept_run_holds_a_bounded_number_of_chunk_arrays_and_reuses_them_bitwise():
+    """A kept prepared run keeps its chunks' arrays and settings by shape and step (a short
+    run's fixed cost), but no more than run_plan.KEEP_CHUNK_ARRAYS of them however many run
+    lengths a study asks for; a run after the bound was passed equals a fresh model's."""
+    from dttmm import run_plan
+    model = rigid_chain(3)
+    for n in range(1, 3 * run_plan.KEEP_CHUNK_ARRAYS):
+        simulate(model, n * 1e-4, 1e-4)
+    plan = next(iter(model.__dict__["_prepared_runs"].values()))
+    assert 0 < len(plan._chunk_arrays) <= run_plan.KEEP_CHUNK_ARRAYS
+    for a, b in zip(_run_arrays(simulate(model, 0.0137, 1e-4)),
+                    _run_arrays(simulate(rigid_chain(3), 0.0137, 1e-4))):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_the_fastest_rate_is_the_same_on_lists_and_on_arrays():
+    """solver._fastest_rate's two paths (a few values in Python, many in numpy) pick the same
+    largest |w| and body."""
+    rng = np.random.default_rng(3)
+    for shape in ((1, 3, 3), (2, 5, 3), (4, 8, 3), (40, 7, 3)):
+        omega = rng.normal(size=shape)
+        squares = (omega ** 2).sum(axis=-1)
+        at = np.unravel_index(squares.argmax(), squares.shape)
+        rate, body = solver._fastest_rate(omega)
+        assert body == at[1]
+        assert rate == pytest.approx(np.sqrt(squares[at]), rel=1e-15)
