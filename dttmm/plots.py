@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .elements.beam import FAMILY, LENGTH, MODES, mode_shapes, stretch_along
+from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .feedback import Progress
 
 
@@ -170,7 +170,9 @@ def run_figures(result, model, directory, title=""):
 
 def centerlines(result, model, points=12):
     """(T, n, points, 3) world points along every body: a rigid body's input, mass centre and
-    output points (repeated), a beam's deflected centreline (docs/beam.md)."""
+    output points (repeated), a beam's deflected centreline r_I + A ((x - c(x) + s(x)) e1 + u)
+    (docs/beam.md; c the foreshortening of a stiffened beam, s the stretch)."""
+    from .result import _foreshortening_along
     n = model.n_bodies
     out = np.empty((len(result.t), n, points, 3))
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -184,6 +186,8 @@ def centerlines(result, model, points=12):
             eta = result.modal_coordinates[:, offsets[k]:offsets[k + 1]]
             local = np.zeros((len(result.t), points, 3))
             local[:, :, 0] = x + stretch_along(row, eta, x)
+            if row[STIFFENING]:
+                local[:, :, 0] -= _foreshortening_along(row, x, eta, eta)[0]
             local[:, :, 1] = eta[:, :m] @ y
             local[:, :, 2] = eta[:, m:2 * m] @ y
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
