@@ -61,21 +61,12 @@ class Stepping:
                       f"(docs/joints.md)")
         # a chunk's inputs and record rows hold each of its steps for every body: no more steps
         # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
-        self.size = size = 1 if self.force_drives else max(1, min(
+        self.size = 1 if self.force_drives else max(1, min(
             s.CHUNK, s.CHUNK_BYTES // (s.CHUNK_STEP_BYTES * n),
             s.CHUNK if opts.adaptive else opts.n_steps - done))
         self.static_ground = model.ground_motion is None
-        if self.static_ground:
-            self.ground = plan.chunk_arrays(("ground", size),
-                                       lambda: s._ground(model, np.zeros(size + 1)))
         self.no_loads = not plan.has_loads
-        if self.no_loads:
-            self.zero_loads = plan.chunk_arrays(("loads", size), lambda: tuple(
-                np.zeros((size, n, 3)) for _ in range(3)))
-        self.joint_input = plan.chunk_arrays(("joint_input", size),
-                                        lambda: np.zeros((size, n, 2, 3)))
-        self.closure_target = plan.chunk_arrays(("closure_target", size),
-                                           lambda: np.zeros((size, len(plan.loops.kind), 3)))
+        self._constants = None          # (constant_inputs)
         # nothing prescribed varies in time: every chunk of m steps reads the same inputs
         self.static_inputs = (self.static_ground and self.no_loads
                               and not plan.joint_inputs_vary and not plan.targets_vary
@@ -104,23 +95,41 @@ class Stepping:
                 np.arange(m + 1) * h, None, h))
         return self.inputs_for((done + np.arange(m + 1)) * h, (done + np.arange(m) + 0.5) * h, h)
 
+    def constant_inputs(self):
+        """(ground, loads, joint inputs, closure targets) of chunks of up to self.size steps
+        where they do not vary in time (a fixed ground's; zero loads, joint inputs and targets,
+        written where they do vary), made once per chunk size."""
+        if self._constants is None:
+            plan, model, size = self.plan, self.plan.model, self.size
+            n = model.n_bodies
+            self._constants = (
+                plan.chunk_arrays(("ground", size), lambda: s._ground(model, np.zeros(size + 1)))
+                if self.static_ground else None,
+                plan.chunk_arrays(("loads", size), lambda: tuple(
+                    np.zeros((size, n, 3)) for _ in range(3))) if self.no_loads else None,
+                plan.chunk_arrays(("joint_input", size), lambda: np.zeros((size, n, 2, 3))),
+                plan.chunk_arrays(("closure_target", size),
+                                  lambda: np.zeros((size, len(plan.loops.kind), 3))))
+        return self._constants
+
     def inputs_for(self, times, mid_times, h):
         """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
         ends times[1:] (the energy-momentum step's loads: at mid_times)."""
         plan, model = self.plan, self.plan.model
         m = len(times) - 1
+        ground, zero_loads, joint_input, closure_target = self.constant_inputs()
         if self.static_ground:
-            ga, gr, gw, gwd, gp, gv = self.ground
+            ga, gr, gw, gwd, gp, gv = ground
         else:
             ga, gr, gw, gwd, gp, gv = s._ground(model, times)
             ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
-        f, tq, ll = self.zero_loads if self.no_loads else s._loads(
+        f, tq, ll = zero_loads if self.no_loads else s._loads(
             model, mid_times if self.opts.scheme.loads_at_midpoints else times[1:])
         ji = (s._joint_inputs(model, times[1:], plan.state, h) if plan.joint_inputs_vary
-              else self.joint_input)
+              else joint_input)
         loops = plan.loops
         ct = closure_targets(model, times[1:], loops) if plan.targets_vary else \
-            self.closure_target
+            closure_target
         for r, law, who in plan.closing_forces:  # f(t, q, q') at the predictor from the last
             q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its
             ct[0, r, 2] = s._drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # proj.)
@@ -165,6 +174,11 @@ class Stepping:
                                                                           partial), partial)
 
 
+def _faster(a, b):
+    """The faster of two (rad/s, body) (solver._fastest_rate), the first where equal."""
+    return b if b[0] > a[0] else a
+
+
 def fixed_steps(run):
     """Chunks of equal steps to n_steps (solver._next_chunk), recorded as `sampling` asks, the
     energy balance checked after each where asked; the Result with its checkpoint."""
@@ -191,7 +205,8 @@ def fixed_steps(run):
                       tq0[:, loaded], ll0[:, loaded])
     ends_only, rec = run.records(every, balance)
     max_newton = run.max_newton
-    bar = Progress(n_steps - done, opts.progress)
+    # (a run of one chunk never shows a bar: Progress shows one after the first chunk)
+    bar = Progress(n_steps - done, opts.progress if n_steps - done > run.size else False)
     fastest = (plan.start_fastest if done == 0      # (rad/s, body) over the samples
                else s._fastest_rate(state.omega[None]))
     try:
@@ -222,7 +237,7 @@ def fixed_steps(run):
                 raise run.stopped(step, step * dt, cause, step - 1)
             max_newton = max(max_newton, int(info[2]))
             if n_rec:
-                fastest = max(fastest, s._fastest_rate(rec.omega[:n_rec]), key=lambda f: f[0])
+                fastest = _faster(fastest, s._fastest_rate(rec.omega[:n_rec]))
             if balance is not None:
                 broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
                                        done + np.arange(1, m + 1), dt,
@@ -243,7 +258,7 @@ def fixed_steps(run):
     rec = inputs = None                         # (the chunks' buffers)
     if recording.last_step != n_steps:          # the final state is always recorded
         recording.add_state(state, plan.history_values, n_steps)
-        fastest = max(fastest, s._fastest_rate(state.omega[None]), key=lambda f: f[0])
+        fastest = _faster(fastest, s._fastest_rate(state.omega[None]))
     checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
                                (max_newton, info[4]))
     turn = fastest[0] * dt

@@ -438,5 +438,7 @@ class Checkpoint:
         """The checkpoint of a run that has ended: its own arrays, or a function returning
         their copy (read-only once read; a run of its own is not copied: a million bodies'
         state is not doubled)."""
-        return cls(step=int(step), h=float(h), run=dict(run),
-                   counters=tuple(int(c) for c in counters), source=structures)
+        checkpoint = object.__new__(cls)      # (the fields known valid: no __init__, a short
+        checkpoint.__dict__.update(step=int(step), h=float(h), run=dict(run),  # run's cost)
+                                   counters=tuple(map(int, counters)), source=structures)
+        return checkpoint

@@ -3,6 +3,7 @@ it, before anything is built or run.  The defaults that depend on the model (New
 whether the energy is held) are decided here too, so that drivers and prepared runs read one
 record of what the run is."""
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -49,6 +50,7 @@ class RunOptions:
     def adaptive(self):
         return self.rtol is not None
 
+    @cached_property
     def plan_key(self):
         """What a prepared run depends on (run_plan.py): the options that shape its arrays,
         its loop variant and its start, not the run's length, records or output."""
@@ -57,7 +59,8 @@ class RunOptions:
                 bool(self.hold_energy))
 
 
-_PLAIN = (int, float, str, bool, type(None))      # arguments whose checked options are kept
+_PLAIN = frozenset((int, float, str, bool, type(None)))  # arguments whose checked options are
+#                                                         kept
 KEEP_OPTIONS = 32       # checked options kept per model (the latest calls' arguments)
 
 
@@ -71,10 +74,11 @@ def run_options(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton
     args = (t_end, dt, rtol, atol, method, scheme, rho_inf, newton_iterations, newton_tol,
             record_every, record_dt, full_state, richardson, progress, max_step_error,
             max_energy_error, hold_energy)
+    types = tuple(map(type, args))
     plain = (isinstance(model, Model) and t_eval is None and resume is None and stream is None
-             and all(type(a) in _PLAIN for a in args))
+             and _PLAIN.issuperset(types))
     if plain:
-        key = args + tuple(map(type, args)) + (closures.PINNED_TIP_SWEEP,)  # (a switch of
+        key = args + types + (closures.PINNED_TIP_SWEEP,)  # (a switch of
         #                                                                   how loops run)
         kept = model.__dict__.get("_run_options")
         if kept is not None and key in kept:

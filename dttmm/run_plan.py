@@ -18,7 +18,6 @@ simulation) each run prepares its own, as before.
 """
 import threading
 from collections import OrderedDict
-from contextlib import contextmanager
 from functools import partial
 
 import numpy as np
@@ -316,42 +315,57 @@ def start_is_pure(model):
 _KEPT_LOCK = threading.Lock()
 
 
-@contextmanager
-def prepared_run(opts):
-    """The prepared run of opts, restarted: the one kept on the model for opts' plan_key where
-    there is one free (start_is_pure, KEEP_BYTES), else a new one (kept where it may be)."""
-    model = opts.model
-    key = opts.plan_key() + (s.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
-    #                                                                   that tests turn)
-    pure = start_is_pure(model)
-    plan = None
-    if pure:
-        with _KEPT_LOCK:
-            kept = model.__dict__.get("_prepared_runs")
-            if kept is None:
-                kept = OrderedDict()
-                object.__setattr__(model, "_prepared_runs", kept)
-            plan = kept.get(key)
-            if plan is not None:
-                kept.move_to_end(key)
-        if plan is not None and plan.lock.acquire(blocking=False):
-            try:
-                plan.restart()
-                yield plan
-            finally:
-                plan.lock.release()
-            return
-    plan = PreparedRun(opts)
-    if pure and sum(b.nbytes for b in plan.buffers) <= KEEP_BYTES:
-        with _KEPT_LOCK:
-            kept = model.__dict__["_prepared_runs"]
-            if key not in kept:
-                plan.kept = True
-                kept[key] = plan
-                while len(kept) > KEEP:
-                    kept.popitem(last=False)
-    if plan.kept:
-        with plan.lock:
-            yield plan
-    else:
-        yield plan
+class prepared_run:
+    """with prepared_run(opts) as plan: the prepared run of opts, restarted: the one kept on the
+    model for opts' plan_key where there is one free (start_is_pure, KEEP_BYTES), else a new
+    one (kept where it may be); a kept one is held (its lock) until the block ends.  (A class
+    rather than a generator: a short run's fixed cost.)"""
+
+    __slots__ = ("opts", "plan", "held")
+
+    def __init__(self, opts):
+        self.opts, self.plan, self.held = opts, None, False
+
+    def __enter__(self):
+        opts = self.opts
+        model = opts.model
+        key = opts.plan_key + (s.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
+        #                                                                   that tests turn)
+        pure = start_is_pure(model)
+        if pure:
+            with _KEPT_LOCK:
+                kept = model.__dict__.get("_prepared_runs")
+                if kept is None:
+                    kept = OrderedDict()
+                    object.__setattr__(model, "_prepared_runs", kept)
+                plan = kept.get(key)
+                if plan is not None:
+                    kept.move_to_end(key)
+            if plan is not None and plan.lock.acquire(blocking=False):
+                self.plan, self.held = plan, True
+                try:
+                    plan.restart()
+                except BaseException:
+                    self.__exit__(None, None, None)
+                    raise
+                return plan
+        plan = PreparedRun(opts)
+        if pure and sum(b.nbytes for b in plan.buffers) <= KEEP_BYTES:
+            with _KEPT_LOCK:
+                kept = model.__dict__["_prepared_runs"]
+                if key not in kept:
+                    plan.kept = True
+                    kept[key] = plan
+                    while len(kept) > KEEP:
+                        kept.popitem(last=False)
+        if plan.kept:
+            plan.lock.acquire()
+            self.held = True
+        self.plan = plan
+        return plan
+
+    def __exit__(self, *exc):
+        if self.held:
+            self.held = False
+            self.plan.lock.release()
+        return False

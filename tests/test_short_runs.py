@@ -233,3 +233,29 @@ def test_the_fastest_rate_is_the_same_on_lists_and_on_arrays():
         rate, body = solver._fastest_rate(omega)
         assert body == at[1]
         assert rate == pytest.approx(np.sqrt(squares[at]), rel=1e-15)
+
+
+def test_a_kept_run_in_use_is_not_shared_and_is_released_after_its_run():
+    """While a kept prepared run is in use (its lock held: another thread's run, here a run
+    entered by hand), a run of the same model and options builds one of its own and gives the
+    same numbers; the kept run is released when its run ends, even one that raised."""
+    from dttmm import run_plan
+    from dttmm.run_options import run_options
+    model = rigid_chain(3)
+    first = simulate(model, 0.01, 1e-3)
+    opts = run_options(model, 0.01, 1e-3, rtol=None, atol=0.0, method="riccati",
+                       scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
+                       record_every=None, record_dt=None, t_eval=None, full_state=False,
+                       richardson=False, progress=None, max_step_error=0.05,
+                       max_energy_error=None, hold_energy=None, resume=None, stream=None)
+    kept = next(iter(model.__dict__["_prepared_runs"].values()))
+    with run_plan.prepared_run(opts) as plan:
+        assert plan is kept and kept.lock.locked()
+        during = simulate(model, 0.01, 1e-3)
+    assert not kept.lock.locked()
+    with pytest.raises(RuntimeError):
+        with run_plan.prepared_run(opts):
+            raise RuntimeError("a run that fails")
+    assert not kept.lock.locked()
+    for a, b in zip(_run_arrays(first), _run_arrays(during)):
+        np.testing.assert_array_equal(a, b)
