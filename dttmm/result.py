@@ -5,6 +5,7 @@ import json
 import numpy as np
 
 from .elements import BEAM
+from .vectors import cross
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, FAMILY, GJ, LENGTH, MASS_PER_LENGTH,
                             MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
                             mode_shapes, stretch_along, torsion_shapes)
@@ -401,11 +402,11 @@ def angular_momentum(model, result, point=(0.0, 0.0, 0.0)):
     p = model.body_params
     rot = result.rotation
     rho_c = np.einsum("tkij,kj->tki", rot, p[:, TO_MASS_CENTER])
-    v_c = result.velocity_input + np.cross(result.angular_velocity, rho_c)
+    v_c = result.velocity_input + cross(result.angular_velocity, rho_c)
     r_c = result.position_input + rho_c - np.asarray(point, float)
     j_c = np.einsum("tkij,kjl,tkml->tkim", rot, model.body_mass_center_inertia, rot)
     spin = np.einsum("tkij,tkj->tki", j_c, result.angular_velocity)
-    return np.sum(p[:, MASS][None, :, None] * np.cross(r_c, v_c) + spin, axis=1)
+    return np.sum(p[:, MASS][None, :, None] * cross(r_c, v_c) + spin, axis=1)
 
 
 def _json_value(x):
@@ -491,7 +492,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
         u_dot[:, :, 0] -= c_dot
     a_t = np.swapaxes(a, 1, 2)
     rho = p @ a_t                                          # A p, every state and point
-    vel = v_in[:, None, :] + np.cross(w[:, None, :], rho) + u_dot @ a_t
+    vel = v_in[:, None, :] + cross(w[:, None, :], rho) + u_dot @ a_t
     spin = np.einsum("ti,ti->t", w, a[:, :, 0])
     kinetic = 0.5 * mu * (np.sum(vel * vel, axis=2) @ wq)
     mt = int(row[TORSION_MODES])
@@ -519,7 +520,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
         # int mu c g . A e1; c(x) = 1/2 int_0^x (v'^2 + w'^2) by its own quadrature on [0, x]
         c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
         e1 = a[:, :, 0]
-        u = np.cross(w, e1)
+        u = cross(w, e1)
         int_c, int_cd, int_xc = c @ wq, c_dot @ wq, c @ (wq * x)
         kinetic -= mu * (np.einsum("ti,ti->t", v_in, u) * int_c
                          + np.einsum("ti,ti->t", v_in, e1) * int_cd
@@ -595,7 +596,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         p = model.body_params[rigid]
         a = rotation[:, rigid]
         rho_c = np.einsum("tkij,kj->tki", a, p[:, TO_MASS_CENTER])
-        v_c = v_in[:, rigid] + np.cross(omega[:, rigid], rho_c)
+        v_c = v_in[:, rigid] + cross(omega[:, rigid], rho_c)
         w_body = np.einsum("tkji,tkj->tki", a, omega[:, rigid])          # A^T w
         kinetic += 0.5 * np.einsum("k,tki,tki->t", p[:, MASS], v_c, v_c)
         kinetic += 0.5 * np.einsum("tki,kij,tkj->t", w_body,
@@ -689,7 +690,7 @@ def beam_midpoint_deflection(model, result, body):
     norm = np.linalg.norm(e3, axis=1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         e3 = np.where(norm > 1e-12, e3 / norm, np.nan)
-    e2 = np.cross(e3, e1)
+    e2 = cross(e3, e1)
     return np.stack([np.einsum("ti,ti->t", d, e2), np.einsum("ti,ti->t", d, e3)], axis=1)
 
 
@@ -707,7 +708,7 @@ def beam_output_offset(row, rotation, omega, eta, eta_dot):
     p_dot = np.stack([u_l_dot - c_dot, eta_dot[..., :nm] @ y, eta_dot[..., nm:2 * nm] @ y],
                      axis=-1)
     rho = np.einsum("...ij,...j->...i", rotation, p)
-    return rho, np.cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
+    return rho, cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 
 
 def point_positions(model, rotation, r_in, eta=None):

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import adaptive as adaptive_steps
+from .vectors import cross
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, FAMILY, LENGTH, MODES,
@@ -210,7 +211,7 @@ def _initial_deflections(model, state):
                 model.initial_modal_velocities[off:off + model.n_modes[p]])
         u = rot_p @ model.hinge_params[k, AXIS_1]
         state.defl[k] = u * model.hinge_params[k, COORDINATE_0][0]
-        state.defl_rate[k] = u * model.hinge_params[k, RATE_0][0] + np.cross(w_p, state.defl[k])
+        state.defl_rate[k] = u * model.hinge_params[k, RATE_0][0] + cross(w_p, state.defl[k])
 
 
 @model_fact
@@ -1273,10 +1274,10 @@ def _station_histories(model, state, independent):
                                             state.eta_d[j0:j1])
         else:
             rho_c = state.rot[k] @ model.body_params[k, TO_MASS_CENTER]
-            c_v[k] = st_v[k] + np.cross(w, rho_c)
-            c_a[k] = (state.z[2 * k + 1, 0:3] + np.cross(wd, rho_c)
-                      + np.cross(w, np.cross(w, rho_c)))
-            rho_dot = np.cross(w, state.rot[k] @ model.body_params[k, TO_OUTPUT])
+            c_v[k] = st_v[k] + cross(w, rho_c)
+            c_a[k] = (state.z[2 * k + 1, 0:3] + cross(wd, rho_c)
+                      + cross(w, cross(w, rho_c)))
+            rho_dot = cross(w, state.rot[k] @ model.body_params[k, TO_OUTPUT])
         st_v[k + 1] = st_v[k] + rho_dot
         st_a[k + 1] = state.z[2 * k + 2, 0:3]
     return (True, st_v, st_a, st_a.copy(), c_v, c_a, c_a.copy())
@@ -1288,8 +1289,8 @@ def _initial_mass_center_velocities(model, rot, omega):
     v_in = model.ground_state(0.0)[1].copy()
     v_c = np.empty((model.n_bodies, 3))
     for k in range(model.n_bodies):
-        v_c[k] = v_in + np.cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
-        v_in = v_in + np.cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
+        v_c[k] = v_in + cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
+        v_in = v_in + cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
     return v_c
 
 
@@ -1649,7 +1650,7 @@ def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_g
             arm, arm_dot = rho[:, p], rho_dot[:, p]
         else:
             arm = rot[:, p] @ model.attachment_point[k]
-            arm_dot = np.cross(omega[:, p], arm)
+            arm_dot = cross(omega[:, p], arm)
         r_in[:, k] = r_in[:, p] + arm + defl[:, k]
         v_in[:, k] = v_in[:, p] + arm_dot + defl_rate[:, k]
     return r_in, v_in
@@ -1770,7 +1771,7 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     v_prev = np.broadcast_to(np.array([g[1] for g in grounds], dtype=float), (m, 3))
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
-    rho_dot = np.cross(omega, rho)
+    rho_dot = cross(omega, rho)
     for k in np.nonzero(model.body_kind == BEAM)[0]:
         j0, j1 = mode_off[k], mode_off[k + 1]
         rho[:, k], rho_dot[:, k] = beam_output_offset(model.beam_params[k], rot[:, k],
@@ -1792,7 +1793,7 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
         # (docs/solver.md)
         rigid = model.body_kind != BEAM if v_st is not None else np.ones(n, dtype=bool)
         rho_c = np.einsum("tkij,kj->tki", rot[:, rigid], model.body_params[rigid, TO_MASS_CENTER])
-        v_in[:, rigid] = v_c[:, rigid] - np.cross(omega[:, rigid], rho_c)
+        v_in[:, rigid] = v_c[:, rigid] - cross(omega[:, rigid], rho_c)
     r_c, r_o = point_positions(model, rot, r_in, eta)
     return dict(position_input=r_in, position_mass_center=r_c, position_output=r_o,
                 velocity_input=v_in)

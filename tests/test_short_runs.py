@@ -259,3 +259,14 @@ def test_a_kept_run_in_use_is_not_shared_and_is_released_after_its_run():
     assert not kept.lock.locked()
     for a, b in zip(_run_arrays(first), _run_arrays(during)):
         np.testing.assert_array_equal(a, b)
+
+
+def test_the_layers_cross_product_is_numpys():
+    """vectors.cross (the Result's derivations; index tables for a few vectors, one array for
+    many) equals np.cross for every broadcast the derivations use, few vectors and many."""
+    from dttmm.vectors import cross
+    rng = np.random.default_rng(7)
+    for sa, sb in (((3,), (3,)), ((5, 3), (3,)), ((4, 7, 3), (4, 7, 3)),
+                   ((300, 9, 3), (300, 1, 3)), ((2, 3), (4, 1, 3)), ((3,), (1000, 3))):
+        a, b = rng.normal(size=sa), rng.normal(size=sb)
+        np.testing.assert_allclose(cross(a, b), np.cross(a, b), rtol=0, atol=1e-14)
