@@ -13,7 +13,6 @@ from functools import lru_cache
 from typing import Callable, Optional
 
 import numpy as np
-from scipy.linalg import eigh
 
 from ._checks import finite_scalar, finite_vector, optional_function, rotation_matrix
 
@@ -115,6 +114,7 @@ def _loaded_modes(n_modes):
     deflection under an end moment: the lowest Ritz mode of x^2, x^3 would be stiffer in a chain
     of elements, since it nearly drops the end curvature).  Normalized to
     int_0^1 Y_j^2 = 1 and Y_j(1) > 0, so int_0^L Y_j Y_k dx = L delta_jk on any length."""
+    from scipy.linalg import eigh      # (when used: import dttmm stays light)
     p = np.arange(2, n_modes + 2)
     mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                     # int t^(p_i + p_j)
     pp = p * (p - 1.0)
@@ -194,6 +194,7 @@ def _loaded_twist_modes(n_modes):
     unit length and their eigenvalues lam_j (GJ Psi'' = -lam j_p Psi there): the Ritz
     eigenvectors of the shaft fixed at x = 0 in the space x .. x^n, normalized to
     int_0^1 Psi_j^2 = 1 and Psi_j(1) > 0."""
+    from scipy.linalg import eigh      # (when used: import dttmm stays light)
     p = np.arange(1, n_modes + 1)
     mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                          # int t^(p_i + p_j)
     stiff = np.outer(p, p) / (p[:, None] + p[None, :] - 1.0)              # int Psi_i' Psi_j'
@@ -245,6 +246,7 @@ def _unit_beam_statics(family, n_modes, end_ratio):
     """(first circular frequency, largest deflection) of a unit beam (L = mu = EI = 1) of the
     family with n_modes, an end mass end_ratio at its output (loaded-end family), under a unit
     uniform load and that mass's unit weight."""
+    from scipy.linalg import eigh      # (when used: import dttmm stays light)
     xg, wg = np.polynomial.legendre.leggauss(24)
     x, w = 0.5 * (xg + 1.0), 0.5 * wg
     along = np.linspace(0.0, 1.0, 101)

@@ -240,7 +240,6 @@ the applied loads at time t and hands them to the kernel as arrays.
 import time
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ..elements import BEAM
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH, MODES, PINNED, STIFFENING,
@@ -680,6 +679,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     >>> ref.position_output.shape  # doctest: +SKIP
     (3, 1, 3)
     """
+    from scipy.integrate import solve_ivp      # (when used: import dttmm stays light)
     t_end, t_eval = _check_args(model, t_end, method, rtol, atol, t_eval)
     assembly = None
     if model.n_closures:

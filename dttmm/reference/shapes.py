@@ -3,7 +3,6 @@ call dttmm.elements.beam.mode_shapes; newton_euler.py, "Beams")."""
 import math
 
 import numpy as np
-from scipy.linalg import eigh
 
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH, MODES, PINNED, TORSION_MODES,
                              AXIAL_MODES)
@@ -102,6 +101,7 @@ def shaft_shape_constants(length, family, count, x=None):
     pinned and clamped) U_j = sqrt(2) sin(b x), b = (2j - 1) pi / (2 L); for a loaded output the
     Ritz modes of the field fixed at 0 in the monomials (x/L)^1 .. (x/L)^count, every integral
     a polynomial moment."""
+    from scipy.linalg import eigh      # (when used: import dttmm stays light)
     vec = np.zeros((N_SHAPE_ROWS, count))
     x = np.zeros(0) if x is None else np.asarray(x, dtype=float)
     if count == 0:
@@ -197,6 +197,7 @@ def loaded_mode_coefficients(n_modes):
     Y_j(t) = sum_i c_ij t^(i+2), and lam_j, from K c = lam M c with M_ij = 1 / (p_i + p_j + 1),
     K_ij = p_i (p_i - 1) p_j (p_j - 1) / (p_i + p_j - 3), p_i = i + 2; normalized to
     int_0^1 Y_j^2 = 1 (c^T M c = I) and Y_j(1) = sum_i c_ij > 0."""
+    from scipy.linalg import eigh      # (when used: import dttmm stays light)
     p = np.arange(2, n_modes + 2, dtype=float)
     m = 1.0 / (p[:, None] + p[None, :] + 1.0)
     pp = p * (p - 1.0)
