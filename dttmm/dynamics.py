@@ -347,8 +347,10 @@ def linearize(model, state=None, t=0.0):
     deflection, every joint coordinate, every modal coordinate; then w, the deflections',
     joint and modal rates.  The inputs u are a force (at the mass centre) and a torque (world)
     on every body, then a torque about every revolute joint's axis and each universal joint's
-    two axes (equal and opposite on the child and the parent), for joints between rigid
-    bodies (next to a beam, clamp it to a rigid hub, as examples/control.py does).  The
+    two axes, and a force along every prismatic joint's axis (each equal and opposite on the
+    child and the parent; the force's pair on one line, through the child's input point: the
+    work of f on the slide's rate, a joint drive's), for joints between rigid bodies (next
+    to a beam, clamp it to a rigid hub, as examples/control.py does).  The
     outputs y are every body's output point, world.  The accelerations' derivatives are
     central differences of ``forward_dynamics`` (step DIFFERENCE_STEP, extrapolated with the
     step twice as large; the error estimate is ``difference_error``); the rest is exact
@@ -374,7 +376,7 @@ def linearize(model, state=None, t=0.0):
     ValueError
         A model with closed loops, or a bad state (see forward_dynamics).
     """
-    from .elements.joints import REVOLUTE, UNIVERSAL
+    from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
     system = ODE(model)
     t = float(t)
     base = forward_dynamics(model, t, state)            # the state with every frame rebuilt
@@ -439,18 +441,35 @@ def linearize(model, state=None, t=0.0):
                          np.zeros((1, n_eta)), None, None)
         return points["position_output"][0].ravel()
 
-    # the joints' torques as body torques: +tau n on the child, -tau n on the parent
+    # the joints' inputs as body loads: a torque tau n, +tau n on the child and -tau n on the
+    # parent; a slide's force f n, +f n on the child and -f n on the parent at one point P (the
+    # child's input point), i.e. at the mass centres with the torques +-(P - c) x f n
     joint_inputs, joint_names = [], []
+    points = None
     for k in range(n):      # (between rigid bodies: a beam's end is not where a body torque is)
         kind = int(model.hinge_kind[k])
         p = model.parent[k]
-        if kind not in (REVOLUTE, UNIVERSAL) or model.body_kind[k] == BEAM or (
+        if kind not in (REVOLUTE, UNIVERSAL, PRISMATIC) or model.body_kind[k] == BEAM or (
                 p >= 0 and model.body_kind[p] == BEAM):
             continue
         rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
+        if kind == PRISMATIC:
+            if points is None:
+                from .solver import _points
+                defl, defl_rate = base["offsets"]
+                points = _points(model, np.array([t]), base["rotation"][None],
+                                 base["angular_velocity"][None], defl[None], defl_rate[None],
+                                 np.asarray(full.get("modal_coordinates", np.zeros(0)))[None],
+                                 np.zeros((1, n_eta)), None, None)
+            at = points["position_input"][0, k]
+            arms = [at - points["position_mass_center"][0, b] if b >= 0 else None
+                    for b in (k, p)]
+            joint_inputs.append((k, p, _joint_axis(model, base, k, 0, rot_p), arms))
+            joint_names.append(f"{model.hinge_names[k]}.force")
+            continue
         for i in range(2 if kind == UNIVERSAL else 1):
             axis = _joint_axis(model, base, k, i, rot_p)
-            joint_inputs.append((k, p, axis))
+            joint_inputs.append((k, p, axis, None))
             joint_names.append(f"{model.hinge_names[k]}.torque{i}")
     n_u = 6 * n + len(joint_inputs)
     inputs = ([f"{model.body_names[k]}.f{c}" for k in range(n) for c in "xyz"]
@@ -463,10 +482,17 @@ def linearize(model, state=None, t=0.0):
         elif j < 6 * n:
             torque[(j - 3 * n) // 3, (j - 3 * n) % 3] = eps
         else:
-            k, p, axis = joint_inputs[j - 6 * n]
-            torque[k] += eps * axis
-            if p >= 0:
-                torque[p] -= eps * axis
+            k, p, axis, arms = joint_inputs[j - 6 * n]
+            if arms is None:                    # a torque about the axis
+                torque[k] += eps * axis
+                if p >= 0:
+                    torque[p] -= eps * axis
+            else:                               # a force along the slide, on one line
+                force[k] += eps * axis
+                torque[k] += np.cross(arms[0], eps * axis)
+                if p >= 0:
+                    force[p] -= eps * axis
+                    torque[p] -= np.cross(arms[1], eps * axis)
         return force, torque
 
     def differenced(eps):

@@ -217,6 +217,52 @@ def test_linearize_the_arm_as_the_reference_equations_difference():
                                lin.B[:, lin.inputs.index("link1.my")], rtol=0, atol=1e-9)
 
 
+def _arm_across(extra=None):
+    """chains.arm("torque") with its prismatic joint sliding across link 3 (axis y of link 3,
+    so that the slide's line misses link 3's mass centre) and its spring-damper (50 N/m,
+    0.5 N s/m) as a JointForce law of the slide that adds the force `extra`, N (None: the
+    SpringDamper itself)."""
+    from dttmm import (JointForce, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
+                       System, UniversalJoint)
+    from dttmm.chains import unit_link
+    system = System(gravity=(0.0, -9.81, 0.0))
+    torque = JointForce(lambda t, q, qd: 2.0 * np.sin(np.pi * t))       # (arm's, N m)
+    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=torque,
+                                                      name="joint1"))
+    system.add(unit_link(name="link2"), RevoluteJoint(axis=[0, 0, 1], name="joint2"),
+               parent="link1")
+    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
+                                                       name="joint3"), parent="link2")
+    spring = (SpringDamper(50.0, 0.5) if extra is None else
+              JointForce(lambda t, q, qd: -50.0 * q - 0.5 * qd + extra))
+    system.add(RigidBody(mass=0.5, inertia=[0.01, 0.02, 0.03], inertia_about="mass_center",
+                         to_mass_center=[0.1, 0.0, 0.05], name="body4"),
+               PrismaticJoint(axis=[0, 1, 0], position=0.1, name="joint4", drive=spring),
+               parent="link3")
+    return system.build()
+
+
+def test_linearize_a_slide_force_as_the_joints_own_drive():
+    """Issue 31: linearize's input on a prismatic joint (a force along the slide, on one line
+    through the child's input point, equal and opposite on the parent) has the response of
+    the joint's own drive: on the arm with its slide across link 3 (the line misses both
+    mass centres, so each side's moment counts), its B column equals the central difference
+    of forward_dynamics' accelerations over a drive that adds +-1e-4 N to the slide's spring
+    (a JointForce: the drive's path through the sweep, not the input's loads), to 1e-7 of
+    the column, mid-run where every link moves."""
+    model = _arm_across()
+    state = simulate(model, 0.3, 1e-3, record_every=300).state(-1)
+    lin = dttmm.linearize(model, state, 0.3)
+    column = lin.B[:, lin.inputs.index("joint4.force")]
+    m = len(lin.states) // 2
+    acc = [forward_dynamics(_arm_across(f), 0.3, state)["joint_acceleration"]
+           for f in (1e-4, -1e-4)]
+    expected = (acc[0] - acc[1]) / 2e-4
+    assert np.abs(column[:m]).max() == 0.0
+    assert np.abs(expected).max() > 1.0                 # (the slide and the links answer)
+    np.testing.assert_allclose(column[m:], expected, rtol=0, atol=1e-7 * np.abs(expected).max())
+
+
 def test_linearize_the_cantilever_with_a_tip_mass_at_its_sag():
     """A steel cantilever with a 0.2 kg tip mass (tests/test_auto_modes.py's), linearized about
     its static equilibrium under gravity (static_equilibrium's model): its squared frequencies
