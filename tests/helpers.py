@@ -117,3 +117,27 @@ def fused_and_general(monkeypatch, model, t_end, dt, loop, **kwargs):
 def rot_y(angle):
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def joints_arm(drive=None, gravity=(0.0, -9.81, 0.0), slide_axis=(1.0, 0.0, 0.0), slide=None,
+               body4=None, slide_position=0.0):
+    """The joints' arm (tests/test_joints.py): revolute (world y), revolute (link 1's z),
+    universal (link 2's z, link 3's y), prismatic (link 3's slide_axis) with `slide` (default
+    a spring-damper 50 N/m, 0.5 N s/m); joint 1 turning at 0.5 rad/s under `drive`; body4
+    the slider (default 0.5 kg, inertia 0.01 about its mass centre at its input point)."""
+    from dttmm import (PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, System,
+                       UniversalJoint)
+    from dttmm.chains import unit_link
+    system = System(gravity=gravity)
+    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=drive,
+                                                      name="joint1"))
+    system.add(unit_link(name="link2"), RevoluteJoint(axis=[0, 0, 1], name="joint2"),
+               parent="link1")
+    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
+                                                       name="joint3"), parent="link2")
+    system.add(body4 if body4 is not None else
+               RigidBody(mass=0.5, inertia=0.01, inertia_about="mass_center", name="body4"),
+               PrismaticJoint(axis=list(slide_axis), position=slide_position, name="joint4",
+                              drive=SpringDamper(50.0, 0.5) if slide is None else slide),
+               parent="link3")
+    return system.build()

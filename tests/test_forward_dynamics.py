@@ -10,6 +10,7 @@ from dttmm.chains import arm, five_link_tree, rigid_chain, three_pendulum
 from dttmm.mechanisms import slider_crank
 from dttmm.reference.newton_euler import _Problem
 from dttmm.result import rotation_to_quaternion
+from helpers import joints_arm
 
 
 def _reference_state(prob, state):
@@ -218,28 +219,18 @@ def test_linearize_the_arm_as_the_reference_equations_difference():
 
 
 def _arm_across(extra=None):
-    """chains.arm("torque") with its prismatic joint sliding across link 3 (axis y of link 3,
-    so that the slide's line misses link 3's mass centre) and its spring-damper (50 N/m,
-    0.5 N s/m) as a JointForce law of the slide that adds the force `extra`, N (None: the
-    SpringDamper itself)."""
-    from dttmm import (JointForce, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
-                       System, UniversalJoint)
-    from dttmm.chains import unit_link
-    system = System(gravity=(0.0, -9.81, 0.0))
-    torque = JointForce(lambda t, q, qd: 2.0 * np.sin(np.pi * t))       # (arm's, N m)
-    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=torque,
-                                                      name="joint1"))
-    system.add(unit_link(name="link2"), RevoluteJoint(axis=[0, 0, 1], name="joint2"),
-               parent="link1")
-    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
-                                                       name="joint3"), parent="link2")
-    spring = (SpringDamper(50.0, 0.5) if extra is None else
-              JointForce(lambda t, q, qd: -50.0 * q - 0.5 * qd + extra))
-    system.add(RigidBody(mass=0.5, inertia=[0.01, 0.02, 0.03], inertia_about="mass_center",
-                         to_mass_center=[0.1, 0.0, 0.05], name="body4"),
-               PrismaticJoint(axis=[0, 1, 0], position=0.1, name="joint4", drive=spring),
-               parent="link3")
-    return system.build()
+    """chains.arm("torque") (2 sin(pi t) N m on joint 1, gravity) with its prismatic joint
+    sliding across link 3 (axis y of link 3, so that the slide's line misses link 3's mass
+    centre) and its spring-damper (50 N/m, 0.5 N s/m) as a JointForce law of the slide that
+    adds the force `extra`, N (None: the SpringDamper itself)."""
+    from dttmm import JointForce, RigidBody
+    return joints_arm(JointForce(lambda t, q, qd: 2.0 * np.sin(np.pi * t)),
+                      slide_axis=(0.0, 1.0, 0.0), slide_position=0.1,
+                      slide=None if extra is None else JointForce(
+                          lambda t, q, qd: -50.0 * q - 0.5 * qd + extra),
+                      body4=RigidBody(mass=0.5, inertia=[0.01, 0.02, 0.03],
+                                      inertia_about="mass_center",
+                                      to_mass_center=[0.1, 0.0, 0.05], name="body4"))
 
 
 def test_linearize_a_slide_force_as_the_joints_own_drive():

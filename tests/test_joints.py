@@ -4,26 +4,17 @@ build, and bad input refused at build time naming the joint and the argument
 import numpy as np
 import pytest
 
-from dttmm import (JointForce, JointMotion, PrismaticJoint, RevoluteJoint, RigidBody,
+from dttmm import (JointForce, JointMotion, PrismaticJoint, RevoluteJoint,
                    SpringDamper, System, UniversalJoint, simulate)
 from dttmm.chains import unit_link
 from dttmm.elements.joints import rotation_about
+from helpers import joints_arm
 
 
 def arm(drive=None):
     """The issue's arm: revolute (world y), revolute (link 1's z), universal (link 2's z, link
     3's y), prismatic (link 3's x) with a spring-damper; joint 1 turning at 0.5 rad/s."""
-    system = System()
-    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=drive,
-                                                      name="joint1"))
-    system.add(unit_link(name="link2"), RevoluteJoint(axis=[0, 0, 1], name="joint2"),
-               parent="link1")
-    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
-                                                       name="joint3"), parent="link2")
-    system.add(RigidBody(mass=0.5, inertia=0.01, inertia_about="mass_center", name="body4"),
-               PrismaticJoint(axis=[1, 0, 0], drive=SpringDamper(50.0, 0.5), name="joint4"),
-               parent="link3")
-    return system.build()
+    return joints_arm(drive)
 
 
 def test_the_arm_starts_turning_rigidly_about_y():
