@@ -1,8 +1,8 @@
 """What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
 import numpy as np
 
-from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, FAMILY,
-                            FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING, TORSION_MODES,
+from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EXACT,
+                            FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING, TORSION_MODES,
                             axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
@@ -127,13 +127,18 @@ def _beam_lines(model, k, end_mass):
     lines.append(f"{ma} stretch mode{'s' if ma > 1 else ''}, own frequencies (Hz): "
                  f"{np.array2string(axial_frequencies(row), precision=4)}" if ma else
                  "no stretch (axial_modes 0)")
-    if row[STIFFENING]:
+    if row[STIFFENING] == EXACT:
+        lines.append("geometric stiffening on, the foreshortening to all orders "
+                     "(stiffening='exact': every section at x - c(x); its w' and eta'' columns "
+                     "differenced, the general loop; docs/beam.md, 'The exact foreshortening')")
+    elif row[STIFFENING]:
         from .solver import STIFFENED_BEND_LIMIT
         limit = STIFFENED_BEND_LIMIT.get(m) if int(row[FAMILY]) == CLAMPED_LOADED else None
         lines.append("geometric stiffening on" + (
             f", to second order in the modes: holds while the beam bends less than ~{limit:g} "
             f"rad over its length with {m} modes per plane (~{STIFFENED_BEND_LIMIT[1]:g} with "
-            f"one; docs/beam.md, 'Where the second-order energy stops')" if limit else ""))
+            f"one; docs/beam.md, 'Where the second-order energy stops'; stiffening='exact' "
+            f"holds beyond)" if limit else ""))
     elif model.tip_pinned and not ma:
         lines.append("geometric stiffening off (the paper's beam; the default for a beam without "
                      "stretch modes in a closed loop, whose inextensible centreline held between "

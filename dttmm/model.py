@@ -9,6 +9,7 @@ import numpy as np
 from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL, BallJoint
 from .elements.joints import rotation_about
 from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
+                            EXACT,
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
                             MAX_LOADED_MODES, MODES, PINNED, STIFFENING, TORSION_MODES,
                             accurate_mode_count, auto_mode_count, auto_part_count,
@@ -528,7 +529,13 @@ class Model:
         twist modes or loads in body axes), so the model runs in the general loop, not the fused one
         (kernels/transfers/beam.py::beam_transfer)."""
         return (self.has_beam_end_torque or self.has_twist or self.has_stretch
-                or self.has_follower_loads)
+                or self.has_follower_loads or self.has_exact_foreshortening)
+
+    @cached_property
+    def has_exact_foreshortening(self):
+        """Whether a beam keeps its foreshortening to all orders (stiffening="exact":
+        docs/beam.md, "The exact foreshortening"; its columns are differenced)."""
+        return bool(np.any((self.body_kind == BEAM) & (self.beam_params[:, STIFFENING] == EXACT)))
 
     @cached_property
     def has_stretch(self):

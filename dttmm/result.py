@@ -6,7 +6,8 @@ import numpy as np
 
 from .elements import BEAM
 from .vectors import cross
-from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, FAMILY, GJ, LENGTH, MASS_PER_LENGTH,
+from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
+                            MASS_PER_LENGTH,
                             MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
                             mode_shapes, stretch_along, torsion_shapes)
 from .elements.drives import SPRING_DAMPER
@@ -473,7 +474,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
     at x + u_x - c(x) along the frame's x, c to all orders (the reference's
     simulate_reference(exact_foreshortening=True)), instead of its terms to first order in c."""
     length, mu, nm = row[LENGTH], row[MASS_PER_LENGTH], int(row[MODES])
-    exact = bool(row[STIFFENING]) and exact_foreshortening
+    exact = row[STIFFENING] == EXACT or (bool(row[STIFFENING]) and exact_foreshortening)
     x = 0.5 * length * (_GL_X + 1.0)
     wq = 0.5 * length * _GL_W
     y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)      # y (m, Q)

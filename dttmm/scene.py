@@ -18,7 +18,7 @@ from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, 
                        JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
                        SpringDamper, UniversalJoint)
 from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
-                            LENGTH,
+                            EXACT, LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
@@ -51,7 +51,7 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "polar_inertia_per_length": "number", "modes_per_plane": "modes",
          "frequency_cutoff": "number",
          "damping_ratio": "number", "mode_family": "str", "force_mode_family": "bool",
-         "stiffening": "bool", "torsion_modes": "int", "torsional_stiffness": "number",
+         "stiffening": "stiffening", "torsion_modes": "int", "torsional_stiffness": "number",
          "load_axes": "str", "axial_modes": "int", "axial_stiffness": "number",
          "initial_modal_coordinates": "list",
          "end_force": "profile", "end_torque": "profile", "distributed_load": "profile",
@@ -335,6 +335,7 @@ def _value(value, kind, where, label):
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
     ok["modes"] = ok["int"] or value == "auto"
     ok["runs"] = ok["bool"] or ok["int"]
+    ok["stiffening"] = ok["bool"] or value == "exact"
     if not ok[kind]:
         what = {"number": "a number", "int": "an integer", "bool": "true or false",
                 "str": "a string", "vector": "3 numbers", "pair": "a number or 2 numbers",
@@ -342,7 +343,7 @@ def _value(value, kind, where, label):
                 "table": "a table", "bodies": "an array of tables ([[body]])",
                 "drives": "a list of two drive tables", "profile": "a number or a profile table",
                 "stiffness": "a number, 3 numbers or a 3 x 3 matrix",
-                "modes": 'an integer or "auto"',
+                "modes": 'an integer or "auto"', "stiffening": 'true, false or "exact"',
                 "runs": "true, false or the number of runs (2 to 4)"}[kind]
         raise SceneError(f"{where}: {label}: {what}, got {value!r}")
 
@@ -419,7 +420,8 @@ def scene_of(model, run=None, name=None):
                          mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
             if row[FAMILY] != PINNED and ball_ends:
                 table["force_mode_family"] = True
-            table["stiffening"] = bool(row[STIFFENING])     # (on by default)
+            table["stiffening"] = ("exact" if row[STIFFENING] == EXACT   # (on by default)
+                                   else bool(row[STIFFENING]))
             if row[TORSION_MODES]:
                 table["torsion_modes"] = int(row[TORSION_MODES])
             if row[GJ] > 0.0:

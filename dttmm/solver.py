@@ -18,8 +18,8 @@ from . import adaptive as adaptive_steps
 from .vectors import cross
 from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
-from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, FAMILY, LENGTH, MODES,
-                            STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
+from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
+                            MODES, STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
                             torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
@@ -549,6 +549,34 @@ def _drive_number(value, who, t):
     return x
 
 
+def exact_points(modes_per_plane):
+    """Gauss-Legendre points of a beam's exact foreshortening (beam_tables): its integrands
+    (docs/beam.md, "The exact foreshortening") are polynomials of degree up to 6 m + 3 for the
+    loaded-end modes (p x p'' with c c'', times D eta in the modal rows), integrated exactly by
+    3 m + 2 points; 3 m + 8 leaves room for the trigonometric families."""
+    return 3 * int(modes_per_plane) + 8
+
+
+def exact_section_table(family, length, m, points):
+    """(m, 1 + points (3 + m)): n = points, then per Gauss-Legendre point on [0, length]
+    [x, weight, Y_j(x), D(x)[j, :]] for mode j's row, D(x) = int_0^x Y' Y'^T by a
+    Gauss-Legendre rule of its own on [0, x] (exact for the loaded-end modes' polynomial
+    slopes) (beam_tables)."""
+    x, wq = gauss_points(length, points)
+    y = mode_shapes(family, length, m, x)[0]
+    table = np.zeros((m, 1 + points * (3 + m)))
+    table[:, 0] = points
+    t, wt = np.polynomial.legendre.leggauss(2 * m + 8)
+    for g in range(points):
+        xs, ws = 0.5 * x[g] * (t + 1.0), 0.5 * x[g] * wt
+        dy = mode_shapes(family, length, m, xs)[1]
+        d = (dy * ws) @ dy.T
+        col = 1 + g * (3 + m)
+        table[:, col], table[:, col + 1], table[:, col + 2] = x[g], wq[g], y[:, g]
+        table[:, col + 3:col + 3 + m] = 0.5 * (d + d.T)
+    return table
+
+
 @model_fact
 def beam_tables(model):
     """(body_kind, beam_params, modal integrals, offsets of each body's modal coordinates,
@@ -562,13 +590,20 @@ def beam_tables(model):
     [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j, and
     ends[k, m + mt:m + mt + ma] its stretch table ("Stretch"; beam_relations): [U_j(L),
     int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
-    (ma)].  The tables but body_kind and the offsets have no rows in a model without beams
-    (the kernels read a beam's rows only; a million rigid bodies' 0.2 GB)."""
+    (ma)].  With stiffening="exact" (docs/beam.md, "The exact foreshortening"), moments[k, j]
+    goes on from column 2 + 4 m with the beam's sections at n Gauss-Legendre points: n, then
+    per point [x, weight, Y_j(x), D(x)[j, 0..m-1]], D(x) = int_0^x Y' Y'^T
+    (kernels/transfers/beam.py::exact_line_integrals).  The tables but body_kind and the
+    offsets have no rows in a model without beams (the kernels read a beam's rows only; a
+    million rigid bodies' 0.2 GB)."""
     n = model.n_bodies if (model.body_kind == BEAM).any() else 0
     max_modes = max(1, int(model.beam_params[:, MODES].max()))
     bp = model.beam_params
     max_rows = max(1, int((bp[:, MODES] + bp[:, TORSION_MODES] + bp[:, AXIAL_MODES]).max()))
-    moments = np.zeros((n, max_modes, 4 * max_modes + 2))
+    exact = (model.body_kind == BEAM) & (bp[:, STIFFENING] == EXACT)
+    points = exact_points(max_modes)
+    moments = np.zeros((n, max_modes, 4 * max_modes + 2
+                        + (1 + points * (3 + max_modes) if exact.any() else 0)))
     ends = np.zeros((n, max_rows, 5 + max_modes + int(bp[:, AXIAL_MODES].max())))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):      # (none without beams)
@@ -583,6 +618,9 @@ def beam_tables(model):
             moments[k, :m, 2:2 + m] = 0.5 * (gram + gram.T)
             for i, d in enumerate(foreshortening_integrals(family, length, m)):
                 moments[k, :m, 2 + (i + 1) * m:2 + (i + 2) * m] = d
+            if exact[k]:
+                table = exact_section_table(family, length, m, exact_points(m))
+                moments[k, :m, 2 + 4 * m:2 + 4 * m + table.shape[1]] = table
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
             factors[k, :m, 0], factors[k, :m, 1] = mass, stiffness
@@ -1527,7 +1565,7 @@ def _stiffened_bend_hint(model, partial):
     for name, _, part, _, _, slope, k in _beam_tips(model):
         row = model.beam_params[k]
         m = int(row[MODES])
-        if not row[STIFFENING] or int(row[FAMILY]) != CLAMPED_LOADED or m not in \
+        if row[STIFFENING] in (0.0, EXACT) or int(row[FAMILY]) != CLAMPED_LOADED or m not in \
                 STIFFENED_BEND_LIMIT:
             continue
         e = eta[part]
@@ -1541,9 +1579,10 @@ def _stiffened_bend_hint(model, partial):
     return (f"; beam '{name}' (geometric stiffening, {m} modes per plane) had bent by {bend:.2g} "
             f"rad over its length, near the {STIFFENED_BEND_LIMIT[m]:g} rad where its second-order "
             f"energy stops being positive (docs/beam.md, \"Where the second-order energy "
-            f"stops\"): " + ("give its elements modes_per_plane=1, or use more elements "
-                              "(each then bends less)" if m > 1 else
-                              "use more elements (each then bends less)"))
+            f"stops\"): give its elements stiffening='exact' (the foreshortening to all "
+            f"orders, without stretch modes)" + (", or modes_per_plane=1, or use more elements "
+                                                 "(each then bends less)" if m > 1 else
+                                                 ", or use more elements (each then bends less)"))
 
 
 def _failure_cause(model, mode, info, monitor, settings):

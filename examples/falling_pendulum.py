@@ -20,7 +20,10 @@ line every 0.1 s.
 Why one mode per plane: with geometric stiffening the modal beam keeps its kinetic energy to
 second order in the modes, which stops being positive once an element bends more than ~0.95
 rad over its length with one mode per plane, ~0.17 rad with two (docs/beam.md, "Where the
-second-order energy stops"); at the whip the tip elements bend that far.  Measured
+second-order energy stops"); at the whip the tip elements bend that far.  --exact keeps the
+foreshortening to all orders (stiffening="exact", an inextensible centre line only so far):
+32 elements of two modes then run through (--exact --modes 2 --elements 32 --axial-stiffness
+rigid; docs/beam.md, "The exact foreshortening").  Measured
 (docs/beam.md): inextensible, 24 to 64 elements of one mode run through 1 s with the energy
 kept to ~5e-6 of the largest kinetic energy.  With the stretch of EA = 1e6, 32 elements stop
 at t = 0.47 s, an element bent by 0.79 rad (issue 32: the energy to all orders in the kernels,
@@ -41,9 +44,10 @@ GRAVITY = 9.81
 KINDS = ("modal",)      # (the element that carries large curvature by itself: issue 32)
 
 
-def pendulum(elements=48, kind="modal", modes=1, axial_stiffness=1e6):
+def pendulum(elements=48, kind="modal", modes=1, axial_stiffness=1e6, exact=False):
     """The pendulum as `elements` welded beam elements behind a ball joint at the origin;
-    axial_stiffness None: an inextensible centre line."""
+    axial_stiffness None: an inextensible centre line; exact: the foreshortening to all
+    orders (stiffening="exact", inextensible only)."""
     if kind not in KINDS:
         raise ValueError(f"pendulum: kind must be one of {KINDS}, not {kind!r}")
     parts = []
@@ -53,16 +57,18 @@ def pendulum(elements=48, kind="modal", modes=1, axial_stiffness=1e6):
                                      bending_stiffness=YOUNG * SECOND_MOMENT,
                                      mass_per_length=DENSITY * AREA,
                                      polar_inertia_per_length=DENSITY * 2 * SECOND_MOMENT,
-                                     modes_per_plane=modes, stiffening=True,
+                                     modes_per_plane=modes,
+                                     stiffening="exact" if exact else True,
                                      axial_stiffness=axial_stiffness,
                                      axial_modes=0 if axial_stiffness is None else 1,
                                      name=f"element{k + 1}")]
     return build_chain(parts, gravity=[0.0, -GRAVITY, 0.0])
 
 
-def run(elements=48, kind="modal", modes=1, axial_stiffness=1e6, t_end=1.0, dt=1e-4):
+def run(elements=48, kind="modal", modes=1, axial_stiffness=1e6, t_end=1.0, dt=1e-4,
+        exact=False):
     """(Result, the DivergenceError or None): a run that stops gives its samples so far."""
-    model = pendulum(elements, kind, modes, axial_stiffness)
+    model = pendulum(elements, kind, modes, axial_stiffness, exact)
     every = max(1, int(round(1e-3 / dt)))           # a sample every ~1 ms
     try:
         return simulate(model, t_end, dt, record_every=every), None
@@ -89,6 +95,9 @@ def main(argv=None):
     parser.add_argument("--axial-stiffness", type=_stiffness, default=1e6,
                         help="E A, N (default 1e6; 1260 is the benchmark's original; 'rigid': "
                              "an inextensible centre line)")
+    parser.add_argument("--exact", action="store_true",
+                        help="the foreshortening to all orders (stiffening='exact'; with "
+                             "--axial-stiffness rigid): two modes per plane hold at the whip")
     parser.add_argument("--t-end", type=float, default=1.0, help="s (default 1)")
     parser.add_argument("--dt", type=float, default=1e-4, help="the step, s (default 1e-4)")
     parser.add_argument("--csv", help="write t, tip_x, tip_y (every 1 ms) here")
@@ -96,15 +105,18 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.elements < 1 or args.modes < 1:
         parser.error("--elements and --modes must be at least 1")
+    if args.exact and args.axial_stiffness is not None:
+        parser.error("--exact runs an inextensible centre line: add --axial-stiffness rigid")
     wall = time.perf_counter()
     result, stopped = run(args.elements, args.kind, args.modes, args.axial_stiffness,
-                          args.t_end, args.dt)
+                          args.t_end, args.dt, args.exact)
     wall = time.perf_counter() - wall
     tip = result.position_output[:, -1]
     stretch = ("inextensible" if args.axial_stiffness is None
                else f"EA = {args.axial_stiffness:g} N")
     print(f"soft falling pendulum: {args.elements} {args.kind} elements, {args.modes} mode(s) "
-          f"per plane, {stretch}, dt = {args.dt:g} s")
+          f"per plane, {stretch}, stiffening {'exact' if args.exact else 'to second order'}, "
+          f"dt = {args.dt:g} s")
     print(f"{'t (s)':>7} {'tip x (m)':>11} {'tip y (m)':>11}")
     for t_mark in np.arange(0.0, result.t[-1] + 1e-9, 0.1):
         i = int(np.argmin(np.abs(result.t - t_mark)))
@@ -133,7 +145,7 @@ def _plot(result, args, folder):
 
     from dttmm.plots import centerlines
     folder.mkdir(parents=True, exist_ok=True)
-    model = pendulum(args.elements, args.kind, args.modes, args.axial_stiffness)
+    model = pendulum(args.elements, args.kind, args.modes, args.axial_stiffness, args.exact)
     lines = centerlines(result, model)
     marks = np.arange(0.0, result.t[-1] + 1e-9, 0.1)
     fig, ax = plt.subplots(figsize=(7.4, 6.2))

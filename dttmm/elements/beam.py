@@ -20,6 +20,7 @@ PINNED = 0            # sin(k pi x / L) in the chord frame: between moment-free 
 CLAMPED = 1           # clamped-free eigenfunctions in the input section's frame: a free tip
 CLAMPED_LOADED = 2    # input section's frame, polynomial Ritz modes: an output that carries loads
 AUTO = -1             # chosen by build_chain from the beam's two ends
+EXACT = 2.0           # beam_params[STIFFENING] of stiffening="exact" (on: 1.0, off: 0.0)
 MODE_FAMILY_NAMES = {"pinned": PINNED, "clamped": CLAMPED, "auto": AUTO}
 MAX_LOADED_MODES = 6  # the polynomial basis x^2 .. x^(m+1) is well conditioned up to here
 CLAMPED_ROOTS = (1.87510406871196, 4.69409113297418, 7.85475743823761, 10.9955407348755,
@@ -409,7 +410,7 @@ class EulerBernoulliBeam:
         The axes of end_force, end_torque and distributed_load: "world" (default), or "body":
         followers, the end loads in the output end section's axes (they turn with it, e.g. a
         thrust along the tip's tangent), the distributed load in the beam frame's.
-    stiffening : bool or None, optional
+    stiffening : bool, "exact" or None, optional
         Geometric stiffening of bending by the axial force (docs/beam.md, "Geometric
         stiffening"): the foreshortening of the deflected centreline kept to second order in
         the energy, so inertia (centrifugal loads included), gravity and the end loads stiffen
@@ -417,7 +418,11 @@ class EulerBernoulliBeam:
         modes in a closed loop (a chain whose tip is pinned): its centreline is then
         inextensible, and held between fixed points it could not bow, so there it stays off
         (the paper's beam) unless asked for; ``model.describe()`` says which.  False: the
-        paper's beam.
+        paper's beam.  "exact": the foreshortening kept to all orders (every section at
+        x - c(x) along the frame; docs/beam.md, "The exact foreshortening"), for an element
+        that bends further than the second-order energy holds (~0.17 rad over its length with
+        two modes per plane); it runs in the general loop with its w' and eta'' columns
+        differenced (no stretch modes yet).
 
     torsion_modes : int or "auto", optional
         Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist); "auto"
@@ -583,11 +588,18 @@ class EulerBernoulliBeam:
                              f"{self.load_axes!r}")
         row[LOAD_AXES] = LOAD_AXES_NAMES[self.load_axes]
         row[FAMILY] = MODE_FAMILY_NAMES[self.mode_family]
-        if self.stiffening is not None and not isinstance(self.stiffening, (bool, np.bool_)):
-            raise ValueError(f"{who}: stiffening must be True, False or None (on unless the beam "
-                             f"would lock: the default), got {self.stiffening!r}")
+        exact = isinstance(self.stiffening, str) and self.stiffening == "exact"
+        if not exact and self.stiffening is not None and not isinstance(self.stiffening,
+                                                                         (bool, np.bool_)):
+            raise ValueError(f"{who}: stiffening must be True, False, 'exact' or None (on unless "
+                             f"the beam would lock: the default), got {self.stiffening!r}")
+        if exact and n_axial:
+            raise ValueError(f"{who}: stiffening='exact' with stretch modes (axial_modes "
+                             f"{self.axial_modes!r}) is not supported yet; give "
+                             f"stiffening=True, or axial_modes=0 (an inextensible centre line)")
         # None: AUTO, resolved by build_chain (model.py::_resolve_mode_families)
-        row[STIFFENING] = AUTO if self.stiffening is None else float(self.stiffening)
+        row[STIFFENING] = (AUTO if self.stiffening is None else EXACT if exact
+                           else float(self.stiffening))
         return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
                     j_i=j_c + shift, force=optional_function(who, "end_force", self.end_force),
                     torque=optional_function(who, "end_torque", self.end_torque),

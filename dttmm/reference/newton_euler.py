@@ -242,8 +242,8 @@ import time
 import numpy as np
 
 from ..elements import BEAM
-from ..elements.beam import (CLAMPED, CLAMPED_LOADED, FAMILY, LENGTH, MODES, PINNED, STIFFENING,
-                             TORSION_MODES, AXIAL_MODES)
+from ..elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, LENGTH, MODES, PINNED,
+                             STIFFENING, TORSION_MODES, AXIAL_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
 from ..elements.kinds import JOINT_KIND, coordinate_count
@@ -359,7 +359,8 @@ class _Problem:
         # padded to the longest and widest (zero weights: no contribution); no columns for the
         # second-order foreshortening
         tables = {k: exact_foreshortening_table(self.beam_params[k]) for k in beams
-                  if exact_foreshortening and self.beam_params[k, STIFFENING] != 0.0}
+                  if self.beam_params[k, STIFFENING] == EXACT
+                  or (exact_foreshortening and self.beam_params[k, STIFFENING] != 0.0)}
         self.exact = np.zeros((n, max([1] + [t.shape[0] for t in tables.values()]),
                                max([0] + [t.shape[1] for t in tables.values()])))
         for k, table in tables.items():

@@ -16,7 +16,7 @@ are used: second order in the O(h^3) predictor error).
 import numpy as np
 from numba import njit
 
-from ...elements.beam import EA, GJ, LOAD_AXES, STIFFENING
+from ...elements.beam import EA, EXACT, GJ, LOAD_AXES, STIFFENING
 from .. import CONTRACT, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm,
@@ -127,6 +127,77 @@ def _foreshortening_sums(moments, eta, eta_d, eta_dd, aux, sums):
                 r = foreshortening_row(m, 2, plane) + l
                 aux[r, 0], aux[r, 1], aux[r, 2] = z0, z1, z2
     return cc0, cd0, cdd0, cc1, cd1, cdd1, cc2, cd2
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def exact_line_integrals(moments, eta, eta_d, eta_dd, o, al, gm, mu, residual):
+    """The line load's integrals with the foreshortening to all orders (stiffening="exact";
+    docs/beam.md, "The exact foreshortening"): at the Gauss points of the beam's exact table
+    (moments' columns from 2 + 4 m: solver.beam_tables) the section p = (x - c, v, w) in the
+    frame, c = 1/2 (eta_v^T D(x) eta_v + eta_w^T D(x) eta_w), p' = (-c', v', w'),
+    p'' = (-c'', v'', w''), and the line load per unit mu f = gamma - alpha x p
+    - omega x (omega x p) - 2 omega x p' - p'' (o, al, gm: omega, alpha, gamma in the frame).
+    Returns (int f, int p x f, int p) per unit mu, frame components, and sets the bending
+    rows of residual to the line load's generalized forces, -mu int (dp/deta_j) . f with
+    dp/deta_vj = (-(D eta_v)_j, Y_j, 0) and dp/deta_wj = (-(D eta_w)_j, 0, Y_j)."""
+    m = moments.shape[0]
+    base = 2 + 4 * m
+    o0, o1, o2 = o
+    al0, al1, al2 = al
+    gm0, gm1, gm2 = gm
+    fb0 = fb1 = fb2 = mb0 = mb1 = mb2 = s0 = s1 = s2 = 0.0
+    for r in range(2 * m):
+        residual[r] = 0.0
+    for g in range(int(moments[0, base])):
+        col = base + 1 + g * (3 + m)
+        x, weight = moments[0, col], moments[0, col + 1]
+        v = w = vd = wd = vdd = wdd = 0.0
+        c = cd = cdd = 0.0
+        for j in range(m):
+            y = moments[j, col + 2]
+            v += y * eta[j]
+            w += y * eta[m + j]
+            vd += y * eta_d[j]
+            wd += y * eta_d[m + j]
+            vdd += y * eta_dd[j]
+            wdd += y * eta_dd[m + j]
+            for plane in range(2):          # c = 1/2 eta^T D eta, c' and c'' (D symmetric)
+                dx = dxd = dxdd = 0.0
+                for l in range(m):
+                    d = moments[j, col + 3 + l]
+                    i = plane * m + l
+                    dx += d * eta[i]
+                    dxd += d * eta_d[i]
+                    dxdd += d * eta_dd[i]
+                e, ed = eta[plane * m + j], eta_d[plane * m + j]
+                c += 0.5 * e * dx
+                cd += ed * dx
+                cdd += ed * dxd + e * dxdd
+        p0, p1, p2 = x - c, v, w
+        op0, op1, op2 = o1 * p2 - o2 * p1, o2 * p0 - o0 * p2, o0 * p1 - o1 * p0
+        f0 = (gm0 - (al1 * p2 - al2 * p1) - (o1 * op2 - o2 * op1) - 2.0 * (o1 * wd - o2 * vd)
+              + cdd)
+        f1 = (gm1 - (al2 * p0 - al0 * p2) - (o2 * op0 - o0 * op2) - 2.0 * (o2 * (-cd) - o0 * wd)
+              - vdd)
+        f2 = (gm2 - (al0 * p1 - al1 * p0) - (o0 * op1 - o1 * op0) - 2.0 * (o0 * vd - o1 * (-cd))
+              - wdd)
+        fb0 += weight * f0
+        fb1 += weight * f1
+        fb2 += weight * f2
+        mb0 += weight * (p1 * f2 - p2 * f1)
+        mb1 += weight * (p2 * f0 - p0 * f2)
+        mb2 += weight * (p0 * f1 - p1 * f0)
+        s0 += weight * p0
+        s1 += weight * p1
+        s2 += weight * p2
+        for plane in range(2):
+            fp = f1 if plane == 0 else f2
+            for j in range(m):
+                dx = 0.0
+                for l in range(m):
+                    dx += moments[j, col + 3 + l] * eta[plane * m + l]
+                residual[plane * m + j] -= mu * weight * (moments[j, col + 2] * fp - dx * f0)
+    return fb0, fb1, fb2, mb0, mb1, mb2, s0, s1, s2
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -325,6 +396,11 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
            - 2.0 * (tr_c * o1 - co1) - h1)
     mb2 = (s0 * gm1 - s1 * gm0 - (j02 * al0 + j12 * al1 + j22 * al2) - (o0 * jo1 - o1 * jo0)
            - 2.0 * (tr_c * o2 - co2) - h2)
+    exact = bp[STIFFENING] == EXACT
+    if exact:   # the foreshortening to all orders: the integrals and the bending rows' inertia
+        fb0, fb1, fb2, mb0, mb1, mb2, s0, s1, s2 = exact_line_integrals(
+            moments, eta, eta_d, eta_dd, (o0, o1, o2), (al0, al1, al2), (gm0, gm1, gm2), mu,
+            residual)
     # back to the world: int f, int rho x f, S = int mu rho
     sf0 = mu * (e10 * fb0 + e20 * fb1 + e30 * fb2)
     sf1 = mu * (e11 * fb0 + e21 * fb1 + e31 * fb2)
@@ -442,9 +518,10 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
         # the foreshortening, residual += G eta, G = N_L D0 + mu gamma_x D1
         # + mu (omega_y^2 + omega_z^2) D2, N_L = -e1 . q_O the axial force at O (tension > 0):
         # N_L D0 eta is the end force's work through c(L), the rest the line load's
+        # (exact: the line load's share is in exact_line_integrals' rows, the end force's here)
         n_l = -(qo0 * e10 + qo1 * e11 + qo2 * e12)
-        c_g = mu * gm0
-        c_w = mu * (o1 * o1 + o2 * o2)
+        c_g = 0.0 if exact else mu * gm0
+        c_w = 0.0 if exact else mu * (o1 * o1 + o2 * o2)
         _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual)
         if sums:
             r_c = coefficient_row(m)
@@ -1244,9 +1321,9 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
     if stretch:
         _stretch_affine_columns(bp, tables[7], rot, d_r)
     # w' and eta'' columns written out unless the beam twists (docs/beam.md, "Torsion") or
-    # stretches, its loads follow it (load_axes="body") or the output has its own history (the
-    # paper's scheme); there, forward differences
-    analytic = (not twist and not stretch and not follower
+    # stretches, keeps its foreshortening exactly, its loads follow it (load_axes="body") or the
+    # output has its own history (the paper's scheme); there, forward differences
+    analytic = (not twist and not stretch and not follower and bp[STIFFENING] != EXACT
                 and not (history[0] and not start))
     if analytic:
         w = w_n if start else work[21:24]
