@@ -572,7 +572,8 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     no drive springs are counted.  The potential counts the closing elastic hinges' springs
     (closures.elastic_closure_terms); ground_position (3,) or (T, 3): the ground point at this
     time (default: the model's), where a closing joint meets the ground.
-    exact_foreshortening: the stiffened beams' foreshortening to all orders (_beam_energies).
+    exact_foreshortening: the stiffened beams' foreshortening to all orders (_beam_energies;
+    a beam of stiffening="exact" takes it always).
     """
     rotation = np.asarray(rotation, dtype=float)
     single = rotation.ndim == 3

@@ -640,7 +640,8 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         Stiffened beams with the foreshortening kept exactly in their kinetic and potential
         energy (module docstring, "Geometric stiffening, exact"; docs/beam.md, "Where the
         second-order energy stops"), by quadrature of their sections, and the energies counted
-        the same way; default False: to second order, as DT-TMM's kernels.
+        the same way; default False: to second order, as DT-TMM's kernels do for
+        stiffening=True.  A beam given stiffening="exact" is exact either way, as in DT-TMM.
 
     Returns
     -------
