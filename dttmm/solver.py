@@ -549,12 +549,13 @@ def _drive_number(value, who, t):
     return x
 
 
-def exact_points(modes_per_plane):
-    """Gauss-Legendre points of a beam's exact foreshortening (beam_tables): its integrands
-    (docs/beam.md, "The exact foreshortening") are polynomials of degree up to 6 m + 3 for the
-    loaded-end modes (p x p'' with c c'', times D eta in the modal rows), integrated exactly by
-    3 m + 2 points; 3 m + 8 leaves room for the trigonometric families."""
-    return 3 * int(modes_per_plane) + 8
+def exact_points(modes):
+    """Gauss-Legendre points of a beam's exact foreshortening (beam_tables), for m bending
+    modes per plane and ma stretch modes (modes = m + ma): its integrands (docs/beam.md, "The
+    exact foreshortening") are polynomials of degree up to 6 m + 3 for the loaded-end modes
+    (p x p'' with c c'', times D eta in the modal rows), integrated exactly by 3 m + 2 points;
+    3 (m + ma) + 8 leaves room for the stretch and the trigonometric families."""
+    return 3 * int(modes) + 8
 
 
 def exact_section_table(family, length, m, points):
@@ -592,7 +593,8 @@ def beam_tables(model):
     int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
     (ma)].  With stiffening="exact" (docs/beam.md, "The exact foreshortening"), moments[k, j]
     goes on from column 2 + 4 m with the beam's sections at n Gauss-Legendre points: n, then
-    per point [x, weight, Y_j(x), D(x)[j, 0..m-1]], D(x) = int_0^x Y' Y'^T
+    per point [x, weight, Y_j(x), D(x)[j, 0..m-1]], D(x) = int_0^x Y' Y'^T, and the stretch
+    table with U_j at those points, from column 5 + m + ma
     (kernels/transfers/beam.py::exact_line_integrals).  The tables but body_kind and the
     offsets have no rows in a model without beams (the kernels read a beam's rows only; a
     million rigid bodies' 0.2 GB)."""
@@ -601,10 +603,11 @@ def beam_tables(model):
     bp = model.beam_params
     max_rows = max(1, int((bp[:, MODES] + bp[:, TORSION_MODES] + bp[:, AXIAL_MODES]).max()))
     exact = (model.body_kind == BEAM) & (bp[:, STIFFENING] == EXACT)
-    points = exact_points(max_modes)
+    points = exact_points(max_modes + int(bp[:, AXIAL_MODES].max()))
     moments = np.zeros((n, max_modes, 4 * max_modes + 2
                         + (1 + points * (3 + max_modes) if exact.any() else 0)))
-    ends = np.zeros((n, max_rows, 5 + max_modes + int(bp[:, AXIAL_MODES].max())))
+    ends = np.zeros((n, max_rows, 5 + max_modes + int(bp[:, AXIAL_MODES].max())
+                     + (points if (exact & (bp[:, AXIAL_MODES] > 0)).any() else 0)))
     factors = np.ones((n, max_modes, 2))
     for k in range(n):      # (none without beams)
         if model.body_kind[k] == BEAM:
@@ -618,8 +621,9 @@ def beam_tables(model):
             moments[k, :m, 2:2 + m] = 0.5 * (gram + gram.T)
             for i, d in enumerate(foreshortening_integrals(family, length, m)):
                 moments[k, :m, 2 + (i + 1) * m:2 + (i + 2) * m] = d
+            ma = int(model.beam_params[k, AXIAL_MODES])
             if exact[k]:
-                table = exact_section_table(family, length, m, exact_points(m))
+                table = exact_section_table(family, length, m, exact_points(m + ma))
                 moments[k, :m, 2 + 4 * m:2 + 4 * m + table.shape[1]] = table
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
@@ -630,10 +634,10 @@ def beam_tables(model):
                 psi = torsion_shapes(family, length, mt, xt)[0]
                 psi_l, _, t_mass, t_stiff = torsion_shapes(family, length, mt, [length])
                 ends[k, m:m + mt, :4] = np.column_stack([psi_l[:, 0], psi @ wt, t_mass, t_stiff])
-            ma = int(model.beam_params[k, AXIAL_MODES])
             if ma:
                 # the stretch: U_j(L), int U_j, int x U_j, m_j / mu, k_j / E A, then
-                # int U_j Y_l (l < m) and int U_j U_l (l < ma) (docs/beam.md, "Stretch")
+                # int U_j Y_l (l < m) and int U_j U_l (l < ma) (docs/beam.md, "Stretch"); with
+                # stiffening="exact", U_j at the exact table's points
                 xa, wa = gauss_points(length, quadrature_size(max(m, ma)))
                 u = torsion_shapes(family, length, ma, xa)[0]
                 y_a = mode_shapes(family, length, m, xa)[0]
@@ -644,6 +648,10 @@ def beam_tables(model):
                 ends[k, r:r + ma, 5:5 + m] = (u * wa) @ y_a.T
                 gram = (u * wa) @ u.T
                 ends[k, r:r + ma, 5 + m:5 + m + ma] = 0.5 * (gram + gram.T)
+                if exact[k]:
+                    xg = gauss_points(length, exact_points(m + ma))[0]
+                    ends[k, r:r + ma, 5 + m + ma:5 + m + ma + len(xg)] = torsion_shapes(
+                        family, length, ma, xg)[0]
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
     beam_params = kernel_array(model, "beam_params") if n else np.zeros((0, BEAM_PARAM_SIZE))
     return kernel_array(model, "body_kind"), beam_params, moments, mode_off, ends, factors
@@ -1580,7 +1588,7 @@ def _stiffened_bend_hint(model, partial):
             f"rad over its length, near the {STIFFENED_BEND_LIMIT[m]:g} rad where its second-order "
             f"energy stops being positive (docs/beam.md, \"Where the second-order energy "
             f"stops\"): give its elements stiffening='exact' (the foreshortening to all "
-            f"orders, without stretch modes)" + (", or modes_per_plane=1, or use more elements "
+            f"orders)" + (", or modes_per_plane=1, or use more elements "
                                                  "(each then bends less)" if m > 1 else
                                                  ", or use more elements (each then bends less)"))
 

@@ -10,25 +10,23 @@ case; "rigid" for an inextensible centre line), pinned to the ground at the orig
 joint, lies along +x at rest at t = 0 and falls under gravity, 9.81 m/s^2 along -y.  Around
 t = 0.4 s its tip whips past the pin at ~20 m/s.
 
-The beam is K welded modal Euler-Bernoulli elements (--elements) with geometric stiffening,
---modes per plane (default 1, see below), one stretch mode each where EA is given.  Printed:
-the tip every 0.1 s, the total energy's largest change over the run as a fraction of the
-largest kinetic energy (nothing dissipates or works: it should stay near zero), and the wall
-time.  --csv: t, tip_x, tip_y every 1 ms; --plots: falling_pendulum.png, the beam's centre
-line every 0.1 s.
+The beam is K welded modal Euler-Bernoulli elements (--elements, default 32) of --modes per
+plane (default 2, the beam's own default) with geometric stiffening, its foreshortening kept to
+all orders (--stiffening exact, the default here; docs/beam.md, "The exact foreshortening"),
+one stretch mode each where EA is given.  Printed: the tip every 0.1 s, the total energy's
+largest change over the run as a fraction of the largest kinetic energy (nothing dissipates or
+works: it should stay near zero), and the wall time.  --csv: t, tip_x, tip_y every 1 ms;
+--plots: falling_pendulum.png, the beam's centre line every 0.1 s.
 
-Why one mode per plane: with geometric stiffening the modal beam keeps its kinetic energy to
-second order in the modes, which stops being positive once an element bends more than ~0.95
-rad over its length with one mode per plane, ~0.17 rad with two (docs/beam.md, "Where the
-second-order energy stops"); at the whip the tip elements bend that far.  --exact keeps the
-foreshortening to all orders (stiffening="exact", an inextensible centre line only so far):
-32 elements of two modes then run through (--exact --modes 2 --elements 32 --axial-stiffness
-rigid; docs/beam.md, "The exact foreshortening").  Measured
-(docs/beam.md): inextensible, 24 to 64 elements of one mode run through 1 s with the energy
-kept to ~5e-6 of the largest kinetic energy.  With the stretch of EA = 1e6, 32 elements stop
-at t = 0.47 s, an element bent by 0.79 rad (issue 32: the energy to all orders in the kernels,
-or an element that carries large curvature by itself, is the fix).  A run that stops says so,
-prints what it had, and returns 1.
+Why exact: the beam's default stiffening keeps its kinetic energy to second order in the
+modes, which stops being positive once an element bends more than ~0.17 rad over its length
+with two modes per plane, ~0.95 rad with one (docs/beam.md, "Where the second-order energy
+stops"); at the whip the tip elements bend that far, and such a run stops there and says so
+(--stiffening second-order).  Measured (docs/beam.md), dt = 1e-4 s over 1 s: the defaults
+(32 x 2, exact, EA = 1e6) run through in 6 s with the energy kept to 2.7e-6 of the largest
+kinetic energy, the tip within 5.3e-3 m of 96 second-order elements of one mode; second-order
+with one mode per plane, 48 elements run through and 32 stop at t = 0.47 s.  A run that stops
+says so, prints what it had, and returns 1.
 """
 import argparse
 import sys
@@ -44,10 +42,10 @@ GRAVITY = 9.81
 KINDS = ("modal",)      # (the element that carries large curvature by itself: issue 32)
 
 
-def pendulum(elements=48, kind="modal", modes=1, axial_stiffness=1e6, exact=False):
+def pendulum(elements=32, kind="modal", modes=2, axial_stiffness=1e6, exact=True):
     """The pendulum as `elements` welded beam elements behind a ball joint at the origin;
     axial_stiffness None: an inextensible centre line; exact: the foreshortening to all
-    orders (stiffening="exact", inextensible only)."""
+    orders (stiffening="exact")."""
     if kind not in KINDS:
         raise ValueError(f"pendulum: kind must be one of {KINDS}, not {kind!r}")
     parts = []
@@ -65,8 +63,8 @@ def pendulum(elements=48, kind="modal", modes=1, axial_stiffness=1e6, exact=Fals
     return build_chain(parts, gravity=[0.0, -GRAVITY, 0.0])
 
 
-def run(elements=48, kind="modal", modes=1, axial_stiffness=1e6, t_end=1.0, dt=1e-4,
-        exact=False):
+def run(elements=32, kind="modal", modes=2, axial_stiffness=1e6, t_end=1.0, dt=1e-4,
+        exact=True):
     """(Result, the DivergenceError or None): a run that stops gives its samples so far."""
     model = pendulum(elements, kind, modes, axial_stiffness, exact)
     every = max(1, int(round(1e-3 / dt)))           # a sample every ~1 ms
@@ -87,17 +85,16 @@ def _stiffness(text):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--elements", type=int, default=48, help="beam elements (default 48)")
+    parser.add_argument("--elements", type=int, default=32, help="beam elements (default 32)")
     parser.add_argument("--kind", choices=KINDS, default="modal",
                         help="the beam element (default modal: the Euler-Bernoulli modal beam)")
-    parser.add_argument("--modes", type=int, default=1,
-                        help="modes per plane (default 1; see the docstring)")
+    parser.add_argument("--modes", type=int, default=2, help="modes per plane (default 2)")
     parser.add_argument("--axial-stiffness", type=_stiffness, default=1e6,
                         help="E A, N (default 1e6; 1260 is the benchmark's original; 'rigid': "
                              "an inextensible centre line)")
-    parser.add_argument("--exact", action="store_true",
-                        help="the foreshortening to all orders (stiffening='exact'; with "
-                             "--axial-stiffness rigid): two modes per plane hold at the whip")
+    parser.add_argument("--stiffening", choices=("exact", "second-order"), default="exact",
+                        help="the foreshortening to all orders (default; stiffening='exact') or "
+                             "to second order in the modes (stiffening=True: see the docstring)")
     parser.add_argument("--t-end", type=float, default=1.0, help="s (default 1)")
     parser.add_argument("--dt", type=float, default=1e-4, help="the step, s (default 1e-4)")
     parser.add_argument("--csv", help="write t, tip_x, tip_y (every 1 ms) here")
@@ -105,17 +102,15 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.elements < 1 or args.modes < 1:
         parser.error("--elements and --modes must be at least 1")
-    if args.exact and args.axial_stiffness is not None:
-        parser.error("--exact runs an inextensible centre line: add --axial-stiffness rigid")
     wall = time.perf_counter()
     result, stopped = run(args.elements, args.kind, args.modes, args.axial_stiffness,
-                          args.t_end, args.dt, args.exact)
+                          args.t_end, args.dt, args.stiffening == "exact")
     wall = time.perf_counter() - wall
     tip = result.position_output[:, -1]
     stretch = ("inextensible" if args.axial_stiffness is None
                else f"EA = {args.axial_stiffness:g} N")
     print(f"soft falling pendulum: {args.elements} {args.kind} elements, {args.modes} mode(s) "
-          f"per plane, {stretch}, stiffening {'exact' if args.exact else 'to second order'}, "
+          f"per plane, {stretch}, stiffening {args.stiffening}, "
           f"dt = {args.dt:g} s")
     print(f"{'t (s)':>7} {'tip x (m)':>11} {'tip y (m)':>11}")
     for t_mark in np.arange(0.0, result.t[-1] + 1e-9, 0.1):
@@ -145,10 +140,11 @@ def _plot(result, args, folder):
 
     from dttmm.plots import centerlines
     folder.mkdir(parents=True, exist_ok=True)
-    model = pendulum(args.elements, args.kind, args.modes, args.axial_stiffness, args.exact)
+    model = pendulum(args.elements, args.kind, args.modes, args.axial_stiffness,
+                     args.stiffening == "exact")
     lines = centerlines(result, model)
     marks = np.arange(0.0, result.t[-1] + 1e-9, 0.1)
-    fig, ax = plt.subplots(figsize=(7.4, 6.2))
+    fig, ax = plt.subplots(figsize=(8.4, 6.2))
     colours = plt.cm.viridis(np.linspace(0.0, 0.9, len(marks)))
     for t_mark, colour in zip(marks, colours):
         i = int(np.argmin(np.abs(result.t - t_mark)))
@@ -158,9 +154,12 @@ def _plot(result, args, folder):
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"Soft falling pendulum: {args.elements} {args.kind} elements, "
-                 f"{args.modes} mode(s) per plane")
-    ax.legend(fontsize=7, loc="lower left")
+    stretch = ("inextensible" if args.axial_stiffness is None
+               else f"EA = {args.axial_stiffness:g} N")
+    ax.set_title(f"Soft falling pendulum: {args.elements} {args.kind} elements x {args.modes} "
+                 f"modes per plane\n(stiffening {args.stiffening}, {stretch}, dt = {args.dt:g} s)",
+                 fontsize=10)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     ax.grid(alpha=0.3)
     fig.tight_layout()
     out = folder / "falling_pendulum.png"

@@ -422,7 +422,7 @@ class EulerBernoulliBeam:
         x - c(x) along the frame; docs/beam.md, "The exact foreshortening"), for an element
         that bends further than the second-order energy holds (~0.17 rad over its length with
         two modes per plane); it runs in the general loop with its w' and eta'' columns
-        differenced (no stretch modes yet).
+        differenced.
 
     torsion_modes : int or "auto", optional
         Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist); "auto"
@@ -593,10 +593,6 @@ class EulerBernoulliBeam:
                                                                          (bool, np.bool_)):
             raise ValueError(f"{who}: stiffening must be True, False, 'exact' or None (on unless "
                              f"the beam would lock: the default), got {self.stiffening!r}")
-        if exact and n_axial:
-            raise ValueError(f"{who}: stiffening='exact' with stretch modes (axial_modes "
-                             f"{self.axial_modes!r}) is not supported yet; give "
-                             f"stiffening=True, or axial_modes=0 (an inextensible centre line)")
         # None: AUTO, resolved by build_chain (model.py::_resolve_mode_families)
         row[STIFFENING] = (AUTO if self.stiffening is None else EXACT if exact
                            else float(self.stiffening))

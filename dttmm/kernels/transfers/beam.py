@@ -130,17 +130,22 @@ def _foreshortening_sums(moments, eta, eta_d, eta_dd, aux, sums):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def exact_line_integrals(moments, eta, eta_d, eta_dd, o, al, gm, mu, residual):
+def exact_line_integrals(moments, axial, eta, eta_d, eta_dd, o, al, gm, mu, residual):
     """The line load's integrals with the foreshortening to all orders (stiffening="exact";
     docs/beam.md, "The exact foreshortening"): at the Gauss points of the beam's exact table
-    (moments' columns from 2 + 4 m: solver.beam_tables) the section p = (x - c, v, w) in the
-    frame, c = 1/2 (eta_v^T D(x) eta_v + eta_w^T D(x) eta_w), p' = (-c', v', w'),
-    p'' = (-c'', v'', w''), and the line load per unit mu f = gamma - alpha x p
+    (moments' columns from 2 + 4 m, the stretch table's U_j from 5 + m + ma:
+    solver.beam_tables) the section p = (x + u_x - c, v, w) in the frame, u_x = U . xi,
+    c = 1/2 (eta_v^T D(x) eta_v + eta_w^T D(x) eta_w), p' = (u_x' - c', v', w'),
+    p'' = (u_x'' - c'', v'', w''), and the line load per unit mu f = gamma - alpha x p
     - omega x (omega x p) - 2 omega x p' - p'' (o, al, gm: omega, alpha, gamma in the frame).
-    Returns (int f, int p x f, int p) per unit mu, frame components, and sets the bending
-    rows of residual to the line load's generalized forces, -mu int (dp/deta_j) . f with
-    dp/deta_vj = (-(D eta_v)_j, Y_j, 0) and dp/deta_wj = (-(D eta_w)_j, 0, Y_j)."""
+    Returns (int f, int p x f, int p) per unit mu, frame components, and sets the bending and
+    stretch rows of residual to the line load's generalized forces, -mu int (dp/deta_j) . f
+    with dp/deta_vj = (-(D eta_v)_j, Y_j, 0), dp/deta_wj = (-(D eta_w)_j, 0, Y_j) and
+    dp/dxi_j = (U_j, 0, 0)."""
     m = moments.shape[0]
+    ma = axial.shape[0]
+    na = eta.shape[0] - ma
+    u_col = 5 + m + ma
     base = 2 + 4 * m
     o0, o1, o2 = o
     al0, al1, al2 = al
@@ -148,11 +153,18 @@ def exact_line_integrals(moments, eta, eta_d, eta_dd, o, al, gm, mu, residual):
     fb0 = fb1 = fb2 = mb0 = mb1 = mb2 = s0 = s1 = s2 = 0.0
     for r in range(2 * m):
         residual[r] = 0.0
+    for j in range(ma):
+        residual[na + j] = 0.0
     for g in range(int(moments[0, base])):
         col = base + 1 + g * (3 + m)
         x, weight = moments[0, col], moments[0, col + 1]
         v = w = vd = wd = vdd = wdd = 0.0
         c = cd = cdd = 0.0
+        for j in range(ma):             # the stretch u_x = U . xi, and its rates, enter as -c
+            u = axial[j, u_col + g]
+            c -= u * eta[na + j]
+            cd -= u * eta_d[na + j]
+            cdd -= u * eta_dd[na + j]
         for j in range(m):
             y = moments[j, col + 2]
             v += y * eta[j]
@@ -197,6 +209,8 @@ def exact_line_integrals(moments, eta, eta_d, eta_dd, o, al, gm, mu, residual):
                 for l in range(m):
                     dx += moments[j, col + 3 + l] * eta[plane * m + l]
                 residual[plane * m + j] -= mu * weight * (moments[j, col + 2] * fp - dx * f0)
+        for j in range(ma):
+            residual[na + j] -= mu * weight * axial[j, u_col + g] * f0
     return fb0, fb1, fb2, mb0, mb1, mb2, s0, s1, s2
 
 
@@ -399,8 +413,8 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     exact = bp[STIFFENING] == EXACT
     if exact:   # the foreshortening to all orders: the integrals and the bending rows' inertia
         fb0, fb1, fb2, mb0, mb1, mb2, s0, s1, s2 = exact_line_integrals(
-            moments, eta, eta_d, eta_dd, (o0, o1, o2), (al0, al1, al2), (gm0, gm1, gm2), mu,
-            residual)
+            moments, axial, eta, eta_d, eta_dd, (o0, o1, o2), (al0, al1, al2), (gm0, gm1, gm2),
+            mu, residual)
     # back to the world: int f, int rho x f, S = int mu rho
     sf0 = mu * (e10 * fb0 + e20 * fb1 + e30 * fb2)
     sf1 = mu * (e11 * fb0 + e21 * fb1 + e31 * fb2)
@@ -456,7 +470,8 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
               - 2.0 * (o1 * u2 - o2 * u1) - v0)
         modal_mass = mu * axial[j, 3]
         stiffness = bp[EA] * axial[j, 4]
-        residual[na + j] = (-mu * f0 + 2.0 * zeta * np.sqrt(stiffness * modal_mass) * ed
+        inertia = residual[na + j] if exact else -mu * f0       # (exact_line_integrals')
+        residual[na + j] = (inertia + 2.0 * zeta * np.sqrt(stiffness * modal_mass) * ed
                             + stiffness * e)
     for k in range(m):
         modal_mass = mu * factors[k, 0]
