@@ -288,6 +288,18 @@ def test_the_exact_foreshortening_carries_the_default_two_modes_through_the_whip
     assert np.abs(exact.position_output[:, -1] - one_mode.position_output[:, -1]).max() < 1e-2
 
 
+def test_the_exact_foreshortening_survives_a_scene_file():
+    """A model with stiffening="exact" beams (and stretch) saved as a scene and read back has
+    the same beam table, the exact flag included (scene.py writes stiffening = "exact")."""
+    from dttmm.elements.beam import EXACT, STIFFENING
+    from dttmm.scene import scene_from_dict, scene_of
+    model = _soft_pendulum(2, 2, "exact", 1260.0)
+    data = scene_of(model)
+    back = scene_from_dict(data).model
+    assert (back.beam_params[:, STIFFENING] == EXACT).all()
+    np.testing.assert_array_equal(back.beam_params, model.beam_params)
+
+
 def test_describe_says_the_foreshortening_is_exact():
     """describe() of a beam with stiffening="exact" says so, and gives no bend limit."""
     text = _soft_pendulum(2, 2, "exact").describe()

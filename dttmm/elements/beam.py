@@ -421,8 +421,8 @@ class EulerBernoulliBeam:
         paper's beam.  "exact": the foreshortening kept to all orders (every section at
         x - c(x) along the frame; docs/beam.md, "The exact foreshortening"), for an element
         that bends further than the second-order energy holds (~0.17 rad over its length with
-        two modes per plane); it runs in the general loop with its w' and eta'' columns
-        differenced.
+        two modes per plane); its w' and eta'' columns are differenced (the general loop, or
+        the welded-chain loop's differenced transfer).
 
     torsion_modes : int or "auto", optional
         Number of twist modes, >= 0, at most 6 (default 0: the beam does not twist); "auto"
