@@ -126,18 +126,19 @@ def test_seed_001_pendulum_one_stiffened_element_follows_the_chain():
     assert np.abs(deflection(_flexible_pendulum(1, 5, False)) - chain).max() > 0.5 * peak
 
 
-def _soft_pendulum(elements, modes, stiffening=True, axial_stiffness=None):
+def _soft_pendulum(elements, modes, stiffening=True, axial_stiffness=None, clamped=False):
     """Issue 32's soft pendulum (Berzeri and Shabana's): a 1.2 m beam (A = 18 cm^2,
     rho = 5540 kg/m^3, I = 1.215e-8 m^4, E = 0.7 MPa: bending a thousand times softer than the
     gravity pull on it) on a ball joint at its root, released along +x under gravity -y, as
     `elements` welded stiffened elements of `modes` modes per plane (None: the default);
     stiffening="exact": the foreshortening to all orders; axial_stiffness: E A, N, with one
-    stretch mode per element (None: inextensible)."""
+    stretch mode per element (None: inextensible); clamped: welded to the ground at its root
+    instead (the welded-chain loop)."""
     from dttmm import BallJoint
     length, area, rho, inertia = 1.2, 1.8e-3, 5540.0, 1.215e-8
     parts = []
     for i in range(elements):
-        parts += [BallJoint() if i == 0 else FixedHinge(),
+        parts += [BallJoint() if i == 0 and not clamped else FixedHinge(),
                   EulerBernoulliBeam(length=length / elements, density=rho, area=area,
                                      bending_stiffness=0.7e6 * inertia,
                                      polar_inertia_per_length=rho * 2 * inertia,
@@ -251,13 +252,7 @@ def test_the_exact_foreshortening_in_the_welded_chain_loop_meets_the_reference()
     differenced transfer), sagging under gravity to a tip 0.44 m below the clamp in 0.3 s:
     against the exact reference at order 2 in dt (measured 3.1e-6 and 7.7e-7 m at dt 1e-3 and
     5e-4 s), the energy kept to 1e-5 of the largest kinetic energy (measured 3.9e-7)."""
-    parts = []
-    for i in range(4):
-        parts += [FixedHinge(), EulerBernoulliBeam(
-            length=0.3, bending_stiffness=0.7e6 * 1.215e-8, mass_per_length=5540.0 * 1.8e-3,
-            polar_inertia_per_length=5540.0 * 2 * 1.215e-8, stiffening="exact",
-            modes_per_plane=2, name=f"e{i + 1}")]
-    model = build_chain(parts, gravity=[0.0, -9.81, 0.0])
+    model = _soft_pendulum(4, 2, "exact", clamped=True)
     t = np.linspace(0.0, 0.3, 7)
     ref = simulate_reference(model, 0.3, t_eval=t, rtol=1e-10, atol=1e-12)
     runs = [simulate(model, 0.3, dt, t_eval=t) for dt in (1e-3, 5e-4)]
@@ -365,7 +360,6 @@ def test_the_exact_foreshortening_carries_the_soft_pendulum_on():
     kinetic energy (measured 4.7e-11 at 0.12 s), and its tip within 2e-4 m of DT-TMM's 32
     elements of one mode per plane (measured 9.5e-5 m; 8 elements fall behind after, 9e-4 m
     at 0.12 s)."""
-    from dttmm.reference.newton_euler import simulate_reference
     t = np.linspace(0.0, 0.1, 11)
     ref = simulate_reference(_soft_pendulum(8, 3), 0.1, rtol=1e-8, atol=1e-10, t_eval=t,
                              exact_foreshortening=True)
