@@ -168,17 +168,20 @@ class Result:
         object.__setattr__(self, "_derivation", derivation)
 
     @classmethod
-    def _of_run(cls, derivation, **values):
+    def _of_run(cls, derivation, lazy=(), **values):
         """A solver's Result (solver._result): the fields are known to be valid and the
         arrays new, held by nothing else, so they are made read-only in place rather than
         through views (views of them, such as force and moment, are then read-only too): the
-        checks and copies of __init__ cost a short run a third of its fixed cost."""
+        checks and copies of __init__ cost a short run a third of its fixed cost.  The
+        derivation gives the DERIVED fields and those named in lazy when first read."""
         full = dict(_RUN_DEFAULTS)
+        for name in lazy:
+            del full[name]
         full.update(values)
         for value in values.values():
             if isinstance(value, np.ndarray) and value.flags.writeable:
                 value.flags.writeable = False
-        if full["info"] is None:
+        if full.get("info", {}) is None:
             full["info"] = {}
         result = object.__new__(cls)
         object.__setattr__(result, "_values", full)
@@ -189,9 +192,9 @@ class Result:
         values = object.__getattribute__(self, "_values")
         if name in values:
             return values[name]
-        if name in DERIVED:
-            values.update({k: _read_only(v) for k, v in
-                           object.__getattribute__(self, "_derivation")(name).items()})
+        derivation = object.__getattribute__(self, "_derivation")
+        if derivation is not None and name in FIELDS:     # DERIVED, or lazy in _of_run
+            values.update({k: _read_only(v) for k, v in derivation(name).items()})
             if name in values:
                 return values[name]
         raise AttributeError(f"Result has no field {name!r}")
@@ -242,6 +245,8 @@ class Result:
         """
         values = dict(object.__getattribute__(self, "_values"), **changes)
         derivation = object.__getattribute__(self, "_derivation")
+        values.update({name: getattr(self, name) for name in FIELDS     # (lazy in _of_run)
+                       if name not in values and name not in DERIVED})
         if derivation is not None and set(changes) & _STATE_OF_DERIVED:
             values.update({name: getattr(self, name) for name in DERIVED
                            if name not in changes})

@@ -46,7 +46,7 @@ from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, m
                     output_section)
 from .energy_balance import does_work
 from .recording import (NoCheckpoint, Recording, model_fingerprint)
-from .result import (FIELDS, Result, beam_output_offset, chain_energies,
+from .result import (DERIVED, FIELDS, Result, beam_output_offset, chain_energies,
                      point_positions)
 
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
@@ -1653,34 +1653,59 @@ def richardson_extrapolation(*runs):
                      for i in range(1, len(table))]
         return table[0]
 
-    names = ("position_input", "position_mass_center", "position_output", "angular_velocity",
-             "angular_acceleration", "force", "moment",
-             "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
-             "joint_rates", "drive_force", "closure_force", "closure_moment",
-             "closure_drive_force")
-    fields = {name: combine(name) for name in names}
-    u, _, vt = np.linalg.svd(combine("rotation"))       # nearest rotation: the polar factor
-    u[..., :, 2] *= np.sign(np.linalg.det(u @ vt))[..., None]
-    fields["rotation"] = u @ vt
-    correction = max(float(np.abs(fields[p] - getattr(fine, p)).max())
-                     for p in ("position_input", "position_mass_center", "position_output"))
-    info = dict(coarse.info, richardson=True, richardson_runs=len(runs),
-                dt_runs=tuple(run.info["dt"] for run in runs),
-                richardson_correction_m=correction,
-                newton_iterations_used=max(run.info.get("newton_iterations_used", 0)
-                                           for run in runs),
-                newton_unconverged_steps=sum(run.info.get("newton_unconverged_steps", 0)
-                                             for run in runs))
-    # the energies combined when first read (each run derives its own then: ~100 us a run)
-    fields.update(wall_time=sum(run.wall_time for run in runs),
-                  n_steps=sum(run.n_steps for run in runs), info=info,
-                  checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) keeps no "
-                                          "checkpoint: it combines runs"))
+    combined = ("position_input", "position_mass_center", "position_output",
+                "angular_velocity", "angular_acceleration", "force", "moment",
+                "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
+                "joint_rates", "drive_force", "closure_force", "closure_moment",
+                "closure_drive_force", "kinetic", "potential")
+    points = ("position_input", "position_mass_center", "position_output")
+    lazy = ("rotation", "info") + tuple(name for name in combined if name not in DERIVED)
+
+    def derivation(name):
+        """Every field combined when first read, as a run's positions are derived (each
+        run's positions cost ~50 us a run to derive): the call itself costs no more than
+        its runs."""
+        if name == "rotation":
+            return {name: nearest_rotations(combine("rotation"))}
+        if name == "info":
+            correction = max(float(np.abs(combine(p) - getattr(fine, p)).max())
+                             for p in points)
+            return {name: dict(coarse.info, richardson=True, richardson_runs=len(runs),
+                               dt_runs=tuple(run.info["dt"] for run in runs),
+                               richardson_correction_m=correction,
+                               newton_iterations_used=max(
+                                   run.info.get("newton_iterations_used", 0) for run in runs),
+                               newton_unconverged_steps=sum(
+                                   run.info.get("newton_unconverged_steps", 0)
+                                   for run in runs))}
+        return {name: combine(name)} if name in combined else {}
+
     kept = {name: getattr(coarse, name) for name in FIELDS
-            if name not in fields and name not in ("kinetic", "potential")}
-    return Result(derivation=lambda name: ({name: combine(name)}
-                                           if name in ("kinetic", "potential") else {}),
-                  **kept, **fields)
+            if name not in combined and name not in lazy}
+    kept.update(wall_time=sum(run.wall_time for run in runs),
+                n_steps=sum(run.n_steps for run in runs),
+                checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) keeps no "
+                                        "checkpoint: it combines runs"))
+    return Result._of_run(derivation, lazy=lazy, **kept)
+
+
+def nearest_rotations(m):
+    """(..., 3, 3): the rotations nearest to matrices m (their orthogonal polar factor).  Near
+    rotations by the Newton-Schulz iteration X <- X (3 I - X^T X) / 2, whose error squares each
+    step (Higham, Functions of Matrices, 8.3): off = |X^T X - I| <= 1e-8 leaves 1e-16 after
+    one more; matrices far from a rotation by the SVD's U V^T, the sign of det fixed."""
+    x = np.asarray(m, dtype=float)
+    for _ in range(6):
+        gram = np.swapaxes(x, -1, -2) @ x
+        off = np.abs(gram - np.eye(3)).max(initial=0.0)
+        if not off <= 0.25:                 # (NaN too)
+            break
+        x = x @ (1.5 * np.eye(3) - 0.5 * gram)
+        if off <= 1e-8:
+            return x
+    u, _, vt = np.linalg.svd(m)
+    u[..., :, 2] *= np.sign(np.linalg.det(u @ vt))[..., None]
+    return u @ vt
 
 
 def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_ground):

@@ -166,3 +166,37 @@ def test_a_scene_takes_the_number_of_runs(tmp_path):
     path.write_text(text.replace("dt = 0.001", "dt = 0.01\nrichardson = \"three\""))
     with pytest.raises(SceneError, match="richardson"):
         load_scene(path)
+
+
+def test_nearest_rotations_is_the_polar_factor():
+    """The extrapolated rotations are projected by Newton-Schulz near a rotation and by the
+    SVD far from one: both the polar factor U V^T of numpy's SVD, to rounding."""
+    rng = np.random.default_rng(3)
+    q = np.linalg.qr(rng.standard_normal((200, 3, 3)))[0]
+    q *= np.sign(np.linalg.det(q))[:, None, None]           # rotations
+    for scale in (0.0, 1e-9, 1e-5, 1e-2, 0.3):
+        m = q + scale * rng.standard_normal(q.shape)
+        u, _, vt = np.linalg.svd(m)
+        polar = u @ vt
+        proper = np.linalg.det(polar) > 0                    # (a reflection: no rotation near)
+        near = solver.nearest_rotations(m)
+        assert np.abs(near - polar)[proper].max() < 1e-13, scale
+        assert np.abs(np.swapaxes(near, 1, 2) @ near - np.eye(3)).max() < 1e-14, scale
+        assert np.all(np.linalg.det(near) > 0)
+
+
+def test_the_combined_result_reads_as_any_other():
+    """The Richardson Result combines its fields when first read: its info and fields are those
+    of the combination however they are reached (read, replaced, pickled)."""
+    import pickle
+    model = rigid_chain(3)
+    coarse, fine = (simulate(model, 0.1, dt, record_every=k) for dt, k in ((1e-2, 1), (5e-3, 2)))
+    res = simulate(model, 0.1, 1e-2, richardson=True)
+    expected = (4.0 * fine.position_output - coarse.position_output) / 3.0
+    for copy in (res.replace(method="copied"), pickle.loads(pickle.dumps(res)), res):
+        assert copy.info["richardson_runs"] == 2 and copy.info["dt_runs"] == (1e-2, 5e-3)
+        assert copy.info["richardson_correction_m"] == pytest.approx(
+            np.abs(expected - fine.position_output).max(), rel=1e-12)
+        assert np.abs(copy.position_output - expected).max() < 1e-15
+        with pytest.raises(ValueError):
+            copy.position_output[0, 0, 0] = 1.0
