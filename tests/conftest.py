@@ -9,3 +9,89 @@ from pathlib import Path
 os.environ.setdefault("DTTMM_SPECIALIZE", "0")
 
 sys.path.insert(0, str(Path(__file__).parent))
+
+
+# --- The kernels compiled once per suite, in parallel -------------------------------------
+# From a fresh clone most of the suite's time is numba compiling.  Run by pytest-xdist, each
+# worker compiles whatever its first tests need, so both compiled the general loop and its start
+# at once (each ~45 s of the first minute: a compile log of every worker found 191 of the
+# suite's 814 s of compiling done twice).  Here each worker first takes, under a file lock, the
+# next family of kernels no worker has taken, compiles it by a short run, and waits for the
+# families the other workers hold; every test then loads them from numba's cache.  Only for a
+# whole suite over several workers: a few tests run alone compile only what they use.
+WHOLE_SUITE = 300          # tests collected
+
+
+def _compile_general_loop():
+    from helpers import joints_arm
+
+    from dttmm import simulate
+    simulate(joints_arm(), 2e-3, 1e-3)
+
+
+def _compile_fused_tree():
+    from dttmm import simulate
+    from dttmm.chains import five_link_tree
+    simulate(five_link_tree(), 2e-3, 1e-3)
+    simulate(five_link_tree(), 2e-3, 1e-3, scheme="dop853")
+
+
+def _compile_fused_chain():
+    from dttmm import simulate
+    from dttmm.chains import rigid_chain
+    simulate(rigid_chain(3), 2e-3, 1e-3)
+    simulate(rigid_chain(3), 2e-3, 1e-3, scheme="dop853")
+    simulate(rigid_chain(3), 2e-3, 1e-3, scheme="energy_momentum")
+
+
+def _compile_welded_chain():
+    from dttmm import simulate
+    from dttmm.chains import stiff_cantilever
+    simulate(stiff_cantilever(2), 2e-3, 1e-3)
+
+
+def _compile_reference():
+    from helpers import joints_arm
+
+    from dttmm.chains import three_pendulum
+    from dttmm.reference import simulate_reference
+    simulate_reference(three_pendulum(), 1e-3)
+    simulate_reference(joints_arm(), 1e-3)
+
+
+KERNEL_FAMILIES = (("general_loop", _compile_general_loop), ("reference", _compile_reference),
+                   ("fused_tree", _compile_fused_tree), ("fused_chain", _compile_fused_chain),
+                   ("welded_chain", _compile_welded_chain))
+
+
+def _compile_families(directory):
+    """Each family compiled by the first worker to lock it; the rest waited for."""
+    import fcntl
+    import warnings
+    left = list(KERNEL_FAMILIES)
+    for blocking in (False, True):
+        for name, job in tuple(left):
+            with open(directory / f"{name}.lock", "a") as lock:
+                try:
+                    fcntl.flock(lock, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+                except BlockingIOError:
+                    continue                    # another worker compiles it
+                done = directory / f"{name}.done"
+                if not done.exists():
+                    try:
+                        job()
+                    except Exception as err:    # (the tests that use it will say what)
+                        warnings.warn(f"compiling the {name} kernels first failed: {err}")
+                    done.touch()
+            left.remove((name, job))
+
+
+def pytest_collection_finish(session):
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if (run is None or int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) < 2
+            or len(session.items) < WHOLE_SUITE):
+        return
+    import tempfile
+    directory = Path(tempfile.gettempdir()) / f"dttmm-compile-{run}"
+    directory.mkdir(exist_ok=True)
+    _compile_families(directory)
