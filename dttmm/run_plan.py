@@ -114,8 +114,12 @@ class PreparedRun:
         loops = s.loop_tables(model)
         # what the general and energy-momentum loops' kernels are compiled for
         features = s.kernel_features(model, mode, scheme.name == "paper")
-        s._consistent_start(model, mode, opts.method, (runner, loop) if fused else None, params,
-                            settings, state, ws.sweep, monitor, dt, loops, features=features)
+        if welded:          # (its start: one pass of its own loop, then the loop from it)
+            runner = s.run_steps_no_alloc
+            loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
+        s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
+                            params, settings, state, ws.sweep, monitor, dt, loops,
+                            features=features)
         if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py)
             loops.energy[:2] = 1.0, start_energy(params, loops, state)
         histories = s._station_histories(model, state, scheme.name == "paper")

@@ -29,6 +29,7 @@ from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC,
 from .elements.joints import PRISMATIC
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import ball_chain
+from .kernels.stepping import weld_chain
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import Loops, set_ground
 from .kernels.features import kept, specialized, unread_dropped
@@ -774,7 +775,10 @@ def _fused_start(runner, loop, run):
     state.eta_acc, as kernels/stepping/step.py::initial_accelerations does; returns its status
     codes."""
     info = np.zeros(5, dtype=np.int64)
-    runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
+    if isinstance(loop, weld_chain.WeldLoop):
+        runner(weld_chain.start_loop(loop, run), run, info)
+    else:
+        runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
     run.state.eta_acc[:] = loop.per_mode[4]
     if info[0] == SINGULAR:
         return int(info[2])

@@ -8,7 +8,7 @@ import pytest
 from helpers import fused_and_general
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion,
-                   RigidBody, build_chain, simulate)
+                   RigidBody, build_chain, forward_dynamics, simulate)
 from dttmm.chains import stiff_cantilever
 
 HUB = PrescribedMotion.spin_about_axis([0, 0, 1], angle=lambda t: 0.5 * t * t, rate=lambda t: t,
@@ -81,3 +81,29 @@ def test_other_chains_keep_their_loops(what, elements, tip):
     chain = [EulerBernoulliBeam(**beam) if e == "beam" else e for e in elements]
     model = build_chain(chain, **({"tip": tip} if tip else {}))
     assert simulate(model, 2e-3, 1e-3).info["loop"] != "welded-chain", what
+
+
+def test_the_welded_loops_own_start_gives_the_general_starts_accelerations():
+    """The welded-chain loop takes its consistent start as one pass of its own iterate
+    (weld_chain.start_loop); forward_dynamics takes it by the general loop's start
+    (step.py::initial_accelerations): a bent, moving, loaded chain on an accelerating hub, with
+    twist and stretch, gives the same accelerations and station loads to rounding."""
+    def element(**more):
+        return EulerBernoulliBeam(length=0.8, mass_per_length=2.0, bending_stiffness=[60.0, 80.0],
+                                  polar_inertia_per_length=2e-3, modes_per_plane=2,
+                                  torsion_modes=1, torsional_stiffness=8.0, axial_modes=1,
+                                  axial_stiffness=3000.0, **more)
+    bent = element(initial_modal_coordinates=[0.02, -0.004, 0.01, 0.002, 0.05, 1e-4],
+                   initial_modal_velocities=[0.1, 0.0, -0.2, 0.05, 0.3, 1e-3])
+    tip = element(end_force=lambda t: [0.0, 0.5, -1.0], end_torque=lambda t: [0.1, 0.0, 0.0],
+                  distributed_load=lambda t: [0.0, 0.2, 0.0], load_axes="body",
+                  initial_modal_velocities=[0.0, 0.2, 0.1, 0.0, -0.1, 0.0])
+    model = build_chain([FixedHinge(), bent, FixedHinge(), tip],
+                        gravity=[0.0, 0.0, -9.81], ground=Ground(motion=HUB))
+    run = simulate(model, 1e-3, 1e-3)
+    assert run.info["loop"] == "welded-chain"
+    general = forward_dynamics(model)
+    for ours, theirs in ((run.angular_acceleration[0], general["angular_acceleration"]),
+                         (run.force[0], general["force"]), (run.moment[0], general["moment"])):
+        assert np.abs(ours - theirs).max() <= 1e-12 * np.abs(theirs).max()
+    assert np.abs(general["angular_acceleration"][1]).max() > 1.0       # (not a trivial case)

@@ -65,6 +65,27 @@ def weld_loop(n, mode_off, h, coef, z):
                      np.zeros(48)))
 
 
+def start_loop(loop, run):
+    """The welded-chain loop set for the consistent start, which the skeleton runs as one pass
+    of its iterate (Settings.start; docs/solver.md, "The consistent start"), as
+    ball_chain.start_loop does for the ball chains: beam_transfer at the start keeps every
+    rotation, rate and modal state and takes w' and eta'' as the unknowns (a welded output's slot
+    the end section's w'), so with (c1, c3) = (1, 0), w1 = 0, w3 = w_n and the root's [a, w'] the
+    ground's, one sweep solves the linear relations and each body's phi comes out as its w'.
+    Returns the loop to run."""
+    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    w1[:] = 0.0
+    w3[:] = run.state.omega
+    phi_star[:] = 0.0
+    loop.per_mode[0] = -run.state.eta
+    loop.per_mode[1] = run.state.eta_d
+    loop.per_mode[3] = 0.0
+    loop.root[:3] = run.inputs.g_acc[0]
+    loop.root[3:] = run.inputs.g_wd[0]
+    loop.vecs[4] = run.inputs.g_wd[0]       # (the ground station's slot: z[0] = [a, w']_g)
+    return loop._replace(coefficients=np.array([1.0, 0.0, 1.0, 0.0]))
+
+
 @loop_piece
 def _predict(loop, run, s, _):
     """The fused ball chain's predictor (phi*, the offsets of every rotation and modal
@@ -175,7 +196,8 @@ def _iterate(loop, run, s, it):
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
                   beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/stepping/step.py)
-        beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity, False,
+        beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
+                      run.settings.start,
                       state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
                       eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u, eta_map[i0:i1],
                       loop.beam_work)
