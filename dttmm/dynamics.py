@@ -61,10 +61,12 @@ def forward_dynamics(model, t=0.0, state=None):
     return _accelerations(model, t, state, True)
 
 
-def _accelerations(model, t, state, check_frames, extra_loads=None):
+def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_forces=None):
     """forward_dynamics' work; check_frames: refuse given rotations of bodies whose frames
     follow their parents' that do not agree with them (dttmm.ode gives placeholders there);
-    extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads."""
+    extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads;
+    extra_joint_forces: (n, 2) generalized forces on the joints' coordinates (where
+    solver.additive_joint_force)."""
     from . import solver
     from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
     from .kernels.stepping.loop import Monitor, Settings
@@ -103,8 +105,13 @@ def _accelerations(model, t, state, check_frames, extra_loads=None):
         extra = np.zeros((2, n, 3))
         extra[:, solver.loaded_bodies(model, km, keep)] = extra_loads
         extra_loads = extra
+    if extra_joint_forces is not None:
+        extra = np.zeros((n, 2))
+        extra[keep] = extra_joint_forces
+        extra_joint_forces = extra
     solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
-                             monitor, 0.0, loops, t=t, extra_loads=extra_loads)
+                             monitor, 0.0, loops, t=t, extra_loads=extra_loads,
+                             extra_joint_forces=extra_joint_forces)
     st = ws.state
     residual = np.zeros(len(loops.kind))
     if len(loops.kind):
@@ -345,12 +352,14 @@ def linearize(model, state=None, t=0.0):
     (a body on a ball joint or an elastic hinge) turned by a small world rotation vector
     (A <- exp(dth^) A; its rate is w, the world angular velocity), every elastic hinge's
     deflection, every joint coordinate, every modal coordinate; then w, the deflections',
-    joint and modal rates.  The inputs u are a force (at the mass centre) and a torque (world)
-    on every body, then a torque about every revolute joint's axis and each universal joint's
-    two axes, and a force along every prismatic joint's axis (each equal and opposite on the
-    child and the parent; the force's pair on one line, through the child's input point: the
-    work of f on the slide's rate, a joint drive's), for joints between rigid bodies (next
-    to a beam, clamp it to a rigid hub, as examples/control.py does).  The
+    joint and modal rates.  The inputs u are a force and a torque (world) on every body (a
+    rigid body's force at its mass centre; a beam's at its output end section, as its
+    ``end_force`` and ``end_torque``, in its end section's axes if its ``load_axes`` is
+    "body"), then a torque about every revolute joint's axis and each universal joint's two
+    axes, and a force along every prismatic joint's axis: the coordinate's generalized force,
+    added to its drive's, which the joint applies between its two frames (next to beams too);
+    0 on a prescribed coordinate; for a compiled JointForce, a pair of body loads, offered
+    between rigid bodies only.  The
     outputs y are every body's output point, world.  The accelerations' derivatives are
     central differences of ``forward_dynamics`` (step DIFFERENCE_STEP, extrapolated with the
     step twice as large; the error estimate is ``difference_error``); the rest is exact
@@ -441,46 +450,69 @@ def linearize(model, state=None, t=0.0):
                          np.zeros((1, n_eta)), None, None)
         return points["position_output"][0].ravel()
 
-    # the joints' inputs as body loads: a torque tau n, +tau n on the child and -tau n on the
-    # parent; a slide's force f n, +f n on the child and -f n on the parent at one point P (the
-    # child's input point), i.e. at the mass centres with the torques +-(P - c) x f n
+    # the joints' inputs: each coordinate's generalized force (a torque about a revolute
+    # joint's axis or a universal joint's, a force along a slide), added to what its drive
+    # gives (solver.additive_joint_force: the joint's own element applies it, between its frames,
+    # next to beams too); a prescribed coordinate's is 0 (nothing moves it).  A compiled
+    # JointForce has no such slot: there the input is a pair of body loads (a torque tau n,
+    # +tau n on the child and -tau n on the parent; a slide's force f n, +f n on the child and
+    # -f n on the parent at one point P, the child's input point, i.e. at the mass centres with
+    # the torques +-(P - c) x f n), between rigid bodies only (a beam's body loads act at its
+    # output end, not where the joint is)
+    from .solver import MOTION, additive_joint_force
     joint_inputs, joint_names = [], []
     points = None
-    for k in range(n):      # (between rigid bodies: a beam's end is not where a body torque is)
+    for k in range(n):
         kind = int(model.hinge_kind[k])
+        if kind not in (REVOLUTE, UNIVERSAL, PRISMATIC):
+            continue
         p = model.parent[k]
-        if kind not in (REVOLUTE, UNIVERSAL, PRISMATIC) or model.body_kind[k] == BEAM or (
-                p >= 0 and model.body_kind[p] == BEAM):
-            continue
-        rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
-        if kind == PRISMATIC:
-            if points is None:
-                from .solver import _points
-                defl, defl_rate = base["offsets"]
-                points = _points(model, np.array([t]), base["rotation"][None],
-                                 base["angular_velocity"][None], defl[None], defl_rate[None],
-                                 np.asarray(full.get("modal_coordinates", np.zeros(0)))[None],
-                                 np.zeros((1, n_eta)), None, None)
-            at = points["position_input"][0, k]
-            arms = [at - points["position_mass_center"][0, b] if b >= 0 else None
-                    for b in (k, p)]
-            joint_inputs.append((k, p, _joint_axis(model, base, k, 0, rot_p), arms))
-            joint_names.append(f"{model.hinge_names[k]}.force")
-            continue
-        for i in range(2 if kind == UNIVERSAL else 1):
+        for i, drive in enumerate(model.drives[k]):
+            name = (f"{model.hinge_names[k]}.force" if kind == PRISMATIC
+                    else f"{model.hinge_names[k]}.torque{i}")
+            if additive_joint_force(drive) or drive["kind"] == MOTION:
+                joint_inputs.append((k, i, None if drive is None or drive["kind"] != MOTION
+                                     else "prescribed"))
+                joint_names.append(name)
+                continue
+            if model.body_kind[k] == BEAM or (p >= 0 and model.body_kind[p] == BEAM):
+                continue
+            rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
             axis = _joint_axis(model, base, k, i, rot_p)
-            joint_inputs.append((k, p, axis, None))
-            joint_names.append(f"{model.hinge_names[k]}.torque{i}")
+            arms = None
+            if kind == PRISMATIC:
+                if points is None:
+                    from .solver import _points
+                    defl, defl_rate = base["offsets"]
+                    points = _points(model, np.array([t]), base["rotation"][None],
+                                     base["angular_velocity"][None], defl[None],
+                                     defl_rate[None],
+                                     np.asarray(full.get("modal_coordinates",
+                                                         np.zeros(0)))[None],
+                                     np.zeros((1, n_eta)), None, None)
+                at = points["position_input"][0, k]
+                arms = [at - points["position_mass_center"][0, b] if b >= 0 else None
+                        for b in (k, p)]
+            joint_inputs.append((k, p, axis, arms))
+            joint_names.append(name)
     n_u = 6 * n + len(joint_inputs)
     inputs = ([f"{model.body_names[k]}.f{c}" for k in range(n) for c in "xyz"]
               + [f"{model.body_names[k]}.m{c}" for k in range(n) for c in "xyz"] + joint_names)
 
     def loads(j, eps):
+        """(force, torque, joint forces) of input j at eps (None: nothing moves)."""
         force, torque = np.zeros((n, 3)), np.zeros((n, 3))
         if j < 3 * n:
             force[j // 3, j % 3] = eps
         elif j < 6 * n:
             torque[(j - 3 * n) // 3, (j - 3 * n) % 3] = eps
+        elif len(joint_inputs[j - 6 * n]) == 3:     # a coordinate's generalized force
+            k, i, prescribed = joint_inputs[j - 6 * n]
+            if prescribed:
+                return None
+            generalized = np.zeros((n, 2))
+            generalized[k, i] = eps
+            return force, torque, generalized
         else:
             k, p, axis, arms = joint_inputs[j - 6 * n]
             if arms is None:                    # a torque about the axis
@@ -493,7 +525,7 @@ def linearize(model, state=None, t=0.0):
                 if p >= 0:
                     force[p] -= eps * axis
                     torque[p] -= np.cross(arms[1], eps * axis)
-        return force, torque
+        return force, torque, None
 
     def differenced(eps):
         da, db, dy = np.zeros((m, 2 * m)), np.zeros((m, n_u)), np.zeros((3 * n, m))
@@ -505,8 +537,11 @@ def linearize(model, state=None, t=0.0):
             if j < m:
                 dy[:, j] = (outputs(plus, up) - outputs(minus, down)) / (2 * eps)
         for j in range(n_u):
-            plus = _accelerations(model, t, full, False, loads(j, eps))
-            minus = _accelerations(model, t, full, False, loads(j, -eps))
+            up, down = loads(j, eps), loads(j, -eps)
+            if up is None:                      # (a prescribed coordinate's force)
+                continue
+            plus = _accelerations(model, t, full, False, up[:2], up[2])
+            minus = _accelerations(model, t, full, False, down[:2], down[2])
             db[:, j] = (accelerations(plus) - accelerations(minus)) / (2 * eps)
         return da, db, dy
 

@@ -527,6 +527,15 @@ def _joint_inputs(model, times, state=None, dt=0.0):
     return out
 
 
+def additive_joint_force(drive):
+    """Whether a generalized force on a joint coordinate with this drive (Model.drives' entry)
+    adds to the force its known-force slot carries into the loop (_joint_inputs' [.., 0],
+    kernels/transfers/joint.py::drive_value): no drive, a spring-damper, a PD tracking or a
+    force of time in Python; not a prescribed motion (the slot holds q) nor a compiled
+    JointForce (it holds t)."""
+    return drive is None or not (drive["kind"] == MOTION or drive.get("compiled"))
+
+
 def _known(d, t, who):
     try:
         return known_force(d, t)
@@ -666,12 +675,15 @@ def _steps(t_end, dt):
 
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
-                      loops=None, t=0.0, extra_loads=None, features=None):
+                      loops=None, t=0.0, extra_loads=None, features=None,
+                      extra_joint_forces=None):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
     or kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
     held at acceleration level.  extra_loads: (force, torque), (n, 3) each, world, added to
-    the applied loads (at the mass centres; dynamics.linearize's inputs).  features: what the
+    the applied loads (at the mass centres; dynamics.linearize's inputs); extra_joint_forces:
+    (n, 2) generalized forces added to the joint coordinates' (where additive_joint_force says
+    they add).  features: what the
     kernels are compiled for (kernel_features: by default the model's, without the paper's
     station histories, which the start does not use)."""
     loops = loop_tables(model) if loops is None else loops
@@ -683,6 +695,8 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
         force[0] += extra_loads[0]
         torque[0] += extra_loads[1]
     joint_input = _joint_inputs(model, [t], state, dt)
+    if extra_joint_forces is not None:      # (n, 2): onto the drives' known forces
+        joint_input[0, :, :, 0] += extra_joint_forces
     try:
         if fused:       # the fused loop's own sweep (compiles nothing else)
             status = _fused_start(*fused, start_pass(

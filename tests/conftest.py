@@ -66,7 +66,10 @@ KERNEL_FAMILIES = (("general_loop", _compile_general_loop), ("reference", _compi
 
 def _compile_families(directory):
     """Each family compiled by the first worker to lock it; the rest waited for."""
+    import contextlib
     import fcntl
+    import io
+    import time
     import warnings
     left = list(KERNEL_FAMILIES)
     for blocking in (False, True):
@@ -78,11 +81,15 @@ def _compile_families(directory):
                     continue                    # another worker compiles it
                 done = directory / f"{name}.done"
                 if not done.exists():
-                    try:
-                        job()
+                    t0 = time.perf_counter()
+                    try:            # (the compile notices: one line below instead)
+                        with contextlib.redirect_stderr(io.StringIO()):
+                            job()
                     except Exception as err:    # (the tests that use it will say what)
                         warnings.warn(f"compiling the {name} kernels first failed: {err}")
                     done.touch()
+                    print(f"\n{os.environ.get('PYTEST_XDIST_WORKER')}: the {name} kernels "
+                          f"ready in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
             left.remove((name, job))
 
 

@@ -238,16 +238,16 @@ def test_linearize_a_slide_force_as_the_joints_own_drive():
     through the child's input point, equal and opposite on the parent) has the response of
     the joint's own drive: on the arm with its slide across link 3 (the line misses both
     mass centres, so each side's moment counts), its B column equals the central difference
-    of forward_dynamics' accelerations over a drive that adds +-1e-4 N to the slide's spring
-    (a JointForce: the drive's path through the sweep, not the input's loads), to 1e-7 of
-    the column, mid-run where every link moves."""
+    of the reference's joint accelerations (its own equations and drive evaluation) over a
+    drive that adds +-1e-4 N to the slide's spring, to 1e-7 of the column, mid-run where every
+    link moves."""
     model = _arm_across()
     state = simulate(model, 0.3, 1e-3, record_every=300).state(-1)
     lin = dttmm.linearize(model, state, 0.3)
     column = lin.B[:, lin.inputs.index("joint4.force")]
     m = len(lin.states) // 2
-    acc = [forward_dynamics(_arm_across(f), 0.3, state)["joint_acceleration"]
-           for f in (1e-4, -1e-4)]
+    problems = [_Problem(_arm_across(f)) for f in (1e-4, -1e-4)]
+    acc = [prob.evaluate(0.3, _reference_state(prob, state))[13] for prob in problems]
     expected = (acc[0] - acc[1]) / 2e-4
     assert np.abs(column[:m]).max() == 0.0
     assert np.abs(expected).max() > 1.0                 # (the slide and the links answer)
@@ -299,3 +299,69 @@ def test_the_lqr_example_quiets_the_flexible_link(capsys):
     assert len(late) == 2 and len(end) == 2, text
     assert late[1] < 0.5 * late[0], text
     assert abs(end[1] - 0.5) < abs(end[0] - 0.5), text
+
+
+def _flexible_arm(extra=(0.0, 0.0, 0.0, 0.0)):
+    """chains.arm("torque", flexible=True) (link 2 the paper's beam 4 between joint 2, a
+    revolute joint, and joint 3, a universal joint), with generalized forces `extra` added on
+    joint 2's angle and joint 3's two angles as JointForces of time (N m), and extra[3] as the
+    beam's end force along world x (N)."""
+    from dttmm import (EulerBernoulliBeam, JointForce, PrismaticJoint, RevoluteJoint,
+                       RigidBody, SpringDamper, System, UniversalJoint)
+    from dttmm.chains import unit_link
+    side, area = 0.02, 0.02 ** 2
+    system = System(gravity=(0.0, -9.81, 0.0))
+    system.add(unit_link(name="link1"), RevoluteJoint(
+        axis=[0, 1, 0], rate=0.5, drive=JointForce(lambda t, q, qd: 2.0 * np.sin(np.pi * t)),
+        name="joint1"))
+    system.add(EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
+                                  bending_stiffness=2.5e10 * side ** 4 / 12.0,
+                                  polar_inertia_per_length=3300.0 * area * side * side / 6.0,
+                                  modes_per_plane=1, name="link2",
+                                  end_force=lambda t: [extra[3], 0.0, 0.0]),
+               RevoluteJoint(axis=[0, 0, 1], name="joint2",
+                             drive=JointForce(lambda t, q, qd: extra[0])), parent="link1")
+    system.add(unit_link(name="link3"), UniversalJoint(
+        axis1=[0, 0, 1], axis2=[0, 1, 0], name="joint3",
+        drives=(JointForce(lambda t, q, qd: extra[1]),
+                JointForce(lambda t, q, qd: extra[2]))),
+        parent="link2")
+    system.add(RigidBody(mass=0.5, inertia=[0.01, 0.01, 0.01], inertia_about="mass_center",
+                         name="body4"),
+               PrismaticJoint(axis=[1, 0, 0], name="joint4", drive=SpringDamper(50.0, 0.5)),
+               parent="link3")
+    return system.build()
+
+
+def test_linearize_the_joints_next_to_a_beam_as_the_reference():
+    """Issue 31: a joint's torque input acts between the joint's two frames, also where a beam
+    is the joint's child (joint 2, at the beam's root) or its parent (joint 3, at the beam's
+    end section), which body loads cannot express (a beam's load acts at its output end).  On
+    the flexible arm mid-run, without drives on joints 2 and 3, each such column of B equals
+    the central difference of the reference's right-hand side (its independent Newton-Euler
+    equations, its own evaluation of the drives) over JointForces of +-1e-3 N m added on that
+    angle: every joint and modal acceleration, to 1e-8 of the column.  And a beam's force
+    input is its end force (at its output end section), as the reference's end_force."""
+    model = _flexible_arm()
+    ref = simulate_reference(model, 0.3, t_eval=[0.0, 0.3])
+    state = ref.state(-1)
+    lin = dttmm.linearize(model, state, 0.3)
+    m = len(lin.states) // 2
+    n_q = len(state["joint_coordinates"])
+    names = ("joint2.torque0", "joint3.torque0", "joint3.torque1", "link2.fx")
+    for which, name in enumerate(names):
+        accelerations = []
+        for sign in (1.0, -1.0):
+            extra = np.zeros(4)
+            extra[which] = sign * 1e-3
+            prob = _Problem(_flexible_arm(tuple(extra)))
+            out = prob.evaluate(0.3, _reference_state(prob, state))
+            accelerations.append(np.concatenate([out[13], out[9]]))
+        expected = (accelerations[0] - accelerations[1]) / 2e-3
+        column = lin.B[:, lin.inputs.index(name)]
+        rows = [lin.states.index(s) for s in lin.states[m:]
+                if s.startswith(("joint", "eta"))]
+        assert len(rows) == n_q + len(state["modal_coordinates"])
+        assert np.abs(expected).max() > 0.1, name       # (the arm answers)
+        np.testing.assert_allclose(column[rows], expected, rtol=0,
+                                   atol=1e-8 * np.abs(expected).max(), err_msg=name)

@@ -130,7 +130,8 @@ def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
     [kind, stiffness, damping, rest] (kind -1: none); given: a FORCE drive's value, or the part
     of a spring-damper's force known in time (a PDTracking's kp target + kd target' +
     feedforward, a JointForce of time alone; 0 for a SpringDamper; solver.joint_drives):
-        tau = -k (q - rest) - c q' + given.
+        tau = -k (q - rest) - c q' + given;
+    without a drive tau = given (0 in a run: dynamics.linearize's generalized force input).
     A COMPILED_FORCE drive is f(t, q, q'), f the C callback at the address forces[int(rest)]
     (a numba JointForce's, elements/drives.py::compiled_force), at the step's time t = given,
     its slope by forward differences: d tau / d nu = (df/dq + c3 df/dq') / c1."""
@@ -151,7 +152,7 @@ def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
         f_q = (call_force(address, given, q + dq, qd) - tau) / dq
         f_qd = (call_force(address, given, q, qd + dqd) - tau) / dqd
         return tau, (f_q + c3 * f_qd) / c1
-    return 0.0, 0.0
+    return given, 0.0       # no drive: given is 0, or dynamics.linearize's input on the coordinate
 
 
 @njit(cache=True, fastmath=CONTRACT)
