@@ -190,13 +190,13 @@ class ODE:
     level only, and the positions drift off the loops (``simulate`` projects them back).
     """
 
-    def __init__(self, model):
+    def __init__(self, model, _closed=False):
         from . import solver
         from .elements.hinges import BALL, ELASTIC
         from .model import Model
         if not isinstance(model, Model):
             raise ValueError(f"ode: model must be a Model, got {type(model).__name__}")
-        if model.n_closures:
+        if model.n_closures and not _closed:    # (linearize takes the tree's coordinates)
             raise ValueError("ode: closed loops drift off their constraints in an ODE "
                              "integrator (they are held at acceleration level only); "
                              "simulate projects them back after every step")
@@ -368,7 +368,9 @@ def linearize(model, state=None, t=0.0):
     Parameters
     ----------
     model : Model
-        A model without closed loops that ``simulate`` runs with the Newmark scheme.
+        A model that ``simulate`` runs with the Newmark scheme.  Closed by closing joints
+        (rigid bodies on joints), its states are its independent coordinates and their rates
+        (the loops' dependent coordinates follow; docs/dynamics.md, "Closed loops").
     state : mapping, optional
         The state to linearize about (as ``forward_dynamics`` takes it; ``result.state(i)``);
         default the model's initial state.
@@ -383,10 +385,20 @@ def linearize(model, state=None, t=0.0):
     Raises
     ------
     ValueError
-        A model with closed loops, or a bad state (see forward_dynamics).
+        A closed model with beams, elastic hinges or a pinned tip, or without freedom left;
+        a bad state (see forward_dynamics).
     """
+    from .elements.hinges import ELASTIC
     from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-    system = ODE(model)
+    from .solver import MOTION, additive_joint_force
+    closed = bool(model.n_closures)
+    if closed and (model.tip_pinned or model.has_beams
+                   or np.isin(model.hinge_kind, (ELASTIC,)).any()):
+        raise ValueError("linearize: closed loops are linearized for rigid bodies on joints "
+                         "(closing joints, System.close); a pinned tip, beams or elastic "
+                         "hinges in a closed model are not yet (static_equilibrium gives "
+                         "their small vibrations at an equilibrium)")
+    system = ODE(model, _closed=closed)
     t = float(t)
     base = forward_dynamics(model, t, state)            # the state with every frame rebuilt
     n = model.n_bodies
@@ -406,34 +418,42 @@ def linearize(model, state=None, t=0.0):
              + [f"eta{j}" for j in range(n_eta)])
     states = names + [s + "'" for s in names]
 
-    def perturbed(j, eps):
-        """The state with coordinate j of x moved by eps."""
+    def moved(dx, dv):
+        """The state with the configuration moved by dx and the rates by dv (m each, x's
+        order: a free rotation turned by the world rotation vector dx[3q:3q+3])."""
         s = {key: np.array(value, dtype=float) for key, value in full.items()}
-        if j >= m:
-            j -= m
-            o = 3 * len(free)
-            if j < o:
-                s["angular_velocity"][free[j // 3], j % 3] += eps
-            elif j < o + 3 * len(elastic):
-                s["deflection_rate"][elastic[(j - o) // 3], (j - o) % 3] += eps
-            elif j < o + 3 * len(elastic) + n_q:
-                s["joint_rates"][j - o - 3 * len(elastic)] += eps
-            else:
-                s["modal_velocities"][j - o - 3 * len(elastic) - n_q] += eps
-            return s
         o = 3 * len(free)
-        if j < o:
-            k = free[j // 3]
-            turn = np.zeros(3)
-            turn[j % 3] = eps
-            s["rotation"][k] = _turned(turn) @ s["rotation"][k]
-        elif j < o + 3 * len(elastic):
-            s["deflection"][elastic[(j - o) // 3], (j - o) % 3] += eps
-        elif j < o + 3 * len(elastic) + n_q:
-            s["joint_coordinates"][j - o - 3 * len(elastic)] += eps
-        else:
-            s["modal_coordinates"][j - o - 3 * len(elastic) - n_q] += eps
+        for q, k in enumerate(free):
+            s["rotation"][k] = _turned(dx[3 * q:3 * q + 3]) @ s["rotation"][k]
+            s["angular_velocity"][k] += dv[3 * q:3 * q + 3]
+        for q, k in enumerate(elastic):
+            s["deflection"][k] += dx[o + 3 * q:o + 3 * q + 3]
+            s["deflection_rate"][k] += dv[o + 3 * q:o + 3 * q + 3]
+        o += 3 * len(elastic)
+        if n_q:
+            s["joint_coordinates"] = s["joint_coordinates"] + dx[o:o + n_q]
+            s["joint_rates"] = s["joint_rates"] + dv[o:o + n_q]
+        if n_eta:
+            s["modal_coordinates"] = s["modal_coordinates"] + dx[o + n_q:]
+            s["modal_velocities"] = s["modal_velocities"] + dv[o + n_q:]
         return s
+
+    def perturbed(j, eps):
+        """The state with coordinate j of x (configuration, then rates) moved by eps."""
+        dx, dv = np.zeros(m), np.zeros(m)
+        (dv if j >= m else dx)[j % m] = eps
+        return moved(dx, dv)
+
+    if closed:              # the loops' coordinates: x's dependent ones follow the rest
+        fixed = np.zeros(m, dtype=bool)     # a prescribed coordinate moves with t alone
+        o = 3 * len(free) + 3 * len(elastic)
+        for c, (k, i) in enumerate(columns):
+            drive = model.drives[k][i]
+            fixed[o + c] = drive is not None and drive["kind"] == MOTION
+        perturbed, independent, moves = _closed_chart(model, t, full, free, columns, m, moved,
+                                                      fixed)
+        states = ([names[i] for i in independent]
+                  + [names[i] + "'" for i in independent])
 
     def accelerations(out):
         return np.concatenate([out["angular_acceleration"][free].ravel(),
@@ -459,7 +479,6 @@ def linearize(model, state=None, t=0.0):
     # -f n on the parent at one point P, the child's input point, i.e. at the mass centres with
     # the torques +-(P - c) x f n), between rigid bodies only (a beam's body loads act at its
     # output end, not where the joint is)
-    from .solver import MOTION, additive_joint_force
     joint_inputs, joint_names = [], []
     points = None
     for k in range(n):
@@ -527,14 +546,19 @@ def linearize(model, state=None, t=0.0):
                     torque[p] -= np.cross(arms[1], eps * axis)
         return force, torque, None
 
+    if closed:
+        rows, d = independent, len(independent)
+    else:
+        rows, d, moves = np.arange(m), m, np.eye(m)
+
     def differenced(eps):
-        da, db, dy = np.zeros((m, 2 * m)), np.zeros((m, n_u)), np.zeros((3 * n, m))
-        for j in range(2 * m):
+        da, db, dy = np.zeros((d, 2 * d)), np.zeros((d, n_u)), np.zeros((3 * n, d))
+        for j in range(2 * d):
             up, down = perturbed(j, eps), perturbed(j, -eps)
             plus = _accelerations(model, t, up, False)
             minus = _accelerations(model, t, down, False)
-            da[:, j] = (accelerations(plus) - accelerations(minus)) / (2 * eps)
-            if j < m:
+            da[:, j] = (accelerations(plus)[rows] - accelerations(minus)[rows]) / (2 * eps)
+            if j < d:
                 dy[:, j] = (outputs(plus, up) - outputs(minus, down)) / (2 * eps)
         for j in range(n_u):
             up, down = loads(j, eps), loads(j, -eps)
@@ -542,7 +566,7 @@ def linearize(model, state=None, t=0.0):
                 continue
             plus = _accelerations(model, t, full, False, up[:2], up[2])
             minus = _accelerations(model, t, full, False, down[:2], down[2])
-            db[:, j] = (accelerations(plus) - accelerations(minus)) / (2 * eps)
+            db[:, j] = (accelerations(plus)[rows] - accelerations(minus)[rows]) / (2 * eps)
         return da, db, dy
 
     da1, db1, dy1 = differenced(DIFFERENCE_STEP)
@@ -550,19 +574,104 @@ def linearize(model, state=None, t=0.0):
     da, db, dy = ((4 * x1 - x2) / 3 for x1, x2 in ((da1, da2), (db1, db2), (dy1, dy2)))
     error = (max(np.abs(da1 - da2).max(initial=0.0), np.abs(db1 - db2).max(initial=0.0)) / 3
              / max(np.abs(da).max(initial=0.0), np.abs(db).max(initial=0.0), 1e-300))
-    a = np.zeros((2 * m, 2 * m))
-    a[:m, m:] = np.eye(m)
-    for q, k in enumerate(free):        # dth' = w + 1/2 w x dth
+    kinematic = np.zeros((m, m))            # d x' / d x at fixed rates: dth' = w + 1/2 w x dth
+    for q, k in enumerate(free):
         w = full["angular_velocity"][k]
-        a[3 * q:3 * q + 3, 3 * q:3 * q + 3] = 0.5 * np.array([[0.0, -w[2], w[1]],
-                                                               [w[2], 0.0, -w[0]],
-                                                               [-w[1], w[0], 0.0]])
-    a[m:] = da
-    b = np.zeros((2 * m, n_u))
-    b[m:] = db
-    c = np.hstack([dy, np.zeros((3 * n, m))])
+        kinematic[3 * q:3 * q + 3, 3 * q:3 * q + 3] = 0.5 * np.array([[0.0, -w[2], w[1]],
+                                                                       [w[2], 0.0, -w[0]],
+                                                                       [-w[1], w[0], 0.0]])
+    a = np.zeros((2 * d, 2 * d))
+    a[:d, d:] = np.eye(d)
+    a[:d, :d] = (kinematic @ moves)[rows]   # (moves = dx / dy: the dependent ones follow)
+    a[d:] = da
+    b = np.zeros((2 * d, n_u))
+    b[d:] = db
+    c = np.hstack([dy, np.zeros((3 * n, d))])
     outputs_names = [f"{model.body_names[k]}.r{c}" for k in range(n) for c in "xyz"]
     return LinearModel(a, b, c, np.zeros((3 * n, n_u)), states, inputs, outputs_names, error)
+
+
+def _closed_chart(model, t, full, free, columns, m, moved, fixed):
+    """A closed model's coordinates for linearize (docs/dynamics.md, "Closed loops"): the
+    tree's coordinates x split into dependent and independent ones by the loops' constraint
+    Jacobian G = dg/dx (g: closures.closure_residuals at the tree's kinematics; central
+    differences): the independent ones chosen root first, each whose column G can lose keeping
+    its rank (singular values above 1e-6 of G's largest; G's own rank counts those above 1e-9,
+    a planar loop's redundant rows dropping out), so a crank's angle before a coupler's.
+    Returns (perturbed, independent, moves): perturbed(j, eps) the state with independent
+    coordinate j (then rate j - d) moved by eps and the dependent ones solved (g = 0, then
+    g' = G x' = 0, by Newton's iteration with G_dep); moves = dx/dy (m x d).  fixed: the
+    coordinates that are neither (prescribed motions: they stay as they are)."""
+    from scipy.linalg import lstsq
+    from .closures import closure_residuals, tree_state
+    from .kernels.algebra.so3 import log_so3
+    n = model.n_bodies
+
+    def residuals(s):
+        theta = np.zeros((n, 3))
+        omega = np.array(model.initial_angular_velocity, dtype=float)
+        q = np.array(model.hinge_params[:, 51:53])
+        qd = np.array(model.hinge_params[:, 53:55])
+        for k in free:
+            log_so3(np.ascontiguousarray(s["rotation"][k] @ model.initial_rotation[k].T),
+                    theta[k])
+            omega[k] = s["angular_velocity"][k]
+        for c, (k, i) in enumerate(columns):
+            q[k, i], qd[k, i] = s["joint_coordinates"][c], s["joint_rates"][c]
+        g, gd, _ = closure_residuals(model, tree_state(model, theta, q, omega, qd), t)
+        return g, gd
+
+    zero = np.zeros(m)
+    jac = np.zeros((len(residuals(moved(zero, zero))[0]), m))
+    for j in range(m):
+        step = np.zeros(m)
+        step[j] = 1e-6
+        jac[:, j] = (residuals(moved(step, zero))[0] - residuals(moved(-step, zero))[0]) / 2e-6
+    movable = np.nonzero(~fixed)[0]
+    singular = np.linalg.svd(jac[:, movable], compute_uv=False)
+    rank = int(np.sum(singular > 1e-9 * singular[0])) if singular.size and singular[0] else 0
+    independent = []            # root first: each coordinate whose loss leaves G_dep's rank
+    for j in movable:
+        if len(independent) == len(movable) - rank:
+            break
+        rest = np.setdiff1d(movable, independent + [j])
+        kept = np.linalg.svd(jac[:, rest], compute_uv=False)
+        if np.sum(kept > 1e-6 * singular[0]) == rank:
+            independent.append(j)
+    independent = np.array(independent, dtype=int)
+    if not len(independent):
+        raise ValueError("linearize: the closed model has no freedom left: its loops and its "
+                         "prescribed motions fix every coordinate")
+    dependent = np.setdiff1d(movable, independent)
+    g_dep = jac[:, dependent]
+    moves = np.zeros((m, len(independent)))
+    moves[independent] = np.eye(len(independent))
+    moves[dependent] = -lstsq(g_dep, jac[:, independent])[0]
+
+    def solved(dx, dv, which):
+        """dx or dv (which 0 or 1) with its dependent entries moved until g (or g') is 0."""
+        target = (dx, dv)[which]
+        for _ in range(50):
+            r = residuals(moved(dx, dv))[which]
+            if np.abs(r).max(initial=0.0) <= 1e-14:
+                break
+            change = lstsq(g_dep, r)[0]
+            target[dependent] -= change
+            if np.abs(change).max(initial=0.0) <= 1e-16:
+                break
+        return target
+
+    def perturbed(j, eps):
+        d = len(independent)
+        dx, dv = np.zeros(m), np.zeros(m)
+        if j < d:
+            dx[independent[j]] = eps
+        else:
+            dv[independent[j - d]] = eps
+        dx = solved(dx, dv, 0)
+        return moved(dx, solved(dx, dv, 1))
+
+    return perturbed, independent, moves
 
 
 def _turned(phi):

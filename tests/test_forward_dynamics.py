@@ -365,3 +365,37 @@ def test_linearize_the_joints_next_to_a_beam_as_the_reference():
         assert np.abs(expected).max() > 0.1, name       # (the arm answers)
         np.testing.assert_allclose(column[rows], expected, rtol=0,
                                    atol=1e-8 * np.abs(expected).max(), err_msg=name)
+
+
+def test_linearize_a_closed_loop_in_its_independent_coordinate():
+    """Issue 31: the N-four-bar (n = 2: two closing revolute joints, redundant spatial rows of a
+    planar loop) moving, 0.7 rad from upright at 1.3 rad/s: its linear model lives in one
+    coordinate, the first bar's joint angle (the dependent ones follow the loops), and is the
+    exact reduction's: I th'' = g c sin th (mechanisms.parallelogram, I = (n + 1) / 3 + n,
+    c = (n + 1) / 2 + n) linearized, so A = [[0, 1], [g c cos th / I, 0]]; its joint torque
+    gives q'' = tau / I; the first bar's tip moves 1 m per rad.  At the hanging equilibrium
+    its squared frequency is static_equilibrium's (the loop's tangent space, another path)."""
+    from dttmm.mechanisms import n_four_bar
+    n, theta = 2, 0.7
+    inertia, c = (n + 1) / 3 + n, (n + 1) / 2 + n
+    lin = dttmm.linearize(n_four_bar(n, theta=theta, rate=1.3))
+    assert lin.states == ("O0.q0", "O0.q0'")
+    expected = [[0.0, 1.0], [9.81 * c * np.cos(theta) / inertia, 0.0]]
+    np.testing.assert_allclose(lin.A, expected, rtol=0, atol=1e-8)
+    b = lin.B[:, lin.inputs.index("O0.torque0")]
+    np.testing.assert_allclose(b, [0.0, 1.0 / inertia], rtol=0, atol=1e-9)
+    tip = [lin.outputs.index(f"v0.r{a}") for a in "xyz"]
+    assert abs(np.linalg.norm(lin.C[tip, 0]) - 1.0) < 1e-8
+    eq = dttmm.static_equilibrium(n_four_bar(n, theta=3.0, rate=0.0))
+    hanging = dttmm.linearize(eq.model)
+    swing = eq.squared_frequencies[eq.squared_frequencies != 0.0]
+    squared = (-np.linalg.eigvals(hanging.A) ** 2).real        # (+-i w: w^2 twice)
+    np.testing.assert_allclose(squared, [swing[0]] * 2, rtol=1e-7)
+
+
+def test_linearize_refuses_what_its_loops_do_not_cover():
+    from dttmm.mechanisms import flexible_slider_crank, stewart_platform
+    with pytest.raises(ValueError, match="closed loops are linearized for rigid bodies"):
+        dttmm.linearize(flexible_slider_crank())
+    with pytest.raises(ValueError, match="no freedom left"):
+        dttmm.linearize(stewart_platform())
