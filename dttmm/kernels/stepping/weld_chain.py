@@ -196,11 +196,16 @@ def _iterate(loop, run, s, it):
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
                   beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/stepping/step.py)
-        beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
-                      run.settings.start,
-                      state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1], w3e[i0:i1],
-                      eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u, eta_map[i0:i1],
-                      loop.beam_work)
+        if run.settings.start:      # (the flag a literal: the step's copy keeps no start code)
+            beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
+                          True, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
+                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
+                          eta_map[i0:i1], loop.beam_work)
+        else:
+            beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
+                          False, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
+                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
+                          eta_map[i0:i1], loop.beam_work)
         if not _all_finite(u):
             return NOT_FINITE, 0, 0.0
         if not riccati_step(u, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
