@@ -61,6 +61,9 @@ def test_simulate_refuses_bad_arguments_by_name(options, message, tmp_path, monk
 BUILD_INPUTS = [
     (lambda: pendulum(force=lambda t: [[0.0, 0.0, 1.0]]), "force.0. must be a flat vector"),
     (lambda: pendulum(force=lambda t: ["1", "2", "3"]), "force.0. must be a vector of 3"),
+    (lambda: pendulum(force=[0.0, 1.0]), "force must be 3 finite numbers, a function of time"),
+    (lambda: pendulum(torque=[0.0, np.nan, 1.0]), "torque must be 3 finite numbers"),
+    (lambda: pendulum(force="up"), "force must be 3 finite numbers"),
     (lambda: revolute(JointForce(lambda t, q, qd: "1.5")), "must return a number.*text"),
     (lambda: build_chain([BallJoint(), RigidBody(mass=True, inertia=[1, 1, 1],
                                                   inertia_about="input",
@@ -221,3 +224,28 @@ def test_result_files_that_are_not_results_are_named(tmp_path):
                         ("pickled", "not a result"), ("missing", "no such file")):
         with pytest.raises(ValueError, match=f"Result.load_npz.*{name}.*{words}"):
             dttmm.Result.load_npz(tmp_path / f"{name}.npz")
+
+
+def test_a_constant_load_is_three_numbers():
+    """A load given as 3 numbers is the constant function: the same run as the function of
+    time, on a rigid body and on a beam's end (and the model pickles, for a sweep's workers)."""
+    import pickle
+    from dttmm import EulerBernoulliBeam, FixedHinge
+    given = pendulum(force=[0.0, 0.0, 2.0], torque=(0.1, 0.0, 0.0))
+    called = pendulum(force=lambda t: [0.0, 0.0, 2.0], torque=lambda t: [0.1, 0.0, 0.0])
+    a, b = simulate(given, 0.05, 1e-3), simulate(called, 0.05, 1e-3)
+    assert np.array_equal(a.position_output, b.position_output)
+    free = simulate(pendulum(), 0.05, 1e-3)
+    assert np.abs(a.position_output[-1] - free.position_output[-1]).max() > 1e-4   # (it acts)
+
+    def beam(**load):
+        return build_chain([FixedHinge(), EulerBernoulliBeam(
+            length=1.0, mass_per_length=1.0, bending_stiffness=50.0,
+            polar_inertia_per_length=1e-3, modes_per_plane=2, **load)])
+    a = simulate(beam(end_force=np.array([0.0, -1.0, 0.0])), 0.05, 1e-3)
+    b = simulate(beam(end_force=lambda t: [0.0, -1.0, 0.0]), 0.05, 1e-3)
+    assert np.array_equal(a.position_output, b.position_output)
+    assert a.position_output[-1, 0, 1] < -1e-4                     # (it bends down)
+    restored = pickle.loads(pickle.dumps(given))
+    assert np.array_equal(simulate(restored, 0.05, 1e-3).position_output,
+                          simulate(given, 0.05, 1e-3).position_output)

@@ -94,12 +94,31 @@ def rotation_matrix(element, argument, value):
     return u @ vt
 
 
+class ConstantLoad:
+    """A load given as 3 numbers: the function of time that returns them (a class, not a
+    closure, so that a model with it pickles for a parameter sweep's workers)."""
+
+    def __init__(self, vector):
+        self.vector = vector
+
+    def __call__(self, t):
+        return self.vector.copy()
+
+    def __repr__(self):
+        return f"ConstantLoad({self.vector.tolist()})"
+
+
 def optional_function(element, argument, value):
+    """A load: None, a function of time returning 3 finite numbers (checked at t = 0), or 3
+    finite numbers (a constant load, ConstantLoad)."""
     if value is None:
         return None
     if not callable(value):
-        raise ValueError(f"{element}: {argument} must be a function of time returning 3 numbers, "
-                         f"or None")
+        try:
+            return ConstantLoad(finite_vector(element, argument, value))
+        except ValueError:
+            raise ValueError(f"{element}: {argument} must be 3 finite numbers, a function of "
+                             f"time returning them, or None; got {value!r}") from None
     out = finite_vector(element, f"{argument}(0)", value(0.0))
     del out
     return value

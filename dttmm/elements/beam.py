@@ -394,15 +394,16 @@ class EulerBernoulliBeam:
         ``duration=``): what the step resolves, 1 / (20 step) (about 20 steps per period),
         lowered to ten times the drives' bandwidth (``build_chain``, docs/beam.md "Mode
         shapes").
-    end_force : callable, optional
+    end_force : callable or array_like of 3, optional
         end_force(t) -> 3 numbers: a world-frame force applied at the beam's output end at
-        time t (s), N (docs/beam.md, "Loads on the beam").  None (default): none.
-    end_torque : callable, optional
+        time t (s), N (docs/beam.md, "Loads on the beam").  None (default): none.  Each of
+        the three loads may be given as 3 numbers for a constant one.
+    end_torque : callable or array_like of 3, optional
         end_torque(t) -> 3 numbers: a world-frame torque applied to the beam's output end
         section, N m.  None (default): none.  A loaded output takes the clamped family's
         loaded-end modes (the free-tip eigenfunctions carry no end load; a torque also rules
         out the pinned family, whose sections' rotations are not modelled).
-    distributed_load : callable, optional
+    distributed_load : callable or array_like of 3, optional
         distributed_load(t) -> 3 numbers: a uniform world-frame load per length along the
         beam at time t (s), N/m (docs/beam.md, "Loads on the beam"; it acts like gravity on
         this beam alone).  None (default): none.

@@ -45,12 +45,14 @@ class RigidBody:
         l_IC: body-frame vector from the input point to the mass centre, m; default zero.
     to_output : array_like of 3, optional
         l_IO: body-frame vector from the input point to the output point, m; default zero.
-    force : callable, optional
+    force : callable or array_like of 3, optional
         force(t) -> 3 numbers: a world-frame force applied at the mass centre at time t (s),
-        N.  None (default): no applied force.  Evaluated at t = 0 when the model is built.
-    torque : callable, optional
-        torque(t) -> 3 numbers: a world-frame torque applied to the body at time t (s), N m.
-        None (default): no applied torque.  Evaluated at t = 0 when the model is built.
+        N; 3 numbers for a constant one.  None (default): no applied force.  Evaluated at
+        t = 0 when the model is built.
+    torque : callable or array_like of 3, optional
+        torque(t) -> 3 numbers: a world-frame torque applied to the body at time t (s), N m;
+        3 numbers for a constant one.  None (default): no applied torque.  Evaluated at t = 0
+        when the model is built.
     rotation : array_like (3, 3), optional
         Initial rotation matrix A (body to world; proper orthonormal, det +1, to 1e-9).  None
         (default): the identity behind a ball joint, and the inboard body's frame turned by
