@@ -7,9 +7,9 @@ import numpy as np
 from .elements import BEAM
 from .vectors import cross
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
-                            MASS_PER_LENGTH,
-                            MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, foreshortening,
-                            mode_shapes, stretch_along, torsion_shapes)
+                            MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
+                            foreshortening, mode_shapes, slope_grams, stretch_along,
+                            torsion_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
@@ -538,17 +538,13 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
 def _foreshortening_along(row, points, eta, eta_dot):
     """c(x) = 1/2 int_0^x (v'^2 + w'^2) dxi and its rate at each of the points, (T, points),
     for T states of one beam: each by a Gauss-Legendre rule of its own on [0, x]."""
-    length, nm = row[LENGTH], int(row[MODES])
-    t, wt = np.polynomial.legendre.leggauss(len(_GL_X))
+    nm = int(row[MODES])
+    grams = slope_grams(int(row[FAMILY]), row[LENGTH], nm, points, len(_GL_X))
     c, c_dot = np.zeros((len(eta), len(points))), np.zeros((len(eta), len(points)))
-    for i, x in enumerate(points):
-        xs, ws = 0.5 * x * (t + 1.0), 0.5 * x * wt
-        dy = mode_shapes(int(row[FAMILY]), length, nm, xs)[1]                  # (m, points)
-        for plane in range(2):
-            slope = eta[:, plane * nm:(plane + 1) * nm] @ dy                   # (T, points)
-            rate = eta_dot[:, plane * nm:(plane + 1) * nm] @ dy
-            c[:, i] += 0.5 * (slope * slope) @ ws
-            c_dot[:, i] += (slope * rate) @ ws
+    for plane in range(2):          # c = 1/2 eta^T D(x) eta, c' = eta^T D(x) eta' per plane
+        e, e_dot = eta[:, plane * nm:(plane + 1) * nm], eta_dot[:, plane * nm:(plane + 1) * nm]
+        c += 0.5 * np.einsum("tj,ijk,tk->ti", e, grams, e)
+        c_dot += np.einsum("tj,ijk,tk->ti", e, grams, e_dot)
     return c, c_dot
 
 

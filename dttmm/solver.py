@@ -20,7 +20,7 @@ from .elements import BEAM, RIGID
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
                             MODES, STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
-                            torsion_shapes)
+                            slope_grams, torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
                               known_force, runs_in_loop)
@@ -568,23 +568,20 @@ def exact_points(modes):
     return 3 * int(modes) + 8
 
 
-def exact_section_table(family, length, m, points):
-    """(m, 1 + points (3 + m)): n = points, then per Gauss-Legendre point on [0, length]
-    [x, weight, Y_j(x), D(x)[j, :]] for mode j's row, D(x) = int_0^x Y' Y'^T by a
+def exact_section_table(family, length, m, x, weights):
+    """(m, 1 + n (3 + m)) for the n Gauss-Legendre points x (weights) on [0, length]: n, then
+    per point [x, weight, Y_j(x), D(x)[j, :]] for mode j's row, D(x) = int_0^x Y' Y'^T by a
     Gauss-Legendre rule of its own on [0, x] (exact for the loaded-end modes' polynomial
-    slopes) (beam_tables)."""
-    x, wq = gauss_points(length, points)
+    slopes; elements/beam.py::slope_grams) (beam_tables)."""
+    n = len(x)
     y = mode_shapes(family, length, m, x)[0]
-    table = np.zeros((m, 1 + points * (3 + m)))
-    table[:, 0] = points
-    t, wt = np.polynomial.legendre.leggauss(2 * m + 8)
-    for g in range(points):
-        xs, ws = 0.5 * x[g] * (t + 1.0), 0.5 * x[g] * wt
-        dy = mode_shapes(family, length, m, xs)[1]
-        d = (dy * ws) @ dy.T
+    grams = slope_grams(family, length, m, x, 2 * m + 8)
+    table = np.zeros((m, 1 + n * (3 + m)))
+    table[:, 0] = n
+    for g in range(n):
         col = 1 + g * (3 + m)
-        table[:, col], table[:, col + 1], table[:, col + 2] = x[g], wq[g], y[:, g]
-        table[:, col + 3:col + 3 + m] = 0.5 * (d + d.T)
+        table[:, col], table[:, col + 1], table[:, col + 2] = x[g], weights[g], y[:, g]
+        table[:, col + 3:col + 3 + m] = grams[g]
     return table
 
 
@@ -632,8 +629,9 @@ def beam_tables(model):
             for i, d in enumerate(foreshortening_integrals(family, length, m)):
                 moments[k, :m, 2 + (i + 1) * m:2 + (i + 2) * m] = d
             ma = int(model.beam_params[k, AXIAL_MODES])
-            if exact[k]:
-                table = exact_section_table(family, length, m, exact_points(m + ma))
+            if exact[k]:        # (its sections' points: the table's and the stretch's)
+                x_exact = gauss_points(length, exact_points(m + ma))
+                table = exact_section_table(family, length, m, *x_exact)
                 moments[k, :m, 2 + 4 * m:2 + 4 * m + table.shape[1]] = table
             y, dy, _, mass, stiffness = mode_shapes(family, length, m, [length])
             ends[k, :m, 0], ends[k, :m, 1] = y[:, 0], dy[:, 0]
@@ -659,7 +657,7 @@ def beam_tables(model):
                 gram = (u * wa) @ u.T
                 ends[k, r:r + ma, 5 + m:5 + m + ma] = 0.5 * (gram + gram.T)
                 if exact[k]:
-                    xg = gauss_points(length, exact_points(m + ma))[0]
+                    xg = x_exact[0]
                     ends[k, r:r + ma, 5 + m + ma:5 + m + ma + len(xg)] = torsion_shapes(
                         family, length, ma, xg)[0]
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
@@ -1662,14 +1660,17 @@ def richardson_extrapolation(*runs):
             raise ValueError("richardson_extrapolation: the runs are not recorded at the same "
                              "times")
 
+    done = {}           # (the positions serve both their fields and info's correction)
+
     def combine(name):
-        table = [getattr(run, name) for run in runs]
-        if table[0] is None:
-            return None
-        for k in range(1, len(runs)):       # T[i, k] = T[i, k-1] + (T[i, k-1] - T[i-1, k-1])
-            table = [table[i] + (table[i] - table[i - 1]) / (4.0 ** k - 1.0)     # / (4^k - 1)
-                     for i in range(1, len(table))]
-        return table[0]
+        if name not in done:
+            table = [getattr(run, name) for run in runs]
+            if table[0] is not None:    # T[i, k] = T[i, k-1] + (T[i, k-1] - T[i-1, k-1])
+                for k in range(1, len(runs)):                                   # / (4^k - 1)
+                    table = [table[i] + (table[i] - table[i - 1]) / (4.0 ** k - 1.0)
+                             for i in range(1, len(table))]
+            done[name] = table[0]
+        return done[name]
 
     combined = ("position_input", "position_mass_center", "position_output",
                 "angular_velocity", "angular_acceleration", "force", "moment",

@@ -88,6 +88,21 @@ def foreshortening_integrals(family, length, n_modes):
     return out
 
 
+def slope_grams(family, length, n_modes, points, order):
+    """(len(points), n_modes, n_modes): D(x) = int_0^x Y_j'(xi) Y_k'(xi) dxi at each of the
+    points, each by a Gauss-Legendre rule of `order` points on [0, x] (symmetrized): the
+    foreshortening c(x) = 1/2 eta^T D(x) eta per plane of the exact foreshortening
+    (docs/beam.md, "The exact foreshortening"; solver.exact_section_table,
+    result._foreshortening_along)."""
+    t, wt = np.polynomial.legendre.leggauss(int(order))
+    out = np.empty((len(points), n_modes, n_modes))
+    for i, x in enumerate(points):
+        dy = mode_shapes(family, length, n_modes, 0.5 * x * (t + 1.0))[1]
+        gram = (dy * (0.5 * x * wt)) @ dy.T
+        out[i] = 0.5 * (gram + gram.T)
+    return out
+
+
 def foreshortening(beam_row, eta, eta_dot=None):
     """(c(L), c'(L)): how far a beam's tip has moved back along its frame's axis, m, and its
     rate, m/s (docs/beam.md, "Geometric stiffening"), for eta (..., 2 m) (any leading axes);
