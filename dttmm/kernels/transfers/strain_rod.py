@@ -1,0 +1,168 @@
+"""The strain rod's kinematics (docs/strain_rod.md): the sections of a rod whose centre line is
+the exponential integral of its strain, their poses, velocities and accelerations in the rod's
+input-section frame, from the strain coordinates q and their rates.
+
+The strain (curvatures, twist, stretch; no shear) along the rod is xi(X) = xi0(X) + Phi(X) q in
+the section's own frame, [angular; linear] (docs/strain_rod.md, "Strain"); the section's pose
+g = (R, p) solves g' = g xi^ from g(0) = (I, 0).  Between consecutive stations X_a, X_a + h the
+step is Magnus' fourth-order one on two Gauss points (docs/strain_rod.md, "Kinematics"):
+
+    Omega = h/2 (xi_1 + xi_2) + sqrt(3)/12 h^2 ad(xi_1) xi_2,     g_{a+1} = g_a exp(Omega^),
+
+exact for a strain constant over the step (ad(xi) xi = 0).  exp of Omega = [theta; u] is
+(exp(theta^), J_l(theta) u).  Differentiating the step in time, with the rod's own motion
+(omega, the angular velocity of the section, and p', both in the input frame):
+
+    omega_{a+1} = omega_a + R_a J_l theta'
+    p'_{a+1}    = p'_a + omega_a x (R_a t) + R_a t',          t = J_l(theta) u
+    alpha_{a+1} = alpha_a + omega_a x (R_a J_l theta') + R_a (DJ_l[theta'] theta' + J_l theta'')
+    p''_{a+1}   = p''_a + alpha_a x (R_a t) + omega_a x (omega_a x (R_a t))
+                  + 2 omega_a x (R_a t') + R_a t''
+    t'  = DJ_l[theta'] u + J_l u'
+    t'' = D2J_l[theta', theta'] u + DJ_l[theta''] u + 2 DJ_l[theta'] u' + J_l u''
+
+with Omega' and Omega'' from xi' = Phi q', xi'' = Phi q'' (the bracket's product rule; its
+second derivative has the cross term 2 ad(xi'_1) xi'_2).  Everything is exact to rounding: the
+velocities are linear in q' at a given q (a unit q' gives a Jacobian column) and the
+accelerations at q'' = 0 are the convective terms.
+"""
+import numpy as np
+from numba import njit
+
+from .. import CONTRACT
+from ..algebra.so3 import expm_so3, left_jacobian
+
+SQRT3_12 = np.sqrt(3.0) / 12.0
+# the Magnus step's two Gauss points, as fractions of the step (1/2 -+ sqrt(3)/6)
+MAGNUS_POINTS = (0.5 - np.sqrt(3.0) / 6.0, 0.5 + np.sqrt(3.0) / 6.0)
+
+
+def _series(sign_shift, terms=14):
+    """The Taylor coefficients in x = t^2 of B (shift 2: (1 - cos t)/t^2) or C (shift 3:
+    (t - sin t)/t^3), B(x) = sum (-1)^k x^k / (2k + 2)!, and of their first two derivatives
+    in x."""
+    from math import factorial
+    f = [(-1) ** k / factorial(2 * k + sign_shift) for k in range(terms)]
+    d1 = [(k + 1) * f[k + 1] for k in range(terms - 1)]
+    d2 = [(k + 1) * d1[k + 1] for k in range(terms - 2)]
+    return tuple(f), tuple(d1), tuple(d2)
+
+
+_B, _B1, _B2 = _series(2)
+_C, _C1, _C2 = _series(3)
+SERIES_BELOW = 4.0          # t^2 below which the coefficients come from their series (t < 2)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _poly(coefficients, x):
+    s = 0.0
+    for k in range(len(coefficients) - 1, -1, -1):
+        s = s * x + coefficients[k]
+    return s
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def jacobian_coefficients(th2):
+    """(b, c, beta, gamma, beta1, gamma1) at t^2 = th2: J_l = I + b t^ + c t^^ with
+    b = (1 - cos t)/t^2, c = (t - sin t)/t^3, beta = b'(t)/t, gamma = c'(t)/t,
+    beta1 = beta'(t)/t, gamma1 = gamma'(t)/t.  As functions of x = t^2, beta = 2 B'(x),
+    beta1 = 4 B''(x) (and C's alike): their series below t = 2 (14 terms, remainder below
+    4^14 / 30! ~ 1e-24), the closed forms above (whose cancellations lose at most ~1e3 eps
+    there)."""
+    if th2 < SERIES_BELOW:
+        return (_poly(_B, th2), _poly(_C, th2), 2.0 * _poly(_B1, th2), 2.0 * _poly(_C1, th2),
+                4.0 * _poly(_B2, th2), 4.0 * _poly(_C2, th2))
+    t = np.sqrt(th2)
+    s, c = np.sin(t), np.cos(t)
+    t4 = th2 * th2
+    return ((1.0 - c) / th2, (t - s) / (th2 * t),
+            (t * s - 2.0 * (1.0 - c)) / t4,
+            (1.0 - c) / t4 - 3.0 * (t - s) / (t4 * t),
+            (th2 * c - 5.0 * t * s + 8.0 * (1.0 - c)) / (t4 * th2),
+            s / (t4 * t) - 7.0 * (1.0 - c) / (t4 * th2) + 15.0 * (t - s) / (t4 * th2 * t))
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def jacobian_derivatives_applied(theta, d, dd, u):
+    """(DJ_l(theta)[d] u, DJ_l(theta)[dd] u + D2J_l(theta)[d, d] u): the first and second
+    derivatives of t(s) = J_l(theta(s)) u along theta(s) = theta + s d + s^2/2 dd at s = 0,
+    u fixed.  With J_l u = u + B theta x u + C theta x (theta x u), B(s) = b(|theta(s)|), whose
+    derivatives are B' = beta (theta . d), B'' = beta1 (theta . d)^2 + beta (|d|^2 + theta . dd)
+    (C's with gamma, gamma1)."""
+    th2 = theta @ theta
+    b, c, beta, gamma, beta1, gamma1 = jacobian_coefficients(th2)
+    td = theta @ d
+    dB, dC = beta * td, gamma * td
+    ddB = beta1 * td * td + beta * (d @ d + theta @ dd)
+    ddC = gamma1 * td * td + gamma * (d @ d + theta @ dd)
+    txu = np.cross(theta, u)
+    dxu = np.cross(d, u)
+    ddxu = np.cross(dd, u)
+    txtxu = np.cross(theta, txu)
+    first = dB * txu + b * dxu + dC * txtxu + c * (np.cross(d, txu) + np.cross(theta, dxu))
+    second = (ddB * txu + 2.0 * dB * dxu + b * ddxu + ddC * txtxu
+              + 2.0 * dC * (np.cross(d, txu) + np.cross(theta, dxu))
+              + c * (2.0 * np.cross(d, dxu) + np.cross(dd, txu) + np.cross(theta, ddxu)))
+    return first, second
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _bracket(x, y):
+    """ad(x) y = [x_w x y_w; x_w x y_v + x_v x y_w] (se(3), [angular; linear])."""
+    out = np.empty(6)
+    out[:3] = np.cross(x[:3], y[:3])
+    out[3:] = np.cross(x[:3], y[3:]) + np.cross(x[3:], y[:3])
+    return out
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
+    """The stations' poses, velocities and accelerations in the input-section frame (the module's
+    docstring).  steps[a] is the a-th step's length h; xi0[a, i] (6) and phi[a, i] (6 x nq) the
+    reference strain and the strain basis at its Gauss point i (MAGNUS_POINTS).  Writes, for the
+    stations 0 .. len(steps) (station 0 the input section: identity, zeros), rot (3 x 3), pos,
+    omega, vel, alpha, acc (3 each)."""
+    n = steps.shape[0]
+    rot[0] = np.eye(3)
+    pos[0] = 0.0
+    omega[0] = 0.0
+    vel[0] = 0.0
+    alpha[0] = 0.0
+    acc[0] = 0.0
+    r_step = np.empty((3, 3))
+    jl = np.empty((3, 3))
+    for a in range(n):
+        h = steps[a]
+        x1 = xi0[a, 0] + phi[a, 0] @ q
+        x2 = xi0[a, 1] + phi[a, 1] @ q
+        v1, v2 = phi[a, 0] @ qd, phi[a, 1] @ qd
+        w1, w2 = phi[a, 0] @ qdd, phi[a, 1] @ qdd
+        k = SQRT3_12 * h * h
+        big = 0.5 * h * (x1 + x2) + k * _bracket(x1, x2)
+        big_d = 0.5 * h * (v1 + v2) + k * (_bracket(v1, x2) + _bracket(x1, v2))
+        big_dd = (0.5 * h * (w1 + w2)
+                  + k * (_bracket(w1, x2) + 2.0 * _bracket(v1, v2) + _bracket(x1, w2)))
+        theta, u = big[:3].copy(), big[3:].copy()
+        th_d, u_d = big_d[:3].copy(), big_d[3:].copy()
+        th_dd, u_dd = big_dd[:3].copy(), big_dd[3:].copy()
+        expm_so3(theta, r_step)
+        left_jacobian(theta, jl)
+        t = jl @ u
+        dj_u, d2j_u = jacobian_derivatives_applied(theta, th_d, th_dd, u)
+        dj_ud, _ = jacobian_derivatives_applied(theta, th_d, th_dd, u_d)
+        t_d = dj_u + jl @ u_d
+        t_dd = d2j_u + 2.0 * dj_ud + jl @ u_dd          # (d2j_u holds DJ_l[theta''] u)
+        # the section's rotation rate: d/dt exp(theta^) = (J_l theta')^ exp(theta^)
+        jth_d = jl @ th_d
+        dj_thd, _ = jacobian_derivatives_applied(theta, th_d, th_dd, th_d)
+        ra = rot[a]
+        rt = ra @ t
+        r_jthd = ra @ jth_d
+        w_a, al_a = omega[a], alpha[a]
+        rot[a + 1] = ra @ r_step
+        pos[a + 1] = pos[a] + rt
+        omega[a + 1] = w_a + r_jthd
+        vel[a + 1] = vel[a] + np.cross(w_a, rt) + ra @ t_d
+        alpha[a + 1] = al_a + np.cross(w_a, r_jthd) + ra @ (dj_thd + jl @ th_dd)
+        acc[a + 1] = (acc[a] + np.cross(al_a, rt) + np.cross(w_a, np.cross(w_a, rt))
+                      + 2.0 * np.cross(w_a, ra @ t_d) + ra @ t_dd)
