@@ -4,7 +4,7 @@ from importlib.metadata import PackageNotFoundError, version as _version
 
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
-                       SpringDamper, UniversalJoint)
+                       SpringDamper, StrainRod, UniversalJoint)
 from .closures import assemble, loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
 from .model import Ground, Model, PrescribedMotion, System, build_chain
@@ -20,12 +20,10 @@ try:
 except PackageNotFoundError:        # run from a source tree that is not installed
     __version__ = "0.0.0+unknown"
 
-__all__ = ["RigidBody", "EulerBernoulliBeam", "BallJoint", "FixedHinge", "ElasticHinge",
-           "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce", "SpringDamper",
-           "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model", "System",
-           "build_chain",
-           "assemble", "loop_residuals", "forward_dynamics", "ode", "linearize",
-           "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
+__all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
+           "ElasticHinge", "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "JointForce",
+           "SpringDamper", "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model",
+           "System", "build_chain", "assemble", "loop_residuals", "forward_dynamics", "ode",
+           "linearize", "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
            "DivergenceError", "UnresolvedMotionWarning", "static_equilibrium",
-           "StaticEquilibrium", "StaticEquilibriumError",
-           "sweep", "SweepTable", "__version__"]
+           "StaticEquilibrium", "StaticEquilibriumError", "sweep", "SweepTable", "__version__"]

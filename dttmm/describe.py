@@ -7,7 +7,9 @@ from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LO
                             torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.kinds import BEAM, RIGID, ROD
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
+from .elements.strain_rod import ROD_LENGTH, ROD_MODES, ROD_STATIONS, rod_components
 from .closures import describe_closures
 from .model import outboard_masses
 
@@ -23,10 +25,12 @@ _FAMILY_WHY = {
 
 
 def describe_counts(model):
-    """'n bodies (r rigid, b beams), d degrees of freedom'."""
+    """'n bodies (r rigid, b beams[, s strain rods]), d degrees of freedom'."""
     kinds = model.body_kind
-    head = (f"{model.n_bodies} bodies ({int(np.sum(kinds == 0))} rigid, "
-            f"{int(np.sum(kinds == 1))} beam{'' if np.sum(kinds == 1) == 1 else 's'}), ")
+    rods = int(np.sum(kinds == ROD))
+    head = (f"{model.n_bodies} bodies ({int(np.sum(kinds == RIGID))} rigid, "
+            f"{int(np.sum(kinds == BEAM))} beam{'' if np.sum(kinds == BEAM) == 1 else 's'}"
+            + (f", {rods} strain rod{'' if rods == 1 else 's'}" if rods else "") + "), ")
     if model.n_closures == 0 or model.tip_pinned:
         return head + f"{degrees_of_freedom(model)} degrees of freedom"
     rows = int(sum(CLOSURE_ROWS[int(k)] for k in model.closure_kind))
@@ -70,7 +74,7 @@ def suggested_dt(model):
     if g > 0 and lengths:
         rates.append(np.sqrt(g / min(lengths)))
     dt = 0.02 / max(max(rates, default=0.0), 1e-3)
-    for k in np.nonzero(model.body_kind == 1)[0]:
+    for k in np.nonzero(model.body_kind == BEAM)[0]:
         f = max(float(np.max(fs, initial=0.0)) for fs in beam_frequencies(model, k)
                 + (torsion_frequencies(model.beam_params[k]),
                    axial_frequencies(model.beam_params[k])))
@@ -165,6 +169,16 @@ def _loop_reach(model):
             f"close near the ground, on a spanning tree of short paths, cost least)")
 
 
+def _rod_line(row):
+    """A strain rod's strain field in words (docs/strain_rod.md)."""
+    modes = int(row[ROD_MODES])
+    field = {1: "constant", 2: "linear", 3: "quadratic"}.get(modes, f"degree {modes - 1}")
+    return (f"strain rod, {row[ROD_LENGTH]:.4g} m: a {field} strain ({modes} coefficient"
+            f"{'s' if modes > 1 else ''} each) in {', '.join(rod_components(row))}, mass "
+            f"integrated at {int(row[ROD_STATIONS])} Gauss points (run by the Newton-Euler "
+            f"reference so far)")
+
+
 def describe(model):
     """The model in words: its counts, gravity and tip, every body with its joint and parent,
     each beam's modes (their frequencies, the family and why, what modes_per_plane='auto'
@@ -175,7 +189,7 @@ def describe(model):
            "bodies:"]
     end_masses = outboard_masses(model.body_params[:, MASS], model.parent)
     for k in range(model.n_bodies):
-        kind = "beam" if model.body_kind[k] == 1 else "rigid"
+        kind = {BEAM: "beam", ROD: "rod"}.get(int(model.body_kind[k]), "rigid")
         p = model.parent[k]
         parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
         joint = JOINT_NAMES[int(model.hinge_kind[k])]
@@ -184,6 +198,8 @@ def describe(model):
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]
+        elif kind == "rod":
+            out.append(f"  {'':<14} {_rod_line(model.rod_params[k])}")
     if model.n_closures and not model.tip_pinned:
         out += ["closing joints:"] + [f"  {line}" for line in describe_closures(model)]
         out.append("  (simulate: held at acceleration level in every Newton iteration, up to 16 "
@@ -244,13 +260,16 @@ def _schemes_line(model):
     tight tolerances."""
     from .methods import SCHEMES
     from .solver import check_supported
-    runs = []
+    runs, why = [], {}
     for name in SCHEMES:
         try:
             check_supported(model, name)
-        except ValueError:
+        except ValueError as error:
+            why[name] = str(error)
             continue
         runs.append(name)
+    if not runs:
+        return f"schemes: none ({why['newmark']})"
     tight = ("scheme='dop853' with rtol (order 8, explicit: docs/integrators.md)"
              if "dop853" in runs else "richardson=3 with newton_iterations (order 6: "
              "docs/solver.md)")

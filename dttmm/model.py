@@ -6,7 +6,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, UNIVERSAL, BallJoint
+from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, ROD, UNIVERSAL, BallJoint
 from .elements.joints import rotation_about
 from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             EXACT,
@@ -21,6 +21,7 @@ from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              WITH_COORDINATES, body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
+from .elements.strain_rod import ROD_PARAM_SIZE, rod_coordinate_count, rod_end_section
 from .kernels.algebra.so3 import expm_so3, left_jacobian
 from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
@@ -267,10 +268,11 @@ def adopt_arrays(model, source=None):
 
 
 _NO_BEAM = np.zeros(BEAM_PARAM_SIZE)     # a rigid body's row of beam_params
+_NO_ROD = np.zeros(ROD_PARAM_SIZE)       # the row of rod_params of a body that is not a rod
 
 # the per-body tables a model shows as one row where every body's (joint's) row is equal
 SHARED_TABLES = ("body_params", "hinge_params", "body_mass_center_inertia", "beam_params",
-                 "initial_rotation", "initial_angular_velocity")
+                 "rod_params", "initial_rotation", "initial_angular_velocity")
 
 
 def shared_rows(table):
@@ -364,13 +366,18 @@ class Model:
     body_mass_center_inertia : ndarray (n, 3, 3)
         J_C, the inertia about the mass centre in body axes, kg m^2 (for the energies).
     body_kind : ndarray (n,) of int
-        0 rigid body, 1 beam.
+        0 rigid body, 1 beam, 2 strain rod.
     beam_params : ndarray (n, 10)
         Per beam: length (m), mass per length (kg/m), EI_v and EI_w (N m^2), polar inertia
         per length (kg m), damping ratio, modes per plane, the mode family resolved
         (0 pinned, 1 clamped, 2 clamped with a loaded end), geometric stiffening (1 or 0) and
         the frequency cutoff of modes_per_plane="auto" (Hz; 0 for a given count;
         elements/beam.py); zero rows for rigid bodies.
+    rod_params : ndarray (n, 14)
+        Per strain rod: length (m), mass per length (kg/m), EI_v, EI_w, GJ (N m^2), EA (N), the
+        sections' inertias per length j_p, rho I_v, rho I_w (kg m), strain modes, twist and
+        stretch (1 or 0), stations and damping (s) (elements/strain_rod.py); zero rows for the
+        other bodies.
     initial_modal_coordinates : ndarray (total modes,)
         The beams' modal coordinates at t = 0, m, flat in body order (a beam's v coordinates
         first, then w).
@@ -431,7 +438,10 @@ class Model:
                                      # beam, body_params holds the undeformed beam as a rigid body
                                      # (its FAMILY column resolved: PINNED, CLAMPED or
                                      # CLAMPED_LOADED)
-    initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w)
+    rod_params: np.ndarray           # (n, ROD_PARAM_SIZE), zero rows but for strain rods
+                                     # (elements/strain_rod.py)
+    initial_modal_coordinates: np.ndarray  # (total modes,) flat in body order (v then w; a
+                                           # strain rod's strain coordinates)
     initial_modal_velocities: np.ndarray
     drives: tuple                    # per hinge: one validated drive (elements/drives.py) or None
                                      # per coordinate of a joint with coordinates, else ()
@@ -492,10 +502,13 @@ class Model:
     @cached_property
     def n_modes(self):
         """(n,) modal coordinates of each body: 2 x modes per plane plus the twist and stretch
-        modes for a beam (elements/beam.py::modal_size), 0 if rigid."""
+        modes for a beam (elements/beam.py::modal_size), a strain rod's strain coordinates
+        (elements/strain_rod.py::rod_coordinate_count), 0 if rigid."""
         n_modes = np.where(self.body_kind == BEAM, 2 * self.beam_params[:, MODES]
                            + self.beam_params[:, TORSION_MODES] + self.beam_params[:, AXIAL_MODES],
                            0).astype(np.int64)
+        for k in np.nonzero(self.body_kind == ROD)[0]:
+            n_modes[k] = rod_coordinate_count(self.rod_params[k])
         n_modes.flags.writeable = False
         return n_modes
 
@@ -966,13 +979,15 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     beam_params = _packed(bv, lambda v: v.get("beam", _NO_BEAM))
     if (body_kind == BEAM).any():           # (written per beam below: its own rows)
         beam_params = np.array(beam_params, order="C")
+    rod_params = _packed(bv, lambda v: v.get("rod", _NO_ROD))
     attachment_point = np.zeros((n, 3))
     for k in range(n):
         p = parent[k]
         if p < 0:
             continue
-        if body_kind[p] == BEAM and attachment[k] != 0:
-            raise ValueError(f"{bodies[k].label(k)}: a beam has one attachment point, its "
+        if body_kind[p] in (BEAM, ROD) and attachment[k] != 0:
+            what = "a beam" if body_kind[p] == BEAM else "a strain rod"
+            raise ValueError(f"{bodies[k].label(k)}: {what} has one attachment point, its "
                              f"output end")
         attachment_point[k] = (bv[p]["l_io"] if attachment[k] == 0
                                else list(bv[p]["points"].values())[attachment[k] - 1])
@@ -995,6 +1010,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         p = parent[k]
         if p < 0:
             a_in, w_in = rot_g, w_g
+        elif attachment[k] == 0 and body_kind[p] == ROD:      # its end section
+            _, a_in, w_in = rod_end_section(rod_params[p], rotations[p], omegas[p],
+                                            bv[p]["eta0"], bv[p]["eta_d0"])
         elif attachment[k] == 0:     # the parent's output section (a beam's end section)
             a_in, w_in = output_section(beam_params[p], rotations[p], omegas[p],
                                         bv[p].get("eta0"), bv[p].get("eta_d0"))
@@ -1021,7 +1039,8 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             rot = default if bv[k]["rotation"] is None else bv[k]["rotation"]
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
-    beams = [k for k in range(n) if body_kind[k] == BEAM]
+    flexible = [k for k in range(n) if body_kind[k] in (BEAM, ROD)]
+    _check_rod_neighbours(bodies, kinds, body_kind, parent, closures)
 
     tree = Model(
         n_bodies=n,
@@ -1043,8 +1062,11 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         body_mass_center_inertia=_packed(bv, lambda v: v["j_c"]),
         body_kind=body_kind,
         beam_params=beam_params,
-        initial_modal_coordinates=np.concatenate([np.zeros(0)] + [bv[k]["eta0"] for k in beams]),
-        initial_modal_velocities=np.concatenate([np.zeros(0)] + [bv[k]["eta_d0"] for k in beams]),
+        rod_params=rod_params,
+        initial_modal_coordinates=np.concatenate([np.zeros(0)]
+                                                 + [bv[k]["eta0"] for k in flexible]),
+        initial_modal_velocities=np.concatenate([np.zeros(0)]
+                                                + [bv[k]["eta_d0"] for k in flexible]),
         parent=parent,
         attachment=attachment,
         attachment_point=attachment_point,
@@ -1084,6 +1106,23 @@ def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
                          f"before it (the body turns with its parent and the joint's rates: "
                          f"{omega}); leave it None and give the joint's rates")
     return rot, omega, r0
+
+
+def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
+    """A strain rod joins its neighbours by ball joints and fixed hinges so far (the reference's
+    rows for it; docs/strain_rod.md), and closes no loop."""
+    rods = set(np.nonzero(body_kind == ROD)[0].tolist())
+    for k in range(len(bodies)):
+        for j, side in ((k, "before it"), (parent[k], "after it")):
+            if j in rods and kinds[k] not in (BALL, FIXED):
+                raise ValueError(f"{bodies[j].label(j)}: a strain rod joins its neighbours by "
+                                 f"ball joints and fixed hinges so far; the hinge {side} is "
+                                 f"{JOINT_KIND[int(kinds[k])].what}")
+    for closure in closures:
+        for body in closure[1:3]:
+            if any(body is bodies[j] for j in rods):
+                j = next(j for j in rods if body is bodies[j])
+                raise ValueError(f"{bodies[j].label(j)}: a strain rod closes no loop so far")
 
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):

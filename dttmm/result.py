@@ -4,7 +4,8 @@ import json
 
 import numpy as np
 
-from .elements import BEAM
+from .elements import BEAM, RIGID, ROD
+from .elements.strain_rod import rod_energies
 from .vectors import cross
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
@@ -594,7 +595,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                          f"(got {eta.shape[1]} and {eta_dot.shape[1]})")
     kinetic, potential = np.zeros(n_t), np.zeros(n_t)
     mode_off = np.concatenate([[0], np.cumsum(n_modes)])
-    rigid = np.nonzero(model.body_kind != BEAM)[0]     # every rigid body at once
+    rigid = np.nonzero(model.body_kind == RIGID)[0]     # every rigid body at once
     if len(rigid):
         p = model.body_params[rigid]
         a = rotation[:, rigid]
@@ -612,6 +613,11 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
             t_k, v_k = _beam_energies(model.beam_params[k], a, omega[:, k], r_in[:, k],
                                       v_in[:, k], eta[:, j0:j1], eta_dot[:, j0:j1],
                                       model.gravity, exact_foreshortening)
+            kinetic += t_k
+            potential += v_k
+        elif model.body_kind[k] == ROD:
+            t_k, v_k = rod_energies(model.rod_params[k], a, omega[:, k], r_in[:, k],
+                                    v_in[:, k], eta[:, j0:j1], eta_dot[:, j0:j1], model.gravity)
             kinetic += t_k
             potential += v_k
         if model.hinge_kind[k] == ELASTIC:

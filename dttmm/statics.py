@@ -24,7 +24,7 @@ from .elements.drives import MOTION
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
                               REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .elements.kinds import JOINT_KIND
+from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import ball_chain
@@ -173,6 +173,13 @@ class _Configuration:
 
     def __init__(self, model, where):
         self.user = model
+        for k, code in enumerate(model.body_kind):
+            kind = BODY_KIND[int(code)]
+            if not kind.schemes:
+                raise ValueError(f"{where}: body '{model.body_names[k]}' is {kind.what} "
+                                 f"({kind.name}), which DT-TMM's sweep does not run yet (the "
+                                 f"static solve takes its consistent start); the Newton-Euler "
+                                 f"reference runs it (dttmm.reference.simulate_reference)")
         km, self.keep = solver.kernel_model(model)
         self.model = km
         n = km.n_bodies

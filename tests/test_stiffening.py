@@ -318,18 +318,19 @@ def _reference_system_sign(model, bend, exact=False):
     (y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
      w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns, gravity, r_g, v_g,
      a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology, attachment_point,
-     joints, tables) = args
+     joints, tables, rods) = args
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
      v_o, rho_att, acc_v_att) = eq._kinematics(
         y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
-        w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology, attachment_point, joints)
+        w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology, attachment_point, joints,
+        rods)
     q_el, m_el = eq._elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, kinds,
                                    hinge_params, rot_g, w_g, topology[0])
     s, _ = eq._assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
                         rho_att, acc_v_att, q_el, m_el, body_params, kinds, hinge_params,
                         body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                         f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
-                        torques, line_loads, topology, joints, tables)
+                        torques, line_loads, topology, joints, tables, rods)
     return np.linalg.slogdet(s)[0]
 
 

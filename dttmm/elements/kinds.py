@@ -13,8 +13,9 @@ from .beam import EulerBernoulliBeam
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
 from .joints import PRISMATIC, REVOLUTE, UNIVERSAL, PrismaticJoint, RevoluteJoint, UniversalJoint
 from .rigid_body import RigidBody
+from .strain_rod import StrainRod
 
-RIGID, BEAM = 0, 1      # Model.body_kind
+RIGID, BEAM, ROD = 0, 1, 2      # Model.body_kind
 
 SCHEMES = ("newmark", "energy_momentum", "paper", "dop853")
 
@@ -54,7 +55,9 @@ BODY_KINDS = (
     Kind(RIGID, RigidBody, SCHEMES, fused=True, doc="docs/rigid_body.md", what="a rigid body"),
     Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper", "dop853"), fused=True, doc="docs/beam.md",
          what="a beam"),
+    Kind(ROD, StrainRod, (), doc="docs/strain_rod.md", what="a strain rod"),
 )
+FLEXIBLE = (BEAM, ROD)      # the body kinds with coordinates of their own (Model.n_modes)
 
 JOINT_KINDS = (
     Kind(BALL, BallJoint, SCHEMES, moment_free=True, doc="docs/hinges.md", what="a ball joint"),

@@ -1,13 +1,21 @@
-"""The strain rod's strain field and stations (docs/strain_rod.md): a rod element whose centre
-line is the exponential integral of its strain, so that a constant curvature is exact with one
-element.  This module holds the field's tables for the kinematics kernel
-(kernels/transfers/strain_rod.py::rod_kinematics); the element class that runs in the solvers
-builds on them.
+"""The strain rod (docs/strain_rod.md): a rod element whose centre line is the exponential
+integral of its strain, so that a constant curvature is exact with one element; its strain
+field's tables for the kinematics (kernels/transfers/strain_rod.py::rod_kinematics, and the
+reference's own, reference/strain_rod.py).
 """
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.polynomial import legendre
 
-from ..kernels.transfers.strain_rod import MAGNUS_POINTS
+from ..kernels.transfers.strain_rod import MAGNUS_POINTS, rod_kinematics
+from ._checks import finite_scalar, finite_vector, rotation_matrix
+
+# the rod's parameter row (Model.rod_params; zero rows for the other bodies)
+(ROD_LENGTH, ROD_MU, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_EA, ROD_JP, ROD_JV, ROD_JW, ROD_MODES,
+ ROD_TWIST, ROD_STRETCH, ROD_STATIONS, ROD_DAMPING) = range(14)
+ROD_PARAM_SIZE = 14
+MAX_STRAIN_MODES = 6
 
 # the strain's components, their rows in xi = [angular; linear] (section frame): the twist
 # kappa_x, the curvatures kappa_y (bending toward -z) and kappa_z (toward +y), the stretch
@@ -55,3 +63,236 @@ def kinematics_tables(length, x, modes, components, reference=STRAIGHT):
     phi = phi.reshape(len(steps), 2, 6, -1)
     xi0 = np.broadcast_to(np.asarray(reference, dtype=float), (len(steps), 2, 6)).copy()
     return steps, xi0, np.ascontiguousarray(phi)
+
+
+def rod_components(row):
+    """The strain components a rod's parameter row carries, in the coordinates' order: the
+    curvatures (bend_z: the deflection v along y; bend_y: w along z), then the twist and the
+    stretch if on."""
+    return (("bend_z", "bend_y") + (("twist",) if row[ROD_TWIST] else ())
+            + (("stretch",) if row[ROD_STRETCH] else ()))
+
+
+def rod_coordinate_count(row):
+    """n_q of a rod's parameter row: strain_modes per component."""
+    return int(row[ROD_MODES]) * len(rod_components(row))
+
+
+def rod_stiffness(row):
+    """K (n_q,): the strain energy 1/2 q^T K q = 1/2 int (xi - xi0)^T C (xi - xi0) dX with
+    C = diag(GJ, EI_w, EI_v, EA) on (twist, kappa_y, kappa_z, stretch); the Legendre basis is
+    orthogonal (int_0^L P_j P_k dX = L / (2k + 1) delta_jk), so K is diagonal."""
+    stiffness = {"bend_z": row[ROD_EI_V], "bend_y": row[ROD_EI_W], "twist": row[ROD_GJ],
+                 "stretch": row[ROD_EA]}
+    m, length = int(row[ROD_MODES]), row[ROD_LENGTH]
+    return np.concatenate([stiffness[c] * length / (2.0 * np.arange(m) + 1.0)
+                           for c in rod_components(row)])
+
+
+def rod_tables(row):
+    """(steps, xi0, phi, weights) of a rod's parameter row: kinematics_tables through its
+    stations (Gauss points and the end) and the weights of the kinematics' stations 0 .. n (the
+    input section and the end weigh 0)."""
+    x, weights = stations(row[ROD_LENGTH], int(row[ROD_STATIONS]))
+    steps, xi0, phi = kinematics_tables(row[ROD_LENGTH], x, int(row[ROD_MODES]),
+                                        rod_components(row))
+    return steps, xi0, phi, np.concatenate([[0.0], weights])
+
+
+def rod_end_section(row, rotation, omega, q, q_dot=None):
+    """(r_O - r_I, A_O, w_O) of a rod in a given state: its end point and end section (world)
+    from its frame (rotation A, world angular velocity w) and strain coordinates."""
+    steps, xi0, phi, _ = rod_tables(row)
+    n = len(steps) + 1
+    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    q = np.asarray(q, dtype=float)
+    q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
+    rod_kinematics(steps, xi0, phi, q, q_dot, np.zeros_like(q), rot, pos, om, vel, al, acc)
+    return rotation @ pos[-1], rotation @ rot[-1], omega + rotation @ om[-1]
+
+
+def rod_energies(row, rotation, omega, r_in, v_in, q, q_dot, gravity):
+    """(kinetic, potential) (T,) of a rod over T states: sum over its stations of
+    1/2 f |v_i|^2 + 1/2 W_i . Theta_i W_i (f = mu w_i, Theta_i = w_i R_i diag(j_p, rho I_w,
+    rho I_v) R_i^T, W_i the section's world angular velocity) and -f g . r_i, plus the strain
+    energy 1/2 q^T K q (docs/strain_rod.md)."""
+    steps, xi0, phi, weights = rod_tables(row)
+    n = len(steps) + 1
+    section = np.diag([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
+    stiffness = rod_stiffness(row)
+    kinetic, potential = np.zeros(len(q)), np.zeros(len(q))
+    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    for t in range(len(q)):
+        qt, qdt = np.ascontiguousarray(q[t]), np.ascontiguousarray(q_dot[t])
+        rod_kinematics(steps, xi0, phi, qt, qdt, np.zeros_like(qt), rot, pos, om, vel, al, acc)
+        a, w = rotation[t], omega[t]
+        rho = pos @ a.T                                         # (stations, 3) world
+        v = v_in[t] + np.cross(w, rho) + vel @ a.T
+        big_w = w + om @ a.T
+        theta = np.einsum("i,kab,bc,kdc->kad", weights, rot, section, rot)   # section frame
+        w_sec = np.einsum("ab,kb->ka", a.T, big_w)                           # in the frame
+        kinetic[t] = 0.5 * row[ROD_MU] * np.einsum("k,ki,ki->", weights, v, v) \
+            + 0.5 * np.einsum("ka,kab,kb->", w_sec, theta, w_sec)
+        potential[t] = (-row[ROD_MU] * weights @ ((r_in[t] + rho) @ gravity)
+                        + 0.5 * qt @ (stiffness * qt))
+    return kinetic, potential
+
+
+def _strain_part(who, flag, name, stiffness, what):
+    if not isinstance(flag, (bool, np.bool_)):
+        raise ValueError(f"{who}: {name} must be True or False, got {flag!r}")
+    if not flag:
+        return 0.0
+    if stiffness is None:
+        raise ValueError(f"{who}: {name}=True needs its stiffness ({what})")
+    return finite_scalar(who, what, stiffness, positive=True)
+
+
+@dataclass(frozen=True, eq=False)
+class StrainRod:
+    """A uniform rod whose centre line is the exponential integral of its strain
+    (docs/strain_rod.md): the curvatures in both planes (and on request the twist and the
+    stretch) are polynomial fields of strain_modes coefficients each along the rod, so a
+    constant curvature is exact with one element whatever the angle it turns through.  No
+    shear (the sections stay normal to the centre line).  The frame is the input section's;
+    the undeformed rod lies along its x axis.  Run by the Newton-Euler reference
+    (``dttmm.simulate_reference``) so far, between ball joints and fixed hinges; DT-TMM's
+    sweep does not run it yet.  The arguments are checked when the model is built.
+
+    Parameters
+    ----------
+    length : float
+        L, m (> 0), undeformed.
+    bending_stiffness : float or array_like of 2
+        (EI_v, EI_w), N m^2 (each > 0): EI_v for bending toward body y (the curvature kappa_z),
+        EI_w toward body z (kappa_y); a scalar for both.
+    mass_per_length : float
+        mu, kg/m (> 0).
+    polar_inertia_per_length : float
+        j_p = rho I_p, kg m (> 0): the sections' polar mass moment per length.
+    rotary_inertia_per_length : float or array_like of 2, optional
+        (rho I_v, rho I_w), kg m (>= 0): the sections' mass moments about their bending axes
+        (z, y) per length.  Default 0 (Euler-Bernoulli, as the modal beam).
+    strain_modes : int, optional
+        Coefficients per strain component (>= 1, at most 6): 1 a constant strain along the
+        element, 2 (default) a linear one, ... (Legendre polynomials).
+    stations : int, optional
+        Gauss points where the rod's mass is integrated and its kinematics stepped (>= 1).
+        Default strain_modes + 3.
+    twist, stretch : bool, optional
+        Whether the rod twists (needs torsional_stiffness) and stretches (needs
+        axial_stiffness).  Default False: neither.
+    torsional_stiffness : float, optional
+        G J, N m^2 (> 0), with twist=True.
+    axial_stiffness : float, optional
+        E A, N (> 0), with stretch=True.
+    damping : float, optional
+        Stiffness-proportional damping of the strain rates, s (>= 0, default 0): the
+        generalized forces -damping K q'.
+    initial_strain : array_like of n_q, optional
+        q at t = 0 (the strain coordinates: per component, in the order bend_z, bend_y, twist,
+        stretch, its strain_modes Legendre coefficients; 1/m for curvatures and twist).  None:
+        straight.
+    initial_strain_rate : array_like of n_q, optional
+        q' at t = 0.  None: zero.
+    rotation, angular_velocity, name
+        As for ``RigidBody``.
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the rod and the argument: a length, stiffness, mass or inertia
+        per length that is not a finite number > 0 (>= 0 for the rotary inertia); strain_modes
+        or stations not an integer in range; twist or stretch not a bool, or True without its
+        stiffness; initial strains or rates without n_q finite entries.
+
+    Examples
+    --------
+    A rod rolled into a quarter circle at rest (a constant curvature pi / (2 L)):
+
+    >>> import numpy as np, dttmm
+    >>> rod = dttmm.StrainRod(length=1.0, bending_stiffness=2.0, mass_per_length=0.5,
+    ...                       polar_inertia_per_length=1e-4, strain_modes=1,
+    ...                       initial_strain=[np.pi / 2, 0.0])
+    >>> model = dttmm.build_chain([dttmm.FixedHinge(), rod], gravity=[0, 0, 0])
+    """
+    length: float
+    bending_stiffness: object
+    mass_per_length: float
+    polar_inertia_per_length: float
+    rotary_inertia_per_length: object = 0.0
+    strain_modes: int = 2
+    stations: int = None
+    twist: bool = False
+    stretch: bool = False
+    torsional_stiffness: float = None
+    axial_stiffness: float = None
+    damping: float = 0.0
+    initial_strain: object = None
+    initial_strain_rate: object = None
+    rotation: object = None
+    angular_velocity: object = None
+    name: str = ""
+
+    def label(self, index=None):
+        where = f"body {index}" if index is not None else "body"
+        return f"StrainRod '{self.name}' ({where})" if self.name else f"StrainRod ({where})"
+
+    def validated(self, index=None):
+        who = self.label(index)
+        length = finite_scalar(who, "length", self.length, positive=True)
+        mu = finite_scalar(who, "mass_per_length", self.mass_per_length, positive=True)
+        ei = (np.full(2, finite_scalar(who, "bending_stiffness", self.bending_stiffness))
+              if np.ndim(self.bending_stiffness) == 0 else
+              finite_vector(who, "bending_stiffness", self.bending_stiffness, size=2))
+        for v in ei:
+            finite_scalar(who, "bending_stiffness", v, positive=True)
+        polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
+                              positive=True)
+        rotary = (np.full(2, finite_scalar(who, "rotary_inertia_per_length",
+                                           self.rotary_inertia_per_length, nonnegative=True))
+                  if np.ndim(self.rotary_inertia_per_length) == 0 else
+                  finite_vector(who, "rotary_inertia_per_length",
+                                self.rotary_inertia_per_length, size=2))
+        for v in rotary:
+            finite_scalar(who, "rotary_inertia_per_length", v, nonnegative=True)
+        modes = _count(who, "strain_modes", self.strain_modes, 1, MAX_STRAIN_MODES)
+        n_stations = (modes + 3 if self.stations is None
+                      else _count(who, "stations", self.stations, 1, 64))
+        gj = _strain_part(who, self.twist, "twist", self.torsional_stiffness,
+                          "torsional_stiffness")
+        ea = _strain_part(who, self.stretch, "stretch", self.axial_stiffness, "axial_stiffness")
+        damping = finite_scalar(who, "damping", self.damping, nonnegative=True)
+        row = np.zeros(ROD_PARAM_SIZE)
+        row[ROD_LENGTH], row[ROD_MU], row[ROD_EI_V], row[ROD_EI_W] = length, mu, ei[0], ei[1]
+        row[ROD_GJ], row[ROD_EA], row[ROD_JP] = gj, ea, polar
+        row[ROD_JV], row[ROD_JW] = rotary
+        row[ROD_MODES], row[ROD_STATIONS], row[ROD_DAMPING] = modes, n_stations, damping
+        row[ROD_TWIST], row[ROD_STRETCH] = float(self.twist), float(self.stretch)
+        nq = rod_coordinate_count(row)
+        q0, qd0 = (np.zeros(nq) if v is None else finite_vector(who, arg, v, size=nq)
+                   for arg, v in (("initial_strain", self.initial_strain),
+                                  ("initial_strain_rate", self.initial_strain_rate)))
+        rotation = (None if self.rotation is None
+                    else rotation_matrix(who, "rotation", self.rotation))
+        omega = None if self.angular_velocity is None else finite_vector(
+            who, "angular_velocity", self.angular_velocity)
+        mass = mu * length
+        # the straight rod as a rigid body (what the model's rigid-body rows show of it)
+        j_c = np.diag([polar * length, rotary[1] * length + mass * length ** 2 / 12,
+                       rotary[0] * length + mass * length ** 2 / 12])
+        l_ic = np.array([length / 2, 0.0, 0.0])
+        shift = mass * (l_ic @ l_ic * np.eye(3) - np.outer(l_ic, l_ic))
+        return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
+                    j_i=j_c + shift, force=None, torque=None, line_load=None,
+                    rotation=rotation, omega=omega, rod=row, eta0=q0, eta_d0=qd0)
+
+
+def _count(who, name, value, low, high):
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer))
+            or not low <= value <= high):
+        raise ValueError(f"{who}: {name} must be an integer from {low} to {high}, got "
+                         f"{value!r}")
+    return int(value)

@@ -13,7 +13,8 @@ from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _
                    _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
                    _DOT, _DYL, _FORCE, _GAP_A, _GAP_WORLD, _JI, _KF, _KR, _KT, _LIC, _LIO, _MASS,
                    _MF, _PRISMATIC, _R0, _REVOLUTE, _ROTATION_A, _SPRING_DAMPER, _SY, _TY,
-                   _UNIVERSAL, _YL)
+                   _UNIVERSAL, _YL, _ROD)
+from .strain_rod import rod_end, rod_state, rod_terms
 from .rotations import (_cross, _expm, _hat, _left_jacobian, _left_jacobian_derivative, _log_rot,
                         _mat3, _quat_to_rot, _vec3)
 
@@ -186,9 +187,30 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _flex_size(k, body_kind, beam_params, rods):
+    """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0."""
+    if body_kind[k] == _BEAM:
+        return _modal_size(beam_params[k])
+    if body_kind[k] == _ROD:
+        return rods[0][k]
+    return 0
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _rod_state(k, rods, y, e0, n_modal, m_off):
+    """Strain rod k's stations (reference/strain_rod.py::rod_state) and its q, q'."""
+    nq = rods[0][k]
+    o = m_off[k]
+    q = np.ascontiguousarray(y[e0 + o:e0 + o + nq])
+    qd = np.ascontiguousarray(y[e0 + n_modal + o:e0 + n_modal + o + nq])
+    phi = np.ascontiguousarray(rods[3][k, :, :, :, :nq])
+    return rod_state(rods[1][k], rods[2][k], phi, q, qd), q, qd
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                 shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
-                attachment_point, joints):
+                attachment_point, joints, rods):
     """Rotations, angular velocities, input-point positions / velocities and the elastic
     deflections and slides (world) of every body, from the state and the ground motion (a
     prismatic joint's offset d = A_P n q and its rate take the deflection's place); and each body's
@@ -199,7 +221,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     frame; a beam parent's rho_O) and acc_v_att[k], the velocity part of a_att,k (w_P x (w_P x
     rho_att,k) on a rigid parent, the beam's a_O velocity part); zero rows for the roots."""
     n = body_params.shape[0]
-    n2max = 2 * shape_vec.shape[2]
+    n2max = max(2 * shape_vec.shape[2], rods[3].shape[4])
     rot = np.empty((n, 3, 3))
     omega = np.empty((n, 3))
     r_in = np.empty((n, 3))
@@ -221,7 +243,8 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         kp = parent[k]
         if kp < 0:               # the ground point
             r_prev, v_prev = r_g, v_g
-        elif body_kind[kp] == _BEAM:     # a beam's one attachment point: its output point
+        elif body_kind[kp] == _BEAM or body_kind[kp] == _ROD:   # its one attachment point: its
+            # output point
             rho_att[k] = rho_o[kp]
             acc_v_att[k] = acc_v[kp]
             r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
@@ -265,6 +288,13 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
             b_r[k, :, :nm2] = br
             b_t[k, :, :nm2] = bt
+        elif body_kind[k] == _ROD:
+            state, _, _ = _rod_state(k, rods, y, e0, n_modal, m_off)
+            rho, v_rel, ro, wo, av, alv, br, bt = rod_end(state, rot[k], omega[k])
+            rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
+            nq = rods[0][k]
+            b_r[k, :, :nq] = br
+            b_t[k, :, :nq] = bt
         else:
             rho = rot[k] @ _vec3(body_params[k], _LIO)
             v_rel = _cross(omega[k], rho)
@@ -625,7 +655,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
               acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
               beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
               n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
-              joints, exact):
+              joints, exact, rods):
     """The global Newton-Euler system  S x = b  for x = [a_0, alpha_0, ..., a_{n-1},
     alpha_{n-1}, reactions, modal accelerations].  Column f_col[k] (m_col[k]) holds the reaction
     force (couple) of hinge k, or -1 when the hinge has none; the matching constraint equation
@@ -689,6 +719,26 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
+        elif body_kind[k] == _ROD:
+            # a strain rod (reference/strain_rod.py::rod_terms): the beam's rows with its
+            # Jacobians; no applied loads of its own yet
+            nm2 = rods[0][k]
+            state, q, qd = _rod_state(k, rods, y, e0, n_modal, m_off)
+            mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = rod_terms(
+                state, rods[4][k], rods[6][k, 0], rods[7][k], rods[5][k, :nm2], rods[6][k, 1],
+                q, qd, a, w, gravity)
+            bn = mass * gravity - _cross(w, _cross(w, h)) + newton_v
+            be = -_cross(w, j_w @ w) + _cross(h, gravity) + euler_v
+            ce = e_col0 + m_off[k]
+            for j in range(nm2):
+                for i in range(3):
+                    s[rn + i, ce + j] = ap[i, j]
+                    s[re + i, ce + j] = ag[i, j]
+                    s[ce + j, ca + i] = ap[i, j]
+                    s[ce + j, cal + i] = ag[i, j]
+                b[ce + j] = modal[j]
+                for i in range(nm2):
+                    s[ce + j, ce + i] = m_ee[j, i]
         else:
             mass = p[_MASS]
             rho_c = a @ _vec3(p, _LIC)
@@ -776,7 +826,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             else:
                 kp = parent[k]
                 hpo = _hat(rho_att[k])
-                pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                pn2 = _flex_size(kp, body_kind, beam_params, rods)
                 pce = e_col0 + m_off[kp]
                 for i in range(3):
                     s[r + i, 6 * kp + i] = -1.0
@@ -793,7 +843,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         b[r + i] = wd_g[i]
                     else:
                         kp = parent[k]
-                        pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                        pn2 = _flex_size(kp, body_kind, beam_params, rods)
                         pce = e_col0 + m_off[kp]
                         s[r + i, 6 * kp + 3 + i] = -1.0
                         for j in range(pn2):
@@ -807,7 +857,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                                 rot[k], omega[k], defl[k], qd, np.zeros((3, 0)), 0, f_col,
                                 m_col, joints)
                 else:
-                    pn2 = _modal_size(beam_params[kp]) if body_kind[kp] == _BEAM else 0
+                    pn2 = _flex_size(kp, body_kind, beam_params, rods)
                     _joint_rows(s, b, k, hinge_kind[k], hinge_params[k], kp, rot_o[kp],
                                 omega_o[kp], alpha_v[kp], rot[k], omega[k], defl[k], qd,
                                 np.ascontiguousarray(b_t[kp, :, :pn2]), e_col0 + m_off[kp],
@@ -994,7 +1044,7 @@ def _solve_least_closure_force(s, b, col0, count):
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     loops, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
-                    line_loads, topology, attachment_point, joints, exact):
+                    line_loads, topology, attachment_point, joints, exact, rods):
     """Kinematics plus the solved accelerations, hinge loads and modal accelerations; also each
     body's rho_O = r_O - r_I, the velocity part of a_O and B_r = d r_O / d eta, per joint
     coordinate (joints) its acceleration q'' and the joint loads' generalized force s_i . N
@@ -1006,14 +1056,14 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
      b_t, v_o, rho_att, acc_v_att) = _kinematics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
-        attachment_point, joints)
+        attachment_point, joints, rods)
     q_el, m_el = _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind,
                                 hinge_params, rot_g, w_g, topology[0])
     s, b = _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t,
                      rho_att, acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params,
                      body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                      f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
-                     torques, line_loads, topology, joints, exact)
+                     torques, line_loads, topology, joints, exact, rods)
     n_rows = loops[1].shape[0]
     if n_rows > 0:
         directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
@@ -1070,7 +1120,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,
-               topology, attachment_point, joints, exact):
+               topology, attachment_point, joints, exact, rods):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
     modal coordinates of all beams, their rates, joint coordinates, their rates]."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
@@ -1078,7 +1128,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
         q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns,
         gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology,
-        attachment_point, joints, exact)
+        attachment_point, joints, exact, rods)
     n = body_params.shape[0]
     dy = np.zeros(y.shape[0])
     for k in range(n):

@@ -241,7 +241,9 @@ import time
 
 import numpy as np
 
-from ..elements import BEAM
+from ..elements import BEAM, ROD
+from ..elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
+                                   rod_coordinate_count, rod_stiffness, rod_tables)
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, LENGTH, MODES, PINNED,
                              STIFFENING, TORSION_MODES, AXIAL_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
@@ -256,6 +258,7 @@ from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
                      stretch_shape_constants, twist_shape_constants)
 from .equations import _kinematics, _solve_dynamics, _stiffening_block, rhs_kernel
+from .strain_rod import rod_state
 
 
 METHODS = ("RK45", "DOP853")
@@ -365,6 +368,7 @@ class _Problem:
                                max([0] + [t.shape[1] for t in tables.values()])))
         for k, table in tables.items():
             self.exact[k, :table.shape[0], :table.shape[1]] = table
+        self.rods = _rod_tables(model)
         n_modes = np.asarray(model.n_modes, dtype=np.int64)
         self.m_off = np.full(n, -1, dtype=np.int64)
         nm = 0
@@ -536,7 +540,7 @@ class _Problem:
                 self.d_off, self.m_off, self.e0, self.n_modal, self.e_col0, self.f_col,
                 self.m_col, self.loops, self.n_unknowns, self.gravity, r_g, v_g, a_g, rot_g, w_g,
                 wd_g, forces, torques, line_loads, self.topology, self.attachment_point,
-                self.joints, self.exact)
+                self.joints, self.exact, self.rods)
         if self._closure_forces:    # a closing JointForce: f(t, q, q') at this state's q, q',
             _solve_dynamics(*args)  # which one evaluation leaves in loops[13]
             values = self.loops[13]
@@ -563,7 +567,7 @@ class _Problem:
                           self.shape_mat, self.q_off, self.w_off, self.d_off, self.m_off,
                           self.e0, self.n_modal,
                           r_g, v_g, rot_g, w_g, self.topology, self.attachment_point,
-                          self.joints)
+                          self.joints, self.rods)
         return out[6], out[13], out[7], out[8]
 
 
@@ -757,6 +761,10 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                                                                  prob.shape_mat[k],
                                                                  eta[:, prob.m_off[k]:]))
             r_o[:, k] = r_in[:, k] + rho_out[:, k]
+        elif prob.body_kind[k] == ROD:          # its stations' mass centre, its end point
+            r_c[:, k] = r_in[:, k] + np.einsum("tij,tj->ti", rot[:, k], _rod_mass_center(
+                prob.rods, k, eta[:, prob.m_off[k]:]))
+            r_o[:, k] = r_in[:, k] + rho_out[:, k]
 
     return Result(method=f"newton-euler/{method}", t=np.array(t_eval), position_input=r_in,
                   position_mass_center=r_c, position_output=r_o, rotation=rot,
@@ -775,6 +783,51 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   joint_rates=qd_rec if nq > 0 else None,
                   drive_force=drive if nq > 0 else None,
                   body_names=tuple(model.body_names))
+
+
+def _rod_tables(model):
+    """The strain rods' tables for the kernels, padded to the longest and widest rod (a padded
+    step has length 0 and weight 0: it adds nothing): (n_q (n,), steps (n, S), xi0
+    (n, S, 2, 6), phi (n, S, 2, 6, Q), weights (n, S + 1), K (n, Q), [mu, damping] (n, 2),
+    the section's inertia per length diag(j_p, rho I_w, rho I_v) (n, 3)).  The strain field is
+    the model's description (elements/strain_rod.py); the kinematics are the reference's own
+    (reference/strain_rod.py)."""
+    n = model.n_bodies
+    rods = [k for k in range(n) if model.body_kind[k] == ROD]
+    tables = {k: rod_tables(model.rod_params[k]) for k in rods}
+    s_max = max([1] + [len(t[0]) for t in tables.values()])
+    q_max = max([1] + [t[2].shape[-1] for t in tables.values()])
+    nq = np.zeros(n, dtype=np.int64)
+    steps = np.zeros((n, s_max))
+    xi0 = np.zeros((n, s_max, 2, 6))
+    phi = np.zeros((n, s_max, 2, 6, q_max))
+    weights = np.zeros((n, s_max + 1))
+    stiffness = np.zeros((n, q_max))
+    mu_damping = np.zeros((n, 2))
+    section = np.zeros((n, 3))
+    for k, (st, x0, ph, wt) in tables.items():
+        row = model.rod_params[k]
+        nq[k] = rod_coordinate_count(row)
+        m = len(st)
+        steps[k, :m], xi0[k, :m], phi[k, :m, :, :, :nq[k]] = st, x0, ph
+        weights[k, :m + 1] = wt
+        stiffness[k, :nq[k]] = rod_stiffness(row)
+        mu_damping[k] = row[ROD_MU], row[ROD_DAMPING]
+        section[k] = row[ROD_JP], row[ROD_JW], row[ROD_JV]
+    return nq, steps, xi0, phi, weights, stiffness, mu_damping, section
+
+
+def _rod_mass_center(rods, k, q):
+    """(T, 3) body-frame mass centre of strain rod k: its stations' centres weighted by their
+    Gauss weights (q: its strain coordinates in the first n_q columns)."""
+    nq = rods[0][k]
+    phi = np.ascontiguousarray(rods[3][k, :, :, :, :nq])
+    out = np.zeros((len(q), 3))
+    for i in range(len(q)):
+        state = rod_state(rods[1][k], rods[2][k], phi, np.ascontiguousarray(q[i, :nq]),
+                          np.zeros(nq))
+        out[i] = rods[4][k] @ state[1] / rods[4][k].sum()
+    return out
 
 
 def _beam_mass_center(bp, sv, my, eta):

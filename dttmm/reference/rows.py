@@ -1,6 +1,6 @@
 """The model's row offsets and the shape constants' rows, as plain ints for the reference's kernels
 (the reference's formulation: newton_euler.py)."""
-from ..elements import BEAM
+from ..elements import BEAM, ROD
 from ..elements.beam import (DAMPING_RATIO, EI_V, EI_W, GJ, LENGTH, LOAD_AXES, MASS_PER_LENGTH,
                              MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.drives import FORCE, SPRING_DAMPER
@@ -23,6 +23,7 @@ _CT = C_TRANSLATION.start
 _KR = K_ROTATION.start
 _CR = C_ROTATION.start
 _BEAM = BEAM
+_ROD = ROD
 _DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B, _ROTATION_A = (DOT, GAP_A, GAP_WORLD, ANGLE_A,
                                                             ANGLE_B, ROTATION_A)
 _SPRING_DAMPER = SPRING_DAMPER

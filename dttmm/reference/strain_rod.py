@@ -103,3 +103,127 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
         alpha[a, 0] = 0.5 * (al[2, 1] - al[1, 2])
         alpha[a, 1] = 0.5 * (al[0, 2] - al[2, 0])
         alpha[a, 2] = 0.5 * (al[1, 0] - al[0, 1])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def rod_state(steps, xi0, phi, q, qd):
+    """Per station (its padded steps have length 0 and weight 0): rotation, centre, the
+    section's angular velocity and the centre's velocity relative to the frame, the convective
+    accelerations (those at q'' = 0), and the Jacobians Jp, Jr (3 x n_q: a unit q'_j's velocity
+    and angular velocity), all in the input-section frame (rod_sections)."""
+    n = steps.shape[0] + 1
+    nq = q.shape[0]
+    rot = np.zeros((n, 3, 3))
+    pos = np.zeros((n, 3))
+    om = np.zeros((n, 3))
+    vel = np.zeros((n, 3))
+    al = np.zeros((n, 3))
+    acc = np.zeros((n, 3))
+    zero = np.zeros(nq)
+    rod_sections(steps, xi0, phi, q, qd, zero, rot, pos, om, vel, al, acc)
+    jp = np.zeros((n, 3, nq))
+    jr = np.zeros((n, 3, nq))
+    r2 = np.zeros((n, 3, 3))
+    p2 = np.zeros((n, 3))
+    o2 = np.zeros((n, 3))
+    v2 = np.zeros((n, 3))
+    a2 = np.zeros((n, 3))
+    c2 = np.zeros((n, 3))
+    for j in range(nq):
+        unit = np.zeros(nq)
+        unit[j] = 1.0
+        rod_sections(steps, xi0, phi, q, unit, zero, r2, p2, o2, v2, a2, c2)
+        for i in range(n):
+            jp[i, :, j] = v2[i]
+            jr[i, :, j] = o2[i]
+    return rot, pos, om, vel, al, acc, jp, jr
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def _cross3(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def rod_end(state, a, w):
+    """The rod's output point and section (world) as the reference's _kinematics takes a body's
+    (equations.py, "End kinematics"): rho_O = A p_L, the relative velocity v_O - v_I,
+    A_O = A R_L, w_O = w + A omega_L, the velocity parts of a_O, w x (w x rho) + 2 w x A p'_L +
+    A c_p,L, and of alpha_O, w x A omega_L + A c_r,L, and B_r = A Jp_L, B_t = A Jr_L."""
+    rot, pos, om, vel, al, acc, jp, jr = state
+    last = pos.shape[0] - 1
+    rho = a @ pos[last]
+    avel = a @ vel[last]
+    aom = a @ om[last]
+    v_rel = _cross3(w, rho) + avel
+    acc_v = _cross3(w, _cross3(w, rho)) + 2.0 * _cross3(w, avel) + a @ acc[last]
+    alpha_v = _cross3(w, aom) + a @ al[last]
+    return (rho, v_rel, a @ rot[last], w + aom, acc_v, alpha_v,
+            a @ np.ascontiguousarray(jp[last]), a @ np.ascontiguousarray(jr[last]))
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
+def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, gravity):
+    """The rod's share of the reference's rows, in the form _beam_terms returns a beam's
+    (equations.py; docs/strain_rod.md, "The rod's equations"): mass, first moment h = A s,
+    inertia about I (world, with the sections' own: section = diag(j_p, rho I_w, rho I_v) per
+    length in the section's axes), A P = A sum f Jp, A G = A sum (f p^ Jp + Theta Jr), the
+    Newton and Euler velocity terms (those beyond -w x (w x h) and -w x J w), the strain rows'
+    right-hand side and their mass matrix, f = mu w_i, Theta_i = w_i R_i section R_i^T:
+        newton_v = -A sum f (2 w x p' + c_p)
+        euler_v  = -A sum [f p x (2 w x p' + c_p) + Theta (w x om + c_r) + w x Theta om
+                           + om x Theta w + om x Theta om]
+        modal    = sum f Jp^T (g - w x (w x p) - 2 w x p' - c_p)
+                   - Jr^T (Theta (w x om + c_r) + (w + om) x Theta (w + om)) - K q - d K q'
+    (w, g in the frame; om, p', c_p, c_r the station's relative rates and convective terms)."""
+    rot, pos, om, vel, al, acc, jp, jr = state
+    nq = q.shape[0]
+    w_b = a.T @ w
+    g_b = a.T @ gravity
+    s_b = np.zeros(3)
+    pi = np.zeros((3, 3))
+    theta_sum = np.zeros((3, 3))
+    p_b = np.zeros((3, nq))
+    gg_b = np.zeros((3, nq))
+    m_ee = np.zeros((nq, nq))
+    nv = np.zeros(3)
+    ev = np.zeros(3)
+    modal = np.zeros(nq)
+    for i in range(weights.shape[0]):
+        wt = weights[i]
+        if wt == 0.0:
+            continue
+        f = mu * wt
+        r = rot[i]
+        theta = wt * (r @ np.diag(section) @ r.T)
+        p, pd, o = pos[i], vel[i], om[i]
+        jpi, jri = np.ascontiguousarray(jp[i]), np.ascontiguousarray(jr[i])
+        s_b += f * p
+        pi += f * np.outer(p, p)
+        theta_sum += theta
+        p_b += f * jpi
+        hp = np.zeros((3, 3))
+        hp[0, 1], hp[0, 2], hp[1, 2] = -p[2], p[1], -p[0]
+        hp[1, 0], hp[2, 0], hp[2, 1] = p[2], -p[1], p[0]
+        gg_b += f * (hp @ jpi) + theta @ jri
+        m_ee += f * (jpi.T @ jpi) + jri.T @ theta @ jri
+        lin = 2.0 * _cross3(w_b, pd) + acc[i]
+        nv += f * lin
+        rate = theta @ (_cross3(w_b, o) + al[i])
+        wo = w_b + o
+        ev += (f * _cross3(p, lin) + rate + _cross3(w_b, theta @ o) + _cross3(o, theta @ w_b)
+               + _cross3(o, theta @ o))
+        modal += f * (jpi.T @ (g_b - _cross3(w_b, _cross3(w_b, p)) - lin))
+        modal -= jri.T @ (rate + _cross3(wo, theta @ wo))
+    modal -= stiffness * (q + damping * qd)
+    mass = f_total = 0.0
+    for i in range(weights.shape[0]):
+        f_total += mu * weights[i]
+    mass = f_total
+    j_b = theta_sum - pi
+    tr = pi[0, 0] + pi[1, 1] + pi[2, 2]
+    for i in range(3):
+        j_b[i, i] += tr
+    return (mass, a @ s_b, a @ j_b @ a.T, a @ p_b, a @ gg_b, -(a @ nv), -(a @ ev), modal, m_ee,
+            np.zeros((3, nq)))
