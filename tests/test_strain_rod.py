@@ -330,3 +330,65 @@ def test_the_docstring_example_runs():
         runner.run(test)
     assert runner.summarize(verbose=False).failed == 0
     assert runner.summarize(verbose=False).attempted >= 3
+
+
+def _relations_accelerations(model, unknowns):
+    """The accelerations DT-TMM's relations of a lone rod (kernels/transfers/strain_rod.py::
+    rod_relations) give at the model's initial state: the input's unknowns ("root moment":
+    a fixed hinge's m_I, q_I; "frame": a ball joint's w', q_I) and q'' solved from the free
+    end's m_O = q_O = 0 and the strain rows (affine in them: solved from unit columns)."""
+    from dttmm.elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
+                                           rod_stiffness, rod_tables)
+    from dttmm.kernels.transfers.strain_rod import rod_relations
+    row = model.rod_params[0]
+    steps, xi0, phi, weights = rod_tables(row)
+    section = np.array([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
+    q, qd = model.initial_modal_coordinates.copy(), model.initial_modal_velocities.copy()
+    rot = np.array(model.initial_rotation[0])
+    w = np.array(model.initial_angular_velocity[0])
+    nq = q.size
+
+    def equations(x):
+        m_i, wd = (x[0:3], np.zeros(3)) if unknowns == "root moment" else (np.zeros(3), x[0:3])
+        out, residual = np.zeros(12), np.zeros(nq)
+        rod_relations(steps, xi0, phi, weights, row[ROD_MU], section, rod_stiffness(row),
+                      row[ROD_DAMPING], np.array(model.gravity), rot, w, wd, q, qd,
+                      np.ascontiguousarray(x[6:]), np.zeros(3), m_i, x[3:6].copy(), out,
+                      residual)
+        return np.concatenate([out[6:12], residual])
+
+    base = equations(np.zeros(6 + nq))
+    jac = np.column_stack([equations(e) - base for e in np.eye(6 + nq)])
+    x = np.linalg.solve(jac, -base)
+    return x[0:3], x[6:]
+
+
+@pytest.mark.parametrize("root", ["fixed", "ball"])
+def test_the_relations_in_dttmm_form_give_the_references_accelerations(root):
+    """A lone rod of linear strain (twist and stretch on), bent and moving, on a fixed hinge or
+    spinning on a ball joint under gravity: the strain accelerations (and the ball's angular
+    acceleration) that DT-TMM's form of its relations gives (the loads passed from station to
+    station, its strain rows by virtual work) equal the Newton-Euler reference's (its own
+    kinematics, its global system) to 1e-10 of their scale."""
+    rng = np.random.default_rng(3)
+    nq = 8
+    rod = dttmm.StrainRod(length=L, bending_stiffness=[2.0, 3.0], mass_per_length=0.5,
+                          polar_inertia_per_length=2e-3, rotary_inertia_per_length=[1e-3, 2e-3],
+                          twist=True, torsional_stiffness=1.5, stretch=True,
+                          axial_stiffness=50.0, damping=0.01,
+                          initial_strain=rng.normal(size=nq),
+                          initial_strain_rate=rng.normal(size=nq),
+                          rotation=(None if root == "fixed"
+                                    else Rotation.from_rotvec([0.3, -0.5, 0.8]).as_matrix()),
+                          angular_velocity=None if root == "fixed" else [0.4, -1.1, 0.7])
+    hinge = dttmm.FixedHinge() if root == "fixed" else dttmm.BallJoint()
+    model = dttmm.build_chain([hinge, rod], gravity=[0.0, -9.81, 0.0])
+    problem = _Problem(model)
+    y = problem.initial_state()
+    dy = problem.rhs(0.0, y)
+    reference_qdd = dy[problem.e0 + nq:problem.e0 + 2 * nq]
+    first, qdd = _relations_accelerations(model, "root moment" if root == "fixed" else "frame")
+    assert np.abs(qdd - reference_qdd).max() < 1e-10 * np.abs(reference_qdd).max()
+    if root == "ball":
+        reference_wd = dy[problem.w_off[0]:problem.w_off[0] + 3]
+        assert np.abs(first - reference_wd).max() < 1e-10 * np.abs(reference_wd).max()

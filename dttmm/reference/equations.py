@@ -1051,7 +1051,8 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     (s_i . F for a slide), and per hinge its attachment point's arm rho_att and the velocity part
     of its acceleration acc_v_att (_kinematics).  exact: the beams' quadrature tables of the
     exact foreshortening (shapes.exact_foreshortening_table, one per body), or no columns for the
-    second-order one (_beam_terms_exact)."""
+    second-order one (_beam_terms_exact).  rods: the strain rods' tables
+    (newton_euler.py::_rod_tables; their rows: reference/strain_rod.py)."""
     (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r,
      b_t, v_o, rho_att, acc_v_att) = _kinematics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,

@@ -106,6 +106,13 @@ parent's Euler row + (rho_att,k + d_k) x F_k + N_k (the transposes of those colu
 reactions still do no work), an elastic hinge's -q at r_att,k and d_k'' = a_k - a_att,k.  Each
 child of one parent carries its own arm.
 
+Strain rods (docs/strain_rod.md).  A rod's strain coordinates and rates sit with the beams' modal
+ones; its stations' poses, rates and Jacobians are the reference's own (strain_rod.py::
+rod_sections: the Magnus step's exponential and its time derivatives from a power series over
+truncated polynomials), its rows a beam's with them (strain_rod.py::rod_terms: the stations'
+masses and section inertias, the strain rows by virtual work) and its end its last station
+(rod_end: rho_O, A_O, w_O, B_r = A Jp_L, B_t = A Jr_L and the velocity parts of a_O and alpha_O).
+
 Joints with coordinates (revolute, universal, prismatic; docs/joints.md).  Their coordinates q
 and rates q' (one each, two for a universal joint) are states (all coordinates in hinge order,
 then all rates: Result.joint_coordinates' order); the child carries no quaternion of its own but

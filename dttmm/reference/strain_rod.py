@@ -217,10 +217,7 @@ def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, grav
         modal += f * (jpi.T @ (g_b - _cross3(w_b, _cross3(w_b, p)) - lin))
         modal -= jri.T @ (rate + _cross3(wo, theta @ wo))
     modal -= stiffness * (q + damping * qd)
-    mass = f_total = 0.0
-    for i in range(weights.shape[0]):
-        f_total += mu * weights[i]
-    mass = f_total
+    mass = mu * weights.sum()
     j_b = theta_sum - pi
     tr = pi[0, 0] + pi[1, 1] + pi[2, 2]
     for i in range(3):

@@ -166,3 +166,74 @@ def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc
         alpha[a + 1] = al_a + np.cross(w_a, r_jthd) + ra @ (dj_thd + jl @ th_dd)
         acc[a + 1] = (acc[a] + np.cross(al_a, rt) + np.cross(w_a, np.cross(w_a, rt))
                       + 2.0 * np.cross(w_a, ra @ t_d) + ra @ t_dd)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
+                  wd, q, qd, qdd, a_i, m_i, q_i, out, residual):
+    """The rod's exact relations in a given state, in the transfer's form (docs/strain_rod.md,
+    "Its relations in DT-TMM's form"): out = [a_O, w' (the frame's), m_O, q_O] from the input's
+    a_I, m_I, q_I and the frame's motion (rotation A, w, w'), and residual = the strain rows'
+    left minus right sides, with the end loads' generalized forces.  With the stations'
+    accelerations a_i = a_I + w' x rho_i + w x (w x rho_i) + 2 w x A p'_i + A p''_i and their
+    sections' alpha_i = w' + w x A omega_i + A alpha_rel,i, each station's load (gravity minus
+    inertia) F_i = f (g - a_i) and couple N_i = -(Theta alpha_i + W_i x Theta W_i)
+    (f = mu w_i, Theta = w_i A R_i diag(section) R_i^T A^T, W_i = w + A omega_i):
+        q_O = q_I + sum F_i,   m_O = m_I - rho_L x q_O + sum (rho_i x F_i + N_i)
+        r_j = -sum (A Jp_i,j . F_i + A Jr_i,j . N_i) + A Jp_L,j . q_O + A Jr_L,j . m_O
+              + (K (q + damping q'))_j
+    (Jp, Jr: the stations' Jacobians, a unit rate's velocities: rod_kinematics).  It allocates
+    its scratch (the step's transfer, which will call it, is not built yet)."""
+    n = steps.shape[0] + 1
+    nq = q.shape[0]
+    rot_s = np.zeros((n, 3, 3))
+    pos = np.zeros((n, 3))
+    om = np.zeros((n, 3))
+    vel = np.zeros((n, 3))
+    al = np.zeros((n, 3))
+    acc = np.zeros((n, 3))
+    rod_kinematics(steps, xi0, phi, q, qd, qdd, rot_s, pos, om, vel, al, acc)
+    forces = np.zeros((n, 3))
+    couples = np.zeros((n, 3))
+    q_o = q_i.copy()
+    m_o = m_i.copy()
+    for i in range(n):
+        rho = rot @ pos[i]
+        if weights[i] != 0.0:
+            f = mu * weights[i]
+            a_st = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho))
+                    + 2.0 * np.cross(w, rot @ vel[i]) + rot @ acc[i])
+            rs = rot @ rot_s[i]
+            theta = weights[i] * (rs @ np.diag(section) @ rs.T)
+            big_w = w + rot @ om[i]
+            al_st = wd + np.cross(w, rot @ om[i]) + rot @ al[i]
+            forces[i] = f * (gravity - a_st)
+            couples[i] = -(theta @ al_st + np.cross(big_w, theta @ big_w))
+            q_o += forces[i]
+            m_o += np.cross(rho, forces[i]) + couples[i]
+    rho_l = rot @ pos[n - 1]
+    m_o -= np.cross(rho_l, q_o)
+    a_o = (a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
+           + 2.0 * np.cross(w, rot @ vel[n - 1]) + rot @ acc[n - 1])
+    out[0:3] = a_o
+    out[3:6] = wd
+    out[6:9] = m_o
+    out[9:12] = q_o
+    # the strain rows by virtual work, a Jacobian column (a unit rate's velocities) at a time
+    zero = np.zeros(nq)
+    r2 = np.zeros((n, 3, 3))
+    p2 = np.zeros((n, 3))
+    o2 = np.zeros((n, 3))
+    v2 = np.zeros((n, 3))
+    a2 = np.zeros((n, 3))
+    c2 = np.zeros((n, 3))
+    for j in range(nq):
+        unit = np.zeros(nq)
+        unit[j] = 1.0
+        rod_kinematics(steps, xi0, phi, q, unit, zero, r2, p2, o2, v2, a2, c2)
+        r = stiffness[j] * (q[j] + damping * qd[j])
+        for i in range(n):
+            if weights[i] != 0.0:
+                r -= (rot @ v2[i]) @ forces[i] + (rot @ o2[i]) @ couples[i]
+        r += (rot @ v2[n - 1]) @ q_o + (rot @ o2[n - 1]) @ m_o
+        residual[j] = r
