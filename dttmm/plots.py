@@ -15,6 +15,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
+from .elements.kinds import ROD
+from .elements.strain_rod import rod_centre_line
 from .feedback import Progress
 
 
@@ -171,7 +173,9 @@ def run_figures(result, model, directory, title=""):
 def centerlines(result, model, points=12):
     """(T, n, points, 3) world points along every body: a rigid body's input, mass centre and
     output points (repeated), a beam's deflected centreline r_I + A ((x - c(x) + s(x)) e1 + u)
-    (docs/beam.md; c the foreshortening of a stiffened beam, s the stretch)."""
+    (docs/beam.md; c the foreshortening of a stiffened beam, s the stretch), a strain rod's
+    centre line from its strain (elements/strain_rod.py::rod_centre_line), ending on its output
+    point."""
     from .result import _foreshortening_along
     n = model.n_bodies
     out = np.empty((len(result.t), n, points, 3))
@@ -191,6 +195,12 @@ def centerlines(result, model, points=12):
             local[:, :, 1] = eta[:, :m] @ y
             local[:, :, 2] = eta[:, m:2 * m] @ y
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
+        elif model.body_kind[k] == ROD:
+            local = rod_centre_line(model.rod_params[k],
+                                    result.modal_coordinates[:, offsets[k]:offsets[k + 1]],
+                                    points)
+            out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
+            out[:, k, -1] = result.position_output[:, k]
         else:
             s = np.linspace(0.0, 1.0, points)[None, :, None]
             r_c, r_o = result.position_mass_center[:, k], result.position_output[:, k]

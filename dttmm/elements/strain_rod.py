@@ -112,6 +112,26 @@ def rod_end_section(row, rotation, omega, q, q_dot=None):
     return rotation @ pos[-1], rotation @ rot[-1], omega + rotation @ om[-1]
 
 
+def rod_centre_line(row, q, points):
+    """(T, points, 3) points equally spaced along a rod's centre line in its frame, for its
+    strain coordinates q (T, n_q): the Magnus steps between them (docs/strain_rod.md), for
+    drawing (the rod's own stations give its end: the last point differs from it by the
+    steps' error, ~h^5 per step of a varying strain, nothing for a constant one)."""
+    length = row[ROD_LENGTH]
+    x = np.linspace(0.0, length, points)[1:]
+    steps, xi0, phi = kinematics_tables(length, x, int(row[ROD_MODES]), rod_components(row))
+    n = points
+    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    out = np.zeros((len(q), points, 3))
+    for t in range(len(q)):
+        qt = np.ascontiguousarray(q[t], dtype=float)
+        zero = np.zeros_like(qt)
+        rod_kinematics(steps, xi0, phi, qt, zero, zero, rot, pos, om, vel, al, acc)
+        out[t] = pos
+    return out
+
+
 def rod_energies(row, rotation, omega, r_in, v_in, q, q_dot, gravity):
     """(kinetic, potential) (T,) of a rod over T states: sum over its stations of
     1/2 f |v_i|^2 + 1/2 W_i . Theta_i W_i (f = mu w_i, Theta_i = w_i R_i diag(j_p, rho I_w,

@@ -796,11 +796,13 @@ def _rod_tables(model):
     """The strain rods' tables for the kernels, padded to the longest and widest rod (a padded
     step has length 0 and weight 0: it adds nothing): (n_q (n,), steps (n, S), xi0
     (n, S, 2, 6), phi (n, S, 2, 6, Q), weights (n, S + 1), K (n, Q), [mu, damping] (n, 2),
-    the section's inertia per length diag(j_p, rho I_w, rho I_v) (n, 3)).  The strain field is
-    the model's description (elements/strain_rod.py); the kinematics are the reference's own
-    (reference/strain_rod.py)."""
+    the section's inertia per length diag(j_p, rho I_w, rho I_v) (n, 3)), or None without rods.
+    The strain field is the model's description (elements/strain_rod.py); the kinematics are
+    the reference's own (reference/strain_rod.py)."""
     n = model.n_bodies
     rods = [k for k in range(n) if model.body_kind[k] == ROD]
+    if not rods:        # (the kernels then compile no rod code: equations.py::_flex_size)
+        return None
     tables = {k: rod_tables(model.rod_params[k]) for k in rods}
     s_max = max([1] + [len(t[0]) for t in tables.values()])
     q_max = max([1] + [t[2].shape[-1] for t in tables.values()])
