@@ -392,3 +392,100 @@ def test_the_relations_in_dttmm_form_give_the_references_accelerations(root):
     if root == "ball":
         reference_wd = dy[problem.w_off[0]:problem.w_off[0] + 3]
         assert np.abs(first - reference_wd).max() < 1e-10 * np.abs(reference_wd).max()
+
+
+def _rod_arguments(model):
+    from dttmm.elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
+                                           rod_stiffness, rod_tables)
+    row = model.rod_params[0]
+    steps, xi0, phi, weights = rod_tables(row)
+    return (steps, xi0, phi, weights, row[ROD_MU],
+            np.array([row[ROD_JP], row[ROD_JW], row[ROD_JV]]), rod_stiffness(row),
+            row[ROD_DAMPING], np.array(model.gravity))
+
+
+def test_the_transfer_at_the_start_gives_the_references_accelerations():
+    """The rod's transfer (rod_transfer: its relations linearized, the strain rows solved inside
+    the element) at the consistent start of a bent, moving rod on a fixed hinge: the free end's
+    m_O = q_O = 0 give m_I, q_I from u's rows, then q_map gives q'', equal to the reference's to
+    1e-8 of its scale (the relations are affine there; forward differences of step 1e-3 leave
+    rounding / step)."""
+    from dttmm.kernels.transfers.strain_rod import rod_transfer
+    rng = np.random.default_rng(5)
+    rod = dttmm.StrainRod(length=L, bending_stiffness=[2.0, 3.0], mass_per_length=0.5,
+                          polar_inertia_per_length=2e-3, twist=True, torsional_stiffness=1.5,
+                          initial_strain=rng.normal(size=6),
+                          initial_strain_rate=rng.normal(size=6))
+    model = dttmm.build_chain([dttmm.FixedHinge(), rod], gravity=[0.0, -9.81, 0.0])
+    problem = _Problem(model)
+    reference = problem.rhs(0.0, problem.initial_state())[problem.e0 + 6:problem.e0 + 12]
+    u, q_map = np.zeros((12, 13)), np.zeros((6, 13))
+    zero3 = np.zeros(3)
+    rod_transfer(*_rod_arguments(model), True, np.eye(3), zero3, zero3, 1.0, 0.0, zero3,
+                 zero3, np.zeros(6), np.zeros(6), model.initial_modal_coordinates.copy(),
+                 model.initial_modal_velocities.copy(), np.zeros(12), np.zeros(6), u, q_map)
+    loads = np.linalg.solve(u[6:12, 6:12], -u[6:12, 12])     # a_I = 0, w' = 0 at the ground
+    z = np.concatenate([np.zeros(6), loads, [1.0]])
+    assert np.abs(q_map @ z - reference).max() < 1e-8 * np.abs(reference).max()
+
+
+def test_the_transfer_is_the_relations_linearization():
+    """In a step (c1 = 4 / h^2 of the trapezoidal rule, h = 1e-3) the transfer is the first-order
+    expansion of the relations with the strain rows solved: about a guess that solves them, u
+    and q_map reproduce the output and q'' to rounding, and against the exact solve (Newton on
+    the strain rows) at z* + s dz their error falls as s^2 (s = 1e-2, 5e-3: ratio 4 +- 0.5)."""
+    from dttmm.kernels.transfers.strain_rod import rod_relations, rod_transfer
+    rng = np.random.default_rng(7)
+    rod = dttmm.StrainRod(length=L, bending_stiffness=2.0, mass_per_length=0.5,
+                          polar_inertia_per_length=2e-3)
+    model = dttmm.build_chain([dttmm.BallJoint(), rod], gravity=[0.0, -9.81, 0.0])
+    args = _rod_arguments(model)
+    h = 1e-3
+    c1, c3 = 4.0 / h ** 2, 2.0 / h
+    rot_n = Rotation.from_rotvec([0.2, -0.4, 0.3]).as_matrix()
+    w_n = np.array([0.5, -0.3, 1.2])
+    q_n, qd_n = rng.normal(size=4), rng.normal(size=4)
+    w3, w1e, w3e = rng.normal(size=3), rng.normal(size=4), rng.normal(size=4)
+    phi_star, wd_star = rng.normal(size=3) * 1e-3, rng.normal(size=3)
+
+    def state(x):
+        phi = phi_star + (x[3:6] - wd_star) / c1
+        q = (x[12:] - w1e) / c1
+        return (Rotation.from_rotvec(phi).as_matrix() @ rot_n, c3 * phi + w3, q, c3 * q + w3e)
+
+    def relations(x):
+        rot, w, q, qd = state(x)
+        out, res = np.zeros(12), np.zeros(4)
+        rod_relations(*args, rot, w, x[3:6].copy(), q, qd, x[12:].copy(), x[0:3].copy(),
+                      x[6:9].copy(), x[9:12].copy(), out, res)
+        return out, res
+
+    def solved(z):            # q'' where the strain rows vanish (Newton, differenced Jacobian)
+        x = np.concatenate([z, np.zeros(4)])
+        for _ in range(20):
+            res = relations(x)[1]
+            jac = np.column_stack([(relations(x + 1e-4 * e)[1] - relations(x - 1e-4 * e)[1])
+                                   / 2e-4 for e in np.eye(16)[12:]])
+            step = np.linalg.solve(jac, -res)
+            x[12:] += step
+            if np.abs(step).max() < 1e-12 * (1.0 + np.abs(x[12:]).max()):
+                break
+        return x[12:], relations(x)[0]
+
+    z_star = rng.normal(size=12)
+    z_star[3:6] = wd_star
+    qdd_star, o_star = solved(z_star)
+    u, q_map = np.zeros((12, 13)), np.zeros((4, 13))
+    rod_transfer(*args, False, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_n, qd_n,
+                 z_star, qdd_star, u, q_map)
+    one = np.append(z_star, 1.0)
+    assert np.abs(q_map @ one - qdd_star).max() < 1e-9 * (1.0 + np.abs(qdd_star).max())
+    assert np.abs(u @ one - o_star).max() < 1e-9 * (1.0 + np.abs(o_star).max())
+    dz = rng.normal(size=12)
+    errors = []
+    for s in (1e-2, 5e-3):
+        z = z_star + s * dz
+        qdd, out = solved(z)
+        lin = np.append(z, 1.0)
+        errors.append(max(np.abs(q_map @ lin - qdd).max(), np.abs(u @ lin - out).max()))
+    assert 3.5 < errors[0] / errors[1] < 4.5, errors

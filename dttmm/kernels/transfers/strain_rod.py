@@ -237,3 +237,78 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
                 r -= (rot @ v2[i]) @ forces[i] + (rot @ o2[i]) @ couples[i]
         r += (rot @ v2[n - 1]) @ q_o + (rot @ o2[n - 1]) @ m_o
         residual[j] = r
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_n, qd_n):
+    """The rod's state for the step's unknowns x = [a_I, w', m_I, q_I, q''] (the integrator's
+    relations, docs/solver.md): at the consistent start the rotation, rates and strains are
+    given; in a step phi = phi* + (w' - w'*)/c1, w = c3 phi + w3, A = exp(phi^) A_n,
+    q = (q'' - w1e)/c1, q' = c3 q + w3e."""
+    nq = q_n.shape[0]
+    if start:
+        return rot_n.copy(), w_n.copy(), q_n.copy(), qd_n.copy()
+    phi = phi_star + (x[3:6] - wd_star) / c1
+    e = np.empty((3, 3))
+    expm_so3(phi, e)
+    q = (x[12:12 + nq] - w1e) / c1
+    return e @ rot_n, c3 * phi + w3, q, c3 * q + w3e
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_transfer(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, start,
+                 rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_n, qd_n, z_star,
+                 qdd_star, u, q_map):
+    """Fill u (12 x 13) with z_O = u [z_I; 1] (angular-acceleration slots) and q_map (n_q x 13)
+    with q'' = q_map [z_I; 1], the rod's relations (rod_relations) linearized about
+    (z_star, qdd_star), as the modal beam's beam_transfer does (docs/strain_rod.md, "Its
+    transfer"): the relations' columns in x = [a_I, w', m_I, q_I, q''] by forward differences
+    (exact for a_I, m_I, q_I, in which they are affine; w' and q'' move the state by 1/c1 of
+    their step, steps 1e-3 (1 + |x|)), the strain rows solved inside the element:
+        q'' - q''* = -D_rq^-1 (r0 + D_rz (z - z*)),   z_O = o0 + D_oz (z - z*) + D_oq (q'' - q''*)
+    z_star's rotation slots are not read (the guess there is wd_star).  start: the
+    consistent-start solve (rotation, rates and strains given, w' and q'' free).  An output
+    welded to the next body is not handled yet (its slot is the frame's w')."""
+    nq = qdd_star.shape[0]
+    nx = 12 + nq
+    x0 = np.empty(nx)
+    x0[:12] = z_star
+    x0[3:6] = wd_star
+    x0[12:] = qdd_star
+    o0 = np.empty(12)
+    r0 = np.empty(nq)
+    rot, w, q, qd = _rod_state(x0, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
+                               q_n, qd_n)
+    rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
+                  x0[3:6].copy(), q, qd, x0[12:].copy(), x0[0:3].copy(), x0[6:9].copy(),
+                  x0[9:12].copy(), o0, r0)
+    d_o = np.empty((12, nx))
+    d_r = np.empty((nq, nx))
+    o1 = np.empty(12)
+    r1 = np.empty(nq)
+    for j in range(nx):
+        affine = j < 3 or 6 <= j < 12
+        h = (1.0 if affine else 1e-3) * (1.0 + abs(x0[j]))
+        x = x0.copy()
+        x[j] += h
+        rot, w, q, qd = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e,
+                                   w3e, q_n, qd_n)
+        rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot,
+                      w, x[3:6].copy(), q, qd, x[12:].copy(), x[0:3].copy(), x[6:9].copy(),
+                      x[9:12].copy(), o1, r1)
+        d_o[:, j] = (o1 - o0) / h
+        d_r[:, j] = (r1 - r0) / h
+    rhs = np.empty((nq, 13))
+    rhs[:, :12] = d_r[:, :12]
+    rhs[:, 12] = r0
+    solved = np.linalg.solve(np.ascontiguousarray(d_r[:, 12:]), rhs)
+    z0 = x0[:12]
+    for i in range(nq):
+        for j in range(12):
+            q_map[i, j] = -solved[i, j]
+        q_map[i, 12] = qdd_star[i] - solved[i, 12] - q_map[i, :12] @ z0
+    d_oq = np.ascontiguousarray(d_o[:, 12:])
+    u[:, :12] = d_o[:, :12] + d_oq @ np.ascontiguousarray(q_map[:, :12])
+    shift = d_oq @ np.ascontiguousarray(solved[:, 12])
+    for i in range(12):
+        u[i, 12] = o0[i] - shift[i] - u[i, :12] @ z0
