@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.polynomial import legendre
 
-from ..kernels.transfers.strain_rod import MAGNUS_POINTS, rod_kinematics
+from ..kernels.transfers.strain_rod import MAGNUS_POINTS, rod_kinematics, station_arrays
 from ._checks import finite_scalar, finite_vector, rotation_matrix
 
 # the rod's parameter row (Model.rod_params; zero rows for the other bodies)
@@ -104,8 +104,7 @@ def rod_end_section(row, rotation, omega, q, q_dot=None):
     from its frame (rotation A, world angular velocity w) and strain coordinates."""
     steps, xi0, phi, _ = rod_tables(row)
     n = len(steps) + 1
-    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
-    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    rot, pos, om, vel, al, acc = station_arrays(n)
     q = np.asarray(q, dtype=float)
     q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
     rod_kinematics(steps, xi0, phi, q, q_dot, np.zeros_like(q), rot, pos, om, vel, al, acc)
@@ -121,8 +120,7 @@ def rod_centre_line(row, q, points):
     x = np.linspace(0.0, length, points)[1:]
     steps, xi0, phi = kinematics_tables(length, x, int(row[ROD_MODES]), rod_components(row))
     n = points
-    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
-    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    rot, pos, om, vel, al, acc = station_arrays(n)
     out = np.zeros((len(q), points, 3))
     for t in range(len(q)):
         qt = np.ascontiguousarray(q[t], dtype=float)
@@ -142,8 +140,7 @@ def rod_energies(row, rotation, omega, r_in, v_in, q, q_dot, gravity):
     section = np.diag([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
     stiffness = rod_stiffness(row)
     kinetic, potential = np.zeros(len(q)), np.zeros(len(q))
-    rot, pos = np.zeros((n, 3, 3)), np.zeros((n, 3))
-    om, vel, al, acc = (np.zeros((n, 3)) for _ in range(4))
+    rot, pos, om, vel, al, acc = station_arrays(n)
     for t in range(len(q)):
         qt, qdt = np.ascontiguousarray(q[t]), np.ascontiguousarray(q_dot[t])
         rod_kinematics(steps, xi0, phi, qt, qdt, np.zeros_like(qt), rot, pos, om, vel, al, acc)

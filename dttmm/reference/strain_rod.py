@@ -106,6 +106,13 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
+def _station_arrays(n):
+    """rod_sections' outputs for n stations, zeroed (rotations (n, 3, 3), then five (n, 3))."""
+    return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+            np.zeros((n, 3)), np.zeros((n, 3)))
+
+
+@numba.njit(cache=True, fastmath=CONTRACT)
 def rod_state(steps, xi0, phi, q, qd):
     """Per station (its padded steps have length 0 and weight 0): rotation, centre, the
     section's angular velocity and the centre's velocity relative to the frame, the convective
@@ -113,22 +120,12 @@ def rod_state(steps, xi0, phi, q, qd):
     and angular velocity), all in the input-section frame (rod_sections)."""
     n = steps.shape[0] + 1
     nq = q.shape[0]
-    rot = np.zeros((n, 3, 3))
-    pos = np.zeros((n, 3))
-    om = np.zeros((n, 3))
-    vel = np.zeros((n, 3))
-    al = np.zeros((n, 3))
-    acc = np.zeros((n, 3))
     zero = np.zeros(nq)
+    rot, pos, om, vel, al, acc = _station_arrays(n)
     rod_sections(steps, xi0, phi, q, qd, zero, rot, pos, om, vel, al, acc)
     jp = np.zeros((n, 3, nq))
     jr = np.zeros((n, 3, nq))
-    r2 = np.zeros((n, 3, 3))
-    p2 = np.zeros((n, 3))
-    o2 = np.zeros((n, 3))
-    v2 = np.zeros((n, 3))
-    a2 = np.zeros((n, 3))
-    c2 = np.zeros((n, 3))
+    r2, p2, o2, v2, a2, c2 = _station_arrays(n)
     for j in range(nq):
         unit = np.zeros(nq)
         unit[j] = 1.0

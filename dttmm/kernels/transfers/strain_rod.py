@@ -116,6 +116,14 @@ def _bracket(x, y):
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def station_arrays(n):
+    """The outputs of rod_kinematics for n stations: rotations (n, 3, 3), centres, angular
+    velocities, velocities, angular accelerations, accelerations (n, 3 each), zeroed."""
+    return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+            np.zeros((n, 3)), np.zeros((n, 3)))
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
     """The stations' poses, velocities and accelerations in the input-section frame (the module's
     docstring).  steps[a] is the a-th step's length h; xi0[a, i] (6) and phi[a, i] (6 x nq) the
@@ -186,12 +194,7 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
     its scratch (the step's transfer, which will call it, is not built yet)."""
     n = steps.shape[0] + 1
     nq = q.shape[0]
-    rot_s = np.zeros((n, 3, 3))
-    pos = np.zeros((n, 3))
-    om = np.zeros((n, 3))
-    vel = np.zeros((n, 3))
-    al = np.zeros((n, 3))
-    acc = np.zeros((n, 3))
+    rot_s, pos, om, vel, al, acc = station_arrays(n)
     rod_kinematics(steps, xi0, phi, q, qd, qdd, rot_s, pos, om, vel, al, acc)
     forces = np.zeros((n, 3))
     couples = np.zeros((n, 3))
@@ -221,12 +224,7 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
     out[9:12] = q_o
     # the strain rows by virtual work, a Jacobian column (a unit rate's velocities) at a time
     zero = np.zeros(nq)
-    r2 = np.zeros((n, 3, 3))
-    p2 = np.zeros((n, 3))
-    o2 = np.zeros((n, 3))
-    v2 = np.zeros((n, 3))
-    a2 = np.zeros((n, 3))
-    c2 = np.zeros((n, 3))
+    r2, p2, o2, v2, a2, c2 = station_arrays(n)
     for j in range(nq):
         unit = np.zeros(nq)
         unit[j] = 1.0
