@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT
-from ..algebra.so3 import expm_so3, left_jacobian
+from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 
 SQRT3_12 = np.sqrt(3.0) / 12.0
 # the Magnus step's two Gauss points, as fractions of the step (1/2 -+ sqrt(3)/6)
@@ -254,9 +254,37 @@ def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def rod_transfer(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, start,
-                 rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_n, qd_n, z_star,
-                 qdd_star, u, q_map):
+def _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                  w1e, w3e, q_n, qd_n, x, out, residual):
+    """rod_relations with the state from the step's unknowns x (_rod_state); with a fixed hinge
+    at the output (outboard = (welded, R_rel, the outboard's rotation at t_n, w1)) the output's
+    rotation slot is the outboard body's angular acceleration, as the modal beam's
+    (kernels/transfers/beam.py::_evaluate): at the start the end section's, w' + w x A omega_L +
+    A alpha_L; in a step c1 phi_out + w1 with exp(phi_out^) A_out,n = A R_L R_rel."""
+    steps, xi0, phi, weights, mu, section, stiffness, damping = tables
+    welded, r_rel, rot_out_n, w1_out = outboard
+    rot, w, q, qd = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
+                               q_n, qd_n)
+    wd = x[3:6].copy()
+    qdd = x[12:].copy()
+    rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
+                  wd, q, qd, qdd, x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out, residual)
+    if welded:
+        n = steps.shape[0] + 1
+        rot_s, pos, om, vel, al, acc = station_arrays(n)
+        rod_kinematics(steps, xi0, phi, q, qd, qdd, rot_s, pos, om, vel, al, acc)
+        if start:
+            out[3:6] = wd + np.cross(w, rot @ om[n - 1]) + rot @ al[n - 1]
+        else:
+            rel = rot @ rot_s[n - 1] @ r_rel @ rot_out_n.T
+            phi_out = np.empty(3)
+            log_so3(rel, phi_out)
+            out[3:6] = c1 * phi_out + w1_out
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                 w1e, w3e, q_n, qd_n, z_star, qdd_star, u, q_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] (angular-acceleration slots) and q_map (n_q x 13)
     with q'' = q_map [z_I; 1], the rod's relations (rod_relations) linearized about
     (z_star, qdd_star), as the modal beam's beam_transfer does (docs/strain_rod.md, "Its
@@ -264,9 +292,10 @@ def rod_transfer(steps, xi0, phi, weights, mu, section, stiffness, damping, grav
     (exact for a_I, m_I, q_I, in which they are affine; w' and q'' move the state by 1/c1 of
     their step, steps 1e-3 (1 + |x|)), the strain rows solved inside the element:
         q'' - q''* = -D_rq^-1 (r0 + D_rz (z - z*)),   z_O = o0 + D_oz (z - z*) + D_oq (q'' - q''*)
-    z_star's rotation slots are not read (the guess there is wd_star).  start: the
-    consistent-start solve (rotation, rates and strains given, w' and q'' free).  An output
-    welded to the next body is not handled yet (its slot is the frame's w')."""
+    tables = (steps, xi0, phi, weights, mu, section, stiffness, damping) (rod_relations);
+    outboard = (welded, R_rel, the outboard's rotation at t_n, w1) (_rod_evaluate).  z_star's
+    rotation slots are not read (the guess there is wd_star).  start: the consistent-start
+    solve (rotation, rates and strains given, w' and q'' free)."""
     nq = qdd_star.shape[0]
     nx = 12 + nq
     x0 = np.empty(nx)
@@ -275,11 +304,8 @@ def rod_transfer(steps, xi0, phi, weights, mu, section, stiffness, damping, grav
     x0[12:] = qdd_star
     o0 = np.empty(12)
     r0 = np.empty(nq)
-    rot, w, q, qd = _rod_state(x0, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
-                               q_n, qd_n)
-    rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
-                  x0[3:6].copy(), q, qd, x0[12:].copy(), x0[0:3].copy(), x0[6:9].copy(),
-                  x0[9:12].copy(), o0, r0)
+    _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                  w1e, w3e, q_n, qd_n, x0, o0, r0)
     d_o = np.empty((12, nx))
     d_r = np.empty((nq, nx))
     o1 = np.empty(12)
@@ -289,11 +315,8 @@ def rod_transfer(steps, xi0, phi, weights, mu, section, stiffness, damping, grav
         h = (1.0 if affine else 1e-3) * (1.0 + abs(x0[j]))
         x = x0.copy()
         x[j] += h
-        rot, w, q, qd = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e,
-                                   w3e, q_n, qd_n)
-        rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot,
-                      w, x[3:6].copy(), q, qd, x[12:].copy(), x[0:3].copy(), x[6:9].copy(),
-                      x[9:12].copy(), o1, r1)
+        _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
+                      w_n, w1e, w3e, q_n, qd_n, x, o1, r1)
         d_o[:, j] = (o1 - o0) / h
         d_r[:, j] = (r1 - r0) / h
     rhs = np.empty((nq, 13))
