@@ -18,7 +18,7 @@ from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPE
 from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
 from .elements.drives import MOTION
 from .elements.hinges import pack_hinge
-from .elements.kinds import (BODY_KINDS, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
+from .elements.kinds import (BODY_KINDS, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              WITH_COORDINATES, body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
 from .elements.strain_rod import ROD_PARAM_SIZE, rod_coordinate_count, rod_end_section
@@ -985,7 +985,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         p = parent[k]
         if p < 0:
             continue
-        if body_kind[p] in (BEAM, ROD) and attachment[k] != 0:
+        if body_kind[p] in FLEXIBLE and attachment[k] != 0:
             what = "a beam" if body_kind[p] == BEAM else "a strain rod"
             raise ValueError(f"{bodies[k].label(k)}: {what} has one attachment point, its "
                              f"output end")
@@ -1039,7 +1039,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             rot = default if bv[k]["rotation"] is None else bv[k]["rotation"]
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
-    flexible = [k for k in range(n) if body_kind[k] in (BEAM, ROD)]
+    flexible = [k for k in range(n) if body_kind[k] in FLEXIBLE]
     _check_rod_neighbours(bodies, kinds, body_kind, parent, closures)
 
     tree = Model(

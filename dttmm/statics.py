@@ -173,13 +173,13 @@ class _Configuration:
 
     def __init__(self, model, where):
         self.user = model
-        for k, code in enumerate(model.body_kind):
-            kind = BODY_KIND[int(code)]
-            if not kind.schemes:
-                raise ValueError(f"{where}: body '{model.body_names[k]}' is {kind.what} "
-                                 f"({kind.name}), which DT-TMM's sweep does not run yet (the "
-                                 f"static solve takes its consistent start); the Newton-Euler "
-                                 f"reference runs it (dttmm.reference.simulate_reference)")
+        unrun = [code for code, kind in BODY_KIND.items() if not kind.schemes]
+        for k in np.nonzero(np.isin(model.body_kind, unrun))[0][:1]:
+            kind = BODY_KIND[int(model.body_kind[k])]
+            raise ValueError(f"{where}: body '{model.body_names[k]}' is {kind.what} "
+                             f"({kind.name}), which DT-TMM's sweep does not run yet (the "
+                             f"static solve takes its consistent start); the Newton-Euler "
+                             f"reference runs it (dttmm.reference.simulate_reference)")
         km, self.keep = solver.kernel_model(model)
         self.model = km
         n = km.n_bodies
