@@ -1120,8 +1120,8 @@ def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
                                  f"{JOINT_KIND[int(kinds[k])].what}")
     for closure in closures:
         for body in closure[1:3]:
-            if any(body is bodies[j] for j in rods):
-                j = next(j for j in rods if body is bodies[j])
+            j = next((j for j in rods if body is bodies[j]), None)
+            if j is not None:
                 raise ValueError(f"{bodies[j].label(j)}: a strain rod closes no loop so far")
 
 

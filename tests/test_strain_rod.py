@@ -332,17 +332,25 @@ def test_the_docstring_example_runs():
     assert runner.summarize(verbose=False).attempted >= 3
 
 
+def _rod_arguments(model):
+    """The kernel's tables of the model's first body, a rod (rod_relations, rod_transfer), and
+    the gravity."""
+    from dttmm.elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_section, rod_stiffness,
+                                           rod_tables)
+    row = model.rod_params[0]
+    steps, xi0, phi, weights = rod_tables(row)
+    tables = (steps, xi0, phi, weights, row[ROD_MU], rod_section(row), rod_stiffness(row),
+              row[ROD_DAMPING])
+    return tables, np.array(model.gravity)
+
+
 def _relations_accelerations(model, unknowns):
     """The accelerations DT-TMM's relations of a lone rod (kernels/transfers/strain_rod.py::
     rod_relations) give at the model's initial state: the input's unknowns ("root moment":
     a fixed hinge's m_I, q_I; "frame": a ball joint's w', q_I) and q'' solved from the free
     end's m_O = q_O = 0 and the strain rows (affine in them: solved from unit columns)."""
-    from dttmm.elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
-                                           rod_stiffness, rod_tables)
     from dttmm.kernels.transfers.strain_rod import rod_relations
-    row = model.rod_params[0]
-    steps, xi0, phi, weights = rod_tables(row)
-    section = np.array([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
+    tables, gravity = _rod_arguments(model)
     q, qd = model.initial_modal_coordinates.copy(), model.initial_modal_velocities.copy()
     rot = np.array(model.initial_rotation[0])
     w = np.array(model.initial_angular_velocity[0])
@@ -351,10 +359,8 @@ def _relations_accelerations(model, unknowns):
     def equations(x):
         m_i, wd = (x[0:3], np.zeros(3)) if unknowns == "root moment" else (np.zeros(3), x[0:3])
         out, residual = np.zeros(12), np.zeros(nq)
-        rod_relations(steps, xi0, phi, weights, row[ROD_MU], section, rod_stiffness(row),
-                      row[ROD_DAMPING], np.array(model.gravity), rot, w, wd, q, qd,
-                      np.ascontiguousarray(x[6:]), np.zeros(3), m_i, x[3:6].copy(), out,
-                      residual)
+        rod_relations(*tables, gravity, rot, w, wd, q, qd, np.ascontiguousarray(x[6:]),
+                      np.zeros(3), m_i, x[3:6].copy(), out, residual)
         return np.concatenate([out[6:12], residual])
 
     base = equations(np.zeros(6 + nq))
@@ -392,17 +398,6 @@ def test_the_relations_in_dttmm_form_give_the_references_accelerations(root):
     if root == "ball":
         reference_wd = dy[problem.w_off[0]:problem.w_off[0] + 3]
         assert np.abs(first - reference_wd).max() < 1e-10 * np.abs(reference_wd).max()
-
-
-def _rod_arguments(model):
-    from dttmm.elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
-                                           rod_stiffness, rod_tables)
-    row = model.rod_params[0]
-    steps, xi0, phi, weights = rod_tables(row)
-    tables = (steps, xi0, phi, weights, row[ROD_MU],
-              np.array([row[ROD_JP], row[ROD_JW], row[ROD_JV]]), rod_stiffness(row),
-              row[ROD_DAMPING])
-    return tables, np.array(model.gravity)
 
 
 FREE_END = (False, np.eye(3), np.eye(3), np.zeros(3))       # rod_transfer's outboard: none

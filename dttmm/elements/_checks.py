@@ -51,6 +51,16 @@ def finite_scalar(element, argument, value, positive=False, nonnegative=False):
     return x
 
 
+def finite_pair(element, argument, value, positive=False, nonnegative=False):
+    """Two numbers (a beam's or rod's two bending planes) from a scalar, for both, or 2 entries,
+    each finite (and > 0 or >= 0 when asked)."""
+    pair = (np.full(2, finite_scalar(element, argument, value)) if np.ndim(value) == 0
+            else finite_vector(element, argument, value, size=2))
+    for v in pair:
+        finite_scalar(element, argument, v, positive=positive, nonnegative=nonnegative)
+    return pair
+
+
 def matrix3(element, argument, value):
     """A 3x3 matrix from a scalar (times identity), 3 diagonal entries, or a 3x3 array."""
     try:

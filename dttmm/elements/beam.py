@@ -14,7 +14,9 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ._checks import finite_scalar, finite_vector, optional_function, rotation_matrix
+from ._checks import (finite_pair, finite_scalar, finite_vector, optional_function,
+                      rotation_matrix)
+from .rigid_body import straight_line_body
 
 PINNED = 0            # sin(k pi x / L) in the chord frame: between moment-free ends
 CLAMPED = 1           # clamped-free eigenfunctions in the input section's frame: a free tip
@@ -523,11 +525,7 @@ class EulerBernoulliBeam:
                   * finite_scalar(who, "area", self.area, positive=True))
         else:
             raise ValueError(f"{who}: mass_per_length (or density and area) is required")
-        ei = np.full(2, finite_scalar(who, "bending_stiffness", self.bending_stiffness)) \
-            if np.ndim(self.bending_stiffness) == 0 else finite_vector(
-                who, "bending_stiffness", self.bending_stiffness, size=2)
-        for v in ei:
-            finite_scalar(who, "bending_stiffness", v, positive=True)
+        ei = finite_pair(who, "bending_stiffness", self.bending_stiffness, positive=True)
         polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
                               positive=True)
         auto = isinstance(self.modes_per_plane, str) and self.modes_per_plane == "auto"
@@ -586,11 +584,6 @@ class EulerBernoulliBeam:
                     else rotation_matrix(who, "rotation", self.rotation))
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
-        mass = mu * length
-        # the undeformed beam as a rigid body (line mass on the x axis plus the polar inertia)
-        j_c = np.diag([polar * length, mass * length ** 2 / 12, mass * length ** 2 / 12])
-        l_ic = np.array([length / 2, 0.0, 0.0])
-        shift = mass * (l_ic @ l_ic * np.eye(3) - np.outer(l_ic, l_ic))
         row = np.zeros(BEAM_PARAM_SIZE)
         row[LENGTH], row[MASS_PER_LENGTH], row[EI_V], row[EI_W] = length, mu, ei[0], ei[1]
         row[POLAR_PER_LENGTH], row[DAMPING_RATIO] = polar, zeta
@@ -612,8 +605,9 @@ class EulerBernoulliBeam:
         # None: AUTO, resolved by build_chain (model.py::_resolve_mode_families)
         row[STIFFENING] = (AUTO if self.stiffening is None else EXACT if exact
                            else float(self.stiffening))
-        return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
-                    j_i=j_c + shift, force=optional_function(who, "end_force", self.end_force),
+        # the undeformed beam as a rigid body (line mass on the x axis plus the polar inertia)
+        return dict(straight_line_body(length, mu, polar),
+                    force=optional_function(who, "end_force", self.end_force),
                     torque=optional_function(who, "end_torque", self.end_torque),
                     line_load=optional_function(who, "distributed_load",
                                                 self.distributed_load),

@@ -125,7 +125,7 @@ class RigidBody:
         if self.inertia_about not in ("mass_center", "input"):
             raise ValueError(f"{who}: inertia_about must be 'mass_center' or 'input', "
                              f"got {self.inertia_about!r}")
-        shift = mass * (l_ic @ l_ic * np.eye(3) - np.outer(l_ic, l_ic))   # parallel-axis term
+        shift = parallel_axis(mass, l_ic)
         if self.inertia_about == "mass_center":
             j_c = inertia
         else:
@@ -155,6 +155,24 @@ class RigidBody:
                     force=optional_function(who, "force", self.force),
                     torque=optional_function(who, "torque", self.torque),
                     rotation=rotation, omega=omega)
+
+
+def parallel_axis(mass, offset):
+    """m (|c|^2 E - c c^T): what a mass m whose centre is at c adds to the inertia about the
+    origin over its own about c (the parallel-axis theorem)."""
+    return mass * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+
+
+def straight_line_body(length, mass_per_length, polar, rotary=(0.0, 0.0)):
+    """A uniform straight line of mass along x from the input point (a beam's or rod's
+    undeformed shape) as a rigid body: its mass, l_IC, l_IO, J_C and J_I, with the sections'
+    polar inertia and rotary inertias (about z, about y) per length."""
+    mass = mass_per_length * length
+    j_c = np.diag([polar * length, rotary[1] * length + mass * length ** 2 / 12,
+                   rotary[0] * length + mass * length ** 2 / 12])
+    l_ic = np.array([length / 2, 0.0, 0.0])
+    return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
+                j_i=j_c + parallel_axis(mass, l_ic))
 
 
 def pack_body(v):

@@ -9,7 +9,8 @@ import numpy as np
 from numpy.polynomial import legendre
 
 from ..kernels.transfers.strain_rod import MAGNUS_POINTS, rod_kinematics, station_arrays
-from ._checks import finite_scalar, finite_vector, rotation_matrix
+from ._checks import finite_pair, finite_scalar, finite_vector, rotation_matrix
+from .rigid_body import straight_line_body
 
 # the rod's parameter row (Model.rod_params; zero rows for the other bodies)
 (ROD_LENGTH, ROD_MU, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_EA, ROD_JP, ROD_JV, ROD_JW, ROD_MODES,
@@ -89,6 +90,12 @@ def rod_stiffness(row):
                            for c in rod_components(row)])
 
 
+def rod_section(row):
+    """The sections' inertia per length in their own axes, the diagonal (j_p, rho I_w, rho I_v)
+    about (x, y, z): the polar moment, and the rotary moments of bending toward z and y."""
+    return np.array([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
+
+
 def rod_tables(row):
     """(steps, xi0, phi, weights) of a rod's parameter row: kinematics_tables through its
     stations (Gauss points and the end) and the weights of the kinematics' stations 0 .. n (the
@@ -137,7 +144,7 @@ def rod_energies(row, rotation, omega, r_in, v_in, q, q_dot, gravity):
     energy 1/2 q^T K q (docs/strain_rod.md)."""
     steps, xi0, phi, weights = rod_tables(row)
     n = len(steps) + 1
-    section = np.diag([row[ROD_JP], row[ROD_JW], row[ROD_JV]])
+    section = np.diag(rod_section(row))
     stiffness = rod_stiffness(row)
     kinetic, potential = np.zeros(len(q)), np.zeros(len(q))
     rot, pos, om, vel, al, acc = station_arrays(n)
@@ -261,20 +268,11 @@ class StrainRod:
         who = self.label(index)
         length = finite_scalar(who, "length", self.length, positive=True)
         mu = finite_scalar(who, "mass_per_length", self.mass_per_length, positive=True)
-        ei = (np.full(2, finite_scalar(who, "bending_stiffness", self.bending_stiffness))
-              if np.ndim(self.bending_stiffness) == 0 else
-              finite_vector(who, "bending_stiffness", self.bending_stiffness, size=2))
-        for v in ei:
-            finite_scalar(who, "bending_stiffness", v, positive=True)
+        ei = finite_pair(who, "bending_stiffness", self.bending_stiffness, positive=True)
         polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
                               positive=True)
-        rotary = (np.full(2, finite_scalar(who, "rotary_inertia_per_length",
-                                           self.rotary_inertia_per_length, nonnegative=True))
-                  if np.ndim(self.rotary_inertia_per_length) == 0 else
-                  finite_vector(who, "rotary_inertia_per_length",
-                                self.rotary_inertia_per_length, size=2))
-        for v in rotary:
-            finite_scalar(who, "rotary_inertia_per_length", v, nonnegative=True)
+        rotary = finite_pair(who, "rotary_inertia_per_length", self.rotary_inertia_per_length,
+                             nonnegative=True)
         modes = _count(who, "strain_modes", self.strain_modes, 1, MAX_STRAIN_MODES)
         n_stations = (modes + 3 if self.stations is None
                       else _count(who, "stations", self.stations, 1, 64))
@@ -296,15 +294,10 @@ class StrainRod:
                     else rotation_matrix(who, "rotation", self.rotation))
         omega = None if self.angular_velocity is None else finite_vector(
             who, "angular_velocity", self.angular_velocity)
-        mass = mu * length
         # the straight rod as a rigid body (what the model's rigid-body rows show of it)
-        j_c = np.diag([polar * length, rotary[1] * length + mass * length ** 2 / 12,
-                       rotary[0] * length + mass * length ** 2 / 12])
-        l_ic = np.array([length / 2, 0.0, 0.0])
-        shift = mass * (l_ic @ l_ic * np.eye(3) - np.outer(l_ic, l_ic))
-        return dict(mass=mass, l_ic=l_ic, l_io=np.array([length, 0.0, 0.0]), j_c=j_c,
-                    j_i=j_c + shift, force=None, torque=None, line_load=None,
-                    rotation=rotation, omega=omega, rod=row, eta0=q0, eta_d0=qd0)
+        return dict(straight_line_body(length, mu, polar, rotary), force=None, torque=None,
+                    line_load=None, rotation=rotation, omega=omega, rod=row, eta0=q0,
+                    eta_d0=qd0)
 
 
 def _count(who, name, value, low, high):

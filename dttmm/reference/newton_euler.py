@@ -249,8 +249,8 @@ import time
 import numpy as np
 
 from ..elements import BEAM, ROD
-from ..elements.strain_rod import (ROD_DAMPING, ROD_JP, ROD_JV, ROD_JW, ROD_MU,
-                                   rod_coordinate_count, rod_stiffness, rod_tables)
+from ..elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_coordinate_count, rod_section,
+                                   rod_stiffness, rod_tables)
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, LENGTH, MODES, PINNED,
                              STIFFENING, TORSION_MODES, AXIAL_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
@@ -265,7 +265,7 @@ from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
                      stretch_shape_constants, twist_shape_constants)
 from .equations import _kinematics, _solve_dynamics, _stiffening_block, rhs_kernel
-from .strain_rod import rod_state
+from .strain_rod import station_arrays, rod_sections
 
 
 METHODS = ("RK45", "DOP853")
@@ -822,7 +822,7 @@ def _rod_tables(model):
         weights[k, :m + 1] = wt
         stiffness[k, :nq[k]] = rod_stiffness(row)
         mu_damping[k] = row[ROD_MU], row[ROD_DAMPING]
-        section[k] = row[ROD_JP], row[ROD_JW], row[ROD_JV]
+        section[k] = rod_section(row)
     return nq, steps, xi0, phi, weights, stiffness, mu_damping, section
 
 
@@ -832,10 +832,12 @@ def _rod_mass_center(rods, k, q):
     nq = rods[0][k]
     phi = np.ascontiguousarray(rods[3][k, :, :, :, :nq])
     out = np.zeros((len(q), 3))
-    for i in range(len(q)):
-        state = rod_state(rods[1][k], rods[2][k], phi, np.ascontiguousarray(q[i, :nq]),
-                          np.zeros(nq))
-        out[i] = rods[4][k] @ state[1] / rods[4][k].sum()
+    zero = np.zeros(nq)
+    stations = station_arrays(rods[1].shape[1] + 1)
+    for i in range(len(q)):         # (the centres only: no Jacobians)
+        rod_sections(rods[1][k], rods[2][k], phi, np.ascontiguousarray(q[i, :nq]), zero, zero,
+                     *stations)
+        out[i] = rods[4][k] @ stations[1] / rods[4][k].sum()
     return out
 
 

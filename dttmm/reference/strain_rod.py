@@ -106,7 +106,7 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
-def _station_arrays(n):
+def station_arrays(n):
     """rod_sections' outputs for n stations, zeroed (rotations (n, 3, 3), then five (n, 3))."""
     return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
             np.zeros((n, 3)), np.zeros((n, 3)))
@@ -121,11 +121,11 @@ def rod_state(steps, xi0, phi, q, qd):
     n = steps.shape[0] + 1
     nq = q.shape[0]
     zero = np.zeros(nq)
-    rot, pos, om, vel, al, acc = _station_arrays(n)
+    rot, pos, om, vel, al, acc = station_arrays(n)
     rod_sections(steps, xi0, phi, q, qd, zero, rot, pos, om, vel, al, acc)
     jp = np.zeros((n, 3, nq))
     jr = np.zeros((n, 3, nq))
-    r2, p2, o2, v2, a2, c2 = _station_arrays(n)
+    r2, p2, o2, v2, a2, c2 = station_arrays(n)
     for j in range(nq):
         unit = np.zeros(nq)
         unit[j] = 1.0

@@ -190,8 +190,9 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
         q_O = q_I + sum F_i,   m_O = m_I - rho_L x q_O + sum (rho_i x F_i + N_i)
         r_j = -sum (A Jp_i,j . F_i + A Jr_i,j . N_i) + A Jp_L,j . q_O + A Jr_L,j . m_O
               + (K (q + damping q'))_j
-    (Jp, Jr: the stations' Jacobians, a unit rate's velocities: rod_kinematics).  It allocates
-    its scratch (the step's transfer, which will call it, is not built yet)."""
+    (Jp, Jr: the stations' Jacobians, a unit rate's velocities: rod_kinematics).  Returns the
+    end section's rotation A R_L and angular acceleration w' + w x A omega_L + A alpha_rel,L
+    (world; a weld at the output reads them: _rod_evaluate).  It allocates its scratch."""
     n = steps.shape[0] + 1
     nq = q.shape[0]
     rot_s, pos, om, vel, al, acc = station_arrays(n)
@@ -222,6 +223,8 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
     out[3:6] = wd
     out[6:9] = m_o
     out[9:12] = q_o
+    end_rotation = rot @ rot_s[n - 1]
+    end_alpha = wd + np.cross(w, rot @ om[n - 1]) + rot @ al[n - 1]
     # the strain rows by virtual work, a Jacobian column (a unit rate's velocities) at a time
     zero = np.zeros(nq)
     r2, p2, o2, v2, a2, c2 = station_arrays(n)
@@ -235,6 +238,7 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
                 r -= (rot @ v2[i]) @ forces[i] + (rot @ o2[i]) @ couples[i]
         r += (rot @ v2[n - 1]) @ q_o + (rot @ o2[n - 1]) @ m_o
         residual[j] = r
+    return end_rotation, end_alpha
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -265,21 +269,16 @@ def _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1
     welded, r_rel, rot_out_n, w1_out = outboard
     rot, w, q, qd = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
                                q_n, qd_n)
-    wd = x[3:6].copy()
-    qdd = x[12:].copy()
-    rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
-                  wd, q, qd, qdd, x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out, residual)
-    if welded:
-        n = steps.shape[0] + 1
-        rot_s, pos, om, vel, al, acc = station_arrays(n)
-        rod_kinematics(steps, xi0, phi, q, qd, qdd, rot_s, pos, om, vel, al, acc)
-        if start:
-            out[3:6] = wd + np.cross(w, rot @ om[n - 1]) + rot @ al[n - 1]
-        else:
-            rel = rot @ rot_s[n - 1] @ r_rel @ rot_out_n.T
-            phi_out = np.empty(3)
-            log_so3(rel, phi_out)
-            out[3:6] = c1 * phi_out + w1_out
+    end_rotation, end_alpha = rod_relations(
+        steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
+        x[3:6].copy(), q, qd, x[12:].copy(), x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out,
+        residual)
+    if welded and start:
+        out[3:6] = end_alpha
+    elif welded:
+        phi_out = np.empty(3)
+        log_so3(end_rotation @ r_rel @ rot_out_n.T, phi_out)
+        out[3:6] = c1 * phi_out + w1_out
 
 
 @njit(cache=True, fastmath=CONTRACT)
