@@ -30,7 +30,9 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT
-from ..algebra.so3 import expm_so3, left_jacobian, log_so3
+from ..algebra.mat3 import (t_cross, t_hat, t_lin9, t_mm, t_mv, t_of_mat, t_of_vec,
+                            t_plus_diag)
+from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
 
 SQRT3_12 = np.sqrt(3.0) / 12.0
 # the Magnus step's two Gauss points, as fractions of the step (1/2 -+ sqrt(3)/6)
@@ -82,37 +84,93 @@ def jacobian_coefficients(th2):
             s / (t4 * t) - 7.0 * (1.0 - c) / (t4 * th2) + 15.0 * (t - s) / (t4 * th2 * t))
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def jacobian_derivatives_applied(theta, d, dd, u):
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def jacobian_derivatives_applied(coefficients, theta, d, dd, u):
     """(DJ_l(theta)[d] u, DJ_l(theta)[dd] u + D2J_l(theta)[d, d] u): the first and second
     derivatives of t(s) = J_l(theta(s)) u along theta(s) = theta + s d + s^2/2 dd at s = 0,
-    u fixed.  With J_l u = u + B theta x u + C theta x (theta x u), B(s) = b(|theta(s)|), whose
-    derivatives are B' = beta (theta . d), B'' = beta1 (theta . d)^2 + beta (|d|^2 + theta . dd)
-    (C's with gamma, gamma1)."""
-    th2 = theta @ theta
-    b, c, beta, gamma, beta1, gamma1 = jacobian_coefficients(th2)
-    td = theta @ d
+    u fixed (3-tuples; coefficients: jacobian_coefficients(|theta|^2)).  With J_l u = u +
+    B theta x u + C theta x (theta x u), B(s) = b(|theta(s)|), whose derivatives are
+    B' = beta (theta . d), B'' = beta1 (theta . d)^2 + beta (|d|^2 + theta . dd) (C's with
+    gamma, gamma1)."""
+    b, c, beta, gamma, beta1, gamma1 = coefficients
+    td = _dot(theta, d)
     dB, dC = beta * td, gamma * td
-    ddB = beta1 * td * td + beta * (d @ d + theta @ dd)
-    ddC = gamma1 * td * td + gamma * (d @ d + theta @ dd)
-    txu = np.cross(theta, u)
-    dxu = np.cross(d, u)
-    ddxu = np.cross(dd, u)
-    txtxu = np.cross(theta, txu)
-    first = dB * txu + b * dxu + dC * txtxu + c * (np.cross(d, txu) + np.cross(theta, dxu))
-    second = (ddB * txu + 2.0 * dB * dxu + b * ddxu + ddC * txtxu
-              + 2.0 * dC * (np.cross(d, txu) + np.cross(theta, dxu))
-              + c * (2.0 * np.cross(d, dxu) + np.cross(dd, txu) + np.cross(theta, ddxu)))
+    rest = _dot(d, d) + _dot(theta, dd)
+    ddB = beta1 * td * td + beta * rest
+    ddC = gamma1 * td * td + gamma * rest
+    txu = t_cross(theta, u)
+    dxu = t_cross(d, u)
+    ddxu = t_cross(dd, u)
+    txtxu = t_cross(theta, txu)
+    mixed = _add(t_cross(d, txu), t_cross(theta, dxu))
+    first = _sum4(dB, txu, b, dxu, dC, txtxu, c, mixed)
+    second = _add(_sum4(ddB, txu, 2.0 * dB, dxu, b, ddxu, ddC, txtxu),
+                  _sum4(2.0 * dC, mixed, 2.0 * c, t_cross(d, dxu), c, t_cross(dd, txu),
+                        c, t_cross(theta, ddxu)))
     return first, second
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def _bracket(x, y):
-    """ad(x) y = [x_w x y_w; x_w x y_v + x_v x y_w] (se(3), [angular; linear])."""
-    out = np.empty(6)
-    out[:3] = np.cross(x[:3], y[:3])
-    out[3:] = np.cross(x[:3], y[3:]) + np.cross(x[3:], y[:3])
-    return out
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _dot(x, y):
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _add(x, y):
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _sum4(a, x, b, y, c, z, d, v):
+    """a x + b y + c z + d v (3-tuples)."""
+    return (a * x[0] + b * y[0] + c * z[0] + d * v[0], a * x[1] + b * y[1] + c * z[1] + d * v[1],
+            a * x[2] + b * y[2] + c * z[2] + d * v[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _scale(a, x):
+    return (a * x[0], a * x[1], a * x[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _apply_jacobian(b, c, theta, v):
+    """J_l(theta) v = v + b theta x v + c theta x (theta x v)."""
+    txv = t_cross(theta, v)
+    return _sum4(1.0, v, b, txv, c, t_cross(theta, txv), 0.0, v)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _mtv(a, x):
+    """a^T x (a a 9-tuple)."""
+    return (a[0] * x[0] + a[3] * x[1] + a[6] * x[2], a[1] * x[0] + a[4] * x[1] + a[7] * x[2],
+            a[2] * x[0] + a[5] * x[1] + a[8] * x[2])
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _put(row, x):
+    row[0], row[1], row[2] = x[0], x[1], x[2]
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _field(base, xi0, phi, q):
+    """(angular, linear) 3-tuples of base xi0 + phi q (xi0 (6,), phi (6, n_q))."""
+    x0, x1, x2 = base * xi0[0], base * xi0[1], base * xi0[2]
+    x3, x4, x5 = base * xi0[3], base * xi0[4], base * xi0[5]
+    for j in range(q.shape[0]):
+        qj = q[j]
+        x0 += phi[0, j] * qj
+        x1 += phi[1, j] * qj
+        x2 += phi[2, j] * qj
+        x3 += phi[3, j] * qj
+        x4 += phi[4, j] * qj
+        x5 += phi[5, j] * qj
+    return (x0, x1, x2), (x3, x4, x5)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _ad(xw, xv, yw, yv):
+    """ad(x) y = [x_w x y_w; x_w x y_v + x_v x y_w] (se(3), [angular; linear]) as 3-tuples."""
+    return t_cross(xw, yw), _add(t_cross(xw, yv), t_cross(xv, yw))
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -129,114 +187,194 @@ def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc
     docstring).  steps[a] is the a-th step's length h; xi0[a, i] (6) and phi[a, i] (6 x nq) the
     reference strain and the strain basis at its Gauss point i (MAGNUS_POINTS).  Writes, for the
     stations 0 .. len(steps) (station 0 the input section: identity, zeros), rot (3 x 3), pos,
-    omega, vel, alpha, acc (3 each)."""
+    omega, vel, alpha, acc (3 each).  On values (mat3's 3-tuples): it allocates nothing."""
     n = steps.shape[0]
-    rot[0] = np.eye(3)
-    pos[0] = 0.0
-    omega[0] = 0.0
-    vel[0] = 0.0
-    alpha[0] = 0.0
-    acc[0] = 0.0
-    r_step = np.empty((3, 3))
-    jl = np.empty((3, 3))
+    zero = (0.0, 0.0, 0.0)
+    ra = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    p_a, w_a, v_a, al_a, ac_a = zero, zero, zero, zero, zero
+    _store(rot[0], pos[0], omega[0], vel[0], alpha[0], acc[0], ra, p_a, w_a, v_a, al_a, ac_a)
     for a in range(n):
         h = steps[a]
-        x1 = xi0[a, 0] + phi[a, 0] @ q
-        x2 = xi0[a, 1] + phi[a, 1] @ q
-        v1, v2 = phi[a, 0] @ qd, phi[a, 1] @ qd
-        w1, w2 = phi[a, 0] @ qdd, phi[a, 1] @ qdd
         k = SQRT3_12 * h * h
-        big = 0.5 * h * (x1 + x2) + k * _bracket(x1, x2)
-        big_d = 0.5 * h * (v1 + v2) + k * (_bracket(v1, x2) + _bracket(x1, v2))
-        big_dd = (0.5 * h * (w1 + w2)
-                  + k * (_bracket(w1, x2) + 2.0 * _bracket(v1, v2) + _bracket(x1, w2)))
-        theta, u = big[:3].copy(), big[3:].copy()
-        th_d, u_d = big_d[:3].copy(), big_d[3:].copy()
-        th_dd, u_dd = big_dd[:3].copy(), big_dd[3:].copy()
-        expm_so3(theta, r_step)
-        left_jacobian(theta, jl)
-        t = jl @ u
-        dj_u, d2j_u = jacobian_derivatives_applied(theta, th_d, th_dd, u)
-        dj_ud, _ = jacobian_derivatives_applied(theta, th_d, th_dd, u_d)
-        t_d = dj_u + jl @ u_d
-        t_dd = d2j_u + 2.0 * dj_ud + jl @ u_dd          # (d2j_u holds DJ_l[theta''] u)
+        x1w, x1v = _field(1.0, xi0[a, 0], phi[a, 0], q)      # the strain at the Gauss points
+        x2w, x2v = _field(1.0, xi0[a, 1], phi[a, 1], q)
+        v1w, v1v = _field(0.0, xi0[a, 0], phi[a, 0], qd)     # its rate
+        v2w, v2v = _field(0.0, xi0[a, 1], phi[a, 1], qd)
+        a1w, a1v = _field(0.0, xi0[a, 0], phi[a, 0], qdd)    # its acceleration
+        a2w, a2v = _field(0.0, xi0[a, 1], phi[a, 1], qdd)
+        # Omega = h/2 (x1 + x2) + k ad(x1) x2 and its time derivatives (the product rule)
+        bw, bv = _ad(x1w, x1v, x2w, x2v)
+        theta = _sum4(0.5 * h, x1w, 0.5 * h, x2w, k, bw, 0.0, bw)
+        u = _sum4(0.5 * h, x1v, 0.5 * h, x2v, k, bv, 0.0, bv)
+        b1w, b1v = _ad(v1w, v1v, x2w, x2v)
+        b2w, b2v = _ad(x1w, x1v, v2w, v2v)
+        th_d = _sum4(0.5 * h, v1w, 0.5 * h, v2w, k, b1w, k, b2w)
+        u_d = _sum4(0.5 * h, v1v, 0.5 * h, v2v, k, b1v, k, b2v)
+        c1w, c1v = _ad(a1w, a1v, x2w, x2v)
+        c2w, c2v = _ad(x1w, x1v, a2w, a2v)
+        c3w, c3v = _ad(v1w, v1v, v2w, v2v)
+        th_dd = _add(_sum4(0.5 * h, a1w, 0.5 * h, a2w, k, c1w, k, c2w), _scale(2.0 * k, c3w))
+        u_dd = _add(_sum4(0.5 * h, a1v, 0.5 * h, a2v, k, c1v, k, c2v), _scale(2.0 * k, c3v))
+        # exp(Omega^) = (exp(theta^), J_l(theta) u)
+        th2 = _dot(theta, theta)
+        coefficients = jacobian_coefficients(th2)
+        b, c = coefficients[0], coefficients[1]
+        sa, sb = exp_coefficients(th2)
+        hat = t_hat(theta)
+        r_step = t_plus_diag(t_lin9(sa, hat, sb, t_mm(hat, hat)), 1.0)
+        t = _apply_jacobian(b, c, theta, u)
+        dj_u, d2j_u = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u)
+        dj_ud, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u_d)
+        t_d = _add(dj_u, _apply_jacobian(b, c, theta, u_d))
+        t_dd = _sum4(1.0, d2j_u, 2.0, dj_ud, 1.0, _apply_jacobian(b, c, theta, u_dd), 0.0, t)
         # the section's rotation rate: d/dt exp(theta^) = (J_l theta')^ exp(theta^)
-        jth_d = jl @ th_d
-        dj_thd, _ = jacobian_derivatives_applied(theta, th_d, th_dd, th_d)
-        ra = rot[a]
-        rt = ra @ t
-        r_jthd = ra @ jth_d
-        w_a, al_a = omega[a], alpha[a]
-        rot[a + 1] = ra @ r_step
-        pos[a + 1] = pos[a] + rt
-        omega[a + 1] = w_a + r_jthd
-        vel[a + 1] = vel[a] + np.cross(w_a, rt) + ra @ t_d
-        alpha[a + 1] = al_a + np.cross(w_a, r_jthd) + ra @ (dj_thd + jl @ th_dd)
-        acc[a + 1] = (acc[a] + np.cross(al_a, rt) + np.cross(w_a, np.cross(w_a, rt))
-                      + 2.0 * np.cross(w_a, ra @ t_d) + ra @ t_dd)
+        jth_d = _apply_jacobian(b, c, theta, th_d)
+        dj_thd, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, th_d)
+        rt = t_mv(ra, t)
+        r_jthd = t_mv(ra, jth_d)
+        r_td = t_mv(ra, t_d)
+        wxrt = t_cross(w_a, rt)
+        p_n = _add(p_a, rt)
+        w_n = _add(w_a, r_jthd)
+        v_n = _sum4(1.0, v_a, 1.0, wxrt, 1.0, r_td, 0.0, v_a)
+        al_n = _sum4(1.0, al_a, 1.0, t_cross(w_a, r_jthd), 1.0,
+                     t_mv(ra, _add(dj_thd, _apply_jacobian(b, c, theta, th_dd))), 0.0, al_a)
+        ac_n = _add(_sum4(1.0, ac_a, 1.0, t_cross(al_a, rt), 1.0, t_cross(w_a, wxrt), 2.0,
+                          t_cross(w_a, r_td)), t_mv(ra, t_dd))
+        ra = t_mm(ra, r_step)
+        p_a, w_a, v_a, al_a, ac_a = p_n, w_n, v_n, al_n, ac_n
+        _store(rot[a + 1], pos[a + 1], omega[a + 1], vel[a + 1], alpha[a + 1], acc[a + 1], ra,
+               p_a, w_a, v_a, al_a, ac_a)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _store(rot, pos, omega, vel, alpha, acc, r, p, w, v, al, ac):
+    """Station a's values into its rows of rod_kinematics' outputs."""
+    for i in range(3):
+        for j in range(3):
+            rot[i, j] = r[3 * i + j]
+    _put(pos, p)
+    _put(omega, w)
+    _put(vel, v)
+    _put(alpha, al)
+    _put(acc, ac)
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
                   wd, q, qd, qdd, a_i, m_i, q_i, out, residual):
     """The rod's exact relations in a given state, in the transfer's form (docs/strain_rod.md,
-    "Its relations in DT-TMM's form"): out = [a_O, w' (the frame's), m_O, q_O] from the input's
-    a_I, m_I, q_I and the frame's motion (rotation A, w, w'), and residual = the strain rows'
-    left minus right sides, with the end loads' generalized forces.  With the stations'
-    accelerations a_i = a_I + w' x rho_i + w x (w x rho_i) + 2 w x A p'_i + A p''_i and their
-    sections' alpha_i = w' + w x A omega_i + A alpha_rel,i, each station's load (gravity minus
-    inertia) F_i = f (g - a_i) and couple N_i = -(Theta alpha_i + W_i x Theta W_i)
-    (f = mu w_i, Theta = w_i A R_i diag(section) R_i^T A^T, W_i = w + A omega_i):
+    "Its relations in DT-TMM's form"): the stations' kinematics (rod_kinematics), their
+    Jacobians (rod_jacobians), then rod_sums.  Returns rod_sums' end section."""
+    n = steps.shape[0] + 1
+    kin = station_arrays(n)
+    rod_kinematics(steps, xi0, phi, q, qd, qdd, *kin)
+    jp, jr = rod_jacobians(steps, xi0, phi, q)
+    return rod_sums(kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot, w, wd,
+                    q, qd, a_i, m_i, q_i, out, residual)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_jacobians(steps, xi0, phi, q):
+    """(Jp, Jr) (stations, n_q, 3): each station's velocity and angular velocity in the input
+    frame for a unit rate of each strain coordinate (rod_kinematics at q' = e_j, q'' = 0: the
+    velocities are linear in q' at a given q)."""
+    n = steps.shape[0] + 1
+    nq = q.shape[0]
+    jp, jr = np.empty((n, nq, 3)), np.empty((n, nq, 3))
+    rot, pos, om, vel, al, acc = station_arrays(n)
+    zero = np.zeros(nq)
+    unit = np.zeros(nq)
+    for j in range(nq):
+        unit[:] = 0.0
+        unit[j] = 1.0
+        rod_kinematics(steps, xi0, phi, q, unit, zero, rot, pos, om, vel, al, acc)
+        jp[:, j, :] = vel
+        jr[:, j, :] = om
+    return jp, jr
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_sums(kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot, w, wd, q, qd,
+             a_i, m_i, q_i, out, residual):
+    """The rod's relations from its stations' kinematics kin = (rotations, centres, angular
+    velocities, velocities, angular accelerations, accelerations) in the input frame
+    (rod_kinematics) and their Jacobians (rod_jacobians): out = [a_O, w' (the frame's), m_O,
+    q_O] from the input's a_I, m_I, q_I and the frame's motion (rotation A, w, w'), and
+    residual = the strain rows' left minus right sides, with the end loads' generalized forces.
+    With the stations' accelerations a_i = a_I + w' x rho_i + w x (w x rho_i) + 2 w x A p'_i +
+    A p''_i and their sections' alpha_i = w' + w x A omega_i + A alpha_rel,i, each station's
+    load (gravity minus inertia) F_i = f (g - a_i) and couple N_i = -(Theta alpha_i + W_i x
+    Theta W_i) (f = mu w_i, Theta = w_i A R_i diag(section) R_i^T A^T, W_i = w + A omega_i):
         q_O = q_I + sum F_i,   m_O = m_I - rho_L x q_O + sum (rho_i x F_i + N_i)
         r_j = -sum (A Jp_i,j . F_i + A Jr_i,j . N_i) + A Jp_L,j . q_O + A Jr_L,j . m_O
               + (K (q + damping q'))_j
-    (Jp, Jr: the stations' Jacobians, a unit rate's velocities: rod_kinematics).  Returns the
-    end section's rotation A R_L and angular acceleration w' + w x A omega_L + A alpha_rel,L
-    (world; a weld at the output reads them: _rod_evaluate).  It allocates its scratch."""
-    n = steps.shape[0] + 1
+    Returns the end section's rotation A R_L and angular acceleration w' + w x A omega_L +
+    A alpha_rel,L (world; a weld at the output reads them: _rod_evaluate).
+    The sums run in the input frame (each vector v as A^T v), the couples in each section's
+    own (R_i^T A^T v, where Theta is w_i diag(section)); the end's values are turned to world.
+    On values (mat3's 3-tuples): it allocates two (stations, 3) arrays and its two returns."""
+    rot_s, pos, om, vel, al, acc = kin
+    n = pos.shape[0]
     nq = q.shape[0]
-    rot_s, pos, om, vel, al, acc = station_arrays(n)
-    rod_kinematics(steps, xi0, phi, q, qd, qdd, rot_s, pos, om, vel, al, acc)
-    forces = np.zeros((n, 3))
-    couples = np.zeros((n, 3))
-    q_o = q_i.copy()
-    m_o = m_i.copy()
+    ra = t_of_mat(rot)
+    a_in, wd_in = _mtv(ra, a_i), _mtv(ra, wd)
+    w_in, g_in = _mtv(ra, w), _mtv(ra, gravity)
+    loc_f = np.zeros((n, 3))        # A^T F_i
+    loc_n = np.zeros((n, 3))        # A^T N_i
+    q_sum, m_sum = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     for i in range(n):
-        rho = rot @ pos[i]
-        if weights[i] != 0.0:
-            f = mu * weights[i]
-            a_st = (a_i + np.cross(wd, rho) + np.cross(w, np.cross(w, rho))
-                    + 2.0 * np.cross(w, rot @ vel[i]) + rot @ acc[i])
-            rs = rot @ rot_s[i]
-            theta = weights[i] * (rs @ np.diag(section) @ rs.T)
-            big_w = w + rot @ om[i]
-            al_st = wd + np.cross(w, rot @ om[i]) + rot @ al[i]
-            forces[i] = f * (gravity - a_st)
-            couples[i] = -(theta @ al_st + np.cross(big_w, theta @ big_w))
-            q_o += forces[i]
-            m_o += np.cross(rho, forces[i]) + couples[i]
-    rho_l = rot @ pos[n - 1]
-    m_o -= np.cross(rho_l, q_o)
-    a_o = (a_i + np.cross(wd, rho_l) + np.cross(w, np.cross(w, rho_l))
-           + 2.0 * np.cross(w, rot @ vel[n - 1]) + rot @ acc[n - 1])
-    out[0:3] = a_o
-    out[3:6] = wd
-    out[6:9] = m_o
-    out[9:12] = q_o
-    end_rotation = rot @ rot_s[n - 1]
-    end_alpha = wd + np.cross(w, rot @ om[n - 1]) + rot @ al[n - 1]
+        if weights[i] == 0.0:
+            continue
+        f = mu * weights[i]
+        rho = t_of_vec(pos[i])
+        wxrho = t_cross(w_in, rho)
+        a_st = _add(_sum4(1.0, a_in, 1.0, t_cross(wd_in, rho), 1.0, t_cross(w_in, wxrho), 2.0,
+                          t_cross(w_in, t_of_vec(vel[i]))), t_of_vec(acc[i]))
+        force = _sum4(f, g_in, -f, a_st, 0.0, a_st, 0.0, a_st)
+        om_i = t_of_vec(om[i])
+        big_w = _add(w_in, om_i)
+        al_st = _add(_add(wd_in, t_cross(w_in, om_i)), t_of_vec(al[i]))
+        ri = t_of_mat(rot_s[i])
+        w_sec, al_sec = _mtv(ri, big_w), _mtv(ri, al_st)
+        th_w = (section[0] * w_sec[0], section[1] * w_sec[1], section[2] * w_sec[2])
+        th_al = (section[0] * al_sec[0], section[1] * al_sec[1], section[2] * al_sec[2])
+        couple = t_mv(ri, _scale(-weights[i], _add(th_al, t_cross(w_sec, th_w))))
+        _put(loc_f[i], force)
+        _put(loc_n[i], couple)
+        q_sum = _add(q_sum, force)
+        m_sum = _sum4(1.0, m_sum, 1.0, t_cross(rho, force), 1.0, couple, 0.0, couple)
+    rho_l = t_of_vec(pos[n - 1])
+    q_loc = _add(_mtv(ra, q_i), q_sum)
+    m_loc = _sum4(1.0, _mtv(ra, m_i), 1.0, m_sum, -1.0, t_cross(rho_l, q_loc), 0.0, m_sum)
+    a_rel = _add(_sum4(1.0, t_cross(wd_in, rho_l), 1.0, t_cross(w_in, t_cross(w_in, rho_l)),
+                       2.0, t_cross(w_in, t_of_vec(vel[n - 1])), 0.0, rho_l),
+                 t_of_vec(acc[n - 1]))
+    a_o = _add(t_of_vec(a_i), t_mv(ra, a_rel))
+    q_o, m_o = t_mv(ra, q_loc), t_mv(ra, m_loc)
+    for i in range(3):
+        out[i] = a_o[i]
+        out[3 + i] = wd[i]
+        out[6 + i] = m_o[i]
+        out[9 + i] = q_o[i]
+    end_rotation = np.empty((3, 3))
+    end = t_mm(ra, t_of_mat(rot_s[n - 1]))
+    om_l = t_of_vec(om[n - 1])
+    end_al = t_mv(ra, _add(_add(wd_in, t_cross(w_in, om_l)), t_of_vec(al[n - 1])))
+    end_alpha = np.empty(3)
+    for i in range(3):
+        end_alpha[i] = end_al[i]
+        for j in range(3):
+            end_rotation[i, j] = end[3 * i + j]
     # the strain rows by virtual work, a Jacobian column (a unit rate's velocities) at a time
-    zero = np.zeros(nq)
-    r2, p2, o2, v2, a2, c2 = station_arrays(n)
     for j in range(nq):
-        unit = np.zeros(nq)
-        unit[j] = 1.0
-        rod_kinematics(steps, xi0, phi, q, unit, zero, r2, p2, o2, v2, a2, c2)
         r = stiffness[j] * (q[j] + damping * qd[j])
         for i in range(n):
             if weights[i] != 0.0:
-                r -= (rot @ v2[i]) @ forces[i] + (rot @ o2[i]) @ couples[i]
-        r += (rot @ v2[n - 1]) @ q_o + (rot @ o2[n - 1]) @ m_o
+                for c in range(3):
+                    r -= jp[i, j, c] * loc_f[i, c] + jr[i, j, c] * loc_n[i, c]
+        for c in range(3):
+            r += jp[n - 1, j, c] * q_loc[c] + jr[n - 1, j, c] * m_loc[c]
         residual[j] = r
     return end_rotation, end_alpha
 
@@ -258,21 +396,19 @@ def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
-                  w1e, w3e, q_n, qd_n, x, out, residual):
-    """rod_relations with the state from the step's unknowns x (_rod_state); with a fixed hinge
-    at the output (outboard = (welded, R_rel, the outboard's rotation at t_n, w1)) the output's
+def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, qd, x, out,
+                  residual):
+    """rod_sums at the step's unknowns x = [a_I, w', m_I, q_I, q''] in the state (A, w, q, q')
+    they give (_rod_state) with its stations' kinematics and Jacobians; with a fixed hinge at
+    the output (outboard = (welded, R_rel, the outboard's rotation at t_n, w1)) the output's
     rotation slot is the outboard body's angular acceleration, as the modal beam's
     (kernels/transfers/beam.py::_evaluate): at the start the end section's, w' + w x A omega_L +
     A alpha_L; in a step c1 phi_out + w1 with exp(phi_out^) A_out,n = A R_L R_rel."""
-    steps, xi0, phi, weights, mu, section, stiffness, damping = tables
+    _, _, _, weights, mu, section, stiffness, damping = tables
     welded, r_rel, rot_out_n, w1_out = outboard
-    rot, w, q, qd = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
-                               q_n, qd_n)
-    end_rotation, end_alpha = rod_relations(
-        steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
-        x[3:6].copy(), q, qd, x[12:].copy(), x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out,
-        residual)
+    end_rotation, end_alpha = rod_sums(
+        kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot, w, x[3:6].copy(),
+        q, qd, x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out, residual)
     if welded and start:
         out[3:6] = end_alpha
     elif welded:
@@ -285,37 +421,57 @@ def _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1
 def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
                  w1e, w3e, q_n, qd_n, z_star, qdd_star, u, q_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] (angular-acceleration slots) and q_map (n_q x 13)
-    with q'' = q_map [z_I; 1], the rod's relations (rod_relations) linearized about
+    with q'' = q_map [z_I; 1], the rod's relations (rod_sums) linearized about
     (z_star, qdd_star), as the modal beam's beam_transfer does (docs/strain_rod.md, "Its
     transfer"): the relations' columns in x = [a_I, w', m_I, q_I, q''] by forward differences
     (exact for a_I, m_I, q_I, in which they are affine; w' and q'' move the state by 1/c1 of
     their step, steps 1e-3 (1 + |x|)), the strain rows solved inside the element:
         q'' - q''* = -D_rq^-1 (r0 + D_rz (z - z*)),   z_O = o0 + D_oz (z - z*) + D_oq (q'' - q''*)
-    tables = (steps, xi0, phi, weights, mu, section, stiffness, damping) (rod_relations);
+    The stations' kinematics and Jacobians run once at the guess and once per q'' column: a_I,
+    m_I, q_I and w' leave the rod's own motion as it is (only the frame's sums change).  (Keeping
+    the guess's Jacobians in the q'' columns too, their change with q left out, is ~2x faster
+    per call but 1e-3 off the linearization in tests/test_strain_rod.py: the iterations would
+    converge at that rate instead of quadratically.)
+    tables = (steps, xi0, phi, weights, mu, section, stiffness, damping) (rod_sums);
     outboard = (welded, R_rel, the outboard's rotation at t_n, w1) (_rod_evaluate).  z_star's
     rotation slots are not read (the guess there is wd_star).  start: the consistent-start
     solve (rotation, rates and strains given, w' and q'' free)."""
+    steps, xi0, phi = tables[0], tables[1], tables[2]
+    n = steps.shape[0] + 1
     nq = qdd_star.shape[0]
     nx = 12 + nq
     x0 = np.empty(nx)
     x0[:12] = z_star
     x0[3:6] = wd_star
     x0[12:] = qdd_star
+    rot, w, q, qd = _rod_state(x0, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
+                               q_n, qd_n)
+    kin = station_arrays(n)
+    rod_kinematics(steps, xi0, phi, q, qd, x0[12:].copy(), *kin)
+    jp, jr = rod_jacobians(steps, xi0, phi, q)
     o0 = np.empty(12)
     r0 = np.empty(nq)
-    _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
-                  w1e, w3e, q_n, qd_n, x0, o0, r0)
+    _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, qd, x0, o0, r0)
     d_o = np.empty((12, nx))
     d_r = np.empty((nq, nx))
     o1 = np.empty(12)
     r1 = np.empty(nq)
+    kin_j = station_arrays(n)
     for j in range(nx):
         affine = j < 3 or 6 <= j < 12
         h = (1.0 if affine else 1e-3) * (1.0 + abs(x0[j]))
         x = x0.copy()
         x[j] += h
-        _rod_evaluate(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3,
-                      w_n, w1e, w3e, q_n, qd_n, x, o1, r1)
+        rot_j, w_j, q_j, qd_j = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
+                                           w1e, w3e, q_n, qd_n)
+        if j < 12:          # the rod's own motion as at the guess
+            _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot_j, w_j, q, qd,
+                          x, o1, r1)
+        else:
+            rod_kinematics(steps, xi0, phi, q_j, qd_j, x[12:].copy(), *kin_j)
+            jp_j, jr_j = rod_jacobians(steps, xi0, phi, q_j)
+            _rod_evaluate(tables, outboard, gravity, start, c1, kin_j, jp_j, jr_j, rot, w, q_j,
+                          qd_j, x, o1, r1)
         d_o[:, j] = (o1 - o0) / h
         d_r[:, j] = (r1 - r0) / h
     rhs = np.empty((nq, 13))
