@@ -175,8 +175,7 @@ def _rod_line(row):
     field = {1: "constant", 2: "linear", 3: "quadratic"}.get(modes, f"degree {modes - 1}")
     return (f"strain rod, {row[ROD_LENGTH]:.4g} m: a {field} strain ({modes} coefficient"
             f"{'s' if modes > 1 else ''} each) in {', '.join(rod_components(row))}, mass "
-            f"integrated at {int(row[ROD_STATIONS])} Gauss points (run by the Newton-Euler "
-            f"reference so far)")
+            f"integrated at {int(row[ROD_STATIONS])} Gauss points")
 
 
 def describe(model):
@@ -222,7 +221,8 @@ def describe(model):
 
 
 # what each flag of a kernel copy stands for (kernels/features.py)
-_FEATURE_WORDS = dict(HAS_BEAMS="beams", HAS_ELASTIC_HINGES="elastic hinges",
+_FEATURE_WORDS = dict(HAS_BEAMS="beams", HAS_RODS="strain rods",
+                      HAS_ELASTIC_HINGES="elastic hinges",
                       HAS_LOOPS="closing joints", HAS_STATION_HISTORIES="station histories",
                       SWEEP_JOINTS="the full-state tree sweep", SWEEP_FULL="the full-state "
                       "chain sweep", SWEEP_DIRECT_FULL="the direct full-state sweep",

@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from .elements import BEAM, RIGID, ROD
-from .elements.strain_rod import rod_energies
+from .elements.strain_rod import rod_energies, rod_output_offset
 from .vectors import cross
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
@@ -734,4 +734,12 @@ def point_positions(model, rotation, r_in, eta=None):
             rho, _ = beam_output_offset(model.beam_params[k], rotation[..., k, :, :],
                                         np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
             r_o[..., k, :] = r_in[..., k, :] + rho
+    if eta is not None and (model.body_kind == ROD).any():
+        eta = np.asarray(eta, dtype=float)
+        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+        for k in np.nonzero(model.body_kind == ROD)[0]:
+            e = eta[..., offsets[k]:offsets[k + 1]]
+            rho, _ = rod_output_offset(model.rod_params[k], rotation[..., k, :, :],
+                                       np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
+            r_o[..., k, :] = r_in[..., k, :] + rho.reshape(r_in[..., k, :].shape)
     return r_c, r_o

@@ -16,7 +16,10 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from .vectors import cross
-from .elements import BEAM, RIGID
+from .elements import BEAM, RIGID, ROD
+from .elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_output_offset, rod_section,
+                                  rod_stiffness)
+from .elements.strain_rod import rod_tables as rod_element_tables
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
                             MODES, STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
@@ -230,11 +233,44 @@ def kernel_params(model):
     (hinge_params,), hinge_row = _rows(model, "hinge_params")
     return Params(body_params=body_params, hinge_kind=kernel_array(model, "hinge_kind"),
                   hinge_params=hinge_params, gravity=kernel_array(model, "gravity"),
-                  beams=beam_tables(model), locked=kernel_array(model, "ground_locked"),
+                  beams=beam_tables(model), rods=rod_tables(model),
+                  locked=kernel_array(model, "ground_locked"),
                   lock_rel=lock_rel, mass_center_inertia=inertia,
                   tip_pinned=bool(model.tip_pinned),
                   parent=kernel_array(model, "parent", np.int64),
                   joint_drive=joint_drives(model), body_row=body_row, hinge_row=hinge_row)
+
+
+@model_fact
+def rod_tables(model):
+    """The strain rods' tables as the kernels read them (kernels/transfers/strain_rod.py), padded
+    to the longest and widest rod (a padded step has length 0 and weight 0: it adds nothing; a
+    rod reads its first n_q coordinates' columns): (rod_row (n,) int64, body k's row or -1;
+    steps (R, S), xi0 (R, S, 2, 6), phi (R, S, 2, 6, Q), weights (R, S + 1) of the stations
+    0 .. S, K (R, Q), [mu, damping] (R, 2), the sections' inertia per length (R, 3)), one row per
+    rod (rods of equal parameters share theirs), one row of zeros without rods."""
+    rod_row = np.full(model.n_bodies, -1, dtype=np.int64)
+    rows, tables = {}, []
+    for k in np.nonzero(model.body_kind == ROD)[0]:
+        row = model.rod_params[k]
+        key = row.tobytes()
+        if key not in rows:
+            rows[key] = len(tables)
+            tables.append((row,) + rod_element_tables(row))
+        rod_row[k] = rows[key]
+    s_max = max([1] + [len(t[1]) for t in tables])
+    q_max = max([1] + [t[3].shape[-1] for t in tables])
+    r = max(1, len(tables))
+    steps, xi0 = np.zeros((r, s_max)), np.zeros((r, s_max, 2, 6))
+    phi, weights = np.zeros((r, s_max, 2, 6, q_max)), np.zeros((r, s_max + 1))
+    stiffness, mu_damping, section = np.zeros((r, q_max)), np.zeros((r, 2)), np.zeros((r, 3))
+    for i, (row, st, x0, ph, wt) in enumerate(tables):
+        m, nq = len(st), ph.shape[-1]
+        steps[i, :m], xi0[i, :m], phi[i, :m, :, :, :nq], weights[i, :m + 1] = st, x0, ph, wt
+        stiffness[i, :nq] = rod_stiffness(row)
+        mu_damping[i] = row[ROD_MU], row[ROD_DAMPING]
+        section[i] = rod_section(row)
+    return rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section
 
 
 def _rows(model, *names):
@@ -317,6 +353,7 @@ def kernel_features(model, mode, stations=False):
     paper's scheme) station points with their own histories."""
     return frozenset([_SWEEP_FLAGS[mode]]
                      + ["HAS_BEAMS"] * bool((model.body_kind == BEAM).any())
+                     + ["HAS_RODS"] * bool((model.body_kind == ROD).any())
                      + ["HAS_ELASTIC_HINGES"] * bool((model.hinge_kind == ELASTIC).any())
                      + ["HAS_LOOPS"] * bool(len(loop_tables(model).kind))
                      + ["HAS_STATION_HISTORIES"] * bool(stations))
@@ -1834,8 +1871,8 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     return Result._of_run(derivation, method="dttmm", t=t, rotation=rot, angular_velocity=omega,
                   angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
                   moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
-                  modal_coordinates=eta if model.has_beams else None,
-                  modal_velocities=eta_d if model.has_beams else None,
+                  modal_coordinates=eta if model.n_modes.any() else None,
+                  modal_velocities=eta_d if model.n_modes.any() else None,
                   body_names=tuple(model.body_names), checkpoint=checkpoint, **joints)
 
 
@@ -1868,6 +1905,11 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
         rho[:, k], rho_dot[:, k] = beam_output_offset(model.beam_params[k], rot[:, k],
                                                       omega[:, k], eta[:, j0:j1],
                                                       eta_d[:, j0:j1])
+    for k in np.nonzero(model.body_kind == ROD)[0]:
+        j0, j1 = mode_off[k], mode_off[k + 1]
+        rho[:, k], rho_dot[:, k] = rod_output_offset(model.rod_params[k], rot[:, k],
+                                                     omega[:, k], eta[:, j0:j1],
+                                                     eta_d[:, j0:j1])
     # down the chain: r_in,k = r_ground + sum_{j<k} (d_j + rho_j) + d_k (d: hinge deflections)
     if model.is_chain:
         r_in = r_prev[:, None] + _sum_before(defl + rho) + defl

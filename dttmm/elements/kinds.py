@@ -55,7 +55,7 @@ BODY_KINDS = (
     Kind(RIGID, RigidBody, SCHEMES, fused=True, doc="docs/rigid_body.md", what="a rigid body"),
     Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper", "dop853"), fused=True, doc="docs/beam.md",
          what="a beam"),
-    Kind(ROD, StrainRod, (), doc="docs/strain_rod.md", what="a strain rod"),
+    Kind(ROD, StrainRod, ("newmark",), doc="docs/strain_rod.md", what="a strain rod"),
 )
 FLEXIBLE = (BEAM, ROD)      # the body kinds with coordinates of their own (Model.n_modes)
 

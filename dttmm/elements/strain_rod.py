@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.polynomial import legendre
 
-from ..kernels.transfers.strain_rod import MAGNUS_POINTS, rod_kinematics, station_arrays
+from ..kernels.transfers.strain_rod import (MAGNUS_POINTS, rod_end_points, rod_kinematics,
+                                             station_arrays)
 from ._checks import finite_pair, finite_scalar, finite_vector, rotation_matrix
 from .rigid_body import straight_line_body
 
@@ -116,6 +117,22 @@ def rod_end_section(row, rotation, omega, q, q_dot=None):
     q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
     rod_kinematics(steps, xi0, phi, q, q_dot, np.zeros_like(q), rot, pos, om, vel, al, acc)
     return rotation @ pos[-1], rotation @ rot[-1], omega + rotation @ om[-1]
+
+
+def rod_output_offset(row, rotation, omega, q, q_dot):
+    """(rho, rho') (T, 3): a rod's output point relative to its input point and its velocity
+    relative to the input point's, world, for T states of its frame (rotation (T, 3, 3), world
+    angular velocity (T, 3)) and strain coordinates and rates (T, n_q): rho = A p_L,
+    rho' = w x rho + A p_L' (rod_kinematics' last station)."""
+    steps, xi0, phi, _ = rod_tables(row)
+    q = np.ascontiguousarray(np.asarray(q, dtype=float).reshape(-1, phi.shape[-1]))
+    q_dot = np.ascontiguousarray(np.asarray(q_dot, dtype=float).reshape(q.shape))
+    p_end, v_end = rod_end_points(steps, xi0, phi, q, q_dot)
+    rotation = np.asarray(rotation, dtype=float).reshape(-1, 3, 3)
+    rho = np.einsum("tij,tj->ti", rotation, p_end)
+    rho_dot = (np.cross(np.asarray(omega, dtype=float).reshape(-1, 3), rho)
+               + np.einsum("tij,tj->ti", rotation, v_end))
+    return rho, rho_dot
 
 
 def rod_centre_line(row, q, points):

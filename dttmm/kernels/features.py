@@ -38,6 +38,7 @@ SPECIALIZE = os.environ.get("DTTMM_SPECIALIZE", "1") != "0" and not config.DISAB
 
 # the model's elements and the scheme (solver.kernel_features sets them from a model)
 HAS_BEAMS = True                # modal beams (body kind BEAM)
+HAS_RODS = True                 # strain rods (body kind ROD)
 HAS_ELASTIC_HINGES = True       # elastic hinges (hinge kind ELASTIC)
 HAS_LOOPS = True                # closing joints (kernels/assembly/closure.py)
 HAS_STATION_HISTORIES = True    # the paper's scheme: station points with their own histories
@@ -49,13 +50,14 @@ SWEEP_TREE = True               # RICCATI_TREE: the reduced tree sweep
 SWEEP_REDUCED = True            # RICCATI_REDUCED: the chain's reduced Riccati sweep
 SWEEP_DIRECT_REDUCED = True     # DIRECT_REDUCED
 
-FLAGS = ("HAS_BEAMS", "HAS_ELASTIC_HINGES", "HAS_LOOPS", "HAS_STATION_HISTORIES",
+FLAGS = ("HAS_BEAMS", "HAS_RODS", "HAS_ELASTIC_HINGES", "HAS_LOOPS", "HAS_STATION_HISTORIES",
          "SWEEP_JOINTS", "SWEEP_FULL", "SWEEP_DIRECT_FULL", "SWEEP_TREE", "SWEEP_REDUCED",
          "SWEEP_DIRECT_REDUCED")
 ALL = frozenset(FLAGS)
 
 # the short names in a copy's name (and so in numba's cache files)
-_SHORT = dict(HAS_BEAMS="b", HAS_ELASTIC_HINGES="e", HAS_LOOPS="l", HAS_STATION_HISTORIES="s",
+_SHORT = dict(HAS_BEAMS="b", HAS_RODS="r", HAS_ELASTIC_HINGES="e", HAS_LOOPS="l",
+              HAS_STATION_HISTORIES="s",
               SWEEP_JOINTS="J", SWEEP_FULL="F", SWEEP_DIRECT_FULL="DF", SWEEP_TREE="T",
               SWEEP_REDUCED="R", SWEEP_DIRECT_REDUCED="DR")
 

@@ -38,6 +38,8 @@ Params = namedtuple("Params", [
     "gravity",          # (3,) m/s^2
     "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors):
                         # solver.beam_tables
+    "rods",             # (rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section):
+                        # solver.rod_tables (kernels/transfers/strain_rod.py)
     "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
     "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame (no
                         # rows without locked bodies: read where locked[k] only)

@@ -25,14 +25,16 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT, loop_piece
-from ...elements import BEAM, RIGID
+from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
 from ...elements.drives import MOTION
 from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
 from ..transfers.body import rigid_body_transfer, station_history_correction
+from ..transfers.strain_rod import rod_end_frame, rod_transfer
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
-from ..features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_STATION_HISTORIES,
+from ..features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_RODS,
+                        HAS_STATION_HISTORIES,
                         SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
                         SWEEP_REDUCED, SWEEP_TREE)
 from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
@@ -326,6 +328,20 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z_star[jh + 1],
                           eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
+        elif HAS_RODS and body_kind[k] == ROD:
+            # a strain rod (kernels/transfers/strain_rod.py; docs/strain_rod.md, "Its
+            # transfer"): the beam's contract, its strain rows solved inside the element
+            i0, i1 = mode_off[k], mode_off[k + 1]
+            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
+            kout = k + 1 if welded else k
+            for i in range(3):
+                w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
+            outboard = (welded, hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+                        rot[kout], w1_out)
+            rod_transfer(_rod(params.rods, k), outboard, params.gravity, at_start, rot[k],
+                         phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
+                         eta[i0:i1], eta_d[i0:i1], z_star[jh + 1], eta_dd_star[i0:i1],
+                         u[jh + 1], eta_map[i0:i1])
         elif body_kind[k] == RIGID:
             for i in range(3):
                 load[i] = body_params[row, 0] * params.gravity[i] + force[k, i]
@@ -341,6 +357,16 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         else:
             return jh + 2
     return 0
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _rod(rods, k):
+    """Strain rod k's tables as rod_transfer takes them: (steps, xi0, phi, weights, mu,
+    section, stiffness, damping) (solver.rod_tables)."""
+    rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rods
+    r = rod_row[k]
+    return (steps[r], xi0[r], phi[r], weights[r], mu_damping[r, 0], section[r], stiffness[r],
+            mu_damping[r, 1])
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -487,12 +513,13 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
 
 @njit(cache=True, fastmath=CONTRACT)
 def _modal_accelerations(beams, eta_map, z, eta_acc):
-    """eta'' of every beam from its input station (angular-acceleration slots)."""
+    """eta'' of every beam (a strain rod's q'') from its input station (angular-acceleration
+    slots)."""
     body_kind, mode_off = beams[0], beams[3]
     zin = np.empty(13)
     zin[12] = 1.0
     for k in range(body_kind.shape[0]):
-        if body_kind[k] == BEAM:
+        if body_kind[k] == BEAM or body_kind[k] == ROD:
             zin[0:12] = z[2 * k + 1]
             for i in range(mode_off[k], mode_off[k + 1]):
                 eta_acc[i] = eta_map[i] @ zin
@@ -554,20 +581,27 @@ def _welded(params, mode, k):
         return False
     if mode == RICCATI_JOINTS:
         return True
-    # in a chain's full-state sweep, a body on a beam's end (as the fused welded-chain loop's
-    # beams, kernels/stepping/weld_chain.py::_follow_welds)
-    return mode == RICCATI_FULL and params.beams[0][params.parent[k]] == BEAM
+    # in a chain's full-state sweep, a body on a beam's or a strain rod's end (as the fused
+    # welded-chain loop's beams, kernels/stepping/weld_chain.py::_follow_welds)
+    kind_p = params.beams[0][params.parent[k]]
+    return mode == RICCATI_FULL and (kind_p == BEAM or kind_p == ROD)
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
-    or the end section's of a parent beam (_end_section_frame)."""
+    or the end section's of a parent beam (_end_section_frame) or strain rod
+    (strain_rod.rod_end_frame)."""
     p = params.parent[k]
     rest = params.hinge_params[params.hinge_row[k], 0:9].copy().reshape((3, 3))
     if HAS_BEAMS and params.beams[0][p] == BEAM:
         _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
                            rot_out, w_out, wd_out)
+    elif HAS_RODS and params.beams[0][p] == ROD:
+        i0, i1 = params.beams[3][p], params.beams[3][p + 1]
+        steps, xi0, phi = _rod(params.rods, p)[:3]
+        rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
+                      eta_dd[i0:i1], rest, rot_out, w_out, wd_out)
     else:
         rot_out[:, :] = rot[p] @ rest
         w_out[:] = w[p]

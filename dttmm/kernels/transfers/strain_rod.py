@@ -488,3 +488,42 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
     shift = d_oq @ np.ascontiguousarray(solved[:, 12])
     for i in range(12):
         u[i, 12] = o0[i] - shift[i] - u[i, :12] @ z0
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out, wd_out):
+    """The frame welded to a rod's end section (rest: the weld's R0) from the rod's frame (A,
+    w, w') and its strain coordinates, rates and accelerations (rod_kinematics' last station:
+    R_L, omega_L, alpha_L in the input frame): A_O = A R_L R0, w_O = w + A omega_L,
+    w_O' = w' + w x (A omega_L) + A alpha_L (as the modal beam's end section,
+    kernels/stepping/step.py::_end_section_frame)."""
+    n = steps.shape[0] + 1
+    r_s, pos, om, vel, al, acc = station_arrays(n)
+    rod_kinematics(steps, xi0, phi, q, qd, qdd, r_s, pos, om, vel, al, acc)
+    ra = t_of_mat(rot)
+    end = t_mm(t_mm(ra, t_of_mat(r_s[n - 1])), t_of_mat(rest))
+    a_om = t_mv(ra, t_of_vec(om[n - 1]))
+    wv = t_of_vec(w)
+    alpha = _add(_add(t_of_vec(wd), t_cross(wv, a_om)), t_mv(ra, t_of_vec(al[n - 1])))
+    for i in range(3):
+        w_out[i] = w[i] + a_om[i]
+        wd_out[i] = alpha[i]
+        for j in range(3):
+            rot_out[i, j] = end[3 * i + j]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_end_points(steps, xi0, phi, q, qd):
+    """(p_L, p_L') (T, 3): a rod's end point and its velocity relative to its frame, in the
+    input frame, for T states of its strain coordinates and rates q, qd (T, n_q)."""
+    n = steps.shape[0] + 1
+    m = q.shape[0]
+    p_end, v_end = np.zeros((m, 3)), np.zeros((m, 3))
+    r_s, pos, om, vel, al, acc = station_arrays(n)
+    zero = np.zeros(q.shape[1])
+    for t in range(m):
+        rod_kinematics(steps, xi0, phi, np.ascontiguousarray(q[t]), np.ascontiguousarray(qd[t]),
+                       zero, r_s, pos, om, vel, al, acc)
+        p_end[t] = pos[n - 1]
+        v_end[t] = vel[n - 1]
+    return p_end, v_end
