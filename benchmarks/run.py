@@ -277,6 +277,33 @@ def jit_warmup_seconds(cold):
     return float(out.stdout.strip().splitlines()[-1])
 
 
+def strain_rods(fig, quick):
+    """Issue 32's speed figures: the strain rod's cost per element and step against the modal
+    beam's (the soft pendulum of examples/falling_pendulum.py as 8 elements of each, its fall's
+    first steps at dt = 1e-4 s); and, in the full run, the wall time of its whole second at the
+    accuracy of 1e-2 m: 8 rods against 32 modal elements (docs/strain_rod.md, "In the sweep")."""
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import falling_pendulum
+    steps, repeats = (200, 3) if quick else (1000, 5)
+    for kind in ("modal", "rod"):
+        per_step = median_us_per_step(falling_pendulum.pendulum(8, kind), steps, repeats)
+        fig[f"soft_pendulum_{kind}_us_per_element_step"] = per_step / 8
+    fig["rod_over_modal_per_element_step"] = (fig["soft_pendulum_rod_us_per_element_step"]
+                                              / fig["soft_pendulum_modal_us_per_element_step"])
+    if not quick:
+        tips = {}
+        for kind, elements in (("modal", 32), ("rod", 8)):
+            res, stopped = falling_pendulum.run(elements, kind)
+            fig[f"soft_pendulum_1s_{kind}_{elements}_wall_s"] = (
+                None if stopped is not None else res.wall_time)
+            tips[kind] = res.position_output[:, -1]
+        if len(tips["modal"]) == len(tips["rod"]):
+            fig["soft_pendulum_1s_rod_8_from_modal_32_m"] = float(
+                np.linalg.norm(tips["rod"] - tips["modal"], axis=1).max())
+    print({k: v for k, v in fig.items() if "soft_pendulum" in k or k.startswith("rod_")},
+          flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer points, shorter runs")
@@ -412,6 +439,8 @@ def main(argv=None):
         wall = float(out.stdout.split(" s; tip height")[0].rsplit(": ", 1)[-1])
         fig[f"sweep_monte_carlo_{workers}_workers_runs_per_s"] = runs / wall
     print({k: v for k, v in fig.items() if k.startswith("sweep")}, flush=True)
+
+    strain_rods(fig, quick)
 
     fig["jit_warmup_s_warm_cache"] = jit_warmup_seconds(cold=False)
     fig["jit_warmup_s_cold_cache"] = None if quick else jit_warmup_seconds(cold=True)

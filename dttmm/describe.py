@@ -1,15 +1,17 @@
 """What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
 import numpy as np
 
-from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EXACT,
-                            FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING, TORSION_MODES,
+from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EI_V, EI_W,
+                            EXACT, FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING,
+                            TORSION_MODES,
                             axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import BEAM, RIGID, ROD
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
-from .elements.strain_rod import ROD_LENGTH, ROD_MODES, ROD_STATIONS, rod_components
+from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
+                                  rod_components, rod_frequencies)
 from .closures import describe_closures
 from .model import outboard_masses
 
@@ -60,7 +62,8 @@ def beam_frequencies(model, k):
 
 def suggested_dt(model):
     """A step that resolves the model's fastest retained motion: 20 steps per period of the
-    highest retained beam mode and of every elastic hinge's springs against the body they
+    highest retained beam mode (a strain rod's highest own frequency) and of every elastic
+    hinge's springs against the body they
     carry (sqrt(k / m) with its stiffest translational spring and the body's mass, sqrt(k / J)
     with its stiffest rotational spring and the body's least inertia about the hinge: above
     the hinge's own frequencies, which the bodies beyond it only lower), and 0.02 rad per step
@@ -79,6 +82,9 @@ def suggested_dt(model):
                 + (torsion_frequencies(model.beam_params[k]),
                    axial_frequencies(model.beam_params[k])))
         dt = min(dt, 1.0 / (20.0 * f))
+    for row in {model.rod_params[k].tobytes(): model.rod_params[k]
+                for k in np.nonzero(model.body_kind == ROD)[0]}.values():
+        dt = min(dt, 1.0 / (20.0 * float(rod_frequencies(row).max())))
     for k in np.nonzero(model.hinge_kind == ELASTIC)[0]:
         h, body = model.hinge_params[k], model.body_params[k]
         least = float(np.linalg.eigvalsh(body[INERTIA_INPUT].reshape(3, 3)).min())
@@ -175,7 +181,53 @@ def _rod_line(row):
     field = {1: "constant", 2: "linear", 3: "quadratic"}.get(modes, f"degree {modes - 1}")
     return (f"strain rod, {row[ROD_LENGTH]:.4g} m: a {field} strain ({modes} coefficient"
             f"{'s' if modes > 1 else ''} each) in {', '.join(rod_components(row))}, mass "
-            f"integrated at {int(row[ROD_STATIONS])} Gauss points")
+            f"integrated at {int(row[ROD_STATIONS])} Gauss points; own frequencies clamped "
+            f"(Hz): {np.array2string(rod_frequencies(row), precision=4)}")
+
+
+# a chain's sag under its own weight (a cantilever's tip deflection over its length) above
+# which describe() calls its beams far-bending
+FAR = 0.1
+
+
+def element_advice(model):
+    """Which flexible element suits the model's beams or rods, in words: their line's sag under
+    its own weight, mu g L^3 / (8 EI) over its whole welded length (a cantilever's tip
+    deflection over its length, linear theory), says whether they bend far (above FAR); the
+    modal beam holds ~0.17 rad of bending per element with 2 modes per plane (docs/beam.md,
+    "Where the second-order energy stops"; its exact foreshortening goes on), a strain rod a
+    constant curvature exactly and costs about 6 modal elements per step
+    (docs/strain_rod.md, "In the sweep").  None for a model without either."""
+    flexible = np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]
+    if not len(flexible):
+        return None
+    g = float(np.linalg.norm(model.gravity))
+    length = sum(float(np.linalg.norm(model.body_params[k, TO_OUTPUT])) for k in flexible)
+    mass = sum(float(model.body_params[k, MASS]) for k in flexible)
+    stiffness = min(_bending_stiffness(model, k) for k in flexible)
+    sag = mass / length * g * length ** 3 / (8.0 * stiffness) if stiffness > 0 else np.inf
+    rods = bool((model.body_kind == ROD).any())
+    far = sag > FAR
+    how = (f"sag under its own weight {sag:.3g} of its length (mu g L^3 / 8 EI over "
+           f"{length:.4g} m)" if g > 0 else "no gravity to judge by")
+    if far and not rods:
+        return (f"elements: far-bending ({how}): the modal beam holds ~0.17 rad of bending per "
+                f"element with 2 modes per plane (its exact foreshortening goes on, with many "
+                f"elements); StrainRod carries a constant curvature exactly and a varying one at "
+                f"order 4 in its length (the soft pendulum: 8 rods within 1e-2 m of 32 modal "
+                f"elements; docs/strain_rod.md)")
+    if rods and not far and g > 0:
+        return (f"elements: bending little ({how}): the modal beam (EulerBernoulliBeam) is "
+                f"~6x cheaper per element and step than a strain rod and as accurate there")
+    return (f"elements: {'strain rods' if rods else 'modal beams'} ({how}); StrainRod for "
+            f"elements that bend far, the modal beam for small deflections (docs/strain_rod.md)")
+
+
+def _bending_stiffness(model, k):
+    """The least bending stiffness EI of beam or rod k, N m^2."""
+    if model.body_kind[k] == ROD:
+        return float(min(model.rod_params[k, ROD_EI_V], model.rod_params[k, ROD_EI_W]))
+    return float(min(model.beam_params[k, EI_V], model.beam_params[k, EI_W]))
 
 
 def describe(model):
@@ -212,6 +264,9 @@ def describe(model):
                                    if why_not is None else f"not held ({why_not}): the "
                                    "balance E - E(0) - W moves at the step's second order")
                    + "; docs/loops.md, \"The energy held\"")
+    advice = element_advice(model)
+    if advice is not None:
+        out.append(advice)
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
                f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
                f"swing)")

@@ -611,3 +611,32 @@ def test_the_transfer_welded_to_a_tip_body_gives_the_references_accelerations():
     loads = np.linalg.solve(e_mat @ u[:, 6:12], e_vec - e_mat @ u[:, 12])
     z = np.concatenate([np.zeros(6), loads, [1.0]])
     assert np.abs(q_map @ z - reference).max() < 1e-8 * np.abs(reference).max()
+
+
+def test_describe_says_which_element_suits_and_steps_for_the_rods_frequencies():
+    """describe(): the soft pendulum of modal beams bends far under its own weight (mu g L^3 /
+    8 EI ~ 2.5e3 of its length) and is pointed to StrainRod; the same as rods is told what they
+    carry; a stiff rod (sag 1e-4) is pointed to the modal beam.  A rod's own frequencies clamped
+    (rod_frequencies): three strain coefficients put the first within 0.1% of Euler-Bernoulli's
+    1.8751^2 / (2 pi L^2) sqrt(EI / mu) (the reference measured 0.03%), and the suggested step
+    resolves the highest (20 steps per period)."""
+    import sys
+    from pathlib import Path
+    from dttmm.describe import element_advice, suggested_dt
+    from dttmm.elements.strain_rod import rod_frequencies
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
+    import falling_pendulum
+    modal = element_advice(falling_pendulum.pendulum(8, "modal"))
+    assert modal.startswith("elements: far-bending") and "StrainRod" in modal, modal
+    rods = falling_pendulum.pendulum(8, "rod")
+    assert "strain rods" in element_advice(rods)
+    assert "elements: strain rods" in rods.describe()
+    stiff = dttmm.build_chain([dttmm.BallJoint(), dttmm.StrainRod(
+        length=1.0, bending_stiffness=5e3, mass_per_length=0.5, polar_inertia_per_length=1e-4,
+        strain_modes=3)], gravity=[0.0, -9.81, 0.0])
+    assert "bending little" in element_advice(stiff) and "EulerBernoulliBeam" in \
+        element_advice(stiff)
+    frequencies = rod_frequencies(stiff.rod_params[0])
+    euler_bernoulli = 1.8751041 ** 2 / (2.0 * np.pi) * np.sqrt(5e3 / 0.5)
+    assert abs(frequencies[0] / euler_bernoulli - 1.0) < 1e-3, frequencies[0] / euler_bernoulli
+    assert suggested_dt(stiff) <= 1.0 / (20.0 * frequencies.max())

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.polynomial import legendre
 
-from ..kernels.transfers.strain_rod import (MAGNUS_POINTS, rod_end_points, rod_kinematics,
-                                             station_arrays)
+from ..kernels.transfers.strain_rod import (MAGNUS_POINTS, rod_end_points, rod_jacobians,
+                                             rod_kinematics, station_arrays)
 from ._checks import finite_pair, finite_scalar, finite_vector, rotation_matrix
 from .rigid_body import straight_line_body
 
@@ -117,6 +117,21 @@ def rod_end_section(row, rotation, omega, q, q_dot=None):
     q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
     rod_kinematics(steps, xi0, phi, q, q_dot, np.zeros_like(q), rot, pos, om, vel, al, acc)
     return rotation @ pos[-1], rotation @ rot[-1], omega + rotation @ om[-1]
+
+
+def rod_frequencies(row):
+    """(n_q,) Hz: the rod's own frequencies clamped at its input, straight and at rest: the
+    eigenvalues of K against the mass matrix of its strain coordinates there, M = sum_i w_i
+    (mu Jp_i^T Jp_i + Jr_i^T diag(section) Jr_i) (its stations' Jacobians, rod_jacobians;
+    describe()'s step)."""
+    steps, xi0, phi, weights = rod_tables(row)
+    nq = rod_coordinate_count(row)
+    jp, jr = rod_jacobians(steps, xi0, phi, np.zeros(nq))
+    section = rod_section(row)
+    mass = (row[ROD_MU] * np.einsum("i,ija,ika->jk", weights, jp, jp)
+            + np.einsum("i,ija,a,ika->jk", weights, jr, section, jr))
+    squared = np.linalg.eigvals(np.linalg.solve(mass, np.diag(rod_stiffness(row)))).real
+    return np.sqrt(np.sort(np.maximum(squared, 0.0))) / (2.0 * np.pi)
 
 
 def rod_output_offset(row, rotation, omega, q, q_dot):

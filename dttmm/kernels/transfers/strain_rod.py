@@ -418,6 +418,55 @@ def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, 
 
 
 @njit(cache=True, fastmath=CONTRACT)
+def _affine_columns(pos, jp, jr, weights, mu, rot, d_o, d_r):
+    """The relations' columns in a_I (0:3), m_I (6:9) and q_I (9:12), in which they are affine
+    (rod_sums; docs/strain_rod.md, "Its transfer"), in closed form: with the mass M = sum f_i,
+    c = sum f_i rho_i and rho_L in the input frame (f_i = mu w_i), d = A^T delta,
+      a_I: a_O += delta, q_O -= M delta, m_O += A (M rho_L - c) x d,
+           r_j += (sum f_i Jp_i,j - M Jp_L,j + Jr_L,j x (M rho_L - c)) . d
+      m_I: m_O += delta, r_j += Jr_L,j . d
+      q_I: q_O += delta, m_O -= A rho_L x d, r_j += (Jp_L,j - Jr_L,j x rho_L) . d
+    (the rotation slot, w' or a weld's, does not move with them)."""
+    n = pos.shape[0]
+    nq = jp.shape[1]
+    ra = t_of_mat(rot)
+    mass, c = 0.0, (0.0, 0.0, 0.0)
+    for i in range(n):
+        f = mu * weights[i]
+        mass += f
+        c = _sum4(1.0, c, f, t_of_vec(pos[i]), 0.0, c, 0.0, c)
+    rho_l = t_of_vec(pos[n - 1])
+    e = _sum4(mass, rho_l, -1.0, c, 0.0, c, 0.0, c)
+    for r in range(12):
+        for col in (0, 1, 2, 6, 7, 8, 9, 10, 11):
+            d_o[r, col] = 0.0
+    for k in range(3):
+        unit = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
+        d = _mtv(ra, unit)                      # A^T e_k
+        dm_a = t_mv(ra, t_cross(e, d))          # m_O's column in a_I
+        dm_q = t_mv(ra, t_cross(rho_l, d))      # minus m_O's column in q_I
+        d_o[k, k] = 1.0
+        d_o[9 + k, k] = -mass
+        d_o[6 + k, 6 + k] = 1.0
+        d_o[9 + k, 9 + k] = 1.0
+        for i in range(3):
+            d_o[6 + i, k] = dm_a[i]
+            d_o[6 + i, 9 + k] = -dm_q[i]
+    for j in range(nq):
+        g = (0.0, 0.0, 0.0)
+        for i in range(n):
+            g = _sum4(1.0, g, mu * weights[i], t_of_vec(jp[i, j]), 0.0, g, 0.0, g)
+        jp_l, jr_l = t_of_vec(jp[n - 1, j]), t_of_vec(jr[n - 1, j])
+        g_a = t_mv(ra, _sum4(1.0, g, -mass, jp_l, 1.0, t_cross(jr_l, e), 0.0, g))
+        g_m = t_mv(ra, jr_l)
+        g_q = t_mv(ra, _sum4(1.0, jp_l, -1.0, t_cross(jr_l, rho_l), 0.0, jp_l, 0.0, jp_l))
+        for k in range(3):
+            d_r[j, k] = g_a[k]
+            d_r[j, 6 + k] = g_m[k]
+            d_r[j, 9 + k] = g_q[k]
+
+
+@njit(cache=True, fastmath=CONTRACT)
 def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
                  w1e, w3e, q_n, qd_n, z_star, qdd_star, u, q_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] (angular-acceleration slots) and q_map (n_q x 13)
@@ -457,14 +506,15 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
     o1 = np.empty(12)
     r1 = np.empty(nq)
     kin_j = station_arrays(n)
-    for j in range(nx):
-        affine = j < 3 or 6 <= j < 12
-        h = (1.0 if affine else 1e-3) * (1.0 + abs(x0[j]))
+    _affine_columns(kin[1], jp, jr, tables[3], tables[4], rot, d_o, d_r)
+    for c in range(3 + nq):         # the w' and q'' columns (a_I, m_I, q_I: _affine_columns)
+        j = 3 + c if c < 3 else 9 + c
+        h = 1e-3 * (1.0 + abs(x0[j]))
         x = x0.copy()
         x[j] += h
         rot_j, w_j, q_j, qd_j = _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
                                            w1e, w3e, q_n, qd_n)
-        if j < 12:          # the rod's own motion as at the guess
+        if j < 12:          # w': the rod's own motion as at the guess
             _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot_j, w_j, q, qd,
                           x, o1, r1)
         else:
