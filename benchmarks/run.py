@@ -281,7 +281,9 @@ def strain_rods(fig, quick):
     """Issue 32's speed figures: the strain rod's cost per element and step against the modal
     beam's (the soft pendulum of examples/falling_pendulum.py as 8 elements of each, its fall's
     first steps at dt = 1e-4 s); and, in the full run, the wall time of its whole second at the
-    accuracy of 1e-2 m: 8 rods against 32 modal elements (docs/strain_rod.md, "In the sweep")."""
+    accuracy of 1e-2 m: 8 rods against 32 modal elements, and of the elastica's static roll-up
+    to the full circle: one rod against 16 modal elements (docs/strain_rod.md, "In the
+    sweep")."""
     sys.path.insert(0, os.path.join(ROOT, "examples"))
     import falling_pendulum
     steps, repeats = (200, 3) if quick else (1000, 5)
@@ -300,8 +302,18 @@ def strain_rods(fig, quick):
         if len(tips["modal"]) == len(tips["rod"]):
             fig["soft_pendulum_1s_rod_8_from_modal_32_m"] = float(
                 np.linalg.norm(tips["rod"] - tips["modal"], axis=1).max())
-    print({k: v for k, v in fig.items() if "soft_pendulum" in k or k.startswith("rod_")},
-          flush=True)
+        # the elastica rolled up to the full circle in 8 load steps by the static solve: one
+        # rod of constant strain (exact) against 16 modal elements (examples/elastica.py)
+        import elastica
+        for kind, elements, modes in (("rod", 1, 1), ("modal", 16, 2)):
+            start = time.perf_counter()
+            runs = elastica.roll_up(elements, 8, modes, kind=kind)
+            fig[f"elastica_{kind}_{elements}_wall_s"] = time.perf_counter() - start
+            fig[f"elastica_{kind}_{elements}_worst_tip_error_m"] = max(
+                float(np.linalg.norm(eq.positions()[2][-1] - elastica.exact_tip(lam)))
+                for lam, eq in runs)
+    print({k: v for k, v in fig.items()
+           if "soft_pendulum" in k or k.startswith(("rod_", "elastica_"))}, flush=True)
 
 
 def main(argv=None):

@@ -248,8 +248,10 @@ def rod_tables(model):
     rod reads its first n_q coordinates' columns): (rod_row (n,) int64, body k's row or -1;
     steps (R, S), xi0 (R, S, 2, 6), phi (R, S, 2, 6, Q), weights (R, S + 1) of the stations
     0 .. S, K (R, Q), [mu, damping] (R, 2), the sections' inertia per length (R, 3)), one row per
-    rod (rods of equal parameters share theirs), one row of zeros without rods."""
-    rod_row = np.full(model.n_bodies, -1, dtype=np.int64)
+    rod (rods of equal parameters share theirs), one row of zeros without rods (and rod_row
+    of one entry: a million rigid bodies keep their 8 MB)."""
+    rod_row = np.full(model.n_bodies if (model.body_kind == ROD).any() else 1, -1,
+                      dtype=np.int64)
     rows, tables = {}, []
     for k in np.nonzero(model.body_kind == ROD)[0]:
         row = model.rod_params[k]
@@ -349,8 +351,8 @@ _SWEEP_FLAGS = {kstep.RICCATI_JOINTS: "SWEEP_JOINTS", kstep.RICCATI_FULL: "SWEEP
 @model_fact
 def kernel_features(model, mode, stations=False):
     """What the model's general-loop kernels are compiled for (kernels/features.py): its sweep
-    (mode), and whether it has beams, elastic hinges, closing joints, and (stations: the
-    paper's scheme) station points with their own histories."""
+    (mode), and whether it has beams, strain rods, elastic hinges, closing joints, and
+    (stations: the paper's scheme) station points with their own histories."""
     return frozenset([_SWEEP_FLAGS[mode]]
                      + ["HAS_BEAMS"] * bool((model.body_kind == BEAM).any())
                      + ["HAS_RODS"] * bool((model.body_kind == ROD).any())

@@ -19,7 +19,7 @@ import warnings
 import numpy as np
 
 from .closures import check_runs_in_sweeps, closure_residuals, start_state
-from .elements import BEAM
+from .elements import BEAM, ROD
 from .elements.drives import MOTION
 from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
                               REST_ROTATION)
@@ -27,6 +27,7 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from .elements.strain_rod import ROD_LENGTH, rod_centre_line, rod_end_section
 from .kernels.stepping import ball_chain
 from .kernels.stepping.loop import Monitor, Settings
 from .kernels.transfers.joint import joint_frame, n_coordinates
@@ -97,12 +98,20 @@ class StaticEquilibrium:
         """Points along each body at the equilibrium, world frame, m: per body an array (p, 3),
         a beam's at p = points_per_beam stations x_i = i L / (p - 1) of its deflected centre
         line, r_I + A ((x - c(x)) e1 + u(x)) (docs/beam.md; c the foreshortening, zero
-        without stiffening), a rigid body's its input and output points."""
+        without stiffening), a strain rod's at as many points equally spaced along it
+        (elements/strain_rod.py::rod_centre_line, the last its end point), a rigid body's its
+        input and output points."""
         m = self.model
         r_in, _, r_o = self.positions()
         off = np.concatenate([[0], np.cumsum(m.n_modes)])
         lines = []
         for k in range(m.n_bodies):
+            if m.body_kind[k] == ROD:
+                e = m.initial_modal_coordinates[off[k]:off[k + 1]]
+                local = rod_centre_line(m.rod_params[k], e[None], int(points_per_beam))[0]
+                local[-1] = (r_o[k] - r_in[k]) @ m.initial_rotation[k]    # (its own stations')
+                lines.append(r_in[k] + local @ m.initial_rotation[k].T)
+                continue
             if m.body_kind[k] != BEAM:
                 lines.append(np.array([r_in[k], r_o[k]]))
                 continue
@@ -160,6 +169,9 @@ def _positions(m):
             e = m.initial_modal_coordinates[off[k]:off[k + 1]]
             rho, _ = beam_output_offset(m.beam_params[k], rot, np.zeros(3), e, np.zeros_like(e))
             r_o[k] = r_in[k] + rho
+        elif m.body_kind[k] == ROD:       # its end point (the rod's kinematics)
+            e = m.initial_modal_coordinates[off[k]:off[k + 1]]
+            r_o[k] = r_in[k] + rod_end_section(m.rod_params[k], rot, np.zeros(3), e)[0]
     return r_in, r_c, r_o
 
 
@@ -219,6 +231,10 @@ class _Configuration:
                 i0, i1 = mode_off[k], mode_off[k + 1]
                 scale[self.e0 + i0:self.e0 + i1] = km.beam_params[k, LENGTH]
                 labels += [f"{km.body_names[k]} mode {j}" for j in range(i1 - i0)]
+            elif km.body_kind[k] == ROD:        # (a strain times the length: rad or m)
+                i0, i1 = mode_off[k], mode_off[k + 1]
+                scale[self.e0 + i0:self.e0 + i1] = km.rod_params[k, ROD_LENGTH]
+                labels += [f"{km.body_names[k]} strain {j}" for j in range(i1 - i0)]
         self.scale = scale
         self.labels = tuple(labels)
         self.mode_off = mode_off
