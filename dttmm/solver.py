@@ -17,8 +17,8 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .vectors import cross
 from .elements import BEAM, RIGID, ROD
-from .elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_output_offset, rod_section,
-                                  rod_stiffness)
+from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components,
+                                  rod_output_offset, rod_section, rod_stiffness)
 from .elements.strain_rod import rod_tables as rod_element_tables
 from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
@@ -1820,8 +1820,14 @@ def _column_names(model):
     joints = [model.hinge_names[k] + (f" {i + 1}" if len(model.drives[k]) > 1 else "")
               for k, i in coordinate_columns(model)]
     modal = []
-    for k in np.nonzero(model.body_kind == BEAM)[0]:
-        row, name = model.beam_params[k], model.body_names[k]
+    for k in np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]:
+        name = model.body_names[k]
+        if model.body_kind[k] == ROD:        # its strain coefficients, component by component
+            row = model.rod_params[k]
+            m = int(row[ROD_MODES])
+            modal += [f"{name} {part}{j + 1}" for part in rod_components(row) for j in range(m)]
+            continue
+        row = model.beam_params[k]
         m = int(row[MODES])
         modal += [f"{name} {plane}{j + 1}" for plane in ("v", "w") for j in range(m)]
         modal += [f"{name} twist{j + 1}" for j in range(int(row[TORSION_MODES]))]
