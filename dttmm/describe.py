@@ -196,7 +196,7 @@ def element_advice(model):
     deflection over its length, linear theory), says whether they bend far (above FAR); the
     modal beam holds ~0.17 rad of bending per element with 2 modes per plane (docs/beam.md,
     "Where the second-order energy stops"; its exact foreshortening goes on), a strain rod a
-    constant curvature exactly and costs about 6 modal elements per step
+    constant curvature exactly and costs about 2.4 modal elements per step
     (docs/strain_rod.md, "In the sweep").  None for a model without either."""
     flexible = np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]
     if not len(flexible):
@@ -218,7 +218,8 @@ def element_advice(model):
                 f"elements; docs/strain_rod.md)")
     if rods and not far and g > 0:
         return (f"elements: bending little ({how}): the modal beam (EulerBernoulliBeam) is "
-                f"~6x cheaper per element and step than a strain rod and as accurate there")
+                f"~2.4x cheaper per element and step than a strain rod and as accurate "
+                f"there")
     return (f"elements: {'strain rods' if rods else 'modal beams'} ({how}); StrainRod for "
             f"elements that bend far, the modal beam for small deflections (docs/strain_rod.md)")
 

@@ -18,9 +18,9 @@ a curvature field of --modes coefficients per plane, the configuration the expon
 strain, one stretch coefficient field where EA is given); --reference runs the Newton-Euler
 reference instead of DT-TMM (DOP853 at rtol 1e-8; --dt unused).  Measured over 1 s in DT-TMM
 (dt = 1e-4 s): 8 rods of linear strain within 9.5e-3 m of 32 modal elements at the tip (EA =
-1e6, and inextensible alike), 8.8 s against 5.6 s of wall time (a rod's step costs ~6 modal
+1e6, and inextensible alike), 4.7 s against 5.4 s of wall time (a rod's step costs ~2.4 modal
 elements'); 8 against 16 rods 7.2e-3 m, 16 rods against the 32 modal 6.3e-3 m; dt = 1e-4
-against 5e-5 s 3.1e-6 m; the energy kept to 2.1e-6 of the
+against 5e-5 s 3.1e-6 m; the energy kept to 2.0e-6 of the
 largest kinetic energy.  Printed: the tip every 0.1 s, the total energy's
 largest change over the run as a fraction of the largest kinetic energy (nothing dissipates or
 works: it should stay near zero), and the wall time.  --csv: t, tip_x, tip_y every 1 ms;

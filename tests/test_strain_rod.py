@@ -122,6 +122,20 @@ def test_velocities_are_linear_in_the_rates(moving_rod):
                   ).max() < 1e-12
 
 
+def test_the_jacobians_pass_is_the_kinematics_at_unit_rates(moving_rod):
+    """rod_jacobians (every column in one pass, velocities only) gives each station's velocity
+    and angular velocity for a unit rate of each coordinate as rod_kinematics does at q' = e_j
+    (to 1e-13), at a bent state."""
+    from dttmm.kernels.transfers.strain_rod import rod_jacobians
+    x, q, _, _, _ = moving_rod
+    steps, xi0, phi = kinematics_tables(L, x, 2, ALL)
+    jp, jr = rod_jacobians(steps, xi0, phi, np.asarray(q, float))
+    for j in range(8):
+        column = _kinematics(x, 2, q, np.eye(8)[j])
+        assert np.abs(jp[:, j] - column[3]).max() < 1e-13
+        assert np.abs(jr[:, j] - column[2]).max() < 1e-13
+
+
 def test_the_jacobian_coefficients_join_at_their_threshold():
     """J_l's coefficients and their derivatives (series below t = 2, closed forms above) agree
     across the threshold to 1e-12 relative, and match differences of b and c."""

@@ -277,20 +277,45 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
 @njit(cache=True, fastmath=CONTRACT)
 def rod_jacobians(steps, xi0, phi, q):
     """(Jp, Jr) (stations, n_q, 3): each station's velocity and angular velocity in the input
-    frame for a unit rate of each strain coordinate (rod_kinematics at q' = e_j, q'' = 0: the
-    velocities are linear in q' at a given q)."""
-    n = steps.shape[0] + 1
+    frame for a unit rate of each strain coordinate, the velocity half of rod_kinematics at
+    q' = e_j (the velocities are linear in q' at a given q), every column in one pass over the
+    stations: the step's pose (Omega, exp, J_l) once, then per column Omega' from the basis'
+    column j, t' = DJ_l[theta'] u + J_l u', and
+        Jp_{a+1} = Jp_a + Jr_a x (R_a t) + R_a t',     Jr_{a+1} = Jr_a + R_a J_l theta'."""
+    n = steps.shape[0]
     nq = q.shape[0]
-    jp, jr = np.empty((n, nq, 3)), np.empty((n, nq, 3))
-    rot, pos, om, vel, al, acc = station_arrays(n)
-    zero = np.zeros(nq)
-    unit = np.zeros(nq)
-    for j in range(nq):
-        unit[:] = 0.0
-        unit[j] = 1.0
-        rod_kinematics(steps, xi0, phi, q, unit, zero, rot, pos, om, vel, al, acc)
-        jp[:, j, :] = vel
-        jr[:, j, :] = om
+    jp, jr = np.zeros((n + 1, nq, 3)), np.zeros((n + 1, nq, 3))
+    ra = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    for a in range(n):
+        h = steps[a]
+        k = SQRT3_12 * h * h
+        x1w, x1v = _field(1.0, xi0[a, 0], phi[a, 0], q)
+        x2w, x2v = _field(1.0, xi0[a, 1], phi[a, 1], q)
+        bw, bv = _ad(x1w, x1v, x2w, x2v)
+        theta = _sum4(0.5 * h, x1w, 0.5 * h, x2w, k, bw, 0.0, bw)
+        u = _sum4(0.5 * h, x1v, 0.5 * h, x2v, k, bv, 0.0, bv)
+        th2 = _dot(theta, theta)
+        coefficients = jacobian_coefficients(th2)
+        b, c = coefficients[0], coefficients[1]
+        rt = t_mv(ra, _apply_jacobian(b, c, theta, u))
+        p1, p2 = phi[a, 0], phi[a, 1]
+        for j in range(nq):
+            v1w, v1v = (p1[0, j], p1[1, j], p1[2, j]), (p1[3, j], p1[4, j], p1[5, j])
+            v2w, v2v = (p2[0, j], p2[1, j], p2[2, j]), (p2[3, j], p2[4, j], p2[5, j])
+            b1w, b1v = _ad(v1w, v1v, x2w, x2v)
+            b2w, b2v = _ad(x1w, x1v, v2w, v2v)
+            th_d = _sum4(0.5 * h, v1w, 0.5 * h, v2w, k, b1w, k, b2w)
+            u_d = _sum4(0.5 * h, v1v, 0.5 * h, v2v, k, b1v, k, b2v)
+            dj_u, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_d, u)
+            t_d = t_mv(ra, _add(dj_u, _apply_jacobian(b, c, theta, u_d)))
+            w_a = t_of_vec(jr[a, j])
+            v_n = _sum4(1.0, t_of_vec(jp[a, j]), 1.0, t_cross(w_a, rt), 1.0, t_d, 0.0, t_d)
+            w_n = _add(w_a, t_mv(ra, _apply_jacobian(b, c, theta, th_d)))
+            _put(jp[a + 1, j], v_n)
+            _put(jr[a + 1, j], w_n)
+        sa, sb = exp_coefficients(th2)
+        hat = t_hat(theta)
+        ra = t_mm(ra, t_plus_diag(t_lin9(sa, hat, sb, t_mm(hat, hat)), 1.0))
     return jp, jr
 
 
