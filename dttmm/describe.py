@@ -3,8 +3,7 @@ import numpy as np
 
 from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EI_V, EI_W,
                             EXACT, FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING,
-                            TORSION_MODES,
-                            axial_frequencies, bending_frequencies, largest_basis,
+                            TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
 from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -63,10 +62,10 @@ def beam_frequencies(model, k):
 def suggested_dt(model):
     """A step that resolves the model's fastest retained motion: 20 steps per period of the
     highest retained beam mode (a strain rod's highest own frequency) and of every elastic
-    hinge's springs against the body they
-    carry (sqrt(k / m) with its stiffest translational spring and the body's mass, sqrt(k / J)
-    with its stiffest rotational spring and the body's least inertia about the hinge: above
-    the hinge's own frequencies, which the bodies beyond it only lower), and 0.02 rad per step
+    hinge's springs against the body they carry (sqrt(k / m) with its stiffest translational
+    spring and the body's mass, sqrt(k / J) with its stiffest rotational spring and the body's
+    least inertia about the hinge: above the hinge's own frequencies, which the bodies beyond
+    it only lower), and 0.02 rad per step
     of the fastest initial spin or of a pendulum swing sqrt(g / L) over the shortest body
     (rounded down to 1, 2 or 5 x 10^k s)."""
     rates = [float(np.linalg.norm(w)) for w in model.initial_angular_velocity]

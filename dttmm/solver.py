@@ -1460,9 +1460,9 @@ def _kernel_model(model):
     if not ends and not closed_inputs and not np.any(model.attachment):
         return model, np.arange(n)
     names = ("body_params", "hinge_kind", "hinge_params", "body_kind", "beam_params",
-             "initial_rotation", "initial_angular_velocity", "ground_locked", "forces",
-             "torques", "line_loads", "body_names", "hinge_names", "body_mass_center_inertia",
-             "drives")
+             "rod_params", "initial_rotation", "initial_angular_velocity", "ground_locked",
+             "forces", "torques", "line_loads", "body_names", "hinge_names",
+             "body_mass_center_inertia", "drives")
     rows = {name: [] for name in names}
     parent, keep, hub, offsets = [], [], {}, {}
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -1474,9 +1474,9 @@ def _kernel_model(model):
         body_params[TO_OUTPUT] = to_output
         row = dict(body_params=body_params, hinge_kind=FIXED, hinge_params=identity,
                    body_kind=RIGID, beam_params=np.zeros_like(model.beam_params[0]),
-                   initial_rotation=rot, initial_angular_velocity=omega, ground_locked=locked,
-                   forces=None, torques=None, line_loads=None, body_names=body_name,
-                   hinge_names=hinge_name,
+                   rod_params=np.zeros_like(model.rod_params[0]), initial_rotation=rot,
+                   initial_angular_velocity=omega, ground_locked=locked, forces=None,
+                   torques=None, line_loads=None, body_names=body_name, hinge_names=hinge_name,
                    body_mass_center_inertia=np.zeros((3, 3)), drives=())
         for name in names:
             rows[name].append(row[name])
@@ -1502,6 +1502,7 @@ def _kernel_model(model):
         if k in closed_inputs:          # the input section takes the hinge, the beam a weld
             section = dict(row, body_params=np.zeros_like(model.body_params[0]),
                            body_kind=RIGID, beam_params=np.zeros_like(model.beam_params[0]),
+                           rod_params=np.zeros_like(model.rod_params[0]),
                            forces=None, torques=None, line_loads=None,
                            body_names=f"{model.body_names[k]} input section",
                            body_mass_center_inertia=np.zeros((3, 3)))
