@@ -722,24 +722,21 @@ def beam_output_offset(row, rotation, omega, eta, eta_dot):
 
 def point_positions(model, rotation, r_in, eta=None):
     """Mass-centre and output-point positions from input points and rotations ((T, n, ...) or
-    (n, ...) arrays); eta (T, total modes) or (total modes,) moves the beams' output points."""
+    (n, ...) arrays); eta (T, total modes) or (total modes,) moves the beams' and strain rods'
+    output points."""
     p = model.body_params
     r_c = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_MASS_CENTER])
     r_o = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_OUTPUT])
-    if eta is not None and model.has_beams:
+    flexible = np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]
+    if eta is not None and len(flexible):
         eta = np.asarray(eta, dtype=float)
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
-        for k in np.nonzero(model.body_kind == BEAM)[0]:
+        for k in flexible:
             e = eta[..., offsets[k]:offsets[k + 1]]
-            rho, _ = beam_output_offset(model.beam_params[k], rotation[..., k, :, :],
-                                        np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
-            r_o[..., k, :] = r_in[..., k, :] + rho
-    if eta is not None and (model.body_kind == ROD).any():
-        eta = np.asarray(eta, dtype=float)
-        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
-        for k in np.nonzero(model.body_kind == ROD)[0]:
-            e = eta[..., offsets[k]:offsets[k + 1]]
-            rho, _ = rod_output_offset(model.rod_params[k], rotation[..., k, :, :],
-                                       np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
+            rod = model.body_kind[k] == ROD
+            offset = rod_output_offset if rod else beam_output_offset
+            rho, _ = offset(model.rod_params[k] if rod else model.beam_params[k],
+                            rotation[..., k, :, :], np.zeros(e.shape[:-1] + (3,)), e,
+                            np.zeros_like(e))
             r_o[..., k, :] = r_in[..., k, :] + rho.reshape(r_in[..., k, :].shape)
     return r_c, r_o
