@@ -154,14 +154,14 @@ def main(argv=None):
                    header="t,tip_x,tip_y", comments="", fmt="%.9g")
         print(f"wrote {args.csv}")
     if args.plots:
-        _plot(result, args, Path(args.plots))
+        _plot(result, args, how, Path(args.plots))
     if stopped is not None:
         print(f"stopped: {stopped}", file=sys.stderr)
         return 1
     return 0
 
 
-def _plot(result, args, folder):
+def _plot(result, args, how, folder):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -184,8 +184,6 @@ def _plot(result, args, folder):
     ax.set_ylabel("y (m)")
     stretch = ("inextensible" if args.axial_stiffness is None
                else f"EA = {args.axial_stiffness:g} N")
-    how = ("strain rods, Newton-Euler reference" if args.kind == "rod"
-           else f"stiffening {args.stiffening}, dt = {args.dt:g} s")
     ax.set_title(f"Soft falling pendulum: {args.elements} {args.kind} elements x {args.modes} "
                  f"modes per plane\n({how}, {stretch})", fontsize=10)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))

@@ -116,7 +116,8 @@ def main(argv=None):
         fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
         ax[0].plot(res.t, v)
         ax[0].set(ylabel="v_tip (m)", title=f"Spin-up to {args.omega:g} rad/s: the tip in the "
-                  f"hub frame ({args.elements} element(s), {args.modes} modes per plane)")
+                  f"hub frame ({args.elements} {args.kind} element(s), {args.modes} "
+                  f"{'strain coefficients' if args.kind == 'rod' else 'modes'} per plane)")
         ax[1].plot(res.t, u)
         ax[1].set(xlabel="t (s)", ylabel="u_tip (m)")
         for a in ax:
