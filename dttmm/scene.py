@@ -16,11 +16,15 @@ import numpy as np
 
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
-                       SpringDamper, UniversalJoint)
+                       SpringDamper, StrainRod, UniversalJoint)
 from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
                             EXACT, LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
+from .elements.kinds import BEAM, ROD
+from .elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
+                                  ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
+                                  ROD_STRETCH, ROD_TWIST)
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
                               DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
@@ -57,6 +61,18 @@ _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "n
          "end_force": "profile", "end_torque": "profile", "distributed_load": "profile",
          "initial_modal_velocities": "list",
          "rotation": "matrix", "angular_velocity": "vector", "joint": "table"}
+_ROD = {"name": "str", "type": "str", "length": "number", "mass_per_length": "number",
+        "bending_stiffness": "pair", "polar_inertia_per_length": "number",
+        "rotary_inertia_per_length": "pair", "strain_modes": "int", "stations": "int",
+        "twist": "bool", "stretch": "bool", "torsional_stiffness": "number",
+        "axial_stiffness": "number", "damping": "number", "initial_strain": "list",
+        "initial_strain_rate": "list", "rotation": "matrix", "angular_velocity": "vector",
+        "joint": "table"}
+_BODY_KINDS = {"rigid": (RigidBody, _RIGID, ("mass", "inertia", "inertia_about")),
+               "beam": (EulerBernoulliBeam, _BEAM, ("length", "bending_stiffness",
+                                                    "polar_inertia_per_length")),
+               "rod": (StrainRod, _ROD, ("length", "bending_stiffness", "mass_per_length",
+                                         "polar_inertia_per_length"))}
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
 _CLOSE_COMMON = {"type": "str", "name": "str", "a": "str", "b": "str", "at_a": "point",
                  "at_b": "point"}
@@ -211,14 +227,13 @@ def _body(table, i, where):
     name = table.get("name")
     label = f"[[body]] {i + 1}" + (f" ('{name}')" if isinstance(name, str) else "")
     kind = table.get("type")
-    if kind not in ("rigid", "beam"):
-        raise SceneError(f"{where}: {label} key 'type': 'rigid' or 'beam', got "
+    if kind not in _BODY_KINDS:
+        raise SceneError(f"{where}: {label} key 'type': 'rigid', 'beam' or 'rod', got "
                          f"{kind!r}" if "type" in table else
-                         f"{where}: {label} needs the key 'type' ('rigid' or 'beam')")
-    schema = _RIGID if kind == "rigid" else _BEAM
+                         f"{where}: {label} needs the key 'type' ('rigid', 'beam' or 'rod')")
+    element, schema, required = _BODY_KINDS[kind]
     _keys(table, schema, where, label)
-    for key in (("mass", "inertia", "inertia_about") if kind == "rigid"
-                else ("length", "bending_stiffness", "polar_inertia_per_length")):
+    for key in required:
         if key not in table:
             raise SceneError(f"{where}: {label} needs the key '{key}'")
     if "joint" not in table:
@@ -233,7 +248,7 @@ def _body(table, i, where):
         for point, vec in args["points"].items():
             _value(vec, "vector", where, f"{label} key 'points.{point}'")
     try:
-        body = (RigidBody if kind == "rigid" else EulerBernoulliBeam)(**args)
+        body = element(**args)
         body.validated(i)
     except TypeError as err:
         raise SceneError(f"{where}: {label}: {err}") from None
@@ -408,7 +423,15 @@ def scene_of(model, run=None, name=None):
         who = f"body '{model.body_names[k]}'"
         kind = int(model.hinge_kind[k])
         table = {"name": model.body_names[k]}
-        if model.body_kind[k] == 1:          # a beam
+        if model.body_kind[k] == ROD:
+            table.update(_rod_table(model.rod_params[k]))
+            q = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
+            q_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
+            if np.any(q):
+                table["initial_strain"] = q.tolist()
+            if np.any(q_d):
+                table["initial_strain_rate"] = q_d.tolist()
+        elif model.body_kind[k] == BEAM:
             row = model.beam_params[k]
             m = int(row[MODES])
             ball_ends = kind == BALL and (not children[k] or all(
@@ -481,6 +504,21 @@ def scene_of(model, run=None, name=None):
     if run:
         data["run"] = dict(run)
     return data
+
+
+def _rod_table(row):
+    """A strain rod's keys from its row of Model.rod_params (elements/strain_rod.py)."""
+    table = dict(type="rod", length=row[ROD_LENGTH], mass_per_length=row[ROD_MU],
+                 bending_stiffness=[row[ROD_EI_V], row[ROD_EI_W]],
+                 polar_inertia_per_length=row[ROD_JP],
+                 rotary_inertia_per_length=[row[ROD_JV], row[ROD_JW]],
+                 strain_modes=int(row[ROD_MODES]), stations=int(row[ROD_STATIONS]),
+                 damping=row[ROD_DAMPING])
+    if row[ROD_TWIST]:
+        table.update(twist=True, torsional_stiffness=row[ROD_GJ])
+    if row[ROD_STRETCH]:
+        table.update(stretch=True, axial_stiffness=row[ROD_EA])
+    return table
 
 
 def _close_table(model, c):

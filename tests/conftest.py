@@ -11,6 +11,14 @@ os.environ.setdefault("DTTMM_SPECIALIZE", "0")
 sys.path.insert(0, str(Path(__file__).parent))
 
 
+def pytest_configure(config):
+    # A sound run of the suite never trips the unresolved-step flag (tests that mean to catch
+    # it).  Added here, not in pyproject.toml's filterwarnings: pytest resolves that option's
+    # warning class when it reads the file, so dttmm was imported before the line above set
+    # DTTMM_SPECIALIZE, and a run in one process compiled a copy of the kernels per kind of model.
+    config.addinivalue_line("filterwarnings", "error::dttmm.solver.UnresolvedMotionWarning")
+
+
 # --- The kernels compiled once per suite, in parallel -------------------------------------
 # From a fresh clone most of the suite's time is numba compiling.  Run by pytest-xdist, each
 # worker compiles whatever its first tests need, so both compiled the general loop and its start
