@@ -5,7 +5,7 @@
     plot_angles(result)         the x-y-z angles of each body, unwrapped
     plot_energy(result)         kinetic, potential, total, and the total's change
     plot_joints(result)         joint coordinates and drive forces (joints with coordinates)
-    plot_modal(result)          the beams' modal coordinates
+    plot_modal(result)          the beams' modal and the strain rods' strain coordinates
     run_figures(result, model, directory)   all that apply, as PNG files
     animate(result, model, path)            a 3D animation, GIF (Pillow) or MP4 (ffmpeg)
 """
@@ -137,15 +137,30 @@ def plot_joints(result, ax=None, title=None):
 
 
 def plot_modal(result, ax=None, title=None):
-    """The beams' modal coordinates eta (m, mode shapes of unit amplitude) against t."""
+    """The beams' modal coordinates eta (m, mode shapes of unit amplitude) and the strain rods'
+    strain coefficients (1/m for curvatures and twist, 1 for stretch) against t."""
     if result.modal_coordinates is None:
-        raise ValueError("plot_modal: the result has no beams")
+        raise ValueError("plot_modal: the result has no beams or strain rods")
     fig, axes = _axes(ax, 1)
     names = _column_labels(result, "modal_names", "eta", result.modal_coordinates.shape[1])
     for j, name in enumerate(names):
         axes[0].plot(result.t, result.modal_coordinates[:, j], label=name, **_style(j))
-    axes[0].set_ylabel("modal coordinate (m)")
-    return _finish(fig, axes, title or "beams' modal coordinates")
+    default_title, label = _modal_words(names)
+    axes[0].set_ylabel(label)
+    return _finish(fig, axes, title or default_title)
+
+
+def _modal_words(names):
+    """(title, y label) of plot_modal for its columns' names (solver.column_names: a strain
+    rod's columns are its components bend_z, bend_y, twist, stretch with their numbers)."""
+    rods = {n.rsplit(" ", 1)[0] for n in names if n.rsplit(" ", 1)[-1].startswith("bend_")}
+    beams = any(n.rsplit(" ", 1)[0] not in rods for n in names)
+    if rods and beams:
+        return ("beams' modal and strain rods' strain coordinates",
+                "modal coordinate (m), strain coefficient (1/m; stretch 1)")
+    if rods:
+        return "strain rods' strain coordinates", "strain coefficient (1/m; stretch 1)"
+    return "beams' modal coordinates", "modal coordinate (m)"
 
 
 def run_figures(result, model, directory, title=""):
@@ -160,7 +175,8 @@ def run_figures(result, model, directory, title=""):
     if result.joint_coordinates is not None:
         figures.append(("joints", plot_joints(result, title=prefix + "joints")))
     if result.modal_coordinates is not None:
-        figures.append(("modal", plot_modal(result, title=prefix + "beams' modal coordinates")))
+        names = _column_labels(result, "modal_names", "eta", result.modal_coordinates.shape[1])
+        figures.append(("modal", plot_modal(result, title=prefix + _modal_words(names)[0])))
     paths = []
     for name, fig in figures:
         path = directory / f"{name}.png"

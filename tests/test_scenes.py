@@ -336,6 +336,12 @@ def test_strain_rods_run_from_a_scene_and_save_back_as_rods(tmp_path):
                            gravity=[0.0, -9.81, 0.0]), scene.model)
     result = simulate(scene.model, 0.01, 1e-3)
     assert np.all(np.isfinite(result.modal_coordinates)) and result.t[-1] == pytest.approx(0.01)
+    import matplotlib
+    matplotlib.use("Agg")
+    from dttmm.plots import plot_modal
+    axes = plot_modal(result).axes[0]       # (a rod's strain, not a beam's modal coordinates)
+    assert "strain coefficient (1/m" in axes.get_ylabel()
+    assert axes.get_legend_handles_labels()[1][:2] == ["inner bend_z1", "inner bend_z2"]
 
     model = build_chain([BallJoint(), rod("inner", twist=True, torsional_stiffness=2e-2,
                                           rotary_inertia_per_length=[1e-6, 2e-6], damping=1e-3,
