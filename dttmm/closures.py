@@ -37,8 +37,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL, BallJoint,
-                       EulerBernoulliBeam)
+from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, ROD, UNIVERSAL,
+                       BallJoint, EulerBernoulliBeam)
+from .elements.kinds import FLEXIBLE
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
 from .elements.joints import rotation_about
@@ -173,11 +174,11 @@ def _side(model, k, at, who, argument, frames, named):
 
 def _weld_group(model):
     """Each body's rigid unit: bodies joined by fixed hinges through rigid bodies share one
-    (GROUND for those welded to the ground)."""
+    (GROUND for those welded to the ground; a beam's or strain rod's end moves on its own)."""
     group = np.arange(model.n_bodies)
     for k in range(model.n_bodies):
         p = model.parent[k]
-        if model.hinge_kind[k] == FIXED and (p < 0 or model.body_kind[p] != BEAM):
+        if model.hinge_kind[k] == FIXED and (p < 0 or model.body_kind[p] not in FLEXIBLE):
             group[k] = GROUND if p < 0 else group[p]
     return group
 
@@ -679,9 +680,11 @@ def tree_state(model, theta, q, omega, qd):
     joints' coordinates, omega (n, 3) the free bodies' angular velocities, qd (n, 2) the
     joints' rates (rows of other bodies unused).  Returns (rot, w, r_in, v_in, rot_o, w_o, r_o,
     v_o), each (n, ...): rotations, angular velocities, input points and their velocities, and
-    the output sections and points (a beam's deflected end; the beams' modal coordinates and
-    rates and the elastic hinges' deflections are the model's)."""
+    the output sections and points (a beam's or strain rod's deflected end; the beams' modal
+    coordinates, the rods' strain coordinates, their rates and the elastic hinges' deflections
+    are the model's)."""
     from .model import output_section
+    from .elements.strain_rod import rod_end_section, rod_output_offset
     from .result import beam_output_offset
     from .kernels.algebra.so3 import expm_so3
     n = model.n_bodies
@@ -723,11 +726,15 @@ def tree_state(model, theta, q, omega, qd):
             if kind != BALL:
                 d = model.hinge_params[k, 45:48]      # the elastic deflection, as given
         r_in[k], v_in[k] = r_att + d, v_att + d_rate
+        eta = model.initial_modal_coordinates[off[k]:off[k + 1]]
+        eta_d = model.initial_modal_velocities[off[k]:off[k + 1]]
         if model.body_kind[k] == BEAM:
-            eta = model.initial_modal_coordinates[off[k]:off[k + 1]]
-            eta_d = model.initial_modal_velocities[off[k]:off[k + 1]]
             rot_o[k], w_o[k] = output_section(model.beam_params[k], rot[k], w[k], eta, eta_d)
             rho, rho_rate = beam_output_offset(model.beam_params[k], rot[k], w[k], eta, eta_d)
+        elif model.body_kind[k] == ROD:         # its end section and point
+            _, rot_o[k], w_o[k] = rod_end_section(model.rod_params[k], rot[k], w[k], eta, eta_d)
+            rho, rho_rate = (x[0] for x in rod_output_offset(model.rod_params[k], rot[k], w[k],
+                                                             eta, eta_d))
         else:
             rot_o[k], w_o[k] = rot[k], w[k]
             rho = rot[k] @ model.body_params[k, TO_OUTPUT]

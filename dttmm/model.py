@@ -1112,7 +1112,10 @@ def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
     """A strain rod joins its neighbours by ball joints and fixed hinges so far (the reference's
     rows for it; docs/strain_rod.md); a body welded to its end hangs there alone, right after
     it (DT-TMM's transfer takes that weld itself; a modal beam's other children then hang from
-    an end section, solver.kernel_model, which the rod does not have yet); it closes no loop."""
+    an end section, solver.kernel_model, which the rod does not have yet).  It may lie inside a
+    closed loop (kernels/assembly/closure.py takes its end point and strain coordinates) but is
+    no closing joint's side: a body welded to its end is (the side's frame there would be the
+    rod's end section, which the loops' rows do not read yet)."""
     rods = set(np.nonzero(body_kind == ROD)[0].tolist())
     for k in range(len(bodies)):
         for j, side in ((k, "before it"), (parent[k], "after it")):
@@ -1136,7 +1139,9 @@ def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
         for body in closure[1:3]:
             j = next((j for j in rods if body is bodies[j]), None)
             if j is not None:
-                raise ValueError(f"{bodies[j].label(j)}: a strain rod closes no loop so far")
+                raise ValueError(f"{bodies[j].label(j)}: a strain rod is no closing joint's side "
+                                 f"so far; weld a light rigid body to its end (FixedHinge) "
+                                 f"and close the loop at that body")
 
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):

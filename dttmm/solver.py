@@ -514,6 +514,8 @@ def energy_not_held(model, rho_inf=1.0):
         return "it has no closed loops (the loops' projection holds it)"
     if np.any(model.body_kind == BEAM):
         return "it has beams"
+    if np.any(model.body_kind == ROD):
+        return "it has strain rods"
     if np.any(model.hinge_kind == ELASTIC) or np.any(np.asarray(model.closure_kind) == ELASTIC):
         return "it has elastic hinges"
     if does_work(model):

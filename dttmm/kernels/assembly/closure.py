@@ -30,8 +30,8 @@ a loop that closes near it costs the sweep, the Delassus matrix and the projecti
 own bodies.
 
 Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies and beams
-(closed at their output ends), a fixed or moving ground (set_ground); every joint kind in the
-tree and closing it.
+(closed at their output ends), strain rods inside a loop (not as a closing joint's side), a
+fixed or moving ground (set_ground); every joint kind in the tree and closing it.
 """
 from collections import namedtuple
 
@@ -39,14 +39,15 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT, no_alloc_kernel
-from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES
+from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_RODS
 from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
-from ...elements import BEAM
+from ...elements import BEAM, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ...elements.hinges import AXIS_1, ELASTIC, FIXED
 from ...elements.joints import PRISMATIC
 from ..transfers.beam import end_section_motion
+from ..transfers.strain_rod import rod_end, rod_end_frame, rod_tables_of
 from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
 from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mmt, t_mv
 from ..algebra.so3 import expm_so3
@@ -203,6 +204,20 @@ def _beam_offset(beams, k, rot, w, eta, eta_d):
 
 
 @no_alloc_kernel
+def _rod_offset(params, k, rot, w, eta, eta_d):
+    """Strain rod k's output point from its input point, rho = A p_L and its rate
+    w x rho + A p_L' (strain_rod.rod_end: its end station in its frame; result.
+    rod_output_offset in Python)."""
+    steps, xi0, phi = rod_tables_of(params.rods, k)[:3]
+    i0, i1 = params.beams[3][k], params.beams[3][k + 1]
+    q, qd = eta[i0:i1], eta_d[i0:i1]
+    _, p_l, _, v_l, _, _ = rod_end(steps, xi0, phi, q, qd, qd)      # (accelerations unused)
+    f = _m9(rot, k)
+    rho = t_mv(f, p_l)
+    return rho, _add(t_cross(_v3(w, k), rho), t_mv(f, v_l))
+
+
+@no_alloc_kernel
 def set_ground(loops, r, v, a, rot, w, wd):
     """The ground point's position r, velocity v and acceleration a and the ground frame's
     rotation rot, angular velocity w and acceleration wd where the rows are next written (a
@@ -224,8 +239,8 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     coordinates and rates, the elastic hinges' deflections and rates and the beams' modal
     coordinates and rates: r_in = r_out,P + d (a slide's d = A_P n q, an elastic hinge's its
     deflection d, world, v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
-    r_in + rho (a beam's deflected end, _beam_offset); the kernel model hangs every child at
-    its parent's output point."""
+    r_in + rho (a beam's deflected end, _beam_offset; a strain rod's, _rod_offset); the kernel
+    model hangs every child at its parent's output point."""
     parent, hinge_kind, hinge_params, body_params = (params.parent, params.hinge_kind,
                                                      params.hinge_params, params.body_params)
     beams, r_out, v_out = params.beams, loops.r_out, loops.v_out
@@ -253,6 +268,8 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
             v = _add(v, _v3(defl_rate, k))
         if HAS_BEAMS and body_kind[k] == BEAM:
             arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
+        elif HAS_RODS and body_kind[k] == ROD:
+            arm, arm_rate = _rod_offset(params, k, rot, w, eta, eta_d)
         else:
             row = params.body_row[k]
             arm = t_mv(_m9(rot, k), (body_params[row, 4], body_params[row, 5],
@@ -693,16 +710,16 @@ def _force_rows(params, loops, rot, w):
 
 @no_alloc_kernel
 def _modal_responses(params, loops, eta_map):
-    """loops.eta_col[j]: row j's response of the beams' eta'' (eta'' = eta_map [z_I; 1] at the
-    beam's input station, step.py::_modal_accelerations; homogeneous: its linear part), on its
-    active beams (zero elsewhere)."""
+    """loops.eta_col[j]: row j's response of the beams' eta'' and the strain rods' q'' (eta'' =
+    eta_map [z_I; 1] at the element's input station, step.py::_modal_accelerations; homogeneous:
+    its linear part), on its active beams and rods (zero elsewhere)."""
     body_kind, mode_off = params.beams[0], params.beams[3]
     loops.eta_col[:, :] = 0.0
     for j in range(loops.kind.shape[0]):
         z = loops.z_save[j + 1]
         for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
             k = loops.act_idx[q]
-            if HAS_BEAMS and body_kind[k] == BEAM:
+            if (HAS_BEAMS and body_kind[k] == BEAM) or (HAS_RODS and body_kind[k] == ROD):
                 for i in range(mode_off[k], mode_off[k + 1]):
                     v = 0.0
                     for c in range(12):
@@ -715,7 +732,8 @@ def _dependent_frames(params, loops, state, bodies, work):
     """Every given body (in tree order) whose frame follows its parent's, from the parent's
     (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's
     offset too), a welded body's as the parent's (R0) or its beam's end section's (beam.
-    end_section_motion).  work: (60,) scratch (nothing is allocated)."""
+    end_section_motion) or its strain rod's (strain_rod.rod_end_frame).  work: (60,) scratch
+    (nothing is allocated)."""
     scratch = work[0:48]
     rest = work[48:57].reshape((3, 3))
     body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
@@ -744,6 +762,15 @@ def _dependent_frames(params, loops, state, bodies, work):
                                    state.eta[i0:i1], state.eta_d[i0:i1], state.eta_acc[i0:i1],
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
+            elif HAS_RODS and body_kind[p] == ROD:
+                for i in range(3):
+                    for j in range(3):
+                        rest[i, j] = params.hinge_params[hr, 3 * i + j]
+                i0, i1 = mode_off[p], mode_off[p + 1]
+                steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
+                rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
+                              state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
+                              state.omega[k], state.omega_dot[k])
             else:
                 hp = params.hinge_params       # A = A_P R0, R0 row-major in hp[hr, 0:9]
                 for i in range(3):

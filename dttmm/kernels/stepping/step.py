@@ -31,7 +31,7 @@ from ...elements.hinges import BALL, ELASTIC, FIXED
 from ...elements.drives import MOTION
 from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
 from ..transfers.body import rigid_body_transfer, station_history_correction
-from ..transfers.strain_rod import rod_end_frame, rod_transfer
+from ..transfers.strain_rod import rod_end_frame, rod_tables_of, rod_transfer
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
 from ..features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_RODS,
                         HAS_STATION_HISTORIES,
@@ -338,7 +338,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
             outboard = (welded, hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
                         rot[kout], w1_out)
-            rod_transfer(_rod(params.rods, k), outboard, params.gravity, at_start, rot[k],
+            rod_transfer(rod_tables_of(params.rods, k), outboard, params.gravity, at_start, rot[k],
                          phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
                          eta[i0:i1], eta_d[i0:i1], z_star[jh + 1], eta_dd_star[i0:i1],
                          u[jh + 1], eta_map[i0:i1])
@@ -357,16 +357,6 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         else:
             return jh + 2
     return 0
-
-
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def _rod(rods, k):
-    """Strain rod k's tables as rod_transfer takes them: (steps, xi0, phi, weights, mu,
-    section, stiffness, damping) (solver.rod_tables)."""
-    rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rods
-    r = rod_row[k]
-    return (steps[r], xi0[r], phi[r], weights[r], mu_damping[r, 0], section[r], stiffness[r],
-            mu_damping[r, 1])
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -599,7 +589,7 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
                            rot_out, w_out, wd_out)
     elif HAS_RODS and params.beams[0][p] == ROD:
         i0, i1 = params.beams[3][p], params.beams[3][p + 1]
-        steps, xi0, phi = _rod(params.rods, p)[:3]
+        steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
         rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
                       eta_dd[i0:i1], rest, rot_out, w_out, wd_out)
     else:

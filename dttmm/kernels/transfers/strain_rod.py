@@ -188,76 +188,99 @@ def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc
     reference strain and the strain basis at its Gauss point i (MAGNUS_POINTS).  Writes, for the
     stations 0 .. len(steps) (station 0 the input section: identity, zeros), rot (3 x 3), pos,
     omega, vel, alpha, acc (3 each).  On values (mat3's 3-tuples): it allocates nothing."""
-    n = steps.shape[0]
-    zero = (0.0, 0.0, 0.0)
-    ra = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-    p_a, w_a, v_a, al_a, ac_a = zero, zero, zero, zero, zero
-    _store(rot[0], pos[0], omega[0], vel[0], alpha[0], acc[0], ra, p_a, w_a, v_a, al_a, ac_a)
-    for a in range(n):
-        h = steps[a]
-        k = SQRT3_12 * h * h
-        x1w, x1v = _field(1.0, xi0[a, 0], phi[a, 0], q)      # the strain at the Gauss points
-        x2w, x2v = _field(1.0, xi0[a, 1], phi[a, 1], q)
-        v1w, v1v = _field(0.0, xi0[a, 0], phi[a, 0], qd)     # its rate
-        v2w, v2v = _field(0.0, xi0[a, 1], phi[a, 1], qd)
-        a1w, a1v = _field(0.0, xi0[a, 0], phi[a, 0], qdd)    # its acceleration
-        a2w, a2v = _field(0.0, xi0[a, 1], phi[a, 1], qdd)
-        # Omega = h/2 (x1 + x2) + k ad(x1) x2 and its time derivatives (the product rule)
-        bw, bv = _ad(x1w, x1v, x2w, x2v)
-        theta = _sum4(0.5 * h, x1w, 0.5 * h, x2w, k, bw, 0.0, bw)
-        u = _sum4(0.5 * h, x1v, 0.5 * h, x2v, k, bv, 0.0, bv)
-        b1w, b1v = _ad(v1w, v1v, x2w, x2v)
-        b2w, b2v = _ad(x1w, x1v, v2w, v2v)
-        th_d = _sum4(0.5 * h, v1w, 0.5 * h, v2w, k, b1w, k, b2w)
-        u_d = _sum4(0.5 * h, v1v, 0.5 * h, v2v, k, b1v, k, b2v)
-        c1w, c1v = _ad(a1w, a1v, x2w, x2v)
-        c2w, c2v = _ad(x1w, x1v, a2w, a2v)
-        c3w, c3v = _ad(v1w, v1v, v2w, v2v)
-        th_dd = _add(_sum4(0.5 * h, a1w, 0.5 * h, a2w, k, c1w, k, c2w), _scale(2.0 * k, c3w))
-        u_dd = _add(_sum4(0.5 * h, a1v, 0.5 * h, a2v, k, c1v, k, c2v), _scale(2.0 * k, c3v))
-        # exp(Omega^) = (exp(theta^), J_l(theta) u)
-        th2 = _dot(theta, theta)
-        coefficients = jacobian_coefficients(th2)
-        b, c = coefficients[0], coefficients[1]
-        sa, sb = exp_coefficients(th2)
-        hat = t_hat(theta)
-        r_step = t_plus_diag(t_lin9(sa, hat, sb, t_mm(hat, hat)), 1.0)
-        t = _apply_jacobian(b, c, theta, u)
-        dj_u, d2j_u = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u)
-        dj_ud, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u_d)
-        t_d = _add(dj_u, _apply_jacobian(b, c, theta, u_d))
-        t_dd = _sum4(1.0, d2j_u, 2.0, dj_ud, 1.0, _apply_jacobian(b, c, theta, u_dd), 0.0, t)
-        # the section's rotation rate: d/dt exp(theta^) = (J_l theta')^ exp(theta^)
-        jth_d = _apply_jacobian(b, c, theta, th_d)
-        dj_thd, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, th_d)
-        rt = t_mv(ra, t)
-        r_jthd = t_mv(ra, jth_d)
-        r_td = t_mv(ra, t_d)
-        wxrt = t_cross(w_a, rt)
-        p_n = _add(p_a, rt)
-        w_n = _add(w_a, r_jthd)
-        v_n = _sum4(1.0, v_a, 1.0, wxrt, 1.0, r_td, 0.0, v_a)
-        al_n = _sum4(1.0, al_a, 1.0, t_cross(w_a, r_jthd), 1.0,
-                     t_mv(ra, _add(dj_thd, _apply_jacobian(b, c, theta, th_dd))), 0.0, al_a)
-        ac_n = _add(_sum4(1.0, ac_a, 1.0, t_cross(al_a, rt), 1.0, t_cross(w_a, wxrt), 2.0,
-                          t_cross(w_a, r_td)), t_mv(ra, t_dd))
-        ra = t_mm(ra, r_step)
-        p_a, w_a, v_a, al_a, ac_a = p_n, w_n, v_n, al_n, ac_n
-        _store(rot[a + 1], pos[a + 1], omega[a + 1], vel[a + 1], alpha[a + 1], acc[a + 1], ra,
-               p_a, w_a, v_a, al_a, ac_a)
+    section = _input_section()
+    _store(rot[0], pos[0], omega[0], vel[0], alpha[0], acc[0], section)
+    for a in range(steps.shape[0]):
+        section = _magnus_step(steps[a], xi0[a], phi[a], q, qd, qdd, section)
+        _store(rot[a + 1], pos[a + 1], omega[a + 1], vel[a + 1], alpha[a + 1], acc[a + 1],
+               section)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rod_end(steps, xi0, phi, q, qd, qdd):
+    """The end section's (R_L (9-tuple, row-major), p_L, omega_L, p_L', alpha_L, p_L'') in the
+    input-section frame: rod_kinematics' last station, on values (no station arrays; callable
+    from kernels compiled without reference counting)."""
+    section = _input_section()
+    for a in range(steps.shape[0]):
+        section = _magnus_step(steps[a], xi0[a], phi[a], q, qd, qdd, section)
+    return section
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def _store(rot, pos, omega, vel, alpha, acc, r, p, w, v, al, ac):
-    """Station a's values into its rows of rod_kinematics' outputs."""
+def _input_section():
+    """Station 0, the input section: (R, p, omega, p', alpha, p'') = (I, 0, ..., 0)."""
+    zero = (0.0, 0.0, 0.0)
+    return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), zero, zero, zero, zero, zero
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _magnus_step(h, xi0, phi, q, qd, qdd, section):
+    """One Magnus step of length h from the section (R_a, p_a, omega_a, p_a', alpha_a, p_a'')
+    to the next (the module's docstring); xi0 (2, 6), phi (2, 6, nq) at its Gauss points."""
+    ra, p_a, w_a, v_a, al_a, ac_a = section
+    k = SQRT3_12 * h * h
+    x1w, x1v = _field(1.0, xi0[0], phi[0], q)      # the strain at the Gauss points
+    x2w, x2v = _field(1.0, xi0[1], phi[1], q)
+    v1w, v1v = _field(0.0, xi0[0], phi[0], qd)     # its rate
+    v2w, v2v = _field(0.0, xi0[1], phi[1], qd)
+    a1w, a1v = _field(0.0, xi0[0], phi[0], qdd)    # its acceleration
+    a2w, a2v = _field(0.0, xi0[1], phi[1], qdd)
+    # Omega = h/2 (x1 + x2) + k ad(x1) x2 and its time derivatives (the product rule)
+    bw, bv = _ad(x1w, x1v, x2w, x2v)
+    theta = _sum4(0.5 * h, x1w, 0.5 * h, x2w, k, bw, 0.0, bw)
+    u = _sum4(0.5 * h, x1v, 0.5 * h, x2v, k, bv, 0.0, bv)
+    b1w, b1v = _ad(v1w, v1v, x2w, x2v)
+    b2w, b2v = _ad(x1w, x1v, v2w, v2v)
+    th_d = _sum4(0.5 * h, v1w, 0.5 * h, v2w, k, b1w, k, b2w)
+    u_d = _sum4(0.5 * h, v1v, 0.5 * h, v2v, k, b1v, k, b2v)
+    c1w, c1v = _ad(a1w, a1v, x2w, x2v)
+    c2w, c2v = _ad(x1w, x1v, a2w, a2v)
+    c3w, c3v = _ad(v1w, v1v, v2w, v2v)
+    th_dd = _add(_sum4(0.5 * h, a1w, 0.5 * h, a2w, k, c1w, k, c2w), _scale(2.0 * k, c3w))
+    u_dd = _add(_sum4(0.5 * h, a1v, 0.5 * h, a2v, k, c1v, k, c2v), _scale(2.0 * k, c3v))
+    # exp(Omega^) = (exp(theta^), J_l(theta) u)
+    th2 = _dot(theta, theta)
+    coefficients = jacobian_coefficients(th2)
+    b, c = coefficients[0], coefficients[1]
+    sa, sb = exp_coefficients(th2)
+    hat = t_hat(theta)
+    r_step = t_plus_diag(t_lin9(sa, hat, sb, t_mm(hat, hat)), 1.0)
+    t = _apply_jacobian(b, c, theta, u)
+    dj_u, d2j_u = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u)
+    dj_ud, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, u_d)
+    t_d = _add(dj_u, _apply_jacobian(b, c, theta, u_d))
+    t_dd = _sum4(1.0, d2j_u, 2.0, dj_ud, 1.0, _apply_jacobian(b, c, theta, u_dd), 0.0, t)
+    # the section's rotation rate: d/dt exp(theta^) = (J_l theta')^ exp(theta^)
+    jth_d = _apply_jacobian(b, c, theta, th_d)
+    dj_thd, _ = jacobian_derivatives_applied(coefficients, theta, th_d, th_dd, th_d)
+    rt = t_mv(ra, t)
+    r_jthd = t_mv(ra, jth_d)
+    r_td = t_mv(ra, t_d)
+    wxrt = t_cross(w_a, rt)
+    p_n = _add(p_a, rt)
+    w_n = _add(w_a, r_jthd)
+    v_n = _sum4(1.0, v_a, 1.0, wxrt, 1.0, r_td, 0.0, v_a)
+    al_n = _sum4(1.0, al_a, 1.0, t_cross(w_a, r_jthd), 1.0,
+                 t_mv(ra, _add(dj_thd, _apply_jacobian(b, c, theta, th_dd))), 0.0, al_a)
+    ac_n = _add(_sum4(1.0, ac_a, 1.0, t_cross(al_a, rt), 1.0, t_cross(w_a, wxrt), 2.0,
+                      t_cross(w_a, r_td)), t_mv(ra, t_dd))
+    return t_mm(ra, r_step), p_n, w_n, v_n, al_n, ac_n
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _store(rot, pos, omega, vel, alpha, acc, section):
+    """A station's values (R, p, omega, p', alpha, p'') into its rows of rod_kinematics'
+    outputs."""
+    r = section[0]
     for i in range(3):
         for j in range(3):
             rot[i, j] = r[3 * i + j]
-    _put(pos, p)
-    _put(omega, w)
-    _put(vel, v)
-    _put(alpha, al)
-    _put(acc, ac)
+    _put(pos, section[1])
+    _put(omega, section[2])
+    _put(vel, section[3])
+    _put(alpha, section[4])
+    _put(acc, section[5])
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -568,18 +591,15 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
 @njit(cache=True, fastmath=CONTRACT)
 def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out, wd_out):
     """The frame welded to a rod's end section (rest: the weld's R0) from the rod's frame (A,
-    w, w') and its strain coordinates, rates and accelerations (rod_kinematics' last station:
-    R_L, omega_L, alpha_L in the input frame): A_O = A R_L R0, w_O = w + A omega_L,
-    w_O' = w' + w x (A omega_L) + A alpha_L (as the modal beam's end section,
-    kernels/stepping/step.py::_end_section_frame)."""
-    n = steps.shape[0] + 1
-    r_s, pos, om, vel, al, acc = station_arrays(n)
-    rod_kinematics(steps, xi0, phi, q, qd, qdd, r_s, pos, om, vel, al, acc)
+    w, w') and its strain coordinates, rates and accelerations (rod_end: R_L, omega_L, alpha_L
+    in the input frame): A_O = A R_L R0, w_O = w + A omega_L, w_O' = w' + w x (A omega_L)
+    + A alpha_L (as the modal beam's end section,
+    kernels/stepping/step.py::_end_section_frame).  Allocates nothing."""
+    r_l, _, om, _, al, _ = rod_end(steps, xi0, phi, q, qd, qdd)
     ra = t_of_mat(rot)
-    end = t_mm(t_mm(ra, t_of_mat(r_s[n - 1])), t_of_mat(rest))
-    a_om = t_mv(ra, t_of_vec(om[n - 1]))
-    wv = t_of_vec(w)
-    alpha = _add(_add(t_of_vec(wd), t_cross(wv, a_om)), t_mv(ra, t_of_vec(al[n - 1])))
+    end = t_mm(t_mm(ra, r_l), t_of_mat(rest))
+    a_om = t_mv(ra, om)
+    alpha = _add(_add(t_of_vec(wd), t_cross(t_of_vec(w), a_om)), t_mv(ra, al))
     for i in range(3):
         w_out[i] = w[i] + a_om[i]
         wd_out[i] = alpha[i]
@@ -591,14 +611,22 @@ def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out,
 def rod_end_points(steps, xi0, phi, q, qd):
     """(p_L, p_L') (T, 3): a rod's end point and its velocity relative to its frame, in the
     input frame, for T states of its strain coordinates and rates q, qd (T, n_q)."""
-    n = steps.shape[0] + 1
     m = q.shape[0]
     p_end, v_end = np.zeros((m, 3)), np.zeros((m, 3))
-    r_s, pos, om, vel, al, acc = station_arrays(n)
-    zero = np.zeros(q.shape[1])
     for t in range(m):
-        rod_kinematics(steps, xi0, phi, np.ascontiguousarray(q[t]), np.ascontiguousarray(qd[t]),
-                       zero, r_s, pos, om, vel, al, acc)
-        p_end[t] = pos[n - 1]
-        v_end[t] = vel[n - 1]
+        q_t, qd_t = np.ascontiguousarray(q[t]), np.ascontiguousarray(qd[t])
+        _, p, _, v, _, _ = rod_end(steps, xi0, phi, q_t, qd_t, qd_t)   # (accelerations unused)
+        _put(p_end[t], p)
+        _put(v_end[t], v)
     return p_end, v_end
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def rod_tables_of(rods, k):
+    """Strain rod k's tables as the kernels take them, from the kernel model's rods
+    (solver.rod_tables; kernels/stepping/loop.py::Params.rods): (steps, xi0, phi, weights, mu,
+    section, stiffness, damping)."""
+    rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rods
+    r = rod_row[k]
+    return (steps[r], xi0[r], phi[r], weights[r], mu_damping[r, 0], section[r], stiffness[r],
+            mu_damping[r, 1])
