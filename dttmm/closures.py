@@ -16,12 +16,12 @@ Per closing joint c (elements/kinds.py codes, as ``Model.hinge_kind``):
     closure_body[c]       (a, b): body indices, -1 for the ground
     closure_point[c, s]   side s's point in its frame from its input point, m (the ground's:
                           in the ground frame from the ground point)
-    closure_on_end[c, s]  the point is a beam's output end (its deflected end section: the
-                          point moves and turns with the beam's deflection)
+    closure_on_end[c, s]  the point is a beam's or strain rod's output end (its deflected end
+                          section: the point moves and turns with the element's deflection)
     closure_params[c]     a hinge_params row (elements/hinges.py): R0, the axes (axis 1 in a's
                           frame, axis 2 in b's) and the coordinates at t = 0
-with F_a, F_b the sides' frames at their points (a rigid body's own, a beam's end section at
-its output end, the ground frame) the joint holds, as a tree joint (docs/joints.md):
+with F_a, F_b the sides' frames at their points (a rigid body's own, a beam's or rod's end
+section at its output end, the ground frame) the joint holds, as a tree joint (docs/joints.md):
     ball:       p_b = p_a
     fixed:      p_b = p_a,  F_b = F_a R0
     revolute:   p_b = p_a,  F_b = F_a Rot(n, q) R0
@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, ROD, UNIVERSAL,
-                       BallJoint, EulerBernoulliBeam)
+                       BallJoint, EulerBernoulliBeam, StrainRod)
 from .elements.kinds import FLEXIBLE
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
@@ -83,7 +83,7 @@ def _body_index(model, side, who, argument, index_of):
 def loop_membership(entries, bodies, parent):
     """Before the build: (in_loop, closed_output, output_moment), (n,) bools: the bodies on
     the tree path between a closing joint's sides (from each side up to their common ancestor;
-    a beam closed at its input end from its parent),
+    a beam or strain rod closed at its input end from its parent),
     those whose output point a closing joint takes, and those where that joint carries a moment
     (any but a ball joint).  Sides that name nothing are skipped here (the
     build refuses them, naming the joint)."""
@@ -106,9 +106,9 @@ def loop_membership(entries, bodies, parent):
             k = parent[k]
         return out
 
-    def start(k, at):       # a beam closed at its input end: its length is not in the loop
+    def start(k, at):       # a beam or rod closed at its input end: its length is not in
         if k >= 0 and isinstance(at, str) and at == "input" and \
-                isinstance(bodies[k], EulerBernoulliBeam):
+                isinstance(bodies[k], (EulerBernoulliBeam, StrainRod)):      # the loop
             return parent[k]
         return k
 
@@ -150,7 +150,7 @@ def _side(model, k, at, who, argument, frames, named):
         p = finite_vector(who, argument, at)
         return model.ground_rotation.T @ (p - model.ground_position), False, p, \
             model.ground_rotation
-    beam = model.body_kind[k] == BEAM
+    beam = model.body_kind[k] in FLEXIBLE        # a modal beam or a strain rod
     if at is None or at == "output":
         if beam:
             return np.zeros(3), True, r_o[k], a_o[k]
@@ -164,8 +164,8 @@ def _side(model, k, at, who, argument, frames, named):
                              f"{at!r} (it has: {', '.join(['output', 'input', *points])})")
         local = np.array(points[at], dtype=float)
     elif beam:
-        raise ValueError(f"{who}: {argument}: a beam is closed at one of its ends ('output' or "
-                         f"'input'), got {at!r}")
+        raise ValueError(f"{who}: {argument}: a beam or strain rod is closed at one of its ends "
+                         f"('output' or 'input'), got {at!r}")
     else:
         from .elements._checks import finite_vector
         local = finite_vector(who, argument, at)
@@ -357,8 +357,8 @@ def is_pinned_tip(model):
     (a, b), n = model.closure_body[0], model.n_bodies
     if model.ground_motion is not None or b != GROUND or a != n - 1:
         return False
-    beam = model.body_kind[a] == BEAM
-    on_output = (model.closure_on_end[0, 0] if beam
+    flexible = model.body_kind[a] in FLEXIBLE
+    on_output = (model.closure_on_end[0, 0] if flexible
                  else np.array_equal(model.closure_point[0, 0], model.body_params[a, TO_OUTPUT]))
     return bool(on_output)
 
@@ -387,8 +387,9 @@ def closure_gaps(model):
 def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground):
     """(p, v, F, w) of closing joint c's side s at T recorded states: its point, the point's
     velocity, the side's frame and angular velocity, (T, ...) each.  rotation, omega, r_in,
-    v_in: (T, n, ...) the bodies'; eta, eta_dot (T, total modes) the beams' (None without
-    beams); ground: (r, v, rot, w) of the ground frame, (T, ...) each."""
+    v_in: (T, n, ...) the bodies'; eta, eta_dot (T, total modes) the beams' and strain rods'
+    (None without); ground: (r, v, rot, w) of the ground frame, (T, ...) each."""
+    from .elements.strain_rod import rod_end_section, rod_output_offset
     from .model import output_section
     from .result import beam_output_offset
     k, local = model.closure_body[c, s], model.closure_point[c, s]
@@ -397,12 +398,19 @@ def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground)
         arm = rot_g @ local
         return r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
     rot, w = rotation[:, k], omega[:, k]
-    if model.closure_on_end[c, s]:      # a beam's output end: its deflected end section
-        row = model.beam_params[k]
+    if model.closure_on_end[c, s]:      # a beam's or rod's output end: its deflected end section
         i0 = int(np.sum(model.n_modes[:k]))
         e, e_d = eta[:, i0:i0 + model.n_modes[k]], eta_dot[:, i0:i0 + model.n_modes[k]]
-        rho, rate = beam_output_offset(row, rot, w, e, e_d)
-        sections = [output_section(row, rot[t], w[t], e[t], e_d[t]) for t in range(len(rot))]
+        if model.body_kind[k] == ROD:
+            row = model.rod_params[k]
+            rho, rate = rod_output_offset(row, rot, w, e, e_d)
+            sections = [rod_end_section(row, rot[t], w[t], e[t], e_d[t])[1:]
+                        for t in range(len(rot))]
+        else:
+            row = model.beam_params[k]
+            rho, rate = beam_output_offset(row, rot, w, e, e_d)
+            sections = [output_section(row, rot[t], w[t], e[t], e_d[t])
+                        for t in range(len(rot))]
         return (r_in[:, k] + rho, v_in[:, k] + rate, np.array([f for f, _ in sections]),
                 np.array([w_o for _, w_o in sections]))
     arm = rot @ local

@@ -192,7 +192,7 @@ def fixed_steps(run):
         work_steps, work_values = [np.array([done])], [np.zeros(1)]     # W at every step
 
         def result_of(values, steps):
-            rows = Recording(keys, plan.keep)
+            rows = Recording(keys, plan.keep, identity=plan.keeps_every_body)
             rows.add(values, steps)
             return s._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
 

@@ -1040,7 +1040,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
     flexible = [k for k in range(n) if body_kind[k] in FLEXIBLE]
-    _check_rod_neighbours(bodies, kinds, body_kind, parent, closures)
+    _check_rod_neighbours(bodies, kinds, body_kind, parent)
 
     tree = Model(
         n_bodies=n,
@@ -1108,14 +1108,12 @@ def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
     return rot, omega, r0
 
 
-def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
+def _check_rod_neighbours(bodies, kinds, body_kind, parent):
     """A strain rod joins its neighbours by ball joints and fixed hinges so far (the reference's
     rows for it; docs/strain_rod.md); a body welded to its end hangs there alone, right after
     it (DT-TMM's transfer takes that weld itself; a modal beam's other children then hang from
-    an end section, solver.kernel_model, which the rod does not have yet).  It may lie inside a
-    closed loop (kernels/assembly/closure.py takes its end point and strain coordinates) but is
-    no closing joint's side: a body welded to its end is (the side's frame there would be the
-    rod's end section, which the loops' rows do not read yet)."""
+    an end section, solver.kernel_model, which the rod does not have yet, except where a
+    closing joint takes its output end: that end section is then the rod's one child)."""
     rods = set(np.nonzero(body_kind == ROD)[0].tolist())
     for k in range(len(bodies)):
         for j, side in ((k, "before it"), (parent[k], "after it")):
@@ -1135,13 +1133,6 @@ def _check_rod_neighbours(bodies, kinds, body_kind, parent, closures):
                              f"carries that body alone, right after it, so far; "
                              f"{bodies[k].label(k)} hangs there too (weld a light rigid body "
                              f"right after the rod and hang the others from it)")
-    for closure in closures:
-        for body in closure[1:3]:
-            j = next((j for j in rods if body is bodies[j]), None)
-            if j is not None:
-                raise ValueError(f"{bodies[j].label(j)}: a strain rod is no closing joint's side "
-                                 f"so far; weld a light rigid body to its end (FixedHinge) "
-                                 f"and close the loop at that body")
 
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):

@@ -15,7 +15,9 @@ _PER_BODY = ("rot", "omega", "omega_dot", "defl", "defl_rate", "jq", "jqd", "jta
 
 class Recording:
     """The samples of one run: each key's rows in blocks, and the steps they were taken at.
-    keep: the kernels' body of each of the model's bodies.  stream: a SampleStream to write
+    keep: the kernels' body of each of the model's bodies; identity: whether those are every
+    kernel body, in order (default: keep is 0 .. n - 1; a kernel model with bodies of its own
+    after the model's needs False, run_plan's keeps_every_body).  stream: a SampleStream to write
     the rows to instead of keeping them (simulate(..., stream=path)).  samples: how many rows
     the run will record, where known (a fixed-step run): each key's rows are then written into
     one array of that many rows, which is never joined (a join holds a key's rows twice); more

@@ -196,7 +196,10 @@ class PreparedRun:
                                      for ds in model.drives for d in ds)
         self.targets_vary = has_closure_drives(model)
         self.has_loads = model.has_applied_loads
-        self.keeps_every_body = bool(np.array_equal(keep, np.arange(len(keep))))
+        # every kernel body is one of the model's, in order (an end section or offset that
+        # the kernel model adds last leaves keep = 0 .. n - 1 with more kernel bodies)
+        self.keeps_every_body = bool(len(keep) == model.n_bodies
+                                     and np.array_equal(keep, np.arange(len(keep))))
         self.lock = threading.Lock()
         self.kept = False               # kept on the model (prepared_run)
         self._chunk_arrays = {}         # the chunks' input and record arrays, by their shape

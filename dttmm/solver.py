@@ -18,9 +18,10 @@ from . import adaptive as adaptive_steps
 from .vectors import cross
 from .elements import BEAM, RIGID, ROD
 from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components,
-                                  rod_output_offset, rod_section, rod_stiffness)
+                                  rod_end_section, rod_output_offset, rod_section,
+                                  rod_stiffness)
 from .elements.strain_rod import rod_tables as rod_element_tables
-from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
+from .elements.kinds import BODY_KIND, FLEXIBLE, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
                             MODES, STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
                             slope_grams, torsion_shapes)
@@ -1405,12 +1406,13 @@ def kernel_model(model):
     - an end section, welded to a beam's end with zero length, carries the section's rotation
       history (docs/beam.md, "End sections") where a hinge there needs it: an elastic hinge or
       a joint with coordinates, or in a tree any hinge but a ball joint, except a lone weld on
-      the body right after the beam (which the beam's transfer takes itself).  The beam's
-      children then hang from it.
+      the body right after the beam (which the beam's transfer takes itself), and where a
+      closing joint takes a beam's or strain rod's output end.  The element's children then
+      hang from it.
     - an attachment offset reaches from a rigid body's output point to one of its named points
       (RigidBody(points=...)); the bodies hanging there hang from its output point.  Every
       sweep then joins children at output points only.
-    - an input section, where a closing joint takes a beam's input end: it takes the beam's
+    - an input section, where a closing joint takes a beam's or rod's input end: it takes its
       hinge (its joint, coordinates, drives, deflection) with zero length, and the beam is
       welded to it (R0 = I), so that the closing joint's side is a rigid body at the beam's
       input point in the beam's frame (the kernel index of the user's beam is the section's:
@@ -1434,15 +1436,16 @@ def _kernel_model(model):
     n = model.n_bodies
     chain = model.is_chain
 
-    # beams whose output end closes a loop (not a chain's pinned tip): the closing joint's
-    # side is the end section (kernels/assembly/closure.py reads rigid sides only)
+    # beams and strain rods whose output end closes a loop (not a chain's pinned tip): the
+    # closing joint's side is the end section (kernels/assembly/closure.py reads rigid sides
+    # only)
     closed_ends, closed_inputs = set(), set()
     if model.n_closures and not model.tip_pinned:
         on_end = np.asarray(model.closure_on_end, dtype=bool)
         sides = np.asarray(model.closure_body)
         closed_ends = {int(k) for k in sides[on_end]}
         closed_inputs = {int(k) for k in sides[~on_end & (sides >= 0)]
-                         if model.body_kind[k] == BEAM}
+                         if model.body_kind[k] in FLEXIBLE}
     if not (closed_ends or np.any(model.body_kind == BEAM) or np.any(model.attachment)):
         return model, np.arange(n)      # (no end sections, no offsets: the model itself)
     children = children_of(model.parent)
@@ -1522,8 +1525,12 @@ def _kernel_model(model):
         if k in ends:
             eta0 = model.initial_modal_coordinates[mode_off[k]:mode_off[k + 1]]
             eta_d0 = model.initial_modal_velocities[mode_off[k]:mode_off[k + 1]]
-            rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
-                                        model.initial_angular_velocity[k], eta0, eta_d0)
+            if model.body_kind[k] == ROD:
+                _, rot, omega = rod_end_section(model.rod_params[k], model.initial_rotation[k],
+                                                model.initial_angular_velocity[k], eta0, eta_d0)
+            else:
+                rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
+                                            model.initial_angular_velocity[k], eta0, eta_d0)
             hub[k] = add_massless(hub[k], np.zeros(3), rot, omega, False,
                                   f"{model.body_names[k]} end section",
                                   f"{model.body_names[k]} end weld")

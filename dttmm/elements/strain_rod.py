@@ -214,8 +214,8 @@ class StrainRod:
     constant curvature is exact with one element whatever the angle it turns through.  No
     shear (the sections stay normal to the centre line).  The frame is the input section's;
     the undeformed rod lies along its x axis.  Between ball joints and fixed hinges, in
-    chains, trees and closed loops (not as a closing joint's side yet: weld a light body to its
-    end), with ``simulate`` (the Newmark scheme), ``static_equilibrium`` and the Newton-Euler
+    chains, trees and closed loops (inside them, or as a closing joint's side at either end),
+    with ``simulate`` (the Newmark scheme), ``static_equilibrium`` and the Newton-Euler
     reference (``dttmm.simulate_reference``); scene files take it as type "rod".  It carries
     no loads of its own yet (a body welded to its end does).  The arguments are checked when
     the model is built.

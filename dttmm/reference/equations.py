@@ -891,18 +891,18 @@ def _closure_side(k, local, on_end, rot, omega, r_in, v_in, rho_o, rot_o, omega_
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _closure_columns(s, row, k, on_end, coef_a, coef_alpha, coef_section, sign, b_r, b_t,
-                     e_col0, m_off, body_kind, beam_params):
+                     e_col0, m_off, body_kind, beam_params, rods):
     """Add sign * (coef_a . a_k + coef_alpha . alpha_k) to a closing joint's row and, on a
-    beam's end, sign * (B_r^T coef_a + B_t^T coef_section) to its modal columns (the end's
-    point moves with B_r eta'', its section turns with B_t eta'')."""
+    beam's or strain rod's end, sign * (B_r^T coef_a + B_t^T coef_section) to its modal or
+    strain columns (the end's point moves with B_r eta'', its section turns with B_t eta'')."""
     if k < 0:
         return
     for i in range(3):
         s[row, 6 * k + i] += sign * coef_a[i]
         s[row, 6 * k + 3 + i] += sign * coef_alpha[i]
-    if on_end and body_kind[k] == _BEAM:
+    if on_end:
         ce = e_col0 + m_off[k]
-        for j in range(_modal_size(beam_params[k])):
+        for j in range(_flex_size(k, body_kind, beam_params, rods)):
             for i in range(3):
                 s[row, ce + j] += sign * (b_r[k, i, j] * coef_a[i]
                                           + b_t[k, i, j] * coef_section[i])
@@ -910,8 +910,8 @@ def _closure_columns(s, row, k, on_end, coef_a, coef_alpha, coef_section, sign, 
 
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
-                  alpha_v, b_r, b_t, e_col0, m_off, body_kind, beam_params, r_g, v_g, a_g, rot_g,
-                  w_g, wd_g):
+                  alpha_v, b_r, b_t, e_col0, m_off, body_kind, beam_params, rods, r_g, v_g, a_g,
+                  rot_g, w_g, wd_g):
     """The closing joints' rows and their multipliers' columns (newton_euler.py's docstring,
     "Loops"): per scalar constraint g (a gap e . (p_b - p_a), e fixed in the world or in side a's
     frame, or a dot (F_a x) . (F_b y)), the row g'' + 2 zeta W g' + W^2 g = 0 (linear in the
@@ -949,9 +949,9 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             gd = n @ dw
             kappa = _cross(w_b if kind[r] == _ANGLE_B else w_a, n) @ dw + n @ (al_b - al_a)
             _closure_columns(s, row, kb, end_b, zero, n, n, 1.0, b_r, b_t, e_col0, m_off,
-                             body_kind, beam_params)
+                             body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
-                             body_kind, beam_params)
+                             body_kind, beam_params, rods)
             directions[r] = n
         elif kind[r] == _DOT:               # (F_a x) . (F_b y) = 0
             x = f_a @ v1[r]
@@ -963,9 +963,9 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             kappa = (dw @ (_cross(_cross(w_b, y), x) + _cross(y, _cross(w_a, x)))
                      + cv @ (al_b - al_a))
             _closure_columns(s, row, kb, end_b, zero, cv, cv, 1.0, b_r, b_t, e_col0, m_off,
-                             body_kind, beam_params)
+                             body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, cv, cv, -1.0, b_r, b_t, e_col0, m_off,
-                             body_kind, beam_params)
+                             body_kind, beam_params, rods)
             directions[r] = cv
         else:                               # e . (p_b - p_a) = 0
             e = v1[r] if kind[r] == _GAP_WORLD else f_a @ v1[r]
@@ -981,11 +981,11 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
                 ed = _cross(e, d)           # (alpha_a x e) . d = alpha_a . (e x d)
                 kappa += ed @ al_a
                 _closure_columns(s, row, ka, end_a, zero, ed, ed, 1.0, b_r, b_t, e_col0, m_off,
-                                 body_kind, beam_params)
+                                 body_kind, beam_params, rods)
             _closure_columns(s, row, kb, end_b, e, _cross(arm_b, e), zero, 1.0, b_r, b_t,
-                             e_col0, m_off, body_kind, beam_params)
+                             e_col0, m_off, body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, e, _cross(arm_a, e), zero, -1.0, b_r, b_t,
-                             e_col0, m_off, body_kind, beam_params)
+                             e_col0, m_off, body_kind, beam_params, rods)
             directions[r] = e
             g -= target[r, 0]
         # a driven coordinate's row: (g - s)'' + 2 zeta W (g - s)' + W^2 (g - s) = 0
@@ -1073,7 +1073,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     if n_rows > 0:
         directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
                                    v_o, acc_v, alpha_v, b_r, b_t, e_col0, m_off, body_kind,
-                                   beam_params, r_g, v_g, a_g, rot_g, w_g, wd_g)
+                                   beam_params, rods, r_g, v_g, a_g, rot_g, w_g, wd_g)
         x = _solve_least_closure_force(s, b, loops[0], n_rows)
     else:
         directions = np.zeros((0, 3))
