@@ -1040,7 +1040,6 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
     flexible = [k for k in range(n) if body_kind[k] in FLEXIBLE]
-    _check_rod_neighbours(bodies, kinds, body_kind, parent)
 
     tree = Model(
         n_bodies=n,
@@ -1106,33 +1105,6 @@ def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
                          f"before it (the body turns with its parent and the joint's rates: "
                          f"{omega}); leave it None and give the joint's rates")
     return rot, omega, r0
-
-
-def _check_rod_neighbours(bodies, kinds, body_kind, parent):
-    """A strain rod joins its neighbours by ball joints and fixed hinges so far (the reference's
-    rows for it; docs/strain_rod.md); a body welded to its end hangs there alone, right after
-    it (DT-TMM's transfer takes that weld itself; a modal beam's other children then hang from
-    an end section, solver.kernel_model, which the rod does not have yet, except where a
-    closing joint takes its output end: that end section is then the rod's one child)."""
-    rods = set(np.nonzero(body_kind == ROD)[0].tolist())
-    for k in range(len(bodies)):
-        for j, side in ((k, "before it"), (parent[k], "after it")):
-            if j in rods and kinds[k] not in (BALL, FIXED):
-                raise ValueError(f"{bodies[j].label(j)}: a strain rod joins its neighbours by "
-                                 f"ball joints and fixed hinges so far; the hinge {side} is "
-                                 f"{JOINT_KIND[int(kinds[k])].what}")
-    on_rods = {j: [] for j in rods}          # each rod's children (one pass over the bodies)
-    for k in range(len(bodies)):
-        if parent[k] in on_rods:
-            on_rods[parent[k]].append(k)
-    for j, children in on_rods.items():
-        welded = [k for k in children if kinds[k] == FIXED]
-        if welded and children != [j + 1]:
-            k = welded[0] if welded[0] != j + 1 else next(c for c in children if c != j + 1)
-            raise ValueError(f"{bodies[j].label(j)}: a strain rod with a body welded to its end "
-                             f"carries that body alone, right after it, so far; "
-                             f"{bodies[k].label(k)} hangs there too (weld a light rigid body "
-                             f"right after the rod and hang the others from it)")
 
 
 def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):

@@ -423,14 +423,13 @@ def scene_of(model, run=None, name=None):
         who = f"body '{model.body_names[k]}'"
         kind = int(model.hinge_kind[k])
         table = {"name": model.body_names[k]}
+        # a beam's or rod's own coordinates and rates at t = 0, under its class's names
+        for key, values in zip(_INITIAL.get(int(model.body_kind[k]), ()),
+                               (model.initial_modal_coordinates, model.initial_modal_velocities)):
+            if np.any(values[offsets[k]:offsets[k + 1]]):
+                table[key] = values[offsets[k]:offsets[k + 1]].tolist()
         if model.body_kind[k] == ROD:
             table.update(_rod_table(model.rod_params[k]))
-            q = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
-            q_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
-            if np.any(q):
-                table["initial_strain"] = q.tolist()
-            if np.any(q_d):
-                table["initial_strain_rate"] = q_d.tolist()
         elif model.body_kind[k] == BEAM:
             row = model.beam_params[k]
             m = int(row[MODES])
@@ -466,12 +465,6 @@ def scene_of(model, run=None, name=None):
                         raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
                                          f"only profiles (dttmm.profiles) can be written")
                     table[key] = f.spec()
-            eta = model.initial_modal_coordinates[offsets[k]:offsets[k + 1]]
-            eta_d = model.initial_modal_velocities[offsets[k]:offsets[k + 1]]
-            if np.any(eta):
-                table["initial_modal_coordinates"] = eta.tolist()
-            if np.any(eta_d):
-                table["initial_modal_velocities"] = eta_d.tolist()
         else:
             p = model.body_params[k]
             table.update(type="rigid", mass=p[MASS],
@@ -504,6 +497,10 @@ def scene_of(model, run=None, name=None):
     if run:
         data["run"] = dict(run)
     return data
+
+
+_INITIAL = {BEAM: ("initial_modal_coordinates", "initial_modal_velocities"),
+            ROD: ("initial_strain", "initial_strain_rate")}
 
 
 def _rod_table(row):

@@ -1403,12 +1403,12 @@ def kernel_model(model):
     (results are mapped back, recording.Recording).  Three kinds of massless rigid body,
     welded to their parent, stand in where a sweep needs a frame or a point that the model
     gives implicitly (docs/topology.md, "What the kernels integrate"):
-    - an end section, welded to a beam's end with zero length, carries the section's rotation
-      history (docs/beam.md, "End sections") where a hinge there needs it: an elastic hinge or
-      a joint with coordinates, or in a tree any hinge but a ball joint, except a lone weld on
-      the body right after the beam (which the beam's transfer takes itself), and where a
-      closing joint takes a beam's or strain rod's output end.  The element's children then
-      hang from it.
+    - an end section, welded to a beam's or strain rod's end with zero length, carries the
+      section's rotation history (docs/beam.md, "End sections") where a hinge there needs it:
+      an elastic hinge or a joint with coordinates, or in a tree any hinge but a ball joint,
+      except a lone weld on the body right after the element (which its transfer takes
+      itself), and where a closing joint takes the element's output end.  The element's
+      children then hang from it.
     - an attachment offset reaches from a rigid body's output point to one of its named points
       (RigidBody(points=...)); the bodies hanging there hang from its output point.  Every
       sweep then joins children at output points only.
@@ -1446,7 +1446,7 @@ def _kernel_model(model):
         closed_ends = {int(k) for k in sides[on_end]}
         closed_inputs = {int(k) for k in sides[~on_end & (sides >= 0)]
                          if model.body_kind[k] in FLEXIBLE}
-    if not (closed_ends or np.any(model.body_kind == BEAM) or np.any(model.attachment)):
+    if not (closed_ends or np.any(model.body_kind != RIGID) or np.any(model.attachment)):
         return model, np.arange(n)      # (no end sections, no offsets: the model itself)
     children = children_of(model.parent)
 
@@ -1454,7 +1454,7 @@ def _kernel_model(model):
         hinges = [int(model.hinge_kind[c]) for c in children[k]]
         if k in closed_ends:
             return True
-        if model.body_kind[k] != BEAM or not hinges:
+        if model.body_kind[k] not in FLEXIBLE or not hinges:
             return False
         if any(h == ELASTIC or h in WITH_COORDINATES for h in hinges):
             return True

@@ -283,38 +283,26 @@ def test_a_stiffened_beam_keeps_its_stiffening_through_a_scene(tmp_path):
 
 # the soft pendulum of issue 32 (examples/falling_pendulum.py) as two strain rods: 1.2 m,
 # A = 0.0018 m^2, I = 1.215e-8 m^4, rho = 5540 kg/m^3, E = 0.7e6 Pa, EA = 1e6 N
-ROD_SCENE = '''
+ROD_TABLE = '''
+[[body]]
+name = "{name}"
+type = "rod"
+length = 0.6
+mass_per_length = 9.972
+bending_stiffness = 8.505e-3
+polar_inertia_per_length = 1.3462e-4
+stretch = true
+axial_stiffness = 1e6
+
+[body.joint]
+{joint}
+'''
+ROD_SCENE = ('''
 [model]
 name = "soft_pendulum"
 gravity = [0.0, -9.81, 0.0]
-
-[[body]]
-name = "inner"
-type = "rod"
-length = 0.6
-mass_per_length = 9.972
-bending_stiffness = 8.505e-3
-polar_inertia_per_length = 1.3462e-4
-stretch = true
-axial_stiffness = 1e6
-
-[body.joint]
-type = "ball"
-
-[[body]]
-name = "outer"
-type = "rod"
-length = 0.6
-mass_per_length = 9.972
-bending_stiffness = 8.505e-3
-polar_inertia_per_length = 1.3462e-4
-stretch = true
-axial_stiffness = 1e6
-
-[body.joint]
-type = "fixed"
-parent = "inner"
-'''
+''' + ROD_TABLE.format(name="inner", joint='type = "ball"')
+             + ROD_TABLE.format(name="outer", joint='type = "fixed"\nparent = "inner"'))
 
 
 def test_strain_rods_run_from_a_scene_and_save_back_as_rods(tmp_path):

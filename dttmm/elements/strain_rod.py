@@ -213,8 +213,8 @@ class StrainRod:
     stretch) are polynomial fields of strain_modes coefficients each along the rod, so a
     constant curvature is exact with one element whatever the angle it turns through.  No
     shear (the sections stay normal to the centre line).  The frame is the input section's;
-    the undeformed rod lies along its x axis.  Between ball joints and fixed hinges, in
-    chains, trees and closed loops (inside them, or as a closing joint's side at either end),
+    the undeformed rod lies along its x axis.  Next to every joint kind, in chains, trees
+    and closed loops (inside them, or as a closing joint's side at either end),
     with ``simulate`` (the Newmark scheme), ``static_equilibrium`` and the Newton-Euler
     reference (``dttmm.simulate_reference``); scene files take it as type "rod".  It carries
     no loads of its own yet (a body welded to its end does).  The arguments are checked when

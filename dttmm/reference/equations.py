@@ -1152,13 +1152,14 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             dy[o:o + 3] = y[o + 3:o + 6]
             kp = topology[0][k]
             # d'' = a_k - a_att,k, the attachment point's acceleration (the ground's for a root;
-            # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's end)
+            # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's or a strain
+            # rod's end)
             if kp < 0:
                 a_att = a_g
             else:
                 a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
-                if body_kind[kp] == _BEAM:
-                    nm2 = _modal_size(beam_params[kp])
+                nm2 = _flex_size(kp, body_kind, beam_params, rods)
+                if nm2 > 0:
                     br = np.ascontiguousarray(b_r[kp, :, :nm2])
                     a_att = a_att + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
             dy[o + 3:o + 6] = acc[k] - a_att
