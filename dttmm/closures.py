@@ -37,7 +37,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, ROD, UNIVERSAL,
+from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL,
                        BallJoint, EulerBernoulliBeam, StrainRod)
 from .elements.kinds import FLEXIBLE
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
@@ -389,9 +389,7 @@ def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground)
     velocity, the side's frame and angular velocity, (T, ...) each.  rotation, omega, r_in,
     v_in: (T, n, ...) the bodies'; eta, eta_dot (T, total modes) the beams' and strain rods'
     (None without); ground: (r, v, rot, w) of the ground frame, (T, ...) each."""
-    from .elements.strain_rod import rod_end_section, rod_output_offset
-    from .model import output_section
-    from .result import beam_output_offset
+    from .result import element_end_section, element_output_offset
     k, local = model.closure_body[c, s], model.closure_point[c, s]
     if k == GROUND:
         r_g, v_g, rot_g, w_g = ground
@@ -401,16 +399,9 @@ def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground)
     if model.closure_on_end[c, s]:      # a beam's or rod's output end: its deflected end section
         i0 = int(np.sum(model.n_modes[:k]))
         e, e_d = eta[:, i0:i0 + model.n_modes[k]], eta_dot[:, i0:i0 + model.n_modes[k]]
-        if model.body_kind[k] == ROD:
-            row = model.rod_params[k]
-            rho, rate = rod_output_offset(row, rot, w, e, e_d)
-            sections = [rod_end_section(row, rot[t], w[t], e[t], e_d[t])[1:]
-                        for t in range(len(rot))]
-        else:
-            row = model.beam_params[k]
-            rho, rate = beam_output_offset(row, rot, w, e, e_d)
-            sections = [output_section(row, rot[t], w[t], e[t], e_d[t])
-                        for t in range(len(rot))]
+        rho, rate = element_output_offset(model, k, rot, w, e, e_d)
+        sections = [element_end_section(model, k, rot[t], w[t], e[t], e_d[t])
+                    for t in range(len(rot))]
         return (r_in[:, k] + rho, v_in[:, k] + rate, np.array([f for f, _ in sections]),
                 np.array([w_o for _, w_o in sections]))
     arm = rot @ local
@@ -691,9 +682,7 @@ def tree_state(model, theta, q, omega, qd):
     the output sections and points (a beam's or strain rod's deflected end; the beams' modal
     coordinates, the rods' strain coordinates, their rates and the elastic hinges' deflections
     are the model's)."""
-    from .model import output_section
-    from .elements.strain_rod import rod_end_section, rod_output_offset
-    from .result import beam_output_offset
+    from .result import element_end_section, element_output_offset
     from .kernels.algebra.so3 import expm_so3
     n = model.n_bodies
     off = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -736,13 +725,9 @@ def tree_state(model, theta, q, omega, qd):
         r_in[k], v_in[k] = r_att + d, v_att + d_rate
         eta = model.initial_modal_coordinates[off[k]:off[k + 1]]
         eta_d = model.initial_modal_velocities[off[k]:off[k + 1]]
-        if model.body_kind[k] == BEAM:
-            rot_o[k], w_o[k] = output_section(model.beam_params[k], rot[k], w[k], eta, eta_d)
-            rho, rho_rate = beam_output_offset(model.beam_params[k], rot[k], w[k], eta, eta_d)
-        elif model.body_kind[k] == ROD:         # its end section and point
-            _, rot_o[k], w_o[k] = rod_end_section(model.rod_params[k], rot[k], w[k], eta, eta_d)
-            rho, rho_rate = (x[0] for x in rod_output_offset(model.rod_params[k], rot[k], w[k],
-                                                             eta, eta_d))
+        if model.body_kind[k] in FLEXIBLE:      # its end section and deflected end point
+            rot_o[k], w_o[k] = element_end_section(model, k, rot[k], w[k], eta, eta_d)
+            rho, rho_rate = element_output_offset(model, k, rot[k], w[k], eta, eta_d)
         else:
             rot_o[k], w_o[k] = rot[k], w[k]
             rho = rot[k] @ model.body_params[k, TO_OUTPUT]

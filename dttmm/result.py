@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from .elements import BEAM, RIGID, ROD
-from .elements.strain_rod import rod_energies, rod_output_offset
+from .elements.strain_rod import rod_end_section, rod_energies, rod_output_offset
 from .vectors import cross
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
@@ -720,6 +720,25 @@ def beam_output_offset(row, rotation, omega, eta, eta_dot):
     return rho, cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 
 
+def element_output_offset(model, k, rotation, omega, eta, eta_dot):
+    """(rho, rho'): a beam's or strain rod's output point from its input point and its rate,
+    world (beam_output_offset, elements/strain_rod.py::rod_output_offset), for one state
+    (rotation (3, 3)) or T states (T, 3, 3); shaped (..., 3) as rotation's leading axes."""
+    rod = model.body_kind[k] == ROD
+    rho, rate = (rod_output_offset if rod else beam_output_offset)(
+        model.rod_params[k] if rod else model.beam_params[k], rotation, omega, eta, eta_dot)
+    shape = np.shape(rotation)[:-1]
+    return np.reshape(rho, shape), np.reshape(rate, shape)
+
+
+def element_end_section(model, k, rotation, omega, eta, eta_dot):
+    """(A_O, w_O) of a beam's or strain rod's output end section, one state (model.
+    output_section, elements/strain_rod.py::rod_end_section)."""
+    if model.body_kind[k] == ROD:
+        return rod_end_section(model.rod_params[k], rotation, omega, eta, eta_dot)[1:]
+    return _output_section(model.beam_params[k], rotation, omega, eta, eta_dot)
+
+
 def point_positions(model, rotation, r_in, eta=None):
     """Mass-centre and output-point positions from input points and rotations ((T, n, ...) or
     (n, ...) arrays); eta (T, total modes) or (total modes,) moves the beams' and strain rods'
@@ -733,10 +752,7 @@ def point_positions(model, rotation, r_in, eta=None):
         offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
         for k in flexible:
             e = eta[..., offsets[k]:offsets[k + 1]]
-            rod = model.body_kind[k] == ROD
-            offset = rod_output_offset if rod else beam_output_offset
-            rho, _ = offset(model.rod_params[k] if rod else model.beam_params[k],
-                            rotation[..., k, :, :], np.zeros(e.shape[:-1] + (3,)), e,
-                            np.zeros_like(e))
-            r_o[..., k, :] = r_in[..., k, :] + rho.reshape(r_in[..., k, :].shape)
+            rho, _ = element_output_offset(model, k, rotation[..., k, :, :],
+                                           np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
+            r_o[..., k, :] = r_in[..., k, :] + rho
     return r_c, r_o

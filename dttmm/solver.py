@@ -18,7 +18,7 @@ from . import adaptive as adaptive_steps
 from .vectors import cross
 from .elements import BEAM, RIGID, ROD
 from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components,
-                                  rod_end_section, rod_output_offset, rod_section,
+                                  rod_section,
                                   rod_stiffness)
 from .elements.strain_rod import rod_tables as rod_element_tables
 from .elements.kinds import BODY_KIND, FLEXIBLE, JOINT_KIND, WITH_COORDINATES
@@ -52,6 +52,7 @@ from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, m
 from .energy_balance import does_work
 from .recording import (NoCheckpoint, Recording, model_fingerprint)
 from .result import (DERIVED, FIELDS, Result, beam_output_offset, chain_energies,
+                     element_end_section, element_output_offset,
                      point_positions)
 
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
@@ -1525,12 +1526,8 @@ def _kernel_model(model):
         if k in ends:
             eta0 = model.initial_modal_coordinates[mode_off[k]:mode_off[k + 1]]
             eta_d0 = model.initial_modal_velocities[mode_off[k]:mode_off[k + 1]]
-            if model.body_kind[k] == ROD:
-                _, rot, omega = rod_end_section(model.rod_params[k], model.initial_rotation[k],
-                                                model.initial_angular_velocity[k], eta0, eta_d0)
-            else:
-                rot, omega = output_section(model.beam_params[k], model.initial_rotation[k],
-                                            model.initial_angular_velocity[k], eta0, eta_d0)
+            rot, omega = element_end_section(model, k, model.initial_rotation[k],
+                                             model.initial_angular_velocity[k], eta0, eta_d0)
             hub[k] = add_massless(hub[k], np.zeros(3), rot, omega, False,
                                   f"{model.body_names[k]} end section",
                                   f"{model.body_names[k]} end weld")
@@ -1918,16 +1915,10 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
     rho_dot = cross(omega, rho)
-    for k in np.nonzero(model.body_kind == BEAM)[0]:
+    for k in np.nonzero(model.body_kind != RIGID)[0]:
         j0, j1 = mode_off[k], mode_off[k + 1]
-        rho[:, k], rho_dot[:, k] = beam_output_offset(model.beam_params[k], rot[:, k],
-                                                      omega[:, k], eta[:, j0:j1],
-                                                      eta_d[:, j0:j1])
-    for k in np.nonzero(model.body_kind == ROD)[0]:
-        j0, j1 = mode_off[k], mode_off[k + 1]
-        rho[:, k], rho_dot[:, k] = rod_output_offset(model.rod_params[k], rot[:, k],
-                                                     omega[:, k], eta[:, j0:j1],
-                                                     eta_d[:, j0:j1])
+        rho[:, k], rho_dot[:, k] = element_output_offset(model, k, rot[:, k], omega[:, k],
+                                                         eta[:, j0:j1], eta_d[:, j0:j1])
     # down the chain: r_in,k = r_ground + sum_{j<k} (d_j + rho_j) + d_k (d: hinge deflections)
     if model.is_chain:
         r_in = r_prev[:, None] + _sum_before(defl + rho) + defl
