@@ -29,8 +29,8 @@ A row's response is zero outside the subtrees of its loaded bodies' topmost movi
 a loop that closes near it costs the sweep, the Delassus matrix and the projection only its
 own bodies.
 
-Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies and beams
-(closed at their output ends), strain rods inside a loop (not as a closing joint's side), a
+Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bodies, beams
+and strain rods (closed at their output ends: the kernel model's end section is the side), a
 fixed or moving ground (set_ground); every joint kind in the tree and closing it.
 """
 from collections import namedtuple
@@ -752,32 +752,26 @@ def _dependent_frames(params, loops, state, bodies, work):
                         state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
         elif hk == FIXED and p >= 0 and not params.locked[k]:
+            for i in range(3):                 # R0, row-major in hinge_params[hr, 0:9]
+                for j in range(3):
+                    rest[i, j] = params.hinge_params[hr, 3 * i + j]
+            i0, i1 = mode_off[p], mode_off[p + 1]      # a flexible parent's coordinates
             if HAS_BEAMS and body_kind[p] == BEAM:
-                for i in range(3):
-                    for j in range(3):
-                        rest[i, j] = params.hinge_params[hr, 3 * i + j]
-                i0, i1 = mode_off[p], mode_off[p + 1]
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
                                    state.eta[i0:i1], state.eta_d[i0:i1], state.eta_acc[i0:i1],
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
             elif HAS_RODS and body_kind[p] == ROD:
-                for i in range(3):
-                    for j in range(3):
-                        rest[i, j] = params.hinge_params[hr, 3 * i + j]
-                i0, i1 = mode_off[p], mode_off[p + 1]
                 steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
                 rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
                               state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
                               state.omega[k], state.omega_dot[k])
-            else:
-                hp = params.hinge_params       # A = A_P R0, R0 row-major in hp[hr, 0:9]
+            else:                              # A = A_P R0
                 for i in range(3):
                     for j in range(3):
-                        state.rot[k, i, j] = (rot_p[i, 0] * hp[hr, j]
-                                              + rot_p[i, 1] * hp[hr, 3 + j]
-                                              + rot_p[i, 2] * hp[hr, 6 + j])
+                        state.rot[k, i, j] = (rot_p[i, 0] * rest[0, j] + rot_p[i, 1] * rest[1, j]
+                                              + rot_p[i, 2] * rest[2, j])
                 for i in range(3):
                     state.omega[k, i] = w_p[i]
                     state.omega_dot[k, i] = wd_p[i]
