@@ -29,6 +29,7 @@ from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import start_energy
+from .kernels.features import specialized
 from .kernels.stepping.loop import DirectCalls, Monitor, Settings
 from .model import model_fact
 from .recording import leaves, model_fingerprint
@@ -120,8 +121,9 @@ class PreparedRun:
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
                             params, settings, state, ws.sweep, monitor, dt, loops,
                             features=features)
-        if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py)
-            loops.energy[:2] = 1.0, start_energy(params, loops, state)
+        if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py;
+            # the model's copy: the one with every feature compiled 5-11 s of code it never runs)
+            loops.energy[:2] = 1.0, specialized(start_energy, features)(params, loops, state)
         histories = s._station_histories(model, state, scheme.name == "paper")
         state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -145,7 +147,7 @@ class PreparedRun:
             loop_name, runner = "welded-chain", s.run_steps_no_alloc
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         else:
-            loop_name, runner = "general", partial(s.run_steps, features=features)
+            loop_name, runner = "general", partial(s.run_steps_no_alloc, features=features)
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)

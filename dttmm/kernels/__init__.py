@@ -62,6 +62,17 @@ def no_alloc_kernel(fn):
     return njit(cache=True, _nrt=False, fastmath=CONTRACT)(fn)
 
 
+def allocating_kernel(fn):
+    """njit(cache=True) with numba's reference counting on, said explicitly (its `_nrt=True`),
+    for the kernels that allocate and are called from a skeleton compiled without it (the
+    general loop's: kernels/stepping/loop.py).  numba compiles a kernel called from another
+    with its caller's setting unless the kernel sets its own, so without this the general
+    loop's skeleton would compile its callees without reference counting, and those that
+    allocate would not compile.  An array such a kernel allocates lives and dies in it (it
+    returns status codes and numbers, never a new array: nothing would free one)."""
+    return njit(cache=True, _nrt=True, fastmath=CONTRACT)(fn)
+
+
 # Small kernels called once per body and step (the predictor and history updates, the
 # exponential and left Jacobian, the 3 x 3 products and inverse, the reduced Riccati step and
 # recovery, the rigid body's reduced map) are declared njit(cache=True, inline='always'):

@@ -189,11 +189,10 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 @numba.njit(cache=True, fastmath=CONTRACT)
 def _flex_size(k, body_kind, beam_params, rods):
     """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0.
-    rods is None for a model without strain rods (newton_euler.py::_rod_tables): numba then
-    prunes every rod branch before typing, and the model's kernels compile no rod code."""
+    rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
     if body_kind[k] == _BEAM:
         return _modal_size(beam_params[k])
-    if rods is not None and body_kind[k] == _ROD:
+    if body_kind[k] == _ROD:
         return rods[0][k]
     return 0
 
@@ -224,8 +223,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     rho_att,k) on a rigid parent, the beam's a_O velocity part); zero rows for the roots."""
     n = body_params.shape[0]
     n2max = 2 * shape_vec.shape[2]
-    if rods is not None:
-        n2max = max(n2max, rods[3].shape[4])
+    n2max = max(n2max, rods[3].shape[4])
     rot = np.empty((n, 3, 3))
     omega = np.empty((n, 3))
     r_in = np.empty((n, 3))
@@ -292,7 +290,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
             b_r[k, :, :nm2] = br
             b_t[k, :, :nm2] = bt
-        elif rods is not None and body_kind[k] == _ROD:
+        elif body_kind[k] == _ROD:
             state, _, _ = _rod_state(k, rods, y, e0, n_modal, m_off)
             rho, v_rel, ro, wo, av, alv, br, bt = rod_end(state, rot[k], omega[k])
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
@@ -723,7 +721,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
-        elif rods is not None and body_kind[k] == _ROD:
+        elif body_kind[k] == _ROD:
             # a strain rod (reference/strain_rod.py::rod_terms): the beam's rows with its
             # Jacobians; no applied loads of its own yet
             nm2 = rods[0][k]

@@ -523,8 +523,7 @@ class _Problem:
 
     def time_inputs(self, t):
         """Ground motion and applied loads at time t, as float arrays for the kernel."""
-        r_g, v_g, a_g, rot_g, w_g, wd_g = (np.asarray(x, dtype=float)
-                                           for x in self.model.ground_state(t))
+        r_g, v_g, a_g, rot_g, w_g, wd_g = _ground_arrays(self.model.ground_state(t))
         for k, f in self._force_fns:
             self.forces[k] = f(t)
         for k, f in self._torque_fns:
@@ -566,8 +565,7 @@ class _Problem:
     def end_sections(self, t, y):
         """Every body's output point and section at one time, world: (rho_O = r_O - r_I, v_O,
         A_O, w_O), each (n, ...)."""
-        r_g, v_g, _, rot_g, w_g, _ = (np.asarray(x, dtype=float)
-                                      for x in self.model.ground_state(t))
+        r_g, v_g, _, rot_g, w_g, _ = _ground_arrays(self.model.ground_state(t))
         y = self.joint_inputs(t, np.ascontiguousarray(y, dtype=float))
         out = _kinematics(y, self.body_params, self.kinds,
                           self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
@@ -792,20 +790,27 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   body_names=tuple(model.body_names))
 
 
+def _ground_arrays(state):
+    """The ground's (r, v, a, R, w, w') as writable float arrays: a moving ground's profiles may
+    give read-only ones, which numba types apart (the kernels compiled a second time, ~40 s)."""
+    return tuple(np.array(x, dtype=float) for x in state)
+
+
 def _rod_tables(model):
     """The strain rods' tables for the kernels, padded to the longest and widest rod (a padded
     step has length 0 and weight 0: it adds nothing): (n_q (n,), steps (n, S), xi0
     (n, S, 2, 6), phi (n, S, 2, 6, Q), weights (n, S + 1), K (n, Q), [mu, damping] (n, 2),
-    the section's inertia per length diag(j_p, rho I_w, rho I_v) (n, 3)), or None without rods.
-    The strain field is the model's description (elements/strain_rod.py); the kinematics are
-    the reference's own (reference/strain_rod.py)."""
+    the section's inertia per length diag(j_p, rho I_w, rho I_v) (n, 3)); without rods the same
+    tables with no steps and no strain columns.  The strain field is the model's description
+    (elements/strain_rod.py); the kinematics are the reference's own (reference/strain_rod.py).
+    Every model passes tables of the same types, so the reference's kernels compile once for
+    all models (rod code included: ~20 s more cold for a model without rods, where a second
+    compilation for the first model with rods took ~70 s)."""
     n = model.n_bodies
     rods = [k for k in range(n) if model.body_kind[k] == ROD]
-    if not rods:        # (the kernels then compile no rod code: equations.py::_flex_size)
-        return None
     tables = {k: rod_tables(model.rod_params[k]) for k in rods}
-    s_max = max([1] + [len(t[0]) for t in tables.values()])
-    q_max = max([1] + [t[2].shape[-1] for t in tables.values()])
+    s_max = max([0] + [len(t[0]) for t in tables.values()])
+    q_max = max([0] + [t[2].shape[-1] for t in tables.values()])
     nq = np.zeros(n, dtype=np.int64)
     steps = np.zeros((n, s_max))
     xi0 = np.zeros((n, s_max, 2, 6))

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, allocating_kernel, no_alloc_kernel
 from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_RODS
 from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ...elements import BEAM, ROD
@@ -598,7 +598,7 @@ def _delassus(loops):
             loops.delassus[r, j] = _row_value(loops, r, z, act)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     """The sweep with the closing joints' multipliers (the module docstring).  rot, w: the
     bodies' rotations and angular velocities the rows are written at, with their points in
@@ -862,7 +862,7 @@ def _constrained(loops, values):
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def project_onto_loops(params, loops, state):
     """After a step: the configuration and the rates moved back onto the loops along the step's
     responses to unit multipliers, dx_j (row j's response of w', q'' and eta'' on its active

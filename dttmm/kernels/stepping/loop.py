@@ -268,7 +268,8 @@ def _skeleton(loop_class, no_alloc):
     (njit inline='always') before typing.  Measured on a cold cache, the three-pendulum's fused
     skeleton: 60 s against 102 s (CPU) when the pieces were chosen by numba overloads on the
     loop structure's type (docs/solver.md, "Compile time").  no_alloc: compiled without numba's
-    reference counting, for the variants whose pieces allocate nothing (the fused loops;
+    reference counting, for the variants whose pieces allocate nothing themselves (the fused
+    loops; the general loop, whose callees that allocate are allocating_kernels;
     kernels/__init__.py::no_alloc_kernel)."""
     key = (loop_class, no_alloc)
     compiled = _SKELETONS.get(key)
@@ -287,22 +288,31 @@ def _skeleton(loop_class, no_alloc):
 
 
 def run_steps(loop, run, out_info, features=ALL, calls=None):
-    """The skeleton of the loop's variant with numba's reference counting (the general and
-    energy-momentum loops, whose pieces allocate), compiled for a model that uses `features`
+    """The skeleton of the loop's variant with numba's reference counting (the energy-momentum
+    loop, whose pieces allocate), compiled for a model that uses `features`
     (kernels/features.py; solver.kernel_features).  calls: the prepared run's DirectCalls."""
+    _run(False, loop, run, out_info, features, calls)
+
+
+def run_steps_no_alloc(loop, run, out_info, features=ALL, calls=None):
+    """The skeleton of the loop's variant without numba's reference counting: the fused loops,
+    which allocate nothing, and the general loop, whose pieces allocate nothing themselves (the
+    kernels they call that do are kernels/__init__.py::allocating_kernel).  A piece that
+    allocates fails to compile.  Measured on the four-bar's cold compile: the general loop's
+    skeleton 54 s against 79 s with reference counting (its own code 27 against 51 s: numba's
+    reference-count calls on every array its structures carry, and LLVM's passes over them).
+    features and calls as run_steps."""
+    _run(True, loop, run, out_info, features, calls)
+
+
+def _run(no_alloc, loop, run, out_info, features, calls):
     features = frozenset(features)
-    run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
-                       inputs=unread_dropped(run.inputs, "inputs", features),
-                       rec=unread_dropped(run.rec, "rec", features))
-    (calls or _call)(specialized(_skeleton(type(loop), False), features),
-                     (unread_dropped(loop, "loop", features), run, out_info))
-
-
-def run_steps_no_alloc(loop, run, out_info, calls=None):
-    """The skeleton of the loop's variant without numba's reference counting (the fused loops,
-    which allocate nothing; a piece that allocates fails to compile).  calls: the prepared
-    run's DirectCalls."""
-    (calls or _call)(_skeleton(type(loop), True), (loop, run, out_info))
+    if features != ALL:     # (the fields no code of the copy reads: None, kernels/features.py)
+        run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
+                           inputs=unread_dropped(run.inputs, "inputs", features),
+                           rec=unread_dropped(run.rec, "rec", features))
+        loop = unread_dropped(loop, "loop", features)
+    (calls or _call)(specialized(_skeleton(type(loop), no_alloc), features), (loop, run, out_info))
 
 
 def _call(compiled, args):

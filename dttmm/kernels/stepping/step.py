@@ -24,7 +24,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, loop_piece
+from .. import CONTRACT, allocating_kernel, loop_piece
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
@@ -98,7 +98,7 @@ def _advance_history(h, coef, x, v, acc, p):
         p[i] = p_new
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _hinge_deflection(params, z, w1d, c1, k):
     """Elastic hinge k's deflection d (world) at the step's end from its stations'
     accelerations: a_in - a_out,P = c1 d + w1d (docs/solver.md), the inboard station the
@@ -108,7 +108,7 @@ def _hinge_deflection(params, z, w1d, c1, k):
             (z[i_in, 2] - z[i_p, 2] - w1d[k, 2]) / c1)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     """A body's rotation, angular velocity and acceleration at the end of the step as functions
     of its world rotation increment phi, with their derivatives (docs/solver.md):
@@ -228,7 +228,7 @@ def fused_coefficients(h, coef):
     return np.array([c1, c3, 1.0 / c1, c3 / c1])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
                     line_load, at_start, rot, w3, modal, stations, joints):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
@@ -359,7 +359,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     """Solve the assembled step (sweep.kind, sweep.u, sweep.known_loads) into z (the stations'
     states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
@@ -501,7 +501,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     return status
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _modal_accelerations(beams, eta_map, z, eta_acc):
     """eta'' of every beam (a strain rod's q'') from its input station (angular-acceleration
     slots)."""
@@ -577,7 +577,7 @@ def _welded(params, mode, k):
     return mode == RICCATI_FULL and (kind_p == BEAM or kind_p == ROD)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
     or the end section's of a parent beam (_end_section_frame) or strain rod
@@ -598,7 +598,7 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
         wd_out[:] = wd[p]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _welded_guess(params, k, c1, c3, w1e, w3e, eta_n, eta_dd_star, rot_n, guess, w1, w3):
     """A welded body's guess from its parent's (_welded_frame; a beam's modal coordinates at
     their guess), with the offsets that make w = c3 phi + w3, w' = c1 phi + w1 hold at it (as
@@ -630,7 +630,7 @@ def _coordinates_from_nu(c1, c3, q_n, w1q, w3q, nu, q, qd, qdd):
     qdd[0] = nu
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _ground_guess(rot_before, rot_now, g_w, g_wd, ground):
     """The ground's motion over the step into ground = (rot, lam, w, wd, dwd, phi): its rotation
     increment phi = log(R_{s+1} R_s^T) and left Jacobian, its rotation and rates at t_{s+1}."""
@@ -647,7 +647,7 @@ def _ground_guess(rot_before, rot_now, g_w, g_wd, ground):
     left_jacobian(phi, g_lam)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_star):
     """The modal coordinates' offsets (eta'' = c1 eta + w1e, eta' = c3 eta + w3e) and their
     predicted accelerations eta''* (constant-acceleration predictor)."""
@@ -658,7 +658,7 @@ def _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_s
         eta_dd_star[i] = c1 * (eta[i] + h * eta_d[i] + 0.5 * h * h * eta_p[i]) + w1e[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _joint_guess(hk, hp, drive, given, h, coef, c1, c3, q, qd, qdd, qp, w1q, w3q, q_s, qd_s,
                  qdd_s, frame, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     """A joint's coordinates' guess for the step (a prescribed motion's from its input given
@@ -681,7 +681,7 @@ def _joint_guess(hk, hp, drive, given, h, coef, c1, c3, q, qd, qdd, qp, w1q, w3q
                        wd, dw, dwd)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _locked_guess(rel, ground, c1, c3, phi, rot, lam, w, wd, dw, dwd, w1, w3):
     """A locked body moves with the ground (its rotation relative to the ground's: rel), with
     the offsets that make w' = c1 phi + w1, w = c3 phi + w3 hold the ground's values (beams use
@@ -700,7 +700,7 @@ def _locked_guess(rel, ground, c1, c3, phi, rot, lam, w, wd, dw, dwd, w1, w3):
             dwd[i, j] = g_dwd[i, j]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _deflection_offsets(h, coef, c1, c3, d, d_rate, d_acc, d_pseudo, w1d, w3d):
     """An elastic hinge's deflection's offsets over the step (as a modal coordinate's)."""
     a1, a3 = _offsets(h, coef, d_rate, d_acc, d_pseudo)
@@ -709,7 +709,7 @@ def _deflection_offsets(h, coef, c1, c3, d, d_rate, d_acc, d_pseudo, w1d, w3d):
         w3d[i] = a3[i] - c3 * d[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _station_offsets(h, coef, histories):
     """The paper's scheme: every station point's and mass centre's offset w1_X (a_X = c1 dr_X +
     w1_X)."""
@@ -722,7 +722,7 @@ def _station_offsets(h, coef, histories):
         w1_c[k, :] = w1
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _stations_guess(z, phi_g, phi_star, z_star):
     """The stations' guess: the last step's states with the predicted rotation increments in
     the phi slots."""
@@ -737,7 +737,7 @@ def _stations_guess(z, phi_g, phi_star, z_star):
             z_star[2 * k + 2, 3 + i] = phi_star[k, i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _spring_guess(hp, rot_in, rot, w_any, d, d_rate, d_pseudo, h, c3, w3d, into_inboard, z_in,
                   z_out):
     """An elastic hinge's spring force at the predicted deflection into its stations' guess: an
@@ -890,7 +890,7 @@ def _iterate(loop, run, s, it):
     return OK, 0, change
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _joint_adopt(hk, hp, drive, c1, c3, q, w1q, w3q, nu, q_s, qd_s, qdd_s, frame, rot_n, phi,
                  w1, w3, rot, lam, w, wd, dw, dwd, z_in, z_out):
     """A joint's coordinates' new guess from their accelerations nu (a prescribed motion's stays
@@ -941,7 +941,7 @@ def _adopt(loop, run, s, it):
                              lam[k], w[k], wd[k], dw[k], dwd[k])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel, body_params,
                       body_row, histories):
     """The paper's scheme: every station point's and rigid mass centre's history over the step
@@ -962,7 +962,7 @@ def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
         _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p):
     """The modal coordinates' histories over the step from their new accelerations; returns
     whether every rate is finite."""
@@ -977,7 +977,7 @@ def _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p):
     return finite
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, qp, jtau, frame,
                    rot, w, wd, d, d_rate, pseudo):
     """A joint's coordinates' histories over the step from their accelerations nu (a prescribed
@@ -1002,7 +1002,7 @@ def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, 
         pseudo[i] = wd[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _advance_body(h, coef, phi, rot, w, wd, p, e3, rot_prev):
     """A body integrated on its own: its angular velocity's history from its rotation increment
     phi, and its rotation A = exp(phi^) A_n (e3, rot_prev: scratch)."""
@@ -1014,7 +1014,7 @@ def _advance_body(h, coef, phi, rot, w, wd, p, e3, rot_prev):
     matmul_into(e3, rot_prev, rot)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _locked_frame(rot_now, rel, g_w, g_wd, rot, w, wd):
     """A locked body's frame from the ground's at the step's end."""
     matmul_into(rot_now, rel, rot)
@@ -1023,7 +1023,7 @@ def _locked_frame(rot_now, rel, g_w, g_wd, rot, w, wd):
         wd[i] = g_wd[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def _advance_deflection(params, z, w1d, c1, k, h, coef, d, d_rate, d_acc, d_pseudo):
     """An elastic hinge's deflection's history over the step from its stations (the hinge's
     deflection at the step's end: _hinge_deflection)."""
