@@ -445,7 +445,8 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
     import spin_up
     rod = build_chain([BallJoint(), StrainRod(length=1.0, bending_stiffness=2.0,
-                                              mass_per_length=0.5)])
+                                              mass_per_length=0.5,
+                                              polar_inertia_per_length=1e-3)])
     models = (build_chain([BallJoint(), link()]), slider_crank(), three_pendulum(),
               spin_up.tube(1, 2, 4.0), rod)
     for model in models:
