@@ -10,7 +10,8 @@ which then alternates A and B run by run (the machine's drift between processes,
 shared machines reaches 2x, then enters a pair only through the seconds between its two runs).
 
 For each system (by default the three-pendulum, rigid chains of 3, 100 and 1000 links; --systems
-arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible; cantilever:
+arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible; slider_crank:
+the general loop with closing joints; cantilever:
 the stiff cantilever of 8 welded elements, the welded-chain loop) the two checkouts
 are timed in turn, A B A B ..., each time in a fresh process that imports that checkout's
 dttmm (warm numba cache, JIT warm-up run first).  A process measures the cost of one step as
@@ -33,6 +34,7 @@ SYSTEMS = {          # name: (constructor expression, steps of the long run: ~0.
     "arm": ("arm(drive='motion')", 3000),                   # the general loop (joints)
     "flexible_arm": ("arm(drive='motion', flexible=True)", 2000),   # (joints and a beam)
     "cantilever": ("stiff_cantilever(8)", 5000),            # the welded-chain loop
+    "slider_crank": ("slider_crank()", 3000),               # the general loop, closing joints
 }
 DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_1000"]
 
@@ -40,6 +42,7 @@ _CHILD = r"""
 import statistics, sys
 from dttmm import simulate
 from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.mechanisms import slider_crank
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -59,6 +62,7 @@ _CALL_CHILD = r"""
 import statistics, time
 from dttmm import simulate
 from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.mechanisms import slider_crank
 model = {expr}
 for _ in range(50):
     simulate(model, 1e-4, 1e-4)
