@@ -107,16 +107,16 @@ class PreparedRun:
         welded = runs_welded(model, mode, scheme)
         loop = runner = None
         if fused and mode == kstep.RICCATI_TREE:
-            loop_name, runner = "ball-tree", s.run_steps_no_alloc
+            loop_name, runner = "ball-tree", s.run_steps
             loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
         elif fused:
-            loop_name, runner = "ball-chain", s.run_steps_no_alloc
+            loop_name, runner = "ball-chain", s.run_steps
             loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
         loops = s.loop_tables(model)
         # what the general and energy-momentum loops' kernels are compiled for
         features = s.kernel_features(model, mode, scheme.name == "paper")
         if welded:          # (its start: one pass of its own loop, then the loop from it)
-            runner = s.run_steps_no_alloc
+            runner = s.run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
                             params, settings, state, ws.sweep, monitor, dt, loops,
@@ -144,10 +144,10 @@ class PreparedRun:
         elif fused:
             ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
         elif welded:
-            loop_name, runner = "welded-chain", s.run_steps_no_alloc
+            loop_name, runner = "welded-chain", s.run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         else:
-            loop_name, runner = "general", partial(s.run_steps_no_alloc, features=features)
+            loop_name, runner = "general", partial(s.run_steps, features=features)
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)

@@ -41,7 +41,7 @@ from .kernels.stepping.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, U
                                     Params, Record, Run, State,
                                     Sweep)
 # the runners the prepared runs take (read here: tests count their calls)
-from .kernels.stepping.loop import run_steps, run_steps_no_alloc     # noqa: F401
+from .kernels.stepping.loop import run_steps     # noqa: F401
 from .kernels.transfers.beam import gauss_points, quadrature_size
 from .kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,

@@ -259,7 +259,7 @@ class _Configuration:
         if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
                 and not km.needs_general_loop
                 and all(solver.BODY_KIND[int(c)].fused for c in km.body_kind)):
-            self.fused = (solver.run_steps_no_alloc,
+            self.fused = (solver.run_steps,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
 
     def vector(self, rot, jq, eta, defl):

@@ -182,8 +182,8 @@ def test_no_kept_code_reads_a_field_its_copy_takes_as_none():
     keeps, in the general and energy-momentum loops and the consistent start: checked by name
     on numba's own IR after its dead-branch pruning, for the most features a field is dropped
     under (every other flag on: turning flags off only drops code)."""
-    roots = [kloop._skeleton(kstep.GeneralLoop, True),
-             kloop._skeleton(em_step.EnergyMomentumLoop, False), kstep.initial_accelerations]
+    roots = [kloop._skeleton(kstep.GeneralLoop),
+             kloop._skeleton(em_step.EnergyMomentumLoop), kstep.initial_accelerations]
     by_flags = {}
     for (structure, field), flags in kf.READ_UNDER.items():
         by_flags.setdefault(frozenset(flags), set()).update(
@@ -200,7 +200,7 @@ def test_a_copy_runs_the_model_as_the_kernels_with_every_feature(monkeypatch):
         monkeypatch.setattr(kf, "SPECIALIZE", specialize)
         model = _scene_model("arm")
         runs[specialize] = solver.simulate(model, 0.05, 1e-3)
-    assert (kloop._skeleton(kstep.GeneralLoop, True).py_func,
+    assert (kloop._skeleton(kstep.GeneralLoop).py_func,
             frozenset({"SWEEP_JOINTS"})) in kf._COPIES
     assert runs[True].joint_coordinates.shape == runs[False].joint_coordinates.shape
     for key in ("rotation", "angular_velocity", "joint_coordinates"):

@@ -148,7 +148,7 @@ def _ground_increment(g_rot, s, rel, out):
 
 
 # The fused loop's own scratch (allocated by fused_loop; nothing is allocated in the loop, so
-# its skeleton is compiled without numba's reference counting: loop.py::run_steps_no_alloc).
+# its skeleton is compiled without numba's reference counting: loop.py::_skeleton).
 FusedLoop = namedtuple("FusedLoop", [
     "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
     "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)

@@ -9,6 +9,9 @@ on a fixed ground.  The pieces below go through the one skeleton (kernels/steppi
 holds the last step's station states [a, b, m, q] (see kernels/transfers/em_body.py),
 state.omega_dot (w_{n+1} - w_n) / h of the last step (the predictor's slope) and state.v_c each
 body's mass-centre velocity; inputs.force and inputs.torque are the applied loads' step means.
+The pieces allocate nothing (the skeleton is compiled without numba's reference counting,
+loop.py::_skeleton): their array work is written element by element into the loop's
+scratch; the body's kernels, which allocate, are kernels/__init__.py::allocating_kernel.
 """
 from collections import namedtuple
 
@@ -19,7 +22,7 @@ from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .step import solve_step
+from .step import _all_finite, _put2, _put3, solve_step
 from ..assembly.sweep import IDENTITY, TRANSFER
 from ..assembly.sweep import BALL as EL_BALL
 
@@ -29,12 +32,13 @@ EnergyMomentumLoop = namedtuple("EnergyMomentumLoop", [
     "root_f",           # (6,) a fixed ground: no displacement, no rotation
     "rot_new",          # (3, 3) scratch
     "omega_new",        # (3,) scratch
+    "load",             # (3,) scratch: a body's applied force with its weight
 ])
 
 
 def energy_momentum_loop(n):
     return EnergyMomentumLoop(np.zeros((2 * n + 1, 12)), np.zeros(6), np.zeros((3, 3)),
-                              np.zeros(3))
+                              np.zeros(3), np.zeros(3))
 
 
 @loop_piece
@@ -42,11 +46,12 @@ def _predict(loop, run, s, _):
     """The guess: phi = h w_n + h^2 w'_n / 2, in b = 2 phi / h^2 units."""
     state, h = run.state, run.settings.h
     z_star = loop.z_star
-    z_star[:, :] = state.z
+    _put2(z_star, state.z)
     for k in range(state.rot.shape[0]):
-        b = (2.0 / h) * state.omega[k] + state.omega_dot[k]
-        z_star[2 * k + 1, 3:6] = b
-        z_star[2 * k + 2, 3:6] = b
+        for i in range(3):
+            b = (2.0 / h) * state.omega[k, i] + state.omega_dot[k, i]
+            z_star[2 * k + 1, 3 + i] = b
+            z_star[2 * k + 2, 3 + i] = b
 
 
 @loop_piece
@@ -70,11 +75,13 @@ def _iterate(loop, run, s, it):
             return UNSUPPORTED, 2 * k + 2, 0.0
         kind[2 * k + 1] = TRANSFER
         row = params.body_row[k]             # (the body's row of the shared tables)
-        load = body_params[row, 0] * params.gravity + run.inputs.force[s, k]
+        load = loop.load
+        for i in range(3):
+            load[i] = body_params[row, 0] * params.gravity[i] + run.inputs.force[s, k, i]
         rigid_body_transfer_em(body_params[row], params.mass_center_inertia[row], state.rot[k],
                                state.omega[k], state.v_c[k], h, z_star[2 * k + 1], load,
                                run.inputs.torque[s, k], u[2 * k + 1])
-    if not np.all(np.isfinite(u)):
+    if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
     status = solve_step(run.settings.mode, params.tip_pinned, params.parent, sweep,
                         loop.root_f, z)
@@ -89,7 +96,7 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _adopt(loop, run, s, it):
-    loop.z_star[:, :] = run.state.z
+    _put2(loop.z_star, run.state.z)
 
 
 @loop_piece
@@ -105,11 +112,15 @@ def _update(loop, run, s, _):
         em_body_kinematics(rot[k], omega[k], zi[3:6], h, rot_new, omega_new)
         # v_C,n+1 = 2 dx_C / h - v_C,n,  dx_C = dx_I + A_{n+1} l_IC - A_n l_IC
         l_ic = run.params.body_params[run.params.body_row[k], 1:4]
-        dx_c = s_half * zi[0:3] + rot_new @ l_ic - rot[k] @ l_ic
-        v_c[k] = (2.0 / h) * dx_c - v_c[k]
-        state.omega_dot[k] = (omega_new - omega[k]) / h
-        omega[k] = omega_new
-        rot[k] = rot_new
+        for i in range(3):
+            now = rot_new[i, 0] * l_ic[0] + rot_new[i, 1] * l_ic[1] + rot_new[i, 2] * l_ic[2]
+            before = rot[k, i, 0] * l_ic[0] + rot[k, i, 1] * l_ic[1] + rot[k, i, 2] * l_ic[2]
+            dx_c = s_half * zi[i] + now - before
+            v_c[k, i] = (2.0 / h) * dx_c - v_c[k, i]
+            state.omega_dot[k, i] = (omega_new[i] - omega[k, i]) / h
+            omega[k, i] = omega_new[i]
+            for j in range(3):
+                rot[k, i, j] = rot_new[i, j]
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(v_c[k, i])):
                 finite = False
@@ -119,11 +130,11 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
-    rec.rot[slot] = state.rot
-    rec.omega[slot] = state.omega
-    rec.omega_dot[slot] = state.omega_dot
-    rec.v_c[slot] = state.v_c
-    rec.z[slot] = state.z
+    _put3(rec.rot[slot], state.rot)
+    _put2(rec.omega[slot], state.omega)
+    _put2(rec.omega_dot[slot], state.omega_dot)
+    _put2(rec.v_c[slot], state.v_c)
+    _put2(rec.z[slot], state.z)
 
 
 @loop_piece

@@ -259,60 +259,48 @@ def _run_steps(loop, run, out_info):
     report(out_info, OK, n_steps, max_iter, n_rec)
 
 
-_SKELETONS = {}     # (loop structure's class, without reference counting) -> its skeleton
+_SKELETONS = {}     # loop structure's class -> its skeleton
 
 
-def _skeleton(loop_class, no_alloc):
+def _skeleton(loop_class):
     """_run_steps for one loop variant: a copy of its code whose globals bind predict, iterate,
-    ... to the variant's pieces, compiled (and cached) on its own.  numba inlines the pieces
-    (njit inline='always') before typing.  Measured on a cold cache, the three-pendulum's fused
+    ... to the variant's pieces, compiled (and cached) on its own, without numba's reference
+    counting (kernels/__init__.py::no_alloc_kernel).  numba inlines the pieces (njit
+    inline='always') before typing.  Measured on a cold cache, the three-pendulum's fused
     skeleton: 60 s against 102 s (CPU) when the pieces were chosen by numba overloads on the
-    loop structure's type (docs/solver.md, "Compile time").  no_alloc: compiled without numba's
-    reference counting, for the variants whose pieces allocate nothing themselves (the fused
-    loops; the general loop, whose callees that allocate are allocating_kernels;
-    kernels/__init__.py::no_alloc_kernel)."""
-    key = (loop_class, no_alloc)
-    compiled = _SKELETONS.get(key)
+    loop structure's type (docs/solver.md, "Compile time").  The pieces allocate nothing
+    themselves (a piece that allocates fails to compile): the fused loops allocate nothing at
+    all; the general and energy-momentum loops' kernels that allocate are
+    kernels/__init__.py::allocating_kernel.  Measured on the four-bar's cold compile: the
+    general loop's skeleton 51 s against 79 s with reference counting (its own code 27 against
+    51 s: numba's reference-count calls on every array its structures carry, and LLVM's passes
+    over them), and its steps 1.4x faster."""
+    compiled = _SKELETONS.get(loop_class)
     if compiled is None:
         pieces = _VARIANTS.get(loop_class)
         if pieces is None:
             raise TypeError(f"run_steps: no loop variant declares {loop_class.__name__} "
                             f"(kernels/stepping/loop.py::loop_variant)")
-        name = f"run_steps_{loop_class.__name__}" + ("_no_alloc" if no_alloc else "")
+        name = f"run_steps_{loop_class.__name__}"
         fn = FunctionType(_run_steps.__code__, dict(globals(), **pieces), name)
         fn.__qualname__ = name          # (numba's cache files are named after it)
         fn.__doc__ = _run_steps.__doc__
-        compiled = (no_alloc_kernel if no_alloc else njit(cache=True, fastmath=CONTRACT))(fn)
-        _SKELETONS[key] = compiled
+        compiled = no_alloc_kernel(fn)
+        _SKELETONS[loop_class] = compiled
     return compiled
 
 
 def run_steps(loop, run, out_info, features=ALL, calls=None):
-    """The skeleton of the loop's variant with numba's reference counting (the energy-momentum
-    loop, whose pieces allocate), compiled for a model that uses `features`
-    (kernels/features.py; solver.kernel_features).  calls: the prepared run's DirectCalls."""
-    _run(False, loop, run, out_info, features, calls)
-
-
-def run_steps_no_alloc(loop, run, out_info, features=ALL, calls=None):
-    """The skeleton of the loop's variant without numba's reference counting: the fused loops,
-    which allocate nothing, and the general loop, whose pieces allocate nothing themselves (the
-    kernels they call that do are kernels/__init__.py::allocating_kernel).  A piece that
-    allocates fails to compile.  Measured on the four-bar's cold compile: the general loop's
-    skeleton 54 s against 79 s with reference counting (its own code 27 against 51 s: numba's
-    reference-count calls on every array its structures carry, and LLVM's passes over them).
-    features and calls as run_steps."""
-    _run(True, loop, run, out_info, features, calls)
-
-
-def _run(no_alloc, loop, run, out_info, features, calls):
+    """The skeleton of the loop's variant, compiled for a model that uses `features`
+    (kernels/features.py; solver.kernel_features: the general and energy-momentum loops; the
+    fused loops read no flag).  calls: the prepared run's DirectCalls."""
     features = frozenset(features)
     if features != ALL:     # (the fields no code of the copy reads: None, kernels/features.py)
         run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
                            inputs=unread_dropped(run.inputs, "inputs", features),
                            rec=unread_dropped(run.rec, "rec", features))
         loop = unread_dropped(loop, "loop", features)
-    (calls or _call)(specialized(_skeleton(type(loop), no_alloc), features), (loop, run, out_info))
+    (calls or _call)(specialized(_skeleton(type(loop)), features), (loop, run, out_info))
 
 
 def _call(compiled, args):

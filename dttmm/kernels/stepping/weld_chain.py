@@ -29,8 +29,8 @@ from .step import _all_finite, fused_coefficients
 from ..assembly.sweep import riccati_step
 from ...elements.beam import MODES, TORSION_MODES
 
-# The loop's own scratch (allocated by weld_loop; the skeleton is compiled with numba's
-# reference counting, as the general loop's: beam_transfer takes views of the tables).
+# The loop's own scratch (allocated by weld_loop; the skeleton is compiled without numba's
+# reference counting, as every loop's: loop.py::_skeleton).
 WeldLoop = namedtuple("WeldLoop", [
     "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
     "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)

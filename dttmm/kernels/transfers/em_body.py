@@ -16,16 +16,15 @@ equations are (EM1-EM4):
   pi = A J_C W, W_{n+1} = 2 Theta / h - W_n, Theta = A_n^T phi    (body-frame midpoint rule)
 """
 import numpy as np
-from numba import njit
 
-from .. import CONTRACT
+from .. import allocating_kernel
 from .body import affine_part
 from ..algebra.so3 import cayley, cayley_tangent, hat
 
 A, B, M, Q = 0, 3, 6, 9
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     """A_{n+1} and the world angular velocity w_{n+1} = A_{n+1} W_{n+1} for the slot value b."""
     phi = 0.5 * h * h * b
@@ -36,7 +35,7 @@ def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     omega_new[:] = rot_new @ w_body
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@allocating_kernel
 def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body
     over one energy-momentum step, linearized about the input state z_star (exact Jacobian).
