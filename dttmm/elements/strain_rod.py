@@ -113,8 +113,10 @@ def rod_end_section(row, rotation, omega, q, q_dot=None):
     steps, xi0, phi, _ = rod_tables(row)
     n = len(steps) + 1
     rot, pos, om, vel, al, acc = station_arrays(n)
-    q = np.asarray(q, dtype=float)
-    q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
+    # writable copies: numba types read-only arrays apart (a Result's coordinates compiled the
+    # kernel a second time, ~5 s)
+    q = np.array(q, dtype=float)
+    q_dot = np.zeros_like(q) if q_dot is None else np.array(q_dot, dtype=float)
     rod_kinematics(steps, xi0, phi, q, q_dot, np.zeros_like(q), rot, pos, om, vel, al, acc)
     return rotation @ pos[-1], rotation @ rot[-1], omega + rotation @ om[-1]
 
@@ -140,8 +142,8 @@ def rod_output_offset(row, rotation, omega, q, q_dot):
     angular velocity (T, 3)) and strain coordinates and rates (T, n_q): rho = A p_L,
     rho' = w x rho + A p_L' (rod_kinematics' last station)."""
     steps, xi0, phi, _ = rod_tables(row)
-    q = np.ascontiguousarray(np.asarray(q, dtype=float).reshape(-1, phi.shape[-1]))
-    q_dot = np.ascontiguousarray(np.asarray(q_dot, dtype=float).reshape(q.shape))
+    q = np.array(q, dtype=float).reshape(-1, phi.shape[-1])         # (writable copies, as
+    q_dot = np.array(q_dot, dtype=float).reshape(q.shape)           # rod_end_section)
     p_end, v_end = rod_end_points(steps, xi0, phi, q, q_dot)
     rotation = np.asarray(rotation, dtype=float).reshape(-1, 3, 3)
     rho = np.einsum("tij,tj->ti", rotation, p_end)
@@ -162,7 +164,7 @@ def rod_centre_line(row, q, points):
     rot, pos, om, vel, al, acc = station_arrays(n)
     out = np.zeros((len(q), points, 3))
     for t in range(len(q)):
-        qt = np.ascontiguousarray(q[t], dtype=float)
+        qt = np.array(q[t], dtype=float)        # (a writable copy, as rod_end_section)
         zero = np.zeros_like(qt)
         rod_kinematics(steps, xi0, phi, qt, zero, zero, rot, pos, om, vel, al, acc)
         out[t] = pos
@@ -181,7 +183,7 @@ def rod_energies(row, rotation, omega, r_in, v_in, q, q_dot, gravity):
     kinetic, potential = np.zeros(len(q)), np.zeros(len(q))
     rot, pos, om, vel, al, acc = station_arrays(n)
     for t in range(len(q)):
-        qt, qdt = np.ascontiguousarray(q[t]), np.ascontiguousarray(q_dot[t])
+        qt, qdt = np.array(q[t], dtype=float), np.array(q_dot[t], dtype=float)   # (writable)
         rod_kinematics(steps, xi0, phi, qt, qdt, np.zeros_like(qt), rot, pos, om, vel, al, acc)
         a, w = rotation[t], omega[t]
         rho = pos @ a.T                                         # (stations, 3) world
