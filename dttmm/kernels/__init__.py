@@ -64,12 +64,12 @@ def no_alloc_kernel(fn):
 
 def allocating_kernel(fn):
     """njit(cache=True) with numba's reference counting on, said explicitly (its `_nrt=True`),
-    for the kernels that allocate and are called from a skeleton compiled without it (the
-    general loop's: kernels/stepping/loop.py).  numba compiles a kernel called from another
-    with its caller's setting unless the kernel sets its own, so without this the general
-    loop's skeleton would compile its callees without reference counting, and those that
-    allocate would not compile.  An array such a kernel allocates lives and dies in it (it
-    returns status codes and numbers, never a new array: nothing would free one)."""
+    for the kernels the general and energy-momentum loops' pieces call that allocate, or call
+    kernels that do: every skeleton is compiled without reference counting
+    (kernels/stepping/loop.py::_skeleton), and numba compiles a kernel called from another with
+    its caller's setting unless the kernel sets its own (so would not compile these).  An array
+    such a kernel allocates lives and dies in it: it returns status codes and numbers, never a
+    new array (nothing would free one)."""
     return njit(cache=True, _nrt=True, fastmath=CONTRACT)(fn)
 
 

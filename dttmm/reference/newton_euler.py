@@ -804,8 +804,8 @@ def _rod_tables(model):
     tables with no steps and no strain columns.  The strain field is the model's description
     (elements/strain_rod.py); the kinematics are the reference's own (reference/strain_rod.py).
     Every model passes tables of the same types, so the reference's kernels compile once for
-    all models (rod code included: ~20 s more cold for a model without rods, where a second
-    compilation for the first model with rods took ~70 s)."""
+    all models, rod code included (cold, the suite's first model 63 -> 99 s; a first model with
+    rods then compiled them all again, ~70 s, and the suite's two workers did so at once)."""
     n = model.n_bodies
     rods = [k for k in range(n) if model.body_kind[k] == ROD]
     tables = {k: rod_tables(model.rod_params[k]) for k in rods}
