@@ -83,6 +83,12 @@ def test_a_copy_drops_the_sweeps_and_kinds_the_model_does_not_use():
     assert not {"solve_with_loops", "tree_points", "elastic_hinge_loads"} & _kept_globals(start)
     with_loops = kf.specialized(kstep.initial_accelerations, {"SWEEP_JOINTS", "HAS_LOOPS"})
     assert {"solve_with_loops", "tree_points"} <= _kept_globals(with_loops)
+    # a copy for closing joints runs only models with them: no step without them (EVERY_KIND)
+    for kernel in (kstep.initial_accelerations, kstep._iterate):
+        assert "solve_step" in _kept_globals(kernel)
+        assert "solve_step" in _kept_globals(kf.specialized(kernel, {"SWEEP_JOINTS"}))
+        assert "solve_step" not in _kept_globals(kf.specialized(kernel, {"SWEEP_JOINTS",
+                                                                         "HAS_LOOPS"}))
 
 
 def test_copies_are_shared_named_after_their_features_and_only_where_a_flag_is_read():

@@ -49,17 +49,23 @@ SWEEP_DIRECT_FULL = True        # DIRECT_FULL
 SWEEP_TREE = True               # RICCATI_TREE: the reduced tree sweep
 SWEEP_REDUCED = True            # RICCATI_REDUCED: the chain's reduced Riccati sweep
 SWEEP_DIRECT_REDUCED = True     # DIRECT_REDUCED
+# on only in the copy with every flag on, which runs every kind of model (DTTMM_SPECIALIZE=0, the
+# tests); off in a model's own copy, whose flags say what the model has, not only what it may
+# have: a copy for closing joints runs models with closing joints only, and compiles no step
+# without them (step.py::solve_step and its sweep, ~10 s cold).  solver.kernel_features never
+# gives it.
+EVERY_KIND = True
 
 FLAGS = ("HAS_BEAMS", "HAS_RODS", "HAS_ELASTIC_HINGES", "HAS_LOOPS", "HAS_STATION_HISTORIES",
          "SWEEP_JOINTS", "SWEEP_FULL", "SWEEP_DIRECT_FULL", "SWEEP_TREE", "SWEEP_REDUCED",
-         "SWEEP_DIRECT_REDUCED")
+         "SWEEP_DIRECT_REDUCED", "EVERY_KIND")
 ALL = frozenset(FLAGS)
 
 # the short names in a copy's name (and so in numba's cache files)
 _SHORT = dict(HAS_BEAMS="b", HAS_RODS="r", HAS_ELASTIC_HINGES="e", HAS_LOOPS="l",
               HAS_STATION_HISTORIES="s",
               SWEEP_JOINTS="J", SWEEP_FULL="F", SWEEP_DIRECT_FULL="DF", SWEEP_TREE="T",
-              SWEEP_REDUCED="R", SWEEP_DIRECT_REDUCED="DR")
+              SWEEP_REDUCED="R", SWEEP_DIRECT_REDUCED="DR", EVERY_KIND="all")
 
 # The fields of the run's structures (kernels/stepping/loop.py,
 # kernels/stepping/step.py::GeneralLoop) that only code under a flag reads: a model's copy of the

@@ -33,7 +33,7 @@ from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_si
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of, rod_transfer
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
-from ..features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_RODS,
+from ..features import (EVERY_KIND, HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_RODS,
                         HAS_STATION_HISTORIES,
                         SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
                         SWEEP_REDUCED, SWEEP_TREE)
@@ -156,6 +156,8 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 _NOT_COMPILED_STATIONS = ("kernel compiled without the paper's station histories "
                           "(kernels/features.py)")
 _NOT_COMPILED_SWEEP = "kernel compiled without the run's sweep (kernels/features.py)"
+_NOT_COMPILED_OPEN = ("kernel compiled for closing joints only, run without them "
+                      "(kernels/features.py)")
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -489,9 +491,11 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
         tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
                     state.defl, state.defl_rate, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
-    else:
+    elif EVERY_KIND or not HAS_LOOPS:   # (a closing joints' copy runs only models with them)
         status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
                             state.z)
+    else:
+        raise ValueError(_NOT_COMPILED_OPEN)
     _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
     for k in range(n):
         for i in range(n_coordinates(hinge_kind[k])):
@@ -859,9 +863,11 @@ def _iterate(loop, run, s, it):
                     eta_d_g, defl_g, defl_rate_g, loops, loops.all_bodies)
         status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
                                   loop.guess.w, z)
-    else:
+    elif EVERY_KIND or not HAS_LOOPS:   # (a closing joints' copy runs only models with them)
         status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
                             loop.root_f, z)
+    else:
+        raise ValueError(_NOT_COMPILED_OPEN)
     if status != 0:
         return SINGULAR, status, 0.0
     eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
