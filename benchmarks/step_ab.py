@@ -11,8 +11,8 @@ shared machines reaches 2x, then enters a pair only through the seconds between 
 
 For each system (by default the three-pendulum, rigid chains of 3, 100 and 1000 links; --systems
 arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible; slider_crank:
-the general loop with closing joints; cantilever:
-the stiff cantilever of 8 welded elements, the welded-chain loop) the two checkouts
+the general loop with closing joints; cantilever: the stiff cantilever of 8 welded elements,
+the welded-chain loop) the two checkouts
 are timed in turn, A B A B ..., each time in a fresh process that imports that checkout's
 dttmm (warm numba cache, JIT warm-up run first).  A process measures the cost of one step as
 the difference of a long and a short run over the steps between (no setup, no recording), the
