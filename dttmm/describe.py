@@ -301,8 +301,8 @@ def _kernels_line(model):
         what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
     else:
         what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
-    # (measured cold, benchmarks/compile.py: the rigid arm 56 s, with beams 71-80 s, with
-    # closing joints 120-154 s)
+    # (measured cold, benchmarks/compile.py, 2026-11-29: the rigid arm 59 s, with beams 94 s,
+    # with closing joints 110-148 s)
     first = ("about two minutes" if "HAS_LOOPS" in compiled_for else "over a minute"
              if "HAS_BEAMS" in compiled_for else "about a minute")
     return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
