@@ -65,7 +65,10 @@ def no_alloc_kernel(fn):
 def allocating_kernel(fn):
     """njit(cache=True) with numba's reference counting on, said explicitly (its `_nrt=True`),
     for the kernels the general and energy-momentum loops' pieces call that allocate, or call
-    kernels that do: every skeleton is compiled without reference counting
+    kernels that do (in step.py, every kernel the pieces call but the copy helpers `_put*`,
+    `_all_finite`, `_integrator_coefficients`: a few of them, `_hinge_deflection` and
+    `_locked_frame` among them, allocate nothing and would compile either way): every skeleton
+    is compiled without reference counting
     (kernels/stepping/loop.py::_skeleton), and numba compiles a kernel called from another with
     its caller's setting unless the kernel sets its own (so would not compile these).  An array
     such a kernel allocates lives and dies in it: it returns status codes and numbers, never a
