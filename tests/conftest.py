@@ -2,6 +2,8 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
+
 # The suite runs dozens of kinds of models: one copy of the kernels with every feature compiled
 # in serves them all (each kind would otherwise compile its own copy, about a minute each on 2
 # cores; kernels/features.py).  tests/test_kernel_features.py turns the copies back on.  Set
@@ -17,6 +19,20 @@ def pytest_configure(config):
     # warning class when it reads the file, so dttmm was imported before the line above set
     # DTTMM_SPECIALIZE, and a run in one process compiled a copy of the kernels per kind of model.
     config.addinivalue_line("filterwarnings", "error::dttmm.solver.UnresolvedMotionWarning")
+
+
+@pytest.fixture(autouse=True)
+def _package_calls_only_entry_kernels():
+    """The package's Python code calls only kernels compiled with numba's entry points for Python
+    (kernels/__init__.py: entry=True); a call of a callee kernel from it runs the kernel's twin,
+    a second compilation of its code, and fails the test that made it."""
+    yield
+    from dttmm import kernels
+    if kernels.CALLED_BY_PACKAGE:
+        names = sorted(kernels.CALLED_BY_PACKAGE)
+        kernels.CALLED_BY_PACKAGE.clear()
+        pytest.fail(f"dttmm's Python code called the callee kernels {names}: declare them "
+                    f"entry=True (kernels/__init__.py::kernel)")
 
 
 # --- The kernels compiled once per suite, in parallel -------------------------------------

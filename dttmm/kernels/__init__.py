@@ -8,9 +8,13 @@
 
 with, here, the decorators every kernel is compiled with and features.py, the flags that
 compile a copy of the kernels per kind of model."""
+import sys
 from pathlib import Path
+from types import FunctionType
 
-from numba import njit
+from numba import config, njit
+from numba.core.caching import NullCache
+from numba.core.registry import CPUDispatcher
 
 
 def _drop_stale_caches():
@@ -50,8 +54,79 @@ def loop_piece(fn):
     return njit(cache=True, inline='always', fastmath=CONTRACT)(fn)
 
 
-def no_alloc_kernel(fn):
-    """njit(cache=True) without numba's reference counting (its `_nrt=False` option), for the
+# What numba builds for calls from Python, left out of a kernel only other kernels call: numba
+# compiles every function with a CPython entry point (unboxing each argument: every array of the
+# run's structures) and a C entry point beside its code, optimizes both and makes machine code
+# of them in its own library, though a kernel's callers link only its code.  Measured on the
+# four-bar's cold compile (every callee compiled without them, one process each, quiet):
+# 83.5 s against 107.5 s.
+_NO_PYTHON_ENTRY = dict(no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
+class CalleeKernel(CPUDispatcher):
+    """A kernel numba compiles without entry points for Python (kernel(), no_alloc_kernel(),
+    allocating_kernel() without entry=True): other kernels call it as any other.  Called from
+    Python it runs its twin (python_twin: the same code compiled, once, with them) instead of
+    jumping into code that is not there.  The package's own Python code calls only kernels
+    declared with entry=True: a call from it is noted in CALLED_BY_PACKAGE, which the test suite
+    checks after every test (tests/conftest.py)."""
+
+    def __call__(self, *args, **kwargs):
+        if sys._getframe(1).f_globals.get("__name__", "").startswith("dttmm."):
+            CALLED_BY_PACKAGE.add(self.py_func.__qualname__)
+        return python_twin(self)(*args, **kwargs)
+
+
+PYTHON_CALLED = {}          # a callee kernel -> its twin, where Python called it
+CALLED_BY_PACKAGE = set()   # the callee kernels the package's Python code called (by name)
+
+
+def python_twin(kernel):
+    """The callee kernel's code compiled (and cached) under its own name with the entry points
+    numba builds for calls from Python."""
+    twin = PYTHON_CALLED.get(kernel)
+    if twin is None:
+        fn = kernel.py_func
+        clone = FunctionType(fn.__code__, fn.__globals__, f"{fn.__name__}__python",
+                             fn.__defaults__, fn.__closure__)
+        clone.__qualname__ = f"{fn.__qualname__}__python"   # (numba's cache files' names)
+        clone.__doc__, clone.__module__ = fn.__doc__, fn.__module__
+        options = {k: v for k, v in kernel.targetoptions.items() if k not in _NO_PYTHON_ENTRY}
+        twin = PYTHON_CALLED[kernel] = _dispatcher(CPUDispatcher, clone, options,
+                                                   cache=not isinstance(kernel._cache, NullCache))
+    return twin
+
+
+def _dispatcher(kind, fn, options, cache=True):
+    """What njit(cache=cache, **options) makes of fn, as a `kind` (CPUDispatcher or
+    CalleeKernel)."""
+    if config.DISABLE_JIT:
+        return fn
+    compiled = kind(py_func=fn, locals={}, targetoptions=dict(options, nopython=True))
+    if cache:
+        compiled.enable_caching()
+    return compiled
+
+
+def recompiled(kernel, fn):
+    """fn (a copy of the kernel's code: kernels/features.py::specialized) compiled as the kernel
+    is: the same options, a callee or an entry, cached where the kernel is."""
+    return _dispatcher(type(kernel), fn, kernel.targetoptions,
+                       cache=not isinstance(kernel._cache, NullCache))
+
+
+def kernel(fn=None, *, entry=False):
+    """njit(cache=True, fastmath=CONTRACT): a kernel called by other kernels only (a
+    CalleeKernel) or, with entry=True, from Python too (by the package's Python code or its
+    tests: a test's call of a callee would compile its twin, seconds for the larger kernels)."""
+    if fn is None:
+        return lambda f: kernel(f, entry=entry)
+    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
+                       dict(fastmath=CONTRACT, **({} if entry else _NO_PYTHON_ENTRY)))
+
+
+def no_alloc_kernel(fn=None, *, entry=False):
+    """kernel() without numba's reference counting (its `_nrt=False` option), for the
     step's kernels that allocate nothing.  Every array argument and every view then costs no
     pair of atomic reference-count calls; numba leaves most of those in functions with loops
     and branches (the compiled beam map had ~400 such call sites).  Measured on the beam's
@@ -59,11 +134,15 @@ def no_alloc_kernel(fn):
     fused ball-chain loop (kernels/stepping/ball_chain.py::_ball_chain_steps, its scratch allocated
     by its caller): 0.88x the time per step.  A kernel that allocates fails to compile (numba
     compiles its callees the same way), so the option cannot hide a mistake."""
-    return njit(cache=True, _nrt=False, fastmath=CONTRACT)(fn)
+    if fn is None:
+        return lambda f: no_alloc_kernel(f, entry=entry)
+    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
+                       dict(_nrt=False, fastmath=CONTRACT,
+                            **({} if entry else _NO_PYTHON_ENTRY)))
 
 
-def allocating_kernel(fn):
-    """njit(cache=True) with numba's reference counting on, said explicitly (its `_nrt=True`),
+def allocating_kernel(fn=None, *, entry=False):
+    """kernel() with numba's reference counting on, said explicitly (its `_nrt=True`),
     for the kernels the general and energy-momentum loops' pieces call that allocate, or call
     kernels that do (in step.py, every kernel the pieces call but the copy helpers `_put*`,
     `_all_finite`, `_integrator_coefficients`: a few of them, `_hinge_deflection` and
@@ -73,7 +152,10 @@ def allocating_kernel(fn):
     its caller's setting unless the kernel sets its own (so would not compile these).  An array
     such a kernel allocates lives and dies in it: it returns status codes and numbers, never a
     new array (nothing would free one)."""
-    return njit(cache=True, _nrt=True, fastmath=CONTRACT)(fn)
+    if fn is None:
+        return lambda f: allocating_kernel(f, entry=entry)
+    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
+                       dict(_nrt=True, fastmath=CONTRACT, **({} if entry else _NO_PYTHON_ENTRY)))
 
 
 # Small kernels called once per body and step (the predictor and history updates, the

@@ -25,9 +25,10 @@ import os
 from functools import lru_cache
 from types import CodeType, FunctionType
 
-from numba import config, njit
-from numba.core.caching import NullCache
+from numba import config
 from numba.core.dispatcher import Dispatcher
+
+from . import recompiled
 
 # DTTMM_SPECIALIZE=0: every kind of model runs the one copy with every flag on (what a test
 # suite or a parameter study over many kinds of models wants: each kind would compile its own
@@ -178,7 +179,6 @@ def specialized(kernel, features=ALL):
         clone = FunctionType(fn.__code__, scope, name, fn.__defaults__, fn.__closure__)
         clone.__qualname__ = f"{fn.__qualname__}__{tag}"    # (numba's cache files' names)
         clone.__doc__, clone.__module__ = fn.__doc__, fn.__module__
-        options = {k: v for k, v in kernel.targetoptions.items() if k != "nopython"}
-        copy = njit(cache=not isinstance(kernel._cache, NullCache), **options)(clone)
+        copy = recompiled(kernel, clone)
         _COPIES[key] = copy
     return copy

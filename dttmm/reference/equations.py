@@ -3,11 +3,10 @@ system with its reactions and closing joints, solved at every evaluation (the fo
 newton_euler.py)."""
 import math
 
-import numba
 import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
-from ..kernels import CONTRACT
+from ..kernels import kernel
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
                    _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
@@ -19,7 +18,7 @@ from .rotations import (_cross, _expm, _hat, _left_jacobian, _left_jacobian_deri
                         _mat3, _quat_to_rot, _vec3)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _stiffening_block(my, nm, i):
     """D_i (i = 0, 1, 2; nm x nm, contiguous) of one beam from its shape matrices
     my = [int Y Y^T | D0 | D1 | D2], each block as wide as the widest beam's modes
@@ -28,13 +27,13 @@ def _stiffening_block(my, nm, i):
     return np.ascontiguousarray(my[:nm, (i + 1) * wide:(i + 1) * wide + nm])
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _modal_size(bp):
     """A beam's modal coordinates: v and w bending, then the twist, then the stretch."""
     return 2 * int(bp[_BMODES]) + int(bp[_BTWIST]) + int(bp[_BSTRETCH])
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     """Output point and output section of one beam (newton_euler.py's docstring, "End kinematics"),
     from its frame (A, w), modal coordinates and rates.  Returns rho_O = r_O - r_I, the relative
@@ -107,14 +106,14 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
     return rho, v_rel, rot_o, w_o, acc_v, alpha_v, br, bt
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rot_about(n, q):
     """Rot(n, q) = exp(q n^) for a unit axis n (Rodrigues)."""
     k = _hat(n)
     return np.eye(3) + math.sin(q) * k + (1.0 - math.cos(q)) * (k @ k)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_coordinates(y, joints, k, kind):
     """(q, q') of joint k, each padded to 2 entries (newton_euler.py's docstring, "Joints with
     coordinates"; joints = (c_off, c0, n_coord, ...): the coordinates at y[c0 + c_off[k] + i],
@@ -129,7 +128,7 @@ def _joint_coordinates(y, joints, k, kind):
     return q, qd
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_frame(kind, h, a_in, w_in, q, qd):
     """Child frame behind a joint with coordinates (newton_euler.py's docstring): its rotation A,
     angular velocity w and, for a slide, the offset d = A_P n q of its input point from the
@@ -155,7 +154,7 @@ def _joint_frame(kind, h, a_in, w_in, q, qd):
     return rot, w, d, d_rate
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_directions(kind, h, a_in, rot):
     """World directions s_i (columns, 3 x 2) of a joint's coordinates: the rotation axes u = A_P n
     (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
@@ -168,7 +167,7 @@ def _joint_directions(kind, h, a_in, rot):
     return s, 1
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
     """Velocity parts of a joint's constraint rows (newton_euler.py's docstring): of the child's
     angular acceleration, (w_P x u) q' (revolute), (w_P x u1) q1' + (w x v2) q2' (universal), 0
@@ -186,7 +185,7 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
     return rot_v, slide_v
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _flex_size(k, body_kind, beam_params, rods):
     """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0.
     rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
@@ -197,7 +196,7 @@ def _flex_size(k, body_kind, beam_params, rods):
     return 0
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rod_state(k, rods, y, e0, n_modal, m_off):
     """Strain rod k's stations (reference/strain_rod.py::rod_state) and its q, q'."""
     nq = rods[0][k]
@@ -208,7 +207,7 @@ def _rod_state(k, rods, y, e0, n_modal, m_off):
     return rod_state(rods[1][k], rods[2][k], phi, q, qd), q, qd
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                 shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
                 attachment_point, joints, rods):
@@ -307,7 +306,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             b_r, b_t, v_o, rho_att, acc_v_att)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
                    w_g, parent):
     """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
@@ -333,7 +332,7 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
 
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _elastic_forces(bp, sv, eta, eta_dot):
     """The generalized forces of one beam's springs and dampers on its coordinates, -c q' - k q
     each: bending k = EI int Y''^2, twist G J int Psi'^2, stretch E A int U'^2, and
@@ -361,7 +360,7 @@ def _elastic_forces(bp, sv, eta, eta_dot):
     return out
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     """World-frame mass properties, coupling blocks and velocity terms of one beam at its
     current (eta, eta'), from the shape integrals sv (int Y, int x Y, ...) and my = int Y Y^T
@@ -514,7 +513,7 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     return mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
     """_beam_terms with the foreshortening kept exactly (newton_euler.py's docstring, "Geometric
     stiffening, exact"): every section is a point of the quadrature `table`
@@ -605,7 +604,7 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
             np.zeros((3, nb)))
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_in, pce, f_col,
                 m_col, joints):
     """Joint k's share of the global system (newton_euler.py's docstring, "Joints with
@@ -652,7 +651,7 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
                     s[rf + i, pce + j] += hdb[i, j]
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, rho_att,
               acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
               beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
@@ -867,7 +866,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
     return s, b
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _closure_side(k, local, on_end, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
                   alpha_v, r_g, v_g, a_g, rot_g, w_g, wd_g):
     """One side of a closing joint (newton_euler.py's docstring, "Loops"): its point's arm from the
@@ -887,7 +886,7 @@ def _closure_side(k, local, on_end, rot, omega, r_in, v_in, rho_o, rot_o, omega_
             np.zeros(3))
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _closure_columns(s, row, k, on_end, coef_a, coef_alpha, coef_section, sign, b_r, b_t,
                      e_col0, m_off, body_kind, beam_params, rods):
     """Add sign * (coef_a . a_k + coef_alpha . alpha_k) to a closing joint's row and, on a
@@ -906,7 +905,7 @@ def _closure_columns(s, row, k, on_end, coef_a, coef_alpha, coef_section, sign, 
                                           + b_t[k, i, j] * coef_section[i])
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_o, acc_v,
                   alpha_v, b_r, b_t, e_col0, m_off, body_kind, beam_params, rods, r_g, v_g, a_g,
                   rot_g, w_g, wd_g):
@@ -1009,7 +1008,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
 LOOP_RCOND = 1e-10
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _solve_least_closure_force(s, b, col0, count):
     """Solve S x = b with the closing joints' multipliers in x[col0:col0 + count] (module
     docstring, "Loops"): the tree's system first, x = x0 - X lam with S_tree x0 = b_tree and
@@ -1042,7 +1041,7 @@ def _solve_least_closure_force(s, b, col0, count):
     return x
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                     shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col,
                     loops, n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques,
@@ -1119,7 +1118,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             b_r, coord_acc, generalized, rho_att, acc_v_att, closure_load)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,

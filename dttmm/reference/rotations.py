@@ -2,13 +2,12 @@
 SO(3)'s exponential, logarithm and left Jacobian with its derivative."""
 import math
 
-import numba
 import numpy as np
 
-from ..kernels import CONTRACT
+from ..kernels import kernel
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mat3(row, start):
     m = np.empty((3, 3))
     for i in range(3):
@@ -17,7 +16,7 @@ def _mat3(row, start):
     return m
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _vec3(row, start):
     v = np.empty(3)
     for i in range(3):
@@ -25,7 +24,7 @@ def _vec3(row, start):
     return v
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _cross(a, b):
     c = np.empty(3)
     c[0] = a[1] * b[2] - a[2] * b[1]
@@ -34,7 +33,7 @@ def _cross(a, b):
     return c
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _hat(v):
     m = np.zeros((3, 3))
     m[0, 1] = -v[2]
@@ -46,7 +45,7 @@ def _hat(v):
     return m
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _quat_to_rot(q):
     """Rotation matrix of the quaternion [w, x, y, z], normalised first."""
     s = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -64,7 +63,7 @@ def _quat_to_rot(q):
     return r
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _log_rot(r):
     """Rotation vector psi with expm(hat(psi)) = r, |psi| <= pi; robust at every angle (it goes
     through the quaternion of r, largest component first)."""
@@ -108,7 +107,7 @@ def _log_rot(r):
     return psi
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _so3_coefficients(t):
     """Coefficients of exp and of the left Jacobian at the rotation vector t, p = |t|:
     c = sin p / p, a = (1 - cos p)/p^2, b = (p - sin p)/p^3 and a1 = a'(p)/p, b1 = b'(p)/p
@@ -146,7 +145,7 @@ def _so3_coefficients(t):
     return c, a, b, a1, b1
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _expm(t):
     """exp(t^), Rodrigues' formula."""
     c, a, _, _, _ = _so3_coefficients(t)
@@ -155,7 +154,7 @@ def _expm(t):
     return e
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _left_jacobian(t):
     """J_l(t) = I + a t^ + b t^ t^: exp((t + d)^) = exp((J_l d)^) exp(t^) to first order."""
     _, a, b, _, _ = _so3_coefficients(t)
@@ -163,7 +162,7 @@ def _left_jacobian(t):
     return np.eye(3) + a * th + b * (th @ th)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _left_jacobian_derivative(t, u):
     """dJ_l[u] = d/ds J_l(t + s u) at s = 0 = (t.u) (a1 t^ + b1 t^ t^) + a u^ + b (u^ t^ + t^ u^),
     since d p / ds = (t.u) / p and a'(p) dp/ds = a1 (t.u)."""
@@ -174,7 +173,7 @@ def _left_jacobian_derivative(t, u):
     return tu * (a1 * th + b1 * (th @ th)) + a * uh + b * (uh @ th + th @ uh)
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _end_section_rate(t, t_dot, t_ddot):
     """d/dt [J_l(t) t'] = J_l(t) t'' + dJ_l[t'] t' (body frame), for tests and the kernels."""
     return _left_jacobian(t) @ t_ddot + _left_jacobian_derivative(t, t_dot) @ t_dot

@@ -11,16 +11,15 @@ G_{a+1} = G_a E, G' = G'_a E + G_a E', G'' = G''_a E + 2 G'_a E' + G_a E'', and 
 the angular velocity omega = vee(R' R^T) and acceleration alpha = vee(R'' R^T) (R'' R^T's skew
 part: d/dt (R' R^T) = R'' R^T + R' R'^T, the latter symmetric).
 """
-import numba
 import numpy as np
 
-from ..kernels import CONTRACT
+from ..kernels import kernel
 
 _SQRT3_12 = np.sqrt(3.0) / 12.0
 _TAYLOR_TERMS = 16          # after scaling to norm < 1/2: remainder below 2^-16 / 16! ~ 1e-18
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _jet_mul(a, b):
     out = np.zeros((3, 4, 4))
     out[0] = a[0] @ b[0]
@@ -29,7 +28,7 @@ def _jet_mul(a, b):
     return out
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _jet_exp(x):
     """exp of the jet x (3, 4, 4): (E, E', E''/2) of exp(X(s))."""
     norm = np.abs(x[0]).sum(axis=1).max() + np.abs(x[1]).sum(axis=1).max() \
@@ -49,7 +48,7 @@ def _jet_exp(x):
     return out
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _twist_matrix(xi):
     m = np.zeros((4, 4))
     m[0, 1], m[0, 2], m[1, 2] = -xi[2], xi[1], -xi[0]
@@ -58,12 +57,12 @@ def _twist_matrix(xi):
     return m
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _matrix_bracket(a, b):
     return a @ b - b @ a
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
     """The same outputs as kernels/transfers/strain_rod.py::rod_kinematics (stations 0 .. n in
     the input frame: rotation, centre, angular velocity, velocity, angular acceleration,
@@ -105,14 +104,14 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
         alpha[a, 2] = 0.5 * (al[1, 0] - al[0, 1])
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def station_arrays(n):
     """rod_sections' outputs for n stations, zeroed (rotations (n, 3, 3), then five (n, 3))."""
     return (np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
             np.zeros((n, 3)), np.zeros((n, 3)))
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_state(steps, xi0, phi, q, qd):
     """Per station (its padded steps have length 0 and weight 0): rotation, centre, the
     section's angular velocity and the centre's velocity relative to the frame, the convective
@@ -136,13 +135,13 @@ def rod_state(steps, xi0, phi, q, qd):
     return rot, pos, om, vel, al, acc, jp, jr
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _cross3(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                      a[0] * b[1] - a[1] * b[0]])
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_end(state, a, w):
     """The rod's output point and section (world) as the reference's _kinematics takes a body's
     (equations.py, "End kinematics"): rho_O = A p_L, the relative velocity v_O - v_I,
@@ -160,7 +159,7 @@ def rod_end(state, a, w):
             a @ np.ascontiguousarray(jp[last]), a @ np.ascontiguousarray(jr[last]))
 
 
-@numba.njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, gravity):
     """The rod's share of the reference's rows, in the form _beam_terms returns a beam's
     (equations.py; docs/strain_rod.md, "The rod's equations"): mass, first moment h = A s,

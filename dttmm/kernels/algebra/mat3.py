@@ -4,7 +4,7 @@ arithmetic."""
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT
+from .. import CONTRACT, kernel
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -39,7 +39,7 @@ def matmul_into(a, b, out):
             out[i, j] = s
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def matvec_into(a, x, out):
     """out = a @ x by loops."""
     for i in range(a.shape[0]):
@@ -49,7 +49,7 @@ def matvec_into(a, x, out):
         out[i] = s
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def hat_mul(v, b, out):
     """out = v^ @ b (3 x 3): column j is v x b[:, j]."""
     for j in range(3):
@@ -59,7 +59,7 @@ def hat_mul(v, b, out):
         out[2, j] = v[0] * b1 - v[1] * b0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def mul_hat(a, v, out):
     """out = a @ v^ (3 x 3): row i is a[i] x v."""
     for i in range(3):
@@ -74,19 +74,19 @@ def mul_hat(a, v, out):
 # A kernel written with these keeps its intermediates in registers (no scratch arrays that the
 # compiler must assume may alias each other); used by kernels/stepping/ball_chain.py::ball_body_map.
 # --------------------------------------------------------------------------------------------
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_of_mat(a):
     """A 3 x 3 array as a 9-tuple."""
     return (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_of_vec(x):
     """A 3-array as a 3-tuple."""
     return (x[0], x[1], x[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_mm(a, b):
     """a @ b."""
     return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
@@ -96,7 +96,7 @@ def t_mm(a, b):
             a[6] * b[2] + a[7] * b[5] + a[8] * b[8])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_mmt(a, b):
     """a @ b^T."""
     return (a[0] * b[0] + a[1] * b[1] + a[2] * b[2], a[0] * b[3] + a[1] * b[4] + a[2] * b[5],
@@ -106,20 +106,20 @@ def t_mmt(a, b):
             a[6] * b[6] + a[7] * b[7] + a[8] * b[8])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_mv(a, x):
     """a @ x."""
     return (a[0] * x[0] + a[1] * x[1] + a[2] * x[2], a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
             a[6] * x[0] + a[7] * x[1] + a[8] * x[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_cross(x, y):
     """x x y."""
     return (x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_hat_mul(v, b):
     """v^ @ b: column j is v x b[:, j]."""
     return (v[1] * b[6] - v[2] * b[3], v[1] * b[7] - v[2] * b[4], v[1] * b[8] - v[2] * b[5],
@@ -127,7 +127,7 @@ def t_hat_mul(v, b):
             v[0] * b[3] - v[1] * b[0], v[0] * b[4] - v[1] * b[1], v[0] * b[5] - v[1] * b[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_mul_hat(a, v):
     """a @ v^: row i is a[i] x v."""
     return (a[1] * v[2] - a[2] * v[1], a[2] * v[0] - a[0] * v[2], a[0] * v[1] - a[1] * v[0],
@@ -135,26 +135,26 @@ def t_mul_hat(a, v):
             a[7] * v[2] - a[8] * v[1], a[8] * v[0] - a[6] * v[2], a[6] * v[1] - a[7] * v[0])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_hat(v):
     """v^ (v^ x = v x x)."""
     return (0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_outer(x, y):
     """x y^T."""
     return (x[0] * y[0], x[0] * y[1], x[0] * y[2], x[1] * y[0], x[1] * y[1], x[1] * y[2],
             x[2] * y[0], x[2] * y[1], x[2] * y[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_lin3(a, x, b, y):
     """a x + b y (3-tuples)."""
     return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_lin9(a, x, b, y):
     """a x + b y (9-tuples)."""
     return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2],
@@ -162,20 +162,20 @@ def t_lin9(a, x, b, y):
             a * x[6] + b * y[6], a * x[7] + b * y[7], a * x[8] + b * y[8])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_scale9(a, x):
     """a x (9-tuple)."""
     return (a * x[0], a * x[1], a * x[2], a * x[3], a * x[4], a * x[5], a * x[6], a * x[7],
             a * x[8])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_plus_diag(a, c):
     """a + c E."""
     return (a[0] + c, a[1], a[2], a[3], a[4] + c, a[5], a[6], a[7], a[8] + c)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def t_inverse(a):
     """(det a, a^-1) by the adjugate (the inverse is not finite when det a = 0)."""
     c00 = a[4] * a[8] - a[5] * a[7]
@@ -188,7 +188,7 @@ def t_inverse(a):
                  c02 * f, (a[1] * a[6] - a[0] * a[7]) * f, (a[0] * a[4] - a[1] * a[3]) * f)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def least_norm_solve3(a, b, rcond):
     """The least-norm least-squares solution of a x = b (3 x 3), as np.linalg.pinv(a, rcond) @ b
     but without allocating: by a one-sided Jacobi SVD (Hestenes), whose singular values are

@@ -8,12 +8,12 @@ remainder below t^8 / 9! < 3e-22 there."""
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT
+from .. import CONTRACT, kernel
 
 SERIES_BELOW = 1e-4       # |phi|^2 below which exp and J_l use their series (docstring)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def hat(v, out):
     """out = v^ (the cross-product matrix: v^ w = v x w)."""
     out[0, 0] = 0.0
@@ -51,7 +51,7 @@ def expm_so3(phi, out):
     _identity_plus(a, b, phi, th2, out)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def exp_coefficients(th2):
     """(sin t / t, (1 - cos t) / t^2) at t^2 = th2, exp(phi^) = I + a phi^ + b phi^ phi^ (their
     series below th2 = SERIES_BELOW)."""
@@ -77,7 +77,7 @@ def left_jacobian(phi, out):
     _identity_plus(b, c, phi, th2, out)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def left_jacobian_derivative(phi, delta, out):
     """out = D J_l(phi)[delta], the derivative of J_l along delta (docs/beam.md, "The end
     moment's columns"): with J_l = I + b phi^ + c phi^^, b = (1 - cos t)/t^2,
@@ -115,7 +115,7 @@ def left_jacobian_derivative(phi, delta, out):
     out[2, 1] += v0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def log_so3(r, out):
     """out = the rotation vector of r (angle in [0, pi))."""
     c = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
@@ -133,7 +133,7 @@ def log_so3(r, out):
     out[2] = f * w2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def cayley(phi, out):
     """out = cay(phi) = (I - phi^/2)^-1 (I + phi^/2) = I + 4/(4 + |phi|^2) (phi^ + phi^^/2):
     the rotation by 2 atan(|phi|/2) about phi (docs/solver.md, energy-momentum scheme)."""
@@ -147,7 +147,7 @@ def cayley(phi, out):
         out[i, i] += 1.0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def cayley_tangent(phi, out):
     """out = D(phi) = 4/(4 + |phi|^2) (I + phi^/2), so that
     cay(phi + dphi) = cay((D dphi)^) cay(phi) to first order."""
@@ -159,7 +159,7 @@ def cayley_tangent(phi, out):
         out[i, i] += f
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def cayley_log(r, out):
     """out = the Cayley vector phi of r (cay(phi) = r): 2 vee(r - r^T) / (1 + tr r); rotations
     by less than pi."""

@@ -36,9 +36,8 @@ fixed or moving ground (set_ground); every joint kind in the tree and closing it
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from .. import CONTRACT, allocating_kernel, no_alloc_kernel
+from .. import allocating_kernel, kernel, no_alloc_kernel
 from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_RODS
 from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ...elements import BEAM, ROD
@@ -127,40 +126,40 @@ ENERGY_STEP_LIMIT = 1e-3     # the energy's projection changes the rates by less
 # atomic counts (measured on the slider-crank and the Stewart platform: _side alone, counting
 # the model's and the loops' named tuples at every call, took a fifth of the step; docs/loops.md,
 # "What runs loops").
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _v3(a, i):
     """Row i of an (m, 3) array as a 3-tuple."""
     return (a[i, 0], a[i, 1], a[i, 2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _m9(a, k):
     """a[k] of an (n, 3, 3) array as a row-major 9-tuple."""
     return (a[k, 0, 0], a[k, 0, 1], a[k, 0, 2], a[k, 1, 0], a[k, 1, 1], a[k, 1, 2],
             a[k, 2, 0], a[k, 2, 1], a[k, 2, 2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _dot(x, y):
     return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _add(x, y):
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _neg(x):
     return (-x[0], -x[1], -x[2])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _sub(x, y):
     return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def _frame(rot, ground_rot, k):
     """Body k's frame (the ground's for k < 0) as a 9-tuple."""
     if k < 0:
@@ -217,7 +216,7 @@ def _rod_offset(params, k, rot, w, eta, eta_d):
     return rho, _add(t_cross(_v3(w, k), rho), t_mv(f, v_l))
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def set_ground(loops, r, v, a, rot, w, wd):
     """The ground point's position r, velocity v and acceleration a and the ground frame's
     rotation rot, angular velocity w and acceleration wd where the rows are next written (a
@@ -280,7 +279,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
             v_out[k, i] = v[i] + arm_rate[i]
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def _side(params, loops, rot, w, c, s):
     """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
     joint c's side s, at the output points loops.r_out, v_out and the bodies' rot, w, as
@@ -303,7 +302,7 @@ def _side(params, loops, rot, w, c, s):
             f, w_k)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rotation_vector(m):
     """The rotation vector psi of the rotation m (9-tuple; exp(psi^) = m), its angle
     atan2(|vee(m - m^T)| / 2, (tr m - 1) / 2) in [0, pi) (so3.log_so3, accurate at small
@@ -315,7 +314,7 @@ def _rotation_vector(m):
     return (f * w0, f * w1, f * w2)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _relative_rotation(f_a, f_b, c1, c2):
     """log(F_a^T F_b R0^T) (in a's frame), R0 = [c1, c2, c1 x c2] from its first two columns
     (an elastic hinge's rest rotation, closures.spring_directions)."""
@@ -428,7 +427,7 @@ def _row_value(loops, r, z, act):
     return v
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def row_residuals(loops, z, out):
     """Every row's value kappa + J (a, alpha) at the stations z (2n + 1, 12) of the whole
     tree, with the Jacobian of the last solve (_row_coefficients), less its target (a driven
@@ -448,7 +447,7 @@ def _column_loads(loops):
                 loops.col_load[r + 1, s, 3 + i] = -loops.coef[r, 2 * s, i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _least_apply(u, sv, vt, b):
     """The least-norm x of a x = b from a's SVD a = u diag(sv) vt, truncated at relative
     1e-10."""
@@ -462,7 +461,7 @@ def _least_apply(u, sv, vt, b):
     return x
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _least_solve(a, b):
     """The least-norm x of a x = b by a truncated SVD (relative 1e-10)."""
     u, sv, vt = np.linalg.svd(a)
@@ -526,7 +525,7 @@ def _band_factor(a, lower, upper, piv):
                     a[i, j] -= f * a[k, j]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _band_apply(lu, lower, upper, piv, b):
     """x with A x = b from _band_factor's factors."""
     m = lu.shape[0]
@@ -543,7 +542,7 @@ def _band_apply(lu, lower, upper, piv, b):
     return x
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rows_solve(loops, a, b):
     """The multipliers of a x = b for the rows' matrix a (the Delassus matrix or V): the
     truncated SVD (_least_solve), or where loops.band holds its bandwidths (many rows, a
@@ -670,7 +669,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _is_force(law, r):
     """Whether row r is a drive's force (a SpringDamper's or a JointForce's), not a
     constraint."""
@@ -727,7 +726,7 @@ def _modal_responses(params, loops, eta_map):
                     loops.eta_col[j, i] = v
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def _dependent_frames(params, loops, state, bodies, work):
     """Every given body (in tree order) whose frame follows its parent's, from the parent's
     (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's
@@ -852,7 +851,7 @@ def _residuals(params, loops, state):
     return largest_g, largest_gd
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _constrained(loops, values):
     """-values with a drive's force's rows 0 (the projection moves nothing for them)."""
     out = -values
@@ -971,7 +970,7 @@ def _mechanical_energy(params, loops, state):
     return kinetic, potential
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def start_energy(params, loops, state):
     """The total energy T + V of the state (at the start of a run: the energy its steps hold,
     loops.energy[1])."""
@@ -1014,7 +1013,7 @@ def _hold_energy(params, loops, state):
 # and in the recovery nu_F,c = k_c - D^-1 Bl_F^T S_O Phi f_I,c.
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _element_columns(u, s_o, p_o, s_i, p_i, t, x):
     """Through an affine element z_O = U z_I + u: S_I and every column's P_I from the outboard
     S_O and P_O (C, 6), in one solve of T (the comment above; column 0 takes u's affine part);
@@ -1046,7 +1045,7 @@ def _element_columns(u, s_o, p_o, s_i, p_i, t, x):
     return True
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, port_s, loops):
     """The upward half of the full-state tree sweep for the step (column 0, every element) and
     each row's unit multiplier (column r + 1, on the bodies its sweep passes: loops.up_ptr,
@@ -1183,7 +1182,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _row_mv(a, i, x, m):
     """Row i of a's first m columns times x[:m]."""
     v = 0.0

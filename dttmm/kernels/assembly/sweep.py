@@ -21,7 +21,7 @@ Riccati (f = a, e = q) or by multiplying the maps out (direct).
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, kernel, no_alloc_kernel
 from ..transfers.joint import FREE, PRESCRIBED
 from ..algebra.mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
 
@@ -35,7 +35,7 @@ E_IDX = np.array([[3, 4, 5, 9, 10, 11], [6, 7, 8, 9, 10, 11], [0, 1, 2, 3, 4, 5]
 TIP_RCOND = 1e-12
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _station_basis(split, s_mat, p_vec, basis, offset):
     """z = basis e + offset for a station carried as f = S e + P."""
     f_idx = F_IDX[split]
@@ -51,7 +51,7 @@ def _station_basis(split, s_mat, p_vec, basis, offset):
             basis[f_idx[r], c] = s_mat[r, c]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _station_state(split, s_mat, p_vec, e, z):
     """z = basis e + offset (_station_basis) without the basis: z_e = e, z_f = S e + P."""
     f_idx = F_IDX[split]
@@ -64,7 +64,7 @@ def _station_state(split, s_mat, p_vec, e, z):
         z[e_idx[r]] = e[r]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _tip_system(basis, offset, tip_pinned):
     """W e = rhs for the tip: m = 0 and q = 0 (free), or a = 0 and m = 0 (joined to the ground by
     a ball joint)."""
@@ -80,7 +80,7 @@ def _tip_system(basis, offset, tip_pinned):
     return w, rhs
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _solve_tip(w, rhs, tip_pinned):
     """(solved, e) of the tip's W e = rhs.  A pinned tip takes the least-norm solution: a chain
     closed between two fixed points can leave the force along an inextensible member statically
@@ -92,7 +92,7 @@ def _solve_tip(w, rhs, tip_pinned):
     return True, np.linalg.solve(w, rhs)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _moment_force_system(basis, offset, target):
     """W e = rhs: the rows of z = basis e + offset that fix [m; q] = target."""
     w = np.empty((6, 6))
@@ -172,7 +172,7 @@ def riccati_step(u, s, p, s_new, p_new, t_inv, t_vec, work):
     return True
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _split_order(u, split, out):
     """out = u with rows and columns in the split's order [f; e] (riccati_step's)."""
     order = np.empty(12, dtype=np.int64)
@@ -184,7 +184,7 @@ def _split_order(u, split, out):
         out[r, 12] = u[order[r], 12]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, t_inv, t_vec,
                  g_mat, g_vec, z):
     """Solve one step; returns 0, or j + 1 if element j (or the tip, j = n_el) is singular.
@@ -271,7 +271,7 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, z):
     """Multiply the transfers out from the root; returns 0 or j + 1 for a singular element j.
 
@@ -337,7 +337,7 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def transfer_residual(kind, u, z):
     """Largest relative residual of the TRANSFER elements' relations z_j+1 = U_j z_j + u_j, by
     block (a, phi, m, q): max |residual| over max (|z_j+1| + |U_j| |z_j| + |u_j|) of the block's
@@ -363,7 +363,7 @@ def transfer_residual(kind, u, z):
     return worst
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:
@@ -409,7 +409,7 @@ def riccati_reduced_step(v, s_in, p_in, s_out, p_out, t_inv, t_vec, t, num):
     return det
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def riccati_reduced_tip(tip_pinned, s_tip, p_tip, aq_tip):
     """[a; q] at the tip from a = S q + P there: q = 0 (free) or a = 0 (tip_pinned; the least-norm
     q, as _solve_tip's, by least_norm_solve3: it allocates nothing)."""
@@ -436,7 +436,7 @@ def riccati_reduced_recover(k, s_mat, p_vec, t_inv, t_vec, aq):
                     + s_mat[k, i, 2] * aq[k, 5] + p_vec[k, i])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     """Reduced Riccati sweep on [a; q]: a = S q + P.  v (n, 6, 7); aq (n + 1, 6) output.
     Tip: q = 0 (free) or a = 0 (tip_pinned)."""
@@ -455,7 +455,7 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def direct_reduced(v, a_root, tip_pinned, aq):
     """Multiply the reduced maps out (the paper's way), solve q_0 from the tip (free: q_N = 0;
     pinned: a_N = 0), and propagate forward.  Loses accuracy on long or stiff chains
@@ -568,7 +568,7 @@ def _add_to_port(s_i, p_i, port_s, port_p):
             port_s[i, j] += s_i[i, j]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def riccati_tree_reduced(v, parent, a_root, s_in, p_in, t_inv, port_s, port_p, aq_in, aq_out):
     """The reduced sweep of a tree of bodies between ball joints (the comment "Trees" above):
     v (n, 6, 7) every body's map; parent (n,) (-1: the ground point, whose acceleration is
@@ -596,7 +596,7 @@ def riccati_tree_reduced(v, parent, a_root, s_in, p_in, t_inv, port_s, port_p, a
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def write_tree_stations(parent, a_root, phi_root, aq_in, aq_out, phi, z):
     """The stations' states in the general layout: z[2k + 1], z[2k + 2] body k's input and
     output [a, phi, 0, q]; z[0] the ground point [a, phi, 0, sum of the roots' q]."""
@@ -619,7 +619,7 @@ def write_tree_stations(parent, a_root, phi_root, aq_in, aq_out, phi, z):
             z[2 * k + 2, 9 + i] = aq_out[k, 3 + i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mm(a, b):
     """a @ b for small blocks that may be strided views (no BLAS, no warning)."""
     out = np.zeros((a.shape[0], b.shape[1]))
@@ -631,7 +631,7 @@ def _mm(a, b):
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mv(a, x):
     out = np.zeros(a.shape[0])
     for i in range(a.shape[0]):
@@ -652,7 +652,7 @@ def _mv(a, x):
 # nu_F = D^-1 (tau0_F - Bl_F^T y) - D^-1 Bl_F^T S_O Phi f_I, and e_I = Psi e_O.
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _gauss_solve(a, b, n, m):
     """Solve a[:n, :n] x = b[:n, :m] in place (x in b; a destroyed), partial pivoting; False if
     a pivot vanishes against the matrix's scale."""
@@ -692,7 +692,7 @@ def _gauss_solve(a, b, n, m):
     return True
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _element_to_inboard(u, s_o, p_o, s_i, p_i):
     """S_I, P_I through an affine element from the outboard S_O, P_O; False if T is singular."""
     t = np.empty((6, 6))
@@ -719,7 +719,7 @@ def _element_to_inboard(u, s_o, p_o, s_i, p_i):
     return True
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
     """The joint's elimination (the comment above): free coordinates' indices, H = D^-1 Bl_F^T
     S_O Phi (mf x 6), D^-1 r (mf) and G = S_O B_F (6 x mf), with r = tau0_F - Bl_F^T y; returns
@@ -774,7 +774,7 @@ def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
     return mf, sy
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root_f, s_mat,
                       p_vec, port_s, port_p, joint_nu, joint_tau, z):
     """The full-state sweep of a tree (the comment above): kind, u (2n elements: 2k hinge k,

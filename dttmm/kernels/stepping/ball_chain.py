@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ...elements import BEAM, RIGID
-from .. import CONTRACT, loop_piece
+from .. import CONTRACT, kernel, loop_piece
 from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from ..transfers.body import kappa_values, rigid_point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
@@ -117,7 +117,7 @@ def ball_body_map(p, rot, lam, w, wd, s, r, a_i, q_i, load, torque, v, pmap):
         v[3 + i, 6] = f[i] - mass * kap_c[i] + mass * d_c_y[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _write_stations(aq, phi, phi_g, z):
     """The stations' states in the general loop's layout (kernels/stepping/step.py::_solve): z[0]
     the ground point [a, phi_g, 0, q]; z[2k + 1], z[2k + 2] body k's input and output."""
@@ -137,7 +137,7 @@ def _write_stations(aq, phi, phi_g, z):
             z[2 * k + 2, 9 + i] = aq[k + 1, 3 + i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _ground_increment(g_rot, s, rel, out):
     """The ground's rotation increment over step s: log(R_{s+1} R_s^T) (rel: 3 x 3 scratch)."""
     for i in range(3):
@@ -190,7 +190,7 @@ def start_loop(loop, state, sweep):
     return loop._replace(coefficients=np.array([1.0, 0.0, 0.0, 0.0]))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def guess_from_stations(z, aq):
     """The fused loop's guess [a; q] of every station (red_aq) from the stations' states z."""
     n = aq.shape[0] - 1

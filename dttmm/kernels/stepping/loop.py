@@ -285,7 +285,7 @@ def _skeleton(loop_class):
         fn = FunctionType(_run_steps.__code__, dict(globals(), **pieces), name)
         fn.__qualname__ = name          # (numba's cache files are named after it)
         fn.__doc__ = _run_steps.__doc__
-        compiled = no_alloc_kernel(fn)
+        compiled = no_alloc_kernel(fn, entry=True)
         _SKELETONS[loop_class] = compiled
     return compiled
 

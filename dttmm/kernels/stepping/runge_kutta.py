@@ -350,7 +350,7 @@ def _integrator(function, loop_class):
         fn = FunctionType(function.__code__, env, f"{function.__name__}_{suffix}")
         fn.__qualname__ = fn.__name__   # (numba's cache files are named after it)
         fn.__doc__ = function.__doc__
-        compiled = _INTEGRATORS[key] = no_alloc_kernel(fn)
+        compiled = _INTEGRATORS[key] = no_alloc_kernel(fn, entry=True)
     return compiled
 
 

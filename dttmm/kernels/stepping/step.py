@@ -24,7 +24,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, allocating_kernel, loop_piece
+from .. import CONTRACT, allocating_kernel, kernel, loop_piece
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
@@ -56,7 +56,7 @@ def has_coordinates(kind):
     return n_coordinates(kind) > 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _integrator_coefficients(h, coef):
     beta, gamma, alpha_m, alpha_f = coef[0], coef[1], coef[2], coef[3]
     c1 = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h)
@@ -64,7 +64,7 @@ def _integrator_coefficients(h, coef):
     return c1, c3
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _offsets(h, coef, v, acc, p):
     """w1, w3 with acc_{n+1} = c1 x + w1, v_{n+1} = c3 x + w3 (x the increment over the step)."""
     w1 = np.empty_like(v)
@@ -125,7 +125,7 @@ def _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
             dwd[i, j] = c1 if i == j else 0.0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, phi_out):
     """Rewrite a transfer linearized in phi slots as one in angular-acceleration slots
     (docs/assembly.md, "scaling"): phi_in = phi_in* + Dwd_in^-1 (w'_in - wd_in*) and
@@ -160,7 +160,7 @@ _NOT_COMPILED_OPEN = ("kernel compiled for closing joints only, run without them
                       "(kernels/features.py)")
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _all_finite(a):
     for x in a.flat:
         if not np.isfinite(x):
@@ -413,7 +413,7 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _solve_tree(sw, parent, root_f, z):
     """The reduced tree sweep (kernels/stepping/tree.py) on the folded maps, into z."""
     n = sw.red_v.shape[0]
@@ -432,7 +432,7 @@ def _solve_tree(sw, parent, root_f, z):
     return 0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
                           joint_input, loops, forces):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
@@ -519,7 +519,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
                 eta_acc[i] = eta_map[i] @ zin
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w1, w3, rot, lam,
                        w, wd, dw, dwd):
     """A joint child's guess: its frame from the parent's guess and the coordinates' (kernels/
@@ -542,7 +542,7 @@ def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w
     _body_kinematics(c1, c3, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame welded to beam k's end section (rest: the weld's R0) from the beam's frame and
     modal coordinates (docs/beam.md, "End sections"; beam.end_section_motion): A_O = A
@@ -1097,7 +1097,7 @@ def _update(loop, run, s, _):
     return finite
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _put1(dst, src):
     """dst[:] = src (same shape), as a call: numba compiles each array assignment written in a
     piece into the skeleton's own code (~0.5 s of its compile time each; docs/solver.md,
@@ -1106,7 +1106,7 @@ def _put1(dst, src):
         dst[i] = src[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _put2(dst, src):
     """dst[:, :] = src (same shape), as _put1."""
     for i in range(dst.shape[0]):
@@ -1114,7 +1114,7 @@ def _put2(dst, src):
             dst[i, j] = src[i, j]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _put3(dst, src):
     """dst[:, :, :] = src (same shape), as _put1."""
     for i in range(dst.shape[0]):

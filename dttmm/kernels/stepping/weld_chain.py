@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, loop_piece
+from .. import CONTRACT, kernel, loop_piece
 from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
@@ -286,7 +286,7 @@ def _update(loop, run, s, _):
     return finite
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _write_stations(stations, phi, phi_g, z):
     """The stations' states in the general loop's layout (kernels/stepping/step.py::_solve): z[0]
     the ground point, z[2k + 1] and z[2k + 2] body k's input and output (the same station across a

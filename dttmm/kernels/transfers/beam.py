@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from ...elements.beam import EA, EXACT, GJ, LOAD_AXES, STIFFENING
-from .. import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, kernel, no_alloc_kernel
 from .body import kappa_values, point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin9, t_mm,
                             t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag, t_scale9)
@@ -33,19 +33,19 @@ from ..algebra.so3 import expm_so3, left_jacobian, left_jacobian_derivative, log
 SUM_U, SUM_V, SUM_H, END_U, END_V, SUM_J, SUM_C, SUM_MODES = 4, 5, 6, 7, 8, 9, 12, 15
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def aux_rows(m):
     """Rows of the aux array with every sum (m modes per plane)."""
     return SUM_MODES + 10 * m + 2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def foreshortening_row(m, which, plane):
     """First aux row of a plane's (D0 x, D1 x, D2 x), x = eta (which 0), eta' (1), eta'' (2)."""
     return SUM_MODES + (4 + 2 * which + plane) * m
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def coefficient_row(m):
     """aux row of (N_L, mu gamma_x, mu (omega_y^2 + omega_z^2)); the next holds g - a_I."""
     return SUM_MODES + 10 * m
@@ -69,7 +69,7 @@ def gauss_points(length, n_points):
     return 0.5 * length * (x + 1.0), 0.5 * length * w
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _weighted_coordinates(y, eta, eta_d, eta_dd):
     """sum_l y_l x_l for the v and the w coordinates x of eta, eta' and eta'' (m = len(y) modes
     per plane): the deflection, its rate and its acceleration at a point, with y the mode
@@ -86,7 +86,7 @@ def _weighted_coordinates(y, eta, eta_d, eta_dd):
     return v, w, vd, wd, vdd, wdd
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _foreshortening_sums(moments, eta, eta_d, eta_dd, aux, sums):
     """(C0, C0', C0'', C1, C1', C1'', C2, C2') of beam_relations (docs/beam.md, "Geometric
     stiffening"), and with sums the rows D x of aux (foreshortening_row).  Kept out of
@@ -129,7 +129,7 @@ def _foreshortening_sums(moments, eta, eta_d, eta_dd, aux, sums):
     return cc0, cd0, cdd0, cc1, cd1, cdd1, cc2, cd2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def exact_line_integrals(moments, axial, eta, eta_d, eta_dd, o, al, gm, mu, residual):
     """The line load's integrals with the foreshortening to all orders (stiffening="exact";
     docs/beam.md, "The exact foreshortening"): at the Gauss points of the beam's exact table
@@ -214,7 +214,7 @@ def exact_line_integrals(moments, axial, eta, eta_d, eta_dd, o, al, gm, mu, resi
     return fb0, fb1, fb2, mb0, mb1, mb2, s0, s1, s2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
     """residual += G eta, G = N_L D0 + mu gamma_x D1 + mu (omega_y^2 + omega_z^2) D2, per plane
     (docs/beam.md, "Geometric stiffening"); c_g, c_w: the last two coefficients."""
@@ -230,7 +230,7 @@ def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
             residual[plane * m + l] += n_l * d0 + c_g * d1 + c_w * d2
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
                    eta_d, eta_dd, a_i, m_i, q_i, out, residual, aux, axial):
     """The beam's exact relations in a given state (docs/beam.md):
@@ -544,7 +544,7 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
             aux[r_c + 1, 0], aux[r_c + 1, 1], aux[r_c + 1, 2] = ga0, ga1, ga2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque, scratch):
     """At a fixed hinge at the output, the generalized forces of the outboard's -m_O (about O)
     on the modal equations (docs/beam.md, equations of motion): residual_v,k += m_O . (A J_l e3)
@@ -575,7 +575,7 @@ def add_end_moment(ends, torsion, eta, rot, out, residual, aux, end_torque, scra
         residual[2 * m + k] += mt * torsion[k, 0]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, m, out, residual):
     """The twist's share of the relations (docs/beam.md, "Torsion"), after beam_relations: the
     sections spin by w . A e1 + psi', psi = sum_k Psi_k(x) eta_t,k (eta[2 m:]), with
@@ -607,7 +607,7 @@ def twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, m, out, residua
     out[8] -= s_dd * e2 + s_d * (w[0] * e1 - w[1] * e0)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _stretch_affine_columns(bp, axial, rot, d_r):
     """The stretch rows' a_I and q_I columns (docs/beam.md, "Stretch"): like a bending row's
     with e1, d r_a,j = (mu int U_j - M_b U_j(L)) e1 . da + U_j(L) e1 . dq (the inertia through
@@ -624,7 +624,7 @@ def _stretch_affine_columns(bp, axial, rot, d_r):
             d_r[row, 9 + c] = u_l * rot[c, 0]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r, scratch):
     """The twist rows' a_I, m_I, q_I columns at an end moment (add_end_moment): residual_t,k
     depends on them through m_O only, d r_t,k = Psi_k(L) (A J_l e1) . d m_O (d_o's rows 6:9,
@@ -644,7 +644,7 @@ def _twist_end_columns(ends, torsion, eta, rot, d_o, d_r, scratch):
             d_r[2 * m + k, c] = torsion[k, 0] * dm
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _follower_loads(bp, tables, eta, rot, gravity, out, scratch):
     """World components of body-axes loads (load_axes="body", docs/beam.md "Loads on the
     beam") into out's rows: A_O F, A_O T, g + A p / mu, A_O = A exp(theta_O^) the output end
@@ -660,7 +660,7 @@ def _follower_loads(bp, tables, eta, rot, gravity, out, scratch):
         out[2, i] = gravity[i] + (rot[i, 0] * p[0] + rot[i, 1] * p[1] + rot[i, 2] * p[2]) / bp[1]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _beam_gravity(bp, gravity, line_load, out):
     """out = g + p / mu: a uniform distributed load p (N/m, world) acts on the beam exactly as
     gravity does, so the beam's relations and columns take it as part of g (docs/beam.md,
@@ -669,13 +669,13 @@ def _beam_gravity(bp, gravity, line_load, out):
         out[i] = gravity[i] + line_load[i] / bp[1]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _any(v):
     """Whether a 3-vector has a nonzero entry (an applied end torque)."""
     return v[0] != 0.0 or v[1] != 0.0 or v[2] != 0.0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def end_foreshortening(moments, eta):
     """c(L) = 1/2 (eta_v^T D0 eta_v + eta_w^T D0 eta_w): how far the tip has moved back along the
     frame's axis (docs/beam.md, "Geometric stiffening"); moments: the beam's modal integrals."""
@@ -688,7 +688,7 @@ def end_foreshortening(moments, eta):
     return c
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def end_angles(ends, torsion, eta):
     """theta_O = [psi(L), -w'(L), v'(L)]: the output section's rotation vector in the frame,
     from the modal coordinates (or their rates), the end slopes Y_k'(L) and the end twists
@@ -710,7 +710,7 @@ def _end_angles_into(ends, torsion, eta, theta):
         theta[0] += torsion[k, 0] * eta[2 * m + k]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def end_section(ends, torsion, eta, rot, out):
     """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
@@ -718,7 +718,7 @@ def end_section(ends, torsion, eta, rot, out):
     out[:, :] = rot @ e
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, out,
                                       scratch):
     """out = w'_O = w' + w x (A J_l theta') + A (J_l theta'' + DJ_l(theta)[theta'] theta') of
@@ -746,7 +746,7 @@ def _end_section_angular_acceleration(ends, torsion, rot, w, wd, eta, eta_d, eta
         out[i] += rot[i, 0] * y[0] + rot[i, 1] * y[1] + rot[i, 2] * y[2]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def end_section_motion(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, rest, rot_out, w_out,
                        wd_out, scratch):
     """The motion of a frame welded to the output section (docs/beam.md, "End sections"):
@@ -765,7 +765,7 @@ def end_section_motion(ends, torsion, rot, w, wd, eta, eta_d, eta_dd, rest, rot_
         w_out[i] = w[i] + rot[i, 0] * v[0] + rot[i, 1] * v[1] + rot[i, 2] * v[2]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d):
     """The beam's state at the end of the step for a rotation increment phi and modal
     accelerations eta'' (the integrator's relations, docs/solver.md): w = c3 phi + w3,
@@ -779,7 +779,7 @@ def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
         eta_d[i] = c3 * eta[i] + w3e[i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
@@ -1187,7 +1187,7 @@ def _end_moment_columns(ends, eta, rot, lam, s, start, m_net, welded, phi_out, a
             d_o[3 + i, 12 + m + k] = ends[k, 1] * tmp[3 + i]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o, col):
     """The foreshortening's share of an eta'' column (docs/beam.md, "Geometric stiffening"):
     eta''_k moves C_i = 1/2 eta^T D_i eta by s (D_i eta)_k, C_i' by r (D_i eta)_k + s (D_i eta')_k
@@ -1221,7 +1221,7 @@ def _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o
                                                + 2.0 * dcd2 * (w[i] - e[i] * e_w))
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def _solve_in_place(a, b, n_rhs):
     """b[:, :n_rhs] <- a^-1 b[:, :n_rhs] by Gaussian elimination with partial pivoting (a is
     overwritten; its first a.shape[0] columns are the matrix): the modal systems are small
@@ -1260,14 +1260,14 @@ def _solve_in_place(a, b, n_rhs):
             b[k, c] = s * inv
 
 
-@njit(cache=True)
+@kernel(entry=True)
 def transfer_work_size(n):
     """The length of beam_transfer's work block for a beam of n modal coordinates."""
     nx, nw, na = 12 + n, 75 + 2 * n, 3 * aux_rows(n // 2)
     return 2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n + 57
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
                   c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map, block):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
@@ -1411,14 +1411,14 @@ def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star
         u[r, 12] = const
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def ball_map_work_shape(n):
     """Shape of beam_ball_map's work block for up to n modal coordinates, rows of 12 + n entries:
     19 rows of vectors and 3 x 3 blocks, aux, d_o (12), d_r, kmat, xm (n each), g (3 + n)."""
     return 19 + aux_rows(n // 2) + 12 + 3 * n + 3 + n, 12 + n
 
 
-@no_alloc_kernel
+@no_alloc_kernel(entry=True)
 def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w3, w1e, w3e, a_i,
                   q_i, eta_dd_star, work, v, pmap, emap):
     """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded

@@ -11,9 +11,8 @@ The body's angular velocity and acceleration are linearized about phi* by the in
 A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 """
 import numpy as np
-from numba import njit
 
-from .. import CONTRACT
+from .. import kernel
 from ..algebra.mat3 import matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_outer, t_plus_diag
 from ..algebra.so3 import hat
 
@@ -21,7 +20,7 @@ A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station stat
 CONST = 12                  # column of the affine part
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mm(a, b):
     """a @ b for 3 x 3 matrices, by loops: BLAS's call overhead dominates at this size."""
     out = np.empty((3, 3))
@@ -31,7 +30,7 @@ def _mm(a, b):
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mv(a, v):
     """a @ v for a 3 x 3 matrix and a 3-vector."""
     out = np.empty(3)
@@ -40,7 +39,7 @@ def _mv(a, v):
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _cross(a, b):
     out = np.empty(3)
     out[0] = a[1] * b[2] - a[2] * b[1]
@@ -49,14 +48,14 @@ def _cross(a, b):
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def _hat(v):
     out = np.empty((3, 3))
     hat(v, out)
     return out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _kappa(w, wd, rho, dwd, dw, d_rho):
     """kappa = wd x rho + w x (w x rho) and its derivative with respect to phi, given
     d wd/d phi = dwd, d w/d phi = dw and d rho/d phi = d_rho."""
@@ -66,7 +65,7 @@ def _kappa(w, wd, rho, dwd, dw, d_rho):
     return kappa, d
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _mm_add(a, b, f, out):
     """out += f a @ b (3 x 3, by loops)."""
     for i in range(3):
@@ -74,14 +73,14 @@ def _mm_add(a, b, f, out):
             out[i, j] += f * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _cross_into(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _kappa_into(w, wd, rho, dwd, dw, d_rho, kappa, d, buf):
     """kappa = wd x rho + w x (w x rho) and d = d kappa / d phi
     = -rho^ Dwd + wd^ R - ((w x rho)^ + w^ rho^) Dw + w^ w^ R (R = d rho / d phi);
@@ -109,7 +108,7 @@ def _kappa_into(w, wd, rho, dwd, dw, d_rho, kappa, d, buf):
     _mm_add(w_h, m2, 1.0, d)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body,
     linearized about the input state z_star (the rotation at z_star[PHI] is a_star).
@@ -222,7 +221,7 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     affine_part(u, a_o, z_star[PHI:PHI + 3], m_o, q_o, z_star)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def affine_part(u, a_o, phi_o, m_o, q_o, z_star):
     """u[:, CONST] such that u [z*; 1] = [a_o, phi_o, m_o, q_o], the transfer's value at the
     guess z* (the linearized map reproduces the relations there)."""
@@ -238,7 +237,7 @@ def affine_part(u, a_o, phi_o, m_o, q_o, z_star):
         u[r, CONST] = acc
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in, w1_out, w1_c,
                                z_star, u):
     """The paper's scheme (docs/solver.md, "The paper's scheme"): turn the rigid transfer that
@@ -284,7 +283,7 @@ def station_history_correction(p, rot_n, a_star, lam, dwd, dw, wd, w, c1, w1_in,
         u[r, CONST] += shift
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def kappa_values(w, wd):
     """K = wd^ + w^ w^ = w w^T - |w|^2 E + wd^ as a 9-tuple (kernels/algebra/mat3.py), so that
     kappa(x) = wd x x + w x (w x x) = K x (the acceleration of a body point at x from the
@@ -293,7 +292,7 @@ def kappa_values(w, wd):
                   1.0, t_hat(wd))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _jacobian_terms(x, y, t, w, lam, s, r):
     """-y^ - r R(x) - s t Lam, R(x) = 2 x w^T - w x^T - (w . x) E (point_jacobian_values)."""
     out = t_lin9(-2.0 * r, t_outer(x, w), r, t_outer(w, x))
@@ -302,7 +301,7 @@ def _jacobian_terms(x, y, t, w, lam, s, r):
     return t_lin9(1.0, out, -1.0, t_hat(y))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def point_jacobian_values(x, u, v, w, kmat, lam, s, r):
     """d r''/d w' for r'' = a_I + w' x x + w x (w x x) + 2 w x U + V (a point, or a
     mass-weighted sum of points: it is linear in x, U = A u', V = A u''), through w' itself,
@@ -318,7 +317,7 @@ def point_jacobian_values(x, u, v, w, kmat, lam, s, r):
     return _jacobian_terms(x, y, t, w, lam, s, r)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rigid_point_jacobian_values(x, w, kmat, lam, s, r):
     """point_jacobian_values of a point of a rigid body (U = V = 0): -x^ - r R(x) - s K x^ Lam."""
     return _jacobian_terms(x, x, t_mul_hat(kmat, x), w, lam, s, r)

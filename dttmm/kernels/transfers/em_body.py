@@ -35,7 +35,7 @@ def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     omega_new[:] = rot_new @ w_body
 
 
-@allocating_kernel
+@allocating_kernel(entry=True)
 def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body
     over one energy-momentum step, linearized about the input state z_star (exact Jacobian).

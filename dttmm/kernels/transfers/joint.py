@@ -17,10 +17,10 @@ step).
 """
 import numpy as np
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.core.extending import intrinsic
 
-from .. import CONTRACT
+from .. import kernel
 from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
 from ...elements.hinges import AXIS_1, AXIS_2, BALL
 from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
@@ -31,13 +31,13 @@ from ..algebra.so3 import exp_coefficients
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _cross(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                      a[0] * b[1] - a[1] * b[0]])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _t_exp(phi):
     """exp(phi^) as a row-major 9-tuple (so3.expm_so3's Rodrigues formula and series, on
     values)."""
@@ -51,7 +51,7 @@ def _t_exp(phi):
             b * phi[2] * phi[2] + d)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     """The child's rotation, angular velocity and acceleration (world) behind a joint with
     coordinates, from its parent's attachment frame (rot_p, w_p, wd_p) and the coordinates
@@ -101,7 +101,7 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     return u1, v2
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def n_coordinates(kind):
     """The free coordinates of a joint kind, as its declaration says (elements/kinds.py)."""
     if kind < 0 or kind >= len(COORDINATES):
@@ -123,7 +123,7 @@ def call_force(typingctx, address, t, q, qd):
     return sig, codegen
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
     """(tau, d tau / d nu) of a free coordinate's drive at (q, q'), nu = q'' (q' = c3/c1 nu +
     const, q = nu / c1 + const over the step; both held at the consistent start).  drive:
@@ -155,7 +155,7 @@ def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
     return given, 0.0       # no drive: given is 0, or dynamics.linearize's input on the coordinate
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1, c3, at_start,
                         u, dof, tau_nu, forces):
     """The joint's element about the guess (q, q', q'' and the parent's frame), written into

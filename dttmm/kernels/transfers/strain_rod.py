@@ -29,7 +29,7 @@ accelerations at q'' = 0 are the convective terms.
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT
+from .. import CONTRACT, kernel
 from ..algebra.mat3 import (t_cross, t_hat, t_lin9, t_mm, t_mv, t_of_mat, t_of_vec,
                             t_plus_diag)
 from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
@@ -55,7 +55,7 @@ _C, _C1, _C2 = _series(3)
 SERIES_BELOW = 4.0          # t^2 below which the coefficients come from their series (t < 2)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _poly(coefficients, x):
     s = 0.0
     for k in range(len(coefficients) - 1, -1, -1):
@@ -63,7 +63,7 @@ def _poly(coefficients, x):
     return s
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def jacobian_coefficients(th2):
     """(b, c, beta, gamma, beta1, gamma1) at t^2 = th2: J_l = I + b t^ + c t^^ with
     b = (1 - cos t)/t^2, c = (t - sin t)/t^3, beta = b'(t)/t, gamma = c'(t)/t,
@@ -173,7 +173,7 @@ def _ad(xw, xv, yw, yv):
     return t_cross(xw, yw), _add(t_cross(xw, yv), t_cross(xv, yw))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def station_arrays(n):
     """The outputs of rod_kinematics for n stations: rotations (n, 3, 3), centres, angular
     velocities, velocities, angular accelerations, accelerations (n, 3 each), zeroed."""
@@ -181,7 +181,7 @@ def station_arrays(n):
             np.zeros((n, 3)), np.zeros((n, 3)))
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
     """The stations' poses, velocities and accelerations in the input-section frame (the module's
     docstring).  steps[a] is the a-th step's length h; xi0[a, i] (6) and phi[a, i] (6 x nq) the
@@ -196,7 +196,7 @@ def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc
                section)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_end(steps, xi0, phi, q, qd, qdd):
     """The end section's (R_L (9-tuple, row-major), p_L, omega_L, p_L', alpha_L, p_L'') in the
     input-section frame: rod_kinematics' last station, on values (no station arrays; callable
@@ -283,7 +283,7 @@ def _store(rot, pos, omega, vel, alpha, acc, section):
     _put(acc, section[5])
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gravity, rot, w,
                   wd, q, qd, qdd, a_i, m_i, q_i, out, residual):
     """The rod's exact relations in a given state, in the transfer's form (docs/strain_rod.md,
@@ -297,7 +297,7 @@ def rod_relations(steps, xi0, phi, weights, mu, section, stiffness, damping, gra
                     q, qd, a_i, m_i, q_i, out, residual)
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_jacobians(steps, xi0, phi, q):
     """(Jp, Jr) (stations, n_q, 3): each station's velocity and angular velocity in the input
     frame for a unit rate of each strain coordinate, the velocity half of rod_kinematics at
@@ -342,7 +342,7 @@ def rod_jacobians(steps, xi0, phi, q):
     return jp, jr
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_sums(kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot, w, wd, q, qd,
              a_i, m_i, q_i, out, residual):
     """The rod's relations from its stations' kinematics kin = (rotations, centres, angular
@@ -427,7 +427,7 @@ def rod_sums(kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot
     return end_rotation, end_alpha
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_n, qd_n):
     """The rod's state for the step's unknowns x = [a_I, w', m_I, q_I, q''] (the integrator's
     relations, docs/solver.md): at the consistent start the rotation, rates and strains are
@@ -443,7 +443,7 @@ def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_
     return e @ rot_n, c3 * phi + w3, q, c3 * q + w3e
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, qd, x, out,
                   residual):
     """rod_sums at the step's unknowns x = [a_I, w', m_I, q_I, q''] in the state (A, w, q, q')
@@ -465,7 +465,7 @@ def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, 
         out[3:6] = c1 * phi_out + w1_out
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def _affine_columns(pos, jp, jr, weights, mu, rot, d_o, d_r):
     """The relations' columns in a_I (0:3), m_I (6:9) and q_I (9:12), in which they are affine
     (rod_sums; docs/strain_rod.md, "Its transfer"), in closed form: with the mass M = sum f_i,
@@ -514,7 +514,7 @@ def _affine_columns(pos, jp, jr, weights, mu, rot, d_o, d_r):
             d_r[j, 9 + k] = g_q[k]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n,
                  w1e, w3e, q_n, qd_n, z_star, qdd_star, u, q_map):
     """Fill u (12 x 13) with z_O = u [z_I; 1] (angular-acceleration slots) and q_map (n_q x 13)
@@ -588,7 +588,7 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
         u[i, 12] = o0[i] - shift[i] - u[i, :12] @ z0
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel
 def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out, wd_out):
     """The frame welded to a rod's end section (rest: the weld's R0) from the rod's frame (A,
     w, w') and its strain coordinates, rates and accelerations (rod_end: R_L, omega_L, alpha_L
@@ -607,7 +607,7 @@ def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out,
             rot_out[i, j] = end[3 * i + j]
 
 
-@njit(cache=True, fastmath=CONTRACT)
+@kernel(entry=True)
 def rod_end_points(steps, xi0, phi, q, qd):
     """(p_L, p_L') (T, 3): a rod's end point and its velocity relative to its frame, in the
     input frame, for T states of its strain coordinates and rates q, qd (T, n_q)."""
