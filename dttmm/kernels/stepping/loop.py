@@ -191,39 +191,49 @@ def _largest_change2(now, before, largest):
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def keep_pseudo(state, monitor):
-    """The pseudo-accelerations p_n before the step (for step_error).  The monitor holds rows
-    for what the model has: no joint coordinates' rows without joints with coordinates, no
-    deflections' rows without elastic hinges (solver.simulate), which it then skips."""
-    _copy2_into(state.pseudo, monitor.pseudo)
-    _copy_into(state.eta_p, monitor.eta_p)
-    _copy2_into(state.jqp, monitor.jqp)
-    _copy2_into(state.defl_pseudo, monitor.defl_pseudo)
+def keep_pseudo(pseudo, eta_p, jqp, defl_pseudo, kept):
+    """The state's pseudo-accelerations p_n before the step into kept, the monitor's
+    (pseudo, eta_p, jqp, defl_pseudo) (for step_error).  The monitor holds rows for what the
+    model has: no joint coordinates' rows without joints with coordinates, no deflections' rows
+    without elastic hinges (solver.simulate), which it then skips."""
+    _copy2_into(pseudo, kept[0])
+    _copy_into(eta_p, kept[1])
+    _copy2_into(jqp, kept[2])
+    _copy2_into(defl_pseudo, kept[3])
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def step_error(state, monitor, h, beta):
+def step_error(pseudo, eta_p, jqp, defl_pseudo, kept, h, beta):
     """The step's local error estimate (Zienkiewicz and Xie 1991): the Newmark displacement
     update x = h v_n + h^2 (1/2 - beta) p_n + h^2 beta p_{n+1} differs from the Taylor series by
     (beta - 1/6) h^2 (p_{n+1} - p_n) + O(h^4), so e = |beta - 1/6| h^2 max |p_{n+1} - p_n| over
     every rotation increment (rad), modal coordinate, joint coordinate (rad or m) and elastic
-    deflection (m)."""
-    largest = _largest_change2(state.pseudo, monitor.pseudo, 0.0)
-    largest = _largest_change(state.eta_p, monitor.eta_p, largest)
-    largest = _largest_change2(state.jqp, monitor.jqp, largest)
-    largest = _largest_change2(state.defl_pseudo, monitor.defl_pseudo, largest)
+    deflection (m): the state's p_{n+1} against kept's p_n (keep_pseudo)."""
+    largest = _largest_change2(pseudo, kept[0], 0.0)
+    largest = _largest_change(eta_p, kept[1], largest)
+    largest = _largest_change2(jqp, kept[2], largest)
+    largest = _largest_change2(defl_pseudo, kept[3], largest)
     return abs(beta - 1.0 / 6.0) * h * h * largest
 
 
 def _run_steps(loop, run, out_info):
-    """Take run.inputs.force.shape[0] steps (docs/solver.md, "The step")."""
+    """Take run.inputs.force.shape[0] steps (docs/solver.md, "The step").  What it reads of
+    the run is read here, before the steps: numba keeps a structure read in more than one block
+    in a stack slot of its whole type, which LLVM splits up again at every read
+    (docs/solver.md, "Compile time", item 6); `run` goes on whole to the pieces only."""
+    settings, state, monitor = run.settings, run.state, run.monitor
     n_steps = run.inputs.force.shape[0]
-    newton_max, newton_tol = run.settings.newton_max, run.settings.newton_tol
-    monitor = run.monitor
+    newton_max, newton_tol = settings.newton_max, settings.newton_tol
+    start, h, beta = settings.start, settings.h, settings.coef[0]
+    max_step_error, record_every = settings.max_step_error, settings.record_every
+    stop_unconverged = settings.stop_unconverged
+    pseudo, eta_p, jqp, defl_pseudo = state.pseudo, state.eta_p, state.jqp, state.defl_pseudo
+    kept, error_so_far = (monitor.pseudo, monitor.eta_p, monitor.jqp,
+                          monitor.defl_pseudo), monitor.error
     max_iter = 0
     n_rec = 0
     for s in range(n_steps):
-        if not run.settings.start:
+        if not start:
             predict(loop, run, s, 0)
         change = 0.0
         for it in range(newton_max + 1):
@@ -235,24 +245,24 @@ def _run_steps(loop, run, out_info):
             if it == newton_max or change <= newton_tol:
                 break
             adopt(loop, run, s, it)
-        if run.settings.start:      # the accelerations at t = 0 are in: stations written below
+        if start:       # the accelerations at t = 0 are in: stations written below
             break
         if newton_max > 0 and change > newton_tol:
             out_info[4] += 1
-            if run.settings.stop_unconverged:
+            if stop_unconverged:
                 report(out_info, UNCONVERGED, s, 0, n_rec)
                 return
-        keep_pseudo(run.state, run.monitor)
+        keep_pseudo(pseudo, eta_p, jqp, defl_pseudo, kept)
         if not update(loop, run, s, 0):
             report(out_info, NOT_FINITE, s, 0, n_rec)
             return
-        error = step_error(run.state, run.monitor, run.settings.h, run.settings.coef[0])
-        monitor.error[0] = max(monitor.error[0], error)
-        if not error <= run.settings.max_step_error:
-            monitor.error[1] = error
+        error = step_error(pseudo, eta_p, jqp, defl_pseudo, kept, h, beta)
+        error_so_far[0] = max(error_so_far[0], error)
+        if not error <= max_step_error:
+            error_so_far[1] = error
             report(out_info, ERROR_ESTIMATE, s, 0, n_rec)
             return
-        if (s + 1) % run.settings.record_every == 0:
+        if (s + 1) % record_every == 0:
             record(loop, run, s, n_rec)
             n_rec += 1
     finish(loop, run, n_steps, 0)

@@ -559,7 +559,7 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def _welded(params, mode, k):
+def _welded(hinge_kind, parent, locked, body_kind, mode, k):
     """In the full-state tree sweep, a body welded to another (a fixed hinge; not to the ground)
     is not integrated on its own: its frame is its parent's (R0), or the end section's of a
     parent beam (solver.kernel_model's end section: the parent frame of a joint with
@@ -571,13 +571,13 @@ def _welded(params, mode, k):
     child, a beam's end) would drift from it, and differencing a rotation held at position level
     with the trapezoidal rule's relations leaves a step-to-step mode in the acceleration that
     grows without bound (docs/joints.md, "Beams")."""
-    if params.hinge_kind[k] != FIXED or params.parent[k] < 0 or params.locked[k]:
+    if hinge_kind[k] != FIXED or parent[k] < 0 or locked[k]:
         return False
     if mode == RICCATI_JOINTS:
         return True
     # in a chain's full-state sweep, a body on a beam's or a strain rod's end (as the fused
     # welded-chain loop's beams, kernels/stepping/weld_chain.py::_follow_welds)
-    kind_p = params.beams[0][params.parent[k]]
+    kind_p = body_kind[parent[k]]
     return mode == RICCATI_FULL and (kind_p == BEAM or kind_p == ROD)
 
 
@@ -763,59 +763,70 @@ def _predict(loop, run, s, _):
     stations' guess z_star.  Ground data per step s: g_acc[s], g_w[s], g_wd[s] at t_{s+1} and
     g_rot[s], g_rot[s + 1] at t_s, t_{s+1}.  The array work is in called kernels, not written
     here: each statement on arrays in a piece is compiled into the skeleton's own code
-    (docs/solver.md, "Compile time")."""
-    params, state, inputs = run.params, run.state, run.inputs
-    h, coef = run.settings.h, run.settings.coef
+    (docs/solver.md, "Compile time"); and every field is read first, in the piece's first
+    block (item 6 there)."""
+    params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
+    guess, ground, w1, w3, w1d, w3d = (loop.guess, loop.ground, loop.w1, loop.w3, loop.w1d,
+                                       loop.w3d)
+    w1e, w3e, eta_dd_star, z_star, root_f = (loop.w1e, loop.w3e, loop.eta_dd_star, loop.z_star,
+                                             loop.root_f)
+    histories, (w1q, w3q, q_s, qd_s, qdd_s) = loop.histories, loop.joints
+    h, coef, mode = settings.h, settings.coef, settings.mode
+    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
+                                                   params.hinge_row, params.parent)
+    locked, lock_rel, joint_drive, body_kind = (params.locked, params.lock_rel,
+                                                params.joint_drive, params.beams[0])
+    rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
+                                        state.z)
+    eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p
+    defl, defl_rate, defl_acc, defl_pseudo = (state.defl, state.defl_rate, state.defl_acc,
+                                              state.defl_pseudo)
+    jq, jqd, jqdd, jqp = state.jq, state.jqd, state.jqdd, state.jqp
+    rot_before, rot_now = inputs.g_rot[s], inputs.g_rot[s + 1]
+    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
+    g_acc, joint_input = inputs.g_acc[s], inputs.joint_input[s]
     c1, c3 = _integrator_coefficients(h, coef)
-    hinge_kind = params.hinge_kind
-    phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
+    phi_star, rot_star, lam, w, wd, dw, dwd = guess
     n = hinge_kind.shape[0]
-    rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
-    _ground_guess(inputs.g_rot[s], rot_now, g_w, g_wd, loop.ground)
-    if state.eta.shape[0] > 0:
-        _modal_guess(h, coef, c1, c3, state.eta, state.eta_d, state.eta_acc, state.eta_p,
-                     loop.w1e, loop.w3e, loop.eta_dd_star)
+    _ground_guess(rot_before, rot_now, g_w, g_wd, ground)
+    if eta.shape[0] > 0:
+        _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_star)
     for k in range(n):
         hk = hinge_kind[k]
         if SWEEP_JOINTS and has_coordinates(hk):
-            w1q, w3q, q_s, qd_s, qdd_s = loop.joints
-            p = params.parent[k]
+            p = parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
-            _joint_guess(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
-                         inputs.joint_input[s, k], h, coef, c1, c3, state.jq[k], state.jqd[k],
-                         state.jqdd[k], state.jqp[k], w1q[k], w3q[k], q_s[k], qd_s[k],
-                         qdd_s[k], frame, state.rot[k], phi_star[k], loop.w1[k], loop.w3[k],
+            _joint_guess(hk, hinge_params[hinge_row[k]], joint_drive[k], joint_input[k], h,
+                         coef, c1, c3, jq[k], jqd[k], jqdd[k], jqp[k], w1q[k], w3q[k], q_s[k],
+                         qd_s[k], qdd_s[k], frame, rot[k], phi_star[k], w1[k], w3[k],
                          rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
-        elif _welded(params, run.settings.mode, k):
-            _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, state.eta, loop.eta_dd_star,
-                          state.rot[k], loop.guess, loop.w1[k], loop.w3[k])
-        elif params.locked[k]:
-            _locked_guess(params.lock_rel[k], loop.ground, c1, c3, phi_star[k], rot_star[k],
-                          lam[k], w[k], wd[k], dw[k], dwd[k], loop.w1[k], loop.w3[k])
+        elif _welded(hinge_kind, parent, locked, body_kind, mode, k):
+            _welded_guess(params, k, c1, c3, w1e, w3e, eta, eta_dd_star, rot[k], guess, w1[k],
+                          w3[k])
+        elif locked[k]:
+            _locked_guess(lock_rel[k], ground, c1, c3, phi_star[k], rot_star[k], lam[k], w[k],
+                          wd[k], dw[k], dwd[k], w1[k], w3[k])
         else:
-            _offsets_into(h, coef, state.omega[k], state.omega_dot[k], state.pseudo[k],
-                          loop.w1[k], loop.w3[k], phi_star[k])   # phi* by the predictor
-            _body_kinematics(c1, c3, state.rot[k], phi_star[k], loop.w1[k], loop.w3[k],
-                             rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k])
+            _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k],
+                          phi_star[k])   # phi* by the predictor
+            _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k], lam[k],
+                             w[k], wd[k], dw[k], dwd[k])
         if HAS_ELASTIC_HINGES and hk == ELASTIC:
-            _deflection_offsets(h, coef, c1, c3, state.defl[k], state.defl_rate[k],
-                                state.defl_acc[k], state.defl_pseudo[k], loop.w1d[k],
-                                loop.w3d[k])
-    if HAS_STATION_HISTORIES and loop.histories[0]:
-        _station_offsets(h, coef, loop.histories)
-    _stations_guess(state.z, loop.ground[5], phi_star, loop.z_star)
+            _deflection_offsets(h, coef, c1, c3, defl[k], defl_rate[k], defl_acc[k],
+                                defl_pseudo[k], w1d[k], w3d[k])
+    if HAS_STATION_HISTORIES and histories[0]:
+        _station_offsets(h, coef, histories)
+    _stations_guess(z, ground[5], phi_star, z_star)
     if HAS_ELASTIC_HINGES:
         for k in range(n):
             if hinge_kind[k] == ELASTIC:
-                p = params.parent[k]
-                _spring_guess(params.hinge_params[params.hinge_row[k]],
-                              rot_now if p < 0 else rot_star[p], rot_star[k], g_w,
-                              state.defl[k],
-                              state.defl_rate[k], state.defl_pseudo[k], h, c3, loop.w3d[k],
-                              p == k - 1, loop.z_star[2 * k], loop.z_star[2 * k + 1])
+                p = parent[k]
+                _spring_guess(hinge_params[hinge_row[k]], rot_now if p < 0 else rot_star[p],
+                              rot_star[k], g_w, defl[k], defl_rate[k], defl_pseudo[k], h, c3,
+                              w3d[k], p == k - 1, z_star[2 * k], z_star[2 * k + 1])
     for i in range(3):
-        loop.root_f[i] = inputs.g_acc[s, i]
-        loop.root_f[3 + i] = g_wd[i]
+        root_f[i] = g_acc[i]
+        root_f[3 + i] = g_wd[i]
 
 
 @loop_piece
@@ -823,67 +834,76 @@ def _iterate(loop, run, s, it):
     """Linearize every element about the guess, sweep, and recover every body's phi and the
     beams' modal accelerations; returns (status, detail, change): change is the largest update
     of a phi (rad) or of a modal coordinate (eta'' / c1)."""
-    params, state, inputs = run.params, run.state, run.inputs
-    c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
-    phi_star, wd, dwd = loop.guess.phi, loop.guess.wd, loop.guess.dwd
-    z = state.z
-    modal = (state.eta, state.eta_d, loop.w1e, loop.w3e, loop.eta_dd_star, state.eta_map)
-    stations = (loop.histories[0], loop.histories[7], loop.histories[8])
-    joints = (run.settings.mode == RICCATI_JOINTS, loop.joints[2], loop.joints[3],
-              loop.joints[4], inputs.joint_input[s, :, :, 0], loop.forces)
-    unknown = _build_elements(params, run.sweep, loop.guess, loop.ground, c1, c3, loop.w1d,
-                              loop.w3d, loop.z_star, inputs.force[s], inputs.torque[s],
-                              inputs.line_load[s], run.settings.start,     # (False)
-                              state.rot, loop.w3, modal, stations, joints)
+    params, settings, state, sweep, inputs = (run.params, run.settings, run.state, run.sweep,
+                                              run.inputs)
+    guess, ground, w1d, w3d, z_star, w3 = (loop.guess, loop.ground, loop.w1d, loop.w3d,
+                                           loop.z_star, loop.w3)
+    w1e, w3e, eta_dd_star, eta_dd_new = loop.w1e, loop.w3e, loop.eta_dd_star, loop.eta_dd_new
+    root_f, g_inv, histories, joints_, forces = (loop.root_f, loop.g_inv, loop.histories,
+                                                 loop.joints, loop.forces)
+    loops, at_guess = (loop.loops, loop.at_guess) if HAS_LOOPS else (None, None)
+    hinge_kind, beams, tip_pinned, parent = (params.hinge_kind, params.beams, params.tip_pinned,
+                                             params.parent)
+    h, coef, mode = settings.h, settings.coef, settings.mode
+    z, eta, eta_d, eta_map, rot = state.z, state.eta, state.eta_d, state.eta_map, state.rot
+    u, joint_nu = sweep.u, sweep.joint_nu
+    force, torque, line_load, joint_input = (inputs.force[s], inputs.torque[s],
+                                             inputs.line_load[s], inputs.joint_input[s, :, :, 0])
+    # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
+    target, g_pos, g_vel = ((inputs.closure_target[s], inputs.g_pos[s], inputs.g_vel[s])
+                            if HAS_LOOPS else (None, None, None))
+    g_acc, rot_now, g_w, g_wd = (inputs.g_acc[s], inputs.g_rot[s + 1], inputs.g_w[s],
+                                 inputs.g_wd[s])
+    c1, c3 = _integrator_coefficients(h, coef)
+    phi_star, wd, dwd = guess.phi, guess.wd, guess.dwd
+    modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
+    stations = (histories[0], histories[7], histories[8])
+    joints = (mode == RICCATI_JOINTS, joints_[2], joints_[3], joints_[4], joint_input, forces)
+    unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d,
+                              w3d, z_star, force, torque,
+                              line_load, settings.start,     # (False)
+                              rot, w3, modal, stations, joints)
     if unknown != 0:
         return UNSUPPORTED, unknown, 0.0
-    if not _all_finite(run.sweep.u):
+    if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
-    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
-        loops = loop.loops
-        _put2(loops.target, inputs.closure_target[s])
-        set_ground(loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s], inputs.g_rot[s + 1],
-                   inputs.g_w[s], inputs.g_wd[s])       # at t_{s+1}
+    if HAS_LOOPS and loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
+        _put2(loops.target, target)
+        set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         loops.step_coef[1] = c3 / c1
-        # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
-        # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
-        # hinges' deflections likewise from their stations' guess, as _update)
-        eta_g, eta_d_g, defl_g, defl_rate_g = loop.at_guess
+        eta_g, eta_d_g, defl_g, defl_rate_g = at_guess
         for i in range(eta_g.shape[0]):
-            eta_g[i] = (loop.eta_dd_star[i] - loop.w1e[i]) / c1
-            eta_d_g[i] = c3 * eta_g[i] + loop.w3e[i]
+            eta_g[i] = (eta_dd_star[i] - w1e[i]) / c1
+            eta_d_g[i] = c3 * eta_g[i] + w3e[i]
         for k in range(defl_g.shape[0]):
-            if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
-                d = _hinge_deflection(params, loop.z_star, loop.w1d, c1, k)
+            if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+                d = _hinge_deflection(params, z_star, w1d, c1, k)
                 for i in range(3):
                     defl_g[k, i] = d[i]
-                    defl_rate_g[k, i] = c3 * d[i] + loop.w3d[k, i]
-        tree_points(params, loop.guess.rot, loop.guess.w, loop.joints[2], loop.joints[3], eta_g,
+                    defl_rate_g[k, i] = c3 * d[i] + w3d[k, i]
+        tree_points(params, guess.rot, guess.w, joints_[2], joints_[3], eta_g,
                     eta_d_g, defl_g, defl_rate_g, loops, loops.all_bodies)
-        status = solve_with_loops(params, run.sweep, loop.root_f, loops, loop.guess.rot,
-                                  loop.guess.w, z)
+        status = solve_with_loops(params, sweep, root_f, loops, guess.rot,
+                                  guess.w, z)
     elif EVERY_KIND or not HAS_LOOPS:   # (a closing joints' copy runs only models with them)
-        status = solve_step(run.settings.mode, params.tip_pinned, params.parent, run.sweep,
-                            loop.root_f, z)
+        status = solve_step(mode, tip_pinned, parent, sweep, root_f, z)
     else:
         raise ValueError(_NOT_COMPILED_OPEN)
     if status != 0:
         return SINGULAR, status, 0.0
-    eta_dd_new, eta_dd_star = loop.eta_dd_new, loop.eta_dd_star
-    _modal_accelerations(params.beams, state.eta_map, z, eta_dd_new)
+    _modal_accelerations(beams, eta_map, z, eta_dd_new)
     # back from angular-acceleration to phi slots
     for i in range(3):
-        z[0, 3 + i] = loop.ground[5][i]
+        z[0, 3 + i] = ground[5][i]
     change = 0.0
     for i in range(eta_dd_new.shape[0]):
         change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
-    qdd_s = loop.joints[4]
-    for k in range(params.hinge_kind.shape[0]):
-        for i in range(n_coordinates(params.hinge_kind[k])):
-            change = max(change, abs(run.sweep.joint_nu[k, i] - qdd_s[k, i]) / c1)
-    g_inv = loop.g_inv
-    for k in range(params.hinge_kind.shape[0]):
+    qdd_s = joints_[4]
+    for k in range(hinge_kind.shape[0]):
+        for i in range(n_coordinates(hinge_kind[k])):
+            change = max(change, abs(joint_nu[k, i] - qdd_s[k, i]) / c1)
+    for k in range(hinge_kind.shape[0]):
         inv3(dwd[k], g_inv)
         dw0 = z[2 * k + 1, 3] - wd[k, 0]
         dw1 = z[2 * k + 1, 4] - wd[k, 1]
@@ -914,37 +934,43 @@ def _joint_adopt(hk, hp, drive, c1, c3, q, w1q, w3q, nu, q_s, qd_s, qdd_s, frame
 
 @loop_piece
 def _adopt(loop, run, s, it):
-    """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''*."""
-    c1, c3 = _integrator_coefficients(run.settings.h, run.settings.coef)
-    z, rot = run.state.z, run.state.rot
-    phi_star, rot_star, lam, w, wd, dw, dwd = loop.guess
-    params, inputs = run.params, run.inputs
-    z_star = loop.z_star
-    _put2(z_star, z)
-    _put1(loop.eta_dd_star, loop.eta_dd_new)
+    """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''* (every field
+    read first, as in _predict)."""
+    params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
+    joint_nu = run.sweep.joint_nu
+    guess, w1, w3, w1e, w3e = loop.guess, loop.w1, loop.w3, loop.w1e, loop.w3e
+    z_star, eta_dd_star, eta_dd_new = loop.z_star, loop.eta_dd_star, loop.eta_dd_new
     w1q, w3q, q_s, qd_s, qdd_s = loop.joints
+    mode = settings.mode
+    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
+                                                   params.hinge_row, params.parent)
+    locked, joint_drive, body_kind = params.locked, params.joint_drive, params.beams[0]
+    z, rot, jq, eta = state.z, state.rot, state.jq, state.eta
+    rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
+    c1, c3 = _integrator_coefficients(settings.h, settings.coef)
+    phi_star, rot_star, lam, w, wd, dw, dwd = guess
+    _put2(z_star, z)
+    _put1(eta_dd_star, eta_dd_new)
     for k in range(phi_star.shape[0]):
-        hk = params.hinge_kind[k]
+        hk = hinge_kind[k]
         if SWEEP_JOINTS and has_coordinates(hk):
-            p = params.parent[k]
-            frame = ((inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]) if p < 0
-                     else (rot_star[p], w[p], wd[p]))
-            _joint_adopt(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
-                         c1, c3, run.state.jq[k], w1q[k], w3q[k], run.sweep.joint_nu[k],
-                         q_s[k], qd_s[k], qdd_s[k], frame, rot[k], phi_star[k], loop.w1[k],
-                         loop.w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k], dwd[k],
-                         z_star[2 * k + 1], z_star[2 * k + 2])
-        elif _welded(params, run.settings.mode, k):
-            _welded_guess(params, k, c1, c3, loop.w1e, loop.w3e, run.state.eta,
-                          loop.eta_dd_star, rot[k], loop.guess, loop.w1[k], loop.w3[k])
+            p = parent[k]
+            frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
+            _joint_adopt(hk, hinge_params[hinge_row[k]], joint_drive[k], c1, c3, jq[k], w1q[k],
+                         w3q[k], joint_nu[k], q_s[k], qd_s[k], qdd_s[k], frame, rot[k],
+                         phi_star[k], w1[k], w3[k], rot_star[k], lam[k], w[k], wd[k], dw[k],
+                         dwd[k], z_star[2 * k + 1], z_star[2 * k + 2])
+        elif _welded(hinge_kind, parent, locked, body_kind, mode, k):
+            _welded_guess(params, k, c1, c3, w1e, w3e, eta, eta_dd_star, rot[k], guess, w1[k],
+                          w3[k])
             for i in range(3):
                 z_star[2 * k + 1, 3 + i] = phi_star[k, i]
                 z_star[2 * k + 2, 3 + i] = phi_star[k, i]
-        elif not params.locked[k]:
+        elif not locked[k]:
             for i in range(3):
                 phi_star[k, i] = z[2 * k + 1, 3 + i]
-            _body_kinematics(c1, c3, rot[k], phi_star[k], loop.w1[k], loop.w3[k], rot_star[k],
-                             lam[k], w[k], wd[k], dw[k], dwd[k])
+            _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k], lam[k],
+                             w[k], wd[k], dw[k], dwd[k])
 
 
 @allocating_kernel
@@ -1046,54 +1072,66 @@ def _advance_deflection(params, z, w1d, c1, k, h, coef, d, d_rate, d_acc, d_pseu
 def _update(loop, run, s, _):
     """Advance the histories over step s from the solution in state.z: rotations (a locked
     body's from the ground's), elastic deflections, modal coordinates, and in the paper's scheme
-    every station point and mass centre; returns whether every rate is finite."""
-    params, state, inputs = run.params, run.state, run.inputs
-    h, coef = run.settings.h, run.settings.coef
+    every station point and mass centre; returns whether every rate is finite (every field read
+    first, as in _predict)."""
+    params, state, inputs, settings, sweep = (run.params, run.state, run.inputs, run.settings,
+                                              run.sweep)
+    joint_nu, joint_tau = sweep.joint_nu, sweep.joint_tau
+    histories, w1q, w1d = loop.histories, loop.joints[0], loop.w1d
+    eta_dd_new, w1e, e3, rot_prev = loop.eta_dd_new, loop.w1e, loop.e3, loop.rot_prev
+    loops, target, g_pos, g_vel, g_acc = ((loop.loops, inputs.closure_target[s], inputs.g_pos[s],
+                                           inputs.g_vel[s], inputs.g_acc[s]) if HAS_LOOPS
+                                          else (None, None, None, None, None))
+    h, coef, mode = settings.h, settings.coef, settings.mode
+    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
+                                                   params.hinge_row, params.parent)
+    locked, lock_rel, joint_drive = params.locked, params.lock_rel, params.joint_drive
+    body_kind, body_params, body_row = params.beams[0], params.body_params, params.body_row
+    rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
+                                        state.z)
+    eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p
+    defl, defl_rate, defl_acc, defl_pseudo = (state.defl, state.defl_rate, state.defl_acc,
+                                              state.defl_pseudo)
+    jq, jqd, jqdd, jqp, jtau = state.jq, state.jqd, state.jqdd, state.jqp, state.jtau
+    rot_now, g_w, g_wd, joint_input = (inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s],
+                                       inputs.joint_input[s])
     c1, _ = _integrator_coefficients(h, coef)
-    rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
-    z = state.z
-    n = params.hinge_kind.shape[0]
-    rot_now = inputs.g_rot[s + 1]
-    if HAS_STATION_HISTORIES and loop.histories[0]:
-        _advance_stations(h, coef, c1, z, rot_now, rot, params.beams[0], params.locked,
-                          params.lock_rel, params.body_params, params.body_row, loop.histories)
+    n = hinge_kind.shape[0]
+    if HAS_STATION_HISTORIES and histories[0]:
+        _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
+                          body_params, body_row, histories)
     finite = True
-    if state.eta.shape[0] > 0:
-        finite = _advance_modal(h, coef, c1, loop.eta_dd_new, loop.w1e, state.eta, state.eta_d,
-                                state.eta_acc, state.eta_p)
+    if eta.shape[0] > 0:
+        finite = _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p)
     for k in range(n):
-        hk = params.hinge_kind[k]
+        hk = hinge_kind[k]
         if SWEEP_JOINTS and has_coordinates(hk):
             # the coordinates' histories, then the child's frame from its parent's new one
-            p = params.parent[k]
-            frame = ((rot_now, inputs.g_w[s], inputs.g_wd[s]) if p < 0
-                     else (rot[p], omega[p], omega_dot[p]))
-            _advance_joint(hk, params.hinge_params[params.hinge_row[k]], params.joint_drive[k],
-                           inputs.joint_input[s, k], h, coef, c1, run.sweep.joint_nu[k],
-                           run.sweep.joint_tau[k], loop.joints[0][k], state.jq[k], state.jqd[k],
-                           state.jqdd[k], state.jqp[k], state.jtau[k], frame, rot[k], omega[k],
-                           omega_dot[k], state.defl[k], state.defl_rate[k], pseudo[k])
-        elif _welded(params, run.settings.mode, k):
-            _welded_frame(params, k, rot, omega, omega_dot, state.eta, state.eta_d,
-                          state.eta_acc, rot[k], omega[k], omega_dot[k])
-            _put1(pseudo[k], omega_dot[k])
-        elif params.locked[k]:
-            _locked_frame(rot_now, params.lock_rel[k], inputs.g_w[s], inputs.g_wd[s], rot[k],
+            p = parent[k]
+            frame = ((rot_now, g_w, g_wd) if p < 0 else (rot[p], omega[p], omega_dot[p]))
+            _advance_joint(hk, hinge_params[hinge_row[k]], joint_drive[k], joint_input[k], h,
+                           coef, c1, joint_nu[k], joint_tau[k], w1q[k], jq[k], jqd[k],
+                           jqdd[k], jqp[k], jtau[k], frame, rot[k], omega[k], omega_dot[k],
+                           defl[k], defl_rate[k], pseudo[k])
+        elif _welded(hinge_kind, parent, locked, body_kind, mode, k):
+            _welded_frame(params, k, rot, omega, omega_dot, eta, eta_d, eta_acc, rot[k],
                           omega[k], omega_dot[k])
+            _put1(pseudo[k], omega_dot[k])
+        elif locked[k]:
+            _locked_frame(rot_now, lock_rel[k], g_w, g_wd, rot[k], omega[k], omega_dot[k])
         else:
-            _advance_body(h, coef, z[2 * k + 1, 3:6], rot[k], omega[k], omega_dot[k], pseudo[k],
-                          loop.e3, loop.rot_prev)
+            _advance_body(h, coef, z[2 * k + 1, 3:6], rot[k], omega[k], omega_dot[k],
+                          pseudo[k], e3, rot_prev)
         if HAS_ELASTIC_HINGES and hk == ELASTIC:
-            _advance_deflection(params, z, loop.w1d, c1, k, h, coef, state.defl[k],
-                                state.defl_rate[k], state.defl_acc[k], state.defl_pseudo[k])
+            _advance_deflection(params, z, w1d, c1, k, h, coef, defl[k], defl_rate[k],
+                                defl_acc[k], defl_pseudo[k])
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
-        _put2(loop.loops.target, inputs.closure_target[s])
-        set_ground(loop.loops, inputs.g_pos[s], inputs.g_vel[s], inputs.g_acc[s],
-                   inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s])
-        project_onto_loops(params, loop.loops, state)
+    if HAS_LOOPS and loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
+        _put2(loops.target, target)
+        set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
+        project_onto_loops(params, loops, state)
     return finite
 
 
@@ -1125,7 +1163,11 @@ def _put3(dst, src):
 
 @loop_piece
 def _record(loop, run, s, slot):
+    """Write the state into run.rec at slot (every field read first, as in _predict)."""
     state, rec = run.state, run.rec
+    histories = loop.histories
+    n_closing, wrench, closure_wrench = ((loop.loops.kind.shape[0], loop.loops.wrench,
+                                          rec.closure_wrench) if HAS_LOOPS else (0, None, None))
     _put3(rec.rot[slot], state.rot)
     _put2(rec.omega[slot], state.omega)
     _put2(rec.omega_dot[slot], state.omega_dot)
@@ -1137,11 +1179,11 @@ def _record(loop, run, s, slot):
     _put2(rec.jq[slot], state.jq)
     _put2(rec.jqd[slot], state.jqd)
     _put2(rec.jtau[slot], state.jtau)
-    if HAS_LOOPS and loop.loops.kind.shape[0] > 0:
-        _put2(rec.closure_wrench[slot], loop.loops.wrench)
-    if HAS_STATION_HISTORIES and loop.histories[0]:
-        _put2(rec.v_st[slot], loop.histories[1])
-        _put2(rec.v_c[slot], loop.histories[4])
+    if HAS_LOOPS and n_closing > 0:
+        _put2(closure_wrench[slot], wrench)
+    if HAS_STATION_HISTORIES and histories[0]:
+        _put2(rec.v_st[slot], histories[1])
+        _put2(rec.v_c[slot], histories[4])
 
 
 @loop_piece
