@@ -833,7 +833,8 @@ def _predict(loop, run, s, _):
 def _iterate(loop, run, s, it):
     """Linearize every element about the guess, sweep, and recover every body's phi and the
     beams' modal accelerations; returns (status, detail, change): change is the largest update
-    of a phi (rad) or of a modal coordinate (eta'' / c1)."""
+    of a phi (rad) or of a modal coordinate (eta'' / c1).  Every field is read first, as in
+    _predict."""
     params, settings, state, sweep, inputs = (run.params, run.settings, run.state, run.sweep,
                                               run.inputs)
     guess, ground, w1d, w3d, z_star, w3 = (loop.guess, loop.ground, loop.w1d, loop.w3d,
@@ -859,9 +860,8 @@ def _iterate(loop, run, s, it):
     modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
     stations = (histories[0], histories[7], histories[8])
     joints = (mode == RICCATI_JOINTS, joints_[2], joints_[3], joints_[4], joint_input, forces)
-    unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d,
-                              w3d, z_star, force, torque,
-                              line_load, settings.start,     # (False)
+    unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force,
+                              torque, line_load, settings.start,     # (False)
                               rot, w3, modal, stations, joints)
     if unknown != 0:
         return UNSUPPORTED, unknown, 0.0
@@ -872,6 +872,9 @@ def _iterate(loop, run, s, it):
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         loops.step_coef[1] = c3 / c1
+        # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
+        # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
+        # hinges' deflections likewise from their stations' guess, as _update)
         eta_g, eta_d_g, defl_g, defl_rate_g = at_guess
         for i in range(eta_g.shape[0]):
             eta_g[i] = (eta_dd_star[i] - w1e[i]) / c1
