@@ -301,9 +301,9 @@ def _kernels_line(model):
         what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
     else:
         what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
-    # (measured cold, benchmarks/compile.py, 2026-11-29: the rigid arm 54 s, with beams 87 s,
-    # with closing joints 89-122 s)
-    first = ("one and a half to two minutes" if "HAS_LOOPS" in compiled_for else "over a minute"
+    # (measured cold, benchmarks/compile.py, 2026-11-29: the rigid arm 49-51 s, with beams
+    # 82 s, with closing joints 80-115 s)
+    first = ("up to two minutes" if "HAS_LOOPS" in compiled_for else "over a minute"
              if "HAS_BEAMS" in compiled_for else "about a minute")
     return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
             f"{first} the first time on 2 cores, cached after; docs/solver.md, "

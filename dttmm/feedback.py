@@ -80,8 +80,8 @@ class _CompileWatch(numba_event.Listener):
                 if not self.announced:
                     _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
                          f"once per machine and kind of model (later runs load them from "
-                         f"numba's cache); about a minute on 2 cores, one and a half to two "
-                         f"with closing joints and beams (docs/solver.md, \"Compile time\"). "
+                         f"numba's cache); about a minute on 2 cores, up to two with closing "
+                         f"joints and beams (docs/solver.md, \"Compile time\"). "
                          f"{now - t0:.0f} s so far")
                     self.announced, self.ending = True, ""
                 elif terminal:

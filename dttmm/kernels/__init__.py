@@ -115,14 +115,20 @@ def recompiled(kernel, fn):
                        cache=not isinstance(kernel._cache, NullCache))
 
 
+def _compiled(fn, entry, **options):
+    """fn compiled with `options` and CONTRACT, a CalleeKernel unless entry (the decorators
+    below, with or without their arguments)."""
+    if fn is None:
+        return lambda f: _compiled(f, entry, **options)
+    kind, no_entry = (CPUDispatcher, {}) if entry else (CalleeKernel, _NO_PYTHON_ENTRY)
+    return _dispatcher(kind, fn, dict(options, fastmath=CONTRACT, **no_entry))
+
+
 def kernel(fn=None, *, entry=False):
     """njit(cache=True, fastmath=CONTRACT): a kernel called by other kernels only (a
     CalleeKernel) or, with entry=True, from Python too (by the package's Python code or its
     tests: a test's call of a callee would compile its twin, seconds for the larger kernels)."""
-    if fn is None:
-        return lambda f: kernel(f, entry=entry)
-    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
-                       dict(fastmath=CONTRACT, **({} if entry else _NO_PYTHON_ENTRY)))
+    return _compiled(fn, entry)
 
 
 def no_alloc_kernel(fn=None, *, entry=False):
@@ -134,11 +140,7 @@ def no_alloc_kernel(fn=None, *, entry=False):
     fused ball-chain loop (kernels/stepping/ball_chain.py::_ball_chain_steps, its scratch allocated
     by its caller): 0.88x the time per step.  A kernel that allocates fails to compile (numba
     compiles its callees the same way), so the option cannot hide a mistake."""
-    if fn is None:
-        return lambda f: no_alloc_kernel(f, entry=entry)
-    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
-                       dict(_nrt=False, fastmath=CONTRACT,
-                            **({} if entry else _NO_PYTHON_ENTRY)))
+    return _compiled(fn, entry, _nrt=False)
 
 
 def allocating_kernel(fn=None, *, entry=False):
@@ -152,10 +154,7 @@ def allocating_kernel(fn=None, *, entry=False):
     its caller's setting unless the kernel sets its own (so would not compile these).  An array
     such a kernel allocates lives and dies in it: it returns status codes and numbers, never a
     new array (nothing would free one)."""
-    if fn is None:
-        return lambda f: allocating_kernel(f, entry=entry)
-    return _dispatcher(CPUDispatcher if entry else CalleeKernel, fn,
-                       dict(_nrt=True, fastmath=CONTRACT, **({} if entry else _NO_PYTHON_ENTRY)))
+    return _compiled(fn, entry, _nrt=True)
 
 
 # Small kernels called once per body and step (the predictor and history updates, the
