@@ -86,15 +86,22 @@ def python_twin(kernel):
     numba builds for calls from Python."""
     twin = PYTHON_CALLED.get(kernel)
     if twin is None:
-        fn = kernel.py_func
-        clone = FunctionType(fn.__code__, fn.__globals__, f"{fn.__name__}__python",
-                             fn.__defaults__, fn.__closure__)
-        clone.__qualname__ = f"{fn.__qualname__}__python"   # (numba's cache files' names)
-        clone.__doc__, clone.__module__ = fn.__doc__, fn.__module__
+        clone = code_copy(kernel.py_func, "python", kernel.py_func.__globals__)
         options = {k: v for k, v in kernel.targetoptions.items() if k not in _NO_PYTHON_ENTRY}
         twin = PYTHON_CALLED[kernel] = _dispatcher(CPUDispatcher, clone, options,
                                                    cache=not isinstance(kernel._cache, NullCache))
     return twin
+
+
+def code_copy(fn, suffix, scope):
+    """fn's code as a function of its own named <name>__<suffix> (numba names its cache files
+    after the qualified name), its globals read from scope: a kernel's twin, its copy for a
+    set of features (kernels/features.py::specialized)."""
+    clone = FunctionType(fn.__code__, scope, f"{fn.__name__}__{suffix}", fn.__defaults__,
+                         fn.__closure__)
+    clone.__qualname__ = f"{fn.__qualname__}__{suffix}"
+    clone.__doc__, clone.__module__ = fn.__doc__, fn.__module__
+    return clone
 
 
 def _dispatcher(kind, fn, options, cache=True):

@@ -23,12 +23,12 @@ model whose features were mistaken stops naming the element instead of running w
 """
 import os
 from functools import lru_cache
-from types import CodeType, FunctionType
+from types import CodeType
 
 from numba import config
 from numba.core.dispatcher import Dispatcher
 
-from . import recompiled
+from . import code_copy, recompiled
 
 # DTTMM_SPECIALIZE=0: every kind of model runs the one copy with every flag on (what a test
 # suite or a parameter study over many kinds of models wants: each kind would compile its own
@@ -175,10 +175,6 @@ def specialized(kernel, features=ALL):
             elif isinstance(scope.get(name), Dispatcher):
                 scope[name] = specialized(scope[name], features)
         tag = "_".join(_SHORT[f] for f in FLAGS if f in features) or "none"
-        name = f"{fn.__name__}__{tag}"
-        clone = FunctionType(fn.__code__, scope, name, fn.__defaults__, fn.__closure__)
-        clone.__qualname__ = f"{fn.__qualname__}__{tag}"    # (numba's cache files' names)
-        clone.__doc__, clone.__module__ = fn.__doc__, fn.__module__
-        copy = recompiled(kernel, clone)
+        copy = recompiled(kernel, code_copy(fn, tag, scope))
         _COPIES[key] = copy
     return copy
