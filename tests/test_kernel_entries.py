@@ -1,5 +1,10 @@
 """Kernels only other kernels call are compiled without numba's entry points for Python
-(kernels/__init__.py::CalleeKernel); called from Python, they run their twin."""
+(kernels/__init__.py::CalleeKernel), into libraries only their callers link
+(kernels/__init__.py::LinkedOnlyLibrary); called from Python, they run their twin."""
+import os
+import subprocess
+import sys
+
 import numpy as np
 from numba import njit
 
@@ -47,3 +52,62 @@ def test_a_callee_called_by_the_package_is_noted_for_the_suite():
     kernels.CALLED_BY_PACKAGE.clear()   # (conftest's check would fail this test)
     exp_coefficients(0.25)              # a test's own call is not the package's
     assert not kernels.CALLED_BY_PACKAGE
+
+
+def test_a_callee_kernels_library_makes_no_machine_code_of_its_own():
+    fn = exp_coefficients.py_func
+    callee = kernels._dispatcher(CalleeKernel, kernels.code_copy(fn, "uncached", fn.__globals__),
+                                 exp_coefficients.targetoptions, cache=False)   # (compiled here)
+    caller = njit(lambda th2: callee(th2))
+    assert np.allclose(caller(0.25), exp_coefficients(0.25), rtol=1e-15, atol=0.0)
+    cres = next(iter(callee.overloads.values()))
+    assert isinstance(cres.library, kernels.LinkedOnlyLibrary)
+    assert cres.library.codegen._engine.get_function_address(cres.fndesc.mangled_name) == 0
+    own = next(iter(caller.overloads.values()))     # the caller's machine code, the callee's in it
+    assert own.library.codegen._engine.get_function_address(own.fndesc.mangled_name) != 0
+
+
+_CACHED = '''
+import sys
+import numpy as np
+from dttmm.kernels import kernel
+
+
+@kernel
+def callee(x):
+    return np.sin(x) + 2.0 * x
+
+
+@kernel(entry=True)
+def first(x):
+    return callee(x) + 1.0
+
+
+@kernel(entry=True)
+def second(x):
+    return 3.0 * callee(x)
+
+
+if __name__ == "__main__":
+    entry = first if sys.argv[1] == "first" else second
+    print(repr(entry(0.5)), callee.stats.cache_hits.get(callee.signatures[0], 0)
+          if callee.signatures else -1)
+'''
+
+
+def test_a_callee_kernel_caches_and_links_from_its_cache(tmp_path):
+    """Its cache holds the code its callers link: a process that compiles a new caller loads the
+    callee from it, and a cached caller runs without the callee."""
+    (tmp_path / "cached_kernels.py").write_text(_CACHED)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+
+    def run(which):
+        done = subprocess.run([sys.executable, "cached_kernels.py", which], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, check=True)
+        value, hits = done.stdout.split()
+        return float(value), int(hits)
+
+    x = 0.5
+    assert run("first") == (np.sin(x) + 2.0 * x + 1.0, 0)    # compiles both, caches both
+    assert run("first") == (np.sin(x) + 2.0 * x + 1.0, -1)   # its cache: the callee not needed
+    assert run("second") == (3.0 * (np.sin(x) + 2.0 * x), 1)  # links the callee's cache
