@@ -6,7 +6,7 @@ import numpy as np
 
 from .elements import BEAM, RIGID, ROD
 from .elements.strain_rod import rod_end_section, rod_energies, rod_output_offset
-from .vectors import cross
+from .vectors import cross, rows_dot
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
                             foreshortening, mode_shapes, slope_grams, stretch_along,
@@ -486,12 +486,12 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
     y, _, _, _, stiffness = mode_shapes(int(row[FAMILY]), length, nm, x)      # y (m, Q)
     p = np.zeros((len(eta), len(x), 3))                    # x e1 + u(x), body frame
     p[:, :, 0] = x
-    p[:, :, 1] = eta[:, :nm] @ y
-    p[:, :, 2] = eta[:, nm:2 * nm] @ y
+    p[:, :, 1] = rows_dot(eta[:, :nm], y)
+    p[:, :, 2] = rows_dot(eta[:, nm:2 * nm], y)
     p[:, :, 0] += stretch_along(row, eta, x)                # the stretch u_x (docs/beam.md)
     u_dot = np.zeros_like(p)
-    u_dot[:, :, 1] = eta_dot[:, :nm] @ y
-    u_dot[:, :, 2] = eta_dot[:, nm:2 * nm] @ y
+    u_dot[:, :, 1] = rows_dot(eta_dot[:, :nm], y)
+    u_dot[:, :, 2] = rows_dot(eta_dot[:, nm:2 * nm], y)
     u_dot[:, :, 0] = stretch_along(row, eta_dot, x)
     if exact:
         c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
@@ -501,26 +501,28 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
     rho = p @ a_t                                          # A p, every state and point
     vel = v_in[:, None, :] + cross(w[:, None, :], rho) + u_dot @ a_t
     spin = np.einsum("ti,ti->t", w, a[:, :, 0])
-    kinetic = 0.5 * mu * (np.sum(vel * vel, axis=2) @ wq)
+    kinetic = 0.5 * mu * rows_dot(np.sum(vel * vel, axis=2), wq)
     mt = int(row[TORSION_MODES])
     if mt:
         # the sections spin by w . A e1 + psi' (docs/beam.md, "Torsion"):
         # T = 1/2 j_p int (w . A e1 + psi')^2, V = 1/2 G J int psi'^2
         psi, dpsi = torsion_shapes(int(row[FAMILY]), length, mt, x)[:2]
-        twist, twist_rate = eta[:, 2 * nm:2 * nm + mt] @ dpsi, eta_dot[:, 2 * nm:2 * nm + mt] @ psi
+        twist = rows_dot(eta[:, 2 * nm:2 * nm + mt], dpsi)
+        twist_rate = rows_dot(eta_dot[:, 2 * nm:2 * nm + mt], psi)
         section_spin = spin[:, None] + twist_rate
-        kinetic += 0.5 * row[POLAR_PER_LENGTH] * (section_spin * section_spin) @ wq
+        kinetic += 0.5 * row[POLAR_PER_LENGTH] * rows_dot(section_spin * section_spin, wq)
     else:
         twist = np.zeros((len(eta), len(x)))
         kinetic += 0.5 * row[POLAR_PER_LENGTH] * length * spin * spin
-    potential = -mu * (((r_in[:, None, :] + rho) @ gravity) @ wq)
-    potential += 0.5 * (eta[:, :nm] ** 2 @ (stiffness * row[EI_V])
-                        + eta[:, nm:2 * nm] ** 2 @ (stiffness * row[EI_W]))
-    potential += 0.5 * row[GJ] * (twist * twist) @ wq
+    potential = -mu * rows_dot(rows_dot(r_in[:, None, :] + rho, gravity), wq)
+    potential += 0.5 * (rows_dot(eta[:, :nm] ** 2, stiffness * row[EI_V])
+                        + rows_dot(eta[:, nm:2 * nm] ** 2, stiffness * row[EI_W]))
+    potential += 0.5 * row[GJ] * rows_dot(twist * twist, wq)
     ma = int(row[AXIAL_MODES])
     if ma:      # V gains 1/2 E A int u_x'^2 ("Stretch")
-        strain = eta[:, eta.shape[1] - ma:] @ torsion_shapes(int(row[FAMILY]), length, ma, x)[1]
-        potential += 0.5 * row[EA] * (strain * strain) @ wq
+        strain = rows_dot(eta[:, eta.shape[1] - ma:],
+                          torsion_shapes(int(row[FAMILY]), length, ma, x)[1])
+        potential += 0.5 * row[EA] * rows_dot(strain * strain, wq)
     if row[STIFFENING] and not exact:
         # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
         # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
@@ -528,11 +530,11 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
         c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
         e1 = a[:, :, 0]
         u = cross(w, e1)
-        int_c, int_cd, int_xc = c @ wq, c_dot @ wq, c @ (wq * x)
+        int_c, int_cd, int_xc = rows_dot(c, wq), rows_dot(c_dot, wq), rows_dot(c, wq * x)
         kinetic -= mu * (np.einsum("ti,ti->t", v_in, u) * int_c
                          + np.einsum("ti,ti->t", v_in, e1) * int_cd
                          + np.einsum("ti,ti->t", u, u) * int_xc)
-        potential += mu * (e1 @ gravity) * int_c
+        potential += mu * rows_dot(e1, gravity) * int_c
     return kinetic, potential
 
 

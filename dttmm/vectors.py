@@ -18,3 +18,18 @@ def cross(a, b):
     np.subtract(a[..., 2] * b[..., 0], a[..., 0] * b[..., 2], out=out[..., 1])
     np.subtract(a[..., 0] * b[..., 1], a[..., 1] * b[..., 0], out=out[..., 2])
     return out
+
+
+def rows_dot(x, y):
+    """x @ y contracting x's last axis (length k) with y's first, y (k,) or (k, m), summed over
+    k in index order, for x (..., k) of any number of leading rows: each row's result is the
+    same however many rows come with it.  numpy's x @ y calls BLAS, whose kernels may sum a row
+    in another order where it falls in a block's remainder: a run's last sample (row 100 of 101)
+    then differed in its last bit from the same sample of a longer run (row 100 of 201), OpenBLAS
+    on an AMD EPYC, and a run resumed from its checkpoint was not bit for bit the whole run."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    tail = (slice(None),) * (y.ndim - 1)
+    out = np.zeros(x.shape[:-1] + y.shape[1:])
+    for j in range(x.shape[-1]):
+        out += x[..., j][(...,) + (None,) * (y.ndim - 1)] * y[j][tail]
+    return out

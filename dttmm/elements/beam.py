@@ -16,6 +16,7 @@ import numpy as np
 
 from ._checks import (finite_pair, finite_scalar, finite_vector, optional_function,
                       rotation_matrix)
+from ..vectors import rows_dot
 from .rigid_body import straight_line_body
 
 PINNED = 0            # sin(k pi x / L) in the chord frame: between moment-free ends
@@ -196,7 +197,7 @@ def stretch_along(beam_row, eta, x):
     eta = np.asarray(eta, dtype=float)
     ma = int(beam_row[AXIAL_MODES])
     shapes = torsion_shapes(int(beam_row[FAMILY]), beam_row[LENGTH], ma, x)[0]   # (ma, len(x))
-    return eta[..., eta.shape[-1] - ma:] @ shapes
+    return rows_dot(eta[..., eta.shape[-1] - ma:], shapes)    # (per row as for any T)
 
 
 def axial_frequencies(beam_row, n_modes=None):
