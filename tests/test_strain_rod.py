@@ -278,7 +278,12 @@ def test_the_elastica_example_rolls_one_rod_up_exactly(tmp_path):
     """examples/elastica.py --kind rod: one rod of constant strain under the tip moment in 4
     load steps to the full circle: every step's tip within 1e-12 m of the exact arc's (measured
     1e-14), the centre line's points on the arc (1e-12 m) and ending on the tip; the CSV and
-    the figure written."""
+    the figure written.  But at three quarters of a turn, the stability limit (the equilibria
+    past it are unstable out of the plane: the module's docstring), the equilibrium is neutral:
+    the solve's Jacobian has a singular value 1e-9 of its largest there (6.4e-7 against 537),
+    so round-off moves the solution along it by up to ~1e-16 / 1e-9 of the coordinates: measured
+    2.8e-12 m at the tip on an AMD EPYC (1e-14 on the machine this test was written on), 1e-9
+    m allowed."""
     import sys
     from pathlib import Path
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
@@ -287,11 +292,12 @@ def test_the_elastica_example_rolls_one_rod_up_exactly(tmp_path):
                           "--csv", str(tmp_path / "e.csv"), "--plots", str(tmp_path)]) == 0
     assert (tmp_path / "elastica.png").stat().st_size > 1000
     for lam, solved in elastica.roll_up(1, 4, 1, kind="rod"):
+        tol = 1e-9 if lam == 0.75 else 1e-12        # (the stability limit: the docstring)
         tip = solved.positions()[2][-1]
-        assert np.linalg.norm(tip - elastica.exact_tip(lam)) < 1e-12
+        assert np.linalg.norm(tip - elastica.exact_tip(lam)) < tol
         line = solved.centreline(33)[0]
         radius = elastica.LENGTH / (2.0 * np.pi * lam)
-        assert np.abs(np.linalg.norm(line[:, :2] - [0.0, radius], axis=1) - radius).max() < 1e-12
+        assert np.abs(np.linalg.norm(line[:, :2] - [0.0, radius], axis=1) - radius).max() < tol
         assert np.linalg.norm(line[-1] - tip) < 1e-15
 
 
