@@ -270,3 +270,17 @@ def test_the_layers_cross_product_is_numpys():
                    ((300, 9, 3), (300, 1, 3)), ((2, 3), (4, 1, 3)), ((3,), (1000, 3))):
         a, b = rng.normal(size=sa), rng.normal(size=sb)
         np.testing.assert_allclose(cross(a, b), np.cross(a, b), rtol=0, atol=1e-14)
+
+
+def test_rows_dot_is_matmul_with_each_row_independent_of_the_others():
+    """vectors.rows_dot (a beam's energies per recorded sample) equals x @ y, and each row of
+    its result is bit for bit the same row of any longer x (a run and its resumed halves)."""
+    from dttmm.vectors import rows_dot
+    rng = np.random.default_rng(3)
+    for sx, sy in (((201, 64), (64,)), ((201, 4), (4, 64)), ((201, 64, 3), (3,)), ((5,), (5, 7)),
+                   ((201, 0), (0, 64))):
+        x, y = rng.normal(size=sx), rng.normal(size=sy)
+        np.testing.assert_allclose(rows_dot(x, y), x @ y, rtol=1e-13, atol=1e-13)
+        if len(sx) > 1:
+            for n in (1, 3, 101, 200):
+                assert np.array_equal(rows_dot(x[:n], y), rows_dot(x, y)[:n])
