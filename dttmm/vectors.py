@@ -28,8 +28,7 @@ def rows_dot(x, y):
     then differed in its last bit from the same sample of a longer run (row 100 of 201), OpenBLAS
     on an AMD EPYC, and a run resumed from its checkpoint was not bit for bit the whole run."""
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    tail = (slice(None),) * (y.ndim - 1)
     out = np.zeros(x.shape[:-1] + y.shape[1:])
     for j in range(x.shape[-1]):
-        out += x[..., j][(...,) + (None,) * (y.ndim - 1)] * y[j][tail]
+        out += (x[..., j, None] if y.ndim == 2 else x[..., j]) * y[j]
     return out

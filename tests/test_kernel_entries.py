@@ -61,6 +61,7 @@ def test_a_callee_kernels_library_makes_no_machine_code_of_its_own():
     caller = njit(lambda th2: callee(th2))
     assert np.allclose(caller(0.25), exp_coefficients(0.25), rtol=1e-15, atol=0.0)
     cres = next(iter(callee.overloads.values()))
+    assert kernels.LINKED_ONLY          # (this numba has what it needs)
     assert isinstance(cres.library, kernels.LinkedOnlyLibrary)
     assert cres.library.codegen._engine.get_function_address(cres.fndesc.mangled_name) == 0
     own = next(iter(caller.overloads.values()))     # the caller's machine code, the callee's in it

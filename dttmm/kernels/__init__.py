@@ -78,7 +78,10 @@ class LinkedOnlyLibrary(JITCodeLibrary):
     linked whole as they always did; its machine code is that of its environment's global
     variable alone (numba sets it when the compile ends, and its cache holds that machine code
     and the code for linking, as any library's).  Measured on the four-bar's cold compile (two
-    processes side by side, their results bit-identical): 203 -> 168 s."""
+    processes side by side, their results bit-identical): 203 -> 168 s.  It overrides two
+    methods of numba's CPUCodeLibrary and calls its helpers (numba 0.58 to 0.68); where a numba
+    lacks them, callee kernels lower as any other (LINKED_ONLY), and tests/test_kernel_entries.py
+    checks both the library and its cache."""
 
     def _optimize_final_module(self):
         pass
@@ -95,6 +98,11 @@ class LinkedOnlyLibrary(JITCodeLibrary):
         self._codegen._add_module(module)
         self._codegen._engine.finalize_object()
         self._finalized = True
+
+
+LINKED_ONLY = all(hasattr(JITCodeLibrary, name) for name in (
+    "_optimize_final_module", "_finalize_final_module", "_finalize_dynamic_globals",
+    "_verify_declare_only_symbols", "enable_object_caching"))
 
 
 class LinkedOnlyCompiler(compiler.Compiler):
@@ -117,7 +125,7 @@ class CalleeKernel(CPUDispatcher):
     which the test suite checks after every test (tests/conftest.py)."""
 
     def __init__(self, py_func, locals=None, targetoptions=None,
-                 pipeline_class=LinkedOnlyCompiler):
+                 pipeline_class=LinkedOnlyCompiler if LINKED_ONLY else compiler.Compiler):
         super().__init__(py_func, locals, targetoptions, pipeline_class)
 
     def __call__(self, *args, **kwargs):
