@@ -686,12 +686,12 @@ def beam_midpoint_deflection(model, result, body):
     # the chord's middle, without its part along the chord
     p_mid = np.zeros((len(eta), 3))
     p_mid[:, 0] = 0.5 * length
-    p_mid[:, 1] = eta[:, :nm] @ y[:, 0]
-    p_mid[:, 2] = eta[:, nm:2 * nm] @ y[:, 0]
+    p_mid[:, 1] = rows_dot(eta[:, :nm], y[:, 0])
+    p_mid[:, 2] = rows_dot(eta[:, nm:2 * nm], y[:, 0])
     p_out = np.zeros((len(eta), 3))
     p_out[:, 0] = length
-    p_out[:, 1] = eta[:, :nm] @ y[:, 1]
-    p_out[:, 2] = eta[:, nm:2 * nm] @ y[:, 1]
+    p_out[:, 1] = rows_dot(eta[:, :nm], y[:, 1])
+    p_out[:, 2] = rows_dot(eta[:, nm:2 * nm], y[:, 1])
     chord = np.einsum("tij,tj->ti", rot, p_out)
     e1 = chord / np.linalg.norm(chord, axis=1, keepdims=True)
     d = np.einsum("tij,tj->ti", rot, p_mid - 0.5 * p_out)
@@ -715,9 +715,10 @@ def beam_output_offset(row, rotation, omega, eta, eta_dot):
     eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
     c, c_dot = foreshortening(row, eta, eta_dot)
     u_l, u_l_dot = (stretch_along(row, e, [length])[..., 0] for e in (eta, eta_dot))
-    p = np.stack([length - c + u_l, eta[..., :nm] @ y, eta[..., nm:2 * nm] @ y], axis=-1)
-    p_dot = np.stack([u_l_dot - c_dot, eta_dot[..., :nm] @ y, eta_dot[..., nm:2 * nm] @ y],
-                     axis=-1)
+    p = np.stack([length - c + u_l, rows_dot(eta[..., :nm], y),
+                  rows_dot(eta[..., nm:2 * nm], y)], axis=-1)
+    p_dot = np.stack([u_l_dot - c_dot, rows_dot(eta_dot[..., :nm], y),
+                      rows_dot(eta_dot[..., nm:2 * nm], y)], axis=-1)
     rho = np.einsum("...ij,...j->...i", rotation, p)
     return rho, cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
 
