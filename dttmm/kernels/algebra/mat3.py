@@ -7,6 +7,60 @@ from numba import njit
 from .. import CONTRACT, kernel
 
 
+# Copies and sums into existing arrays (same shapes), as calls of small kernels.  Written as an
+# array statement (`out[:] = x`, `s[k] = s[j]`, `h[:, :] = -g`), numba compiles its broadcasting
+# setitem in place, with a shape check whose error message it formats in compiled code: ~0.5 s
+# each in a step piece, and the first one of each kind in a process compiled that string
+# formatting, 6.5 s of the four-bar's cold compile for one line (docs/solver.md, "Compile time",
+# items 3 and 8).
+
+@kernel
+def put1(dst, src):
+    """dst[:] = src."""
+    for i in range(dst.shape[0]):
+        dst[i] = src[i]
+
+
+@kernel
+def put2(dst, src):
+    """dst[:, :] = src."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@kernel
+def put3(dst, src):
+    """dst[:, :, :] = src."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            for k in range(dst.shape[2]):
+                dst[i, j, k] = src[i, j, k]
+
+
+@kernel
+def add1(dst, src):
+    """dst[:] += src."""
+    for i in range(dst.shape[0]):
+        dst[i] += src[i]
+
+
+@kernel
+def add2(dst, src):
+    """dst[:, :] += src."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] += src[i, j]
+
+
+@kernel
+def neg2(dst, src):
+    """dst[:, :] = -src."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] = -src[i, j]
+
+
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def inv3(a, out):
     """out = a^-1 (t_inverse, written to an array); returns the determinant (out is not finite

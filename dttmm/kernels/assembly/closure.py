@@ -48,7 +48,7 @@ from ...elements.joints import PRISMATIC
 from ..transfers.beam import end_section_motion
 from ..transfers.strain_rod import rod_end, rod_end_frame, rod_tables_of
 from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
-from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mmt, t_mv
+from ..algebra.mat3 import add1, add2, put1, put2, t_cross, t_lin3, t_mm, t_mmt, t_mv
 from ..algebra.so3 import expm_so3
 from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
 
@@ -643,11 +643,11 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
         loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
                                              + _row_value(loops, r, loops.z_save[0], loops.act[0]))
     _force_rows(params, loops, rot, w)
-    loops.lam[:] = _rows_solve(loops, loops.delassus, loops.rhs)
+    put1(loops.lam, _rows_solve(loops, loops.delassus, loops.rhs))
     # the step with the multipliers' loads: P and k superposed, one recovery over the tree
     p_comb, k_comb = loops.p_comb, loops.k_comb
-    p_comb[:, :] = loops.p_col[0]
-    k_comb[:, :] = loops.k_store[0]
+    put2(p_comb, loops.p_col[0])
+    put2(k_comb, loops.k_store[0])
     for k in range(n):
         for q in range(loops.up_ptr[k], loops.up_ptr[k + 1]):
             c = loops.up_idx[q]
@@ -900,7 +900,7 @@ def project_onto_loops(params, loops, state):
                 row_positions(params, loops, state.rot, state.omega, rows)
                 for q in range(rows.shape[0]):
                     v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
-    loops.gd[:] = base
+    put1(loops.gd, base)
     for r in range(n_rows):             # a drive's force's row: mu_r = 0
         if _is_force(loops.law, r):
             v[r, :] = 0.0
@@ -1069,7 +1069,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
         for side in range(2):
             kb = loops.col_body[c, side]
             if kb >= 0:
-                port_p[c, kb] += loops.col_load[c, side]
+                add1(port_p[c, kb], loops.col_load[c, side])
     cols = np.empty(most, dtype=np.int64)
     p_o = np.empty((most, 6))
     p_i = np.empty((most, 6))
@@ -1087,22 +1087,22 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
             cols[1 + q - up_ptr[k]] = up_idx[q]
         # the body: T and S_I, and every column's P_I, in one solve
         for a in range(m):
-            p_o[a] = port_p[cols[a], k]
+            put1(p_o[a], port_p[cols[a], k])
         if not _element_columns(u[jb], port_s[k], p_o[:m], s_mat[jb], p_i[:m], t, x[:, :6 + m]):
             return jb + 1
         for a in range(m):
-            p_col[cols[a], jb] = p_i[a]
+            put1(p_col[cols[a], jb], p_i[a])
         kd = kind[jh]
         if kd == IDENTITY:
-            s_mat[jh] = s_mat[jb]
+            put2(s_mat[jh], s_mat[jb])
             for a in range(m):
-                p_col[cols[a], jh] = p_col[cols[a], jb]
+                put1(p_col[cols[a], jh], p_col[cols[a], jb])
         elif kd == TRANSFER:
             if not _element_columns(u[jh], s_mat[jb], p_i[:m], s_mat[jh], p_o[:m], t,
                                     x[:, :6 + m]):
                 return jh + 1
             for a in range(m):
-                p_col[cols[a], jh] = p_o[a]
+                put1(p_col[cols[a], jh], p_o[a])
         elif kd == LOCKED:
             s_mat[jh] = 0.0
             for a in range(m):
@@ -1127,7 +1127,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
                     g[i, a] = gv
             # y_c = S_O c'_c + P_O,c: the affine part c' (prescribed coordinates too) in column 0
             for a in range(m):
-                y[a] = p_i[a]
+                put1(y[a], p_i[a])
             for i in range(6):
                 ci = uh[i, 12]
                 for c3 in range(3):
@@ -1165,20 +1165,20 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
                 for a in range(mf):
                     for j in range(6):
                         s_e[i, j] -= g[i, a] * rhs[a, j]
-            s_mat[jh] = _mm(psi, s_e)
+            put2(s_mat[jh], _mm(psi, s_e))
             for c in range(m):
                 p_e = y[c].copy()
                 for i in range(6):
                     for a in range(mf):
                         p_e[i] += g[i, a] * rhs[a, 6 + c]
-                p_col[cols[c], jh] = _mv(psi, p_e)
+                put1(p_col[cols[c], jh], _mv(psi, p_e))
         else:
             return jh + 1
         p = parent[k]
         if p >= 0:
-            port_s[p] += s_mat[jh]
+            add2(port_s[p], s_mat[jh])
             for a in range(m):
-                port_p[cols[a], p] += p_col[cols[a], jh]
+                add1(port_p[cols[a], p], p_col[cols[a], jh])
     return 0
 
 

@@ -23,7 +23,8 @@ from numba import njit
 
 from .. import CONTRACT, kernel, no_alloc_kernel
 from ..transfers.joint import FREE, PRESCRIBED
-from ..algebra.mat3 import inv3, least_norm_solve3, matmul_into, mm3_into, t_inverse, t_of_mat
+from ..algebra.mat3 import (add1, add2, inv3, least_norm_solve3, matmul_into, mm3_into, put1, put2,
+                            t_inverse, t_of_mat)
 
 TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -202,14 +203,14 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
     ordered = np.empty((12, 13))
     split[0] = SPLIT_B
     s_mat[0, :, :] = 0.0
-    p_vec[0, :] = root_f
+    put1(p_vec[0], root_f)
     for j in range(n_el):
         sp = split[j]
         k = kind[j]
         if k == IDENTITY:
             split[j + 1] = sp
-            s_mat[j + 1] = s_mat[j]
-            p_vec[j + 1] = p_vec[j]
+            put2(s_mat[j + 1], s_mat[j])
+            put1(p_vec[j + 1], p_vec[j])
         elif k == TRANSFER:
             split[j + 1] = sp
             if sp == SPLIT_B:
@@ -230,21 +231,21 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
             if abs(np.linalg.det(w)) == 0.0:
                 return j + 1
             wi = np.linalg.inv(w)
-            g_vec[j] = wi @ rhs
+            put1(g_vec[j], wi @ rhs)
             s_mat[j + 1, :, :] = 0.0
             p_vec[j + 1, :] = 0.0
             if k == BALL:
                 # inboard e = g + G q; outboard f = [a, m] = [(basis G) q + basis g + offset; 0]
-                g_mat[j] = wi[:, 3:6]
+                put2(g_mat[j], wi[:, 3:6])
                 bg = basis @ g_mat[j]
                 bo = basis @ g_vec[j] + offset
                 split[j + 1] = SPLIT_A
-                s_mat[j + 1, 0:3, 3:6] = bg[0:3]
-                p_vec[j + 1, 0:3] = bo[0:3]
+                put2(s_mat[j + 1, 0:3, 3:6], bg[0:3])
+                put1(p_vec[j + 1, 0:3], bo[0:3])
             else:
                 g_mat[j, :, :] = 0.0
                 split[j + 1] = SPLIT_C
-                p_vec[j + 1] = known_loads[j, 6:12]
+                put1(p_vec[j + 1], known_loads[j, 6:12])
     _station_basis(split[n_el], s_mat[n_el], p_vec[n_el], basis, offset)
     w, rhs = _tip_system(basis, offset, tip_pinned)
     solved, e = _solve_tip(w, rhs, tip_pinned)
@@ -799,14 +800,14 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
         s_o, p_o = s_mat[jb], p_vec[jb]
         kd = kind[jh]
         if kd == IDENTITY:
-            s_mat[jh] = s_o
-            p_vec[jh] = p_o
+            put2(s_mat[jh], s_o)
+            put1(p_vec[jh], p_o)
         elif kd == TRANSFER:
             if not _element_to_inboard(u[jh], s_o, p_o, s_mat[jh], p_vec[jh]):
                 return jh + 1
         elif kd == LOCKED:
             s_mat[jh] = 0.0
-            p_vec[jh] = known_loads[jh, 0:6]
+            put1(p_vec[jh], known_loads[jh, 0:6])
         else:   # JOINT
             mf, sy = _joint_parts(u[jh], joint_dof[k], joint_drive[k], s_o, p_o, free, h_mat,
                                   k0, g)
@@ -820,40 +821,40 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
                     p_e[i] += g[i, a] * k0[a]
                     for j in range(6):
                         s_e[i, j] -= g[i, a] * h_mat[a, j]
-            s_mat[jh] = _mm(psi, s_e)
-            p_vec[jh] = _mv(psi, p_e)
+            put2(s_mat[jh], _mm(psi, s_e))
+            put1(p_vec[jh], _mv(psi, p_e))
         p = parent[k]
         if p >= 0:
-            port_s[p] += s_mat[jh]
-            port_p[p] += p_vec[jh]
+            add2(port_s[p], s_mat[jh])
+            add1(port_p[p], p_vec[jh])
     for r in range(z.shape[0]):
         for c in range(12):
             z[r, c] = 0.0
-    z[0, 0:6] = root_f
+    put1(z[0, 0:6], root_f)
     f_i = np.empty(6)
     f_o = np.empty(6)
     for k in range(n):
         jb, jh = 2 * k + 1, 2 * k
         p = parent[k]
         st = 0 if p < 0 else 2 * p + 2
-        f_i[:] = z[st, 0:6]
+        put1(f_i, z[st, 0:6])
         if p < 0:
-            z[0, 6:12] += _mv(s_mat[jh], f_i) + p_vec[jh]
+            add1(z[0, 6:12], _mv(s_mat[jh], f_i) + p_vec[jh])
         kd = kind[jh]
         if kd == IDENTITY:
-            f_o[:] = f_i
+            put1(f_o, f_i)
         elif kd == TRANSFER:
             zi = np.empty(12)
-            zi[0:6] = f_i
-            zi[6:12] = _mv(s_mat[jh], f_i) + p_vec[jh]
-            f_o[:] = _mv(u[jh, 0:6, 0:12], zi) + u[jh, 0:6, 12]
+            put1(zi[0:6], f_i)
+            put1(zi[6:12], _mv(s_mat[jh], f_i) + p_vec[jh])
+            put1(f_o, _mv(u[jh, 0:6, 0:12], zi) + u[jh, 0:6, 12])
         elif kd == LOCKED:
             a = s_mat[jb].copy()
             x = np.empty((6, 1))
-            x[:, 0] = known_loads[jh, 6:12] - p_vec[jb]
+            put1(x[:, 0], known_loads[jh, 6:12] - p_vec[jb])
             if not _gauss_solve(a, x, 6, 1):
                 return jh + 1
-            f_o[:] = x[:, 0]
+            put1(f_o, x[:, 0])
         else:
             s_o, p_o = s_mat[jb], p_vec[jb]
             mf, _ = _joint_parts(u[jh], joint_dof[k], joint_drive[k], s_o, p_o, free, h_mat,
@@ -867,13 +868,13 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
                 for j in range(6):
                     x -= h_mat[a, j] * f_i[j]
                 joint_nu[k, free[a]] = x
-            f_o[:] = _mv(u[jh, 0:6, 0:6], f_i) + u[jh, 0:6, 12]
+            put1(f_o, _mv(u[jh, 0:6, 0:6], f_i) + u[jh, 0:6, 12])
             for c in range(3):
                 if joint_dof[k, c] != 0:
                     for i in range(6):
                         f_o[i] += u[jh, i, 6 + c] * joint_nu[k, c]
-        z[jb, 0:6] = f_o
-        z[jb, 6:12] = _mv(s_mat[jb], f_o) + p_vec[jb]
+        put1(z[jb, 0:6], f_o)
+        put1(z[jb, 6:12], _mv(s_mat[jb], f_o) + p_vec[jb])
         if kd == JOINT:
             for c in range(3):
                 x = 0.0
@@ -881,5 +882,5 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
                     for i in range(6):
                         x += u[jh, 6 + i, c] * z[jb, 6 + i]
                 joint_tau[k, c] = x
-        z[jb + 1] = _mv(u[jb, :, 0:12], z[jb]) + u[jb, :, 12]
+        put1(z[jb + 1], _mv(u[jb, :, 0:12], z[jb]) + u[jb, :, 12])
     return 0

@@ -22,7 +22,8 @@ from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .step import _all_finite, _put2, _put3, solve_step
+from .step import _all_finite, solve_step
+from ..algebra.mat3 import put2, put3
 from ..assembly.sweep import IDENTITY, TRANSFER
 from ..assembly.sweep import BALL as EL_BALL
 
@@ -46,7 +47,7 @@ def _predict(loop, run, s, _):
     """The guess: phi = h w_n + h^2 w'_n / 2, in b = 2 phi / h^2 units."""
     state, h = run.state, run.settings.h
     z_star = loop.z_star
-    _put2(z_star, state.z)
+    put2(z_star, state.z)
     for k in range(state.rot.shape[0]):
         for i in range(3):
             b = (2.0 / h) * state.omega[k, i] + state.omega_dot[k, i]
@@ -96,7 +97,7 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _adopt(loop, run, s, it):
-    _put2(loop.z_star, run.state.z)
+    put2(loop.z_star, run.state.z)
 
 
 @loop_piece
@@ -130,11 +131,11 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
-    _put3(rec.rot[slot], state.rot)
-    _put2(rec.omega[slot], state.omega)
-    _put2(rec.omega_dot[slot], state.omega_dot)
-    _put2(rec.v_c[slot], state.v_c)
-    _put2(rec.z[slot], state.z)
+    put3(rec.rot[slot], state.rot)
+    put2(rec.omega[slot], state.omega)
+    put2(rec.omega_dot[slot], state.omega_dot)
+    put2(rec.v_c[slot], state.v_c)
+    put2(rec.z[slot], state.z)
 
 
 @loop_piece

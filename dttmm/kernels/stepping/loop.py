@@ -27,6 +27,7 @@ from numba import njit
 from numba._dispatcher import compute_fingerprint
 
 from .. import CONTRACT, no_alloc_kernel
+from ..algebra.mat3 import put1, put2
 from ..features import ALL, specialized, unread_dropped
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
@@ -163,19 +164,6 @@ def report(out_info, status, step, detail, n_rec):
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def _copy_into(src, dst):
-    for i in range(src.shape[0]):
-        dst[i] = src[i]
-
-
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def _copy2_into(src, dst):
-    for i in range(dst.shape[0]):           # (the monitor's rows: none for a kind not there)
-        for j in range(dst.shape[1]):
-            dst[i, j] = src[i, j]
-
-
-@njit(cache=True, inline='always', fastmath=CONTRACT)
 def _largest_change(now, before, largest):
     for i in range(now.shape[0]):
         largest = max(largest, abs(now[i] - before[i]))
@@ -196,10 +184,10 @@ def keep_pseudo(pseudo, eta_p, jqp, defl_pseudo, kept):
     (pseudo, eta_p, jqp, defl_pseudo) (for step_error).  The monitor holds rows for what the
     model has: no joint coordinates' rows without joints with coordinates, no deflections' rows
     without elastic hinges (solver.simulate), which it then skips."""
-    _copy2_into(pseudo, kept[0])
-    _copy_into(eta_p, kept[1])
-    _copy2_into(jqp, kept[2])
-    _copy2_into(defl_pseudo, kept[3])
+    put2(kept[0], pseudo)        # (over kept's rows: none for a kind not there)
+    put1(kept[1], eta_p)
+    put2(kept[2], jqp)
+    put2(kept[3], defl_pseudo)
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)

@@ -40,7 +40,7 @@ from ..features import (EVERY_KIND, HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HA
 from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
 from ..transfers.joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from ..algebra.mat3 import inv3, matmul_into
+from ..algebra.mat3 import inv3, matmul_into, mm3_into, put1, put2, put3
 from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 from ..assembly.sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced,
                               fold_ball_body, riccati_full, riccati_reduced, riccati_tree_full,
@@ -453,7 +453,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     zero3 = np.zeros((n, 3))
     unit33 = np.zeros((n, 3, 3))
     for k in range(n):
-        unit33[k] = np.eye(3)
+        for i in range(3):
+            unit33[k, i, i] = 1.0
     guess = Guess(zero3, rot, np.zeros((n, 3, 3)), omega, zero3, np.zeros((n, 3, 3)), unit33)
     g = (g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3))
     eta = state.eta
@@ -485,8 +486,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
             known_loads[2 * k, 6:9] = m_out
             known_loads[2 * k, 9:12] = q
     root_f = np.empty(6)
-    root_f[0:3] = g_acc
-    root_f[3:6] = g_wd
+    put1(root_f[0:3], g_acc)
+    put1(root_f[3:6], g_wd)
     if HAS_LOOPS and loops.kind.shape[0] > 0:
         tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
                     state.defl, state.defl_rate, loops, loops.all_bodies)
@@ -514,7 +515,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
     zin[12] = 1.0
     for k in range(body_kind.shape[0]):
         if body_kind[k] == BEAM or body_kind[k] == ROD:
-            zin[0:12] = z[2 * k + 1]
+            put1(zin[0:12], z[2 * k + 1])
             for i in range(mode_off[k], mode_off[k + 1]):
                 eta_acc[i] = eta_map[i] @ zin
 
@@ -597,9 +598,9 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
         rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
                       eta_dd[i0:i1], rest, rot_out, w_out, wd_out)
     else:
-        rot_out[:, :] = rot[p] @ rest
-        w_out[:] = w[p]
-        wd_out[:] = wd[p]
+        mm3_into(rot[p], rest, rot_out)
+        put1(w_out, w[p])
+        put1(wd_out, wd[p])
 
 
 @allocating_kernel
@@ -868,7 +869,7 @@ def _iterate(loop, run, s, it):
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
     if HAS_LOOPS and loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
-        _put2(loops.target, target)
+        put2(loops.target, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         loops.step_coef[1] = c3 / c1
@@ -952,8 +953,8 @@ def _adopt(loop, run, s, it):
     rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
     c1, c3 = _integrator_coefficients(settings.h, settings.coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
-    _put2(z_star, z)
-    _put1(eta_dd_star, eta_dd_new)
+    put2(z_star, z)
+    put1(eta_dd_star, eta_dd_new)
     for k in range(phi_star.shape[0]):
         hk = hinge_kind[k]
         if SWEEP_JOINTS and has_coordinates(hk):
@@ -1119,7 +1120,7 @@ def _update(loop, run, s, _):
         elif _welded(hinge_kind, parent, locked, body_kind, mode, k):
             _welded_frame(params, k, rot, omega, omega_dot, eta, eta_d, eta_acc, rot[k],
                           omega[k], omega_dot[k])
-            _put1(pseudo[k], omega_dot[k])
+            put1(pseudo[k], omega_dot[k])
         elif locked[k]:
             _locked_frame(rot_now, lock_rel[k], g_w, g_wd, rot[k], omega[k], omega_dot[k])
         else:
@@ -1132,36 +1133,10 @@ def _update(loop, run, s, _):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
     if HAS_LOOPS and loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
-        _put2(loops.target, target)
+        put2(loops.target, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         project_onto_loops(params, loops, state)
     return finite
-
-
-@kernel
-def _put1(dst, src):
-    """dst[:] = src (same shape), as a call: numba compiles each array assignment written in a
-    piece into the skeleton's own code (~0.5 s of its compile time each; docs/solver.md,
-    "Compile time"), a call to this once."""
-    for i in range(dst.shape[0]):
-        dst[i] = src[i]
-
-
-@kernel
-def _put2(dst, src):
-    """dst[:, :] = src (same shape), as _put1."""
-    for i in range(dst.shape[0]):
-        for j in range(dst.shape[1]):
-            dst[i, j] = src[i, j]
-
-
-@kernel
-def _put3(dst, src):
-    """dst[:, :, :] = src (same shape), as _put1."""
-    for i in range(dst.shape[0]):
-        for j in range(dst.shape[1]):
-            for k in range(dst.shape[2]):
-                dst[i, j, k] = src[i, j, k]
 
 
 @loop_piece
@@ -1171,22 +1146,22 @@ def _record(loop, run, s, slot):
     histories = loop.histories
     n_closing, wrench, closure_wrench = ((loop.loops.kind.shape[0], loop.loops.wrench,
                                           rec.closure_wrench) if HAS_LOOPS else (0, None, None))
-    _put3(rec.rot[slot], state.rot)
-    _put2(rec.omega[slot], state.omega)
-    _put2(rec.omega_dot[slot], state.omega_dot)
-    _put2(rec.z[slot], state.z)
-    _put2(rec.defl[slot], state.defl)
-    _put2(rec.defl_rate[slot], state.defl_rate)
-    _put1(rec.eta[slot], state.eta)
-    _put1(rec.eta_d[slot], state.eta_d)
-    _put2(rec.jq[slot], state.jq)
-    _put2(rec.jqd[slot], state.jqd)
-    _put2(rec.jtau[slot], state.jtau)
+    put3(rec.rot[slot], state.rot)
+    put2(rec.omega[slot], state.omega)
+    put2(rec.omega_dot[slot], state.omega_dot)
+    put2(rec.z[slot], state.z)
+    put2(rec.defl[slot], state.defl)
+    put2(rec.defl_rate[slot], state.defl_rate)
+    put1(rec.eta[slot], state.eta)
+    put1(rec.eta_d[slot], state.eta_d)
+    put2(rec.jq[slot], state.jq)
+    put2(rec.jqd[slot], state.jqd)
+    put2(rec.jtau[slot], state.jtau)
     if HAS_LOOPS and n_closing > 0:
-        _put2(closure_wrench[slot], wrench)
+        put2(closure_wrench[slot], wrench)
     if HAS_STATION_HISTORIES and histories[0]:
-        _put2(rec.v_st[slot], histories[1])
-        _put2(rec.v_c[slot], histories[4])
+        put2(rec.v_st[slot], histories[1])
+        put2(rec.v_c[slot], histories[4])
 
 
 @loop_piece

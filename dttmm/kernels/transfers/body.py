@@ -13,7 +13,8 @@ A(phi) l ~ A* l - (A* l)^ Lam (phi - phi*), Lam = J_l(phi*).
 import numpy as np
 
 from .. import kernel
-from ..algebra.mat3 import matvec_into, t_hat, t_lin9, t_mm, t_mul_hat, t_outer, t_plus_diag
+from ..algebra.mat3 import (matvec_into, neg2, put1, t_hat, t_lin9, t_mm, t_mul_hat, t_outer,
+                            t_plus_diag)
 from ..algebra.so3 import hat
 
 A, PHI, M, Q = 0, 3, 6, 9   # offsets of the blocks in the 12-entry station state
@@ -194,15 +195,15 @@ def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u)
     # J w_dot: J Dwd + [-(J wd)^ + J wd^] Lam
     _mm_add(j, dwd, -1.0, d_m)
     hat(jwd, h1)
-    h2[:, :] = -h1
+    neg2(h2, h1)
     hat(wd, h1)
     _mm_add(j, h1, 1.0, h2)
     _mm_add(h2, lam, -1.0, d_m)
     # w x J w: (w^ J - (J w)^) Dw + w^ [-(J w)^ + J w^] Lam
-    h2[:, :] = -jw_h
+    neg2(h2, jw_h)
     _mm_add(w_h, j, 1.0, h2)
     _mm_add(h2, dw, -1.0, d_m)
-    h2[:, :] = -jw_h
+    neg2(h2, jw_h)
     _mm_add(j, w_h, 1.0, h2)
     h3[:, :] = 0.0
     _mm_add(h2, lam, 1.0, h3)
@@ -226,10 +227,10 @@ def affine_part(u, a_o, phi_o, m_o, q_o, z_star):
     """u[:, CONST] such that u [z*; 1] = [a_o, phi_o, m_o, q_o], the transfer's value at the
     guess z* (the linearized map reproduces the relations there)."""
     value = np.empty(12)
-    value[A:A + 3] = a_o
-    value[PHI:PHI + 3] = phi_o
-    value[M:M + 3] = m_o
-    value[Q:Q + 3] = q_o
+    put1(value[A:A + 3], a_o)
+    put1(value[PHI:PHI + 3], phi_o)
+    put1(value[M:M + 3], m_o)
+    put1(value[Q:Q + 3], q_o)
     for r in range(12):
         acc = value[r]
         for c in range(12):

@@ -230,7 +230,9 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
         return
     # rotational joints: a passes; alpha_O = Phi alpha_I + B nu + c
     b = np.zeros((3, 2))
-    b[:, 0] = u1 + r * _cross(w_p, u1)
+    c = _cross(w_p, u1)
+    for i in range(3):      # (by loops: docs/solver.md, "Compile time", item 8)
+        b[i, 0] = u1[i] + r * c[i]
     phi_aa = np.zeros((3, 3))
     # (c3/c1) d alpha_P x u1 q1' from w_P = c3/c1 alpha_P + const
     x = r * qd[0]
@@ -239,8 +241,11 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
     phi_aa[2, 0], phi_aa[2, 1] = u1[1] * x, -u1[0] * x
     if kind == UNIVERSAL:
         v2 = dirs[:, 1].copy()
-        b[:, 0] += r * _cross(u1, v2) * qd[1]
-        b[:, 1] = v2 + r * _cross(w_p + u1 * qd[0], v2)
+        c = _cross(u1, v2)
+        w_v = _cross(w_p + u1 * qd[0], v2)
+        for i in range(3):
+            b[i, 0] += r * c[i] * qd[1]
+            b[i, 1] = v2[i] + r * w_v[i]
         y = r * qd[1]
         phi_aa[0, 1] += v2[2] * y
         phi_aa[0, 2] -= v2[1] * y
