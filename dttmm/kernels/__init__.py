@@ -210,7 +210,7 @@ def no_alloc_kernel(fn=None, *, entry=False):
 def allocating_kernel(fn=None, *, entry=False):
     """kernel() with numba's reference counting on, said explicitly (its `_nrt=True`),
     for the kernels the general and energy-momentum loops' pieces call that allocate, or call
-    kernels that do (in step.py, every kernel the pieces call but the copy helpers `_put*`,
+    kernels that do (in step.py, every kernel the pieces call but the copy helpers (mat3.put*),
     `_all_finite`, `_integrator_coefficients`: a few of them, `_hinge_deflection` and
     `_locked_frame` among them, allocate nothing and would compile either way): every skeleton
     is compiled without reference counting

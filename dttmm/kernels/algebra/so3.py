@@ -77,7 +77,7 @@ def left_jacobian(phi, out):
     _identity_plus(b, c, phi, th2, out)
 
 
-@kernel(entry=True)
+@kernel
 def left_jacobian_derivative(phi, delta, out):
     """out = D J_l(phi)[delta], the derivative of J_l along delta (docs/beam.md, "The end
     moment's columns"): with J_l = I + b phi^ + c phi^^, b = (1 - cos t)/t^2,

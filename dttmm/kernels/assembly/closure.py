@@ -159,7 +159,7 @@ def _sub(x, y):
     return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def _frame(rot, ground_rot, k):
     """Body k's frame (the ground's for k < 0) as a 9-tuple."""
     if k < 0:
@@ -279,7 +279,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
             v_out[k, i] = v[i] + arm_rate[i]
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def _side(params, loops, rot, w, c, s):
     """(point, velocity, arm from the body's output point, frame, angular velocity) of closing
     joint c's side s, at the output points loops.r_out, v_out and the bodies' rot, w, as
@@ -726,7 +726,7 @@ def _modal_responses(params, loops, eta_map):
                     loops.eta_col[j, i] = v
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def _dependent_frames(params, loops, state, bodies, work):
     """Every given body (in tree order) whose frame follows its parent's, from the parent's
     (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's

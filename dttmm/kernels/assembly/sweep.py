@@ -364,7 +364,7 @@ def transfer_residual(kind, u, z):
     return worst
 
 
-@kernel(entry=True)
+@kernel
 def fold_ball_body(u, v, phi_map):
     """Fold a body between moment-free cuts into v (6 x 7): [a_O; q_O] = v [a_I; q_I; 1], and
     phi_map (3 x 7): phi = phi_map [a_I; q_I; 1], from its full transfer u with m_I = m_O = 0:

@@ -33,7 +33,7 @@ from ..algebra.so3 import expm_so3, left_jacobian, left_jacobian_derivative, log
 SUM_U, SUM_V, SUM_H, END_U, END_V, SUM_J, SUM_C, SUM_MODES = 4, 5, 6, 7, 8, 9, 12, 15
 
 
-@kernel(entry=True)
+@kernel
 def aux_rows(m):
     """Rows of the aux array with every sum (m modes per plane)."""
     return SUM_MODES + 10 * m + 2
@@ -230,7 +230,7 @@ def _add_geometric_stiffness(moments, eta, n_l, c_g, c_w, residual):
             residual[plane * m + l] += n_l * d0 + c_g * d1 + c_w * d2
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, rot, w, wd, eta,
                    eta_d, eta_dd, a_i, m_i, q_i, out, residual, aux, axial):
     """The beam's exact relations in a given state (docs/beam.md):
@@ -710,7 +710,7 @@ def _end_angles_into(ends, torsion, eta, theta):
         theta[0] += torsion[k, 0] * eta[2 * m + k]
 
 
-@kernel(entry=True)
+@kernel
 def end_section(ends, torsion, eta, rot, out):
     """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
@@ -779,7 +779,7 @@ def _step_state(phi, c1, c3, w3, rot_n, eta_dd, w1e, w3e, e, rot, w, eta, eta_d)
         eta_d[i] = c3 * eta[i] + w3e[i]
 
 
-@kernel(entry=True)
+@kernel
 def _evaluate(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1, c3,
               w3, w_n, w1e, w3e, eta_n, eta_d_n, x, out, residual, aux, work):
     """beam_relations with the state expressed in the step's unknowns
@@ -1221,7 +1221,7 @@ def _foreshortening_column(mu, m, plane, k, s, r, rot, w, wd, q_o, aux, d_q, d_o
                                                + 2.0 * dcd2 * (w[i] - e[i] * e_w))
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def _solve_in_place(a, b, n_rhs):
     """b[:, :n_rhs] <- a^-1 b[:, :n_rhs] by Gaussian elimination with partial pivoting (a is
     overwritten; its first a.shape[0] columns are the matrix): the modal systems are small
@@ -1267,7 +1267,7 @@ def transfer_work_size(n):
     return 2 * nx + 24 + 2 * n + 12 + na + 2 * nw + 12 * nx + n * nx + 13 * n + n * n + 57
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def beam_transfer(bp, tables, outboard, history, gravity, start, rot_n, phi_star, wd_star, c1,
                   c3, w3, w_n, w1e, w3e, eta_n, eta_d_n, z_star, eta_dd_star, u, eta_map, block):
     """Fill u (12 x 13) with z_O = u [z_I; 1] in angular-acceleration slots, and eta_map
@@ -1418,7 +1418,7 @@ def ball_map_work_shape(n):
     return 19 + aux_rows(n // 2) + 12 + 3 * n + 3 + n, 12 + n
 
 
-@no_alloc_kernel(entry=True)
+@no_alloc_kernel
 def beam_ball_map(bp, tables, gravity, rot_n, phi_star, wd_star, coefficients, w3, w1e, w3e, a_i,
                   q_i, eta_dd_star, work, v, pmap, emap):
     """A beam between moment-free cuts (ball joints, the free tip; Newmark steps), folded

@@ -109,7 +109,7 @@ def _kappa_into(w, wd, rho, dwd, dw, d_rho, kappa, d, buf):
     _mm_add(w_h, m2, 1.0, d)
 
 
-@kernel(entry=True)
+@kernel
 def rigid_body_transfer(p, a_star, lam, dwd, dw, wd, w, z_star, load, torque, u):
     """Fill u (12 x 13) with the affine transfer z_O = u[:, :12] z_I + u[:, 12] of a rigid body,
     linearized about the input state z_star (the rotation at z_star[PHI] is a_star).

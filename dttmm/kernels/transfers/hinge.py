@@ -17,7 +17,7 @@ from .body import A, CONST, M, PHI, Q
 from ..algebra.so3 import hat, log_so3
 
 
-@kernel(entry=True)
+@kernel
 def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_out, dw_out,
                            phi_out_star, c1, c3, w1d, w3d, z_star, u):
     """Fill u (12 x 13) with z_out = u[:, :12] z_in + u[:, 12], linearized about z_star (the
@@ -72,7 +72,7 @@ def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_o
     u[PHI:PHI + 3, CONST] = phi_out_star + n_out_inv @ (m0 - n_star + n_in @ phi_in_star)
 
 
-@kernel(entry=True)
+@kernel
 def elastic_hinge_loads(h, rot_in, w_in, rot_out, w_out, d, d_dot):
     """Spring-damper force q and couples (m_in about the inboard point, m_out about the outboard
     point) of an elastic hinge in a given state: used where the state is known (the consistent
