@@ -120,7 +120,8 @@ class PreparedRun:
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
                             params, settings, state, ws.sweep, monitor, dt, loops,
-                            features=features)
+                            features=features,
+                            in_skeleton=not (fused or welded or scheme.loop == "energy_momentum"))
         if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py;
             # the model's copy: the one with every feature compiled 5-11 s of code it never runs)
             loops.energy[:2] = 1.0, specialized(start_energy, features)(params, loops, state)

@@ -35,13 +35,14 @@ from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import ball_chain
 from .kernels.stepping import weld_chain
 from .kernels.stepping import step as kstep
+from .kernels import python_twin
 from .kernels.assembly.closure import Loops, set_ground
 from .kernels.features import kept, specialized, unread_dropped
 from .kernels.stepping.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                                     Params, Record, Run, State,
                                     Sweep)
 # the runners the prepared runs take (read here: tests count their calls)
-from .kernels.stepping.loop import run_steps     # noqa: F401
+from .kernels.stepping.loop import run_steps
 from .kernels.transfers.beam import gauss_points, quadrature_size
 from .kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from .closures import (assemble, check_drives_move, check_runs_in_sweeps, closure_forces,
@@ -717,16 +718,20 @@ def _steps(t_end, dt):
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
                       loops=None, t=0.0, extra_loads=None, features=None,
-                      extra_joint_forces=None):
+                      extra_joint_forces=None, in_skeleton=False):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
-    "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop))
-    or kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
-    held at acceleration level.  extra_loads: (force, torque), (n, 3) each, world, added to
-    the applied loads (at the mass centres; dynamics.linearize's inputs); extra_joint_forces:
-    (n, 2) generalized forces added to the joint coordinates' (where additive_joint_force says
-    they add).  features: what the
-    kernels are compiled for (kernel_features: by default the model's, without the paper's
-    station histories, which the start does not use)."""
+    "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop)) or
+    kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
+    held at acceleration level; in_skeleton: as one pass of the general loop's skeleton (a run on
+    it: it then compiles no start of its own), else the start alone (statics, linear models,
+    forward dynamics, the energy-momentum scheme: initial_accelerations' copy for the features,
+    with entry points).  extra_loads: (force, torque), (n, 3) each, world,
+    added to the applied loads (at the mass centres; dynamics.linearize's inputs);
+    extra_joint_forces: (n, 2) generalized forces added to the joint coordinates' (where
+    additive_joint_force says they add).  features: what the skeleton is compiled for
+    (kernel_features: by default the model's without the paper's station histories, which the
+    start does not read; a run passes its own, so that its start and its steps run one compiled
+    skeleton)."""
     loops = loop_tables(model) if loops is None else loops
     features = kernel_features(model, mode) if features is None else features
     n = model.n_bodies
@@ -750,12 +755,29 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
                 loops.step_coef[:] = 0.0        # the springs' forces explicit
 
-            def start():        # (what the features do not read: None, kernels/features.py)
-                return specialized(kstep.initial_accelerations, features)(
-                    params, settings, state, unread_dropped(sweep, "sweep", features),
-                    (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0], torque[0], line_load[0],
-                    joint_input[0], loops if kept("loop", "loops", features) else None,
-                    compiled_forces(model))
+            if in_skeleton:     # one pass of the general loop's skeleton (Settings.start),
+                # on a throwaway scratch: the run that follows compiles nothing else for it
+                loop = kstep.general_loop(n, len(state.eta), settings.h, settings.coef,
+                                          _station_histories(model, state, False), loops,
+                                          compiled_forces(model))
+                run = start_pass(params, settings, state, sweep, monitor,
+                                 (g_acc, g_rot, g_w, g_wd, g_pos, g_vel),
+                                 (force, torque, line_load), joint_input, len(loops.kind))
+
+                def start():
+                    info = np.zeros(5, dtype=np.int64)
+                    run_steps(loop, run, info, features)
+                    return 0 if info[0] == OK else int(info[2])
+            else:               # the start alone: its copy's twin, with entry points
+                start_alone = python_twin(specialized(kstep.initial_accelerations, features))
+
+                def start():    # (what the features do not read: None, kernels/features.py)
+                    return start_alone(
+                        params, settings, state, unread_dropped(sweep, "sweep", features),
+                        (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0], torque[0],
+                        line_load[0], joint_input[0],
+                        loops if kept("loop", "loops", features) else None,
+                        compiled_forces(model))
             status = start()
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
@@ -791,10 +813,10 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
 
 def start_pass(params, settings, state, sweep, monitor, ground, loads, joint_input,
                n_closures):
-    """The Run of one pass of a fused loop's consistent start at one time (_fused_start; the
-    high-order scheme's stages, kernels/stepping/runge_kutta.py): ground = _ground's six (1, ...)
-    arrays, loads = _loads' three, joint_input = _joint_inputs'; no Newton iteration, no
-    record."""
+    """The Run of one pass of a loop's consistent start at one time (_fused_start, the general
+    loop's in _consistent_start; the high-order scheme's stages,
+    kernels/stepping/runge_kutta.py): ground = _ground's six (1, ...) arrays, loads = _loads'
+    three, joint_input = _joint_inputs'; no Newton iteration, no record."""
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = ground
     force, torque, line_load = loads
     return Run(params, settings._replace(newton_max=0, start=True), state, sweep,

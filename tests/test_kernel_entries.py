@@ -11,7 +11,8 @@ from numba import njit
 from dttmm import kernels
 from dttmm.kernels import CalleeKernel, recompiled
 from dttmm.kernels.algebra.so3 import exp_coefficients
-from dttmm.kernels.stepping.step import initial_accelerations, solve_step
+from dttmm.kernels.assembly.closure import set_ground
+from dttmm.kernels.stepping.step import solve_step
 
 
 @njit
@@ -39,9 +40,8 @@ def test_a_callee_kernel_has_no_python_entry_and_python_calls_run_its_twin():
 def test_a_kernels_copies_are_of_its_kind():
     assert isinstance(solve_step, CalleeKernel)
     assert isinstance(recompiled(solve_step, solve_step.py_func), CalleeKernel)
-    assert not isinstance(initial_accelerations, CalleeKernel)      # (entry=True)
-    assert not isinstance(recompiled(initial_accelerations, initial_accelerations.py_func),
-                          CalleeKernel)
+    assert not isinstance(set_ground, CalleeKernel)      # (entry=True)
+    assert not isinstance(recompiled(set_ground, set_ground.py_func), CalleeKernel)
 
 
 def test_a_callee_called_by_the_package_is_noted_for_the_suite():

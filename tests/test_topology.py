@@ -157,21 +157,21 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     odd_hinge = dataclasses.replace(model, hinge_kind=np.array([0, 9]))
     with pytest.raises(ValueError, match="hinge 'FixedHinge1' has kind code 9"):
         simulate(odd_hinge, 0.01, 1e-3)
-    # the kernels, bypassing the check: the consistent start reports the element
+    # the kernels, bypassing the check: the consistent start (one pass of the general loop's
+    # skeleton) reports the element
     from dttmm.kernels.stepping import step as kstep
-    from dttmm.kernels.stepping.loop import Settings
-    from dttmm.solver import Workspace, kernel_params, loop_tables
-    for odd, element in ((odd_body, 4), (odd_hinge, 3)):
+    from dttmm.kernels.stepping.loop import Monitor, Settings
+    from dttmm.solver import Workspace, _consistent_start, kernel_params
+    for odd, element in ((odd_body, "body 'body1' \\(kind 7\\)"),
+                         (odd_hinge, "hinge 'FixedHinge1' \\(kind 9\\)")):
         ws = Workspace(odd)
         settings = Settings(kstep.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
                             1, np.inf, False, False)
-        ground = (np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3))
-        status = kstep.initial_accelerations(kernel_params(odd), settings, ws.state,
-                                             ws.sweep, ground, np.zeros((2, 3)),
-                                             np.zeros((2, 3)), np.zeros((2, 3)),
-                                             np.zeros((2, 2, 3)), loop_tables(odd),
-                                             np.zeros(0, dtype=np.int64))
-        assert status == -element
+        monitor = Monitor(np.zeros((2, 3)), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 3)),
+                          np.zeros(2))
+        with pytest.raises(ValueError, match=f"consistent start does not support {element}"):
+            _consistent_start(odd, kstep.RICCATI_FULL, "riccati", None, kernel_params(odd),
+                              settings, ws.state, ws.sweep, monitor, 1e-3)
 
 
 def test_schemes_are_checked_against_the_declarations():

@@ -140,7 +140,9 @@ CALLED_BY_PACKAGE = set()   # the callee kernels the package's Python code calle
 
 def python_twin(kernel):
     """The callee kernel's code compiled (and cached) under its own name with the entry points
-    numba builds for calls from Python."""
+    numba builds for calls from Python (with numba's JIT off: the function itself)."""
+    if config.DISABLE_JIT:
+        return kernel
     twin = PYTHON_CALLED.get(kernel)
     if twin is None:
         clone = code_copy(kernel.py_func, "python", kernel.py_func.__globals__)

@@ -432,7 +432,7 @@ def _solve_tree(sw, parent, root_f, z):
     return 0
 
 
-@kernel(entry=True)
+@allocating_kernel
 def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
                           joint_input, loops, forces):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
@@ -856,6 +856,11 @@ def _iterate(loop, run, s, it):
                             if HAS_LOOPS else (None, None, None))
     g_acc, rot_now, g_w, g_wd = (inputs.g_acc[s], inputs.g_rot[s + 1], inputs.g_w[s],
                                  inputs.g_wd[s])
+    if settings.start:      # the consistent start (Settings.start): one pass, at t
+        start = initial_accelerations(params, settings, state, sweep, (g_acc, rot_now, g_w, g_wd),
+                                      force, torque, line_load, inputs.joint_input[s], loops,
+                                      forces)
+        return (OK, 0, 0.0) if start == 0 else (SINGULAR, start, 0.0)
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star, wd, dwd = guess.phi, guess.wd, guess.dwd
     modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
