@@ -157,8 +157,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     odd_hinge = dataclasses.replace(model, hinge_kind=np.array([0, 9]))
     with pytest.raises(ValueError, match="hinge 'FixedHinge1' has kind code 9"):
         simulate(odd_hinge, 0.01, 1e-3)
-    # the kernels, bypassing the check: the consistent start (one pass of the general loop's
-    # skeleton) reports the element
+    # the kernels, bypassing the check: the consistent start reports the element, alone
+    # (statics, linear models) and as one pass of the general loop's skeleton (a run's)
     from dttmm.kernels.stepping import step as kstep
     from dttmm.kernels.stepping.loop import Monitor, Settings
     from dttmm.solver import Workspace, _consistent_start, kernel_params
@@ -169,9 +169,12 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
                             1, np.inf, False, False)
         monitor = Monitor(np.zeros((2, 3)), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 3)),
                           np.zeros(2))
-        with pytest.raises(ValueError, match=f"consistent start does not support {element}"):
-            _consistent_start(odd, kstep.RICCATI_FULL, "riccati", None, kernel_params(odd),
-                              settings, ws.state, ws.sweep, monitor, 1e-3)
+        for in_skeleton in (False, True):
+            with pytest.raises(ValueError,
+                               match=f"consistent start does not support {element}"):
+                _consistent_start(odd, kstep.RICCATI_FULL, "riccati", None, kernel_params(odd),
+                                  settings, ws.state, ws.sweep, monitor, 1e-3,
+                                  in_skeleton=in_skeleton)
 
 
 def test_schemes_are_checked_against_the_declarations():
