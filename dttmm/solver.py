@@ -767,7 +767,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 def start():
                     info = np.zeros(5, dtype=np.int64)
                     run_steps(loop, run, info, features)
-                    return 0 if info[0] == OK else int(info[2])
+                    return _start_status(info)
             else:               # the start alone: its copy's twin, with entry points
                 start_alone = python_twin(specialized(kstep.initial_accelerations, features))
 
@@ -842,7 +842,7 @@ def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
                   closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 10)))
 
 
-_NOT_FINITE_START = -(1 << 30)      # _fused_start's status for accelerations not finite
+_NOT_FINITE_START = -(1 << 30)      # a start pass's status for accelerations not finite
 
 
 def _fused_start(runner, loop, run):
@@ -857,11 +857,22 @@ def _fused_start(runner, loop, run):
     else:
         runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
     run.state.eta_acc[:] = loop.per_mode[4]
+    return _start_status(info)
+
+
+def _start_status(info):
+    """The status code of a start pass (_fused_start's, the general loop's in _consistent_start)
+    from its loop's info (kernels/stepping/loop.py::report): 0 done; SINGULAR's detail (the
+    singular element, or the general loop's start's own code: kernels/stepping/step.py::_iterate
+    under Settings.start); minus UNSUPPORTED's element (elements' codes are j + 1, never 0:
+    _singular_cause); _NOT_FINITE_START for any other status, which never reads as done."""
+    if info[0] == OK:
+        return 0
     if info[0] == SINGULAR:
         return int(info[2])
     if info[0] == UNSUPPORTED:
         return -int(info[2])
-    return 0 if info[0] == OK else _NOT_FINITE_START
+    return _NOT_FINITE_START
 
 
 def _check_positive(name, value, where="simulate"):

@@ -177,6 +177,23 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
                                   in_skeleton=in_skeleton)
 
 
+def test_a_start_pass_that_ends_without_detail_never_reads_as_done():
+    """A start pass's loop status maps to the start's code (solver._start_status): done only on
+    OK; a status that carries no element (NOT_FINITE, UNCONVERGED, ...) is the not-finite
+    start, never 0, whichever loop ran the pass."""
+    from dttmm.kernels.stepping.loop import (NOT_FINITE, OK, SINGULAR, UNCONVERGED,
+                                             UNSUPPORTED)
+    from dttmm.solver import _NOT_FINITE_START, _start_status
+
+    def info(status, detail):
+        return np.array([status, 0, detail, 0, 0], dtype=np.int64)
+    assert _start_status(info(OK, 0)) == 0
+    assert _start_status(info(SINGULAR, 3)) == 3
+    assert _start_status(info(UNSUPPORTED, 4)) == -4
+    for status in (NOT_FINITE, UNCONVERGED):
+        assert _start_status(info(status, 0)) == _NOT_FINITE_START
+
+
 def test_schemes_are_checked_against_the_declarations():
     elastic = build_chain([BallJoint(), unit_link(),
                            ElasticHinge(1e4, 1e3, name="spring"), unit_link()])
