@@ -18,7 +18,8 @@ class _CompileWatch(numba_event.Listener):
     """Says on stderr what is compiling and for how long (issue 30): numba announces each
     compilation ("numba:compile" events, outermost first; a kernel loaded from numba's cache
     announces none), and one watcher thread per process, started at the first, writes a line
-    once a compilation of dttmm's kernels has run COMPILE_NOTICE_AFTER seconds, then the
+    once a compilation of dttmm's kernels has run COMPILE_NOTICE_AFTER seconds (the first in
+    a process says what compiling is and costs, a later one only its kernels), then the
     seconds so far every COMPILE_REPORT_EVERY (on a terminal one line rewritten in place), and
     a last line when it ends.  Nothing per call: a run whose kernels are compiled costs no
     thread and no timer."""
@@ -27,6 +28,7 @@ class _CompileWatch(numba_event.Listener):
         self.depth = 0
         self.active = None             # (what, start time) of the outermost compilation
         self.announced = False
+        self.explained = False          # the first notice in a process says what compiling is
         self.next_at = 0.0              # when the watcher writes its next line
         self.ending = ""                # what the last line starts with ("\r": rewrite)
         self.wake = threading.Condition()
@@ -77,11 +79,16 @@ class _CompileWatch(numba_event.Listener):
                     continue            # (ended, or woken early)
                 what, t0 = active
                 terminal = sys.stderr.isatty()
-                if not self.announced:
+                if not self.announced and not self.explained:
                     _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
                          f"once per machine and kind of model (later runs load them from "
                          f"numba's cache); about a minute on 2 cores, up to two with closing "
                          f"joints and beams (docs/solver.md, \"Compile time\"). "
+                         f"{now - t0:.0f} s so far")
+                    self.announced = self.explained = True
+                    self.ending = ""
+                elif not self.announced:    # (a later one in the same process: one line)
+                    _say(f"dttmm: compiling the numba kernels ({what}) too: "
                          f"{now - t0:.0f} s so far")
                     self.announced, self.ending = True, ""
                 elif terminal:
