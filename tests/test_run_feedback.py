@@ -96,6 +96,38 @@ def test_a_line_while_kernels_compile_says_what_and_how_long(capsys, monkeypatch
     assert threading.active_count() == before
 
 
+def test_the_garbage_collector_is_off_while_dttmm_compiles_and_back_after():
+    """docs/solver.md, "Compile time", item 12: Python's cyclic garbage collector is off during
+    the compile of a kernel of dttmm's, on again after it; a user's own numba function compiles
+    with the collector as the user left it, and a collector the user turned off stays off."""
+    import gc
+
+    from numba.core import event as numba_event
+    seen = []
+
+    class Probe(numba_event.Listener):
+        def on_start(self, event):
+            seen.append(gc.isenabled())
+
+        def on_end(self, event):
+            pass
+    probe = Probe()
+    numba_event.register("numba:compile", probe)
+    try:
+        assert gc.isenabled()
+        _fresh_kernel("dttmm.kernels.fresh")(np.ones(3))
+        assert seen and not any(seen) and gc.isenabled()
+        seen.clear()
+        _fresh_kernel("users_module")(np.ones(3))
+        assert seen and all(seen) and gc.isenabled()
+        gc.disable()
+        _fresh_kernel("dttmm.kernels.fresh")(np.ones(3))
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+        numba_event.unregister("numba:compile", probe)
+
+
 def test_the_public_names_are_at_the_top_level():
     assert dttmm.__version__ == version("dttmm")
     for name in ("simulate", "simulate_reference", "Result", "DivergenceError", "System",
