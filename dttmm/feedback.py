@@ -82,8 +82,8 @@ class _CompileWatch(numba_event.Listener):
                 if not self.announced and not self.explained:
                     _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
                          f"once per machine and kind of model (later runs load them from "
-                         f"numba's cache); about a minute on 2 cores, up to two with closing "
-                         f"joints and beams (docs/solver.md, \"Compile time\"). "
+                         f"numba's cache); half a minute to three on 2 cores, the most with "
+                         f"closing joints and beams (docs/solver.md, \"Compile time\"). "
                          f"{now - t0:.0f} s so far")
                     self.announced = self.explained = True
                     self.ending = ""
