@@ -8,6 +8,8 @@ import time
 
 from numba.core import event as numba_event
 
+from .kernels import compiled_dttmm_function
+
 COMPILE_NOTICE_AFTER = 3.0      # s a compilation runs before stderr says so
 COMPILE_REPORT_EVERY = (5.0, 30.0)  # s between its progress reports (a terminal: one line
                                     # rewritten in place; else lines)
@@ -38,8 +40,8 @@ class _CompileWatch(numba_event.Listener):
         self.depth += 1
         if self.depth > 1:
             return
-        function = getattr(event.data.get("dispatcher"), "py_func", None)
-        if not getattr(function, "__module__", "").startswith("dttmm"):
+        function = compiled_dttmm_function(event)
+        if function is None:
             return                      # (a user's own numba function: not ours to report)
         with self.wake:
             t0 = time.perf_counter()

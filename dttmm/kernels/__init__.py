@@ -46,6 +46,14 @@ def _drop_stale_caches():
 _drop_stale_caches()
 
 
+def compiled_dttmm_function(event):
+    """The Python function a "numba:compile" event compiles if it is dttmm's (a kernel, a
+    kernel's copy or twin, the reference's), else None (a user's own numba function).  The
+    listeners that act on dttmm's compiles only (here; feedback.py's notice) ask this."""
+    function = getattr(event.data.get("dispatcher"), "py_func", None)
+    return function if getattr(function, "__module__", "").startswith("dttmm") else None
+
+
 class _NoGarbageCollectionWhileCompiling(numba_event.Listener):
     """Python's cyclic garbage collector off while numba compiles a kernel of dttmm's (the
     outermost "numba:compile" event whose function is dttmm's; docs/solver.md, "Compile time",
@@ -67,8 +75,7 @@ class _NoGarbageCollectionWhileCompiling(numba_event.Listener):
         self.depth += 1
         if self.depth > 1 or not gc.isenabled():
             return
-        function = getattr(event.data.get("dispatcher"), "py_func", None)
-        if getattr(function, "__module__", "").startswith("dttmm"):
+        if compiled_dttmm_function(event) is not None:
             gc.disable()
             self.paused = True
 
