@@ -167,6 +167,21 @@ def test_inv3_matches_numpy():
     assert inv3(np.ones((3, 3)), out) == 0.0 and not np.all(np.isfinite(out))
 
 
+def test_small_products_match_numpy():
+    """mat3.matmul, matvec and dot (the loops that replace numba's BLAS `@` in the kernels that
+    allocate) against numpy's @, on contiguous arrays, transposes and strided views, and on
+    empty sizes."""
+    from dttmm.kernels.algebra.mat3 import dot, matmul, matvec
+    a, b = rng.normal(size=(3, 5)), rng.normal(size=(5, 4))
+    big = rng.normal(size=(6, 9))
+    for x, y in ((a, b), (b.T, a.T), (big[::2, 1:6], big[1:6, ::3]), (a[:, :0], b[:0])):
+        assert np.allclose(matmul(x, y), x @ y, rtol=1e-14, atol=1e-15)
+        v = big[0, :x.shape[1]]
+        assert np.allclose(matvec(x, v), x @ v, rtol=1e-14, atol=1e-15)
+        assert dot(v, v) == pytest.approx(v @ v, rel=1e-14)
+    assert dot(np.zeros(0), np.zeros(0)) == 0.0
+
+
 def test_least_norm_solve3_matches_the_pseudo_inverse():
     """The pinned tip's 3 x 3 least-norm solve (kernels/algebra/mat3.py::least_norm_solve3, a Jacobi
     SVD that allocates nothing) against numpy's pinv with the same rcond: on full-rank, rank-2,

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
+from ..kernels.algebra.mat3 import dot, matmul, matvec
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
                    _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
@@ -74,20 +75,20 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
         for plane in range(2):
             e = np.ascontiguousarray(eta[plane * nm:(plane + 1) * nm])
             ed = np.ascontiguousarray(eta_dot[plane * nm:(plane + 1) * nm])
-            de = d0 @ e
+            de = matvec(d0, e)
             d0_eta[plane * nm:(plane + 1) * nm] = de
-            p_l[0] -= 0.5 * (e @ de)
-            ud_l[0] -= ed @ de
-            cdd_v += ed @ (d0 @ ed)
-    rho = a @ p_l
-    aud = a @ ud_l
+            p_l[0] -= 0.5 * dot(e, de)
+            ud_l[0] -= dot(ed, de)
+            cdd_v += dot(ed, matvec(d0, ed))
+    rho = matvec(a, p_l)
+    aud = matvec(a, ud_l)
     v_rel = _cross(w, rho) + aud
     jl = _left_jacobian(th)
-    rot_o = a @ _expm(th)
-    ajt = a @ (jl @ thd)
+    rot_o = matmul(a, _expm(th))
+    ajt = matvec(a, matvec(jl, thd))
     w_o = w + ajt
     acc_v = _cross(w, _cross(w, rho)) + 2.0 * _cross(w, aud) - cdd_v * a[:, 0]
-    alpha_v = _cross(w, ajt) + a @ (_left_jacobian_derivative(th, thd) @ thd)
+    alpha_v = _cross(w, ajt) + matvec(a, matvec(_left_jacobian_derivative(th, thd), thd))
     br = np.zeros((3, nb))
     d = np.zeros((3, nb))
     for j in range(nt):
@@ -101,8 +102,8 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
         br[0, nm + j] = -d0_eta[nm + j]
         d[2, j] = sv[_DYL, j]
         d[1, nm + j] = -sv[_DYL, j]
-    br = a @ br
-    bt = a @ (jl @ d)
+    br = matmul(a, br)
+    bt = matmul(a, matmul(jl, d))
     return rho, v_rel, rot_o, w_o, acc_v, alpha_v, br, bt
 
 
@@ -110,7 +111,7 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
 def _rot_about(n, q):
     """Rot(n, q) = exp(q n^) for a unit axis n (Rodrigues)."""
     k = _hat(n)
-    return np.eye(3) + math.sin(q) * k + (1.0 - math.cos(q)) * (k @ k)
+    return np.eye(3) + math.sin(q) * k + (1.0 - math.cos(q)) * matmul(k, k)
 
 
 @kernel
@@ -139,16 +140,16 @@ def _joint_frame(kind, h, a_in, w_in, q, qd):
     d = np.zeros(3)
     d_rate = np.zeros(3)
     if kind == _REVOLUTE:                   # A = A_P Rot(n, q) R0,  w = w_P + (A_P n) q'
-        rot = a_in @ _rot_about(n1, q[0]) @ r0
-        w = w_in + (a_in @ n1) * qd[0]
+        rot = matmul(matmul(a_in, _rot_about(n1, q[0])), r0)
+        w = w_in + matvec(a_in, n1) * qd[0]
     elif kind == _UNIVERSAL:                # A = A_P Rot(n1, q1) R0 Rot(n2, q2),
         n2 = _vec3(h, _AX2)                 # w = w_P + (A_P n1) q1' + (A n2) q2'
-        rot = a_in @ _rot_about(n1, q[0]) @ r0 @ _rot_about(n2, q[1])
-        w = w_in + (a_in @ n1) * qd[0] + (rot @ n2) * qd[1]
+        rot = matmul(matmul(matmul(a_in, _rot_about(n1, q[0])), r0), _rot_about(n2, q[1]))
+        w = w_in + matvec(a_in, n1) * qd[0] + matvec(rot, n2) * qd[1]
     else:                                   # prismatic: A = A_P R0, w = w_P, d = (A_P n) q
-        rot = a_in @ r0
+        rot = matmul(a_in, r0)
         w = w_in.copy()
-        u = a_in @ n1
+        u = matvec(a_in, n1)
         d = u * q[0]
         d_rate = _cross(w_in, d) + u * qd[0]
     return rot, w, d, d_rate
@@ -160,9 +161,9 @@ def _joint_directions(kind, h, a_in, rot):
     (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
     (prismatic); and the number of coordinates."""
     s = np.zeros((3, 2))
-    s[:, 0] = a_in @ _vec3(h, _AX1)
+    s[:, 0] = matvec(a_in, _vec3(h, _AX1))
     if kind == _UNIVERSAL:
-        s[:, 1] = rot @ _vec3(h, _AX2)
+        s[:, 1] = matvec(rot, _vec3(h, _AX2))
         return s, 2
     return s, 1
 
@@ -253,7 +254,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             # a rigid parent's attachment point x_k (its output point l_IO or a named point):
             # r_att = r_in,P + A_P x_k,  v_att = v_in,P + w_P x rho_att,
             # a_att = a_P + alpha_P x rho_att + w_P x (w_P x rho_att)
-            arm = rot[kp] @ attachment_point[k]
+            arm = matvec(rot[kp], attachment_point[k])
             v_arm = _cross(omega[kp], arm)
             rho_att[k] = arm
             acc_v_att[k] = _cross(omega[kp], v_arm)
@@ -263,7 +264,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         if hinge_kind[k] == FIXED:   # welded to the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
-            rot[k] = a_in @ _mat3(hinge_params[k], _R0)
+            rot[k] = matmul(a_in, _mat3(hinge_params[k], _R0))
             omega[k] = w_in
         elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
@@ -297,7 +298,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             b_r[k, :, :nq] = br
             b_t[k, :, :nq] = bt
         else:
-            rho = rot[k] @ _vec3(body_params[k], _LIO)
+            rho = matvec(rot[k], _vec3(body_params[k], _LIO))
             v_rel = _cross(omega[k], rho)
             rho_o[k], rot_o[k], omega_o[k] = rho, rot[k], omega[k]
             acc_v[k] = _cross(omega[k], v_rel)
@@ -321,12 +322,12 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
         h = hinge_params[k]
         a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
         w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
-        d_b = a_in.T @ defl[k]
-        dd_b = a_in.T @ defl_rate[k]
-        q[k] = -(a_in @ (_mat3(h, _KT) @ d_b + _mat3(h, _CT) @ dd_b))
-        psi = _log_rot(a_in.T @ rot[k] @ _mat3(h, _R0).T)
-        w_rel_b = a_in.T @ (omega[k] - w_in)
-        m[k] = -(a_in @ (_mat3(h, _KR) @ psi + _mat3(h, _CR) @ w_rel_b))
+        d_b = matvec(a_in.T, defl[k])
+        dd_b = matvec(a_in.T, defl_rate[k])
+        q[k] = -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b))
+        psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
+        w_rel_b = matvec(a_in.T, omega[k] - w_in)
+        m[k] = -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b))
     return q, m
 
 
@@ -387,8 +388,8 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     mav = np.ascontiguousarray(sv[N_SHAPE_ROWS:N_SHAPE_ROWS + nm, 2 * tw:2 * tw + na].T)
     xi = np.ascontiguousarray(eta[sa:nb])
     xid = np.ascontiguousarray(eta_dot[sa:nb])
-    mva_xi = mav.T @ xi                # int Y_l u_x, int Y_l u_x' (per bending mode)
-    mva_xid = mav.T @ xid
+    mva_xi = matvec(mav.T, xi)                # int Y_l u_x, int Y_l u_x' (per bending mode)
+    mva_xid = matvec(mav.T, xid)
     sy = sv[_SY, :nm]
     ty = sv[_TY, :nm]
     myy = np.ascontiguousarray(my[:nm, :nm])
@@ -396,10 +397,10 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     ew = np.ascontiguousarray(eta[nm:n2])
     dv = np.ascontiguousarray(eta_dot[:nm])
     dw = np.ascontiguousarray(eta_dot[nm:n2])
-    mev = myy @ ev                                 # int Y v, int Y w, int Y v', int Y w'
-    mew = myy @ ew
-    mdv = myy @ dv
-    mdw = myy @ dw
+    mev = matvec(myy, ev)                          # int Y v, int Y w, int Y v', int Y w'
+    mew = matvec(myy, ew)
+    mdv = matvec(myy, dv)
+    mdw = matvec(myy, dw)
     mass = mu * length
     # the foreshortening -c(x) e1 to first order in c (newton_euler.py's docstring, "Geometric
     # stiffening"): C1 = int c, C2 = int x c = 1/2 eta^T (D1, D2) eta, their rates, and
@@ -409,25 +410,25 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     if bp[_BSTIFF] != 0.0:
         for i in range(3):
             d = _stiffening_block(my, nm, i)
-            geo[i, :nm] = d @ ev
-            geo[i, nm:n2] = d @ ew
+            geo[i, :nm] = matvec(d, ev)
+            geo[i, nm:n2] = matvec(d, ew)
         d1 = _stiffening_block(my, nm, 1)
-        c1 = 0.5 * (ev @ geo[1, :nm] + ew @ geo[1, nm:n2])
-        c1_dot = dv @ geo[1, :nm] + dw @ geo[1, nm:n2]
-        c1_vel = dv @ (d1 @ dv) + dw @ (d1 @ dw)
-        c2 = 0.5 * (ev @ geo[2, :nm] + ew @ geo[2, nm:n2])
-        c2_dot = dv @ geo[2, :nm] + dw @ geo[2, nm:n2]
+        c1 = 0.5 * (dot(ev, geo[1, :nm]) + dot(ew, geo[1, nm:n2]))
+        c1_dot = dot(dv, geo[1, :nm]) + dot(dw, geo[1, nm:n2])
+        c1_vel = dot(dv, matvec(d1, dv)) + dot(dw, matvec(d1, dw))
+        c2 = 0.5 * (dot(ev, geo[2, :nm]) + dot(ew, geo[2, nm:n2]))
+        c2_dot = dot(dv, geo[2, :nm]) + dot(dw, geo[2, nm:n2])
     s_b = np.empty(3)
-    s_b[0] = mu * (length * length / 2.0 - c1 + pa @ xi)
-    s_b[1] = mu * (sy @ ev)
-    s_b[2] = mu * (sy @ ew)
+    s_b[0] = mu * (length * length / 2.0 - c1 + dot(pa, xi))
+    s_b[1] = mu * dot(sy, ev)
+    s_b[2] = mu * dot(sy, ew)
     q = np.empty((3, 3))                           # int mu p p^T
-    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2 + 2.0 * (xa @ xi) + xi @ (maa * xi))
-    q[0, 1] = q[1, 0] = mu * (ty @ ev + mva_xi @ ev)
-    q[0, 2] = q[2, 0] = mu * (ty @ ew + mva_xi @ ew)
-    q[1, 1] = mu * (ev @ mev)
-    q[1, 2] = q[2, 1] = mu * (ev @ mew)
-    q[2, 2] = mu * (ew @ mew)
+    q[0, 0] = mu * (length ** 3 / 3.0 - 2.0 * c2 + 2.0 * dot(xa, xi) + dot(xi, maa * xi))
+    q[0, 1] = q[1, 0] = mu * (dot(ty, ev) + dot(mva_xi, ev))
+    q[0, 2] = q[2, 0] = mu * (dot(ty, ew) + dot(mva_xi, ew))
+    q[1, 1] = mu * dot(ev, mev)
+    q[1, 2] = q[2, 1] = mu * dot(ev, mew)
+    q[2, 2] = mu * dot(ew, mew)
     tr = q[0, 0] + q[1, 1] + q[2, 2]
     j_b = -q
     for i in range(3):
@@ -446,40 +447,40 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
         g_b[0, j] = -mu * mew[j]
         g_b[1, nm + j] = -mu * (ty[j] + mva_xi[j])  # p x (Y_j e3) = Y_j (v, -(x + u_x), 0)
         g_b[0, nm + j] = mu * mev[j]
-    mav_v, mav_w = mav @ ev, mav @ ew              # int U_j v, int U_j w
-    mav_dv, mav_dw = mav @ dv, mav @ dw
+    mav_v, mav_w = matvec(mav, ev), matvec(mav, ew)    # int U_j v, int U_j w
+    mav_dv, mav_dw = matvec(mav, dv), matvec(mav, dw)
     for j in range(na):
         p_b[0, sa + j] = mu * pa[j]
         g_b[1, sa + j] = mu * mav_w[j]             # p x (U_j e1) = U_j (0, w, -v)
         g_b[2, sa + j] = -mu * mav_v[j]
     c = np.zeros((3, 3))                           # int mu p' p^T
-    c[0, 0] = mu * (-c2_dot + xa @ xid + xid @ (maa * xi))
-    c[0, 1] = mu * (xid @ mav_v)
-    c[0, 2] = mu * (xid @ mav_w)
-    c[1, 0] = mu * (ty @ dv + mva_xi @ dv)
-    c[2, 0] = mu * (ty @ dw + mva_xi @ dw)
-    c[1, 1] = mu * (dv @ mev)
-    c[1, 2] = mu * (dv @ mew)
-    c[2, 1] = mu * (dw @ mev)
-    c[2, 2] = mu * (dw @ mew)
-    w_b = a.T @ w
+    c[0, 0] = mu * (-c2_dot + dot(xa, xid) + dot(xid, maa * xi))
+    c[0, 1] = mu * dot(xid, mav_v)
+    c[0, 2] = mu * dot(xid, mav_w)
+    c[1, 0] = mu * (dot(ty, dv) + dot(mva_xi, dv))
+    c[2, 0] = mu * (dot(ty, dw) + dot(mva_xi, dw))
+    c[1, 1] = mu * dot(dv, mev)
+    c[1, 2] = mu * dot(dv, mew)
+    c[2, 1] = mu * dot(dw, mev)
+    c[2, 2] = mu * dot(dw, mew)
+    w_b = matvec(a.T, w)
     trc = c[0, 0] + c[1, 1] + c[2, 2]
-    cor_b = 2.0 * (trc * w_b - c @ w_b)            # int mu p x (2 w x u')
-    ap = a @ p_b
-    ag = a @ g_b
-    h = a @ s_b
-    j_w = a @ j_b @ a.T
+    cor_b = 2.0 * (trc * w_b - matvec(c, w_b))     # int mu p x (2 w x u')
+    ap = matmul(a, p_b)
+    ag = matmul(a, g_b)
+    h = matvec(a, s_b)
+    j_w = matmul(matmul(a, j_b), a.T)
     e1 = np.ascontiguousarray(a[:, 0])
-    ud = ap @ eta_dot - mu * c1_dot * e1           # A int mu p' dx
+    ud = matvec(ap, eta_dot) - mu * c1_dot * e1         # A int mu p' dx
     # the velocity terms; A int mu p'' = A P eta'' - mu (eta'^T D1 eta' + (D1 eta)^T eta'') e1
     newton_v = -2.0 * _cross(w, ud) + mu * c1_vel * e1
-    euler_v = -(a @ cor_b) - p_t * _cross(w, e1)  # and the twist's spin momentum turning
+    euler_v = -matvec(a, cor_b) - p_t * _cross(w, e1)  # and the twist's spin momentum turning
     # modal right-hand side
     ww2 = w_b[0] * w_b[0] + w_b[1] * w_b[1] + w_b[2] * w_b[2]
     mm = np.outer(w_b, w_b)                        # w^ w^ = w w^T - |w|^2 E
     for i in range(3):
         mm[i, i] -= ww2
-    g_w = ap.T @ gravity                           # (A P)^T g
+    g_w = matvec(ap.T, gravity)                   # (A P)^T g
     modal = _elastic_forces(bp, sv, eta, eta_dot)
     for j in range(nm):
         x_j = ty[j] + mva_xi[j]                   # int Y_j (x + u_x)
@@ -499,7 +500,7 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     # (newton_euler.py's docstring; N_L D0 eta is the end force's work through B_r); the a_I term
     # goes to the matrix (_assemble, with geo), the rest here
     if bp[_BSTIFF] != 0.0:
-        known = mu * (e1 @ gravity) * geo[1] + mu * (w_b[1] ** 2 + w_b[2] ** 2) * geo[2]
+        known = mu * dot(e1, gravity) * geo[1] + mu * (w_b[1] ** 2 + w_b[2] ** 2) * geo[2]
         for j in range(n2):
             modal[j] -= known[j]
     m_ee = np.zeros((nb, nb))                      # the modal mass: mu int Y Y^T per plane,
@@ -535,8 +536,8 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
     n2 = 2 * nm
     nb = n2 + nt + na
     sa = n2 + nt
-    w_b = a.T @ w
-    g_b = a.T @ gravity
+    w_b = matvec(a.T, w)
+    g_b = matvec(a.T, gravity)
     s_b = np.zeros(3)
     pi = np.zeros((3, 3))
     p_b = np.zeros((3, nb))
@@ -556,7 +557,7 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
         u = table[g, 2 + nm + nm * nm:2 + nm + nm * nm + na]
         ev, ew = eta[:nm], eta[nm:n2]
         dv, dw = eta_dot[:nm], eta_dot[nm:n2]
-        dev, dew = d @ ev, d @ ew
+        dev, dew = matvec(d, ev), matvec(d, ew)
         phi[:, :] = 0.0
         for j in range(nm):
             phi[0, j] = -dev[j]
@@ -566,25 +567,25 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
         for j in range(na):
             phi[0, sa + j] = u[j]
         pos = np.empty(3)
-        pos[0] = x - 0.5 * (ev @ dev + ew @ dew)
-        pos[1] = y @ ev
-        pos[2] = y @ ew
+        pos[0] = x - 0.5 * (dot(ev, dev) + dot(ew, dew))
+        pos[1] = dot(y, ev)
+        pos[2] = dot(y, ew)
         for j in range(na):
             pos[0] += u[j] * eta[sa + j]
-        vel = phi @ eta_dot
+        vel = matvec(phi, eta_dot)
         kap = np.zeros(3)
-        kap[0] = -(dv @ (d @ dv) + dw @ (d @ dw))
+        kap[0] = -(dot(dv, matvec(d, dv)) + dot(dw, matvec(d, dw)))
         acc_v = _cross(w_b, _cross(w_b, pos)) + 2.0 * _cross(w_b, vel) + kap
         f = mu * wt
         s_b += f * pos
         pi += f * np.outer(pos, pos)
         p_b += f * phi
-        gg_b += f * (_hat(pos) @ phi)
-        m_ee += f * (phi.T @ phi)
+        gg_b += f * matmul(_hat(pos), phi)
+        m_ee += f * matmul(phi.T, phi)
         ud_b += f * vel
         kap_b += f * kap
         lcor += f * _cross(pos, 2.0 * _cross(w_b, vel) + kap)
-        modal += f * (phi.T @ (g_b - acc_v))
+        modal += f * matvec(phi.T, g_b - acc_v)
     mass = mu * length
     j_b = -pi
     tr = pi[0, 0] + pi[1, 1] + pi[2, 2]
@@ -597,10 +598,11 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
         p_t += bp[_BJP] * sv[_SY, tw + j] * eta_dot[n2 + j]
         m_ee[n2 + j, n2 + j] = bp[_BJP] * sv[_MF, tw + j]
     e1 = np.ascontiguousarray(a[:, 0])
-    newton_v = -2.0 * _cross(w, a @ ud_b) - a @ kap_b
-    euler_v = -(a @ lcor) - p_t * _cross(w, e1)
+    newton_v = -2.0 * _cross(w, matvec(a, ud_b)) - matvec(a, kap_b)
+    euler_v = -matvec(a, lcor) - p_t * _cross(w, e1)
     modal += _elastic_forces(bp, sv, eta, eta_dot)
-    return (mass, a @ s_b, a @ j_b @ a.T, a @ p_b, a @ gg_b, newton_v, euler_v, modal, m_ee,
+    return (mass, matvec(a, s_b), matmul(matmul(a, j_b), a.T), matmul(a, p_b), matmul(a, gg_b),
+            newton_v, euler_v, modal, m_ee,
             np.zeros((3, nb)))
 
 
@@ -643,7 +645,7 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
         for i in range(3):
             b[rf + i] += b_v[i]
         if kp >= 0:
-            hdb = hd @ b_t_in
+            hdb = matmul(hd, b_t_in)
             for i in range(3):
                 for j in range(3):
                     s[rf + i, 6 * kp + 3 + j] += hd[i, j]
@@ -689,7 +691,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             # loads in body axes (followers) turn with the end section (F, T) and the frame (p)
             f_k, t_k, p_k = forces[k], torques[k], line_loads[k]
             if beam_params[k, _BAXES] != 0.0:
-                f_k, t_k, p_k = rot_o[k] @ f_k, rot_o[k] @ t_k, a @ p_k
+                f_k, t_k, p_k = matvec(rot_o[k], f_k), matvec(rot_o[k], t_k), matvec(a, p_k)
             g_k = gravity + p_k / beam_params[k, _BMU]
             if exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
                 mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = _beam_terms_exact(
@@ -702,7 +704,8 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             # and their generalized forces B_r^T F + B_t^T T in the modal rows (below)
             weight = mass * g_k + f_k
             bn = weight - _cross(w, _cross(w, h)) + newton_v
-            be = (-_cross(w, j_w @ w) + _cross(h, g_k) + euler_v + t_k + _cross(rho_o[k], f_k))
+            be = (-_cross(w, matvec(j_w, w)) + _cross(h, g_k) + euler_v + t_k
+                  + _cross(rho_o[k], f_k))
             ce = e_col0 + o
             for j in range(nm2):
                 for i in range(3):
@@ -729,7 +732,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 state, rods[4][k], rods[6][k, 0], rods[7][k], rods[5][k, :nm2], rods[6][k, 1],
                 q, qd, a, w, gravity)
             bn = mass * gravity - _cross(w, _cross(w, h)) + newton_v
-            be = -_cross(w, j_w @ w) + _cross(h, gravity) + euler_v
+            be = -_cross(w, matvec(j_w, w)) + _cross(h, gravity) + euler_v
             ce = e_col0 + m_off[k]
             for j in range(nm2):
                 for i in range(3):
@@ -742,16 +745,16 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                     s[ce + j, ce + i] = m_ee[j, i]
         else:
             mass = p[_MASS]
-            rho_c = a @ _vec3(p, _LIC)
+            rho_c = matvec(a, _vec3(p, _LIC))
             h = mass * rho_c
-            j_w = a @ _mat3(p, _JI) @ a.T
+            j_w = matmul(matmul(a, _mat3(p, _JI)), a.T)
             weight = mass * gravity + forces[k]
             # Newton: M a - hat(h) alpha - F_k + F_{k+1} = M g + f - w x (w x h) + q_k - q_{k+1}
             bn = weight - _cross(w, _cross(w, h))
             # Euler about I: J alpha + hat(h) a - N_k + sum_c [N_c + hat(rho_att,c + d_c) F_c]
             #     = -w x J w + rho_c x (M g + f) + tau + m_k - sum_c [m_c + (rho_att,c + d_c) x q_c]
             # over the children c (rho_att,c = rho_o for a chain's output point)
-            be = -_cross(w, j_w @ w) + _cross(rho_c, weight) + torques[k]
+            be = -_cross(w, matvec(j_w, w)) + _cross(rho_c, weight) + torques[k]
         hc = _hat(h)
         for i in range(3):
             s[rn + i, ca + i] = mass
@@ -801,7 +804,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         s[ce + j, c + i] = b_r[k, i, j]
                 if hinge_kind[kc] == _PRISMATIC and nm2 > 0:
                     # B_t^T (d x F) = B_t^T d^ F: column i gets -(d^ B_t)[i, :]
-                    hdb = _hat(defl[kc]) @ np.ascontiguousarray(b_t[k, :, :nm2])
+                    hdb = matmul(_hat(defl[kc]), b_t[k, :, :nm2])
                     for i in range(3):
                         for j in range(nm2):
                             s[ce + j, c + i] -= hdb[i, j]
@@ -874,13 +877,13 @@ def _closure_side(k, local, on_end, rot, omega, r_in, v_in, rho_o, rot_o, omega_
     terms; all of it on the ground), and its frame, the frame's angular velocity and the known
     part of its angular acceleration."""
     if k < 0:
-        arm = rot_g @ local
+        arm = matvec(rot_g, local)
         acc = a_g + _cross(wd_g, arm) + _cross(w_g, _cross(w_g, arm))
         return arm, r_g + arm, v_g + _cross(w_g, arm), acc, rot_g, w_g, wd_g
     if on_end:
         return (rho_o[k], r_in[k] + rho_o[k], v_o[k], acc_v[k], rot_o[k], omega_o[k],
                 alpha_v[k])
-    arm = rot[k] @ local
+    arm = matvec(rot[k], local)
     w = omega[k]
     return (arm, r_in[k] + arm, v_in[k] + _cross(w, arm), _cross(w, _cross(w, arm)), rot[k], w,
             np.zeros(3))
@@ -932,51 +935,51 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
         if kind[r] == _ANGLE_A or kind[r] == _ANGLE_B or kind[r] == _ROTATION_A:
             # a driven angle, or an elastic hinge's rotation n . log(F_a^T F_b R0^T) about n
             # fixed in a's frame; its rate n . (w_b - w_a)
-            n = (f_b if kind[r] == _ANGLE_B else f_a) @ v3[r]
+            n = matvec(f_b if kind[r] == _ANGLE_B else f_a, v3[r])
             dw = w_b - w_a
             if kind[r] == _ROTATION_A:
                 r0 = np.empty((3, 3))
                 r0[:, 0], r0[:, 1], r0[:, 2] = v1[r], v2[r], _cross(v1[r], v2[r])
-                g = v3[r] @ _log_rot(f_a.T @ f_b @ r0.T) - target[r, 0]
+                g = dot(v3[r], _log_rot(matmul(matmul(f_a.T, f_b), r0.T))) - target[r, 0]
             else:
-                x = f_a @ v1[r]
-                y = f_b @ v2[r]
-                g = np.arctan2(n @ _cross(x, y), x @ y) - target[r, 0]
+                x = matvec(f_a, v1[r])
+                y = matvec(f_b, v2[r])
+                g = np.arctan2(dot(n, _cross(x, y)), dot(x, y)) - target[r, 0]
                 g = (g + np.pi) % (2.0 * np.pi) - np.pi
-            gd = n @ dw
-            kappa = _cross(w_b if kind[r] == _ANGLE_B else w_a, n) @ dw + n @ (al_b - al_a)
+            gd = dot(n, dw)
+            kappa = dot(_cross(w_b if kind[r] == _ANGLE_B else w_a, n), dw) + dot(n, al_b - al_a)
             _closure_columns(s, row, kb, end_b, zero, n, n, 1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
             directions[r] = n
         elif kind[r] == _DOT:               # (F_a x) . (F_b y) = 0
-            x = f_a @ v1[r]
-            y = f_b @ v2[r]
+            x = matvec(f_a, v1[r])
+            y = matvec(f_b, v2[r])
             cv = _cross(y, x)
             dw = w_b - w_a
-            g = x @ y
-            gd = dw @ cv
-            kappa = (dw @ (_cross(_cross(w_b, y), x) + _cross(y, _cross(w_a, x)))
-                     + cv @ (al_b - al_a))
+            g = dot(x, y)
+            gd = dot(dw, cv)
+            kappa = (dot(dw, _cross(_cross(w_b, y), x) + _cross(y, _cross(w_a, x)))
+                     + dot(cv, al_b - al_a))
             _closure_columns(s, row, kb, end_b, zero, cv, cv, 1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, cv, cv, -1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
             directions[r] = cv
         else:                               # e . (p_b - p_a) = 0
-            e = v1[r] if kind[r] == _GAP_WORLD else f_a @ v1[r]
+            e = v1[r] if kind[r] == _GAP_WORLD else matvec(f_a, v1[r])
             d = p_b - p_a
             dd = v_b - v_a
-            g = e @ d
-            gd = e @ dd
-            kappa = e @ (acc_b - acc_a)
+            g = dot(e, d)
+            gd = dot(e, dd)
+            kappa = dot(e, acc_b - acc_a)
             if kind[r] == _GAP_A:           # e turns with side a: its rates enter
                 we = _cross(w_a, e)
-                gd += we @ d
-                kappa += _cross(w_a, we) @ d + 2.0 * (we @ dd)
+                gd += dot(we, d)
+                kappa += dot(_cross(w_a, we), d) + 2.0 * dot(we, dd)
                 ed = _cross(e, d)           # (alpha_a x e) . d = alpha_a . (e x d)
-                kappa += ed @ al_a
+                kappa += dot(ed, al_a)
                 _closure_columns(s, row, ka, end_a, zero, ed, ed, 1.0, b_r, b_t, e_col0, m_off,
                                  body_kind, beam_params, rods)
             _closure_columns(s, row, kb, end_b, e, _cross(arm_b, e), zero, 1.0, b_r, b_t,
@@ -1027,16 +1030,16 @@ def _solve_least_closure_force(s, b, col0, count):
     sol = np.linalg.solve(tree, rhs)
     jac = np.ascontiguousarray(s[col0:col0 + count, :col0])
     # a spring's row is lam_r = F (its S_cc 1, its J 0; a constraint's S_cc 0)
-    delassus = jac @ np.ascontiguousarray(sol[:, 1:]) - s[col0:col0 + count, col0:col0 + count]
-    target = jac @ np.ascontiguousarray(sol[:, 0]) - b[col0:col0 + count]
+    delassus = matmul(jac, sol[:, 1:]) - s[col0:col0 + count, col0:col0 + count]
+    target = matvec(jac, sol[:, 0]) - b[col0:col0 + count]
     u, sv, vt = np.linalg.svd(delassus)
     lam = np.zeros(count)
-    ut = u.T @ target
+    ut = matvec(u.T, target)
     for i in range(count):
         if sv[i] > LOOP_RCOND * sv[0]:
             lam += (ut[i] / sv[i]) * vt[i]
     x = np.empty(col0 + count)
-    x[:col0] = sol[:, 0] - np.ascontiguousarray(sol[:, 1:]) @ lam
+    x[:col0] = sol[:, 0] - matvec(sol[:, 1:], lam)
     x[col0:] = lam
     return x
 
@@ -1157,8 +1160,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
                 a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
                 nm2 = _flex_size(kp, body_kind, beam_params, rods)
                 if nm2 > 0:
-                    br = np.ascontiguousarray(b_r[kp, :, :nm2])
-                    a_att = a_att + br @ modal_acc[m_off[kp]:m_off[kp] + nm2]
+                    a_att = a_att + matvec(b_r[kp, :, :nm2], modal_acc[m_off[kp]:m_off[kp] + nm2])
             dy[o + 3:o + 6] = acc[k] - a_att
     for i in range(n_modal):
         dy[e0 + i] = y[e0 + n_modal + i]

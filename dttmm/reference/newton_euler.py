@@ -429,6 +429,7 @@ class _Problem:
             self.loops[10][r, 0] = model.closure_drives[owner[r]][coordinate[r]]["rest"]
         c += self.loops[1].shape[0]
         self.n_unknowns = c
+        self._still_ground = None
         self.forces = np.zeros((n, 3))
         self.torques = np.zeros((n, 3))
         self.line_loads = np.zeros((n, 3))
@@ -521,9 +522,18 @@ class _Problem:
                    self._number(c, "PDTracking feedforward", t, feedforward(t))))
         return y
 
+    def ground(self, t):
+        """The ground's (r, v, a, R, w, w') at time t as float arrays (_ground_arrays; a still
+        ground's made once: the kernels only read them)."""
+        if self.model.ground_motion is None:
+            if self._still_ground is None:
+                self._still_ground = _ground_arrays(self.model.ground_state(0.0))
+            return self._still_ground
+        return _ground_arrays(self.model.ground_state(t))
+
     def time_inputs(self, t):
         """Ground motion and applied loads at time t, as float arrays for the kernel."""
-        r_g, v_g, a_g, rot_g, w_g, wd_g = _ground_arrays(self.model.ground_state(t))
+        r_g, v_g, a_g, rot_g, w_g, wd_g = self.ground(t)
         for k, f in self._force_fns:
             self.forces[k] = f(t)
         for k, f in self._torque_fns:
@@ -565,7 +575,7 @@ class _Problem:
     def end_sections(self, t, y):
         """Every body's output point and section at one time, world: (rho_O = r_O - r_I, v_O,
         A_O, w_O), each (n, ...)."""
-        r_g, v_g, _, rot_g, w_g, _ = _ground_arrays(self.model.ground_state(t))
+        r_g, v_g, _, rot_g, w_g, _ = self.ground(t)
         y = self.joint_inputs(t, np.ascontiguousarray(y, dtype=float))
         out = _kinematics(y, self.body_params, self.kinds,
                           self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,

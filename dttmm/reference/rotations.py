@@ -5,6 +5,7 @@ import math
 import numpy as np
 
 from ..kernels import kernel
+from ..kernels.algebra.mat3 import matmul, matvec
 
 
 @kernel
@@ -150,7 +151,7 @@ def _expm(t):
     """exp(t^), Rodrigues' formula."""
     c, a, _, _, _ = _so3_coefficients(t)
     th = _hat(t)
-    e = np.eye(3) + c * th + a * (th @ th)
+    e = np.eye(3) + c * th + a * matmul(th, th)
     return e
 
 
@@ -159,7 +160,7 @@ def _left_jacobian(t):
     """J_l(t) = I + a t^ + b t^ t^: exp((t + d)^) = exp((J_l d)^) exp(t^) to first order."""
     _, a, b, _, _ = _so3_coefficients(t)
     th = _hat(t)
-    return np.eye(3) + a * th + b * (th @ th)
+    return np.eye(3) + a * th + b * matmul(th, th)
 
 
 @kernel(entry=True)
@@ -170,10 +171,11 @@ def _left_jacobian_derivative(t, u):
     th = _hat(t)
     uh = _hat(u)
     tu = t[0] * u[0] + t[1] * u[1] + t[2] * u[2]
-    return tu * (a1 * th + b1 * (th @ th)) + a * uh + b * (uh @ th + th @ uh)
+    return tu * (a1 * th + b1 * matmul(th, th)) + a * uh + b * (matmul(uh, th) + matmul(th, uh))
 
 
 @kernel(entry=True)
 def _end_section_rate(t, t_dot, t_ddot):
     """d/dt [J_l(t) t'] = J_l(t) t'' + dJ_l[t'] t' (body frame), for tests and the kernels."""
-    return _left_jacobian(t) @ t_ddot + _left_jacobian_derivative(t, t_dot) @ t_dot
+    return (matvec(_left_jacobian(t), t_ddot)
+            + matvec(_left_jacobian_derivative(t, t_dot), t_dot))

@@ -14,6 +14,7 @@ part: d/dt (R' R^T) = R'' R^T + R' R'^T, the latter symmetric).
 import numpy as np
 
 from ..kernels import kernel
+from ..kernels.algebra.mat3 import matmul, matvec
 
 _SQRT3_12 = np.sqrt(3.0) / 12.0
 _TAYLOR_TERMS = 16          # after scaling to norm < 1/2: remainder below 2^-16 / 16! ~ 1e-18
@@ -22,9 +23,9 @@ _TAYLOR_TERMS = 16          # after scaling to norm < 1/2: remainder below 2^-16
 @kernel
 def _jet_mul(a, b):
     out = np.zeros((3, 4, 4))
-    out[0] = a[0] @ b[0]
-    out[1] = a[0] @ b[1] + a[1] @ b[0]
-    out[2] = a[0] @ b[2] + a[1] @ b[1] + a[2] @ b[0]
+    out[0] = matmul(a[0], b[0])
+    out[1] = matmul(a[0], b[1]) + matmul(a[1], b[0])
+    out[2] = matmul(a[0], b[2]) + matmul(a[1], b[1]) + matmul(a[2], b[0])
     return out
 
 
@@ -59,7 +60,7 @@ def _twist_matrix(xi):
 
 @kernel
 def _matrix_bracket(a, b):
-    return a @ b - b @ a
+    return matmul(a, b) - matmul(b, a)
 
 
 @kernel(entry=True)
@@ -76,12 +77,12 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
         if a > 0:
             h = steps[a - 1]
             k = _SQRT3_12 * h * h
-            x1 = _twist_matrix(xi0[a - 1, 0] + phi[a - 1, 0] @ q)
-            x2 = _twist_matrix(xi0[a - 1, 1] + phi[a - 1, 1] @ q)
-            v1 = _twist_matrix(phi[a - 1, 0] @ qd)
-            v2 = _twist_matrix(phi[a - 1, 1] @ qd)
-            w1 = _twist_matrix(phi[a - 1, 0] @ qdd)
-            w2 = _twist_matrix(phi[a - 1, 1] @ qdd)
+            x1 = _twist_matrix(xi0[a - 1, 0] + matvec(phi[a - 1, 0], q))
+            x2 = _twist_matrix(xi0[a - 1, 1] + matvec(phi[a - 1, 1], q))
+            v1 = _twist_matrix(matvec(phi[a - 1, 0], qd))
+            v2 = _twist_matrix(matvec(phi[a - 1, 1], qd))
+            w1 = _twist_matrix(matvec(phi[a - 1, 0], qdd))
+            w2 = _twist_matrix(matvec(phi[a - 1, 1], qdd))
             jet = np.zeros((3, 4, 4))
             jet[0] = 0.5 * h * (x1 + x2) + k * _matrix_bracket(x1, x2)
             jet[1] = 0.5 * h * (v1 + v2) + k * (_matrix_bracket(v1, x2) + _matrix_bracket(x1, v2))
@@ -89,16 +90,17 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
                                                         + 2.0 * _matrix_bracket(v1, v2)
                                                         + _matrix_bracket(x1, w2)))
             e = _jet_exp(jet)
-            g, g1, g2 = g @ e[0], g1 @ e[0] + g @ e[1], g2 @ e[0] + 2.0 * g1 @ e[1] + 2.0 * g @ e[2]
+            g, g1, g2 = (matmul(g, e[0]), matmul(g1, e[0]) + matmul(g, e[1]),
+                         matmul(g2, e[0]) + 2.0 * matmul(g1, e[1]) + 2.0 * matmul(g, e[2]))
         r, r1, r2 = g[:3, :3].copy(), g1[:3, :3].copy(), g2[:3, :3].copy()
         rot[a] = r
         pos[a] = g[:3, 3]
         vel[a] = g1[:3, 3]
         acc[a] = g2[:3, 3]
-        rt = np.ascontiguousarray(r.T)
-        w = r1 @ rt
+        rt = r.T
+        w = matmul(r1, rt)
         omega[a, 0], omega[a, 1], omega[a, 2] = w[2, 1], w[0, 2], w[1, 0]
-        al = r2 @ rt
+        al = matmul(r2, rt)
         alpha[a, 0] = 0.5 * (al[2, 1] - al[1, 2])
         alpha[a, 1] = 0.5 * (al[0, 2] - al[2, 0])
         alpha[a, 2] = 0.5 * (al[1, 0] - al[0, 1])
@@ -149,14 +151,14 @@ def rod_end(state, a, w):
     A c_p,L, and of alpha_O, w x A omega_L + A c_r,L, and B_r = A Jp_L, B_t = A Jr_L."""
     rot, pos, om, vel, al, acc, jp, jr = state
     last = pos.shape[0] - 1
-    rho = a @ pos[last]
-    avel = a @ vel[last]
-    aom = a @ om[last]
+    rho = matvec(a, pos[last])
+    avel = matvec(a, vel[last])
+    aom = matvec(a, om[last])
     v_rel = _cross3(w, rho) + avel
-    acc_v = _cross3(w, _cross3(w, rho)) + 2.0 * _cross3(w, avel) + a @ acc[last]
-    alpha_v = _cross3(w, aom) + a @ al[last]
-    return (rho, v_rel, a @ rot[last], w + aom, acc_v, alpha_v,
-            a @ np.ascontiguousarray(jp[last]), a @ np.ascontiguousarray(jr[last]))
+    acc_v = _cross3(w, _cross3(w, rho)) + 2.0 * _cross3(w, avel) + matvec(a, acc[last])
+    alpha_v = _cross3(w, aom) + matvec(a, al[last])
+    return (rho, v_rel, matmul(a, rot[last]), w + aom, acc_v, alpha_v, matmul(a, jp[last]),
+            matmul(a, jr[last]))
 
 
 @kernel
@@ -175,8 +177,8 @@ def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, grav
     (w, g in the frame; om, p', c_p, c_r the station's relative rates and convective terms)."""
     rot, pos, om, vel, al, acc, jp, jr = state
     nq = q.shape[0]
-    w_b = a.T @ w
-    g_b = a.T @ gravity
+    w_b = matvec(a.T, w)
+    g_b = matvec(a.T, gravity)
     s_b = np.zeros(3)
     pi = np.zeros((3, 3))
     theta_sum = np.zeros((3, 3))
@@ -192,7 +194,7 @@ def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, grav
             continue
         f = mu * wt
         r = rot[i]
-        theta = wt * (r @ np.diag(section) @ r.T)
+        theta = wt * matmul(matmul(r, np.diag(section)), r.T)
         p, pd, o = pos[i], vel[i], om[i]
         jpi, jri = np.ascontiguousarray(jp[i]), np.ascontiguousarray(jr[i])
         s_b += f * p
@@ -202,21 +204,22 @@ def rod_terms(state, weights, mu, section, stiffness, damping, q, qd, a, w, grav
         hp = np.zeros((3, 3))
         hp[0, 1], hp[0, 2], hp[1, 2] = -p[2], p[1], -p[0]
         hp[1, 0], hp[2, 0], hp[2, 1] = p[2], -p[1], p[0]
-        gg_b += f * (hp @ jpi) + theta @ jri
-        m_ee += f * (jpi.T @ jpi) + jri.T @ theta @ jri
+        gg_b += f * matmul(hp, jpi) + matmul(theta, jri)
+        m_ee += f * matmul(jpi.T, jpi) + matmul(matmul(jri.T, theta), jri)
         lin = 2.0 * _cross3(w_b, pd) + acc[i]
         nv += f * lin
-        rate = theta @ (_cross3(w_b, o) + al[i])
+        rate = matvec(theta, _cross3(w_b, o) + al[i])
         wo = w_b + o
-        ev += (f * _cross3(p, lin) + rate + _cross3(w_b, theta @ o) + _cross3(o, theta @ w_b)
-               + _cross3(o, theta @ o))
-        modal += f * (jpi.T @ (g_b - _cross3(w_b, _cross3(w_b, p)) - lin))
-        modal -= jri.T @ (rate + _cross3(wo, theta @ wo))
+        ev += (f * _cross3(p, lin) + rate + _cross3(w_b, matvec(theta, o))
+               + _cross3(o, matvec(theta, w_b)) + _cross3(o, matvec(theta, o)))
+        modal += f * matvec(jpi.T, g_b - _cross3(w_b, _cross3(w_b, p)) - lin)
+        modal -= matvec(jri.T, rate + _cross3(wo, matvec(theta, wo)))
     modal -= stiffness * (q + damping * qd)
     mass = mu * weights.sum()
     j_b = theta_sum - pi
     tr = pi[0, 0] + pi[1, 1] + pi[2, 2]
     for i in range(3):
         j_b[i, i] += tr
-    return (mass, a @ s_b, a @ j_b @ a.T, a @ p_b, a @ gg_b, -(a @ nv), -(a @ ev), modal, m_ee,
+    return (mass, matvec(a, s_b), matmul(matmul(a, j_b), a.T), matmul(a, p_b), matmul(a, gg_b),
+            -matvec(a, nv), -matvec(a, ev), modal, m_ee,
             np.zeros((3, nq)))

@@ -103,6 +103,36 @@ def matvec_into(a, x, out):
         out[i] = s
 
 
+# Products that return a new array, for kernels that allocate (the reference's; the sweeps'
+# small blocks, which may be strided views).  numba compiles `a @ b` as a BLAS call: at 3 x 3
+# about 220 ns a product against 40 ns by these loops, and each `@` in a kernel took ~0.2 s of
+# its compile (its typing and lowering; docs/solver.md, "Compile time", item 13).
+
+@kernel(entry=True)
+def matmul(a, b):
+    """a @ b (2-D, any layouts)."""
+    out = np.empty((a.shape[0], b.shape[1]))
+    matmul_into(a, b, out)
+    return out
+
+
+@kernel(entry=True)
+def matvec(a, x):
+    """a @ x (a 2-D, x 1-D)."""
+    out = np.empty(a.shape[0])
+    matvec_into(a, x, out)
+    return out
+
+
+@kernel(entry=True)
+def dot(x, y):
+    """x @ y (1-D)."""
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += x[i] * y[i]
+    return s
+
+
 @kernel
 def hat_mul(v, b, out):
     """out = v^ @ b (3 x 3): column j is v x b[:, j]."""
