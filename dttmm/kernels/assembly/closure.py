@@ -48,9 +48,10 @@ from ...elements.joints import PRISMATIC
 from ..transfers.beam import end_section_motion
 from ..transfers.strain_rod import rod_end, rod_end_frame, rod_tables_of
 from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
-from ..algebra.mat3 import add1, add2, put1, put2, t_cross, t_lin3, t_mm, t_mmt, t_mv
+from ..algebra.mat3 import (add1, add2, matmul, matvec, put1, put2, t_cross, t_lin3, t_mm, t_mmt,
+                            t_mv)
 from ..algebra.so3 import expm_so3
-from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve, _mm, _mv
+from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve
 
 
 # the closing joints as the loop reads them, and the loop's scratch for them (solver.
@@ -454,7 +455,7 @@ def _least_apply(u, sv, vt, b):
     x = np.zeros(vt.shape[1])
     if sv.shape[0] == 0:
         return x
-    ub = u.T @ b
+    ub = matvec(u.T, b)
     for i in range(sv.shape[0]):
         if sv[i] > 1e-10 * sv[0]:
             x += (ub[i] / sv[i]) * vt[i]
@@ -1117,7 +1118,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
                     loops.free_store[k, mf] = c3
                     mf += 1
             loops.free_store[k, 3] = mf
-            s_phi = _mm(s_o, uh[0:6, 0:6])
+            s_phi = matmul(s_o, uh[0:6, 0:6])
             for a in range(mf):
                 ca = loops.free_store[k, a]
                 for i in range(6):
@@ -1165,13 +1166,13 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
                 for a in range(mf):
                     for j in range(6):
                         s_e[i, j] -= g[i, a] * rhs[a, j]
-            put2(s_mat[jh], _mm(psi, s_e))
+            put2(s_mat[jh], matmul(psi, s_e))
             for c in range(m):
                 p_e = y[c].copy()
                 for i in range(6):
                     for a in range(mf):
                         p_e[i] += g[i, a] * rhs[a, 6 + c]
-                put1(p_col[cols[c], jh], _mv(psi, p_e))
+                put1(p_col[cols[c], jh], matvec(psi, p_e))
         else:
             return jh + 1
         p = parent[k]

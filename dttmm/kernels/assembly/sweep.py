@@ -23,8 +23,8 @@ from numba import njit
 
 from .. import CONTRACT, kernel, no_alloc_kernel
 from ..transfers.joint import FREE, PRESCRIBED
-from ..algebra.mat3 import (add1, add2, inv3, least_norm_solve3, matmul_into, mm3_into, put1, put2,
-                            t_inverse, t_of_mat)
+from ..algebra.mat3 import (add1, add2, inv3, least_norm_solve3, matmul, matmul_into, matvec,
+                            mm3_into, put1, put2, t_inverse, t_of_mat)
 
 TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -87,7 +87,7 @@ def _solve_tip(w, rhs, tip_pinned):
     closed between two fixed points can leave the force along an inextensible member statically
     indeterminate (no pre-stress is assumed; docs/assembly.md)."""
     if tip_pinned:
-        return True, np.linalg.pinv(w, rcond=TIP_RCOND) @ rhs
+        return True, matvec(np.linalg.pinv(w, rcond=TIP_RCOND), rhs)
     if abs(np.linalg.det(w)) == 0.0:
         return False, rhs
     return True, np.linalg.solve(w, rhs)
@@ -231,14 +231,14 @@ def riccati_full(kind, u, known_loads, root_f, tip_pinned, split, s_mat, p_vec, 
             if abs(np.linalg.det(w)) == 0.0:
                 return j + 1
             wi = np.linalg.inv(w)
-            put1(g_vec[j], wi @ rhs)
+            put1(g_vec[j], matvec(wi, rhs))
             s_mat[j + 1, :, :] = 0.0
             p_vec[j + 1, :] = 0.0
             if k == BALL:
                 # inboard e = g + G q; outboard f = [a, m] = [(basis G) q + basis g + offset; 0]
                 put2(g_mat[j], wi[:, 3:6])
-                bg = basis @ g_mat[j]
-                bo = basis @ g_vec[j] + offset
+                bg = matmul(basis, g_mat[j])
+                bo = matvec(basis, g_vec[j]) + offset
                 split[j + 1] = SPLIT_A
                 put2(s_mat[j + 1, 0:3, 3:6], bg[0:3])
                 put1(p_vec[j + 1, 0:3], bo[0:3])
@@ -292,19 +292,19 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
             zmat[j + 1] = zmat[j]
             zoff[j + 1] = zoff[j]
         elif k == TRANSFER:
-            uj = np.ascontiguousarray(u[j, :, 0:12])
-            zmat[j + 1] = uj @ zmat[j]
-            zoff[j + 1] = uj @ zoff[j] + u[j, :, 12]
+            uj = u[j, :, 0:12]
+            zmat[j + 1] = matmul(uj, zmat[j])
+            zoff[j + 1] = matvec(uj, zoff[j]) + u[j, :, 12]
         elif k == BALL:
             cm = zmat[j, 6:9, :]
             if np.linalg.matrix_rank(cm) < 3:
                 return j + 1
             # x = x0 + N y with cm x0 = -o_m (least norm) and N spanning the null space of cm
             _, _, vt = np.linalg.svd(cm)
-            x0[j] = np.linalg.pinv(cm) @ (-zoff[j, 6:9])
+            x0[j] = matvec(np.linalg.pinv(cm), -zoff[j, 6:9])
             nmat[j] = vt[3:6].T
-            inner_z = zmat[j] @ nmat[j]
-            inner_o = zmat[j] @ x0[j] + zoff[j]
+            inner_z = matmul(zmat[j], nmat[j])
+            inner_o = matvec(zmat[j], x0[j]) + zoff[j]
             zmat[j + 1, :, :] = 0.0
             zoff[j + 1, :] = 0.0
             for r in (0, 1, 2, 9, 10, 11):
@@ -328,11 +328,11 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
     solved, x = _solve_tip(w, rhs, tip_pinned)
     if not solved:
         return n_el + 1
-    z[n_el] = zmat[n_el] @ x + zoff[n_el]
+    z[n_el] = matvec(zmat[n_el], x) + zoff[n_el]
     for j in range(n_el - 1, -1, -1):
         if kind[j] == BALL or kind[j] == LOCKED:
-            x = x0[j] + nmat[j] @ x[0:3]
-        z[j] = zmat[j] @ x + zoff[j]
+            x = x0[j] + matvec(nmat[j], x[0:3])
+        z[j] = matvec(zmat[j], x) + zoff[j]
     if transfer_residual(kind, u, z) > DIRECT_TOLERANCE:
         return LOST_ACCURACY
     return 0
@@ -466,17 +466,17 @@ def direct_reduced(v, a_root, tip_pinned, aq):
     step = np.eye(7)
     for k in range(n):
         step[0:6, :] = v[k]
-        prod = step @ prod
+        prod = matmul(step, prod)
     r = 0 if tip_pinned else 3
     pqq = np.ascontiguousarray(prod[r:r + 3, 3:6])
-    rhs = np.ascontiguousarray(prod[r:r + 3, 0:3]) @ a_root + prod[r:r + 3, 6]
+    rhs = matvec(prod[r:r + 3, 0:3], a_root) + prod[r:r + 3, 6]
     aq[0, 0:3] = a_root
     solved, q0 = _solve_tip(pqq, -rhs, tip_pinned)     # least norm in the root's unknowns
     if not solved:
         return n + 1
     aq[0, 3:6] = q0
     for k in range(n):
-        aq[k + 1] = np.ascontiguousarray(v[k, :, 0:6]) @ aq[k] + v[k, :, 6]
+        aq[k + 1] = matvec(v[k, :, 0:6], aq[k]) + v[k, :, 6]
     # propagated forward, the tip condition shows what the products lost
     first = 0 if tip_pinned else 3
     scale = 0.0
@@ -620,27 +620,6 @@ def write_tree_stations(parent, a_root, phi_root, aq_in, aq_out, phi, z):
             z[2 * k + 2, 9 + i] = aq_out[k, 3 + i]
 
 
-@kernel
-def _mm(a, b):
-    """a @ b for small blocks that may be strided views (no BLAS, no warning)."""
-    out = np.zeros((a.shape[0], b.shape[1]))
-    for i in range(a.shape[0]):
-        for k in range(a.shape[1]):
-            x = a[i, k]
-            for j in range(b.shape[1]):
-                out[i, j] += x * b[k, j]
-    return out
-
-
-@kernel
-def _mv(a, x):
-    out = np.zeros(a.shape[0])
-    for i in range(a.shape[0]):
-        for k in range(a.shape[1]):
-            out[i] += a[i, k] * x[k]
-    return out
-
-
 # Trees in full state (joints with coordinates; docs/assembly.md, "Trees with joints")
 #
 # Leaves to root, every station's loads e = [m, q] as an affine function of its motion
@@ -732,7 +711,7 @@ def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
             if dof[c] == PRESCRIBED:
                 ci += u[i, 6 + c] * tau_nu[c, 2]
         y[i] = ci
-    sy = _mv(s_o, y) + p_o
+    sy = matvec(s_o, y) + p_o
     mf = 0
     for c in range(3):
         if dof[c] == FREE:
@@ -740,7 +719,7 @@ def _joint_parts(u, dof, tau_nu, s_o, p_o, free, d_inv_bl_s_phi, d_inv_r, g):
             mf += 1
     if mf == 0:
         return 0, sy
-    s_phi = _mm(s_o, u[0:6, 0:6])
+    s_phi = matmul(s_o, u[0:6, 0:6])
     d = np.empty((3, 3))
     rhs = np.empty((3, 7))
     for a in range(mf):
@@ -814,15 +793,15 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
             if mf < 0:
                 return jh + 1
             psi = u[jh, 6:12, 6:12]
-            s_e = _mm(s_o, u[jh, 0:6, 0:6])
+            s_e = matmul(s_o, u[jh, 0:6, 0:6])
             p_e = sy.copy()
             for i in range(6):
                 for a in range(mf):
                     p_e[i] += g[i, a] * k0[a]
                     for j in range(6):
                         s_e[i, j] -= g[i, a] * h_mat[a, j]
-            put2(s_mat[jh], _mm(psi, s_e))
-            put1(p_vec[jh], _mv(psi, p_e))
+            put2(s_mat[jh], matmul(psi, s_e))
+            put1(p_vec[jh], matvec(psi, p_e))
         p = parent[k]
         if p >= 0:
             add2(port_s[p], s_mat[jh])
@@ -839,15 +818,15 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
         st = 0 if p < 0 else 2 * p + 2
         put1(f_i, z[st, 0:6])
         if p < 0:
-            add1(z[0, 6:12], _mv(s_mat[jh], f_i) + p_vec[jh])
+            add1(z[0, 6:12], matvec(s_mat[jh], f_i) + p_vec[jh])
         kd = kind[jh]
         if kd == IDENTITY:
             put1(f_o, f_i)
         elif kd == TRANSFER:
             zi = np.empty(12)
             put1(zi[0:6], f_i)
-            put1(zi[6:12], _mv(s_mat[jh], f_i) + p_vec[jh])
-            put1(f_o, _mv(u[jh, 0:6, 0:12], zi) + u[jh, 0:6, 12])
+            put1(zi[6:12], matvec(s_mat[jh], f_i) + p_vec[jh])
+            put1(f_o, matvec(u[jh, 0:6, 0:12], zi) + u[jh, 0:6, 12])
         elif kd == LOCKED:
             a = s_mat[jb].copy()
             x = np.empty((6, 1))
@@ -868,13 +847,13 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
                 for j in range(6):
                     x -= h_mat[a, j] * f_i[j]
                 joint_nu[k, free[a]] = x
-            put1(f_o, _mv(u[jh, 0:6, 0:6], f_i) + u[jh, 0:6, 12])
+            put1(f_o, matvec(u[jh, 0:6, 0:6], f_i) + u[jh, 0:6, 12])
             for c in range(3):
                 if joint_dof[k, c] != 0:
                     for i in range(6):
                         f_o[i] += u[jh, i, 6 + c] * joint_nu[k, c]
         put1(z[jb, 0:6], f_o)
-        put1(z[jb, 6:12], _mv(s_mat[jb], f_o) + p_vec[jb])
+        put1(z[jb, 6:12], matvec(s_mat[jb], f_o) + p_vec[jb])
         if kd == JOINT:
             for c in range(3):
                 x = 0.0
@@ -882,5 +861,5 @@ def riccati_tree_full(kind, u, known_loads, joint_dof, joint_drive, parent, root
                     for i in range(6):
                         x += u[jh, 6 + i, c] * z[jb, 6 + i]
                 joint_tau[k, c] = x
-        put1(z[jb + 1], _mv(u[jb, :, 0:12], z[jb]) + u[jb, :, 12])
+        put1(z[jb + 1], matvec(u[jb, :, 0:12], z[jb]) + u[jb, :, 12])
     return 0

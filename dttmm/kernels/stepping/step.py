@@ -40,7 +40,7 @@ from ..features import (EVERY_KIND, HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HA
 from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
 from ..transfers.joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from ..algebra.mat3 import inv3, matmul_into, mm3_into, put1, put2, put3
+from ..algebra.mat3 import dot, inv3, matmul, matmul_into, matvec, mm3_into, put1, put2, put3
 from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 from ..assembly.sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced,
                               fold_ball_body, riccati_full, riccati_reduced, riccati_tree_full,
@@ -517,7 +517,7 @@ def _modal_accelerations(beams, eta_map, z, eta_acc):
         if body_kind[k] == BEAM or body_kind[k] == ROD:
             put1(zin[0:12], z[2 * k + 1])
             for i in range(mode_off[k], mode_off[k + 1]):
-                eta_acc[i] = eta_map[i] @ zin
+                eta_acc[i] = dot(eta_map[i], zin)
 
 
 @kernel
@@ -994,11 +994,11 @@ def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
         x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
         if body_kind[k] != BEAM:
             if locked[k]:
-                rot_new = rot_now @ lock_rel[k]
+                rot_new = matmul(rot_now, lock_rel[k])
             else:
                 expm_so3(z[2 * k + 1, 3:6], e3)
-                rot_new = e3 @ rot[k]
-            x_c = x_in + (rot_new - rot[k]) @ body_params[body_row[k], 1:4]
+                rot_new = matmul(e3, rot[k])
+            x_c = x_in + matvec(rot_new - rot[k], body_params[body_row[k], 1:4])
             _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
         _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
 

@@ -715,7 +715,7 @@ def end_section(ends, torsion, eta, rot, out):
     """out = A exp(theta_O^): the output section's rotation."""
     e = np.empty((3, 3))
     expm_so3(end_angles(ends, torsion, eta), e)
-    out[:, :] = rot @ e
+    mm3_into(rot, e, out)
 
 
 @kernel

@@ -18,7 +18,8 @@ equations are (EM1-EM4):
 import numpy as np
 
 from .. import allocating_kernel
-from .body import affine_part
+from .body import _cross, _mm, _mv, affine_part
+from ..algebra.mat3 import matvec_into, mm3_into
 from ..algebra.so3 import cayley, cayley_tangent, hat
 
 A, B, M, Q = 0, 3, 6, 9
@@ -30,9 +31,9 @@ def em_body_kinematics(rot_n, omega_n, b, h, rot_new, omega_new):
     phi = 0.5 * h * h * b
     c = np.empty((3, 3))
     cayley(phi, c)
-    rot_new[:, :] = c @ rot_n
-    w_body = (2.0 / h) * (rot_n.T @ phi) - rot_n.T @ omega_n
-    omega_new[:] = rot_new @ w_body
+    mm3_into(c, rot_n, rot_new)
+    w_body = (2.0 / h) * _mv(rot_n.T, phi) - _mv(rot_n.T, omega_n)
+    matvec_into(rot_new, w_body, omega_new)
 
 
 @allocating_kernel(entry=True)
@@ -57,18 +58,18 @@ def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torqu
     cayley(phi, cay)
     tangent = np.empty((3, 3))
     cayley_tangent(phi, tangent)
-    rot = cay @ rot_n
-    rc1 = rot @ l_ic
-    ro1 = rot @ l_io
-    rho_c = 0.5 * (rot_n @ l_ic + rc1)
-    rho_o = 0.5 * (rot_n @ l_io + ro1)
+    rot = _mm(cay, rot_n)
+    rc1 = _mv(rot, l_ic)
+    ro1 = _mv(rot, l_io)
+    rho_c = 0.5 * (_mv(rot_n, l_ic) + rc1)
+    rho_o = 0.5 * (_mv(rot_n, l_io) + ro1)
     r_oc = rho_o - rho_c
     tmp = np.empty((3, 3))
     # d(A_{n+1} l)/db = -(A_{n+1} l)^ D s
     hat(rc1, tmp)
-    d_rho_c = -0.5 * s * (tmp @ tangent)
+    d_rho_c = -0.5 * s * _mm(tmp, tangent)
     hat(ro1, tmp)
-    d_rho_o = -0.5 * s * (tmp @ tangent)
+    d_rho_o = -0.5 * s * _mm(tmp, tangent)
     b_h = np.empty((3, 3))
     hat(b, b_h)
     rhoc_h = np.empty((3, 3))
@@ -79,25 +80,26 @@ def rigid_body_transfer_em(p, j_c, rot_n, omega_n, v_c_n, h, z_star, load, torqu
     hat(r_oc, roc_h)
 
     # EM1, EM2
-    a_o = a_i + np.cross(b, rho_o)
-    d_ao = -rhoo_h + b_h @ d_rho_o
-    a_c = a_i + np.cross(b, rho_c)
-    d_ac = -rhoc_h + b_h @ d_rho_c
+    a_o = a_i + _cross(b, rho_o)
+    d_ao = -rhoo_h + _mm(b_h, d_rho_o)
+    a_c = a_i + _cross(b, rho_c)
+    d_ac = -rhoc_h + _mm(b_h, d_rho_c)
     q_o = q_i + load - mass * (a_c - (2.0 / h) * v_c_n)
     d_qo = -mass * d_ac
 
     # EM3, EM4: pi_{n+1} = A J_C (2 A_n^T phi / h - A_n^T w_n)
-    w_body = (2.0 / h) * (rot_n.T @ phi) - rot_n.T @ omega_n
-    pi1 = rot @ (j_c @ w_body)
-    pi0 = rot_n @ (j_c @ (rot_n.T @ omega_n))
+    w_body = (2.0 / h) * _mv(rot_n.T, phi) - _mv(rot_n.T, omega_n)
+    pi1 = _mv(rot, _mv(j_c, w_body))
+    pi0 = _mv(rot_n, _mv(j_c, _mv(rot_n.T, omega_n)))
     hat(pi1, tmp)
-    d_pi1 = s * (-tmp @ tangent + (2.0 / h) * (rot @ j_c @ rot_n.T))
-    m_o = (m_i - np.cross(rho_c, q_i) - np.cross(r_oc, q_o) + torque - (pi1 - pi0) / h)
+    d_pi1 = s * (-_mm(tmp, tangent) + (2.0 / h) * _mm(_mm(rot, j_c), rot_n.T))
+    m_o = (m_i - _cross(rho_c, q_i) - _cross(r_oc, q_o) + torque - (pi1 - pi0) / h)
     qi_h = np.empty((3, 3))
     hat(q_i, qi_h)
     qo_h = np.empty((3, 3))
     hat(q_o, qo_h)
-    d_mo = qi_h @ d_rho_c - roc_h @ d_qo + qo_h @ (d_rho_o - d_rho_c) - d_pi1 / h
+    d_mo = (_mm(qi_h, d_rho_c) - _mm(roc_h, d_qo) + _mm(qo_h, d_rho_o - d_rho_c)
+            - d_pi1 / h)
 
     for r in range(12):
         for c in range(13):

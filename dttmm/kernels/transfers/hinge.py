@@ -13,7 +13,7 @@ terms in psi and d, which changes the convergence rate of Newton iterations, not
 import numpy as np
 
 from .. import kernel
-from .body import A, CONST, M, PHI, Q
+from .body import A, CONST, M, PHI, Q, _cross, _mm, _mv
 from ..algebra.so3 import hat, log_so3
 
 
@@ -29,30 +29,30 @@ def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_o
     c_t = h[18:27].reshape((3, 3))
     k_r = h[27:36].reshape((3, 3))
     c_r = h[36:45].reshape((3, 3))
-    k_w = rot_in @ k_t @ rot_in.T
-    c_w = rot_in @ c_t @ rot_in.T
-    kr_w = rot_in @ k_r @ rot_in.T
-    cr_w = rot_in @ c_r @ rot_in.T
+    k_w = _mm(_mm(rot_in, k_t), rot_in.T)
+    c_w = _mm(_mm(rot_in, c_t), rot_in.T)
+    kr_w = _mm(_mm(rot_in, k_r), rot_in.T)
+    cr_w = _mm(_mm(rot_in, c_r), rot_in.T)
 
     d_of_q = -np.linalg.inv(k_w + c3 * c_w)      # d = d_of_q q + d0
-    d0 = d_of_q @ (c_w @ w3d)
+    d0 = _mv(d_of_q, _mv(c_w, w3d))
     q_star = z_star[Q:Q + 3]
     phi_in_star = z_star[PHI:PHI + 3]
-    d_star = d_of_q @ q_star + d0
+    d_star = _mv(d_of_q, q_star) + d0
 
     psi = np.empty(3)
-    log_so3(rot_in.T @ rot_out @ r0.T, psi)
-    n_star = -rot_in @ (k_r @ psi + c_r @ (rot_in.T @ (w_out - w_in)))
-    n_out = -kr_w @ lam_out - cr_w @ dw_out
-    n_in = kr_w @ lam_in + cr_w @ dw_in
+    log_so3(_mm(_mm(rot_in.T, rot_out), r0.T), psi)
+    n_star = -_mv(rot_in, _mv(k_r, psi) + _mv(c_r, _mv(rot_in.T, w_out - w_in)))
+    n_out = -_mm(kr_w, lam_out) - _mm(cr_w, dw_out)
+    n_in = _mm(kr_w, lam_in) + _mm(cr_w, dw_in)
     n_out_inv = np.linalg.inv(n_out)
 
     dh = np.empty((3, 3))
     hat(d_star, dh)
     qh = np.empty((3, 3))
     hat(q_star, qh)
-    dm_dq = -dh + qh @ d_of_q                    # m_out = m + dm_dq q + m0
-    m0 = qh @ d0 - qh @ d_star
+    dm_dq = -dh + _mm(qh, d_of_q)                # m_out = m + dm_dq q + m0
+    m0 = _mv(qh, d0) - _mv(qh, d_star)
 
     for r in range(12):
         for c in range(13):
@@ -67,9 +67,9 @@ def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_o
     u[M:M + 3, CONST] = m0
     # phi_out = phi_out* + n_out^-1 (m_out - n* - n_in (phi_in - phi_in*))
     u[PHI:PHI + 3, M:M + 3] = n_out_inv
-    u[PHI:PHI + 3, Q:Q + 3] = n_out_inv @ dm_dq
-    u[PHI:PHI + 3, PHI:PHI + 3] = -n_out_inv @ n_in
-    u[PHI:PHI + 3, CONST] = phi_out_star + n_out_inv @ (m0 - n_star + n_in @ phi_in_star)
+    u[PHI:PHI + 3, Q:Q + 3] = _mm(n_out_inv, dm_dq)
+    u[PHI:PHI + 3, PHI:PHI + 3] = -_mm(n_out_inv, n_in)
+    u[PHI:PHI + 3, CONST] = phi_out_star + _mv(n_out_inv, m0 - n_star + _mv(n_in, phi_in_star))
 
 
 @kernel
@@ -82,9 +82,9 @@ def elastic_hinge_loads(h, rot_in, w_in, rot_out, w_out, d, d_dot):
     c_t = h[18:27].reshape((3, 3))
     k_r = h[27:36].reshape((3, 3))
     c_r = h[36:45].reshape((3, 3))
-    q = -rot_in @ (k_t @ (rot_in.T @ d) + c_t @ (rot_in.T @ d_dot))
+    q = -_mv(rot_in, _mv(k_t, _mv(rot_in.T, d)) + _mv(c_t, _mv(rot_in.T, d_dot)))
     psi = np.empty(3)
-    log_so3(rot_in.T @ rot_out @ r0.T, psi)
-    m_out = -rot_in @ (k_r @ psi + c_r @ (rot_in.T @ (w_out - w_in)))
-    m_in = m_out + np.cross(d, q)
+    log_so3(_mm(_mm(rot_in.T, rot_out), r0.T), psi)
+    m_out = -_mv(rot_in, _mv(k_r, psi) + _mv(c_r, _mv(rot_in.T, w_out - w_in)))
+    m_in = m_out + _cross(d, q)
     return q, m_in, m_out

@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT, kernel
-from ..algebra.mat3 import (t_cross, t_hat, t_lin9, t_mm, t_mv, t_of_mat, t_of_vec,
-                            t_plus_diag)
+from ..algebra.mat3 import (dot, matmul, matvec, t_cross, t_hat, t_lin9, t_mm, t_mv, t_of_mat,
+                            t_of_vec, t_plus_diag)
 from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
 
 SQRT3_12 = np.sqrt(3.0) / 12.0
@@ -440,7 +440,7 @@ def _rod_state(x, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e, q_
     e = np.empty((3, 3))
     expm_so3(phi, e)
     q = (x[12:12 + nq] - w1e) / c1
-    return e @ rot_n, c3 * phi + w3, q, c3 * q + w3e
+    return matmul(e, rot_n), c3 * phi + w3, q, c3 * q + w3e
 
 
 @kernel
@@ -461,7 +461,7 @@ def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, 
         out[3:6] = end_alpha
     elif welded:
         phi_out = np.empty(3)
-        log_so3(end_rotation @ r_rel @ rot_out_n.T, phi_out)
+        log_so3(matmul(matmul(end_rotation, r_rel), rot_out_n.T), phi_out)
         out[3:6] = c1 * phi_out + w1_out
 
 
@@ -580,12 +580,12 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
     for i in range(nq):
         for j in range(12):
             q_map[i, j] = -solved[i, j]
-        q_map[i, 12] = qdd_star[i] - solved[i, 12] - q_map[i, :12] @ z0
-    d_oq = np.ascontiguousarray(d_o[:, 12:])
-    u[:, :12] = d_o[:, :12] + d_oq @ np.ascontiguousarray(q_map[:, :12])
-    shift = d_oq @ np.ascontiguousarray(solved[:, 12])
+        q_map[i, 12] = qdd_star[i] - solved[i, 12] - dot(q_map[i, :12], z0)
+    d_oq = d_o[:, 12:]
+    u[:, :12] = d_o[:, :12] + matmul(d_oq, q_map[:, :12])
+    shift = matvec(d_oq, solved[:, 12])
     for i in range(12):
-        u[i, 12] = o0[i] - shift[i] - u[i, :12] @ z0
+        u[i, 12] = o0[i] - shift[i] - dot(u[i, :12], z0)
 
 
 @kernel
