@@ -441,6 +441,7 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     from dttmm.chains import three_pendulum
     from dttmm.mechanisms import slider_crank
     from dttmm.reference import equations
+    from dttmm.reference.integrator import integrate_dop853
     from dttmm.reference.newton_euler import _Problem
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
     import spin_up
@@ -452,5 +453,40 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     for model in models:
         problem = _Problem(model)
         assert np.all(np.isfinite(problem.rhs(0.1, problem.initial_state())))
-    for kernel in (equations.rhs_kernel, equations._solve_dynamics):
+        fixed = problem.fixed_args()
+        if fixed is not None:
+            integrate_dop853(*fixed, problem.initial_state(), 1e-300, 1.0, 1.0, np.zeros(0))
+    for kernel in (equations.rhs_kernel, equations._solve_dynamics, integrate_dop853):
         assert len(getattr(kernel, "signatures", [None])) <= 1, kernel.signatures
+
+
+@pytest.mark.parametrize("case", ["three_pendulum", "joints"])
+def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
+    """A model with nothing in Python during the run integrates in compiled code
+    (reference/integrator.py: scipy's DOP853 step for step, the joints' arm's spring-damper
+    slide set as in Python); the same run through solve_ivp (the compiled path turned off) gives
+    the same states to rounding, in as many steps to one."""
+    from helpers import joints_arm
+
+    from dttmm.chains import three_pendulum
+    from dttmm.reference.newton_euler import _Problem
+    model = three_pendulum(2) if case == "three_pendulum" else joints_arm()
+    assert _Problem(model).fixed_args() is not None
+    t = np.linspace(0.0, 0.3, 31)
+    compiled = simulate_reference(model, 0.3, t_eval=t)
+    monkeypatch.setattr(_Problem, "fixed_args", lambda self: None)
+    scipy_run = simulate_reference(model, 0.3, t_eval=t)
+    for field in ("position_output", "velocity_input", "angular_velocity"):
+        assert np.allclose(getattr(compiled, field), getattr(scipy_run, field),
+                           rtol=0.0, atol=1e-11), field
+    assert abs(compiled.n_steps - scipy_run.n_steps) <= 1
+    assert compiled.info["nfev"] <= scipy_run.info["nfev"]
+
+
+def test_a_model_with_python_inputs_integrates_through_scipy():
+    """A drive, load or ground motion given as a function keeps solve_ivp (it runs Python at
+    every right-hand side)."""
+    from dttmm.reference.newton_euler import _Problem
+    pushed = build_chain([BallJoint(), link(force=lambda t: [0.0, np.sin(t), 0.0])])
+    assert _Problem(pushed).fixed_args() is None
+    assert _Problem(build_chain([BallJoint(), link()])).fixed_args() is not None
