@@ -28,6 +28,7 @@ import numpy as np
 from scipy.integrate import DOP853
 
 from ..kernels import kernel
+from ..kernels.algebra.mat3 import put1
 from .equations import rhs_kernel
 
 _STAGES = DOP853.n_stages                                      # 12
@@ -122,7 +123,7 @@ def _dense_output(args, springs, t, h, y, y1, k, t_eval, first, last, out):
     tmp = np.empty(n)
     for s in range(_STAGES + 1, 16):
         _stage_state(y, k, h, s, tmp)
-        k[s] = _rhs(tmp, args, springs)
+        put1(k[s], _rhs(tmp, args, springs))
     f = np.empty((7, n))
     for i in range(n):
         dy = y1[i] - y[i]
@@ -161,7 +162,7 @@ def integrate_dop853(args, springs, y0, t_end, rtol, atol, t_eval):
     nfev, n_steps = 2, 0
     p = 0
     while p < t_eval.shape[0] and t_eval[p] <= 0.0:
-        ys[p] = y0
+        put1(ys[p], y0)
         p += 1
     t = 0.0
     while t < t_end:
@@ -174,17 +175,17 @@ def integrate_dop853(args, springs, y0, t_end, rtol, atol, t_eval):
             t_new = min(t + h_abs, t_end)
             h = t_new - t
             h_abs = h
-            k[0] = f
+            put1(k[0], f)
             for s in range(1, _STAGES):
                 _stage_state(y, k, h, s, tmp)
-                k[s] = _rhs(tmp, args, springs)
+                put1(k[s], _rhs(tmp, args, springs))
             y1 = np.empty(n)
             for i in range(n):
                 acc = 0.0
                 for j in range(_STAGES):
                     acc += _B[j] * k[j, i]
                 y1[i] = y[i] + h * acc
-            k[_STAGES] = _rhs(y1, args, springs)
+            put1(k[_STAGES], _rhs(y1, args, springs))
             nfev += _STAGES
             err = _error_norm(y, y1, k, h, rtol, atol)
             if err < 1.0:
