@@ -486,7 +486,10 @@ def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
 def test_a_model_with_python_inputs_integrates_through_scipy():
     """A drive, load or ground motion given as a function keeps solve_ivp (it runs Python at
     every right-hand side)."""
+    from dttmm.reference.integrator import _JOINTS
     from dttmm.reference.newton_euler import _Problem
     pushed = build_chain([BallJoint(), link(force=lambda t: [0.0, np.sin(t), 0.0])])
     assert _Problem(pushed).fixed_args() is None
-    assert _Problem(build_chain([BallJoint(), link()])).fixed_args() is not None
+    problem = _Problem(build_chain([BallJoint(), link()]))
+    args, springs = problem.fixed_args()
+    assert args[_JOINTS] is problem.joints and springs.shape == (0, 4)   # where _rhs sets them

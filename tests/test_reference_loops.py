@@ -36,8 +36,11 @@ def test_n_four_bar_follows_the_parallelogram_through_its_flat_positions():
     """Spatial revolute joints make the planar loops redundant (10 constraint equations for
     2 loops that close 4 freedoms), and twice a turn the bars lie flat, where the loops are
     singular: the least closing forces (a truncated SVD of the Delassus matrix) carry the run
-    through both flat positions of the first 2 s within 1e-7 m of the exact reduction (measured
-    3e-8; each later crossing adds 1e-7 to 1e-5 at rtol 1e-10: docs/loops.md)."""
+    through both flat positions of the first 2 s within 2e-6 m of the exact reduction (each
+    later crossing adds 1e-7 to 1e-5 at rtol 1e-10: docs/loops.md).  At a flat position the
+    truncation amplifies rounding: six starts moved by 1e-15 gave 7.7e-10 to 5.8e-7 m through
+    scipy's DOP853 and 1.5e-8 to 3.2e-7 m through the compiled one (reference/integrator.py),
+    so the bound is the spread's, not one start's (1e-7 before: 3e-8 by scipy's rounding)."""
     t = np.linspace(0.0, 2.0, 201)
     model = n_four_bar(2)
     assert "mobility at least -5" in model.describe()
@@ -45,7 +48,7 @@ def test_n_four_bar_follows_the_parallelogram_through_its_flat_positions():
     exact = parallelogram(2, t)
     theta = np.arctan2(exact[:, 0], exact[:, 1])
     assert np.any(np.abs(np.abs(theta) - np.pi / 2) < 0.05)          # flat at least once
-    assert np.abs(result.position_output[:, 0, :2] - exact).max() < 1e-7
+    assert np.abs(result.position_output[:, 0, :2] - exact).max() < 2e-6
 
 
 def test_a_bar_pinned_at_both_ends_hangs_half_its_weight_on_each_pin():
