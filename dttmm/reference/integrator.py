@@ -9,7 +9,9 @@ from scipy.integrate.DOP853), its initial step, error norm and step control, its
 at the recorded times.  What it saves is the Python between the right-hand sides: scipy's
 stage loop and its call of rhs_kernel from Python cost about as much as the right-hand side
 itself (docs/reference.md, "Integrator").  tests/test_reference.py checks it against
-solve_ivp on the same models.
+solve_ivp on the same models.  It is written apart from kernels/stepping/runge_kutta.py (the
+same method as DT-TMM's scheme="dop853", which the reference checks): the reference shares no
+code with what it tests.
 
     stages      k_s = f(y + h sum_{j<s} a_sj k_j),  s = 0..11;  k_12 = f(y1)  (f: no t in it)
     step        y1 = y + h sum_j b_j k_j
