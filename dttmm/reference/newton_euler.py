@@ -638,7 +638,9 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
 
 def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=None,
                        exact_foreshortening=False):
-    """Integrate the model with the global Newton-Euler equations and scipy's solve_ivp.
+    """Integrate the model with the global Newton-Euler equations and scipy's solve_ivp (its
+    DOP853 run in compiled code when nothing in the model runs Python during the run:
+    reference/integrator.py; docs/reference.md, "Integrator").
 
     An independent check of DT-TMM (docs/reference.md; the formulation is in this module's
     docstring): it shares only the model description with the rest of the package.  Every
@@ -700,7 +702,8 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         drive that returns a non-finite or non-scalar value during the run (naming the joint
         and coordinate).
     RuntimeError
-        solve_ivp failed (the time and its message).
+        The integration failed (the time and why: solve_ivp's message, or the compiled
+        integrator's step fallen below the spacing of the numbers near t).
 
     Examples
     --------
