@@ -89,12 +89,13 @@ def _initial_step(args, springs, t_end, y0, f0, rtol, atol):
 
 
 @kernel
-def _stage_state(y, k, h, s, out):
-    """out = y + h sum_{j<s} a_sj k_j."""
+def _stage_state(y, k, h, coefficients, count, out):
+    """out = y + h sum_{j<count} c_j k_j: a stage's state (c = a_s., count = s) or the step's
+    y1 (c = b, count = 12)."""
     for i in range(y.shape[0]):
         acc = 0.0
-        for j in range(s):
-            acc += _A[s, j] * k[j, i]
+        for j in range(count):
+            acc += coefficients[j] * k[j, i]
         out[i] = y[i] + h * acc
 
 
@@ -124,7 +125,7 @@ def _dense_output(args, springs, t, h, y, y1, k, t_eval, first, last, out):
     n = y.shape[0]
     tmp = np.empty(n)
     for s in range(_STAGES + 1, 16):
-        _stage_state(y, k, h, s, tmp)
+        _stage_state(y, k, h, _A[s], s, tmp)
         put1(k[s], _rhs(tmp, args, springs))
     f = np.empty((7, n))
     for i in range(n):
@@ -179,14 +180,10 @@ def integrate_dop853(args, springs, y0, t_end, rtol, atol, t_eval):
             h_abs = h
             put1(k[0], f)
             for s in range(1, _STAGES):
-                _stage_state(y, k, h, s, tmp)
+                _stage_state(y, k, h, _A[s], s, tmp)
                 put1(k[s], _rhs(tmp, args, springs))
             y1 = np.empty(n)
-            for i in range(n):
-                acc = 0.0
-                for j in range(_STAGES):
-                    acc += _B[j] * k[j, i]
-                y1[i] = y[i] + h * acc
+            _stage_state(y, k, h, _B, _STAGES, y1)
             put1(k[_STAGES], _rhs(y1, args, springs))
             nfev += _STAGES
             err = _error_norm(y, y1, k, h, rtol, atol)
