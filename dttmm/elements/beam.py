@@ -74,6 +74,18 @@ def mode_shapes(family, length, n_modes, x):
     return y, dy, ddy, mass, stiff
 
 
+@lru_cache(maxsize=4096)
+def end_angle_shapes(family, length, n_modes, n_twist):
+    """(Y_k'(L), Psi_k(L)), each (n,): the bending slopes and twists at a beam's output end,
+    whose combinations are its output section's angles (model.output_section; docs/beam.md,
+    "End sections"): evaluated once per kind of beam (read-only arrays)."""
+    slope = mode_shapes(family, length, n_modes, [length])[1][:, 0]
+    twist = torsion_shapes(family, length, n_twist, [length])[0][:, 0]
+    slope.setflags(write=False)
+    twist.setflags(write=False)
+    return slope, twist
+
+
 def foreshortening_integrals(family, length, n_modes):
     """D0, D1, D2 (3, n_modes, n_modes): int_0^L w(x) Y_j'(x) Y_k'(x) dx for w = 1, L - x and
     (L^2 - x^2) / 2, the geometric stiffness integrals of docs/beam.md ("Geometric
@@ -125,6 +137,7 @@ def foreshortening(beam_row, eta, eta_dot=None):
     return c, c_dot
 
 
+@lru_cache(maxsize=64)
 def _loaded_modes(n_modes):
     """Coefficients c (n, n) of the loaded-end modes Y_j(x) = sum_i c_ij (x/L)^(i+2) on a unit
     length, and their eigenvalues lam_j (EI d4Y/dx4 = lam mu Y on a unit length): the Ritz
@@ -141,6 +154,8 @@ def _loaded_modes(n_modes):
     lam, coef = eigh(stiff, mass)
     coef = coef / np.sqrt(np.einsum("ij,ik,kj->j", coef, mass, coef))
     coef = coef * np.sign(coef.sum(axis=0))
+    coef.setflags(write=False)
+    lam.setflags(write=False)
     return coef, lam
 
 # layout of one row of Model.beam_params
@@ -208,11 +223,12 @@ def axial_frequencies(beam_row, n_modes=None):
     return np.sqrt(beam_row[EA] * stiff / (beam_row[MASS_PER_LENGTH] * mass)) / (2 * np.pi)
 
 
+@lru_cache(maxsize=64)
 def _loaded_twist_modes(n_modes):
     """Coefficients c (n, n) of the loaded-end twist modes Psi_j = sum_i c_ij (x/L)^(i+1) on a
     unit length and their eigenvalues lam_j (GJ Psi'' = -lam j_p Psi there): the Ritz
     eigenvectors of the shaft fixed at x = 0 in the space x .. x^n, normalized to
-    int_0^1 Psi_j^2 = 1 and Psi_j(1) > 0."""
+    int_0^1 Psi_j^2 = 1 and Psi_j(1) > 0.  Solved once per count (read-only arrays)."""
     from scipy.linalg import eigh      # (when used: import dttmm stays light)
     p = np.arange(1, n_modes + 1)
     mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                          # int t^(p_i + p_j)
@@ -220,6 +236,8 @@ def _loaded_twist_modes(n_modes):
     lam, coef = eigh(stiff, mass)
     coef = coef / np.sqrt(np.einsum("ij,ik,kj->j", coef, mass, coef))
     coef = coef * np.sign(coef.sum(axis=0))
+    coef.setflags(write=False)
+    lam.setflags(write=False)
     return coef, lam
 
 
