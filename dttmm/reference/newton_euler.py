@@ -773,8 +773,9 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     alpha = np.empty((nt, n, 3))
     force = np.empty((nt, n, 3))
     moment = np.empty((nt, n, 3))
-    kinetic = np.empty(nt)
-    potential = np.empty(nt)
+    deflection = np.empty((nt, n, 3))
+    ground_rot = np.empty((nt, 3, 3))
+    ground_pos = np.empty((nt, 3))
     nm, e0 = prob.n_modal, prob.e0
     eta = np.ascontiguousarray(ys[:, e0:e0 + nm])
     eta_dot = np.ascontiguousarray(ys[:, e0 + nm:e0 + 2 * nm])
@@ -795,13 +796,15 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         y_i = prob.joint_inputs(t, ys[i])
         q_rec[i], qd_rec[i] = y_i[c0:c0 + nq], y_i[c0 + nq:c0 + 2 * nq]
         drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value)
+        deflection[i] = dk
         ground = model.ground_state(t)
-        kinetic[i], potential[i] = chain_energies(model, rk, wk, rik, vik, dk,
-                                                    ground_rotation=ground[3],
-                                                    eta=eta[i], eta_dot=eta_dot[i],
-                                                    joint_coordinates=q_rec[i] if nq else None,
-                                                    ground_position=ground[0],
-                                                    exact_foreshortening=exact_foreshortening)
+        ground_rot[i], ground_pos[i] = ground[3], ground[0]
+    # every sample's energies at once (their beams' shape tables made once, not per sample)
+    kinetic, potential = chain_energies(model, rot, omega, r_in, v_in, deflection,
+                                        ground_rotation=ground_rot, eta=eta, eta_dot=eta_dot,
+                                        joint_coordinates=q_rec if nq else None,
+                                        ground_position=ground_pos,
+                                        exact_foreshortening=exact_foreshortening)
     r_c, r_o = point_positions(model, rot, r_in)
     for k in range(n):                          # a beam's mass centre and output point move
         if prob.body_kind[k] == BEAM:           # with its deflection
