@@ -13,7 +13,7 @@ from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPE
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
                             MAX_LOADED_MODES, MODES, PINNED, STIFFENING, TORSION_MODES,
                             accurate_mode_count, auto_mode_count, auto_part_count,
-                            axial_frequencies, end_angle_shapes, modal_size,
+                            axial_frequencies, end_shapes, modal_size,
                             torsion_frequencies)
 from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
 from .elements.drives import MOTION
@@ -1116,7 +1116,7 @@ def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
         return rotation, omega
     eta_dot = np.zeros(2 * m + mt) if eta_dot is None else eta_dot
     family, length = int(beam_row[FAMILY]), beam_row[LENGTH]
-    slope, twist = end_angle_shapes(family, float(length), m, mt)
+    slope, twist = end_shapes(family, float(length), m, mt)[1:]
 
     def angles(e):
         return np.array([twist @ e[2 * m:2 * m + mt], -slope @ e[m:2 * m], slope @ e[:m]])

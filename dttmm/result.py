@@ -9,7 +9,7 @@ from .elements.strain_rod import rod_end_section, rod_energies, rod_output_offse
 from .vectors import cross, rows_dot
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
-                            foreshortening, mode_shapes, slope_grams, stretch_along,
+                            end_shapes, foreshortening, mode_shapes, slope_grams, stretch_along,
                             torsion_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
@@ -711,7 +711,7 @@ def beam_output_offset(row, rotation, omega, eta, eta_dot):
     foreshortening, "Geometric stiffening", zero without it; u(L) with the stretch u_x(L),
     "Stretch"); any leading axes (T states)."""
     length, nm = row[LENGTH], int(row[MODES])
-    y = mode_shapes(int(row[FAMILY]), length, nm, [length])[0][:, 0]
+    y = end_shapes(int(row[FAMILY]), float(length), nm, 0)[0]
     eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
     c, c_dot = foreshortening(row, eta, eta_dot)
     u_l, u_l_dot = (stretch_along(row, e, [length])[..., 0] for e in (eta, eta_dot))

@@ -75,24 +75,26 @@ def mode_shapes(family, length, n_modes, x):
 
 
 @lru_cache(maxsize=4096)
-def end_angle_shapes(family, length, n_modes, n_twist):
-    """(Y_k'(L), Psi_k(L)), each (n,): the bending slopes and twists at a beam's output end,
-    whose combinations are its output section's angles (model.output_section; docs/beam.md,
-    "End sections"): evaluated once per kind of beam (read-only arrays)."""
-    slope = mode_shapes(family, length, n_modes, [length])[1][:, 0]
+def end_shapes(family, length, n_modes, n_twist):
+    """(Y_k(L), Y_k'(L), Psi_k(L)), each (n,): the bending shapes, their slopes and the twists
+    at a beam's output end, which place its output point and turn its output section
+    (model.output_section, result.beam_output_offset; docs/beam.md, "End sections"):
+    evaluated once per kind of beam (read-only arrays)."""
+    y, slope = (v[:, 0] for v in mode_shapes(family, length, n_modes, [length])[:2])
     twist = torsion_shapes(family, length, n_twist, [length])[0][:, 0]
-    slope.setflags(write=False)
-    twist.setflags(write=False)
-    return slope, twist
+    for v in (y, slope, twist):
+        v.setflags(write=False)
+    return y, slope, twist
 
 
+@lru_cache(maxsize=1024)
 def foreshortening_integrals(family, length, n_modes):
     """D0, D1, D2 (3, n_modes, n_modes): int_0^L w(x) Y_j'(x) Y_k'(x) dx for w = 1, L - x and
     (L^2 - x^2) / 2, the geometric stiffness integrals of docs/beam.md ("Geometric
     stiffening"): c(L) = 1/2 eta^T D0 eta, int c = 1/2 eta^T D1 eta, int x c = 1/2 eta^T D2 eta
     per plane.  By Gauss-Legendre quadrature with 3 n_modes + 12 points (the integrands are
     products of two slopes and a quadratic, like the modal integrals of
-    kernels/transfers/beam.py::quadrature_size)."""
+    kernels/transfers/beam.py::quadrature_size); once per kind of beam (read-only)."""
     t, wt = np.polynomial.legendre.leggauss(3 * int(n_modes) + 12)
     x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
     dy = mode_shapes(family, length, n_modes, x)[1]
@@ -100,6 +102,7 @@ def foreshortening_integrals(family, length, n_modes):
     for i, weight in enumerate((wt, wt * (length - x), wt * 0.5 * (length * length - x * x))):
         gram = (dy * weight) @ dy.T
         out[i] = 0.5 * (gram + gram.T)
+    out.setflags(write=False)
     return out
 
 
