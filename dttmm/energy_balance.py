@@ -223,8 +223,7 @@ class EnergyBalance:
             np.concatenate([[self.p_last + p[0]], p[:-1] + p[1:]]))
         self.work = float(self.chunk_work[-1])
         self.p_last = p[-1]
-        last = {key: v[-1:] for key, v in values.items()}
-        e, kinetic = self.energy(self.result_of(last, steps[-1:])[0])
+        e, kinetic = self.energy(res)               # (its last row: the chunk's end)
         # over every row (a run from rest to rest in one chunk has no kinetic energy at its
         # ends: the scale was 0 there and any rounding "broke" the balance)
         self.largest_kinetic = max(self.largest_kinetic, kinetic, float(np.max(res.kinetic)))
