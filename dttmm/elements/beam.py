@@ -148,7 +148,8 @@ def _loaded_modes(n_modes):
     the exact static deflection under any end force and moment (n >= 2; one mode is x^2, the
     deflection under an end moment: the lowest Ritz mode of x^2, x^3 would be stiffer in a chain
     of elements, since it nearly drops the end curvature).  Normalized to
-    int_0^1 Y_j^2 = 1 and Y_j(1) > 0, so int_0^L Y_j Y_k dx = L delta_jk on any length."""
+    int_0^1 Y_j^2 = 1 and Y_j(1) > 0, so int_0^L Y_j Y_k dx = L delta_jk on any length.  Solved
+    once per count (read-only arrays): a static solve evaluates the shapes thousands of times."""
     from scipy.linalg import eigh      # (when used: import dttmm stays light)
     p = np.arange(2, n_modes + 2)
     mass = 1.0 / (p[:, None] + p[None, :] + 1.0)                     # int t^(p_i + p_j)
