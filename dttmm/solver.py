@@ -23,8 +23,8 @@ from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components
 from .elements.strain_rod import rod_tables as rod_element_tables
 from .elements.kinds import BODY_KIND, FLEXIBLE, JOINT_KIND, WITH_COORDINATES
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
-                            MODES, STIFFENING, TORSION_MODES, foreshortening_integrals, mode_shapes,
-                            slope_grams, torsion_shapes)
+                            MODES, STIFFENING, TORSION_MODES, end_shapes, foreshortening_integrals,
+                            mode_shapes, slope_grams, torsion_shapes)
 from .elements._checks import is_text
 from .elements.drives import (COMPILED_FORCE, FORCE, MOTION, PD, SPRING_DAMPER, compiled_force,
                               known_force, runs_in_loop)
@@ -1620,9 +1620,8 @@ def _beam_tips(model):
     for k in np.nonzero(model.body_kind == BEAM)[0]:
         row = model.beam_params[k]
         length, nm = row[LENGTH], int(row[MODES])
-        y, slope = (v[:, 0] for v in mode_shapes(int(row[FAMILY]), length, nm, [length])[:2])
-        psi = torsion_shapes(int(row[FAMILY]), length, int(row[TORSION_MODES]),
-                             [length])[0][:, 0]
+        y, slope, psi = end_shapes(int(row[FAMILY]), float(length), nm,
+                                   int(row[TORSION_MODES]))
         tips.append((model.body_names[k], length, slice(offsets[k], offsets[k + 1]), y, psi,
                      slope, k))
     return tips

@@ -78,8 +78,8 @@ def mode_shapes(family, length, n_modes, x):
 def end_shapes(family, length, n_modes, n_twist):
     """(Y_k(L), Y_k'(L), Psi_k(L)), each (n,): the bending shapes, their slopes and the twists
     at a beam's output end, which place its output point and turn its output section
-    (model.output_section, result.beam_output_offset; docs/beam.md, "End sections"):
-    evaluated once per kind of beam (read-only arrays)."""
+    (model.output_section, result.beam_output_offset, solver._beam_tips; docs/beam.md, "End
+    sections"): evaluated once per kind of beam (read-only arrays)."""
     y, slope = (v[:, 0] for v in mode_shapes(family, length, n_modes, [length])[:2])
     twist = torsion_shapes(family, length, n_twist, [length])[0][:, 0]
     for v in (y, slope, twist):
