@@ -76,6 +76,10 @@ class PrescribedMotion:
     >>> ground = dttmm.Ground(motion=motion)
     """
 
+    # (unit axis, angle, rate, acceleration) of a spin made by spin_about_axis, else None: the
+    # reference evaluates a profile's angle there in compiled code (reference/hub.py)
+    spin = None
+
     def __init__(self, position=None, velocity=None, acceleration=None,
                  rotation=None, angular_velocity=None, angular_acceleration=None):
         self._f = (position, velocity, acceleration, rotation, angular_velocity,
@@ -181,9 +185,11 @@ class PrescribedMotion:
             th = angle(t)
             return np.eye(3) + np.sin(th) * k + (1.0 - np.cos(th)) * k @ k
 
-        return cls(position=lambda t: p, rotation=rotation,
-                   angular_velocity=lambda t: rate(t) * n,
-                   angular_acceleration=lambda t: acceleration(t) * n)
+        motion = cls(position=lambda t: p, rotation=rotation,
+                     angular_velocity=lambda t: rate(t) * n,
+                     angular_acceleration=lambda t: acceleration(t) * n)
+        motion.spin = (n, angle, rate, acceleration)
+        return motion
 
 
 @dataclass(frozen=True)

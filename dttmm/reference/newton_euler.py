@@ -265,6 +265,7 @@ from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
                      stretch_shape_constants, twist_shape_constants)
 from .equations import _kinematics, _solve_dynamics, _stiffening_block, rhs_kernel
+from .hub import hub_table
 from .strain_rod import station_arrays, rod_sections
 
 
@@ -570,16 +571,20 @@ class _Problem:
 
     def fixed_args(self):
         """(rhs_kernel's arguments after y, the spring-damper drives as rows [coordinate,
-        stiffness, damping, rest]) when nothing in them depends on time or runs Python (no
-        drive but springs, applied load, closing joint's motion or force, or ground motion given
-        as a function): integrator.py runs such a model in compiled code, setting the springs'
-        forces as joint_inputs does; None otherwise."""
+        stiffness, damping, rest], the ground's spin axis and its angle's terms: hub.py's
+        hub_table) when nothing in them runs Python (no drive but springs, applied load, closing
+        joint's motion or force, or ground motion given as functions other than a spin by a
+        profile's angle): integrator.py runs such a model in compiled code, setting the springs'
+        forces as joint_inputs does and the spun ground as ground does; None otherwise."""
+        hub = hub_table(self.model.ground_motion)
         if (self._motions or self._drive_fns or self._pds or self._force_fns
                 or self._torque_fns or self._line_load_fns or self._closure_motions
-                or self._closure_forces or self.model.ground_motion is not None):
+                or self._closure_forces or hub is None):
             return None
         springs = np.array([list(row) for row in self._springs], dtype=float).reshape(-1, 4)
-        return self._args(self.initial_state(), 0.0)[1:], springs
+        # (the ground's arrays among the arguments are the run's own, made at t = 0: the
+        # integrator writes a spun ground's motion into them)
+        return (self._args(self.initial_state(), 0.0)[1:], springs) + hub
 
     def evaluate(self, t, y):
         """Everything Result records at one time, from the state (see _solve_dynamics)."""
@@ -639,8 +644,9 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
 def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=None,
                        exact_foreshortening=False):
     """Integrate the model with the global Newton-Euler equations and scipy's solve_ivp (its
-    DOP853 run in compiled code when nothing in the model runs Python during the run:
-    reference/integrator.py; docs/reference.md, "Integrator").
+    DOP853 run in compiled code when nothing in the model runs Python during the run, a hub
+    spun by a profile's angle included: reference/integrator.py, reference/hub.py;
+    docs/reference.md, "Integrator").
 
     An independent check of DT-TMM (docs/reference.md; the formulation is in this module's
     docstring): it shares only the model description with the rest of the package.  Every
@@ -736,11 +742,10 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     if prob.n_state > 0 and fixed is not None:
         # scipy's DOP853 in compiled code (integrator.py); its first call, over a vanishing
         # interval, compiles or loads it outside the timing
-        args, springs = fixed
-        integrate_dop853(args, springs, y0, 1e-300, 1.0, 1.0, np.zeros(0))
+        integrate_dop853(*fixed, y0, 1e-300, 1.0, 1.0, np.zeros(0))
         t0 = time.perf_counter()
         ys, n_steps, nfev, status, t_reached = integrate_dop853(
-            args, springs, y0, t_end, float(rtol), float(atol), t_eval)
+            *fixed, y0, t_end, float(rtol), float(atol), t_eval)
         wall = time.perf_counter() - t0
         if status != OK:
             raise RuntimeError(f"simulate_reference: integration failed at t = {t_reached}: "
