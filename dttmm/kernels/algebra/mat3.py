@@ -273,62 +273,66 @@ def t_inverse(a):
                  c02 * f, (a[1] * a[6] - a[0] * a[7]) * f, (a[0] * a[4] - a[1] * a[3]) * f)
 
 
-@kernel(entry=True)
+@kernel
 def least_norm_solve3(a, b, rcond):
     """The least-norm least-squares solution of a x = b (3 x 3), as np.linalg.pinv(a, rcond) @ b
     but without allocating: by a one-sided Jacobi SVD (Hestenes), whose singular values are
     accurate to rounding relative to the largest (those of a^T a would square the relative
-    error).  Columns p, q of u = a v are rotated until orthogonal; then a = u v^T with u's
-    columns sigma_j u_j, and x = sum over sigma_j > rcond sigma_max of v_j (u_j . b) / sigma_j."""
-    u = t_of_mat(a)
-    v = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    error).  Columns p, q of u = a v are rotated until orthogonal (_jacobi_rotation, the pairs
+    (0, 1), (0, 2), (1, 2) in turn); then a = u v^T with u's columns sigma_j u_j, and
+    x = sum over sigma_j > rcond sigma_max of v_j (u_j . b) / sigma_j.  The columns are 3-tuples
+    named apiece, not a 9-tuple indexed by the pair: numba typed each runtime index into a tuple
+    as a branch per entry, and the kernel took 7.4 s of the three-pendulum's cold compile
+    (under 2 s so)."""
+    u0 = (a[0, 0], a[1, 0], a[2, 0])
+    u1 = (a[0, 1], a[1, 1], a[2, 1])
+    u2 = (a[0, 2], a[1, 2], a[2, 2])
+    v0, v1, v2 = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
     for _ in range(30):
-        rotated = False
-        for p, q in ((0, 1), (0, 2), (1, 2)):
-            alpha = u[p] * u[p] + u[3 + p] * u[3 + p] + u[6 + p] * u[6 + p]
-            beta = u[q] * u[q] + u[3 + q] * u[3 + q] + u[6 + q] * u[6 + q]
-            gamma = u[p] * u[q] + u[3 + p] * u[3 + q] + u[6 + p] * u[6 + q]
-            if abs(gamma) <= 1e-15 * np.sqrt(alpha * beta):
-                continue
-            rotated = True
-            zeta = (beta - alpha) / (2.0 * gamma)
-            t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + np.sqrt(1.0 + zeta * zeta))
-            c = 1.0 / np.sqrt(1.0 + t * t)
-            s = c * t
-            u = _rotate_columns(u, p, q, c, s)
-            v = _rotate_columns(v, p, q, c, s)
-        if not rotated:
+        u0, u1, v0, v1, rotated01 = _jacobi_rotation(u0, u1, v0, v1)
+        u0, u2, v0, v2, rotated02 = _jacobi_rotation(u0, u2, v0, v2)
+        u1, u2, v1, v2, rotated12 = _jacobi_rotation(u1, u2, v1, v2)
+        if not (rotated01 or rotated02 or rotated12):
             break
-    sigma = (np.sqrt(u[0] * u[0] + u[3] * u[3] + u[6] * u[6]),
-             np.sqrt(u[1] * u[1] + u[4] * u[4] + u[7] * u[7]),
-             np.sqrt(u[2] * u[2] + u[5] * u[5] + u[8] * u[8]))
-    cutoff = rcond * max(sigma[0], sigma[1], sigma[2])
-    x0 = x1 = x2 = 0.0
-    for j in range(3):
-        if sigma[j] > cutoff:
-            f = (u[j] * b[0] + u[3 + j] * b[1] + u[6 + j] * b[2]) / (sigma[j] * sigma[j])
-            x0 += f * v[j]
-            x1 += f * v[3 + j]
-            x2 += f * v[6 + j]
-    return x0, x1, x2
+    sigma0 = np.sqrt(u0[0] * u0[0] + u0[1] * u0[1] + u0[2] * u0[2])
+    sigma1 = np.sqrt(u1[0] * u1[0] + u1[1] * u1[1] + u1[2] * u1[2])
+    sigma2 = np.sqrt(u2[0] * u2[0] + u2[1] * u2[1] + u2[2] * u2[2])
+    cutoff = rcond * max(sigma0, sigma1, sigma2)
+    x = _add_singular_term((0.0, 0.0, 0.0), u0, v0, sigma0, cutoff, b)
+    x = _add_singular_term(x, u1, v1, sigma1, cutoff, b)
+    return _add_singular_term(x, u2, v2, sigma2, cutoff, b)
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def _rotated(m, i, p, q, c, s):
-    """Entry i of m (9-tuple, row-major 3 x 3) after its columns p, q become c m_p - s m_q and
-    s m_p + c m_q."""
-    col = i % 3
-    row = i - col
-    if col == p:
-        return c * m[i] - s * m[row + q]
-    if col == q:
-        return s * m[row + p] + c * m[i]
-    return m[i]
+@kernel
+def _jacobi_rotation(up, uq, vp, vq):
+    """One Jacobi rotation of the columns up, uq of u (and vp, vq of v) that makes up . uq zero:
+    (up, uq, vp, vq, whether rotated); none where they are orthogonal to 1e-15 already."""
+    alpha = up[0] * up[0] + up[1] * up[1] + up[2] * up[2]
+    beta = uq[0] * uq[0] + uq[1] * uq[1] + uq[2] * uq[2]
+    gamma = up[0] * uq[0] + up[1] * uq[1] + up[2] * uq[2]
+    if abs(gamma) <= 1e-15 * np.sqrt(alpha * beta):
+        return up, uq, vp, vq, False
+    zeta = (beta - alpha) / (2.0 * gamma)
+    t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + np.sqrt(1.0 + zeta * zeta))
+    c = 1.0 / np.sqrt(1.0 + t * t)
+    s = c * t
+    up, uq = _rotated_pair(up, uq, c, s)
+    vp, vq = _rotated_pair(vp, vq, c, s)
+    return up, uq, vp, vq, True
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def _rotate_columns(m, p, q, c, s):
-    """m (9-tuple, row-major 3 x 3) with columns p, q rotated (_rotated)."""
-    return (_rotated(m, 0, p, q, c, s), _rotated(m, 1, p, q, c, s), _rotated(m, 2, p, q, c, s),
-            _rotated(m, 3, p, q, c, s), _rotated(m, 4, p, q, c, s), _rotated(m, 5, p, q, c, s),
-            _rotated(m, 6, p, q, c, s), _rotated(m, 7, p, q, c, s), _rotated(m, 8, p, q, c, s))
+@kernel
+def _rotated_pair(p, q, c, s):
+    """(c p - s q, s p + c q) of two 3-vectors."""
+    return ((c * p[0] - s * q[0], c * p[1] - s * q[1], c * p[2] - s * q[2]),
+            (s * p[0] + c * q[0], s * p[1] + c * q[1], s * p[2] + c * q[2]))
+
+
+@kernel
+def _add_singular_term(x, u, v, sigma, cutoff, b):
+    """x + v (u . b) / sigma^2 (u = sigma times the left singular vector), or x where sigma is
+    at or below the cutoff."""
+    if sigma <= cutoff:
+        return x
+    f = (u[0] * b[0] + u[1] * b[1] + u[2] * b[2]) / (sigma * sigma)
+    return x[0] + f * v[0], x[1] + f * v[1], x[2] + f * v[2]
