@@ -208,7 +208,7 @@ def _rod_state(k, rods, y, e0, n_modal, m_off):
     return rod_state(rods[1][k], rods[2][k], phi, q, qd), q, qd
 
 
-@kernel(entry=True)
+@kernel
 def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                 shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, r_g, v_g, rot_g, w_g, topology,
                 attachment_point, joints, rods):
@@ -307,7 +307,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             b_r, b_t, v_o, rho_att, acc_v_att)
 
 
-@kernel(entry=True)
+@kernel
 def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hinge_params, rot_g,
                    w_g, parent):
     """Force q and couple m every elastic hinge exerts on its outboard body (world; zero rows for
@@ -653,7 +653,7 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
                     s[rf + i, pce + j] += hdb[i, j]
 
 
-@kernel(entry=True)
+@kernel
 def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b_t, rho_att,
               acc_v_att, q_el, m_el, body_params, hinge_kind, hinge_params, body_kind,
               beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0, f_col, m_col, loops,

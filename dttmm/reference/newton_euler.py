@@ -264,7 +264,7 @@ from ..result import Result, chain_energies, point_positions, rotation_to_quater
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
                      stretch_shape_constants, twist_shape_constants)
-from .equations import _kinematics, _solve_dynamics, _stiffening_block, rhs_kernel
+from .equations import _solve_dynamics, _stiffening_block, rhs_kernel
 from .hub import hub_table
 from .strain_rod import station_arrays, rod_sections
 
@@ -589,19 +589,6 @@ class _Problem:
     def evaluate(self, t, y):
         """Everything Result records at one time, from the state (see _solve_dynamics)."""
         return _solve_dynamics(*self._args(np.ascontiguousarray(y, dtype=float), t))
-
-    def end_sections(self, t, y):
-        """Every body's output point and section at one time, world: (rho_O = r_O - r_I, v_O,
-        A_O, w_O), each (n, ...)."""
-        r_g, v_g, _, rot_g, w_g, _ = self.ground(t)
-        y = self.joint_inputs(t, np.ascontiguousarray(y, dtype=float))
-        out = _kinematics(y, self.body_params, self.kinds,
-                          self.hinge_params, self.body_kind, self.beam_params, self.shape_vec,
-                          self.shape_mat, self.q_off, self.w_off, self.d_off, self.m_off,
-                          self.e0, self.n_modal,
-                          r_g, v_g, rot_g, w_g, self.topology, self.attachment_point,
-                          self.joints, self.rods)
-        return out[6], out[13], out[7], out[8]
 
 
 def _check_args(model, t_end, method, rtol, atol, t_eval):

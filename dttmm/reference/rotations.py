@@ -34,7 +34,7 @@ def _cross(a, b):
     return c
 
 
-@kernel(entry=True)
+@kernel
 def _hat(v):
     m = np.zeros((3, 3))
     m[0, 1] = -v[2]
@@ -108,7 +108,7 @@ def _log_rot(r):
     return psi
 
 
-@kernel(entry=True)
+@kernel
 def _so3_coefficients(t):
     """Coefficients of exp and of the left Jacobian at the rotation vector t, p = |t|:
     c = sin p / p, a = (1 - cos p)/p^2, b = (p - sin p)/p^3 and a1 = a'(p)/p, b1 = b'(p)/p
@@ -146,7 +146,7 @@ def _so3_coefficients(t):
     return c, a, b, a1, b1
 
 
-@kernel(entry=True)
+@kernel
 def _expm(t):
     """exp(t^), Rodrigues' formula."""
     c, a, _, _, _ = _so3_coefficients(t)
@@ -155,7 +155,7 @@ def _expm(t):
     return e
 
 
-@kernel(entry=True)
+@kernel
 def _left_jacobian(t):
     """J_l(t) = I + a t^ + b t^ t^: exp((t + d)^) = exp((J_l d)^) exp(t^) to first order."""
     _, a, b, _, _ = _so3_coefficients(t)
@@ -163,7 +163,7 @@ def _left_jacobian(t):
     return np.eye(3) + a * th + b * matmul(th, th)
 
 
-@kernel(entry=True)
+@kernel
 def _left_jacobian_derivative(t, u):
     """dJ_l[u] = d/ds J_l(t + s u) at s = 0 = (t.u) (a1 t^ + b1 t^ t^) + a u^ + b (u^ t^ + t^ u^),
     since d p / ds = (t.u) / p and a'(p) dp/ds = a1 (t.u)."""
@@ -174,7 +174,7 @@ def _left_jacobian_derivative(t, u):
     return tu * (a1 * th + b1 * matmul(th, th)) + a * uh + b * (matmul(uh, th) + matmul(th, uh))
 
 
-@kernel(entry=True)
+@kernel
 def _end_section_rate(t, t_dot, t_ddot):
     """d/dt [J_l(t) t'] = J_l(t) t'' + dJ_l[t'] t' (body frame), for tests and the kernels."""
     return (matvec(_left_jacobian(t), t_ddot)
