@@ -439,6 +439,7 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
 
     from dttmm import StrainRod
     from dttmm.chains import three_pendulum
+    from dttmm.kernels import python_twin
     from dttmm.mechanisms import slider_crank
     from dttmm.reference import equations
     from dttmm.reference.integrator import integrate_dop853
@@ -456,7 +457,8 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
         fixed = problem.fixed_args()
         if fixed is not None:
             integrate_dop853(*fixed, problem.initial_state(), 1e-300, 1.0, 1.0, np.zeros(0))
-    for kernel in (equations.rhs_kernel, equations._solve_dynamics, integrate_dop853):
+    for kernel in (equations.rhs_kernel, python_twin(equations.rhs_kernel),
+                   equations._solve_dynamics, integrate_dop853):
         assert len(getattr(kernel, "signatures", [None])) <= 1, kernel.signatures
 
 

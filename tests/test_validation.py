@@ -137,6 +137,7 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
     own arrays read-only (a second run of each model)."""
     from dttmm import simulate_reference
     from dttmm.chains import arm, three_pendulum
+    from dttmm.kernels import python_twin
     from dttmm.kernels.stepping import loop, step as kstep
     from dttmm.reference import equations
     for model in (three_pendulum(), arm("motion")):
@@ -149,6 +150,7 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
         simulate_reference(model, 0.01, rtol=1e-6, atol=1e-6)
     kernels = list(loop._SKELETONS.values()) + [kstep.initial_accelerations,
                                                 equations.rhs_kernel,
+                                                python_twin(equations.rhs_kernel),
                                                 equations._solve_dynamics]
     for kernel in kernels:
         for signature in getattr(kernel, "signatures", []):

@@ -1121,13 +1121,17 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
             b_r, coord_acc, generalized, rho_att, acc_v_att, closure_load)
 
 
-@kernel(entry=True)
+@kernel
 def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec,
                shape_mat, q_off, w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops,
                n_unknowns, gravity, r_g, v_g, a_g, rot_g, w_g, wd_g, forces, torques, line_loads,
                topology, attachment_point, joints, exact, rods):
     """dy/dt of the state [quaternions, angular velocities, (d, d') of elastic hinges,
-    modal coordinates of all beams, their rates, joint coordinates, their rates]."""
+    modal coordinates of all beams, their rates, joint coordinates, their rates].  A callee: the
+    compiled integrator links it (integrator.py); solve_ivp calls its twin with entry points
+    (newton_euler.py's _Problem.rhs), compiled only when a run goes through solve_ivp: as an
+    entry itself its code was optimized and compiled once more on every first use, ~30 s cold
+    (docs/solver.md, "Compile time", item 9)."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
      b_r, coord_acc, _, rho_att, acc_v_att, _) = _solve_dynamics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,

@@ -256,6 +256,7 @@ from ..elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, LENGTH, MOD
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
 from ..elements.kinds import JOINT_KIND, coordinate_count
+from ..kernels import python_twin
 from ..closures import (assemble, check_drives_move, closure_forces, constraint_rows,
                         has_closure_drives, loop_residuals)
 from ..model import Model
@@ -567,7 +568,7 @@ class _Problem:
         return args
 
     def rhs(self, t, y):
-        return rhs_kernel(*self._args(np.ascontiguousarray(y, dtype=float), t))
+        return python_twin(rhs_kernel)(*self._args(np.ascontiguousarray(y, dtype=float), t))
 
     def fixed_args(self):
         """(rhs_kernel's arguments after y, the spring-damper drives as rows [coordinate,
