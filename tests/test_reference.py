@@ -470,7 +470,7 @@ def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
     reference/hub.py); the same run through solve_ivp (the compiled path turned off) gives the
     same states to rounding, in as many steps to one.  Not the spun tube's steps: its stiff
     modes make the count chaotic, for scipy's integrator too (seed 000's tube with a mass over
-    2 s: 681 to 2269 steps from starts 1e-15 apart), so there the states alone."""
+    2 s: 710 to 2269 steps from four starts 1e-15 apart), so there the states alone."""
     import sys
     from pathlib import Path
 
