@@ -83,9 +83,22 @@ def _compile_reference():
     simulate_reference(joints_arm(), 1e-3)
 
 
+def _compile_reference_rhs():
+    """The reference's right-hand side as scipy's solve_ivp calls it (the twin of rhs_kernel, a
+    callee the compiled integrator links: ~30 s), which the first test through scipy on each
+    worker compiled otherwise (measured: both did)."""
+    from helpers import joints_arm
+
+    from dttmm.reference import simulate_reference
+    simulate_reference(joints_arm(), 1e-3, method="RK45")
+
+
+# (in the order they are taken: measured, the first worker compiles the general loop, then the
+# welded chain and the reference's right-hand side while the other compiles the rest)
 KERNEL_FAMILIES = (("general_loop", _compile_general_loop), ("reference", _compile_reference),
                    ("fused_tree", _compile_fused_tree), ("fused_chain", _compile_fused_chain),
-                   ("welded_chain", _compile_welded_chain))
+                   ("welded_chain", _compile_welded_chain),
+                   ("reference_rhs", _compile_reference_rhs))
 
 
 def _compile_families(directory):

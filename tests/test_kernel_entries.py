@@ -37,6 +37,20 @@ def test_a_callee_kernel_has_no_python_entry_and_python_calls_run_its_twin():
     assert twin.py_func.__qualname__ == "exp_coefficients__python"   # (its own cache files)
 
 
+def test_no_kernel_has_a_c_entry_point():
+    """numba's C entry point (for numba.cfunc and first-class function values) is left out of
+    every kernel: an entry kernel and a callee's twin have the CPython one only."""
+    from dttmm.kernels.transfers.joint import n_coordinates
+    assert n_coordinates(1) >= 0 and exp_coefficients(0.25)[0] > 0.0   # (compiled or loaded)
+    for compiled in (n_coordinates, kernels.PYTHON_CALLED[exp_coefficients]):
+        assert not isinstance(compiled, CalleeKernel)
+        assert compiled.targetoptions["no_cfunc_wrapper"]
+        assert not compiled.targetoptions.get("no_cpython_wrapper", False)
+        cres = next(iter(compiled.overloads.values()))
+        assert cres.library.get_pointer_to_function(cres.fndesc.llvm_cpython_wrapper_name) != 0
+        assert cres.library.get_pointer_to_function(cres.fndesc.llvm_cfunc_wrapper_name) == 0
+
+
 def test_a_kernels_copies_are_of_its_kind():
     assert isinstance(solve_step, CalleeKernel)
     assert isinstance(recompiled(solve_step, solve_step.py_func), CalleeKernel)

@@ -125,8 +125,15 @@ def loop_piece(fn):
 # run's structures) and a C entry point beside its code, optimizes both and makes machine code
 # of them in its own library, though a kernel's callers link only its code.  Measured on the
 # four-bar's cold compile (every callee compiled without them, one process each, quiet):
-# 83.5 s against 107.5 s.
-_NO_PYTHON_ENTRY = dict(no_cpython_wrapper=True, no_cfunc_wrapper=True)
+# 83.5 s against 107.5 s.  The C entry point (a C function of the kernel's own arguments, for
+# numba.cfunc and numba's first-class function values) is left out of every kernel, entries and
+# twins too: Python calls the CPython one, kernels call the code itself (the compiled drives'
+# C callbacks are the user's functions', elements/drives.py).  Measured on the four-bar's cold
+# compile, two processes side by side twice: 108 -> 103 s and 98 -> 94 s (the skeleton's C entry
+# alone was ~2,000 lines of LLVM IR beside its ~10,000: every array of its structures passed
+# as separate scalars); docs/solver.md, "Compile time", item 14.
+_NO_C_ENTRY = dict(no_cfunc_wrapper=True)
+_NO_PYTHON_ENTRY = dict(no_cpython_wrapper=True, **_NO_C_ENTRY)
 
 
 class LinkedOnlyLibrary(JITCodeLibrary):
@@ -208,7 +215,7 @@ def python_twin(kernel):
     twin = PYTHON_CALLED.get(kernel)
     if twin is None:
         clone = code_copy(kernel.py_func, "python", kernel.py_func.__globals__)
-        options = {k: v for k, v in kernel.targetoptions.items() if k not in _NO_PYTHON_ENTRY}
+        options = {k: v for k, v in kernel.targetoptions.items() if k != "no_cpython_wrapper"}
         twin = PYTHON_CALLED[kernel] = _dispatcher(CPUDispatcher, clone, options,
                                                    cache=not isinstance(kernel._cache, NullCache))
     return twin
@@ -248,7 +255,7 @@ def _compiled(fn, entry, **options):
     below, with or without their arguments)."""
     if fn is None:
         return lambda f: _compiled(f, entry, **options)
-    kind, no_entry = (CPUDispatcher, {}) if entry else (CalleeKernel, _NO_PYTHON_ENTRY)
+    kind, no_entry = (CPUDispatcher, _NO_C_ENTRY) if entry else (CalleeKernel, _NO_PYTHON_ENTRY)
     return _dispatcher(kind, fn, dict(options, fastmath=CONTRACT, **no_entry))
 
 

@@ -11,7 +11,7 @@ dttmm.profiles Profile as its angle, read here as a table of terms, so that a ru
       ramp      v min(t / d, 1)                       v / d (t < d)      0
       spin_up   (W / T)(t^2 / 2 + (cos(c t) - 1) / c^2),  c = 2 pi / T, for t <= T;
                 W (t - T / 2) after                   its derivatives
-    R(t) = I + sin(angle) K + (1 - cos(angle)) K K   (K = [n]x, n the unit axis: Rodrigues)
+    R(t) = exp(angle [n]x)   (n the unit axis; rotations.py's _expm: Rodrigues' formula)
     w(t) = angle'(t) n,   w'(t) = angle''(t) n;   the ground point fixed (v = a = 0)
 
 A profile of any other kind (a table), of vector values, or an angle given as a plain function
@@ -23,6 +23,7 @@ import numpy as np
 
 from ..kernels import kernel
 from ..profiles import Profile
+from .rotations import _expm
 
 CONSTANT, LINEAR, SINE, RAMP, SPIN_UP = 0, 1, 2, 3, 4
 ROW = 5             # a term's row: [kind, its parameters (zero-padded)]
@@ -120,12 +121,7 @@ def spun_ground(axis, terms, t, rot, w, w_dot):
     if terms.shape[0] == 0:
         return
     a, a_dot, a_ddot = _angle(terms, t)
-    s, c = math.sin(a), 1.0 - math.cos(a)
-    n0, n1, n2 = axis[0], axis[1], axis[2]
-    k = ((0.0, -n2, n1), (n2, 0.0, -n0), (-n1, n0, 0.0))
+    rot[:, :] = _expm(a * axis)
     for i in range(3):
-        for j in range(3):
-            kk = k[i][0] * k[0][j] + k[i][1] * k[1][j] + k[i][2] * k[2][j]
-            rot[i, j] = (1.0 if i == j else 0.0) + s * k[i][j] + c * kk
         w[i] = a_dot * axis[i]
         w_dot[i] = a_ddot * axis[i]
