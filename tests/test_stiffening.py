@@ -3,9 +3,11 @@ the Newton-Euler reference and against the beam without it; the spin-up's one-el
 in test_examples_and_results.py, the kernels' in test_kernels.py."""
 import numpy as np
 import pytest
+from numba import njit
 
 from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate, simulate_reference
 from dttmm.chains import three_pendulum
+from dttmm.reference import equations as eq
 from helpers import fitted_order, output_errors_against_reference
 
 
@@ -318,14 +320,23 @@ def _reference_system_sign(model, bend, exact=False):
     the joints' rows) at rest, with the first element bent in its first mode by `bend` rad at its
     end (exact: with the foreshortening kept exactly)."""
     from dttmm.elements.beam import FAMILY, LENGTH, mode_shapes
-    from dttmm.reference import equations as eq
     from dttmm.reference.newton_euler import _Problem
     p = _Problem(model, exact)
     y = p.initial_state()
     row = model.beam_params[0]
     slope = mode_shapes(int(row[FAMILY]), row[LENGTH], 2, [row[LENGTH]])[1][0, 0]
     y[p.e0] = bend / slope
-    args = p._args(y, 0.0)
+    return np.linalg.slogdet(_reference_system(p._args(y, 0.0)))[0]
+
+
+@njit
+def _reference_system(args):
+    """The reference's assembled system at the state of its right-hand side's arguments (as
+    reference/equations.py::_solve_dynamics assembles it).  One function of the test's calling
+    the reference's kernels, which only kernels call (their code compiled already, for the
+    reference's runs), where calling each from Python would compile its twin (~40 s cold).
+    Not cached: numba would not see an edit of the kernels it links (kernels/__init__.py,
+    _drop_stale_caches, looks after the package's caches only)."""
     (y, body_params, kinds, hinge_params, body_kind, beam_params, shape_vec, shape_mat, q_off,
      w_off, d_off, m_off, e0, n_modal, e_col0, f_col, m_col, loops, n_unknowns, gravity, r_g, v_g,
      a_g, rot_g, w_g, wd_g, forces, torques, line_loads, topology, attachment_point,
@@ -342,7 +353,7 @@ def _reference_system_sign(model, bend, exact=False):
                         body_kind, beam_params, shape_vec, shape_mat, m_off, e0, n_modal, e_col0,
                         f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
                         torques, line_loads, topology, joints, tables, rods)
-    return np.linalg.slogdet(s)[0]
+    return s
 
 
 @pytest.mark.parametrize("bend, exact", [
