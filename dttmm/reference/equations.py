@@ -1130,8 +1130,8 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
     modal coordinates of all beams, their rates, joint coordinates, their rates].  A callee: the
     compiled integrator links it (integrator.py); solve_ivp calls its twin with entry points
     (newton_euler.py's _Problem.rhs), compiled only when a run goes through solve_ivp: as an
-    entry itself its code was optimized and compiled once more on every first use, ~30 s cold
-    (docs/solver.md, "Compile time", item 9)."""
+    entry itself its code was optimized and made into machine code once more (~30 s) wherever
+    numba's cache was cold (docs/solver.md, "Compile time", item 9)."""
     (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
      b_r, coord_acc, _, rho_att, acc_v_att, _) = _solve_dynamics(
         y, body_params, hinge_kind, hinge_params, body_kind, beam_params, shape_vec, shape_mat,
