@@ -4,10 +4,10 @@ one set of options builds before its first step, built once.
 PreparedRun holds the kernel model and its tables, the mode and the loop variant the method
 table picks (methods.py), the run's preallocated arrays (state, sweep, loop, monitor: "the
 structures", the only things the compiled loop writes besides a chunk's records) and their
-values after the consistent start.  The structures' arrays are views of one flat buffer per
-dtype (float64, int64), so that putting the start back before a run, or keeping a run's end
-for its checkpoint, is one copy of each buffer (a copy per array would cost ~0.5 us each, of
-~100).
+values after the consistent start.  In a run that may be kept (below) the structures' arrays
+are views of one flat buffer per dtype (float64, int64), so that putting the start back before
+a run, or keeping a run's end for its checkpoint, is one copy of each buffer (a copy per array
+would cost ~0.5 us each, of ~100); any other run steps the arrays as they were made.
 
 A prepared run is kept on the model (per RunOptions.plan_key, at most KEEP of them) where its
 start is a pure function of the model and the options (no Python function of the user's is
@@ -74,7 +74,7 @@ def kernels_used(model, scheme, method="riccati"):
 class PreparedRun:
     """The arrays and choices of a run of opts.model with opts' scheme, sweep, step and
     iterations, started (the consistent start taken) and ready to step.  Built by
-    prepared_run; a run restores `started` (restart) before stepping."""
+    prepared_run; a kept one's run restores `started` (restart) before stepping."""
 
     def __init__(self, opts):
         scheme = opts.scheme
@@ -166,8 +166,15 @@ class PreparedRun:
                                    newton_iterations=int(opts.newton_iterations))
 
         structures = (state, ws.sweep, loop, monitor)
-        # most arrays: views of buffers; layout: each leaf's place in them (None: not there)
-        self.buffers, structures, self.layout = _gathered(structures)
+        # a run that may be kept on the model (prepared_run): most arrays views of buffers, the
+        # layout each leaf's place in them (None: not there); any other run's arrays stay as
+        # they are (gathered, a million bodies' arrays would be held twice at once, and three
+        # times with the start's copy: 3.5 GB at 10^6 bodies against 2 GB)
+        self.keepable = (start_is_pure(user_model)
+                         and sum(a.nbytes for a in _movable(structures).values()) <= KEEP_BYTES)
+        self.buffers, self.layout = [], None
+        if self.keepable:
+            self.buffers, structures, self.layout = _gathered(structures)
         self.state, self.sweep, self.loop, self.monitor = self.structures = structures
         self.loops = self.loop.loops if loop_name == "general" else loops
         histories = self.loop.histories if loop_name == "general" else histories
@@ -175,9 +182,11 @@ class PreparedRun:
                                    v_c=(self.state.v_c if scheme.name != "paper"
                                         else histories[4]),
                                    closure_wrench=self.loops.wrench)
-        self.others = [a for a, place in zip(leaves(structures), self.layout)
-                       if place is None and a.size]
-        self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        self.others = self.started = None
+        if self.keepable:           # (the start's values, which restart puts back)
+            self.others = [a for a, place in zip(leaves(structures), self.layout)
+                           if place is None and a.size]
+            self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
         if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
             self.derivative_run = s.start_pass(     # (fixed ground, no loads or drives:
                 params, settings, self.state, self.sweep, self.monitor,    # check_supported)
@@ -247,20 +256,26 @@ def _root(a):
     return a
 
 
-def _gathered(structures):
-    """(buffers, structures, layout): every C-contiguous array of a GATHERED dtype in the
-    nested tuples replaced by a view of one flat buffer per dtype holding its values (an array
-    whose memory another leaf shares is left as it is; an array that appears twice becomes one
-    view); layout: each leaf's (buffer, offset, shape) in the new structures' leaf order, None
-    for a leaf left as it is."""
+def _movable(structures):
+    """{id: array} of the arrays in the nested tuples that _gathered moves into its buffers:
+    every C-contiguous array of a GATHERED dtype whose memory no other leaf shares (an array
+    that appears twice, once)."""
     arrays = leaves(structures)
     roots = [id(_root(a)) for a in arrays]
     sharing = {}
     for a, root in zip(arrays, roots):
         sharing.setdefault(root, set()).add(id(a))
-    movable = {id(a): a for a, root in zip(arrays, roots)
-               if a.dtype in GATHERED and a.flags.c_contiguous and a.size
-               and len(sharing[root]) == 1}
+    return {id(a): a for a, root in zip(arrays, roots)
+            if a.dtype in GATHERED and a.flags.c_contiguous and a.size
+            and len(sharing[root]) == 1}
+
+
+def _gathered(structures):
+    """(buffers, structures, layout): every array _movable names replaced by a view of one
+    flat buffer per dtype holding its values; layout: each leaf's (buffer, offset, shape) in
+    the new structures' leaf order, None for a leaf left as it is."""
+    arrays = leaves(structures)
+    movable = _movable(structures)
     buffers, places = [], {}
     for i, dtype in enumerate(GATHERED):
         parts = [(key, a) for key, a in movable.items() if a.dtype == dtype]
@@ -360,7 +375,7 @@ class prepared_run:
                     raise
                 return plan
         plan = PreparedRun(opts)
-        if pure and sum(b.nbytes for b in plan.buffers) <= KEEP_BYTES:
+        if plan.keepable:
             with _KEPT_LOCK:
                 kept = model.__dict__["_prepared_runs"]
                 if key not in kept:
