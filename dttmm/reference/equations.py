@@ -1,12 +1,19 @@
 """The reference's right-hand side: kinematics, hinge and joint laws, the global Newton-Euler
 system with its reactions and closing joints, solved at every evaluation (the formulation:
-newton_euler.py)."""
+newton_euler.py).
+
+What a model uses is read through kernels/features.py's flags (HAS_RODS, HAS_LOOPS,
+HAS_JOINTS, HAS_ELASTIC_HINGES), True here: newton_euler.py runs a model's copy of the kernels
+with the flags it does not use off (features.specialized), whose branches numba drops before
+typing: the three-pendulum's reference compiles no strain rod, closing joint, joint coordinate
+or elastic hinge (newton_euler.py::reference_features; docs/reference.md, "Compile time")."""
 import math
 
 import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
+from ..kernels.features import HAS_ELASTIC_HINGES, HAS_JOINTS, HAS_LOOPS, HAS_RODS
 from ..kernels.algebra.mat3 import dot, matmul, matvec
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
@@ -192,7 +199,7 @@ def _flex_size(k, body_kind, beam_params, rods):
     rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
     if body_kind[k] == _BEAM:
         return _modal_size(beam_params[k])
-    if body_kind[k] == _ROD:
+    if HAS_RODS and body_kind[k] == _ROD:
         return rods[0][k]
     return 0
 
@@ -266,7 +273,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             w_in = w_g if kp < 0 else omega_o[kp]
             rot[k] = matmul(a_in, _mat3(hinge_params[k], _R0))
             omega[k] = w_in
-        elif joints[0][k] >= 0:      # a joint with coordinates, on the inboard frame
+        elif HAS_JOINTS and joints[0][k] >= 0:  # a joint with coordinates, on the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
             q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
@@ -275,7 +282,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         else:
             rot[k] = _quat_to_rot(y[q_off[k]:q_off[k] + 4])
             omega[k] = y[w_off[k]:w_off[k] + 3]
-        if hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             defl[k] = y[d_off[k]:d_off[k] + 3]
             defl_rate[k] = y[d_off[k] + 3:d_off[k] + 6]
         r_in[k] = r_prev + defl[k]
@@ -290,7 +297,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
             b_r[k, :, :nm2] = br
             b_t[k, :, :nm2] = bt
-        elif body_kind[k] == _ROD:
+        elif HAS_RODS and body_kind[k] == _ROD:
             state, _, _ = _rod_state(k, rods, y, e0, n_modal, m_off)
             rho, v_rel, ro, wo, av, alv, br, bt = rod_end(state, rot[k], omega[k])
             rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
@@ -316,18 +323,19 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
     n = rot.shape[0]
     q = np.zeros((n, 3))
     m = np.zeros((n, 3))
-    for k in range(n):
-        if hinge_kind[k] != ELASTIC:
-            continue
-        h = hinge_params[k]
-        a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
-        w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
-        d_b = matvec(a_in.T, defl[k])
-        dd_b = matvec(a_in.T, defl_rate[k])
-        q[k] = -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b))
-        psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
-        w_rel_b = matvec(a_in.T, omega[k] - w_in)
-        m[k] = -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b))
+    if HAS_ELASTIC_HINGES:
+        for k in range(n):
+            if hinge_kind[k] != ELASTIC:
+                continue
+            h = hinge_params[k]
+            a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
+            w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
+            d_b = matvec(a_in.T, defl[k])
+            dd_b = matvec(a_in.T, defl_rate[k])
+            q[k] = -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b))
+            psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
+            w_rel_b = matvec(a_in.T, omega[k] - w_in)
+            m[k] = -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b))
     return q, m
 
 
@@ -723,7 +731,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
-        elif body_kind[k] == _ROD:
+        elif HAS_RODS and body_kind[k] == _ROD:
             # a strain rod (reference/strain_rod.py::rod_terms): the beam's rows with its
             # Jacobians; no applied loads of its own yet
             nm2 = rods[0][k]
@@ -763,7 +771,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 s[re + i, cal + j] = j_w[i, j]
                 s[re + i, ca + j] = hc[i, j]
         # the inboard hinge acting on body k
-        if hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             bn += q_el[k]
             be += m_el[k]
         else:
@@ -782,7 +790,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         for ci in range(child_start[k], child_start[k + 1]):
             kc = child_list[ci]
             arm = rho_att[kc] + defl[kc]
-            if hinge_kind[kc] == ELASTIC:
+            if HAS_ELASTIC_HINGES and hinge_kind[kc] == ELASTIC:
                 # -q at r_att and the couple -m_in = -(m_out + d x q) about r_att; on a beam
                 # their generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
                 bn -= q_el[kc]
@@ -853,7 +861,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         for j in range(pn2):
                             s[r + i, pce + j] = -b_t[kp, i, j]
                         b[r + i] = alpha_v[kp, i]
-            if joints[0][k] >= 0:
+            if HAS_JOINTS and joints[0][k] >= 0:
                 kp = parent[k]
                 _, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
                 if kp < 0:
@@ -1070,7 +1078,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
                      f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
                      torques, line_loads, topology, joints, exact, rods)
     n_rows = loops[1].shape[0]
-    if n_rows > 0:
+    if HAS_LOOPS and n_rows > 0:
         directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
                                    v_o, acc_v, alpha_v, b_r, b_t, e_col0, m_off, body_kind,
                                    beam_params, rods, r_g, v_g, a_g, rot_g, w_g, wd_g)
@@ -1096,7 +1104,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     for k in range(n):
         acc[k] = x[6 * k:6 * k + 3]
         alpha[k] = x[6 * k + 3:6 * k + 6]
-        if hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             force[k] = q_el[k]
             moment[k] = m_el[k]
         else:
@@ -1107,16 +1115,17 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     c_off, n_coord, c_col0 = joints[0], joints[2], joints[3]
     coord_acc = x[c_col0:c_col0 + n_coord].copy()
     generalized = np.zeros(n_coord)
-    for k in range(n):
-        if c_off[k] < 0:
-            continue
-        kp = topology[0][k]
-        a_in = rot_g if kp < 0 else rot_o[kp]
-        dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
-        load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
-        for i in range(nc):
-            generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
-                dirs[2, i] * load[2]
+    if HAS_JOINTS:
+        for k in range(n):
+            if c_off[k] < 0:
+                continue
+            kp = topology[0][k]
+            a_in = rot_g if kp < 0 else rot_o[kp]
+            dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
+            load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
+            for i in range(nc):
+                generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
+                    dirs[2, i] * load[2]
     return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
             b_r, coord_acc, generalized, rho_att, acc_v_att, closure_load)
 
@@ -1151,7 +1160,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             dy[o + 2] = 0.5 * (qw * wy + wz * qx - wx * qz)
             dy[o + 3] = 0.5 * (qw * wz + wx * qy - wy * qx)
             dy[w_off[k]:w_off[k] + 3] = alpha[k]
-        if hinge_kind[k] == ELASTIC:
+        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             o = d_off[k]
             dy[o:o + 3] = y[o + 3:o + 6]
             kp = topology[0][k]

@@ -257,6 +257,7 @@ from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
 from ..elements.kinds import JOINT_KIND, coordinate_count
 from ..kernels import python_twin
+from ..kernels.features import ALL, specialized
 from ..closures import (assemble, check_drives_move, closure_forces, constraint_rows,
                         has_closure_drives, loop_residuals)
 from ..model import Model
@@ -295,6 +296,28 @@ def _loop_rows(model, col0):
             np.array(model.closure_on_end, dtype=np.int64).reshape(-1, 2),
             np.array([2.0 * LOOP_DAMPING, LOOP_DAMPING ** 2]), v3, np.zeros((len(kind), 3)),
             coordinate, law, np.zeros((len(kind), 2)))
+
+
+def reference_features(body_kind, hinge_kind, loops, c_off):
+    """What the reference's kernels are compiled for (kernels/features.py's flags that
+    equations.py reads): strain rods, elastic hinges, closing joints (_loop_rows' rows), joints
+    with coordinates; ALL where the model has all four (the kernels themselves).  A model's
+    copy compiles only those of its branches (docs/reference.md, "Compile time")."""
+    on = frozenset(flag for flag, used in (
+            ("HAS_RODS", (body_kind == ROD).any()),
+            ("HAS_ELASTIC_HINGES", (hinge_kind == ELASTIC).any()),
+            ("HAS_LOOPS", loops[1].shape[0] > 0), ("HAS_JOINTS", (c_off >= 0).any())) if used)
+    return ALL if len(on) == 4 else on
+
+
+class _Kernels:
+    """A model's copies of the reference's kernels called from Python: the right-hand side as
+    solve_ivp calls it (rhs_kernel's twin) and the solved system at a time (_solve_dynamics).
+    (Each made once per process: features.specialized and python_twin keep them.)"""
+
+    def __init__(self, features):
+        self.rhs = python_twin(specialized(rhs_kernel, features))
+        self.solve_dynamics = specialized(_solve_dynamics, features)
 
 
 def _finite_number(value, who, what, t):
@@ -468,6 +491,8 @@ class _Problem:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
         self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
+        self.features = reference_features(self.body_kind, kinds, self.loops, self.c_off)
+        self.kernels = _Kernels(self.features)
 
     def coordinate_label(self, c):
         """How messages name coordinate c: its joint, hinge index and coordinate."""
@@ -560,7 +585,7 @@ class _Problem:
                 wd_g, forces, torques, line_loads, self.topology, self.attachment_point,
                 self.joints, self.exact, self.rods)
         if self._closure_forces:    # a closing JointForce: f(t, q, q') at this state's q, q',
-            _solve_dynamics(*args)  # which one evaluation leaves in loops[13]
+            self.kernels.solve_dynamics(*args)   # which one evaluation leaves in loops[13]
             values = self.loops[13]
             for r, f, who in self._closure_forces:
                 target[r, 2] = _finite_number(f(t, values[r, 0], values[r, 1]), who,
@@ -568,7 +593,7 @@ class _Problem:
         return args
 
     def rhs(self, t, y):
-        return python_twin(rhs_kernel)(*self._args(np.ascontiguousarray(y, dtype=float), t))
+        return self.kernels.rhs(*self._args(np.ascontiguousarray(y, dtype=float), t))
 
     def fixed_args(self):
         """(rhs_kernel's arguments after y, the spring-damper drives as rows [coordinate,
@@ -589,7 +614,7 @@ class _Problem:
 
     def evaluate(self, t, y):
         """Everything Result records at one time, from the state (see _solve_dynamics)."""
-        return _solve_dynamics(*self._args(np.ascontiguousarray(y, dtype=float), t))
+        return self.kernels.solve_dynamics(*self._args(np.ascontiguousarray(y, dtype=float), t))
 
 
 def _check_args(model, t_end, method, rtol, atol, t_eval):
@@ -730,9 +755,10 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     if prob.n_state > 0 and fixed is not None:
         # scipy's DOP853 in compiled code (integrator.py); its first call, over a vanishing
         # interval, compiles or loads it outside the timing
-        integrate_dop853(*fixed, y0, 1e-300, 1.0, 1.0, np.zeros(0))
+        integrate = specialized(integrate_dop853, prob.features)
+        integrate(*fixed, y0, 1e-300, 1.0, 1.0, np.zeros(0))
         t0 = time.perf_counter()
-        ys, n_steps, nfev, status, t_reached = integrate_dop853(
+        ys, n_steps, nfev, status, t_reached = integrate(
             *fixed, y0, t_end, float(rtol), float(atol), t_eval)
         wall = time.perf_counter() - t0
         if status != OK:
