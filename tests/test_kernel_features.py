@@ -229,18 +229,19 @@ def test_with_numba_off_the_kernels_run_as_the_one_copy():
 
 def test_the_references_copy_solves_as_its_kernels_with_every_feature():
     """The reference's kernels compiled for what a model uses (newton_euler.py::
-    reference_features: equations.py's branches for strain rods, closing joints and joints with
-    coordinates): the three-pendulum's copy (none of them) solves its system at a moving state
-    as the kernels with every flag on, to rounding; each model gets the flags it uses."""
+    reference_features: equations.py's branches for modal beams, strain rods, elastic hinges,
+    closing joints and joints with coordinates): the three-pendulum's copy (beams only) solves
+    its system at a moving state as the kernels with every flag on, to rounding; each model
+    gets the flags it uses."""
     from dttmm.mechanisms import slider_crank
     from dttmm.reference.equations import _solve_dynamics
     from dttmm.reference.newton_euler import _Problem
     assert _Problem(_scene_model("arm")).features == {"HAS_JOINTS"}
     assert _Problem(slider_crank()).features == {"HAS_JOINTS", "HAS_LOOPS"}
     problem = _Problem(chains.three_pendulum())
-    assert problem.features == frozenset()
+    assert problem.features == {"HAS_BEAMS"}
     copy = problem.kernels.solve_dynamics
-    assert copy is not _solve_dynamics and copy.py_func.__name__.endswith("__none")
+    assert copy is not _solve_dynamics and copy.py_func.__name__.endswith("__b")
     y = problem.initial_state() + 0.05 * np.sin(np.arange(problem.n_state))    # (moving)
     ours, theirs = copy(*problem._args(y, 0.3)), _solve_dynamics(*problem._args(y, 0.3))
     assert len(ours) == len(theirs) == 18

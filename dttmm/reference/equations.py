@@ -2,18 +2,19 @@
 system with its reactions and closing joints, solved at every evaluation (the formulation:
 newton_euler.py).
 
-What a model uses is read through kernels/features.py's flags (HAS_RODS, HAS_LOOPS,
-HAS_JOINTS, HAS_ELASTIC_HINGES), True here: newton_euler.py runs a model's copy of the kernels
-with the flags it does not use off (features.specialized), whose branches numba drops before
-typing: the three-pendulum's reference compiles no strain rod, closing joint, joint coordinate
-or elastic hinge (newton_euler.py::reference_features; docs/reference.md, "Compile time")."""
+What a model uses is read through kernels/features.py's flags (HAS_BEAMS, HAS_RODS,
+HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_JOINTS), True here: newton_euler.py runs a model's copy of
+the kernels with the flags it does not use off (features.specialized), whose branches numba
+drops before typing: the three-pendulum's reference compiles no strain rod, elastic hinge,
+closing joint or joint coordinate, the arm's no beam (newton_euler.py::reference_features;
+docs/reference.md, "Compile time")."""
 import math
 
 import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
-from ..kernels.features import HAS_ELASTIC_HINGES, HAS_JOINTS, HAS_LOOPS, HAS_RODS
+from ..kernels.features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_JOINTS, HAS_LOOPS, HAS_RODS
 from ..kernels.algebra.mat3 import dot, matmul, matvec
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
@@ -197,7 +198,7 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 def _flex_size(k, body_kind, beam_params, rods):
     """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0.
     rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
-    if body_kind[k] == _BEAM:
+    if HAS_BEAMS and body_kind[k] == _BEAM:
         return _modal_size(beam_params[k])
     if HAS_RODS and body_kind[k] == _ROD:
         return rods[0][k]
@@ -287,7 +288,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             defl_rate[k] = y[d_off[k] + 3:d_off[k] + 6]
         r_in[k] = r_prev + defl[k]
         v_in[k] = v_prev + defl_rate[k]
-        if body_kind[k] == _BEAM:
+        if HAS_BEAMS and body_kind[k] == _BEAM:
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
@@ -690,7 +691,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         nm2 = 0
         ce = -1
         geo = np.zeros((3, 0))
-        if body_kind[k] == _BEAM:
+        if HAS_BEAMS and body_kind[k] == _BEAM:
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]

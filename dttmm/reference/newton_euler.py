@@ -300,14 +300,14 @@ def _loop_rows(model, col0):
 
 def reference_features(body_kind, hinge_kind, loops, c_off):
     """What the reference's kernels are compiled for (kernels/features.py's flags that
-    equations.py reads): strain rods, elastic hinges, closing joints (_loop_rows' rows), joints
-    with coordinates; ALL where the model has all four (the kernels themselves).  A model's
-    copy compiles only those of its branches (docs/reference.md, "Compile time")."""
+    equations.py reads): modal beams, strain rods, elastic hinges, closing joints (_loop_rows'
+    rows), joints with coordinates; ALL where the model has all five (the kernels themselves).
+    A model's copy compiles only those of its branches (docs/reference.md, "Compile time")."""
     on = frozenset(flag for flag, used in (
-            ("HAS_RODS", (body_kind == ROD).any()),
+            ("HAS_BEAMS", (body_kind == BEAM).any()), ("HAS_RODS", (body_kind == ROD).any()),
             ("HAS_ELASTIC_HINGES", (hinge_kind == ELASTIC).any()),
             ("HAS_LOOPS", loops[1].shape[0] > 0), ("HAS_JOINTS", (c_off >= 0).any())) if used)
-    return ALL if len(on) == 4 else on
+    return ALL if len(on) == 5 else on
 
 
 class _Kernels:
