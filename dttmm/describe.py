@@ -296,18 +296,21 @@ def _kernels_line(model):
     except ValueError:
         return "kernels: none run this model with the default scheme"
     if compiled_for is None:
-        return (f"kernels: the fused {loop} loop (compiled once for every model it runs; about "
-                f"30 s the first time on 2 cores, cached after)")
+        return (f"kernels: the fused {loop} loop (compiled once for every model it runs; "
+                f"20-50 s the first time on 2 cores, by the machine, cached after)")
     if not features.SPECIALIZE:
         what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
     else:
         what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
-    # (measured cold, benchmarks/compile.py, 2026-11-29: the rigid arm 49-51 s, with beams
-    # 82 s, with closing joints 80-115 s)
-    first = ("up to two minutes" if "HAS_LOOPS" in compiled_for else "over a minute"
-             if "HAS_BEAMS" in compiled_for else "about a minute")
+    # (measured cold, benchmarks/compile.py, 2026-11-30, on the two kinds of machine this
+    # project runs on: the fused loops 21-24 s, the rigid arm 22 s, with beams 37-39 s, with
+    # closing joints 41-57 s; about 2.4x that on the older kind: the arm 55-65 s, the four-bar
+    # 94-112 s, the flexible slider-crank ~150 s)
+    first = ("40 s to two and a half minutes" if "HAS_LOOPS" in compiled_for else
+             "40 s to a minute and a half" if "HAS_BEAMS" in compiled_for else
+             "20 s to a minute")
     return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
-            f"{first} the first time on 2 cores, cached after; docs/solver.md, "
+            f"{first} the first time on 2 cores, by the machine, cached after; docs/solver.md, "
             f"\"Compile time\")")
 
 
