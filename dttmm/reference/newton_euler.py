@@ -302,7 +302,10 @@ def reference_features(body_kind, hinge_kind, loops, c_off):
     """What the reference's kernels are compiled for (kernels/features.py's flags that
     equations.py reads): modal beams, strain rods, elastic hinges, closing joints (_loop_rows'
     rows), joints with coordinates; ALL where the model has all five (the kernels themselves).
-    A model's copy compiles only those of its branches (docs/reference.md, "Compile time")."""
+    A model's copy compiles only those of its branches (docs/reference.md, "Compile time").
+    Its branches fall through where a flag is off, where DT-TMM's element dispatch refuses: a
+    copy is right only for the tables it was chosen from, so only _Problem (whose tables these
+    are) and simulate_reference call one."""
     on = frozenset(flag for flag, used in (
             ("HAS_BEAMS", (body_kind == BEAM).any()), ("HAS_RODS", (body_kind == ROD).any()),
             ("HAS_ELASTIC_HINGES", (hinge_kind == ELASTIC).any()),
