@@ -280,6 +280,7 @@ _FEATURE_WORDS = dict(HAS_BEAMS="beams", HAS_RODS="strain rods",
                       HAS_ELASTIC_HINGES="elastic hinges",
                       HAS_LOOPS="closing joints", HAS_STATION_HISTORIES="station histories",
                       HAS_JOINTS="joints with coordinates",
+                      HAS_EXACT_STIFFENING="the exact foreshortening",
                       SWEEP_JOINTS="the full-state tree sweep", SWEEP_FULL="the full-state "
                       "chain sweep", SWEEP_DIRECT_FULL="the direct full-state sweep",
                       SWEEP_TREE="the reduced tree sweep", SWEEP_REDUCED="the reduced chain "

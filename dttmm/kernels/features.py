@@ -45,6 +45,8 @@ HAS_LOOPS = True                # closing joints (kernels/assembly/closure.py)
 HAS_STATION_HISTORIES = True    # the paper's scheme: station points with their own histories
 HAS_JOINTS = True               # joints with coordinates (read by the reference's kernels only:
 #                                 DT-TMM's sweeps say so by SWEEP_JOINTS; reference_features)
+HAS_EXACT_STIFFENING = True     # stiffened beams' exact foreshortening tables (read by the
+#                                 reference's kernels only: newton_euler.py::reference_features)
 # the run's sweep (its mode, kernels/assembly/sweep.py): exactly one is on in a model's copy
 SWEEP_JOINTS = True             # RICCATI_JOINTS: the full-state tree sweep with joint elements
 SWEEP_FULL = True               # RICCATI_FULL: the chain's full-state Riccati sweep
@@ -60,13 +62,13 @@ SWEEP_DIRECT_REDUCED = True     # DIRECT_REDUCED
 EVERY_KIND = True
 
 FLAGS = ("HAS_BEAMS", "HAS_RODS", "HAS_ELASTIC_HINGES", "HAS_LOOPS", "HAS_STATION_HISTORIES",
-         "HAS_JOINTS", "SWEEP_JOINTS", "SWEEP_FULL", "SWEEP_DIRECT_FULL", "SWEEP_TREE",
-         "SWEEP_REDUCED", "SWEEP_DIRECT_REDUCED", "EVERY_KIND")
+         "HAS_JOINTS", "HAS_EXACT_STIFFENING", "SWEEP_JOINTS", "SWEEP_FULL", "SWEEP_DIRECT_FULL",
+         "SWEEP_TREE", "SWEEP_REDUCED", "SWEEP_DIRECT_REDUCED", "EVERY_KIND")
 ALL = frozenset(FLAGS)
 
 # the short names in a copy's name (and so in numba's cache files)
 _SHORT = dict(HAS_BEAMS="b", HAS_RODS="r", HAS_ELASTIC_HINGES="e", HAS_LOOPS="l",
-              HAS_STATION_HISTORIES="s", HAS_JOINTS="j",
+              HAS_STATION_HISTORIES="s", HAS_JOINTS="j", HAS_EXACT_STIFFENING="x",
               SWEEP_JOINTS="J", SWEEP_FULL="F", SWEEP_DIRECT_FULL="DF", SWEEP_TREE="T",
               SWEEP_REDUCED="R", SWEEP_DIRECT_REDUCED="DR", EVERY_KIND="all")
 

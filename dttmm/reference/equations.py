@@ -3,18 +3,19 @@ system with its reactions and closing joints, solved at every evaluation (the fo
 newton_euler.py).
 
 What a model uses is read through kernels/features.py's flags (HAS_BEAMS, HAS_RODS,
-HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_JOINTS), True here: newton_euler.py runs a model's copy of
-the kernels with the flags it does not use off (features.specialized), whose branches numba
-drops before typing: the three-pendulum's reference compiles no strain rod, elastic hinge,
-closing joint or joint coordinate, the arm's no beam (newton_euler.py::reference_features;
-docs/reference.md, "Compile time")."""
+HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_JOINTS, HAS_EXACT_STIFFENING), True here: newton_euler.py
+runs a model's copy of the kernels with the flags it does not use off (features.specialized),
+whose branches numba drops before typing: the three-pendulum's reference compiles no strain
+rod, elastic hinge, closing joint, joint coordinate or exact foreshortening, the arm's no beam
+(newton_euler.py::reference_features; docs/reference.md, "Compile time")."""
 import math
 
 import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
-from ..kernels.features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_JOINTS, HAS_LOOPS, HAS_RODS
+from ..kernels.features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_EXACT_STIFFENING, HAS_JOINTS,
+                               HAS_LOOPS, HAS_RODS)
 from ..kernels.algebra.mat3 import dot, matmul, matvec
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
@@ -702,7 +703,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             if beam_params[k, _BAXES] != 0.0:
                 f_k, t_k, p_k = matvec(rot_o[k], f_k), matvec(rot_o[k], t_k), matvec(a, p_k)
             g_k = gravity + p_k / beam_params[k, _BMU]
-            if exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
+            if HAS_EXACT_STIFFENING and exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
                 mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = _beam_terms_exact(
                     beam_params[k], shape_vec[k], exact[k], eta, eta_dot, a, w, g_k)
             else:

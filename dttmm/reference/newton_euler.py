@@ -298,10 +298,11 @@ def _loop_rows(model, col0):
             coordinate, law, np.zeros((len(kind), 2)))
 
 
-def reference_features(body_kind, hinge_kind, loops, c_off):
+def reference_features(body_kind, hinge_kind, loops, c_off, exact):
     """What the reference's kernels are compiled for (kernels/features.py's flags that
     equations.py reads): modal beams, strain rods, elastic hinges, closing joints (_loop_rows'
-    rows), joints with coordinates; ALL where the model has all five (the kernels themselves).
+    rows), joints with coordinates, stiffened beams' exact foreshortening (its tables' columns);
+    ALL where the model has all six (the kernels themselves).
     A model's copy compiles only those of its branches (docs/reference.md, "Compile time").
     Its branches fall through where a flag is off, where DT-TMM's element dispatch refuses: a
     copy is right only for the tables it was chosen from, so only _Problem (whose tables these
@@ -309,8 +310,9 @@ def reference_features(body_kind, hinge_kind, loops, c_off):
     on = frozenset(flag for flag, used in (
             ("HAS_BEAMS", (body_kind == BEAM).any()), ("HAS_RODS", (body_kind == ROD).any()),
             ("HAS_ELASTIC_HINGES", (hinge_kind == ELASTIC).any()),
-            ("HAS_LOOPS", loops[1].shape[0] > 0), ("HAS_JOINTS", (c_off >= 0).any())) if used)
-    return ALL if len(on) == 5 else on
+            ("HAS_LOOPS", loops[1].shape[0] > 0), ("HAS_JOINTS", (c_off >= 0).any()),
+            ("HAS_EXACT_STIFFENING", exact.shape[2] > 0)) if used)
+    return ALL if len(on) == 6 else on
 
 
 class _Kernels:
@@ -494,7 +496,8 @@ class _Problem:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
         self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
-        self.features = reference_features(self.body_kind, kinds, self.loops, self.c_off)
+        self.features = reference_features(self.body_kind, kinds, self.loops, self.c_off,
+                                           self.exact)
         self.kernels = _Kernels(self.features)
 
     def coordinate_label(self, c):
