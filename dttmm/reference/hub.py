@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from ..kernels import kernel
+from ..kernels.algebra.mat3 import put2
 from ..profiles import Profile
 from .rotations import _expm
 
@@ -121,7 +122,7 @@ def spun_ground(axis, terms, t, rot, w, w_dot):
     if terms.shape[0] == 0:
         return
     a, a_dot, a_ddot = _angle(terms, t)
-    rot[:, :] = _expm(a * axis)
+    put2(rot, _expm(a * axis))
     for i in range(3):
         w[i] = a_dot * axis[i]
         w_dot[i] = a_ddot * axis[i]
