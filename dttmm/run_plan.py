@@ -170,11 +170,16 @@ class PreparedRun:
         # layout each leaf's place in them (None: not there); any other run's arrays stay as
         # they are (gathered, a million bodies' arrays would be held twice at once, and three
         # times with the start's copy: 3.5 GB at 10^6 bodies against 2 GB)
+        movable = _movable(structures)
         self.keepable = (start_is_pure(user_model)
-                         and sum(a.nbytes for a in _movable(structures).values()) <= KEEP_BYTES)
-        self.buffers, self.layout = [], None
+                         and sum(a.nbytes for a in movable.values()) <= KEEP_BYTES)
+        self.buffers, self.layout, self.others, self.started = [], None, None, None
         if self.keepable:
-            self.buffers, structures, self.layout = _gathered(structures)
+            self.buffers, structures, self.layout = _gathered(structures, movable)
+            self.others = [a for a, place in zip(leaves(structures), self.layout)
+                           if place is None and a.size]
+            # (the start's values, which restart puts back)
+            self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
         self.state, self.sweep, self.loop, self.monitor = self.structures = structures
         self.loops = self.loop.loops if loop_name == "general" else loops
         histories = self.loop.histories if loop_name == "general" else histories
@@ -182,11 +187,6 @@ class PreparedRun:
                                    v_c=(self.state.v_c if scheme.name != "paper"
                                         else histories[4]),
                                    closure_wrench=self.loops.wrench)
-        self.others = self.started = None
-        if self.keepable:           # (the start's values, which restart puts back)
-            self.others = [a for a, place in zip(leaves(structures), self.layout)
-                           if place is None and a.size]
-            self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
         if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
             self.derivative_run = s.start_pass(     # (fixed ground, no loads or drives:
                 params, settings, self.state, self.sweep, self.monitor,    # check_supported)
@@ -270,12 +270,11 @@ def _movable(structures):
             and len(sharing[root]) == 1}
 
 
-def _gathered(structures):
-    """(buffers, structures, layout): every array _movable names replaced by a view of one
-    flat buffer per dtype holding its values; layout: each leaf's (buffer, offset, shape) in
-    the new structures' leaf order, None for a leaf left as it is."""
+def _gathered(structures, movable):
+    """(buffers, structures, layout): every array of movable (_movable's) replaced by a view
+    of one flat buffer per dtype holding its values; layout: each leaf's (buffer, offset,
+    shape) in the new structures' leaf order, None for a leaf left as it is."""
     arrays = leaves(structures)
-    movable = _movable(structures)
     buffers, places = [], {}
     for i, dtype in enumerate(GATHERED):
         parts = [(key, a) for key, a in movable.items() if a.dtype == dtype]
