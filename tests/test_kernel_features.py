@@ -231,15 +231,14 @@ def test_the_references_copy_solves_as_its_kernels_with_every_feature():
     """The reference's kernels compiled for what a model uses (newton_euler.py::
     reference_features: equations.py's branches for modal beams, strain rods, elastic hinges,
     closing joints, joints with coordinates and the exact foreshortening of stiffened beams):
-    the three-pendulum's copy (beams only) solves
-    its system at a moving state as the kernels with every flag on, to rounding; each model
-    gets the flags it uses."""
+    the three-pendulum's copy (beams only) solves its system at a moving state as the kernels
+    with every flag on, to rounding; each model gets the flags it uses."""
+    from dttmm import BallJoint, EulerBernoulliBeam, build_chain
     from dttmm.mechanisms import slider_crank
     from dttmm.reference.equations import _solve_dynamics
     from dttmm.reference.newton_euler import _Problem
     assert _Problem(_scene_model("arm")).features == {"HAS_JOINTS"}
     assert _Problem(slider_crank()).features == {"HAS_JOINTS", "HAS_LOOPS"}
-    from dttmm import BallJoint, EulerBernoulliBeam, build_chain
     for stiffening, option in (("exact", False), (True, True), (True, False)):
         beam = EulerBernoulliBeam(length=1.0, density=2700.0, area=1e-4, bending_stiffness=2.0,
                                   polar_inertia_per_length=0.0045, modes_per_plane=2,
