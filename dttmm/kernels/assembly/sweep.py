@@ -24,7 +24,7 @@ from numba import njit
 from .. import CONTRACT, kernel, no_alloc_kernel
 from ..transfers.joint import FREE, PRESCRIBED
 from ..algebra.mat3 import (add1, add2, inv3, least_norm_solve3, matmul, matmul_into, matvec,
-                            mm3_into, put1, put2, t_inverse, t_of_mat)
+                            matvec_into, mm3_into, put1, put2, t_inverse, t_of_mat)
 
 TRANSFER, IDENTITY, BALL, LOCKED, JOINT = 0, 1, 2, 3, 4
 LOST_ACCURACY = 1 << 30      # status of a direct sweep whose products cancelled
@@ -177,8 +177,9 @@ def riccati_step(u, s, p, s_new, p_new, t_inv, t_vec, work):
 def _split_order(u, split, out):
     """out = u with rows and columns in the split's order [f; e] (riccati_step's)."""
     order = np.empty(12, dtype=np.int64)
-    order[0:6] = F_IDX[split]
-    order[6:12] = E_IDX[split]
+    for i in range(6):
+        order[i] = F_IDX[split, i]
+        order[6 + i] = E_IDX[split, i]
     for r in range(12):
         for c in range(12):
             out[r, c] = u[order[r], order[c]]
@@ -283,26 +284,27 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
     # ground station: a, phi known; x = [m, q]
     zmat[0, :, :] = 0.0
     zoff[0, :] = 0.0
-    zoff[0, 0:6] = root_f
+    put1(zoff[0, 0:6], root_f)
     for i in range(6):
         zmat[0, 6 + i, i] = 1.0
     for j in range(n_el):
         k = kind[j]
         if k == IDENTITY:
-            zmat[j + 1] = zmat[j]
-            zoff[j + 1] = zoff[j]
+            put2(zmat[j + 1], zmat[j])
+            put1(zoff[j + 1], zoff[j])
         elif k == TRANSFER:
             uj = u[j, :, 0:12]
-            zmat[j + 1] = matmul(uj, zmat[j])
-            zoff[j + 1] = matvec(uj, zoff[j]) + u[j, :, 12]
+            matmul_into(uj, zmat[j], zmat[j + 1])
+            matvec_into(uj, zoff[j], zoff[j + 1])
+            add1(zoff[j + 1], u[j, :, 12])
         elif k == BALL:
             cm = zmat[j, 6:9, :]
             if np.linalg.matrix_rank(cm) < 3:
                 return j + 1
             # x = x0 + N y with cm x0 = -o_m (least norm) and N spanning the null space of cm
             _, _, vt = np.linalg.svd(cm)
-            x0[j] = matvec(np.linalg.pinv(cm), -zoff[j, 6:9])
-            nmat[j] = vt[3:6].T
+            matvec_into(np.linalg.pinv(cm), -zoff[j, 6:9], x0[j])
+            put2(nmat[j], vt[3:6].T)
             inner_z = matmul(zmat[j], nmat[j])
             inner_o = matvec(zmat[j], x0[j]) + zoff[j]
             zmat[j + 1, :, :] = 0.0
@@ -317,22 +319,24 @@ def direct_full(kind, u, known_loads, root_f, tip_pinned, zmat, zoff, x0, nmat, 
             w = zmat[j, 6:12, :]
             if abs(np.linalg.det(w)) == 0.0:
                 return j + 1
-            x0[j] = np.linalg.solve(w, known_loads[j, 0:6] - zoff[j, 6:12])
+            put1(x0[j], np.linalg.solve(w, known_loads[j, 0:6] - zoff[j, 6:12]))
             nmat[j, :, :] = 0.0
             zmat[j + 1, :, :] = 0.0
             zoff[j + 1, :] = 0.0
-            zoff[j + 1, 6:12] = known_loads[j, 6:12]
+            put1(zoff[j + 1, 6:12], known_loads[j, 6:12])
             for i in range(6):
                 zmat[j + 1, i, i] = 1.0              # outboard a and phi are new parameters
     w, rhs = _tip_system(zmat[n_el], zoff[n_el], tip_pinned)
     solved, x = _solve_tip(w, rhs, tip_pinned)
     if not solved:
         return n_el + 1
-    z[n_el] = matvec(zmat[n_el], x) + zoff[n_el]
+    matvec_into(zmat[n_el], x, z[n_el])
+    add1(z[n_el], zoff[n_el])
     for j in range(n_el - 1, -1, -1):
         if kind[j] == BALL or kind[j] == LOCKED:
             x = x0[j] + matvec(nmat[j], x[0:3])
-        z[j] = matvec(zmat[j], x) + zoff[j]
+        matvec_into(zmat[j], x, z[j])
+        add1(z[j], zoff[j])
     if transfer_residual(kind, u, z) > DIRECT_TOLERANCE:
         return LOST_ACCURACY
     return 0
@@ -443,7 +447,7 @@ def riccati_reduced(v, a_root, tip_pinned, s_mat, p_vec, t_inv, t_vec, aq):
     Tip: q = 0 (free) or a = 0 (tip_pinned)."""
     n = v.shape[0]
     s_mat[0, :, :] = 0.0
-    p_vec[0, :] = a_root
+    put1(p_vec[0], a_root)
     t = np.empty((3, 3))
     num = np.empty((3, 3))
     for k in range(n):
@@ -465,18 +469,19 @@ def direct_reduced(v, a_root, tip_pinned, aq):
     prod = np.eye(7)
     step = np.eye(7)
     for k in range(n):
-        step[0:6, :] = v[k]
+        put2(step[0:6, :], v[k])
         prod = matmul(step, prod)
     r = 0 if tip_pinned else 3
     pqq = np.ascontiguousarray(prod[r:r + 3, 3:6])
     rhs = matvec(prod[r:r + 3, 0:3], a_root) + prod[r:r + 3, 6]
-    aq[0, 0:3] = a_root
+    put1(aq[0, 0:3], a_root)
     solved, q0 = _solve_tip(pqq, -rhs, tip_pinned)     # least norm in the root's unknowns
     if not solved:
         return n + 1
-    aq[0, 3:6] = q0
+    put1(aq[0, 3:6], q0)
     for k in range(n):
-        aq[k + 1] = matvec(v[k, :, 0:6], aq[k]) + v[k, :, 6]
+        matvec_into(v[k, :, 0:6], aq[k], aq[k + 1])
+        add1(aq[k + 1], v[k, :, 6])
     # propagated forward, the tip condition shows what the products lost
     first = 0 if tip_pinned else 3
     scale = 0.0

@@ -301,7 +301,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 z_in = z_star[jh]           # the hinge's inboard station: 2k in a chain
             else:                           # in a tree the parent's output station holds the
                 z_in = z_star[jh + 1].copy()    # loads of all its children: the hinge's own q
-                z_in[3:6] = phi_in              # is its outboard's (a massless hinge passes it)
+                put1(z_in[3:6], phi_in)         # is its outboard's (a massless hinge passes it)
             elastic_hinge_transfer(hinge_params[hr], rot_in, lam_in, w_in, dw_in, rot_star[k],
                                    lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
                                    z_in, u[jh])
@@ -396,9 +396,8 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
         return status
     red_aq, red_phi = sw.red_aq, sw.red_phi
     z[:, :] = 0.0
-    z[0, 0:3] = root_f[0:3]
-    z[0, 3:6] = root_f[3:6]
-    z[0, 9:12] = red_aq[0, 3:6]
+    put1(z[0, 0:6], root_f[0:6])
+    put1(z[0, 9:12], red_aq[0, 3:6])
     for k in range(n):
         for i in range(3):
             phi = red_phi[k, i, 6]
@@ -406,10 +405,10 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
                 phi += red_phi[k, i, c] * red_aq[k, c]
             z[2 * k + 1, 3 + i] = phi
             z[2 * k + 2, 3 + i] = phi
-        z[2 * k + 1, 0:3] = red_aq[k, 0:3]
-        z[2 * k + 1, 9:12] = red_aq[k, 3:6]
-        z[2 * k + 2, 0:3] = red_aq[k + 1, 0:3]
-        z[2 * k + 2, 9:12] = red_aq[k + 1, 3:6]
+        put1(z[2 * k + 1, 0:3], red_aq[k, 0:3])
+        put1(z[2 * k + 1, 9:12], red_aq[k, 3:6])
+        put1(z[2 * k + 2, 0:3], red_aq[k + 1, 0:3])
+        put1(z[2 * k + 2, 9:12], red_aq[k + 1, 3:6])
     return 0
 
 
@@ -481,10 +480,10 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
             q, m_in, m_out = elastic_hinge_loads(hinge_params[params.hinge_row[k]], rot_in,
                                                  w_in, rot[k], omega[k], state.defl[k],
                                                  state.defl_rate[k])
-            known_loads[2 * k, 0:3] = m_in
-            known_loads[2 * k, 3:6] = q
-            known_loads[2 * k, 6:9] = m_out
-            known_loads[2 * k, 9:12] = q
+            put1(known_loads[2 * k, 0:3], m_in)
+            put1(known_loads[2 * k, 3:6], q)
+            put1(known_loads[2 * k, 6:9], m_out)
+            put1(known_loads[2 * k, 9:12], q)
     root_f = np.empty(6)
     put1(root_f[0:3], g_acc)
     put1(root_f[3:6], g_wd)
@@ -721,10 +720,10 @@ def _station_offsets(h, coef, histories):
     _, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c = histories
     for j in range(st_v.shape[0]):
         w1, _ = _offsets(h, coef, st_v[j], st_a[j], st_p[j])
-        w1_st[j, :] = w1
+        put1(w1_st[j], w1)
     for k in range(c_v.shape[0]):
         w1, _ = _offsets(h, coef, c_v[k], c_a[k], c_p[k])
-        w1_c[k, :] = w1
+        put1(w1_c[k], w1)
 
 
 @allocating_kernel

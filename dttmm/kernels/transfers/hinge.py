@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import kernel
 from .body import A, CONST, M, PHI, Q, _cross, _mm, _mv
+from ..algebra.mat3 import put1, put2
 from ..algebra.so3 import hat, log_so3
 
 
@@ -61,15 +62,16 @@ def elastic_hinge_transfer(h, rot_in, lam_in, w_in, dw_in, rot_out, lam_out, w_o
         u[A + i, A + i] = 1.0
         u[M + i, M + i] = 1.0
         u[Q + i, Q + i] = 1.0
-    u[A:A + 3, Q:Q + 3] = c1 * d_of_q
-    u[A:A + 3, CONST] = c1 * d0 + w1d
-    u[M:M + 3, Q:Q + 3] = dm_dq
-    u[M:M + 3, CONST] = m0
+    put2(u[A:A + 3, Q:Q + 3], c1 * d_of_q)
+    put1(u[A:A + 3, CONST], c1 * d0 + w1d)
+    put2(u[M:M + 3, Q:Q + 3], dm_dq)
+    put1(u[M:M + 3, CONST], m0)
     # phi_out = phi_out* + n_out^-1 (m_out - n* - n_in (phi_in - phi_in*))
-    u[PHI:PHI + 3, M:M + 3] = n_out_inv
-    u[PHI:PHI + 3, Q:Q + 3] = _mm(n_out_inv, dm_dq)
-    u[PHI:PHI + 3, PHI:PHI + 3] = -_mm(n_out_inv, n_in)
-    u[PHI:PHI + 3, CONST] = phi_out_star + _mv(n_out_inv, m0 - n_star + _mv(n_in, phi_in_star))
+    put2(u[PHI:PHI + 3, M:M + 3], n_out_inv)
+    put2(u[PHI:PHI + 3, Q:Q + 3], _mm(n_out_inv, dm_dq))
+    put2(u[PHI:PHI + 3, PHI:PHI + 3], -_mm(n_out_inv, n_in))
+    put1(u[PHI:PHI + 3, CONST],
+         phi_out_star + _mv(n_out_inv, m0 - n_star + _mv(n_in, phi_in_star)))
 
 
 @kernel

@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT, kernel
-from ..algebra.mat3 import (dot, matmul, matvec, t_cross, t_hat, t_lin9, t_mm, t_mv, t_of_mat,
-                            t_of_vec, t_plus_diag)
+from ..algebra.mat3 import (dot, matmul, matvec, put1, put2, t_cross, t_hat, t_lin9, t_mm, t_mv,
+                            t_of_mat, t_of_vec, t_plus_diag)
 from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
 
 SQRT3_12 = np.sqrt(3.0) / 12.0
@@ -458,11 +458,11 @@ def _rod_evaluate(tables, outboard, gravity, start, c1, kin, jp, jr, rot, w, q, 
         kin, jp, jr, weights, mu, section, stiffness, damping, gravity, rot, w, x[3:6].copy(),
         q, qd, x[0:3].copy(), x[6:9].copy(), x[9:12].copy(), out, residual)
     if welded and start:
-        out[3:6] = end_alpha
+        put1(out[3:6], end_alpha)
     elif welded:
         phi_out = np.empty(3)
         log_so3(matmul(matmul(end_rotation, r_rel), rot_out_n.T), phi_out)
-        out[3:6] = c1 * phi_out + w1_out
+        put1(out[3:6], c1 * phi_out + w1_out)
 
 
 @kernel
@@ -538,9 +538,9 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
     nq = qdd_star.shape[0]
     nx = 12 + nq
     x0 = np.empty(nx)
-    x0[:12] = z_star
-    x0[3:6] = wd_star
-    x0[12:] = qdd_star
+    put1(x0[:12], z_star)
+    put1(x0[3:6], wd_star)
+    put1(x0[12:], qdd_star)
     rot, w, q, qd = _rod_state(x0, start, rot_n, phi_star, wd_star, c1, c3, w3, w_n, w1e, w3e,
                                q_n, qd_n)
     kin = station_arrays(n)
@@ -570,11 +570,11 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
             jp_j, jr_j = rod_jacobians(steps, xi0, phi, q_j)
             _rod_evaluate(tables, outboard, gravity, start, c1, kin_j, jp_j, jr_j, rot, w, q_j,
                           qd_j, x, o1, r1)
-        d_o[:, j] = (o1 - o0) / h
-        d_r[:, j] = (r1 - r0) / h
+        put1(d_o[:, j], (o1 - o0) / h)
+        put1(d_r[:, j], (r1 - r0) / h)
     rhs = np.empty((nq, 13))
-    rhs[:, :12] = d_r[:, :12]
-    rhs[:, 12] = r0
+    put2(rhs[:, :12], d_r[:, :12])
+    put1(rhs[:, 12], r0)
     solved = np.linalg.solve(np.ascontiguousarray(d_r[:, 12:]), rhs)
     z0 = x0[:12]
     for i in range(nq):
@@ -582,7 +582,7 @@ def rod_transfer(tables, outboard, gravity, start, rot_n, phi_star, wd_star, c1,
             q_map[i, j] = -solved[i, j]
         q_map[i, 12] = qdd_star[i] - solved[i, 12] - dot(q_map[i, :12], z0)
     d_oq = d_o[:, 12:]
-    u[:, :12] = d_o[:, :12] + matmul(d_oq, q_map[:, :12])
+    put2(u[:, :12], d_o[:, :12] + matmul(d_oq, q_map[:, :12]))
     shift = matvec(d_oq, solved[:, 12])
     for i in range(12):
         u[i, 12] = o0[i] - shift[i] - dot(u[i, :12], z0)
