@@ -16,7 +16,7 @@ from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
 from ..kernels.features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_EXACT_STIFFENING, HAS_JOINTS,
                                HAS_LOOPS, HAS_RODS)
-from ..kernels.algebra.mat3 import dot, matmul, matvec
+from ..kernels.algebra.mat3 import dot, matmul, matvec, put1, put2
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
                    _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
@@ -85,7 +85,7 @@ def _beam_end(bp, sv, my, a, w, eta, eta_dot):
             e = np.ascontiguousarray(eta[plane * nm:(plane + 1) * nm])
             ed = np.ascontiguousarray(eta_dot[plane * nm:(plane + 1) * nm])
             de = matvec(d0, e)
-            d0_eta[plane * nm:(plane + 1) * nm] = de
+            put1(d0_eta[plane * nm:(plane + 1) * nm], de)
             p_l[0] -= 0.5 * dot(e, de)
             ud_l[0] -= dot(ed, de)
             cdd_v += dot(ed, matvec(d0, ed))
@@ -170,9 +170,9 @@ def _joint_directions(kind, h, a_in, rot):
     (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
     (prismatic); and the number of coordinates."""
     s = np.zeros((3, 2))
-    s[:, 0] = matvec(a_in, _vec3(h, _AX1))
+    put1(s[:, 0], matvec(a_in, _vec3(h, _AX1)))
     if kind == _UNIVERSAL:
-        s[:, 1] = matvec(rot, _vec3(h, _AX2))
+        put1(s[:, 1], matvec(rot, _vec3(h, _AX2)))
         return s, 2
     return s, 1
 
@@ -256,8 +256,8 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             r_prev, v_prev = r_g, v_g
         elif body_kind[kp] == _BEAM or body_kind[kp] == _ROD:   # its one attachment point: its
             # output point
-            rho_att[k] = rho_o[kp]
-            acc_v_att[k] = acc_v[kp]
+            put1(rho_att[k], rho_o[kp])
+            put1(acc_v_att[k], acc_v[kp])
             r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
         else:
             # a rigid parent's attachment point x_k (its output point l_IO or a named point):
@@ -265,30 +265,34 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             # a_att = a_P + alpha_P x rho_att + w_P x (w_P x rho_att)
             arm = matvec(rot[kp], attachment_point[k])
             v_arm = _cross(omega[kp], arm)
-            rho_att[k] = arm
-            acc_v_att[k] = _cross(omega[kp], v_arm)
+            put1(rho_att[k], arm)
+            put1(acc_v_att[k], _cross(omega[kp], v_arm))
             r_prev, v_prev = r_in[kp] + arm, v_in[kp] + v_arm
         # the inboard frame: the parent's output section (a rigid parent's own frame, A_O = A,
         # w_O = w, whichever of its points the hinge is at; a beam's end section), or the ground
         if hinge_kind[k] == FIXED:   # welded to the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
-            rot[k] = matmul(a_in, _mat3(hinge_params[k], _R0))
-            omega[k] = w_in
+            put2(rot[k], matmul(a_in, _mat3(hinge_params[k], _R0)))
+            put1(omega[k], w_in)
         elif HAS_JOINTS and joints[0][k] >= 0:  # a joint with coordinates, on the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
             q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
-            rot[k], omega[k], defl[k], defl_rate[k] = _joint_frame(
+            rot_k, omega_k, defl_k, defl_rate_k = _joint_frame(
                 hinge_kind[k], hinge_params[k], a_in, w_in, q, qd)
+            put2(rot[k], rot_k)
+            put1(omega[k], omega_k)
+            put1(defl[k], defl_k)
+            put1(defl_rate[k], defl_rate_k)
         else:
-            rot[k] = _quat_to_rot(y[q_off[k]:q_off[k] + 4])
-            omega[k] = y[w_off[k]:w_off[k] + 3]
+            put2(rot[k], _quat_to_rot(y[q_off[k]:q_off[k] + 4]))
+            put1(omega[k], y[w_off[k]:w_off[k] + 3])
         if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
-            defl[k] = y[d_off[k]:d_off[k] + 3]
-            defl_rate[k] = y[d_off[k] + 3:d_off[k] + 6]
-        r_in[k] = r_prev + defl[k]
-        v_in[k] = v_prev + defl_rate[k]
+            put1(defl[k], y[d_off[k]:d_off[k] + 3])
+            put1(defl_rate[k], y[d_off[k] + 3:d_off[k] + 6])
+        put1(r_in[k], r_prev + defl[k])
+        put1(v_in[k], v_prev + defl_rate[k])
         if HAS_BEAMS and body_kind[k] == _BEAM:
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
@@ -296,22 +300,32 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
                 beam_params[k], shape_vec[k], shape_mat[k], rot[k], omega[k],
                 y[e0 + o:e0 + o + nm2],
                 y[e0 + n_modal + o:e0 + n_modal + o + nm2])
-            rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
-            b_r[k, :, :nm2] = br
-            b_t[k, :, :nm2] = bt
+            put1(rho_o[k], rho)
+            put2(rot_o[k], ro)
+            put1(omega_o[k], wo)
+            put1(acc_v[k], av)
+            put1(alpha_v[k], alv)
+            put2(b_r[k, :, :nm2], br)
+            put2(b_t[k, :, :nm2], bt)
         elif HAS_RODS and body_kind[k] == _ROD:
             state, _, _ = _rod_state(k, rods, y, e0, n_modal, m_off)
             rho, v_rel, ro, wo, av, alv, br, bt = rod_end(state, rot[k], omega[k])
-            rho_o[k], rot_o[k], omega_o[k], acc_v[k], alpha_v[k] = rho, ro, wo, av, alv
+            put1(rho_o[k], rho)
+            put2(rot_o[k], ro)
+            put1(omega_o[k], wo)
+            put1(acc_v[k], av)
+            put1(alpha_v[k], alv)
             nq = rods[0][k]
-            b_r[k, :, :nq] = br
-            b_t[k, :, :nq] = bt
+            put2(b_r[k, :, :nq], br)
+            put2(b_t[k, :, :nq], bt)
         else:
             rho = matvec(rot[k], _vec3(body_params[k], _LIO))
             v_rel = _cross(omega[k], rho)
-            rho_o[k], rot_o[k], omega_o[k] = rho, rot[k], omega[k]
-            acc_v[k] = _cross(omega[k], v_rel)
-        v_o[k] = v_in[k] + v_rel
+            put1(rho_o[k], rho)
+            put2(rot_o[k], rot[k])
+            put1(omega_o[k], omega[k])
+            put1(acc_v[k], _cross(omega[k], v_rel))
+        put1(v_o[k], v_in[k] + v_rel)
     return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
             b_r, b_t, v_o, rho_att, acc_v_att)
 
@@ -334,10 +348,10 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
             w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
             d_b = matvec(a_in.T, defl[k])
             dd_b = matvec(a_in.T, defl_rate[k])
-            q[k] = -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b))
+            put1(q[k], -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b)))
             psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
             w_rel_b = matvec(a_in.T, omega[k] - w_in)
-            m[k] = -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b))
+            put1(m[k], -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b)))
     return q, m
 
 
@@ -420,8 +434,8 @@ def _beam_terms(bp, sv, my, eta, eta_dot, a, w, gravity):
     if bp[_BSTIFF] != 0.0:
         for i in range(3):
             d = _stiffening_block(my, nm, i)
-            geo[i, :nm] = matvec(d, ev)
-            geo[i, nm:n2] = matvec(d, ew)
+            put1(geo[i, :nm], matvec(d, ev))
+            put1(geo[i, nm:n2], matvec(d, ew))
         d1 = _stiffening_block(my, nm, 1)
         c1 = 0.5 * (dot(ev, geo[1, :nm]) + dot(ew, geo[1, nm:n2]))
         c1_dot = dot(dv, geo[1, :nm]) + dot(dw, geo[1, nm:n2])
@@ -949,7 +963,9 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
             dw = w_b - w_a
             if kind[r] == _ROTATION_A:
                 r0 = np.empty((3, 3))
-                r0[:, 0], r0[:, 1], r0[:, 2] = v1[r], v2[r], _cross(v1[r], v2[r])
+                put1(r0[:, 0], v1[r])
+                put1(r0[:, 1], v2[r])
+                put1(r0[:, 2], _cross(v1[r], v2[r]))
                 g = dot(v3[r], _log_rot(matmul(matmul(f_a.T, f_b), r0.T))) - target[r, 0]
             else:
                 x = matvec(f_a, v1[r])
@@ -962,7 +978,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
                              body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, n, n, -1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
-            directions[r] = n
+            put1(directions[r], n)
         elif kind[r] == _DOT:               # (F_a x) . (F_b y) = 0
             x = matvec(f_a, v1[r])
             y = matvec(f_b, v2[r])
@@ -976,7 +992,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
                              body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, zero, cv, cv, -1.0, b_r, b_t, e_col0, m_off,
                              body_kind, beam_params, rods)
-            directions[r] = cv
+            put1(directions[r], cv)
         else:                               # e . (p_b - p_a) = 0
             e = v1[r] if kind[r] == _GAP_WORLD else matvec(f_a, v1[r])
             d = p_b - p_a
@@ -996,7 +1012,7 @@ def _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o, v_
                              e_col0, m_off, body_kind, beam_params, rods)
             _closure_columns(s, row, ka, end_a, e, _cross(arm_a, e), zero, -1.0, b_r, b_t,
                              e_col0, m_off, body_kind, beam_params, rods)
-            directions[r] = e
+            put1(directions[r], e)
             g -= target[r, 0]
         # a driven coordinate's row: (g - s)'' + 2 zeta W (g - s)' + W^2 (g - s) = 0
         gd -= target[r, 1]
@@ -1035,8 +1051,8 @@ def _solve_least_closure_force(s, b, col0, count):
     it.  The accelerations do not depend on the choice."""
     tree = np.ascontiguousarray(s[:col0, :col0])
     rhs = np.empty((col0, count + 1))
-    rhs[:, 0] = b[:col0]
-    rhs[:, 1:] = s[:col0, col0:col0 + count]
+    put1(rhs[:, 0], b[:col0])
+    put2(rhs[:, 1:], s[:col0, col0:col0 + count])
     sol = np.linalg.solve(tree, rhs)
     jac = np.ascontiguousarray(s[col0:col0 + count, :col0])
     # a spring's row is lam_r = F (its S_cc 1, its J 0; a constraint's S_cc 0)
@@ -1049,8 +1065,8 @@ def _solve_least_closure_force(s, b, col0, count):
         if sv[i] > LOOP_RCOND * sv[0]:
             lam += (ut[i] / sv[i]) * vt[i]
     x = np.empty(col0 + count)
-    x[:col0] = sol[:, 0] - matvec(sol[:, 1:], lam)
-    x[col0:] = lam
+    put1(x[:col0], sol[:, 0] - matvec(sol[:, 1:], lam))
+    put1(x[col0:], lam)
     return x
 
 
@@ -1104,15 +1120,15 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     force = np.zeros((n, 3))
     moment = np.zeros((n, 3))
     for k in range(n):
-        acc[k] = x[6 * k:6 * k + 3]
-        alpha[k] = x[6 * k + 3:6 * k + 6]
+        put1(acc[k], x[6 * k:6 * k + 3])
+        put1(alpha[k], x[6 * k + 3:6 * k + 6])
         if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
-            force[k] = q_el[k]
-            moment[k] = m_el[k]
+            put1(force[k], q_el[k])
+            put1(moment[k], m_el[k])
         else:
-            force[k] = x[f_col[k]:f_col[k] + 3]
+            put1(force[k], x[f_col[k]:f_col[k] + 3])
             if m_col[k] >= 0:
-                moment[k] = x[m_col[k]:m_col[k] + 3]
+                put1(moment[k], x[m_col[k]:m_col[k] + 3])
     modal_acc = x[e_col0:e_col0 + n_modal].copy()
     c_off, n_coord, c_col0 = joints[0], joints[2], joints[3]
     coord_acc = x[c_col0:c_col0 + n_coord].copy()
@@ -1161,10 +1177,10 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             dy[o + 1] = 0.5 * (qw * wx + wy * qz - wz * qy)
             dy[o + 2] = 0.5 * (qw * wy + wz * qx - wx * qz)
             dy[o + 3] = 0.5 * (qw * wz + wx * qy - wy * qx)
-            dy[w_off[k]:w_off[k] + 3] = alpha[k]
+            put1(dy[w_off[k]:w_off[k] + 3], alpha[k])
         if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
             o = d_off[k]
-            dy[o:o + 3] = y[o + 3:o + 6]
+            put1(dy[o:o + 3], y[o + 3:o + 6])
             kp = topology[0][k]
             # d'' = a_k - a_att,k, the attachment point's acceleration (the ground's for a root;
             # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's or a strain
@@ -1176,7 +1192,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
                 nm2 = _flex_size(kp, body_kind, beam_params, rods)
                 if nm2 > 0:
                     a_att = a_att + matvec(b_r[kp, :, :nm2], modal_acc[m_off[kp]:m_off[kp] + nm2])
-            dy[o + 3:o + 6] = acc[k] - a_att
+            put1(dy[o + 3:o + 6], acc[k] - a_att)
     for i in range(n_modal):
         dy[e0 + i] = y[e0 + n_modal + i]
         dy[e0 + n_modal + i] = modal_acc[i]

@@ -14,7 +14,7 @@ part: d/dt (R' R^T) = R'' R^T + R' R'^T, the latter symmetric).
 import numpy as np
 
 from ..kernels import kernel
-from ..kernels.algebra.mat3 import matmul, matvec
+from ..kernels.algebra.mat3 import add2, matmul, matvec, put1, put2
 
 _SQRT3_12 = np.sqrt(3.0) / 12.0
 _TAYLOR_TERMS = 16          # after scaling to norm < 1/2: remainder below 2^-16 / 16! ~ 1e-18
@@ -23,9 +23,9 @@ _TAYLOR_TERMS = 16          # after scaling to norm < 1/2: remainder below 2^-16
 @kernel
 def _jet_mul(a, b):
     out = np.zeros((3, 4, 4))
-    out[0] = matmul(a[0], b[0])
-    out[1] = matmul(a[0], b[1]) + matmul(a[1], b[0])
-    out[2] = matmul(a[0], b[2]) + matmul(a[1], b[1]) + matmul(a[2], b[0])
+    put2(out[0], matmul(a[0], b[0]))
+    put2(out[1], matmul(a[0], b[1]) + matmul(a[1], b[0]))
+    put2(out[2], matmul(a[0], b[2]) + matmul(a[1], b[1]) + matmul(a[2], b[0]))
     return out
 
 
@@ -40,10 +40,10 @@ def _jet_exp(x):
         squarings += 1
     y = x / 2.0 ** squarings
     out = np.zeros((3, 4, 4))
-    out[0] = np.eye(4)
+    put2(out[0], np.eye(4))
     for k in range(_TAYLOR_TERMS, 0, -1):        # exp(y) = I + y (I + y/2 (I + y/3 (...)))
         out = _jet_mul(y, out) / k
-        out[0] += np.eye(4)
+        add2(out[0], np.eye(4))
     for _ in range(squarings):
         out = _jet_mul(out, out)
     return out
@@ -84,19 +84,20 @@ def rod_sections(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
             w1 = _twist_matrix(matvec(phi[a - 1, 0], qdd))
             w2 = _twist_matrix(matvec(phi[a - 1, 1], qdd))
             jet = np.zeros((3, 4, 4))
-            jet[0] = 0.5 * h * (x1 + x2) + k * _matrix_bracket(x1, x2)
-            jet[1] = 0.5 * h * (v1 + v2) + k * (_matrix_bracket(v1, x2) + _matrix_bracket(x1, v2))
-            jet[2] = 0.5 * (0.5 * h * (w1 + w2) + k * (_matrix_bracket(w1, x2)
-                                                        + 2.0 * _matrix_bracket(v1, v2)
-                                                        + _matrix_bracket(x1, w2)))
+            put2(jet[0], 0.5 * h * (x1 + x2) + k * _matrix_bracket(x1, x2))
+            put2(jet[1], 0.5 * h * (v1 + v2)
+                 + k * (_matrix_bracket(v1, x2) + _matrix_bracket(x1, v2)))
+            put2(jet[2], 0.5 * (0.5 * h * (w1 + w2) + k * (_matrix_bracket(w1, x2)
+                                                            + 2.0 * _matrix_bracket(v1, v2)
+                                                            + _matrix_bracket(x1, w2))))
             e = _jet_exp(jet)
             g, g1, g2 = (matmul(g, e[0]), matmul(g1, e[0]) + matmul(g, e[1]),
                          matmul(g2, e[0]) + 2.0 * matmul(g1, e[1]) + 2.0 * matmul(g, e[2]))
         r, r1, r2 = g[:3, :3].copy(), g1[:3, :3].copy(), g2[:3, :3].copy()
-        rot[a] = r
-        pos[a] = g[:3, 3]
-        vel[a] = g1[:3, 3]
-        acc[a] = g2[:3, 3]
+        put2(rot[a], r)
+        put1(pos[a], g[:3, 3])
+        put1(vel[a], g1[:3, 3])
+        put1(acc[a], g2[:3, 3])
         rt = r.T
         w = matmul(r1, rt)
         omega[a, 0], omega[a, 1], omega[a, 2] = w[2, 1], w[0, 2], w[1, 0]
@@ -132,8 +133,8 @@ def rod_state(steps, xi0, phi, q, qd):
         unit[j] = 1.0
         rod_sections(steps, xi0, phi, q, unit, zero, r2, p2, o2, v2, a2, c2)
         for i in range(n):
-            jp[i, :, j] = v2[i]
-            jr[i, :, j] = o2[i]
+            put1(jp[i, :, j], v2[i])
+            put1(jr[i, :, j], o2[i])
     return rot, pos, om, vel, al, acc, jp, jr
 
 
