@@ -14,6 +14,11 @@
    station point carrying its own position history, scheme="paper"): the largest angular
    acceleration and the energy error per window, and where the paper's scheme stops.
 Prints every number and saves PNG charts in DIR (default: stability/).
+
+Its first run on a machine compiles every method it compares: six copies of the loops (both
+schemes, the direct and Riccati sweeps, rigid and welded chains) and the reference's kernels
+for two kinds of model under both integrators, 4-25 s each, about 2.5 minutes together on 2
+cores (numba's cache keeps them: a later --quick run takes ~7 s).
 """
 import argparse
 import os
