@@ -52,6 +52,7 @@ from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, m
                     output_section)
 from .energy_balance import does_work
 from .recording import (NoCheckpoint, Recording, model_fingerprint)
+from .threads import blas_threads
 from .result import (DERIVED, FIELDS, Result, beam_output_offset, chain_energies,
                      element_end_section, element_output_offset,
                      point_positions)
@@ -980,7 +981,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
              scheme="newmark", rho_inf=1.0, newton_iterations=None, newton_tol=1e-12,
              record_every=None, record_dt=None, t_eval=None, full_state=False, richardson=False,
              progress=None, max_step_error=MAX_STEP_ERROR, max_energy_error=None,
-             hold_energy=None, resume=None, stream=None) -> Result:
+             hold_energy=None, resume=None, stream=None, threads=None) -> Result:
     """Integrate a model from t = 0 to t_end by DT-TMM.
 
     Parameters
@@ -1095,6 +1096,10 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         memory maps of those files; ``dttmm.load_stream(model, path)`` reads them again, also
         those of a run that stopped or was killed (the samples written so far). A stream
         already in the directory is replaced.
+    threads : int, optional
+        BLAS threads the run may use (the loops' small LAPACK calls). Default: 1, or the
+        environment variable DTTMM_BLAS_THREADS; the process's own limit is restored after the
+        run (dttmm/threads.py; docs/solver.md, "Threads").
 
     Returns
     -------
@@ -1117,15 +1122,21 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         ``err.partial`` holds the Result recorded before it.
     """
     wall0 = time.perf_counter()
-    opts = run_options(model, t_end, dt, rtol=rtol, atol=atol, method=method, scheme=scheme,
-                       rho_inf=rho_inf, newton_iterations=newton_iterations,
-                       newton_tol=newton_tol, record_every=record_every, record_dt=record_dt,
-                       t_eval=t_eval, full_state=full_state, richardson=richardson,
-                       progress=progress, max_step_error=max_step_error,
-                       max_energy_error=max_energy_error, hold_energy=hold_energy,
-                       resume=resume, stream=stream)
+    with blas_threads(threads):
+        return _simulate(wall0, threads, model, t_end, dt, rtol=rtol, atol=atol, method=method,
+                         scheme=scheme, rho_inf=rho_inf, newton_iterations=newton_iterations,
+                         newton_tol=newton_tol, record_every=record_every,
+                         record_dt=record_dt, t_eval=t_eval, full_state=full_state,
+                         richardson=richardson, progress=progress,
+                         max_step_error=max_step_error, max_energy_error=max_energy_error,
+                         hold_energy=hold_energy, resume=resume, stream=stream)
+
+
+def _simulate(wall0, threads, model, t_end, dt, **options):
+    """simulate's run, inside its BLAS thread limit (Richardson's runs take the same)."""
+    opts = run_options(model, t_end, dt, **options)
     if opts.richardson > 1:
-        return drivers.richardson(opts, simulate)
+        return drivers.richardson(opts, functools.partial(simulate, threads=threads))
     check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
     with prepared_run(opts) as plan:
         run = drivers.Stepping(plan, opts, wall0)
