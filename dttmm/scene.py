@@ -138,6 +138,9 @@ def load_scene(path):
         raise SceneError(f"{path}: cannot read the scene file ({err.strerror})") from None
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"{path}: not valid TOML: {err}") from None
+    except UnicodeDecodeError as err:
+        raise SceneError(f"{path}: not a text file (a scene is TOML, UTF-8 text): byte "
+                         f"{err.start} cannot be read") from None
     return scene_from_dict(data, str(path))
 
 

@@ -249,3 +249,59 @@ def test_a_constant_load_is_three_numbers():
     restored = pickle.loads(pickle.dumps(given))
     assert np.array_equal(simulate(restored, 0.05, 1e-3).position_output,
                           simulate(given, 0.05, 1e-3).position_output)
+
+
+def _beam(**kw):
+    return dttmm.EulerBernoulliBeam(**{**dict(length=1.0, bending_stiffness=100.0,
+                                              mass_per_length=1.0,
+                                              polar_inertia_per_length=1e-5), **kw})
+
+
+# issue 65, item 10: (a model builder, the message expected at build); before, in the comment
+ISSUE_65_ELEMENTS = [
+    # ran, and returned an energy 1e260 times the kinetic
+    (lambda: build_chain([dttmm.FixedHinge(), _beam(bending_stiffness=1e300)]),
+     r"EulerBernoulliBeam \(body 0\): bending_stiffness gives the element an own frequency"),
+    (lambda: build_chain([dttmm.FixedHinge(), dttmm.StrainRod(
+        length=1.0, mass_per_length=1.0, bending_stiffness=1e300,
+        polar_inertia_per_length=1e-5)]),
+     r"StrainRod \(body 0\): bending_stiffness gives the element an own frequency"),
+    # numpy's "cannot convert float NaN to integer" and an OverflowError
+    (lambda: build_chain([dttmm.FixedHinge(), _beam(modes_per_plane=float("nan"))]),
+     r"EulerBernoulliBeam \(body 0\): modes_per_plane must be an integer >= 1"),
+    (lambda: build_chain([dttmm.FixedHinge(), _beam(modes_per_plane=float("inf"))]),
+     r"EulerBernoulliBeam \(body 0\): modes_per_plane must be an integer >= 1"),
+    # blamed on the step size after the first step
+    (lambda: build_chain([BallJoint(), link()], gravity=[0, -1e300, 0]),
+     r"System: gravity .* is beyond any physical system's"),
+    # an IndexError
+    (lambda: build_chain([BallJoint(), link()], ground=dttmm.Ground(
+        motion=dttmm.PrescribedMotion(rotation=lambda t: np.eye(2)))),
+     r"PrescribedMotion: rotation\(0\) must be"),
+]
+
+
+@pytest.mark.parametrize("build, message", ISSUE_65_ELEMENTS,
+                         ids=["EI 1e300", "rod EI 1e300", "modes nan", "modes inf",
+                              "gravity 1e300", "ground rotation 2x2"])
+def test_issue_65_inputs_are_refused_at_build(build, message):
+    with pytest.raises(ValueError, match=message):
+        build()
+
+
+def test_an_axis_of_any_finite_length_is_a_direction():
+    """A revolute axis of 1e300 (its square overflowed: 'the transfer at hinge ... is
+    singular') turns the link as the unit axis does."""
+    def swing(axis):
+        model = build_chain([RevoluteJoint(axis=axis), link()], gravity=[0, -9.81, 0])
+        return simulate(model, 0.05, 1e-3).position_output[-1]
+    assert np.array_equal(swing([0, 0, 1e300]), swing([0, 0, 1.0]))
+
+
+def test_a_binary_scene_file_is_named(tmp_path):
+    """A binary file given as a scene (a UnicodeDecodeError before)."""
+    from dttmm.scene import SceneError, load_scene
+    path = tmp_path / "scene.toml"
+    path.write_bytes(bytes(range(256)))
+    with pytest.raises(SceneError, match="not a text file"):
+        load_scene(path)

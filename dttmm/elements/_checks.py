@@ -35,6 +35,22 @@ def finite_vector(element, argument, value, size=3):
     return v
 
 
+MAX_FREQUENCY = 1e12     # Hz: an element's own frequency beyond it is refused as non-physical
+
+
+def physical_frequency(element, argument, frequency):
+    """Refuse a stiffness that gives an element an own frequency (Hz) above MAX_FREQUENCY,
+    beyond any structure (a MEMS resonator's are below 1e10 Hz): a slip of units, whose step
+    would carry energies of 1e200 and more (issue 65: EI = 1e300 ran, its energy 1e260 times
+    the kinetic)."""
+    if not frequency <= MAX_FREQUENCY:
+        raise ValueError(f"{element}: {argument} gives the element an own frequency of "
+                         f"{frequency:.3g} Hz, beyond any physical structure's (at most "
+                         f"{MAX_FREQUENCY:g} Hz here): a slip of units? Give N m^2 for a "
+                         f"bending or torsional stiffness, N for an axial one, with the mass per "
+                         f"length in kg/m")
+
+
 def finite_scalar(element, argument, value, positive=False, nonnegative=False):
     if is_text(value):
         raise ValueError(f"{element}: {argument} must be a number, got {value!r}")

@@ -38,10 +38,11 @@ def _label(joint, index):
 
 def unit_axis(who, argument, value):
     v = finite_vector(who, argument, value)
-    norm = np.linalg.norm(v)
-    if norm < 1e-12:
+    scale = np.abs(v).max()          # (any finite length: 1e300 squared would overflow)
+    u = v / scale if scale > 0.0 else v
+    if np.linalg.norm(u) * scale < 1e-12:
         raise ValueError(f"{who}: {argument} must be a nonzero vector, got {v}")
-    return v / norm
+    return u / np.linalg.norm(u)
 
 
 def _coordinates(who, values, rates, drives, names):

@@ -10,7 +10,8 @@ from numpy.polynomial import legendre
 
 from ..kernels.transfers.strain_rod import (MAGNUS_POINTS, rod_end_points, rod_jacobians,
                                              rod_kinematics, station_arrays)
-from ._checks import finite_pair, finite_scalar, finite_vector, rotation_matrix
+from ._checks import (finite_pair, finite_scalar, finite_vector, physical_frequency,
+                      rotation_matrix)
 from .rigid_body import straight_line_body
 
 # the rod's parameter row (Model.rod_params; zero rows for the other bodies)
@@ -316,6 +317,11 @@ class StrainRod:
         gj = _strain_part(who, self.twist, "twist", self.torsional_stiffness,
                           "torsional_stiffness")
         ea = _strain_part(who, self.stretch, "stretch", self.axial_stiffness, "axial_stiffness")
+        for argument, frequency in (     # (the modal beam's own first frequencies, Hz)
+                ("bending_stiffness", 0.56 * np.sqrt(max(ei) / (mu * length ** 4))),
+                ("axial_stiffness", np.sqrt(ea / mu) / (4 * length)),
+                ("torsional_stiffness", np.sqrt(gj / polar) / (4 * length))):
+            physical_frequency(who, argument, frequency)
         damping = finite_scalar(who, "damping", self.damping, nonnegative=True)
         row = np.zeros(ROD_PARAM_SIZE)
         row[ROD_LENGTH], row[ROD_MU], row[ROD_EI_V], row[ROD_EI_W] = length, mu, ei[0], ei[1]
