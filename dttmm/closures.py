@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL,
-                       BallJoint, EulerBernoulliBeam, StrainRod)
+                       BallJoint, EulerBernoulliBeam, RevoluteJoint, StrainRod, UniversalJoint)
 from .elements.kinds import FLEXIBLE
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
@@ -85,7 +85,9 @@ def loop_membership(entries, bodies, parent):
     the tree path between a closing joint's sides (from each side up to their common ancestor;
     a beam or strain rod closed at its input end from its parent),
     those whose output point a closing joint takes, and those where that joint carries a moment
-    (any but a ball joint).  Sides that name nothing are skipped here (the
+    (any but a ball joint); and output_pinned: those whose output a ball, revolute or universal
+    joint holds at a point while it turns freely in some plane (the beams' mode counts,
+    elements/beam.py::truncation_errors).  Sides that name nothing are skipped here (the
     build refuses them, naming the joint)."""
     n = len(bodies)
     index_of = {id(b): k for k, b in enumerate(bodies)}
@@ -93,6 +95,7 @@ def loop_membership(entries, bodies, parent):
     in_loop = np.zeros(n, dtype=bool)
     closed_output = np.zeros(n, dtype=bool)
     output_moment = np.zeros(n, dtype=bool)
+    output_pinned = np.zeros(n, dtype=bool)
 
     def index(side):
         if isinstance(side, str):
@@ -126,7 +129,9 @@ def loop_membership(entries, bodies, parent):
                 closed_output[k] = True
                 output_moment[k] |= not isinstance(joint, BallJoint)   # (an elastic
                 # hinge's couple too)
-    return in_loop, closed_output, output_moment
+                output_pinned[k] |= isinstance(joint, (BallJoint, RevoluteJoint,
+                                                       UniversalJoint))
+    return in_loop, closed_output, output_moment, output_pinned
 
 
 def start_state(model):
@@ -473,6 +478,12 @@ def describe_closures(model):
                      + (f", {drives[0]}" if kind == ELASTIC else
                         f", {', '.join(drives)} (its force: Result.closure_drive_force)"
                         if drives else ""))
+    moves = model.__dict__.get("_assembly_moves")
+    if moves is not None and len(moves):
+        m, r = int(np.argmax(moves[:, 0])), int(np.argmax(moves[:, 1]))
+        lines.append(f"assembled (assemble: the loops closed at t = 0): bodies moved at most "
+                     f"{moves[m, 0]:.3g} m ('{model.body_names[m]}') and {moves[r, 1]:.3g} rad "
+                     f"('{model.body_names[r]}')")
     return lines
 
 
@@ -673,7 +684,7 @@ def wrap_angle(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
-def tree_state(model, theta, q, omega, qd):
+def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     """The tree's kinematics from its coordinates: theta (n, 3), each free body's rotation
     change (A = exp(theta^) A_0, a ball joint's or an elastic hinge's body), q (n, 2) the
     joints' coordinates, omega (n, 3) the free bodies' angular velocities, qd (n, 2) the
@@ -681,7 +692,8 @@ def tree_state(model, theta, q, omega, qd):
     v_o), each (n, ...): rotations, angular velocities, input points and their velocities, and
     the output sections and points (a beam's or strain rod's deflected end; the beams' modal
     coordinates, the rods' strain coordinates, their rates and the elastic hinges' deflections
-    are the model's)."""
+    are the model's).  stretch_rate (n,), optional: each flexible body's output point also moves
+    along its chord at this rate, m/s, and all that hangs from it with it (held_chords)."""
     from .result import element_end_section, element_output_offset
     from .kernels.algebra.so3 import expm_so3
     n = model.n_bodies
@@ -728,6 +740,8 @@ def tree_state(model, theta, q, omega, qd):
         if model.body_kind[k] in FLEXIBLE:      # its end section and deflected end point
             rot_o[k], w_o[k] = element_end_section(model, k, rot[k], w[k], eta, eta_d)
             rho, rho_rate = element_output_offset(model, k, rot[k], w[k], eta, eta_d)
+            if stretch_rate is not None and stretch_rate[k]:
+                rho_rate = rho_rate + stretch_rate[k] * rho / np.linalg.norm(rho)
         else:
             rot_o[k], w_o[k] = rot[k], w[k]
             rho = rot[k] @ model.body_params[k, TO_OUTPUT]
@@ -812,7 +826,7 @@ def _coordinates(model, keep):
     return variables, np.array(kept, dtype=bool)
 
 
-def _state_of(model, variables, x, xd):
+def _state_of(model, variables, x, xd, stretch_rate=None):
     n = model.n_bodies
     theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
     omega = np.array(model.initial_angular_velocity, order="C")
@@ -822,7 +836,42 @@ def _state_of(model, variables, x, xd):
             q[k, i], qd[k, i] = value, rate
         else:
             theta[k, i], omega[k, i] = value, rate
-    return tree_state(model, theta, q, omega, qd)
+    return tree_state(model, theta, q, omega, qd, stretch_rate)
+
+
+def held_chords(model, beams):
+    """Of the bodies `beams` (flexible, in closed loops), those whose chord length the loops
+    hold: a unit rate of the chord's stretch (the output point and all that hangs from it moving
+    along the chord) that no rates of the tree's free coordinates (those no JointMotion
+    prescribes) make up in the loops' rate Jacobian G (exact: g' = G x' + g'_0), as
+    check_drives_move tests a drive.  A beam without stretch modes held so cannot bow under
+    geometric stiffening (its foreshortening would need the ends to approach): the build leaves
+    its stiffening off there (docs/loops.md, "Flexible links").  A four-bar's coupler, whose
+    ends the crank and the rocker carry, is not held."""
+    if model.n_closures == 0 or not len(beams):
+        return []
+    variables, kept = _coordinates(model, ())
+    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                  for what, k, i in variables])
+    xd = np.zeros(len(variables))
+    base = closure_residuals(model, _state_of(model, variables, x, xd))[1]
+    free = np.nonzero(~kept)[0]
+    jac = np.zeros((base.size, free.size))
+    for j, col in enumerate(free):
+        unit = xd.copy()
+        unit[col] = 1.0
+        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    held = []
+    for k in beams:
+        stretch = np.zeros(model.n_bodies)
+        stretch[k] = 1.0
+        column = closure_residuals(model, _state_of(model, variables, x, xd, stretch))[1] - base
+        left = column
+        if free.size:
+            left = column + jac @ np.linalg.lstsq(jac, -column, rcond=1e-10)[0]
+        if np.abs(left).max() > 1e-6 * max(1.0, np.abs(column).max()):
+            held.append(int(k))
+    return held
 
 
 def loop_residuals(model):
@@ -970,8 +1019,18 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     def residual(values):
         return closure_residuals(model, _state_of(model, variables, values, xd))[0]
 
+    rows = constraint_rows(model)
+    metres = np.isin(rows.kind, (GAP_WORLD, GAP_A))     # gaps in m; the rest are angles
+
+    def gaps(g):
+        """(largest gap in m, largest in rad) of the residuals g."""
+        return (float(np.abs(g[metres]).max(initial=0.0)),
+                float(np.abs(g[~metres]).max(initial=0.0)))
+
+    start = _state_of(model, variables, x, xd)
     g = residual(x)
     history = [np.abs(g).max()]
+    best = gaps(g)
     step = 1e-7
     for _ in range(max_iterations):
         if history[-1] <= limit:
@@ -985,18 +1044,22 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
         x[free] -= np.linalg.pinv(jac, rcond=1e-10) @ g
         g = residual(x)
         history.append(np.abs(g).max())
+        if history[-1] < max(best):
+            best = gaps(g)
         if len(history) > 6 and history[-1] > 0.5 * history[-6]:
             break                               # stalled: the loop cannot close
     owner = closure_residuals(model, _state_of(model, variables, x, xd))[2]
     if history[-1] > limit:
         worst = int(owner[np.argmax(np.abs(g))])
-        gaps = np.zeros(model.n_closures)
-        np.maximum.at(gaps, owner, np.abs(g))
+        left = gaps(g)
+        first = gaps(residual(np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                                        for what, k, i in variables])))
         raise ValueError(f"assemble: closing joint '{model.closure_names[worst]}' cannot close: "
-                         f"a gap of {gaps[worst]:.4g} (m or rad) is left after "
-                         f"{len(history) - 1} iterations (from {history[0]:.4g}); the loop's "
-                         f"bodies cannot reach (a link too short or too long), or a kept "
-                         f"coordinate forbids it")
+                         f"after {len(history) - 1} iterations a gap of {left[0]:.4g} m and "
+                         f"{left[1]:.4g} rad is left (at the start {first[0]:.4g} m and "
+                         f"{first[1]:.4g} rad; the smallest reached {best[0]:.4g} m and "
+                         f"{best[1]:.4g} rad); the loop's bodies cannot reach (a link too short "
+                         f"or too long, a pivot out of reach), or a kept coordinate forbids it")
     # the rates: the loops' velocity residual is linear in them, g' = G xd + g'_0
     def rate_residual(rates):
         return closure_residuals(model, _state_of(model, variables, x, rates))[1]
@@ -1014,11 +1077,53 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
         raise ValueError(f"assemble: the kept rates move closing joint "
                          f"'{model.closure_names[worst]}' apart at {np.abs(gd).max():.4g} (m/s or "
                          f"rad/s); keep fewer rates")
-    rot, w = _state_of(model, variables, x, xd)[:2]
+    end = _state_of(model, variables, x, xd)
+    rot, w = end[:2]
     hinge = np.array(model.hinge_params, order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
             hinge[k, 51 + i], hinge[k, 53 + i] = value, rate
     from .model import adopt_arrays
-    return adopt_arrays(replace(model, initial_rotation=rot, initial_angular_velocity=w,
-                                hinge_params=hinge), model)
+    assembled = adopt_arrays(replace(model, initial_rotation=rot, initial_angular_velocity=w,
+                                     hinge_params=hinge), model)
+    moves = assembly_moves(start, end)
+    object.__setattr__(assembled, "_assembly_moves", moves)
+    _warn_of_moves(model, moves, scale)
+    return assembled
+
+
+MOVE_TOLERANCE = 0.01   # of the model's reach (m), and rad: assemble warns of a body moved more
+
+
+class AssemblyWarning(UserWarning):
+    """assemble moved a body further than MOVE_TOLERANCE to close the loops: the mechanism
+    simulated is not the one given (docs/loops.md, "Assembly")."""
+
+
+def assembly_moves(start, end):
+    """(n, 2): how far assemble moved each body, the largest displacement of its input and
+    output points (m) and the angle of its rotation (rad), between two tree_states."""
+    moved = np.maximum(np.linalg.norm(end[2] - start[2], axis=1),
+                       np.linalg.norm(end[6] - start[6], axis=1))
+    turn = np.einsum("kij,kij->k", end[0], start[0])        # trace(A_end A_start^T)
+    angle = np.arccos(np.clip(0.5 * (turn - 1.0), -1.0, 1.0))
+    return np.column_stack([moved, angle])
+
+
+def _warn_of_moves(model, moves, reach):
+    """AssemblyWarning naming the bodies assemble moved beyond MOVE_TOLERANCE x reach (m) or
+    MOVE_TOLERANCE rad: 1% of the mechanism's size changes its geometry visibly (a pivot in
+    the wrong place), where the rounding of hand-given coordinates (three or four digits) stays
+    well below it."""
+    far = [k for k in range(model.n_bodies)
+           if moves[k, 0] > MOVE_TOLERANCE * reach or moves[k, 1] > MOVE_TOLERANCE]
+    if not far:
+        return
+    import warnings
+    said = ", ".join(f"'{model.body_names[k]}' {moves[k, 0]:.3g} m and {moves[k, 1]:.3g} rad"
+                     for k in far[:6]) + (f" and {len(far) - 6} more" if len(far) > 6 else "")
+    warnings.warn(f"assemble: closing the loops moved bodies beyond {MOVE_TOLERANCE:g} of the "
+                  f"model's reach ({MOVE_TOLERANCE * reach:.3g} m) or {MOVE_TOLERANCE:g} rad: "
+                  f"{said}; the mechanism simulated is not the one given: place the bodies "
+                  f"where the loops close, or keep=[...] the coordinates that are right",
+                  AssemblyWarning, stacklevel=3)

@@ -11,7 +11,7 @@ from .elements.kinds import BEAM, RIGID, ROD
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                   rod_components, rod_frequencies)
-from .closures import describe_closures
+from .closures import describe_closures, held_chords
 from .model import outboard_masses
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
@@ -103,15 +103,24 @@ def _beam_lines(model, k, end_mass):
     lines = [f"{m} mode{'s' if m > 1 else ''} per plane, own frequencies (Hz): "
              f"v {np.array2string(fv, precision=4)}, w {np.array2string(fw, precision=4)}",
              f"mode family {_FAMILY_WHY[int(row[FAMILY])]}"]
-    freq, defl = truncation_errors(row, m, end_mass)
+    ends = model.beam_ends[k] if k < len(model.beam_ends) and model.beam_ends[k] else None
+    ends = ends or (False, False)
+    if any(ends):
+        said = [what for what, on in zip(("the root turns freely (a joint's free rotation: "
+                                          "pinned in that plane)",
+                                          "the output is held at a point and turns freely "
+                                          "(a closing joint: pinned in that plane)"), ends) if on]
+        lines.append(f"ends: {' and '.join(said)}; the modes are counted for those ends")
+    errors = truncation_errors(row, m, end_mass, ends)
     on = (f", with {end_mass:.4g} kg beyond its output as an end mass"
-          if int(row[FAMILY]) == CLAMPED_LOADED else "")
-    lines.append(f"estimated truncation error{on}: first frequency {freq:+.2%}, static "
-                 f"deflection {defl:+.2%} (against the family's largest basis; docs/beam.md, "
-                 f"'How many modes')")
+          if int(row[FAMILY]) == CLAMPED_LOADED and not ends[1] else "")
+    lines.append(f"estimated truncation error{on}: "
+                 + ", ".join(f"{what} {e:+.2%}" for what, e in errors.items())
+                 + " (against the family's largest basis; docs/beam.md, 'How many modes')")
     cutoff = row[FREQUENCY_CUTOFF]
+    cutoff_counted = cutoff == ACCURATE or cutoff > 0.0
     if cutoff == ACCURATE:
-        lines.append(f"modes_per_plane=None (default): the fewest modes with both estimates "
+        lines.append(f"modes_per_plane=None (default): the fewest modes with every estimate "
                      f"within {ACCURACY:.1%}")
     if cutoff > 0.0:
         # auto_mode_count's measure: the frequencies of the family's largest basis
@@ -139,7 +148,10 @@ def _beam_lines(model, k, end_mass):
     if row[STIFFENING] == EXACT:
         lines.append("geometric stiffening on, the foreshortening to all orders "
                      "(stiffening='exact': every section at x - c(x); its w' and eta'' columns "
-                     "differenced, the general loop; docs/beam.md, 'The exact foreshortening')")
+                     "differenced, the general loop; docs/beam.md, 'The exact foreshortening')"
+                     + ("; the default where the build counts 3 or more modes for a pinned "
+                        "end, whose second-order energy holds only to a bend of ~0.08 rad or "
+                        "less" if any(ends) and m >= 3 and cutoff_counted else ""))
     elif row[STIFFENING]:
         from .solver import STIFFENED_BEND_LIMIT
         limit = STIFFENED_BEND_LIMIT.get(m) if int(row[FAMILY]) == CLAMPED_LOADED else None
@@ -148,10 +160,11 @@ def _beam_lines(model, k, end_mass):
             f"rad over its length with {m} modes per plane (~{STIFFENED_BEND_LIMIT[1]:g} with "
             f"one; docs/beam.md, 'Where the second-order energy stops'; stiffening='exact' "
             f"holds beyond)" if limit else ""))
-    elif model.tip_pinned and not ma:
-        lines.append("geometric stiffening off (the paper's beam; the default for a beam without "
-                     "stretch modes in a closed loop, whose inextensible centreline held between "
-                     "fixed points could not bow)")
+    elif not ma and model.n_closures and held_chords(model, [k]):
+        lines.append("geometric stiffening off (the paper's beam): the loops hold this beam's "
+                     "chord, so its inextensible centreline could not bow under stiffening (the "
+                     "default's choice here, or stiffening=False); give it axial_modes and "
+                     "axial_stiffness to stiffen it (docs/loops.md, 'Flexible links')")
     else:
         lines.append("geometric stiffening off (the paper's beam)")
     return lines

@@ -110,6 +110,11 @@ class PrescribedMotion:
         def fd(f, t):
             return derivative(f, t, eps)
 
+        r, v, a, rot, w, wd = self(0.0)           # what each function returns, checked first
+        for name, value in (("position", r), ("velocity", v), ("acceleration", a),
+                            ("angular_velocity", w), ("angular_acceleration", wd)):
+            finite_vector("PrescribedMotion", f"{name}(0)", value)
+        rotation_matrix("PrescribedMotion", "rotation(0)", rot)
         for t in times:
             r, v, a, rot, w, wd = self(t)
             rot_dot = fd(lambda s: self(s)[3], t)
@@ -403,6 +408,10 @@ class Model:
         Per body: where the cutoff of a beam with ``modes_per_plane="auto"`` and no
         ``frequency_cutoff`` came from (the build's step and the drives' bandwidth); "" for
         every other body.
+    beam_ends : tuple
+        Per body: a beam's (root pinned, tip pinned), whether in some bending plane its root
+        turns freely and its output is held at a point, turning freely (its mode count is
+        estimated for those ends; elements/beam.py::truncation_errors); None for other bodies.
     closure_kind, closure_body, closure_point, closure_on_end, closure_params, closure_names
         The loop-closing joints (``System.close``; m of them): kind (m,), the two sides' bodies
         (m, 2; -1 the ground), each side's point in its frame (m, 2, 3; the ground's in the
@@ -457,6 +466,7 @@ class Model:
     attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
                                      # point, m (zero for the ground)
     frequency_cutoff_reasons: tuple = ()  # per body: where a derived "auto" cutoff came from
+    beam_ends: tuple = ()   # per body: a beam's (root pinned, tip pinned) in some plane, or None
     # the loop-closing joints (closures.py): m rows
     closure_kind: np.ndarray = field(default_factory=lambda: empty_table()["closure_kind"])
     closure_body: np.ndarray = field(default_factory=lambda: empty_table()["closure_body"])
@@ -930,6 +940,9 @@ def _who(body, index=None):
     return f"{type(body).__name__} '{name}'{where}" if name else f"{type(body).__name__}{where}"
 
 
+MAX_GRAVITY = 1e6      # m/s^2 (1e5 g): System's gravity beyond it is refused as non-physical
+
+
 def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, duration=None,
             closures=()):
     """Validate every element and the system, and freeze them into a Model.  bodies, hinges:
@@ -959,6 +972,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         raise ValueError("System: tip='ball' pins the tip to a point of the ground, and loops on "
                          "a moving ground do not run in DT-TMM yet")
     g = finite_vector("System", "gravity", gravity)
+    if np.abs(g).max() > MAX_GRAVITY:
+        raise ValueError(f"System: gravity {g} m/s^2 is beyond any physical system's (at most "
+                         f"{MAX_GRAVITY:g} m/s^2, 1e5 g, here): a slip of units? Give it in m/s^2")
     if not isinstance(ground, Ground):
         raise ValueError("System: ground must be a Ground")
     if ground.motion is not None:
@@ -1005,8 +1021,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     if tip == "ball":
         closures.append((BallJoint(name="tip"), bodies[-1], "ground", None, None))
     loops = loop_membership(closures, bodies, parent)
-    _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, loops,
-                           None if derived is None else derived[0])
+    beam_ends, loop_stiffened = _resolve_mode_families(
+        bodies, bv, hv, kinds, body_kind, beam_params, parent, children, loops,
+        None if derived is None else derived[0])
     _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
     rotations = np.zeros((n, 3, 3))
@@ -1077,6 +1094,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         attachment_point=attachment_point,
         drives=tuple(v.get("drives", ()) for v in hv),
         frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
+        beam_ends=tuple(beam_ends),
     )
     tree = replace(tree, **{name: shared_rows(getattr(tree, name)) for name in SHARED_TABLES})
     adopt_arrays(tree)
@@ -1084,7 +1102,21 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         return tree
     index_of = {id(b): k for k, b in enumerate(bodies)}
     named = [dict(v.get("points") or {}) for v in bv]
-    return adopt_arrays(replace(tree, **closure_rows(tree, closures, index_of, named)), tree)
+    return _unstiffen_held_chords(adopt_arrays(
+        replace(tree, **closure_rows(tree, closures, index_of, named)), tree), loop_stiffened)
+
+
+def _unstiffen_held_chords(model, candidates):
+    """Resolve stiffening=None of the inextensible beams in closed loops (the candidates,
+    stiffened so far): off where the loops hold the beam's chord length (closures.held_chords:
+    held between points that cannot approach, it could not bow), on elsewhere (a four-bar's
+    coupler: its ends move)."""
+    held = closures.held_chords(model, candidates)
+    if not held:
+        return model
+    params = np.array(model.beam_params, order="C")
+    params[held, STIFFENING] = 0.0
+    return adopt_arrays(replace(model, beam_params=params), model)
 
 
 def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
@@ -1189,8 +1221,8 @@ def drives_bandwidth(step, duration, ground_motion, motions, max_samples=1 << 15
     return best
 
 
-def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, children, loops,
-                           derived_cutoff=None):
+def _resolve_mode_families(bodies, bv, hv, kinds, body_kind, beam_params, parent, children,
+                           loops, derived_cutoff=None):
     """Write each beam's mode family into beam_params (docs/beam.md, "Mode shapes").  "auto":
     pinned between moment-free ends (ball joints, the free or pinned tip); otherwise clamped in
     the input section's frame, with the clamped-free eigenfunctions when the output is the free
@@ -1198,12 +1230,16 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
     contradicts the hinges is refused (clamped between moment-free ends only if the user
     insists).  An elastic hinge at the input clamps the beam elastically (the frame is the input
     section's, as after a fixed hinge); one at the output loads it (loaded-end modes).
-    loops = (in_loop, closed_output, output_moment) per body (closures.loop_membership): a
-    closing joint at a beam's output end holds it like a child's joint (a ball joint:
-    moment-free)."""
+    loops = (in_loop, closed_output, output_moment, output_pinned) per body
+    (closures.loop_membership): a closing joint at a beam's output end holds it like a child's
+    joint (a ball joint: moment-free).  The mode count of modes_per_plane=None is estimated for
+    the beam's own ends (root_pinned, output_pinned; elements/beam.py::truncation_errors);
+    returns them per body ((root pinned, tip pinned) for a beam, None for another body), and
+    the beams whose stiffening=None waits for the loops (in a loop without stretch modes)."""
     n = len(bodies)
-    in_loop, closed_output, output_moment = loops
+    in_loop, closed_output, output_moment, output_pinned = loops
     end_mass = outboard_masses([v["mass"] for v in bv], parent)
+    ends, candidates = [None] * n, []
     for k in range(n):
         if body_kind[k] != BEAM:
             continue
@@ -1231,15 +1267,18 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
         elif family != PINNED:
             family = CLAMPED if free_tip else CLAMPED_LOADED
         beam_params[k, FAMILY] = family
+        ends[k] = (family != PINNED and (input_free or root_pinned(bodies[k], kinds[k], hv[k])),
+                   family != PINNED and bool(output_pinned[k]))
         if beam_params[k, FREQUENCY_CUTOFF] == FROM_STEP:   # derived (build_chain's step)
             beam_params[k, FREQUENCY_CUTOFF] = derived_cutoff
         if beam_params[k, FREQUENCY_CUTOFF] == ACCURATE:    # modes_per_plane=None
-            beam_params[k, MODES] = accurate_mode_count(beam_params[k], end_mass[k])
+            beam_params[k, MODES] = accurate_mode_count(beam_params[k], end_mass[k], ends[k])
             bv[k] = dict(bv[k], eta0=np.zeros(modal_size(beam_params[k])),    # (its own dict:
                          eta_d0=np.zeros(modal_size(beam_params[k])))       # copy on write)
         if beam_params[k, FREQUENCY_CUTOFF] > 0.0:          # modes_per_plane="auto"
             beam_params[k, MODES] = max(auto_mode_count(beam_params[k]),
-                                        accurate_mode_count(beam_params[k], end_mass[k]))
+                                        accurate_mode_count(beam_params[k], end_mass[k],
+                                                            ends[k]))
             for part, frequencies in ((TORSION_MODES, torsion_frequencies),
                                       (AXIAL_MODES, axial_frequencies)):
                 if beam_params[k, part] == AUTO:           # "auto" twist or stretch
@@ -1247,15 +1286,41 @@ def _resolve_mode_families(bodies, bv, kinds, body_kind, beam_params, parent, ch
             bv[k] = dict(bv[k], eta0=np.zeros(modal_size(beam_params[k])),
                          eta_d0=np.zeros(modal_size(beam_params[k])))
         if beam_params[k, STIFFENING] == AUTO:
-            # stiffening=None: on, unless an inextensible beam (no stretch modes) sits in a
-            # closed loop (the tip pinned), where held between fixed points it would lock
-            beam_params[k, STIFFENING] = float(not (in_loop[k]
-                                                    and beam_params[k, AXIAL_MODES] == 0))
+            # stiffening=None: on; to all orders where the build counted 3 or more modes for a
+            # pinned end (the second-order energy then holds only to a bend of 0.08 rad or
+            # less, which a swinging or coupled link passes: docs/beam.md, "Where the
+            # second-order energy stops"); an inextensible beam (no stretch modes) in a closed
+            # loop is a candidate, which the build turns off where the loops hold its chord (it
+            # could not bow: _unstiffen_held_chords)
+            counted = (beam_params[k, FREQUENCY_CUTOFF] == ACCURATE
+                       or beam_params[k, FREQUENCY_CUTOFF] > 0.0)
+            beam_params[k, STIFFENING] = (EXACT if counted and any(ends[k])
+                                          and beam_params[k, MODES] >= 3 else 1.0)
+            if in_loop[k] and beam_params[k, AXIAL_MODES] == 0:
+                candidates.append(k)
         if family == CLAMPED_LOADED and beam_params[k, MODES] > MAX_LOADED_MODES:
             raise ValueError(f"{who}: modes_per_plane must be <= {MAX_LOADED_MODES} for a "
                              f"clamped beam whose output carries loads (polynomial modes), got "
                              f"{int(beam_params[k, MODES])}")
         beam_params[k, FAMILY] = family
+    return ends, candidates
+
+
+def root_pinned(body, kind, joint):
+    """Whether a body's root joint lets it turn freely in some bending plane of its own: a
+    revolute or universal joint with a coordinate that no JointMotion prescribes, about an axis
+    not along the body's x (R0 is the identity unless the body was given a rotation; then the
+    axis in its frame is not known before the build's kinematics, and a free coordinate counts
+    as pinned).  A ball joint: always (the caller's input_free)."""
+    if kind not in (REVOLUTE, UNIVERSAL):
+        return False
+    axes = [joint["axis1"]] + ([joint["axis2"]] if kind == UNIVERSAL else [])
+    for axis, drive in zip(axes, joint["drives"]):
+        if drive is not None and drive["kind"] == MOTION:
+            continue
+        if getattr(body, "rotation", None) is not None or abs(axis[0]) < 1.0 - 1e-9:
+            return True
+    return False
 
 
 def _validated(elements):

@@ -74,9 +74,10 @@ def test_stiffening_must_be_a_bool_or_exact():
 
 def test_stiffening_is_on_by_default_except_where_it_would_lock():
     """stiffening=None (the default) resolves at the build: on for a cantilever and for a beam
-    in a chain with a free tip; off for a beam without stretch modes in a closed loop (the tip
-    pinned), where its inextensible centreline could not bow, and describe() says why; on there
-    with stretch modes, or when asked for."""
+    in a chain with a free tip; off for a beam without stretch modes whose chord the loops hold
+    (here between two ground points), where its inextensible centreline could not bow, and
+    describe() says why; on there with stretch modes, or when asked for (a loop whose ends move:
+    tests/test_flexible_defaults.py)."""
     from dttmm import BallJoint
     from dttmm.elements.beam import STIFFENING
 
@@ -87,7 +88,7 @@ def test_stiffening_is_on_by_default_except_where_it_would_lock():
     assert build_chain([BallJoint(), beam()]).beam_params[0, STIFFENING] == 1.0
     closed = build_chain([BallJoint(), beam()], tip="ball")
     assert closed.beam_params[0, STIFFENING] == 0.0
-    assert "default for a beam without stretch modes in a closed loop" in closed.describe()
+    assert "the loops hold this beam's chord" in closed.describe()
     for kw in (dict(axial_modes=1, axial_stiffness=1e6), dict(stiffening=True)):
         assert build_chain([BallJoint(), beam(**kw)], tip="ball").beam_params[0, STIFFENING] == 1.0
     assert build_chain([FixedHinge(), beam(stiffening=False)]).beam_params[0, STIFFENING] == 0.0
@@ -217,12 +218,14 @@ def test_the_stretching_soft_pendulum_runs_its_whole_second_as_modal_beams_and_a
 
 
 def test_a_soft_pendulum_stopped_at_its_whip_says_which_element_bent_too_far():
-    """Issue 32: the soft pendulum with the default two modes per plane stops as its tip whips
-    (docs/beam.md, "Where the second-order energy stops"); the message says which element had
-    bent near where its second-order energy stops being positive, and what to do."""
+    """Issue 32: the soft pendulum with two modes per plane (the default of its welded elements;
+    the first, behind the ball joint, now counts 4 for its pinned root, which second-order
+    stiffening holds only to 0.048 rad: given 2 here) stops as its tip whips (docs/beam.md,
+    "Where the second-order energy stops"); the message says which element had bent near where
+    its second-order energy stops being positive, and what to do."""
     from dttmm import DivergenceError
     with pytest.raises(DivergenceError) as stop:
-        simulate(_soft_pendulum(16, None), 0.6, 2e-4, record_dt=1e-3)
+        simulate(_soft_pendulum(16, 2), 0.6, 2e-4, record_dt=1e-3)
     message = str(stop.value)
     assert stop.value.t > 0.3, message                  # the fall before the whip runs
     assert "second-order energy stops being positive" in message, message

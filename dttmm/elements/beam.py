@@ -15,7 +15,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from ._checks import (finite_pair, finite_scalar, finite_vector, optional_function,
-                      rotation_matrix)
+                      physical_frequency, rotation_matrix)
 from ..vectors import rows_dot
 from .rigid_body import straight_line_body
 
@@ -264,22 +264,36 @@ def largest_basis(beam_row):
     return MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
 
 
-def truncation_errors(beam_row, n_modes, end_mass=0.0):
-    """(first bending frequency, largest static deflection) of n_modes per plane, relative
-    to the family's largest basis (MAX_LOADED_MODES, else MAX_AUTO_MODES): the Ritz problem of
-    the beam alone with its family's ends, the loaded-end family's output carrying end_mass
+def truncation_errors(beam_row, n_modes, end_mass=0.0, ends=(False, False)):
+    """{estimate: relative error} of n_modes per plane against the family's largest basis
+    (MAX_LOADED_MODES, else MAX_AUTO_MODES): the Ritz problem of the beam alone with the ends
+    it has (docs/beam.md, "How many modes"), the loaded-end family's output carrying end_mass
     (kg: what hangs on it, as a point mass), under a uniform load along its length plus that
-    mass's weight (docs/beam.md, "How many modes").  Both are ratios of the same beam's
-    numbers, so they depend on the family, n_modes and end_mass / (mu L) only."""
+    mass's weight.  ends = (root pinned, tip pinned): whether, in some bending plane, the root
+    turns freely (a ball, revolute or universal joint whose coordinate nothing prescribes) or
+    the output is held at a point and turns freely (a closing ball, revolute or universal
+    joint).  Clamped ends: the first frequency and the largest static deflection.  A pinned end:
+    the first two flexible frequencies (the swing's inertial load, linear along the beam,
+    excites the second) and the static deflection from the chord (with a free tip the beam
+    swings about its root: the rigid turn takes the load's moment, the modes the rest).  Ratios
+    of the same beam's numbers, so they depend on the family, n_modes, end_mass / (mu L) and the
+    ends only."""
     family = int(beam_row[FAMILY])
     ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
         if family == CLAMPED_LOADED else 0.0
     cap = largest_basis(beam_row)
     n = min(int(n_modes), cap)
     ratio = float(f"{ratio:.2g}")               # (a cache key: 2 digits are plenty here)
-    f, d = _unit_beam_statics(family, n, ratio)
-    f_ref, d_ref = _unit_beam_statics(family, cap, ratio)
-    return f / f_ref - 1.0, d / d_ref - 1.0
+    root, tip = bool(ends[0]), bool(ends[1])
+    if family == PINNED or not (root or tip):
+        f, d = _unit_beam_statics(family, n, ratio)
+        f_ref, d_ref = _unit_beam_statics(family, cap, ratio)
+        return {"first frequency": f / f_ref - 1.0, "static deflection": d / d_ref - 1.0}
+    f, d = _unit_beam_with_ends(family, n, ratio, root, tip)
+    f_ref, d_ref = _unit_beam_with_ends(family, cap, ratio, root, tip)
+    return {"first frequency": f[0] / f_ref[0] - 1.0,
+            "second frequency": f[1] / f_ref[1] - 1.0,
+            "static deflection from the chord": d / d_ref - 1.0}
 
 
 @lru_cache(maxsize=4096)
@@ -299,12 +313,60 @@ def _unit_beam_statics(family, n_modes, end_ratio):
     return float(np.sqrt(first)), float(np.max(np.abs(eta @ y[:, len(x):-1])))
 
 
-def accurate_mode_count(beam_row, end_mass=0.0):
-    """modes_per_plane=None: the fewest modes per plane whose truncation_errors are both at
-    most ACCURACY (the largest basis if none is).  Needs the family resolved."""
+@lru_cache(maxsize=4096)
+def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
+    """((first, second flexible circular frequency), largest static deflection from the chord)
+    of a unit beam (L = mu = EI = 1) with n_modes of the family in its input section's frame:
+    root_pinned adds the frame's turn about the root, w = theta x, as a coordinate without
+    stiffness; tip_pinned holds the output on the root's line, w(L) = 0 (the constraint
+    eliminated by its null space).  A free tip carries end_ratio as a point mass.  The
+    deflection under a unit uniform load and the end mass's unit weight: with a pinned root and
+    a free tip the beam cannot stand, and the load turns it at theta'' = f_theta / M_theta_theta
+    while the modes take f - M theta'' (the quasi-static swing, inertia relief)."""
+    from scipy.linalg import eigh, null_space
+    xg, wg = np.polynomial.legendre.leggauss(48)
+    x, w = 0.5 * (xg + 1.0), 0.5 * wg
+    along = np.linspace(0.0, 1.0, 101)
+    points = np.concatenate([x, along, [1.0]])
+    y, _, ddy, _, _ = mode_shapes(family, 1.0, n_modes, points)
+    shapes, curvatures = y, ddy
+    if root_pinned:
+        shapes = np.vstack([points, y])
+        curvatures = np.vstack([np.zeros_like(points), ddy])
+    q = len(x)
+    mass = (shapes[:, :q] * w) @ shapes[:, :q].T
+    stiff = (curvatures[:, :q] * w) @ curvatures[:, :q].T
+    tip = shapes[:, -1]
+    load = shapes[:, :q] @ w
+    if not tip_pinned:
+        mass = mass + end_ratio * np.outer(tip, tip)
+        load = load + end_ratio * tip
+    basis = null_space(tip[None, :]) if tip_pinned else np.eye(len(tip))
+    if basis.shape[1] <= int(root_pinned and not tip_pinned):
+        return (np.inf, np.inf), np.inf           # no flexible coordinate left
+    mass, stiff, load = basis.T @ mass @ basis, basis.T @ stiff @ basis, basis.T @ load
+    values = eigh(stiff, mass, eigvals_only=True)
+    flexible = np.sqrt(values[values > 1e-9 * values.max()])
+    if root_pinned and not tip_pinned:
+        turn = load[0] / mass[0, 0]
+        coordinates = np.zeros(len(load))
+        coordinates[1:] = np.linalg.solve(stiff[1:, 1:], load[1:] - mass[1:, 0] * turn)
+    else:
+        coordinates = np.linalg.solve(stiff, load)
+    deflection = (basis @ coordinates) @ shapes[:, q:-1]
+    deflection = deflection - along * deflection[-1]          # from the chord
+    second = flexible[1] if len(flexible) > 1 else np.inf
+    return (float(flexible[0]), float(second)), float(np.max(np.abs(deflection)))
+
+
+def accurate_mode_count(beam_row, end_mass=0.0, ends=(False, False)):
+    """modes_per_plane=None: the fewest modes per plane whose truncation_errors (for the beam's
+    ends) are all at most ACCURACY (the largest basis if none is).  Needs the family
+    resolved."""
     cap = largest_basis(beam_row)
     for n in range(1, cap + 1):
-        if max(abs(e) for e in truncation_errors(beam_row, n, end_mass)) <= ACCURACY:
+        errors = truncation_errors(beam_row, n, end_mass, ends)
+        if max(abs(e) for e in errors.values()) <= ACCURACY:
             return n
     return cap
 
@@ -551,6 +613,8 @@ class EulerBernoulliBeam:
         ei = finite_pair(who, "bending_stiffness", self.bending_stiffness, positive=True)
         polar = finite_scalar(who, "polar_inertia_per_length", self.polar_inertia_per_length,
                               positive=True)
+        physical_frequency(who, "bending_stiffness", 1.875 ** 2 / (2 * np.pi) * np.sqrt(
+            max(ei) / (mu * length ** 4)))
         auto = isinstance(self.modes_per_plane, str) and self.modes_per_plane == "auto"
         accurate = self.modes_per_plane is None      # the default: counted at the build
         if accurate and self.frequency_cutoff is not None:
@@ -570,6 +634,7 @@ class EulerBernoulliBeam:
             pass
         elif (isinstance(self.modes_per_plane, (str, bool, np.bool_))
               or not isinstance(self.modes_per_plane, (int, float, np.integer, np.floating))
+              or not np.isfinite(self.modes_per_plane)
               or int(self.modes_per_plane) != self.modes_per_plane or self.modes_per_plane < 1):
             raise ValueError(f"{who}: modes_per_plane must be an integer >= 1, 'auto' or None "
                              f"(the default: as many as {ACCURACY:.1%} accuracy needs), got "
@@ -585,6 +650,8 @@ class EulerBernoulliBeam:
                             self.torsional_stiffness, "twist", "G J, N m^2", auto)
         n_axial, ea = _part(who, "axial_modes", self.axial_modes, "axial_stiffness",
                             self.axial_stiffness, "stretch", "E A, N", auto)
+        physical_frequency(who, "axial_stiffness", np.sqrt(ea / mu) / (4 * length))
+        physical_frequency(who, "torsional_stiffness", np.sqrt(gj / polar) / (4 * length))
         per_plane = self.modes_per_plane
         if accurate:
             # initial modal coordinates given: their size says how many modes; otherwise the
