@@ -18,6 +18,7 @@ from .kernels.stepping import runge_kutta as runge_kutta_kernels
 from .kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
                                     Inputs, Run)
 from .recording import Checkpoint, NoCheckpoint, Recording, SampleStream
+from .resolution import warn_unresolved
 from .result import _drive_spring_energy
 
 
@@ -268,8 +269,8 @@ def fixed_steps(run):
             f"'{model.body_names[fastest[1]]}' turns by up to {turn:.3g} rad per step "
             f"({fastest[0]:.4g} rad/s at dt = {dt:g} s), where the trapezoidal rule's phase "
             f"error, about (w dt)^2 / 12 per radian ({turn ** 2 / 12:.1%} here), may leave "
-            f"the result far off; take dt <= {s.MAX_TURN_PER_STEP / fastest[0]:.2g} s, or "
-            f"rtol= for steps chosen by the error"), stacklevel=3)
+            f"the result far off; take dt <= {2 * np.pi / (20 * fastest[0]):.2g} s (20 steps "
+            f"a turn), or rtol= for steps chosen by the error"), stacklevel=3)
     result = s._result(plan.user_model, recording, dt, 0.0, n_steps,
                        dict(plan.run_info, newton_iterations_used=max_newton,
                             newton_unconverged_steps=int(info[4]),
@@ -279,6 +280,8 @@ def fixed_steps(run):
                                {"energy_balance_error": balance.worst}),
                             **s._loop_info(plan.loops)),
                        checkpoint)
+    warn_unresolved(plan.user_model, result, dt, s.UnresolvedMotionWarning,
+                    s.MAX_TURN_PER_STEP, s.STIFFENED_BEND_LIMIT)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
                          np.concatenate(work_values))
