@@ -3,10 +3,12 @@ cannot resolve the motion"; issue 65, item 5).
 
 - A kept bending mode that the step does not resolve, omega_k dt > MAX_TURN_PER_STEP (0.35 rad
   of its phase a step, about 18 steps a period: the trapezoidal rule's phase error, about
-  (omega dt)^2 / 12 per radian, passes 1% there, as for a body's turn), and that holds more
-  than MODE_SHARE of the run's energy: its largest modal energy
-  1/2 m_k (eta_k'^2 + omega_k^2 eta_k^2) over the samples against the largest kinetic energy
-  plus the beams' elastic energy.  A mode below the share moves the result by at most about
+  (omega dt)^2 / 12 per radian, passes 1% there, as for a body's turn), and whose vibration
+  holds more than MODE_SHARE of the run's energy: its largest kinetic energy 1/2 m_k eta_k'^2
+  over the samples against the largest kinetic energy plus the beams' elastic energy.  Its
+  kinetic energy, not its elastic: a stiff mode that slow loads bend quasi-statically (each
+  element of a fine mesh) stores elastic energy without vibrating, which the trapezoidal rule
+  resolves at any step.  A mode vibrating below the share moves the result by at most about
   sqrt(1e-3) ~ 3% of the elastic motion whatever its phase; the trapezoidal rule keeps such
   stiff modes bounded, which is why it is used.  The advice: 20 steps a period of that mode.
 - An element with geometric stiffening to second order that bends beyond half of where its
@@ -50,7 +52,7 @@ def unresolved_mode(model, result, dt, max_phase):
             elastic += 0.5 * (q * q) @ (ei * stiff)
             for j in np.nonzero(omega * dt > max_phase)[0]:
                 qd = eta_dot[:, offsets[k] + first + j]
-                energy = 0.5 * modal_mass[j] * (qd * qd + omega[j] ** 2 * q[:, j] ** 2)
+                energy = 0.5 * modal_mass[j] * qd * qd     # its vibration's (kinetic) energy
                 candidates.append((model.body_names[k], plane, j + 1,
                                    omega[j] / (2 * np.pi), float(energy.max())))
     if not candidates:
