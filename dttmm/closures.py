@@ -874,6 +874,29 @@ def held_chords(model, beams):
     return held
 
 
+def loop_rank(model):
+    """(rigid coordinates of the tree, rank of the loops' constraint rows over them): the rate
+    Jacobian G of every closing joint's rows (g' = G x' + g'_0, exact) over the tree's joint
+    coordinates and free rotations (closures._coordinates; the beams' modal coordinates left
+    out), its rank by SVD to 1e-9 of its largest singular value.  The rigid mechanism's
+    mobility is their difference (Grübler's count, corrected by the rows that are redundant,
+    as a planar loop's spatial joints are; describe)."""
+    variables, _ = _coordinates(model, ())
+    if model.n_closures == 0 or not variables:
+        return len(variables), 0
+    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                  for what, k, i in variables])
+    xd = np.zeros(len(variables))
+    base = closure_residuals(model, _state_of(model, variables, x, xd))[1]
+    jac = np.zeros((base.size, len(variables)))
+    for j in range(len(variables)):
+        unit = xd.copy()
+        unit[j] = 1.0
+        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    sv = np.linalg.svd(jac, compute_uv=False)
+    return len(variables), int(np.sum(sv > 1e-9 * sv.max(initial=0.0))) if sv.size else 0
+
+
 def loop_residuals(model):
     """How far each closing joint is from holding at t = 0 (docs/loops.md, "Constraints").
 

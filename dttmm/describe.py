@@ -11,7 +11,7 @@ from .elements.kinds import BEAM, RIGID, ROD
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                   rod_components, rod_frequencies)
-from .closures import describe_closures, held_chords
+from .closures import describe_closures, held_chords, loop_rank
 from .model import outboard_masses
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
@@ -36,10 +36,14 @@ def describe_counts(model):
         return head + f"{degrees_of_freedom(model)} degrees of freedom"
     rows = int(sum(CLOSURE_ROWS[int(k)] for k in model.closure_kind))
     tree = degrees_of_freedom(model)
-    return head + (f"{tree} degrees of freedom in the tree, {model.n_closures} closing "
+    rigid, rank = loop_rank(model)
+    modal = int(np.sum(model.n_modes))
+    return head + (f"{tree} degrees of freedom in the tree, closed by {model.n_closures} "
                    f"joint{'s' if model.n_closures > 1 else ''} with {rows} constraint "
-                   f"equations (mobility at least {tree - rows}; more where constraints are "
-                   f"redundant, as a planar loop's spatial joints are)")
+                   f"equations, {rows - rank} of them redundant: mobility {rigid - rank} as a "
+                   f"rigid mechanism (Grübler's count {rigid - rows}, corrected by the rank "
+                   f"{rank} of the constraint rows)"
+                   + (f", plus {modal} modal coordinates" if modal else ""))
 
 
 # the constraint equations of each closing joint kind (closures.py): 6 less its freedoms
@@ -248,8 +252,10 @@ def describe(model):
     each beam's modes (their frequencies, the family and why, what modes_per_plane='auto'
     kept, the twist modes), and a step that resolves it."""
     out = [describe_counts(model),
-           f"gravity {model.gravity.tolist()} m/s^2; tip "
-           f"{'pinned' if model.tip_pinned else 'free'}",
+           f"gravity {model.gravity.tolist()} m/s^2; "
+           + ("tip pinned" if model.tip_pinned else
+              f"closed by {model.n_closures} joint{'s' if model.n_closures > 1 else ''}"
+              if model.n_closures else "tip free"),
            "bodies:"]
     end_masses = outboard_masses(model.body_params[:, MASS], model.parent)
     for k in range(model.n_bodies):

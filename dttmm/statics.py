@@ -80,6 +80,11 @@ class StaticEquilibrium:
         about the vertical).
     coordinates : tuple of str
         The configuration's coordinates, in the order of the Jacobian's columns.
+    trusted_below : float
+        Hz: frequencies below it are within about 1% of what more modes would give; at or
+        above it a beam's kept modes no longer hold its own frequencies to 1% (the lowest over
+        the beams of elements/beam.py::trusted_frequency; inf without beams).  ``trusted``
+        marks them.
     """
     model: Model
     iterations: int
@@ -87,6 +92,14 @@ class StaticEquilibrium:
     stable: bool
     squared_frequencies: np.ndarray
     coordinates: tuple
+    trusted_below: float = np.inf
+
+    @property
+    def trusted(self):
+        """(frequencies,) bool: True for each frequency below ``trusted_below`` (the modes
+        kept hold it to about 1%); False for those beyond what the mode counts were chosen
+        for (give the beams more modes, or more elements, to trust them)."""
+        return np.asarray(self.frequencies < self.trusted_below)
 
     def positions(self):
         """The bodies' input points, mass centres and output points at the equilibrium, each
@@ -131,7 +144,8 @@ class StaticEquilibrium:
     def frequencies(self):
         """The small vibrations' frequencies about the equilibrium, Hz (sqrt of the squared
         circular frequencies over 2 pi; NaN for an unstable direction, fluttering ones
-        included)."""
+        included).  Those at or above ``trusted_below`` are beyond what the beams' mode counts
+        were chosen for (``trusted`` is False for them)."""
         lam = np.asarray(self.squared_frequencies)
         big = np.max(np.abs(lam), initial=0.0)
         real = np.real(lam)
@@ -585,9 +599,26 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         warnings.warn(f"{where}: the equilibrium is unstable ({kind}): a disturbance grows "
                       f"from it (e.g. a column past its buckling load, or under a follower "
                       f"force past its flutter load)", stacklevel=2)
-    return StaticEquilibrium(model=cfg.result_model(q), iterations=iterations,
+    model = cfg.result_model(q)
+    return StaticEquilibrium(model=model, iterations=iterations,
                              residual=float(np.max(np.abs(a), initial=0.0)), stable=stable,
-                             squared_frequencies=lam, coordinates=cfg.labels)
+                             squared_frequencies=lam, coordinates=cfg.labels,
+                             trusted_below=_trusted_below(model))
+
+
+def _trusted_below(model):
+    """Hz: the lowest over the beams of the own frequency their kept modes no longer hold to
+    1% (elements/beam.py::trusted_frequency, with what hangs on each and its ends)."""
+    from .elements.beam import trusted_frequency
+    from .model import outboard_masses
+    from .elements.rigid_body import MASS
+    beams = np.nonzero(model.body_kind == BEAM)[0]
+    if not len(beams):
+        return np.inf
+    end_mass = outboard_masses(model.body_params[:, MASS], model.parent)
+    ends = model.beam_ends if len(model.beam_ends) == model.n_bodies else (None,) * len(end_mass)
+    return float(min(trusted_frequency(model.beam_params[k], end_mass[k],
+                                       ends[k] or (False, False)) for k in beams))
 
 
 def _settling_step(cfg, q, a, k, r, newton, tau, max_increment):

@@ -60,3 +60,16 @@ def test_a_pivot_out_of_reach_is_refused_with_metres_and_radians():
     with pytest.raises(ValueError, match=r"cannot close: after \d+ iterations a gap of [0-9.e+-]+ "
                                          r"m and [0-9.e+-]+ rad is left .*the smallest reached"):
         dttmm.assemble(square_four_bar([5.0, 0, 0]))
+
+
+def test_describe_gives_a_closed_loops_true_mobility():
+    """Issue 65, item 6: a closed one-degree-of-freedom four-bar (its spatial revolute joints
+    redundant in the plane) said 'mobility at least -2' and 'tip free'; now its mobility is
+    Grübler's count corrected by the rank of the constraint rows, and it is 'closed by 1
+    joint'."""
+    text = dttmm.assemble(square_four_bar([1.0, 0, 0])).describe()
+    assert "3 of them redundant: mobility 1 as a rigid mechanism" in text
+    assert "closed by 1 joint" in text and "tip free" not in text
+    from dttmm.mechanisms import slider_crank, stewart_platform
+    assert "mobility 1 as a rigid mechanism" in slider_crank().describe()
+    assert "0 of them redundant: mobility 6" in stewart_platform("motion").describe()

@@ -291,9 +291,36 @@ def truncation_errors(beam_row, n_modes, end_mass=0.0, ends=(False, False)):
         return {"first frequency": f / f_ref - 1.0, "static deflection": d / d_ref - 1.0}
     f, d = _unit_beam_with_ends(family, n, ratio, root, tip)
     f_ref, d_ref = _unit_beam_with_ends(family, cap, ratio, root, tip)
+    f, f_ref = f + (np.inf, np.inf), f_ref + (np.inf, np.inf)
     return {"first frequency": f[0] / f_ref[0] - 1.0,
             "second frequency": f[1] / f_ref[1] - 1.0,
             "static deflection from the chord": d / d_ref - 1.0}
+
+
+FREQUENCY_TRUST = 0.01      # a beam's own frequency is trusted within 1% of the largest basis'
+
+
+def trusted_frequency(beam_row, end_mass=0.0, ends=(False, False)):
+    """Hz: the beam's own frequencies below this one come out within FREQUENCY_TRUST of the
+    family's largest basis with the modes it keeps; the first that does not, or the first it
+    does not keep (of the largest basis), is returned (of the softer plane), inf where every
+    own frequency of the largest basis is held.  The unit Ritz problem of truncation_errors
+    (the beam alone with its ends and end mass), all its flexible frequencies.  A system's
+    frequency at or above the lowest of these over its beams may be off by more than 1%
+    (StaticEquilibrium.trusted)."""
+    family = int(beam_row[FAMILY])
+    ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
+        if family == CLAMPED_LOADED else 0.0
+    ratio = float(f"{ratio:.2g}")
+    cap, n = largest_basis(beam_row), int(beam_row[MODES])
+    f = _unit_beam_with_ends(family, min(n, cap), ratio, bool(ends[0]), bool(ends[1]))[0]
+    f_ref = _unit_beam_with_ends(family, cap, ratio, bool(ends[0]), bool(ends[1]))[0]
+    scale = np.sqrt(min(beam_row[EI_V], beam_row[EI_W])
+                    / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH] ** 4)) / (2 * np.pi)
+    for j, reference in enumerate(f_ref):
+        if j >= len(f) or abs(f[j] / reference - 1.0) > FREQUENCY_TRUST:
+            return float(reference * scale)
+    return np.inf
 
 
 @lru_cache(maxsize=4096)
@@ -315,8 +342,8 @@ def _unit_beam_statics(family, n_modes, end_ratio):
 
 @lru_cache(maxsize=4096)
 def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
-    """((first, second flexible circular frequency), largest static deflection from the chord)
-    of a unit beam (L = mu = EI = 1) with n_modes of the family in its input section's frame:
+    """((every flexible circular frequency, ascending), largest static deflection from the
+    chord) of a unit beam (L = mu = EI = 1) with n_modes of the family in its input section's frame:
     root_pinned adds the frame's turn about the root, w = theta x, as a coordinate without
     stiffness; tip_pinned holds the output on the root's line, w(L) = 0 (the constraint
     eliminated by its null space).  A free tip carries end_ratio as a point mass.  The
@@ -343,7 +370,7 @@ def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
         load = load + end_ratio * tip
     basis = null_space(tip[None, :]) if tip_pinned else np.eye(len(tip))
     if basis.shape[1] <= int(root_pinned and not tip_pinned):
-        return (np.inf, np.inf), np.inf           # no flexible coordinate left
+        return (), np.inf                          # no flexible coordinate left
     mass, stiff, load = basis.T @ mass @ basis, basis.T @ stiff @ basis, basis.T @ load
     values = eigh(stiff, mass, eigvals_only=True)
     flexible = np.sqrt(values[values > 1e-9 * values.max()])
@@ -355,8 +382,7 @@ def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
         coordinates = np.linalg.solve(stiff, load)
     deflection = (basis @ coordinates) @ shapes[:, q:-1]
     deflection = deflection - along * deflection[-1]          # from the chord
-    second = flexible[1] if len(flexible) > 1 else np.inf
-    return (float(flexible[0]), float(second)), float(np.max(np.abs(deflection)))
+    return tuple(float(f) for f in flexible), float(np.max(np.abs(deflection)))
 
 
 def accurate_mode_count(beam_row, end_mass=0.0, ends=(False, False)):
