@@ -44,6 +44,9 @@ def main(argv=None):
     run.add_argument("--csv", help="write t, the output points and the energies to FILE.csv")
     run.add_argument("--plots", help="draw the run's figures into DIR")
     run.add_argument("--animate", help="write a 3D animation (FILE.gif or FILE.mp4)")
+    run.add_argument("--view", default="auto",
+                     help="the animation's view: auto (default: a planar motion square on), "
+                          "oblique, xy, xz, yz, or ELEVATION,AZIMUTH in degrees")
     run.add_argument("--checkpoint", help="write the final state to FILE.npz (to resume)")
     run.add_argument("--resume", help="continue from a checkpoint file")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -172,7 +175,7 @@ def _run(args):
             print(f"wrote {path}")
     if args.animate:
         from .plots import animate
-        animate(res, model, args.animate, title=scene.name)
+        animate(res, model, args.animate, title=scene.name, view=_view(args.view))
         print(f"wrote {args.animate}")
     return 0
 
@@ -189,11 +192,26 @@ def _output_problem(args):
             return f"{flag} {path}: is a directory; give a file name"
     if args.animate and Path(args.animate).suffix not in (".gif", ".mp4"):
         return f"--animate {args.animate}: write a .gif or an .mp4"
+    if _view(args.view) is None:
+        return (f"--view {args.view}: give auto, oblique, xy, xz, yz or ELEVATION,AZIMUTH in "
+                f"degrees")
     if args.plots and Path(args.plots).exists() and not Path(args.plots).is_dir():
         return f"--plots {args.plots}: is a file; give a directory"
     if args.resume and not Path(args.resume).is_file():
         return f"--resume {args.resume}: no such file"
     return ""
+
+
+def _view(text):
+    """--view's value as animate takes it (a name, or (elevation, azimuth)); None if bad."""
+    from .plots import VIEWS
+    if text in VIEWS:
+        return text
+    try:
+        elevation, azimuth = (float(v) for v in text.split(","))
+    except ValueError:
+        return None
+    return (elevation, azimuth) if np.isfinite([elevation, azimuth]).all() else None
 
 
 def _info(args):

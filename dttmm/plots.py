@@ -122,18 +122,28 @@ def plot_energy(result, ax=None, title=None):
 
 
 def plot_joints(result, ax=None, title=None):
-    """Joint coordinates (rad or m) and the drives' generalized forces (N m or N)."""
+    """Joint coordinates (rad or m) and the drives' generalized forces (N m or N): the second
+    panel only for the coordinates a drive acts on (an undriven joint's force is zero by
+    construction: its rounding, ~1e-14, is not drawn), and only where there are some."""
     if result.joint_coordinates is None:
         raise ValueError("plot_joints: the result has no joints with coordinates")
-    fig, axes = _axes(ax, 2)
     names = _column_labels(result, "coordinate_names", "q", result.joint_coordinates.shape[1])
+    force = np.asarray(result.drive_force)
+    driven = [j for j in range(len(names))
+              if np.abs(force[:, j]).max(initial=0.0) > ZERO_FORCE * max(
+                  1.0, float(np.abs(force).max(initial=0.0)))]
+    fig, axes = _axes(ax, 2 if driven else 1)
     for j, name in enumerate(names):
-        style = _style(j)
-        axes[0].plot(result.t, result.joint_coordinates[:, j], label=name, **style)
-        axes[1].plot(result.t, result.drive_force[:, j], label=name, **style)
+        axes[0].plot(result.t, result.joint_coordinates[:, j], label=name, **_style(j))
+    for j in driven:
+        axes[1].plot(result.t, force[:, j], label=names[j], **_style(j))
     axes[0].set_ylabel("coordinate (rad or m)")
-    axes[1].set_ylabel("drive force (N m or N)")
+    if driven:
+        axes[1].set_ylabel("drive force (N m or N)")
     return _finish(fig, axes, title or "joints")
+
+
+ZERO_FORCE = 1e-9     # of the largest drive force (or 1 N): below it a column is rounding
 
 
 def plot_modal(result, ax=None, title=None):
@@ -226,12 +236,15 @@ def centerlines(result, model, points=12):
     return out
 
 
-def animate(result, model, path, title="", frames=150, fps=25, progress=None):
+def animate(result, model, path, title="", frames=150, fps=25, progress=None, view="auto"):
     """A 3D animation of the run (each body a line through its points, a beam its deflected
     centreline) to path: .gif (Pillow, with matplotlib) or .mp4 (ffmpeg needed).  The axes
     are drawn once and each frame draws only the bodies and the time over them (blitting); a
     GIF's frames share the first frame's palette.  progress: a bar over the frames (None:
-    when stderr is a terminal)."""
+    when stderr is a terminal).  view: "auto" (default: a planar motion seen square on, along
+    its plane's normal, else an oblique view), "oblique", "xy", "xz", "yz" (the world plane
+    seen square on), or (elevation, azimuth) in degrees (matplotlib's, in the drawn axes,
+    whose z is against gravity)."""
     plt = _plt()
     from matplotlib import animation
     path = Path(path)
@@ -254,8 +267,15 @@ def animate(result, model, path, title="", frames=150, fps=25, progress=None):
     fig = plt.figure(figsize=(6, 6))
     ax = fig.add_subplot(projection="3d")
     ax.set_box_aspect((1, 1, 1))
+    elevation, azimuth = view_angles(lines.reshape(-1, 3), view, order)
+    ax.view_init(elev=elevation, azim=azimuth)
+    e, a = np.radians(elevation), np.radians(azimuth)
+    sight = np.abs([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
     for i, set_lim in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
         set_lim(mid[i] - half, mid[i] + half)
+        if sight[i] > 0.999:        # seen along this axis: its ticks would pile up
+            (ax.set_xticks, ax.set_yticks, ax.set_zticks)[i]([])
+            continue
         (ax.set_xlabel, ax.set_ylabel, ax.set_zlabel)[i](labels[i])
     drawn = [ax.plot([], [], [], lw=2, marker="o", markevery=[0])[0]
              for _ in range(model.n_bodies)]
@@ -280,6 +300,38 @@ def animate(result, model, path, title="", frames=150, fps=25, progress=None):
         bar.close()
         plt.close(fig)
     return path
+
+
+VIEWS = ("auto", "oblique", "xy", "xz", "yz")
+PLANAR = 1e-3      # a motion whose points spread less than this fraction out of a plane
+
+
+def view_angles(points, view="auto", order=(0, 1, 2)):
+    """(elevation, azimuth) in degrees of the camera for the drawn points (n, 3) (axes order:
+    the world axes drawn as x, y, z): "auto" looks along the normal of the plane the points
+    span when they spread less than PLANAR of their extent out of it (a planar mechanism seen
+    square on), else matplotlib's oblique default (30, -60); "xy", "xz", "yz": along the
+    world axis normal to that plane; a pair: as given."""
+    if isinstance(view, (tuple, list)) and len(view) == 2:
+        return float(view[0]), float(view[1])
+    if view not in VIEWS:
+        raise ValueError(f"animate: view must be one of {VIEWS} or (elevation, azimuth) in "
+                         f"degrees, got {view!r}")
+    normal = None
+    if view in ("xy", "xz", "yz"):
+        axis = ({0, 1, 2} - {"xyz".index(view[0]), "xyz".index(view[1])}).pop()
+        normal = np.eye(3)[list(order).index(axis)]
+    elif view == "auto" and len(points) >= 3:
+        centred = points - points.mean(axis=0)
+        _, spread, vt = np.linalg.svd(centred, full_matrices=False)
+        if spread[0] > 0.0 and spread[-1] <= PLANAR * spread[0]:
+            normal = vt[-1]
+    if normal is None:
+        return 30.0, -60.0
+    if normal[2] < 0 or (normal[2] == 0 and normal[1] > 0):
+        normal = -normal                  # seen from above, or from the front
+    return (float(np.degrees(np.arcsin(np.clip(normal[2], -1.0, 1.0)))),
+            float(np.degrees(np.arctan2(normal[1], normal[0]))))
 
 
 def _samples(result, pick):
