@@ -280,8 +280,7 @@ def fixed_steps(run):
                                {"energy_balance_error": balance.worst}),
                             **s._loop_info(plan.loops)),
                        checkpoint)
-    warn_unresolved(plan.user_model, result, dt, s.UnresolvedMotionWarning,
-                    s.MAX_TURN_PER_STEP, s.STIFFENED_BEND_LIMIT)
+    warn_unresolved(plan.user_model, result, dt, s.UnresolvedMotionWarning, s.MAX_TURN_PER_STEP)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
                          np.concatenate(work_values))

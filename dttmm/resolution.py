@@ -11,21 +11,13 @@ cannot resolve the motion"; issue 65, item 5).
   resolves at any step.  A mode vibrating below the share moves the result by at most about
   sqrt(1e-3) ~ 3% of the elastic motion whatever its phase; the trapezoidal rule keeps such
   stiff modes bounded, which is why it is used.  The advice: 20 steps a period of that mode.
-- An element with geometric stiffening to second order that bends beyond half of where its
-  second-order energy stops being positive (solver.STIFFENED_BEND_LIMIT; docs/beam.md, "Where
-  the second-order energy stops"): the energy's error in the turning motion grows as
-  (bend / limit)^2, a quarter of it at half the limit, and the one-element mast of issue 65
-  bent 0.15 rad (of 0.17) was 8.7% off.  The advice: stiffening="exact" or as many elements
-  as bring each below half the limit.
-
-Both are UnresolvedMotionWarning; each names the element and what would resolve it.
+An UnresolvedMotionWarning, naming the beam, the mode and what would resolve it.
 """
 import warnings
 
 import numpy as np
 
-from .elements.beam import (CLAMPED_LOADED, EI_V, EI_W, EXACT, FAMILY, LENGTH, MASS_PER_LENGTH,
-                            MODES, STIFFENING, mode_shapes)
+from .elements.beam import EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, mode_shapes
 from .elements.kinds import BEAM
 
 MODE_SHARE = 1e-3         # of the run's energy: a mode holding more must be resolved
@@ -63,30 +55,9 @@ def unresolved_mode(model, result, dt, max_phase):
     return worst[:4] + (share,) if share > MODE_SHARE else None
 
 
-def overbent_element(model, result, limits):
-    """The second-order stiffened loaded-end element bent furthest beyond half its limit, as
-    (name, its largest bend rad, the limit rad, modes per plane), or None."""
-    from .solver import _beam_tips
-    if result.modal_coordinates is None or not len(result.t):
-        return None
-    eta = np.asarray(result.modal_coordinates)
-    worst = None
-    for name, _, part, _, _, slope, k in _beam_tips(model):
-        row = model.beam_params[k]
-        m = int(row[MODES])
-        if row[STIFFENING] in (0.0, EXACT) or int(row[FAMILY]) != CLAMPED_LOADED \
-                or m not in limits:
-            continue
-        e = eta[:, part]
-        bend = float(np.max(np.hypot(e[:, :m] @ slope, e[:, m:2 * m] @ slope)))
-        if bend > 0.5 * limits[m] and (worst is None or bend / limits[m] > worst[1] / worst[2]):
-            worst = (name, bend, limits[m], m)
-    return worst
-
-
-def warn_unresolved(model, result, dt, warning, max_phase, limits, stacklevel=4):
-    """Warn (`warning`, UnresolvedMotionWarning) of an unresolved mode and of an overbent
-    element of a finished fixed-step run."""
+def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
+    """Warn (`warning`, UnresolvedMotionWarning) of an unresolved mode of a finished fixed-step
+    run."""
     mode = unresolved_mode(model, result, dt, max_phase)
     if mode is not None:
         name, plane, j, f, share = mode
@@ -96,15 +67,4 @@ def warn_unresolved(model, result, dt, warning, max_phase, limits, stacklevel=4)
             f"{f * dt:.3g} periods a step, where the trapezoidal rule's phase error may leave "
             f"the deflection far off; take dt <= {1.0 / (STEPS_PER_PERIOD * f):.2g} s "
             f"({STEPS_PER_PERIOD} steps a period), or fewer modes (modes_per_plane)"),
-            stacklevel=stacklevel)
-    bent = overbent_element(model, result, limits)
-    if bent is not None:
-        name, bend, limit, m = bent
-        pieces = int(np.ceil(bend / (0.5 * limit)))
-        warnings.warn(warning(
-            f"simulate: beam '{name}' bent by up to {bend:.3g} rad over its length, beyond half "
-            f"of the {limit:g} rad where the second-order stiffening of {m} modes per plane "
-            f"stops holding (docs/beam.md, \"Where the second-order energy stops\"): its "
-            f"vibration and deflection may be off by percents; give it stiffening='exact', or "
-            f"make it {pieces} elements (each then bends by about {bend / pieces:.2g} rad)"),
             stacklevel=stacklevel)

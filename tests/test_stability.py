@@ -83,7 +83,11 @@ def elastic_clamped_chain():
                         ElasticHinge(1e5, [1e3, 2e3, 3e3]), unit_link()])
 
 
+# (the two sweeps compared on the same steps: the stiff cantilever's 636 Hz modes unresolved at
+# dt = 1e-3 on purpose, 0.1% of the energy)
 @pytest.mark.parametrize("name", ["rigid3", "three_pendulum", "elastic_clamped", "cantilever4"])
+@pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
+                            "dttmm.solver.UnresolvedMotionWarning")
 def test_direct_and_riccati_agree_on_short_systems(name):
     model = {"rigid3": lambda: rigid_chain(3), "three_pendulum": lambda: three_pendulum(2),
              "elastic_clamped": elastic_clamped_chain,
