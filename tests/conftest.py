@@ -120,8 +120,11 @@ def _compile_families(directory):
                 done = directory / f"{name}.done"
                 if not done.exists():
                     t0 = time.perf_counter()
-                    try:            # (the compile notices: one line below instead)
-                        with contextlib.redirect_stderr(io.StringIO()):
+                    try:            # (the compile notices: one line below instead; the
+                        #             short runs' flags on what their step resolves)
+                        with contextlib.redirect_stderr(io.StringIO()), \
+                                warnings.catch_warnings():
+                            warnings.simplefilter("ignore")
                             job()
                     except Exception as err:    # (the tests that use it will say what)
                         warnings.warn(f"compiling the {name} kernels first failed: {err}")

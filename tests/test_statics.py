@@ -371,6 +371,8 @@ def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
     assert np.abs(res.position_output - res.position_output[0]).max() < 1e-9
 
 
+# (the crank turned to 2.5 rad and the loop assembled around it on purpose: AssemblyWarning)
+@pytest.mark.filterwarnings("ignore::dttmm.closures.AssemblyWarning")
 def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
     """The IFToMM spatial slider-crank under gravity (closed by its prismatic joint): its
     potential, g (0.12 (0.12 + 0.04 cos th) + 0.5 (0.12 + 0.08 cos th) / 2), is least with the
