@@ -137,8 +137,8 @@ def test_four_bar_coupler_stiffened_by_default_against_a_fine_mesh():
     """A crank-rocker whose coupler is a steel beam in the loop: its ends move with the crank
     and the rocker, so the default keeps its geometric stiffening (to all orders: a pinned root
     with 4 modes) and the coupler's mid-point deflection is within 5% of the fine mesh's peak
-    at every instant over a turn, the rocker angle within 1e-3 rad (stiffening off, the old
-    default: twice the deflection)."""
+    at every instant over a turn, the rocker angle within 1e-3 rad (the old default, 2 modes
+    without stiffening: a 77 mm peak, 178% of the peak off, the rocker 2.1e-2 rad)."""
     model = crank_rocker(1)
     assert model.beam_params[1, STIFFENING] == EXACT
     t_end, dt = 1.0, 2e-4
