@@ -11,7 +11,8 @@ from .elements.joints import rotation_about
 from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             EXACT,
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
-                            MAX_LOADED_MODES, MODES, PINNED, STIFFENING, TORSION_MODES,
+                            MASS_PER_LENGTH, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
+                            TORSION_MODES,
                             accurate_mode_count, auto_mode_count, auto_part_count,
                             axial_frequencies, end_shapes, modal_size,
                             torsion_frequencies)
@@ -21,7 +22,8 @@ from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              WITH_COORDINATES, body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import pack_body
-from .elements.strain_rod import ROD_PARAM_SIZE, rod_coordinate_count, rod_end_section
+from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, ROD_PARAM_SIZE, ROD_STATIONS,
+                                  rod_coordinate_count, rod_end_section)
 from .kernels.algebra.so3 import expm_so3, left_jacobian
 from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
@@ -1029,6 +1031,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     beam_ends, loop_stiffened = _resolve_mode_families(
         bodies, bv, hv, kinds, body_kind, beam_params, parent, children, loops,
         None if derived is None else derived[0])
+    if (body_kind == ROD).any():
+        rod_params = _count_rod_strains(bodies, bv, hv, kinds, body_kind, rod_params, parent,
+                                        loops)
     _check_ball_lookahead(bodies, bv, kinds, body_kind, children, attachment)
 
     rotations = np.zeros((n, 3, 3))
@@ -1309,6 +1314,34 @@ def _resolve_mode_families(bodies, bv, hv, kinds, body_kind, beam_params, parent
                              f"{int(beam_params[k, MODES])}")
         beam_params[k, FAMILY] = family
     return ends, candidates
+
+
+def _count_rod_strains(bodies, bv, hv, kinds, body_kind, rod_params, parent, loops):
+    """strain_modes=None of a strain rod with a pinned end (its root behind a ball joint or a
+    free revolute or universal joint, its output held by a closing ball, revolute or universal
+    joint): the count of a loaded-end modal beam with those ends and what hangs on it
+    (elements/beam.py::accurate_mode_count; the rod's deflection polynomials are those modes'),
+    its stations count + 3 unless given, its strain coordinates zero.  Other rods keep 2."""
+    output_pinned = loops[3]
+    end_mass = outboard_masses([v["mass"] for v in bv], parent)
+    rods = np.array(rod_params, order="C")
+    for k in np.nonzero(body_kind == ROD)[0]:
+        if not bv[k].get("counted"):
+            continue
+        ends = (bool(kinds[k] == BALL or root_pinned(bodies[k], kinds[k], hv[k])),
+                bool(output_pinned[k]))
+        if not any(ends):
+            continue
+        row = np.zeros(BEAM_PARAM_SIZE)
+        row[LENGTH], row[MASS_PER_LENGTH] = rods[k, ROD_LENGTH], rods[k, ROD_MU]
+        row[FAMILY] = CLAMPED_LOADED
+        count = accurate_mode_count(row, end_mass[k], ends)
+        rods[k, ROD_MODES] = count
+        if not bv[k].get("stations_given"):
+            rods[k, ROD_STATIONS] = count + 3
+        nq = rod_coordinate_count(rods[k])
+        bv[k] = dict(bv[k], eta0=np.zeros(nq), eta_d0=np.zeros(nq))
+    return rods
 
 
 def root_pinned(body, kind, joint):

@@ -19,6 +19,7 @@ from .rigid_body import straight_line_body
  ROD_TWIST, ROD_STRETCH, ROD_STATIONS, ROD_DAMPING) = range(14)
 ROD_PARAM_SIZE = 14
 MAX_STRAIN_MODES = 6
+DEFAULT_STRAIN_MODES = 2      # strain_modes=None where no end is pinned (model.py raises it)
 
 # the strain's components, their rows in xi = [angular; linear] (section frame): the twist
 # kappa_x, the curvatures kappa_y (bending toward -z) and kappa_z (toward +y), the stretch
@@ -239,7 +240,13 @@ class StrainRod:
         (z, y) per length.  Default 0 (Euler-Bernoulli, as the modal beam).
     strain_modes : int, optional
         Coefficients per strain component (>= 1, at most 6): 1 a constant strain along the
-        element, 2 (default) a linear one, ... (Legendre polynomials).
+        element, 2 a linear one, ... (Legendre polynomials).  None (default): 2, or as many as
+        the rod's ends need where one is pinned in a bending plane (a root behind a ball, or a
+        revolute or universal joint no JointMotion holds; an output held by a closing ball,
+        revolute or universal joint), counted at the build as a modal beam's
+        (elements/beam.py::accurate_mode_count: its deflection's polynomials x^2 .. x^(m+1) are
+        the loaded-end modes'): 4 behind a revolute joint (2 left a double pendulum's mid-span
+        deflection 42% off); or the count initial_strain implies.
     stations : int, optional
         Gauss points where the rod's mass is integrated and its kinematics stepped (>= 1).
         Default strain_modes + 3.
@@ -285,7 +292,7 @@ class StrainRod:
     mass_per_length: float
     polar_inertia_per_length: float
     rotary_inertia_per_length: object = 0.0
-    strain_modes: int = 2
+    strain_modes: int = None
     stations: int = None
     twist: bool = False
     stretch: bool = False
@@ -311,7 +318,15 @@ class StrainRod:
                               positive=True)
         rotary = finite_pair(who, "rotary_inertia_per_length", self.rotary_inertia_per_length,
                              nonnegative=True)
-        modes = _count(who, "strain_modes", self.strain_modes, 1, MAX_STRAIN_MODES)
+        components = 2 + int(bool(self.twist)) + int(bool(self.stretch))
+        given = [np.size(v) for v in (self.initial_strain, self.initial_strain_rate)
+                 if v is not None]
+        if self.strain_modes is None and given and given[0] % components == 0:
+            modes = given[0] // components        # (the count the initial strain implies)
+        elif self.strain_modes is None:
+            modes = DEFAULT_STRAIN_MODES          # (raised at the build for pinned ends)
+        else:
+            modes = _count(who, "strain_modes", self.strain_modes, 1, MAX_STRAIN_MODES)
         n_stations = (modes + 3 if self.stations is None
                       else _count(who, "stations", self.stations, 1, 64))
         gj = _strain_part(who, self.twist, "twist", self.torsional_stiffness,
@@ -340,7 +355,8 @@ class StrainRod:
         # the straight rod as a rigid body (what the model's rigid-body rows show of it)
         return dict(straight_line_body(length, mu, polar, rotary), force=None, torque=None,
                     line_load=None, rotation=rotation, omega=omega, rod=row, eta0=q0,
-                    eta_d0=qd0)
+                    eta_d0=qd0, counted=self.strain_modes is None and not given,
+                    stations_given=self.stations is not None)
 
 
 def _count(who, name, value, low, high):
