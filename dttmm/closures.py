@@ -839,6 +839,28 @@ def _state_of(model, variables, x, xd, stretch_rate=None):
     return tree_state(model, theta, q, omega, qd, stretch_rate)
 
 
+def _start_values(model, variables):
+    """The assembly's variables at t = 0: each joint coordinate as given, each free body's
+    rotation change 0."""
+    return np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                     for what, k, i in variables])
+
+
+def _rate_jacobian(model, variables, x, columns=None):
+    """(g'_0, G, owner): the loops' rate residual at positions x with every rate zero, its
+    Jacobian over the variables `columns` (default: all), exact since g' = G x' + g'_0 is
+    linear in the rates (one unit rate a column), and each row's closing joint."""
+    xd = np.zeros(len(variables))
+    _, base, owner = closure_residuals(model, _state_of(model, variables, x, xd))
+    columns = range(len(variables)) if columns is None else columns
+    jac = np.zeros((base.size, len(columns)))
+    for j, col in enumerate(columns):
+        unit = xd.copy()
+        unit[col] = 1.0
+        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    return base, jac, owner
+
+
 def held_chords(model, beams):
     """Of the bodies `beams` (flexible, in closed loops), those whose chord length the loops
     hold: a unit rate of the chord's stretch (the output point and all that hangs from it moving
@@ -851,21 +873,15 @@ def held_chords(model, beams):
     if model.n_closures == 0 or not len(beams):
         return []
     variables, kept = _coordinates(model, ())
-    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                  for what, k, i in variables])
-    xd = np.zeros(len(variables))
-    base = closure_residuals(model, _state_of(model, variables, x, xd))[1]
+    x = _start_values(model, variables)
     free = np.nonzero(~kept)[0]
-    jac = np.zeros((base.size, free.size))
-    for j, col in enumerate(free):
-        unit = xd.copy()
-        unit[col] = 1.0
-        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    base, jac, _ = _rate_jacobian(model, variables, x, free)
     held = []
     for k in beams:
         stretch = np.zeros(model.n_bodies)
         stretch[k] = 1.0
-        column = closure_residuals(model, _state_of(model, variables, x, xd, stretch))[1] - base
+        column = closure_residuals(model, _state_of(model, variables, x,
+                                                    np.zeros(len(variables)), stretch))[1] - base
         left = column
         if free.size:
             left = column + jac @ np.linalg.lstsq(jac, -column, rcond=1e-10)[0]
@@ -884,15 +900,7 @@ def loop_rank(model):
     variables, _ = _coordinates(model, ())
     if model.n_closures == 0 or not variables:
         return len(variables), 0
-    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                  for what, k, i in variables])
-    xd = np.zeros(len(variables))
-    base = closure_residuals(model, _state_of(model, variables, x, xd))[1]
-    jac = np.zeros((base.size, len(variables)))
-    for j in range(len(variables)):
-        unit = xd.copy()
-        unit[j] = 1.0
-        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    jac = _rate_jacobian(model, variables, _start_values(model, variables))[1]
     sv = np.linalg.svd(jac, compute_uv=False)
     return len(variables), int(np.sum(sv > 1e-9 * sv.max(initial=0.0))) if sv.size else 0
 
@@ -943,15 +951,7 @@ def check_drives_move(model, who):
     driven_rows = np.nonzero(rows.law[:, 0] == MOTION)[0]
     if not driven and not len(driven_rows):
         return
-    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                  for what, k, i in variables])
-    xd = np.zeros(len(variables))
-    base = closure_residuals(model, _state_of(model, variables, x, xd))
-    jac = np.zeros((base[1].size, len(variables)))
-    for j in range(len(variables)):
-        unit = xd.copy()
-        unit[j] = 1.0
-        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base[1]
+    jac = _rate_jacobian(model, variables, _start_values(model, variables))[1]
     others = [j for j in range(len(variables)) if j not in driven]
 
     def left_over(column):
@@ -963,7 +963,7 @@ def check_drives_move(model, who):
 
     def locking(left):
         return ", ".join(repr(n) for n in sorted(
-            {model.closure_names[c] for c in base[2][np.abs(left) > 1e-6 * np.abs(left).max()]}))
+            {model.closure_names[c] for c in owner[np.abs(left) > 1e-6 * np.abs(left).max()]}))
 
     for j in driven:
         column = jac[:, j]
@@ -976,7 +976,7 @@ def check_drives_move(model, who):
                              f"held, no motion of the rest keeps the loops closed); drive a "
                              f"coordinate the loops leave free, or drop the drive")
     for r in driven_rows:
-        unit = np.zeros(len(base[1]))
+        unit = np.zeros(jac.shape[0])
         unit[r] = -1.0
         left = left_over(unit)
         if np.abs(left).max() > 1e-6:
@@ -1031,8 +1031,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
         return model
     check_drives_move(model, "assemble")
     variables, kept = _coordinates(model, keep)
-    x = np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                  for what, k, i in variables])
+    x = _start_values(model, variables)
     xd = np.array([model.hinge_params[k, 53 + i] if what == "q"
                    else model.initial_angular_velocity[k, i] for what, k, i in variables])
     free = np.nonzero(~kept)[0]
@@ -1053,7 +1052,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     start = _state_of(model, variables, x, xd)
     g = residual(x)
     history = [np.abs(g).max()]
-    best = gaps(g)
+    first = best = gaps(g)
     step = 1e-7
     for _ in range(max_iterations):
         if history[-1] <= limit:
@@ -1075,8 +1074,6 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     if history[-1] > limit:
         worst = int(owner[np.argmax(np.abs(g))])
         left = gaps(g)
-        first = gaps(residual(np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                                        for what, k, i in variables])))
         raise ValueError(f"assemble: closing joint '{model.closure_names[worst]}' cannot close: "
                          f"after {len(history) - 1} iterations a gap of {left[0]:.4g} m and "
                          f"{left[1]:.4g} rad is left (at the start {first[0]:.4g} m and "

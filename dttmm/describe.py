@@ -100,15 +100,14 @@ def suggested_dt(model):
     return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
 
 
-def _beam_lines(model, k, end_mass):
+def _beam_lines(model, k, end_mass, chord_held=False):
     row = model.beam_params[k]
     m = int(row[MODES])
     fv, fw = beam_frequencies(model, k)
     lines = [f"{m} mode{'s' if m > 1 else ''} per plane, own frequencies (Hz): "
              f"v {np.array2string(fv, precision=4)}, w {np.array2string(fw, precision=4)}",
              f"mode family {_FAMILY_WHY[int(row[FAMILY])]}"]
-    ends = model.beam_ends[k] if k < len(model.beam_ends) and model.beam_ends[k] else None
-    ends = ends or (False, False)
+    ends = model.ends_of(k)
     if any(ends):
         said = [what for what, on in zip(("the root turns freely (a joint's free rotation: "
                                           "pinned in that plane)",
@@ -164,7 +163,7 @@ def _beam_lines(model, k, end_mass):
             f"rad over its length with {m} modes per plane (~{STIFFENED_BEND_LIMIT[1]:g} with "
             f"one; docs/beam.md, 'Where the second-order energy stops'; stiffening='exact' "
             f"holds beyond)" if limit else ""))
-    elif not ma and model.n_closures and held_chords(model, [k]):
+    elif chord_held:
         lines.append("geometric stiffening off (the paper's beam): the loops hold this beam's "
                      "chord, so its inextensible centreline could not bow under stiffening (the "
                      "default's choice here, or stiffening=False); give it axial_modes and "
@@ -258,6 +257,10 @@ def describe(model):
               if model.n_closures else "tip free"),
            "bodies:"]
     end_masses = outboard_masses(model.body_params[:, MASS], model.parent)
+    # the unstiffened beams without stretch whose chord the loops hold (one Jacobian for all)
+    unstiffened = np.nonzero((model.body_kind == BEAM) & (model.beam_params[:, STIFFENING] == 0.0)
+                             & (model.beam_params[:, AXIAL_MODES] == 0))[0]
+    held = set(held_chords(model, unstiffened)) if model.n_closures else set()
     for k in range(model.n_bodies):
         kind = {BEAM: "beam", ROD: "rod"}.get(int(model.body_kind[k]), "rigid")
         p = model.parent[k]
@@ -267,7 +270,8 @@ def describe(model):
                    f"on {'an' if joint[0] in 'aeio' else 'a'} {joint} joint "
                    f"'{model.hinge_names[k]}' to {parent}")
         if kind == "beam":
-            out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k])]
+            out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k],
+                                                                 k in held)]
         elif kind == "rod":
             out.append(f"  {'':<14} {_rod_line(model.rod_params[k])}")
     if model.n_closures and not model.tip_pinned:

@@ -586,6 +586,12 @@ class Model:
         """Whether any body has an applied force or torque."""
         return any(f is not None for f in self.forces + self.torques + self.line_loads)
 
+    def ends_of(self, k):
+        """Body k's (root pinned, tip pinned) as the build found them (``beam_ends``);
+        (False, False) for a body that is not a beam, or a model made without them."""
+        ends = self.beam_ends[k] if k < len(self.beam_ends) else None
+        return ends or (False, False)
+
     def describe(self):
         """The model in words (as ``dttmm info`` prints it).
 
@@ -1277,7 +1283,7 @@ def _resolve_mode_families(bodies, bv, hv, kinds, body_kind, beam_params, parent
         elif family != PINNED:
             family = CLAMPED if free_tip else CLAMPED_LOADED
         beam_params[k, FAMILY] = family
-        ends[k] = (family != PINNED and (input_free or root_pinned(bodies[k], kinds[k], hv[k])),
+        ends[k] = (family != PINNED and root_pinned(bodies[k], kinds[k], hv[k]),
                    family != PINNED and bool(output_pinned[k]))
         if beam_params[k, FREQUENCY_CUTOFF] == FROM_STEP:   # derived (build_chain's step)
             beam_params[k, FREQUENCY_CUTOFF] = derived_cutoff
@@ -1328,7 +1334,7 @@ def _count_rod_strains(bodies, bv, hv, kinds, body_kind, rod_params, parent, loo
     for k in np.nonzero(body_kind == ROD)[0]:
         if not bv[k].get("counted"):
             continue
-        ends = (bool(kinds[k] == BALL or root_pinned(bodies[k], kinds[k], hv[k])),
+        ends = (root_pinned(bodies[k], kinds[k], hv[k]),
                 bool(output_pinned[k]))
         if not any(ends):
             continue
@@ -1349,7 +1355,9 @@ def root_pinned(body, kind, joint):
     revolute or universal joint with a coordinate that no JointMotion prescribes, about an axis
     not along the body's x (R0 is the identity unless the body was given a rotation; then the
     axis in its frame is not known before the build's kinematics, and a free coordinate counts
-    as pinned).  A ball joint: always (the caller's input_free)."""
+    as pinned).  A ball joint: always."""
+    if kind == BALL:
+        return True
     if kind not in (REVOLUTE, UNIVERSAL):
         return False
     axes = [joint["axis1"]] + ([joint["axis2"]] if kind == UNIVERSAL else [])

@@ -616,9 +616,8 @@ def _trusted_below(model):
     if not len(beams):
         return np.inf
     end_mass = outboard_masses(model.body_params[:, MASS], model.parent)
-    ends = model.beam_ends if len(model.beam_ends) == model.n_bodies else (None,) * len(end_mass)
-    return float(min(trusted_frequency(model.beam_params[k], end_mass[k],
-                                       ends[k] or (False, False)) for k in beams))
+    return float(min(trusted_frequency(model.beam_params[k], end_mass[k], model.ends_of(k))
+                     for k in beams))
 
 
 def _settling_step(cfg, q, a, k, r, newton, tau, max_increment):

@@ -264,6 +264,14 @@ def largest_basis(beam_row):
     return MAX_LOADED_MODES if int(beam_row[FAMILY]) == CLAMPED_LOADED else MAX_AUTO_MODES
 
 
+def _end_ratio(beam_row, end_mass):
+    """end_mass / (mu L) for the loaded-end family (what hangs on its output; 0 for the others),
+    to 2 digits: the unit problems' cache key (2 digits are plenty there)."""
+    if int(beam_row[FAMILY]) != CLAMPED_LOADED:
+        return 0.0
+    return float(f"{end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]):.2g}")
+
+
 def truncation_errors(beam_row, n_modes, end_mass=0.0, ends=(False, False)):
     """{estimate: relative error} of n_modes per plane against the family's largest basis
     (MAX_LOADED_MODES, else MAX_AUTO_MODES): the Ritz problem of the beam alone with the ends
@@ -278,12 +286,9 @@ def truncation_errors(beam_row, n_modes, end_mass=0.0, ends=(False, False)):
     swings about its root: the rigid turn takes the load's moment, the modes the rest).  Ratios
     of the same beam's numbers, so they depend on the family, n_modes, end_mass / (mu L) and the
     ends only."""
-    family = int(beam_row[FAMILY])
-    ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
-        if family == CLAMPED_LOADED else 0.0
+    family, ratio = int(beam_row[FAMILY]), _end_ratio(beam_row, end_mass)
     cap = largest_basis(beam_row)
     n = min(int(n_modes), cap)
-    ratio = float(f"{ratio:.2g}")               # (a cache key: 2 digits are plenty here)
     root, tip = bool(ends[0]), bool(ends[1])
     if family == PINNED or not (root or tip):
         f, d = _unit_beam_statics(family, n, ratio)
@@ -308,10 +313,7 @@ def trusted_frequency(beam_row, end_mass=0.0, ends=(False, False)):
     (the beam alone with its ends and end mass), all its flexible frequencies.  A system's
     frequency at or above the lowest of these over its beams may be off by more than 1%
     (StaticEquilibrium.trusted)."""
-    family = int(beam_row[FAMILY])
-    ratio = end_mass / (beam_row[MASS_PER_LENGTH] * beam_row[LENGTH]) \
-        if family == CLAMPED_LOADED else 0.0
-    ratio = float(f"{ratio:.2g}")
+    family, ratio = int(beam_row[FAMILY]), _end_ratio(beam_row, end_mass)
     cap, n = largest_basis(beam_row), int(beam_row[MODES])
     f = _unit_beam_with_ends(family, min(n, cap), ratio, bool(ends[0]), bool(ends[1]))[0]
     f_ref = _unit_beam_with_ends(family, cap, ratio, bool(ends[0]), bool(ends[1]))[0]
