@@ -7,10 +7,11 @@ the N-four-bar on its chain and its ground spanning trees) the model with its cl
 and the same model with them removed ("opened": the tree alone, which falls freely) are timed
 in turn in one process, A B A B ..., each a run of fixed steps at dt = 1e-3 after a warm-up;
 the cost of a step is the difference of a long and a short run over the steps between (no
-setup), the best of 3 pairs.  The N-four-bar's cost exponent on its ground tree is fitted over
-N.  Then the one loop a chain closes in its sweeps' own tip condition (build_chain(...,
-tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure run as a row of the loops'
-table, on a chain of N rods: what keeping that special case buys.  --quick: fewer sizes and
+setup), the best of 3 pairs.  The N-four-bar's cost exponent is fitted over N on each tree
+(the ground tree from N = 2 to 160, its loops local: O(N); the chain tree, every loop through
+the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its sweeps' own tip
+condition (build_chain(..., tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure
+run as a row of the loops' table, on a chain of N rods: what keeping that special case buys.  --quick: fewer sizes and
 steps (the CI's smoke run).  Not a test: nothing is asserted.
 """
 import argparse
@@ -102,14 +103,18 @@ def main(argv=None):
                          opened_us=tree * 1e6, ratio=with_loops / tree))
         print(f"{name:<28} {rows_count:>5} {with_loops * 1e6:>14.0f} {tree * 1e6:>15.0f} "
               f"{with_loops / tree:>7.1f}", flush=True)
-    ground = [(int(r["model"].split("-")[0]), r["loops_us"]) for r in rows
-              if r["model"].endswith("ground tree")]
-    if len(ground) >= 2:
-        n, us = np.array(ground, dtype=float).T
-        exponent = np.polyfit(np.log(n[n >= 10] if np.sum(n >= 10) >= 2 else n),
-                              np.log(us[n >= 10] if np.sum(n >= 10) >= 2 else us), 1)[0]
-        print(f"N-four-bar on its ground tree: cost ~ N^{exponent:.2f}")
-        rows.append(dict(model="four-bar exponent (ground tree)", exponent=exponent))
+    for tree in ("ground", "chain"):
+        sized = [(int(r["model"].split("-")[0]), r["loops_us"]) for r in rows
+                 if r["model"].endswith(f"{tree} tree")]
+        if len(sized) < 2:
+            continue
+        n, us = np.array(sized, dtype=float).T
+        exponent = np.polyfit(np.log(n), np.log(us), 1)[0]     # (over every size, N = 2 on)
+        ratio = (f", N = 40 / N = 10: {us[n == 40][0] / us[n == 10][0]:.2f}"
+                 if 40 in n and 10 in n else "")
+        print(f"N-four-bar on its {tree} tree: cost ~ N^{exponent:.2f} "
+              f"(N = {', '.join(str(int(x)) for x in n)}){ratio}")
+        rows.append(dict(model=f"four-bar exponent ({tree} tree)", exponent=exponent))
     print(f"\n{'pinned-tip chain':<28} {'tip us/step':>14} {'row us/step':>15} {'ratio':>7}")
     for n in (3, 10) if args.quick else (3, 10, 40):
         # (thousands of steps: the fused chain's step costs microseconds, a run's setup more)

@@ -706,8 +706,9 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     e3 = np.empty((3, 3))
     for k in range(n):
         p, kind, h = model.parent[k], int(model.hinge_kind[k]), model.hinge_params[k]
-        if p < 0:
-            r_att, v_att, f_in, w_in = r_g, v_g, rot_g, w_g
+        if p < 0:               # its place on the ground
+            arm = rot_g @ model.attachment_point[k]
+            r_att, v_att, f_in, w_in = r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
         elif model.attachment[k] == 0:
             r_att, v_att, f_in, w_in = r_o[p], v_o[p], rot_o[p], w_o[p]
         else:

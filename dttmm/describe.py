@@ -185,9 +185,19 @@ def _loop_reach(model):
     rows = len(owner)
     reach = np.diff(act_ptr[1:]).mean() if rows else 0.0
     solve = "a banded LU" if band[0] >= 0 else "a truncated SVD"
-    return (f"(each of the {rows} rows' sweep columns passes {reach:.3g} of the {km.n_bodies} "
+    line = (f"(each of the {rows} rows' sweep columns passes {reach:.3g} of the {km.n_bodies} "
             f"bodies of the kernel model on average, the rows solved by {solve}: loops that "
             f"close near the ground, on a spanning tree of short paths, cost least)")
+    if rows >= LONG_LOOP_ROWS and reach > 0.5 * km.n_bodies:
+        line += ("\n  the loops share most bodies, so a step costs rows x bodies, O(N^2) in a "
+                 "mechanism's size: root each loop's bodies at their own ground pivots "
+                 "(System.add(body, joint, at=[x, y, z])) and close each loop between "
+                 "neighbours, and each column passes a few bodies (docs/loops.md, \"Where a "
+                 "column runs\": the 40-four-bar 14x faster a step)")
+    return line
+
+
+LONG_LOOP_ROWS = 20     # rows from which describe() advises a tree of local loops (4 loops)
 
 
 def _rod_line(row):
@@ -265,6 +275,8 @@ def describe(model):
         kind = {BEAM: "beam", ROD: "rod"}.get(int(model.body_kind[k]), "rigid")
         p = model.parent[k]
         parent = "the ground" if p < 0 else f"'{model.body_names[p]}'"
+        if p < 0 and model.attachment_point[k].any():
+            parent += f" at {np.array2string(model.attachment_point[k], precision=4)} m"
         joint = JOINT_NAMES[int(model.hinge_kind[k])]
         out.append(f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
                    f"on {'an' if joint[0] in 'aeio' else 'a'} {joint} joint "

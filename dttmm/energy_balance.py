@@ -175,9 +175,10 @@ class EnergyBalance:
         if model.ground_motion is not None:
             for k in self.roots:
                 f, m = res.force[:, k], res.moment[:, k]
-                if model.hinge_kind[k] == ELASTIC:          # the moment about the ground point
+                if model.hinge_kind[k] == ELASTIC:          # the moment about its place
                     m = m + np.cross(values["defl"][:, k], f)
-                p += np.einsum("ti,ti->t", f, v_g) + np.einsum("ti,ti->t", m, w_g)
+                v_place = v_g + np.cross(w_g, g_rot @ model.attachment_point[k])
+                p += np.einsum("ti,ti->t", f, v_place) + np.einsum("ti,ti->t", m, w_g)
         return p
 
     def _ground(self, t):

@@ -121,9 +121,9 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
         theta' at t = 0, rad/s (default 1: the top of the first bar, B_0, moves at (1, 0) m/s
         when upright; every vertical bar turns at -rate about z), the rest assembled.
     tree : {"chain", "ground"}
-        The spanning tree: "chain" (default) as above, every loop through v0; "ground": a base
-        welded to the ground carries every vertical bar "v0".. "v{n}" on its joint "O{i}" at
-        (i, 0), each horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed
+        The spanning tree: "chain" (default) as above, every loop through v0; "ground": every
+        vertical bar "v0".. "v{n}" is a root on its joint "O{i}" at its ground pivot (i, 0)
+        (``System.add(..., at=[i, 0, 0])``), each horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed
         to v{i}'s top by a revolute joint "B{i}": each loop is then local (its sweep columns
         pass four bars, kernels/assembly/closure.py), the cost linear in n.
 
@@ -140,15 +140,10 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     z = [0, 0, 1.0]
     system = System(gravity=[0, -9.81, 0])
     if tree == "ground":
-        from .elements import FixedHinge
-        system.add(RigidBody(mass=1.0, inertia=[1.0, 1.0, 1.0], inertia_about="mass_center",
-                             name="base", points={f"O{i}": [float(i), 0, 0]
-                                                  for i in range(n + 1)}),
-                   FixedHinge(name="base weld"))
         for i in range(n + 1):
             system.add(_bar(f"v{i}", _rot_z(np.pi / 2 - theta)),
                        RevoluteJoint(axis=z, rate=-rate if i == 0 else 0.0, name=f"O{i}"),
-                       parent="base", at=f"O{i}")
+                       at=[float(i), 0, 0])
         for i in range(1, n + 1):
             system.add(_bar(f"h{i}", np.eye(3)), RevoluteJoint(axis=z, name=f"H{i}"),
                        parent=f"v{i - 1}")

@@ -405,7 +405,8 @@ class Model:
         Where on the parent: 0 its output point, j >= 1 its j-th named point
         (``RigidBody.points``).
     attachment_point : ndarray (n, 3)
-        That point in the parent's frame from its input point, m (zero for the ground).
+        That point in the parent's frame from its input point, m; a root's: its place on
+        the ground, in the ground frame from the ground point (System.add(..., at=[x, y, z])).
     frequency_cutoff_reasons : tuple of str
         Per body: where the cutoff of a beam with ``modes_per_plane="auto"`` and no
         ``frequency_cutoff`` came from (the build's step and the drives' bandwidth); "" for
@@ -683,10 +684,12 @@ class System:
         parent : RigidBody, EulerBernoulliBeam or str, optional
             None (default) for the ground point, or a body of the system (the body itself or
             its name; it may be added later).
-        at : str, optional
+        at : str or array_like of 3, optional
             The parent's attachment point: None (default) or "output" for its output point, or
-            the name of one of a rigid body's points (``RigidBody(points={...})``).  A beam
-            and the ground have only their one point.
+            the name of one of a rigid body's points (``RigidBody(points={...})``); a beam has
+            only its output end.  On the ground (parent None): a point of the ground, in the
+            ground frame from the ground point, m (default the ground point itself), so that
+            several roots stand at their own places (a mechanism's ground pivots).
 
         Returns
         -------
@@ -933,12 +936,17 @@ def _resolve_topology(entries):
     attach = []
     for k, i in enumerate(order):
         at, p = entries[i][3], parents[k]
+        if p < 0 and at is not None and not isinstance(at, str):    # a point of the ground
+            at = finite_vector(f"System: {_who(bodies[k], i)}", "at (a point of the ground)", at)
+            attach.append(at)
+            continue
         if at is None or at == "output":
             attach.append(0)
             continue
         if p < 0:
-            raise ValueError(f"System: {_who(bodies[k], i)}: at={at!r}: the ground has one "
-                             f"attachment point (leave at=None)")
+            raise ValueError(f"System: {_who(bodies[k], i)}: at={at!r}: the ground has no named "
+                             f"points; give a root's place on the ground as [x, y, z] (m, in "
+                             f"the ground frame from the ground point), or leave at=None")
         pts = getattr(bodies[p], "points", None) or {}
         if at not in pts:
             raise ValueError(f"System: {_who(bodies[k], i)}: at={at!r}: {_who(bodies[p])} has no "
@@ -975,7 +983,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             raise ValueError(f"{type(element).__name__} (body {k}): the name {name!r} is the "
                              f"ground's (parent='ground' means the ground): choose another")
     parent = np.array(parents, dtype=np.int64)
-    attachment = np.array(attach, dtype=np.int64)
+    ground_points = {k: a for k, a in enumerate(attach) if not np.isscalar(a)}
+    attachment = np.array([0 if k in ground_points else a for k, a in enumerate(attach)],
+                          dtype=np.int64)
     chain = bool(np.all(parent == np.arange(n) - 1) and np.all(attachment == 0))
     if tip == "ball" and not chain:
         raise ValueError("System: tip='ball' joins the last body of a chain to the ground; this "
@@ -1018,7 +1028,8 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     attachment_point = np.zeros((n, 3))
     for k in range(n):
         p = parent[k]
-        if p < 0:
+        if p < 0:               # a root's place on the ground (ground frame, from its point)
+            attachment_point[k] = ground_points.get(k, 0.0)
             continue
         if body_kind[p] in FLEXIBLE and attachment[k] != 0:
             what = "a beam" if body_kind[p] == BEAM else "a strain rod"

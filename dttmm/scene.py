@@ -73,7 +73,7 @@ _BODY_KINDS = {"rigid": (RigidBody, _RIGID, ("mass", "inertia", "inertia_about")
                                                     "polar_inertia_per_length")),
                "rod": (StrainRod, _ROD, ("length", "bending_stiffness", "mass_per_length",
                                          "polar_inertia_per_length"))}
-_JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "str"}
+_JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "point"}
 _CLOSE_COMMON = {"type": "str", "name": "str", "a": "str", "b": "str", "at_a": "point",
                  "at_b": "point"}
 _JOINTS = {
@@ -573,6 +573,8 @@ def _joint_table(model, k, who):
              "parent": "ground" if p < 0 else model.body_names[p]}
     if model.attachment[k]:
         table["at"] = f"p{int(model.attachment[k])}"
+    elif p < 0 and model.attachment_point[k].any():     # a root's place on the ground
+        table["at"] = model.attachment_point[k].tolist()
     rest = h[REST_ROTATION].reshape(3, 3)
     if kind == FIXED:
         table["rotation"] = rest.tolist()

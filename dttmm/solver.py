@@ -1457,12 +1457,15 @@ def kernel_model(model):
     - an attachment offset reaches from a rigid body's output point to one of its named points
       (RigidBody(points=...)); the bodies hanging there hang from its output point.  Every
       sweep then joins children at output points only.
+    - a ground anchor reaches from the ground point to a root's place on the ground
+      (System.add(..., at=[x, y, z])), welded to the ground (moving with it); the roots placed
+      there hang from its output point.  Every sweep then starts at the ground point.
     - an input section, where a closing joint takes a beam's or rod's input end: it takes its
       hinge (its joint, coordinates, drives, deflection) with zero length, and the beam is
       welded to it (R0 = I), so that the closing joint's side is a rigid body at the beam's
       input point in the beam's frame (the kernel index of the user's beam is the section's:
       its rotation, angular velocity, input loads and joint are the section's).
-    The mass, momentum and energy of all three are zero; a chain without them is the model
+    The mass, momentum and energy of all four are zero; a chain without them is the model
     itself."""
     km, keep = _kernel_model_kept(model)
     return (model if km is None else km), keep
@@ -1491,7 +1494,9 @@ def _kernel_model(model):
         closed_ends = {int(k) for k in sides[on_end]}
         closed_inputs = {int(k) for k in sides[~on_end & (sides >= 0)]
                          if model.body_kind[k] in FLEXIBLE}
-    if not (closed_ends or np.any(model.body_kind != RIGID) or np.any(model.attachment)):
+    placed = np.any(model.attachment_point[model.parent < 0])    # roots off the ground point
+    if not (closed_ends or np.any(model.body_kind != RIGID) or np.any(model.attachment)
+            or placed):
         return model, np.arange(n)      # (no end sections, no offsets: the model itself)
     children = children_of(model.parent)
 
@@ -1507,7 +1512,7 @@ def _kernel_model(model):
                 and not (children[k] == [k + 1] and hinges == [FIXED]))
 
     ends = {k for k in range(n) if needs_section(k)}
-    if not ends and not closed_inputs and not np.any(model.attachment):
+    if not ends and not closed_inputs and not np.any(model.attachment) and not placed:
         return model, np.arange(n)
     names = ("body_params", "hinge_kind", "hinge_params", "body_kind", "beam_params",
              "rod_params", "initial_rotation", "initial_angular_velocity", "ground_locked",
@@ -1533,9 +1538,18 @@ def _kernel_model(model):
         parent.append(inboard)
         return len(parent) - 1
 
+    anchors = {}
     for k in range(n):
         p = model.parent[k]
-        if p < 0:
+        if p < 0 and model.attachment_point[k].any():     # one anchor per place in use
+            key = tuple(model.attachment_point[k])
+            if key not in anchors:
+                anchors[key] = add_massless(
+                    -1, model.attachment_point[k], model.ground_rotation,
+                    model.ground_state(0.0)[4], True, f"ground anchor {len(anchors)}",
+                    f"ground anchor {len(anchors)} weld")
+            inboard = anchors[key]
+        elif p < 0:
             inboard = -1
         elif model.attachment[k] == 0:
             inboard = hub[p]
@@ -1816,15 +1830,29 @@ def nearest_rotations(m):
     return u @ vt
 
 
-def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_ground, v_ground):
+def _root_place(model, k, r_ground, v_ground, rot_ground, w_ground):
+    """(T, 3) root k's place on the ground (Model.attachment_point[k], ground frame) and its
+    velocity, from the ground point's (T, 3) position and velocity and the ground frame's
+    (T, 3, 3) rotation and (T, 3) angular velocity."""
+    local = model.attachment_point[k]
+    if not local.any():
+        return r_ground, v_ground
+    arm = rot_ground @ local
+    return r_ground + arm, v_ground + cross(w_ground, arm)
+
+
+def _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, ground):
     """(T, n, 3) input points' positions and velocities of a tree, parents first: body k's
-    input is its parent's attachment point (the output point, rho, or a named point fixed in
-    the parent) plus its joint's deflection."""
+    input is its parent's attachment point (the output point, rho, a named point fixed in
+    the parent, or a root's place on the ground) plus its joint's deflection.  ground: the
+    ground point's position and velocity, the ground frame's rotation and angular velocity,
+    (T, ...) each."""
     r_in, v_in = np.empty_like(rho), np.empty_like(rho)
     for k in range(model.n_bodies):
         p = model.parent[k]
         if p < 0:
-            r_in[:, k], v_in[:, k] = r_ground + defl[:, k], v_ground + defl_rate[:, k]
+            r_att, v_att = _root_place(model, k, *ground)
+            r_in[:, k], v_in[:, k] = r_att + defl[:, k], v_att + defl_rate[:, k]
             continue
         if model.attachment[k] == 0:
             arm, arm_dot = rho[:, p], rho_dot[:, p]
@@ -1953,8 +1981,8 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
     # the ground point and frame at every sample (one state for a ground at rest)
     grounds = [model.ground_state(ti) for ti in (t if model.ground_motion is not None else t[:1])]
-    r_prev = np.broadcast_to(np.array([g[0] for g in grounds], dtype=float), (m, 3))
-    v_prev = np.broadcast_to(np.array([g[1] for g in grounds], dtype=float), (m, 3))
+    ground = tuple(np.broadcast_to(np.array([g[i] for g in grounds], dtype=float),
+                                   (m,) + np.shape(grounds[0][i])) for i in (0, 1, 3, 4))
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
     rho_dot = cross(omega, rho)
@@ -1964,11 +1992,11 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
                                                          eta[:, j0:j1], eta_d[:, j0:j1])
     # down the chain: r_in,k = r_ground + sum_{j<k} (d_j + rho_j) + d_k (d: hinge deflections)
     if model.is_chain:
-        r_in = r_prev[:, None] + _sum_before(defl + rho) + defl
-        v_in = v_prev[:, None] + _sum_before(defl_rate + rho_dot) + defl_rate
+        r_root, v_root = _root_place(model, 0, *ground)
+        r_in = r_root[:, None] + _sum_before(defl + rho) + defl
+        v_in = v_root[:, None] + _sum_before(defl_rate + rho_dot) + defl_rate
     else:
-        r_in, v_in = _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, r_prev,
-                                  v_prev)
+        r_in, v_in = _tree_inputs(model, rot, omega, rho, rho_dot, defl, defl_rate, ground)
     if v_st is not None:                    # the paper's scheme: a beam's input point's own
         beams = model.body_kind == BEAM
         v_in[:, beams] = v_st[:, :n][:, beams]

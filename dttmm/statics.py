@@ -162,8 +162,9 @@ def _positions(m):
     r_in, r_c, r_o = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
     for k in range(n):
         p = m.parent[k]
-        if p < 0:
-            r_in[k], rot_p = m.ground_position, m.ground_rotation
+        if p < 0:               # its place on the ground
+            r_in[k], rot_p = m.ground_position + m.ground_rotation @ m.attachment_point[k], \
+                m.ground_rotation
         elif m.attachment[k] == 0:
             r_in[k] = r_o[p]
             rot_p = output_section(m.beam_params[p], m.initial_rotation[p], np.zeros(3),

@@ -229,7 +229,10 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     with a parent P, where its hinge attaches (newton_euler.py's docstring, "Attachment points"):
     rho_att[k] = r_att,k - r_in,P (A_P x_k on a rigid parent, x_k = attachment_point[k] in its
     frame; a beam parent's rho_O) and acc_v_att[k], the velocity part of a_att,k (w_P x (w_P x
-    rho_att,k) on a rigid parent, the beam's a_O velocity part); zero rows for the roots."""
+    rho_att,k) on a rigid parent, the beam's a_O velocity part); a root's rho_att is its place
+    on the ground from the ground point, A_g x_k (x_k in the ground frame), and its acc_v_att
+    zero (the ground's known w_g' x rho_att + w_g x (w_g x rho_att) join a_g where it is used,
+    _ground_place_acceleration)."""
     n = body_params.shape[0]
     n2max = 2 * shape_vec.shape[2]
     n2max = max(n2max, rods[3].shape[4])
@@ -252,8 +255,10 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
     parent = topology[0]
     for k in range(n):           # parents first (Model.parent[k] < k)
         kp = parent[k]
-        if kp < 0:               # the ground point
-            r_prev, v_prev = r_g, v_g
+        if kp < 0:               # its place on the ground: r_g + A_g x_k, v_g + w_g x (A_g x_k)
+            arm = matvec(rot_g, attachment_point[k])
+            put1(rho_att[k], arm)
+            r_prev, v_prev = r_g + arm, v_g + _cross(w_g, arm)
         elif body_kind[kp] == _BEAM or body_kind[kp] == _ROD:   # its one attachment point: its
             # output point
             put1(rho_att[k], rho_o[kp])
@@ -849,8 +854,9 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             for i in range(3):
                 s[r + i, ca + i] = 1.0
             if parent[k] < 0:
+                a_place = _ground_place_acceleration(rho_att[k], a_g, w_g, wd_g)
                 for i in range(3):
-                    b[r + i] = a_g[i]
+                    b[r + i] = a_place[i]
             else:
                 kp = parent[k]
                 hpo = _hat(rho_att[k])
@@ -891,6 +897,13 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                                 np.ascontiguousarray(b_t[kp, :, :pn2]), e_col0 + m_off[kp],
                                 f_col, m_col, joints)
     return s, b
+
+
+@kernel
+def _ground_place_acceleration(arm, a_g, w_g, wd_g):
+    """A root's place on the ground, at arm from the ground point: its acceleration
+    a_g + w_g' x arm + w_g x (w_g x arm)."""
+    return a_g + _cross(wd_g, arm) + _cross(w_g, _cross(w_g, arm))
 
 
 @kernel
@@ -1186,7 +1199,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             # a_P + alpha_P x rho_att + velocity part, + B_r eta''_P on a beam's or a strain
             # rod's end)
             if kp < 0:
-                a_att = a_g
+                a_att = _ground_place_acceleration(rho_att[k], a_g, w_g, wd_g)
             else:
                 a_att = acc[kp] + _cross(alpha[kp], rho_att[k]) + acc_v_att[k]
                 nm2 = _flex_size(kp, body_kind, beam_params, rods)
