@@ -123,9 +123,10 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     tree : {"chain", "ground"}
         The spanning tree: "chain" (default) as above, every loop through v0; "ground": every
         vertical bar "v0".. "v{n}" is a root on its joint "O{i}" at its ground pivot (i, 0)
-        (``System.add(..., at=[i, 0, 0])``), each horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed
-        to v{i}'s top by a revolute joint "B{i}": each loop is then local (its sweep columns
-        pass four bars, kernels/assembly/closure.py), the cost linear in n.
+        (``System.add(..., at=[i, 0, 0])``), each horizontal bar "h{i}" hangs from v{i-1}'s
+        top (joint "H{i}") and is closed to v{i}'s top by a revolute joint "B{i}": each loop
+        is then local (its sweep columns pass four bars, kernels/assembly/closure.py), the
+        cost linear in n.
 
     Returns
     -------

@@ -7,8 +7,9 @@ their tops, every axis along z, gravity -9.81 along y (dttmm.mechanisms.n_four_b
 spanning tree (--tree): "ground" (default) roots every vertical bar at its ground pivot, hangs
 each horizontal bar from the bar before it and closes it on the next, so each loop is local and
 a step costs O(N); "chain" holds the first vertical bar and the horizontal bars, and N
-revolute joints close the loops to the ground, every loop through the first bar: O(N^2).  The bars start upright, B_0 (the first bar's top) moving at (1, 0) m/s; twice a turn
-the bars lie flat, where the loops are singular and the spatial revolute joints redundant.
+revolute joints close the loops to the ground, every loop through the first bar: O(N^2).
+The bars start upright, B_0 (the first bar's top) moving at (1, 0) m/s; twice a turn the
+bars lie flat, where the loops are singular and the spatial revolute joints redundant.
 The run is compared with the exact one-degree-of-freedom reduction of the parallelogram.  CSV:
 t, B0_x, B0_y, B0_vx, B0_vy every 0.01 s.
 """
