@@ -11,8 +11,8 @@ setup), the best of 3 pairs.  The N-four-bar's cost exponent is fitted over N on
 (the ground tree from N = 2 to 160, its loops local: O(N); the chain tree, every loop through
 the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its sweeps' own tip
 condition (build_chain(..., tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure
-run as a row of the loops' table, on a chain of N rods: what keeping that special case buys.  --quick: fewer sizes and
-steps (the CI's smoke run).  Not a test: nothing is asserted.
+run as a row of the loops' table, on a chain of N rods: what keeping that special case buys.
+--quick: fewer sizes and steps (the CI's smoke run).  Not a test: nothing is asserted.
 """
 import argparse
 import json
