@@ -342,7 +342,8 @@ def test_n_four_bar_with_local_loops_runs_linear_in_n_on_the_parallelogram():
     rows' matrices are banded, solved by the regularized banded LU;
     kernels/assembly/closure.py): N = 2 moves as on the chain tree (the truncated SVD there) to
     1e-9 m, and N = 40 (200 rows) from 1.2 rad off upright follows the exact reduction within
-    1e-5 m over 0.4 s at dt = 1e-3, through a flat position (measured 5.1e-7 m; from upright over 1 s 2.1e-6 m, as N = 10 and 160)."""
+    1e-5 m over 0.4 s at dt = 1e-3, through a flat position (measured 5.1e-7 m; from upright
+    over 1 s 2.1e-6 m, as N = 10 and 160)."""
     t = np.linspace(0.0, 0.3, 4)
     chain, ground = n_four_bar(2), n_four_bar(2, tree="ground")
     a = simulate(chain, 0.3, 1e-3, t_eval=t).position_output[:, chain.body_names.index("v0")]
