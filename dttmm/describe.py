@@ -173,6 +173,9 @@ def _beam_lines(model, k, end_mass, chord_held=False):
     return lines
 
 
+LONG_LOOP_ROWS = 20     # rows from which describe() advises a tree of local loops (4 loops)
+
+
 def _loop_reach(model):
     """How far the closing joints' sweep columns reach (solver.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
@@ -195,9 +198,6 @@ def _loop_reach(model):
                  "neighbours, and each column passes a few bodies (docs/loops.md, \"Where a "
                  "column runs\": the 40-four-bar 14x faster a step)")
     return line
-
-
-LONG_LOOP_ROWS = 20     # rows from which describe() advises a tree of local loops (4 loops)
 
 
 def _rod_line(row):

@@ -158,24 +158,28 @@ class Workspace:
         n_el, n_sst = 2 * n_full, (0 if fused else n_st)
         n_eta = int(model.n_modes.sum())
         z3 = lambda: np.zeros((n, 3))                               # noqa: E731
+        # a fused loop's ball joints have no offsets, coordinates or mass-centre velocities of
+        # their own: those per-body arrays are empty there (a million links: 190 MB)
+        n_joint = 0 if fused else n
+        off3 = lambda: np.zeros((n_joint, 3))                       # noqa: E731
         # the joints' coordinates and rates at t = 0 (zeros, untouched, without such joints)
         jq, jqd = ((model.hinge_params[:, COORDINATE_0].copy(),
                     model.hinge_params[:, RATE_0].copy()) if has_coordinates(model)
-                   else (np.zeros((n, 2)), np.zeros((n, 2))))
+                   else (np.zeros((n_joint, 2)), np.zeros((n_joint, 2))))
         self.state = State(
             rot=model.initial_rotation.copy(), omega=model.initial_angular_velocity.copy(),
             omega_dot=z3(), pseudo=z3(),    # pseudo: the rotation integrator's pseudo-acceleration
-            defl=z3(), defl_rate=z3(), defl_acc=z3(), defl_pseudo=z3(),
+            defl=off3(), defl_rate=off3(), defl_acc=off3(), defl_pseudo=off3(),
             z=np.zeros((n_st, 12)),
             # the beams' modal coordinates, rates, accelerations and the integrator's
             # pseudo-accelerations, flat over the beams (v coordinates of a beam, then w)
             eta=model.initial_modal_coordinates.copy(),
             eta_d=model.initial_modal_velocities.copy(), eta_acc=np.zeros(n_eta),
-            eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=z3(),
+            eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=off3(),
             # joints with coordinates (kernels/transfers/joint.py): q, q', q'', pseudo, generalized
             # force
-            jq=jq, jqd=jqd, jqdd=np.zeros((n, 2)),
-            jqp=np.zeros((n, 2)), jtau=np.zeros((n, 2)))
+            jq=jq, jqd=jqd, jqdd=np.zeros((n_joint, 2)),
+            jqp=np.zeros((n_joint, 2)), jtau=np.zeros((n_joint, 2)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
             known_loads=np.zeros((n_el, 12)), split=np.zeros(n_sst, dtype=np.int64),

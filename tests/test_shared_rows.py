@@ -122,14 +122,17 @@ def test_a_run_too_large_to_keep_holds_its_arrays_once():
 def test_no_kernel_reads_a_table_past_its_rows():
     """The tables with no or one row (shared rows, the lock and joint-drive tables, the beams'
     without beams) are read within their rows on every loop variant: the cases above and a
-    ball-joint tree on the full-state sweep, two steps each with numba's compilation off (pure
-    Python: numpy refuses an index past the end, where compiled code would read past it)."""
+    ball-joint tree on the full-state sweep, and the high-order scheme's stages on the fused
+    chain, two steps each with numba's compilation off (pure Python: numpy refuses an index past
+    the end, where compiled code would read past it).  The fused loops' state has no rows of
+    joint offsets, coordinates or mass-centre velocities (solver.Workspace): read here too."""
     script = (
         "import sys; sys.path.insert(0, 'tests')\n"
         "from test_shared_rows import CASES\n"
         "from dttmm import simulate\n"
-        "from dttmm.chains import binary_tree\n"
-        "cases = list(CASES.values()) + [(lambda: binary_tree(2), dict(full_state=True))]\n"
+        "from dttmm.chains import binary_tree, rigid_chain\n"
+        "cases = list(CASES.values()) + [(lambda: binary_tree(2), dict(full_state=True)),\n"
+        "                                (lambda: rigid_chain(4), dict(scheme='dop853'))]\n"
         "for build, options in cases:\n"
         "    simulate(build(), 0.002, 1e-3, **options)\n")
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
