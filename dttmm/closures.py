@@ -1051,7 +1051,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
                 float(np.abs(g[~metres]).max(initial=0.0)))
 
     start = _state_of(model, variables, x, xd)
-    g = residual(x)
+    g = closure_residuals(model, start)[0]
     history = [np.abs(g).max()]
     first = best = gaps(g)
     step = 1e-7
@@ -1071,7 +1071,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
             best = gaps(g)
         if len(history) > 6 and history[-1] > 0.5 * history[-6]:
             break                               # stalled: the loop cannot close
-    owner = closure_residuals(model, _state_of(model, variables, x, xd))[2]
+    owner = rows.owner
     if history[-1] > limit:
         worst = int(owner[np.argmax(np.abs(g))])
         left = gaps(g)

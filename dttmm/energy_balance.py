@@ -120,7 +120,7 @@ class EnergyBalance:
         t = res.t
         p = np.zeros(len(t))
         w = res.angular_velocity
-        ground = self._ground(t)            # (r, v, R, w) of the ground at each t
+        ground = self.model.ground_states(t)    # (r, v, R, w) of the ground at each t
         _, v_g, g_rot, w_g = ground
         if model.has_applied_loads:
             l_ic = model.body_params[:, TO_MASS_CENTER]
@@ -180,13 +180,6 @@ class EnergyBalance:
                 v_place = v_g + np.cross(w_g, g_rot @ model.attachment_point[k])
                 p += np.einsum("ti,ti->t", f, v_place) + np.einsum("ti,ti->t", m, w_g)
         return p
-
-    def _ground(self, t):
-        """(r, v, rot, w) of the ground point and frame at the times t, (T, ...) each."""
-        grounds = [self.model.ground_state(ti) for ti in (t if self.model.ground_motion
-                                                           is not None else t[:1])]
-        return tuple(np.broadcast_to(np.array([g[i] for g in grounds]),
-                                     (len(t),) + np.shape(grounds[0][i])) for i in (0, 1, 3, 4))
 
     def _closures_ground_power(self, res, values, ground):
         """(T,) the power a moving ground puts in through the closing joints that meet it:

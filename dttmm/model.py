@@ -467,7 +467,7 @@ class Model:
     attachment: np.ndarray           # (n,) where on the parent: 0 its output point, j >= 1 its
                                      # j-th named point (RigidBody.points)
     attachment_point: np.ndarray     # (n, 3) that point in the parent's frame from its input
-                                     # point, m (zero for the ground)
+                                     # point, m (a root's: its place on the ground)
     frequency_cutoff_reasons: tuple = ()  # per body: where a derived "auto" cutoff came from
     beam_ends: tuple = ()   # per body: a beam's (root pinned, tip pinned) in some plane, or None
     # the loop-closing joints (closures.py): m rows
@@ -615,6 +615,14 @@ class Model:
             z = np.zeros(3)
             return self.ground_position, z, z, self.ground_rotation, z, z
         return self.ground_motion(t)
+
+    def ground_states(self, times):
+        """(r, v, R, w) of the ground point and frame at the times (T,), (T, ...) each (one
+        state shown for every time where the ground is at rest)."""
+        states = [self.ground_state(t) for t in (times if self.ground_motion is not None
+                                                  else times[:1])]
+        return tuple(np.broadcast_to(np.array([g[i] for g in states], dtype=float),
+                                     (len(times),) + np.shape(states[0][i])) for i in (0, 1, 3, 4))
 
 
 class System:

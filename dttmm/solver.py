@@ -1945,11 +1945,7 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
             derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
                                    eta, eta_d, values.get("v_st"), values.get("v_c")))
         if name in ("kinetic", "potential") and "kinetic" not in derived:
-            grounds = [model.ground_state(ti) for ti in
-                       (t if model.ground_motion is not None else t[:1])]
-            ground_rot, ground_r = (np.broadcast_to(np.array([g[i] for g in grounds], dtype=float),
-                                                    (len(t),) + np.shape(grounds[0][i]))
-                                    for i in (3, 0))
+            ground_r, _, ground_rot, _ = model.ground_states(t)
             derived["kinetic"], derived["potential"] = chain_energies(
                 model, rot, omega, derived["position_input"], derived["velocity_input"],
                 values["defl"], ground_rotation=ground_rot, eta=eta, eta_dot=eta_d,
@@ -1980,13 +1976,9 @@ def _zeros(shape):
 def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     """Positions of every body's points and velocities of its input, for all samples."""
     n = model.n_bodies
-    m = len(t)
     l_io = model.body_params[:, TO_OUTPUT]
     mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
-    # the ground point and frame at every sample (one state for a ground at rest)
-    grounds = [model.ground_state(ti) for ti in (t if model.ground_motion is not None else t[:1])]
-    ground = tuple(np.broadcast_to(np.array([g[i] for g in grounds], dtype=float),
-                                   (m,) + np.shape(grounds[0][i])) for i in (0, 1, 3, 4))
+    ground = model.ground_states(t)     # the ground point and frame at every sample
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)
     rho_dot = cross(omega, rho)

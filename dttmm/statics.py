@@ -25,14 +25,15 @@ from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC,
                               REST_ROTATION)
 from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import BODY_KIND, JOINT_KIND
-from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
-from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
+                            trusted_frequency)
+from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
 from .elements.strain_rod import ROD_LENGTH, rod_centre_line, rod_end_section
 from .kernels.stepping import ball_chain
 from .kernels.stepping.loop import Monitor, Settings
 from .kernels.transfers.joint import joint_frame, n_coordinates
 from .kernels.algebra.so3 import expm_so3
-from .model import Model, output_section
+from .model import Model, outboard_masses, output_section
 from .result import _foreshortening_along, _log_so3, beam_output_offset
 from . import solver
 
@@ -610,9 +611,6 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
 def _trusted_below(model):
     """Hz: the lowest over the beams of the own frequency their kept modes no longer hold to
     1% (elements/beam.py::trusted_frequency, with what hangs on each and its ends)."""
-    from .elements.beam import trusted_frequency
-    from .model import outboard_masses
-    from .elements.rigid_body import MASS
     beams = np.nonzero(model.body_kind == BEAM)[0]
     if not len(beams):
         return np.inf
