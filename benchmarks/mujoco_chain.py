@@ -34,7 +34,6 @@ Needs MuJoCo (`pip install mujoco`); without it the script says so and exits 0.
 import argparse
 import json
 import os
-import platform
 import sys
 import time
 
@@ -44,7 +43,8 @@ from dttmm import simulate, simulate_reference
 from dttmm.chains import rigid_chain
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peers import pinocchio_run, time_at  # noqa: E402  (benchmarks/peers.py)
+from peers import (cpu_description, curve_figures, interleaved_curves,  # noqa: E402
+                   pinocchio_run, time_at)                               # (benchmarks/peers.py)
 
 INTEGRATORS = {"rk4": "RK4", "euler": "Euler"}
 
@@ -141,9 +141,7 @@ def main(argv=None):
              "dttmm_dop853": [1e-4, 1e-6, 1e-8] if quick else
              [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11]}    # (rtols)
     targets = (1e-4, 1e-6) if quick else (1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
-    cpu = [line.split(":")[1].strip() for line in open("/proc/cpuinfo")
-           if line.startswith(("model name", "cpu family"))][:2] \
-        if os.path.exists("/proc/cpuinfo") else [platform.processor()]
+    cpu = cpu_description()
     fig = {"mujoco": mujoco.__version__, "cpu": cpu, "t_end_s": t_end, "repeats": repeats,
            "load_average_start": os.getloadavg()}
     print("MuJoCo", mujoco.__version__, "on", cpu, "load average", fig["load_average_start"],
@@ -167,22 +165,9 @@ def main(argv=None):
         for name, run in runners.items():                  # warm-up (DT-TMM compiles here)
             run(steps[name][0])
         # interleaved: MuJoCo's and DT-TMM's runs alternate, the order reversed every repeat
-        mj = [(k, dt) for k in steps if k.startswith("mujoco") for dt in steps[k]]
-        ours = [(k, dt) for k in steps if k.startswith("dttmm") for dt in steps[k]]
-        order = [job for pair in zip(mj + [None] * len(ours), ours + [None] * len(mj))
-                 for job in pair if job is not None]
-        walls = {job: [] for job in order}
-        errors = {}
-        for r in range(repeats):
-            for job in (order if r % 2 == 0 else order[::-1]):
-                wall, tip = runners[job[0]](job[1])
-                walls[job].append(wall)
-                errors[job] = float(np.linalg.norm(tip - truth))
-        curves = {k: [(float(np.median(walls[(k, dt)])), errors[(k, dt)]) for dt in steps[k]]
-                  for k in steps}
-        fig[f"chain{n}"] = {k: [{"dt_s": dt, "wall_s": w, "error_m": e,
-                                 "walls_s": walls[(k, dt)]}
-                                for dt, (w, e) in zip(steps[k], curves[k])] for k in curves}
+        curves, walls = interleaved_curves(steps, runners, repeats,
+                                           lambda tip: float(np.linalg.norm(tip - truth)))
+        fig[f"chain{n}"] = curve_figures(steps, curves, walls)
         for k in curves:
             print(n, k, " ".join(f"{dt:g}:{w * 1e3:.3g}ms/{e:.1e}m"
                                  for dt, (w, e) in zip(steps[k], curves[k])), flush=True)

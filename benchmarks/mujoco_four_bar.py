@@ -47,7 +47,6 @@ nothing is asserted.
 import argparse
 import json
 import os
-import platform
 import sys
 import time
 
@@ -57,7 +56,8 @@ from dttmm import simulate
 from dttmm.mechanisms import n_four_bar, parallelogram
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peers import time_at  # noqa: E402  (benchmarks/peers.py)
+from peers import (cpu_description, curve_figures, interleaved_curves,  # noqa: E402
+                   time_at)                                              # (benchmarks/peers.py)
 
 SAMPLE = 0.01                                         # s between samples, both sides
 STIFF_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)      # d at MuJoCo's ceiling
@@ -170,9 +170,7 @@ def main(argv=None):
     targets = (1e-5, 1e-7) if quick else (1e-4, 1e-5, 1e-6, 1e-7)
     ratios = [(m, d) for m in ("mujoco_rk4", "mujoco_euler")
               for d in ("dttmm_newmark", "dttmm_richardson")]
-    cpu = [line.split(":")[1].strip() for line in open("/proc/cpuinfo")
-           if line.startswith(("model name", "cpu family"))][:2] \
-        if os.path.exists("/proc/cpuinfo") else [platform.processor()]
+    cpu = cpu_description()
     fig = {"mujoco": mujoco.__version__, "cpu": cpu, "t_end_s": t_end, "repeats": repeats,
            "sample_s": SAMPLE, "solimp": STIFF_SOLIMP, "solref": "(2 dt, 1)",
            "dttmm_specialize": os.environ.get("DTTMM_SPECIALIZE"),
@@ -203,22 +201,9 @@ def main(argv=None):
             run(steps[name][0])
         print(f"N = {n}: warm-up {time.perf_counter() - t0:.1f} s", flush=True)
         # interleaved: MuJoCo's and DT-TMM's runs alternate, the order reversed every repeat
-        mj = [(k, dt) for k in steps if k.startswith("mujoco") for dt in steps[k]]
-        ours = [(k, dt) for k in steps if k.startswith("dttmm") for dt in steps[k]]
-        order = [job for pair in zip(mj + [None] * len(ours), ours + [None] * len(mj))
-                 for job in pair if job is not None]
-        walls = {job: [] for job in order}
-        errors = {}
-        for r in range(repeats):
-            for job in (order if r % 2 == 0 else order[::-1]):
-                wall, b0 = runners[job[0]](job[1])
-                walls[job].append(wall)
-                errors[job] = distance(b0, exact)
-        curves = {k: [(float(np.median(walls[(k, dt)])), errors[(k, dt)]) for dt in steps[k]]
-                  for k in steps}
-        fig[f"four_bar{n}"] = {k: [{"dt_s": dt, "wall_s": w, "error_m": e,
-                                    "walls_s": walls[(k, dt)]}
-                                   for dt, (w, e) in zip(steps[k], curves[k])] for k in curves}
+        curves, walls = interleaved_curves(steps, runners, repeats,
+                                           lambda b0: distance(b0, exact))
+        fig[f"four_bar{n}"] = curve_figures(steps, curves, walls)
         for k in curves:
             print(f"N = {n} {k:16s}", " ".join(f"{dt:g}:{w * 1e3:.3g}ms/{e:.1e}m"
                                                for dt, (w, e) in zip(steps[k], curves[k])),

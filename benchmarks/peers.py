@@ -23,6 +23,8 @@ run: its stepping is a fixed-step integrator of its own, not an error-controlled
 """
 import argparse
 import json
+import os
+import platform
 import time
 
 import numpy as np
@@ -93,6 +95,40 @@ def time_at(points, target):
     if not errs[0] <= np.log(target) <= errs[-1]:
         return None
     return float(np.exp(np.interp(np.log(target), errs, np.log([p[0] for p in pts]))))
+
+
+def cpu_description():
+    """The machine's CPU model name and family (/proc/cpuinfo), or platform's processor."""
+    if not os.path.exists("/proc/cpuinfo"):
+        return [platform.processor()]
+    return [line.split(":")[1].strip() for line in open("/proc/cpuinfo")
+            if line.startswith(("model name", "cpu family"))][:2]
+
+
+def interleaved_curves(steps, runners, repeats, error_of):
+    """Work-precision curves timed interleaved: every (name, step) job of steps (name -> its
+    steps or tolerances) run by runners[name](step), which returns (wall s, output); the peer's
+    jobs (names not starting "dttmm") alternate with DT-TMM's, the order reversed every repeat.
+    Returns ({name: [(median wall s, error_of(output)), ...]}, {job: every wall s})."""
+    peer = [(k, dt) for k in steps if not k.startswith("dttmm") for dt in steps[k]]
+    ours = [(k, dt) for k in steps if k.startswith("dttmm") for dt in steps[k]]
+    order = [job for pair in zip(peer + [None] * len(ours), ours + [None] * len(peer))
+             for job in pair if job is not None]
+    walls, errors = {job: [] for job in order}, {}
+    for r in range(repeats):
+        for job in (order if r % 2 == 0 else order[::-1]):
+            wall, output = runners[job[0]](job[1])
+            walls[job].append(wall)
+            errors[job] = error_of(output)
+    curves = {k: [(float(np.median(walls[(k, dt)])), errors[(k, dt)]) for dt in steps[k]]
+              for k in steps}
+    return curves, walls
+
+
+def curve_figures(steps, curves, walls):
+    """The curves as the --json figures: per name, each step's wall, error and every wall."""
+    return {k: [{"dt_s": dt, "wall_s": w, "error_m": e, "walls_s": walls[(k, dt)]}
+                for dt, (w, e) in zip(steps[k], curves[k])] for k in curves}
 
 
 def main(argv=None):
