@@ -18,14 +18,10 @@ from dttmm.elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, MODES, STIFFENI
                                  _unit_beam_with_ends)
 from dttmm.elements.strain_rod import ROD_MODES, rod_centre_line
 from dttmm.result import beam_midpoint_deflection
+from helpers import rot_z
 
 Z = [0, 0, 1.0]
 STEEL = dict(E=210e9, rho=7850.0)
-
-
-def rot_z(angle):
-    c, s = np.cos(angle), np.sin(angle)
-    return [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 
 
 def steel_rod(length, d, name, **kw):
