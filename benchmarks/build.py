@@ -3,7 +3,8 @@
     python benchmarks/build.py [--quick] [--sizes 1000 10000 ...] [--json FILE]
 
 For each size N, in a fresh process (so that its peak memory is its own): N unit rods on
-ball joints listed as the user would (distinct but equal objects), build_chain's wall time,
+ball joints listed as the user would (distinct but equal objects, each rod named in the loop
+that makes them), build_chain's wall time,
 then a 10-step run at dt = 1e-3 after a 2-step warm-up (the kernels compiled or loaded), its
 cost per body-step, and the process's peak resident memory.  The build's and the step's
 exponents are fitted over N.  --quick: N = 1e3 and 1e4 (the CI's smoke run).  Not a test:
@@ -25,8 +26,8 @@ def one(n):
     rod = dict(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12], inertia_about="mass_center",
                to_mass_center=[0.5, 0, 0], to_output=[1.0, 0, 0])
     elements = []
-    for _ in range(n):
-        elements += [dttmm.BallJoint(), dttmm.RigidBody(**rod)]
+    for k in range(n):
+        elements += [dttmm.BallJoint(), dttmm.RigidBody(**rod, name=f"rod{k}")]
     t0 = time.perf_counter()
     model = dttmm.build_chain(elements, gravity=[0, -9.81, 0])
     build = time.perf_counter() - t0
