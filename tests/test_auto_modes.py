@@ -130,7 +130,7 @@ def test_the_default_beam_meets_engineering_accuracy():
     assert abs(f / exact_f - 1.0) < 0.01, (f, exact_f)
     assert abs(-eq.positions()[2][-1][1] / exact_d - 1.0) < 0.01
     text = model.describe()
-    assert "2 modes per plane" in text and "estimated truncation error" in text
+    assert "3 modes per plane" in text and "estimated truncation error" in text
     assert "0.2 kg beyond its output" in text and "modes_per_plane=None (default)" in text
 
 

@@ -409,9 +409,11 @@ def _with_crank(model, angle):
 
 def test_frequencies_beyond_the_mode_count_are_marked():
     """Issue 65, item 6: the guide's cantilever (steel, 1 m, 10 mm square, a 0.2 kg tip mass)
-    keeps 2 modes per plane, chosen for the first frequency: its first frequency is within 1% of
-    Euler-Bernoulli's (5.857 Hz) and trusted; its second comes out 58.8 Hz where
-    Euler-Bernoulli's is 42.35 Hz (+39%) and is marked untrusted (before: unflagged)."""
+    keeps 3 modes per plane, chosen for the first two frequencies: its first and second are
+    within 1% of Euler-Bernoulli's (5.857, 42.35 Hz) and trusted; its third comes out 197.8 Hz
+    where Euler-Bernoulli's is 125.88 Hz (+57%) and is marked untrusted.  (With 2 modes, the
+    count before the second frequency was held, the second was 58.8 Hz, +39%, unflagged before
+    the marks.)"""
     e, rho, side = 210e9, 7850.0, 0.01
     second = side ** 4 / 12
     beam = dttmm.EulerBernoulliBeam(length=1.0, bending_stiffness=e * second, density=rho,
@@ -422,5 +424,6 @@ def test_frequencies_beyond_the_mode_count_are_marked():
                                                     gravity=[0.0, -9.81, 0.0]))
     f = eq.frequencies
     assert f[0] == pytest.approx(5.857, rel=0.01) and eq.trusted[0] and eq.trusted[1]
-    assert f[2] > 1.3 * 42.35 and not eq.trusted[2] and not eq.trusted[3]
-    assert 42.35 <= eq.trusted_below < 42.35 * 1.01   # the second mode, of the 6-mode basis
+    assert f[2] == pytest.approx(42.35, rel=0.01) and eq.trusted[2] and eq.trusted[3]
+    assert f[4] > 1.3 * 125.88 and not eq.trusted[4] and not eq.trusted[5]
+    assert 125.88 <= eq.trusted_below < 125.88 * 1.01   # the third mode, of the 6-mode basis

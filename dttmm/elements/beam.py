@@ -255,7 +255,8 @@ MAX_AUTO_MODES = 10   # modes_per_plane="auto" keeps at most this many (6 for lo
 FROM_STEP = -1.0      # FREQUENCY_CUTOFF of "auto" without a cutoff: the build derives it
 ACCURATE = -2.0       # FREQUENCY_CUTOFF of modes_per_plane=None: the build counts by ACCURACY
 ACCURACY = 5e-3       # modes_per_plane=None (default): each beam's estimated truncation error
-#                       (first frequency, static deflection; truncation_errors) at most this
+#                       (first and second frequency, static deflection; truncation_errors) at
+#                       most this
 
 
 def largest_basis(beam_row):
@@ -293,7 +294,11 @@ def truncation_errors(beam_row, n_modes, end_mass=0.0, ends=(False, False)):
     if family == PINNED or not (root or tip):
         f, d = _unit_beam_statics(family, n, ratio)
         f_ref, d_ref = _unit_beam_statics(family, cap, ratio)
-        return {"first frequency": f / f_ref - 1.0, "static deflection": d / d_ref - 1.0}
+        errors = {"first frequency": f / f_ref - 1.0, "static deflection": d / d_ref - 1.0}
+        if family == CLAMPED_LOADED:      # (welded on to what it carries: the second, too)
+            errors["second frequency"] = _second_frequency(n, ratio) / _second_frequency(
+                cap, ratio) - 1.0
+        return errors
     f, d = _unit_beam_with_ends(family, n, ratio, root, tip)
     f_ref, d_ref = _unit_beam_with_ends(family, cap, ratio, root, tip)
     f, f_ref = f + (np.inf, np.inf), f_ref + (np.inf, np.inf)
@@ -343,6 +348,14 @@ def _unit_beam_statics(family, n_modes, end_ratio):
 
 
 @lru_cache(maxsize=4096)
+@lru_cache(maxsize=4096)
+def _second_frequency(n_modes, end_ratio):
+    """The second circular frequency of a unit loaded-end beam with n_modes, clamped, its
+    output carrying end_ratio as a point mass (inf with one mode)."""
+    f = _unit_beam_with_ends(CLAMPED_LOADED, n_modes, end_ratio, False, False)[0]
+    return f[1] if len(f) > 1 else np.inf
+
+
 def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
     """((every flexible circular frequency, ascending), largest static deflection from the
     chord) of a unit beam (L = mu = EI = 1) with n_modes of the family in its input section's frame:
