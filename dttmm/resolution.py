@@ -12,16 +12,103 @@ cannot resolve the motion"; issue 65, item 5).
   sqrt(1e-3) ~ 3% of the elastic motion whatever its phase; the trapezoidal rule keeps such
   stiff modes bounded, which is why it is used.  The advice: 20 steps a period of that mode.
 An UnresolvedMotionWarning, naming the beam, the mode and what would resolve it.
+
+- A beam element that rings while bent far (docs/beam.md, "How far an element bends"): its
+  sections do not follow the arc, and its ringing runs slow by about c b^2 (b: the ringing bend,
+  its end section against its input, rad; c by what its output carries, `softening`), so the
+  phase drifts by Omega c b^2 a second.  For a ringing bend beta = B sin(Omega t) the mean of
+  (beta'/Omega)^2 is B^2 / 2 and Omega^2 = int beta'^2 / int beta^2, which gives the drift
+  over the run without a window:  2 c sqrt(int beta'^2 dt int (beta - mean)^2 dt)  (a slow
+  bend, as a spin-up's, drifts little).  The deflection is then off by about the drift, of its
+  peak.  An element welded end to end with others into one longer beam drifts as its share of
+  that beam's length squared, (l / L)^2: the mast of 2 elements then predicts 1.9% (measured
+  1.93%), of 4 0.17% (0.26%), of one 11.4% (8.9%).  Above BEND_DRIFT it warns, naming the
+  element, its largest bend and the elements that hold it (1 / n^2 for n elements).  Measured
+  on elements whose input section holds the frame and whose output is free to follow the arc:
+  not said of a pinned family's element nor of one with a pinned end (behind a revolute joint,
+  held by a closing joint), whose ends move otherwise.
 """
 import warnings
 
 import numpy as np
 
-from .elements.beam import EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, mode_shapes
+from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
+                            mode_shapes)
+from .elements.hinges import FIXED
 from .elements.kinds import BEAM
+from .elements.rigid_body import MASS
+from .model import outboard_masses
 
 MODE_SHARE = 1e-3         # of the run's energy: a mode holding more must be resolved
 STEPS_PER_PERIOD = 20     # the advice: 20 steps a period (or a turn)
+BEND_DRIFT = 0.02         # a bent element's phase drift (rad: its error, of the peak) that warns
+
+
+def softening(end_mass_ratio):
+    """c of a bent element's ringing, f = f_fine (1 - c b^2), by r = the mass its output carries
+    over its own: measured on a mast of one element against 16 (docs/beam.md), c = 0.012,
+    0.14 and 0.171 at r = 0, 1.05 and 10.5; the tip's inertia along the arc it cannot follow."""
+    r = end_mass_ratio
+    return 0.012 + 0.16 * r / (r + 0.2)
+
+
+def _integral(f, t):
+    """The trapezoidal rule's integral of the samples f(t)."""
+    return float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
+
+
+def welded_length(model, k):
+    """The length of the beam that beam element k is part of: k and the beam elements welded to
+    it end to end (a FixedHinge at an output point), m."""
+    def welded(j):      # body j hangs from its parent's output by a weld, and both are beams
+        p = model.parent[j]
+        return (p >= 0 and model.hinge_kind[j] == FIXED and model.attachment[j] == 0
+                and model.body_kind[j] == BEAM and model.body_kind[p] == BEAM)
+    run, j = {k}, k
+    while welded(j):
+        j = int(model.parent[j])
+        run.add(j)
+    grown = True
+    while grown:
+        grown = False
+        for j in np.nonzero(np.isin(model.parent, list(run)))[0]:
+            if j not in run and welded(j):
+                run.add(int(j))
+                grown = True
+    return sum(model.beam_params[j][LENGTH] for j in run)
+
+
+def bent_element(model, result):
+    """The beam element whose bent ringing drifts the most, as (name, largest bend rad,
+    predicted drift, elements that hold it), where that drift passes BEND_DRIFT; else None."""
+    beams = np.nonzero(model.body_kind == BEAM)[0]
+    t = np.asarray(result.t)
+    if not len(beams) or result.modal_coordinates is None or len(t) < 3:
+        return None
+    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    masses = np.asarray(model.body_params)[:, MASS]
+    carried = outboard_masses(masses, model.parent)
+    eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
+    worst = None
+    for k in beams:
+        row = model.beam_params[k]
+        if row[FAMILY] == PINNED or any(model.ends_of(k)):
+            continue        # (measured on clamped elements only: see the module's notes)
+        m, length = int(row[MODES]), row[LENGTH]
+        _, dy, _, _, _ = mode_shapes(int(row[FAMILY]), length, m, [0.0, length])
+        slope = dy[:, 1] - dy[:, 0]                 # the bend per coordinate
+        c = softening(carried[k] / (row[MASS_PER_LENGTH] * length)) * (
+            length / welded_length(model, k)) ** 2
+        for first in (0, m):
+            cols = slice(offsets[k] + first, offsets[k] + first + m)
+            beta, rate = eta[:, cols] @ slope, eta_dot[:, cols] @ slope
+            still = beta - _integral(beta, t) / (t[-1] - t[0])
+            drift = 2 * c * np.sqrt(_integral(rate * rate, t) * _integral(still * still, t))
+            if worst is None or drift > worst[2]:
+                worst = (model.body_names[k], float(np.abs(beta).max()), drift)
+    if worst is None or worst[2] <= BEND_DRIFT:
+        return None
+    return worst + (int(np.ceil(np.sqrt(worst[2] / BEND_DRIFT))),)     # (per element)
 
 
 def unresolved_mode(model, result, dt, max_phase):
@@ -57,7 +144,17 @@ def unresolved_mode(model, result, dt, max_phase):
 
 def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
     """Warn (`warning`, UnresolvedMotionWarning) of an unresolved mode of a finished fixed-step
-    run."""
+    run, and of an element bent too far for its accuracy."""
+    bent = bent_element(model, result)
+    if bent is not None:
+        name, bend, drift, elements = bent
+        warnings.warn(warning(
+            f"simulate: beam '{name}' rings while bent by up to {bend:.3g} rad, where one "
+            f"element's sections no longer follow the arc: its vibration runs slow, and the "
+            f"phase drift it predicts over this run leaves its deflection about {drift:.1%} "
+            f"of the peak off (docs/beam.md, 'How far an element bends'); build it of "
+            f"{elements} or more welded elements (each bends less), whatever its modes or "
+            f"stiffening"), stacklevel=stacklevel)
     mode = unresolved_mode(model, result, dt, max_phase)
     if mode is not None:
         name, plane, j, f, share = mode

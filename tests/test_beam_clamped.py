@@ -5,7 +5,8 @@ import pytest
 from helpers import crossing_period, fitted_frequencies
 from scipy.optimize import brentq
 
-from dttmm import BallJoint, EulerBernoulliBeam, FixedHinge, RigidBody, build_chain, simulate
+from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RigidBody, UnresolvedMotionWarning,
+                   build_chain, simulate)
 from dttmm.model import output_section
 
 L, EI, MU = 1.0, 100.0, 2.0
@@ -103,7 +104,9 @@ def test_cantilever_with_a_tip_body():
     body = RigidBody(mass=mass, inertia=[1e-3, inertia, inertia], inertia_about="mass_center",
                      to_mass_center=[0, 0, 0], to_output=[0.05, 0, 0])
     exact = tip_mass_frequency(mass, inertia)
-    found = first_frequency(cantilever(1, 3, body), t_end=2.0)
+    with pytest.warns(UnresolvedMotionWarning, match="beam 'body0' rings while bent by up to "
+                                                     "0.168 rad"):   # (its amplitude: the
+        found = first_frequency(cantilever(1, 3, body), t_end=2.0)   # frequency 0.27% low)
     print(f"tip body: first frequency {found:.4f} rad/s, analytical {exact:.4f} "
           f"(bare beam {clamped_free_omega(0):.4f})")
     assert found == pytest.approx(exact, rel=0.01)
