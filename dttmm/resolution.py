@@ -1,5 +1,5 @@
-"""What a fixed-step run could not resolve, said after the run (docs/solver.md, "Steps that
-cannot resolve the motion"; issue 65, item 5).
+"""What a run could not resolve, said after it (docs/solver.md, "Steps that cannot resolve the
+motion"; issue 65, item 5): a fixed step's unresolved mode, and (any run) a bent element.
 
 - A kept bending mode that the step does not resolve, omega_k dt > MAX_TURN_PER_STEP (0.35 rad
   of its phase a step, about 18 steps a period: the trapezoidal rule's phase error, about
@@ -142,9 +142,9 @@ def unresolved_mode(model, result, dt, max_phase):
     return worst[:4] + (share,) if share > MODE_SHARE else None
 
 
-def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
-    """Warn (`warning`, UnresolvedMotionWarning) of an unresolved mode of a finished fixed-step
-    run, and of an element bent too far for its accuracy."""
+def warn_bent(model, result, warning, stacklevel=4):
+    """Warn (`warning`, UnresolvedMotionWarning) of an element a finished run bent too far for
+    its accuracy (any scheme: the element's, not the step's)."""
     bent = bent_element(model, result)
     if bent is not None:
         name, bend, drift, elements = bent
@@ -155,6 +155,11 @@ def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
             f"of the peak off (docs/beam.md, 'How far an element bends'); build it of "
             f"{elements} or more welded elements (each bends less), whatever its modes or "
             f"stiffening"), stacklevel=stacklevel)
+
+
+def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
+    """Warn (`warning`, UnresolvedMotionWarning) of an unresolved mode of a finished fixed-step
+    run."""
     mode = unresolved_mode(model, result, dt, max_phase)
     if mode is not None:
         name, plane, j, f, share = mode

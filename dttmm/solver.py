@@ -52,6 +52,7 @@ from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, m
                     output_section)
 from .energy_balance import does_work
 from .recording import (NoCheckpoint, Recording, model_fingerprint)
+from .resolution import warn_bent
 from .threads import blas_threads
 from .result import (DERIVED, FIELDS, Result, beam_output_offset, chain_energies,
                      element_end_section, element_output_offset,
@@ -1146,6 +1147,7 @@ def _simulate(wall0, threads, model, t_end, dt, **options):
         run = drivers.Stepping(plan, opts, wall0)
         result = (drivers.runge_kutta if opts.scheme.loop == "runge_kutta"
                   else drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
+    warn_bent(model, result, UnresolvedMotionWarning)
     return result._timed(time.perf_counter() - wall0)
 
 def load_stream(model, path):
