@@ -427,3 +427,23 @@ def test_frequencies_beyond_the_mode_count_are_marked():
     assert f[2] == pytest.approx(42.35, rel=0.01) and eq.trusted[2] and eq.trusted[3]
     assert f[4] > 1.3 * 125.88 and not eq.trusted[4] and not eq.trusted[5]
     assert 125.88 <= eq.trusted_below < 125.88 * 1.01   # the third mode, of the 6-mode basis
+
+
+def test_many_welded_elements_give_the_cantilevers_frequencies():
+    """A 1 m aluminium cantilever (15 mm round) of 16 welded elements, 3 modes each (the inner
+    ones' default): its first two frequencies within 1e-5 of Euler-Bernoulli's (1.8751^2 and
+    4.6941^2 sqrt(EI / mu) / 2 pi L^2).  The stiff modes' accelerations are far from linear
+    over a central difference's step: the step alone left the first 0.29% low."""
+    e, rho, d = 70e9, 2700.0, 0.015
+    area, second = np.pi * d ** 2 / 4, np.pi * d ** 4 / 64
+    elements = []
+    for i in range(16):
+        elements += [dttmm.FixedHinge(), dttmm.EulerBernoulliBeam(
+            length=1.0 / 16, density=rho, area=area, bending_stiffness=e * second,
+            polar_inertia_per_length=2 * rho * second, name=f"e{i}")]
+    model = dttmm.build_chain(elements, gravity=[0.0, 0.0, 0.0])
+    assert model.n_modes[0] == 6
+    scale = np.sqrt(e * second / (rho * area)) / (2 * np.pi)
+    f = dttmm.static_equilibrium(model).frequencies
+    assert f[0] == pytest.approx(1.8751040687 ** 2 * scale, rel=1e-5)
+    assert f[2] == pytest.approx(4.6940911330 ** 2 * scale, rel=1e-5)
