@@ -22,7 +22,7 @@ An UnresolvedMotionWarning, naming the beam, the mode and what would resolve it.
   bend, as a spin-up's, drifts little).  The deflection is then off by about the drift, of its
   peak.  An element welded end to end with others into one longer beam drifts as its share of
   that beam's length squared, (l / L)^2: the mast of 2 elements then predicts 1.9% (measured
-  1.93%), of 4 0.17% (0.26%), of one 11.4% (8.9%).  Above BEND_DRIFT it warns, naming the
+  2.02%), of 4 0.17% (0.27%), of one 11.6% (9.4%).  Above BEND_DRIFT it warns, naming the
   element, its largest bend and the elements that hold it (1 / n^2 for n elements).  Measured
   on elements whose input section holds the frame and whose output is free to follow the arc:
   not said of a pinned family's element nor of one with a pinned end (behind a revolute joint,
@@ -57,25 +57,19 @@ def _integral(f, t):
     return float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
 
 
-def welded_length(model, k):
-    """The length of the beam that beam element k is part of: k and the beam elements welded to
-    it end to end (a FixedHinge at an output point), m."""
-    def welded(j):      # body j hangs from its parent's output by a weld, and both are beams
+def welded_lengths(model):
+    """Per body: the length of the beam it is part of, m: a beam element and the beam elements
+    welded to it end to end (a FixedHinge at an output point); 0 for other bodies."""
+    beam = np.asarray(model.body_kind) == BEAM
+    head = np.arange(model.n_bodies)        # each body's first element of its welded run
+    for j in range(model.n_bodies):         # (parents first)
         p = model.parent[j]
-        return (p >= 0 and model.hinge_kind[j] == FIXED and model.attachment[j] == 0
-                and model.body_kind[j] == BEAM and model.body_kind[p] == BEAM)
-    run, j = {k}, k
-    while welded(j):
-        j = int(model.parent[j])
-        run.add(j)
-    grown = True
-    while grown:
-        grown = False
-        for j in np.nonzero(np.isin(model.parent, list(run)))[0]:
-            if j not in run and welded(j):
-                run.add(int(j))
-                grown = True
-    return sum(model.beam_params[j][LENGTH] for j in run)
+        if (p >= 0 and beam[j] and beam[p] and model.hinge_kind[j] == FIXED
+                and model.attachment[j] == 0):
+            head[j] = head[p]
+    lengths = np.zeros(model.n_bodies)
+    np.add.at(lengths, head[beam], np.asarray(model.beam_params)[beam, LENGTH])
+    return np.where(beam, lengths[head], 0.0)
 
 
 def bent_element(model, result):
@@ -88,6 +82,7 @@ def bent_element(model, result):
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     masses = np.asarray(model.body_params)[:, MASS]
     carried = outboard_masses(masses, model.parent)
+    whole = welded_lengths(model)
     eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
     worst = None
     for k in beams:
@@ -98,7 +93,7 @@ def bent_element(model, result):
         _, dy, _, _, _ = mode_shapes(int(row[FAMILY]), length, m, [0.0, length])
         slope = dy[:, 1] - dy[:, 0]                 # the bend per coordinate
         c = softening(carried[k] / (row[MASS_PER_LENGTH] * length)) * (
-            length / welded_length(model, k)) ** 2
+            length / whole[k]) ** 2
         for first in (0, m):
             cols = slice(offsets[k] + first, offsets[k] + first + m)
             beta, rate = eta[:, cols] @ slope, eta_dot[:, cols] @ slope

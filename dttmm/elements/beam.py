@@ -348,7 +348,6 @@ def _unit_beam_statics(family, n_modes, end_ratio):
 
 
 @lru_cache(maxsize=4096)
-@lru_cache(maxsize=4096)
 def _second_frequency(n_modes, end_ratio):
     """The second circular frequency of a unit loaded-end beam with n_modes, clamped, its
     output carrying end_ratio as a point mass (inf with one mode)."""
@@ -356,6 +355,7 @@ def _second_frequency(n_modes, end_ratio):
     return f[1] if len(f) > 1 else np.inf
 
 
+@lru_cache(maxsize=4096)
 def _unit_beam_with_ends(family, n_modes, end_ratio, root_pinned, tip_pinned):
     """((every flexible circular frequency, ascending), largest static deflection from the
     chord) of a unit beam (L = mu = EI = 1) with n_modes of the family in its input section's frame:
