@@ -3,13 +3,14 @@
     python benchmarks/loops.py [--quick] [--json FILE]
 
 For each mechanism (the IFToMM slider-crank, the Stewart platform with its slides prescribed,
-the N-four-bar on its chain and its ground spanning trees) the model with its closing joints
+the N-four-bar on its chain and its ground spanning trees, and the chain rebuilt by
+System.build(tree="shortest")) the model with its closing joints
 and the same model with them removed ("opened": the tree alone, which falls freely) are timed
 in turn in one process, A B A B ..., each a run of fixed steps at dt = 1e-3 after a warm-up;
 the cost of a step is the difference of a long and a short run over the steps between (no
 setup), the best of 3 pairs.  The N-four-bar's cost exponent is fitted over N on each tree
-(the ground tree from N = 2 to 160, its loops local: O(N); the chain tree, every loop through
-the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its sweeps' own tip
+(the ground tree and the shortest from N = 2 to 160, their loops local: O(N); the chain tree,
+every loop through the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its sweeps' own tip
 condition (build_chain(..., tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure
 run as a row of the loops' table, on a chain of N rods: what keeping that special case buys.
 --quick: fewer sizes and steps (the CI's smoke run).  Not a test: nothing is asserted.
@@ -90,8 +91,9 @@ def main(argv=None):
         if n <= 40:
             cases.append((f"{n}-four-bar, chain tree", n_four_bar(n), 200 if n < 40 else 40))
         # (at least 100 steps: a run's setup, ~0.2 s at N = 160, must not enter the difference)
-        cases.append((f"{n}-four-bar, ground tree", n_four_bar(n, tree="ground"),
-                      max(100, 4000 // (5 * n))))
+        for tree in ("ground", "shortest"):
+            cases.append((f"{n}-four-bar, {tree} tree", n_four_bar(n, tree=tree),
+                          max(100, 4000 // (5 * n))))
     if args.quick:      # (at least 50 steps: with fewer a run's setup enters the difference)
         cases = [(name, m, max(50, steps // 4)) for name, m, steps in cases]
     rows = []
@@ -103,7 +105,7 @@ def main(argv=None):
                          opened_us=tree * 1e6, ratio=with_loops / tree))
         print(f"{name:<28} {rows_count:>5} {with_loops * 1e6:>14.0f} {tree * 1e6:>15.0f} "
               f"{with_loops / tree:>7.1f}", flush=True)
-    for tree in ("ground", "chain"):
+    for tree in ("ground", "shortest", "chain"):
         sized = [(int(r["model"].split("-")[0]), r["loops_us"]) for r in rows
                  if r["model"].endswith(f"{tree} tree")]
         if len(sized) < 2:

@@ -193,10 +193,12 @@ def _loop_reach(model):
             f"close near the ground, on a spanning tree of short paths, cost least)")
     if rows >= LONG_LOOP_ROWS and reach > 0.5 * km.n_bodies:
         line += ("\n  the loops share most bodies, so a step costs rows x bodies, O(N^2) in a "
-                 "mechanism's size: root each loop's bodies at their own ground pivots "
-                 "(System.add(body, joint, at=[x, y, z])) and close each loop between "
-                 "neighbours, and each column passes a few bodies (docs/loops.md, \"Where a "
-                 "column runs\": the 40-four-bar 14x faster a step)")
+                 "mechanism's size: build it with System.build(tree=\"shortest\"), which "
+                 "roots each body by its nearest joint to the ground, or root each loop's "
+                 "bodies at their own ground pivots (System.add(body, joint, at=[x, y, z])) "
+                 "and close each loop between neighbours, and each column passes a few bodies "
+                 "(docs/loops.md, \"Choosing the spanning tree\": the 40-four-bar 14x faster "
+                 "a step)")
     return line
 
 

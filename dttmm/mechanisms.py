@@ -120,9 +120,12 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
     rate : float
         theta' at t = 0, rad/s (default 1: the top of the first bar, B_0, moves at (1, 0) m/s
         when upright; every vertical bar turns at -rate about z), the rest assembled.
-    tree : {"chain", "ground"}
-        The spanning tree: "chain" (default) as above, every loop through v0; "ground": every
-        vertical bar "v0".. "v{n}" is a root on its joint "O{i}" at its ground pivot (i, 0)
+    tree : {"chain", "shortest", "ground"}
+        The spanning tree: "chain" (default) as above, every loop through v0; "shortest": the
+        chain as above built with ``System.build(tree="shortest")``, which re-roots every
+        vertical bar at its ground pivot and hangs "h{i}" (i >= 2) from v{i}'s top (joint
+        "B{i}" reversed), the joints "O{i}" then in the tree and "B1", "H{i}" closing (each
+        loop local, as below); "ground": every vertical bar "v0".. "v{n}" is a root on its joint "O{i}" at its ground pivot (i, 0)
         (``System.add(..., at=[i, 0, 0])``), each horizontal bar "h{i}" hangs from v{i-1}'s
         top (joint "H{i}") and is closed to v{i}'s top by a revolute joint "B{i}": each loop
         is then local (its sweep columns pass four bars, kernels/assembly/closure.py), the
@@ -150,8 +153,9 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
                        parent=f"v{i - 1}")
             system.close(RevoluteJoint(axis=z, name=f"B{i}"), f"h{i}", f"v{i}")
         return assemble(system.build(), keep=["O0"])
-    if tree != "chain":
-        raise ValueError(f"n_four_bar: tree must be 'chain' or 'ground', got {tree!r}")
+    if tree not in ("chain", "shortest"):
+        raise ValueError(f"n_four_bar: tree must be 'chain', 'shortest' or 'ground', got "
+                         f"{tree!r}")
     system.add(_bar("v0", _rot_z(np.pi / 2 - theta)), RevoluteJoint(axis=z, rate=-rate, name="O0"))
     inboard = "v0"
     for i in range(1, n + 1):
@@ -160,7 +164,7 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
                    parent=f"h{i}")
         system.close(RevoluteJoint(axis=z, name=f"O{i}"), f"v{i}", "ground")
         inboard = f"h{i}"
-    return assemble(system.build(), keep=["O0"])
+    return assemble(system.build(tree="as added" if tree == "chain" else tree), keep=["O0"])
 
 
 def parallelogram(n, t, theta=0.0, rate=1.0):

@@ -764,11 +764,19 @@ class System:
         self._closures.append((joint, a, b, at_a, at_b))
         return joint
 
-    def build(self, tip="free", step=None, duration=None) -> "Model":
+    def build(self, tip="free", step=None, duration=None, tree="as added") -> "Model":
         """Validate and freeze into a Model.
 
         Parameters
         ----------
+        tree : {"as added", "shortest"}, optional
+            The spanning tree of a system with closing joints: "as added" (default), or
+            "shortest": the breadth-first tree from the ground over every joint, tree and
+            closing alike, so that each loop runs through the fewest bodies (a loop's rows
+            cost a step over its bodies; docs/loops.md, "Choosing the spanning tree").  A
+            body the new tree reaches at another point is the same body described from that
+            point, so its input point (``position_input``) is that point; the joints keep
+            their names, the ones left out of the tree closing the loops.
         tip : {"free", "ball"}, optional
             "free" (default) or, for a chain only, "ball": the last body's output point is
             joined to the ground by a ball joint where it starts (a fixed point; e.g. a simply
@@ -796,9 +804,20 @@ class System:
             against its ends, a rotation or angular velocity contradicting the joint before a
             body, a ball-joint body with no inertia about its hinge-to-hinge axis.
         """
+        if tree not in ("as added", "shortest"):
+            raise ValueError(f"System.build: tree must be 'as added' or 'shortest', got "
+                             f"{tree!r}")
         bodies, joints, parents, attach = _resolve_topology(self._entries)
-        return _freeze(bodies, joints, parents, attach, self.gravity, self.ground, tip, step,
-                       duration, closures=self._closures)
+        model = _freeze(bodies, joints, parents, attach, self.gravity, self.ground, tip, step,
+                        duration, closures=self._closures)
+        if tree == "as added" or not self._closures:
+            return model
+        from .spanning_tree import shortest_tree
+        rebuilt = shortest_tree(self, model)
+        if isinstance(rebuilt, str):
+            raise ValueError(f"System.build(tree='shortest'): {rebuilt}; build the tree as "
+                             f"added (tree='as added')")
+        return rebuilt.build(tip, step, duration)
 
 
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),
