@@ -813,7 +813,7 @@ class System:
         if tree == "as added" or not self._closures:
             return model
         from .spanning_tree import shortest_tree
-        rebuilt = shortest_tree(self, model)
+        rebuilt = shortest_tree(self, model, bodies)
         if isinstance(rebuilt, str):
             raise ValueError(f"System.build(tree='shortest'): {rebuilt}; build the tree as "
                              f"added (tree='as added')")

@@ -79,18 +79,17 @@ def _reversed(joint, rot_old_parent, rot_new_parent):
     return None
 
 
-def shortest_tree(system, model):
-    """A System of the same bodies and joints as `system` (built as `model`), its spanning tree
-    the breadth-first one from the ground; or a sentence saying why it cannot be built."""
+def shortest_tree(system, model, in_model):
+    """A System of the same bodies and joints as `system` (built as `model`, its bodies in the
+    order `in_model` lists them), its spanning tree the breadth-first one from the ground; or
+    a sentence saying why it cannot be built."""
     from .model import System
     from .statics import _positions
     bodies = [e[0] for e in system._entries]
     by_id = {id(b): i for i, b in enumerate(bodies)}
     by_name = {b.name: i for i, b in enumerate(bodies) if b.name}
-    index = {name: k for k, name in enumerate(model.body_names)}
-    if not all(b.name for b in bodies):
-        return "every body needs a name (the model's bodies are matched by name)"
-    k_of = [index[b.name] for b in bodies]
+    index = {id(b): k for k, b in enumerate(in_model)}
+    k_of = [index[id(b)] for b in bodies]
     edges = []          # (joint, side a, point on a, side b, point on b, closing): a the parent's
     for i, (body, joint, parent, at) in enumerate(system._entries):
         a = _node(parent, by_id, by_name)
