@@ -13,7 +13,8 @@ point is the same rigid body described from that point (its mass centre, output 
 points shifted; its inertia about the mass centre); a joint the new tree runs the other way
 (its child now its parent) is a ball joint, or a revolute joint whose axis is turned into the
 new parent's frame and whose angle and rate change sign.  Every body keeps its initial rotation,
-and a body behind a ball joint its angular velocity.
+and a body behind a ball joint its angular velocity; a body on its own tree joint is kept as
+it is.
 """
 from collections import deque
 from dataclasses import replace
@@ -177,14 +178,14 @@ def shortest_tree(system, model, in_model):
 
     new_body = {}
     for i, body in enumerate(bodies):
-        ball = isinstance(joint_before[i], BallJoint)
-        w = np.asarray(model.initial_angular_velocity[k_of[i]]) if ball else None
-        if isinstance(body, RigidBody):
-            body = _from_point(body, shift[i], rotation(i), w)
-            if i in extra:
-                body = replace(body, points={**(body.points or {}), **extra[i]})
-        else:
-            body = replace(body, rotation=rotation(i))
+        e, forward = via[i]
+        if edges[e][5] or not forward:      # (else on its own tree joint: as it was)
+            ball = isinstance(joint_before[i], BallJoint)
+            w = np.asarray(model.initial_angular_velocity[k_of[i]]) if ball else None
+            body = (_from_point(body, shift[i], rotation(i), w) if isinstance(body, RigidBody)
+                    else replace(body, rotation=rotation(i), angular_velocity=w))
+        if i in extra:
+            body = replace(body, points={**(body.points or {}), **extra[i]})
         new_body[i] = body
 
     def side(node):
