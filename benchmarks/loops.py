@@ -10,9 +10,10 @@ in turn in one process, A B A B ..., each a run of fixed steps at dt = 1e-3 afte
 the cost of a step is the difference of a long and a short run over the steps between (no
 setup), the best of 3 pairs.  The N-four-bar's cost exponent is fitted over N on each tree
 (the ground tree and the shortest from N = 2 to 160, their loops local: O(N); the chain tree,
-every loop through the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its sweeps' own tip
-condition (build_chain(..., tip="ball"), closures.PINNED_TIP_SWEEP) against the same closure
-run as a row of the loops' table, on a chain of N rods: what keeping that special case buys.
+every loop through the first bar, to N = 40: O(N^2)).  Then the one loop a chain closes in its
+sweeps' own tip condition (build_chain(..., tip="ball"), closures.PINNED_TIP_SWEEP) against the
+same closure run as a row of the loops' table, on a chain of N rods: what keeping that special
+case buys.
 --quick: fewer sizes and steps (the CI's smoke run).  Not a test: nothing is asserted.
 """
 import argparse

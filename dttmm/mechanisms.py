@@ -125,11 +125,11 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
         chain as above built with ``System.build(tree="shortest")``, which re-roots every
         vertical bar at its ground pivot and hangs "h{i}" (i >= 2) from v{i}'s top (joint
         "B{i}" reversed), the joints "O{i}" then in the tree and "B1", "H{i}" closing (each
-        loop local, as below); "ground": every vertical bar "v0".. "v{n}" is a root on its joint "O{i}" at its ground pivot (i, 0)
-        (``System.add(..., at=[i, 0, 0])``), each horizontal bar "h{i}" hangs from v{i-1}'s
-        top (joint "H{i}") and is closed to v{i}'s top by a revolute joint "B{i}": each loop
-        is then local (its sweep columns pass four bars, kernels/assembly/closure.py), the
-        cost linear in n.
+        loop local, as below); "ground": every vertical bar "v0".. "v{n}" is a root on its
+        joint "O{i}" at its ground pivot (i, 0) (``System.add(..., at=[i, 0, 0])``), each
+        horizontal bar "h{i}" hangs from v{i-1}'s top (joint "H{i}") and is closed to v{i}'s
+        top by a revolute joint "B{i}": each loop is then local (its sweep columns pass four
+        bars, kernels/assembly/closure.py), the cost linear in n.
 
     Returns
     -------

@@ -58,7 +58,8 @@ def test_a_body_described_from_another_point_is_the_same_body():
         s.add(_bar("coupler", np.eye(3)), RevoluteJoint(axis=z, name="B"), parent="crank")
         s.add(RigidBody(mass=1.5, inertia_about="input",
                         inertia=[[0.0026, -0.015, 0], [-0.015, 0.495, 0], [0, 0, 0.4956]],
-                        to_mass_center=[0.5, 0.02, 0], to_output=[1.0, 0, 0], points={"p": [0.3, 0, 0]},
+                        to_mass_center=[0.5, 0.02, 0], to_output=[1.0, 0, 0],
+                        points={"p": [0.3, 0, 0]},
                         rotation=_rot_z(-np.pi / 2), name="rocker"),
               RevoluteJoint(axis=z, name="C"), parent="coupler")
         s.add(_bar("pendulum", _rot_z(-np.pi / 3)), RevoluteJoint(axis=z, name="P"),
