@@ -27,6 +27,7 @@ from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, ROD_PARAM_SIZE,
 from .kernels.algebra.so3 import expm_so3, left_jacobian
 from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
+from .spanning_tree import shortest_tree
 
 
 class PrescribedMotion:
@@ -769,14 +770,6 @@ class System:
 
         Parameters
         ----------
-        tree : {"as added", "shortest"}, optional
-            The spanning tree of a system with closing joints: "as added" (default), or
-            "shortest": the breadth-first tree from the ground over every joint, tree and
-            closing alike, so that each loop runs through the fewest bodies (a loop's rows
-            cost a step over its bodies; docs/loops.md, "Choosing the spanning tree").  A
-            body the new tree reaches at another point is the same body described from that
-            point, so its input point (``position_input``) is that point; the joints keep
-            their names, the ones left out of the tree closing the loops.
         tip : {"free", "ball"}, optional
             "free" (default) or, for a chain only, "ball": the last body's output point is
             joined to the ground by a ball joint where it starts (a fixed point; e.g. a simply
@@ -785,6 +778,14 @@ class System:
             The time step (s) and the length (s) of the runs the model is for: a beam with
             ``modes_per_plane="auto"`` and no ``frequency_cutoff`` keeps the modes at or below
             a cutoff derived from them (``build_chain``).
+        tree : {"as added", "shortest"}, optional
+            The spanning tree of a system with closing joints: "as added" (default), or
+            "shortest": the breadth-first tree from the ground over every joint, tree and
+            closing alike, so that each loop runs through the fewest bodies (a loop's rows
+            cost a step over its bodies; docs/loops.md, "Choosing the spanning tree").  A
+            body the new tree reaches at another point is the same body described from that
+            point, so its input point (``position_input``) is that point; the joints keep
+            their names, the ones left out of the tree closing the loops.
 
         Returns
         -------
@@ -802,7 +803,9 @@ class System:
             ground; and every element's own checks (naming the element, its index and the
             argument; see each class), and the checks across elements: a beam's mode family
             against its ends, a rotation or angular velocity contradicting the joint before a
-            body, a ball-joint body with no inertia about its hinge-to-hinge axis.
+            body, a ball-joint body with no inertia about its hinge-to-hinge axis; tree not
+            "as added" or "shortest", or a tree="shortest" the system cannot be rebuilt on
+            (naming the body or the joint).
         """
         if tree not in ("as added", "shortest"):
             raise ValueError(f"System.build: tree must be 'as added' or 'shortest', got "
@@ -812,12 +815,13 @@ class System:
                         duration, closures=self._closures)
         if tree == "as added" or not self._closures:
             return model
-        from .spanning_tree import shortest_tree
-        rebuilt = shortest_tree(self, model, bodies)
+        rebuilt = shortest_tree(self._entries, self._closures, model, bodies)
         if isinstance(rebuilt, str):
             raise ValueError(f"System.build(tree='shortest'): {rebuilt}; build the tree as "
                              f"added (tree='as added')")
-        return rebuilt.build(tip, step, duration)
+        system = System(gravity=self.gravity, ground=self.ground)
+        system._entries, system._closures = rebuilt
+        return system.build(tip, step, duration)
 
 
 def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = Ground(),

@@ -80,22 +80,21 @@ def _reversed(joint, rot_old_parent, rot_new_parent):
     return None
 
 
-def shortest_tree(system, model, in_model):
-    """A System of the same bodies and joints as `system` (built as `model`, its bodies in the
-    order `in_model` lists them), its spanning tree the breadth-first one from the ground; or
-    a sentence saying why it cannot be built."""
-    from .model import System
-    from .statics import _positions
-    bodies = [e[0] for e in system._entries]
+def shortest_tree(entries, closures, model, in_model):
+    """The (entries, closures) of a System (as System.add and System.close take them) of the
+    same bodies and joints as `entries` and `closures`, built as `model` (its bodies in the
+    order `in_model` lists them), its spanning tree the breadth-first one from the ground; or a
+    sentence saying why they cannot be made."""
+    bodies = [e[0] for e in entries]
     by_id = {id(b): i for i, b in enumerate(bodies)}
     by_name = {b.name: i for i, b in enumerate(bodies) if b.name}
     index = {id(b): k for k, b in enumerate(in_model)}
     k_of = [index[id(b)] for b in bodies]
     edges = []          # (joint, side a, point on a, side b, point on b, closing): a the parent's
-    for i, (body, joint, parent, at) in enumerate(system._entries):
+    for i, (body, joint, parent, at) in enumerate(entries):
         a = _node(parent, by_id, by_name)
         edges.append((joint, a, at if a == GROUND else (at or "output"), i, "input", False))
-    for joint, a, b, at_a, at_b in system._closures:
+    for joint, a, b, at_a, at_b in closures:
         a, b = _node(a, by_id, by_name), _node(b, by_id, by_name)
         edges.append((joint, a, at_a if a == GROUND else (at_a or "output"), b,
                       at_b if b == GROUND else (at_b or "output"), True))
@@ -114,13 +113,9 @@ def shortest_tree(system, model, in_model):
                 queue.append(v)
     ground_rot = np.asarray(model.ground_rotation)
     ground_pos = np.asarray(model.ground_position)
-    r_in = _positions(model)[0]
 
     def rotation(node):
         return ground_rot if node == GROUND else np.asarray(model.initial_rotation[k_of[node]])
-
-    def world(node, point):          # a body's point (from its input point), world, at t = 0
-        return r_in[k_of[node]] + rotation(node) @ point
 
     # each body's new input point (from its old one), and the joint before it
     shift, joint_before = {}, {}
@@ -160,9 +155,8 @@ def shortest_tree(system, model, in_model):
         joint, a, at_a, b, at_b, closing = edges[e]
         parent, at = (a, at_a) if forward else (b, at_b)
         if parent == GROUND:
-            if closing:        # a world point (None: where the body's point starts) -> a place
-                spot = world(i, shift[i]) if at is None else np.asarray(at, dtype=float)
-                at = (ground_rot.T @ (spot - ground_pos)).tolist()
+            if closing:        # the ground's point, as the build placed it (ground frame)
+                at = model.closure_point[e - len(entries), 0 if forward else 1].tolist()
         else:
             at = point_spec(parent, at)
             if at == "input" or (at is not None and not isinstance(at, str)):
@@ -191,10 +185,9 @@ def shortest_tree(system, model, in_model):
     def side(node):
         return "ground" if node == GROUND else new_body[node]
 
-    rebuilt = System(gravity=system.gravity, ground=system.ground)
-    for i, parent, at in tree:
-        rebuilt.add(new_body[i], joint_before[i], parent=None if parent == GROUND else
-                    new_body[parent], at=at)
+    new_entries = [(new_body[i], joint_before[i], None if parent == GROUND else new_body[parent],
+                    at) for i, parent, at in tree]
+    new_closures = []
     taken = {via[i][0] for i in via}
     for e, (joint, a, at_a, b, at_b, closing) in enumerate(edges):
         if e in taken:
@@ -202,6 +195,5 @@ def shortest_tree(system, model, in_model):
         if a == GROUND and not closing:    # a root's place -> its world point
             at_a = (ground_pos + ground_rot @ (np.zeros(3) if at_a is None else
                                                np.asarray(at_a, dtype=float))).tolist()
-        rebuilt.close(joint, side(a), side(b), at_a=point_spec(a, at_a),
-                      at_b=point_spec(b, at_b))
-    return rebuilt
+        new_closures.append((joint, side(a), side(b), point_spec(a, at_a), point_spec(b, at_b)))
+    return new_entries, new_closures
