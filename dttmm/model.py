@@ -21,7 +21,7 @@ from .elements.drives import MOTION
 from .elements.hinges import pack_hinge
 from .elements.kinds import (BODY_KINDS, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
                              WITH_COORDINATES, body_kind_of, joint_kind_of, names)
-from .elements.rigid_body import pack_body
+from .elements.rigid_body import MASS, pack_body
 from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, ROD_PARAM_SIZE, ROD_STATIONS,
                                   rod_coordinate_count, rod_end_section)
 from .kernels.algebra.so3 import expm_so3, left_jacobian
@@ -587,6 +587,10 @@ class Model:
     def has_applied_loads(self):
         """Whether any body has an applied force or torque."""
         return any(f is not None for f in self.forces + self.torques + self.line_loads)
+
+    def carried_masses(self):
+        """Per body: the mass of everything attached beyond it (its descendants), kg."""
+        return outboard_masses(np.asarray(self.body_params)[:, MASS], self.parent)
 
     def ends_of(self, k):
         """Body k's (root pinned, tip pinned) as the build found them (``beam_ends``);

@@ -36,8 +36,6 @@ from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, 
                             mode_shapes)
 from .elements.hinges import FIXED
 from .elements.kinds import BEAM
-from .elements.rigid_body import MASS
-from .model import outboard_masses
 
 MODE_SHARE = 1e-3         # of the run's energy: a mode holding more must be resolved
 STEPS_PER_PERIOD = 20     # the advice: 20 steps a period (or a turn)
@@ -80,8 +78,7 @@ def bent_element(model, result):
     if not len(beams) or result.modal_coordinates is None or len(t) < 3:
         return None
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
-    masses = np.asarray(model.body_params)[:, MASS]
-    carried = outboard_masses(masses, model.parent)
+    carried = model.carried_masses()
     whole = welded_lengths(model)
     eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
     worst = None
