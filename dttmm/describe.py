@@ -12,7 +12,6 @@ from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                   rod_components, rod_frequencies)
 from .closures import describe_closures, held_chords, loop_rank
-from .model import outboard_masses
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
                UNIVERSAL: "universal", PRISMATIC: "prismatic"}
@@ -268,7 +267,7 @@ def describe(model):
               f"closed by {model.n_closures} joint{'s' if model.n_closures > 1 else ''}"
               if model.n_closures else "tip free"),
            "bodies:"]
-    end_masses = outboard_masses(model.body_params[:, MASS], model.parent)
+    end_masses = model.carried_masses()
     # the unstiffened beams without stretch whose chord the loops hold (one Jacobian for all)
     unstiffened = np.nonzero((model.body_kind == BEAM) & (model.beam_params[:, STIFFENING] == 0.0)
                              & (model.beam_params[:, AXIAL_MODES] == 0))[0]

@@ -27,15 +27,6 @@ from .elements.rigid_body import parallel_axis
 GROUND = -1
 
 
-def _node(side, by_id, by_name):
-    """A joint's side as a body index, GROUND for the ground."""
-    if side is None or (isinstance(side, str) and side == "ground"):
-        return GROUND
-    if isinstance(side, str):
-        return by_name[side]
-    return by_id[id(side)]
-
-
 def _point(body, spec):
     """The body-frame vector from body's input point to the point spec names ("input",
     "output", a named point, or 3 numbers), or None where the body cannot say (a beam's point
@@ -86,16 +77,19 @@ def shortest_tree(entries, closures, model, in_model):
     order `in_model` lists them), its spanning tree the breadth-first one from the ground; or a
     sentence saying why they cannot be made."""
     bodies = [e[0] for e in entries]
-    by_id = {id(b): i for i, b in enumerate(bodies)}
-    by_name = {b.name: i for i, b in enumerate(bodies) if b.name}
     index = {id(b): k for k, b in enumerate(in_model)}
     k_of = [index[id(b)] for b in bodies]
+    entry_of = {k: i for i, k in enumerate(k_of)}
+
+    def node(k):        # the build's body index (its parents and sides resolved) -> entry
+        return GROUND if k < 0 else entry_of[int(k)]
+
     edges = []          # (joint, side a, point on a, side b, point on b, closing): a the parent's
-    for i, (body, joint, parent, at) in enumerate(entries):
-        a = _node(parent, by_id, by_name)
+    for i, (_, joint, _, at) in enumerate(entries):
+        a = node(model.parent[k_of[i]])
         edges.append((joint, a, at if a == GROUND else (at or "output"), i, "input", False))
-    for joint, a, b, at_a, at_b in closures:
-        a, b = _node(a, by_id, by_name), _node(b, by_id, by_name)
+    for c, (joint, _, _, at_a, at_b) in enumerate(closures):
+        a, b = (node(k) for k in model.closure_body[c])
         edges.append((joint, a, at_a if a == GROUND else (at_a or "output"), b,
                       at_b if b == GROUND else (at_b or "output"), True))
     touching = {}

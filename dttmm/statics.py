@@ -27,13 +27,13 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
                             trusted_frequency)
-from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
+from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .elements.strain_rod import ROD_LENGTH, rod_centre_line, rod_end_section
 from .kernels.stepping import ball_chain
 from .kernels.stepping.loop import Monitor, Settings
 from .kernels.transfers.joint import joint_frame, n_coordinates
 from .kernels.algebra.so3 import expm_so3
-from .model import Model, outboard_masses, output_section
+from .model import Model, output_section
 from .result import _foreshortening_along, _log_so3, beam_output_offset
 from . import solver
 
@@ -625,7 +625,7 @@ def _trusted_below(model):
     beams = np.nonzero(model.body_kind == BEAM)[0]
     if not len(beams):
         return np.inf
-    end_mass = outboard_masses(model.body_params[:, MASS], model.parent)
+    end_mass = model.carried_masses()
     return float(min(trusted_frequency(model.beam_params[k], end_mass[k], model.ends_of(k))
                      for k in beams))
 
