@@ -37,7 +37,7 @@ reversed every repeat, and the median of --repeats kept.  The wall times at equa
 interpolated on the log-log work-precision curves; the figures are MuJoCo's time over
 DT-TMM's (above 1: DT-TMM faster).
 
-    DTTMM_SPECIALIZE=0 python benchmarks/mujoco_four_bar.py [--quick] [--json FILE]
+    python benchmarks/mujoco_four_bar.py [--quick] [--json FILE]
                                                 [--sizes N ...] [--repeats R]
                         (N = 2, 10, 40 over 1 s; --quick: N = 2 over 0.5 s, fewer steps)
 
@@ -173,7 +173,6 @@ def main(argv=None):
     cpu = cpu_description()
     fig = {"mujoco": mujoco.__version__, "cpu": cpu, "t_end_s": t_end, "repeats": repeats,
            "sample_s": SAMPLE, "solimp": STIFF_SOLIMP, "solref": "(2 dt, 1)",
-           "dttmm_specialize": os.environ.get("DTTMM_SPECIALIZE"),
            "load_average_start": os.getloadavg()}
     print("MuJoCo", mujoco.__version__, "on", cpu, "load average", fig["load_average_start"],
           f"; t_end {t_end} s, B_0 sampled every {SAMPLE} s, median of {repeats}", flush=True)

@@ -5,6 +5,7 @@
                          [--static-start] [--no-energy-balance]
     dttmm info SCENE.toml          bodies, joints, degrees of freedom, beams' modes, a dt
     dttmm example [NAME] [--force] the shipped scenes; NAME: write NAME.toml here
+    dttmm compile [--jobs N]       compile every kernel ahead (CI, containers, a shared install)
 
 Also `python -m dttmm ...`.  Exit status 0, or 2 with a one-line message for a bad scene or
 argument, 1 for a run that stopped (DivergenceError).
@@ -12,6 +13,7 @@ argument, 1 for a run that stopped (DivergenceError).
 import argparse
 import shutil
 import sys
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -62,12 +64,31 @@ def main(argv=None):
     example.add_argument("--to", default=".", help="directory to write NAME.toml into")
     example.add_argument("--force", action="store_true",
                          help="overwrite NAME.toml if it exists")
+    compile_ = sub.add_parser("compile", help="compile every kernel now (once per install), "
+                              "so that no run waits for numba")
+    compile_.add_argument("--jobs", type=int, help="processes at once (default: the cores)")
+    compile_.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
     try:
-        return {"run": _run, "info": _info, "example": _example}[args.command](args)
+        return {"run": _run, "info": _info, "example": _example,
+                "compile": _compile}[args.command](args)
     except SceneError as err:
         print(f"dttmm: {err}", file=sys.stderr)
         return 2
+
+
+def _compile(args):
+    from .precompile import cache_location, compile_all
+    t0 = time.perf_counter()
+    try:
+        took = compile_all(args.jobs, progress=not args.no_progress)
+    except RuntimeError as err:
+        print(f"dttmm: {err}", file=sys.stderr)
+        return 1
+    print(f"compiled {len(took)} families of kernels in {time.perf_counter() - t0:.0f} s "
+          f"({', '.join(f'{name} {s:.0f} s' for name, s in took.items())})")
+    print(f"cache: {cache_location()}")
+    return 0
 
 
 def _run(args):

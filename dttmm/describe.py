@@ -311,44 +311,20 @@ def describe(model):
     return "\n".join(out)
 
 
-# what each flag of a kernel copy stands for (kernels/features.py)
-_FEATURE_WORDS = dict(HAS_BEAMS="beams", HAS_RODS="strain rods",
-                      HAS_ELASTIC_HINGES="elastic hinges",
-                      HAS_LOOPS="closing joints", HAS_STATION_HISTORIES="station histories",
-                      HAS_JOINTS="joints with coordinates",
-                      HAS_EXACT_STIFFENING="the exact foreshortening",
-                      SWEEP_JOINTS="the full-state tree sweep", SWEEP_FULL="the full-state "
-                      "chain sweep", SWEEP_DIRECT_FULL="the direct full-state sweep",
-                      SWEEP_TREE="the reduced tree sweep", SWEEP_REDUCED="the reduced chain "
-                      "sweep", SWEEP_DIRECT_REDUCED="the direct reduced sweep")
-
-
 def _kernels_line(model):
-    """Which loop runs the model (Newmark, Riccati) and what its kernels are compiled for."""
-    from .kernels import features
+    """Which loop runs the model (Newmark, Riccati) and what it compiles."""
     from .methods import SCHEMES
     from .run_plan import kernels_used
     try:
-        loop, compiled_for = kernels_used(model, SCHEMES["newmark"])
+        loop = kernels_used(model, SCHEMES["newmark"])
     except ValueError:
         return "kernels: none run this model with the default scheme"
-    if compiled_for is None:
-        return (f"kernels: the fused {loop} loop (compiled once for every model it runs; "
-                f"20-50 s the first time on 2 cores, by the machine, cached after)")
-    if not features.SPECIALIZE:
-        what = "every feature (DTTMM_SPECIALIZE=0: one copy for every kind of model)"
-    else:
-        what = ", ".join(_FEATURE_WORDS[f] for f in features.FLAGS if f in compiled_for)
-    # (measured cold, benchmarks/compile.py, 2026-11-30, on the two kinds of machine this
-    # project runs on: the fused loops 21-24 s, the rigid arm 22 s, with beams 37-39 s, with
-    # closing joints 41-57 s; about 2.4x that on the older kind: the arm 55-65 s, the four-bar
-    # 94-112 s, the flexible slider-crank ~150 s)
-    first = ("40 s to two and a half minutes" if "HAS_LOOPS" in compiled_for else
-             "40 s to a minute and a half" if "HAS_BEAMS" in compiled_for else
-             "20 s to a minute")
-    return (f"kernels: the {loop} loop, compiled for {what} (a copy for this kind of model: "
-            f"{first} the first time on 2 cores, by the machine, cached after; docs/solver.md, "
-            f"\"Compile time\")")
+    if loop == "general":
+        return ("kernels: the general loop, the core every kind of model runs (compiled once "
+                "per install, by `dttmm compile` or the first run; docs/solver.md, \"Compile "
+                "time\")")
+    return (f"kernels: the fused {loop} loop (compiled once per install for every model it "
+            f"runs, by `dttmm compile` or its first use)")
 
 
 def _schemes_line(model):

@@ -70,7 +70,6 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     from . import solver
     from .kernels import python_twin
     from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
-    from .kernels.features import specialized
     from .kernels.stepping.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
         solver.check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
@@ -92,9 +91,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
         _, g_rot, g_w, g_wd, g_pos, g_vel = solver._ground(km, [t])
         set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
         given = (ws.state.rot[keep].copy(), ws.state.omega[keep].copy()) if check_frames else ()
-        # (the kernels' callee, called here through its twin, kernels/__init__.py::python_twin,
-        # of its copy for what the model uses: kernels/features.py)
-        frames = python_twin(specialized(_dependent_frames, solver.kernel_features(km, mode)))
+        # (the kernels' callee, called here through its twin, kernels/__init__.py::python_twin)
+        frames = python_twin(_dependent_frames)
         frames(params, loops, ws.state, np.arange(n, dtype=np.int64), np.zeros(60))
         for key, rebuilt, value in zip(("rotation", "angular_velocity"),
                                        (ws.state.rot[keep], ws.state.omega[keep]), given):

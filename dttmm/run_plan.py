@@ -18,7 +18,6 @@ simulation) each run prepares its own, as before.
 """
 import threading
 from collections import OrderedDict
-from functools import partial
 
 import numpy as np
 
@@ -29,7 +28,6 @@ from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import start_energy
-from .kernels.features import specialized
 from .kernels.stepping.loop import DirectCalls, Monitor, Settings
 from .model import model_fact
 from .recording import leaves, model_fingerprint
@@ -58,17 +56,17 @@ def runs_welded(model, mode, scheme):
 
 
 def kernels_used(model, scheme, method="riccati"):
-    """(the loop variant, the features its kernels are compiled for or None for a fused loop)
-    of a user's model run with `scheme` (dttmm/methods.py) and `method` (describe())."""
+    """The loop variant that runs a user's model with `scheme` (dttmm/methods.py) and `method`
+    (describe())."""
     km, _ = s.kernel_model(model)
     mode = s._mode(km, method, False)
     if runs_fused(km, mode, scheme):
-        return ("ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"), None
+        return "ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"
     if scheme.loop == "energy_momentum":
-        return "energy-momentum", s.kernel_features(km, mode)
+        return "energy-momentum"
     if runs_welded(km, mode, scheme):
-        return "welded-chain", None
-    return "general", s.kernel_features(km, mode, scheme.name == "paper")
+        return "welded-chain"
+    return "general"
 
 
 class PreparedRun:
@@ -113,18 +111,14 @@ class PreparedRun:
             loop_name, runner = "ball-chain", s.run_steps
             loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
         loops = s.loop_tables(model)
-        # what the general and energy-momentum loops' kernels are compiled for
-        features = s.kernel_features(model, mode, scheme.name == "paper")
         if welded:          # (its start: one pass of its own loop, then the loop from it)
             runner = s.run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
                             params, settings, state, ws.sweep, monitor, dt, loops,
-                            features=features,
                             in_skeleton=not (fused or welded or scheme.loop == "energy_momentum"))
-        if opts.hold_energy:        # the total energy the steps hold (kernels/assembly/closure.py;
-            # the model's copy: the one with every feature compiled 5-11 s of code it never runs)
-            loops.energy[:2] = 1.0, specialized(start_energy, features)(params, loops, state)
+        if opts.hold_energy:    # the total energy the steps hold (kernels/assembly/closure.py)
+            loops.energy[:2] = 1.0, start_energy(params, loops, state)
         histories = s._station_histories(model, state, scheme.name == "paper")
         state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
@@ -137,7 +131,7 @@ class PreparedRun:
         if len(loops.kind):
             keys.append("closure_wrench")
         if scheme.loop == "energy_momentum":
-            loop_name, runner = "energy-momentum", partial(s.run_steps, features=features)
+            loop_name, runner = "energy-momentum", s.run_steps
             loop = em_step.energy_momentum_loop(n)
             state.v_c[:] = s._initial_mass_center_velocities(model, state.rot, state.omega)
         elif fused and scheme.loop == "runge_kutta":
@@ -148,7 +142,7 @@ class PreparedRun:
             loop_name, runner = "welded-chain", s.run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         else:
-            loop_name, runner = "general", partial(s.run_steps, features=features)
+            loop_name, runner = "general", s.run_steps
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
                                       s.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)

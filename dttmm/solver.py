@@ -37,7 +37,6 @@ from .kernels.stepping import weld_chain
 from .kernels.stepping import step as kstep
 from .kernels import python_twin
 from .kernels.assembly.closure import Loops, set_ground
-from .kernels.features import kept, specialized, unread_dropped
 from .kernels.stepping.loop import (ERROR_ESTIMATE, OK, SINGULAR, UNCONVERGED, UNSUPPORTED, Inputs,
                                     Params, Record, Run, State,
                                     Sweep)
@@ -349,25 +348,6 @@ def has_offsets(model):
 def has_loops(model):
     """Closing joints other than a chain's pinned tip (kernels/assembly/closure.py)."""
     return model.n_closures > 0 and not model.tip_pinned
-
-
-_SWEEP_FLAGS = {kstep.RICCATI_JOINTS: "SWEEP_JOINTS", kstep.RICCATI_FULL: "SWEEP_FULL",
-                kstep.DIRECT_FULL: "SWEEP_DIRECT_FULL", kstep.RICCATI_TREE: "SWEEP_TREE",
-                kstep.RICCATI_REDUCED: "SWEEP_REDUCED",
-                kstep.DIRECT_REDUCED: "SWEEP_DIRECT_REDUCED"}
-
-
-@model_fact
-def kernel_features(model, mode, stations=False):
-    """What the model's general-loop kernels are compiled for (kernels/features.py): its sweep
-    (mode), and whether it has beams, strain rods, elastic hinges, closing joints, and
-    (stations: the paper's scheme) station points with their own histories."""
-    return frozenset([_SWEEP_FLAGS[mode]]
-                     + ["HAS_BEAMS"] * bool((model.body_kind == BEAM).any())
-                     + ["HAS_RODS"] * bool((model.body_kind == ROD).any())
-                     + ["HAS_ELASTIC_HINGES"] * bool((model.hinge_kind == ELASTIC).any())
-                     + ["HAS_LOOPS"] * bool(len(loop_tables(model).kind))
-                     + ["HAS_STATION_HISTORIES"] * bool(stations))
 
 
 @model_fact
@@ -723,23 +703,19 @@ def _steps(t_end, dt):
 
 
 def _consistent_start(model, mode, method, fused, params, settings, state, sweep, monitor, dt,
-                      loops=None, t=0.0, extra_loads=None, features=None,
+                      loops=None, t=0.0, extra_loads=None,
                       extra_joint_forces=None, in_skeleton=False):
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop)) or
     kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
     held at acceleration level; in_skeleton: as one pass of the general loop's skeleton (a run on
     it: it then compiles no start of its own), else the start alone (statics, linear models,
-    forward dynamics, the energy-momentum scheme: initial_accelerations' copy for the features,
-    with entry points).  extra_loads: (force, torque), (n, 3) each, world,
+    forward dynamics, the energy-momentum scheme: initial_accelerations' twin, with entry
+    points).  extra_loads: (force, torque), (n, 3) each, world,
     added to the applied loads (at the mass centres; dynamics.linearize's inputs);
     extra_joint_forces: (n, 2) generalized forces added to the joint coordinates' (where
-    additive_joint_force says they add).  features: what the skeleton is compiled for
-    (kernel_features: by default the model's without the paper's station histories, which the
-    start does not read; a run passes its own, so that its start and its steps run one compiled
-    skeleton)."""
+    additive_joint_force says they add)."""
     loops = loop_tables(model) if loops is None else loops
-    features = kernel_features(model, mode) if features is None else features
     n = model.n_bodies
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = _ground(model, [t])
     force, torque, line_load = _loads(model, [t])
@@ -772,17 +748,15 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
 
                 def start():
                     info = np.zeros(5, dtype=np.int64)
-                    run_steps(loop, run, info, features)
+                    run_steps(loop, run, info)
                     return _start_status(info)
             else:               # the start alone: its copy's twin, with entry points
-                start_alone = python_twin(specialized(kstep.initial_accelerations, features))
+                start_alone = python_twin(kstep.initial_accelerations)
 
-                def start():    # (what the features do not read: None, kernels/features.py)
+                def start():
                     return start_alone(
-                        params, settings, state, unread_dropped(sweep, "sweep", features),
-                        (g_acc[0], g_rot[0], g_w[0], g_wd[0]), force[0], torque[0],
-                        line_load[0], joint_input[0],
-                        loops if kept("loop", "loops", features) else None,
+                        params, settings, state, sweep, (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
+                        force[0], torque[0], line_load[0], joint_input[0], loops,
                         compiled_forces(model))
             status = start()
             forces = closure_forces(model, loops)

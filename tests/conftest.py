@@ -4,20 +4,13 @@ from pathlib import Path
 
 import pytest
 
-# The suite runs dozens of kinds of models: one copy of the kernels with every feature compiled
-# in serves them all (each kind would otherwise compile its own copy, about a minute each on 2
-# cores; kernels/features.py).  tests/test_kernel_features.py turns the copies back on.  Set
-# before dttmm is imported; the CLI's subprocesses inherit it.
-os.environ.setdefault("DTTMM_SPECIALIZE", "0")
-
 sys.path.insert(0, str(Path(__file__).parent))
 
 
 def pytest_configure(config):
     # A sound run of the suite never trips the unresolved-step flag (tests that mean to catch
-    # it).  Added here, not in pyproject.toml's filterwarnings: pytest resolves that option's
-    # warning class when it reads the file, so dttmm was imported before the line above set
-    # DTTMM_SPECIALIZE, and a run in one process compiled a copy of the kernels per kind of model.
+    # it).  Added here, not in pyproject.toml's filterwarnings: pytest would import dttmm to
+    # resolve that option's warning class as it reads the file.
     config.addinivalue_line("filterwarnings", "error::dttmm.solver.UnresolvedMotionWarning")
 
 
@@ -46,72 +39,15 @@ def _package_calls_only_entry_kernels():
 WHOLE_SUITE = 300          # tests collected
 
 
-def _compile_general_loop():
-    from helpers import joints_arm
-
-    from dttmm import simulate
-    simulate(joints_arm(), 2e-3, 1e-3)
-
-
-def _compile_fused_tree():
-    from dttmm import simulate
-    from dttmm.chains import five_link_tree
-    simulate(five_link_tree(), 2e-3, 1e-3)
-    simulate(five_link_tree(), 2e-3, 1e-3, scheme="dop853")
-
-
-def _compile_fused_chain():
-    from dttmm import simulate
-    from dttmm.chains import rigid_chain
-    simulate(rigid_chain(3), 2e-3, 1e-3)
-    simulate(rigid_chain(3), 2e-3, 1e-3, scheme="dop853")
-    simulate(rigid_chain(3), 2e-3, 1e-3, scheme="energy_momentum")
-
-
-def _compile_welded_chain():
-    from dttmm import simulate
-    from dttmm.chains import stiff_cantilever
-    simulate(stiff_cantilever(2), 2e-3, 1e-3)
-
-
-def _compile_reference():
-    from helpers import joints_arm
-
-    from dttmm.chains import three_pendulum
-    from dttmm.reference import simulate_reference
-    simulate_reference(three_pendulum(), 1e-3)
-    simulate_reference(joints_arm(), 1e-3)
-
-
-def _compile_reference_rhs():
-    """The reference's right-hand side as scipy's solve_ivp calls it (the twin of rhs_kernel, a
-    callee the compiled integrator links: ~30 s), which the first test through scipy on each
-    worker compiled otherwise (measured: both did)."""
-    from helpers import joints_arm
-
-    from dttmm.reference import simulate_reference
-    simulate_reference(joints_arm(), 1e-3, method="RK45")
-
-
-# (taken in this order: measured, the worker that takes the general loop then takes the welded
-# chain and the reference's right-hand side while the other compiles the reference, the fused
-# tree and the fused chain, each ~6 minutes on 2 cores of an AMD EPYC)
-KERNEL_FAMILIES = (("general_loop", _compile_general_loop), ("reference", _compile_reference),
-                   ("fused_tree", _compile_fused_tree), ("fused_chain", _compile_fused_chain),
-                   ("welded_chain", _compile_welded_chain),
-                   ("reference_rhs", _compile_reference_rhs))
-
-
 def _compile_families(directory):
     """Each family compiled by the first worker to lock it; the rest waited for."""
-    import contextlib
     import fcntl
-    import io
     import time
     import warnings
-    left = list(KERNEL_FAMILIES)
+    from dttmm.precompile import FAMILIES, compile_family
+    left = [name for name, _ in FAMILIES]
     for blocking in (False, True):
-        for name, job in tuple(left):
+        for name in tuple(left):
             with open(directory / f"{name}.lock", "a") as lock:
                 try:
                     fcntl.flock(lock, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
@@ -120,18 +56,14 @@ def _compile_families(directory):
                 done = directory / f"{name}.done"
                 if not done.exists():
                     t0 = time.perf_counter()
-                    try:            # (the compile notices: one line below instead; the
-                        #             short runs' flags on what their step resolves)
-                        with contextlib.redirect_stderr(io.StringIO()), \
-                                warnings.catch_warnings():
-                            warnings.simplefilter("ignore")
-                            job()
+                    try:            # (dttmm compile's families: dttmm/precompile.py)
+                        compile_family(name)
                     except Exception as err:    # (the tests that use it will say what)
                         warnings.warn(f"compiling the {name} kernels first failed: {err}")
                     done.touch()
                     print(f"\n{os.environ.get('PYTEST_XDIST_WORKER')}: the {name} kernels "
                           f"ready in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
-            left.remove((name, job))
+            left.remove(name)
 
 
 def pytest_collection_finish(session):

@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from dttmm import kernels
-from dttmm.kernels import CalleeKernel, recompiled
+from dttmm.kernels import CalleeKernel
 from dttmm.kernels.algebra.so3 import exp_coefficients
 from dttmm.kernels.assembly.closure import set_ground
 from dttmm.kernels.stepping.step import solve_step
@@ -51,11 +51,9 @@ def test_no_kernel_has_a_c_entry_point():
         assert cres.library.get_pointer_to_function(cres.fndesc.llvm_cfunc_wrapper_name) == 0
 
 
-def test_a_kernels_copies_are_of_its_kind():
+def test_callees_and_entries_are_of_their_kinds():
     assert isinstance(solve_step, CalleeKernel)
-    assert isinstance(recompiled(solve_step, solve_step.py_func), CalleeKernel)
     assert not isinstance(set_ground, CalleeKernel)      # (entry=True)
-    assert not isinstance(recompiled(set_ground, set_ground.py_func), CalleeKernel)
 
 
 def test_a_callee_called_by_the_package_is_noted_for_the_suite():

@@ -433,9 +433,7 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     """The reference's kernels take arguments of the same types for every model: rigid links,
     a closed loop, modal beams on a spinning hub (a prescribed ground), strain rods.  A model
     that typed any apart (no rods' tables, a moving ground's read-only arrays) compiled the
-    kernels a second time, 40-75 s on a cold cache.  (The kernels with every feature, as the
-    suite runs them; a user's process runs each kind of model's copy, compiled for its
-    features: tests/test_kernel_features.py.)"""
+    kernels a second time, 40-75 s on a cold cache."""
     import sys
     from pathlib import Path
 

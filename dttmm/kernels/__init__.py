@@ -6,8 +6,9 @@
   stepping/    the time loops: the step skeleton (loop.py), its variants (step.py, ball_chain.py,
                tree.py, weld_chain.py, em_step.py) and the high-order integrator (runge_kutta.py)
 
-with, here, the decorators every kernel is compiled with and features.py, the flags that
-compile a copy of the kernels per kind of model."""
+with, here, the decorators every kernel is compiled with.  One compiled copy of each kernel runs
+every kind of model: what a model uses is read from its tables at run time, so a user compiles
+the core once per install (`dttmm compile`, or the first run), never once per kind of model."""
 import gc
 import os
 import sys
@@ -223,8 +224,8 @@ def python_twin(kernel):
 
 def code_copy(fn, suffix, scope):
     """fn's code as a function of its own named <name>__<suffix> (numba names its cache files
-    after the qualified name), its globals read from scope: a kernel's twin, its copy for a
-    set of features (kernels/features.py::specialized)."""
+    after the qualified name), its globals read from scope: a kernel's twin (python_twin) or a
+    loop variant's skeleton."""
     clone = FunctionType(fn.__code__, scope, f"{fn.__name__}__{suffix}", fn.__defaults__,
                          fn.__closure__)
     clone.__qualname__ = f"{fn.__qualname__}__{suffix}"
@@ -241,13 +242,6 @@ def _dispatcher(kind, fn, options, cache=True):
     if cache:
         compiled.enable_caching()
     return compiled
-
-
-def recompiled(kernel, fn):
-    """fn (a copy of the kernel's code: kernels/features.py::specialized) compiled as the kernel
-    is: the same options, a callee or an entry, cached where the kernel is."""
-    return _dispatcher(type(kernel), fn, kernel.targetoptions,
-                       cache=not isinstance(kernel._cache, NullCache))
 
 
 def _compiled(fn, entry, **options):

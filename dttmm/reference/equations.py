@@ -2,20 +2,14 @@
 system with its reactions and closing joints, solved at every evaluation (the formulation:
 newton_euler.py).
 
-What a model uses is read through kernels/features.py's flags (HAS_BEAMS, HAS_RODS,
-HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_JOINTS, HAS_EXACT_STIFFENING), True here: newton_euler.py
-runs a model's copy of the kernels with the flags it does not use off (features.specialized),
-whose branches numba drops before typing: the three-pendulum's reference compiles no strain
-rod, elastic hinge, closing joint, joint coordinate or exact foreshortening, the arm's no beam
-(newton_euler.py::reference_features; docs/reference.md, "Compile time")."""
+One compiled copy runs every kind of model: what a model uses is read from its tables at run
+time (docs/reference.md, "Compile time")."""
 import math
 
 import numpy as np
 
 from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
-from ..kernels.features import (HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_EXACT_STIFFENING, HAS_JOINTS,
-                               HAS_LOOPS, HAS_RODS)
 from ..kernels.algebra.mat3 import dot, matmul, matvec, put1, put2
 
 from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
@@ -199,9 +193,9 @@ def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
 def _flex_size(k, body_kind, beam_params, rods):
     """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0.
     rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
-    if HAS_BEAMS and body_kind[k] == _BEAM:
+    if body_kind[k] == _BEAM:
         return _modal_size(beam_params[k])
-    if HAS_RODS and body_kind[k] == _ROD:
+    if body_kind[k] == _ROD:
         return rods[0][k]
     return 0
 
@@ -280,7 +274,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             w_in = w_g if kp < 0 else omega_o[kp]
             put2(rot[k], matmul(a_in, _mat3(hinge_params[k], _R0)))
             put1(omega[k], w_in)
-        elif HAS_JOINTS and joints[0][k] >= 0:  # a joint with coordinates, on the inboard frame
+        elif joints[0][k] >= 0:  # a joint with coordinates, on the inboard frame
             a_in = rot_g if kp < 0 else rot_o[kp]
             w_in = w_g if kp < 0 else omega_o[kp]
             q, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
@@ -293,12 +287,12 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         else:
             put2(rot[k], _quat_to_rot(y[q_off[k]:q_off[k] + 4]))
             put1(omega[k], y[w_off[k]:w_off[k] + 3])
-        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             put1(defl[k], y[d_off[k]:d_off[k] + 3])
             put1(defl_rate[k], y[d_off[k] + 3:d_off[k] + 6])
         put1(r_in[k], r_prev + defl[k])
         put1(v_in[k], v_prev + defl_rate[k])
-        if HAS_BEAMS and body_kind[k] == _BEAM:
+        if body_kind[k] == _BEAM:
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             rho, v_rel, ro, wo, av, alv, br, bt = _beam_end(
@@ -312,7 +306,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             put1(alpha_v[k], alv)
             put2(b_r[k, :, :nm2], br)
             put2(b_t[k, :, :nm2], bt)
-        elif HAS_RODS and body_kind[k] == _ROD:
+        elif body_kind[k] == _ROD:
             state, _, _ = _rod_state(k, rods, y, e0, n_modal, m_off)
             rho, v_rel, ro, wo, av, alv, br, bt = rod_end(state, rot[k], omega[k])
             put1(rho_o[k], rho)
@@ -344,19 +338,18 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
     n = rot.shape[0]
     q = np.zeros((n, 3))
     m = np.zeros((n, 3))
-    if HAS_ELASTIC_HINGES:
-        for k in range(n):
-            if hinge_kind[k] != ELASTIC:
-                continue
-            h = hinge_params[k]
-            a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
-            w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
-            d_b = matvec(a_in.T, defl[k])
-            dd_b = matvec(a_in.T, defl_rate[k])
-            put1(q[k], -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b)))
-            psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
-            w_rel_b = matvec(a_in.T, omega[k] - w_in)
-            put1(m[k], -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b)))
+    for k in range(n):
+        if hinge_kind[k] != ELASTIC:
+            continue
+        h = hinge_params[k]
+        a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
+        w_in = w_g if parent[k] < 0 else omega_o[parent[k]]
+        d_b = matvec(a_in.T, defl[k])
+        dd_b = matvec(a_in.T, defl_rate[k])
+        put1(q[k], -matvec(a_in, matvec(_mat3(h, _KT), d_b) + matvec(_mat3(h, _CT), dd_b)))
+        psi = _log_rot(matmul(matmul(a_in.T, rot[k]), _mat3(h, _R0).T))
+        w_rel_b = matvec(a_in.T, omega[k] - w_in)
+        put1(m[k], -matvec(a_in, matvec(_mat3(h, _KR), psi) + matvec(_mat3(h, _CR), w_rel_b)))
     return q, m
 
 
@@ -711,7 +704,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         nm2 = 0
         ce = -1
         geo = np.zeros((3, 0))
-        if HAS_BEAMS and body_kind[k] == _BEAM:
+        if body_kind[k] == _BEAM:
             nm2 = _modal_size(beam_params[k])
             o = m_off[k]
             eta = y[e0 + o:e0 + o + nm2]
@@ -722,7 +715,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             if beam_params[k, _BAXES] != 0.0:
                 f_k, t_k, p_k = matvec(rot_o[k], f_k), matvec(rot_o[k], t_k), matvec(a, p_k)
             g_k = gravity + p_k / beam_params[k, _BMU]
-            if HAS_EXACT_STIFFENING and exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
+            if exact.shape[2] > 0 and beam_params[k, _BSTIFF] != 0.0:
                 mass, h, j_w, ap, ag, newton_v, euler_v, modal, m_ee, geo = _beam_terms_exact(
                     beam_params[k], shape_vec[k], exact[k], eta, eta_dot, a, w, g_k)
             else:
@@ -752,7 +745,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             for j in range(nm2):                      # geometric stiffening: -mu e1 . a_I
                 for i in range(3):
                     s[ce + j, ca + i] -= beam_params[k, _BMU] * a[i, 0] * geo[1, j]
-        elif HAS_RODS and body_kind[k] == _ROD:
+        elif body_kind[k] == _ROD:
             # a strain rod (reference/strain_rod.py::rod_terms): the beam's rows with its
             # Jacobians; no applied loads of its own yet
             nm2 = rods[0][k]
@@ -792,7 +785,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 s[re + i, cal + j] = j_w[i, j]
                 s[re + i, ca + j] = hc[i, j]
         # the inboard hinge acting on body k
-        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             bn += q_el[k]
             be += m_el[k]
         else:
@@ -811,7 +804,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         for ci in range(child_start[k], child_start[k + 1]):
             kc = child_list[ci]
             arm = rho_att[kc] + defl[kc]
-            if HAS_ELASTIC_HINGES and hinge_kind[kc] == ELASTIC:
+            if hinge_kind[kc] == ELASTIC:
                 # -q at r_att and the couple -m_in = -(m_out + d x q) about r_att; on a beam
                 # their generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
                 bn -= q_el[kc]
@@ -883,7 +876,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         for j in range(pn2):
                             s[r + i, pce + j] = -b_t[kp, i, j]
                         b[r + i] = alpha_v[kp, i]
-            if HAS_JOINTS and joints[0][k] >= 0:
+            if joints[0][k] >= 0:
                 kp = parent[k]
                 _, qd = _joint_coordinates(y, joints, k, hinge_kind[k])
                 if kp < 0:
@@ -1109,7 +1102,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
                      f_col, m_col, loops, n_unknowns, gravity, a_g, rot_g, w_g, wd_g, forces,
                      torques, line_loads, topology, joints, exact, rods)
     n_rows = loops[1].shape[0]
-    if HAS_LOOPS and n_rows > 0:
+    if n_rows > 0:
         directions = _closure_rows(s, b, loops, rot, omega, r_in, v_in, rho_o, rot_o, omega_o,
                                    v_o, acc_v, alpha_v, b_r, b_t, e_col0, m_off, body_kind,
                                    beam_params, rods, r_g, v_g, a_g, rot_g, w_g, wd_g)
@@ -1135,7 +1128,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     for k in range(n):
         put1(acc[k], x[6 * k:6 * k + 3])
         put1(alpha[k], x[6 * k + 3:6 * k + 6])
-        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             put1(force[k], q_el[k])
             put1(moment[k], m_el[k])
         else:
@@ -1146,17 +1139,16 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     c_off, n_coord, c_col0 = joints[0], joints[2], joints[3]
     coord_acc = x[c_col0:c_col0 + n_coord].copy()
     generalized = np.zeros(n_coord)
-    if HAS_JOINTS:
-        for k in range(n):
-            if c_off[k] < 0:
-                continue
-            kp = topology[0][k]
-            a_in = rot_g if kp < 0 else rot_o[kp]
-            dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
-            load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
-            for i in range(nc):
-                generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
-                    dirs[2, i] * load[2]
+    for k in range(n):
+        if c_off[k] < 0:
+            continue
+        kp = topology[0][k]
+        a_in = rot_g if kp < 0 else rot_o[kp]
+        dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
+        load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
+        for i in range(nc):
+            generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
+                dirs[2, i] * load[2]
     return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,
             b_r, coord_acc, generalized, rho_att, acc_v_att, closure_load)
 
@@ -1191,7 +1183,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             dy[o + 2] = 0.5 * (qw * wy + wz * qx - wx * qz)
             dy[o + 3] = 0.5 * (qw * wz + wx * qy - wy * qx)
             put1(dy[w_off[k]:w_off[k] + 3], alpha[k])
-        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             o = d_off[k]
             put1(dy[o:o + 3], y[o + 3:o + 6])
             kp = topology[0][k]

@@ -257,7 +257,6 @@ from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
 from ..elements.kinds import JOINT_KIND, coordinate_count
 from ..kernels import python_twin
-from ..kernels.features import ALL, specialized
 from ..closures import (assemble, check_drives_move, closure_forces, constraint_rows,
                         has_closure_drives, loop_residuals)
 from ..model import Model
@@ -298,31 +297,14 @@ def _loop_rows(model, col0):
             coordinate, law, np.zeros((len(kind), 2)))
 
 
-def reference_features(body_kind, hinge_kind, loops, c_off, exact):
-    """What the reference's kernels are compiled for (kernels/features.py's flags that
-    equations.py reads): modal beams, strain rods, elastic hinges, closing joints (_loop_rows'
-    rows), joints with coordinates, stiffened beams' exact foreshortening (its tables' columns);
-    ALL where the model has all six (the kernels themselves).
-    A model's copy compiles only those of its branches (docs/reference.md, "Compile time").
-    Its branches fall through where a flag is off, where DT-TMM's element dispatch refuses: a
-    copy is right only for the tables it was chosen from, so only _Problem (whose tables these
-    are) and simulate_reference call one."""
-    on = frozenset(flag for flag, used in (
-            ("HAS_BEAMS", (body_kind == BEAM).any()), ("HAS_RODS", (body_kind == ROD).any()),
-            ("HAS_ELASTIC_HINGES", (hinge_kind == ELASTIC).any()),
-            ("HAS_LOOPS", loops[1].shape[0] > 0), ("HAS_JOINTS", (c_off >= 0).any()),
-            ("HAS_EXACT_STIFFENING", exact.shape[2] > 0)) if used)
-    return ALL if len(on) == 6 else on
-
-
 class _Kernels:
-    """A model's copies of the reference's kernels called from Python: the right-hand side as
-    solve_ivp calls it (rhs_kernel's twin) and the solved system at a time (_solve_dynamics).
-    (Each made once per process: features.specialized and python_twin keep them.)"""
+    """The reference's kernels called from Python: the right-hand side as solve_ivp calls it
+    (rhs_kernel's twin) and the solved system at a time (_solve_dynamics); one compiled copy
+    for every model."""
 
-    def __init__(self, features):
-        self.rhs = python_twin(specialized(rhs_kernel, features))
-        self.solve_dynamics = specialized(_solve_dynamics, features)
+    def __init__(self):
+        self.rhs = python_twin(rhs_kernel)
+        self.solve_dynamics = _solve_dynamics
 
 
 def _finite_number(value, who, what, t):
@@ -496,9 +478,7 @@ class _Problem:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
         self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
-        self.features = reference_features(self.body_kind, kinds, self.loops, self.c_off,
-                                           self.exact)
-        self.kernels = _Kernels(self.features)
+        self.kernels = _Kernels()
 
     def coordinate_label(self, c):
         """How messages name coordinate c: its joint, hinge index and coordinate."""
@@ -761,7 +741,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     if prob.n_state > 0 and fixed is not None:
         # scipy's DOP853 in compiled code (integrator.py); its first call, over a vanishing
         # interval, compiles or loads it outside the timing
-        integrate = specialized(integrate_dop853, prob.features)
+        integrate = integrate_dop853
         integrate(*fixed, y0, 1e-300, 1.0, 1.0, np.zeros(0))
         t0 = time.perf_counter()
         ys, n_steps, nfev, status, t_reached = integrate(

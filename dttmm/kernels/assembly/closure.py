@@ -38,7 +38,6 @@ from collections import namedtuple
 import numpy as np
 
 from .. import allocating_kernel, kernel, no_alloc_kernel
-from ..features import HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_RODS
 from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ...elements import BEAM, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
@@ -266,9 +265,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
         elif hinge_kind[k] == ELASTIC:
             r = _add(r, _v3(defl, k))
             v = _add(v, _v3(defl_rate, k))
-        if HAS_BEAMS and body_kind[k] == BEAM:
+        if body_kind[k] == BEAM:
             arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
-        elif HAS_RODS and body_kind[k] == ROD:
+        elif body_kind[k] == ROD:
             arm, arm_rate = _rod_offset(params, k, rot, w, eta, eta_d)
         else:
             row = params.body_row[k]
@@ -719,7 +718,7 @@ def _modal_responses(params, loops, eta_map):
         z = loops.z_save[j + 1]
         for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
             k = loops.act_idx[q]
-            if (HAS_BEAMS and body_kind[k] == BEAM) or (HAS_RODS and body_kind[k] == ROD):
+            if body_kind[k] == BEAM or body_kind[k] == ROD:
                 for i in range(mode_off[k], mode_off[k + 1]):
                     v = 0.0
                     for c in range(12):
@@ -756,13 +755,13 @@ def _dependent_frames(params, loops, state, bodies, work):
                 for j in range(3):
                     rest[i, j] = params.hinge_params[hr, 3 * i + j]
             i0, i1 = mode_off[p], mode_off[p + 1]      # a flexible parent's coordinates
-            if HAS_BEAMS and body_kind[p] == BEAM:
+            if body_kind[p] == BEAM:
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
                                    state.eta[i0:i1], state.eta_d[i0:i1], state.eta_acc[i0:i1],
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
-            elif HAS_RODS and body_kind[p] == ROD:
+            elif body_kind[p] == ROD:
                 steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
                 rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
                               state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
@@ -802,7 +801,7 @@ def _add_rates(params, loops, state, j, f):
         k = loops.act_idx[q]
         for i in range(3):
             state.omega[k, i] += f * z[2 * k + 1, 3 + i]
-        if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
+        if params.hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(n_coordinates(params.hinge_kind[k])):
@@ -821,7 +820,7 @@ def _move(params, loops, state, j, f, e3, phi):
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
-        if HAS_ELASTIC_HINGES and params.hinge_kind[k] == ELASTIC:
+        if params.hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):

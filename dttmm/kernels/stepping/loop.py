@@ -28,7 +28,6 @@ from numba._dispatcher import compute_fingerprint
 
 from .. import CONTRACT, no_alloc_kernel
 from ..algebra.mat3 import put1, put2
-from ..features import ALL, specialized, unread_dropped
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
 
@@ -288,17 +287,10 @@ def _skeleton(loop_class):
     return compiled
 
 
-def run_steps(loop, run, out_info, features=ALL, calls=None):
-    """The skeleton of the loop's variant, compiled for a model that uses `features`
-    (kernels/features.py; solver.kernel_features: the general and energy-momentum loops; the
-    fused loops read no flag).  calls: the prepared run's DirectCalls."""
-    features = frozenset(features)
-    if features != ALL:     # (the fields no code of the copy reads: None, kernels/features.py)
-        run = run._replace(sweep=unread_dropped(run.sweep, "sweep", features),
-                           inputs=unread_dropped(run.inputs, "inputs", features),
-                           rec=unread_dropped(run.rec, "rec", features))
-        loop = unread_dropped(loop, "loop", features)
-    (calls or _call)(specialized(_skeleton(type(loop)), features), (loop, run, out_info))
+def run_steps(loop, run, out_info, calls=None):
+    """The skeleton of the loop's variant, compiled once for every model it runs.  calls: the
+    prepared run's DirectCalls."""
+    (calls or _call)(_skeleton(type(loop)), (loop, run, out_info))
 
 
 def _call(compiled, args):

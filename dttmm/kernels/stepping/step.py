@@ -33,10 +33,6 @@ from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_si
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of, rod_transfer
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points
-from ..features import (EVERY_KIND, HAS_BEAMS, HAS_ELASTIC_HINGES, HAS_LOOPS, HAS_RODS,
-                        HAS_STATION_HISTORIES,
-                        SWEEP_DIRECT_FULL, SWEEP_DIRECT_REDUCED, SWEEP_FULL, SWEEP_JOINTS,
-                        SWEEP_REDUCED, SWEEP_TREE)
 from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
 from ..transfers.joint import joint_frame, joint_linearization, n_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
@@ -151,13 +147,8 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
                                      + dwd_out[i, 2] * phi_out[2])
 
 
-# a kernel copy run on a model it was not compiled for (kernels/features.py: a mistake in
-# solver.kernel_features, never the user's)
-_NOT_COMPILED_STATIONS = ("kernel compiled without the paper's station histories "
-                          "(kernels/features.py)")
-_NOT_COMPILED_SWEEP = "kernel compiled without the run's sweep (kernels/features.py)"
-_NOT_COMPILED_OPEN = ("kernel compiled for closing joints only, run without them "
-                      "(kernels/features.py)")
+# a sweep mode no sweep implements (the solver's mistake, never the user's)
+_UNKNOWN_SWEEP = "unknown sweep mode (kernels/assembly/sweep.py)"
 
 
 @kernel
@@ -253,8 +244,6 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
     independent = independent and not at_start
-    if independent and not HAS_STATION_HISTORIES:
-        raise ValueError(_NOT_COMPILED_STATIONS)
     body_params, hinge_kind = params.body_params, params.hinge_kind
     hinge_params = params.hinge_params
     body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
@@ -272,7 +261,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
         hk = hinge_kind[k]
         p = params.parent[k]
         hr, row = params.hinge_row[k], params.body_row[k]   # (their rows of the shared tables)
-        if SWEEP_JOINTS and full_tree and (hk == BALL or has_coordinates(hk)):
+        if full_tree and (hk == BALL or has_coordinates(hk)):
             kind[jh] = EL_JOINT
             if p < 0:
                 rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
@@ -287,9 +276,9 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             kind[jh] = EL_BALL
         elif hk == FIXED:
             kind[jh] = IDENTITY
-        elif HAS_ELASTIC_HINGES and hk == ELASTIC and at_start:
+        elif hk == ELASTIC and at_start:
             kind[jh] = LOCKED
-        elif HAS_ELASTIC_HINGES and hk == ELASTIC:
+        elif hk == ELASTIC:
             kind[jh] = TRANSFER
             if p < 0:
                 rot_in, lam_in, w_in, wd_in, dwd_in, phi_in = ground
@@ -307,10 +296,10 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                                    z_in, u[jh])
             _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
                                             phi_star[k])
-        else:           # (a kind this copy was not compiled for: kernels/features.py)
+        else:           # (an unknown kind: the builder's mistake, named by the caller)
             return jh + 1
         kind[jh + 1] = TRANSFER
-        if HAS_BEAMS and body_kind[k] == BEAM:
+        if body_kind[k] == BEAM:
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = int(beam_params[k, MODES])
             mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
@@ -330,7 +319,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z_star[jh + 1],
                           eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
-        elif HAS_RODS and body_kind[k] == ROD:
+        elif body_kind[k] == ROD:
             # a strain rod (kernels/transfers/strain_rod.py; docs/strain_rod.md, "Its
             # transfer"): the beam's contract, its strain rows solved inside the element
             i0, i1 = mode_off[k], mode_off[k + 1]
@@ -349,7 +338,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 load[i] = body_params[row, 0] * params.gravity[i] + force[k, i]
             rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
                                 w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
-            if HAS_STATION_HISTORIES and independent:
+            if independent:
                 station_history_correction(body_params[row], rot[k], rot_star[k], lam[k], dwd[k],
                                            dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],
                                            w1_c[k], z_star[jh + 1], u[jh + 1])
@@ -367,31 +356,30 @@ def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
     states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
     bodies' parents (RICCATI_TREE; a chain's are k - 1)."""
     sw = sweep
-    if SWEEP_JOINTS and mode == RICCATI_JOINTS:
+    if mode == RICCATI_JOINTS:
         return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
                                  parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
                                  sw.joint_tau, z)
-    if SWEEP_FULL and mode == RICCATI_FULL:
+    if mode == RICCATI_FULL:
         return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
                             sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
-    if SWEEP_DIRECT_FULL and mode == DIRECT_FULL:
+    if mode == DIRECT_FULL:
         return direct_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.dir_z,
                            sw.dir_o, sw.gv, sw.g, z)
-    if not (SWEEP_TREE or SWEEP_REDUCED or SWEEP_DIRECT_REDUCED) or mode not in (
-            RICCATI_TREE, RICCATI_REDUCED, DIRECT_REDUCED):
-        raise ValueError(_NOT_COMPILED_SWEEP)
+    if mode not in (RICCATI_TREE, RICCATI_REDUCED, DIRECT_REDUCED):
+        raise ValueError(_UNKNOWN_SWEEP)
     n = sw.red_v.shape[0]
     for k in range(n):
         fold_ball_body(sw.u[2 * k + 1], sw.red_v[k], sw.red_phi[k])
-    if SWEEP_TREE and mode == RICCATI_TREE:
+    if mode == RICCATI_TREE:
         return _solve_tree(sw, parent, root_f, z)
-    if SWEEP_REDUCED and mode == RICCATI_REDUCED:
+    if mode == RICCATI_REDUCED:
         status = riccati_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_s, sw.red_p,
                                  sw.red_tinv, sw.red_t, sw.red_aq)
-    elif SWEEP_DIRECT_REDUCED and mode == DIRECT_REDUCED:
+    elif mode == DIRECT_REDUCED:
         status = direct_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_aq)
     else:
-        raise ValueError(_NOT_COMPILED_SWEEP)
+        raise ValueError(_UNKNOWN_SWEEP)
     if status != 0:
         return status
     red_aq, red_phi = sw.red_aq, sw.red_phi
@@ -473,7 +461,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
         return -unknown
     known_loads = sweep.known_loads
     for k in range(n):
-        if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             p = params.parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
@@ -487,15 +475,13 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f = np.empty(6)
     put1(root_f[0:3], g_acc)
     put1(root_f[3:6], g_wd)
-    if HAS_LOOPS and loops.kind.shape[0] > 0:
+    if loops.kind.shape[0] > 0:
         tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
                     state.defl, state.defl_rate, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
-    elif EVERY_KIND or not HAS_LOOPS:   # (a closing joints' copy runs only models with them)
+    else:
         status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
                             state.z)
-    else:
-        raise ValueError(_NOT_COMPILED_OPEN)
     _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
     for k in range(n):
         for i in range(n_coordinates(hinge_kind[k])):
@@ -588,10 +574,10 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
     (strain_rod.rod_end_frame)."""
     p = params.parent[k]
     rest = params.hinge_params[params.hinge_row[k], 0:9].copy().reshape((3, 3))
-    if HAS_BEAMS and params.beams[0][p] == BEAM:
+    if params.beams[0][p] == BEAM:
         _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
                            rot_out, w_out, wd_out)
-    elif HAS_RODS and params.beams[0][p] == ROD:
+    elif params.beams[0][p] == ROD:
         i0, i1 = params.beams[3][p], params.beams[3][p + 1]
         steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
         rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
@@ -793,7 +779,7 @@ def _predict(loop, run, s, _):
         _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_star)
     for k in range(n):
         hk = hinge_kind[k]
-        if SWEEP_JOINTS and has_coordinates(hk):
+        if has_coordinates(hk):
             p = parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
             _joint_guess(hk, hinge_params[hinge_row[k]], joint_drive[k], joint_input[k], h,
@@ -811,19 +797,18 @@ def _predict(loop, run, s, _):
                           phi_star[k])   # phi* by the predictor
             _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k], lam[k],
                              w[k], wd[k], dw[k], dwd[k])
-        if HAS_ELASTIC_HINGES and hk == ELASTIC:
+        if hk == ELASTIC:
             _deflection_offsets(h, coef, c1, c3, defl[k], defl_rate[k], defl_acc[k],
                                 defl_pseudo[k], w1d[k], w3d[k])
-    if HAS_STATION_HISTORIES and histories[0]:
+    if histories[0]:
         _station_offsets(h, coef, histories)
     _stations_guess(z, ground[5], phi_star, z_star)
-    if HAS_ELASTIC_HINGES:
-        for k in range(n):
-            if hinge_kind[k] == ELASTIC:
-                p = parent[k]
-                _spring_guess(hinge_params[hinge_row[k]], rot_now if p < 0 else rot_star[p],
-                              rot_star[k], g_w, defl[k], defl_rate[k], defl_pseudo[k], h, c3,
-                              w3d[k], p == k - 1, z_star[2 * k], z_star[2 * k + 1])
+    for k in range(n):
+        if hinge_kind[k] == ELASTIC:
+            p = parent[k]
+            _spring_guess(hinge_params[hinge_row[k]], rot_now if p < 0 else rot_star[p],
+                          rot_star[k], g_w, defl[k], defl_rate[k], defl_pseudo[k], h, c3,
+                          w3d[k], p == k - 1, z_star[2 * k], z_star[2 * k + 1])
     for i in range(3):
         root_f[i] = g_acc[i]
         root_f[3 + i] = g_wd[i]
@@ -842,7 +827,7 @@ def _iterate(loop, run, s, it):
     w1e, w3e, eta_dd_star, eta_dd_new = loop.w1e, loop.w3e, loop.eta_dd_star, loop.eta_dd_new
     root_f, g_inv, histories, joints_, forces = (loop.root_f, loop.g_inv, loop.histories,
                                                  loop.joints, loop.forces)
-    loops, at_guess = (loop.loops, loop.at_guess) if HAS_LOOPS else (None, None)
+    loops, at_guess = loop.loops, loop.at_guess
     hinge_kind, beams, tip_pinned, parent = (params.hinge_kind, params.beams, params.tip_pinned,
                                              params.parent)
     h, coef, mode = settings.h, settings.coef, settings.mode
@@ -851,8 +836,7 @@ def _iterate(loop, run, s, it):
     force, torque, line_load, joint_input = (inputs.force[s], inputs.torque[s],
                                              inputs.line_load[s], inputs.joint_input[s, :, :, 0])
     # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
-    target, g_pos, g_vel = ((inputs.closure_target[s], inputs.g_pos[s], inputs.g_vel[s])
-                            if HAS_LOOPS else (None, None, None))
+    target, g_pos, g_vel = inputs.closure_target[s], inputs.g_pos[s], inputs.g_vel[s]
     g_acc, rot_now, g_w, g_wd = (inputs.g_acc[s], inputs.g_rot[s + 1], inputs.g_w[s],
                                  inputs.g_wd[s])
     if settings.start:      # the consistent start (Settings.start): one pass, at t
@@ -872,7 +856,7 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
-    if HAS_LOOPS and loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
+    if loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
         put2(loops.target, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
@@ -885,7 +869,7 @@ def _iterate(loop, run, s, it):
             eta_g[i] = (eta_dd_star[i] - w1e[i]) / c1
             eta_d_g[i] = c3 * eta_g[i] + w3e[i]
         for k in range(defl_g.shape[0]):
-            if HAS_ELASTIC_HINGES and hinge_kind[k] == ELASTIC:
+            if hinge_kind[k] == ELASTIC:
                 d = _hinge_deflection(params, z_star, w1d, c1, k)
                 for i in range(3):
                     defl_g[k, i] = d[i]
@@ -894,10 +878,8 @@ def _iterate(loop, run, s, it):
                     eta_d_g, defl_g, defl_rate_g, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, guess.rot,
                                   guess.w, z)
-    elif EVERY_KIND or not HAS_LOOPS:   # (a closing joints' copy runs only models with them)
-        status = solve_step(mode, tip_pinned, parent, sweep, root_f, z)
     else:
-        raise ValueError(_NOT_COMPILED_OPEN)
+        status = solve_step(mode, tip_pinned, parent, sweep, root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     _modal_accelerations(beams, eta_map, z, eta_dd_new)
@@ -961,7 +943,7 @@ def _adopt(loop, run, s, it):
     put1(eta_dd_star, eta_dd_new)
     for k in range(phi_star.shape[0]):
         hk = hinge_kind[k]
-        if SWEEP_JOINTS and has_coordinates(hk):
+        if has_coordinates(hk):
             p = parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot_star[p], w[p], wd[p]))
             _joint_adopt(hk, hinge_params[hinge_row[k]], joint_drive[k], c1, c3, jq[k], w1q[k],
@@ -1087,9 +1069,8 @@ def _update(loop, run, s, _):
     joint_nu, joint_tau = sweep.joint_nu, sweep.joint_tau
     histories, w1q, w1d = loop.histories, loop.joints[0], loop.w1d
     eta_dd_new, w1e, e3, rot_prev = loop.eta_dd_new, loop.w1e, loop.e3, loop.rot_prev
-    loops, target, g_pos, g_vel, g_acc = ((loop.loops, inputs.closure_target[s], inputs.g_pos[s],
-                                           inputs.g_vel[s], inputs.g_acc[s]) if HAS_LOOPS
-                                          else (None, None, None, None, None))
+    loops, target, g_pos, g_vel, g_acc = (loop.loops, inputs.closure_target[s], inputs.g_pos[s],
+                                          inputs.g_vel[s], inputs.g_acc[s])
     h, coef, mode = settings.h, settings.coef, settings.mode
     hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
                                                    params.hinge_row, params.parent)
@@ -1105,7 +1086,7 @@ def _update(loop, run, s, _):
                                        inputs.joint_input[s])
     c1, _ = _integrator_coefficients(h, coef)
     n = hinge_kind.shape[0]
-    if HAS_STATION_HISTORIES and histories[0]:
+    if histories[0]:
         _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
                           body_params, body_row, histories)
     finite = True
@@ -1113,7 +1094,7 @@ def _update(loop, run, s, _):
         finite = _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p)
     for k in range(n):
         hk = hinge_kind[k]
-        if SWEEP_JOINTS and has_coordinates(hk):
+        if has_coordinates(hk):
             # the coordinates' histories, then the child's frame from its parent's new one
             p = parent[k]
             frame = ((rot_now, g_w, g_wd) if p < 0 else (rot[p], omega[p], omega_dot[p]))
@@ -1130,13 +1111,13 @@ def _update(loop, run, s, _):
         else:
             _advance_body(h, coef, z[2 * k + 1, 3:6], rot[k], omega[k], omega_dot[k],
                           pseudo[k], e3, rot_prev)
-        if HAS_ELASTIC_HINGES and hk == ELASTIC:
+        if hk == ELASTIC:
             _advance_deflection(params, z, w1d, c1, k, h, coef, defl[k], defl_rate[k],
                                 defl_acc[k], defl_pseudo[k])
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    if HAS_LOOPS and loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
+    if loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
         put2(loops.target, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         project_onto_loops(params, loops, state)
@@ -1148,8 +1129,8 @@ def _record(loop, run, s, slot):
     """Write the state into run.rec at slot (every field read first, as in _predict)."""
     state, rec = run.state, run.rec
     histories = loop.histories
-    n_closing, wrench, closure_wrench = ((loop.loops.kind.shape[0], loop.loops.wrench,
-                                          rec.closure_wrench) if HAS_LOOPS else (0, None, None))
+    n_closing, wrench, closure_wrench = (loop.loops.kind.shape[0], loop.loops.wrench,
+                                         rec.closure_wrench)
     put3(rec.rot[slot], state.rot)
     put2(rec.omega[slot], state.omega)
     put2(rec.omega_dot[slot], state.omega_dot)
@@ -1161,9 +1142,9 @@ def _record(loop, run, s, slot):
     put2(rec.jq[slot], state.jq)
     put2(rec.jqd[slot], state.jqd)
     put2(rec.jtau[slot], state.jtau)
-    if HAS_LOOPS and n_closing > 0:
+    if n_closing > 0:
         put2(closure_wrench[slot], wrench)
-    if HAS_STATION_HISTORIES and histories[0]:
+    if histories[0]:
         put2(rec.v_st[slot], histories[1])
         put2(rec.v_c[slot], histories[4])
 
