@@ -5,15 +5,18 @@ from importlib.metadata import PackageNotFoundError, version as _version
 from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
                        JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
                        SpringDamper, StrainRod, UniversalJoint)
-from .closures import assemble, loop_residuals
+from .assembly import assemble
+from .closures import loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
 from .model import Ground, Model, PrescribedMotion, System, build_chain
 from .recording import Checkpoint
 from .result import Result
-from .solver import DivergenceError, UnresolvedMotionWarning, load_stream, simulate
+from .run_checks import DivergenceError, UnresolvedMotionWarning
+from .solver import load_stream, simulate
 from .statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
 from .parameter_sweep import SweepTable, sweep
+from . import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)
 
 try:
     __version__ = _version("dttmm")

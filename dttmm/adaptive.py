@@ -86,7 +86,7 @@ def checked_times(t_eval):
 
 def sample_times(t_end, record_dt=None, t_eval=None):
     """The times an adaptive run lands on and records (besides t = 0 and t_end), or None for
-    the default: the end of a segment once per t_end / MAX_SAMPLES (solver.MAX_SAMPLES)."""
+    the default: the end of a segment once per t_end / MAX_SAMPLES (run_records.MAX_SAMPLES)."""
     if t_eval is not None:
         times = checked_times(t_eval)
         if np.any(np.diff(times) <= 0) or times[0] < 0.0 or times[-1] > t_end * (1 + 1e-12):

@@ -93,7 +93,8 @@ def _compile(args):
 
 def _run(args):
     from .recording import Checkpoint
-    from .solver import DivergenceError, simulate
+    from .run_checks import DivergenceError
+    from .solver import simulate
     scene = load_scene(args.scene)
     options = dict(scene.run)
     for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),

@@ -39,13 +39,14 @@ import numpy as np
 
 from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL,
                        BallJoint, EulerBernoulliBeam, RevoluteJoint, StrainRod, UniversalJoint)
-from .elements.kinds import FLEXIBLE
 from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
                               K_TRANSLATION, REST_ROTATION, pack_hinge)
 from .elements.joints import rotation_about
-from .elements.kinds import HINGE_KIND_NAMES, JOINT_KIND, joint_kind_of
+from .elements.kinds import (ANGLE_A, ANGLE_B, DOT, FLEXIBLE, GAP_A, GAP_WORLD, HINGE_KIND_NAMES,
+                             JOINT_KIND, ROTATION_A, joint_kind_of)
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.rigid_body import TO_OUTPUT
+from .sections import element_end_section, element_output_offset, log_rotation
 
 GROUND = -1
 CLOSING_KINDS = (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC, ELASTIC)
@@ -394,7 +395,6 @@ def side_motions(model, c, s, rotation, omega, r_in, v_in, eta, eta_dot, ground)
     velocity, the side's frame and angular velocity, (T, ...) each.  rotation, omega, r_in,
     v_in: (T, n, ...) the bodies'; eta, eta_dot (T, total modes) the beams' and strain rods'
     (None without); ground: (r, v, rot, w) of the ground frame, (T, ...) each."""
-    from .result import element_end_section, element_output_offset
     k, local = model.closure_body[c, s], model.closure_point[c, s]
     if k == GROUND:
         r_g, v_g, rot_g, w_g = ground
@@ -419,7 +419,6 @@ def elastic_closure_terms(model, rotation, omega, r_in, v_in, eta, eta_dot, grou
     with d = F_a^T (p_b - p_a), d' = F_a^T (v_b - v_a - w_a x (p_b - p_a)) its rate in a's
     frame, psi = log(F_a^T F_b R0^T), w_r = F_a^T (w_b - w_a) (docs/loops.md, "An elastic
     hinge closing a loop"); arguments as side_motions'."""
-    from .result import _log_so3
     n_t = len(rotation)
     strain, power = np.zeros(n_t), np.zeros(n_t)
     for c in np.nonzero(model.closure_kind == ELASTIC)[0]:
@@ -432,7 +431,7 @@ def elastic_closure_terms(model, rotation, omega, r_in, v_in, eta, eta_dot, grou
         d_rate = np.einsum("tji,tj->ti", f_a, v_b - v_a - np.cross(w_a, gap))
         w_r = np.einsum("tji,tj->ti", f_a, w_b - w_a)
         r0 = h[REST_ROTATION].reshape(3, 3)
-        psi = np.array([_log_so3(f_a[t].T @ f_b[t] @ r0.T) for t in range(n_t)]).reshape(n_t, 3)
+        psi = np.array([log_rotation(f_a[t].T @ f_b[t] @ r0.T) for t in range(n_t)]).reshape(n_t, 3)
         k_t, k_r = h[K_TRANSLATION].reshape(3, 3), h[K_ROTATION].reshape(3, 3)
         c_t, c_r = h[C_TRANSLATION].reshape(3, 3), h[C_ROTATION].reshape(3, 3)
         strain += 0.5 * (np.einsum("ti,ij,tj->t", d, k_t, d)
@@ -485,7 +484,6 @@ def describe_closures(model):
                      f"{moves[m, 0]:.3g} m ('{model.body_names[m]}') and {moves[r, 1]:.3g} rad "
                      f"('{model.body_names[r]}')")
     return lines
-
 
 
 def check_runs_in_sweeps(model, who, moving_ground=False):
@@ -549,13 +547,6 @@ def constraint_directions(model, c):
     elif kind == UNIVERSAL:
         dots = [(n1, n2)]
     return points, dots
-
-
-# constraint_rows' kinds (kernels/assembly/closure.py, the reference): gaps e . (p_b - p_a) with e
-# fixed in the world or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an
-# axis fixed in a's or in b's frame (driven_directions), and an elastic hinge's rotation about
-# an axis fixed in a's frame (spring_directions)
-GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B, ROTATION_A = 0, 1, 2, 3, 4, 5
 
 
 def driven_directions(model, c):
@@ -694,7 +685,6 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     coordinates, the rods' strain coordinates, their rates and the elastic hinges' deflections
     are the model's).  stretch_rate (n,), optional: each flexible body's output point also moves
     along its chord at this rate, m/s, and all that hangs from it with it (held_chords)."""
-    from .result import element_end_section, element_output_offset
     from .kernels.algebra.so3 import expm_so3
     n = model.n_bodies
     off = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -797,69 +787,6 @@ def closure_residuals(model, state, t=0.0):
             e = rows.v1[r]
             g[r], gd[r] = e @ (p_b - p_a), e @ (v_b - v_a)
     return g, gd, rows.owner
-
-
-def _coordinates(model, keep):
-    """The assembly's variables: per body, ("rot", k, i) for a free body's rotation (a ball
-    joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
-    whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
-    coordinate always)."""
-    from .elements.kinds import WITH_COORDINATES, coordinate_count
-    names = set(keep)
-    unknown = names - set(model.hinge_names) - set(model.body_names)
-    if unknown:
-        raise ValueError(f"assemble: keep names no joint or body of the model: "
-                         f"{', '.join(sorted(map(str, unknown)))} (joints: "
-                         f"{', '.join(model.hinge_names)})")
-    variables, kept = [], []
-    for k in range(model.n_bodies):
-        kind = int(model.hinge_kind[k])
-        named = model.hinge_names[k] in names or model.body_names[k] in names
-        if kind in WITH_COORDINATES:
-            for i in range(coordinate_count(kind)):
-                drive = model.drives[k][i] if len(model.drives[k]) > i else None
-                variables.append(("q", k, i))
-                kept.append(named or (drive is not None and drive["kind"] == MOTION))
-        elif kind != FIXED:
-            for i in range(3):
-                variables.append(("rot", k, i))
-                kept.append(named)
-    return variables, np.array(kept, dtype=bool)
-
-
-def _state_of(model, variables, x, xd, stretch_rate=None):
-    n = model.n_bodies
-    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
-    omega = np.array(model.initial_angular_velocity, order="C")
-    qd = np.array(model.hinge_params[:, 53:55], order="C")
-    for (what, k, i), value, rate in zip(variables, x, xd):
-        if what == "q":
-            q[k, i], qd[k, i] = value, rate
-        else:
-            theta[k, i], omega[k, i] = value, rate
-    return tree_state(model, theta, q, omega, qd, stretch_rate)
-
-
-def _start_values(model, variables):
-    """The assembly's variables at t = 0: each joint coordinate as given, each free body's
-    rotation change 0."""
-    return np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
-                     for what, k, i in variables])
-
-
-def _rate_jacobian(model, variables, x, columns=None):
-    """(g'_0, G, owner): the loops' rate residual at positions x with every rate zero, its
-    Jacobian over the variables `columns` (default: all), exact since g' = G x' + g'_0 is
-    linear in the rates (one unit rate a column), and each row's closing joint."""
-    xd = np.zeros(len(variables))
-    _, base, owner = closure_residuals(model, _state_of(model, variables, x, xd))
-    columns = range(len(variables)) if columns is None else columns
-    jac = np.zeros((base.size, len(columns)))
-    for j, col in enumerate(columns):
-        unit = xd.copy()
-        unit[col] = 1.0
-        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
-    return base, jac, owner
 
 
 def held_chords(model, beams):
@@ -991,160 +918,69 @@ def check_drives_move(model, who):
         object.__setattr__(model, "_drives_move", True)
 
 
-def assemble(model, keep=(), tol=1e-12, max_iterations=30):
-    """Close every loop at t = 0 (docs/loops.md, "Assembly"): move the tree's coordinates the
-    least (in the least-squares sense) that makes every closing joint hold, then the rates the
-    least that makes the loops' velocities consistent.
-
-    Parameters
-    ----------
-    model : Model
-        A model with closing joints (``System.close``); one without is returned as it is.
-    keep : sequence of str, optional
-        Joints (or their bodies, by name) whose coordinates and rates are given and stay: a
-        crank's angle and rate.  A prescribed motion's coordinates always stay.
-    tol : float, optional
-        The residual the closure must reach, m and rad (default 1e-12, times the model's
-        reach in metres where that is above 1).
-    max_iterations : int, optional
-        Gauss-Newton iterations for the positions (default 30).
-
-    Returns
-    -------
-    Model
-        The same model with its initial rotations, angular velocities and joint coordinates
-        and rates moved onto the loops (``loop_residuals`` reports what is left).
-
-    Raises
-    ------
-    ValueError
-        A loop that cannot close (a rod too short, a kept coordinate that forbids it), naming
-        the closing joint and its remaining gap; keep naming nothing of the model.
-
-    Examples
-    --------
-    >>> import dttmm
-    >>> assembled = dttmm.assemble(model, keep=["crank"])  # doctest: +SKIP
-    >>> dttmm.loop_residuals(assembled)  # doctest: +SKIP
-    """
-    from dataclasses import replace
-    if model.n_closures == 0:
-        return model
-    check_drives_move(model, "assemble")
-    variables, kept = _coordinates(model, keep)
-    x = _start_values(model, variables)
-    xd = np.array([model.hinge_params[k, 53 + i] if what == "q"
-                   else model.initial_angular_velocity[k, i] for what, k, i in variables])
-    free = np.nonzero(~kept)[0]
-    scale = max(1.0, float(np.abs(model.body_params[:, TO_OUTPUT]).sum()))
-    limit = tol * scale
-
-    def residual(values):
-        return closure_residuals(model, _state_of(model, variables, values, xd))[0]
-
-    rows = constraint_rows(model)
-    metres = np.isin(rows.kind, (GAP_WORLD, GAP_A))     # gaps in m; the rest are angles
-
-    def gaps(g):
-        """(largest gap in m, largest in rad) of the residuals g."""
-        return (float(np.abs(g[metres]).max(initial=0.0)),
-                float(np.abs(g[~metres]).max(initial=0.0)))
-
-    start = _state_of(model, variables, x, xd)
-    g = closure_residuals(model, start)[0]
-    history = [np.abs(g).max()]
-    first = best = gaps(g)
-    step = 1e-7
-    for _ in range(max_iterations):
-        if history[-1] <= limit:
-            break
-        jac = np.zeros((g.size, free.size))
-        for j, col in enumerate(free):
-            up, down = x.copy(), x.copy()
-            up[col] += step
-            down[col] -= step
-            jac[:, j] = (residual(up) - residual(down)) / (2 * step)
-        x[free] -= np.linalg.pinv(jac, rcond=1e-10) @ g
-        g = residual(x)
-        history.append(np.abs(g).max())
-        if history[-1] < max(best):
-            best = gaps(g)
-        if len(history) > 6 and history[-1] > 0.5 * history[-6]:
-            break                               # stalled: the loop cannot close
-    owner = rows.owner
-    if history[-1] > limit:
-        worst = int(owner[np.argmax(np.abs(g))])
-        left = gaps(g)
-        raise ValueError(f"assemble: closing joint '{model.closure_names[worst]}' cannot close: "
-                         f"after {len(history) - 1} iterations a gap of {left[0]:.4g} m and "
-                         f"{left[1]:.4g} rad is left (at the start {first[0]:.4g} m and "
-                         f"{first[1]:.4g} rad; the smallest reached {best[0]:.4g} m and "
-                         f"{best[1]:.4g} rad); the loop's bodies cannot reach (a link too short "
-                         f"or too long, a pivot out of reach), or a kept coordinate forbids it")
-    # the rates: the loops' velocity residual is linear in them, g' = G xd + g'_0
-    def rate_residual(rates):
-        return closure_residuals(model, _state_of(model, variables, x, rates))[1]
-    gd = rate_residual(xd)
-    if free.size and np.abs(gd).max() > limit:
-        jac = np.zeros((gd.size, free.size))
-        for j, col in enumerate(free):
-            unit = xd.copy()
-            unit[col] += 1.0
-            jac[:, j] = rate_residual(unit) - gd
-        xd[free] -= np.linalg.pinv(jac, rcond=1e-10) @ gd
-        gd = rate_residual(xd)
-    if np.abs(gd).max() > 1e-9 * max(1.0, float(np.abs(xd).max()) * scale):
-        worst = int(owner[np.argmax(np.abs(gd))])
-        raise ValueError(f"assemble: the kept rates move closing joint "
-                         f"'{model.closure_names[worst]}' apart at {np.abs(gd).max():.4g} (m/s or "
-                         f"rad/s); keep fewer rates")
-    end = _state_of(model, variables, x, xd)
-    rot, w = end[:2]
-    hinge = np.array(model.hinge_params, order="C")
-    for (what, k, i), value, rate in zip(variables, x, xd):
-        if what == "q":
-            hinge[k, 51 + i], hinge[k, 53 + i] = value, rate
-    from .model import adopt_arrays
-    assembled = adopt_arrays(replace(model, initial_rotation=rot, initial_angular_velocity=w,
-                                     hinge_params=hinge), model)
-    moves = assembly_moves(start, end)
-    object.__setattr__(assembled, "_assembly_moves", moves)
-    _warn_of_moves(model, moves, scale)
-    return assembled
-
-
-MOVE_TOLERANCE = 0.01   # of the model's reach (m), and rad: assemble warns of a body moved more
-
-
 class AssemblyWarning(UserWarning):
     """assemble moved a body further than MOVE_TOLERANCE to close the loops: the mechanism
     simulated is not the one given (docs/loops.md, "Assembly")."""
 
 
-def assembly_moves(start, end):
-    """(n, 2): how far assemble moved each body, the largest displacement of its input and
-    output points (m) and the angle of its rotation (rad), between two tree_states."""
-    moved = np.maximum(np.linalg.norm(end[2] - start[2], axis=1),
-                       np.linalg.norm(end[6] - start[6], axis=1))
-    turn = np.einsum("kij,kij->k", end[0], start[0])        # trace(A_end A_start^T)
-    angle = np.arccos(np.clip(0.5 * (turn - 1.0), -1.0, 1.0))
-    return np.column_stack([moved, angle])
+def _coordinates(model, keep):
+    """The assembly's variables: per body, ("rot", k, i) for a free body's rotation (a ball
+    joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
+    whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
+    coordinate always)."""
+    from .elements.kinds import WITH_COORDINATES, coordinate_count
+    names = set(keep)
+    unknown = names - set(model.hinge_names) - set(model.body_names)
+    if unknown:
+        raise ValueError(f"assemble: keep names no joint or body of the model: "
+                         f"{', '.join(sorted(map(str, unknown)))} (joints: "
+                         f"{', '.join(model.hinge_names)})")
+    variables, kept = [], []
+    for k in range(model.n_bodies):
+        kind = int(model.hinge_kind[k])
+        named = model.hinge_names[k] in names or model.body_names[k] in names
+        if kind in WITH_COORDINATES:
+            for i in range(coordinate_count(kind)):
+                drive = model.drives[k][i] if len(model.drives[k]) > i else None
+                variables.append(("q", k, i))
+                kept.append(named or (drive is not None and drive["kind"] == MOTION))
+        elif kind != FIXED:
+            for i in range(3):
+                variables.append(("rot", k, i))
+                kept.append(named)
+    return variables, np.array(kept, dtype=bool)
 
 
-def _warn_of_moves(model, moves, reach):
-    """AssemblyWarning naming the bodies assemble moved beyond MOVE_TOLERANCE x reach (m) or
-    MOVE_TOLERANCE rad: 1% of the mechanism's size changes its geometry visibly (a pivot in
-    the wrong place), where the rounding of hand-given coordinates (three or four digits) stays
-    well below it."""
-    far = [k for k in range(model.n_bodies)
-           if moves[k, 0] > MOVE_TOLERANCE * reach or moves[k, 1] > MOVE_TOLERANCE]
-    if not far:
-        return
-    import warnings
-    said = ", ".join(f"'{model.body_names[k]}' {moves[k, 0]:.3g} m and {moves[k, 1]:.3g} rad"
-                     for k in far[:6]) + (f" and {len(far) - 6} more" if len(far) > 6 else "")
-    warnings.warn(f"assemble: closing the loops moved bodies beyond {MOVE_TOLERANCE:g} of the "
-                  f"model's reach ({MOVE_TOLERANCE * reach:.3g} m) or {MOVE_TOLERANCE:g} rad: "
-                  f"{said}; the mechanism simulated is not the one given: place the bodies "
-                  f"where the loops close, or keep=[...] the coordinates that are right",
-                  AssemblyWarning, stacklevel=3)
+def _state_of(model, variables, x, xd, stretch_rate=None):
+    n = model.n_bodies
+    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
+    omega = np.array(model.initial_angular_velocity, order="C")
+    qd = np.array(model.hinge_params[:, 53:55], order="C")
+    for (what, k, i), value, rate in zip(variables, x, xd):
+        if what == "q":
+            q[k, i], qd[k, i] = value, rate
+        else:
+            theta[k, i], omega[k, i] = value, rate
+    return tree_state(model, theta, q, omega, qd, stretch_rate)
+
+
+def _start_values(model, variables):
+    """The assembly's variables at t = 0: each joint coordinate as given, each free body's
+    rotation change 0."""
+    return np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+                     for what, k, i in variables])
+
+
+def _rate_jacobian(model, variables, x, columns=None):
+    """(g'_0, G, owner): the loops' rate residual at positions x with every rate zero, its
+    Jacobian over the variables `columns` (default: all), exact since g' = G x' + g'_0 is
+    linear in the rates (one unit rate a column), and each row's closing joint."""
+    xd = np.zeros(len(variables))
+    _, base, owner = closure_residuals(model, _state_of(model, variables, x, xd))
+    columns = range(len(variables)) if columns is None else columns
+    jac = np.zeros((base.size, len(columns)))
+    for j, col in enumerate(columns):
+        unit = xd.copy()
+        unit[col] = 1.0
+        jac[:, j] = closure_residuals(model, _state_of(model, variables, x, unit))[1] - base
+    return base, jac, owner

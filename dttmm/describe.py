@@ -10,8 +10,10 @@ from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
 from .elements.kinds import BEAM, RIGID, ROD
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
-                                  rod_components, rod_frequencies)
+                                  rod_components)
+from .rod_motion import rod_frequencies
 from .closures import describe_closures, held_chords, loop_rank
+from .model import DESCRIBE
 
 JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
                UNIVERSAL: "universal", PRISMATIC: "prismatic"}
@@ -155,7 +157,7 @@ def _beam_lines(model, k, end_mass, chord_held=False):
                         "end, whose second-order energy holds only to a bend of ~0.08 rad or "
                         "less" if any(ends) and m >= 3 and cutoff_counted else ""))
     elif row[STIFFENING]:
-        from .solver import STIFFENED_BEND_LIMIT
+        from .run_checks import STIFFENED_BEND_LIMIT
         limit = STIFFENED_BEND_LIMIT.get(m) if int(row[FAMILY]) == CLAMPED_LOADED else None
         lines.append("geometric stiffening on" + (
             f", to second order in the modes: holds while the beam bends less than ~{limit:g} "
@@ -176,14 +178,14 @@ LONG_LOOP_ROWS = 20     # rows from which describe() advises a tree of local loo
 
 
 def _loop_reach(model):
-    """How far the closing joints' sweep columns reach (solver.loop_tables): the cost of a step
+    """How far the closing joints' sweep columns reach (run_tables.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
-    from . import solver
+    from . import run_tables
     from .closures import constraint_rows
-    km = solver.kernel_model(model)[0]
+    km = run_tables.kernel_model(model)[0]
     owner = constraint_rows(km)[1]
     body = np.array(km.closure_body, dtype=np.int64).reshape(-1, 2)
-    _, _, _, act_ptr, _, band = solver.loop_columns(km, owner, body)
+    _, _, _, act_ptr, _, band = run_tables.loop_columns(km, owner, body)
     rows = len(owner)
     reach = np.diff(act_ptr[1:]).mean() if rows else 0.0
     solve = "a banded LU" if band[0] >= 0 else "a truncated SVD"
@@ -293,7 +295,7 @@ def describe(model):
                    "by default, positions and rates projected back onto the loops after every "
                    "step; docs/loops.md)")
         out.append("  " + _loop_reach(model))
-        from .solver import energy_not_held
+        from .run_checks import energy_not_held
         why_not = energy_not_held(model)
         out.append("  energy: " + ("held after every step by scaling the rates (nothing works "
                                    "on these rigid loops; hold_energy=False steps without it)"
@@ -331,7 +333,7 @@ def _schemes_line(model):
     """Which of simulate's schemes run the model (dttmm/methods.py), and which to take for
     tight tolerances."""
     from .methods import SCHEMES
-    from .solver import check_supported
+    from .run_checks import check_supported
     runs, why = [], {}
     for name in SCHEMES:
         try:
@@ -347,3 +349,6 @@ def _schemes_line(model):
              "docs/solver.md)")
     return (f"schemes: {', '.join(runs) or 'none'}; for tight tolerances (below ~1e-7 m) "
             f"{tight}")
+
+
+DESCRIBE[0] = describe          # Model.describe (model.py)

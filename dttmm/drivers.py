@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 
 from . import adaptive as adaptive_steps
-from . import solver as s
+from . import consistent_start, run_checks, run_inputs, run_records, run_tables
 from .energy_balance import EnergyBalance
 from .feedback import Progress, note_once
 from .closures import closure_targets
@@ -36,10 +36,10 @@ class Stepping:
             resume.restore(plan.structures, plan.checkpoint_run)
             counters, done = resume.counters, resume.step
             if plan.loop_name == "general":     # this process's callbacks, not the
-                plan.loop.forces[:] = s.compiled_forces(model)  # checkpoint's addresses
+                plan.loop.forces[:] = run_tables.compiled_forces(model)  # checkpoint's addresses
                 # (another process's, or another function of the same name)
         self.done = done
-        self.samples = None if opts.adaptive else s._sample_count(opts.sampling, done,
+        self.samples = None if opts.adaptive else run_records._sample_count(opts.sampling, done,
                                                                    opts.n_steps)
         keys = plan.keys
         self.recording = Recording(keys, plan.keep, None if opts.stream is None else
@@ -63,8 +63,8 @@ class Stepping:
         # a chunk's inputs and record rows hold each of its steps for every body: no more steps
         # than the run has, nor than CHUNK_BYTES of them (a million bodies: one step per chunk)
         self.size = 1 if self.force_drives else max(1, min(
-            s.CHUNK, s.CHUNK_BYTES // (s.CHUNK_STEP_BYTES * n),
-            s.CHUNK if opts.adaptive else opts.n_steps - done))
+            run_records.CHUNK, run_records.CHUNK_BYTES // (run_records.CHUNK_STEP_BYTES * n),
+            run_records.CHUNK if opts.adaptive else opts.n_steps - done))
         self.static_ground = model.ground_motion is None
         self.no_loads = not plan.has_loads
         self._constants = None          # (constant_inputs)
@@ -77,16 +77,18 @@ class Stepping:
         self.max_newton = counters[0]
 
     def records(self, every, balance):
-        """Where the compiled loop writes a chunk's samples (solver._record), every every-th
+        """Where the compiled loop writes a chunk's samples (consistent_start._record), every
+        every-th
         step of chunks of up to self.size steps; a run that samples only its ends (a million
-        bodies by default: solver._sampling) records its last state from the state itself, and
+        bodies by default: run_records._sampling) records its last state from the state itself, and
         its chunks write no rows (the rows of a step would hold 0.4 KB per body)."""
         plan, n = self.plan, self.plan.model.n_bodies
         ends_only = balance is None and self.samples == 2
         shape = (0 if ends_only else max(1, self.size // every), n, len(plan.state.eta),
                  plan.scheme.name == "paper", "v_c" in plan.keys,
                  plan.loops.wrench.shape[0] if "closure_wrench" in plan.keys else 0)
-        return ends_only, plan.chunk_arrays(("record",) + shape, lambda: s._record(*shape))
+        return ends_only, plan.chunk_arrays(("record",) + shape,
+                                            lambda: consistent_start._record(*shape))
 
     def chunk_inputs(self, done, m, h):
         """The prescribed data of the m steps of h after step `done` (inputs_for): a run whose
@@ -104,7 +106,8 @@ class Stepping:
             plan, model, size = self.plan, self.plan.model, self.size
             n = model.n_bodies
             self._constants = (
-                plan.chunk_arrays(("ground", size), lambda: s._ground(model, np.zeros(size + 1)))
+                plan.chunk_arrays(("ground", size), lambda: run_inputs._ground(model,
+                                                                               np.zeros(size + 1)))
                 if self.static_ground else None,
                 plan.chunk_arrays(("loads", size), lambda: tuple(
                     np.zeros((size, n, 3)) for _ in range(3))) if self.no_loads else None,
@@ -122,18 +125,19 @@ class Stepping:
         if self.static_ground:
             ga, gr, gw, gwd, gp, gv = ground
         else:
-            ga, gr, gw, gwd, gp, gv = s._ground(model, times)
+            ga, gr, gw, gwd, gp, gv = run_inputs._ground(model, times)
             ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
-        f, tq, ll = zero_loads if self.no_loads else s._loads(
+        f, tq, ll = zero_loads if self.no_loads else run_inputs._loads(
             model, mid_times if self.opts.scheme.loads_at_midpoints else times[1:])
-        ji = (s._joint_inputs(model, times[1:], plan.state, h) if plan.joint_inputs_vary
+        ji = (run_inputs._joint_inputs(model, times[1:], plan.state, h) if plan.joint_inputs_vary
               else joint_input)
         loops = plan.loops
         ct = closure_targets(model, times[1:], loops) if plan.targets_vary else \
             closure_target
         for r, law, who in plan.closing_forces:  # f(t, q, q') at the predictor from the last
             q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its
-            ct[0, r, 2] = s._drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,  # proj.)
+            ct[0, r, 2] = run_inputs._drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,
+                                                        # proj.)
                                               qd + h * qdd), who, times[1])
         return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], g_pos=gp[:m],
                       g_vel=gv[:m], force=f[:m],
@@ -153,35 +157,35 @@ class Stepping:
             plan.runner(plan.loop, Run(plan.params, settings, plan.state, plan.sweep, inputs, rec,
                                        plan.monitor), self.info, calls=plan.calls)
         except np.linalg.LinAlgError as err:
-            raise s.DivergenceError(
+            raise run_checks.DivergenceError(
                 first_step + 1, t_first, f"a matrix of the sweep is singular somewhere in steps "
                 f"{first_step + 1}..{first_step + len(inputs.force)} ({err}); "
-                f"{s._DIRECT_HINT if opts.method == 'direct' else ''}") from None
+                f"{run_checks._DIRECT_HINT if opts.method == 'direct' else ''}") from None
         if self.info[0] == UNSUPPORTED:
-            raise ValueError(s._unsupported_cause(plan.model, int(self.info[2]),
+            raise ValueError(run_checks._unsupported_cause(plan.model, int(self.info[2]),
                                                   f"the {plan.loop_name} loop"))
 
     def partial(self, steps_taken):
         """The Result of the samples recorded so far (a run that stops)."""
-        return s._result(self.plan.user_model, self.recording, self.opts.dt,
+        return run_records._result(self.plan.user_model, self.recording, self.opts.dt,
                          time.perf_counter() - self.wall0, steps_taken, dict(self.plan.run_info))
 
     def stopped(self, step, t, cause, steps_taken):
         """The DivergenceError of a run that stops at `step` (time t) for `cause`, with the samples
         recorded so far and, where a stiffened beam had bent near where its second-order energy
-        stops holding, that (solver._stiffened_bend_hint)."""
+        stops holding, that (run_checks._stiffened_bend_hint)."""
         partial = self.partial(steps_taken)
-        return s.DivergenceError(step, t, cause + s._stiffened_bend_hint(self.plan.user_model,
-                                                                          partial), partial)
+        hint = run_checks._stiffened_bend_hint(self.plan.user_model, partial)
+        return run_checks.DivergenceError(step, t, cause + hint, partial)
 
 
 def _faster(a, b):
-    """The faster of two (rad/s, body) (solver._fastest_rate), the first where equal."""
+    """The faster of two (rad/s, body) (run_checks._fastest_rate), the first where equal."""
     return b if b[0] > a[0] else a
 
 
 def fixed_steps(run):
-    """Chunks of equal steps to n_steps (solver._next_chunk), recorded as `sampling` asks, the
+    """Chunks of equal steps to n_steps (run_records._next_chunk), recorded as `sampling` asks, the
     energy balance checked after each where asked; the Result with its checkpoint."""
     plan, opts, recording = run.plan, run.opts, run.recording
     model, state, info, dt = plan.model, plan.state, run.info, opts.dt
@@ -195,12 +199,12 @@ def fixed_steps(run):
         def result_of(values, steps):
             rows = Recording(keys, plan.keep, identity=plan.keeps_every_body)
             rows.add(values, steps)
-            return s._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
+            return run_records._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
 
         balance = EnergyBalance(plan.user_model, opts.max_energy_error, result_of,
-                                s.beam_tables(plan.user_model))
+                                run_tables.beam_tables(plan.user_model))
         start_values = dict(state._asdict(), **plan.history_values)
-        f0, tq0, ll0 = s._loads(model, [done * dt])
+        f0, tq0, ll0 = run_inputs._loads(model, [done * dt])
         loaded = plan.loaded
         balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],
                       tq0[:, loaded], ll0[:, loaded])
@@ -209,17 +213,17 @@ def fixed_steps(run):
     # (a run of one chunk never shows a bar: Progress shows one after the first chunk)
     bar = Progress(n_steps - done, opts.progress if n_steps - done > run.size else False)
     fastest = (plan.start_fastest if done == 0      # (rad/s, body) over the samples
-               else s._fastest_rate(state.omega[None]))
+               else run_checks._fastest_rate(state.omega[None]))
     try:
         while done < n_steps:
-            m, every = s._next_chunk(done, n_steps, sampling, run.size)
+            m, every = run_records._next_chunk(done, n_steps, sampling, run.size)
             if ends_only:
                 every = m + 1
             try:
                 inputs = run.chunk_inputs(done, m, dt)
-            except s.UserFunctionError as err:
+            except run_checks.UserFunctionError as err:
                 step = max(int(round(err.t / dt)), done + 1)
-                raise s.DivergenceError(step, err.t, str(err), run.partial(done)) from None
+                raise run_checks.DivergenceError(step, err.t, str(err), run.partial(done)) from None
             run.run_chunk(inputs, rec, dt, 1 if balance else every, done, (done + 1) * dt)
             n_rec = int(info[3])
             if balance is not None and n_rec:       # the samples asked for, from every step's
@@ -232,13 +236,14 @@ def fixed_steps(run):
                               done + every * np.arange(1, n_rec + 1))
             if info[0] != OK:
                 step = done + int(info[1]) + 1
-                cause = s._failure_cause(model, plan.mode, info, plan.monitor, plan.settings)
+                cause = run_checks._failure_cause(model, plan.mode, info, plan.monitor,
+                                                  plan.settings)
                 if opts.method == "direct" and info[0] == SINGULAR:
-                    cause += "; " + s._DIRECT_HINT
+                    cause += "; " + run_checks._DIRECT_HINT
                 raise run.stopped(step, step * dt, cause, step - 1)
             max_newton = max(max_newton, int(info[2]))
             if n_rec:
-                fastest = _faster(fastest, s._fastest_rate(rec.omega[:n_rec]))
+                fastest = _faster(fastest, run_checks._fastest_rate(rec.omega[:n_rec]))
             if balance is not None:
                 broken = balance.chunk({key: getattr(rec, key)[:m] for key in keys},
                                        done + np.arange(1, m + 1), dt,
@@ -251,7 +256,7 @@ def fixed_steps(run):
                 work_values.append(balance.chunk_work)
             done += m
             bar.update(done)
-            runaway = s._beam_beyond_its_length(model, plan.beam_tips, state.eta)
+            runaway = run_checks._beam_beyond_its_length(model, plan.beam_tips, state.eta)
             if runaway:
                 raise run.stopped(done, done * dt, runaway, done)
     finally:
@@ -259,28 +264,29 @@ def fixed_steps(run):
     rec = inputs = None                         # (the chunks' buffers)
     if recording.last_step != n_steps:          # the final state is always recorded
         recording.add_state(state, plan.history_values, n_steps)
-        fastest = _faster(fastest, s._fastest_rate(state.omega[None]))
+        fastest = _faster(fastest, run_checks._fastest_rate(state.omega[None]))
     checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
                                (max_newton, info[4]))
     turn = fastest[0] * dt
-    if turn > s.MAX_TURN_PER_STEP:
-        warnings.warn(s.UnresolvedMotionWarning(
+    if turn > run_checks.MAX_TURN_PER_STEP:
+        warnings.warn(run_checks.UnresolvedMotionWarning(
             f"simulate: the step does not resolve the motion: body "
             f"'{model.body_names[fastest[1]]}' turns by up to {turn:.3g} rad per step "
             f"({fastest[0]:.4g} rad/s at dt = {dt:g} s), where the trapezoidal rule's phase "
             f"error, about (w dt)^2 / 12 per radian ({turn ** 2 / 12:.1%} here), may leave "
             f"the result far off; take dt <= {2 * np.pi / (20 * fastest[0]):.2g} s (20 steps "
             f"a turn), or rtol= for steps chosen by the error"), stacklevel=3)
-    result = s._result(plan.user_model, recording, dt, 0.0, n_steps,
+    result = run_records._result(plan.user_model, recording, dt, 0.0, n_steps,
                        dict(plan.run_info, newton_iterations_used=max_newton,
                             newton_unconverged_steps=int(info[4]),
                             step_error_max=float(plan.monitor.error[0]),
                             turn_per_step_max=turn,
                             **({} if balance is None else
                                {"energy_balance_error": balance.worst}),
-                            **s._loop_info(plan.loops)),
+                            **run_tables._loop_info(plan.loops)),
                        checkpoint)
-    warn_unresolved(plan.user_model, result, dt, s.UnresolvedMotionWarning, s.MAX_TURN_PER_STEP)
+    warn_unresolved(plan.user_model, result, dt, run_checks.UnresolvedMotionWarning,
+                    run_checks.MAX_TURN_PER_STEP)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
                          np.concatenate(work_values))
@@ -309,9 +315,9 @@ def adaptive(run):
     targets, t_end = opts.targets, control.t_end
     snapshot = adaptive_steps.Snapshot(plan.structures)
     t, taken, largest, most_newton, i_target = 0.0, 0, 0.0, 0, 0
-    every_default = t_end / s.MAX_SAMPLES
+    every_default = t_end / run_records.MAX_SAMPLES
     next_default = every_default
-    bar = Progress(s.MAX_SAMPLES, opts.progress)
+    bar = Progress(run_records.MAX_SAMPLES, opts.progress)
     try:
         while t < t_end:
             if targets is not None:
@@ -321,7 +327,7 @@ def adaptive(run):
                 else t_end
             m, h = adaptive_steps.segment(t, control.h, target, most)
             snapshot.save()
-            s._set_step(plan.loop, h, opts.coef)
+            run_records._set_step(plan.loop, h, opts.coef)
             monitor.error[0] = 0.0
             times = t + np.arange(m + 1) * h
             lands = times[-1] >= target * (1 - 1e-12)
@@ -330,13 +336,14 @@ def adaptive(run):
             # a step above the tolerance stops the segment at once (the skeleton's own check)
             try:
                 inputs = run.inputs_for(times, times[:-1] + 0.5 * h, h)
-            except s.UserFunctionError as err:
-                raise s.DivergenceError(taken + 1, err.t, str(err), run.partial(taken)) from None
+            except run_checks.UserFunctionError as err:
+                raise run_checks.DivergenceError(taken + 1, err.t, str(err),
+                                                 run.partial(taken)) from None
             run.run_chunk(inputs, rec, h, m + 1, taken, times[1],
                           min(settings.max_step_error, control.step_limit(h)))
             over = info[0] == ERROR_ESTIMATE and monitor.error[0] <= settings.max_step_error
             failed = (info[0] != OK and not over) or bool(
-                s._beam_beyond_its_length(model, plan.beam_tips, plan.state.eta))
+                run_checks._beam_beyond_its_length(model, plan.beam_tips, plan.state.eta))
             steps_run = m if info[0] == OK else int(info[1]) + 1
             if control.after(float(monitor.error[0]), h, steps_run, failed):
                 t, taken = float(times[-1]), taken + m
@@ -346,11 +353,11 @@ def adaptive(run):
                     recording.add_state(plan.state, plan.history_values, taken, t)
                     while next_default <= t:
                         next_default += every_default
-                bar.update(int(s.MAX_SAMPLES * t / t_end))
+                bar.update(int(run_records.MAX_SAMPLES * t / t_end))
                 continue
             cause = (f"local error estimate {monitor.error[0]:.3g} above the tolerance's "
                      f"{control.step_limit(h):.3g} for a step of {h:.3g} s" if over
-                     else s._failure_cause(model, plan.mode, info, monitor, settings)
+                     else run_checks._failure_cause(model, plan.mode, info, monitor, settings)
                      if info[0] != OK else "a beam deflected beyond its length")
             snapshot.restore()
             if control.too_small:
@@ -364,10 +371,10 @@ def adaptive(run):
     run_info = dict(plan.run_info, dt=None, dt_min=control.h_min, dt_max=control.h_max,
                     segments_rejected=control.rejected, steps_rejected=control.rejected_steps,
                     rtol=opts.rtol, atol=opts.atol)
-    return s._result(plan.user_model, recording, opts.dt, 0.0, taken,
+    return run_records._result(plan.user_model, recording, opts.dt, 0.0, taken,
                      dict(run_info, newton_iterations_used=most_newton,
                           newton_unconverged_steps=int(info[4]),
-                          step_error_max=largest, **s._loop_info(plan.loops)),
+                          step_error_max=largest, **run_tables._loop_info(plan.loops)),
                      NoCheckpoint("an adaptive run (rtol=) keeps no checkpoint: its steps "
                                   "lie on no grid to continue on; run again to a later "
                                   "t_end, or use fixed steps (dt) to resume"))
@@ -388,7 +395,7 @@ def runge_kutta(run):
                  else sampling) * opts.dt
     else:
         times = (opts.targets if opts.targets is not None
-                 else np.arange(1, s.MAX_SAMPLES + 1) * (t_end / s.MAX_SAMPLES))
+                 else np.arange(1, run_records.MAX_SAMPLES + 1) * (t_end / run_records.MAX_SAMPLES))
     times = np.asarray(times, dtype=float)
     if not len(times) or times[-1] < t_end:     # (the final state is always recorded)
         times = np.append(times, t_end)
@@ -398,11 +405,14 @@ def runge_kutta(run):
     if not runge_kutta_kernels.start(loop, evaluation, info, rk, rtol, atol,
                                      opts.dt if opts.dt_given else 0.0, t_end):
         why = _PASS_FAILURES.get(int(info[0]), f"status {int(info[0])}")
-        raise s.DivergenceError(0, 0.0, f"{opts.scheme.name}: the sweep failed at the initial "
+        raise run_checks.DivergenceError(0, 0.0,
+                                         f"{opts.scheme.name}: the sweep failed at the initial "
                                 f"state ({why})")
-    size = max(1, min(len(times), s.CHUNK_BYTES // (s.CHUNK_STEP_BYTES * max(n, 1))))
+    size = max(1, min(len(times),
+                      run_records.CHUNK_BYTES // (run_records.CHUNK_STEP_BYTES * max(n, 1))))
     n_eta = len(plan.state.eta)
-    rec = plan.chunk_arrays(("samples", size, n, n_eta), lambda: s._record(size, n, n_eta))
+    rec = plan.chunk_arrays(("samples", size, n, n_eta), lambda: consistent_start._record(size, n,
+                                                                                          n_eta))
     sample_steps = np.zeros(size, dtype=np.int64)
     h_min = adaptive_steps.MIN_STEP * t_end
     done = 0
@@ -434,7 +444,7 @@ def runge_kutta(run):
     if opts.adaptive:
         run_info.update(dt=None, dt_min=float(control[6]), dt_max=float(control[7]),
                         steps_rejected=int(control[3]), rtol=opts.rtol, atol=atol)
-    return s._result(plan.user_model, recording, opts.dt, 0.0, int(control[2]),
+    return run_records._result(plan.user_model, recording, opts.dt, 0.0, int(control[2]),
                      dict(run_info, newton_iterations_used=0, newton_unconverged_steps=0),
                      NoCheckpoint(f"a {opts.scheme.name} run keeps no checkpoint: its steps "
                                   f"lie on no grid to continue on; run again to a later t_end, "
@@ -449,7 +459,7 @@ _PASS_FAILURES = {SINGULAR: "a transfer of the sweep is singular",
 
 def richardson(opts, simulate):
     """The Romberg extrapolation of opts.richardson runs at dt, dt/2, dt/4, ... on the even
-    powers of the step (solver.richardson_extrapolation; docs/solver.md, "Richardson
+    powers of the step (run_records.richardson_extrapolation; docs/solver.md, "Richardson
     extrapolation"): orders 4, 6, 8 from two, three, four runs, at the recorded times."""
     runs = []
     sampling, dt, n_steps = opts.sampling, opts.dt, opts.n_steps
@@ -467,7 +477,8 @@ def richardson(opts, simulate):
                                  max_step_error=(None if opts.max_step_error == np.inf
                                                  else opts.max_step_error),
                                  hold_energy=opts.hold_energy))
-        except s.DivergenceError as err:
-            raise s.DivergenceError(err.step, err.t, f"in the Richardson run at dt = {h:g} "
+        except run_checks.DivergenceError as err:
+            raise run_checks.DivergenceError(err.step, err.t,
+                                             f"in the Richardson run at dt = {h:g} "
                                     f"s: {err.cause}", err.partial) from None
-    return s.richardson_extrapolation(*runs)
+    return run_records.richardson_extrapolation(*runs)

@@ -66,29 +66,30 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     follow their parents' that do not agree with them (dttmm.ode gives placeholders there);
     extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads;
     extra_joint_forces: (n, 2) generalized forces on the joints' coordinates (where
-    solver.additive_joint_force)."""
-    from . import solver
+    run_inputs.additive_joint_force)."""
+    from . import consistent_start, run_checks, run_inputs, run_tables
+    from .closures import check_runs_in_sweeps
     from .kernels import python_twin
     from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
     from .kernels.stepping.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
-        solver.check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
-    solver.check_supported(model, "newmark", "riccati", True)
-    km, keep = solver.kernel_model(model)
-    mode = solver._mode(km, "riccati", True)
-    settings = Settings(mode=mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0).array(),
+        check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
+    run_checks.check_supported(model, "newmark", "riccati", True)
+    km, keep = run_tables.kernel_model(model)
+    mode = run_tables._mode(km, "riccati", True)
+    settings = Settings(mode=mode, h=1.0, coef=run_tables.Integrator.from_rho_inf(1.0).array(),
                         newton_max=0, newton_tol=0.0, record_every=1, max_step_error=np.inf,
                         stop_unconverged=False, start=False)
     n = km.n_bodies
     monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
                       jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
-    ws = solver.Workspace(km)
-    params = solver.kernel_params(km)
-    loops = solver.loop_tables(km)
-    columns = solver.coordinate_columns(model)
+    ws = run_tables.Workspace(km)
+    params = run_tables.kernel_params(km)
+    loops = run_tables.loop_tables(km)
+    columns = run_tables.coordinate_columns(model)
     if state is not None:
         _set_state(model, km, keep, columns, ws.state, state, check_frames)
-        _, g_rot, g_w, g_wd, g_pos, g_vel = solver._ground(km, [t])
+        _, g_rot, g_w, g_wd, g_pos, g_vel = run_inputs._ground(km, [t])
         set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
         given = (ws.state.rot[keep].copy(), ws.state.omega[keep].copy()) if check_frames else ()
         # (the kernels' callee, called here through its twin, kernels/__init__.py::python_twin)
@@ -105,13 +106,14 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
                                  f"child follows its parent and the joint's coordinates)")
     if extra_loads is not None:         # onto the kernel bodies that carry each body's loads
         extra = np.zeros((2, n, 3))
-        extra[:, solver.loaded_bodies(model, km, keep)] = extra_loads
+        extra[:, run_tables.loaded_bodies(model, km, keep)] = extra_loads
         extra_loads = extra
     if extra_joint_forces is not None:
         extra = np.zeros((n, 2))
         extra[keep] = extra_joint_forces
         extra_joint_forces = extra
-    solver._consistent_start(km, mode, "riccati", None, params, settings, ws.state, ws.sweep,
+    consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
+                                       ws.sweep,
                              monitor, 0.0, loops, t=t, extra_loads=extra_loads,
                              extra_joint_forces=extra_joint_forces)
     st = ws.state
@@ -193,7 +195,7 @@ class ODE:
     """
 
     def __init__(self, model, _closed=False):
-        from . import solver
+        from . import run_tables
         from .elements.hinges import BALL, ELASTIC
         from .model import Model
         if not isinstance(model, Model):
@@ -205,7 +207,7 @@ class ODE:
         self.model = model
         self.free = np.nonzero(np.isin(model.hinge_kind, (BALL, ELASTIC)))[0]
         self.elastic = np.nonzero(model.hinge_kind == ELASTIC)[0]
-        self.columns = solver.coordinate_columns(model)
+        self.columns = run_tables.coordinate_columns(model)
         n_eta = int(model.n_modes.sum())
         names = []
         for k in self.free:
@@ -220,7 +222,7 @@ class ODE:
         self.names = tuple(names)
         self._n_eta = n_eta
         start = forward_dynamics(model)         # the initial state, every frame rebuilt
-        initial = solver.Workspace(model).state     # (its offsets and joint coordinates)
+        initial = run_tables.Workspace(model).state     # (its offsets and joint coordinates)
         self.y0 = self._pack(start["rotation"], start["angular_velocity"], initial.defl,
                              initial.defl_rate,
                              np.array([initial.jq[k, i] for k, i in self.columns]),
@@ -392,7 +394,8 @@ def linearize(model, state=None, t=0.0):
     """
     from .elements.hinges import ELASTIC
     from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-    from .solver import MOTION, additive_joint_force
+    from .elements.drives import MOTION
+    from .run_inputs import additive_joint_force
     closed = bool(model.n_closures)
     if closed and (model.tip_pinned or model.has_beams
                    or np.isin(model.hinge_kind, (ELASTIC,)).any()):
@@ -464,7 +467,7 @@ def linearize(model, state=None, t=0.0):
 
     def outputs(out, s):
         """Every output point of the state s (forward_dynamics' out of it: its frames)."""
-        from .solver import _points
+        from .run_inputs import _points
         defl, defl_rate = out["offsets"]
         eta = np.asarray(s.get("modal_coordinates", np.zeros(0)), dtype=float)
         points = _points(model, np.array([t]), out["rotation"][None],
@@ -474,7 +477,8 @@ def linearize(model, state=None, t=0.0):
 
     # the joints' inputs: each coordinate's generalized force (a torque about a revolute
     # joint's axis or a universal joint's, a force along a slide), added to what its drive
-    # gives (solver.additive_joint_force: the joint's own element applies it, between its frames,
+    # gives (run_inputs.additive_joint_force: the joint's own element applies it, between its
+    # frames,
     # next to beams too); a prescribed coordinate's is 0 (nothing moves it).  A compiled
     # JointForce has no such slot: there the input is a pair of body loads (a torque tau n,
     # +tau n on the child and -tau n on the parent; a slide's force f n, +f n on the child and
@@ -503,7 +507,7 @@ def linearize(model, state=None, t=0.0):
             arms = None
             if kind == PRISMATIC:
                 if points is None:
-                    from .solver import _points
+                    from .run_inputs import _points
                     defl, defl_rate = base["offsets"]
                     points = _points(model, np.array([t]), base["rotation"][None],
                                      base["angular_velocity"][None], defl[None],

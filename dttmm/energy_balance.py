@@ -32,8 +32,8 @@ from .elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, 
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .closures import elastic_closure_terms, side_motions
 from .elements.rigid_body import TO_MASS_CENTER
-from .model import output_section
-from .result import _drive_spring_energy, beam_output_offset
+from .result import _drive_spring_energy
+from .sections import beam_output_offset, output_section
 
 
 def does_work(model):
@@ -54,8 +54,8 @@ def does_work(model):
 
 class EnergyBalance:
     """The running balance of one run.  result_of(values, steps) -> (Result, the rows
-    restricted to the model's bodies) for rows of the kernels' recorded state (solver._result);
-    beams: solver.beam_tables(model) of the user's model (its modal factors)."""
+    restricted to the model's bodies) for rows of the kernels' recorded state (run_records._result);
+    beams: run_tables.beam_tables(model) of the user's model (its modal factors)."""
 
     def __init__(self, model, limit, result_of, beams):
         self.model, self.limit, self.result_of = model, float(limit), result_of
@@ -96,7 +96,7 @@ class EnergyBalance:
                 mass = row[MASS_PER_LENGTH] * factors[k, :m, 0]
                 stiffness = ei * factors[k, :m, 1]
                 c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(stiffness * mass))
-            twist = beams[4][k, m:m + mt]               # then the twist (solver.beam_tables)
+            twist = beams[4][k, m:m + mt]               # then the twist (run_tables.beam_tables)
             c.extend(2.0 * row[DAMPING_RATIO] * np.sqrt(row[GJ] * twist[:, 3]
                                                         * row[POLAR_PER_LENGTH] * twist[:, 2]))
             stretch = beams[4][k, m + mt:m + mt + int(row[AXIAL_MODES])]    # and the stretch
@@ -248,7 +248,7 @@ def _beam_end_rates(row, res, k, offset):
 
 def _first_moment_integrals(row):
     """(P, D1) of a beam row: P_k = int Y_k (Gauss-Legendre, exact for its modes as in
-    solver.beam_tables) and the foreshortening's D1 (None without stiffening)."""
+    run_tables.beam_tables) and the foreshortening's D1 (None without stiffening)."""
     m = int(row[MODES])
     length, family = row[LENGTH], int(row[FAMILY])
     t, wt = np.polynomial.legendre.leggauss(2 * m + 10)

@@ -1,6 +1,6 @@
 """What a run tells its user while it works: a note when the numba kernels are being compiled
-(once per machine and kind of model; later runs load them from numba's cache) and a progress
-bar on runs that take more than a couple of seconds."""
+(once per install: every kind of model runs them; later runs load them from numba's cache)
+and a progress bar on runs that take more than a couple of seconds."""
 import os
 import sys
 import threading
@@ -82,11 +82,10 @@ class _CompileWatch(numba_event.Listener):
                 what, t0 = active
                 terminal = sys.stderr.isatty()
                 if not self.announced and not self.explained:
-                    _say(f"dttmm: compiling the numba kernels ({what}) for this kind of model: "
-                         f"once per machine and kind of model (later runs load them from "
-                         f"numba's cache); half a minute to three on 2 cores, the most with "
-                         f"closing joints and beams (docs/solver.md, \"Compile time\"). "
-                         f"{now - t0:.0f} s so far")
+                    _say(f"dttmm: compiling the numba kernels ({what}): once per install, "
+                         f"for every kind of model (later runs load them from numba's cache; "
+                         f"`dttmm compile` compiles them all ahead); up to three minutes on 2 "
+                         f"cores (docs/solver.md, \"Compile time\"). {now - t0:.0f} s so far")
                     self.announced = self.explained = True
                     self.ending = ""
                 elif not self.announced:    # (a later one in the same process: one line)

@@ -29,7 +29,7 @@ def loop_accelerations(model):
         Loops the time step does not close yet (beams, elastic hinges, a moving ground).
     """
     from .dynamics import forward_dynamics
-    from .solver import coordinate_columns
+    from .run_tables import coordinate_columns
     out = forward_dynamics(model)
     joints = np.zeros((model.n_bodies, 2))
     for c, (k, i) in enumerate(coordinate_columns(model)):

@@ -8,7 +8,7 @@ joint whose rate the benchmark gives.
 """
 import numpy as np
 
-from .closures import assemble
+from .assembly import assemble
 from .elements.drives import JointMotion
 from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
 from .model import Ground, System

@@ -14,7 +14,7 @@ from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPE
                             MASS_PER_LENGTH, MAX_LOADED_MODES, MODES, PINNED, STIFFENING,
                             TORSION_MODES,
                             accurate_mode_count, auto_mode_count, auto_part_count,
-                            axial_frequencies, end_shapes, modal_size,
+                            axial_frequencies, modal_size,
                             torsion_frequencies)
 from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
 from .elements.drives import MOTION
@@ -23,10 +23,11 @@ from .elements.kinds import (BODY_KINDS, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND,
                              WITH_COORDINATES, body_kind_of, joint_kind_of, names)
 from .elements.rigid_body import MASS, pack_body
 from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, ROD_PARAM_SIZE, ROD_STATIONS,
-                                  rod_coordinate_count, rod_end_section)
-from .kernels.algebra.so3 import expm_so3, left_jacobian
+                                  rod_coordinate_count)
+from .rod_motion import rod_end_section
 from . import closures
 from .closures import closure_rows, empty_table, is_pinned_tip, loop_membership
+from .sections import output_section
 from .spanning_tree import shortest_tree
 
 
@@ -200,6 +201,12 @@ class PrescribedMotion:
         return motion
 
 
+# Model.describe's words, set by the describing layer (describe.py, which knows what runs a
+# model: the loops, the schemes, the steps) when dttmm is imported: the model imports nothing
+# above it.
+DESCRIBE = [lambda model: "(import dttmm to describe a model)"]
+
+
 @dataclass(frozen=True)
 class Ground:
     """Where the root hinge attaches: a fixed point and frame, or a prescribed motion.
@@ -293,7 +300,7 @@ def shared_rows(table):
     """table, or where its rows are all equal (a chain of equal links) its first row shown
     len(table) times: a read-only view of stride 0 that reads as the table in every numpy
     operation and holds one row (a million bodies' tables in a few hundred bytes; the kernels
-    read the one row: solver.kernel_params)."""
+    read the one row: run_tables.kernel_params)."""
     if len(table) < 2 or is_shared(table) or not (table == table[0]).all():
         return table
     return _shown_for_all(table[0], len(table))
@@ -609,8 +616,7 @@ class Model:
             ``modes_per_plane="auto"`` kept below its cutoff, and whether geometric stiffening
             is on; a step that resolves the fastest retained motion.
         """
-        from .describe import describe
-        return describe(self)
+        return DESCRIBE[0](self)
 
     def ground_state(self, t):
         """(r, v, a, R, w, w_dot) of the ground frame at time t (s): position m, velocity
@@ -1206,26 +1212,6 @@ def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
                          f"before it (the body turns with its parent and the joint's rates: "
                          f"{omega}); leave it None and give the joint's rates")
     return rot, omega, r0
-
-
-def output_section(beam_row, rotation, omega, eta=None, eta_dot=None):
-    """Rotation and world angular velocity of a body's output section: the body's own for a
-    rigid body; for a beam A_O = A exp(theta_O^), theta_O = [psi(L), -w'(L), v'(L)], and
-    w_O = w + A J_l(theta_O) theta_O' (docs/beam.md, "End sections")."""
-    m, mt = int(beam_row[MODES]), int(beam_row[TORSION_MODES])
-    if m == 0 or eta is None:
-        return rotation, omega
-    eta_dot = np.zeros(2 * m + mt) if eta_dot is None else eta_dot
-    family, length = int(beam_row[FAMILY]), beam_row[LENGTH]
-    slope, twist = end_shapes(family, float(length), m, mt)[1:]
-
-    def angles(e):
-        return np.array([twist @ e[2 * m:2 * m + mt], -slope @ e[m:2 * m], slope @ e[:m]])
-    theta, theta_dot = angles(eta), angles(eta_dot)
-    e, jl = np.empty((3, 3)), np.empty((3, 3))
-    expm_so3(theta, e)
-    left_jacobian(theta, jl)
-    return rotation @ e, omega + rotation @ jl @ theta_dot
 
 
 def _derived_cutoff(step, duration, ground, hv, bodies, beam_params):

@@ -16,8 +16,9 @@ import numpy as np
 
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.kinds import ROD
-from .elements.strain_rod import rod_centre_line
+from .rod_motion import rod_centre_line
 from .feedback import Progress
+from .sections import foreshortening_along
 
 
 def _plt():
@@ -84,7 +85,7 @@ def plot_angles(result, ax=None, title=None):
 
 
 def _column_labels(result, key, letter, count):
-    """The columns' legend names from result.info[key] (solver.column_names), else letter1,
+    """The columns' legend names from result.info[key] (run_tables.column_names), else letter1,
     letter2, ..."""
     names = (result.info or {}).get(key)
     return list(names) if names is not None and len(names) == count else [
@@ -161,7 +162,7 @@ def plot_modal(result, ax=None, title=None):
 
 
 def _modal_words(names):
-    """(title, y label) of plot_modal for its columns' names (solver.column_names: a strain
+    """(title, y label) of plot_modal for its columns' names (run_tables.column_names: a strain
     rod's columns are its components bend_z, bend_y, twist, stretch with their numbers)."""
     rods = {n.rsplit(" ", 1)[0] for n in names if n.rsplit(" ", 1)[-1].startswith("bend_")}
     beams = any(n.rsplit(" ", 1)[0] not in rods for n in names)
@@ -202,7 +203,6 @@ def centerlines(result, model, points=12):
     (docs/beam.md; c the foreshortening of a stiffened beam, s the stretch), a strain rod's
     centre line from its strain (elements/strain_rod.py::rod_centre_line), ending on its output
     point."""
-    from .result import _foreshortening_along
     n = model.n_bodies
     out = np.empty((len(result.t), n, points, 3))
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
@@ -217,7 +217,7 @@ def centerlines(result, model, points=12):
             local = np.zeros((len(result.t), points, 3))
             local[:, :, 0] = x + stretch_along(row, eta, x)
             if row[STIFFENING]:
-                local[:, :, 0] -= _foreshortening_along(row, x, eta, eta)[0]
+                local[:, :, 0] -= foreshortening_along(row, x, eta, eta)[0]
             local[:, :, 1] = eta[:, :m] @ y
             local[:, :, 2] = eta[:, m:2 * m] @ y
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)

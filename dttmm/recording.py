@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 # the kernels' state recorded per body (kernels/stepping/loop.py::Record), restricted to the model's
-# bodies when the kernels integrate more (solver.kernel_model)
+# bodies when the kernels integrate more (run_tables.kernel_model)
 _PER_BODY = ("rot", "omega", "omega_dot", "defl", "defl_rate", "jq", "jqd", "jtau", "v_c")
 
 

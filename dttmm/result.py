@@ -5,15 +5,17 @@ import json
 import numpy as np
 
 from .elements import BEAM, RIGID, ROD
-from .elements.strain_rod import rod_end_section, rod_energies, rod_output_offset
+from .rod_motion import rod_energies
 from .vectors import cross, rows_dot
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
-                            end_shapes, foreshortening, mode_shapes, slope_grams, stretch_along,
+                            mode_shapes, stretch_along,
                             torsion_shapes)
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
-from .elements.rigid_body import MASS, TO_MASS_CENTER, TO_OUTPUT
+from .elements.rigid_body import MASS, TO_MASS_CENTER
+from .sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
+                       output_section, rotation_to_quaternion)
 
 
 FIELDS = (
@@ -170,7 +172,7 @@ class Result:
 
     @classmethod
     def _of_run(cls, derivation, lazy=(), **values):
-        """A solver's Result (solver._result): the fields are known to be valid and the
+        """A solver's Result (run_records._result): the fields are known to be valid and the
         arrays new, held by nothing else, so they are made read-only in place rather than
         through views (views of them, such as force and moment, are then read-only too): the
         checks and copies of __init__ cost a short run a third of its fixed cost.  The
@@ -421,54 +423,12 @@ def _json_value(x):
     return x.item() if isinstance(x, np.generic) else str(x)
 
 
-def rotation_to_quaternion(rot):
-    rot = np.asarray(rot)
-    shape = rot.shape[:-2]
-    r = rot.reshape(-1, 3, 3)
-    q = np.empty((len(r), 4))
-    for i, m in enumerate(r):
-        tr = m[0, 0] + m[1, 1] + m[2, 2]
-        k = np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]])
-        if k == 0:
-            s = 2.0 * np.sqrt(1.0 + tr)
-            q[i] = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s,
-                    (m[1, 0] - m[0, 1]) / s]
-        elif k == 1:
-            s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-            q[i] = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s,
-                    (m[0, 2] + m[2, 0]) / s]
-        elif k == 2:
-            s = 2.0 * np.sqrt(1.0 - m[0, 0] + m[1, 1] - m[2, 2])
-            q[i] = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s,
-                    (m[1, 2] + m[2, 1]) / s]
-        else:
-            s = 2.0 * np.sqrt(1.0 - m[0, 0] - m[1, 1] + m[2, 2])
-            q[i] = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s,
-                    0.25 * s]
-        if q[i, 0] < 0:
-            q[i] = -q[i]
-    return q.reshape(shape + (4,))
-
-
 def rotation_to_xyz_angles(rot):
     rot = np.asarray(rot)
     ty = np.arcsin(np.clip(-rot[..., 2, 0], -1.0, 1.0))
     tx = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
     tz = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
     return np.stack([tx, ty, tz], axis=-1)
-
-
-def _log_so3(r):
-    """Rotation vector of r, through the quaternion (accurate at every angle)."""
-    w, x, y, z = rotation_to_quaternion(r)
-    s = np.sqrt(x * x + y * y + z * z)
-    return 2.0 * np.arctan2(s, w) / s * np.array([x, y, z]) if s > 1e-300 else np.zeros(3)
-
-
-# Gauss-Legendre rule for the beam integrals in chain_energies: 64 points on [0, L] integrate
-# the products of sin(j pi x / L), sin(k pi x / L) (j, k <= 10) times x^2 to ~1e-16 relative
-# (tests/test_reference_beam.py checks it against the closed forms).
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(64)
 
 
 def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
@@ -494,7 +454,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
     u_dot[:, :, 2] = rows_dot(eta_dot[:, nm:2 * nm], y)
     u_dot[:, :, 0] = stretch_along(row, eta_dot, x)
     if exact:
-        c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
+        c, c_dot = foreshortening_along(row, x, eta, eta_dot)
         p[:, :, 0] -= c
         u_dot[:, :, 0] -= c_dot
     a_t = np.swapaxes(a, 1, 2)
@@ -527,7 +487,7 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
         # the foreshortening -c(x) A e1 to first order in c (docs/beam.md, "Geometric
         # stiffening"): T gains int mu (v_I + w x A x e1) . (-c w x A e1 - c' A e1), V gains
         # int mu c g . A e1; c(x) = 1/2 int_0^x (v'^2 + w'^2) by its own quadrature on [0, x]
-        c, c_dot = _foreshortening_along(row, x, eta, eta_dot)
+        c, c_dot = foreshortening_along(row, x, eta, eta_dot)
         e1 = a[:, :, 0]
         u = cross(w, e1)
         int_c, int_cd, int_xc = rows_dot(c, wq), rows_dot(c_dot, wq), rows_dot(c, wq * x)
@@ -536,24 +496,6 @@ def _beam_energies(row, a, w, r_in, v_in, eta, eta_dot, gravity,
                          + np.einsum("ti,ti->t", u, u) * int_xc)
         potential += mu * rows_dot(e1, gravity) * int_c
     return kinetic, potential
-
-
-def _foreshortening_along(row, points, eta, eta_dot):
-    """c(x) = 1/2 int_0^x (v'^2 + w'^2) dxi and its rate at each of the points, (T, points),
-    for T states of one beam: each by a Gauss-Legendre rule of its own on [0, x]."""
-    nm = int(row[MODES])
-    grams = slope_grams(int(row[FAMILY]), row[LENGTH], nm, points, len(_GL_X))
-    c, c_dot = np.zeros((len(eta), len(points))), np.zeros((len(eta), len(points)))
-    for plane in range(2):          # c = 1/2 eta^T D(x) eta, c' = eta^T D(x) eta' per plane
-        e, e_dot = eta[:, plane * nm:(plane + 1) * nm], eta_dot[:, plane * nm:(plane + 1) * nm]
-        c += 0.5 * np.einsum("tj,ijk,tk->ti", e, grams, e)
-        c_dot += np.einsum("tj,ijk,tk->ti", e, grams, e_dot)
-    return c, c_dot
-
-
-def _output_section(*args):
-    from .model import output_section     # (model imports the elements this module uses)
-    return output_section(*args)
 
 
 def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotation=None,
@@ -628,10 +570,10 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                 inb = model.parent[k]                    # the hinge's inboard body
                 a_in = ground_rot[i] if inb < 0 else rotation[i, inb]
                 if inb >= 0 and model.body_kind[inb] == BEAM:     # the beam's end section
-                    a_in = _output_section(model.beam_params[inb], a_in, np.zeros(3),
+                    a_in = output_section(model.beam_params[inb], a_in, np.zeros(3),
                                            eta[i, mode_off[inb]:mode_off[inb + 1]])[0]
                 d_b = a_in.T @ deflection[i, k]
-                psi = _log_so3(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
+                psi = log_rotation(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
     if np.any(model.closure_kind == ELASTIC):
@@ -705,57 +647,3 @@ def beam_midpoint_deflection(model, result, body):
     return np.stack([np.einsum("ti,ti->t", d, e2), np.einsum("ti,ti->t", d, e3)], axis=1)
 
 
-def beam_output_offset(row, rotation, omega, eta, eta_dot):
-    """World offset r_O - r_I = A ((L - c(L)) e1 + u(L)) of a beam's output point and its rate
-    w x (r_O - r_I) + A (u'(L) - c'(L) e1) (docs/beam.md, "End sections"; c(L) the
-    foreshortening, "Geometric stiffening", zero without it; u(L) with the stretch u_x(L),
-    "Stretch"); any leading axes (T states)."""
-    length, nm = row[LENGTH], int(row[MODES])
-    y = end_shapes(int(row[FAMILY]), float(length), nm, 0)[0]
-    eta, eta_dot = np.asarray(eta, dtype=float), np.asarray(eta_dot, dtype=float)
-    c, c_dot = foreshortening(row, eta, eta_dot)
-    u_l, u_l_dot = (stretch_along(row, e, [length])[..., 0] for e in (eta, eta_dot))
-    p = np.stack([length - c + u_l, rows_dot(eta[..., :nm], y),
-                  rows_dot(eta[..., nm:2 * nm], y)], axis=-1)
-    p_dot = np.stack([u_l_dot - c_dot, rows_dot(eta_dot[..., :nm], y),
-                      rows_dot(eta_dot[..., nm:2 * nm], y)], axis=-1)
-    rho = np.einsum("...ij,...j->...i", rotation, p)
-    return rho, cross(omega, rho) + np.einsum("...ij,...j->...i", rotation, p_dot)
-
-
-def element_output_offset(model, k, rotation, omega, eta, eta_dot):
-    """(rho, rho'): a beam's or strain rod's output point from its input point and its rate,
-    world (beam_output_offset, elements/strain_rod.py::rod_output_offset), for one state
-    (rotation (3, 3)) or T states (T, 3, 3); shaped (..., 3) as rotation's leading axes."""
-    rod = model.body_kind[k] == ROD
-    rho, rate = (rod_output_offset if rod else beam_output_offset)(
-        model.rod_params[k] if rod else model.beam_params[k], rotation, omega, eta, eta_dot)
-    shape = np.shape(rotation)[:-1]
-    return np.reshape(rho, shape), np.reshape(rate, shape)
-
-
-def element_end_section(model, k, rotation, omega, eta, eta_dot):
-    """(A_O, w_O) of a beam's or strain rod's output end section, one state (model.
-    output_section, elements/strain_rod.py::rod_end_section)."""
-    if model.body_kind[k] == ROD:
-        return rod_end_section(model.rod_params[k], rotation, omega, eta, eta_dot)[1:]
-    return _output_section(model.beam_params[k], rotation, omega, eta, eta_dot)
-
-
-def point_positions(model, rotation, r_in, eta=None):
-    """Mass-centre and output-point positions from input points and rotations ((T, n, ...) or
-    (n, ...) arrays); eta (T, total modes) or (total modes,) moves the beams' and strain rods'
-    output points."""
-    p = model.body_params
-    r_c = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_MASS_CENTER])
-    r_o = r_in + np.einsum("...ij,...j->...i", rotation, p[:, TO_OUTPUT])
-    flexible = np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]
-    if eta is not None and len(flexible):
-        eta = np.asarray(eta, dtype=float)
-        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
-        for k in flexible:
-            e = eta[..., offsets[k]:offsets[k + 1]]
-            rho, _ = element_output_offset(model, k, rotation[..., k, :, :],
-                                           np.zeros(e.shape[:-1] + (3,)), e, np.zeros_like(e))
-            r_o[..., k, :] = r_in[..., k, :] + rho
-    return r_c, r_o

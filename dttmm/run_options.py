@@ -8,8 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from . import adaptive as adaptive_steps
-from . import closures
-from . import solver as s       # (solver imports this module at its end: read at call time)
+from . import closures, consistent_start, run_checks, run_records, run_tables
 from .methods import SWEEPS, scheme_named
 from .model import Model
 from .recording import Checkpoint, NoCheckpoint
@@ -22,7 +21,7 @@ MAX_LEVELS = 4          # richardson's most runs (h, h/2, h/4, h/8: order 8)
 @dataclass(frozen=True)
 class RunOptions:
     """One simulate call's arguments, checked (simulate's docstring says what each means)."""
-    model: Model                # the user's model (closed where it has loops: solver._closed)
+    model: Model                # the user's model (closed where it has loops: run_checks._closed)
     t_end: float
     dt: float                   # the step (an adaptive run's first step)
     dt_given: bool              # dt given (not an adaptive run's default first step)
@@ -30,7 +29,7 @@ class RunOptions:
     scheme: object              # methods.Scheme
     method: str                 # methods.SWEEPS
     rho_inf: float
-    coef: np.ndarray = field(repr=False)   # the generalized-alpha coefficients (solver.Integrator)
+    coef: np.ndarray = field(repr=False)   # generalized-alpha coefficients (run_tables.Integrator)
     newton_iterations: int = 0
     newton_tol: float = 1e-12
     full_state: bool = False
@@ -104,13 +103,13 @@ def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_it
     """simulate's arguments checked, in the order simulate documents them (RunOptions)."""
     if not isinstance(model, Model):
         raise ValueError("simulate: model must be a Model (see dttmm.build_chain)")
-    if s.has_loops(model):
-        model = s._closed(model)
-    t_end = s._check_positive("t_end", t_end)
+    if run_tables.has_loops(model):
+        model = run_checks._closed(model)
+    t_end = run_checks._check_positive("t_end", t_end)
     scheme = scheme_named(scheme)
     adaptive = rtol is not None
     if adaptive:
-        rtol, atol = s._check_positive("rtol", rtol), float(atol)
+        rtol, atol = run_checks._check_positive("rtol", rtol), float(atol)
         if not atol >= 0.0:
             raise ValueError(f"simulate: atol must be >= 0 (rad or m), got {atol!r}")
         for name, given, why in (("max_energy_error", max_energy_error is not None, "it is "
@@ -124,16 +123,16 @@ def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_it
                 raise ValueError(f"simulate: adaptive steps (rtol) and {name} do not combine: "
                                  f"{why}")
         dt_given = dt is not None
-        dt = t_end / s.MAX_SAMPLES if dt is None else dt
+        dt = t_end / run_records.MAX_SAMPLES if dt is None else dt
     elif dt is None:
         raise ValueError("simulate: give the step dt (s), or rtol for adaptive steps")
     else:
         dt_given = True
-    dt = s._check_positive("dt", dt)
+    dt = run_checks._check_positive("dt", dt)
     if t_end / dt > MAX_STEPS:
         raise ValueError(f"simulate: dt = {dt:g} s makes {t_end / dt:.3g} steps of t_end = "
                          f"{t_end:g} s (more than {MAX_STEPS:.0e}): dt is in seconds")
-    n_steps, dt = s._steps(t_end, dt)
+    n_steps, dt = consistent_start._steps(t_end, dt)
     if isinstance(resume, NoCheckpoint):
         raise ValueError(f"simulate(resume=...): {resume.why}")
     if resume is not None:
@@ -153,13 +152,13 @@ def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_it
     if adaptive:        # the times it lands on, or the steps it records (besides its ends)
         sampling, targets = 1, adaptive_steps.sample_times(t_end, record_dt, t_eval)
     else:
-        sampling, targets = s._sampling(n_steps, dt, record_every, record_dt, t_eval,
+        sampling, targets = run_records._sampling(n_steps, dt, record_every, record_dt, t_eval,
                                       0 if resume is None else resume.step, model.n_bodies), None
     if newton_iterations is None:
         newton_iterations = (scheme.newton_iterations if scheme.newton_iterations is not None
-                             else 16 if s.has_loops(model)
-                             else 8 if s._iterates(model, full_state) else 0)
-    newton_iterations = s._check_count("newton_iterations", newton_iterations, 0)
+                             else 16 if run_tables.has_loops(model)
+                             else 8 if run_checks._iterates(model, full_state) else 0)
+    newton_iterations = run_checks._check_count("newton_iterations", newton_iterations, 0)
     try:
         newton_tol = float(newton_tol)
     except (TypeError, ValueError):
@@ -167,7 +166,7 @@ def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_it
     if not (np.isfinite(newton_tol) and newton_tol >= 0.0):
         raise ValueError(f"simulate: newton_tol must be a finite number >= 0 (rad or m), got "
                          f"{newton_tol!r}")
-    coef = s.Integrator.from_rho_inf(rho_inf).array()     # (checked here, before any run)
+    coef = run_tables.Integrator.from_rho_inf(rho_inf).array()     # (checked here, before any run)
     if not scheme.damping and float(rho_inf) != 1.0:
         raise ValueError(f"simulate: scheme={scheme.name!r} takes no numerical damping: "
                          f"rho_inf must be 1, got {rho_inf!r}")
@@ -181,18 +180,18 @@ def _checked(model, t_end, dt, *, rtol, atol, method, scheme, rho_inf, newton_it
                          f"{richardson!r}")
     richardson = int(richardson)
     max_step_error = (np.inf if max_step_error is None
-                      else s._check_positive("max_step_error", max_step_error))
+                      else run_checks._check_positive("max_step_error", max_step_error))
     if hold_energy not in (None, True, False):
         raise ValueError(f"simulate: hold_energy must be None, True or False, got "
                          f"{hold_energy!r}")
-    why_not_held = s.energy_not_held(model, rho_inf)
+    why_not_held = run_checks.energy_not_held(model, rho_inf)
     if hold_energy and why_not_held:
         raise ValueError(f"simulate: hold_energy=True, but the loops' projection cannot hold "
                          f"this model's energy: {why_not_held} (docs/loops.md, \"The energy "
                          f"held\"); leave hold_energy unset")
     hold_energy = why_not_held is None and hold_energy is not False
     if max_energy_error is not None:
-        max_energy_error = s._check_positive("max_energy_error", max_energy_error)
+        max_energy_error = run_checks._check_positive("max_energy_error", max_energy_error)
     if richardson > 1:
         for name, value in (("stream", stream), ("max_energy_error", max_energy_error)):
             if value is not None:

@@ -22,13 +22,14 @@ from collections import OrderedDict
 import numpy as np
 
 from . import closures
-from . import solver as s       # (solver imports this module at its end: read at call time)
+from . import consistent_start, run_checks, run_inputs, run_tables
 from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import start_energy
-from .kernels.stepping.loop import DirectCalls, Monitor, Settings
+from .elements.kinds import BODY_KIND
+from .kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
 from .model import model_fact
 from .recording import leaves, model_fingerprint
 
@@ -40,26 +41,26 @@ def runs_fused(model, mode, scheme):
     """Whether a kernel model runs in a fused loop (kernels/stepping/ball_chain.py,
     kernels/stepping/tree.py): rigid bodies and beams between ball joints, Newmark or the high-order
     scheme."""
-    return (s.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+    return (run_tables.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
             and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
-            and all(s.BODY_KIND[int(c)].fused for c in model.body_kind))
+            and all(BODY_KIND[int(c)].fused for c in model.body_kind))
 
 
 def runs_welded(model, mode, scheme):
     """Whether a kernel model runs in the fused welded-chain loop (kernels/stepping/weld_chain.py):
     a chain of beams welded end to end from the ground (fixed hinges, a free tip), Newmark."""
-    return (s.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
+    return (run_tables.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
             and model.is_chain and not model.tip_pinned and model.n_bodies > 0
-            and all(int(c) == s.BEAM for c in model.body_kind)
-            and all(int(h) == s.FIXED for h in model.hinge_kind)
+            and all(int(c) == run_tables.BEAM for c in model.body_kind)
+            and all(int(h) == run_tables.FIXED for h in model.hinge_kind)
             and not any(model.ground_locked[1:]))
 
 
 def kernels_used(model, scheme, method="riccati"):
     """The loop variant that runs a user's model with `scheme` (dttmm/methods.py) and `method`
     (describe())."""
-    km, _ = s.kernel_model(model)
-    mode = s._mode(km, method, False)
+    km, _ = run_tables.kernel_model(model)
+    mode = run_tables._mode(km, method, False)
     if runs_fused(km, mode, scheme):
         return "ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"
     if scheme.loop == "energy_momentum":
@@ -77,11 +78,12 @@ class PreparedRun:
     def __init__(self, opts):
         scheme = opts.scheme
         user_model = opts.model
-        model, keep = s.kernel_model(user_model)
+        model, keep = run_tables.kernel_model(user_model)
         self.scheme = scheme
         self.user_model, self.model, self.keep = user_model, model, keep
-        self.loaded = s.loaded_bodies(user_model, model, keep)  # where each body's loads act
-        self.mode = mode = s._mode(model, opts.method, opts.full_state)
+        self.loaded = run_tables.loaded_bodies(user_model, model,
+                                               keep)  # where each body's loads act
+        self.mode = mode = run_tables._mode(model, opts.method, opts.full_state)
         dt, coef, n = opts.dt, opts.coef, model.n_bodies
         # the loop variant (kernels/stepping/loop.py): a fused one (kernels/stepping/ball_chain.py,
         # tree.py, weld_chain.py), the energy-momentum scheme's, or the general loop
@@ -90,65 +92,66 @@ class PreparedRun:
         if scheme.loop == "runge_kutta" and not fused:     # (check_supported refuses it)
             raise ValueError(f"simulate(scheme={scheme.name!r}): the model does not run in the "
                              f"fused ball-joint loops its stages take")
-        ws = s.Workspace(model, fused=fused)
+        ws = run_tables.Workspace(model, fused=fused)
         state = ws.state
-        self.params = params = s.kernel_params(model)
+        self.params = params = run_tables.kernel_params(model)
         self.settings = settings = Settings(
             mode=mode, h=dt, coef=coef, newton_max=int(opts.newton_iterations),
             newton_tol=opts.newton_tol, record_every=1, max_step_error=opts.max_step_error,
             stop_unconverged=scheme.stop_unconverged, start=False)
         monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
-                          jqp=np.zeros((n if s.has_coordinates(model) else 0, 2)),
-                          defl_pseudo=np.zeros((n if (model.hinge_kind == s.ELASTIC).any()
+                          jqp=np.zeros((n if run_tables.has_coordinates(model) else 0, 2)),
+                          defl_pseudo=np.zeros((n if (model.hinge_kind == run_tables.ELASTIC).any()
                                                 else 0, 3)),
                           error=np.zeros(2))
         welded = runs_welded(model, mode, scheme)
         loop = runner = None
         if fused and mode == kstep.RICCATI_TREE:
-            loop_name, runner = "ball-tree", s.run_steps
+            loop_name, runner = "ball-tree", run_steps
             loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
         elif fused:
-            loop_name, runner = "ball-chain", s.run_steps
+            loop_name, runner = "ball-chain", run_steps
             loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
-        loops = s.loop_tables(model)
+        loops = run_tables.loop_tables(model)
         if welded:          # (its start: one pass of its own loop, then the loop from it)
-            runner = s.run_steps
+            runner = run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
-        s._consistent_start(model, mode, opts.method, (runner, loop) if fused or welded else None,
-                            params, settings, state, ws.sweep, monitor, dt, loops,
-                            in_skeleton=not (fused or welded or scheme.loop == "energy_momentum"))
+        consistent_start._consistent_start(
+            model, mode, opts.method, (runner, loop) if fused or welded else None, params,
+            settings, state, ws.sweep, monitor, dt, loops,
+            in_skeleton=not (fused or welded or scheme.loop == "energy_momentum"))
         if opts.hold_energy:    # the total energy the steps hold (kernels/assembly/closure.py)
             loops.energy[:2] = 1.0, start_energy(params, loops, state)
-        histories = s._station_histories(model, state, scheme.name == "paper")
+        histories = run_tables._station_histories(model, state, scheme.name == "paper")
         state.z[:, 3:6] = 0.0          # from here on the phi slots hold rotation increments
 
         # the joints' offsets (an elastic hinge's deflection, a slide) where a joint has one
         # (they are zero otherwise: _result's zeros, 48 B per body and sample not kept)
-        offsets = ["defl", "defl_rate"] if s.has_offsets(model) else []
+        offsets = ["defl", "defl_rate"] if run_tables.has_offsets(model) else []
         keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
         if mode == kstep.RICCATI_JOINTS:
             keys += ["jq", "jqd", "jtau"]
         if len(loops.kind):
             keys.append("closure_wrench")
         if scheme.loop == "energy_momentum":
-            loop_name, runner = "energy-momentum", s.run_steps
+            loop_name, runner = "energy-momentum", run_steps
             loop = em_step.energy_momentum_loop(n)
-            state.v_c[:] = s._initial_mass_center_velocities(model, state.rot, state.omega)
+            state.v_c[:] = run_tables._initial_mass_center_velocities(model, state.rot, state.omega)
         elif fused and scheme.loop == "runge_kutta":
             loop_name = f"runge-kutta ({loop_name})"
         elif fused:
             ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
         elif welded:
-            loop_name, runner = "welded-chain", s.run_steps
+            loop_name, runner = "welded-chain", run_steps
             loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
         else:
-            loop_name, runner = "general", s.run_steps
+            loop_name, runner = "general", run_steps
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
-                                      s.compiled_forces(model).copy())    # (the run's own)
+                                      run_tables.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)
         self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
         self.calls = DirectCalls()      # (its skeleton's calls: kernels/stepping/loop.py)
-        self.run_info = dict(mode=s._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
+        self.run_info = dict(mode=run_tables._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
                              loop=loop_name, model_fingerprint=model_fingerprint(user_model))
         if len(loops.kind):
             self.run_info.update(energy_held=bool(opts.hold_energy))
@@ -182,16 +185,16 @@ class PreparedRun:
                                         else histories[4]),
                                    closure_wrench=self.loops.wrench)
         if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
-            self.derivative_run = s.start_pass(     # (fixed ground, no loads or drives:
-                params, settings, self.state, self.sweep, self.monitor,    # check_supported)
-                s._ground(model, [0.0]), s._loads(model, [0.0]),
-                s._joint_inputs(model, [0.0]), len(loops.kind))
+            self.derivative_run = consistent_start.start_pass(  # (fixed ground, no loads or
+                params, settings, self.state, self.sweep, self.monitor,  # drives: check_supported)
+                run_inputs._ground(model, [0.0]), run_inputs._loads(model, [0.0]),
+                run_inputs._joint_inputs(model, [0.0]), len(loops.kind))
             self.derivative_loop = ball_chain.start_loop(self.loop, self.state, self.sweep)
             self.integrator = runge_kutta.runge_kutta_scratch(
                 n, len(self.state.eta), runge_kutta.dop853_tables())
-        self.beam_tips = s._beam_tips(model)
-        self.start_fastest = s._fastest_rate(self.state.omega[None])  # (drivers.fixed_steps)
-        self.closing_forces = s.closure_forces(model, self.loops)
+        self.beam_tips = run_checks._beam_tips(model)
+        self.start_fastest = run_checks._fastest_rate(self.state.omega[None])  # (drivers)
+        self.closing_forces = closures.closure_forces(model, self.loops)
         # what each run's chunks evaluate in Python (drivers.Stepping.inputs_for): JointForces
         # of the state given as Python functions (one step per chunk), the drives' and the
         # driven closing joints' inputs, the applied loads
@@ -347,7 +350,7 @@ class prepared_run:
     def __enter__(self):
         opts = self.opts
         model = opts.model
-        key = opts.plan_key + (s.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
+        key = opts.plan_key + (run_tables.FUSED_BALL_CHAIN, closures.PINNED_TIP_SWEEP)  # (switches
         #                                                                   that tests turn)
         pure = start_is_pure(model)
         if pure:

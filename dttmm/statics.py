@@ -28,14 +28,16 @@ from .elements.kinds import BODY_KIND, JOINT_KIND
 from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
                             trusted_frequency)
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .elements.strain_rod import ROD_LENGTH, rod_centre_line, rod_end_section
+from .elements.strain_rod import ROD_LENGTH
+from .rod_motion import rod_centre_line, rod_end_section
 from .kernels.stepping import ball_chain
 from .kernels.stepping.loop import Monitor, Settings
 from .kernels.transfers.joint import joint_frame, n_coordinates
 from .kernels.algebra.so3 import expm_so3
-from .model import Model, output_section
-from .result import _foreshortening_along, _log_so3, beam_output_offset
-from . import solver
+from .kernels.stepping.loop import run_steps
+from .model import Model
+from .sections import beam_output_offset, foreshortening_along, log_rotation, output_section
+from . import consistent_start, run_checks, run_tables
 
 __all__ = ["StaticEquilibrium", "StaticEquilibriumError", "static_equilibrium"]
 
@@ -134,7 +136,7 @@ class StaticEquilibrium:
             x = np.linspace(0.0, row[LENGTH], int(points_per_beam))
             y = mode_shapes(int(row[FAMILY]), row[LENGTH], nm, x)[0]
             eta = m.initial_modal_coordinates[off[k]:off[k + 1]]
-            c = (_foreshortening_along(row, x, eta[None], np.zeros((1, len(eta))))[0][0]
+            c = (foreshortening_along(row, x, eta[None], np.zeros((1, len(eta))))[0][0]
                  if row[STIFFENING] else np.zeros(len(x)))
             local = np.stack([x - c + stretch_along(row, eta, x), eta[:nm] @ y,
                               eta[nm:2 * nm] @ y], axis=1)
@@ -196,7 +198,7 @@ class _Configuration:
     axes: behind a ball joint or an elastic hinge; each joint coordinate that no motion
     prescribes; each elastic hinge's deflection, world, m; then every beam's modal
     coordinates), and the accelerations at rest a(q) by the solver's consistent start.  Works on
-    the kernel model (solver.kernel_model), whose extra massless bodies are welded and so follow
+    the kernel model (run_tables.kernel_model), whose extra massless bodies are welded and so follow
     their inboard bodies."""
 
     def __init__(self, model, where):
@@ -208,7 +210,7 @@ class _Configuration:
                              f"({kind.name}), which DT-TMM's sweep does not run yet (the "
                              f"static solve takes its consistent start); the Newton-Euler "
                              f"reference runs it (dttmm.reference.simulate_reference)")
-        km, self.keep = solver.kernel_model(model)
+        km, self.keep = run_tables.kernel_model(model)
         self.model = km
         n = km.n_bodies
         for k in range(n):
@@ -262,20 +264,20 @@ class _Configuration:
         self.rot0 = np.array(km.initial_rotation, order="C")
         self.eta0 = np.array(km.initial_modal_coordinates)
         # one workspace for every evaluation (the beams' tables do not change)
-        self.mode = solver._mode(km, "riccati", False)
-        self.ws = solver.Workspace(km)
-        self.params = solver.kernel_params(km)
-        self.settings = Settings(mode=self.mode, h=1.0, coef=solver.Integrator.from_rho_inf(1.0)
+        self.mode = run_tables._mode(km, "riccati", False)
+        self.ws = run_tables.Workspace(km)
+        self.params = run_tables.kernel_params(km)
+        self.settings = Settings(mode=self.mode, h=1.0, coef=run_tables.Integrator.from_rho_inf(1.0)
                                  .array(), newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)
         self.monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(self.n_eta),
-                               jqp=np.zeros((n if solver.has_coordinates(km) else 0, 2)),
+                               jqp=np.zeros((n if run_tables.has_coordinates(km) else 0, 2)),
                                defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
         self.fused = None
-        if (solver.FUSED_BALL_CHAIN and self.mode == solver.kstep.RICCATI_REDUCED
+        if (run_tables.FUSED_BALL_CHAIN and self.mode == run_tables.kstep.RICCATI_REDUCED
                 and not km.needs_general_loop
-                and all(solver.BODY_KIND[int(c)].fused for c in km.body_kind)):
-            self.fused = (solver.run_steps,
+                and all(BODY_KIND[int(c)].fused for c in km.body_kind)):
+            self.fused = (run_steps,
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
 
     def vector(self, rot, jq, eta, defl):
@@ -283,7 +285,7 @@ class _Configuration:
         coordinates and hinge deflections (n, 3) (rotations relative to the model's own)."""
         q = np.zeros(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
-            q[3 * i:3 * i + 3] = _log_so3(rot[k] @ self.rot0[k].T)
+            q[3 * i:3 * i + 3] = log_rotation(rot[k] @ self.rot0[k].T)
         for j, (k, i) in enumerate(self.coords):
             q[self.n_rot + j] = jq[k, i]
         for j, k in enumerate(self.elastic):
@@ -358,7 +360,8 @@ class _Configuration:
             st.defl[k] = defl[k]
             st.defl_rate[k] = 0.0
         st.z[:] = 0.0
-        solver._consistent_start(self.model, self.mode, "riccati", self.fused, self.params,
+        consistent_start._consistent_start(self.model, self.mode, "riccati", self.fused,
+                                           self.params,
                                  self.settings, st, self.ws.sweep, self.monitor, 1.0)
         a = np.empty(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
@@ -496,9 +499,9 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
     if not isinstance(model, Model):
         raise TypeError(f"{where}: model must be a dttmm.Model (build_chain or System.build), "
                         f"got {type(model).__name__}")
-    tol = solver._check_positive("tol", tol, where)
-    max_increment = solver._check_positive("max_increment", max_increment, where)
-    max_iterations = solver._check_count("max_iterations", max_iterations, 1, where)
+    tol = run_checks._check_positive("tol", tol, where)
+    max_increment = run_checks._check_positive("max_increment", max_increment, where)
+    max_iterations = run_checks._check_count("max_iterations", max_iterations, 1, where)
     check_runs_in_sweeps(model, where)
     cfg = _Configuration(model, where)
     q = cfg.vector(cfg.rot0, cfg.jq0, cfg.eta0, cfg.defl0)
@@ -673,7 +676,7 @@ def _accelerations_or_nan(cfg, q):
     """a(q), or NaN where the sweep breaks down (a step too far)."""
     try:
         return cfg.accelerations(q)
-    except solver.DivergenceError:
+    except run_checks.DivergenceError:
         return np.full(len(q), np.nan)
 
 
@@ -730,11 +733,11 @@ def _damped_closed_step(cfg, q, a, k, r, loop, newton, max_increment):
 def _check_within_validity(cfg, q, where):
     """Refuse an equilibrium that bends a beam beyond what its modal description holds: a tip
     deflection larger than the beam's length, or a twist beyond half a turn (the time loop's
-    check, solver._beam_beyond_its_length); such a configuration solves the modal equations
+    check, run_checks._beam_beyond_its_length); such a configuration solves the modal equations
     but is no beam's shape (one element rolled into a full circle puts its tip 5.6 m from a
     1 m beam's root)."""
     model = cfg.result_model(q)
-    cause = solver._beam_beyond_its_length(model, solver._beam_tips(model),
+    cause = run_checks._beam_beyond_its_length(model, run_checks._beam_tips(model),
                                            model.initial_modal_coordinates)
     if cause:
         cause = cause.split(":")[0]

@@ -104,12 +104,12 @@ def energy_gaps_with_an_arm(beam, gravity, steps=(1e-3, 5e-4), t_end=0.5):
 
 def fused_and_general(monkeypatch, model, t_end, dt, loop, **kwargs):
     """The same run through the fused loop named `loop` (result.info["loop"]) and through the
-    general loop (solver.FUSED_BALL_CHAIN = False), checking which loop each took."""
-    from dttmm import simulate, solver
+    general loop (run_tables.FUSED_BALL_CHAIN = False), checking which loop each took."""
+    from dttmm import run_tables, simulate
     fused = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", False)
+    monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", False)
     general = simulate(model, t_end, dt, **kwargs)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", True)
+    monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", True)
     assert fused.info["loop"] == loop and general.info["loop"] == "general"
     return fused, general
 

@@ -9,8 +9,8 @@ from helpers import fused_and_general, rot_z
 
 from dttmm import BallJoint, DivergenceError, Ground, PrescribedMotion, RigidBody, build_chain, \
     simulate
-from dttmm import solver
 from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm import run_tables
 
 
 def _both_loops(monkeypatch, model, t_end, dt, **kwargs):
@@ -86,7 +86,7 @@ def test_fused_loop_reports_divergence_like_the_general_loop(monkeypatch):
     model = build_chain([BallJoint(), unit_link(), BallJoint(), spinning])
     errors = []
     for fused in (True, False):
-        monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", fused)
+        monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", fused)
         with pytest.raises(DivergenceError) as err:
             simulate(model, 1.0, 1e-2)
         errors.append(err.value)

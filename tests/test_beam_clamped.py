@@ -7,7 +7,7 @@ from scipy.optimize import brentq
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RigidBody, UnresolvedMotionWarning,
                    build_chain, simulate)
-from dttmm.model import output_section
+from dttmm.sections import output_section
 
 L, EI, MU = 1.0, 100.0, 2.0
 ROOTS = [1.87510406871196, 4.69409113297418, 7.85475743823761]   # 1 + cos x cosh x = 0

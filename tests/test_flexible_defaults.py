@@ -16,7 +16,8 @@ from dttmm import (EulerBernoulliBeam, FixedHinge, JointMotion, RevoluteJoint, R
                    System, assemble, simulate)
 from dttmm.elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, MODES, STIFFENING,
                                  _unit_beam_with_ends)
-from dttmm.elements.strain_rod import ROD_MODES, rod_centre_line
+from dttmm.elements.strain_rod import ROD_MODES
+from dttmm.rod_motion import rod_centre_line
 from dttmm.result import beam_midpoint_deflection
 from helpers import rot_z
 

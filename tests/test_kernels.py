@@ -262,7 +262,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
     from dttmm.kernels.transfers.beam import _evaluate, beam_transfer, transfer_work_size
-    from dttmm.solver import Workspace
+    from dttmm.run_tables import Workspace
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
                 else (_stiffened_cantilever(2 if "twist" in system else 0,
@@ -374,7 +374,7 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening, stretch
                                      torsion_shapes)
     from dttmm.kernels.transfers.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES,
                                               SUM_U, SUM_V, aux_rows, beam_relations)
-    from dttmm.solver import beam_tables
+    from dttmm.run_tables import beam_tables
     from types import SimpleNamespace
     gen = np.random.default_rng(3 + family + m)
     length, mu, ei_v, ei_w, j_p, zeta = 1.3, 2.1, 40.0, 55.0, 0.02, 0.04
@@ -501,7 +501,7 @@ def test_beam_ball_map_folds_the_beam_transfer():
     from dttmm.kernels.transfers.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
                                               transfer_work_size)
     from dttmm.kernels.assembly.sweep import fold_ball_body
-    from dttmm.solver import Workspace
+    from dttmm.run_tables import Workspace
     model = three_pendulum(2, damping_ratio=0.03)
     _, bp, moments, mode_off, ends, factors = Workspace(model).beams
     k, m = 1, 2

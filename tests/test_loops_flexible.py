@@ -142,7 +142,7 @@ def _square_with_an_arm(at_beam):
 
 
 def test_a_loop_closed_at_a_beam_input_end_converges_to_the_reference():
-    """A closing joint at a beam's input end (solver.kernel_model's input section takes the
+    """A closing joint at a beam's input end (run_tables.kernel_model's input section takes the
     beam's hinge, the beam welded to it): the four-bar closed at the arm's input end moves as
     the same four-bar closed at the crank's top to 1e-10 m (measured 1e-14) and converges to
     the reference at order 2 (measured 1.0e-5, 2.3e-6 m at dt = 5e-4, 2.5e-4; the arm's tip

@@ -8,8 +8,9 @@ import pytest
 
 import dttmm
 from dttmm import PDTracking, RevoluteJoint, RigidBody, System, simulate, simulate_reference
-from dttmm import solver
+from dttmm import run_tables
 from dttmm.chains import arm, arm_servo
+from dttmm import run_plan
 
 from helpers import fitted_order
 
@@ -142,13 +143,13 @@ def test_a_numba_joint_force_runs_inside_the_loop_and_is_the_pd_law(monkeypatch)
     to the same implicit step, its slope taken by differences).  (The consistent start is one
     more call of the skeleton, Settings.start: not counted.)"""
     calls = []
-    real = solver.run_steps
+    real = run_plan.run_steps
 
     def counted(loop, run, *args, **kwargs):
         if not run.settings.start:
             calls.append(1)
         return real(loop, run, *args, **kwargs)
-    monkeypatch.setattr(solver, "run_steps", counted)
+    monkeypatch.setattr(run_plan, "run_steps", counted)
     compiled = arm("pd-njit")
     assert compiled.drives[0][0]["compiled"]
     b = simulate(compiled, 0.5, 1e-3)
@@ -233,7 +234,7 @@ def test_a_run_with_a_numba_joint_force_resumes_with_this_process_callbacks():
     model = arm("pd-njit")
     whole = simulate(model, 0.1, 1e-3)
     half = simulate(model, 0.05, 1e-3)
-    address = solver.compiled_forces(solver.kernel_model(model)[0])[0]
+    address = run_tables.compiled_forces(run_tables.kernel_model(model)[0])[0]
     arrays = tuple(np.zeros_like(a) if (a.dtype == np.int64 and a.shape == (1,)
                                         and a[0] == address) else a
                    for a in half.checkpoint.arrays)

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate,
-                   solver)
+from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
 from dttmm.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
                           unit_link)
+from dttmm import run_records
 
 ROOT = Path(__file__).resolve().parents[1]
 STATE = ("t", "rotation", "angular_velocity", "angular_acceleration", "force", "moment",
@@ -191,7 +191,7 @@ def test_a_streamed_run_holds_no_samples_in_memory(tmp_path):
                                      {}])
 def test_a_fixed_step_run_knows_how_many_samples_it_records(options):
     """A fixed-step run writes its samples into arrays of the rows it will record
-    (solver._sample_count; recording.Recording(samples=)): the count is the samples it then
+    (run_records._sample_count; recording.Recording(samples=)): the count is the samples it then
     records, from t = 0 and from a checkpoint, so that no row is joined or left over."""
     model = rigid_chain(3)
     runs = [(0, simulate(model, 0.01, 1e-3, **options))]
@@ -199,6 +199,6 @@ def test_a_fixed_step_run_knows_how_many_samples_it_records(options):
         first = simulate(model, 0.004, 1e-3, **options)
         runs.append((4, simulate(model, 0.01, 1e-3, resume=first.checkpoint, **options)))
     for start, result in runs:
-        sampling = solver._sampling(10, 1e-3, options.get("record_every"), None,
+        sampling = run_records._sampling(10, 1e-3, options.get("record_every"), None,
                                     options.get("t_eval"), start, model.n_bodies)
-        assert len(result.t) == solver._sample_count(sampling, start, 10), (start, result.t)
+        assert len(result.t) == run_records._sample_count(sampling, start, 10), (start, result.t)

@@ -7,10 +7,11 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import BallJoint, DivergenceError, build_chain, simulate
-from dttmm import solver
+from dttmm import run_inputs
 from dttmm.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
+from dttmm import run_tables
 
 DTS = (5e-3, 2.5e-3, 1.25e-3)
 
@@ -29,7 +30,7 @@ def test_rigid_chain_fourth_order(chain_and_reference, monkeypatch, fused, rho_i
     """5 swinging links over 1 s, both time loops.  Measured: slope 4.0 at rho_inf 1 and 0.8
     (errors 1.4e-5 -> 3.4e-9 m from dt = 1e-2), against 2.0 for the plain runs."""
     model, ref = chain_and_reference
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", fused)
+    monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", fused)
     errors, plain_errors = [], []
     for dt in DTS:
         res = simulate(model, 1.0, dt, rho_inf=rho_inf, richardson=True,
@@ -179,7 +180,7 @@ def test_nearest_rotations_is_the_polar_factor():
         u, _, vt = np.linalg.svd(m)
         polar = u @ vt
         proper = np.linalg.det(polar) > 0                    # (a reflection: no rotation near)
-        near = solver.nearest_rotations(m)
+        near = run_inputs.nearest_rotations(m)
         assert np.abs(near - polar)[proper].max() < 1e-13, scale
         assert np.abs(np.swapaxes(near, 1, 2) @ near - np.eye(3)).max() < 1e-14, scale
         assert np.all(np.linalg.det(near) > 0)

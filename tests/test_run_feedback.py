@@ -84,7 +84,7 @@ def test_a_line_while_kernels_compile_says_what_and_how_long(capsys, monkeypatch
     _fresh_kernel("dttmm.kernels.fresh")(np.ones(3))    # a second: one line, not the whole why
     again = capsys.readouterr().err
     assert "compiling the numba kernels (fresh_kernel) too" in again
-    assert "once per machine" not in again and "compiled fresh_kernel in" in again
+    assert "once per install" not in again and "compiled fresh_kernel in" in again
     kernel(np.ones(4))                                  # compiled: nothing
     _fresh_kernel("users_module")(np.ones(3))          # not ours: nothing
     assert capsys.readouterr().err == ""

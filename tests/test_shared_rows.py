@@ -1,6 +1,6 @@
 """Equal links hold their tables once (issue 30, "a million bodies"): where every body's (joint's)
 row of a per-body table is the same, the model shows that row for all through a view of stride
-0 (model.shared_rows) and the kernels read the one row (solver.kernel_params: body_row,
+0 (model.shared_rows) and the kernels read the one row (run_tables.kernel_params: body_row,
 hinge_row).  The runs of such a model equal bit for bit those of the same model with every row
 stored, on every loop variant; and the model's memory per body falls accordingly."""
 import os
@@ -125,7 +125,7 @@ def test_no_kernel_reads_a_table_past_its_rows():
     ball-joint tree on the full-state sweep, and the high-order scheme's stages on the fused
     chain, two steps each with numba's compilation off (pure Python: numpy refuses an index past
     the end, where compiled code would read past it).  The fused loops' state has no rows of
-    joint offsets, coordinates or mass-centre velocities (solver.Workspace): read here too."""
+    joint offsets, coordinates or mass-centre velocities (run_tables.Workspace): read here too."""
     script = (
         "import sys; sys.path.insert(0, 'tests')\n"
         "from test_shared_rows import CASES\n"

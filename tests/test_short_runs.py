@@ -7,11 +7,12 @@ import pickle
 import numpy as np
 import pytest
 
-from dttmm import BallJoint, build_chain, simulate, solver
+from dttmm import BallJoint, build_chain, simulate
 from dttmm.chains import arm, rigid_chain, three_pendulum, unit_link
 from dttmm.mechanisms import n_four_bar
 from dttmm.recording import leaves
 from dttmm.result import FIELDS
+from dttmm import run_checks, run_tables
 
 
 MODELS = {
@@ -23,9 +24,9 @@ MODELS = {
 
 
 def _tables(model):
-    km = solver.kernel_model(model)[0]
-    return leaves((solver.kernel_params(km), solver.beam_tables(km),
-                   solver.loop_tables(km)))
+    km = run_tables.kernel_model(model)[0]
+    return leaves((run_tables.kernel_params(km), run_tables.beam_tables(km),
+                   run_tables.loop_tables(km)))
 
 
 @pytest.mark.parametrize("name", list(MODELS))
@@ -49,8 +50,8 @@ def test_a_second_run_does_not_rebuild_the_kernels_model(monkeypatch):
     """The kernels' model is built on the first run of a model only; a new model (or a copy of
     it through pickle, which carries its fields, not its kept facts) builds its own."""
     calls = []
-    original = solver._kernel_model
-    monkeypatch.setattr(solver, "_kernel_model", lambda m: calls.append(m) or original(m))
+    original = run_tables._kernel_model
+    monkeypatch.setattr(run_tables, "_kernel_model", lambda m: calls.append(m) or original(m))
     model = arm(drive="pd")
     simulate(model, 0.002, 1e-3)
     assert len(calls) == 1
@@ -223,14 +224,14 @@ def test_a_kept_run_holds_a_bounded_number_of_chunk_arrays_and_reuses_them_bitwi
 
 
 def test_the_fastest_rate_is_the_same_on_lists_and_on_arrays():
-    """solver._fastest_rate's two paths (a few values in Python, many in numpy) pick the same
+    """run_checks._fastest_rate's two paths (a few values in Python, many in numpy) pick the same
     largest |w| and body."""
     rng = np.random.default_rng(3)
     for shape in ((1, 3, 3), (2, 5, 3), (4, 8, 3), (40, 7, 3)):
         omega = rng.normal(size=shape)
         squares = (omega ** 2).sum(axis=-1)
         at = np.unravel_index(squares.argmax(), squares.shape)
-        rate, body = solver._fastest_rate(omega)
+        rate, body = run_checks._fastest_rate(omega)
         assert body == at[1]
         assert rate == pytest.approx(np.sqrt(squares[at]), rel=1e-15)
 

@@ -6,7 +6,7 @@ import pytest
 
 import dttmm
 from dttmm import EulerBernoulliBeam, FixedHinge, RevoluteJoint, RigidBody, System
-from dttmm.closures import assemble
+from dttmm.assembly import assemble
 from dttmm.mechanisms import n_four_bar, parallelogram
 
 

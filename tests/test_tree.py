@@ -8,7 +8,8 @@ from dttmm.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_cha
                           three_pendulum, unit_link)
 from dttmm.model import Model
 from dttmm.reference import simulate_reference
-from dttmm import run_plan, solver
+from dttmm import run_plan
+from dttmm import run_tables
 
 def angular_momentum(model, res):
     """(T, 3) total angular momentum about the world origin from the recorded state."""
@@ -32,7 +33,7 @@ def test_the_tree_sweep_on_a_chain_is_the_chain_sweep(make, t_end, dt, monkeypat
     monkeypatch.setattr(Model, "is_chain", property(lambda self: False))
     run_plan.forget(model)          # (its prepared runs are the chain's)
     tree = simulate(model, t_end, dt)
-    monkeypatch.setattr(solver, "FUSED_BALL_CHAIN", False)
+    monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", False)
     general = simulate(model, t_end, dt)
     assert chain.info["loop"] == "ball-chain" and tree.info["loop"] == "ball-tree"
     assert general.info["loop"] == "general" and general.info["mode"] == "riccati-tree"

@@ -1,5 +1,5 @@
 """Where a child hangs in a tree: at a beam's end behind any joint kind, and at the named
-points of a rigid body (solver.kernel_model's end sections and attachment offsets;
+points of a rigid body (run_tables.kernel_model's end sections and attachment offsets;
 docs/topology.md, "What the kernels integrate"), against an analytical composite body, the
 conservation laws and the independent Newton-Euler reference."""
 import numpy as np

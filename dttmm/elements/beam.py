@@ -78,7 +78,7 @@ def mode_shapes(family, length, n_modes, x):
 def end_shapes(family, length, n_modes, n_twist):
     """(Y_k(L), Y_k'(L), Psi_k(L)), each (n,): the bending shapes, their slopes and the twists
     at a beam's output end, which place its output point and turn its output section
-    (model.output_section, result.beam_output_offset, solver._beam_tips; docs/beam.md, "End
+    (sections.output_section, sections.beam_output_offset, run_checks._beam_tips; docs/beam.md, "End
     sections"): evaluated once per kind of beam (read-only arrays)."""
     y, slope = (v[:, 0] for v in mode_shapes(family, length, n_modes, [length])[:2])
     twist = torsion_shapes(family, length, n_twist, [length])[0][:, 0]
@@ -110,8 +110,8 @@ def slope_grams(family, length, n_modes, points, order):
     """(len(points), n_modes, n_modes): D(x) = int_0^x Y_j'(xi) Y_k'(xi) dxi at each of the
     points, each by a Gauss-Legendre rule of `order` points on [0, x] (symmetrized): the
     foreshortening c(x) = 1/2 eta^T D(x) eta per plane of the exact foreshortening
-    (docs/beam.md, "The exact foreshortening"; solver.exact_section_table,
-    result._foreshortening_along)."""
+    (docs/beam.md, "The exact foreshortening"; run_tables.exact_section_table,
+    sections.foreshortening_along)."""
     t, wt = np.polynomial.legendre.leggauss(int(order))
     out = np.empty((len(points), n_modes, n_modes))
     for i, x in enumerate(points):

@@ -88,7 +88,7 @@ solved by eliminating the tree first and then the multipliers from the Delassus 
 truncated SVD (_solve_least_closure_force): the least multipliers, where constraints are
 redundant (a planar loop of spatial revolute joints; a chain straight between two fixed points,
 whose tension is then indeterminate, as the DT-TMM sweeps take it) or singular (a
-parallelogram lying flat).  A run starts from an assembled state (closures.assemble, applied
+parallelogram lying flat).  A run starts from an assembled state (assembly.assemble, applied
 when the loops are open by more than 1e-10 at t = 0).
 
 Attachment points.  In a tree "k - 1" above reads parent[k] = P, and hinge k sits at P's
@@ -257,10 +257,12 @@ from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
 from ..elements.kinds import JOINT_KIND, coordinate_count
 from ..kernels import python_twin
-from ..closures import (assemble, check_drives_move, closure_forces, constraint_rows,
+from ..assembly import assemble
+from ..closures import (check_drives_move, closure_forces, constraint_rows,
                         has_closure_drives, loop_residuals)
 from ..model import Model
-from ..result import Result, chain_energies, point_positions, rotation_to_quaternion
+from ..result import Result, chain_energies
+from ..sections import point_positions, rotation_to_quaternion
 
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
@@ -284,10 +286,10 @@ LOOP_DAMPING = 20.0
 
 def _loop_rows(model, col0):
     """The closing joints as the kernels read them (_closure_rows): (first multiplier column,
-    per row its kind (closures.GAP_WORLD, GAP_A or DOT), its closing joint, x or e, y, then per
-    closing joint its sides' bodies, points and end flags, the stabilization's gains, per row
-    its angle axis, its targets, its driven coordinate, its drive's law, and its (g, g') as the
-    last evaluation found them)."""
+    per row its kind (elements/kinds.py: GAP_WORLD, GAP_A or DOT), its closing joint, x or e,
+    y, then per closing joint its sides' bodies, points and end flags, the stabilization's
+    gains, per row its angle axis, its targets, its driven coordinate, its drive's law, and its
+    (g, g') as the last evaluation found them)."""
     kind, owner, v1, v2, v3, coordinate, law = constraint_rows(model)
     return (col0, kind, owner, v1, v2,
             np.array(model.closure_body, dtype=np.int64).reshape(-1, 2),
@@ -728,7 +730,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     assembly = None
     if model.n_closures:
         before = [float(np.max(r, initial=0.0)) for r in loop_residuals(model)]
-        if max(before) > 1e-10:          # close the loops first (closures.assemble, which
+        if max(before) > 1e-10:          # close the loops first (assembly.assemble, which
             model = assemble(model)      # refuses a drive the loops lock)
         else:
             check_drives_move(model, "simulate_reference")

@@ -7,9 +7,9 @@ from ..elements.drives import FORCE, SPRING_DAMPER
 from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLATION,
                                REST_ROTATION)
 from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from ..elements.kinds import WITH_COORDINATES
+from ..elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A,
+                             WITH_COORDINATES)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
-from ..closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 
 
 # offsets into a body_params / hinge_params row, as plain ints for the kernels

@@ -25,7 +25,7 @@ responses to unit multipliers (project_onto_loops), so that every step ends with
 closed.
 
 A row's response is zero outside the subtrees of its loaded bodies' topmost moving ancestors
-(its active bodies, solver._column_bodies): below the ground (fixed, or moving as prescribed),
+(its active bodies, run_tables._column_bodies): below the ground (fixed, or moving as prescribed),
 a loop that closes near it costs the sweep, the Delassus matrix and the projection only its
 own bodies.
 
@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 from .. import allocating_kernel, kernel, no_alloc_kernel
-from ...closures import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
+from ...elements.kinds import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
 from ...elements import BEAM, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
@@ -174,7 +174,7 @@ def _beam_offset(beams, k, rot, w, eta, eta_d):
     """Beam k's output point from its input point, rho = A p and its rate w x rho + A p', with
     p = [L - c(L) + u_x(L), v(L), w(L)] (docs/beam.md, "End sections": c(L) the
     foreshortening with geometric stiffening, beam.end_foreshortening; u_x(L) the stretch;
-    result.beam_output_offset in Python); beams: the kernel model's beam tables."""
+    sections.beam_output_offset in Python); beams: the kernel model's beam tables."""
     bp, moments, mode_off, ends = beams[1], beams[2], beams[3], beams[4]
     i0 = mode_off[k]
     m, mt, ma = int(bp[k, MODES]), int(bp[k, TORSION_MODES]), int(bp[k, AXIAL_MODES])

@@ -37,9 +37,9 @@ Params = namedtuple("Params", [
     "hinge_params",     # (rows, HINGE_PARAM_SIZE) elements/hinges.py: joint k's at hinge_row[k]
     "gravity",          # (3,) m/s^2
     "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors):
-                        # solver.beam_tables
+                        # run_tables.beam_tables
     "rods",             # (rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section):
-                        # solver.rod_tables (kernels/transfers/strain_rod.py)
+                        # run_tables.rod_tables (kernels/transfers/strain_rod.py)
     "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
     "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame (no
                         # rows without locked bodies: read where locked[k] only)
@@ -49,7 +49,7 @@ Params = namedtuple("Params", [
     "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
     "joint_drive",      # (n, 2, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
                         # none; elements/drives.py); one row of none without joints with
-                        # coordinates (solver.joint_drives)
+                        # coordinates (run_tables.joint_drives)
     "body_row",         # (n,) int64: body k's row of body_params and mass_center_inertia, and
     "hinge_row",        # (n,) int64: joint k's of hinge_params (one row for all where the
                         # model's rows are all equal: model.shared_rows)
@@ -58,7 +58,7 @@ Params = namedtuple("Params", [
 Settings = namedtuple("Settings", [
     "mode",             # RICCATI_FULL / RICCATI_REDUCED / DIRECT_REDUCED / DIRECT_FULL (step.py)
     "h",                # the step, s
-    "coef",             # (4,) beta, gamma, alpha_m, alpha_f (solver.Integrator)
+    "coef",             # (4,) beta, gamma, alpha_m, alpha_f (run_tables.Integrator)
     "newton_max",       # extra linearizations per step
     "newton_tol",       # stop iterating below this change (rad; scaled modal units)
     "record_every",     # record after every record_every-th step of a chunk

@@ -190,10 +190,10 @@ GeneralLoop = namedtuple("GeneralLoop", [
 
 def general_loop(n, n_eta, h, coef, histories, loops, forces):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
-    paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (solver._station_histories);
+    paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (run_tables._station_histories);
     the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
     joints (kernels/assembly/closure.py::Loops; no rows without them).  forces: the compiled
-    JointForces' callbacks' addresses (solver.compiled_forces)."""
+    JointForces' callbacks' addresses (run_tables.compiled_forces)."""
     c1, _ = _coefficients_py(h, coef)
     guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
                   np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)))
@@ -216,7 +216,7 @@ def _coefficients_py(h, coef):
 def fused_coefficients(h, coef):
     """(4,) the fused loops' step constants c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1,
     w = c3 phi + w3) for a step h: their loop's `coefficients`, set again by an adaptive run's
-    segments (solver._set_step)."""
+    segments (run_records._set_step)."""
     c1, c3 = _coefficients_py(h, coef)
     return np.array([c1, c3, 1.0 / c1, c3 / c1])
 
@@ -313,7 +313,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
                       beam_ends[k, m:m + mt],               # the twist and stretch tables
-                      beam_ends[k, m + mt:i1 - i0 - m])     # (solver.beam_tables)
+                      beam_ends[k, m + mt:i1 - i0 - m])     # (run_tables.beam_tables)
             history = (independent, dw1)
             beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
@@ -548,7 +548,7 @@ def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, 
 def _welded(hinge_kind, parent, locked, body_kind, mode, k):
     """In the full-state tree sweep, a body welded to another (a fixed hinge; not to the ground)
     is not integrated on its own: its frame is its parent's (R0), or the end section's of a
-    parent beam (solver.kernel_model's end section: the parent frame of a joint with
+    parent beam (run_tables.kernel_model's end section: the parent frame of a joint with
     coordinates or an elastic hinge there); in a chain's full-state sweep, likewise a body
     welded to a beam's end (rotating beam no. 2's arm, or the next element of a welded chain:
     integrated on its own, its angular acceleration alternated from step to step and grew

@@ -52,7 +52,7 @@ def coefficient_row(m):
 
 
 def quadrature_size(modes_per_plane):
-    """Gauss-Legendre points that integrate the beam's modal integrals (solver.beam_tables) to
+    """Gauss-Legendre points that integrate the beam's modal integrals (run_tables.beam_tables) to
     rounding, for every mode family.  Measured when the kernel still sampled the relations
     themselves (products of up to three mode-shape factors, more than the modal integrals'
     two), against 60 points on random states: the largest relative error is 2e-16 at 12
@@ -134,7 +134,7 @@ def exact_line_integrals(moments, axial, eta, eta_d, eta_dd, o, al, gm, mu, resi
     """The line load's integrals with the foreshortening to all orders (stiffening="exact";
     docs/beam.md, "The exact foreshortening"): at the Gauss points of the beam's exact table
     (moments' columns from 2 + 4 m, the stretch table's U_j from 5 + m + ma:
-    solver.beam_tables) the section p = (x + u_x - c, v, w) in the frame, u_x = U . xi,
+    run_tables.beam_tables) the section p = (x + u_x - c, v, w) in the frame, u_x = U . xi,
     c = 1/2 (eta_v^T D(x) eta_v + eta_w^T D(x) eta_w), p' = (u_x' - c', v', w'),
     p'' = (u_x'' - c'', v'', w''), and the line load per unit mu f = gamma - alpha x p
     - omega x (omega x p) - 2 omega x p' - p'' (o, al, gm: omega, alpha, gamma in the frame).
@@ -237,7 +237,7 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
     out = [a_O, w' (the frame's), m_O, q_O]; residual = the modal equations' left minus right
     sides, with the end force's generalized forces (an end moment's: add_end_moment, at a fixed
     hinge at the output; elsewhere m_O = 0).  bp: beam parameter row; moments (m, m + 2): the
-    modal integrals [int Y_k, int x Y_k, int Y_k Y_l] (solver.beam_tables); ends (m, 2):
+    modal integrals [int Y_k, int x Y_k, int Y_k Y_l] (run_tables.beam_tables); ends (m, 2):
     Y_k(L), Y_k'(L); factors (m, 2): modal mass over mu and modal stiffness over EI;
     end_force, end_torque (3,): the applied force F and torque T at the output end, world
     (docs/beam.md, "Loads on the beam"; they add to q_O and m_O, and the net end force
@@ -259,7 +259,7 @@ def beam_relations(bp, moments, ends, factors, end_force, end_torque, gravity, r
                                                                         (M eta_w)_k]
     (f the line load, gravity minus inertia).  Written in scalars: it runs 3 + n + 1 times per
     beam and step where columns are differenced.
-    axial (ma, 5 + m + ma): the stretch table (solver.beam_tables; docs/beam.md, "Stretch"):
+    axial (ma, 5 + m + ma): the stretch table (run_tables.beam_tables; docs/beam.md, "Stretch"):
     with ma > 0 the last ma coordinates xi stretch the centreline, rho = (x + U . xi) e1 + ...,
     and every integral above gains its terms exactly (s_x, Pi, C, H, Q_k's first entry, the
     output point), and the stretch's own rows follow the bending rows' rule with e1."""
@@ -586,7 +586,7 @@ def twist_relations(bp, torsion, rot, w, wd, eta, eta_d, eta_dd, m, out, residua
                                                               momentum beyond the frame's),
     alpha_x = w' . A e1, P_k = int Psi_k, int Psi_j Psi_k = L delta_jk, m_k = j_p L,
     k_k = G J int Psi_k'^2, c_k = 2 zeta omega_k m_k.  torsion (mt, 4): Psi_k(L), P_k,
-    m_k / j_p, k_k / G J (solver.beam_tables)."""
+    m_k / j_p, k_k / G J (run_tables.beam_tables)."""
     j_p, zeta, gj = bp[4], bp[5], bp[GJ]
     e0, e1, e2 = rot[0, 0], rot[1, 0], rot[2, 0]
     alpha_x = wd[0] * e0 + wd[1] * e1 + wd[2] * e2

@@ -129,7 +129,7 @@ def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
     const, q = nu / c1 + const over the step; both held at the consistent start).  drive:
     [kind, stiffness, damping, rest] (kind -1: none); given: a FORCE drive's value, or the part
     of a spring-damper's force known in time (a PDTracking's kp target + kd target' +
-    feedforward, a JointForce of time alone; 0 for a SpringDamper; solver.joint_drives):
+    feedforward, a JointForce of time alone; 0 for a SpringDamper; run_tables.joint_drives):
         tau = -k (q - rest) - c q' + given;
     without a drive tau = given (0 in a run: dynamics.linearize's generalized force input).
     A COMPILED_FORCE drive is f(t, q, q'), f the C callback at the address forces[int(rest)]

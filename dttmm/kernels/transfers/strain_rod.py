@@ -35,8 +35,6 @@ from ..algebra.mat3 import (dot, matmul, matvec, put1, put2, t_cross, t_hat, t_l
 from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
 
 SQRT3_12 = np.sqrt(3.0) / 12.0
-# the Magnus step's two Gauss points, as fractions of the step (1/2 -+ sqrt(3)/6)
-MAGNUS_POINTS = (0.5 - np.sqrt(3.0) / 6.0, 0.5 + np.sqrt(3.0) / 6.0)
 
 
 def _series(sign_shift, terms=14):
@@ -185,9 +183,10 @@ def station_arrays(n):
 def rod_kinematics(steps, xi0, phi, q, qd, qdd, rot, pos, omega, vel, alpha, acc):
     """The stations' poses, velocities and accelerations in the input-section frame (the module's
     docstring).  steps[a] is the a-th step's length h; xi0[a, i] (6) and phi[a, i] (6 x nq) the
-    reference strain and the strain basis at its Gauss point i (MAGNUS_POINTS).  Writes, for the
-    stations 0 .. len(steps) (station 0 the input section: identity, zeros), rot (3 x 3), pos,
-    omega, vel, alpha, acc (3 each).  On values (mat3's 3-tuples): it allocates nothing."""
+    reference strain and the strain basis at its Gauss point i
+    (elements/strain_rod.py::MAGNUS_POINTS).  Writes, for the stations 0 .. len(steps) (station
+    0 the input section: identity, zeros), rot (3 x 3), pos, omega, vel, alpha, acc (3 each).
+    On values (mat3's 3-tuples): it allocates nothing."""
     section = _input_section()
     _store(rot[0], pos[0], omega[0], vel[0], alpha[0], acc[0], section)
     for a in range(steps.shape[0]):
@@ -624,7 +623,7 @@ def rod_end_points(steps, xi0, phi, q, qd):
 @njit(cache=True, inline='always', fastmath=CONTRACT)
 def rod_tables_of(rods, k):
     """Strain rod k's tables as the kernels take them, from the kernel model's rods
-    (solver.rod_tables; kernels/stepping/loop.py::Params.rods): (steps, xi0, phi, weights, mu,
+    (run_tables.rod_tables; kernels/stepping/loop.py::Params.rods): (steps, xi0, phi, weights, mu,
     section, stiffness, damping)."""
     rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rods
     r = rod_row[k]
