@@ -73,10 +73,10 @@ def welded_lengths(model):
 def bent_element(model, result):
     """The beam element whose bent ringing drifts the most, as (name, largest bend rad,
     predicted drift, elements that hold it), where that drift passes BEND_DRIFT; else None."""
+    if not model.has_beams or result.modal_coordinates is None or len(result.t) < 3:
+        return None
     beams = np.nonzero(model.body_kind == BEAM)[0]
     t = np.asarray(result.t)
-    if not len(beams) or result.modal_coordinates is None or len(t) < 3:
-        return None
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     carried = model.carried_masses()
     whole = welded_lengths(model)
@@ -106,9 +106,9 @@ def bent_element(model, result):
 def unresolved_mode(model, result, dt, max_phase):
     """The worst kept bending mode the step does not resolve and the motion excites, as
     (beam name, plane, mode number, frequency Hz, share of the energy), or None."""
-    beams = np.nonzero(model.body_kind == BEAM)[0]
-    if not len(beams) or result.modal_coordinates is None or len(result.t) < 2:
+    if not model.has_beams or result.modal_coordinates is None or len(result.t) < 2:
         return None
+    beams = np.nonzero(model.body_kind == BEAM)[0]
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
     candidates, elastic = [], np.zeros(len(result.t))

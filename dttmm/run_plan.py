@@ -56,11 +56,12 @@ def runs_welded(model, mode, scheme):
             and not any(model.ground_locked[1:]))
 
 
-def kernels_used(model, scheme, method="riccati"):
-    """The loop variant that runs a user's model with `scheme` (dttmm/methods.py) and `method`
-    (describe())."""
+def kernels_used(model, scheme, method="riccati", full_state=False):
+    """The loop variant that runs a user's model with `scheme` (dttmm/methods.py), `method` and
+    `full_state` (describe(); simulate's BLAS threads: only the general and energy-momentum
+    loops call LAPACK)."""
     km, _ = run_tables.kernel_model(model)
-    mode = run_tables._mode(km, method, False)
+    mode = run_tables._mode(km, method, full_state)
     if runs_fused(km, mode, scheme):
         return "ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"
     if scheme.loop == "energy_momentum":

@@ -13,10 +13,10 @@ import time
 from .model import Model
 from .recording import (Recording, model_fingerprint)
 from .resolution import warn_bent
-from .threads import blas_threads
+from .threads import blas_threads, thread_count
 from . import drivers
 from .run_options import run_options
-from .run_plan import prepared_run
+from .run_plan import kernels_used, prepared_run
 from .result import Result
 from .run_checks import (UnresolvedMotionWarning, check_supported)
 from .run_records import _result
@@ -170,28 +170,33 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         ``err.partial`` holds the Result recorded before it.
     """
     wall0 = time.perf_counter()
-    with blas_threads(threads):
-        return _simulate(wall0, threads, model, t_end, dt, rtol=rtol, atol=atol, method=method,
-                         scheme=scheme, rho_inf=rho_inf, newton_iterations=newton_iterations,
-                         newton_tol=newton_tol, record_every=record_every,
-                         record_dt=record_dt, t_eval=t_eval, full_state=full_state,
-                         richardson=richardson, progress=progress,
-                         max_step_error=max_step_error, max_energy_error=max_energy_error,
-                         hold_energy=hold_energy, resume=resume, stream=stream)
+    threads = thread_count(threads)
+    return _simulate(wall0, threads, model, t_end, dt, rtol=rtol, atol=atol, method=method,
+                     scheme=scheme, rho_inf=rho_inf, newton_iterations=newton_iterations,
+                     newton_tol=newton_tol, record_every=record_every,
+                     record_dt=record_dt, t_eval=t_eval, full_state=full_state,
+                     richardson=richardson, progress=progress,
+                     max_step_error=max_step_error, max_energy_error=max_energy_error,
+                     hold_energy=hold_energy, resume=resume, stream=stream)
 
 
 def _simulate(wall0, threads, model, t_end, dt, **options):
-    """simulate's run, inside its BLAS thread limit (Richardson's runs take the same)."""
+    """simulate's run, its BLAS libraries held to `threads` threads where its loop calls
+    LAPACK (threads.py; the fused loops call none: the limit's ~20 us would be a short run's
+    largest fixed cost)."""
     opts = run_options(model, t_end, dt, **options)
     if opts.richardson > 1:
         return drivers.richardson(opts, functools.partial(simulate, threads=threads))
     check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
-    with prepared_run(opts) as plan:
+    lapack = kernels_used(opts.model, opts.scheme, opts.method, opts.full_state) in (
+        "general", "energy-momentum")
+    with blas_threads(threads, lapack), prepared_run(opts) as plan:
         run = drivers.Stepping(plan, opts, wall0)
         result = (drivers.runge_kutta if opts.scheme.loop == "runge_kutta"
                   else drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
     warn_bent(model, result, UnresolvedMotionWarning)
     return result._timed(time.perf_counter() - wall0)
+
 
 def load_stream(model, path):
     """The Result of the samples a run streamed to a directory.

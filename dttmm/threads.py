@@ -8,6 +8,8 @@ one (issue 65).  A run therefore holds every BLAS library loaded in the process 
 while it steps, unless the caller asks for more: ``simulate(..., threads=k)`` or the environment
 variable DTTMM_BLAS_THREADS=k.  The limit is set on entry to the run and the previous one
 restored on exit (threadpoolctl), so the user's own numpy work around the run is untouched.
+The fused loops (ball chains, trees, welded chains, DOP853) call no LAPACK: their runs set no
+limit (setting and restoring it costs ~20 us, a short run's largest fixed cost).
 """
 import os
 from contextlib import contextmanager
@@ -48,7 +50,12 @@ def _blas():
 
 
 @contextmanager
-def blas_threads(threads=None):
-    """Hold the process's BLAS libraries to thread_count(threads) threads inside the block."""
-    with _blas().limit(limits=thread_count(threads), user_api="blas"):
+def blas_threads(threads=None, needed=True):
+    """Hold the process's BLAS libraries to thread_count(threads) threads inside the block,
+    where `needed` (a loop that calls LAPACK: solver._simulate)."""
+    threads = thread_count(threads)
+    if not needed:
+        yield
+        return
+    with _blas().limit(limits=threads, user_api="blas"):
         yield
