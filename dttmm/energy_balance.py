@@ -77,7 +77,7 @@ class EnergyBalance:
         self.closing_dampers = any(np.any(model.closure_params[c, C_TRANSLATION])
                                    or np.any(model.closure_params[c, C_ROTATION])
                                    for c in np.nonzero(model.closure_kind == ELASTIC)[0])
-        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+        offsets = model.mode_offsets
         self.loaded_beams = [(k, offsets[k]) for k in range(n) if model.body_kind[k] == BEAM
                              and (model.forces[k] is not None or model.torques[k] is not None)]
         # a distributed load's beams, with their constant modal integrals int Y_k and D1

@@ -540,6 +540,15 @@ class Model:
         return n_modes
 
     @cached_property
+    def mode_offsets(self):
+        """(n + 1,) where each body's own coordinates start in the run's modal vector (every
+        flexible body's n_modes in body order): body k's are [mode_offsets[k],
+        mode_offsets[k + 1])."""
+        offsets = np.concatenate([[0], np.cumsum(self.n_modes)]).astype(np.int64)
+        offsets.flags.writeable = False
+        return offsets
+
+    @cached_property
     def has_twist(self):
         """Whether a beam has twist modes (it runs in the general loop: docs/beam.md,
         "Torsion")."""

@@ -77,7 +77,7 @@ def bent_element(model, result):
         return None
     beams = np.nonzero(model.body_kind == BEAM)[0]
     t = np.asarray(result.t)
-    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    offsets = model.mode_offsets
     carried = model.carried_masses()
     whole = welded_lengths(model)
     eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
@@ -109,7 +109,7 @@ def unresolved_mode(model, result, dt, max_phase):
     if not model.has_beams or result.modal_coordinates is None or len(result.t) < 2:
         return None
     beams = np.nonzero(model.body_kind == BEAM)[0]
-    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    offsets = model.mode_offsets
     eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
     candidates, elastic = [], np.zeros(len(result.t))
     for k in beams:

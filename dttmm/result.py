@@ -538,7 +538,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
         raise ValueError(f"chain_energies: eta and eta_dot must hold {total} modal coordinates "
                          f"(got {eta.shape[1]} and {eta_dot.shape[1]})")
     kinetic, potential = np.zeros(n_t), np.zeros(n_t)
-    mode_off = np.concatenate([[0], np.cumsum(n_modes)])
+    mode_off = model.mode_offsets
     rigid = np.nonzero(model.body_kind == RIGID)[0]     # every rigid body at once
     if len(rigid):
         p = model.body_params[rigid]

@@ -300,7 +300,7 @@ def _unsupported_cause(model, code, where):
 def _beam_tips(model):
     """Per beam: (name, length, its modal coordinates' slice, the mode shapes at its tip, the
     twist's there, the mode shapes' slopes there, its body index)."""
-    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    offsets = model.mode_offsets
     tips = []
     for k in np.nonzero(model.body_kind == BEAM)[0]:
         row = model.beam_params[k]

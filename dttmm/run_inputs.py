@@ -203,7 +203,7 @@ def _points(model, t, rot, omega, defl, defl_rate, eta, eta_d, v_st, v_c):
     """Positions of every body's points and velocities of its input, for all samples."""
     n = model.n_bodies
     l_io = model.body_params[:, TO_OUTPUT]
-    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    mode_off = model.mode_offsets
     ground = model.ground_states(t)     # the ground point and frame at every sample
     # each body's output point relative to its input point, every body and sample at once
     rho = np.einsum("tkij,kj->tki", rot, l_io)

@@ -512,7 +512,7 @@ def beam_tables(model):
                     xg = x_exact[0]
                     ends[k, r:r + ma, 5 + m + ma:5 + m + ma + len(xg)] = torsion_shapes(
                         family, length, ma, xg)[0]
-    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
+    mode_off = model.mode_offsets.copy()        # (writable, as every array the kernels take)
     beam_params = kernel_array(model, "beam_params") if n else np.zeros((0, BEAM_PARAM_SIZE))
     return kernel_array(model, "body_kind"), beam_params, moments, mode_off, ends, factors
 
@@ -547,7 +547,7 @@ def _station_histories(model, state, independent):
         return (False, empty, empty, empty, empty, empty, empty)
     st_v, st_a = np.zeros((n + 1, 3)), np.zeros((n + 1, 3))
     c_v, c_a = np.zeros((n, 3)), np.zeros((n, 3))
-    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    mode_off = model.mode_offsets
     for k in range(n):
         w, wd = state.omega[k], state.omega_dot[k]
         if model.body_kind[k] == BEAM:
@@ -653,7 +653,7 @@ def _kernel_model(model):
              "body_mass_center_inertia", "drives")
     rows = {name: [] for name in names}
     parent, keep, hub, offsets = [], [], {}, {}
-    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)])
+    mode_off = model.mode_offsets
     identity = np.zeros(HINGE_PARAM_SIZE)
     identity[REST_ROTATION] = np.eye(3).reshape(-1)
 

@@ -417,7 +417,7 @@ def scene_of(model, run=None, name=None):
     else:
         data["ground"] = {"position": model.ground_position.tolist(),
                           "rotation": model.ground_rotation.tolist()}
-    offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+    offsets = model.mode_offsets
     children = children_of(model.parent)
     named = [sorted({int(model.attachment[c]) for c in children[k] if model.attachment[c]})
              for k in range(model.n_bodies)]

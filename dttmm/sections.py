@@ -136,7 +136,7 @@ def point_positions(model, rotation, r_in, eta=None):
     flexible = np.nonzero((model.body_kind == BEAM) | (model.body_kind == ROD))[0]
     if eta is not None and len(flexible):
         eta = np.asarray(eta, dtype=float)
-        offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
+        offsets = model.mode_offsets
         for k in flexible:
             e = eta[..., offsets[k]:offsets[k + 1]]
             rho, _ = element_output_offset(model, k, rotation[..., k, :, :],
