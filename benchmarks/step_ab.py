@@ -10,14 +10,14 @@ which then alternates A and B run by run (the machine's drift between processes,
 shared machines reaches 2x, then enters a pair only through the seconds between its two runs).
 
 For each system (by default the three-pendulum, rigid chains of 3, 100 and 1000 links; --systems
-arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible; slider_crank:
-the general loop with closing joints; cantilever: the stiff cantilever of 8 welded elements,
-the welded-chain loop) the two checkouts
-are timed in turn, A B A B ..., each time in a fresh process that imports that checkout's
-dttmm (warm numba cache, JIT warm-up run first).  A process measures the cost of one step as
-the difference of a long and a short run over the steps between (no setup, no recording), the
-median of 5.  The figure per system is the median over the pairs of the ratio A/B, so that the
-machine's drift between pairs does not enter it.  Not a test: nothing is asserted.
+arm flexible_arm: examples/arm.py's arm on the general loop, rigid and flexible; slider_crank: the
+general loop with closing joints; four_bar: the 2-four-bar; cantilever: the stiff cantilever of 8
+welded elements, the welded-chain loop) the two checkouts are timed in turn, A B A B ..., each time
+in a fresh process that imports that checkout's dttmm (warm numba cache, JIT warm-up run first). A
+process measures the cost of one step as the difference of a long and a short run over the steps
+between (no setup, no recording), the median of 5. The figure per system is the median over the
+pairs of the ratio A/B, so that the machine's drift between pairs does not enter it. Not a test:
+nothing is asserted.
 """
 import argparse
 import json
@@ -35,6 +35,7 @@ SYSTEMS = {          # name: (constructor expression, steps of the long run: ~0.
     "flexible_arm": ("arm(drive='motion', flexible=True)", 2000),   # (joints and a beam)
     "cantilever": ("stiff_cantilever(8)", 5000),            # the welded-chain loop
     "slider_crank": ("slider_crank()", 3000),               # the general loop, closing joints
+    "four_bar": ("n_four_bar(2)", 3000),                    # the general loop, two loops
 }
 DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_1000"]
 
@@ -42,7 +43,7 @@ _CHILD = r"""
 import statistics, sys
 from dttmm import simulate
 from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.mechanisms import slider_crank
+from dttmm.mechanisms import n_four_bar, slider_crank
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -62,7 +63,7 @@ _CALL_CHILD = r"""
 import statistics, time
 from dttmm import simulate
 from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.mechanisms import slider_crank
+from dttmm.mechanisms import n_four_bar, slider_crank
 model = {expr}
 for _ in range(50):
     simulate(model, 1e-4, 1e-4)
