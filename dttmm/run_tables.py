@@ -25,7 +25,7 @@ from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import Loops
 from .kernels.stepping.loop import (Params, State,
                                     Sweep)
-from .kernels.transfers.beam import gauss_points, quadrature_size
+from .kernels.transfers.beam_relations import (gauss_points, quadrature_size)
 from .closures import constraint_rows
 from .methods import SWEEPS
 from .model import (Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact,
@@ -443,18 +443,18 @@ def beam_tables(model):
     [Y_k(L), Y_k'(L)], [modal mass / mu, stiffness / EI]) for the kernels (docs/beam.md, "Mode
     shapes" and "The integrals in the frame").  The modal integrals of beam k, moments[k, j] =
     [int Y_j, int x Y_j, int Y_j Y_0, .., int Y_j Y_(m-1)] over [0, L], by Gauss-Legendre
-    quadrature exact to rounding for the mode families (kernels/transfers/beam.py::quadrature_size),
-    then the geometric stiffness integrals int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2
-    (D0, D1, D2 of docs/beam.md, "Geometric stiffening"), m columns each.  ends[k, m:m + mt]
-    is beam k's twist table (docs/beam.md, "Torsion"; kernels/transfers/beam.py::twist_relations):
-    [Psi_j(L), int Psi_j, modal mass / j_p, modal stiffness / G J] per twist mode j, and
-    ends[k, m + mt:m + mt + ma] its stretch table ("Stretch"; beam_relations): [U_j(L),
-    int U_j, int x U_j, modal mass / mu, modal stiffness / E A, int U_j Y_l (m), int U_j U_l
-    (ma)].  With stiffening="exact" (docs/beam.md, "The exact foreshortening"), moments[k, j]
-    goes on from column 2 + 4 m with the beam's sections at n Gauss-Legendre points: n, then
-    per point [x, weight, Y_j(x), D(x)[j, 0..m-1]], D(x) = int_0^x Y' Y'^T, and the stretch
-    table with U_j at those points, from column 5 + m + ma
-    (kernels/transfers/beam.py::exact_line_integrals).  The tables but body_kind and the
+    quadrature exact to rounding for the mode families
+    (kernels/transfers/beam_relations.py::quadrature_size), then the geometric stiffness integrals
+    int w(x) Y_j' Y_l' for w = 1, L - x, (L^2 - x^2) / 2 (D0, D1, D2 of docs/beam.md, "Geometric
+    stiffening"), m columns each.  ends[k, m:m + mt] is beam k's twist table (docs/beam.md,
+    "Torsion"; kernels/transfers/beam_relations.py::twist_relations): [Psi_j(L), int Psi_j, modal
+    mass / j_p, modal stiffness / G J] per twist mode j, and ends[k, m + mt:m + mt + ma] its
+    stretch table ("Stretch"; beam_relations): [U_j(L), int U_j, int x U_j, modal mass / mu, modal
+    stiffness / E A, int U_j Y_l (m), int U_j U_l (ma)].  With stiffening="exact" (docs/beam.md,
+    "The exact foreshortening"), moments[k, j] goes on from column 2 + 4 m with the beam's sections
+    at n Gauss-Legendre points: n, then per point [x, weight, Y_j(x), D(x)[j, 0..m-1]], D(x) =
+    int_0^x Y' Y'^T, and the stretch table with U_j at those points, from column 5 + m + ma
+    (kernels/transfers/beam_relations.py::exact_line_integrals).  The tables but body_kind and the
     offsets have no rows in a model without beams (the kernels read a beam's rows only; a
     million rigid bodies' 0.2 GB)."""
     n = model.n_bodies if (model.body_kind == BEAM).any() else 0
@@ -512,7 +512,9 @@ def beam_tables(model):
                     xg = x_exact[0]
                     ends[k, r:r + ma, 5 + m + ma:5 + m + ma + len(xg)] = torsion_shapes(
                         family, length, ma, xg)[0]
-    mode_off = model.mode_offsets.copy()        # (writable, as every array the kernels take)
+    # (from n_modes: beam_tables also reads a model-like namespace; writable, as every array the
+    # kernels take)
+    mode_off = np.concatenate([[0], np.cumsum(model.n_modes)]).astype(np.int64)
     beam_params = kernel_array(model, "beam_params") if n else np.zeros((0, BEAM_PARAM_SIZE))
     return kernel_array(model, "body_kind"), beam_params, moments, mode_off, ends, factors
 

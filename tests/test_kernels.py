@@ -296,7 +296,7 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
         # a body welded to the output (fixed hinge, relative rotation r_rel): its rotation slot
         # is c1 phi_out + w1 with exp(phi_out^) A_out,n = A_O r_rel; A_out,n a little behind
         # the guess's A_O r_rel, w1 such that the slot holds an acceleration ~10
-        from dttmm.kernels.transfers.beam import end_section
+        from dttmm.kernels.transfers.beam_relations import end_section
         rot_star = Rotation.from_rotvec(phi_star).as_matrix() @ rot_n
         a_o = np.empty((3, 3))
         end_section(ends[k, :m], ends[k, m:m + mt], (eta_dd_star - w1e) / c1, rot_star, a_o)
@@ -372,8 +372,9 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening, stretch
     -int U_j e1 . f + damping + stiffness + (q_O . e1) U_j(L)."""
     from dttmm.elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EA, mode_shapes,
                                      torsion_shapes)
-    from dttmm.kernels.transfers.beam import (END_U, END_V, SUM_C, SUM_H, SUM_J, SUM_MODES,
-                                              SUM_U, SUM_V, aux_rows, beam_relations)
+    from dttmm.kernels.transfers.beam_relations import (END_U, END_V, SUM_C, SUM_H, SUM_J,
+                                                        SUM_MODES, SUM_U, SUM_V, aux_rows,
+                                                        beam_relations)
     from dttmm.run_tables import beam_tables
     from types import SimpleNamespace
     gen = np.random.default_rng(3 + family + m)

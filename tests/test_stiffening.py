@@ -249,13 +249,14 @@ def test_the_default_two_modes_carry_the_soft_pendulum_through_its_whip():
 
 @pytest.mark.parametrize("axial_stiffness", [None, 1260.0])
 def test_the_exact_foreshortening_meets_the_exact_reference_at_order_2(axial_stiffness):
-    """stiffening="exact" in DT-TMM's kernels (kernels/transfers/beam.py::exact_line_integrals,
-    docs/beam.md "The exact foreshortening") against the Newton-Euler reference's own exact
-    equations (reference/equations.py::_beam_terms_exact, which a beam of stiffening="exact"
-    takes), on the soft pendulum of 4 elements with 2 modes per plane over 0.1 s, inextensible
-    and with the benchmark's soft stretch (E A = 1260 N, one stretch mode each): the output
-    points' largest error falls at order 2 in dt (measured on 8 inextensible elements: 8.1e-6,
-    2.0e-6, 5.0e-7 m at dt 2e-3, 1e-3, 5e-4 s)."""
+    """stiffening="exact" in DT-TMM's kernels
+    (kernels/transfers/beam_relations.py::exact_line_integrals, docs/beam.md "The exact
+    foreshortening") against the Newton-Euler reference's own exact equations
+    (reference/equations.py::_beam_terms_exact, which a beam of stiffening="exact" takes), on the
+    soft pendulum of 4 elements with 2 modes per plane over 0.1 s, inextensible and with the
+    benchmark's soft stretch (E A = 1260 N, one stretch mode each): the output points' largest
+    error falls at order 2 in dt (measured on 8 inextensible elements: 8.1e-6, 2.0e-6, 5.0e-7 m at
+    dt 2e-3, 1e-3, 5e-4 s)."""
     model = _soft_pendulum(4, 2, "exact", axial_stiffness)
     t = np.linspace(0.0, 0.1, 11)
     ref = simulate_reference(model, 0.1, t_eval=t, rtol=1e-10, atol=1e-12)

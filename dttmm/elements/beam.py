@@ -94,7 +94,7 @@ def foreshortening_integrals(family, length, n_modes):
     stiffening"): c(L) = 1/2 eta^T D0 eta, int c = 1/2 eta^T D1 eta, int x c = 1/2 eta^T D2 eta
     per plane.  By Gauss-Legendre quadrature with 3 n_modes + 12 points (the integrands are
     products of two slopes and a quadratic, like the modal integrals of
-    kernels/transfers/beam.py::quadrature_size); once per kind of beam (read-only)."""
+    kernels/transfers/beam_relations.py::quadrature_size); once per kind of beam (read-only)."""
     t, wt = np.polynomial.legendre.leggauss(3 * int(n_modes) + 12)
     x, wt = 0.5 * length * (t + 1.0), 0.5 * length * wt
     dy = mode_shapes(family, length, n_modes, x)[1]

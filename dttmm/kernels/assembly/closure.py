@@ -44,7 +44,7 @@ from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ...elements.hinges import AXIS_1, ELASTIC, FIXED
 from ...elements.joints import PRISMATIC
-from ..transfers.beam import end_section_motion
+from ..transfers.beam_relations import end_section_motion
 from ..transfers.strain_rod import rod_end, rod_end_frame, rod_tables_of
 from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
 from ..algebra.mat3 import (add1, add2, matmul, matvec, put1, put2, t_cross, t_lin3, t_mm, t_mmt,

@@ -29,7 +29,8 @@ from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
 from ...elements.drives import MOTION
-from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
+from ..transfers.beam import (beam_transfer, transfer_work_size)
+from ..transfers.beam_relations import end_section_motion
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of, rod_transfer
 from ..assembly.closure import project_onto_loops, set_ground, solve_with_loops, tree_points

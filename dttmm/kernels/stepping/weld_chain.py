@@ -21,7 +21,8 @@ from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
 from .ball_chain import _predict as _predict_offsets
-from ..transfers.beam import beam_transfer, end_section_motion, transfer_work_size
+from ..transfers.beam import (beam_transfer, transfer_work_size)
+from ..transfers.beam_relations import end_section_motion
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
 from ..algebra.mat3 import mm3_into
 from ..algebra.so3 import expm_so3, log_so3
