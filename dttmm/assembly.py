@@ -6,7 +6,7 @@ import numpy as np
 
 from .closures import (AssemblyWarning, _coordinates, _start_values, _state_of, check_drives_move,
                        closure_residuals, constraint_rows)
-from .elements.kinds import GAP_A, GAP_WORLD
+from .elements.kinds import COORDINATE_0, GAP_A, GAP_WORLD, RATE_0
 from .elements.rigid_body import TO_OUTPUT
 from .model import adopt_arrays
 
@@ -53,7 +53,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     check_drives_move(model, "assemble")
     variables, kept = _coordinates(model, keep)
     x = _start_values(model, variables)
-    xd = np.array([model.hinge_params[k, 53 + i] if what == "q"
+    xd = np.array([model.hinge_params[k, RATE_0.start + i] if what == "q"
                    else model.initial_angular_velocity[k, i] for what, k, i in variables])
     free = np.nonzero(~kept)[0]
     scale = max(1.0, float(np.abs(model.body_params[:, TO_OUTPUT]).sum()))
@@ -123,7 +123,7 @@ def assemble(model, keep=(), tol=1e-12, max_iterations=30):
     hinge = np.array(model.hinge_params, order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
-            hinge[k, 51 + i], hinge[k, 53 + i] = value, rate
+            hinge[k, COORDINATE_0.start + i], hinge[k, RATE_0.start + i] = value, rate
         assembled = adopt_arrays(replace(model, initial_rotation=rot, initial_angular_velocity=w,
                                      hinge_params=hinge), model)
     moves = assembly_moves(start, end)

@@ -12,7 +12,7 @@ arrays on the Model (``closure_*``); this module builds and checks it, and gives
 points' positions and frames at t = 0.
 
 Per closing joint c (elements/kinds.py codes, as ``Model.hinge_kind``):
-    closure_kind[c]       BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC or ELASTIC
+    closure_kind[c]       its kind's code (BALL, FIXED, ELASTIC or a joint with coordinates)
     closure_body[c]       (a, b): body indices, -1 for the ground
     closure_point[c, s]   side s's point in its frame from its input point, m (the ground's:
                           in the ground frame from the ground point)
@@ -27,8 +27,10 @@ section at its output end, the ground frame) the joint holds, as a tree joint (d
     revolute:   p_b = p_a,  F_b = F_a Rot(n, q) R0
     universal:  p_b = p_a,  F_b = F_a Rot(n1, q1) R0 Rot(n2, q2)
     prismatic:  p_b = p_a + F_a n q,  F_b = F_a R0
+    any joint with coordinates (elements/kinds.py): p_b = p_a + F_a sum n_i q_i over its
+                slides, F_b = F_a R_P R0 R_C with R_P, R_C its turns fixed in a and in b
 R0 is read from the bodies' frames at t = 0 (at the joint's given angles, default 0); a
-prismatic joint's coordinate is measured from its points.  An elastic hinge holds nothing: its
+slide's coordinate is measured from its points.  An elastic hinge holds nothing: its
 springs and dampers act across the deflection d = F_a^T (p_b - p_a) and the rotation
 psi = log(F_a^T F_b R0^T), both in a's frame (R0: the frames' at t = 0 unless given), as a tree
 elastic hinge's (docs/loops.md, "An elastic hinge closing a loop").
@@ -37,19 +39,21 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import (BALL, BEAM, ELASTIC, FIXED, PRISMATIC, REVOLUTE, UNIVERSAL,
-                       BallJoint, EulerBernoulliBeam, RevoluteJoint, StrainRod, UniversalJoint)
-from .elements.hinges import (AXIS_1, C_ROTATION, C_TRANSLATION, HINGE_PARAM_SIZE, K_ROTATION,
-                              K_TRANSLATION, REST_ROTATION, pack_hinge)
-from .elements.joints import rotation_about
-from .elements.kinds import (ANGLE_A, ANGLE_B, DOT, FLEXIBLE, GAP_A, GAP_WORLD, HINGE_KIND_NAMES,
-                             JOINT_KIND, ROTATION_A, joint_kind_of)
+from .elements import (BALL, BEAM, ELASTIC, FIXED, BallJoint, EulerBernoulliBeam, StrainRod)
+from .elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, K_ROTATION,
+                              K_TRANSLATION, REST_ROTATION)
+from .elements.kinds import (ANGLE_A, ANGLE_B, CHILD, CLOSING_DRIVES, COORDINATE_0, DOT,
+                             FLEXIBLE, GAP_A, GAP_WORLD, HINGE_KIND_NAMES, HINGE_PARAM_SIZE,
+                             JOINT_KIND, JOINT_KINDS, PARENT, RATE_0, ROTATION_A, SLIDE, TURN,
+                             WITH_COORDINATES, WITH_SLIDES, WITH_TURNS, coordinates_of,
+                             joint_kind_of, joint_motion, joint_values, pack_hinge, row_axes,
+                             turn_rotations)
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.rigid_body import TO_OUTPUT
 from .sections import element_end_section, element_output_offset, log_rotation
 
 GROUND = -1
-CLOSING_KINDS = (BALL, FIXED, REVOLUTE, UNIVERSAL, PRISMATIC, ELASTIC)
+CLOSING_KINDS = tuple(k.code for k in JOINT_KINDS)     # (every joint kind closes a loop)
 
 
 def empty_table():
@@ -86,8 +90,8 @@ def loop_membership(entries, bodies, parent):
     the tree path between a closing joint's sides (from each side up to their common ancestor;
     a beam or strain rod closed at its input end from its parent),
     those whose output point a closing joint takes, and those where that joint carries a moment
-    (any but a ball joint); and output_pinned: those whose output a ball, revolute or universal
-    joint holds at a point while it turns freely in some plane (the beams' mode counts,
+    (any but a ball joint); and output_pinned: those whose output a ball joint or a joint with a
+    turn holds while it turns freely in some plane (the beams' mode counts,
     elements/beam.py::truncation_errors).  Sides that name nothing are skipped here (the
     build refuses them, naming the joint)."""
     n = len(bodies)
@@ -130,15 +134,16 @@ def loop_membership(entries, bodies, parent):
                 closed_output[k] = True
                 output_moment[k] |= not isinstance(joint, BallJoint)   # (an elastic
                 # hinge's couple too)
-                output_pinned[k] |= isinstance(joint, (BallJoint, RevoluteJoint,
-                                                       UniversalJoint))
+                kind = joint_kind_of(joint)
+                output_pinned[k] |= isinstance(joint, BallJoint) or (
+                    kind is not None and kind.code in WITH_TURNS)
     return in_loop, closed_output, output_moment, output_pinned
 
 
 def start_state(model):
     """The tree's kinematics at t = 0 (tree_state at the model's own coordinates and rates)."""
-    return tree_state(model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, 51:53],
-                      model.initial_angular_velocity, model.hinge_params[:, 53:55])
+    return tree_state(model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, COORDINATE_0],
+                      model.initial_angular_velocity, model.hinge_params[:, RATE_0])
 
 
 def _side(model, k, at, who, argument, frames, named):
@@ -244,29 +249,9 @@ def closure_rows(model, entries, index_of, named):
                              f"between them closes no loop")
         f_a, f_b = side_a[3], side_b[3]
         v = dict(v)
-        if kind.code in (REVOLUTE, UNIVERSAL, PRISMATIC):
-            n1, n2 = v["axis1"], v["axis2"]
-            q1, q2 = v["q0"]
-            if kind.code == PRISMATIC:
-                if q1 != 0.0 and (drives[0] is None or drives[0]["kind"] != MOTION):
-                    raise ValueError(f"{label}: a closing prismatic joint's position is "
-                                     f"measured between its points; leave position 0")
-                q1 = float((f_a @ n1) @ (side_b[2] - side_a[2]))
-                if (drives and drives[0] is not None and drives[0]["kind"] == SPRING_DAMPER
-                        and getattr(joint.drive, "rest", 0.0) is None):
-                    # a spring's rest by default: the slide measured between the points
-                    drives = (dict(drives[0], rest=q1),) + drives[1:]
-                v["q0"] = np.array([q1, 0.0])
-            r1 = rotation_about(n1, q1) if kind.code != PRISMATIC else np.eye(3)
-            r2 = rotation_about(n2, q2) if kind.code == UNIVERSAL else np.eye(3)
-            v["rotation"] = r1.T @ f_a.T @ f_b @ r2.T
-            cosine = float(n1 @ (v["rotation"] @ n2))
-            if kind.code == UNIVERSAL and abs(cosine) > 1e-9:
-                angle = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
-                raise ValueError(f"{label}: axis1 (in a's frame) and axis2 (in b's frame) must "
-                                 f"be perpendicular at the start; at t = 0 they make "
-                                 f"{angle:.4g} deg")
-            v["qd0"] = np.zeros(2)
+        if kind.code in WITH_COORDINATES:
+            drives = _closing_coordinates(label, joint, kind, v, drives, f_a, side_a[2], f_b,
+                                          side_b[2])
         elif kind.code == ELASTIC:
             if joint.deflection is not None:
                 raise ValueError(f"{label}: a closing elastic hinge's deflection is measured "
@@ -295,6 +280,51 @@ def closure_rows(model, entries, index_of, named):
                 closure_on_end=np.array(ends, dtype=bool).reshape(-1, 2),
                 closure_params=np.array(params).reshape(-1, HINGE_PARAM_SIZE),
                 closure_names=tuple(names), closure_drives=tuple(all_drives))
+
+
+def _closing_coordinates(label, joint, kind, v, drives, f_a, p_a, f_b, p_b):
+    """A closing joint with coordinates (v: its validated parameters, changed here): each slide
+    measured between its points, (F_a n_i) . (p_b - p_a) (a SpringDamper's rest, if not given,
+    that slide), the turns as given, R0 = R_P^T F_a^T F_b R_C^T from the sides' frames, the
+    rates 0; its drives, a slide's spring's rest filled in.  ValueError naming the joint: a
+    slide given a value (without a JointMotion), axes of a turn in each frame that are not
+    perpendicular at the start, a drive past the closing joints' CLOSING_DRIVES coordinates."""
+    axes, spec = v["axes"], kind.coordinates
+    given = joint_values(joint)[2]
+    names = kind.arguments[0:1] if len(spec) == 1 else \
+        [f"{kind.arguments[0]}[{i}]" for i in range(len(spec))]
+    q0 = list(v["q0"])
+    drives = list(drives) + [None] * (len(spec) - len(drives))
+    for i, c in enumerate(spec):
+        if c.motion != SLIDE:
+            continue
+        if q0[i] != 0.0 and (drives[i] is None or drives[i]["kind"] != MOTION):
+            raise ValueError(f"{label}: a closing joint's slide is measured between its "
+                             f"points; leave {names[i]} 0")
+        q0[i] = float((f_a @ axes[c.axis]) @ (p_b - p_a))
+        if (drives[i] is not None and drives[i]["kind"] == SPRING_DAMPER
+                and getattr(given[i], "rest", 0.0) is None):
+            drives[i] = dict(drives[i], rest=q0[i])  # a spring's rest by default: the slide
+    late = [i for i in range(CLOSING_DRIVES, len(spec)) if drives[i] is not None]
+    if late:
+        raise ValueError(f"{label}: a closing joint carries drives on its first "
+                         f"{CLOSING_DRIVES} coordinates so far, got one on {names[late[0]]}; "
+                         f"build the loop with this joint in the tree (System.add) and close "
+                         f"it at another joint")
+    v["q0"] = q0
+    r_p, r_c = turn_rotations(kind.code, axes, q0)
+    v["rotation"] = r_p.T @ f_a.T @ f_b @ r_c.T
+    turns = {c.frame: c.axis for c in spec if c.motion == TURN}
+    if len(turns) == 2:
+        first, second = kind.axes[turns[PARENT]], kind.axes[turns[CHILD]]
+        cosine = float(axes[turns[PARENT]] @ (v["rotation"] @ axes[turns[CHILD]]))
+        if abs(cosine) > 1e-9:
+            angle = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+            raise ValueError(f"{label}: {first} (in a's frame) and {second} (in b's frame) must "
+                             f"be perpendicular at the start; at t = 0 they make {angle:.4g} "
+                             f"deg")
+    v["qd0"] = [0.0] * len(spec)
+    return tuple(drives)
 
 
 def _principal_axes(label, part, k, c):
@@ -380,13 +410,16 @@ def closure_points(model):
 
 
 def closure_gaps(model):
-    """(m,) each closing joint's positional gap at t = 0, m: |p_b - p_a| (a prismatic joint's
-    across its axis)."""
+    """(m,) each closing joint's positional gap at t = 0, m: |p_b - p_a| (a joint with slides'
+    across its slides' axes, which are perpendicular)."""
     p_a, p_b, f_a, _ = closure_points(model)
     gap = p_b - p_a
-    for c in np.nonzero(model.closure_kind == PRISMATIC)[0]:
-        u = f_a[c] @ model.closure_params[c, AXIS_1]
-        gap[c] = gap[c] - u * (u @ gap[c])
+    for c in np.nonzero(np.isin(model.closure_kind, WITH_SLIDES))[0]:
+        axes = row_axes(model.closure_params[c])
+        for spec in coordinates_of(model.closure_kind[c]):
+            if spec.motion == SLIDE:
+                u = f_a[c] @ axes[spec.axis]
+                gap[c] = gap[c] - u * (u @ gap[c])
     return np.linalg.norm(gap, axis=1)
 
 
@@ -520,61 +553,84 @@ def _perpendiculars(n):
 
 
 def constraint_directions(model, c):
-    """The closing joint c's scalar constraints (closure_rows' count, CLOSURE_ROWS in
-    describe.py), in the sides' own frames:
+    """The closing joint c's scalar constraints (closure_rows' count, Kind.constraints in
+    elements/kinds.py), in the sides' own frames:
         points: [(frame, e)], the rows e . (p_b - p_a) = 0 with e fixed in side a's frame
                 (frame "a") or in the world (frame "w");
         dots:   [(x, y)], the rows (F_a x) . (F_b y) = 0, x fixed in a's frame, y in b's.
-    ball: the three world components of the gap; fixed and prismatic: the relative rotation's
-    three dots (F_a R0 e_i) . (F_b e_j), (i, j) = (2, 3), (3, 1), (1, 2); revolute: the axis
-    F_b R0^T n kept perpendicular to a's two directions across n; universal: n1 . n2 = 0;
-    prismatic: the gap across a's axis; elastic: none (its rows are forces:
-    spring_directions)."""
+    From the joint's declaration: the points hold the gap across its slides' axes (the three
+    world components without slides; a's two directions across one slide's axis, or the normal
+    of two slides' plane); the dots hold what its turns leave: without turns the relative
+    rotation's three dots (F_a R0 e_i) . (F_b e_j), (i, j) = (2, 3), (3, 1), (1, 2); with one
+    turn fixed in a (b) its axis kept perpendicular to the two directions across it in the
+    other frame (revolute: F_b R0^T n against a's two across n); with one in each frame their
+    axes perpendicular (universal: n1 . n2 = 0).  A ball joint: the gap alone; an elastic
+    hinge: none (its rows are forces: spring_directions)."""
     kind, row = int(model.closure_kind[c]), model.closure_params[c]
     if kind == ELASTIC:
         return [], []
-    r0 = row[0:9].reshape(3, 3)
-    n1, n2 = row[45:48], row[48:51]
+    r0 = row[REST_ROTATION].reshape(3, 3)
+    axes, spec = row_axes(row), coordinates_of(kind)
     e = np.eye(3)
-    points = [("w", e[i]) for i in range(3)]
-    dots = []
-    if kind == PRISMATIC:
-        points = [("a", p) for p in _perpendiculars(n1)]
-    if kind in (FIXED, PRISMATIC):
+    slides = [axes[x.axis] for x in spec if x.motion == SLIDE]
+    turns = {x.frame: axes[x.axis] for x in spec if x.motion == TURN}
+    if not slides:
+        points = [("w", e[i]) for i in range(3)]
+    elif len(slides) == 1:
+        points = [("a", p) for p in _perpendiculars(slides[0])]
+    elif len(slides) == 2:
+        normal = np.cross(slides[0], slides[1])
+        points = [("a", normal / np.linalg.norm(normal))]
+    else:
+        points = []
+    if kind == BALL:
+        dots = []
+    elif not turns:
         dots = [(r0 @ e[i], e[j]) for i, j in ((1, 2), (2, 0), (0, 1))]
-    elif kind == REVOLUTE:
-        dots = [(p, r0.T @ n1) for p in _perpendiculars(n1)]
-    elif kind == UNIVERSAL:
-        dots = [(n1, n2)]
+    elif len(turns) == 2:
+        dots = [(turns[PARENT], turns[CHILD])]
+    elif PARENT in turns:
+        dots = [(p, r0.T @ turns[PARENT]) for p in _perpendiculars(turns[PARENT])]
+    else:
+        dots = [(p, turns[CHILD]) for p in _perpendiculars(r0 @ turns[CHILD])]
     return points, dots
 
 
 def driven_directions(model, c):
     """The rows of closing joint c's driven coordinates (JointMotion or SpringDamper): [(i,
-    kind, v1, v2, v3)] for coordinate i.  A slide is the gap along a's axis (GAP_A, e = n); an
-    angle is
+    kind, v1, v2, v3)] for coordinate i.  A slide is the gap along a's axis (GAP_A, e = n); a
+    turn's angle is
         q = atan2(n . (x x y), x . y),  q' = n . (w_b - w_a)
-    with x = F_a v1, y = F_b v2 and the axis n = F v3 (F_a: ANGLE_A, F_b: ANGLE_B):
-        revolute:      x = u, y = R0^T u (u across n), n in a
-        universal q1:  x = R0 n2, y = n2, n1 in a;   q2: x = n1, y = R0^T n1, n2 in b
-    (F_b = F_a Rot(n1, q1) R0 Rot(n2, q2); docs/loops.md, "Drives on closing joints")."""
+    with x = F_a v1, y = F_b v2 and the axis n = F v3 (F_a: ANGLE_A, F_b: ANGLE_B), from the
+    joint's declaration (F_b = F_a R_P R0 R_C):
+        a turn fixed in a, alone:          x = u, y = R0^T u (u across n), n in a (revolute)
+        fixed in a, with one fixed in b:   x = R0 m, y = m (m the other axis), n in a
+                                           (universal q1)
+        fixed in b, with one fixed in a:   x = m, y = R0^T m, n in b (universal q2)
+        fixed in b, alone:                 x = u, y = R0^T u (u across R0 n), n in b
+    (docs/loops.md, "Drives on closing joints")."""
     kind, row = int(model.closure_kind[c]), model.closure_params[c]
-    r0 = row[0:9].reshape(3, 3)
-    n1, n2 = row[45:48], row[48:51]
+    r0 = row[REST_ROTATION].reshape(3, 3)
+    axes, spec = row_axes(row), coordinates_of(kind)
+    turns = {x.frame: axes[x.axis] for x in spec if x.motion == TURN}
     zero = np.zeros(3)
     rows = []
     for i, d in enumerate(model.closure_drives[c] if model.closure_drives else ()):
         if d is None:
             continue
-        if kind == PRISMATIC:
-            rows.append((i, GAP_A, n1, zero, zero))
-        elif kind == REVOLUTE:
-            u = _perpendiculars(n1)[0]
-            rows.append((i, ANGLE_A, u, r0.T @ u, n1))
-        elif i == 0:
-            rows.append((i, ANGLE_A, r0 @ n2, n2, n1))
+        n = axes[spec[i].axis]
+        if spec[i].motion == SLIDE:
+            rows.append((i, GAP_A, n, zero, zero))
+        elif spec[i].frame == PARENT and CHILD in turns:
+            rows.append((i, ANGLE_A, r0 @ turns[CHILD], turns[CHILD], n))
+        elif spec[i].frame == PARENT:
+            u = _perpendiculars(n)[0]
+            rows.append((i, ANGLE_A, u, r0.T @ u, n))
+        elif PARENT in turns:
+            rows.append((i, ANGLE_B, turns[PARENT], r0.T @ turns[PARENT], n))
         else:
-            rows.append((i, ANGLE_B, n1, r0.T @ n1, n2))
+            u = _perpendiculars(r0 @ n)[0]
+            rows.append((i, ANGLE_B, u, r0.T @ u, n))
     return rows
 
 
@@ -677,8 +733,8 @@ def wrap_angle(a):
 
 def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     """The tree's kinematics from its coordinates: theta (n, 3), each free body's rotation
-    change (A = exp(theta^) A_0, a ball joint's or an elastic hinge's body), q (n, 2) the
-    joints' coordinates, omega (n, 3) the free bodies' angular velocities, qd (n, 2) the
+    change (A = exp(theta^) A_0, a ball joint's or an elastic hinge's body), q (n, 3) the
+    joints' coordinates, omega (n, 3) the free bodies' angular velocities, qd (n, 3) the
     joints' rates (rows of other bodies unused).  Returns (rot, w, r_in, v_in, rot_o, w_o, r_o,
     v_o), each (n, ...): rotations, angular velocities, input points and their velocities, and
     the output sections and points (a beam's or strain rod's deflected end; the beams' modal
@@ -705,26 +761,21 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
             arm = rot[p] @ model.attachment_point[k]
             r_att, v_att = r_in[p] + arm, v_in[p] + np.cross(w[p], arm)
             f_in, w_in = rot[p], w[p]
-        r0 = h[0:9].reshape(3, 3)
-        n1, n2 = h[45:48], h[48:51]
+        r0 = h[REST_ROTATION].reshape(3, 3)
         d, d_rate = np.zeros(3), np.zeros(3)
-        if kind == FIXED:
+        if kind in WITH_COORDINATES:                # elements/kinds.py::joint_motion
+            rot[k], w[k], d, d_rate, _ = joint_motion(kind, row_axes(h), r0, f_in, w_in, q[k],
+                                                      qd[k])
+        elif kind == FIXED:
             rot[k], w[k] = f_in @ r0, w_in
-        elif kind == REVOLUTE:
-            rot[k] = f_in @ rotation_about(n1, q[k, 0]) @ r0
-            w[k] = w_in + (f_in @ n1) * qd[k, 0]
-        elif kind == UNIVERSAL:
-            rot[k] = f_in @ rotation_about(n1, q[k, 0]) @ r0 @ rotation_about(n2, q[k, 1])
-            w[k] = w_in + (f_in @ n1) * qd[k, 0] + (rot[k] @ n2) * qd[k, 1]
-        elif kind == PRISMATIC:
-            rot[k], w[k] = f_in @ r0, w_in
-            u = f_in @ n1
-            d, d_rate = u * q[k, 0], np.cross(w_in, u * q[k, 0]) + u * qd[k, 0]
-        else:                                    # ball joint, elastic hinge: free rotation
+        elif kind in (BALL, ELASTIC):               # free rotation
             expm_so3(np.ascontiguousarray(theta[k], dtype=float), e3)
             rot[k], w[k] = e3 @ model.initial_rotation[k], omega[k]
-            if kind != BALL:
-                d = model.hinge_params[k, 45:48]      # the elastic deflection, as given
+            if kind == ELASTIC:
+                d = model.hinge_params[k, DEFLECTION_0]     # the deflection, as given
+        else:
+            raise ValueError(f"tree_state: joint '{model.hinge_names[k]}' has no kinematics "
+                             f"here (kind {kind})")
         r_in[k], v_in[k] = r_att + d, v_att + d_rate
         eta = model.initial_modal_coordinates[off[k]:off[k + 1]]
         eta_d = model.initial_modal_velocities[off[k]:off[k + 1]]
@@ -928,7 +979,7 @@ def _coordinates(model, keep):
     joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
     whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
     coordinate always)."""
-    from .elements.kinds import WITH_COORDINATES, coordinate_count
+    from .elements.kinds import coordinate_count
     names = set(keep)
     unknown = names - set(model.hinge_names) - set(model.body_names)
     if unknown:
@@ -953,9 +1004,9 @@ def _coordinates(model, keep):
 
 def _state_of(model, variables, x, xd, stretch_rate=None):
     n = model.n_bodies
-    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, 51:53], order="C")
+    theta, q = np.zeros((n, 3)), np.array(model.hinge_params[:, COORDINATE_0], order="C")
     omega = np.array(model.initial_angular_velocity, order="C")
-    qd = np.array(model.hinge_params[:, 53:55], order="C")
+    qd = np.array(model.hinge_params[:, RATE_0], order="C")
     for (what, k, i), value, rate in zip(variables, x, xd):
         if what == "q":
             q[k, i], qd[k, i] = value, rate
@@ -967,7 +1018,7 @@ def _state_of(model, variables, x, xd, stretch_rate=None):
 def _start_values(model, variables):
     """The assembly's variables at t = 0: each joint coordinate as given, each free body's
     rotation change 0."""
-    return np.array([model.hinge_params[k, 51 + i] if what == "q" else 0.0
+    return np.array([model.hinge_params[k, COORDINATE_0.start + i] if what == "q" else 0.0
                      for what, k, i in variables])
 
 

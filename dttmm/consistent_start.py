@@ -4,6 +4,7 @@ import numpy as np
 
 from .elements.drives import MOTION
 from .elements.hinges import ELASTIC
+from .elements.kinds import MAX_COORDINATES
 from .kernels.stepping import ball_chain
 from .kernels.stepping import weld_chain
 from .kernels.stepping import step as kstep
@@ -37,7 +38,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     forward dynamics, the energy-momentum scheme: initial_accelerations' twin, with entry
     points).  extra_loads: (force, torque), (n, 3) each, world,
     added to the applied loads (at the mass centres; dynamics.linearize's inputs);
-    extra_joint_forces: (n, 2) generalized forces added to the joint coordinates' (where
+    extra_joint_forces: (n, 3) generalized forces added to the joint coordinates' (where
     additive_joint_force says they add)."""
     loops = loop_tables(model) if loops is None else loops
     n = model.n_bodies
@@ -47,7 +48,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
         force[0] += extra_loads[0]
         torque[0] += extra_loads[1]
     joint_input = _joint_inputs(model, [t], state, dt)
-    if extra_joint_forces is not None:      # (n, 2): onto the drives' known forces
+    if extra_joint_forces is not None:      # (n, MAX_COORDINATES): onto the drives' known forces
         joint_input[0, :, :, 0] += extra_joint_forces
     try:
         if fused:       # the fused loop's own sweep (compiles nothing else)
@@ -141,8 +142,9 @@ def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
                   eta=np.zeros((n_rec_max, n_eta)), eta_d=np.zeros((n_rec_max, n_eta)),
                   v_st=np.zeros((n_rec_max if v_st else 1, n + 1, 3)),
                   v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
-                  jq=np.zeros((n_rec_max, n, 2)), jqd=np.zeros((n_rec_max, n, 2)),
-                  jtau=np.zeros((n_rec_max, n, 2)),
+                  jq=np.zeros((n_rec_max, n, MAX_COORDINATES)),
+                  jqd=np.zeros((n_rec_max, n, MAX_COORDINATES)),
+                  jtau=np.zeros((n_rec_max, n, MAX_COORDINATES)),
                   closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 10)))
 
 

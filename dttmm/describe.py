@@ -5,9 +5,8 @@ from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LO
                             EXACT, FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING,
                             TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
                             torsion_frequencies, truncation_errors)
-from .elements.hinges import BALL, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION
-from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .elements.kinds import BEAM, RIGID, ROD
+from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
+from .elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                   rod_components)
@@ -15,9 +14,9 @@ from .rod_motion import rod_frequencies
 from .closures import describe_closures, held_chords, loop_rank
 from .model import DESCRIBE
 
-JOINT_NAMES = {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
-               UNIVERSAL: "universal", PRISMATIC: "prismatic"}
-JOINT_DOF = {BALL: 3, FIXED: 0, ELASTIC: 6, REVOLUTE: 1, UNIVERSAL: 2, PRISMATIC: 1}
+# each joint kind's name (its scene type) and degrees of freedom (elements/kinds.py)
+JOINT_NAMES = SCENE_TYPE
+JOINT_DOF = {k.code: k.dof for k in JOINT_KINDS}
 _FAMILY_WHY = {
     PINNED: "pinned (sine modes in the chord frame): both ends are moment-free",
     CLAMPED: "clamped (the clamped-free eigenfunctions): the input section holds the frame and "
@@ -47,8 +46,9 @@ def describe_counts(model):
                    + (f", plus {modal} modal coordinates" if modal else ""))
 
 
-# the constraint equations of each closing joint kind (closures.py): 6 less its freedoms
-CLOSURE_ROWS = {BALL: 3, FIXED: 6, REVOLUTE: 5, UNIVERSAL: 4, PRISMATIC: 5, ELASTIC: 0}
+# the constraint equations of each closing joint kind (closures.py): 6 less its freedoms (an
+# elastic hinge's none: elements/kinds.py, Kind.constraints)
+CLOSURE_ROWS = {k.code: k.constraints for k in JOINT_KINDS}
 
 
 def degrees_of_freedom(model):

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from . import consistent_start, run_checks, run_inputs, run_records, run_tables
+from .elements.kinds import MAX_COORDINATES
 from .energy_balance import EnergyBalance
 from .feedback import Progress, note_once
 from .closures import closure_targets
@@ -111,7 +112,8 @@ class Stepping:
                 if self.static_ground else None,
                 plan.chunk_arrays(("loads", size), lambda: tuple(
                     np.zeros((size, n, 3)) for _ in range(3))) if self.no_loads else None,
-                plan.chunk_arrays(("joint_input", size), lambda: np.zeros((size, n, 2, 3))),
+                plan.chunk_arrays(("joint_input", size),
+                                  lambda: np.zeros((size, n, MAX_COORDINATES, 3))),
                 plan.chunk_arrays(("closure_target", size),
                                   lambda: np.zeros((size, len(plan.loops.kind), 3))))
         return self._constants

@@ -6,6 +6,8 @@ dynamics.md).
 import numpy as np
 
 from .elements import BEAM
+from .elements.kinds import (CHILD, COORDINATE_0, MAX_COORDINATES, RATE_0, SLIDE, TURN,
+                             WITH_COORDINATES, coordinates_of, row_axes)
 
 # the state forward_dynamics takes, as Result records it (one sample), and the kernel state's
 # field each is written to; deflection and deflection_rate: elastic hinges' (world, m, m/s)
@@ -65,7 +67,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     """forward_dynamics' work; check_frames: refuse given rotations of bodies whose frames
     follow their parents' that do not agree with them (dttmm.ode gives placeholders there);
     extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads;
-    extra_joint_forces: (n, 2) generalized forces on the joints' coordinates (where
+    extra_joint_forces: (n, 3) generalized forces on the joints' coordinates (where
     run_inputs.additive_joint_force)."""
     from . import consistent_start, run_checks, run_inputs, run_tables
     from .closures import check_runs_in_sweeps
@@ -82,7 +84,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
                         stop_unconverged=False, start=False)
     n = km.n_bodies
     monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
-                      jqp=np.zeros((n, 2)), defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
+                      jqp=np.zeros((n, MAX_COORDINATES)), defl_pseudo=np.zeros((0, 3)),
+                      error=np.zeros(2))
     ws = run_tables.Workspace(km)
     params = run_tables.kernel_params(km)
     loops = run_tables.loop_tables(km)
@@ -109,7 +112,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
         extra[:, run_tables.loaded_bodies(model, km, keep)] = extra_loads
         extra_loads = extra
     if extra_joint_forces is not None:
-        extra = np.zeros((n, 2))
+        extra = np.zeros((n, MAX_COORDINATES))
         extra[keep] = extra_joint_forces
         extra_joint_forces = extra
     consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
@@ -393,7 +396,6 @@ def linearize(model, state=None, t=0.0):
         a bad state (see forward_dynamics).
     """
     from .elements.hinges import ELASTIC
-    from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
     from .elements.drives import MOTION
     from .run_inputs import additive_joint_force
     closed = bool(model.n_closures)
@@ -489,12 +491,15 @@ def linearize(model, state=None, t=0.0):
     points = None
     for k in range(n):
         kind = int(model.hinge_kind[k])
-        if kind not in (REVOLUTE, UNIVERSAL, PRISMATIC):
+        if kind not in WITH_COORDINATES:
             continue
         p = model.parent[k]
+        spec = coordinates_of(kind)
         for i, drive in enumerate(model.drives[k]):
-            name = (f"{model.hinge_names[k]}.force" if kind == PRISMATIC
-                    else f"{model.hinge_names[k]}.torque{i}")
+            # a turn's torque, a slide's force (a joint of one slide: ".force")
+            slide = spec[i].motion == SLIDE
+            name = (f"{model.hinge_names[k]}.torque{i}" if not slide
+                    else f"{model.hinge_names[k]}.force" + (f"{i}" if len(spec) > 1 else ""))
             if additive_joint_force(drive) or drive["kind"] == MOTION:
                 joint_inputs.append((k, i, None if drive is None or drive["kind"] != MOTION
                                      else "prescribed"))
@@ -505,7 +510,7 @@ def linearize(model, state=None, t=0.0):
             rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
             axis = _joint_axis(model, base, k, i, rot_p)
             arms = None
-            if kind == PRISMATIC:
+            if slide:
                 if points is None:
                     from .run_inputs import _points
                     defl, defl_rate = base["offsets"]
@@ -535,7 +540,7 @@ def linearize(model, state=None, t=0.0):
             k, i, prescribed = joint_inputs[j - 6 * n]
             if prescribed:
                 return None
-            generalized = np.zeros((n, 2))
+            generalized = np.zeros((n, MAX_COORDINATES))
             generalized[k, i] = eps
             return force, torque, generalized
         else:
@@ -616,8 +621,8 @@ def _closed_chart(model, t, full, free, columns, m, moved, fixed):
     def residuals(s):
         theta = np.zeros((n, 3))
         omega = np.array(model.initial_angular_velocity, dtype=float)
-        q = np.array(model.hinge_params[:, 51:53])
-        qd = np.array(model.hinge_params[:, 53:55])
+        q = np.array(model.hinge_params[:, COORDINATE_0])
+        qd = np.array(model.hinge_params[:, RATE_0])
         for k in free:
             log_so3(np.ascontiguousarray(s["rotation"][k] @ model.initial_rotation[k].T),
                     theta[k])
@@ -691,8 +696,9 @@ def _turned(phi):
 
 
 def _joint_axis(model, base, k, i, rot_p):
-    """Joint k's axis i (world) at the state: a revolute joint's (fixed in the parent), a
-    universal joint's first (in the parent) or second (in the child)."""
-    from .elements.hinges import AXIS_1, AXIS_2
-    h = model.hinge_params[k]
-    return rot_p @ h[AXIS_1] if i == 0 else base["rotation"][k] @ h[AXIS_2]
+    """Joint k's coordinate i's axis (world) at the state: a slide's or a turn's fixed in the
+    parent, rot_p n; a turn's fixed in the child, A n (a joint has at most one turn in each
+    frame: elements/kinds.py)."""
+    c = coordinates_of(int(model.hinge_kind[k]))[i]
+    axis = row_axes(model.hinge_params[k])[c.axis]
+    return (base["rotation"][k] if c.motion == TURN and c.frame == CHILD else rot_p) @ axis

@@ -1,7 +1,7 @@
 """DT-TMM's accelerations of a model with closed loops at t = 0: the consistent start with the
 closing joints' multipliers (kernels/assembly/closure.py; docs/loops.md, "The sweep with closing
 joints"): dttmm.forward_dynamics of the model's initial state, its joint accelerations per
-joint (n, 2).
+joint (n, MAX_COORDINATES).
 """
 import numpy as np
 
@@ -18,9 +18,9 @@ def loop_accelerations(model):
     Returns
     -------
     dict
-        ``angular_acceleration`` (n, 3, rad/s^2), ``input_acceleration`` (n, 3, m/s^2, each
-        body's input point), ``joint_acceleration`` (n, 2: each joint coordinate's), the
-        multipliers ``multipliers`` (R,) and the rows' residual ``residual`` (R,, m/s^2 or
+        ``angular_acceleration`` (n, 3, rad/s^2), ``input_acceleration`` (n, 3, m/s^2, each body's
+        input point), ``joint_acceleration`` (n, 3: each joint coordinate's; 0 past a joint's own),
+        the multipliers ``multipliers`` (R,) and the rows' residual ``residual`` (R,, m/s^2 or
         rad/s^2) after the solve.
 
     Raises
@@ -31,7 +31,8 @@ def loop_accelerations(model):
     from .dynamics import forward_dynamics
     from .run_tables import coordinate_columns
     out = forward_dynamics(model)
-    joints = np.zeros((model.n_bodies, 2))
+    from .elements.kinds import MAX_COORDINATES
+    joints = np.zeros((model.n_bodies, MAX_COORDINATES))
     for c, (k, i) in enumerate(coordinate_columns(model)):
         joints[k, i] = out["joint_acceleration"][c]
     return {"input_acceleration": out["input_acceleration"],

@@ -6,8 +6,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .elements import BALL, BEAM, FIXED, PRISMATIC, REVOLUTE, RIGID, ROD, UNIVERSAL, BallJoint
-from .elements.joints import rotation_about
+from .elements import BALL, BEAM, FIXED, RIGID, ROD, BallJoint
 from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPED, CLAMPED_LOADED,
                             EXACT,
                             FAMILY, FREQUENCY_CUTOFF, FROM_STEP, LENGTH, LOAD_AXES,
@@ -18,9 +17,10 @@ from .elements.beam import (ACCURATE, AUTO, AXIAL_MODES, BEAM_PARAM_SIZE, CLAMPE
                             torsion_frequencies)
 from .elements._checks import derivative, finite_scalar, finite_vector, rotation_matrix
 from .elements.drives import MOTION
-from .elements.hinges import pack_hinge
-from .elements.kinds import (BODY_KINDS, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND, JOINT_KINDS,
-                             WITH_COORDINATES, body_kind_of, joint_kind_of, names)
+from .elements.kinds import (BODY_KINDS, CHILD, FLEXIBLE, HINGE_KIND_NAMES, JOINT_KIND,
+                             JOINT_KINDS, PARENT, TURN, WITH_COORDINATES, body_kind_of,
+                             coordinates_of, joint_kind_of, joint_motion, names, pack_hinge,
+                             turn_rotations)
 from .elements.rigid_body import MASS, pack_body
 from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, ROD_PARAM_SIZE, ROD_STATIONS,
                                   rod_coordinate_count)
@@ -349,12 +349,13 @@ class Model:
         body (elements/rigid_body.py).
     hinge_kind : ndarray (n,) of int
         The joint before each body: 0 ball, 1 fixed, 2 elastic, 3 revolute, 4 universal,
-        5 prismatic (elements/kinds.py).
-    hinge_params : ndarray (n, 55)
+        5 prismatic, ... (elements/kinds.py, JOINT_KINDS).
+    hinge_params : ndarray (n, 60)
         Per joint: the rest rotation R0 (9), K_t (9, N/m), C_t (9, N s/m), K_r (9, N m/rad),
-        C_r (9, N m s/rad), all row-major, and for joints with coordinates axis 1 (3, parent
-        frame), axis 2 (3, a universal joint's, child frame), the coordinates (2, rad or m)
-        and rates (2, rad/s or m/s) at t = 0 (elements/hinges.py).
+        C_r (9, N m s/rad), all row-major, and for joints with coordinates axis 1 (3), axis 2
+        (3), the coordinates (3, rad or m), rates (3, rad/s or m/s) at t = 0 and axis 3 (3),
+        each axis in the frame its declaration says (elements/hinges.py, elements/kinds.py:
+        AXES, COORDINATE_0, RATE_0).
     gravity : ndarray (3,)
         World frame, m/s^2.
     ground_position : ndarray (3,)
@@ -426,7 +427,7 @@ class Model:
     closure_kind, closure_body, closure_point, closure_on_end, closure_params, closure_names
         The loop-closing joints (``System.close``; m of them): kind (m,), the two sides' bodies
         (m, 2; -1 the ground), each side's point in its frame (m, 2, 3; the ground's in the
-        ground frame), whether it is a beam's output end (m, 2), a hinge_params row (m, 55:
+        ground frame), whether it is a beam's output end (m, 2), a hinge_params row (m, 60:
         R0 and the axes) and names (dttmm/closures.py, docs/loops.md).  Empty for a tree.
     closure_drives : tuple
         Per closing joint, per coordinate, its drive as ``drives`` (a prescribed motion or a
@@ -707,8 +708,10 @@ class System:
         ----------
         body : RigidBody or EulerBernoulliBeam
             The body added (each body once).
-        joint : BallJoint, FixedHinge, ElasticHinge, RevoluteJoint, UniversalJoint or PrismaticJoint
-            The joint between the parent's attachment point and the body's input point.
+        joint : BallJoint, FixedHinge, ElasticHinge or a joint with coordinates
+            The joint between the parent's attachment point and the body's input point (any
+            kind of elements/kinds.py's JOINT_KINDS: RevoluteJoint, UniversalJoint,
+            PrismaticJoint, ...).
         parent : RigidBody, EulerBernoulliBeam or str, optional
             None (default) for the ground point, or a body of the system (the body itself or
             its name; it may be added later).
@@ -731,17 +734,19 @@ class System:
         """Close a loop: join a point of side a to a point of side b by joint, beside the tree
         (docs/loops.md).
 
-        The bodies' frames at t = 0 define the joint's rest: a revolute, universal or fixed
-        joint's relative rotation R0 is read from them (at the joint's given angles), a
-        prismatic joint's coordinate is measured between its points.  Nothing is checked here:
-        ``build`` validates the joint and its sides.
+        The bodies' frames at t = 0 define the joint's rest: a joint's relative rotation R0 is
+        read from them (at its turns' given angles), a slide's coordinate is measured between
+        its points.  Nothing is checked here: ``build`` validates the joint and its sides.
 
         Parameters
         ----------
-        joint : BallJoint, FixedHinge, RevoluteJoint, UniversalJoint or PrismaticJoint
-            The closing joint.  Side a plays a tree joint's parent (axis, axis1 are in a's
-            frame; the slide runs along a's axis), side b its child (a universal joint's axis2
-            is in b's frame; the joint's force and couple act on b).
+        joint : any joint kind (elements/kinds.py's JOINT_KINDS)
+            The closing joint: BallJoint, FixedHinge, ElasticHinge, RevoluteJoint,
+            UniversalJoint, PrismaticJoint, ...  Side a plays a tree joint's parent (the axes
+            fixed in the parent, axis or axis1, are in a's frame; slides run along a's axes),
+            side b its child (an axis fixed in the child, a universal joint's axis2, is in b's
+            frame; the joint's force and couple act on b).  A closing joint's drives sit on its
+            first two coordinates.
         a, b : body, str
             A body of the system, its name, or "ground" (b defaults to the ground).
         at_a, at_b : str or array_like of 3, optional
@@ -857,8 +862,9 @@ def build_chain(elements: Sequence, gravity=(0.0, -9.81, 0.0), ground: Ground = 
 
             [hinge_0, body_0, hinge_1, body_1, ..., hinge_{n-1}, body_{n-1}]
 
-        Hinges: BallJoint, FixedHinge, ElasticHinge, RevoluteJoint, UniversalJoint,
-        PrismaticJoint; bodies: RigidBody, EulerBernoulliBeam.
+        Hinges: any joint kind (BallJoint, FixedHinge, ElasticHinge, RevoluteJoint,
+        UniversalJoint, PrismaticJoint, ...: elements/kinds.py); bodies: RigidBody,
+        EulerBernoulliBeam.
     gravity : array_like of 3, optional
         Gravitational acceleration, world frame, m/s^2 (default (0, -9.81, 0)).
     ground : Ground, optional
@@ -1199,23 +1205,24 @@ def _unstiffen_held_chords(model, candidates):
 
 def _joint_start(kind, v, a_in, w_in, given_rot, given_omega, joint_name, who):
     """A child's rotation and angular velocity at t = 0 behind a joint with coordinates, and the
-    joint's R0 (elements/joints.py): A = A_P Rot(n, q) R0 (revolute), A_P Rot(n1, q1) R0
-    Rot(n2, q2) (universal), A_P R0 (prismatic); w = w_P + the joint's rates about its axes."""
-    n1, n2, (q1, q2), (qd1, qd2) = v["axis1"], v["axis2"], v["q0"], v["qd0"]
-    r1 = rotation_about(n1, q1) if kind != PRISMATIC else np.eye(3)
-    r2 = rotation_about(n2, q2) if kind == UNIVERSAL else np.eye(3)
-    r0 = np.eye(3) if given_rot is None else r1.T @ a_in.T @ given_rot @ r2.T
-    if kind == UNIVERSAL:
-        dot = float(n1 @ (r0 @ n2))
+    joint's R0 (elements/joints.py): A = A_P R_P R0 R_C, R_P and R_C the joint's turns fixed in
+    the parent and in the child (A_P Rot(n, q) R0 for a revolute joint, A_P Rot(n1, q1) R0
+    Rot(n2, q2) for a universal one, A_P R0 for a prismatic one); w = w_P + the turns' rates
+    about their axes (elements/kinds.py::joint_motion).  A kind with a turn in each frame needs
+    their axes perpendicular at q = 0 (its closing row keeps them so)."""
+    axes, q0, qd0 = v["axes"], v["q0"], v["qd0"]
+    r_p, r_c = turn_rotations(kind, axes, q0)
+    r0 = np.eye(3) if given_rot is None else r_p.T @ a_in.T @ given_rot @ r_c.T
+    turns = {c.frame: c.axis for c in coordinates_of(kind) if c.motion == TURN}
+    if len(turns) == 2:
+        names = JOINT_KIND[int(kind)].axes
+        first, second = names[turns[PARENT]], names[turns[CHILD]]
+        dot = float(axes[turns[PARENT]] @ (r0 @ axes[turns[CHILD]]))
         if abs(dot) > 1e-9:
-            raise ValueError(f"{joint_name} before {who}: axis1 and axis2 must be perpendicular "
-                             f"(axis1 . axis2 in the parent's frame at q = 0: {dot:.3g})")
-    rot = a_in @ r1 @ r0 @ r2
-    omega = w_in.copy()
-    if kind == REVOLUTE:
-        omega = omega + a_in @ n1 * qd1
-    elif kind == UNIVERSAL:
-        omega = omega + a_in @ n1 * qd1 + rot @ n2 * qd2
+            raise ValueError(f"{joint_name} before {who}: {first} and {second} must be "
+                             f"perpendicular ({first} . {second} in the parent's frame at q = 0: "
+                             f"{dot:.3g})")
+    rot, omega, _, _, _ = joint_motion(kind, axes, r0, a_in, w_in, q0, qd0)
     if given_omega is not None and not np.allclose(given_omega, omega, atol=1e-9):
         raise ValueError(f"{who}: angular_velocity {given_omega} contradicts the {joint_name} "
                          f"before it (the body turns with its parent and the joint's rates: "
@@ -1394,19 +1401,17 @@ def _count_rod_strains(bodies, bv, hv, kinds, body_kind, rod_params, parent, loo
 
 def root_pinned(body, kind, joint):
     """Whether a body's root joint lets it turn freely in some bending plane of its own: a
-    revolute or universal joint with a coordinate that no JointMotion prescribes, about an axis
-    not along the body's x (R0 is the identity unless the body was given a rotation; then the
-    axis in its frame is not known before the build's kinematics, and a free coordinate counts
+    joint with a turn that no JointMotion prescribes (elements/kinds.py's declaration), about an
+    axis not along the body's x (R0 is the identity unless the body was given a rotation; then
+    the axis in its frame is not known before the build's kinematics, and a free turn counts
     as pinned).  A ball joint: always."""
     if kind == BALL:
         return True
-    if kind not in (REVOLUTE, UNIVERSAL):
-        return False
-    axes = [joint["axis1"]] + ([joint["axis2"]] if kind == UNIVERSAL else [])
-    for axis, drive in zip(axes, joint["drives"]):
-        if drive is not None and drive["kind"] == MOTION:
+    for c, drive in zip(coordinates_of(kind), joint.get("drives", ())):
+        if c.motion != TURN or (drive is not None and drive["kind"] == MOTION):
             continue
-        if getattr(body, "rotation", None) is not None or abs(axis[0]) < 1.0 - 1e-9:
+        if getattr(body, "rotation", None) is not None or abs(joint["axes"][c.axis][0]) < \
+                1.0 - 1e-9:
             return True
     return False
 

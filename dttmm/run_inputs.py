@@ -9,6 +9,7 @@ from .vectors import cross
 from .elements import BEAM, RIGID
 from .elements._checks import is_text
 from .elements.drives import (FORCE, MOTION, PD, known_force, runs_in_loop)
+from .elements.kinds import MAX_COORDINATES
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .sections import (element_output_offset,
                      point_positions)
@@ -17,13 +18,12 @@ from .run_checks import UserFunctionError
 
 
 def _joint_inputs(model, times, state=None, dt=0.0):
-    """(len(times), n, 2, 3): per joint coordinate, a prescribed motion's (q, q', q''), a
-    drive's force known in time (elements/drives.py::known_force) and a JointForce's value
-    f(t, q, q') at each time (kernels/stepping/loop.py::Inputs).  A JointForce of the state is
+    """(len(times), n, MAX_COORDINATES, 3): per joint coordinate, a prescribed motion's
+    (q, q', q''), a drive's force known in time (elements/drives.py::known_force) and a JointForce's
+    value f(t, q, q') at each time (kernels/stepping/loop.py::Inputs).  A JointForce of the state is
     evaluated at the coordinates the constant-acceleration predictor gives from the state (one step
-    ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the
-    transfer"."""
-    out = np.zeros((len(times), model.n_bodies, 2, 3))
+    ahead of it: the solver then takes one step per chunk); docs/joints.md, "In the transfer"."""
+    out = np.zeros((len(times), model.n_bodies, MAX_COORDINATES, 3))
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
             if d is None or d["kind"] not in (FORCE, MOTION, PD):

@@ -101,7 +101,8 @@ class PreparedRun:
             newton_tol=opts.newton_tol, record_every=1, max_step_error=opts.max_step_error,
             stop_unconverged=scheme.stop_unconverged, start=False)
         monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
-                          jqp=np.zeros((n if run_tables.has_coordinates(model) else 0, 2)),
+                          jqp=np.zeros((n if run_tables.has_coordinates(model) else 0,
+                                        run_tables.MAX_COORDINATES)),
                           defl_pseudo=np.zeros((n if (model.hinge_kind == run_tables.ELASTIC).any()
                                                 else 0, 3)),
                           error=np.zeros(2))

@@ -12,14 +12,13 @@ from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components
                                   rod_section,
                                   rod_stiffness)
 from .elements.strain_rod import rod_tables as rod_element_tables
-from .elements.kinds import FLEXIBLE, WITH_COORDINATES
+from .elements.kinds import (COORDINATE_0, FLEXIBLE, HINGE_PARAM_SIZE, MAX_COORDINATES, RATE_0,
+                             WITH_COORDINATES, WITH_SLIDES)
 from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
                             MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
                             mode_shapes, slope_grams, torsion_shapes)
 from .elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
-from .elements.hinges import (AXIS_1, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED,
-                              HINGE_PARAM_SIZE, RATE_0, REST_ROTATION)
-from .elements.joints import PRISMATIC
+from .elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import Loops
@@ -82,7 +81,8 @@ class Workspace:
         # the joints' coordinates and rates at t = 0 (zeros, untouched, without such joints)
         jq, jqd = ((model.hinge_params[:, COORDINATE_0].copy(),
                     model.hinge_params[:, RATE_0].copy()) if has_coordinates(model)
-                   else (np.zeros((n_joint, 2)), np.zeros((n_joint, 2))))
+                   else (np.zeros((n_joint, MAX_COORDINATES)),
+                         np.zeros((n_joint, MAX_COORDINATES))))
         self.state = State(
             rot=model.initial_rotation.copy(), omega=model.initial_angular_velocity.copy(),
             omega_dot=z3(), pseudo=z3(),    # pseudo: the rotation integrator's pseudo-acceleration
@@ -95,8 +95,8 @@ class Workspace:
             eta_p=np.zeros(n_eta), eta_map=np.zeros((n_eta, 13)), v_c=off3(),
             # joints with coordinates (kernels/transfers/joint.py): q, q', q'', pseudo, generalized
             # force
-            jq=jq, jqd=jqd, jqdd=np.zeros((n_joint, 2)),
-            jqp=np.zeros((n_joint, 2)), jtau=np.zeros((n_joint, 2)))
+            jq=jq, jqd=jqd, jqdd=np.zeros((n_joint, MAX_COORDINATES)),
+            jqp=np.zeros((n_joint, MAX_COORDINATES)), jtau=np.zeros((n_joint, MAX_COORDINATES)))
         self.sweep = Sweep(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
             known_loads=np.zeros((n_el, 12)), split=np.zeros(n_sst, dtype=np.int64),
@@ -120,13 +120,14 @@ def _initial_deflections(model, state):
     """state.defl at t = 0, the offset of each body's input point from its parent's output
     point, which the loops keep from the first step on (the t = 0 sample, the energies and
     positions then place the body where the model says): an elastic hinge's given deflection
-    (ElasticHinge.deflection; its rate starts at zero), and a prismatic joint's slide d = u q
-    with its rate u q' + w_p x d (u the axis in world, w_p the parent's output section's
-    angular velocity; kernels/transfers/joint.py::joint_frame)."""
+    (ElasticHinge.deflection; its rate starts at zero), and a joint's slides d = A_P sum n_i q_i
+    with its rate (w_p, the parent's output section's angular velocity;
+    kernels/transfers/joint.py::joint_frame and its joint_offset)."""
+    from .kernels.transfers.joint import joint_frame
     for k in range(model.n_bodies):
         if model.hinge_kind[k] == ELASTIC:
             state.defl[k] = model.hinge_params[k, DEFLECTION_0]
-        if model.hinge_kind[k] != PRISMATIC:
+        if model.hinge_kind[k] not in WITH_SLIDES:
             continue
         p = model.parent[k]
         if p < 0:
@@ -138,9 +139,13 @@ def _initial_deflections(model, state):
                 model.initial_angular_velocity[p],
                 model.initial_modal_coordinates[off:off + model.n_modes[p]],
                 model.initial_modal_velocities[off:off + model.n_modes[p]])
-        u = rot_p @ model.hinge_params[k, AXIS_1]
-        state.defl[k] = u * model.hinge_params[k, COORDINATE_0][0]
-        state.defl_rate[k] = u * model.hinge_params[k, RATE_0][0] + cross(w_p, state.defl[k])
+        zero = np.zeros(3)
+        joint_frame(int(model.hinge_kind[k]), np.array(model.hinge_params[k], dtype=float),
+                    np.array(rot_p, dtype=float), np.array(w_p, dtype=float), zero,
+                    np.array(model.hinge_params[k, COORDINATE_0], dtype=float),
+                    np.array(model.hinge_params[k, RATE_0], dtype=float),
+                    np.zeros(MAX_COORDINATES), np.empty((3, 3)), np.empty(3), np.empty(3),
+                    state.defl[k], state.defl_rate[k])
 
 
 @model_fact
@@ -212,14 +217,14 @@ def _rows(model, *names):
 
 
 def joint_drives(model):
-    """(n, 2, 4): each joint coordinate's drive as the kernels read it, [kind, stiffness,
-    damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in time
-    (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known
-    part in the inputs (_joint_inputs; kernels/transfers/joint.py::drive_value); a compiled
-    JointForce is COMPILED_FORCE with its callback's index in compiled_forces in place of the rest.
-    One row of none for a model without joints with coordinates (the kernels read a joint's row
-    only; the full-state tree sweep hands a ball joint row 0, unread)."""
-    table = np.zeros((model.n_bodies if has_coordinates(model) else 1, 2, 4))
+    """(n, MAX_COORDINATES, 4): each joint coordinate's drive as the kernels read it, [kind,
+    stiffness, damping, rest], kind -1 for none (elements/drives.py).  A drive with a part known in
+    time (a PDTracking, a JointForce of time alone) is a spring-damper about 0 there, its known part
+    in the inputs (_joint_inputs; kernels/transfers/joint.py::drive_value); a compiled JointForce is
+    COMPILED_FORCE with its callback's index in compiled_forces in place of the rest. One row of
+    none for a model without joints with coordinates (the kernels read a joint's row only; the
+    full-state tree sweep hands a ball joint row 0, unread)."""
+    table = np.zeros((model.n_bodies if has_coordinates(model) else 1, MAX_COORDINATES, 4))
     table[:, :, 0] = -1.0
     for k, drives in enumerate(model.drives):
         for i, d in enumerate(drives):
@@ -257,8 +262,8 @@ def has_coordinates(model):
 @model_fact
 def has_offsets(model):
     """A joint offsets its body's input point from its parent's output point (state.defl): an
-    elastic hinge's deflection, a prismatic joint's slide."""
-    return bool(np.isin(model.hinge_kind, (ELASTIC, PRISMATIC)).any())
+    elastic hinge's deflection, a joint's slides (elements/kinds.py: WITH_SLIDES)."""
+    return bool(np.isin(model.hinge_kind, (ELASTIC,) + WITH_SLIDES).any())
 
 
 @model_fact

@@ -14,22 +14,20 @@ from pathlib import Path
 
 import numpy as np
 
-from .elements import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, JointForce,
-                       JointMotion, PDTracking, PrismaticJoint, RevoluteJoint, RigidBody,
-                       SpringDamper, StrainRod, UniversalJoint)
+from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking, RigidBody,
+                       SpringDamper, StrainRod)
 from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
                             EXACT, LENGTH,
                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
-from .elements.kinds import BEAM, ROD
+from .elements.kinds import (AXES, BEAM, COORDINATE_0, JOINT_KIND, JOINT_KINDS, RATE_0, ROD,
+                             SCENE_TYPE, SLIDE, WITH_COORDINATES)
 from .elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
                                   ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
                                   ROD_STRETCH, ROD_TWIST)
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from .elements.hinges import (AXIS_1, AXIS_2, BALL, C_ROTATION, C_TRANSLATION, COORDINATE_0,
-                              DEFLECTION_0, ELASTIC, FIXED, K_ROTATION, K_TRANSLATION, RATE_0,
-                              REST_ROTATION)
-from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
+from .elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
+                              K_ROTATION, K_TRANSLATION, REST_ROTATION)
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 from .model import Ground, Model, PrescribedMotion, System, children_of
 from .profiles import Profile, ProfileForce, profile
@@ -42,7 +40,8 @@ class SceneError(ValueError):
 
 
 # the keys each table takes: key -> kind of value ("number", "int", "bool", "str", "vector",
-# "pair", "matrix", "stiffness": a number, 3 numbers or a 3 x 3 matrix, "profile", "table")
+# "pair", "matrix", "stiffness": a number, 3 numbers or a 3 x 3 matrix, "profile", "table",
+# "numbers<n>": n numbers, "drives<n>": a list of n drive tables)
 _MODEL = {"name": "str", "gravity": "vector", "tip": "str"}
 _GROUND = {"position": "vector", "rotation": "matrix", "spin": "table"}
 _SPIN = {"axis": "vector", "angle": "profile", "position": "vector"}
@@ -76,21 +75,31 @@ _BODY_KINDS = {"rigid": (RigidBody, _RIGID, ("mass", "inertia", "inertia_about")
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "point"}
 _CLOSE_COMMON = {"type": "str", "name": "str", "a": "str", "b": "str", "at_a": "point",
                  "at_b": "point"}
-_JOINTS = {
-    "ball": (BallJoint, {}),
-    "fixed": (FixedHinge, {"rotation": "matrix"}),
-    "elastic": (ElasticHinge, {"translational_stiffness": "stiffness",
-                               "rotational_stiffness": "stiffness",
-                               "translational_damping": "stiffness",
-                               "rotational_damping": "stiffness", "rotation": "matrix",
-                               "deflection": "vector"}),
-    "revolute": (RevoluteJoint, {"axis": "vector", "angle": "number", "rate": "number",
-                                 "drive": "table"}),
-    "universal": (UniversalJoint, {"axis1": "vector", "axis2": "vector", "angles": "pair",
-                                   "rates": "pair", "drives": "drives"}),
-    "prismatic": (PrismaticJoint, {"axis": "vector", "position": "number", "rate": "number",
-                                   "drive": "table"}),
+# the joints' own keys: those without coordinates here, a joint with coordinates' from its
+# declaration (elements/kinds.py: its axes, then its coordinates' values, rates and drives, one
+# each for a joint of one coordinate, else lists of one per coordinate), under its scene type
+_OWN_KEYS = {
+    BALL: {},
+    FIXED: {"rotation": "matrix"},
+    ELASTIC: {"translational_stiffness": "stiffness", "rotational_stiffness": "stiffness",
+              "translational_damping": "stiffness", "rotational_damping": "stiffness",
+              "rotation": "matrix", "deflection": "vector"},
 }
+
+
+def _coordinate_keys(kind):
+    """A joint with coordinates' keys (Kind.axes and Kind.arguments)."""
+    count = len(kind.coordinates)
+    values, rates, drives = kind.arguments
+    one = count == 1
+    return dict({axis: "vector" for axis in kind.axes},
+                **{values: "number" if one else f"numbers{count}",
+                   rates: "number" if one else f"numbers{count}",
+                   drives: "table" if one else f"drives{count}"})
+
+
+_JOINTS = {k.scene: (k.cls, _coordinate_keys(k) if k.code in WITH_COORDINATES
+                     else _OWN_KEYS[k.code]) for k in JOINT_KINDS}
 _DRIVES = ("spring_damper", "force", "motion", "pd", "none")
 _RUN = {"t_end": "number", "dt": "number", "method": "str", "scheme": "str",
         "rho_inf": "number", "newton_iterations": "int", "newton_tol": "number",
@@ -241,8 +250,7 @@ def _body(table, i, where):
             raise SceneError(f"{where}: {label} needs the key '{key}'")
     if "joint" not in table:
         raise SceneError(f"{where}: {label} needs a [body.joint] table (how it hangs from its "
-                         f"parent: type = 'ball', 'fixed', 'elastic', 'revolute', 'universal' "
-                         f"or 'prismatic')")
+                         f"parent: type = one of {', '.join(_JOINTS)})")
     args = {k: v for k, v in table.items() if k not in ("type", "joint")}
     for key in ("force", "torque", "end_force", "end_torque", "distributed_load"):
         if key in args:
@@ -270,13 +278,15 @@ def _joint(table, where, label, common=_JOINT_COMMON):
     cls, own = _JOINTS[kind]
     _keys(table, dict(common, **own), where, label)
     args = {k: v for k, v in table.items() if k not in common or k == "name"}
-    if "drive" in args:
-        args["drive"] = _drive(args["drive"], where, f"{label} key 'drive'")
-    if "drives" in args:
-        args["drives"] = tuple(_drive(d, where, f"{label} key 'drives[{j}]'")
-                               for j, d in enumerate(args["drives"]))
-    for key in ("angles", "rates"):
-        if key in args:
+    for key, value in own.items():          # (a joint with coordinates' drives and lists)
+        if key not in args:
+            continue
+        if value == "table":
+            args[key] = _drive(args[key], where, f"{label} key '{key}'")
+        elif value.startswith("drives"):
+            args[key] = tuple(_drive(d, where, f"{label} key '{key}[{j}]'")
+                              for j, d in enumerate(args[key]))
+        elif value.startswith("numbers"):
             args[key] = tuple(args[key])
     try:
         joint = cls(**args)
@@ -348,6 +358,9 @@ def _value(value, kind, where, label):
               isinstance(r, list) and len(r) == 3 and all(map(number, r)) for r in value),
           "table": isinstance(value, dict), "bodies": isinstance(value, list),
           "drives": isinstance(value, list) and len(value) == 2,
+          **{f"numbers{n}": isinstance(value, list) and len(value) == n
+             and all(map(number, value)) for n in (2, 3)},
+          **{f"drives{n}": isinstance(value, list) and len(value) == n for n in (2, 3)},
           "profile": number(value) or isinstance(value, dict)}
     ok["point"] = ok["str"] or ok["vector"]
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
@@ -360,6 +373,8 @@ def _value(value, kind, where, label):
                 "list": "a list of numbers", "matrix": "a 3 x 3 matrix (3 rows of 3)",
                 "table": "a table", "bodies": "an array of tables ([[body]])",
                 "drives": "a list of two drive tables", "profile": "a number or a profile table",
+                "numbers2": "2 numbers", "numbers3": "3 numbers",
+                "drives2": "a list of 2 drive tables", "drives3": "a list of 3 drive tables",
                 "stiffness": "a number, 3 numbers or a 3 x 3 matrix",
                 "modes": 'an integer or "auto"', "stiffening": 'true, false or "exact"',
                 "runs": "true, false or the number of runs (2 to 4)"}[kind]
@@ -488,9 +503,7 @@ def scene_of(model, run=None, name=None):
         if kind in (BALL, ELASTIC):          # (else the joint sets them)
             table["rotation"] = model.initial_rotation[k].tolist()
             table["angular_velocity"] = model.initial_angular_velocity[k].tolist()
-        elif kind == PRISMATIC:
-            table["rotation"] = model.initial_rotation[k].tolist()
-        elif kind in (REVOLUTE, UNIVERSAL):
+        elif kind in WITH_COORDINATES:       # (its R0 read again from it; w from the rates)
             table["rotation"] = model.initial_rotation[k].tolist()
         table["joint"] = _joint_table(model, k, who)
         bodies.append(table)
@@ -526,9 +539,7 @@ def _close_table(model, c):
     (its rest rotation is read again from the frames at t = 0; an elastic hinge's is written)."""
     kind = int(model.closure_kind[c])
     h = model.closure_params[c]
-    table = {"type": {BALL: "ball", FIXED: "fixed", REVOLUTE: "revolute",
-                      UNIVERSAL: "universal", PRISMATIC: "prismatic", ELASTIC: "elastic"}[kind],
-             "name": model.closure_names[c]}
+    table = {"type": SCENE_TYPE[kind], "name": model.closure_names[c]}
     if kind == ELASTIC:         # its springs, and its rest rotation as built
         table.update(translational_stiffness=h[K_TRANSLATION].reshape(3, 3).tolist(),
                      rotational_stiffness=h[K_ROTATION].reshape(3, 3).tolist(),
@@ -546,20 +557,34 @@ def _close_table(model, c):
         else:
             point = local
         table[f"at_{side}"] = point if isinstance(point, str) else np.asarray(point).tolist()
-    if kind in (REVOLUTE, PRISMATIC):
-        table["axis"] = h[AXIS_1].tolist()
-    if kind == REVOLUTE and h[COORDINATE_0][0] != 0.0:
-        table["angle"] = float(h[COORDINATE_0][0])
-    if kind == UNIVERSAL:
-        table["axis1"], table["axis2"] = h[AXIS_1].tolist(), h[AXIS_2].tolist()
-        if np.any(h[COORDINATE_0] != 0.0):
-            table["angles"] = h[COORDINATE_0].tolist()
-    drives = model.closure_drives[c] if model.closure_drives else ()
-    who = f"closing joint '{model.closure_names[c]}'"
-    if kind in (REVOLUTE, PRISMATIC) and drives and drives[0] is not None:
-        table["drive"] = _drive_table(drives[0], who)
-    if kind == UNIVERSAL and any(d is not None for d in drives):
-        table["drives"] = [_drive_table(d, who) for d in drives]
+    if kind in WITH_COORDINATES:     # its axes, its turns' angles (slides: from the points)
+        drives = model.closure_drives[c] if model.closure_drives else ()
+        table.update(_coordinate_table(JOINT_KIND[kind], h, drives,
+                                       f"closing joint '{model.closure_names[c]}'", True))
+    return table
+
+
+def _coordinate_table(kind, h, drives, who, closing=False):
+    """A joint with coordinates' keys (its declaration's names, elements/kinds.py): its axes,
+    its coordinates' values and rates at t = 0 and its drives (a closing joint: its turns'
+    values where not 0, no rates (they start at 0), drives where any)."""
+    count = len(kind.coordinates)
+    values_key, rates_key, drives_key = kind.arguments
+    table = {name: h[AXES[slot]].tolist() for slot, name in enumerate(kind.axes)}
+    values = h[COORDINATE_0][:count].tolist()
+    if closing:                     # a slide's value: measured between its points again
+        values = [0.0 if c.motion == SLIDE else v for c, v in zip(kind.coordinates, values)]
+    if not closing or any(values):
+        table[values_key] = values[0] if count == 1 else values
+    if not closing:
+        rates = h[RATE_0][:count].tolist()
+        table[rates_key] = rates[0] if count == 1 else rates
+    written = [_drive_table(d, who) for d in (list(drives) + [None] * count)[:count]]
+    if count == 1:
+        if written[0]["type"] != "none":
+            table[drives_key] = written[0]
+    elif not closing or any(d is not None for d in drives):
+        table[drives_key] = written
     return table
 
 
@@ -567,8 +592,7 @@ def _joint_table(model, k, who):
     kind = int(model.hinge_kind[k])
     h = model.hinge_params[k]
     p = model.parent[k]
-    table = {"type": {BALL: "ball", FIXED: "fixed", ELASTIC: "elastic", REVOLUTE: "revolute",
-                      UNIVERSAL: "universal", PRISMATIC: "prismatic"}[kind],
+    table = {"type": SCENE_TYPE[kind],
              "name": model.hinge_names[k],
              "parent": "ground" if p < 0 else model.body_names[p]}
     if model.attachment[k]:
@@ -586,17 +610,8 @@ def _joint_table(model, k, who):
                      rotation=rest.tolist())
         if np.any(h[DEFLECTION_0]):
             table["deflection"] = h[DEFLECTION_0].tolist()
-    elif kind in (REVOLUTE, PRISMATIC):
-        coordinate = "angle" if kind == REVOLUTE else "position"
-        table.update(axis=h[AXIS_1].tolist(), **{coordinate: h[COORDINATE_0][0]},
-                     rate=h[RATE_0][0])
-        drive = _drive_table(model.drives[k][0], who)
-        if drive["type"] != "none":
-            table["drive"] = drive
-    elif kind == UNIVERSAL:
-        table.update(axis1=h[AXIS_1].tolist(), axis2=h[AXIS_2].tolist(),
-                     angles=h[COORDINATE_0].tolist(), rates=h[RATE_0].tolist(),
-                     drives=[_drive_table(d, who) for d in model.drives[k]])
+    elif kind in WITH_COORDINATES:
+        table.update(_coordinate_table(JOINT_KIND[kind], h, model.drives[k], who))
     return table
 
 

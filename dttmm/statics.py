@@ -21,10 +21,9 @@ import numpy as np
 from .closures import check_runs_in_sweeps, closure_residuals, start_state
 from .elements import BEAM, ROD
 from .elements.drives import MOTION
-from .elements.hinges import (AXIS_1, BALL, COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0,
-                              REST_ROTATION)
-from .elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from .elements.kinds import BODY_KIND, JOINT_KIND
+from .elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
+from .elements.kinds import (BODY_KIND, COORDINATE_0, JOINT_KIND, MAX_COORDINATES, RATE_0,
+                             WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes)
 from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
                             trusted_frequency)
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -175,9 +174,11 @@ def _positions(m):
         else:
             r_in[k] = r_in[p] + m.initial_rotation[p] @ m.attachment_point[k]
             rot_p = m.initial_rotation[p]
-        if m.hinge_kind[k] == PRISMATIC:          # the slide along the joint's axis
-            r_in[k] = r_in[k] + rot_p @ m.hinge_params[k, AXIS_1] * \
-                m.hinge_params[k, COORDINATE_0][0]
+        if m.hinge_kind[k] in WITH_SLIDES:        # the slides along the joint's axes
+            h = m.hinge_params[k]
+            r_in[k] = r_in[k] + joint_motion(m.hinge_kind[k], row_axes(h), np.eye(3), rot_p,
+                                             np.zeros(3), h[COORDINATE_0],
+                                             np.zeros(MAX_COORDINATES))[2]
         elif m.hinge_kind[k] == ELASTIC:          # the hinge's deflection (world)
             r_in[k] = r_in[k] + m.hinge_params[k, DEFLECTION_0]
         rot = m.initial_rotation[k]
@@ -215,7 +216,7 @@ class _Configuration:
         n = km.n_bodies
         for k in range(n):
             kind = int(km.hinge_kind[k])
-            if kind not in (BALL, FIXED, ELASTIC, REVOLUTE, UNIVERSAL, PRISMATIC):
+            if kind not in (BALL, FIXED, ELASTIC) + WITH_COORDINATES:
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
                                  f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "
                                  f"fixed and elastic hinges and joints with coordinates so far "
@@ -271,7 +272,8 @@ class _Configuration:
                                  .array(), newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)
         self.monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(self.n_eta),
-                               jqp=np.zeros((n if run_tables.has_coordinates(km) else 0, 2)),
+                               jqp=np.zeros((n if run_tables.has_coordinates(km) else 0,
+                                             MAX_COORDINATES)),
                                defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
         self.fused = None
         if (run_tables.FUSED_BALL_CHAIN and self.mode == run_tables.kstep.RICCATI_REDUCED
@@ -281,7 +283,7 @@ class _Configuration:
                           ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
 
     def vector(self, rot, jq, eta, defl):
-        """q of a configuration given by rotations, joint coordinates (n, 2), modal
+        """q of a configuration given by rotations, joint coordinates (n, 3), modal
         coordinates and hinge deflections (n, 3) (rotations relative to the model's own)."""
         q = np.zeros(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
@@ -306,7 +308,7 @@ class _Configuration:
         return q
 
     def state(self, q):
-        """(rotations, joint coordinates (n, 2), modal coordinates, hinge deflections (n, 3))
+        """(rotations, joint coordinates (n, 3), modal coordinates, hinge deflections (n, 3))
         of q: the free bodies turned by their increments, every welded body placed on its
         inboard output section, a body behind a joint with coordinates on its joint's frame
         (kernels/transfers/joint.py)."""
@@ -340,8 +342,8 @@ class _Configuration:
             else:
                 out = np.empty((3, 3))
                 joint_frame(kind, np.array(km.hinge_params[k]), np.ascontiguousarray(a_in),
-                            zero, zero, jq[k].copy(), np.zeros(2), np.zeros(2), out, w, wd, d,
-                            d_rate)
+                            zero, zero, jq[k].copy(), np.zeros(MAX_COORDINATES),
+                            np.zeros(MAX_COORDINATES), out, w, wd, d, d_rate)
                 rot[k] = out
         return rot, jq, np.array(eta), defl
 

@@ -400,9 +400,10 @@ def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
 def _with_crank(model, angle):
     """The model with the crank's joint coordinate set to angle (rad), at rest."""
     from dataclasses import replace
+    from dttmm.elements.kinds import COORDINATE_0, RATE_0
     hinge_params = np.array(model.hinge_params, order="C")
-    hinge_params[0, 51] = angle
-    hinge_params[:, 53:55] = 0.0
+    hinge_params[0, COORDINATE_0.start] = angle
+    hinge_params[:, RATE_0] = 0.0
     return replace(model, hinge_params=hinge_params,
                    initial_angular_velocity=np.zeros((model.n_bodies, 3)))
 

@@ -11,19 +11,15 @@ from ._checks import finite_vector, matrix3, rotation_matrix, symmetric_positive
 
 BALL, FIXED, ELASTIC = 0, 1, 2        # Model.hinge_kind (declared in kinds.py)
 
-# layout of one row of Model.hinge_params (3x3 blocks, row-major)
+# layout of one row of Model.hinge_params (3x3 blocks, row-major); a joint's axes, coordinates
+# and rates follow (elements/kinds.py: AXES, COORDINATE_0, RATE_0, HINGE_PARAM_SIZE)
 REST_ROTATION = slice(0, 9)        # R0: outboard frame = inboard frame R0 at rest
 K_TRANSLATION = slice(9, 18)       # in the inboard body's frame, N/m
 C_TRANSLATION = slice(18, 27)      # N s/m
 K_ROTATION = slice(27, 36)         # N m/rad
 C_ROTATION = slice(36, 45)         # N m s/rad
-AXIS_1 = slice(45, 48)             # joints with coordinates (joints.py): the (first) axis,
-AXIS_2 = slice(48, 51)             # parent frame; a universal joint's second, child frame
-COORDINATE_0 = slice(51, 53)       # their coordinates (rad or m) and rates at t = 0
 DEFLECTION_0 = slice(45, 48)       # an elastic hinge's deflection d at t = 0 (world, m), in
-#                                    the axis slots, which an elastic hinge has no use for
-RATE_0 = slice(53, 55)
-HINGE_PARAM_SIZE = 55
+#                                    the first axis slot (kinds.AXIS_1), which it has no use for
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,8 +183,9 @@ def _label(hinge, index):
     return f"{kind} '{hinge.name}' ({where})" if hinge.name else f"{kind} ({where})"
 
 
-def pack_hinge(v):
-    row = np.zeros(HINGE_PARAM_SIZE)
+def row_blocks(v, row):
+    """The hinge's R0, springs, dampers and deflection (validated()'s dict v) into its
+    hinge_params row (elements/kinds.py::pack_hinge packs the rest); returns row."""
     row[REST_ROTATION] = v["rotation"].reshape(-1)
     row[K_TRANSLATION] = v["k_t"].reshape(-1)
     row[C_TRANSLATION] = v["c_t"].reshape(-1)
@@ -196,9 +193,4 @@ def pack_hinge(v):
     row[C_ROTATION] = v["c_r"].reshape(-1)
     if "d0" in v:
         row[DEFLECTION_0] = v["d0"]
-    if "axis1" in v:
-        row[AXIS_1] = v["axis1"]
-        row[AXIS_2] = v["axis2"]
-        row[COORDINATE_0] = v["q0"]
-        row[RATE_0] = v["qd0"]
     return row

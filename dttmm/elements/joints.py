@@ -66,11 +66,23 @@ def _coordinates(who, values, rates, drives, names):
     return q0, qd0, checked
 
 
-def _common(axis1, axis2, q0, qd0, drives):
+def _common(axes, q0, qd0, drives):
+    """A joint's validated parameters: R0 (the identity until the build reads it from the
+    bodies), no springs, its axes by slot (elements/kinds.py::AXES), its coordinates' and
+    rates' initial values and its drives, one per coordinate."""
     return dict(rotation=np.eye(3), k_t=np.zeros((3, 3)), c_t=np.zeros((3, 3)),
-                k_r=np.zeros((3, 3)), c_r=np.zeros((3, 3)), axis1=axis1, axis2=axis2,
-                q0=np.array(q0 + [0.0] * (2 - len(q0))),
-                qd0=np.array(qd0 + [0.0] * (2 - len(qd0))), drives=tuple(drives))
+                k_r=np.zeros((3, 3)), c_r=np.zeros((3, 3)), axes=tuple(axes), q0=list(q0),
+                qd0=list(qd0), drives=tuple(drives))
+
+
+def _per_coordinate(who, joint, names, count, what="one per axis"):
+    """ValueError naming the argument unless each of `names` is a tuple or list of count
+    entries."""
+    for argument in names:
+        value = getattr(joint, argument)
+        if not isinstance(value, (tuple, list)) or len(value) != count:
+            kind = "a pair" if count == 2 else f"{count} entries"
+            raise ValueError(f"{who}: {argument} must be {kind} ({what}), got {value!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,7 +141,7 @@ class RevoluteJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _coordinates(who, [self.angle], [self.rate], [self.drive],
                                        [("angle", "rate")])
-        return _common(n, np.zeros(3), q0, qd0, drives)
+        return _common([n], q0, qd0, drives)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,13 +202,10 @@ class UniversalJoint:
         who = _label(self, index)
         n1 = unit_axis(who, "axis1", self.axis1)
         n2 = unit_axis(who, "axis2", self.axis2)
-        for argument in ("angles", "rates", "drives"):
-            value = getattr(self, argument)
-            if not isinstance(value, (tuple, list)) or len(value) != 2:
-                raise ValueError(f"{who}: {argument} must be a pair (one per axis), got {value!r}")
+        _per_coordinate(who, self, ("angles", "rates", "drives"), 2)
         q0, qd0, drives = _coordinates(who, self.angles, self.rates, self.drives,
                                        [("angles[0]", "rates[0]"), ("angles[1]", "rates[1]")])
-        return _common(n1, n2, q0, qd0, drives)
+        return _common([n1, n2], q0, qd0, drives)
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,7 +259,7 @@ class PrismaticJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _coordinates(who, [self.position], [self.rate], [self.drive],
                                        [("position", "rate")])
-        return _common(n, np.zeros(3), q0, qd0, drives)
+        return _common([n], q0, qd0, drives)
 
 
 def rotation_about(axis, angle):

@@ -12,11 +12,12 @@ from ..elements.hinges import ELASTIC, FIXED
 from ..kernels import kernel
 from ..kernels.algebra.mat3 import dot, matmul, matvec, put1, put2
 
-from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AX1, _AX2, _BAXES, _BEA, _BEAM, _BEIV, _BEIW,
-                   _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _CR, _CT,
-                   _DOT, _DYL, _FORCE, _GAP_A, _GAP_WORLD, _JI, _KF, _KR, _KT, _LIC, _LIO, _MASS,
-                   _MF, _PRISMATIC, _R0, _REVOLUTE, _ROTATION_A, _SPRING_DAMPER, _SY, _TY,
-                   _UNIVERSAL, _YL, _ROD)
+from .rows import (N_SHAPE_ROWS, _ANGLE_A, _ANGLE_B, _AXIS, _AXIS_START, _BAXES, _BEA, _BEAM,
+                   _BEIV, _BEIW, _BGJ, _BJP, _BL, _BMODES, _BMU, _BSTIFF, _BSTRETCH, _BTWIST,
+                   _BZETA, _CHILD, _CR, _CT, _DOT, _DYL, _FORCE, _FRAME, _GAP_A, _GAP_WORLD,
+                   _HAS_SLIDES, _JI, _KF, _KR, _KT, _LIC, _LIO, _MASS, _MAXC, _MF, _MOTION,
+                   _N_COORDINATES, _R0, _ROTATION_A, _SLIDE, _SPRING_DAMPER, _SY, _TURN, _TY, _YL,
+                   _ROD)
 from .strain_rod import rod_end, rod_state, rod_terms
 from .rotations import (_cross, _expm, _hat, _left_jacobian, _left_jacobian_derivative, _log_rot,
                         _mat3, _quat_to_rot, _vec3)
@@ -119,73 +120,88 @@ def _rot_about(n, q):
 
 @kernel
 def _joint_coordinates(y, joints, k, kind):
-    """(q, q') of joint k, each padded to 2 entries (newton_euler.py's docstring, "Joints with
-    coordinates"; joints = (c_off, c0, n_coord, ...): the coordinates at y[c0 + c_off[k] + i],
-    their rates at y[c0 + n_coord + c_off[k] + i])."""
+    """(q, q') of joint k, each padded to MAX_COORDINATES entries (newton_euler.py's docstring,
+    "Joints with coordinates"; joints = (c_off, c0, n_coord, ...): the coordinates at
+    y[c0 + c_off[k] + i], their rates at y[c0 + n_coord + c_off[k] + i])."""
     c_off, c0, n_coord = joints[0], joints[1], joints[2]
-    q = np.zeros(2)
-    qd = np.zeros(2)
+    q = np.zeros(_MAXC)
+    qd = np.zeros(_MAXC)
     o = c_off[k]
-    for i in range(2 if kind == _UNIVERSAL else 1):
+    for i in range(_N_COORDINATES[kind]):
         q[i] = y[c0 + o + i]
         qd[i] = y[c0 + n_coord + o + i]
     return q, qd
 
 
 @kernel
+def _joint_axis(h, kind, i):
+    """Coordinate i's axis n_i of a joint kind (its slot of the hinge_params row h), in the
+    frame its declaration fixes it in (elements/kinds.py)."""
+    return _vec3(h, _AXIS_START[_AXIS[kind][i]])
+
+
+@kernel
 def _joint_frame(kind, h, a_in, w_in, q, qd):
-    """Child frame behind a joint with coordinates (newton_euler.py's docstring): its rotation A,
-    angular velocity w and, for a slide, the offset d = A_P n q of its input point from the
-    attachment point and its rate d' = w_P x d + A_P n q' (zero for revolute and universal
-    joints)."""
-    n1 = _vec3(h, _AX1)
+    """Child frame behind a joint with coordinates (newton_euler.py's docstring), from its
+    declaration (elements/kinds.py): its rotation A = A_P R_P R0 R_C (R_P, R_C: the turns fixed
+    in the parent and in the child), angular velocity w = w_P + sum over turns u_i q_i' (u_i =
+    F n_i, F the frame before turn i), and the offset d = A_P sum n_i q_i of its input point
+    from the attachment point over the slides, with its rate d' = w_P x d + A_P sum n_i q_i'
+    (zero without slides)."""
     r0 = _mat3(h, _R0)
+    rot = a_in.copy()
+    w = w_in.copy()
+    for which in range(2):
+        if which == _CHILD:
+            rot = matmul(rot, r0)
+        for i in range(_MAXC):
+            if _MOTION[kind][i] == _TURN and _FRAME[kind][i] == which:
+                n = _joint_axis(h, kind, i)
+                w = w + matvec(rot, n) * qd[i]
+                rot = matmul(rot, _rot_about(n, q[i]))
     d = np.zeros(3)
-    d_rate = np.zeros(3)
-    if kind == _REVOLUTE:                   # A = A_P Rot(n, q) R0,  w = w_P + (A_P n) q'
-        rot = matmul(matmul(a_in, _rot_about(n1, q[0])), r0)
-        w = w_in + matvec(a_in, n1) * qd[0]
-    elif kind == _UNIVERSAL:                # A = A_P Rot(n1, q1) R0 Rot(n2, q2),
-        n2 = _vec3(h, _AX2)                 # w = w_P + (A_P n1) q1' + (A n2) q2'
-        rot = matmul(matmul(matmul(a_in, _rot_about(n1, q[0])), r0), _rot_about(n2, q[1]))
-        w = w_in + matvec(a_in, n1) * qd[0] + matvec(rot, n2) * qd[1]
-    else:                                   # prismatic: A = A_P R0, w = w_P, d = (A_P n) q
-        rot = matmul(a_in, r0)
-        w = w_in.copy()
-        u = matvec(a_in, n1)
-        d = u * q[0]
-        d_rate = _cross(w_in, d) + u * qd[0]
-    return rot, w, d, d_rate
+    v = np.zeros(3)
+    for i in range(_MAXC):
+        if _MOTION[kind][i] == _SLIDE:
+            u = matvec(a_in, _joint_axis(h, kind, i))
+            d = d + u * q[i]
+            v = v + u * qd[i]
+    return rot, w, d, _cross(w_in, d) + v
 
 
 @kernel
 def _joint_directions(kind, h, a_in, rot):
-    """World directions s_i (columns, 3 x 2) of a joint's coordinates: the rotation axes u = A_P n
-    (revolute), u1 = A_P n1 and v2 = A n2 (universal), the slide direction u = A_P n
-    (prismatic); and the number of coordinates."""
-    s = np.zeros((3, 2))
-    put1(s[:, 0], matvec(a_in, _vec3(h, _AX1)))
-    if kind == _UNIVERSAL:
-        put1(s[:, 1], matvec(rot, _vec3(h, _AX2)))
-        return s, 2
-    return s, 1
+    """World directions s_i (columns, 3 x MAX_COORDINATES) of a joint's coordinates: a slide's
+    u = A_P n, a turn's u = A_P n fixed in the parent or A n fixed in the child (a joint has at
+    most one turn in each frame: elements/kinds.py); and the number of coordinates."""
+    s = np.zeros((3, _MAXC))
+    nc = _N_COORDINATES[kind]
+    for i in range(nc):
+        frame = rot if _MOTION[kind][i] == _TURN and _FRAME[kind][i] == _CHILD else a_in
+        put1(s[:, i], matvec(frame, _joint_axis(h, kind, i)))
+    return s, nc
 
 
 @kernel
 def _joint_velocity_terms(kind, dirs, w_in, w, d, qd):
     """Velocity parts of a joint's constraint rows (newton_euler.py's docstring): of the child's
-    angular acceleration, (w_P x u) q' (revolute), (w_P x u1) q1' + (w x v2) q2' (universal), 0
-    (prismatic); of its input point's acceleration relative to the attachment point's,
-    w_P x (w_P x d) + 2 w_P x u q' (prismatic), 0 otherwise."""
+    angular acceleration, sum over turns (w_(i-1) x u_i) q_i', with w_(i-1) = w_P for the turn
+    fixed in the parent and the child's w for the one fixed in it (w x u = (w_(i-1) + u q')
+    x u); of its input point's acceleration relative to the attachment point's (with slides),
+    w_P x (w_P x d) + 2 w_P x sum u_i q_i' over the slides (revolute: (w_P x u) q'; universal:
+    (w_P x u1) q1' + (w x v2) q2'; prismatic: w_P x (w_P x d) + 2 w_P x u q')."""
     rot_v = np.zeros(3)
     slide_v = np.zeros(3)
-    u = np.ascontiguousarray(dirs[:, 0])
-    if kind == _PRISMATIC:
-        slide_v = _cross(w_in, _cross(w_in, d)) + 2.0 * qd[0] * _cross(w_in, u)
-    else:
-        rot_v = qd[0] * _cross(w_in, u)
-        if kind == _UNIVERSAL:
-            rot_v = rot_v + qd[1] * _cross(w, np.ascontiguousarray(dirs[:, 1]))
+    if _HAS_SLIDES[kind]:
+        slide_v = _cross(w_in, _cross(w_in, d))
+    for i in range(_N_COORDINATES[kind]):
+        u = np.ascontiguousarray(dirs[:, i])
+        if _MOTION[kind][i] == _SLIDE:
+            slide_v = slide_v + 2.0 * qd[i] * _cross(w_in, u)
+        elif _FRAME[kind][i] == _CHILD:
+            rot_v = rot_v + qd[i] * _cross(w, u)
+        else:
+            rot_v = rot_v + qd[i] * _cross(w_in, u)
     return rot_v, slide_v
 
 
@@ -644,8 +660,9 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
     dirs, nc = _joint_directions(kind, h, a_in, rot)
     rot_v, slide_v = _joint_velocity_terms(kind, dirs, w_in, w, d, qd)
     rf, rm = f_col[k], m_col[k]
-    rs = rf if kind == _PRISMATIC else rm       # the rows (and reaction) a coordinate moves
     for i in range(nc):
+        # the rows (and reaction) a coordinate moves: a slide's the force's, a turn's the couple's
+        rs = rf if _MOTION[kind][i] == _SLIDE else rm
         c = c_off[k] + i
         cq = c_col0 + c
         for j in range(3):
@@ -659,7 +676,7 @@ def _joint_rows(s, b, k, kind, h, kp, a_in, w_in, alpha_in, rot, w, d, qd, b_t_i
     for j in range(3):
         b[rm + j] += rot_v[j]
         b[rf + j] += slide_v[j]
-    if kind == _PRISMATIC:
+    if _HAS_SLIDES[kind]:
         # a_k - ... - alpha_O,P x d = ...: on the left d^ alpha_O,P, with alpha_O,P =
         # alpha_P + B_t eta''_P + alpha_in; alpha_in x d on the right
         hd = _hat(d)
@@ -824,7 +841,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                         s[re + i, c + j] = ha[i, j]
                     for j in range(nm2):
                         s[ce + j, c + i] = b_r[k, i, j]
-                if hinge_kind[kc] == _PRISMATIC and nm2 > 0:
+                if _HAS_SLIDES[hinge_kind[kc]] and nm2 > 0:
                     # B_t^T (d x F) = B_t^T d^ F: column i gets -(d^ B_t)[i, :]
                     hdb = matmul(_hat(defl[kc]), b_t[k, :, :nm2])
                     for i in range(3):
@@ -1145,8 +1162,8 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
         kp = topology[0][k]
         a_in = rot_g if kp < 0 else rot_o[kp]
         dirs, nc = _joint_directions(hinge_kind[k], hinge_params[k], a_in, rot[k])
-        load = force[k] if hinge_kind[k] == _PRISMATIC else moment[k]
         for i in range(nc):
+            load = force[k] if _MOTION[hinge_kind[k]][i] == _SLIDE else moment[k]
             generalized[c_off[k] + i] = dirs[0, i] * load[0] + dirs[1, i] * load[1] + \
                 dirs[2, i] * load[2]
     return (rot, omega, r_in, v_in, defl, acc, alpha, force, moment, modal_acc, rho_o, acc_v,

@@ -254,8 +254,8 @@ from ..elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_coordinate_count, ro
 from ..elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, LENGTH, MODES, PINNED,
                              STIFFENING, TORSION_MODES, AXIAL_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from ..elements.hinges import COORDINATE_0, DEFLECTION_0, ELASTIC, FIXED, RATE_0
-from ..elements.kinds import JOINT_KIND, coordinate_count
+from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED
+from ..elements.kinds import COORDINATE_0, JOINT_KIND, RATE_0, coordinate_count
 from ..kernels import python_twin
 from ..assembly import assemble
 from ..closures import (check_drives_move, closure_forces, constraint_rows,

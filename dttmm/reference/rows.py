@@ -4,11 +4,11 @@ from ..elements import BEAM, ROD
 from ..elements.beam import (DAMPING_RATIO, EI_V, EI_W, GJ, LENGTH, LOAD_AXES, MASS_PER_LENGTH,
                              MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.drives import FORCE, SPRING_DAMPER
-from ..elements.hinges import (AXIS_1, AXIS_2, C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLATION,
+from ..elements.hinges import (C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLATION,
                                REST_ROTATION)
-from ..elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from ..elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A,
-                             WITH_COORDINATES)
+from ..elements.kinds import (ANGLE_A, ANGLE_B, AXIS, AXIS_START, CHILD, COORDINATES, DOT, FRAME,
+                             GAP_A, GAP_WORLD, HAS_SLIDES, MAX_COORDINATES, MOTION, ROTATION_A,
+                             SLIDE, TURN, WITH_COORDINATES)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 
 
@@ -32,9 +32,11 @@ _BL, _BMU, _BEIV, _BEIW = LENGTH, MASS_PER_LENGTH, EI_V, EI_W
 _BJP, _BZETA, _BMODES, _BSTIFF = POLAR_PER_LENGTH, DAMPING_RATIO, MODES, STIFFENING
 _BTWIST, _BGJ, _BAXES = TORSION_MODES, GJ, LOAD_AXES
 _BSTRETCH, _BEA = AXIAL_MODES, EA
-_AX1 = AXIS_1.start
-_AX2 = AXIS_2.start
-_REVOLUTE, _UNIVERSAL, _PRISMATIC = REVOLUTE, UNIVERSAL, PRISMATIC
+# the joints' declarations (elements/kinds.py): per kind its coordinates' count, and per
+# coordinate its motion (a turn or a slide), its axis's slot and the frame that axis is fixed in
+_N_COORDINATES, _MAXC = COORDINATES, MAX_COORDINATES
+_MOTION, _AXIS, _FRAME, _AXIS_START = MOTION, AXIS, FRAME, AXIS_START
+_TURN, _SLIDE, _CHILD, _HAS_SLIDES = TURN, SLIDE, CHILD, HAS_SLIDES
 JOINTS_WITH_COORDINATES = WITH_COORDINATES          # (elements/kinds.py)
 
 # rows of the per-beam shape constants (_Problem.shape_vec[k, row, mode])

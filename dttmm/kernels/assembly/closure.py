@@ -38,16 +38,16 @@ from collections import namedtuple
 import numpy as np
 
 from .. import allocating_kernel, kernel, no_alloc_kernel
-from ...elements.kinds import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, ROTATION_A
+from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES,
+                               ROTATION_A)
 from ...elements import BEAM, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
-from ...elements.hinges import AXIS_1, ELASTIC, FIXED
-from ...elements.joints import PRISMATIC
+from ...elements.hinges import ELASTIC, FIXED
 from ..transfers.beam_relations import end_section_motion
 from ..transfers.strain_rod import rod_end, rod_end_frame, rod_tables_of
-from ..transfers.joint import FREE, PRESCRIBED, joint_frame, n_coordinates
-from ..algebra.mat3 import (add1, add2, matmul, matvec, put1, put2, t_cross, t_lin3, t_mm, t_mmt,
+from ..transfers.joint import FREE, PRESCRIBED, joint_frame, joint_offset, n_coordinates
+from ..algebra.mat3 import (add1, add2, matmul, matvec, put1, put2, t_cross, t_mm, t_mmt,
                             t_mv)
 from ..algebra.so3 import expm_so3
 from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER, _gauss_solve
@@ -112,7 +112,6 @@ Loops = namedtuple("Loops", [
                                      # relative change of the rates its projection made]
 ])
 
-AXIS_1_START = AXIS_1.start
 POSITION_PROJECTIONS = 4     # Gauss-Newton projections of the positions after a step, at most
 POSITION_TOL = 1e-13         # m, rad: where they stop
 RATE_TOL = 1e-13             # m/s, rad/s: the rates' projection's
@@ -236,8 +235,9 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     """The output point and its velocity (loops.r_out, v_out) of the given bodies (in tree
     order; the others' are read as they are) from the rotations, angular velocities, joint
     coordinates and rates, the elastic hinges' deflections and rates and the beams' modal
-    coordinates and rates: r_in = r_out,P + d (a slide's d = A_P n q, an elastic hinge's its
-    deflection d, world, v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
+    coordinates and rates: r_in = r_out,P + d (a joint's slides' d = A_P sum n_i q_i,
+    kernels/transfers/joint.py::joint_offset, an elastic hinge's its deflection d, world,
+    v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
     r_in + rho (a beam's deflected end, _beam_offset; a strain rod's, _rod_offset); the kernel
     model hangs every child at its parent's output point."""
     parent, hinge_kind, hinge_params, body_params = (params.parent, params.hinge_kind,
@@ -253,15 +253,13 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
         else:
             r = _v3(r_out, p)
             v = _v3(v_out, p)
-        if hinge_kind[k] == PRISMATIC:
+        if HAS_SLIDES[hinge_kind[k]]:      # the slides: kernels/transfers/joint.py
             f_p = _frame(rot, loops.ground_rot, p)
-            hr = params.hinge_row[k]         # (the joint's row of the shared table)
-            u = t_mv(f_p, (hinge_params[hr, AXIS_1_START], hinge_params[hr, AXIS_1_START + 1],
-                           hinge_params[hr, AXIS_1_START + 2]))
-            d = t_lin3(jq[k, 0], u, 0.0, u)
-            r = _add(r, d)
             w_p = _v3(loops.ground_motion, 2) if p < 0 else _v3(w, p)
-            v = _add(v, t_lin3(1.0, t_cross(w_p, d), jqd[k, 0], u))
+            d, d_rate = joint_offset(hinge_kind[k], hinge_params[params.hinge_row[k]], f_p, w_p,
+                                     jq[k], jqd[k])
+            r = _add(r, d)
+            v = _add(v, d_rate)
         elif hinge_kind[k] == ELASTIC:
             r = _add(r, _v3(defl, k))
             v = _add(v, _v3(defl_rate, k))

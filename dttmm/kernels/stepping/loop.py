@@ -47,7 +47,7 @@ Params = namedtuple("Params", [
                             # momentum step)
     "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
     "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
-    "joint_drive",      # (n, 2, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
+    "joint_drive",      # (n, 3, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
                         # none; elements/drives.py); one row of none without joints with
                         # coordinates (run_tables.joint_drives)
     "body_row",         # (n,) int64: body k's row of body_params and mass_center_inertia, and
@@ -76,9 +76,9 @@ State = namedtuple("State", [
     "eta", "eta_d", "eta_acc", "eta_p",             # (total modes,) the beams' coordinates
     "eta_map",                                      # (total modes, 13) eta'' on the input state
     "v_c",                                          # (n, 3) mass-centre velocities (EM scheme)
-    "jq", "jqd", "jqdd", "jqp",                     # (n, 2) joint coordinates, rates,
+    "jq", "jqd", "jqdd", "jqp",                     # (n, 3) joint coordinates, rates,
                                                     # accelerations, pseudo-accelerations
-    "jtau",                                         # (n, 2) their generalized forces
+    "jtau",                                         # (n, 3) their generalized forces
 ])
 
 Sweep = namedtuple("Sweep", [
@@ -98,7 +98,7 @@ Inputs = namedtuple("Inputs", [
                                        # t_{s+1} (where closing joints meet a moving ground)
     "force", "torque",                 # (m, n, 3) applied at t_{s+1} (EM: the step's means)
     "line_load",                       # (m, n, 3) a beam's distributed load per length, world
-    "joint_input",                     # (m, n, 2, 3) per joint coordinate at t_{s+1}: a
+    "joint_input",                     # (m, n, 3, 3) per joint coordinate at t_{s+1}: a
                                        # prescribed motion's (q, q', q''), a JointForce's value
     "closure_target",                  # (m, R, 3) per closing joints' row at t_{s+1}: a driven
                                        # coordinate's (q, q', q''), else 0 (closures.py)

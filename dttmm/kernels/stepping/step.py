@@ -29,7 +29,8 @@ from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
 from ...elements.drives import MOTION
-from ..transfers.beam import (beam_transfer, transfer_work_size)
+from ...elements.kinds import MAX_COORDINATES
+from ..transfers.beam import beam_transfer, transfer_work_size
 from ..transfers.beam_relations import end_section_motion
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of, rod_transfer
@@ -178,7 +179,7 @@ GeneralLoop = namedtuple("GeneralLoop", [
     "e3", "g_inv", "rot_prev",      # 3 x 3 scratch
     "histories",                    # the paper's scheme: (independent, st_v, st_a, st_p, c_v,
                                     # c_a, c_p, w1_st, w1_c), see general_loop
-    "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 2) each: the joint
+    "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 3) each: the joint
                                     # coordinates' offsets and guess (kernels/transfers/joint.py)
     "loops",                        # the closing joints and their scratch
     #                                 (kernels/assembly/closure.py)
@@ -204,7 +205,7 @@ def general_loop(n, n_eta, h, coef, histories, loops, forces):
                        np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
                        np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                        tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
-                       tuple(np.zeros((n, 2)) for _ in range(5)), loops,
+                       tuple(np.zeros((n, MAX_COORDINATES)) for _ in range(5)), loops,
                        (np.zeros(n_eta), np.zeros(n_eta), np.zeros((n, 3)), np.zeros((n, 3))),
                        forces)
 
@@ -239,7 +240,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme").  joints =
     (full_tree, q, q', q'', given, forces): in the full-state tree sweep (RICCATI_JOINTS) ball
     joints and joints with coordinates are JOINT elements (kernels/transfers/joint.py), linearized
-    about the coordinates' guess; given (n, 2): each JointForce drive's value over the step (a
+    about the coordinates' guess; given (n, 3): each JointForce drive's value over the step (a
     compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
     addresses."""
     independent, w1_st, w1_c = stations
@@ -427,7 +428,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
     accelerations come out in state.eta_acc.  ground: (a, R, w, w') of the ground at t = 0;
-    force, torque, line_load (n, 3) at t = 0; joint_input (n, 2, 3) the joint coordinates'
+    force, torque, line_load (n, 3) at t = 0; joint_input (n, 3, 3) the joint coordinates'
     inputs at t = 0 (kernels/stepping/loop.py::Inputs), their accelerations come out in state.jqdd.
     loops: the closing joints (kernels/assembly/closure.py), held at acceleration level.  forces:
     the compiled JointForces' callbacks' addresses (kernels/transfers/joint.py::drive_value).
@@ -653,9 +654,9 @@ def _modal_guess(h, coef, c1, c3, eta, eta_d, eta_acc, eta_p, w1e, w3e, eta_dd_s
 def _joint_guess(hk, hp, drive, given, h, coef, c1, c3, q, qd, qdd, qp, w1q, w3q, q_s, qd_s,
                  qdd_s, frame, rot_n, phi, w1, w3, rot, lam, w, wd, dw, dwd):
     """A joint's coordinates' guess for the step (a prescribed motion's from its input given
-    (2, 3) at t_{s+1}, the others' by the constant-acceleration predictor), their offsets
+    (3, 3) at t_{s+1}, the others' by the constant-acceleration predictor), their offsets
     w1q, w3q, and its child's guess from the parent's frame (_joint_child_guess)."""
-    x_pred = np.empty(2)
+    x_pred = np.empty(MAX_COORDINATES)
     _offsets_into(h, coef, qd, qdd, qp, w1q, w3q, x_pred)
     for i in range(n_coordinates(hk)):
         if drive[i, 0] == MOTION:
@@ -1004,9 +1005,9 @@ def _advance_modal(h, coef, c1, eta_dd_new, w1e, eta, eta_d, eta_acc, eta_p):
 def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, qp, jtau, frame,
                    rot, w, wd, d, d_rate, pseudo):
     """A joint's coordinates' histories over the step from their accelerations nu (a prescribed
-    motion's: as given (2, 3) at t_{s+1}), then its child's frame from the parent's new one
+    motion's: as given (3, 3) at t_{s+1}), then its child's frame from the parent's new one
     (kernels/transfers/joint.py::joint_frame)."""
-    x = np.zeros(2)
+    x = np.zeros(MAX_COORDINATES)
     for i in range(n_coordinates(hk)):
         x[i] = (nu[i] - w1q[i]) / c1
         if drive[i, 0] == MOTION:

@@ -1,10 +1,16 @@
-"""Joints with coordinates in the general loop: revolute, universal, prismatic (docs/joints.md,
-"In the transfer").
+"""Joints with coordinates in the general loop: every kind elements/kinds.py declares, read
+from its declaration (docs/joints.md, "In the transfer").
 
 A child behind such a joint is not integrated on its own: its rotation, angular velocity and
 acceleration follow from its parent's and from the joint's coordinates q, which carry the
-Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's increment).
+Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's increment).  Each
+coordinate is a turn about, or a slide along, an axis (its slot of the hinge_params row) fixed
+in the parent's frame or in the child's (kinds.py: MOTION, AXIS, FRAME, indexed here as
+compile-time constants): the turns fixed in the parent come first, then R0, then those fixed in
+the child; the slides move the child's input point along axes fixed in the parent.
 
+  joint_offset         the child's input point from the attachment point: d = A_P sum n_i q_i
+                       over the slides, and its rate
   joint_frame          the child's frame from its parent's and the coordinates (exact)
   joint_linearization  the joint as an element of the sweep, in angular-acceleration slots:
                          f_O = Phi f_I + B nu + c      (f = [a, alpha]; nu: the coordinates' q'')
@@ -22,19 +28,14 @@ from numba.core.extending import intrinsic
 
 from .. import kernel
 from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
-from ...elements.hinges import AXIS_1, AXIS_2, BALL
-from ...elements.joints import PRISMATIC, REVOLUTE, UNIVERSAL
-from ...elements.kinds import COORDINATES
+from ...elements.hinges import BALL
+from ...elements.kinds import (AXIS, AXIS_START, CHILD, COORDINATES, FRAME, HAS_SLIDES,
+                               MAX_COORDINATES, MOTION as MOVES, SLIDE, TURN)
 from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mv
 from ..algebra.so3 import exp_coefficients
 
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
-
-
-@kernel
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+ZERO3 = (0.0, 0.0, 0.0)
 
 
 @kernel
@@ -51,46 +52,82 @@ def _t_exp(phi):
             b * phi[2] * phi[2] + d)
 
 
+@kernel
+def joint_axis(hp, kind, i):
+    """Coordinate i's axis n_i of a joint kind (its slot of the hinge_params row hp), a
+    3-tuple in the frame the declaration fixes it in."""
+    a = AXIS_START[AXIS[kind][i]]
+    return (hp[a], hp[a + 1], hp[a + 2])
+
+
+@kernel
+def joint_offset(kind, hp, f_p, wp, q, qd):
+    """(d, d'): the child's input point relative to the attachment point behind a joint with
+    slides, and its rate, as 3-tuples: d = sum u_i q_i, d' = w_P x d + sum u_i q_i' over the
+    slides, u_i = A_P n_i (f_p: A_P as a row-major 9-tuple, wp: w_P; zero without slides).
+    The one offset of joint_frame, the loops' tree points (kernels/assembly/closure.py::
+    tree_points) and the run's first state (run_tables._initial_deflections)."""
+    d = ZERO3
+    for i in range(MAX_COORDINATES):
+        if MOVES[kind][i] == SLIDE:
+            d = t_lin3(1.0, d, q[i], t_mv(f_p, joint_axis(hp, kind, i)))
+    v = t_cross(wp, d)
+    for i in range(MAX_COORDINATES):
+        if MOVES[kind][i] == SLIDE:
+            v = t_lin3(1.0, v, qd[i], t_mv(f_p, joint_axis(hp, kind, i)))
+    return d, v
+
+
 @kernel(entry=True)
 def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     """The child's rotation, angular velocity and acceleration (world) behind a joint with
     coordinates, from its parent's attachment frame (rot_p, w_p, wd_p) and the coordinates
-    q, q', q'' (docs/joints.md, "Kinematics"); d, d_rate: a prismatic child's input point
-    relative to the attachment point, and its rate (zero for the others).  Returns the
-    coordinates' world directions u1 and v2 (a universal joint's second; zero for the others)
-    as 3-tuples.  Allocates nothing (kernels/algebra/mat3.py's tuple algebra)."""
+    q, q', q'' (docs/joints.md, "Kinematics"), written into rot, w, wd; d, d_rate: the child's
+    input point relative to the attachment point and its rate (joint_offset; zero without
+    slides).  Turn by turn (the parent's, then R0, then the child's):
+        u_i = F n_i,  F <- F Rot(n_i, q_i),  w' <- w' + u_i q_i'' + (w x u_i) q_i',
+        w <- w + u_i q_i'
+    from F = A_P, w = w_P, w' = w_P'; a slide's u_i = A_P n_i.  Returns per coordinate its
+    world direction u_i and, for a turn, the angular velocity w_(i-1) it turns on (the one
+    before it), as two 3-tuples of 3-tuples (zero past the joint's coordinates).  Allocates
+    nothing (kernels/algebra/mat3.py's tuple algebra)."""
     r0 = (hp[0], hp[1], hp[2], hp[3], hp[4], hp[5], hp[6], hp[7], hp[8])
-    a1 = AXIS_1.start
-    n1 = (hp[a1], hp[a1 + 1], hp[a1 + 2])
     f_p = (rot_p[0, 0], rot_p[0, 1], rot_p[0, 2], rot_p[1, 0], rot_p[1, 1], rot_p[1, 2],
            rot_p[2, 0], rot_p[2, 1], rot_p[2, 2])
     wp = (w_p[0], w_p[1], w_p[2])
-    u1 = t_mv(f_p, n1)
-    v2 = (0.0, 0.0, 0.0)
-    d_out = (0.0, 0.0, 0.0)
-    d_rate_out = (0.0, 0.0, 0.0)
-    if kind == REVOLUTE:
-        f = t_mm(t_mm(f_p, _t_exp(t_lin3(q[0], n1, 0.0, n1))), r0)
-        w_out = t_lin3(1.0, wp, qd[0], u1)
-        wd_out = t_lin3(1.0, t_lin3(1.0, (wd_p[0], wd_p[1], wd_p[2]), qdd[0], u1), qd[0],
-                        t_cross(wp, u1))
-    elif kind == UNIVERSAL:
-        a2 = AXIS_2.start
-        n2 = (hp[a2], hp[a2 + 1], hp[a2 + 2])
-        f = t_mm(t_mm(t_mm(f_p, _t_exp(t_lin3(q[0], n1, 0.0, n1))), r0),
-                 _t_exp(t_lin3(q[1], n2, 0.0, n2)))
-        v2 = t_mv(f, n2)
-        w_out = t_lin3(1.0, t_lin3(1.0, wp, qd[0], u1), qd[1], v2)
-        # wd = wd_P + u1 q1'' + v2 q2'' + (w_P x u1) q1' + ((w_P + u1 q1') x v2) q2'
-        wd_out = t_lin3(1.0, t_lin3(1.0, (wd_p[0], wd_p[1], wd_p[2]), qdd[0], u1), qdd[1], v2)
-        wd_out = t_lin3(1.0, t_lin3(1.0, wd_out, qd[0], t_cross(wp, u1)), qd[1],
-                        t_cross(t_lin3(1.0, wp, qd[0], u1), v2))
-    else:   # PRISMATIC
-        f = t_mm(f_p, r0)
-        w_out = wp
-        wd_out = (wd_p[0], wd_p[1], wd_p[2])
-        d_out = t_lin3(q[0], u1, 0.0, u1)
-        d_rate_out = t_lin3(qd[0], u1, 1.0, t_cross(wp, d_out))
+    f = f_p
+    w_out = wp
+    wd_out = (wd_p[0], wd_p[1], wd_p[2])
+    u0, u1, u2 = ZERO3, ZERO3, ZERO3
+    b0, b1, b2 = ZERO3, ZERO3, ZERO3
+    for which in range(2):
+        if which == CHILD:
+            f = t_mm(f, r0)
+        for i in range(MAX_COORDINATES):
+            if MOVES[kind][i] != TURN or FRAME[kind][i] != which:
+                continue
+            n = joint_axis(hp, kind, i)
+            u = t_mv(f, n)
+            f = t_mm(f, _t_exp(t_lin3(q[i], n, 0.0, n)))
+            wd_out = t_lin3(1.0, t_lin3(1.0, wd_out, qdd[i], u), qd[i], t_cross(w_out, u))
+            before = w_out
+            w_out = t_lin3(1.0, w_out, qd[i], u)
+            if i == 0:
+                u0, b0 = u, before
+            elif i == 1:
+                u1, b1 = u, before
+            else:
+                u2, b2 = u, before
+    for i in range(MAX_COORDINATES):
+        if MOVES[kind][i] == SLIDE:
+            u = t_mv(f_p, joint_axis(hp, kind, i))
+            if i == 0:
+                u0 = u
+            elif i == 1:
+                u1 = u
+            else:
+                u2 = u
+    d_out, d_rate_out = joint_offset(kind, hp, f_p, wp, q, qd)
     for i in range(3):
         for j in range(3):
             rot[i, j] = f[3 * i + j]
@@ -98,7 +135,7 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
         wd[i] = wd_out[i]
         d[i] = d_out[i]
         d_rate[i] = d_rate_out[i]
-    return u1, v2
+    return (u0, u1, u2), (b0, b1, b2)
 
 
 @kernel(entry=True)
@@ -165,9 +202,17 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
     the drive's tau = tau0 + tau' nu of a free coordinate, a prescribed one's nu = q''
     (drive_value; forces: the compiled JointForces' callbacks' addresses).
     A ball joint is the same element with the three angular accelerations free and tau = 0.
-    Jacobians hold the terms of order 1 and c3/c1 (the parent's w and q' follow nu and alpha_P
-    by c3/c1); the O(1/c1) dependence of the axes on the parent's rotation is left out: the
-    constant c makes f_O exact at the guess, so Newton iterations converge to the exact step."""
+    Per coordinate (docs/joints.md, "In the transfer"; r = c3/c1 = dq'/dnu, s = 1/c1 = dq/dnu):
+        a turn:   B_i = [0; u_i + r w_(i-1) x u_i + r sum_(later turns j) (u_i x u_j) q_j'],
+                  Bl_i = [u_i; 0] (the moment about u_i), Phi_alpha,alpha -= r q_i' u_i^;
+        a slide:  B_i = [u_i + 2 r w_P x u_i + s (w_P' x u_i + w_P x (w_P x u_i)); 0],
+                  Bl_i = [0; u_i] (the force along u_i);
+    with slides Phi_a,alpha = -d^ (alpha_P x d) and Psi_m,q = d^ (m_I = m_O + d x q_O); c makes
+    f_O exact at the guess.  Jacobians hold the terms of order 1 and c3/c1 (the parent's w and
+    q' follow nu and alpha_P by c3/c1); the O(1/c1) dependence of the axes on the parent's
+    rotation, and a slide's O(c3/c1) one of its a-rows on alpha_P through w_P, are left out:
+    the constant c makes f_O exact at the guess, so Newton iterations converge to the exact
+    step."""
     u[:, :] = 0.0
     for i in range(6):
         u[i, i] = 1.0
@@ -190,12 +235,7 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
     wd = np.empty(3)
     d = np.empty(3)
     d_rate = np.empty(3)
-    u1_t, v2_t = joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
-    u1 = np.array(u1_t)
-    dirs = np.zeros((3, 2))
-    for i in range(3):
-        dirs[i, 0] = u1_t[i]
-        dirs[i, 1] = v2_t[i]
+    dirs, before = joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
     m = n_coordinates(kind)
     for i in range(m):
         if drive[i, 0] == MOTION:
@@ -206,15 +246,37 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
             tau, slope = drive_value(drive[i], given[i], q[i], qd[i], c1, c3, at_start, forces)
             tau_nu[i, 0] = tau - slope * qdd[i]
             tau_nu[i, 1] = slope
-    if kind == PRISMATIC:
-        wxu = _cross(w_p, u1)
-        # a_O = a_I + u q'' + 2 w_P x u q' + alpha_P x d + w_P x (w_P x d)
-        b_a = u1 + 2.0 * r * wxu + s * (_cross(wd_p, u1) + _cross(w_p, wxu))
-        a_rel = (u1 * qdd[0] + 2.0 * qd[0] * wxu + _cross(wd_p, d)
-                 + _cross(w_p, _cross(w_p, d)))
-        for i in range(3):
-            u[i, 6] = b_a[i]
-            u[9 + i, 0] = u1[i]            # Bl: the force along u
+    wp = (w_p[0], w_p[1], w_p[2])
+    wdp = (wd_p[0], wd_p[1], wd_p[2])
+    phi_aa = np.zeros((3, 3))
+    for c in range(m):
+        ui = dirs[c]
+        if MOVES[kind][c] == TURN:
+            # alpha_O = ... + u_i q_i'' + (w_(i-1) x u_i) q_i': B_i, and (c3/c1) d alpha_P x u_i
+            # q_i' from w_P = c3/c1 alpha_P + const in Phi
+            b = t_lin3(1.0, ui, r, t_cross(before[c], ui))
+            for j in range(c + 1, m):
+                if MOVES[kind][j] == TURN:
+                    b = t_lin3(1.0, b, r * qd[j], t_cross(ui, dirs[j]))
+            x = r * qd[c]
+            phi_aa[0, 1] += ui[2] * x
+            phi_aa[0, 2] -= ui[1] * x
+            phi_aa[1, 0] -= ui[2] * x
+            phi_aa[1, 2] += ui[0] * x
+            phi_aa[2, 0] += ui[1] * x
+            phi_aa[2, 1] -= ui[0] * x
+            for i in range(3):      # (by loops: docs/solver.md, "Compile time", item 8)
+                u[3 + i, 6 + c] = b[i]
+                u[6 + i, c] = ui[i]             # Bl: the moment about u_i
+        else:
+            # a_O = a_I + u q'' + 2 w_P x u q' + alpha_P x d + w_P x (w_P x d)
+            wxu = t_cross(wp, ui)
+            b = t_lin3(1.0, t_lin3(1.0, ui, 2.0 * r, wxu), s,
+                       t_lin3(1.0, t_cross(wdp, ui), 1.0, t_cross(wp, wxu)))
+            for i in range(3):
+                u[i, 6 + c] = b[i]
+                u[9 + i, c] = ui[i]             # Bl: the force along u_i
+    if HAS_SLIDES[kind]:
         # Phi_a,alpha = -d^ (alpha_P x d);  Psi_m,q = d^ (m_I = m_O + d x q_O)
         u[0, 4], u[0, 5] = d[2], -d[1]
         u[1, 3], u[1, 5] = -d[2], d[0]
@@ -222,47 +284,30 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
         u[6, 10], u[6, 11] = -d[2], d[1]
         u[7, 9], u[7, 11] = d[2], -d[0]
         u[8, 9], u[8, 10] = -d[1], d[0]
+        dt = (d[0], d[1], d[2])
+        # a_O - a_I = sum (u_i q_i'' + 2 q_i' w_P x u_i) + alpha_P x d + w_P x (w_P x d)
+        a_rel = ZERO3
+        for c in range(m):
+            if MOVES[kind][c] == SLIDE:
+                a_rel = t_lin3(1.0, t_lin3(1.0, a_rel, qdd[c], dirs[c]), 2.0 * qd[c],
+                               t_cross(wp, dirs[c]))
+        a_rel = t_lin3(1.0, t_lin3(1.0, a_rel, 1.0, t_cross(wdp, dt)), 1.0,
+                       t_cross(wp, t_cross(wp, dt)))
         for i in range(3):
-            lin = b_a[i] * qdd[0]
+            lin = 0.0
+            for c in range(m):
+                lin += u[i, 6 + c] * qdd[c]
             for j in range(3):
                 lin += u[i, 3 + j] * wd_p[j]
             u[i, 12] = a_rel[i] - lin
-        return
-    # rotational joints: a passes; alpha_O = Phi alpha_I + B nu + c
-    b = np.zeros((3, 2))
-    c = _cross(w_p, u1)
-    for i in range(3):      # (by loops: docs/solver.md, "Compile time", item 8)
-        b[i, 0] = u1[i] + r * c[i]
-    phi_aa = np.zeros((3, 3))
-    # (c3/c1) d alpha_P x u1 q1' from w_P = c3/c1 alpha_P + const
-    x = r * qd[0]
-    phi_aa[0, 1], phi_aa[0, 2] = u1[2] * x, -u1[1] * x
-    phi_aa[1, 0], phi_aa[1, 2] = -u1[2] * x, u1[0] * x
-    phi_aa[2, 0], phi_aa[2, 1] = u1[1] * x, -u1[0] * x
-    if kind == UNIVERSAL:
-        v2 = dirs[:, 1].copy()
-        c = _cross(u1, v2)
-        w_v = _cross(w_p + u1 * qd[0], v2)
-        for i in range(3):
-            b[i, 0] += r * c[i] * qd[1]
-            b[i, 1] = v2[i] + r * w_v[i]
-        y = r * qd[1]
-        phi_aa[0, 1] += v2[2] * y
-        phi_aa[0, 2] -= v2[1] * y
-        phi_aa[1, 0] -= v2[2] * y
-        phi_aa[1, 2] += v2[0] * y
-        phi_aa[2, 0] += v2[1] * y
-        phi_aa[2, 1] -= v2[0] * y
+    # alpha_O = Phi alpha_I + B nu + c
     for i in range(3):
         for j in range(3):
             u[3 + i, 3 + j] += phi_aa[i, j]
-        for c in range(m):
-            u[3 + i, 6 + c] = b[i, c]
-            u[6 + i, c] = dirs[i, c]        # Bl: the moment about each axis
     for i in range(3):
         lin = wd_p[i]
         for j in range(3):
             lin += phi_aa[i, j] * wd_p[j]
         for c in range(m):
-            lin += b[i, c] * qdd[c]
+            lin += u[3 + i, 6 + c] * qdd[c]
         u[3 + i, 12] = wd[i] - lin
