@@ -13,6 +13,9 @@ slide in m) start at the given values and rates, or on a prescribed motion's:
   PrismaticJoint(axis):           A_child = A_P R0; the child's input point sits at the
                                   attachment point + A_P n q (it slides along n, fixed in the
                                   parent, and does not turn relative to the parent).
+  CylindricalJoint(axis):         A_child = A_P Rot(n, theta) R0; the child's input point
+                                  sits at the attachment point + A_P n s (it turns about and
+                                  slides along n); coordinates (theta, s).
 
 R0 is the child's rotation relative to the parent at q = 0: the identity, or, when the child
 body is given an initial rotation, whatever makes that rotation hold at the initial q.  A drive
@@ -27,7 +30,7 @@ import numpy as np
 from ._checks import finite_scalar, finite_vector
 from .drives import JointMotion, validated_drive
 
-REVOLUTE, UNIVERSAL, PRISMATIC = 3, 4, 5      # Model.hinge_kind (declared in kinds.py)
+REVOLUTE, UNIVERSAL, PRISMATIC, CYLINDRICAL = 3, 4, 5, 6   # Model.hinge_kind (kinds.py)
 
 
 def _label(joint, index):
@@ -259,6 +262,70 @@ class PrismaticJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _coordinates(who, [self.position], [self.rate], [self.drive],
                                        [("position", "rate")])
+        return _common([n], q0, qd0, drives)
+
+
+@dataclass(frozen=True, eq=False)
+class CylindricalJoint:
+    """A turn about and a slide along one axis fixed in the parent: A_child = A_P Rot(n, theta)
+    R0, the child's input point at the attachment point + A_P n s (docs/joints.md).
+
+    The child slides along n and turns about it (a revolute joint and a prismatic one on the
+    same axis): w = w_P + (A_P n) theta'.  The axis is fixed in the child too (R0^T n), so the
+    turn does not move the input point and the slide does not turn the child.  R0 is the
+    identity, or, when the child body is given an initial rotation, whatever makes that
+    rotation hold at the initial angle.  Runs where ``RevoluteJoint`` does.
+
+    Parameters
+    ----------
+    axis : array_like of 3
+        n, the axis in the parent's frame; any nonzero length, normalized here.
+    coordinates : pair of float, optional
+        (theta, s) at t = 0: the angle (rad) and the slide (m) (default (0, 0)).  A coordinate
+        with a JointMotion drive starts on the motion (leave its entry 0).
+    rates : pair of float, optional
+        (theta', s') at t = 0, rad/s and m/s (default (0, 0)).
+    drives : pair, optional
+        The drive on each coordinate: JointForce (N m about the axis on theta, N along it on
+        s), SpringDamper, JointMotion, PDTracking or None (default (None, None): both free).
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "":
+        ``CylindricalJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index; the child body for its angular
+        velocity) and the argument: an axis that is zero or not 3 finite numbers; coordinates,
+        rates or drives that are not a pair (tuple or list of 2); an initial value that is not
+        a finite number; a drive that is not a JointForce, SpringDamper, JointMotion,
+        PDTracking or None, or that fails its own checks (see each drive); initial values that
+        contradict a prescribed motion's at t = 0; a child's given angular velocity that
+        contradicts the joint's rates.
+
+    Examples
+    --------
+    A sleeve on a vertical rod, sliding on a spring and turning freely:
+
+    >>> import dttmm
+    >>> sleeve = dttmm.CylindricalJoint(axis=[0, 0, 1], coordinates=(0.0, 0.1),
+    ...                                 drives=(None, dttmm.SpringDamper(200.0, 2.0)))
+    """
+    axis: object
+    coordinates: tuple = (0.0, 0.0)
+    rates: tuple = (0.0, 0.0)
+    drives: tuple = (None, None)
+    name: str = ""
+    kind = CYLINDRICAL
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        n = unit_axis(who, "axis", self.axis)
+        _per_coordinate(who, self, ("coordinates", "rates", "drives"), 2,
+                        "one per coordinate: theta, s")
+        q0, qd0, drives = _coordinates(who, self.coordinates, self.rates, self.drives,
+                                       [("coordinates[0]", "rates[0]"),
+                                        ("coordinates[1]", "rates[1]")])
         return _common([n], q0, qd0, drives)
 
 

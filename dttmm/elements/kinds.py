@@ -20,8 +20,8 @@ import numpy as np
 
 from .beam import EulerBernoulliBeam
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge, row_blocks
-from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, PrismaticJoint, RevoluteJoint,
-                     UniversalJoint, rotation_about)
+from .joints import (CYLINDRICAL, PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint,
+                     PrismaticJoint, RevoluteJoint, UniversalJoint, rotation_about)
 from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
@@ -162,6 +162,10 @@ JOINT_KINDS = (
     Kind(PRISMATIC, PrismaticJoint, ("newmark",), coordinates=(Coordinate(SLIDE, 0),),
          scene="prismatic", arguments=("position", "rate", "drive"), axes=("axis",),
          doc="docs/joints.md", what="a prismatic joint"),
+    Kind(CYLINDRICAL, CylindricalJoint, ("newmark",),
+         coordinates=(Coordinate(TURN, 0), Coordinate(SLIDE, 0)), scene="cylindrical",
+         arguments=("coordinates", "rates", "drives"), axes=("axis",), doc="docs/joints.md",
+         what="a cylindrical joint"),
 )
 
 # the kinds of a closing joint's constraint rows (closures.py::constraint_rows, read by
