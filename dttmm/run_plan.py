@@ -110,14 +110,14 @@ class PreparedRun:
         loop = runner = None
         if fused and mode == kstep.RICCATI_TREE:
             loop_name, runner = "ball-tree", run_steps
-            loop = tree.fused_tree_loop(n, model.parent, ws.beams[3], dt, coef)
+            loop = tree.fused_tree_loop(n, model.parent, model.mode_offsets, dt, coef)
         elif fused:
             loop_name, runner = "ball-chain", run_steps
-            loop = ball_chain.fused_loop(n, ws.beams[3], dt, coef)
+            loop = ball_chain.fused_loop(n, model.mode_offsets, dt, coef)
         loops = run_tables.loop_tables(model)
         if welded:          # (its start: one pass of its own loop, then the loop from it)
             runner = run_steps
-            loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
+            loop = weld_chain.weld_loop(n, model.mode_offsets, dt, coef, state.z)
         consistent_start._consistent_start(
             model, mode, opts.method, (runner, loop) if fused or welded else None, params,
             settings, state, ws.sweep, monitor, dt, loops,
@@ -145,7 +145,7 @@ class PreparedRun:
             ball_chain.guess_from_stations(state.z, ws.sweep.red_aq)
         elif welded:
             loop_name, runner = "welded-chain", run_steps
-            loop = weld_chain.weld_loop(n, ws.beams[3], dt, coef, state.z)
+            loop = weld_chain.weld_loop(n, model.mode_offsets, dt, coef, state.z)
         else:
             loop_name, runner = "general", run_steps
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,

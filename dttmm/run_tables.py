@@ -22,7 +22,8 @@ from .elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .kernels.stepping import step as kstep
 from .kernels.assembly.closure import Loops
-from .kernels.stepping.loop import (Params, State,
+from .kernels.schema import pack
+from .kernels.stepping.loop import (State,
                                     Sweep)
 from .kernels.transfers.beam_relations import (gauss_points, quadrature_size)
 from .closures import constraint_rows
@@ -61,8 +62,8 @@ class Integrator:
 
 class Workspace:
     """Preallocated state and scratch of one run (nothing here is shared between runs): the
-    state the loops advance (kernels/stepping/loop.py::State), the assembly's scratch (Sweep) and
-    the beams' tables (beam_tables).  fused: the run takes a fused ball-chain or ball-tree loop,
+    state the loops advance (kernels/stepping/loop.py::State) and the assembly's scratch
+    (Sweep).  fused: the run takes a fused ball-chain or ball-tree loop,
     which reads the reduced sweep's recursion arrays only (red_s, red_p, red_tinv, red_t,
     red_aq): the full-state sweep's and the general loop's reduced maps (red_v, red_phi) are
     left empty (about 6.5 KB per body: a million bodies' gigabytes)."""
@@ -112,7 +113,6 @@ class Workspace:
             joint_dof=np.zeros((n_full, 3), dtype=np.int64),
             joint_tau_nu=np.zeros((n_full, 3, 3)), joint_nu=np.zeros((n_full, 3)),
             joint_tau=np.zeros((n_full, 3)))
-        self.beams = beam_tables(model)
         _initial_deflections(model, self.state)
 
 
@@ -150,25 +150,29 @@ def _initial_deflections(model, state):
 
 @model_fact
 def kernel_params(model):
-    """The frozen model's arrays as the kernels read them (kernels/stepping/loop.py::Params), once
-    per model: the kernels read them and never write them."""
+    """The frozen model's tables as the kernels read them, once per model: one flat model
+    (kernels/schema.py::FlatModel, its tables named and shaped by the schema's MODEL); the
+    kernels read them and never write them."""
     # a locked body's rotation relative to the ground frame (read only where locked[k]; no
     # rows without locked bodies: a million bodies' 72 MB)
     lock_rel = (np.einsum("ji,kjl->kil", model.ground_rotation, model.initial_rotation,
                           order="C") if model.ground_locked.any() else np.zeros((0, 3, 3)))
-    # the model's arrays writable (numba types read-only arrays apart, and every kernel would
-    # compile twice), its own memory where it has it: kernel_array; a table whose rows are all
-    # equal (model.shared_rows) as its one row, which every body (joint) reads (body_row)
+    # a table whose rows are all equal (model.shared_rows) as its one row, which every body
+    # (joint) reads (body_row)
     (body_params, inertia), body_row = _rows(model, "body_params", "body_mass_center_inertia")
     (hinge_params,), hinge_row = _rows(model, "hinge_params")
-    return Params(body_params=body_params, hinge_kind=kernel_array(model, "hinge_kind"),
-                  hinge_params=hinge_params, gravity=kernel_array(model, "gravity"),
-                  beams=beam_tables(model), rods=rod_tables(model),
-                  locked=kernel_array(model, "ground_locked"),
-                  lock_rel=lock_rel, mass_center_inertia=inertia,
-                  tip_pinned=bool(model.tip_pinned),
-                  parent=kernel_array(model, "parent", np.int64),
-                  joint_drive=joint_drives(model), body_row=body_row, hinge_row=hinge_row)
+    body_kind, beam_params, beam_moments, mode_offset, beam_ends, beam_factors = \
+        beam_tables(model)
+    rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rod_tables(model)
+    return pack(body_params=body_params, mass_center_inertia=inertia, body_row=body_row,
+                hinge_kind=model.hinge_kind, hinge_params=hinge_params, hinge_row=hinge_row,
+                parent=model.parent, gravity=model.gravity, locked=model.ground_locked,
+                lock_rel=lock_rel, tip_pinned=bool(model.tip_pinned),
+                joint_drive=joint_drives(model), body_kind=body_kind, beam_params=beam_params,
+                beam_moments=beam_moments, mode_offset=mode_offset, beam_ends=beam_ends,
+                beam_factors=beam_factors, rod_row=rod_row, rod_steps=steps, rod_xi0=xi0,
+                rod_phi=phi, rod_weights=weights, rod_stiffness=stiffness,
+                rod_mu_damping=mu_damping, rod_section=section)
 
 
 @model_fact

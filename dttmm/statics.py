@@ -280,7 +280,7 @@ class _Configuration:
                 and not km.needs_general_loop
                 and all(BODY_KIND[int(c)].fused for c in km.body_kind)):
             self.fused = (run_steps,
-                          ball_chain.fused_loop(n, self.ws.beams[3], 1.0, self.settings.coef))
+                          ball_chain.fused_loop(n, km.mode_offsets, 1.0, self.settings.coef))
 
     def vector(self, rot, jq, eta, defl):
         """q of a configuration given by rotations, joint coordinates (n, 3), modal

@@ -262,12 +262,12 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
     from dttmm.chains import three_pendulum
     from dttmm.kernels.transfers.beam import _evaluate, beam_transfer, transfer_work_size
-    from dttmm.run_tables import Workspace
+    from dttmm.run_tables import beam_tables
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
                 else (_stiffened_cantilever(2 if "twist" in system else 0,
                                             2 if system.startswith("stretch") else 0), 0))
-    _, bp, moments, mode_off, ends, factors = Workspace(model).beams
+    _, bp, moments, mode_off, ends, factors = beam_tables(model)
     assert bp[k, 8] == 1.0                      # geometric stiffening on (the default)
     m, mt = int(bp[k, 6]), int(bp[k, 10])
     n = mode_off[k + 1] - mode_off[k]           # 2 m bending, then the twist, the stretch
@@ -502,9 +502,9 @@ def test_beam_ball_map_folds_the_beam_transfer():
     from dttmm.kernels.transfers.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
                                               transfer_work_size)
     from dttmm.kernels.assembly.sweep import fold_ball_body
-    from dttmm.run_tables import Workspace
+    from dttmm.run_tables import beam_tables
     model = three_pendulum(2, damping_ratio=0.03)
-    _, bp, moments, mode_off, ends, factors = Workspace(model).beams
+    _, bp, moments, mode_off, ends, factors = beam_tables(model)
     k, m = 1, 2
     n = 2 * m
     tables = (moments[k, :m, :4 * m + 2], ends[k, :m], factors[k, :m],

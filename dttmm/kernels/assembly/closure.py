@@ -37,7 +37,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import allocating_kernel, kernel, no_alloc_kernel
+from .. import allocating_kernel, kernel, model_tables, no_alloc_kernel
 from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES,
                                ROTATION_A)
 from ...elements import BEAM, ROD
@@ -169,12 +169,13 @@ def _frame(rot, ground_rot, k):
 
 
 @no_alloc_kernel
-def _beam_offset(beams, k, rot, w, eta, eta_d):
+def _beam_offset(params, k, rot, w, eta, eta_d):
     """Beam k's output point from its input point, rho = A p and its rate w x rho + A p', with
     p = [L - c(L) + u_x(L), v(L), w(L)] (docs/beam.md, "End sections": c(L) the
     foreshortening with geometric stiffening, beam.end_foreshortening; u_x(L) the stretch;
-    sections.beam_output_offset in Python); beams: the kernel model's beam tables."""
-    bp, moments, mode_off, ends = beams[1], beams[2], beams[3], beams[4]
+    sections.beam_output_offset in Python)."""
+    bp, moments = model_tables.beam_params(params), model_tables.beam_moments(params)
+    mode_off, ends = model_tables.mode_offset(params), model_tables.beam_ends(params)
     i0 = mode_off[k]
     m, mt, ma = int(bp[k, MODES]), int(bp[k, TORSION_MODES]), int(bp[k, AXIAL_MODES])
     px, py, pz = bp[k, LENGTH], 0.0, 0.0
@@ -206,8 +207,9 @@ def _rod_offset(params, k, rot, w, eta, eta_d):
     """Strain rod k's output point from its input point, rho = A p_L and its rate
     w x rho + A p_L' (strain_rod.rod_end: its end station in its frame; result.
     rod_output_offset in Python)."""
-    steps, xi0, phi = rod_tables_of(params.rods, k)[:3]
-    i0, i1 = params.beams[3][k], params.beams[3][k + 1]
+    steps, xi0, phi = rod_tables_of(params, k)[:3]
+    mode_off = model_tables.mode_offset(params)
+    i0, i1 = mode_off[k], mode_off[k + 1]
     q, qd = eta[i0:i1], eta_d[i0:i1]
     _, p_l, _, v_l, _, _ = rod_end(steps, xi0, phi, q, qd, qd)      # (accelerations unused)
     f = _m9(rot, k)
@@ -240,10 +242,12 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
     r_in + rho (a beam's deflected end, _beam_offset; a strain rod's, _rod_offset); the kernel
     model hangs every child at its parent's output point."""
-    parent, hinge_kind, hinge_params, body_params = (params.parent, params.hinge_kind,
-                                                     params.hinge_params, params.body_params)
-    beams, r_out, v_out = params.beams, loops.r_out, loops.v_out
-    body_kind = beams[0]
+    parent = model_tables.parent(params)
+    hinge_kind = model_tables.hinge_kind(params)
+    hinge_params = model_tables.hinge_params(params)
+    body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
+    hinge_row, body_kind = model_tables.hinge_row(params), model_tables.body_kind(params)
+    r_out, v_out = loops.r_out, loops.v_out
     for q in range(bodies.shape[0]):
         k = bodies[q]
         p = parent[k]
@@ -256,19 +260,19 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
         if HAS_SLIDES[hinge_kind[k]]:      # the slides: kernels/transfers/joint.py
             f_p = _frame(rot, loops.ground_rot, p)
             w_p = _v3(loops.ground_motion, 2) if p < 0 else _v3(w, p)
-            d, d_rate = joint_offset(hinge_kind[k], hinge_params[params.hinge_row[k]], f_p, w_p,
-                                     jq[k], jqd[k])
+            d, d_rate = joint_offset(hinge_kind[k], hinge_params[hinge_row[k]], f_p, w_p, jq[k],
+                                     jqd[k])
             r = _add(r, d)
             v = _add(v, d_rate)
         elif hinge_kind[k] == ELASTIC:
             r = _add(r, _v3(defl, k))
             v = _add(v, _v3(defl_rate, k))
         if body_kind[k] == BEAM:
-            arm, arm_rate = _beam_offset(beams, k, rot, w, eta, eta_d)
+            arm, arm_rate = _beam_offset(params, k, rot, w, eta, eta_d)
         elif body_kind[k] == ROD:
             arm, arm_rate = _rod_offset(params, k, rot, w, eta, eta_d)
         else:
-            row = params.body_row[k]
+            row = body_row[k]
             arm = t_mv(_m9(rot, k), (body_params[row, 4], body_params[row, 5],
                                      body_params[row, 6]))
             arm_rate = t_cross(_v3(w, k), arm)
@@ -294,7 +298,7 @@ def _side(params, loops, rot, w, c, s):
                 _add(_v3(loops.ground_motion, 0), t_cross(w_g, arm)), arm, f, w_g)
     f = _m9(rot, k)
     w_k = _v3(w, k)
-    centre, row = params.body_params, params.body_row[k]
+    centre, row = model_tables.body_params(params), model_tables.body_row(params)[k]
     arm = t_mv(f, _sub(local, (centre[row, 4], centre[row, 5], centre[row, 6])))
     return (_add(_v3(loops.r_out, k), arm), _add(_v3(loops.v_out, k), t_cross(w_k, arm)), arm,
             f, w_k)
@@ -615,20 +619,21 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     sw = sweep
     _row_coefficients(params, loops, rot, w)
     _column_loads(loops)
+    parent = model_tables.parent(params)
     status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                           params.parent, sw.s, sw.tree_s, loops)
+                           parent, sw.s, sw.tree_s, loops)
     if status != 0:
         return status
     work = np.empty((9, 12))
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            params.parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
+                            parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
                             loops.h_store, loops.free_store, loops.z_save[0], loops.nu_save[0],
                             loops.tau_save[0], step_column, loops.all_bodies, loops.act[0],
                             work)
     for c in range(1, n_rows + 1):
         if status == 0:
             status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
-                                    sw.known_loads, params.parent, root_f, sw.s, loops.p_col[c],
+                                    sw.known_loads, parent, root_f, sw.s, loops.p_col[c],
                                     loops.k_store[c], loops.h_store, loops.free_store,
                                     loops.z_save[c], loops.nu_save[c], loops.tau_save[c],
                                     unit_column,
@@ -656,7 +661,7 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
             for i in range(3):
                 k_comb[k, i] += f * loops.k_store[c, k, i]
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            params.parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
+                            parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
                             loops.free_store, z, sw.joint_nu, sw.joint_tau, step_column,
                             loops.all_bodies, loops.act[0], work)
     if status != 0:
@@ -710,7 +715,7 @@ def _modal_responses(params, loops, eta_map):
     """loops.eta_col[j]: row j's response of the beams' eta'' and the strain rods' q'' (eta'' =
     eta_map [z_I; 1] at the element's input station, step.py::_modal_accelerations; homogeneous:
     its linear part), on its active beams and rods (zero elsewhere)."""
-    body_kind, mode_off = params.beams[0], params.beams[3]
+    body_kind, mode_off = model_tables.body_kind(params), model_tables.mode_offset(params)
     loops.eta_col[:, :] = 0.0
     for j in range(loops.kind.shape[0]):
         z = loops.z_save[j + 1]
@@ -733,25 +738,30 @@ def _dependent_frames(params, loops, state, bodies, work):
     (nothing is allocated)."""
     scratch = work[0:48]
     rest = work[48:57].reshape((3, 3))
-    body_kind, mode_off, ends, bp = params.beams[0], params.beams[3], params.beams[4], \
-        params.beams[1]
+    body_kind = model_tables.body_kind(params)
+    mode_off = model_tables.mode_offset(params)
+    ends = model_tables.beam_ends(params)
+    bp = model_tables.beam_params(params)
+    hinge_kind, hinge_params = model_tables.hinge_kind(params), model_tables.hinge_params(params)
+    hinge_row, parent = model_tables.hinge_row(params), model_tables.parent(params)
+    locked = model_tables.locked(params)
     for q in range(bodies.shape[0]):
         k = bodies[q]
-        hk = params.hinge_kind[k]
-        p = params.parent[k]
+        hk = hinge_kind[k]
+        p = parent[k]
         if p < 0:
             rot_p, w_p, wd_p = loops.ground_rot, loops.ground_motion[2], loops.ground_motion[3]
         else:
             rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
-        hr = params.hinge_row[k]             # (the joint's row of the shared table)
+        hr = hinge_row[k]             # (the joint's row of the shared table)
         if n_coordinates(hk) > 0:
-            joint_frame(hk, params.hinge_params[hr], rot_p, w_p, wd_p, state.jq[k],
+            joint_frame(hk, hinge_params[hr], rot_p, w_p, wd_p, state.jq[k],
                         state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
                         state.omega_dot[k], state.defl[k], state.defl_rate[k])
-        elif hk == FIXED and p >= 0 and not params.locked[k]:
+        elif hk == FIXED and p >= 0 and not locked[k]:
             for i in range(3):                 # R0, row-major in hinge_params[hr, 0:9]
                 for j in range(3):
-                    rest[i, j] = params.hinge_params[hr, 3 * i + j]
+                    rest[i, j] = hinge_params[hr, 3 * i + j]
             i0, i1 = mode_off[p], mode_off[p + 1]      # a flexible parent's coordinates
             if body_kind[p] == BEAM:
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
@@ -760,7 +770,7 @@ def _dependent_frames(params, loops, state, bodies, work):
                                    rest, state.rot[k], state.omega[k], state.omega_dot[k],
                                    scratch)
             elif body_kind[p] == ROD:
-                steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
+                steps, xi0, phi = rod_tables_of(params, p)[:3]
                 rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
                               state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
                               state.omega[k], state.omega_dot[k])
@@ -783,7 +793,7 @@ def _deflection_response(params, loops, z, j, k, i):
     """Row j's response of elastic hinge k's d''_i: its outboard input station's acceleration
     less its inboard output station's (v_in = v_out,P + d', step.py::_update; station 0 the
     ground, a parent outside the row's active bodies does not move)."""
-    p = params.parent[k]
+    p = model_tables.parent(params)[k]
     inboard = 0.0 if p < 0 or not loops.act[j + 1, p] else z[2 * p + 2, i]
     return z[2 * k + 1, i] - inboard
 
@@ -793,16 +803,16 @@ def _add_rates(params, loops, state, j, f):
     """The angular velocities, the joint coordinates', the elastic hinges' deflections' and
     the modal coordinates' rates += f times row j's response (of w', q'', d'' and eta'') on
     its active bodies (the dependent frames are rebuilt after, _dependent_frames)."""
-    mode_off = params.beams[3]
+    mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
         for i in range(3):
             state.omega[k, i] += f * z[2 * k + 1, 3 + i]
-        if params.hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
-        for i in range(n_coordinates(params.hinge_kind[k])):
+        for i in range(n_coordinates(hinge_kind[k])):
             state.jqd[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
             state.eta_d[i] += f * loops.eta_col[j, i]
@@ -814,11 +824,11 @@ def _move(params, loops, state, j, f, e3, phi):
     move its joint coordinates, elastic deflection and modal coordinates by f times their
     response of q'', d'' and eta'' (the dependent frames are rebuilt after,
     _dependent_frames); e3 (3, 3), phi (3,) scratch."""
-    mode_off = params.beams[3]
+    mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
     z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
     for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
         k = loops.act_idx[q]
-        if params.hinge_kind[k] == ELASTIC:
+        if hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):
@@ -829,7 +839,7 @@ def _move(params, loops, state, j, f, e3, phi):
             for b in range(3):
                 state.rot[k, a, b] = (e3[a, 0] * rot_k[b] + e3[a, 1] * rot_k[3 + b]
                                       + e3[a, 2] * rot_k[6 + b])
-        for i in range(n_coordinates(params.hinge_kind[k])):
+        for i in range(n_coordinates(hinge_kind[k])):
             state.jq[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
             state.eta[i] += f * loops.eta_col[j, i]
@@ -946,10 +956,12 @@ def _mechanical_energy(params, loops, state):
     point (tree_points), r_C = r_O + A (l_IC - l_IO), v_C = v_O + w x A (l_IC - l_IO)."""
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
                 state.defl, state.defl_rate, loops, loops.all_bodies)
-    bp, inertia, g = params.body_params, params.mass_center_inertia, params.gravity
+    bp = model_tables.body_params(params)
+    inertia = model_tables.mass_center_inertia(params)
+    g, body_row = model_tables.gravity(params), model_tables.body_row(params)
     kinetic, potential = 0.0, 0.0
-    for k in range(params.parent.shape[0]):
-        row = params.body_row[k]
+    for k in range(body_row.shape[0]):
+        row = body_row[k]
         rot_k = _m9(state.rot, k)
         w = _v3(state.omega, k)
         arm = t_mv(rot_k, (bp[row, 1] - bp[row, 4], bp[row, 2] - bp[row, 5],
@@ -991,11 +1003,12 @@ def _hold_energy(params, loops, state):
     if abs(s - 1.0) > ENERGY_STEP_LIMIT:
         return
     loops.energy[2] = max(loops.energy[2], abs(s - 1.0))
-    for k in range(params.parent.shape[0]):
+    hinge_kind = model_tables.hinge_kind(params)
+    for k in range(hinge_kind.shape[0]):
         for i in range(3):
             state.omega[k, i] *= s
             state.defl_rate[k, i] *= s
-        for i in range(n_coordinates(params.hinge_kind[k])):
+        for i in range(n_coordinates(hinge_kind[k])):
             state.jqd[k, i] *= s
 
 

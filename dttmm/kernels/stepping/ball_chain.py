@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ...elements import BEAM, RIGID
-from .. import CONTRACT, kernel, loop_piece
+from .. import CONTRACT, kernel, loop_piece, model_tables
 from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from ..transfers.body import kappa_values, rigid_point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
@@ -243,9 +243,15 @@ def _iterate(loop, run, s, it):
                                          loop.per_mode[4])
     s_mat, p_vec, t_inv, t_vec, aq = sweep.red_s, sweep.red_p, sweep.red_tinv, sweep.red_t, \
         sweep.red_aq
-    body_params, gravity, rot = params.body_params, params.gravity, state.rot
+    body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
+    gravity, rot = model_tables.gravity(params), state.rot
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
-    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    body_kind = model_tables.body_kind(params)
+    beam_params = model_tables.beam_params(params)
+    beam_moments = model_tables.beam_moments(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    beam_factors = model_tables.beam_factors(params)
     eta_map = state.eta_map
     n = rot.shape[0]
     for i in range(3):
@@ -269,7 +275,7 @@ def _iterate(loop, run, s, it):
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
             left_jacobian(phi, lam)
-            row = params.body_row[k]         # (the body's row of the shared table)
+            row = body_row[k]         # (the body's row of the shared table)
             for i in range(3):
                 load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
             ball_body_map(body_params[row], rot_star, lam, w, wd, s_c, r_c, aq[k, 0:3],
@@ -279,7 +285,7 @@ def _iterate(loop, run, s, it):
         if riccati_reduced_step(v, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
                                 t_vec[k], t_buf, num_buf) == 0.0:
             return SINGULAR, k + 1, 0.0
-    riccati_reduced_tip(params.tip_pinned, s_mat[n], p_vec[n], aq[n])
+    riccati_reduced_tip(model_tables.tip_pinned(params), s_mat[n], p_vec[n], aq[n])
     change = 0.0
     finite = True
     for k in range(n - 1, -1, -1):

@@ -17,7 +17,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece
+from .. import loop_piece, model_tables
 from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
@@ -62,7 +62,10 @@ def _iterate(loop, run, s, it):
     params, state, sweep = run.params, run.state, run.sweep
     h = run.settings.h
     s_half = 0.5 * h * h
-    body_params, hinge_kind, kind, u = params.body_params, params.hinge_kind, sweep.kind, sweep.u
+    body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
+    hinge_kind, body_kind = model_tables.hinge_kind(params), model_tables.body_kind(params)
+    gravity, inertia = model_tables.gravity(params), model_tables.mass_center_inertia(params)
+    kind, u = sweep.kind, sweep.u
     z, z_star = state.z, loop.z_star
     n = state.rot.shape[0]
     for k in range(n):
@@ -72,20 +75,20 @@ def _iterate(loop, run, s, it):
             kind[2 * k] = IDENTITY
         else:
             return UNSUPPORTED, 2 * k + 1, 0.0
-        if params.beams[0][k] != RIGID:
+        if body_kind[k] != RIGID:
             return UNSUPPORTED, 2 * k + 2, 0.0
         kind[2 * k + 1] = TRANSFER
-        row = params.body_row[k]             # (the body's row of the shared tables)
+        row = body_row[k]             # (the body's row of the shared tables)
         load = loop.load
         for i in range(3):
-            load[i] = body_params[row, 0] * params.gravity[i] + run.inputs.force[s, k, i]
-        rigid_body_transfer_em(body_params[row], params.mass_center_inertia[row], state.rot[k],
+            load[i] = body_params[row, 0] * gravity[i] + run.inputs.force[s, k, i]
+        rigid_body_transfer_em(body_params[row], inertia[row], state.rot[k],
                                state.omega[k], state.v_c[k], h, z_star[2 * k + 1], load,
                                run.inputs.torque[s, k], u[2 * k + 1])
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
-    status = solve_step(run.settings.mode, params.tip_pinned, params.parent, sweep,
-                        loop.root_f, z)
+    status = solve_step(run.settings.mode, model_tables.tip_pinned(params),
+                        model_tables.parent(params), sweep, loop.root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     change = 0.0
@@ -107,12 +110,13 @@ def _update(loop, run, s, _):
     s_half = 0.5 * h * h
     rot, omega, v_c = state.rot, state.omega, state.v_c
     rot_new, omega_new = loop.rot_new, loop.omega_new
+    body_params, body_row = model_tables.body_params(run.params), model_tables.body_row(run.params)
     finite = True
     for k in range(rot.shape[0]):
         zi = state.z[2 * k + 1]
         em_body_kinematics(rot[k], omega[k], zi[3:6], h, rot_new, omega_new)
         # v_C,n+1 = 2 dx_C / h - v_C,n,  dx_C = dx_I + A_{n+1} l_IC - A_n l_IC
-        l_ic = run.params.body_params[run.params.body_row[k], 1:4]
+        l_ic = body_params[body_row[k], 1:4]
         for i in range(3):
             now = rot_new[i, 0] * l_ic[0] + rot_new[i, 1] * l_ic[1] + rot_new[i, 2] * l_ic[2]
             before = rot[k, i, 0] * l_ic[0] + rot[k, i, 1] * l_ic[1] + rot[k, i, 2] * l_ic[2]

@@ -3,7 +3,8 @@
 A run's data reach the kernels as a few typed structures (numba named tuples), not dozens of
 positional arrays:
 
-  Params    the frozen model's arrays (bodies, hinges, beams' tables, gravity, locks, the tip)
+  params    the frozen model's tables as one flat model (kernels/schema.py::FlatModel: two
+            buffers, their offsets and sizes; read by name through kernels/model_tables.py)
   Settings  the run's integrator and Newton settings
   State     the preallocated state the loop advances in place
   Sweep     the assembly's scratch (element transfers, Riccati and direct sweeps)
@@ -30,30 +31,6 @@ from .. import CONTRACT, no_alloc_kernel
 from ..algebra.mat3 import put1, put2
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
-
-Params = namedtuple("Params", [
-    "body_params",      # (rows, BODY_PARAM_SIZE) elements/rigid_body.py: body k's at body_row[k]
-    "hinge_kind",       # (n,) BALL / FIXED / ELASTIC: hinge k joins body k - 1 (or the ground)
-    "hinge_params",     # (rows, HINGE_PARAM_SIZE) elements/hinges.py: joint k's at hinge_row[k]
-    "gravity",          # (3,) m/s^2
-    "beams",            # (body_kind, beam_params, moments, mode_off, ends, factors):
-                        # run_tables.beam_tables
-    "rods",             # (rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section):
-                        # run_tables.rod_tables (kernels/transfers/strain_rod.py)
-    "locked",           # (n,) bool: rotation fixed to the ground frame by fixed hinges
-    "lock_rel",         # (n, 3, 3) a locked body's rotation relative to the ground frame (no
-                        # rows without locked bodies: read where locked[k] only)
-    "mass_center_inertia",  # (rows, 3, 3) J_C in body axes at body_row[k] (the energy-
-                            # momentum step)
-    "tip_pinned",       # the tip is joined to the ground by a ball joint (else free)
-    "parent",           # (n,) int64 Model.parent: body k hangs from body parent[k] (-1: ground)
-    "joint_drive",      # (n, 3, 4) each joint coordinate's drive [kind, k, c, rest] (kind -1:
-                        # none; elements/drives.py); one row of none without joints with
-                        # coordinates (run_tables.joint_drives)
-    "body_row",         # (n,) int64: body k's row of body_params and mass_center_inertia, and
-    "hinge_row",        # (n,) int64: joint k's of hinge_params (one row for all where the
-                        # model's rows are all equal: model.shared_rows)
-])
 
 Settings = namedtuple("Settings", [
     "mode",             # RICCATI_FULL / RICCATI_REDUCED / DIRECT_REDUCED / DIRECT_FULL (step.py)
@@ -117,6 +94,7 @@ Monitor = namedtuple("Monitor", [
     "error",            # (2,) the run's largest local error estimate so far; the failing step's
 ])
 
+# params: the flat model (kernels/schema.py::FlatModel)
 Run = namedtuple("Run", ["params", "settings", "state", "sweep", "inputs", "rec", "monitor"])
 
 _PIECES = ("predict", "iterate", "adopt", "update", "record", "finish")

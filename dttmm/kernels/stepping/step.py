@@ -24,7 +24,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, allocating_kernel, kernel, loop_piece
+from .. import CONTRACT, allocating_kernel, kernel, loop_piece, model_tables
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
@@ -101,7 +101,7 @@ def _hinge_deflection(params, z, w1d, c1, k):
     """Elastic hinge k's deflection d (world) at the step's end from its stations'
     accelerations: a_in - a_out,P = c1 d + w1d (docs/solver.md), the inboard station the
     parent's output (0: the ground)."""
-    i_in, i_p = 2 * k + 1, 2 * params.parent[k] + 2
+    i_in, i_p = 2 * k + 1, 2 * model_tables.parent(params)[k] + 2
     return ((z[i_in, 0] - z[i_p, 0] - w1d[k, 0]) / c1, (z[i_in, 1] - z[i_p, 1] - w1d[k, 1]) / c1,
             (z[i_in, 2] - z[i_p, 2] - w1d[k, 2]) / c1)
 
@@ -246,9 +246,17 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
     independent = independent and not at_start
-    body_params, hinge_kind = params.body_params, params.hinge_kind
-    hinge_params = params.hinge_params
-    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    body_params, hinge_kind = model_tables.body_params(params), model_tables.hinge_kind(params)
+    hinge_params = model_tables.hinge_params(params)
+    parent, gravity = model_tables.parent(params), model_tables.gravity(params)
+    hinge_row, body_row = model_tables.hinge_row(params), model_tables.body_row(params)
+    joint_drive = model_tables.joint_drive(params)
+    body_kind = model_tables.body_kind(params)
+    beam_params = model_tables.beam_params(params)
+    beam_moments = model_tables.beam_moments(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    beam_factors = model_tables.beam_factors(params)
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     kind, u = sweep.kind, sweep.u
@@ -261,15 +269,15 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     for k in range(n):
         jh = 2 * k
         hk = hinge_kind[k]
-        p = params.parent[k]
-        hr, row = params.hinge_row[k], params.body_row[k]   # (their rows of the shared tables)
+        p = parent[k]
+        hr, row = hinge_row[k], body_row[k]   # (their rows of the shared tables)
         if full_tree and (hk == BALL or has_coordinates(hk)):
             kind[jh] = EL_JOINT
             if p < 0:
                 rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
             else:
                 rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
-            drive = params.joint_drive[k if has_coordinates(hk) else 0]   # (a ball joint's:
+            drive = joint_drive[k if has_coordinates(hk) else 0]   # (a ball joint's:
             # unread, and the table has one row of none without joints with coordinates)
             joint_linearization(hk, hinge_params[hr], drive, given[k], rot_p,
                                 w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
@@ -305,19 +313,19 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             i0, i1 = mode_off[k], mode_off[k + 1]
             m = int(beam_params[k, MODES])
             mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
-            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
+            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and parent[k + 1] == k
             kout = k + 1 if welded else k
             for i in range(3):
                 w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
                 dw1[i] = w1_st[k + 1, i] - w1_st[k, i]
-            outboard = (welded, hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+            outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
                         rot[kout], w1_out)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
                       beam_ends[k, m:m + mt],               # the twist and stretch tables
                       beam_ends[k, m + mt:i1 - i0 - m])     # (run_tables.beam_tables)
             history = (independent, dw1)
-            beam_transfer(beam_params[k], tables, outboard, history, params.gravity, at_start,
+            beam_transfer(beam_params[k], tables, outboard, history, gravity, at_start,
                           rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z_star[jh + 1],
                           eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
@@ -325,19 +333,19 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             # a strain rod (kernels/transfers/strain_rod.py; docs/strain_rod.md, "Its
             # transfer"): the beam's contract, its strain rows solved inside the element
             i0, i1 = mode_off[k], mode_off[k + 1]
-            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and params.parent[k + 1] == k
+            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and parent[k + 1] == k
             kout = k + 1 if welded else k
             for i in range(3):
                 w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
-            outboard = (welded, hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+            outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
                         rot[kout], w1_out)
-            rod_transfer(rod_tables_of(params.rods, k), outboard, params.gravity, at_start, rot[k],
+            rod_transfer(rod_tables_of(params, k), outboard, gravity, at_start, rot[k],
                          phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
                          eta[i0:i1], eta_d[i0:i1], z_star[jh + 1], eta_dd_star[i0:i1],
                          u[jh + 1], eta_map[i0:i1])
         elif body_kind[k] == RIGID:
             for i in range(3):
-                load[i] = body_params[row, 0] * params.gravity[i] + force[k, i]
+                load[i] = body_params[row, 0] * gravity[i] + force[k, i]
             rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
                                 w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
             if independent:
@@ -437,7 +445,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     accelerations and loads."""
     g_acc, g_rot, g_w, g_wd = ground
     rot, omega = state.rot, state.omega
-    hinge_kind, hinge_params = params.hinge_kind, params.hinge_params
+    hinge_kind, hinge_params = model_tables.hinge_kind(params), model_tables.hinge_params(params)
+    hinge_row, parent = model_tables.hinge_row(params), model_tables.parent(params)
     n = hinge_kind.shape[0]
     zero3 = np.zeros((n, 3))
     unit33 = np.zeros((n, 3, 3))
@@ -464,10 +473,10 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     known_loads = sweep.known_loads
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
-            p = params.parent[k]
+            p = parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
-            q, m_in, m_out = elastic_hinge_loads(hinge_params[params.hinge_row[k]], rot_in,
+            q, m_in, m_out = elastic_hinge_loads(hinge_params[hinge_row[k]], rot_in,
                                                  w_in, rot[k], omega[k], state.defl[k],
                                                  state.defl_rate[k])
             put1(known_loads[2 * k, 0:3], m_in)
@@ -482,9 +491,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
                     state.defl, state.defl_rate, loops, loops.all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
     else:
-        status = solve_step(settings.mode, params.tip_pinned, params.parent, sweep, root_f,
-                            state.z)
-    _modal_accelerations(params.beams, state.eta_map, state.z, state.eta_acc)
+        status = solve_step(settings.mode, model_tables.tip_pinned(params), parent, sweep,
+                            root_f, state.z)
+    _modal_accelerations(params, state.eta_map, state.z, state.eta_acc)
     for k in range(n):
         for i in range(n_coordinates(hinge_kind[k])):
             state.jqdd[k, i] = sweep.joint_nu[k, i]
@@ -494,10 +503,10 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
 
 
 @allocating_kernel
-def _modal_accelerations(beams, eta_map, z, eta_acc):
+def _modal_accelerations(params, eta_map, z, eta_acc):
     """eta'' of every beam (a strain rod's q'') from its input station (angular-acceleration
     slots)."""
-    body_kind, mode_off = beams[0], beams[3]
+    body_kind, mode_off = model_tables.body_kind(params), model_tables.mode_offset(params)
     zin = np.empty(13)
     zin[12] = 1.0
     for k in range(body_kind.shape[0]):
@@ -531,17 +540,18 @@ def _joint_child_guess(kind, hp, parent_frame, q, qd, qdd, c1, c3, rot_n, phi, w
 
 
 @kernel
-def _end_section_frame(beams, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
+def _end_section_frame(params, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame welded to beam k's end section (rest: the weld's R0) from the beam's frame and
     modal coordinates (docs/beam.md, "End sections"; beam.end_section_motion): A_O = A
     exp(theta^) R0, theta = [psi(L), -w'(L), v'(L)]; w_O = w + A J_l(theta) theta';
     w_O' = w' + w x (A J_l theta') + A (J_l theta'' + DJ_l(theta)[theta'] theta') (exact; its
     leading term theta' x (theta x theta') / 6 alone left the twisting arm of
     tests/test_torsion.py an energy error of 4e-5 that did not fall with dt)."""
-    mode_off, ends = beams[3], beams[4]
+    mode_off, ends = model_tables.mode_offset(params), model_tables.beam_ends(params)
+    beam_params = model_tables.beam_params(params)
     i0, i1 = mode_off[k], mode_off[k + 1]
-    m = int(beams[1][k, MODES])
-    bending, twist = ends[k, :m], ends[k, m:m + int(beams[1][k, TORSION_MODES])]
+    m = int(beam_params[k, MODES])
+    bending, twist = ends[k, :m], ends[k, m:m + int(beam_params[k, TORSION_MODES])]
     end_section_motion(bending, twist, rot, w, wd, eta[i0:i1], eta_d[i0:i1], eta_dd[i0:i1],
                        rest, rot_out, w_out, wd_out, np.empty(48))
 
@@ -574,14 +584,17 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
     """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
     or the end section's of a parent beam (_end_section_frame) or strain rod
     (strain_rod.rod_end_frame)."""
-    p = params.parent[k]
-    rest = params.hinge_params[params.hinge_row[k], 0:9].copy().reshape((3, 3))
-    if params.beams[0][p] == BEAM:
-        _end_section_frame(params.beams, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
+    p = model_tables.parent(params)[k]
+    hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
+    rest = hinge_params[hinge_row[k], 0:9].copy().reshape((3, 3))
+    body_kind = model_tables.body_kind(params)
+    if body_kind[p] == BEAM:
+        _end_section_frame(params, p, rest, rot[p], w[p], wd[p], eta, eta_d, eta_dd,
                            rot_out, w_out, wd_out)
-    elif params.beams[0][p] == ROD:
-        i0, i1 = params.beams[3][p], params.beams[3][p + 1]
-        steps, xi0, phi = rod_tables_of(params.rods, p)[:3]
+    elif body_kind[p] == ROD:
+        mode_off = model_tables.mode_offset(params)
+        i0, i1 = mode_off[p], mode_off[p + 1]
+        steps, xi0, phi = rod_tables_of(params, p)[:3]
         rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
                       eta_dd[i0:i1], rest, rot_out, w_out, wd_out)
     else:
@@ -760,10 +773,14 @@ def _predict(loop, run, s, _):
                                              loop.root_f)
     histories, (w1q, w3q, q_s, qd_s, qdd_s) = loop.histories, loop.joints
     h, coef, mode = settings.h, settings.coef, settings.mode
-    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
-                                                   params.hinge_row, params.parent)
-    locked, lock_rel, joint_drive, body_kind = (params.locked, params.lock_rel,
-                                                params.joint_drive, params.beams[0])
+    hinge_kind = model_tables.hinge_kind(params)
+    hinge_params = model_tables.hinge_params(params)
+    hinge_row = model_tables.hinge_row(params)
+    parent = model_tables.parent(params)
+    locked = model_tables.locked(params)
+    lock_rel = model_tables.lock_rel(params)
+    joint_drive = model_tables.joint_drive(params)
+    body_kind = model_tables.body_kind(params)
     rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
                                         state.z)
     eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p
@@ -830,8 +847,9 @@ def _iterate(loop, run, s, it):
     root_f, g_inv, histories, joints_, forces = (loop.root_f, loop.g_inv, loop.histories,
                                                  loop.joints, loop.forces)
     loops, at_guess = loop.loops, loop.at_guess
-    hinge_kind, beams, tip_pinned, parent = (params.hinge_kind, params.beams, params.tip_pinned,
-                                             params.parent)
+    hinge_kind = model_tables.hinge_kind(params)
+    tip_pinned = model_tables.tip_pinned(params)
+    parent = model_tables.parent(params)
     h, coef, mode = settings.h, settings.coef, settings.mode
     z, eta, eta_d, eta_map, rot = state.z, state.eta, state.eta_d, state.eta_map, state.rot
     u, joint_nu = sweep.u, sweep.joint_nu
@@ -884,7 +902,7 @@ def _iterate(loop, run, s, it):
         status = solve_step(mode, tip_pinned, parent, sweep, root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
-    _modal_accelerations(beams, eta_map, z, eta_dd_new)
+    _modal_accelerations(params, eta_map, z, eta_dd_new)
     # back from angular-acceleration to phi slots
     for i in range(3):
         z[0, 3 + i] = ground[5][i]
@@ -934,9 +952,13 @@ def _adopt(loop, run, s, it):
     z_star, eta_dd_star, eta_dd_new = loop.z_star, loop.eta_dd_star, loop.eta_dd_new
     w1q, w3q, q_s, qd_s, qdd_s = loop.joints
     mode = settings.mode
-    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
-                                                   params.hinge_row, params.parent)
-    locked, joint_drive, body_kind = params.locked, params.joint_drive, params.beams[0]
+    hinge_kind = model_tables.hinge_kind(params)
+    hinge_params = model_tables.hinge_params(params)
+    hinge_row = model_tables.hinge_row(params)
+    parent = model_tables.parent(params)
+    locked = model_tables.locked(params)
+    joint_drive = model_tables.joint_drive(params)
+    body_kind = model_tables.body_kind(params)
     z, rot, jq, eta = state.z, state.rot, state.jq, state.eta
     rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
     c1, c3 = _integrator_coefficients(settings.h, settings.coef)
@@ -1074,10 +1096,16 @@ def _update(loop, run, s, _):
     loops, target, g_pos, g_vel, g_acc = (loop.loops, inputs.closure_target[s], inputs.g_pos[s],
                                           inputs.g_vel[s], inputs.g_acc[s])
     h, coef, mode = settings.h, settings.coef, settings.mode
-    hinge_kind, hinge_params, hinge_row, parent = (params.hinge_kind, params.hinge_params,
-                                                   params.hinge_row, params.parent)
-    locked, lock_rel, joint_drive = params.locked, params.lock_rel, params.joint_drive
-    body_kind, body_params, body_row = params.beams[0], params.body_params, params.body_row
+    hinge_kind = model_tables.hinge_kind(params)
+    hinge_params = model_tables.hinge_params(params)
+    hinge_row = model_tables.hinge_row(params)
+    parent = model_tables.parent(params)
+    locked = model_tables.locked(params)
+    lock_rel = model_tables.lock_rel(params)
+    joint_drive = model_tables.joint_drive(params)
+    body_kind = model_tables.body_kind(params)
+    body_params = model_tables.body_params(params)
+    body_row = model_tables.body_row(params)
     rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
                                         state.z)
     eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p

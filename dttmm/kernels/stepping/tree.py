@@ -8,7 +8,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece
+from .. import loop_piece, model_tables
 from ...elements import BEAM, RIGID
 from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
                          recover_body)
@@ -65,9 +65,15 @@ def _iterate(loop, run, s, it):
     s_in, p_in, t_inv, port_s, port_p = loop.s_in, loop.p_in, loop.t_inv, loop.port_s, \
         loop.port_p
     parent = loop.parent
-    body_params, gravity, rot = params.body_params, params.gravity, state.rot
+    body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
+    gravity, rot = model_tables.gravity(params), state.rot
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
-    body_kind, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    body_kind = model_tables.body_kind(params)
+    beam_params = model_tables.beam_params(params)
+    beam_moments = model_tables.beam_moments(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    beam_factors = model_tables.beam_factors(params)
     eta_map = state.eta_map
     n = rot.shape[0]
     _clear_ports(port_s, port_p)
@@ -88,7 +94,7 @@ def _iterate(loop, run, s, it):
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
             left_jacobian(phi, lam)
-            row = params.body_row[k]         # (the body's row of the shared table)
+            row = body_row[k]         # (the body's row of the shared table)
             for i in range(3):
                 load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
             ball_body_map(body_params[row], rot_star, lam, w, wd, s_c, r_c, aq_in[k, 0:3],

@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, kernel, loop_piece
+from .. import CONTRACT, kernel, loop_piece, model_tables
 from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
@@ -100,7 +100,7 @@ def _predict(loop, run, s, _):
     phi_g = loop.vecs[4]
     _ground_increment(inputs.g_rot, s, loop.mats[6], phi_g)
     g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
-    locked = run.params.locked
+    locked = model_tables.locked(run.params)
     for k in range(locked.shape[0]):
         if locked[k]:
             for i in range(3):
@@ -129,7 +129,10 @@ def _follow_welds(loop, run):
     modal, mats, vecs, scratch = loop.follow
     rot_p, rot_k, rel = mats[0], mats[1], mats[2]
     w_p, wd_p, w_k, wd_k = vecs[0], vecs[1], vecs[2], vecs[3]
-    _, beam_params, _, mode_off, beam_ends, _ = params.beams
+    beam_params = model_tables.beam_params(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     rot = state.rot
     for k in range(1, phi_star.shape[0]):
         p = k - 1
@@ -146,8 +149,8 @@ def _follow_welds(loop, run):
         mt = int(beam_params[p, TORSION_MODES])
         end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot_p, w_p, wd_p,
                            modal[0, i0:i1], modal[1, i0:i1], eta_dd_star[i0:i1],
-                           params.hinge_params[params.hinge_row[k], 0:9].reshape((3, 3)), rot_k,
-                           w_k, wd_k, scratch)
+                           hinge_params[hinge_row[k], 0:9].reshape((3, 3)), rot_k, w_k, wd_k,
+                           scratch)
         for i in range(3):
             for j in range(3):
                 rel[i, j] = (rot_k[i, 0] * rot[k, j, 0] + rot_k[i, 1] * rot[k, j, 1]
@@ -173,7 +176,13 @@ def _iterate(loop, run, s, it):
     s_mat, p_vec, t_inv, t_vec = loop.riccati
     u, work = loop.transfer
     z = loop.stations
-    _, beam_params, beam_moments, mode_off, beam_ends, beam_factors = params.beams
+    beam_params = model_tables.beam_params(params)
+    beam_moments = model_tables.beam_moments(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    beam_factors = model_tables.beam_factors(params)
+    hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
+    gravity = model_tables.gravity(params)
     eta, eta_d, eta_map = state.eta, state.eta_d, state.eta_map
     force, torque, line_load = inputs.force[s], inputs.torque[s], inputs.line_load[s]
     n = phi_star.shape[0]
@@ -192,18 +201,18 @@ def _iterate(loop, run, s, it):
         kout = k + 1 if welded else k
         for i in range(3):
             w1_out[i] = w1[kout, i]             # (its w' = c1 phi_out + w1_out)
-        outboard = (welded, params.hinge_params[params.hinge_row[kout], 0:9].reshape((3, 3)),
+        outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
                     state.rot[kout], w1_out)
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
                   beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/stepping/step.py)
         if run.settings.start:      # (the flag a literal: the step's copy keeps no start code)
-            beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
+            beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
                           True, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
                           eta_map[i0:i1], loop.beam_work)
         else:
-            beam_transfer(beam_params[k], tables, outboard, (False, zero3), params.gravity,
+            beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
                           False, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
                           eta_map[i0:i1], loop.beam_work)
@@ -261,12 +270,16 @@ def _update(loop, run, s, _):
     angular acceleration (as step.py's welded bodies); every rate finite?"""
     finite = _update_integrated(loop, run, s, 0)
     params, state, inputs = run.params, run.state, run.inputs
-    _, beam_params, _, mode_off, beam_ends, _ = params.beams
+    beam_params = model_tables.beam_params(params)
+    mode_off = model_tables.mode_offset(params)
+    beam_ends = model_tables.beam_ends(params)
+    hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
+    locked, lock_rel = model_tables.locked(params), model_tables.lock_rel(params)
     rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
     scratch = loop.follow[3]
     for k in range(rot.shape[0]):
-        if params.locked[k]:
-            mm3_into(inputs.g_rot[s + 1], params.lock_rel[k], rot[k])
+        if locked[k]:
+            mm3_into(inputs.g_rot[s + 1], lock_rel[k], rot[k])
             for i in range(3):
                 omega[k, i] = inputs.g_w[s, i]
                 omega_dot[k, i] = inputs.g_wd[s, i]
@@ -278,7 +291,7 @@ def _update(loop, run, s, _):
         end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot[p], omega[p],
                            omega_dot[p], state.eta[i0:i1], state.eta_d[i0:i1],
                            state.eta_acc[i0:i1],
-                           params.hinge_params[params.hinge_row[k], 0:9].reshape((3, 3)),
+                           hinge_params[hinge_row[k], 0:9].reshape((3, 3)),
                            rot[k], omega[k], omega_dot[k], scratch)
         for i in range(3):
             state.pseudo[k, i] = omega_dot[k, i]

@@ -29,7 +29,7 @@ accelerations at q'' = 0 are the convective terms.
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, kernel
+from .. import CONTRACT, kernel, model_tables
 from ..algebra.mat3 import (dot, matmul, matvec, put1, put2, t_cross, t_hat, t_lin9, t_mm, t_mv,
                             t_of_mat, t_of_vec, t_plus_diag)
 from ..algebra.so3 import exp_coefficients, expm_so3, log_so3
@@ -621,11 +621,13 @@ def rod_end_points(steps, xi0, phi, q, qd):
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
-def rod_tables_of(rods, k):
-    """Strain rod k's tables as the kernels take them, from the kernel model's rods
-    (run_tables.rod_tables; kernels/stepping/loop.py::Params.rods): (steps, xi0, phi, weights, mu,
-    section, stiffness, damping)."""
-    rod_row, steps, xi0, phi, weights, stiffness, mu_damping, section = rods
-    r = rod_row[k]
-    return (steps[r], xi0[r], phi[r], weights[r], mu_damping[r, 0], section[r], stiffness[r],
-            mu_damping[r, 1])
+def rod_tables_of(params, k):
+    """Strain rod k's tables as the kernels take them, from the flat model's (params; its
+    rod_* tables, run_tables.rod_tables): (steps, xi0, phi, weights, mu, section, stiffness,
+    damping)."""
+    r = model_tables.rod_row(params)[k]
+    mu_damping = model_tables.rod_mu_damping(params)
+    return (model_tables.rod_steps(params)[r], model_tables.rod_xi0(params)[r],
+            model_tables.rod_phi(params)[r], model_tables.rod_weights(params)[r],
+            mu_damping[r, 0], model_tables.rod_section(params)[r],
+            model_tables.rod_stiffness(params)[r], mu_damping[r, 1])

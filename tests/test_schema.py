@@ -1,0 +1,105 @@
+"""The flat model (issue 66, item 2; kernels/schema.py): a model's tables in two buffers whose
+offsets and sizes come from one schema, read by the kernels through accessors generated from it
+(kernels/model_tables.py)."""
+import numpy as np
+import pytest
+from numba import njit
+
+from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, StrainRod,
+                   build_chain, run_tables)
+from dttmm.chains import arm, unit_link
+from dttmm.kernels import model_tables, schema
+from dttmm.kernels.schema import MODEL, SIZES, pack, unpack
+from dttmm.mechanisms import n_four_bar
+
+
+def test_the_accessors_are_generated_from_the_schema():
+    """kernels/model_tables.py is what the schema generates (after an edit of the schema:
+    schema.write())."""
+    assert schema.GENERATED.read_text() == schema.generated_source(), \
+        'kernels/model_tables.py is stale: python -c "from dttmm.kernels import schema; ' \
+        'schema.write()"'
+
+
+def _models():
+    beam = EulerBernoulliBeam(length=1.0, bending_stiffness=175.0, density=7850.0, area=1e-4,
+                              polar_inertia_per_length=1.3e-4, modes_per_plane=3,
+                              torsion_modes=1, torsional_stiffness=100.0,
+                              axial_stiffness=2e7, axial_modes=1)
+    rod = StrainRod(length=0.3, bending_stiffness=50.0, mass_per_length=1.0,
+                    polar_inertia_per_length=1e-4)
+    return {
+        "flexible arm": arm(drive="pd", flexible=True),
+        "four-bar": n_four_bar(2),
+        "beam welded to a body": build_chain([BallJoint(), beam, FixedHinge(), unit_link()]),
+        "strain rod behind revolute joints": build_chain(
+            [RevoluteJoint(axis=[0, 0, 1.0]), unit_link(), RevoluteJoint(axis=[0, 1.0, 0]), rod]),
+    }
+
+
+@pytest.mark.parametrize("name", list(_models()))
+def test_a_model_packed_reads_back_its_own_tables(name):
+    """Every table of a packed model reads back, by name, equal to the table it was packed from
+    (run_tables' own, built apart: beam_tables, rod_tables, joint_drives), shape and values, and
+    the sizes are those of the model."""
+    km = run_tables.kernel_model(_models()[name])[0]
+    flat = run_tables.kernel_params(km)
+    tables = unpack(flat)
+    beams = dict(zip(["body_kind", "beam_params", "beam_moments", "mode_offset", "beam_ends",
+                      "beam_factors"], run_tables.beam_tables(km)))
+    rods = dict(zip(["rod_row", "rod_steps", "rod_xi0", "rod_phi", "rod_weights",
+                     "rod_stiffness", "rod_mu_damping", "rod_section"],
+                    run_tables.rod_tables(km)))
+    expected = dict(beams, **rods, hinge_kind=km.hinge_kind, parent=km.parent,
+                    gravity=km.gravity, locked=km.ground_locked,
+                    joint_drive=run_tables.joint_drives(km), tip_pinned=int(km.tip_pinned))
+    for key, value in expected.items():
+        np.testing.assert_array_equal(tables[key], value, err_msg=key)
+        assert np.shape(tables[key]) == np.shape(value), key
+    n = km.n_bodies
+    assert flat.size[[s for s, _ in SIZES].index("bodies")] == n
+    for k in range(n):      # each body's row of the shared tables is its own parameters
+        np.testing.assert_array_equal(tables["body_params"][tables["body_row"][k]],
+                                      km.body_params[k])
+        np.testing.assert_array_equal(tables["hinge_params"][tables["hinge_row"][k]],
+                                      km.hinge_params[k])
+    assert flat.real.dtype == np.float64 and flat.int.dtype == np.int64
+    assert flat.real.size == sum(tables[f.name].size for f in MODEL if f.buffer == schema.REAL)
+
+
+def _reader(accessor):
+    @njit
+    def read(m):
+        return accessor(m)
+    return read
+
+
+def test_each_compiled_accessor_reads_its_table():
+    """The accessors the kernels call (compiled) return each table's view of the buffers: the
+    same shape and values as Python's unpack, and a view (no copy) of a table with entries."""
+    km = run_tables.kernel_model(arm(drive="pd", flexible=True))[0]
+    flat = run_tables.kernel_params(km)
+    tables = unpack(flat)
+    for field in MODEL:
+        got = _reader(getattr(model_tables, field.name))(flat)
+        want = tables[field.name]
+        np.testing.assert_array_equal(got, want, err_msg=field.name)
+        assert np.shape(got) == np.shape(want), field.name
+        if np.size(want) and np.ndim(want):
+            buffer = flat.real if field.buffer == schema.REAL else flat.int
+            assert np.shares_memory(got, buffer), field.name
+
+
+def test_pack_refuses_tables_that_disagree_on_a_size():
+    """Two tables that give one size two values, a table of the wrong rank or width, and a
+    missing or unknown table are refused, naming the table."""
+    km = run_tables.kernel_model(arm())[0]
+    good = unpack(run_tables.kernel_params(km))
+    with pytest.raises(ValueError, match="parent's axis bodies"):
+        pack(**dict(good, parent=np.zeros(km.n_bodies + 1, dtype=np.int64)))
+    with pytest.raises(ValueError, match="body_params has shape"):
+        pack(**dict(good, body_params=np.zeros((km.n_bodies, 3))))
+    with pytest.raises(TypeError, match="missing tables \\['gravity'\\]"):
+        pack(**{k: v for k, v in good.items() if k != "gravity"})
+    with pytest.raises(TypeError, match="unknown tables \\['mass'\\]"):
+        pack(**dict(good, mass=np.zeros(3)))
