@@ -12,7 +12,8 @@ own sides (a the parent's, b the child's).  A body reached at a point other than
 point is the same rigid body described from that point (its mass centre, output and named
 points shifted; its inertia about the mass centre); a joint the new tree runs the other way
 (its child now its parent) is a ball joint, or a revolute joint whose axis is turned into the
-new parent's frame and whose angle and rate change sign.  Every body keeps its initial rotation,
+new parent's frame and whose angle and rate change sign (a planar joint is refused unless it
+stays where it is: in the tree, or closing its loop).  Every body keeps its initial rotation,
 and a body behind a ball joint its angular velocity; a body on its own tree joint is kept as
 it is.
 """
@@ -21,7 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .elements import BallJoint, RevoluteJoint, RigidBody
+from .elements import BallJoint, PlanarJoint, RevoluteJoint, RigidBody
 from .elements.rigid_body import parallel_axis
 
 GROUND = -1
@@ -115,7 +116,12 @@ def shortest_tree(entries, closures, model, in_model):
     shift, joint_before = {}, {}
     for i, body in enumerate(bodies):
         e, forward = via[i]
-        joint, a, at_a, b, at_b, _ = edges[e]
+        joint, a, at_a, b, at_b, closing = edges[e]
+        if isinstance(joint, PlanarJoint) and (closing or not forward):
+            return (f"planar joint '{joint.name or type(joint).__name__}' would "
+                    + ("run the other way" if not forward else "join the tree from its loop")
+                    + ", and a planar joint is kept only where it is (in the tree as added, or "
+                      "closing its loop)")
         p = _point(body, at_b if forward else at_a)
         if p is None:
             return (f"body '{body.name}' would hang from a point other than its input, and a "
