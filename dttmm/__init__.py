@@ -3,8 +3,9 @@ flexible beams (Rui et al.), with an independent Newton-Euler reference solver."
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam,
-                       FixedHinge, JointForce, JointMotion, PDTracking, PrismaticJoint,
-                       RevoluteJoint, RigidBody, SpringDamper, StrainRod, UniversalJoint)
+                       FixedHinge, JointForce, JointMotion, PDTracking, PlanarJoint,
+                       PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
+                       UniversalJoint)
 from .assembly import assemble
 from .closures import loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
@@ -25,7 +26,7 @@ except PackageNotFoundError:        # run from a source tree that is not install
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "CylindricalJoint",
-           "JointForce",
+           "PlanarJoint", "JointForce",
            "SpringDamper", "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model",
            "System", "build_chain", "assemble", "loop_residuals", "forward_dynamics", "ode",
            "linearize", "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",

@@ -308,9 +308,9 @@ def _closing_coordinates(label, joint, kind, v, drives, f_a, p_a, f_b, p_b):
     late = [i for i in range(CLOSING_DRIVES, len(spec)) if drives[i] is not None]
     if late:
         raise ValueError(f"{label}: a closing joint carries drives on its first "
-                         f"{CLOSING_DRIVES} coordinates so far, got one on {names[late[0]]}; "
-                         f"build the loop with this joint in the tree (System.add) and close "
-                         f"it at another joint")
+                         f"{CLOSING_DRIVES} coordinates so far, got {kind.arguments[2]}"
+                         f"[{late[0]}] on {names[late[0]]}; build the loop with this joint in "
+                         f"the tree (System.add) and close it at another joint")
     v["q0"] = q0
     r_p, r_c = turn_rotations(kind.code, axes, q0)
     v["rotation"] = r_p.T @ f_a.T @ f_b @ r_c.T

@@ -809,7 +809,10 @@ class System:
             cost a step over its bodies; docs/loops.md, "Choosing the spanning tree").  A
             body the new tree reaches at another point is the same body described from that
             point, so its input point (``position_input``) is that point; the joints keep
-            their names, the ones left out of the tree closing the loops.
+            their names, the ones left out of the tree closing the loops.  A joint with
+            coordinates the new tree takes from its loop, or runs the other way, starts where
+            the system stands: its slides at the gaps between its points, its rates those of
+            the bodies' motion at t = 0.
 
         Returns
         -------

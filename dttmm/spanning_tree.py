@@ -8,20 +8,27 @@ closing alike, as an edge between two bodies (or a body and the ground) and pick
 breadth-first search from the ground (each body from the first joint that reaches it, in the
 order added): each loop then runs through the fewest bodies.  A joint the new tree takes keeps
 its sides where it can (side a the parent); a joint it leaves becomes a closing joint with its
-own sides (a the parent's, b the child's).  A body reached at a point other than its input
-point is the same rigid body described from that point (its mass centre, output and named
-points shifted; its inertia about the mass centre); a joint the new tree runs the other way
-(its child now its parent) is a ball joint, or a revolute joint whose axis is turned into the
-new parent's frame and whose angle and rate change sign.  Every body keeps its initial rotation,
-and a body behind a ball joint its angular velocity; a body on its own tree joint is kept as
-it is.
+own sides (a the parent's, b the child's; its slides then measured between its points, as
+every closing joint's).  A body reached at a point other than its input point is the same
+rigid body described from that point (its mass centre, output and named points shifted; its
+inertia about the mass centre).  A joint with coordinates the new tree takes from its loop, or
+runs the other way (its child now its parent: an undriven joint whose coordinates are all
+about or along axes fixed in its parent, those axes turned into the new parent's frame, its
+turns' angles negated), starts where the system as built stands (`_placed`): each slide the
+gap between its points along its axis, each turn as given (R0 comes from the bodies' frames),
+and the rates those of the bodies' motion at t = 0; a ball joint runs either way as it is.
+Every body keeps its initial rotation, and a body behind a ball joint its angular velocity; a
+body on its own tree joint is kept as it is.
 """
 from collections import deque
 from dataclasses import replace
 
 import numpy as np
 
-from .elements import BallJoint, RevoluteJoint, RigidBody
+from .closures import _side_motion, start_state
+from .elements import BallJoint, RigidBody
+from .elements.drives import MOTION
+from .elements.kinds import CHILD, SLIDE, TURN, joint_kind_of, joint_motion, turn_rotations
 from .elements.rigid_body import parallel_axis
 
 GROUND = -1
@@ -61,14 +68,91 @@ def _from_point(body, p, rotation, angular_velocity):
                    points=points or None, rotation=rotation, angular_velocity=angular_velocity)
 
 
-def _reversed(joint, rot_old_parent, rot_new_parent):
-    """joint taken the other way (its child now its parent), or None where it cannot be."""
-    if isinstance(joint, BallJoint):
+def _attachment(model, state, k):
+    """((point, velocity, frame, angular velocity) of tree body k's attachment point, the same
+    of its input point) at t = 0 (state: closures.start_state; the parent's side as
+    closures.tree_state places it)."""
+    rot, w, r_in, v_in, rot_o, w_o, r_o, v_o = state
+    p = model.parent[k]
+    if p < 0:
+        r_g, v_g, _, rot_g, w_g, _ = model.ground_state(0.0)
+        arm = rot_g @ model.attachment_point[k]
+        side_a = (r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g)
+    elif model.attachment[k] == 0:
+        side_a = (r_o[p], v_o[p], rot_o[p], w_o[p])
+    else:
+        arm = rot[p] @ model.attachment_point[k]
+        side_a = (r_in[p] + arm, v_in[p] + np.cross(w[p], arm), rot[p], w[p])
+    return side_a, (r_in[k], v_in[k], rot[k], w[k])
+
+
+def _value(kind, values):
+    """A joint class's argument of its coordinates' values (a scalar for one coordinate)."""
+    values = tuple(float(x) for x in values)
+    return values[0] if len(kind.coordinates) == 1 else values
+
+
+def _placed(joint, forward, side_a, side_b):
+    """A joint with coordinates as the new tree takes it, from its side a's point to its side
+    b's (forward) or the other way, starting where the system as built stands: side_a, side_b
+    its sides' (point, velocity, frame, angular velocity) at t = 0 (world).  Its frames
+    F_P, F_C and points p_P, p_C (the new parent's and child's) and the joint's kinematics
+    (elements/kinds.py::joint_motion: F_C = F_P R_P R0 R_C, p_C = p_P + F_P sum n_i q_i over
+    its slides) give
+        each slide       q_i = (F_P n_i) . (p_C - p_P)   (its axes perpendicular, as
+                         closures._closing_coordinates measures a closing joint's),
+        each turn        q_i as given, or its negative run the other way (R0, which the build
+                         reads from the bodies' frames, takes up the rest),
+        the rates        least squares of  sum_turns u_i q_i' = w_C - w_P,
+                         sum_slides u_i q_i' = v_C - v_P - w_P x d  (d = sum_slides u_i q_i)
+    (a coordinate on a JointMotion starts on its motion, as given).  Run the other way (its
+    child now its parent), each axis, fixed in the old parent, is turned into the new parent's
+    frame, F_C^T F_P n, which holds for a joint whose coordinates are all about or along axes
+    fixed in its parent; a driven one (its drives would act on other coordinates) or one with a
+    turn fixed in the child: None."""
+    kind = joint_kind_of(joint)
+    v = joint.validated()
+    spec, axes = kind.coordinates, [np.asarray(n, dtype=float) for n in v["axes"]]
+    q, qd = np.array(v["q0"], dtype=float), np.array(v["qd0"], dtype=float)
+    prescribed = np.array([d is not None and d["kind"] == MOTION for d in v["drives"]])
+    changes = {}
+    if not forward:
+        if any(d is not None for d in v["drives"]) or any(c.frame == CHILD for c in spec):
+            return None
+        turn = side_b[2].T @ side_a[2]          # old parent's frame -> new parent's
+        axes = [turn @ n for n in axes]
+        changes = {name: axes[slot] for slot, name in enumerate(kind.axes)}
+        q = -q
+        side_a, side_b = side_b, side_a
+    (p_p, v_p, f_p, w_p), (p_c, v_c, f_c, w_c) = side_a, side_b
+    for i, c in enumerate(spec):
+        if c.motion == SLIDE and not prescribed[i]:
+            q[i] = (f_p @ axes[c.axis]) @ (p_c - p_p)
+    r_p, r_c = turn_rotations(kind.code, axes, q)
+    r0 = r_p.T @ f_p.T @ f_c @ r_c.T
+    _, _, d, _, u = joint_motion(kind.code, axes, r0, f_p, w_p, q, np.zeros(len(spec)))
+    jac = np.zeros((6, len(spec)))
+    for i, c in enumerate(spec):
+        rows = slice(0, 3) if c.motion == TURN else slice(3, 6)
+        jac[rows, i] = u[:, i]
+    rhs = np.concatenate([w_c - w_p, v_c - v_p - np.cross(w_p, d)]) - \
+        jac[:, prescribed] @ qd[prescribed]
+    qd[~prescribed] = np.linalg.lstsq(jac[:, ~prescribed], rhs, rcond=None)[0]
+    changes[kind.arguments[0]] = _value(kind, q)
+    changes[kind.arguments[1]] = _value(kind, qd)
+    return replace(joint, **changes)
+
+
+def _closing(joint):
+    """A tree joint the new tree leaves, as a closing joint: its slides measured between its
+    points (given 0; one on a JointMotion as given: closing, it holds the gap on the motion)."""
+    kind = joint_kind_of(joint)
+    if kind is None or not any(c.motion == SLIDE for c in kind.coordinates):
         return joint
-    if isinstance(joint, RevoluteJoint) and joint.drive is None:
-        axis = rot_new_parent.T @ (rot_old_parent @ np.asarray(joint.axis, dtype=float))
-        return replace(joint, axis=axis, angle=-joint.angle, rate=-joint.rate)
-    return None
+    v = joint.validated()
+    values = [0.0 if c.motion == SLIDE and not (d is not None and d["kind"] == MOTION) else q
+              for c, d, q in zip(kind.coordinates, v["drives"], v["q0"])]
+    return replace(joint, **{kind.arguments[0]: _value(kind, values)})
 
 
 def shortest_tree(entries, closures, model, in_model):
@@ -111,23 +195,36 @@ def shortest_tree(entries, closures, model, in_model):
     def rotation(node):
         return ground_rot if node == GROUND else np.asarray(model.initial_rotation[k_of[node]])
 
+    state = start_state(model)
+
+    def sides(e):
+        """Edge e's sides at t = 0, (point, velocity, frame, angular velocity) each, as the
+        system as built places them."""
+        if e >= len(entries):
+            return tuple(_side_motion(model, state, e - len(entries), s) for s in (0, 1))
+        return _attachment(model, state, k_of[e])
+
     # each body's new input point (from its old one), and the joint before it
     shift, joint_before = {}, {}
     for i, body in enumerate(bodies):
         e, forward = via[i]
-        joint, a, at_a, b, at_b, _ = edges[e]
+        joint, a, at_a, b, at_b, closing = edges[e]
         p = _point(body, at_b if forward else at_a)
         if p is None:
             return (f"body '{body.name}' would hang from a point other than its input, and a "
                     f"beam's input end is its root")
         shift[i] = p
-        if not forward:
-            joint = _reversed(joint, rotation(b), rotation(a))
-            if joint is None:
-                j = edges[e][0]
-                return (f"joint '{j.name or type(j).__name__}' would run the other way, and "
-                        f"only ball joints and undriven revolute joints can")
-        joint_before[i] = joint
+        kind = joint_kind_of(joint)
+        if kind is not None and kind.coordinates and (closing or not forward):
+            placed = _placed(joint, forward, *sides(e))
+        else:       # (a ball joint runs either way; a fixed or elastic hinge only forward)
+            placed = joint if forward or isinstance(joint, BallJoint) else None
+        if placed is None:
+            return (f"joint '{joint.name or type(joint).__name__}' would run the other way, "
+                    f"and only ball joints and undriven joints whose coordinates are all about "
+                    f"or along axes fixed in the parent (revolute, prismatic, cylindrical, "
+                    f"planar) can")
+        joint_before[i] = placed
 
     def point_spec(node, spec):
         """spec's point on node, as the rebuilt system names it: a body described from another
@@ -189,5 +286,6 @@ def shortest_tree(entries, closures, model, in_model):
         if a == GROUND and not closing:    # a root's place -> its world point
             at_a = (ground_pos + ground_rot @ (np.zeros(3) if at_a is None else
                                                np.asarray(at_a, dtype=float))).tolist()
-        new_closures.append((joint, side(a), side(b), point_spec(a, at_a), point_spec(b, at_b)))
+        new_closures.append((joint if closing else _closing(joint), side(a), side(b),
+                             point_spec(a, at_a), point_spec(b, at_b)))
     return new_entries, new_closures

@@ -1,4 +1,4 @@
-"""CylindricalJoint (docs/joints.md, "Cylindrical and planar joints"): a turn about and a slide
+"""CylindricalJoint (docs/joints.md, "Cylindrical joint"): a turn about and a slide
 along one axis fixed in the parent.  The Newton-Euler reference against an independent MuJoCo
 run (tests/data/mujoco_joints.py), DT-TMM against both (order 2 against the reference), drives
 on each coordinate, statics, loops (in the tree and closing), scenes, describe and its build

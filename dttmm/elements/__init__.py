@@ -3,14 +3,14 @@ declared once (kinds.py)."""
 from .beam import EulerBernoulliBeam
 from .drives import JointForce, JointMotion, PDTracking, SpringDamper
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
-from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint, PrismaticJoint,
-                     RevoluteJoint, UniversalJoint)
+from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint, PlanarJoint,
+                     PrismaticJoint, RevoluteJoint, UniversalJoint)
 from .kinds import BEAM, BODY_KINDS, JOINT_KINDS, RIGID, ROD
 from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "CylindricalJoint",
-           "JointForce",
+           "PlanarJoint", "JointForce",
            "SpringDamper", "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "REVOLUTE",
            "UNIVERSAL", "PRISMATIC", "RIGID", "BEAM", "ROD", "BODY_KINDS", "JOINT_KINDS"]

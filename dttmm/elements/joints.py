@@ -1,4 +1,5 @@
-"""Joints with free coordinates: revolute, universal and prismatic (docs/joints.md).
+"""Joints with free coordinates: revolute, universal, prismatic, cylindrical and planar
+(docs/joints.md).
 
 Each joins its parent's attachment point (the parent's output section, frame A_P) to its child's
 input point.  Axes are unit vectors, normalized here; a joint's coordinates q (angles in rad, a
@@ -16,6 +17,11 @@ slide in m) start at the given values and rates, or on a prescribed motion's:
   CylindricalJoint(axis):         A_child = A_P Rot(n, theta) R0; the child's input point
                                   sits at the attachment point + A_P n s (it turns about and
                                   slides along n); coordinates (theta, s).
+  PlanarJoint(axis1, axis2):      A_child = A_P Rot(n, theta) R0,  n = n1 x n2 the plane's
+                                  normal; the child's input point sits at the attachment
+                                  point + A_P (n1 x + n2 y) (it moves in the plane of n1 and
+                                  n2, fixed in the parent, and turns about its normal);
+                                  coordinates (x, y, theta).
 
 R0 is the child's rotation relative to the parent at q = 0: the identity, or, when the child
 body is given an initial rotation, whatever makes that rotation hold at the initial q.  A drive
@@ -30,7 +36,7 @@ import numpy as np
 from ._checks import finite_scalar, finite_vector
 from .drives import JointMotion, validated_drive
 
-REVOLUTE, UNIVERSAL, PRISMATIC, CYLINDRICAL = 3, 4, 5, 6   # Model.hinge_kind (kinds.py)
+REVOLUTE, UNIVERSAL, PRISMATIC, CYLINDRICAL, PLANAR = 3, 4, 5, 6, 7   # Model.hinge_kind
 
 
 def _label(joint, index):
@@ -327,6 +333,88 @@ class CylindricalJoint:
                                        [("coordinates[0]", "rates[0]"),
                                         ("coordinates[1]", "rates[1]")])
         return _common([n], q0, qd0, drives)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanarJoint:
+    """The child moves in a plane fixed in the parent: two slides along perpendicular axes n1,
+    n2 of the plane and a turn about its normal n = n1 x n2.  A_child = A_P Rot(n, theta) R0,
+    the child's input point at the attachment point + A_P (n1 x + n2 y) (docs/joints.md,
+    "Planar joint").
+
+    The user gives the plane by its two in-plane axes (as ``UniversalJoint`` its two axes), so
+    that x and y are measured along directions of the user's choosing; the turning axis is
+    their right-handed normal n = n1 x n2 (normal to the plane, fixed in the parent and, as
+    R0^T n, in the child): w = w_P + (A_P n) theta'.  The turn does not move the input point
+    and the slides do not turn the child.  R0 is the identity, or, when the child body is given
+    an initial rotation, whatever makes that rotation hold at the initial angle.  Runs where
+    ``RevoluteJoint`` does; as a closing joint (``System.close``) its drives go on x and y only.
+
+    Parameters
+    ----------
+    axis1 : array_like of 3
+        n1, the direction of x, in the parent's frame; any nonzero length, normalized here.
+    axis2 : array_like of 3
+        n2, the direction of y, in the parent's frame, perpendicular to n1; any nonzero length,
+        normalized here.
+    coordinates : 3 floats, optional
+        (x, y, theta) at t = 0: the slides (m) along n1 and n2 and the angle (rad) about n1 x n2
+        (default (0, 0, 0)).  A coordinate with a JointMotion drive starts on the motion (leave
+        its entry 0).
+    rates : 3 floats, optional
+        (x', y', theta') at t = 0, m/s and rad/s (default (0, 0, 0)).
+    drives : 3 entries, optional
+        The drive on each coordinate: JointForce (N along n1 on x, along n2 on y, N m about the
+        normal on theta), SpringDamper, JointMotion, PDTracking or None (default (None, None,
+        None): all free).
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "":
+        ``PlanarJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index; the child body for its angular
+        velocity) and the argument: an axis that is zero or not 3 finite numbers; axes that are
+        not perpendicular; coordinates, rates or drives that are not 3 entries (tuple or list);
+        an initial value that is not a finite number; a drive that is not a JointForce,
+        SpringDamper, JointMotion, PDTracking or None, or that fails its own checks (see each
+        drive); initial values that contradict a prescribed motion's at t = 0; a child's given
+        angular velocity that contradicts the joint's rates; as a closing joint, a drive on
+        theta.
+
+    Examples
+    --------
+    A puck on a horizontal table (the plane of x and y, turning about z), held by a spring
+    along x:
+
+    >>> import dttmm
+    >>> puck = dttmm.PlanarJoint(axis1=[1, 0, 0], axis2=[0, 1, 0], coordinates=(0.1, 0.0, 0.0),
+    ...                          drives=(dttmm.SpringDamper(50.0, 0.5), None, None))
+    """
+    axis1: object
+    axis2: object
+    coordinates: tuple = (0.0, 0.0, 0.0)
+    rates: tuple = (0.0, 0.0, 0.0)
+    drives: tuple = (None, None, None)
+    name: str = ""
+    kind = PLANAR
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        n1 = unit_axis(who, "axis1", self.axis1)
+        n2 = unit_axis(who, "axis2", self.axis2)
+        cosine = float(n1 @ n2)
+        if abs(cosine) > 1e-9:
+            angle = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+            raise ValueError(f"{who}: axis1 and axis2 must be perpendicular (the plane's two "
+                             f"axes; its normal is axis1 x axis2), they make {angle:.6g} deg")
+        _per_coordinate(who, self, ("coordinates", "rates", "drives"), 3,
+                        "one per coordinate: x, y, theta")
+        q0, qd0, drives = _coordinates(who, self.coordinates, self.rates, self.drives,
+                                       [(f"coordinates[{i}]", f"rates[{i}]") for i in range(3)])
+        normal = np.cross(n1, n2)
+        return _common([n1, n2, normal / np.linalg.norm(normal)], q0, qd0, drives)
 
 
 def rotation_about(axis, angle):

@@ -20,8 +20,8 @@ import numpy as np
 
 from .beam import EulerBernoulliBeam
 from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge, row_blocks
-from .joints import (CYLINDRICAL, PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint,
-                     PrismaticJoint, RevoluteJoint, UniversalJoint, rotation_about)
+from .joints import (CYLINDRICAL, PLANAR, PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint,
+                     PlanarJoint, PrismaticJoint, RevoluteJoint, UniversalJoint, rotation_about)
 from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
@@ -166,6 +166,13 @@ JOINT_KINDS = (
          coordinates=(Coordinate(TURN, 0), Coordinate(SLIDE, 0)), scene="cylindrical",
          arguments=("coordinates", "rates", "drives"), axes=("axis",), doc="docs/joints.md",
          what="a cylindrical joint"),
+    # two slides in the plane of axis1 and axis2 and a turn about its normal axis1 x axis2
+    # (slot 2, which validated() derives); closing, 3 rows and drives on x and y only
+    # (CLOSING_DRIVES)
+    Kind(PLANAR, PlanarJoint, ("newmark",),
+         coordinates=(Coordinate(SLIDE, 0), Coordinate(SLIDE, 1), Coordinate(TURN, 2)),
+         scene="planar", arguments=("coordinates", "rates", "drives"), axes=("axis1", "axis2"),
+         doc="docs/joints.md", what="a planar joint"),
 )
 
 # the kinds of a closing joint's constraint rows (closures.py::constraint_rows, read by

@@ -1,13 +1,17 @@
-"""Independent MuJoCo reference runs for dttmm's CylindricalJoint (and the planar joint's
-case, below), the data tests/test_cylindrical_joint.py compares with.  Writes, beside this file,
+"""Independent MuJoCo reference runs for dttmm's CylindricalJoint and PlanarJoint, the data
+tests/test_cylindrical_joint.py and tests/test_planar_joint.py compare with.  Writes, beside
+this file,
 
     mujoco_cylindrical.npz     a carrier on a cylindrical joint + a link
+    mujoco_planar.npz          a carrier on a planar joint (slide, slide, hinge) + a link
 
 subsampled every 10 ms (101 samples over 1 s; a few KB), from a run at dt = 1e-5 with RK4, and
 the run's own error estimates (against dt/2 and 2 dt).  The tests read the .npz only: they need
 no MuJoCo (this script skips, saying so, without it).
 
-Run:  python tests/data/mujoco_joints.py          (MuJoCo 3 or later; ~10 s)
+Run:  python tests/data/mujoco_joints.py [cylindrical|planar]   (MuJoCo 3 or later; ~10 s;
+      the committed files: MuJoCo 4.0.1; the planar run's own error 6.6e-14 m against dt/2,
+      its energy drift 1.7e-14 of the largest kinetic energy, 2.7 m of travel)
 
 GEOMETRY (SI units; every vector in the frame named; "dttmm" lines say how to rebuild it)
 =========================================================================================
