@@ -26,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 
 from .closures import _side_motion, start_state
-from .elements import BallJoint, RigidBody
+from .elements import BallJoint, ElasticHinge, RigidBody
 from .elements.drives import MOTION
 from .elements.kinds import CHILD, SLIDE, TURN, joint_kind_of, joint_motion, turn_rotations
 from .elements.rigid_body import parallel_axis
@@ -215,6 +215,10 @@ def shortest_tree(entries, closures, model, in_model):
                     f"beam's input end is its root")
         shift[i] = p
         kind = joint_kind_of(joint)
+        if closing and isinstance(joint, ElasticHinge):
+            return (f"elastic hinge '{joint.name or 'ElasticHinge'}' closes a loop, and in the "
+                    f"tree its deflection and rest rotation would start from zero, not from "
+                    f"where its two points stand")
         if kind is not None and kind.coordinates and (closing or not forward):
             placed = _placed(joint, forward, *sides(e))
         else:       # (a ball joint runs either way; a fixed or elastic hinge only forward)

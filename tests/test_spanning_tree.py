@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm import (BallJoint, CylindricalJoint, EulerBernoulliBeam, FixedHinge, Ground,
-                   PlanarJoint, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, System,
-                   UniversalJoint, simulate_reference)
+from dttmm import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge,
+                   Ground, PlanarJoint, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
+                   System, UniversalJoint, simulate_reference)
 from dttmm.assembly import assemble
 from dttmm.elements.kinds import COORDINATE_0, RATE_0, row_axes
 from dttmm.mechanisms import _frame, n_four_bar, parallelogram
@@ -92,6 +92,20 @@ def test_what_cannot_be_rebuilt_is_refused_naming_it():
         s.build(tree="shortest")
     with pytest.raises(ValueError, match="tree must be 'as added' or 'shortest'"):
         s.build(tree="bfs")
+
+
+def test_a_closing_elastic_hinge_the_tree_would_take_is_refused():
+    """A closing elastic hinge measures its deflection and rest rotation between its two
+    points; in the tree it would start from zero (the link moved 0.045 m at t = 0, no error):
+    tree='shortest' refuses to take it, naming it."""
+    z = [0, 0, 1.0]
+    s = System(gravity=[0, -9.81, 0])
+    s.add(_bar("crank", _rot_z(np.pi / 2)), RevoluteJoint(axis=z, name="A"))
+    s.add(_bar("link", _rot_z(-0.3)), RevoluteJoint(axis=z, name="B"), parent="crank")
+    s.close(ElasticHinge(1e3, 10.0, name="E"), "ground", "link", at_a=[1.0, 0.7, 0.0])
+    with pytest.raises(ValueError, match=r"tree='shortest'.*elastic hinge 'E' closes a loop"):
+        s.build(tree="shortest")
+    assert s.build().closure_names == ("E",)
 
 
 # ---- joints with coordinates the new tree moves (into the tree from its loop, the other way,
