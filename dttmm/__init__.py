@@ -9,7 +9,8 @@ from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulli
 from .assembly import assemble
 from .closures import loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
-from .model import Ground, Model, PrescribedMotion, System, build_chain
+from .model import Ground, Model, PrescribedMotion
+from .system import System, build_chain
 from .recording import Checkpoint
 from .result import Result
 from .run_checks import DivergenceError, UnresolvedMotionWarning

@@ -3,7 +3,7 @@ import numba
 import numpy as np
 
 from .elements import BallJoint, FixedHinge, RigidBody
-from .model import System, build_chain
+from .system import System, build_chain
 
 # +90 degrees about world y: a body's x axis along world -z
 TURNED_ABOUT_Y = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])

@@ -11,7 +11,8 @@ import numpy as np
 from .assembly import assemble
 from .elements.drives import JointMotion
 from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
-from .model import Ground, System
+from .model import Ground
+from .system import System
 from .profiles import profile
 
 

@@ -29,7 +29,8 @@ from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
                               K_ROTATION, K_TRANSLATION, REST_ROTATION)
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
-from .model import Ground, Model, PrescribedMotion, System, children_of
+from .model import Ground, Model, PrescribedMotion, children_of
+from .system import System
 from .profiles import Profile, ProfileForce, profile
 
 Scene = namedtuple("Scene", ["name", "model", "run", "path"])
