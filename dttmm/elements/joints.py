@@ -85,13 +85,17 @@ def _common(axes, q0, qd0, drives):
 
 
 def _per_coordinate(who, joint, names, count, what="one per axis"):
-    """ValueError naming the argument unless each of `names` is a tuple or list of count
-    entries."""
+    """The initial coordinates, rates and drives (_coordinates) of a joint whose arguments
+    `names` (values, rates, drives) hold one entry per coordinate: ValueError naming the
+    argument unless each is a tuple or list of count entries."""
     for argument in names:
         value = getattr(joint, argument)
         if not isinstance(value, (tuple, list)) or len(value) != count:
             kind = "a pair" if count == 2 else f"{count} entries"
             raise ValueError(f"{who}: {argument} must be {kind} ({what}), got {value!r}")
+    values, rates, drives = (getattr(joint, argument) for argument in names)
+    return _coordinates(who, values, rates, drives,
+                        [(f"{names[0]}[{i}]", f"{names[1]}[{i}]") for i in range(count)])
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,9 +215,7 @@ class UniversalJoint:
         who = _label(self, index)
         n1 = unit_axis(who, "axis1", self.axis1)
         n2 = unit_axis(who, "axis2", self.axis2)
-        _per_coordinate(who, self, ("angles", "rates", "drives"), 2)
-        q0, qd0, drives = _coordinates(who, self.angles, self.rates, self.drives,
-                                       [("angles[0]", "rates[0]"), ("angles[1]", "rates[1]")])
+        q0, qd0, drives = _per_coordinate(who, self, ("angles", "rates", "drives"), 2)
         return _common([n1, n2], q0, qd0, drives)
 
 
@@ -327,11 +329,8 @@ class CylindricalJoint:
     def validated(self, index=None):
         who = _label(self, index)
         n = unit_axis(who, "axis", self.axis)
-        _per_coordinate(who, self, ("coordinates", "rates", "drives"), 2,
-                        "one per coordinate: theta, s")
-        q0, qd0, drives = _coordinates(who, self.coordinates, self.rates, self.drives,
-                                       [("coordinates[0]", "rates[0]"),
-                                        ("coordinates[1]", "rates[1]")])
+        q0, qd0, drives = _per_coordinate(who, self, ("coordinates", "rates", "drives"), 2,
+                                          "one per coordinate: theta, s")
         return _common([n], q0, qd0, drives)
 
 
@@ -409,10 +408,8 @@ class PlanarJoint:
             angle = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
             raise ValueError(f"{who}: axis1 and axis2 must be perpendicular (the plane's two "
                              f"axes; its normal is axis1 x axis2), they make {angle:.6g} deg")
-        _per_coordinate(who, self, ("coordinates", "rates", "drives"), 3,
-                        "one per coordinate: x, y, theta")
-        q0, qd0, drives = _coordinates(who, self.coordinates, self.rates, self.drives,
-                                       [(f"coordinates[{i}]", f"rates[{i}]") for i in range(3)])
+        q0, qd0, drives = _per_coordinate(who, self, ("coordinates", "rates", "drives"), 3,
+                                          "one per coordinate: x, y, theta")
         normal = np.cross(n1, n2)
         return _common([n1, n2, normal / np.linalg.norm(normal)], q0, qd0, drives)
 

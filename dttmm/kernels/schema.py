@@ -108,15 +108,27 @@ def axes(shape):
     return dims
 
 
-def _size_index():
+def size_index():
+    """{size name: its index in FlatModel.size}."""
     return {name: i for i, (name, _) in enumerate(SIZES)}
+
+
+def table_of(flat, field, buffer, shape):
+    """Table `field` (its index in the schema; of `buffer`, of the schema's `shape`) of a
+    FlatModel as a numpy view of its buffer (a table without axes: its one value)."""
+    index = size_index()
+    extents = tuple(constant if name is None else int(flat.size[index[name]]) + plus
+                    for name, constant, plus in axes(shape))
+    start = int(flat.start[field])
+    view = getattr(flat, buffer)[start:start + int(np.prod(extents, dtype=np.int64))]
+    return view.reshape(extents)[()]
 
 
 def pack(fields=MODEL, **arrays):
     """The FlatModel of the tables `arrays` (by their schema names; every field of `fields`):
     the sizes read from the arrays' shapes (an axis named twice must agree), the tables copied
     into the two buffers in the schema's order."""
-    index = _size_index()
+    index = size_index()
     size = np.full(len(SIZES), -1, dtype=np.int64)
     missing = [f.name for f in fields if f.name not in arrays]
     extra = sorted(set(arrays) - {f.name for f in fields})
@@ -155,15 +167,7 @@ def pack(fields=MODEL, **arrays):
 
 def unpack(flat, fields=MODEL):
     """{name: view} of a FlatModel's tables (the kernels' accessors' views, for Python)."""
-    out = {}
-    for i, f in enumerate(fields):
-        shape = tuple(constant if name is None else int(flat.size[_size_index()[name]]) + plus
-                      for name, constant, plus in axes(f.shape))
-        buffer = flat.real if f.buffer == REAL else flat.int
-        count = int(np.prod(shape, dtype=np.int64))
-        view = buffer[flat.start[i]:flat.start[i] + count].reshape(shape)
-        out[f.name] = view[()] if shape == () else view
-    return out
+    return {f.name: table_of(flat, i, f.buffer, f.shape) for i, f in enumerate(fields)}
 
 
 def _accessor(i, f):

@@ -12,14 +12,13 @@ the reshape's checks; the general loop reads ~150), this ~10 ms (120 reads in on
 numba's pass timings); tests/test_schema.py checks each accessor against numpy.  The view
 borrows the buffer's memory (its meminfo: a reference where the caller counts them).
 """
-import numpy as np
 from numba import config
 from numba.core import cgutils, types
 from numba.core.imputils import impl_ret_borrowed
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from .schema import SIZES, axes
+from .schema import axes, size_index, table_of
 
 # FlatModel's fields in order (kernels/schema.py::FlatModel)
 _POSITION = {"real": 0, "int": 1}
@@ -33,12 +32,12 @@ def _load(builder, context, array, index):
 def table_view(field, buffer, shape):
     """The accessor of table `field` (its index in the schema) of `buffer`, of the schema's
     `shape`; with no axes, the table's one value."""
+    if config.DISABLE_JIT:      # (numba off: the same view by numpy, its indexing checked)
+        return lambda m: table_of(m, field, buffer, shape)
     position = _POSITION[buffer]
-    index = {name: i for i, (name, _) in enumerate(SIZES)}
+    index = size_index()
     dims = [(None if name is None else index[name], constant, plus)
             for name, constant, plus in axes(shape)]
-    if config.DISABLE_JIT:      # (numba off: the same view by numpy, its indexing checked)
-        return _python_accessor(field, buffer, dims)
 
     @intrinsic
     def accessor(typingctx, m):
@@ -79,12 +78,3 @@ def table_view(field, buffer, shape):
 
     return accessor
 
-
-def _python_accessor(field, buffer, dims):
-    def accessor(m):
-        shape = tuple(constant if i is None else int(m.size[i]) + plus
-                      for i, constant, plus in dims)
-        start = int(m.start[field])
-        view = getattr(m, buffer)[start:start + int(np.prod(shape, dtype=np.int64))]
-        return view.reshape(shape) if shape else view[0]
-    return accessor
