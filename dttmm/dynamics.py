@@ -72,7 +72,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     from . import consistent_start, run_checks, run_inputs, run_tables
     from .closures import check_runs_in_sweeps
     from .kernels import python_twin
-    from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
+    from .kernels.assembly.closure import row_residuals, set_ground
+    from .kernels.assembly.loop_projection import _dependent_frames
     from .kernels.stepping.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
         check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)

@@ -27,7 +27,7 @@ from .closures import has_closure_drives
 from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
 from .kernels.stepping import step as kstep
-from .kernels.assembly.closure import start_energy
+from .kernels.assembly.loop_projection import start_energy
 from .elements.kinds import BODY_KIND
 from .kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
 from .model import model_fact

@@ -2,7 +2,8 @@
 
   algebra/     3 x 3 algebra and rotations (mat3.py, so3.py)
   transfers/   each element's transfer matrix over one step (body, beam, hinge, joint, em_body)
-  assembly/    one step's sweeps (sweep.py) and the closing joints held with them (closure.py)
+  assembly/    one step's sweeps (sweep.py: chains; tree_sweep.py: trees) and the closing joints
+               held with them (closure.py, loop_columns.py, loop_projection.py)
   stepping/    the time loops: the step skeleton (loop.py), its variants (step.py, ball_chain.py,
                tree.py, weld_chain.py, em_step.py) and the high-order integrator (runge_kutta.py)
 

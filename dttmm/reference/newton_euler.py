@@ -267,7 +267,8 @@ from ..sections import point_positions, rotation_to_quaternion
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,
                      stretch_shape_constants, twist_shape_constants)
-from .equations import _solve_dynamics, _stiffening_block, rhs_kernel
+from .beam_terms import _stiffening_block
+from .equations import _solve_dynamics, rhs_kernel
 from .hub import hub_table
 from .strain_rod import station_arrays, rod_sections
 

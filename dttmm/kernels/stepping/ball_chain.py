@@ -21,7 +21,8 @@ from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_li
                             t_mmt, t_mul_hat, t_mv, t_of_mat, t_of_vec, t_outer, t_plus_diag)
 from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .step import _advance_history, _offsets_into, fused_coefficients
+from .generalized_alpha import _advance_history, _offsets_into
+from .step import fused_coefficients
 from ..assembly.sweep import riccati_reduced_recover, riccati_reduced_step, riccati_reduced_tip
 
 

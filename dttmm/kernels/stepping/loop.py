@@ -64,7 +64,7 @@ Sweep = namedtuple("Sweep", [
     "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
     "dir_z", "dir_o",                                # direct full-state sweep
     "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/stepping/tree.py)
-    "tree_s", "tree_p",                              # full-state tree sweep (sweep.py)
+    "tree_s", "tree_p",                              # full-state tree sweep (tree_sweep.py)
     "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints
     #                                                         (kernels/transfers/joint.py)
 ])

@@ -1,9 +1,9 @@
 """The fused loop variant for trees of rigid bodies and beams joined by ball joints: every
 body's reduced map (kernels/stepping/ball_chain.py::ball_body_map,
 kernels/transfers/beam.py::beam_ball_map) goes straight into the leaves-to-root sweep
-(kernels/assembly/sweep.py, "Trees"; docs/assembly.md, "Trees"), then the recovery from the root to
-the leaves.  Predict, adopt and update are the fused chain loop's (they do not depend on the
-topology)."""
+(kernels/assembly/tree_sweep.py, "Trees"; docs/assembly.md, "Trees"), then the recovery
+from the root to the leaves.  Predict, adopt and update are the fused chain loop's (they do not
+depend on the topology)."""
 from collections import namedtuple
 
 import numpy as np
@@ -17,8 +17,8 @@ from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..algebra.mat3 import mm3_into
 from ..algebra.so3 import expm_so3, left_jacobian
 from .step import fused_coefficients
-from ..assembly.sweep import _add_to_port, _clear_ports, tree_reduced_recover, tree_reduced_step, \
-    write_tree_stations
+from ..assembly.tree_sweep import (_add_to_port, _clear_ports, tree_reduced_recover,
+                                   tree_reduced_step, write_tree_stations)
 
 
 # The fused tree loop's scratch: the fused chain loop's (kernels/stepping/ball_chain.py::FusedLoop,

@@ -18,7 +18,7 @@ the child; the slides move the child's input point along axes fixed in the paren
                          Bl_i . e_O = tau_i            (the drive's generalized force, free q_i)
   drive_value          tau and d tau / d nu of a free coordinate's drive
 
-kernels/assembly/sweep.py::riccati_tree_full eliminates nu leaves to root (an articulated-body
+kernels/assembly/tree_sweep.py::riccati_tree_full eliminates nu leaves to root (an articulated-body
 step).
 """
 import numpy as np

@@ -593,7 +593,7 @@ def rod_end_frame(steps, xi0, phi, rot, w, wd, q, qd, qdd, rest, rot_out, w_out,
     w, w') and its strain coordinates, rates and accelerations (rod_end: R_L, omega_L, alpha_L
     in the input frame): A_O = A R_L R0, w_O = w + A omega_L, w_O' = w' + w x (A omega_L)
     + A alpha_L (as the modal beam's end section,
-    kernels/stepping/step.py::_end_section_frame).  Allocates nothing."""
+    kernels/stepping/generalized_alpha.py::_end_section_frame).  Allocates nothing."""
     r_l, _, om, _, al, _ = rod_end(steps, xi0, phi, q, qd, qdd)
     ra = t_of_mat(rot)
     end = t_mm(t_mm(ra, r_l), t_of_mat(rest))
