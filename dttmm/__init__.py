@@ -6,11 +6,11 @@ from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulli
                        FixedHinge, JointForce, JointMotion, PDTracking, PlanarJoint,
                        PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
                        UniversalJoint)
-from .assembly import assemble
-from .closures import loop_residuals
+from .model.assembly import assemble
+from .model.closures import loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
-from .model import Ground, Model, PrescribedMotion
-from .system import System, build_chain
+from .model.model import Ground, Model, PrescribedMotion
+from .model.system import System, build_chain
 from .recording import Checkpoint
 from .result import Result
 from .run_checks import DivergenceError, UnresolvedMotionWarning

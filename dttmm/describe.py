@@ -10,9 +10,9 @@ from .elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                   rod_components)
-from .rod_motion import rod_frequencies
-from .closures import describe_closures, held_chords, loop_rank
-from .model import DESCRIBE
+from .model.rod_motion import rod_frequencies
+from .model.closures import describe_closures, held_chords, loop_rank
+from .model.model import DESCRIBE
 
 # each joint kind's name (its scene type) and degrees of freedom (elements/kinds.py)
 JOINT_NAMES = SCENE_TYPE
@@ -181,7 +181,7 @@ def _loop_reach(model):
     """How far the closing joints' sweep columns reach (run_tables.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
     from . import run_tables
-    from .closures import constraint_rows
+    from .model.closures import constraint_rows
     km = run_tables.kernel_model(model)[0]
     owner = constraint_rows(km)[1]
     body = np.array(km.closure_body, dtype=np.int64).reshape(-1, 2)

@@ -54,7 +54,7 @@ def forward_dynamics(model, t=0.0, state=None):
         A model the Newmark loops do not run, a state of the wrong shape, not finite, or whose
         joint children's frames do not follow their joints' coordinates.
     """
-    from .model import Model
+    from .model.model import Model
     if not isinstance(model, Model):
         raise ValueError(f"forward_dynamics: model must be a Model, got {type(model).__name__}")
     t = float(t)
@@ -70,7 +70,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     extra_joint_forces: (n, 3) generalized forces on the joints' coordinates (where
     run_inputs.additive_joint_force)."""
     from . import consistent_start, run_checks, run_inputs, run_tables
-    from .closures import check_runs_in_sweeps
+    from .model.closures import check_runs_in_sweeps
     from .kernels import python_twin
     from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
     from .kernels.stepping.loop import Monitor, Settings
@@ -200,7 +200,7 @@ class ODE:
     def __init__(self, model, _closed=False):
         from . import run_tables
         from .elements.hinges import BALL, ELASTIC
-        from .model import Model
+        from .model.model import Model
         if not isinstance(model, Model):
             raise ValueError(f"ode: model must be a Model, got {type(model).__name__}")
         if model.n_closures and not _closed:    # (linearize takes the tree's coordinates)
@@ -614,7 +614,7 @@ def _closed_chart(model, t, full, free, columns, m, moved, fixed):
     g' = G x' = 0, by Newton's iteration with G_dep); moves = dx/dy (m x d).  fixed: the
     coordinates that are neither (prescribed motions: they stay as they are)."""
     from scipy.linalg import lstsq
-    from .closures import closure_residuals, tree_state
+    from .model.closures import closure_residuals, tree_state
     from .kernels.algebra.so3 import log_so3
     n = model.n_bodies
 

@@ -16,9 +16,9 @@ import numpy as np
 
 from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
 from .elements.kinds import ROD
-from .rod_motion import rod_centre_line
+from .model.rod_motion import rod_centre_line
 from .feedback import Progress
-from .sections import foreshortening_along
+from .model.sections import foreshortening_along
 
 
 def _plt():

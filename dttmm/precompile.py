@@ -18,8 +18,8 @@ import time
 
 
 def _general_loop():
-    from .chains import arm, three_pendulum
-    from .mechanisms import n_four_bar
+    from .model.chains import arm, three_pendulum
+    from .model.mechanisms import n_four_bar
     from .solver import simulate
     simulate(arm(), 2e-3, 1e-3)
     simulate(n_four_bar(2), 2e-3, 1e-3, hold_energy=True)
@@ -28,9 +28,9 @@ def _general_loop():
 
 
 def _statics_and_linear_models():
-    from .chains import arm, stiff_cantilever
+    from .model.chains import arm, stiff_cantilever
     from .dynamics import forward_dynamics, linearize
-    from .mechanisms import n_four_bar
+    from .model.mechanisms import n_four_bar
     from .statics import static_equilibrium
     static_equilibrium(stiff_cantilever(2))
     linearize(n_four_bar(2))
@@ -38,27 +38,27 @@ def _statics_and_linear_models():
 
 
 def _fused_chain():
-    from .chains import rigid_chain
+    from .model.chains import rigid_chain
     from .solver import simulate
     for scheme in ("newmark", "dop853", "energy_momentum"):
         simulate(rigid_chain(3), 2e-3, 1e-3, scheme=scheme)
 
 
 def _fused_tree():
-    from .chains import five_link_tree
+    from .model.chains import five_link_tree
     from .solver import simulate
     for scheme in ("newmark", "dop853"):
         simulate(five_link_tree(), 2e-3, 1e-3, scheme=scheme)
 
 
 def _welded_chain():
-    from .chains import stiff_cantilever
+    from .model.chains import stiff_cantilever
     from .solver import simulate
     simulate(stiff_cantilever(2), 2e-3, 1e-3)
 
 
 def _reference():
-    from .chains import arm, three_pendulum
+    from .model.chains import arm, three_pendulum
     from .reference import simulate_reference
     simulate_reference(three_pendulum(), 1e-3)
     simulate_reference(arm(), 1e-3)
@@ -66,7 +66,7 @@ def _reference():
 
 def _reference_rhs():
     """The reference's right-hand side as scipy's solve_ivp calls it."""
-    from .chains import arm
+    from .model.chains import arm
     from .reference import simulate_reference
     simulate_reference(arm(), 1e-3, method="RK45")
 

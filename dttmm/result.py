@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from .elements import BEAM, RIGID, ROD
-from .rod_motion import rod_energies
+from .model.rod_motion import rod_energies
 from .vectors import cross, rows_dot
 from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
@@ -14,8 +14,8 @@ from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENG
 from .elements.drives import SPRING_DAMPER
 from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from .elements.rigid_body import MASS, TO_MASS_CENTER
-from .sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
-                       output_section, rotation_to_quaternion)
+from .model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
+                             output_section, rotation_to_quaternion)
 
 
 FIELDS = (
@@ -577,7 +577,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
     if np.any(model.closure_kind == ELASTIC):
-        from .closures import elastic_closure_terms
+        from .model.closures import elastic_closure_terms
         r_g = np.broadcast_to(np.asarray(model.ground_position if ground_position is None
                                          else ground_position, dtype=float), (n_t, 3))
         zero = np.zeros((n_t, 3))

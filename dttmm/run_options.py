@@ -8,9 +8,10 @@ from functools import cached_property
 import numpy as np
 
 from . import adaptive as adaptive_steps
-from . import closures, consistent_start, run_checks, run_records, run_tables
+from .model import closures
+from . import consistent_start, run_checks, run_records, run_tables
 from .methods import SWEEPS, scheme_named
-from .model import Model
+from .model.model import Model
 from .recording import Checkpoint, NoCheckpoint
 
 

@@ -29,9 +29,9 @@ from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from .elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
                               K_ROTATION, K_TRANSLATION, REST_ROTATION)
 from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
-from .model import Ground, Model, PrescribedMotion, children_of
-from .system import System
-from .profiles import Profile, ProfileForce, profile
+from .model.model import Ground, Model, PrescribedMotion, children_of
+from .model.system import System
+from .model.profiles import Profile, ProfileForce, profile
 
 Scene = namedtuple("Scene", ["name", "model", "run", "path"])
 
@@ -482,7 +482,7 @@ def scene_of(model, run=None, name=None):
                 if f is not None:
                     if not isinstance(f, Profile):
                         raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
-                                         f"only profiles (dttmm.profiles) can be written")
+                                         f"only profiles (dttmm.model.profiles) can be written")
                     table[key] = f.spec()
         else:
             p = model.body_params[k]
@@ -499,7 +499,7 @@ def scene_of(model, run=None, name=None):
                 if f is not None:
                     if not isinstance(f, Profile):
                         raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
-                                         f"only profiles (dttmm.profiles) can be written")
+                                         f"only profiles (dttmm.model.profiles) can be written")
                     table[key] = f.spec()
         if kind in (BALL, ELASTIC):          # (else the joint sets them)
             table["rotation"] = model.initial_rotation[k].tolist()
@@ -631,7 +631,7 @@ def _drive_table(d, who):
         return dict(type="pd", kp=d["stiffness"], kd=d["damping"], target=target.spec(),
                     **({} if feedforward is None else {"feedforward": feedforward.spec()}))
     raise ValueError(f"save_scene: the drive of the joint before {who} is a Python function; "
-                     f"only profiles (dttmm.profiles) can be written")
+                     f"only profiles (dttmm.model.profiles) can be written")
 
 
 def save_scene(model, path, run=None, name=None):

@@ -10,7 +10,7 @@ and collects the recorded samples (recording.py).
 import functools
 import time
 
-from .model import Model
+from .model.model import Model
 from .recording import (Recording, model_fingerprint)
 from .resolution import warn_bent
 from .threads import blas_threads, thread_count

@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 
-from .closures import check_runs_in_sweeps, closure_residuals, start_state
+from .model.closures import check_runs_in_sweeps, closure_residuals, start_state
 from .elements import BEAM, ROD
 from .elements.drives import MOTION
 from .elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
@@ -28,14 +28,14 @@ from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stre
                             trusted_frequency)
 from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .elements.strain_rod import ROD_LENGTH
-from .rod_motion import rod_centre_line, rod_end_section
+from .model.rod_motion import rod_centre_line, rod_end_section
 from .kernels.stepping import ball_chain
 from .kernels.stepping.loop import Monitor, Settings
 from .kernels.transfers.joint import joint_frame, n_coordinates
 from .kernels.algebra.so3 import expm_so3
 from .kernels.stepping.loop import run_steps
-from .model import Model
-from .sections import beam_output_offset, foreshortening_along, log_rotation, output_section
+from .model.model import Model
+from .model.sections import beam_output_offset, foreshortening_along, log_rotation, output_section
 from . import consistent_start, run_checks, run_tables
 
 __all__ = ["StaticEquilibrium", "StaticEquilibriumError", "static_equilibrium"]

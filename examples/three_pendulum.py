@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 

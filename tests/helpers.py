@@ -127,7 +127,7 @@ def joints_arm(drive=None, gravity=(0.0, -9.81, 0.0), slide_axis=(1.0, 0.0, 0.0)
     the slider (default 0.5 kg, inertia 0.01 about its mass centre at its input point)."""
     from dttmm import (PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, System,
                        UniversalJoint)
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     system = System(gravity=gravity)
     system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=drive,
                                                       name="joint1"))

@@ -11,7 +11,7 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, JointForce, RevoluteJoint, RigidBody, System, build_chain,
                    simulate)
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 
 def link(**kw):

@@ -9,7 +9,7 @@ from helpers import fused_and_general, rot_z
 
 from dttmm import BallJoint, DivergenceError, Ground, PrescribedMotion, RigidBody, build_chain, \
     simulate
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm import run_tables
 
 

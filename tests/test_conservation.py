@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 from dttmm.result import angular_momentum
 
 

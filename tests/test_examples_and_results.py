@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dttmm import Result, simulate
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.model.chains import rigid_chain, three_pendulum
 from dttmm.result import FIELDS, rotation_to_quaternion, rotation_to_xyz_angles
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,7 +17,7 @@ from dttmm import (EulerBernoulliBeam, FixedHinge, JointMotion, RevoluteJoint, R
 from dttmm.elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, MODES, STIFFENING,
                                  _unit_beam_with_ends)
 from dttmm.elements.strain_rod import ROD_MODES
-from dttmm.rod_motion import rod_centre_line
+from dttmm.model.rod_motion import rod_centre_line
 from dttmm.result import beam_midpoint_deflection
 from helpers import rot_z
 

@@ -6,7 +6,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent.parent / "dttmm"
 
 # modules over 800 lines still to split (issue 66): this list may only shrink
-STILL_LONG = {"closures.py",
+STILL_LONG = {"model/closures.py",
               "kernels/assembly/closure.py", "kernels/stepping/step.py",
               "kernels/assembly/sweep.py", "reference/equations.py",
               "reference/newton_euler.py"}

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from dttmm.loop_dynamics import loop_accelerations
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 from dttmm.reference.newton_euler import _Problem
 
 

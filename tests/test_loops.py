@@ -7,7 +7,7 @@ import dttmm
 from dttmm import (BallJoint, FixedHinge, PrismaticJoint,
                    RevoluteJoint, RigidBody, System, UniversalJoint, build_chain, simulate,
                    simulate_reference)
-from dttmm.closures import GROUND, closure_gaps, closure_points
+from dttmm.model.closures import GROUND, closure_gaps, closure_points
 from dttmm.elements import BALL, PRISMATIC, REVOLUTE, UNIVERSAL
 
 from helpers import rot_z
@@ -78,11 +78,11 @@ def test_the_pinned_tip_is_one_row_of_the_closure_table_and_runs_as_before():
     # the tip moves 1 m)
     ref = simulate_reference(model, 0.5, t_eval=[0.0, 0.5], rtol=1e-11, atol=1e-13)
     try:
-        dttmm.closures.PINNED_TIP_SWEEP = False
+        dttmm.model.closures.PINNED_TIP_SWEEP = False
         assert not model.tip_pinned
         as_row = simulate(model, 0.5, 1e-3)
     finally:
-        dttmm.closures.PINNED_TIP_SWEEP = True
+        dttmm.model.closures.PINNED_TIP_SWEEP = True
     assert as_row.info["loop_position_residual"] < 1e-10
     assert np.abs(again.position_output[-1] - ref.position_output[-1]).max() < 3e-5
     assert np.abs(as_row.position_output[-1] - ref.position_output[-1]).max() < 2e-5

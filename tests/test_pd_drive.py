@@ -9,7 +9,7 @@ import pytest
 import dttmm
 from dttmm import PDTracking, RevoluteJoint, RigidBody, System, simulate, simulate_reference
 from dttmm import run_tables
-from dttmm.chains import arm, arm_servo
+from dttmm.model.chains import arm, arm_servo
 from dttmm import run_plan
 
 from helpers import fitted_order

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
-from dttmm.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
+from dttmm.model.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
                           unit_link)
 from dttmm import run_records
 

@@ -9,7 +9,7 @@ from scipy.integrate import cumulative_simpson
 from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, JointForce, JointMotion,
                    PrescribedMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                    System, UniversalJoint)
-from dttmm.chains import unit_link
+from dttmm.model.chains import unit_link
 from dttmm.reference import simulate_reference
 from dttmm.result import angular_momentum
 from helpers import crossing_period

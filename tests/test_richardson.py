@@ -8,7 +8,7 @@ from helpers import fitted_order
 
 from dttmm import BallJoint, DivergenceError, build_chain, simulate
 from dttmm import run_inputs
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 from dttmm import run_tables
@@ -135,7 +135,7 @@ def test_extrapolation_is_stable_at_steps_far_above_a_stiff_beams_periods():
     runs (order 6 where the step resolves the motion) follow a run at dt = 1e-4 to 5.7e-4 m at
     the tip (the plain run at 10 ms: 5.6e-3 m; the tip swings 0.31 m), with the energy held to
     1e-6 J."""
-    from dttmm.chains import stiff_cantilever
+    from dttmm.model.chains import stiff_cantilever
     model = stiff_cantilever(20)
     shortest = 1.0 / np.max(dttmm_frequencies(model))
     dt = 0.01

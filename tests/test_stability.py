@@ -6,7 +6,7 @@ import pytest
 
 from dttmm import (DivergenceError, ElasticHinge, FixedHinge, RigidBody,
                    build_chain, simulate)
-from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum, unit_link
+from dttmm.model.chains import rigid_chain, stiff_cantilever, three_pendulum, unit_link
 
 H = 1e-3
 K_SPRING = 1e4

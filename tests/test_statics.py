@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm import chains
+from dttmm.model import chains
 
 EI = 100.0          # N m^2: the issue's cantilever (L = 1 m)
 
@@ -354,12 +354,12 @@ def test_an_element_bent_beyond_its_validity_is_refused():
 
 @pytest.mark.parametrize("n", [1, 2])
 def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
-    """The N-four-bar (closing revolute joints, dttmm.mechanisms.n_four_bar; redundant spatial
+    """The N-four-bar (closing revolute joints, dttmm.model.mechanisms.n_four_bar; redundant spatial
     rows of a planar loop) from its vertical bars 3 rad off upright: they hang straight down
     (B_0 at (0, -1)), the horizontal bars above them, and its one swing has the exact
     reduction's squared frequency g c / I, I = (n + 1) / 3 + n, c = (n + 1) / 2 + n
     (mechanisms.parallelogram); DT-TMM from the equilibrium stays at rest."""
-    from dttmm.mechanisms import n_four_bar
+    from dttmm.model.mechanisms import n_four_bar
     eq = dttmm.static_equilibrium(n_four_bar(n, theta=3.0, rate=0.0))
     r_o = eq.positions()[2]
     assert np.abs(r_o[0] - [0.0, -1.0, 0.0]).max() < 1e-9, r_o[0]
@@ -372,14 +372,14 @@ def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
 
 
 # (the crank turned to 2.5 rad and the loop assembled around it on purpose: AssemblyWarning)
-@pytest.mark.filterwarnings("ignore::dttmm.closures.AssemblyWarning")
+@pytest.mark.filterwarnings("ignore::dttmm.model.closures.AssemblyWarning")
 def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
     """The IFToMM spatial slider-crank under gravity (closed by its prismatic joint): its
     potential, g (0.12 (0.12 + 0.04 cos th) + 0.5 (0.12 + 0.08 cos th) / 2), is least with the
     crank hanging down, th = pi, where the slider sits at x = sqrt(0.3^2 - 0.1^2 - 0.04^2) =
     0.28 m; the one small vibration's frequency equals the reference's swing from 0.01 rad off
     (its period measured over 2 s)."""
-    from dttmm.mechanisms import slider_crank
+    from dttmm.model.mechanisms import slider_crank
     from helpers import crossing_period
     model = slider_crank(crank_rate=0.0)
     eq = dttmm.static_equilibrium(dttmm.assemble(_with_crank(model, 2.5), keep=["A"]))

@@ -6,7 +6,7 @@ import pytest
 from numba import njit
 
 from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate, simulate_reference
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import equations as eq
 from helpers import fitted_order, output_errors_against_reference
 
@@ -406,7 +406,7 @@ def test_the_exact_foreshortening_adds_nothing_where_the_beams_bend_little():
     on the stiffened three-pendulum (its beam deflects by 0.5 mm) the two references agree to
     1e-8 m over 0.5 s (measured 3.2e-10 m), both keeping the energy to 1e-12 of the largest
     kinetic energy (measured 2e-15)."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.reference.newton_euler import simulate_reference
     t = np.linspace(0.0, 0.5, 26)
     model = three_pendulum(2, stiffening=True)
@@ -421,7 +421,7 @@ def test_describe_says_how_far_a_stiffened_element_holds():
     """A stiffened beam of loaded-end modes (welded elements) says in describe() how far it may
     bend before its second-order energy stops holding (docs/beam.md); a pinned one, which holds
     past where a modal element describes its deflection, does not."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     welded = _soft_pendulum(4, 2).describe()
     assert "bends less than ~0.17 rad over its length with 2 modes per plane" in welded
     assert "bends less than" not in three_pendulum(2, stiffening=True).describe()

@@ -8,7 +8,7 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import simulate
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import simulate_reference
 from dttmm.result import beam_midpoint_deflection
 

@@ -8,7 +8,7 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, ElasticHinge, FixedHinge, RigidBody, System, build_chain,
                    simulate)
-from dttmm.chains import three_pendulum, unit_link
+from dttmm.model.chains import three_pendulum, unit_link
 from dttmm.elements import BODY_KINDS, JOINT_KINDS, kinds
 
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dttmm import BallJoint, ElasticHinge, FixedHinge, System, simulate
-from dttmm.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_chain,
+from dttmm.model.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_chain,
                           three_pendulum, unit_link)
-from dttmm.model import Model
+from dttmm.model.model import Model
 from dttmm.reference import simulate_reference
 from dttmm import run_plan
 from dttmm import run_tables

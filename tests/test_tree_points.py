@@ -6,7 +6,7 @@ import numpy as np
 
 from dttmm import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, RevoluteJoint,
                    RigidBody, System, simulate)
-from dttmm.chains import TURNED_ABOUT_Y, unit_link
+from dttmm.model.chains import TURNED_ABOUT_Y, unit_link
 from dttmm.reference import simulate_reference
 from dttmm.result import angular_momentum
 

@@ -4,13 +4,13 @@ along its length: what the model's builder, the closing joints, the results and 
 all read, below each of them."""
 import numpy as np
 
-from .elements import BEAM, ROD
-from .elements.beam import (FAMILY, LENGTH, MODES, TORSION_MODES, end_shapes, foreshortening,
-                            slope_grams, stretch_along)
-from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from ..elements import BEAM, ROD
+from ..elements.beam import (FAMILY, LENGTH, MODES, TORSION_MODES, end_shapes, foreshortening,
+                             slope_grams, stretch_along)
+from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from .rod_motion import rod_end_section, rod_output_offset
-from .kernels.algebra.so3 import expm_so3, left_jacobian
-from .vectors import cross, rows_dot
+from ..kernels.algebra.so3 import expm_so3, left_jacobian
+from ..vectors import cross, rows_dot
 
 
 # Gauss-Legendre rule for the beam integrals in result.py::chain_energies (and

@@ -2,8 +2,8 @@
 (freeze.py)."""
 from typing import Sequence
 
-from .elements._checks import finite_vector
-from .elements.kinds import BODY_KINDS, JOINT_KINDS, body_kind_of, joint_kind_of, names
+from ..elements._checks import finite_vector
+from ..elements.kinds import BODY_KINDS, JOINT_KINDS, body_kind_of, joint_kind_of, names
 from .freeze import _freeze, _who
 from .model import Ground, Model
 from .spanning_tree import shortest_tree

@@ -39,17 +39,17 @@ from collections import namedtuple
 
 import numpy as np
 
-from .elements import (BALL, BEAM, ELASTIC, FIXED, BallJoint, EulerBernoulliBeam, StrainRod)
-from .elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, K_ROTATION,
-                              K_TRANSLATION, REST_ROTATION)
-from .elements.kinds import (ANGLE_A, ANGLE_B, CHILD, CLOSING_DRIVES, COORDINATE_0, DOT,
-                             FLEXIBLE, GAP_A, GAP_WORLD, HINGE_KIND_NAMES, HINGE_PARAM_SIZE,
-                             JOINT_KIND, JOINT_KINDS, PARENT, RATE_0, ROTATION_A, SLIDE, TURN,
-                             WITH_COORDINATES, WITH_SLIDES, WITH_TURNS, coordinates_of,
-                             joint_kind_of, joint_motion, joint_values, pack_hinge, row_axes,
-                             turn_rotations)
-from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from .elements.rigid_body import TO_OUTPUT
+from ..elements import (BALL, BEAM, ELASTIC, FIXED, BallJoint, EulerBernoulliBeam, StrainRod)
+from ..elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, K_ROTATION,
+                               K_TRANSLATION, REST_ROTATION)
+from ..elements.kinds import (ANGLE_A, ANGLE_B, CHILD, CLOSING_DRIVES, COORDINATE_0, DOT,
+                              FLEXIBLE, GAP_A, GAP_WORLD, HINGE_KIND_NAMES, HINGE_PARAM_SIZE,
+                              JOINT_KIND, JOINT_KINDS, PARENT, RATE_0, ROTATION_A, SLIDE, TURN,
+                              WITH_COORDINATES, WITH_SLIDES, WITH_TURNS, coordinates_of,
+                              joint_kind_of, joint_motion, joint_values, pack_hinge, row_axes,
+                              turn_rotations)
+from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
+from ..elements.rigid_body import TO_OUTPUT
 from .sections import element_end_section, element_output_offset, log_rotation
 
 GROUND = -1
@@ -157,7 +157,7 @@ def _side(model, k, at, who, argument, frames, named):
             raise ValueError(f"{who}: {argument} on the ground is a position (3 numbers, world "
                              f"frame, m), or None for where the other side's point starts; got "
                              f"{at!r}")
-        from .elements._checks import finite_vector
+        from ..elements._checks import finite_vector
         p = finite_vector(who, argument, at)
         return model.ground_rotation.T @ (p - model.ground_position), False, p, \
             model.ground_rotation
@@ -178,7 +178,7 @@ def _side(model, k, at, who, argument, frames, named):
         raise ValueError(f"{who}: {argument}: a beam or strain rod is closed at one of its ends "
                          f"('output' or 'input'), got {at!r}")
     else:
-        from .elements._checks import finite_vector
+        from ..elements._checks import finite_vector
         local = finite_vector(who, argument, at)
     return local, False, r_in[k] + rot[k] @ local, rot[k]
 
@@ -741,7 +741,7 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     coordinates, the rods' strain coordinates, their rates and the elastic hinges' deflections
     are the model's).  stretch_rate (n,), optional: each flexible body's output point also moves
     along its chord at this rate, m/s, and all that hangs from it with it (held_chords)."""
-    from .kernels.algebra.so3 import expm_so3
+    from ..kernels.algebra.so3 import expm_so3
     n = model.n_bodies
     off = np.concatenate([[0], np.cumsum(model.n_modes)])
     rot, w = np.zeros((n, 3, 3)), np.zeros((n, 3))
@@ -979,7 +979,7 @@ def _coordinates(model, keep):
     joint's or an elastic hinge's body; 3 each) and ("q", k, i) for a joint's coordinate, with
     whether each is kept (named in keep: a hinge's or its body's name; a prescribed motion's
     coordinate always)."""
-    from .elements.kinds import coordinate_count
+    from ..elements.kinds import coordinate_count
     names = set(keep)
     unknown = names - set(model.hinge_names) - set(model.body_names)
     if unknown:

@@ -6,51 +6,51 @@ import numpy as np
 
 from . import closures
 from .closures import closure_rows, loop_membership
-from .elements import BALL, BEAM, FIXED, RIGID, ROD, BallJoint
-from .elements._checks import finite_scalar, finite_vector, rotation_matrix
-from .elements.beam import (
-    ACCURATE,
-    AUTO,
-    AXIAL_MODES,
-    BEAM_PARAM_SIZE,
-    CLAMPED,
-    CLAMPED_LOADED,
-    EXACT,
-    FAMILY,
-    FREQUENCY_CUTOFF,
-    FROM_STEP,
-    LENGTH,
-    MASS_PER_LENGTH,
-    MAX_LOADED_MODES,
-    MODES,
-    PINNED,
-    STIFFENING,
-    TORSION_MODES,
-    accurate_mode_count,
-    auto_mode_count,
-    auto_part_count,
-    axial_frequencies,
-    modal_size,
-    torsion_frequencies,
-)
-from .elements.drives import MOTION
-from .elements.kinds import (
-    CHILD,
-    FLEXIBLE,
-    HINGE_KIND_NAMES,
-    JOINT_KIND,
-    PARENT,
-    TURN,
-    WITH_COORDINATES,
-    body_kind_of,
-    coordinates_of,
-    joint_kind_of,
-    joint_motion,
-    pack_hinge,
-    turn_rotations,
-)
-from .elements.rigid_body import pack_body
-from .elements.strain_rod import ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS, rod_coordinate_count
+from ..elements import BALL, BEAM, FIXED, RIGID, ROD, BallJoint
+from ..elements._checks import finite_scalar, finite_vector, rotation_matrix
+from ..elements.beam import (
+     ACCURATE,
+     AUTO,
+     AXIAL_MODES,
+     BEAM_PARAM_SIZE,
+     CLAMPED,
+     CLAMPED_LOADED,
+     EXACT,
+     FAMILY,
+     FREQUENCY_CUTOFF,
+     FROM_STEP,
+     LENGTH,
+     MASS_PER_LENGTH,
+     MAX_LOADED_MODES,
+     MODES,
+     PINNED,
+     STIFFENING,
+     TORSION_MODES,
+     accurate_mode_count,
+     auto_mode_count,
+     auto_part_count,
+     axial_frequencies,
+     modal_size,
+     torsion_frequencies,
+ )
+from ..elements.drives import MOTION
+from ..elements.kinds import (
+     CHILD,
+     FLEXIBLE,
+     HINGE_KIND_NAMES,
+     JOINT_KIND,
+     PARENT,
+     TURN,
+     WITH_COORDINATES,
+     body_kind_of,
+     coordinates_of,
+     joint_kind_of,
+     joint_motion,
+     pack_hinge,
+     turn_rotations,
+ )
+from ..elements.rigid_body import pack_body
+from ..elements.strain_rod import ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS, rod_coordinate_count
 from .model import (
     _NO_BEAM,
     _NO_ROD,

@@ -9,8 +9,8 @@ joint whose rate the benchmark gives.
 import numpy as np
 
 from .assembly import assemble
-from .elements.drives import JointMotion
-from .elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
+from ..elements.drives import JointMotion
+from ..elements import (BallJoint, PrismaticJoint, RevoluteJoint, RigidBody, UniversalJoint)
 from .model import Ground
 from .system import System
 from .profiles import profile
@@ -62,7 +62,7 @@ def slider_crank(tree="slider on the rod", crank_rate=6.0, slide=None):
 
     Examples
     --------
-    >>> from dttmm.mechanisms import slider_crank
+    >>> from dttmm.model.mechanisms import slider_crank
     >>> slider_crank().n_closures
     1
     """
@@ -138,7 +138,7 @@ def n_four_bar(n=2, theta=0.0, rate=1.0, tree="chain"):
 
     Examples
     --------
-    >>> from dttmm.mechanisms import n_four_bar
+    >>> from dttmm.model.mechanisms import n_four_bar
     >>> n_four_bar(2).n_closures
     2
     """
@@ -224,7 +224,7 @@ def stewart_platform(drive="motion", gravity=(0.0, 0.0, -9.81), slide_rates=None
     -------
     Model
     """
-    from .elements import FixedHinge, JointForce, JointMotion
+    from ..elements import FixedHinge, JointForce, JointMotion
     beta = np.radians(STEWART_BASE_ANGLES)
     gamma = np.radians(STEWART_PLATFORM_ANGLES)
     b = np.stack([np.cos(beta), np.sin(beta), np.zeros(6)], axis=1)
@@ -301,7 +301,7 @@ def flexible_slider_crank(elements=1, modes=3, axial_modes=1, crank_rate=FLEXIBL
     Model
         Bodies "crank", "rod1".. "rod{elements}", "slider".
     """
-    from .elements import EulerBernoulliBeam, FixedHinge, JointMotion
+    from ..elements import EulerBernoulliBeam, FixedHinge, JointMotion
     crank, rod = 0.15, 0.3
     d = 6e-3
     area, second_moment = np.pi * d * d / 4, np.pi * d ** 4 / 64

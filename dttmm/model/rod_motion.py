@@ -4,10 +4,10 @@ small-vibration frequencies, through the kernels' kinematics (kernels/transfers/
 Above the kernels: the element (elements/strain_rod.py) only declares the rod and its tables."""
 import numpy as np
 
-from .elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, kinematics_tables, rod_components,
-                                  rod_coordinate_count, rod_section, rod_stiffness, rod_tables)
-from .kernels.transfers.strain_rod import (rod_end_points, rod_jacobians, rod_kinematics,
-                                           station_arrays)
+from ..elements.strain_rod import (ROD_LENGTH, ROD_MODES, ROD_MU, kinematics_tables, rod_components,
+                                   rod_coordinate_count, rod_section, rod_stiffness, rod_tables)
+from ..kernels.transfers.strain_rod import (rod_end_points, rod_jacobians, rod_kinematics,
+                                            station_arrays)
 
 
 def rod_end_section(row, rotation, omega, q, q_dot=None):

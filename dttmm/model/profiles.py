@@ -42,7 +42,7 @@ class Profile:
 
     Examples
     --------
-    >>> from dttmm.profiles import profile
+    >>> from dttmm.model.profiles import profile
     >>> p = profile({"profile": "ramp", "value": 2.0, "duration": 0.5})
     >>> p(0.25), p.rate(0.25), p.acceleration(0.25), p(1.0)
     (1.0, 4.0, 0.0, 2.0)
@@ -188,7 +188,7 @@ def profile(spec, where="profile"):
 
     Examples
     --------
-    >>> from dttmm.profiles import profile
+    >>> from dttmm.model.profiles import profile
     >>> p = profile({"profile": "sine", "amplitude": 2.0, "frequency": 0.5})   # 2 sin(pi t)
     >>> float(p(0.5)), round(float(p.rate(0.0)), 6)
     (2.0, 6.283185)
@@ -263,7 +263,7 @@ class ProfileForce:
     Examples
     --------
     >>> import dttmm
-    >>> from dttmm.profiles import ProfileForce, profile
+    >>> from dttmm.model.profiles import ProfileForce, profile
     >>> torque = profile({"profile": "ramp", "value": 1.0, "duration": 2.0})
     >>> drive = dttmm.JointForce(ProfileForce(torque))
     """

@@ -6,8 +6,8 @@ import numpy as np
 
 from .closures import (AssemblyWarning, _coordinates, _start_values, _state_of, check_drives_move,
                        closure_residuals, constraint_rows)
-from .elements.kinds import COORDINATE_0, GAP_A, GAP_WORLD, RATE_0
-from .elements.rigid_body import TO_OUTPUT
+from ..elements.kinds import COORDINATE_0, GAP_A, GAP_WORLD, RATE_0
+from ..elements.rigid_body import TO_OUTPUT
 from .model import adopt_arrays
 
 

@@ -8,25 +8,25 @@ import numpy as np
 
 from . import closures
 from .closures import empty_table, is_pinned_tip
-from .elements import BEAM, ROD
-from .elements._checks import derivative, finite_vector, rotation_matrix
-from .elements.beam import (
-    AXIAL_MODES,
-    BEAM_PARAM_SIZE,
-    EXACT,
-    LOAD_AXES,
-    MODES,
-    STIFFENING,
-    TORSION_MODES,
-)
-from .elements.kinds import (
-    JOINT_KIND,
-)
-from .elements.rigid_body import MASS
-from .elements.strain_rod import (
-    ROD_PARAM_SIZE,
-    rod_coordinate_count,
-)
+from ..elements import BEAM, ROD
+from ..elements._checks import derivative, finite_vector, rotation_matrix
+from ..elements.beam import (
+     AXIAL_MODES,
+     BEAM_PARAM_SIZE,
+     EXACT,
+     LOAD_AXES,
+     MODES,
+     STIFFENING,
+     TORSION_MODES,
+ )
+from ..elements.kinds import (
+     JOINT_KIND,
+ )
+from ..elements.rigid_body import MASS
+from ..elements.strain_rod import (
+     ROD_PARAM_SIZE,
+     rod_coordinate_count,
+ )
 
 
 class PrescribedMotion:

@@ -2,7 +2,7 @@
 import numba
 import numpy as np
 
-from .elements import BallJoint, FixedHinge, RigidBody
+from ..elements import BallJoint, FixedHinge, RigidBody
 from .system import System, build_chain
 
 # +90 degrees about world y: a body's x axis along world -z
@@ -42,7 +42,7 @@ def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.
     velocity tip_angular_velocity ([0, 0.1, 0] rad/s).  stiffness_factor multiplies the beam's
     modulus (a stiff variant for the stability study); stiffening: the beam's geometric
     stiffening (docs/beam.md; off by default here: the paper's beam, the main job's)."""
-    from .elements import EulerBernoulliBeam
+    from ..elements import EulerBernoulliBeam
     side = 0.02
     area = side * side
     beam = EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
@@ -61,7 +61,7 @@ def stiff_cantilever(n_elements, length=5.0, joint=FixedHinge):
     """A cantilever of n_elements beam elements (EI = 1e4 N m^2, 2 kg/m, two modes per plane)
     welded end to end by fixed hinges: the stiff beam chain of the stability study.  joint:
     the hinge class before every element (BallJoint: a hanging chain of the same elements)."""
-    from .elements import EulerBernoulliBeam
+    from ..elements import EulerBernoulliBeam
     elements = []
     for _ in range(n_elements):
         elements += [joint(),
@@ -131,8 +131,8 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
     the paper's beam 4 (1 m, 20 mm square section, E = 2.5e10 Pa, rho = 3300 kg/m^3).
     undriven: no drive on joint 1 and no damper
     (the energy test)."""
-    from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
-                           PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
+    from ..elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
+                            PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
     from .profiles import ProfileForce, profile
     if drive not in ("torque", "motion", "pd", "pd-njit"):
         raise ValueError(f"arm: drive must be 'torque', 'motion', 'pd' or 'pd-njit', got "

@@ -26,10 +26,10 @@ from dataclasses import replace
 import numpy as np
 
 from .closures import _side_motion, start_state
-from .elements import BallJoint, ElasticHinge, RigidBody
-from .elements.drives import MOTION
-from .elements.kinds import CHILD, SLIDE, TURN, joint_kind_of, joint_motion, turn_rotations
-from .elements.rigid_body import parallel_axis
+from ..elements import BallJoint, ElasticHinge, RigidBody
+from ..elements.drives import MOTION
+from ..elements.kinds import CHILD, SLIDE, TURN, joint_kind_of, joint_motion, turn_rotations
+from ..elements.rigid_body import parallel_axis
 
 GROUND = -1
 
