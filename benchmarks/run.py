@@ -19,7 +19,7 @@ import numpy as np
 from dttmm import BallJoint, simulate
 from dttmm.model.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
+from dttmm.results.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
 from dttmm.kernels.stepping import step as kstep
 from dttmm.run_tables import Workspace, _mode, kernel_model

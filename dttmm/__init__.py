@@ -11,8 +11,8 @@ from .model.closures import loop_residuals
 from .dynamics import forward_dynamics, linearize, ode
 from .model.model import Ground, Model, PrescribedMotion
 from .model.system import System, build_chain
-from .recording import Checkpoint
-from .result import Result
+from .results.recording import Checkpoint
+from .results.result import Result
 from .run_checks import DivergenceError, UnresolvedMotionWarning
 from .solver import load_stream, simulate
 from .statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium

@@ -92,7 +92,7 @@ def _compile(args):
 
 
 def _run(args):
-    from .recording import Checkpoint
+    from .results.recording import Checkpoint
     from .run_checks import DivergenceError
     from .solver import simulate
     scene = load_scene(args.scene)
@@ -192,11 +192,11 @@ def _run(args):
         res.checkpoint.save(args.checkpoint)
         print(f"wrote {args.checkpoint} (continue with --resume {args.checkpoint})")
     if args.plots:
-        from .plots import run_figures
+        from .results.plots import run_figures
         for path in run_figures(res, model, args.plots, title=scene.name):
             print(f"wrote {path}")
     if args.animate:
-        from .plots import animate
+        from .results.plots import animate
         animate(res, model, args.animate, title=scene.name, view=_view(args.view))
         print(f"wrote {args.animate}")
     return 0
@@ -226,7 +226,7 @@ def _output_problem(args):
 
 def _view(text):
     """--view's value as animate takes it (a name, or (elevation, azimuth)); None if bad."""
-    from .plots import VIEWS
+    from .results.plots import VIEWS
     if text in VIEWS:
         return text
     try:

@@ -234,7 +234,7 @@ class ODE:
                              np.asarray(model.initial_modal_velocities, dtype=float))
 
     def _pack(self, rot, omega, defl, defl_rate, q, qd, eta, eta_d):
-        from .result import rotation_to_quaternion
+        from .results.result import rotation_to_quaternion
         parts = []
         for k in self.free:
             parts += [rotation_to_quaternion(rot[k]), omega[k]]

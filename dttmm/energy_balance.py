@@ -32,7 +32,7 @@ from .elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, 
 from .elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
 from .model.closures import elastic_closure_terms, side_motions
 from .elements.rigid_body import TO_MASS_CENTER
-from .result import _drive_spring_energy
+from .results.result import _drive_spring_energy
 from .model.sections import beam_output_offset, output_section
 
 

@@ -12,7 +12,7 @@ from .model import closures
 from . import consistent_start, run_checks, run_records, run_tables
 from .methods import SWEEPS, scheme_named
 from .model.model import Model
-from .recording import Checkpoint, NoCheckpoint
+from .results.recording import Checkpoint, NoCheckpoint
 
 
 MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan

@@ -31,7 +31,7 @@ from .kernels.assembly.closure import start_energy
 from .elements.kinds import BODY_KIND
 from .kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
 from .model.model import model_fact
-from .recording import leaves, model_fingerprint
+from .results.recording import leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
 KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)

@@ -5,8 +5,8 @@ import numpy as np
 from . import adaptive as adaptive_steps
 from .kernels.stepping import step as kstep
 from .model.closures import has_closure_drives
-from .recording import NoCheckpoint
-from .result import (DERIVED, FIELDS, Result, chain_energies)
+from .results.recording import NoCheckpoint
+from .results.result import (DERIVED, FIELDS, Result, chain_energies)
 from .run_tables import (column_names, coordinate_columns)
 from .run_checks import (_check_count, _check_positive)
 from .run_inputs import (_points, _zeros, nearest_rotations)

@@ -11,13 +11,13 @@ import functools
 import time
 
 from .model.model import Model
-from .recording import (Recording, model_fingerprint)
+from .results.recording import (Recording, model_fingerprint)
 from .resolution import warn_bent
 from .threads import blas_threads, thread_count
 from . import drivers
 from .run_options import run_options
 from .run_plan import kernels_used, prepared_run
-from .result import Result
+from .results.result import Result
 from .run_checks import (UnresolvedMotionWarning, check_supported)
 from .run_records import _result
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from dttmm import simulate
 from dttmm.model.mechanisms import flexible_slider_crank
-from dttmm.plots import centerlines
+from dttmm.results.plots import centerlines
 
 ROD = 0.3           # m, the rod's length at rest
 

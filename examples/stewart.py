@@ -17,7 +17,7 @@ import numpy as np
 
 from dttmm import simulate
 from dttmm.model.mechanisms import stewart_platform
-from dttmm.result import rotation_to_quaternion
+from dttmm.results.result import rotation_to_quaternion
 
 
 def main(argv=None):

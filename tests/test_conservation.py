@@ -5,7 +5,7 @@ import pytest
 
 from dttmm import simulate
 from dttmm.model.chains import rigid_chain
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 
 
 def drifts(n_links, dt, t_end=10.0):

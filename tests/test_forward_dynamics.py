@@ -9,7 +9,7 @@ from dttmm import forward_dynamics, simulate, simulate_reference
 from dttmm.model.chains import arm, five_link_tree, rigid_chain, three_pendulum
 from dttmm.model.mechanisms import slider_crank
 from dttmm.reference.newton_euler import _Problem
-from dttmm.result import rotation_to_quaternion
+from dttmm.results.result import rotation_to_quaternion
 from helpers import joints_arm
 
 

@@ -270,7 +270,7 @@ def test_a_free_stewart_platform_keeps_its_energy():
 def _momenta(model, result):
     """(T, 3) each: the total linear momentum and the angular momentum about the origin, and
     the largest sum of the bodies' momenta's magnitudes (the scale they cancel from)."""
-    from dttmm.result import angular_momentum
+    from dttmm.results.result import angular_momentum
     p = model.body_params
     rho_c = np.einsum("tkij,kj->tki", result.rotation, p[:, 1:4])
     v_c = result.velocity_input + np.cross(result.angular_velocity, rho_c)

@@ -208,7 +208,7 @@ def test_a_numba_joint_force_that_does_not_fit_is_refused_at_build():
 
 def test_a_python_joint_force_of_the_state_is_said_to_run_step_by_step_once(capsys,
                                                                              monkeypatch):
-    from dttmm import feedback
+    from dttmm.results import feedback
     monkeypatch.setattr(feedback, "_noted", set())
     compiled = arm("pd-njit")
     stepwise = with_joint1_force(compiled, arm_servo.py_func)

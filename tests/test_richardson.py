@@ -10,7 +10,7 @@ from dttmm import BallJoint, DivergenceError, build_chain, simulate
 from dttmm import run_inputs
 from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
+from dttmm.results.result import beam_midpoint_deflection
 from dttmm import run_tables
 
 DTS = (5e-3, 2.5e-3, 1.25e-3)

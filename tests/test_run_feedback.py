@@ -9,7 +9,8 @@ import numba
 import numpy as np
 
 import dttmm
-from dttmm import feedback, simulate
+from dttmm import simulate
+from dttmm.results import feedback
 from dttmm.model.chains import rigid_chain
 
 

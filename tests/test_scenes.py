@@ -12,7 +12,7 @@ from dttmm.model.chains import arm, five_link_tree, rigid_chain, stiff_cantileve
 from dttmm.cli import main, shipped_scenes
 from dttmm.model.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
 from dttmm.model.model import Model
-from dttmm.result import Result
+from dttmm.results.result import Result
 from dttmm.model.profiles import KINDS, profile
 from dttmm.scene import SceneError, load_scene, save_scene
 
@@ -326,7 +326,7 @@ def test_strain_rods_run_from_a_scene_and_save_back_as_rods(tmp_path):
     assert np.all(np.isfinite(result.modal_coordinates)) and result.t[-1] == pytest.approx(0.01)
     import matplotlib
     matplotlib.use("Agg")
-    from dttmm.plots import plot_modal
+    from dttmm.results.plots import plot_modal
     axes = plot_modal(result).axes[0]       # (a rod's strain, not a beam's modal coordinates)
     assert "strain coefficient (1/m" in axes.get_ylabel()
     assert axes.get_legend_handles_labels()[1][:2] == ["inner bend_z1", "inner bend_z2"]

@@ -10,8 +10,8 @@ import pytest
 from dttmm import BallJoint, build_chain, simulate
 from dttmm.model.chains import arm, rigid_chain, three_pendulum, unit_link
 from dttmm.model.mechanisms import n_four_bar
-from dttmm.recording import leaves
-from dttmm.result import FIELDS
+from dttmm.results.recording import leaves
+from dttmm.results.result import FIELDS
 from dttmm import run_checks, run_tables
 
 

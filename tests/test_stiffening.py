@@ -24,7 +24,7 @@ def test_the_three_pendulums_stiff_beam_barely_feels_it():
 
 
 def test_the_stiffened_three_pendulum_conserves_energy():
-    """Energy, with the foreshortening's terms (dttmm.result.chain_energies), over 2 s at
+    """Energy, with the foreshortening's terms (dttmm.results.result.chain_energies), over 2 s at
     dt = 1e-3: within 1e-5 of the largest kinetic energy (issue 16)."""
     res = simulate(three_pendulum(2, stiffening=True), 2.0, 1e-3)
     e = res.kinetic + res.potential

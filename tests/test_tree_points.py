@@ -8,7 +8,7 @@ from dttmm import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, Revo
                    RigidBody, System, simulate)
 from dttmm.model.chains import TURNED_ABOUT_Y, unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 
 SIDE, TOP = [0.3, 0.2, -0.1], [0.6, 0.0, 0.3]
 

@@ -261,7 +261,7 @@ from ..model.assembly import assemble
 from ..model.closures import (check_drives_move, closure_forces, constraint_rows,
                               has_closure_drives, loop_residuals)
 from ..model.model import Model
-from ..result import Result, chain_energies
+from ..results.result import Result, chain_energies
 from ..model.sections import point_positions, rotation_to_quaternion
 
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY

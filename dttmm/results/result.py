@@ -4,18 +4,18 @@ import json
 
 import numpy as np
 
-from .elements import BEAM, RIGID, ROD
-from .model.rod_motion import rod_energies
-from .vectors import cross, rows_dot
-from .elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
-                            MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
-                            mode_shapes, stretch_along,
-                            torsion_shapes)
-from .elements.drives import SPRING_DAMPER
-from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
-from .elements.rigid_body import MASS, TO_MASS_CENTER
-from .model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
-                             output_section, rotation_to_quaternion)
+from ..elements import BEAM, RIGID, ROD
+from ..model.rod_motion import rod_energies
+from ..vectors import cross, rows_dot
+from ..elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LENGTH,
+                             MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
+                             mode_shapes, stretch_along,
+                             torsion_shapes)
+from ..elements.drives import SPRING_DAMPER
+from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
+from ..elements.rigid_body import MASS, TO_MASS_CENTER
+from ..model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
+                              output_section, rotation_to_quaternion)
 
 
 FIELDS = (
@@ -37,16 +37,17 @@ _RUN_DEFAULTS = {name: _DEFAULTS.get(name) for name in FIELDS if name not in DER
 
 
 def _plot_method(name, what, more_options="", missing=None):
-    """Result.<name>: dttmm.plots.<name> on this result (matplotlib imported when called)."""
+    """Result.<name>: dttmm.results.plots.<name> on this result (matplotlib imported when
+    called)."""
     def method(self, **options):
         from . import plots
         return getattr(plots, name)(self, **options)
 
     method.__name__ = method.__qualname__ = name
     method.__doc__ = (
-        f"{what} (dttmm.plots.{name}).\n\n"
+        f"{what} (dttmm.results.plots.{name}).\n\n"
         f"        Parameters\n        ----------\n        **options\n"
-        f"            Passed to ``dttmm.plots.{name}``: ax (matplotlib axes to draw on, "
+        f"            Passed to ``dttmm.results.plots.{name}``: ax (matplotlib axes to draw on, "
         f"default a new\n            figure), title (str){more_options}.\n\n"
         f"        Returns\n        -------\n        matplotlib.figure.Figure\n"
         f"            The figure.\n\n"
@@ -577,7 +578,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
     if np.any(model.closure_kind == ELASTIC):
-        from .model.closures import elastic_closure_terms
+        from ..model.closures import elastic_closure_terms
         r_g = np.broadcast_to(np.asarray(model.ground_position if ground_position is None
                                          else ground_position, dtype=float), (n_t, 3))
         zero = np.zeros((n_t, 3))

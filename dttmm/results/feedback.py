@@ -8,7 +8,7 @@ import time
 
 from numba.core import event as numba_event
 
-from .kernels import compiled_dttmm_function
+from ..kernels import compiled_dttmm_function
 
 COMPILE_NOTICE_AFTER = 3.0      # s a compilation runs before stderr says so
 COMPILE_REPORT_EVERY = (5.0, 30.0)  # s between its progress reports (a terminal: one line

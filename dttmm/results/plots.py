@@ -14,11 +14,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
-from .elements.kinds import ROD
-from .model.rod_motion import rod_centre_line
+from ..elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
+from ..elements.kinds import ROD
+from ..model.rod_motion import rod_centre_line
 from .feedback import Progress
-from .model.sections import foreshortening_along
+from ..model.sections import foreshortening_along
 
 
 def _plt():
