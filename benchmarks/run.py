@@ -22,7 +22,7 @@ from dttmm.reference import simulate_reference
 from dttmm.results.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
 from dttmm.kernels.stepping import step as kstep
-from dttmm.run_tables import Workspace, _mode, kernel_model
+from dttmm.solving.run_tables import Workspace, _mode, kernel_model
 from numba import njit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -8,14 +8,14 @@ from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulli
                        UniversalJoint)
 from .model.assembly import assemble
 from .model.closures import loop_residuals
-from .dynamics import forward_dynamics, linearize, ode
+from .solving.dynamics import forward_dynamics, linearize, ode
 from .model.model import Ground, Model, PrescribedMotion
 from .model.system import System, build_chain
 from .results.recording import Checkpoint
 from .results.result import Result
-from .run_checks import DivergenceError, UnresolvedMotionWarning
-from .solver import load_stream, simulate
-from .statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
+from .solving.run_checks import DivergenceError, UnresolvedMotionWarning
+from .solving.solver import load_stream, simulate
+from .solving.statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
 from .parameter_sweep import SweepTable, sweep
 from . import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)

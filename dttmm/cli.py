@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .describe import describe_counts, suggested_dt
-from .methods import SCHEMES, SWEEPS
+from .solving.methods import SCHEMES, SWEEPS
 from .scene import SceneError, load_scene
 
 
@@ -93,8 +93,8 @@ def _compile(args):
 
 def _run(args):
     from .results.recording import Checkpoint
-    from .run_checks import DivergenceError
-    from .solver import simulate
+    from .solving.run_checks import DivergenceError
+    from .solving.solver import simulate
     scene = load_scene(args.scene)
     options = dict(scene.run)
     for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),
@@ -122,7 +122,7 @@ def _run(args):
         return 2
     model = scene.model
     if args.static_start:
-        from .statics import StaticEquilibriumError, static_equilibrium
+        from .solving.statics import StaticEquilibriumError, static_equilibrium
         try:
             eq = static_equilibrium(model)
         except (StaticEquilibriumError, ValueError) as err:
@@ -135,7 +135,7 @@ def _run(args):
               f"{'stable' if eq.stable else 'UNSTABLE'}; {int(np.sum(freqs == 0.0))} neutral "
               f"directions; lowest frequencies (Hz): "
               f"{', '.join(f'{f:.4g}' for f in moving[:3])})")
-    from .energy_balance import does_work
+    from .solving.energy_balance import does_work
     worked = does_work(model)
     if (worked and "rtol" not in options and "max_energy_error" not in options
             and not args.no_energy_balance):

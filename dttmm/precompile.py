@@ -20,7 +20,7 @@ import time
 def _general_loop():
     from .model.chains import arm, three_pendulum
     from .model.mechanisms import n_four_bar
-    from .solver import simulate
+    from .solving.solver import simulate
     simulate(arm(), 2e-3, 1e-3)
     simulate(n_four_bar(2), 2e-3, 1e-3, hold_energy=True)
     simulate(three_pendulum(), 2e-3, 1e-3, scheme="paper")
@@ -29,9 +29,9 @@ def _general_loop():
 
 def _statics_and_linear_models():
     from .model.chains import arm, stiff_cantilever
-    from .dynamics import forward_dynamics, linearize
+    from .solving.dynamics import forward_dynamics, linearize
     from .model.mechanisms import n_four_bar
-    from .statics import static_equilibrium
+    from .solving.statics import static_equilibrium
     static_equilibrium(stiff_cantilever(2))
     linearize(n_four_bar(2))
     forward_dynamics(arm(), 0.0)
@@ -39,21 +39,21 @@ def _statics_and_linear_models():
 
 def _fused_chain():
     from .model.chains import rigid_chain
-    from .solver import simulate
+    from .solving.solver import simulate
     for scheme in ("newmark", "dop853", "energy_momentum"):
         simulate(rigid_chain(3), 2e-3, 1e-3, scheme=scheme)
 
 
 def _fused_tree():
     from .model.chains import five_link_tree
-    from .solver import simulate
+    from .solving.solver import simulate
     for scheme in ("newmark", "dop853"):
         simulate(five_link_tree(), 2e-3, 1e-3, scheme=scheme)
 
 
 def _welded_chain():
     from .model.chains import stiff_cantilever
-    from .solver import simulate
+    from .solving.solver import simulate
     simulate(stiff_cantilever(2), 2e-3, 1e-3)
 
 

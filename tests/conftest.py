@@ -11,7 +11,7 @@ def pytest_configure(config):
     # A sound run of the suite never trips the unresolved-step flag (tests that mean to catch
     # it).  Added here, not in pyproject.toml's filterwarnings: pytest would import dttmm to
     # resolve that option's warning class as it reads the file.
-    config.addinivalue_line("filterwarnings", "error::dttmm.solver.UnresolvedMotionWarning")
+    config.addinivalue_line("filterwarnings", "error::dttmm.solving.solver.UnresolvedMotionWarning")
 
 
 @pytest.fixture(autouse=True)

@@ -105,7 +105,8 @@ def energy_gaps_with_an_arm(beam, gravity, steps=(1e-3, 5e-4), t_end=0.5):
 def fused_and_general(monkeypatch, model, t_end, dt, loop, **kwargs):
     """The same run through the fused loop named `loop` (result.info["loop"]) and through the
     general loop (run_tables.FUSED_BALL_CHAIN = False), checking which loop each took."""
-    from dttmm import run_tables, simulate
+    from dttmm import simulate
+    from dttmm.solving import run_tables
     fused = simulate(model, t_end, dt, **kwargs)
     monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", False)
     general = simulate(model, t_end, dt, **kwargs)

@@ -72,7 +72,7 @@ def first_frequency(model, t_end=1.0, dt=1e-3):
 # (coarse on purpose: the elements' own modes above what the step resolves, 0.1% of the energy,
 # the first frequency measured over many periods; issue 65's flag for unresolved modes)
 @pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 def test_k_element_cantilever_converges():
     exact = clamped_free_omega(0)
     errors = {m: [first_frequency(cantilever(k, m)) / exact - 1 for k in (1, 2, 3, 4)]
@@ -116,7 +116,7 @@ def test_cantilever_with_a_tip_body():
 # (coarse on purpose: the order of the energy error is fitted from dt = 5e-4, where the second
 # element's 157 Hz mode takes 13 steps a period)
 @pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 def test_welded_chain_energy_and_welds():
     """Two elements and a tip body, released deflected without gravity: the energy error is
     second order (each welded body integrates its own angular velocity, which matches the end

@@ -172,7 +172,7 @@ def _driven_loaded_cantilever(load_axes="world"):
 # (bent far on purpose, 0.9-1.1 rad in one element: an integration test against the reference,
 # which shares the modes; the run's warning that a real beam would differ is beside its point)
 @pytest.mark.filterwarnings("ignore:simulate. beam .* rings while bent:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("load_axes", ["world", "body"])
 def test_end_loads_converge_to_the_reference_at_order_2(load_axes):
     """DT-TMM against the Newton-Euler reference (which adds the loads to its own Newton,
@@ -190,7 +190,7 @@ def test_end_loads_converge_to_the_reference_at_order_2(load_axes):
 # (bent far on purpose, 0.9-1.1 rad in one element: an integration test against the reference,
 # which shares the modes; the run's warning that a real beam would differ is beside its point)
 @pytest.mark.filterwarnings("ignore:simulate. beam .* rings while bent:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("load_axes", ["world", "body"])
 def test_end_loads_work_is_counted_in_the_energy_balance(load_axes):
     """E - E(0) - W, W the work of the loads (F . v_O + T . w_O, p . int v dx, followers

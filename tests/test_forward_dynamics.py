@@ -86,7 +86,7 @@ def test_forward_dynamics_gives_the_steps_own_accelerations():
 
 def test_forward_dynamics_of_the_initial_state_is_the_consistent_start():
     """Without a state: the model's initial state, as the loops' own start takes it."""
-    from dttmm.loop_dynamics import loop_accelerations
+    from dttmm.solving.loop_dynamics import loop_accelerations
     model = slider_crank()
     out = forward_dynamics(model)
     start = loop_accelerations(model)

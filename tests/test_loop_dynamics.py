@@ -4,7 +4,7 @@ the Newton-Euler reference."""
 import numpy as np
 import pytest
 
-from dttmm.loop_dynamics import loop_accelerations
+from dttmm.solving.loop_dynamics import loop_accelerations
 from dttmm.model.mechanisms import n_four_bar, slider_crank
 from dttmm.reference.newton_euler import _Problem
 

@@ -8,9 +8,9 @@ import pytest
 
 import dttmm
 from dttmm import PDTracking, RevoluteJoint, RigidBody, System, simulate, simulate_reference
-from dttmm import run_tables
+from dttmm.solving import run_tables
 from dttmm.model.chains import arm, arm_servo
-from dttmm import run_plan
+from dttmm.solving import run_plan
 
 from helpers import fitted_order
 

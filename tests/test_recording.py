@@ -11,7 +11,7 @@ import pytest
 from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
 from dttmm.model.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
                           unit_link)
-from dttmm import run_records
+from dttmm.solving import run_records
 
 ROOT = Path(__file__).resolve().parents[1]
 STATE = ("t", "rotation", "angular_velocity", "angular_acceleration", "force", "moment",

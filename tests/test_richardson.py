@@ -7,11 +7,11 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import BallJoint, DivergenceError, build_chain, simulate
-from dttmm import run_inputs
+from dttmm.solving import run_inputs
 from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
 from dttmm.results.result import beam_midpoint_deflection
-from dttmm import run_tables
+from dttmm.solving import run_tables
 
 DTS = (5e-3, 2.5e-3, 1.25e-3)
 
@@ -105,7 +105,8 @@ def test_energy_drift_fourth_order():
     assert drifts[-1] < 1e-6 * res.kinetic.max()
 
 
-@pytest.mark.filterwarnings("ignore::dttmm.solver.UnresolvedMotionWarning")  # (the 50 ms run)
+# (the warning: the 50 ms run)
+@pytest.mark.filterwarnings("ignore::dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("runs, dts, low, high", [
     (3, (2e-2, 1e-2, 5e-3), 5.6, 6.5),
     (4, (5e-2, 2.5e-2, 1.25e-2), 7.0, 8.8)])

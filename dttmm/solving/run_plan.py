@@ -21,17 +21,17 @@ from collections import OrderedDict
 
 import numpy as np
 
-from .model import closures
+from ..model import closures
 from . import consistent_start, run_checks, run_inputs, run_tables
-from .model.closures import has_closure_drives
-from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
-from .kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
-from .kernels.stepping import step as kstep
-from .kernels.assembly.closure import start_energy
-from .elements.kinds import BODY_KIND
-from .kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
-from .model.model import model_fact
-from .results.recording import leaves, model_fingerprint
+from ..model.closures import has_closure_drives
+from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
+from ..kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
+from ..kernels.stepping import step as kstep
+from ..kernels.assembly.closure import start_energy
+from ..elements.kinds import BODY_KIND
+from ..kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
+from ..model.model import model_fact
+from ..results.recording import leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
 KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)

@@ -6,7 +6,7 @@ say which schemes they run in (elements/kinds.py, Kind.schemes).
 """
 from dataclasses import dataclass
 
-from .elements import kinds
+from ..elements import kinds
 
 
 @dataclass(frozen=True)

@@ -11,16 +11,16 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from . import consistent_start, run_checks, run_inputs, run_records, run_tables
-from .elements.kinds import MAX_COORDINATES
+from ..elements.kinds import MAX_COORDINATES
 from .energy_balance import EnergyBalance
-from .results.feedback import Progress, note_once
-from .model.closures import closure_targets
-from .kernels.stepping import runge_kutta as runge_kutta_kernels
-from .kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
-                                    Inputs, Run)
-from .results.recording import Checkpoint, NoCheckpoint, Recording, SampleStream
+from ..results.feedback import Progress, note_once
+from ..model.closures import closure_targets
+from ..kernels.stepping import runge_kutta as runge_kutta_kernels
+from ..kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
+                                     Inputs, Run)
+from ..results.recording import Checkpoint, NoCheckpoint, Recording, SampleStream
 from .resolution import warn_unresolved
-from .results.result import _drive_spring_energy
+from ..results.result import _drive_spring_energy
 
 
 class Stepping:

@@ -32,10 +32,10 @@ import warnings
 
 import numpy as np
 
-from .elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
-                            mode_shapes)
-from .elements.hinges import FIXED
-from .elements.kinds import BEAM
+from ..elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
+                             mode_shapes)
+from ..elements.hinges import FIXED
+from ..elements.kinds import BEAM
 
 MODE_SHARE = 1e-3         # of the run's energy: a mode holding more must be resolved
 STEPS_PER_PERIOD = 20     # the advice: 20 steps a period (or a turn)

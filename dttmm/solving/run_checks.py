@@ -5,17 +5,17 @@ import math
 
 import numpy as np
 
-from .elements import BEAM, ROD
-from .elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
-from .elements.beam import (CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
-                            MODES, STIFFENING, TORSION_MODES, end_shapes)
-from .elements.hinges import (BALL, ELASTIC, FIXED)
-from .kernels.stepping import step as kstep
-from .kernels.stepping.loop import (ERROR_ESTIMATE, UNCONVERGED)
-from .kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
-from .model.assembly import assemble
-from .model.closures import check_drives_move, check_runs_in_sweeps, loop_residuals
-from .model.model import model_fact
+from ..elements import BEAM, ROD
+from ..elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
+from ..elements.beam import (CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
+                             MODES, STIFFENING, TORSION_MODES, end_shapes)
+from ..elements.hinges import (BALL, ELASTIC, FIXED)
+from ..kernels.stepping import step as kstep
+from ..kernels.stepping.loop import (ERROR_ESTIMATE, UNCONVERGED)
+from ..kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
+from ..model.assembly import assemble
+from ..model.closures import check_drives_move, check_runs_in_sweeps, loop_residuals
+from ..model.model import model_fact
 from .energy_balance import does_work
 from .run_tables import (full_tree, has_coordinates, has_loops, kernel_model)
 

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .results.recording import leaves
+from ..results.recording import leaves
 
 SEGMENT = 256       # most steps per call of the compiled loop (a call costs ~45 us in Python)
 SAFETY = 0.8        # aim below the tolerance

@@ -3,10 +3,10 @@ the Result built from a recording (docs/solver.md, "Steps and records")."""
 import numpy as np
 
 from . import adaptive as adaptive_steps
-from .kernels.stepping import step as kstep
-from .model.closures import has_closure_drives
-from .results.recording import NoCheckpoint
-from .results.result import (DERIVED, FIELDS, Result, chain_energies)
+from ..kernels.stepping import step as kstep
+from ..model.closures import has_closure_drives
+from ..results.recording import NoCheckpoint
+from ..results.result import (DERIVED, FIELDS, Result, chain_energies)
 from .run_tables import (column_names, coordinate_columns)
 from .run_checks import (_check_count, _check_positive)
 from .run_inputs import (_points, _zeros, nearest_rotations)

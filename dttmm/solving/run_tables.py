@@ -6,30 +6,30 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .vectors import cross
-from .elements import BEAM, RIGID, ROD
-from .elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components,
-                                  rod_section,
-                                  rod_stiffness)
-from .elements.strain_rod import rod_tables as rod_element_tables
-from .elements.kinds import (COORDINATE_0, FLEXIBLE, HINGE_PARAM_SIZE, MAX_COORDINATES, RATE_0,
-                             WITH_COORDINATES, WITH_SLIDES)
-from .elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
-                            MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
-                            mode_shapes, slope_grams, torsion_shapes)
-from .elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
-from .elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
-from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .kernels.stepping import step as kstep
-from .kernels.assembly.closure import Loops
-from .kernels.schema import pack
-from .kernels.stepping.loop import (State,
-                                    Sweep)
-from .kernels.transfers.beam_relations import (gauss_points, quadrature_size)
-from .model.closures import constraint_rows
+from ..vectors import cross
+from ..elements import BEAM, RIGID, ROD
+from ..elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_components,
+                                   rod_section,
+                                   rod_stiffness)
+from ..elements.strain_rod import rod_tables as rod_element_tables
+from ..elements.kinds import (COORDINATE_0, FLEXIBLE, HINGE_PARAM_SIZE, MAX_COORDINATES, RATE_0,
+                              WITH_COORDINATES, WITH_SLIDES)
+from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
+                             MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
+                             mode_shapes, slope_grams, torsion_shapes)
+from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
+from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
+from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from ..kernels.stepping import step as kstep
+from ..kernels.assembly.closure import Loops
+from ..kernels.schema import pack
+from ..kernels.stepping.loop import (State,
+                                     Sweep)
+from ..kernels.transfers.beam_relations import (gauss_points, quadrature_size)
+from ..model.closures import constraint_rows
 from .methods import SWEEPS
-from .model.model import Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact
-from .model.sections import beam_output_offset, element_end_section, output_section
+from ..model.model import Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact
+from ..model.sections import beam_output_offset, element_end_section, output_section
 
 
 @dataclass(frozen=True)
@@ -122,7 +122,7 @@ def _initial_deflections(model, state):
     (ElasticHinge.deflection; its rate starts at zero), and a joint's slides d = A_P sum n_i q_i
     with its rate (w_p, the parent's output section's angular velocity;
     kernels/transfers/joint.py::joint_frame and its joint_offset)."""
-    from .kernels.transfers.joint import joint_frame
+    from ..kernels.transfers.joint import joint_frame
     for k in range(model.n_bodies):
         if model.hinge_kind[k] == ELASTIC:
             state.defl[k] = model.hinge_params[k, DEFLECTION_0]

@@ -8,11 +8,11 @@ from functools import cached_property
 import numpy as np
 
 from . import adaptive as adaptive_steps
-from .model import closures
+from ..model import closures
 from . import consistent_start, run_checks, run_records, run_tables
 from .methods import SWEEPS, scheme_named
-from .model.model import Model
-from .results.recording import Checkpoint, NoCheckpoint
+from ..model.model import Model
+from ..results.recording import Checkpoint, NoCheckpoint
 
 
 MAX_STEPS = 10 ** 12    # more steps than this in one run is a unit mistake, not a plan

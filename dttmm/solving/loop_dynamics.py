@@ -31,7 +31,7 @@ def loop_accelerations(model):
     from .dynamics import forward_dynamics
     from .run_tables import coordinate_columns
     out = forward_dynamics(model)
-    from .elements.kinds import MAX_COORDINATES
+    from ..elements.kinds import MAX_COORDINATES
     joints = np.zeros((model.n_bodies, MAX_COORDINATES))
     for c, (k, i) in enumerate(coordinate_columns(model)):
         joints[k, i] = out["joint_acceleration"][c]

@@ -10,14 +10,14 @@ and collects the recorded samples (recording.py).
 import functools
 import time
 
-from .model.model import Model
-from .results.recording import (Recording, model_fingerprint)
+from ..model.model import Model
+from ..results.recording import (Recording, model_fingerprint)
 from .resolution import warn_bent
 from .threads import blas_threads, thread_count
 from . import drivers
 from .run_options import run_options
 from .run_plan import kernels_used, prepared_run
-from .results.result import Result
+from ..results.result import Result
 from .run_checks import (UnresolvedMotionWarning, check_supported)
 from .run_records import _result
 
@@ -56,7 +56,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
         transfer matrices out, as the paper does; chains only; loses accuracy on long or stiff
         chains).
     scheme : {"newmark", "energy_momentum", "paper", "dop853"}
-        The table of schemes is ``dttmm.methods.SCHEMES``.
+        The table of schemes is ``dttmm.solving.methods.SCHEMES``.
         "newmark" (default): generalized-alpha, every element and topology.
         "energy_momentum": rigid chains with ball and fixed hinges on a fixed ground; a
         second-order step that conserves the total energy and the angular momentum to

@@ -2,19 +2,19 @@
 general loop's start (docs/solver.md, "Consistent start")."""
 import numpy as np
 
-from .elements.drives import MOTION
-from .elements.hinges import ELASTIC
-from .elements.kinds import MAX_COORDINATES
-from .kernels.stepping import ball_chain
-from .kernels.stepping import weld_chain
-from .kernels.stepping import step as kstep
-from .kernels import python_twin
-from .kernels.assembly.closure import set_ground
-from .kernels.stepping.loop import (OK, SINGULAR, UNSUPPORTED, Inputs,
-                                    Record, Run)
-from .kernels.stepping.loop import run_steps
-from .kernels.assembly.sweep import LOST_ACCURACY
-from .model.closures import closure_forces, closure_targets, has_closure_drives
+from ..elements.drives import MOTION
+from ..elements.hinges import ELASTIC
+from ..elements.kinds import MAX_COORDINATES
+from ..kernels.stepping import ball_chain
+from ..kernels.stepping import weld_chain
+from ..kernels.stepping import step as kstep
+from ..kernels import python_twin
+from ..kernels.assembly.closure import set_ground
+from ..kernels.stepping.loop import (OK, SINGULAR, UNSUPPORTED, Inputs,
+                                     Record, Run)
+from ..kernels.stepping.loop import run_steps
+from ..kernels.assembly.sweep import LOST_ACCURACY
+from ..model.closures import closure_forces, closure_targets, has_closure_drives
 from .run_tables import _station_histories, compiled_forces, loop_tables
 from .run_checks import DivergenceError, _DIRECT_HINT, _singular_cause, _unsupported_cause
 from .run_inputs import _drive_number, _ground, _joint_inputs, _loads

@@ -5,14 +5,14 @@ import functools
 
 import numpy as np
 
-from .vectors import cross
-from .elements import BEAM, RIGID
-from .elements._checks import is_text
-from .elements.drives import (FORCE, MOTION, PD, known_force, runs_in_loop)
-from .elements.kinds import MAX_COORDINATES
-from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .model.sections import (element_output_offset,
-                           point_positions)
+from ..vectors import cross
+from ..elements import BEAM, RIGID
+from ..elements._checks import is_text
+from ..elements.drives import (FORCE, MOTION, PD, known_force, runs_in_loop)
+from ..elements.kinds import MAX_COORDINATES
+from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from ..model.sections import (element_output_offset,
+                            point_positions)
 from .run_tables import _sum_before
 from .run_checks import UserFunctionError
 

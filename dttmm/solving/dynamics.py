@@ -5,9 +5,9 @@ dynamics.md).
 """
 import numpy as np
 
-from .elements import BEAM
-from .elements.kinds import (CHILD, COORDINATE_0, MAX_COORDINATES, RATE_0, SLIDE, TURN,
-                             WITH_COORDINATES, coordinates_of, row_axes)
+from ..elements import BEAM
+from ..elements.kinds import (CHILD, COORDINATE_0, MAX_COORDINATES, RATE_0, SLIDE, TURN,
+                              WITH_COORDINATES, coordinates_of, row_axes)
 
 # the state forward_dynamics takes, as Result records it (one sample), and the kernel state's
 # field each is written to; deflection and deflection_rate: elastic hinges' (world, m, m/s)
@@ -54,7 +54,7 @@ def forward_dynamics(model, t=0.0, state=None):
         A model the Newmark loops do not run, a state of the wrong shape, not finite, or whose
         joint children's frames do not follow their joints' coordinates.
     """
-    from .model.model import Model
+    from ..model.model import Model
     if not isinstance(model, Model):
         raise ValueError(f"forward_dynamics: model must be a Model, got {type(model).__name__}")
     t = float(t)
@@ -70,10 +70,10 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     extra_joint_forces: (n, 3) generalized forces on the joints' coordinates (where
     run_inputs.additive_joint_force)."""
     from . import consistent_start, run_checks, run_inputs, run_tables
-    from .model.closures import check_runs_in_sweeps
-    from .kernels import python_twin
-    from .kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
-    from .kernels.stepping.loop import Monitor, Settings
+    from ..model.closures import check_runs_in_sweeps
+    from ..kernels import python_twin
+    from ..kernels.assembly.closure import _dependent_frames, row_residuals, set_ground
+    from ..kernels.stepping.loop import Monitor, Settings
     if model.n_closures and not model.tip_pinned:
         check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
     run_checks.check_supported(model, "newmark", "riccati", True)
@@ -199,8 +199,8 @@ class ODE:
 
     def __init__(self, model, _closed=False):
         from . import run_tables
-        from .elements.hinges import BALL, ELASTIC
-        from .model.model import Model
+        from ..elements.hinges import BALL, ELASTIC
+        from ..model.model import Model
         if not isinstance(model, Model):
             raise ValueError(f"ode: model must be a Model, got {type(model).__name__}")
         if model.n_closures and not _closed:    # (linearize takes the tree's coordinates)
@@ -234,7 +234,7 @@ class ODE:
                              np.asarray(model.initial_modal_velocities, dtype=float))
 
     def _pack(self, rot, omega, defl, defl_rate, q, qd, eta, eta_d):
-        from .results.result import rotation_to_quaternion
+        from ..results.result import rotation_to_quaternion
         parts = []
         for k in self.free:
             parts += [rotation_to_quaternion(rot[k]), omega[k]]
@@ -395,8 +395,8 @@ def linearize(model, state=None, t=0.0):
         A closed model with beams, elastic hinges or a pinned tip, or without freedom left;
         a bad state (see forward_dynamics).
     """
-    from .elements.hinges import ELASTIC
-    from .elements.drives import MOTION
+    from ..elements.hinges import ELASTIC
+    from ..elements.drives import MOTION
     from .run_inputs import additive_joint_force
     closed = bool(model.n_closures)
     if closed and (model.tip_pinned or model.has_beams
@@ -614,8 +614,8 @@ def _closed_chart(model, t, full, free, columns, m, moved, fixed):
     g' = G x' = 0, by Newton's iteration with G_dep); moves = dx/dy (m x d).  fixed: the
     coordinates that are neither (prescribed motions: they stay as they are)."""
     from scipy.linalg import lstsq
-    from .model.closures import closure_residuals, tree_state
-    from .kernels.algebra.so3 import log_so3
+    from ..model.closures import closure_residuals, tree_state
+    from ..kernels.algebra.so3 import log_so3
     n = model.n_bodies
 
     def residuals(s):

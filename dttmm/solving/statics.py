@@ -18,24 +18,24 @@ import warnings
 
 import numpy as np
 
-from .model.closures import check_runs_in_sweeps, closure_residuals, start_state
-from .elements import BEAM, ROD
-from .elements.drives import MOTION
-from .elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
-from .elements.kinds import (BODY_KIND, COORDINATE_0, JOINT_KIND, MAX_COORDINATES, RATE_0,
-                             WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes)
-from .elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
-                            trusted_frequency)
-from .elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from .elements.strain_rod import ROD_LENGTH
-from .model.rod_motion import rod_centre_line, rod_end_section
-from .kernels.stepping import ball_chain
-from .kernels.stepping.loop import Monitor, Settings
-from .kernels.transfers.joint import joint_frame, n_coordinates
-from .kernels.algebra.so3 import expm_so3
-from .kernels.stepping.loop import run_steps
-from .model.model import Model
-from .model.sections import beam_output_offset, foreshortening_along, log_rotation, output_section
+from ..model.closures import check_runs_in_sweeps, closure_residuals, start_state
+from ..elements import BEAM, ROD
+from ..elements.drives import MOTION
+from ..elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
+from ..elements.kinds import (BODY_KIND, COORDINATE_0, JOINT_KIND, MAX_COORDINATES, RATE_0,
+                              WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes)
+from ..elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
+                             trusted_frequency)
+from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
+from ..elements.strain_rod import ROD_LENGTH
+from ..model.rod_motion import rod_centre_line, rod_end_section
+from ..kernels.stepping import ball_chain
+from ..kernels.stepping.loop import Monitor, Settings
+from ..kernels.transfers.joint import joint_frame, n_coordinates
+from ..kernels.algebra.so3 import expm_so3
+from ..kernels.stepping.loop import run_steps
+from ..model.model import Model
+from ..model.sections import beam_output_offset, foreshortening_along, log_rotation, output_section
 from . import consistent_start, run_checks, run_tables
 
 __all__ = ["StaticEquilibrium", "StaticEquilibriumError", "static_equilibrium"]
