@@ -72,7 +72,7 @@ SESSION = [
 
 
 def scenes():
-    folder = resources.files("dttmm") / "scenes"
+    folder = resources.files("dttmm.interfaces") / "scenes"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -88,7 +88,7 @@ def timed(command, cache):
 
 
 def timed_scene(scene, cache, t_end):
-    path = str(resources.files("dttmm") / "scenes" / f"{scene}.toml")
+    path = str(resources.files("dttmm.interfaces") / "scenes" / f"{scene}.toml")
     return timed([sys.executable, "-m", "dttmm", "run", path, "--t-end", str(t_end),
                   "--no-progress", "--no-energy-balance"], cache)
 

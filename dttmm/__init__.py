@@ -17,8 +17,8 @@ from .solving.run_checks import DivergenceError, UnresolvedMotionWarning
 from .solving.solver import load_stream, simulate
 from .solving.statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
-from .parameter_sweep import SweepTable, sweep
-from . import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)
+from .interfaces.parameter_sweep import SweepTable, sweep
+from .interfaces import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)
 
 try:
     __version__ = _version("dttmm")

@@ -44,7 +44,7 @@ def _compile_families(directory):
     import fcntl
     import time
     import warnings
-    from dttmm.precompile import FAMILIES, compile_family
+    from dttmm.interfaces.precompile import FAMILIES, compile_family
     left = [name for name, _ in FAMILIES]
     for blocking in (False, True):
         for name in tuple(left):

@@ -245,7 +245,7 @@ def test_end_loads_in_a_scene_round_trip(tmp_path):
     """A scene's beam takes end_force and end_torque as profiles, and save_scene writes them
     back: the same arrays and the same loads."""
     from dttmm.model.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.interfaces.scene import load_scene, save_scene
     ramp = profile({"profile": "ramp", "value": [0.0, 0.0, 2.0], "duration": 1.0})
     model = build_chain([FixedHinge(), EulerBernoulliBeam(
         length=1.0, bending_stiffness=EI, mass_per_length=1.0, polar_inertia_per_length=1e-3,

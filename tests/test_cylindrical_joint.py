@@ -182,7 +182,7 @@ def test_in_a_loop_it_follows_the_reference(closing):
 def test_a_scene_file_writes_and_reads_it_back(tmp_path):
     """save_scene / load_scene: the same model (its arrays and drives), the same run."""
     from dttmm.model.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.interfaces.scene import load_scene, save_scene
     p = profile({"profile": "sine", "amplitude": 0.05, "frequency": 0.5, "offset": 0.1}, "s")
     model, _ = mujoco_case(drives=(SpringDamper(8.0, 0.3, rest=0.1),
                                    JointMotion(p, p.rate, p.acceleration)), rates=(2.0, 0.0))

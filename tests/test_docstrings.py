@@ -7,7 +7,7 @@ import textwrap
 import pytest
 
 import dttmm
-from dttmm import scene
+from dttmm.interfaces import scene
 from dttmm.model import profiles
 
 def _public():

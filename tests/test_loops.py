@@ -198,7 +198,7 @@ def test_a_closure_on_a_moving_ground_and_tip_ball_on_a_tree_say_what_to_do():
 def test_closing_joints_in_scene_files_round_trip():
     """[[close]] tables build the same closure table as System.close, and save_scene writes
     them back (the rest rotation read again from the saved frames)."""
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     system = four_bar()
     system.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "right", "ground")
     model = system.build()

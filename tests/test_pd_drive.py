@@ -103,7 +103,7 @@ def test_a_force_of_time_alone_runs_in_chunks_as_the_step_by_step_function_did()
 
 
 def test_pd_drives_in_scenes_and_where_they_are_refused():
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = arm("pd")
     data = scene_of(model, name="arm_pd")
     drive = data["body"][0]["joint"]["drive"]

@@ -296,7 +296,7 @@ def test_a_scene_file_writes_and_reads_it_back(tmp_path):
     """save_scene / load_scene: the same model (its arrays), the same run; and a scene written
     by hand with type "planar" builds the same joint as Python does."""
     from dttmm.model.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.interfaces.scene import load_scene, save_scene
     p = profile({"profile": "sine", "amplitude": 0.05, "frequency": 0.5, "offset": 0.2}, "x")
     model, _ = mujoco_case(drives=(JointMotion(p, p.rate, p.acceleration),
                                    SpringDamper(8.0, 0.3, rest=0.1), None),

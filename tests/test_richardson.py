@@ -158,8 +158,8 @@ def dttmm_frequencies(model):
 def test_a_scene_takes_the_number_of_runs(tmp_path):
     """[run] richardson = 3 in a scene file: three runs, as simulate(richardson=3)."""
     from importlib import resources
-    from dttmm.scene import SceneError, load_scene
-    text = (resources.files("dttmm") / "scenes" / "rigid_chain.toml").read_text()
+    from dttmm.interfaces.scene import SceneError, load_scene
+    text = (resources.files("dttmm.interfaces") / "scenes" / "rigid_chain.toml").read_text()
     path = tmp_path / "chain.toml"
     path.write_text(text.replace("dt = 0.001", "dt = 0.01\nrichardson = 3"))
     scene = load_scene(path)

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from dttmm.model.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.cli import main, shipped_scenes
+from dttmm.interfaces.cli import main, shipped_scenes
 from dttmm.model.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
 from dttmm.model.model import Model
 from dttmm.results.result import Result
 from dttmm.model.profiles import KINDS, profile
-from dttmm.scene import SceneError, load_scene, save_scene
+from dttmm.interfaces.scene import SceneError, load_scene, save_scene
 
 BUILDERS = {"three_pendulum": three_pendulum, "rigid_chain": lambda: rigid_chain(3),
             "tree": five_link_tree, "arm": lambda: arm("torque"),

@@ -156,7 +156,7 @@ def test_link_on_an_elastic_hinge_is_analytic():
     ElasticHinge.deflection, which a scene keeps; DT-TMM from the equilibrium moves nothing by
     1e-9 m over 0.5 s."""
     from scipy.optimize import brentq
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     mass, l_c, i_c, k_t, k_z = 2.0, 0.5, 1.0 / 6.0, 2000.0, 15.0
     link = dttmm.RigidBody(mass=mass, inertia=[1e-3, i_c, i_c], inertia_about="mass_center",
                            to_mass_center=[l_c, 0, 0], to_output=[1.0, 0, 0])
@@ -332,8 +332,8 @@ def test_the_shipped_scenes_reach_their_equilibrium(name):
     """dttmm run --static-start's solve on every shipped scene (rigid_chain and tree start
     horizontal; before stop 28 both failed): it converges, and DT-TMM from it stays at rest
     (1e-9 m over 0.05 s)."""
-    from dttmm.scene import load_scene
-    from dttmm.cli import shipped_scenes
+    from dttmm.interfaces.scene import load_scene
+    from dttmm.interfaces.cli import shipped_scenes
     model = load_scene(shipped_scenes()[name]).model
     eq = dttmm.static_equilibrium(model)
     assert eq.residual < 1e-8

@@ -308,7 +308,7 @@ def test_the_exact_foreshortening_survives_a_scene_file():
     """A model with stiffening="exact" beams (and stretch) saved as a scene and read back has
     the same beam table, the exact flag included (scene.py writes stiffening = "exact")."""
     from dttmm.elements.beam import EXACT, STIFFENING
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = _soft_pendulum(2, 2, "exact", 1260.0)
     data = scene_of(model)
     back = scene_from_dict(data).model

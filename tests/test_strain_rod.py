@@ -710,7 +710,7 @@ def test_describe_says_which_element_suits_and_steps_for_the_rods_frequencies():
     resolves the highest (20 steps per period)."""
     import sys
     from pathlib import Path
-    from dttmm.describe import element_advice, suggested_dt
+    from dttmm.interfaces.describe import element_advice, suggested_dt
     from dttmm.model.rod_motion import rod_frequencies
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
     import falling_pendulum

@@ -115,7 +115,7 @@ FAILED = "__failed__"     # a failed run's row: its parameters and this key, the
 def _run_one(make_model, parameters, t_end, dt, outputs, options):
     """One run, on whichever process it lands: the model, the run, its outputs; a run that
     raises returns its parameters and the error instead (the sweep keeps the others)."""
-    from .solving.solver import simulate
+    from ..solving.solver import simulate
     try:
         model = make_model(**parameters)
         result = simulate(model, t_end, dt, progress=False, **options)

@@ -18,9 +18,9 @@ import time
 
 
 def _general_loop():
-    from .model.chains import arm, three_pendulum
-    from .model.mechanisms import n_four_bar
-    from .solving.solver import simulate
+    from ..model.chains import arm, three_pendulum
+    from ..model.mechanisms import n_four_bar
+    from ..solving.solver import simulate
     simulate(arm(), 2e-3, 1e-3)
     simulate(n_four_bar(2), 2e-3, 1e-3, hold_energy=True)
     simulate(three_pendulum(), 2e-3, 1e-3, scheme="paper")
@@ -28,46 +28,46 @@ def _general_loop():
 
 
 def _statics_and_linear_models():
-    from .model.chains import arm, stiff_cantilever
-    from .solving.dynamics import forward_dynamics, linearize
-    from .model.mechanisms import n_four_bar
-    from .solving.statics import static_equilibrium
+    from ..model.chains import arm, stiff_cantilever
+    from ..solving.dynamics import forward_dynamics, linearize
+    from ..model.mechanisms import n_four_bar
+    from ..solving.statics import static_equilibrium
     static_equilibrium(stiff_cantilever(2))
     linearize(n_four_bar(2))
     forward_dynamics(arm(), 0.0)
 
 
 def _fused_chain():
-    from .model.chains import rigid_chain
-    from .solving.solver import simulate
+    from ..model.chains import rigid_chain
+    from ..solving.solver import simulate
     for scheme in ("newmark", "dop853", "energy_momentum"):
         simulate(rigid_chain(3), 2e-3, 1e-3, scheme=scheme)
 
 
 def _fused_tree():
-    from .model.chains import five_link_tree
-    from .solving.solver import simulate
+    from ..model.chains import five_link_tree
+    from ..solving.solver import simulate
     for scheme in ("newmark", "dop853"):
         simulate(five_link_tree(), 2e-3, 1e-3, scheme=scheme)
 
 
 def _welded_chain():
-    from .model.chains import stiff_cantilever
-    from .solving.solver import simulate
+    from ..model.chains import stiff_cantilever
+    from ..solving.solver import simulate
     simulate(stiff_cantilever(2), 2e-3, 1e-3)
 
 
 def _reference():
-    from .model.chains import arm, three_pendulum
-    from .reference import simulate_reference
+    from ..model.chains import arm, three_pendulum
+    from ..reference import simulate_reference
     simulate_reference(three_pendulum(), 1e-3)
     simulate_reference(arm(), 1e-3)
 
 
 def _reference_rhs():
     """The reference's right-hand side as scipy's solve_ivp calls it."""
-    from .model.chains import arm
-    from .reference import simulate_reference
+    from ..model.chains import arm
+    from ..reference import simulate_reference
     simulate_reference(arm(), 1e-3, method="RK45")
 
 
@@ -93,10 +93,10 @@ def cache_location():
     """Where numba keeps dttmm's compiled kernels: beside their sources (__pycache__ folders in
     the installed package), or NUMBA_CACHE_DIR where it is set, or numba's per-user cache where
     the package is not writable."""
-    from .kernels.algebra.mat3 import matmul
+    from ..kernels.algebra.mat3 import matmul
     matmul(_eye(), _eye())          # (loads or compiles it: its cache is then located)
     path = matmul._cache._cache_path
-    package = os.path.dirname(os.path.abspath(__file__))
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))     # dttmm/
     if path.startswith(package):
         return f"{package} (the __pycache__ folder beside each kernel's source)"
     return path
@@ -127,7 +127,8 @@ def compile_all(jobs=None, progress=True, out=sys.stderr):
         while waiting and len(running) < jobs:
             name, _ = waiting.pop(0)
             command = [sys.executable, "-c",
-                       f"from dttmm.precompile import compile_family; compile_family({name!r})"]
+                       "from dttmm.interfaces.precompile import compile_family; "
+                       f"compile_family({name!r})"]
             running[name] = (subprocess.Popen(command, stdout=subprocess.DEVNULL,
                                               stderr=subprocess.PIPE, text=True),
                              time.perf_counter())

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .describe import describe_counts, suggested_dt
-from .solving.methods import SCHEMES, SWEEPS
+from ..solving.methods import SCHEMES, SWEEPS
 from .scene import SceneError, load_scene
 
 
@@ -92,9 +92,9 @@ def _compile(args):
 
 
 def _run(args):
-    from .results.recording import Checkpoint
-    from .solving.run_checks import DivergenceError
-    from .solving.solver import simulate
+    from ..results.recording import Checkpoint
+    from ..solving.run_checks import DivergenceError
+    from ..solving.solver import simulate
     scene = load_scene(args.scene)
     options = dict(scene.run)
     for key, value in (("t_end", args.t_end), ("dt", args.dt), ("method", args.method),
@@ -122,7 +122,7 @@ def _run(args):
         return 2
     model = scene.model
     if args.static_start:
-        from .solving.statics import StaticEquilibriumError, static_equilibrium
+        from ..solving.statics import StaticEquilibriumError, static_equilibrium
         try:
             eq = static_equilibrium(model)
         except (StaticEquilibriumError, ValueError) as err:
@@ -135,7 +135,7 @@ def _run(args):
               f"{'stable' if eq.stable else 'UNSTABLE'}; {int(np.sum(freqs == 0.0))} neutral "
               f"directions; lowest frequencies (Hz): "
               f"{', '.join(f'{f:.4g}' for f in moving[:3])})")
-    from .solving.energy_balance import does_work
+    from ..solving.energy_balance import does_work
     worked = does_work(model)
     if (worked and "rtol" not in options and "max_energy_error" not in options
             and not args.no_energy_balance):
@@ -192,11 +192,11 @@ def _run(args):
         res.checkpoint.save(args.checkpoint)
         print(f"wrote {args.checkpoint} (continue with --resume {args.checkpoint})")
     if args.plots:
-        from .results.plots import run_figures
+        from ..results.plots import run_figures
         for path in run_figures(res, model, args.plots, title=scene.name):
             print(f"wrote {path}")
     if args.animate:
-        from .results.plots import animate
+        from ..results.plots import animate
         animate(res, model, args.animate, title=scene.name, view=_view(args.view))
         print(f"wrote {args.animate}")
     return 0
@@ -226,7 +226,7 @@ def _output_problem(args):
 
 def _view(text):
     """--view's value as animate takes it (a name, or (elevation, azimuth)); None if bad."""
-    from .results.plots import VIEWS
+    from ..results.plots import VIEWS
     if text in VIEWS:
         return text
     try:
@@ -245,8 +245,8 @@ def _info(args):
 
 
 def shipped_scenes():
-    """name -> path of the scenes shipped in dttmm/scenes."""
-    folder = resources.files("dttmm") / "scenes"
+    """name -> path of the scenes shipped in dttmm/interfaces/scenes."""
+    folder = resources.files("dttmm.interfaces") / "scenes"
     return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".toml")}
 
 

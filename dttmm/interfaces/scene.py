@@ -14,24 +14,24 @@ from pathlib import Path
 
 import numpy as np
 
-from .elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking, RigidBody,
-                       SpringDamper, StrainRod)
-from .elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
-                            EXACT, LENGTH,
-                            LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
-                            STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
-from .elements.kinds import (AXES, BEAM, COORDINATE_0, JOINT_KIND, JOINT_KINDS, RATE_0, ROD,
-                             SCENE_TYPE, SLIDE, WITH_COORDINATES)
-from .elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
-                                  ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
-                                  ROD_STRETCH, ROD_TWIST)
-from .elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from .elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
-                              K_ROTATION, K_TRANSLATION, REST_ROTATION)
-from .elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
-from .model.model import Ground, Model, PrescribedMotion, children_of
-from .model.system import System
-from .model.profiles import Profile, ProfileForce, profile
+from ..elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking, RigidBody,
+                        SpringDamper, StrainRod)
+from ..elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
+                             EXACT, LENGTH,
+                             LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
+                             STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
+from ..elements.kinds import (AXES, BEAM, COORDINATE_0, JOINT_KIND, JOINT_KINDS, RATE_0, ROD,
+                              SCENE_TYPE, SLIDE, WITH_COORDINATES)
+from ..elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
+                                   ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
+                                   ROD_STRETCH, ROD_TWIST)
+from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
+from ..elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
+                               K_ROTATION, K_TRANSLATION, REST_ROTATION)
+from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
+from ..model.model import Ground, Model, PrescribedMotion, children_of
+from ..model.system import System
+from ..model.profiles import Profile, ProfileForce, profile
 
 Scene = namedtuple("Scene", ["name", "model", "run", "path"])
 
@@ -136,7 +136,7 @@ def load_scene(path):
     Examples
     --------
     >>> import dttmm
-    >>> from dttmm.scene import load_scene
+    >>> from dttmm.interfaces.scene import load_scene
     >>> scene = load_scene("pendulum.toml")  # doctest: +SKIP
     >>> result = dttmm.simulate(scene.model, **scene.run)  # doctest: +SKIP
     """
@@ -662,7 +662,7 @@ def save_scene(model, path, run=None, name=None):
     Examples
     --------
     >>> import dttmm
-    >>> from dttmm.scene import load_scene, save_scene
+    >>> from dttmm.interfaces.scene import load_scene, save_scene
     >>> rod = dttmm.RigidBody(mass=1.0, inertia=[1e-4, 1 / 12, 1 / 12],
     ...                       inertia_about="mass_center", to_mass_center=[0.5, 0, 0],
     ...                       to_output=[1.0, 0, 0])

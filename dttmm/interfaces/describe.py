@@ -1,18 +1,18 @@
 """What a built model holds, in words: Model.describe() and `dttmm info` (docs/scenes.md)."""
 import numpy as np
 
-from .elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EI_V, EI_W,
-                            EXACT, FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING,
-                            TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
-                            torsion_frequencies, truncation_errors)
-from .elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
-from .elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE
-from .elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
-from .elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
-                                  rod_components)
-from .model.rod_motion import rod_frequencies
-from .model.closures import describe_closures, held_chords, loop_rank
-from .model.model import DESCRIBE
+from ..elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EI_V, EI_W,
+                             EXACT, FAMILY, FREQUENCY_CUTOFF, MODES, PINNED, STIFFENING,
+                             TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
+                             torsion_frequencies, truncation_errors)
+from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
+from ..elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE
+from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
+from ..elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
+                                   rod_components)
+from ..model.rod_motion import rod_frequencies
+from ..model.closures import describe_closures, held_chords, loop_rank
+from ..model.model import DESCRIBE
 
 # each joint kind's name (its scene type) and degrees of freedom (elements/kinds.py)
 JOINT_NAMES = SCENE_TYPE
@@ -157,7 +157,7 @@ def _beam_lines(model, k, end_mass, chord_held=False):
                         "end, whose second-order energy holds only to a bend of ~0.08 rad or "
                         "less" if any(ends) and m >= 3 and cutoff_counted else ""))
     elif row[STIFFENING]:
-        from .solving.run_checks import STIFFENED_BEND_LIMIT
+        from ..solving.run_checks import STIFFENED_BEND_LIMIT
         limit = STIFFENED_BEND_LIMIT.get(m) if int(row[FAMILY]) == CLAMPED_LOADED else None
         lines.append("geometric stiffening on" + (
             f", to second order in the modes: holds while the beam bends less than ~{limit:g} "
@@ -180,8 +180,8 @@ LONG_LOOP_ROWS = 20     # rows from which describe() advises a tree of local loo
 def _loop_reach(model):
     """How far the closing joints' sweep columns reach (run_tables.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
-    from .solving import run_tables
-    from .model.closures import constraint_rows
+    from ..solving import run_tables
+    from ..model.closures import constraint_rows
     km = run_tables.kernel_model(model)[0]
     owner = constraint_rows(km)[1]
     body = np.array(km.closure_body, dtype=np.int64).reshape(-1, 2)
@@ -295,7 +295,7 @@ def describe(model):
                    "by default, positions and rates projected back onto the loops after every "
                    "step; docs/loops.md)")
         out.append("  " + _loop_reach(model))
-        from .solving.run_checks import energy_not_held
+        from ..solving.run_checks import energy_not_held
         why_not = energy_not_held(model)
         out.append("  energy: " + ("held after every step by scaling the rates (nothing works "
                                    "on these rigid loops; hold_energy=False steps without it)"
@@ -315,8 +315,8 @@ def describe(model):
 
 def _kernels_line(model):
     """Which loop runs the model (Newmark, Riccati) and what it compiles."""
-    from .solving.methods import SCHEMES
-    from .solving.run_plan import kernels_used
+    from ..solving.methods import SCHEMES
+    from ..solving.run_plan import kernels_used
     try:
         loop = kernels_used(model, SCHEMES["newmark"])
     except ValueError:
@@ -332,8 +332,8 @@ def _kernels_line(model):
 def _schemes_line(model):
     """Which of simulate's schemes run the model (dttmm/methods.py), and which to take for
     tight tolerances."""
-    from .solving.methods import SCHEMES
-    from .solving.run_checks import check_supported
+    from ..solving.methods import SCHEMES
+    from ..solving.run_checks import check_supported
     runs, why = [], {}
     for name in SCHEMES:
         try:
