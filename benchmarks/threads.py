@@ -4,7 +4,7 @@
 
 The N-four-bar (dttmm.model.mechanisms.n_four_bar, its default chain tree, dt = 5e-4) is stepped in
 child processes, while a busy process spins on every other core (bounded: it stops by itself):
-  default   dttmm as a user runs it (a run holds BLAS to one thread: dttmm/threads.py);
+  default   dttmm as a user runs it (a run holds BLAS to one thread: dttmm/solving/threads.py);
   one       OPENBLAS_NUM_THREADS=1 for the whole process (the workaround the issue measured);
   all       simulate(..., threads=cpu count): a thread per core, as BLAS starts by default
             (dttmm before the limit).

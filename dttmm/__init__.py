@@ -18,7 +18,8 @@ from .solving.solver import load_stream, simulate
 from .solving.statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
 from .interfaces.parameter_sweep import SweepTable, sweep
-from .interfaces import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)
+# (Model.describe's words, set on import: model/model.py::DESCRIBE)
+from .interfaces import describe as _describe  # noqa: F401
 
 try:
     __version__ = _version("dttmm")

@@ -1,4 +1,4 @@
-"""python -m dttmm: the command line (dttmm/cli.py)."""
+"""python -m dttmm: the command line (dttmm/interfaces/cli.py)."""
 import sys
 
 from .interfaces.cli import main

@@ -56,7 +56,7 @@ def _compile_families(directory):
                 done = directory / f"{name}.done"
                 if not done.exists():
                     t0 = time.perf_counter()
-                    try:            # (dttmm compile's families: dttmm/precompile.py)
+                    try:            # (dttmm compile's families: dttmm/interfaces/precompile.py)
                         compile_family(name)
                     except Exception as err:    # (the tests that use it will say what)
                         warnings.warn(f"compiling the {name} kernels first failed: {err}")

@@ -1,6 +1,6 @@
-"""dttmm.forward_dynamics (dttmm/dynamics.py, docs/dynamics.md): the accelerations of any state
-at any time by DT-TMM's sweep, against the Newton-Euler reference's right-hand side at the same
-state, and against the time step's own accelerations."""
+"""dttmm.forward_dynamics (dttmm/solving/dynamics.py, docs/dynamics.md): the accelerations of any
+state at any time by DT-TMM's sweep, against the Newton-Euler reference's right-hand side at the
+same state, and against the time step's own accelerations."""
 import numpy as np
 import pytest
 

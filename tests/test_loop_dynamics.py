@@ -1,4 +1,4 @@
-"""DT-TMM's sweep with closing joints at acceleration level (dttmm/loop_dynamics.py,
+"""DT-TMM's sweep with closing joints at acceleration level (dttmm/solving/loop_dynamics.py,
 docs/loops.md "The sweep with closing joints"): against the parallelogram's exact reduction and
 the Newton-Euler reference."""
 import numpy as np

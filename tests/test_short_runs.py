@@ -67,7 +67,8 @@ def test_a_second_run_does_not_rebuild_the_kernels_model(monkeypatch):
 def test_a_checkpoint_holds_the_finished_runs_arrays_read_only():
     """A checkpoint's arrays are read-only and resume the run: a run of its own (a large
     model's) hands them over without a copy (a million bodies' would double its memory); a
-    run kept on its model (run_plan.py) copies them, since the next run reuses its arrays."""
+    run kept on its model (solving/run_plan.py) copies them, since the next run reuses its
+    arrays."""
     result = simulate(rigid_chain(3), 0.01, 1e-3)
     arrays = result.checkpoint.arrays
     assert arrays and not any(a.flags.writeable for a in arrays)
@@ -91,7 +92,7 @@ def _run_arrays(result):
 @pytest.mark.parametrize("name", list(KEPT))
 def test_a_prepared_run_kept_on_the_model_gives_a_fresh_models_numbers(name):
     """A model whose start calls no function of the user's keeps its prepared run (the kernels'
-    arrays after the consistent start: run_plan.py) and starts the next run from it: runs
+    arrays after the consistent start: solving/run_plan.py) and starts the next run from it: runs
     with other steps and options and a resumed run in between, a run equals the same run of
     the same system built again bit for bit, and a finished run's checkpoint is not changed
     by the runs after it (they reuse the kept arrays, not the checkpoint's)."""

@@ -1,6 +1,6 @@
-"""Static equilibrium (dttmm/statics.py, docs/statics.md) against analytic answers: a pendulum
-hanging and its small-vibration frequency, the elastica rolled up by a tip moment (and its
-convergence order in the number of elements), Euler's buckling load; and the errors."""
+"""Static equilibrium (dttmm/solving/statics.py, docs/statics.md) against analytic answers: a
+pendulum hanging and its small-vibration frequency, the elastica rolled up by a tip moment (and
+its convergence order in the number of elements), Euler's buckling load; and the errors."""
 import warnings
 
 import numpy as np

@@ -306,7 +306,8 @@ def test_the_exact_foreshortening_carries_the_default_two_modes_through_the_whip
 
 def test_the_exact_foreshortening_survives_a_scene_file():
     """A model with stiffening="exact" beams (and stretch) saved as a scene and read back has
-    the same beam table, the exact flag included (scene.py writes stiffening = "exact")."""
+    the same beam table, the exact flag included (interfaces/scene.py writes stiffening =
+    "exact")."""
     from dttmm.elements.beam import EXACT, STIFFENING
     from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = _soft_pendulum(2, 2, "exact", 1260.0)

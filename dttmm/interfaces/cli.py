@@ -39,7 +39,7 @@ def main(argv=None):
                           "the largest kinetic energy")
     run.add_argument("--method", choices=tuple(SWEEPS))
     run.add_argument("--scheme", choices=tuple(SCHEMES),
-                     help="the time-stepping scheme (dttmm/methods.py): " + "; ".join(
+                     help="the time-stepping scheme (dttmm/solving/methods.py): " + "; ".join(
                          f"{name}: {scheme.summary}" for name, scheme in SCHEMES.items()))
     run.add_argument("--record-dt", type=float, help="record every RECORD_DT s")
     run.add_argument("--out", help="write the Result to FILE.npz (Result.load_npz reads it)")

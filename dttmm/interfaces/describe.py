@@ -46,7 +46,7 @@ def describe_counts(model):
                    + (f", plus {modal} modal coordinates" if modal else ""))
 
 
-# the constraint equations of each closing joint kind (closures.py): 6 less its freedoms (an
+# the constraint equations of each closing joint kind (model/closures.py): 6 less its freedoms (an
 # elastic hinge's none: elements/kinds.py, Kind.constraints)
 CLOSURE_ROWS = {k.code: k.constraints for k in JOINT_KINDS}
 
@@ -330,7 +330,7 @@ def _kernels_line(model):
 
 
 def _schemes_line(model):
-    """Which of simulate's schemes run the model (dttmm/methods.py), and which to take for
+    """Which of simulate's schemes run the model (dttmm/solving/methods.py), and which to take for
     tight tolerances."""
     from ..solving.methods import SCHEMES
     from ..solving.run_checks import check_supported
@@ -351,4 +351,4 @@ def _schemes_line(model):
             f"{tight}")
 
 
-DESCRIBE[0] = describe          # Model.describe (model.py)
+DESCRIBE[0] = describe          # Model.describe (model/model.py)

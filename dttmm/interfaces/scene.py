@@ -5,7 +5,7 @@
 
 A scene has [model] (name, gravity, tip), [ground] (position, rotation, or a spin about a fixed
 axis), one [[body]] table per body with its [body.joint] (how it hangs from its parent), loads
-and drives from named profiles (dttmm/profiles.py), and [run] (t_end, dt and simulate's other
+and drives from named profiles (dttmm/model/profiles.py), and [run] (t_end, dt and simulate's other
 options).  Every mistake is reported with the file, the table and the key.
 """
 import tomllib
@@ -388,7 +388,7 @@ def scene_of(model, run=None, name=None):
     """The scene (a dict, as load_scene reads it) of a model: every body, joint, load and drive
     from the model's arrays, so that it builds the same model again.
 
-    Loads, drives and ground motion must be profiles (dttmm/profiles.py; ``ProfileForce`` for
+    Loads, drives and ground motion must be profiles (dttmm/model/profiles.py; ``ProfileForce`` for
     a joint force, a ground spin read from a scene file); a Python function cannot be written.
     A rigid body's inertia is written about its input point, a beam's mode family resolved
     ("pinned" or "clamped", with force_mode_family where needed), the initial rotations of

@@ -1,7 +1,7 @@
 """Assembly: the closest configuration, to the model's joint coordinates, rotations and modal
 coordinates, that closes every loop (docs/loops.md, "Assembly"), by Gauss-Newton on the
-closing joints' rows (closures.py::closure_residuals).  Solving layer: it builds an assembled
-Model from the user's."""
+closing joints' rows (closures.py::closure_residuals).  In the model layer (docs/README.md,
+"Layout"): it builds an assembled Model from the user's, with numpy alone."""
 import numpy as np
 
 from .closures import (AssemblyWarning, _coordinates, _start_values, _state_of, check_drives_move,

@@ -199,9 +199,9 @@ class PrescribedMotion:
         return motion
 
 
-# Model.describe's words, set by the describing layer (describe.py, which knows what runs a
-# model: the loops, the schemes, the steps) when dttmm is imported: the model imports nothing
-# above it.
+# Model.describe's words, set by the describing layer (interfaces/describe.py, which knows what
+# runs a model: the loops, the schemes, the steps) when dttmm is imported: the model imports
+# nothing above it.
 DESCRIBE = [lambda model: "(import dttmm to describe a model)"]
 
 
@@ -429,7 +429,7 @@ class Model:
         The loop-closing joints (``System.close``; m of them): kind (m,), the two sides' bodies
         (m, 2; -1 the ground), each side's point in its frame (m, 2, 3; the ground's in the
         ground frame), whether it is a beam's output end (m, 2), a hinge_params row (m, 60:
-        R0 and the axes) and names (dttmm/closures.py, docs/loops.md).  Empty for a tree.
+        R0 and the axes) and names (dttmm/model/closures.py, docs/loops.md).  Empty for a tree.
     closure_drives : tuple
         Per closing joint, per coordinate, its drive as ``drives`` (a prescribed motion or a
         spring-damper) or None.

@@ -13,7 +13,7 @@ from ..kernels.algebra.so3 import expm_so3, left_jacobian
 from ..vectors import cross, rows_dot
 
 
-# Gauss-Legendre rule for the beam integrals in result.py::chain_energies (and
+# Gauss-Legendre rule for the beam integrals in results/result.py::chain_energies (and
 # foreshortening_along's): 64 points on [0, L] integrate the products of sin(j pi x / L),
 # sin(k pi x / L) (j, k <= 10) times x^2 to ~1e-16 relative (tests/test_reference_beam.py
 # checks it against the closed forms).

@@ -337,7 +337,7 @@ class Checkpoint:
         (most Newton iterations used, unconverged steps).
     source : tuple or callable
         The run's structures as it ended, (state, sweep, loop, monitor), or their arrays, or
-        a function returning those arrays (a prepared run's copy, run_plan.py): ``arrays``
+        a function returning those arrays (a prepared run's copy, solving/run_plan.py): ``arrays``
         gathers them, read-only, when first read (a run that is never resumed or saved pays
         nothing for its checkpoint).
 

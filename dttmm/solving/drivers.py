@@ -24,8 +24,8 @@ from ..results.result import _drive_spring_energy
 
 
 class Stepping:
-    """One simulate call on a prepared run: its records (recording.py), the prescribed inputs
-    of its chunks, the compiled loop's calls, and its Result."""
+    """One simulate call on a prepared run: its records (results/recording.py), the prescribed
+    inputs of its chunks, the compiled loop's calls, and its Result."""
 
     def __init__(self, plan, opts, wall0):
         self.plan, self.opts, self.wall0 = plan, opts, wall0

@@ -57,9 +57,9 @@ def runs_welded(model, mode, scheme):
 
 
 def kernels_used(model, scheme, method="riccati", full_state=False):
-    """The loop variant that runs a user's model with `scheme` (dttmm/methods.py), `method` and
-    `full_state` (describe(); simulate's BLAS threads: only the general and energy-momentum
-    loops call LAPACK)."""
+    """The loop variant that runs a user's model with `scheme` (dttmm/solving/methods.py),
+    `method` and `full_state` (describe(); simulate's BLAS threads: only the general and
+    energy-momentum loops call LAPACK)."""
     km, _ = run_tables.kernel_model(model)
     mode = run_tables._mode(km, method, full_state)
     if runs_fused(km, mode, scheme):

@@ -5,7 +5,7 @@ The frozen Model is read-only; all mutable state lives in a Workspace allocated 
 The time loop runs in numba (one skeleton, kernels/stepping/loop.py, with the scheme's loop variant)
 in chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python only evaluates
 the prescribed ground motion, applied loads and joint drives for each chunk, judges segments,
-and collects the recorded samples (recording.py).
+and collects the recorded samples (results/recording.py).
 """
 import functools
 import time
@@ -147,7 +147,7 @@ def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="ricca
     threads : int, optional
         BLAS threads the run may use (the loops' small LAPACK calls). Default: 1, or the
         environment variable DTTMM_BLAS_THREADS; the process's own limit is restored after the
-        run (dttmm/threads.py; docs/solver.md, "Threads").
+        run (dttmm/solving/threads.py; docs/solver.md, "Threads").
 
     Returns
     -------
