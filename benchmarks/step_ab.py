@@ -100,7 +100,7 @@ def in_process(a_dir, b_dir, systems, pairs):
                         ignore=shutil.ignore_patterns("__pycache__"))   # caches name dttmm
     sys.path.insert(0, root)
     packages = [importlib.import_module(name) for name in ("dttmm_a", "dttmm_b")]
-    chains = [importlib.import_module(f"{name}.chains") for name in ("dttmm_a", "dttmm_b")]
+    chains = [importlib.import_module(f"{name}.model.chains") for name in ("dttmm_a", "dttmm_b")]
     out = {}
     for system in systems:
         expr, steps = SYSTEMS[system]

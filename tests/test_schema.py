@@ -6,7 +6,8 @@ import pytest
 from numba import njit
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, StrainRod,
-                   build_chain, run_tables)
+                   build_chain)
+from dttmm.solving import run_tables
 from dttmm.model.chains import arm, unit_link
 from dttmm.kernels import model_tables, schema
 from dttmm.kernels.schema import MODEL, SIZES, pack, unpack
