@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from dttmm import simulate, simulate_reference
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.model.chains import rigid_chain, three_pendulum
 
 
 def _wall(fn, *args, **kw):

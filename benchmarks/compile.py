@@ -29,11 +29,11 @@ from pathlib import Path
 
 # the issue's session: (name, Python code run in a fresh process)
 SESSION = [
-    ("arm", "import dttmm; from dttmm.chains import arm\n"
+    ("arm", "import dttmm; from dttmm.model.chains import arm\n"
             "dttmm.simulate(arm(), 0.01, 1e-3)"),
-    ("slider-crank", "import dttmm; from dttmm.mechanisms import slider_crank\n"
+    ("slider-crank", "import dttmm; from dttmm.model.mechanisms import slider_crank\n"
                      "dttmm.simulate(slider_crank(), 0.01, 1e-3)"),
-    ("N-four-bar", "import dttmm; from dttmm.mechanisms import n_four_bar\n"
+    ("N-four-bar", "import dttmm; from dttmm.model.mechanisms import n_four_bar\n"
                    "dttmm.simulate(n_four_bar(4), 0.01, 1e-3)"),
     ("cantilever + statics",
      "import dttmm\n"
@@ -44,7 +44,7 @@ SESSION = [
      "                          gravity=[0.0, -9.81, 0.0])\n"
      "dttmm.static_equilibrium(model); dttmm.simulate(model, 0.01, 1e-4)"),
     ("rod in a loop",
-     "import dttmm; from dttmm.mechanisms import slider_crank\n"
+     "import dttmm; from dttmm.model.mechanisms import slider_crank\n"
      "rod = dttmm.StrainRod(length=0.3, bending_stiffness=50.0, mass_per_length=1.0,\n"
      "    polar_inertia_per_length=1e-4, name='rod')\n"
      "s = dttmm.System(gravity=[0, -9.81, 0])\n"
@@ -55,13 +55,13 @@ SESSION = [
      "s.close(dttmm.PrismaticJoint(axis=[1.0, 0, 0], name='slide'), 'rod', 'ground')\n"
      "dttmm.simulate(dttmm.assemble(s.build()), 0.01, 1e-3)"),
     ("elastic-hinge chain",
-     "import dttmm; from dttmm.chains import unit_link\n"
+     "import dttmm; from dttmm.model.chains import unit_link\n"
      "parts = []\n"
      "for i in range(4):\n"
      "    parts += [dttmm.ElasticHinge(1e5, 1e3), unit_link(name=f'l{i}')]\n"
      "dttmm.simulate(dttmm.build_chain(parts, gravity=[0, -9.81, 0]), 0.01, 1e-3)"),
     ("fixed-hinge tree",
-     "import dttmm; from dttmm.chains import unit_link\n"
+     "import dttmm; from dttmm.model.chains import unit_link\n"
      "s = dttmm.System(gravity=[0, -9.81, 0])\n"
      "s.add(unit_link(name='a'), dttmm.BallJoint(name='j'))\n"
      "s.add(unit_link(name='b'), dttmm.FixedHinge(), parent='a')\n"
@@ -72,7 +72,7 @@ SESSION = [
 
 
 def scenes():
-    folder = resources.files("dttmm") / "scenes"
+    folder = resources.files("dttmm.interfaces") / "scenes"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -88,7 +88,7 @@ def timed(command, cache):
 
 
 def timed_scene(scene, cache, t_end):
-    path = str(resources.files("dttmm") / "scenes" / f"{scene}.toml")
+    path = str(resources.files("dttmm.interfaces") / "scenes" / f"{scene}.toml")
     return timed([sys.executable, "-m", "dttmm", "run", path, "--t-end", str(t_end),
                   "--no-progress", "--no-energy-balance"], cache)
 

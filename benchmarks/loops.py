@@ -24,8 +24,8 @@ from dataclasses import replace
 import numpy as np
 
 import dttmm
-from dttmm.closures import empty_table
-from dttmm.mechanisms import n_four_bar, slider_crank, stewart_platform
+from dttmm.model.closures import empty_table
+from dttmm.model.mechanisms import n_four_bar, slider_crank, stewart_platform
 
 
 def opened(model):
@@ -74,10 +74,10 @@ def tip_cost(model, steps, pairs):
     a, b = [], []
     for _ in range(pairs):
         for on, out in ((True, a), (False, b)):
-            dttmm.closures.PINNED_TIP_SWEEP = on
+            dttmm.model.closures.PINNED_TIP_SWEEP = on
             dttmm.simulate(model, 2e-3, 1e-3)          # compile or load, warm up
             out.append(step_cost(model, steps))
-    dttmm.closures.PINNED_TIP_SWEEP = True
+    dttmm.model.closures.PINNED_TIP_SWEEP = True
     return min(a), min(b)
 
 
@@ -101,7 +101,7 @@ def main(argv=None):
     print(f"{'model':<28} {'rows':>5} {'loops us/step':>14} {'opened us/step':>15} {'ratio':>7}")
     for name, model, steps in cases:
         with_loops, tree = measure(model, steps, 2 if args.quick else 3)
-        rows_count = len(dttmm.closures.constraint_rows(model)[0])
+        rows_count = len(dttmm.model.closures.constraint_rows(model)[0])
         rows.append(dict(model=name, rows=rows_count, loops_us=with_loops * 1e6,
                          opened_us=tree * 1e6, ratio=with_loops / tree))
         print(f"{name:<28} {rows_count:>5} {with_loops * 1e6:>14.0f} {tree * 1e6:>15.0f} "

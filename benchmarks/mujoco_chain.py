@@ -1,6 +1,6 @@
 """DT-TMM against MuJoCo on the rigid N-link ball chain, both at fixed steps, at equal error.
 
-The same system on both sides: dttmm.chains.rigid_chain(N) (unit links: 1 kg, mass centre at
+The same system on both sides: dttmm.model.chains.rigid_chain(N) (unit links: 1 kg, mass centre at
 0.5 m, inertia diag(1/6, 1/6, 1/6) kg m^2 about it, ball joints 1 m apart, gravity -9.81 along
 y, all along +x at rest but the last link, turning at 0.1 rad/s about y), written as MJCF: a
 ball joint at each body's origin, an explicit inertial, no geoms, no damping, no armature,
@@ -40,7 +40,7 @@ import time
 import numpy as np
 
 from dttmm import simulate, simulate_reference
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from peers import (cpu_description, curve_figures, interleaved_curves,  # noqa: E402

@@ -1,6 +1,6 @@
 """DT-TMM against MuJoCo on the N-four-bar (closed loops), both at fixed steps, at equal error.
 
-The same system on both sides: dttmm.mechanisms.n_four_bar(N, tree="ground") (N + 1 vertical
+The same system on both sides: dttmm.model.mechanisms.n_four_bar(N, tree="ground") (N + 1 vertical
 unit bars on revolute joints about z to the ground at (i, 0, 0), N horizontal bars joining
 their tops; every bar 1 m, 1 kg, mass centre at its middle, inertia about it 1/12 kg m^2
 across the bar and 1e-3 along it; gravity -9.81 along y; the bars upright, every vertical bar
@@ -23,7 +23,7 @@ Euler; implicitfast takes the same steps as Euler here (no damping: measured, id
 errors), so it is left out.  From upright the bars start with no acceleration, so Euler's
 first-order start-up error vanishes and its positions converge at about second order here.
 Before anything is timed the script prints MuJoCo's distance from the exact reduction
-(dttmm.mechanisms.parallelogram) at a tiny step: RK4 at dt = 1e-5 over the run.
+(dttmm.model.mechanisms.parallelogram) at a tiny step: RK4 at dt = 1e-5 over the run.
 
 DT-TMM runs dttmm.simulate(model, t_end, dt, record_every=k) with its defaults (the Newmark
 step, second order; each step's loops projected, the energy held) and, beside it, the same
@@ -53,7 +53,7 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.mechanisms import n_four_bar, parallelogram
+from dttmm.model.mechanisms import n_four_bar, parallelogram
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from peers import (cpu_description, curve_figures, interleaved_curves,  # noqa: E402

@@ -1,6 +1,6 @@
 """DT-TMM against Pinocchio on the rigid N-link ball chain (issue 31's work-precision figure).
 
-The same system on both sides: dttmm.chains.rigid_chain(N) (unit links: 1 kg, mass centre at
+The same system on both sides: dttmm.model.chains.rigid_chain(N) (unit links: 1 kg, mass centre at
 0.5 m, inertia diag(1/6, 1/6, 1/6) kg m^2 about it, spherical joints 1 m apart, gravity -9.81
 along y, all along +x at rest but the last link, turning at 0.1 rad/s about y).  Pinocchio's
 articulated-body algorithm (pin.aba) gives the accelerations of (q, v), quaternions and local
@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from dttmm import simulate, simulate_reference
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 
 def pinocchio_chain(n):

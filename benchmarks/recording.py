@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain, three_pendulum
+from dttmm.model.chains import rigid_chain, three_pendulum
 
 
 def recording_overhead(model, steps=2000, dt=1e-3, pairs=15):

@@ -13,7 +13,7 @@ import time
 
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 from dttmm.reference import simulate_reference
 
 

@@ -17,12 +17,12 @@ import time
 import numpy as np
 
 from dttmm import BallJoint, simulate
-from dttmm.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.model.chains import arm, binary_tree, rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
+from dttmm.results.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
 from dttmm.kernels.stepping import step as kstep
-from dttmm.run_tables import Workspace, _mode, kernel_model
+from dttmm.solving.run_tables import Workspace, _mode, kernel_model
 from numba import njit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -275,7 +275,8 @@ def reference_us_per_rhs(model, evaluations=200):
 
 def jit_warmup_seconds(cold):
     code = ("import time; t0 = time.perf_counter(); from dttmm import simulate; "
-            "from dttmm.chains import three_pendulum; simulate(three_pendulum(2), 1e-4, 1e-4); "
+            "from dttmm.model.chains import three_pendulum; "
+            "simulate(three_pendulum(2), 1e-4, 1e-4); "
             "print(time.perf_counter() - t0)")
     env = dict(os.environ)
     with tempfile.TemporaryDirectory() as cache:

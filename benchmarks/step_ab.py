@@ -42,8 +42,8 @@ DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_10
 _CHILD = r"""
 import statistics, sys
 from dttmm import simulate
-from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -62,8 +62,8 @@ print(1e6 * statistics.median(costs))
 _CALL_CHILD = r"""
 import statistics, time
 from dttmm import simulate
-from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 model = {expr}
 for _ in range(50):
     simulate(model, 1e-4, 1e-4)
@@ -100,7 +100,7 @@ def in_process(a_dir, b_dir, systems, pairs):
                         ignore=shutil.ignore_patterns("__pycache__"))   # caches name dttmm
     sys.path.insert(0, root)
     packages = [importlib.import_module(name) for name in ("dttmm_a", "dttmm_b")]
-    chains = [importlib.import_module(f"{name}.chains") for name in ("dttmm_a", "dttmm_b")]
+    chains = [importlib.import_module(f"{name}.model.chains") for name in ("dttmm_a", "dttmm_b")]
     out = {}
     for system in systems:
         expr, steps = SYSTEMS[system]

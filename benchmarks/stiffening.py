@@ -17,7 +17,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "examples"))
 
 from dttmm import simulate  # noqa: E402
-from dttmm.chains import three_pendulum  # noqa: E402
+from dttmm.model.chains import three_pendulum  # noqa: E402
 
 
 def us_per_step(model, steps):

@@ -2,9 +2,9 @@
 
     python benchmarks/threads.py [--quick] [--n 10] [--json FILE]
 
-The N-four-bar (dttmm.mechanisms.n_four_bar, its default chain tree, dt = 5e-4) is stepped in
+The N-four-bar (dttmm.model.mechanisms.n_four_bar, its default chain tree, dt = 5e-4) is stepped in
 child processes, while a busy process spins on every other core (bounded: it stops by itself):
-  default   dttmm as a user runs it (a run holds BLAS to one thread: dttmm/threads.py);
+  default   dttmm as a user runs it (a run holds BLAS to one thread: dttmm/solving/threads.py);
   one       OPENBLAS_NUM_THREADS=1 for the whole process (the workaround the issue measured);
   all       simulate(..., threads=cpu count): a thread per core, as BLAS starts by default
             (dttmm before the limit).
@@ -22,7 +22,7 @@ import time
 CHILD = r"""
 import sys, time
 import dttmm
-from dttmm.mechanisms import n_four_bar
+from dttmm.model.mechanisms import n_four_bar
 n, steps, threads = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 kw = {} if threads == "default" else dict(threads=int(threads))
 model, dt = n_four_bar(n), 5e-4

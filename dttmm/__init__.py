@@ -6,19 +6,20 @@ from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulli
                        FixedHinge, JointForce, JointMotion, PDTracking, PlanarJoint,
                        PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
                        UniversalJoint)
-from .assembly import assemble
-from .closures import loop_residuals
-from .dynamics import forward_dynamics, linearize, ode
-from .model import Ground, Model, PrescribedMotion
-from .system import System, build_chain
-from .recording import Checkpoint
-from .result import Result
-from .run_checks import DivergenceError, UnresolvedMotionWarning
-from .solver import load_stream, simulate
-from .statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
+from .model.assembly import assemble
+from .model.closures import loop_residuals
+from .solving.dynamics import forward_dynamics, linearize, ode
+from .model.model import Ground, Model, PrescribedMotion
+from .model.system import System, build_chain
+from .results.recording import Checkpoint
+from .results.result import Result
+from .solving.run_checks import DivergenceError, UnresolvedMotionWarning
+from .solving.solver import load_stream, simulate
+from .solving.statics import StaticEquilibrium, StaticEquilibriumError, static_equilibrium
 from .reference import simulate_reference
-from .parameter_sweep import SweepTable, sweep
-from . import describe as _describe  # noqa: F401  (Model.describe: model.py::DESCRIBE)
+from .interfaces.parameter_sweep import SweepTable, sweep
+# (Model.describe's words, set on import: model/model.py::DESCRIBE)
+from .interfaces import describe as _describe  # noqa: F401
 
 try:
     __version__ = _version("dttmm")

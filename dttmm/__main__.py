@@ -1,6 +1,6 @@
-"""python -m dttmm: the command line (dttmm/cli.py)."""
+"""python -m dttmm: the command line (dttmm/interfaces/cli.py)."""
 import sys
 
-from .cli import main
+from .interfaces.cli import main
 
 sys.exit(main())

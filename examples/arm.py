@@ -5,10 +5,10 @@
 Link 1 turns on a revolute joint about world y (driven: a torque 2 sin(pi t) N m, the angle
 0.5 t + 0.2 (1 - cos 2t) rad prescribed, or PD feedback tracking that angle, kp = 200 N m/rad,
 kd = 20 N m s/rad, inside the compiled loop: --drive pd as dttmm.PDTracking, --drive pd-njit
-as the same law written as an @numba.njit JointForce, dttmm.chains.arm_servo); link 2 on a
+as the same law written as an @numba.njit JointForce, dttmm.model.chains.arm_servo); link 2 on a
 revolute joint about link 1's z axis; link 3 on a universal joint (link 2's z, then link 3's
 y); body 4 slides along link 3's x axis on a 50 N/m spring with a 0.5 N s/m damper
-(dttmm.chains.arm).  --flexible makes link 2 the paper's beam 4.  The joints' coordinates
+(dttmm.model.chains.arm).  --flexible makes link 2 the paper's beam 4.  The joints' coordinates
 carry the integration and the step is swept leaves to root in full state (docs/joints.md).
 CSV: t, x1, y1, z1, x2, y2, z2, x3, y3, z3 (links 1-3's output points), x4, y4, z4 (body 4's
 mass centre), s4 (its slide from the start, m), tau1 (joint 1's torque: applied, needed by the
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import arm
+from dttmm.model.chains import arm
 
 
 def main(argv=None):

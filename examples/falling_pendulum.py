@@ -166,7 +166,7 @@ def _plot(result, args, how, folder):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from dttmm.plots import centerlines
+    from dttmm.results.plots import centerlines
     folder.mkdir(parents=True, exist_ok=True)
     model = pendulum(args.elements, args.kind, args.modes, args.axial_stiffness,
                      args.stiffening == "exact")

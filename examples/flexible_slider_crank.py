@@ -6,7 +6,7 @@ DT-TMM.
 A rigid crank 0.15 m turned at a prescribed 150 rad/s about world z, a steel rod 0.3 m long
 (d = 6 mm, E = 2e11 Pa, rho = 7870 kg/m^3) that bends and stretches, on revolute joints at the
 crank's end A and at the slider B, a point mass of half the rod's mass sliding on the x axis;
-no gravity (dttmm.mechanisms.flexible_slider_crank; docs/loops.md).  At t = 0 the rod lies
+no gravity (dttmm.model.mechanisms.flexible_slider_crank; docs/loops.md).  At t = 0 the rod lies
 straight along +x with rigid-body velocities.  CSV: t, mid_deflection (the rod's mid-point from
 the middle of the chord AB, along z x (B - A) / |B - A|), half_elongation ((|AB| - 0.3) / 2),
 slider_x, every 1e-4 s.  The defaults (one element of three bending modes per plane and one
@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate
-from dttmm.mechanisms import flexible_slider_crank
-from dttmm.plots import centerlines
+from dttmm.model.mechanisms import flexible_slider_crank
+from dttmm.results.plots import centerlines
 
 ROD = 0.3           # m, the rod's length at rest
 

@@ -3,7 +3,7 @@
     python examples/four_bar.py --n 2 --t-end 10 --dt 1e-3 --csv four_bar.csv --plots figures
 
 N + 1 vertical unit bars on revolute joints to the ground at (i, 0), N horizontal bars between
-their tops, every axis along z, gravity -9.81 along y (dttmm.mechanisms.n_four_bar).  The
+their tops, every axis along z, gravity -9.81 along y (dttmm.model.mechanisms.n_four_bar).  The
 spanning tree (--tree): "ground" (default) roots every vertical bar at its ground pivot, hangs
 each horizontal bar from the bar before it and closes it on the next, so each loop is local and
 a step costs O(N); "chain" holds the first vertical bar and the horizontal bars, and N
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate
-from dttmm.mechanisms import n_four_bar, parallelogram
+from dttmm.model.mechanisms import n_four_bar, parallelogram
 
 
 def main(argv=None):

@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 import dttmm
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 
 
 def make_model(spin, stiffness):

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 
 def main(argv=None):

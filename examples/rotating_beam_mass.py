@@ -31,7 +31,7 @@ import numpy as np
 
 from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion, RigidBody,
                    build_chain, simulate, static_equilibrium)
-from dttmm.profiles import profile
+from dttmm.model.profiles import profile
 
 LENGTH, DENSITY, YOUNG, SHEAR = 5.0, 3000.0, 6.9e10, 2.6e10
 R_OUT, R_IN = 0.0326, 0.0306

@@ -4,7 +4,7 @@
 
 A crank on a revolute joint about world x at (0, 0.1, 0.12), a rod on a ball joint at its end,
 a slider on the x axis: the rod joins it by a universal joint, and its prismatic joint closes
-the loop (dttmm.mechanisms.slider_crank; docs/loops.md).  The crank turns at 6 rad/s at t = 0,
+the loop (dttmm.model.mechanisms.slider_crank; docs/loops.md).  The crank turns at 6 rad/s at t = 0,
 the rest assembled consistent with it; no drive, no friction, gravity along -z.  CSV: t,
 slider_x, slider_vx, crank_angle (unwrapped), crank_rate every 1 ms.
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate, simulate_reference
-from dttmm.mechanisms import slider_crank
+from dttmm.model.mechanisms import slider_crank
 
 
 def main(argv=None):

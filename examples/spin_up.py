@@ -4,7 +4,7 @@
 
 The hub turns about the vertical z axis by the spin-up law theta(t) = (omega / T)(t^2 / 2 +
 (T / 2 pi)^2 (cos(2 pi t / T) - 1)) for t <= T = 15 s, then omega (t - T / 2)
-(dttmm.profiles, "spin_up"); the tube (rho = 3000 kg/m^3, L = 10 m, E = 6.9e10 Pa, hollow
+(dttmm.model.profiles, "spin_up"); the tube (rho = 3000 kg/m^3, L = 10 m, E = 6.9e10 Pa, hollow
 circular section R = 0.0326 m, r = 0.0306 m) is clamped to it along x, no gravity, as K
 elements of L / K welded end to end (--elements), each with --modes modes per plane; or, with
 --kind rod, K strain rods (docs/strain_rod.md) of --modes strain coefficients per plane (their
@@ -28,7 +28,7 @@ import numpy as np
 
 from dttmm import (DivergenceError, EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion,
                    StrainRod, build_chain, simulate)
-from dttmm.profiles import profile
+from dttmm.model.profiles import profile
 
 LENGTH, DENSITY, YOUNG = 10.0, 3000.0, 6.9e10
 R_OUT, R_IN = 0.0326, 0.0306

@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from dttmm import DivergenceError, simulate
-from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.model.chains import rigid_chain, stiff_cantilever, three_pendulum
 from dttmm.reference import simulate_reference
 
 

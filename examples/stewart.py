@@ -3,7 +3,7 @@
     python examples/stewart.py --drive motion --t-end 3 --dt 1e-4 --csv stewart.csv --plots figures
 
 Six legs of two bodies (a universal joint at the base, a prismatic joint along the leg, a ball
-joint at the platform) carry a 10 kg platform (dttmm.mechanisms.stewart_platform; issue 29's
+joint at the platform) carry a 10 kg platform (dttmm.model.mechanisms.stewart_platform; issue 29's
 data).  --drive motion prescribes each slide, s_i(t) = +-0.05 (1 - cos 2 pi t) m (+ for legs 1,
 3, 5); --drive force pushes each slide by 2e4 (s_ref - s) - 500 s' N.  Gravity along -z, from
 rest.  CSV: t, x, y, z, qw, qx, qy, qz (the platform's centre and orientation) then f1 ... f6
@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate
-from dttmm.mechanisms import stewart_platform
-from dttmm.result import rotation_to_quaternion
+from dttmm.model.mechanisms import stewart_platform
+from dttmm.results.result import rotation_to_quaternion
 
 
 def main(argv=None):

@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
+from dttmm.results.result import beam_midpoint_deflection
 
 BODY2, BEAM4, BODY6 = 0, 1, 2
 SAMPLE = 1e-3          # output grid, s

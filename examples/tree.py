@@ -3,7 +3,7 @@
     python examples/tree.py --t-end 2 --dt 1e-4 --csv tree.csv --plots figures
 
 Links 2 and 4 hang from link 1's output point, link 3 from link 2's, link 5 from link 4's;
-links 4 and 5 start along -z, links 1-3 along +x (dttmm.chains.five_link_tree).  The run is
+links 4 and 5 start along -z, links 1-3 along +x (dttmm.model.chains.five_link_tree).  The run is
 swept from the leaves to the root each step (docs/assembly.md, "Trees").  CSV: t, x1, y1, z1,
 ..., x5, y5, z5, the world positions of the links' output points every 0.01 s.
 """
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from dttmm import simulate
-from dttmm.chains import five_link_tree
+from dttmm.model.chains import five_link_tree
 
 
 def main(argv=None):

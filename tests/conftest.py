@@ -11,7 +11,7 @@ def pytest_configure(config):
     # A sound run of the suite never trips the unresolved-step flag (tests that mean to catch
     # it).  Added here, not in pyproject.toml's filterwarnings: pytest would import dttmm to
     # resolve that option's warning class as it reads the file.
-    config.addinivalue_line("filterwarnings", "error::dttmm.solver.UnresolvedMotionWarning")
+    config.addinivalue_line("filterwarnings", "error::dttmm.solving.solver.UnresolvedMotionWarning")
 
 
 @pytest.fixture(autouse=True)
@@ -44,7 +44,7 @@ def _compile_families(directory):
     import fcntl
     import time
     import warnings
-    from dttmm.precompile import FAMILIES, compile_family
+    from dttmm.interfaces.precompile import FAMILIES, compile_family
     left = [name for name, _ in FAMILIES]
     for blocking in (False, True):
         for name in tuple(left):
@@ -56,7 +56,7 @@ def _compile_families(directory):
                 done = directory / f"{name}.done"
                 if not done.exists():
                     t0 = time.perf_counter()
-                    try:            # (dttmm compile's families: dttmm/precompile.py)
+                    try:            # (dttmm compile's families: dttmm/interfaces/precompile.py)
                         compile_family(name)
                     except Exception as err:    # (the tests that use it will say what)
                         warnings.warn(f"compiling the {name} kernels first failed: {err}")

@@ -105,7 +105,8 @@ def energy_gaps_with_an_arm(beam, gravity, steps=(1e-3, 5e-4), t_end=0.5):
 def fused_and_general(monkeypatch, model, t_end, dt, loop, **kwargs):
     """The same run through the fused loop named `loop` (result.info["loop"]) and through the
     general loop (run_tables.FUSED_BALL_CHAIN = False), checking which loop each took."""
-    from dttmm import run_tables, simulate
+    from dttmm import simulate
+    from dttmm.solving import run_tables
     fused = simulate(model, t_end, dt, **kwargs)
     monkeypatch.setattr(run_tables, "FUSED_BALL_CHAIN", False)
     general = simulate(model, t_end, dt, **kwargs)
@@ -127,7 +128,7 @@ def joints_arm(drive=None, gravity=(0.0, -9.81, 0.0), slide_axis=(1.0, 0.0, 0.0)
     the slider (default 0.5 kg, inertia 0.01 about its mass centre at its input point)."""
     from dttmm import (PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, System,
                        UniversalJoint)
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     system = System(gravity=gravity)
     system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=drive,
                                                       name="joint1"))

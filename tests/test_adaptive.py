@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dttmm import DivergenceError, simulate, simulate_reference
-from dttmm.chains import arm, rigid_chain, three_pendulum
+from dttmm.model.chains import arm, rigid_chain, three_pendulum
 
 T_END = 1.0
 RTOLS = (1e-4, 1e-5, 1e-6, 1e-7)
@@ -101,7 +101,7 @@ def test_a_moving_ground_is_taken_at_the_adaptive_times():
     """A two-link chain hanging from a hub spun up at 2 rad/s^2 (ground motion evaluated per
     segment): adaptive at rtol 1e-5 within 1e-5 m of a fixed-step run at dt = 2.5e-5."""
     from dttmm import BallJoint, FixedHinge, Ground, PrescribedMotion, build_chain
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     hub = PrescribedMotion.spin_about_axis([0, 1, 0], lambda t: t * t, lambda t: 2.0 * t,
                                            lambda t: 2.0)
     model = build_chain([FixedHinge(), unit_link(), BallJoint(), unit_link()],
@@ -115,7 +115,7 @@ def test_a_step_that_cannot_be_made_small_enough_stops():
     """A torque growing without bound: the adaptive run shrinks its step until it falls below
     1e-12 of t_end and stops with DivergenceError, keeping its samples."""
     from dttmm import BallJoint, build_chain
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     spinning = unit_link(torque=lambda t: [0.0, 0.0, 1e300 * t * t])
     with pytest.raises(DivergenceError, match="adaptive steps: the step fell below") as err:
         simulate(build_chain([BallJoint(), spinning]), 1.0, rtol=1e-4)

@@ -4,7 +4,7 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import BallJoint, ElasticHinge, FixedHinge, build_chain, simulate
-from dttmm.chains import rigid_chain, unit_link
+from dttmm.model.chains import rigid_chain, unit_link
 from dttmm.reference import simulate_reference
 
 T_END = 2.0

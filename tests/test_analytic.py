@@ -5,7 +5,7 @@ from helpers import crossing_period, rot_z
 
 from dttmm import (BallJoint, ElasticHinge, FixedHinge, Ground, PrescribedMotion, RigidBody,
                    build_chain, simulate)
-from dttmm.chains import unit_link
+from dttmm.model.chains import unit_link
 
 G = 9.81
 

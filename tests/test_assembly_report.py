@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm.closures import AssemblyWarning
+from dttmm.model.closures import AssemblyWarning
 
 UP = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]          # a bar's x along world y
 
@@ -70,6 +70,6 @@ def test_describe_gives_a_closed_loops_true_mobility():
     text = dttmm.assemble(square_four_bar([1.0, 0, 0])).describe()
     assert "3 of them redundant: mobility 1 as a rigid mechanism" in text
     assert "closed by 1 joint" in text and "tip free" not in text
-    from dttmm.mechanisms import slider_crank, stewart_platform
+    from dttmm.model.mechanisms import slider_crank, stewart_platform
     assert "mobility 1 as a rigid mechanism" in slider_crank().describe()
     assert "0 of them redundant: mobility 6" in stewart_platform("motion").describe()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm.scene import load_scene, save_scene
+from dttmm.interfaces.scene import load_scene, save_scene
 
 EI = 100.0
 
@@ -51,7 +51,7 @@ def test_auto_modes_take_their_cutoff_from_the_step_and_the_drives():
     constant spin bounds nothing; a scene's [run] dt (1e-3 s: 50 Hz, 2 modes) does the
     same."""
     from dttmm import Ground, PrescribedMotion
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     w = 2 * np.pi * 4.0
 
     def model(motion=None, **build):

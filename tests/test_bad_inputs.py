@@ -11,7 +11,7 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, JointForce, RevoluteJoint, RigidBody, System, build_chain,
                    simulate)
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 
 def link(**kw):
@@ -300,7 +300,7 @@ def test_an_axis_of_any_finite_length_is_a_direction():
 
 def test_a_binary_scene_file_is_named(tmp_path):
     """A binary file given as a scene (a UnicodeDecodeError before)."""
-    from dttmm.scene import SceneError, load_scene
+    from dttmm.interfaces.scene import SceneError, load_scene
     path = tmp_path / "scene.toml"
     path.write_bytes(bytes(range(256)))
     with pytest.raises(SceneError, match="not a text file"):

@@ -9,8 +9,8 @@ from helpers import fused_and_general, rot_z
 
 from dttmm import BallJoint, DivergenceError, Ground, PrescribedMotion, RigidBody, build_chain, \
     simulate
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
-from dttmm import run_tables
+from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.solving import run_tables
 
 
 def _both_loops(monkeypatch, model, t_end, dt, **kwargs):

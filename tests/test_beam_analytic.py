@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from dttmm import BallJoint, EulerBernoulliBeam, RigidBody, build_chain, simulate
-from dttmm.chains import unit_link
-from dttmm.result import beam_midpoint_deflection
+from dttmm.model.chains import unit_link
+from dttmm.results.result import beam_midpoint_deflection
 
 SIDE, E, RHO, G = 0.02, 2.5e10, 3300.0, 9.81
 EI = E * SIDE ** 4 / 12

@@ -7,7 +7,7 @@ from scipy.optimize import brentq
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RigidBody, UnresolvedMotionWarning,
                    build_chain, simulate)
-from dttmm.sections import output_section
+from dttmm.model.sections import output_section
 
 L, EI, MU = 1.0, 100.0, 2.0
 ROOTS = [1.87510406871196, 4.69409113297418, 7.85475743823761]   # 1 + cos x cosh x = 0
@@ -72,7 +72,7 @@ def first_frequency(model, t_end=1.0, dt=1e-3):
 # (coarse on purpose: the elements' own modes above what the step resolves, 0.1% of the energy,
 # the first frequency measured over many periods; issue 65's flag for unresolved modes)
 @pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 def test_k_element_cantilever_converges():
     exact = clamped_free_omega(0)
     errors = {m: [first_frequency(cantilever(k, m)) / exact - 1 for k in (1, 2, 3, 4)]
@@ -116,7 +116,7 @@ def test_cantilever_with_a_tip_body():
 # (coarse on purpose: the order of the energy error is fitted from dt = 5e-4, where the second
 # element's 157 Hz mode takes 13 steps a period)
 @pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 def test_welded_chain_energy_and_welds():
     """Two elements and a tip body, released deflected without gravity: the energy error is
     second order (each welded body integrates its own angular velocity, which matches the end
@@ -171,7 +171,7 @@ def test_clamped_cluster_against_the_reference():
     over 1 s, second order in positions and modal coordinates (measured: 2.03 and 2.04; 2.3e-7 m
     at dt = 1.25e-4)."""
     from helpers import fitted_order
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     from dttmm.reference import simulate_reference
     tip = RigidBody(mass=0.4, inertia=[2e-3, 4e-3, 5e-3], inertia_about="mass_center",
                     to_mass_center=[0.05, 0.01, 0], to_output=[0.1, 0, 0])

@@ -172,7 +172,7 @@ def _driven_loaded_cantilever(load_axes="world"):
 # (bent far on purpose, 0.9-1.1 rad in one element: an integration test against the reference,
 # which shares the modes; the run's warning that a real beam would differ is beside its point)
 @pytest.mark.filterwarnings("ignore:simulate. beam .* rings while bent:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("load_axes", ["world", "body"])
 def test_end_loads_converge_to_the_reference_at_order_2(load_axes):
     """DT-TMM against the Newton-Euler reference (which adds the loads to its own Newton,
@@ -190,7 +190,7 @@ def test_end_loads_converge_to_the_reference_at_order_2(load_axes):
 # (bent far on purpose, 0.9-1.1 rad in one element: an integration test against the reference,
 # which shares the modes; the run's warning that a real beam would differ is beside its point)
 @pytest.mark.filterwarnings("ignore:simulate. beam .* rings while bent:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("load_axes", ["world", "body"])
 def test_end_loads_work_is_counted_in_the_energy_balance(load_axes):
     """E - E(0) - W, W the work of the loads (F . v_O + T . w_O, p . int v dx, followers
@@ -244,8 +244,8 @@ def test_bad_distributed_load_and_mode_count_are_refused_naming_the_beam(bad, ma
 def test_end_loads_in_a_scene_round_trip(tmp_path):
     """A scene's beam takes end_force and end_torque as profiles, and save_scene writes them
     back: the same arrays and the same loads."""
-    from dttmm.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.model.profiles import profile
+    from dttmm.interfaces.scene import load_scene, save_scene
     ramp = profile({"profile": "ramp", "value": [0.0, 0.0, 2.0], "duration": 1.0})
     model = build_chain([FixedHinge(), EulerBernoulliBeam(
         length=1.0, bending_stiffness=EI, mass_per_length=1.0, polar_inertia_per_length=1e-3,

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from dttmm import simulate
-from dttmm.chains import rigid_chain
-from dttmm.result import angular_momentum
+from dttmm.model.chains import rigid_chain
+from dttmm.results.result import angular_momentum
 
 
 def drifts(n_links, dt, t_end=10.0):

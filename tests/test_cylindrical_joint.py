@@ -12,7 +12,7 @@ from dttmm import (BallJoint, CylindricalJoint, Ground, JointForce, JointMotion,
                    RevoluteJoint, RigidBody, SpringDamper, System, UniversalJoint, assemble,
                    simulate, static_equilibrium)
 from dttmm.elements.kinds import COORDINATE_0
-from dttmm.mechanisms import _frame
+from dttmm.model.mechanisms import _frame
 from dttmm.reference import simulate_reference
 
 DATA = Path(__file__).resolve().parent / "data" / "mujoco_cylindrical.npz"
@@ -125,7 +125,7 @@ def test_statics_holds_a_body_where_the_spring_carries_its_weight():
 
 
 def _crank_rod(system):
-    """The IFToMM slider-crank's crank and rod (dttmm.mechanisms.slider_crank); returns the
+    """The IFToMM slider-crank's crank and rod (dttmm.model.mechanisms.slider_crank); returns the
     universal joint's cross axis in the rod's frame."""
     b, c = np.array([0, 0.1, 0.2]), np.array([0.2, 0, 0])
     system.add(RigidBody(mass=0.12, inertia=[1e-4, 1e-4, 1e-5], inertia_about="mass_center",
@@ -181,8 +181,8 @@ def test_in_a_loop_it_follows_the_reference(closing):
 
 def test_a_scene_file_writes_and_reads_it_back(tmp_path):
     """save_scene / load_scene: the same model (its arrays and drives), the same run."""
-    from dttmm.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.model.profiles import profile
+    from dttmm.interfaces.scene import load_scene, save_scene
     p = profile({"profile": "sine", "amplitude": 0.05, "frequency": 0.5, "offset": 0.1}, "s")
     model, _ = mujoco_case(drives=(SpringDamper(8.0, 0.3, rest=0.1),
                                    JointMotion(p, p.rate, p.acceleration)), rates=(2.0, 0.0))

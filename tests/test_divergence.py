@@ -9,7 +9,7 @@ import dttmm
 
 from dttmm import (BallJoint, DivergenceError, EulerBernoulliBeam, FixedHinge, Ground,
                    PrescribedMotion, build_chain, simulate)
-from dttmm.chains import rigid_chain, unit_link
+from dttmm.model.chains import rigid_chain, unit_link
 
 
 def _spinning_chain():

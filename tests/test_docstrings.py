@@ -7,7 +7,8 @@ import textwrap
 import pytest
 
 import dttmm
-from dttmm import profiles, scene
+from dttmm.interfaces import scene
+from dttmm.model import profiles
 
 def _public():
     """(name, object) of every class and function in dttmm.__all__."""

@@ -9,7 +9,7 @@ import pytest
 
 from dttmm import (BallJoint, DivergenceError, ElasticHinge, EulerBernoulliBeam, FixedHinge,
                    Ground, PrescribedMotion, build_chain, simulate)
-from dttmm.chains import arm, rigid_chain, three_pendulum, unit_link
+from dttmm.model.chains import arm, rigid_chain, three_pendulum, unit_link
 
 
 def _hub():

@@ -6,10 +6,10 @@ import pytest
 from helpers import fitted_order, rot_z
 
 from dttmm import BallJoint, ElasticHinge, FixedHinge, build_chain, simulate
-from dttmm.chains import rigid_chain, unit_link
+from dttmm.model.chains import rigid_chain, unit_link
 from dttmm.kernels.transfers.em_body import rigid_body_transfer_em
 from dttmm.reference import simulate_reference
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 
 rng = np.random.default_rng(11)
 EM = dict(scheme="energy_momentum")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from dttmm import Result, simulate
-from dttmm.chains import rigid_chain, three_pendulum
-from dttmm.result import FIELDS, rotation_to_quaternion, rotation_to_xyz_angles
+from dttmm.model.chains import rigid_chain, three_pendulum
+from dttmm.results.result import FIELDS, rotation_to_quaternion, rotation_to_xyz_angles
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -122,7 +122,7 @@ def test_a_welded_beams_centre_lines_meet_at_the_welds():
     pendulum's elements are shortened by up to 8 mm: without c the lines overlapped by that)."""
     sys.path.insert(0, str(ROOT / "examples"))
     import falling_pendulum
-    from dttmm.plots import centerlines
+    from dttmm.results.plots import centerlines
     result, _ = falling_pendulum.run(8, axial_stiffness=None, t_end=0.3)
     lines = centerlines(result, falling_pendulum.pendulum(8, axial_stiffness=None))
     gap = np.linalg.norm(lines[:, 1:, 0] - lines[:, :-1, -1], axis=-1).max()
@@ -324,7 +324,7 @@ def test_the_falling_pendulum_example_with_strain_rods(tmp_path):
     strain meet at the welds and end on each rod's output point."""
     sys.path.insert(0, str(ROOT / "examples"))
     import falling_pendulum
-    from dttmm.plots import centerlines
+    from dttmm.results.plots import centerlines
     csv = tmp_path / "tip.csv"
     assert falling_pendulum.main(["--kind", "rod", "--elements", "4", "--t-end", "0.1",
                                   "--axial-stiffness", "rigid", "--csv", str(csv), "--plots",

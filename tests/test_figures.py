@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm.plots import animate, view_angles
+from dttmm.results.plots import animate, view_angles
 
 matplotlib.use("Agg")
 

@@ -17,8 +17,8 @@ from dttmm import (EulerBernoulliBeam, FixedHinge, JointMotion, RevoluteJoint, R
 from dttmm.elements.beam import (CLAMPED, CLAMPED_LOADED, EXACT, MODES, STIFFENING,
                                  _unit_beam_with_ends)
 from dttmm.elements.strain_rod import ROD_MODES
-from dttmm.rod_motion import rod_centre_line
-from dttmm.result import beam_midpoint_deflection
+from dttmm.model.rod_motion import rod_centre_line
+from dttmm.results.result import beam_midpoint_deflection
 from helpers import rot_z
 
 Z = [0, 0, 1.0]

@@ -1,15 +1,15 @@
-"""dttmm.forward_dynamics (dttmm/dynamics.py, docs/dynamics.md): the accelerations of any state
-at any time by DT-TMM's sweep, against the Newton-Euler reference's right-hand side at the same
-state, and against the time step's own accelerations."""
+"""dttmm.forward_dynamics (dttmm/solving/dynamics.py, docs/dynamics.md): the accelerations of any
+state at any time by DT-TMM's sweep, against the Newton-Euler reference's right-hand side at the
+same state, and against the time step's own accelerations."""
 import numpy as np
 import pytest
 
 import dttmm
 from dttmm import forward_dynamics, simulate, simulate_reference
-from dttmm.chains import arm, five_link_tree, rigid_chain, three_pendulum
-from dttmm.mechanisms import slider_crank
+from dttmm.model.chains import arm, five_link_tree, rigid_chain, three_pendulum
+from dttmm.model.mechanisms import slider_crank
 from dttmm.reference.newton_euler import _Problem
-from dttmm.result import rotation_to_quaternion
+from dttmm.results.result import rotation_to_quaternion
 from helpers import joints_arm
 
 
@@ -86,7 +86,7 @@ def test_forward_dynamics_gives_the_steps_own_accelerations():
 
 def test_forward_dynamics_of_the_initial_state_is_the_consistent_start():
     """Without a state: the model's initial state, as the loops' own start takes it."""
-    from dttmm.loop_dynamics import loop_accelerations
+    from dttmm.solving.loop_dynamics import loop_accelerations
     model = slider_crank()
     out = forward_dynamics(model)
     start = loop_accelerations(model)
@@ -308,7 +308,7 @@ def _flexible_arm(extra=(0.0, 0.0, 0.0, 0.0)):
     beam's end force along world x (N)."""
     from dttmm import (EulerBernoulliBeam, JointForce, PrismaticJoint, RevoluteJoint,
                        RigidBody, SpringDamper, System, UniversalJoint)
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     side, area = 0.02, 0.02 ** 2
     system = System(gravity=(0.0, -9.81, 0.0))
     system.add(unit_link(name="link1"), RevoluteJoint(
@@ -375,7 +375,7 @@ def test_linearize_a_closed_loop_in_its_independent_coordinate():
     c = (n + 1) / 2 + n) linearized, so A = [[0, 1], [g c cos th / I, 0]]; its joint torque
     gives q'' = tau / I; the first bar's tip moves 1 m per rad.  At the hanging equilibrium
     its squared frequency is static_equilibrium's (the loop's tangent space, another path)."""
-    from dttmm.mechanisms import n_four_bar
+    from dttmm.model.mechanisms import n_four_bar
     n, theta = 2, 0.7
     inertia, c = (n + 1) / 3 + n, (n + 1) / 2 + n
     lin = dttmm.linearize(n_four_bar(n, theta=theta, rate=1.3))
@@ -394,7 +394,7 @@ def test_linearize_a_closed_loop_in_its_independent_coordinate():
 
 
 def test_linearize_refuses_what_its_loops_do_not_cover():
-    from dttmm.mechanisms import flexible_slider_crank, stewart_platform
+    from dttmm.model.mechanisms import flexible_slider_crank, stewart_platform
     with pytest.raises(ValueError, match="closed loops are linearized for rigid bodies"):
         dttmm.linearize(flexible_slider_crank())
     with pytest.raises(ValueError, match="no freedom left"):

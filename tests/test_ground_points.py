@@ -97,7 +97,7 @@ def test_a_place_on_a_fixed_turned_ground_and_its_statics():
 def test_a_scene_keeps_the_places():
     """save_scene writes a root's place as at = [x, y, z]; loading it builds the same model."""
     placed, _ = _pair(Ground())
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     data = scene_of(placed)
     model = scene_from_dict(data).model
     assert np.allclose(model.attachment_point, placed.attachment_point)

@@ -7,8 +7,8 @@ import pytest
 
 import dttmm
 from dttmm import simulate, simulate_reference
-from dttmm.chains import binary_tree, rigid_chain, stiff_cantilever, three_pendulum, unit_link
-from dttmm.mechanisms import n_four_bar
+from dttmm.model.chains import binary_tree, rigid_chain, stiff_cantilever, three_pendulum, unit_link
+from dttmm.model.mechanisms import n_four_bar
 
 _REFERENCE = {}
 

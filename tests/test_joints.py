@@ -6,7 +6,7 @@ import pytest
 
 from dttmm import (JointForce, JointMotion, PrismaticJoint, RevoluteJoint,
                    SpringDamper, System, UniversalJoint, simulate)
-from dttmm.chains import unit_link
+from dttmm.model.chains import unit_link
 from dttmm.elements.joints import rotation_about
 from helpers import joints_arm
 
@@ -109,7 +109,7 @@ def test_each_joint_kind_declares_its_coordinates_and_the_solver_and_kernels_rea
     read by the model, the reference and the kernels alike; the arm's joints (revolute,
     revolute, universal, prismatic) give its Result five coordinate columns."""
     from dttmm import simulate
-    from dttmm.chains import arm
+    from dttmm.model.chains import arm
     from dttmm.elements.kinds import JOINT_KINDS, coordinate_count
     from dttmm.kernels.transfers.joint import n_coordinates
     declared = {k.name: len(k.coordinates) for k in JOINT_KINDS}

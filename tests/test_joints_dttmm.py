@@ -7,7 +7,7 @@ import pytest
 
 from dttmm import (BallJoint, FixedHinge, PrismaticJoint, RevoluteJoint, RigidBody,
                    SpringDamper, System, UniversalJoint, simulate)
-from dttmm.chains import arm, unit_link
+from dttmm.model.chains import arm, unit_link
 from dttmm.reference import simulate_reference
 
 

@@ -260,9 +260,9 @@ def test_beam_transfer_is_the_linearization_of_the_beam_relations(start, system)
     output slot is the welded body's angular acceleration.  A beam with twist modes
     (twist_relations) or stretch modes has its w' and eta'' columns differenced; its twist
     rows' a_I, m_I, q_I columns at an end moment are _twist_end_columns'."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.kernels.transfers.beam import _evaluate, beam_transfer, transfer_work_size
-    from dttmm.run_tables import beam_tables
+    from dttmm.solving.run_tables import beam_tables
     model, k = ((three_pendulum(2, damping_ratio=0.03, stiffening=True), 1)
                 if system == "three_pendulum"
                 else (_stiffened_cantilever(2 if "twist" in system else 0,
@@ -375,7 +375,7 @@ def test_beam_relations_match_a_direct_quadrature(family, m, stiffening, stretch
     from dttmm.kernels.transfers.beam_relations import (END_U, END_V, SUM_C, SUM_H, SUM_J,
                                                         SUM_MODES, SUM_U, SUM_V, aux_rows,
                                                         beam_relations)
-    from dttmm.run_tables import beam_tables
+    from dttmm.solving.run_tables import beam_tables
     from types import SimpleNamespace
     gen = np.random.default_rng(3 + family + m)
     length, mu, ei_v, ei_w, j_p, zeta = 1.3, 2.1, 40.0, 55.0, 0.02, 0.04
@@ -498,11 +498,11 @@ def test_beam_ball_map_folds_the_beam_transfer():
     12 x 13 transfer in angular-acceleration slots), then fold_ball_body (m_I = m_O = 0) and
     eta'' recovered from the input station with the folded w'.  Measured: 2e-15 (v), 1e-14
     (pmap) and 4e-16 (eta map) relative to each row's largest entry."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.kernels.transfers.beam import (ball_map_work_shape, beam_ball_map, beam_transfer,
                                               transfer_work_size)
     from dttmm.kernels.assembly.sweep import fold_ball_body
-    from dttmm.run_tables import beam_tables
+    from dttmm.solving.run_tables import beam_tables
     model = three_pendulum(2, damping_ratio=0.03)
     _, bp, moments, mode_off, ends, factors = beam_tables(model)
     k, m = 1, 2

@@ -1,11 +1,11 @@
-"""DT-TMM's sweep with closing joints at acceleration level (dttmm/loop_dynamics.py,
+"""DT-TMM's sweep with closing joints at acceleration level (dttmm/solving/loop_dynamics.py,
 docs/loops.md "The sweep with closing joints"): against the parallelogram's exact reduction and
 the Newton-Euler reference."""
 import numpy as np
 import pytest
 
-from dttmm.loop_dynamics import loop_accelerations
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.solving.loop_dynamics import loop_accelerations
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 from dttmm.reference.newton_euler import _Problem
 
 

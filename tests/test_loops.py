@@ -7,7 +7,7 @@ import dttmm
 from dttmm import (BallJoint, FixedHinge, PrismaticJoint,
                    RevoluteJoint, RigidBody, System, UniversalJoint, build_chain, simulate,
                    simulate_reference)
-from dttmm.closures import GROUND, closure_gaps, closure_points
+from dttmm.model.closures import GROUND, closure_gaps, closure_points
 from dttmm.elements import BALL, PRISMATIC, REVOLUTE, UNIVERSAL
 
 from helpers import rot_z
@@ -78,11 +78,11 @@ def test_the_pinned_tip_is_one_row_of_the_closure_table_and_runs_as_before():
     # the tip moves 1 m)
     ref = simulate_reference(model, 0.5, t_eval=[0.0, 0.5], rtol=1e-11, atol=1e-13)
     try:
-        dttmm.closures.PINNED_TIP_SWEEP = False
+        dttmm.model.closures.PINNED_TIP_SWEEP = False
         assert not model.tip_pinned
         as_row = simulate(model, 0.5, 1e-3)
     finally:
-        dttmm.closures.PINNED_TIP_SWEEP = True
+        dttmm.model.closures.PINNED_TIP_SWEEP = True
     assert as_row.info["loop_position_residual"] < 1e-10
     assert np.abs(again.position_output[-1] - ref.position_output[-1]).max() < 3e-5
     assert np.abs(as_row.position_output[-1] - ref.position_output[-1]).max() < 2e-5
@@ -198,7 +198,7 @@ def test_a_closure_on_a_moving_ground_and_tip_ball_on_a_tree_say_what_to_do():
 def test_closing_joints_in_scene_files_round_trip():
     """[[close]] tables build the same closure table as System.close, and save_scene writes
     them back (the rest rotation read again from the saved frames)."""
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     system = four_bar()
     system.close(RevoluteJoint(axis=[0, 0, 1], name="pin"), "right", "ground")
     model = system.build()

@@ -8,7 +8,7 @@ import pytest
 from dttmm import (BallJoint, DivergenceError, Ground, JointForce, JointMotion, PrismaticJoint,
                    RevoluteJoint, RigidBody, SpringDamper, System, UniversalJoint, assemble,
                    simulate, simulate_reference)
-from dttmm.mechanisms import _bar, _frame, slider_crank
+from dttmm.model.mechanisms import _bar, _frame, slider_crank
 
 from helpers import fitted_order, rot_z
 
@@ -169,8 +169,8 @@ def test_drives_on_closing_joints_that_do_not_run_are_refused():
 def test_a_closing_joints_drive_goes_through_a_scene_file(tmp_path):
     """A closing joint's prescribed motion from a profile is written to the scene's [[close]]
     table and read back: the same motion, and the same run to the last bit."""
-    from dttmm.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.model.profiles import profile
+    from dttmm.interfaces.scene import load_scene, save_scene
     p = profile({"profile": "sine", "amplitude": 0.5, "angular_frequency": 2.0})
     model = _four_bar(JointMotion(p, p.rate, p.acceleration))
     save_scene(model, tmp_path / "four_bar.toml")

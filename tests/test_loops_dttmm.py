@@ -6,7 +6,7 @@ import pytest
 import dttmm
 from dttmm import BallJoint, RigidBody, System, simulate, simulate_reference
 
-from dttmm.mechanisms import n_four_bar, parallelogram, slider_crank
+from dttmm.model.mechanisms import n_four_bar, parallelogram, slider_crank
 
 from helpers import energy_drift, fitted_order, rot_y, rot_z
 
@@ -122,7 +122,7 @@ def test_a_swinging_four_bar_holds_its_energy_through_its_turning_points():
 def test_holding_the_energy_is_refused_where_work_is_done_and_described():
     """hold_energy=True where the projection cannot hold it: a ValueError saying why; left
     unset, such a run steps without it and says so (info, describe())."""
-    from dttmm.mechanisms import flexible_slider_crank
+    from dttmm.model.mechanisms import flexible_slider_crank
     crank = slider_crank()
     assert "energy: held after every step" in crank.describe()
     for model, kwargs, why in ((flexible_slider_crank(), {}, "it has beams"),
@@ -206,7 +206,7 @@ def test_stewart_platform_against_the_reference_with_both_drives():
     reference at order 2 over 0.25 s (measured over 0.5 s: 1.3e-6, 3.1e-7, 7.5e-8 m at dt = 1e-3,
     5e-4, 2.5e-4); with the slides prescribed the motion is the legs' kinematics (to 1e-12 m)
     and the drives' forces converge to the reference's (measured order 3)."""
-    from dttmm.mechanisms import stewart_platform
+    from dttmm.model.mechanisms import stewart_platform
     t_end, t = 0.25, np.linspace(0.0, 0.25, 6)
     model = stewart_platform("force")
     ref = simulate_reference(model, t_end, t_eval=t, rtol=1e-11, atol=1e-13)
@@ -230,7 +230,7 @@ def test_stewart_platform_against_the_reference_with_both_drives():
 def test_stewart_platform_over_1_s_at_dt_1e_4_with_both_drives():
     """Issue 29's figure: both drives, over 1 s at dt = 1e-4, the
     platform's centre within 1e-6 m of the reference at every 0.05 s."""
-    from dttmm.mechanisms import stewart_platform
+    from dttmm.model.mechanisms import stewart_platform
     t = np.linspace(0.0, 1.0, 21)
     for drive in ("force", "motion"):
         model = stewart_platform(drive)
@@ -248,7 +248,7 @@ def test_a_free_stewart_platform_keeps_its_energy():
     to 1e-12 of the kinetic energy; without holding it, to second order in dt (measured over
     0.2 s: 3.6e-9 and 8.9e-10 at dt = 1e-3 and 5e-4). Either way the platform follows the
     reference (3.9e-9, 9.6e-10 m)."""
-    from dttmm.mechanisms import stewart_platform
+    from dttmm.model.mechanisms import stewart_platform
     model = stewart_platform("free", gravity=(0.0, 0.0, 0.0),
                              slide_rates=[1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
     ref = simulate_reference(model, 0.2, t_eval=[0.0, 0.2])
@@ -270,7 +270,7 @@ def test_a_free_stewart_platform_keeps_its_energy():
 def _momenta(model, result):
     """(T, 3) each: the total linear momentum and the angular momentum about the origin, and
     the largest sum of the bodies' momenta's magnitudes (the scale they cancel from)."""
-    from dttmm.result import angular_momentum
+    from dttmm.results.result import angular_momentum
     p = model.body_params
     rho_c = np.einsum("tkij,kj->tki", result.rotation, p[:, 1:4])
     v_c = result.velocity_input + np.cross(result.angular_velocity, rho_c)
@@ -287,7 +287,7 @@ def test_a_free_stewart_platform_balances_its_momenta_with_the_ground():
     base's input, by the trapezoidal rule over every step): at order 2 in dt (2.9e-8, 7.2e-9
     of the bodies' 2.4 N s at dt = 1e-3, 5e-4), and the momenta follow the reference's (as
     close)."""
-    from dttmm.mechanisms import stewart_platform
+    from dttmm.model.mechanisms import stewart_platform
     model = stewart_platform("free", gravity=(0.0, 0.0, 0.0),
                              slide_rates=[1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
     base = model.body_names.index("base")

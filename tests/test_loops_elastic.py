@@ -115,7 +115,7 @@ def test_a_closing_elastic_hinge_keeps_the_energy_and_its_dampers_balance():
 
 
 def test_a_closing_elastic_hinge_describes_itself_and_round_trips_through_a_scene():
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = closing()
     text = model.describe()
     assert "closure 0 'spring'" in text and "N m/rad" in text and "constrains nothing" in text
@@ -158,7 +158,7 @@ def test_the_suggested_step_resolves_an_elastic_hinge():
     (it ignored them): a 1 kg body on a 1e6 N/m hinge oscillates at 159 Hz, so the step is at
     most a twentieth of its period; the run at that step keeps the oscillation's period to
     1% (its amplitude's zero crossings against 2 pi sqrt(m / k))."""
-    from dttmm.describe import suggested_dt
+    from dttmm.interfaces.describe import suggested_dt
     from helpers import crossing_period
     system = System(gravity=[0.0, 0.0, 0.0])
     system.add(RigidBody(mass=1.0, inertia=[0.1, 0.1, 0.1], inertia_about="mass_center",

@@ -10,7 +10,7 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, RigidBody,
                    System, UniversalJoint, simulate, simulate_reference)
-from dttmm.mechanisms import flexible_slider_crank
+from dttmm.model.mechanisms import flexible_slider_crank
 
 from helpers import fitted_order, rot_z
 
@@ -89,7 +89,7 @@ def _flexible_four_bar(closing, beam_side):
     (UniversalJoint(axis1=[0, 0, 1.0], axis2=[1.0, 0, 0], name="B"), "b"),
 ])
 # (the mechanism built roughly and assembled on purpose: AssemblyWarning)
-@pytest.mark.filterwarnings("ignore::dttmm.closures.AssemblyWarning")
+@pytest.mark.filterwarnings("ignore::dttmm.model.closures.AssemblyWarning")
 def test_a_beam_closing_a_loop_by_each_joint_kind_follows_the_reference(closing, beam_side):
     """The flexible four-bar over 0.3 s, gravity partly out of its plane: the coupler's output
     point and the joints' angles converge to the reference at order 2 from dt = 5e-4 to

@@ -8,7 +8,7 @@ from helpers import fitted_order
 
 from dttmm import (BallJoint, DivergenceError, ElasticHinge, Ground, PrescribedMotion,
                    build_chain, simulate)
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
 
 

@@ -8,9 +8,9 @@ import pytest
 
 import dttmm
 from dttmm import PDTracking, RevoluteJoint, RigidBody, System, simulate, simulate_reference
-from dttmm import run_tables
-from dttmm.chains import arm, arm_servo
-from dttmm import run_plan
+from dttmm.solving import run_tables
+from dttmm.model.chains import arm, arm_servo
+from dttmm.solving import run_plan
 
 from helpers import fitted_order
 
@@ -103,7 +103,7 @@ def test_a_force_of_time_alone_runs_in_chunks_as_the_step_by_step_function_did()
 
 
 def test_pd_drives_in_scenes_and_where_they_are_refused():
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = arm("pd")
     data = scene_of(model, name="arm_pd")
     drive = data["body"][0]["joint"]["drive"]
@@ -208,7 +208,7 @@ def test_a_numba_joint_force_that_does_not_fit_is_refused_at_build():
 
 def test_a_python_joint_force_of_the_state_is_said_to_run_step_by_step_once(capsys,
                                                                              monkeypatch):
-    from dttmm import feedback
+    from dttmm.results import feedback
     monkeypatch.setattr(feedback, "_noted", set())
     compiled = arm("pd-njit")
     stepwise = with_joint1_force(compiled, arm_servo.py_func)

@@ -15,7 +15,7 @@ from dttmm import (BallJoint, Ground, JointForce, JointMotion, PDTracking, Plana
                    simulate, static_equilibrium)
 from dttmm.elements.joints import rotation_about
 from dttmm.elements.kinds import COORDINATE_0
-from dttmm.mechanisms import _frame
+from dttmm.model.mechanisms import _frame
 from dttmm.reference import simulate_reference
 
 DATA = Path(__file__).resolve().parent / "data" / "mujoco_planar.npz"
@@ -186,7 +186,7 @@ def test_linearize_gives_the_springs_frequencies(offset):
 
 
 def _crank_rod(system):
-    """The IFToMM slider-crank's crank and rod (dttmm.mechanisms.slider_crank), as
+    """The IFToMM slider-crank's crank and rod (dttmm.model.mechanisms.slider_crank), as
     tests/test_cylindrical_joint.py's; returns the universal joint's cross axis in the rod's
     frame."""
     b, c = np.array([0, 0.1, 0.2]), np.array([0.2, 0, 0])
@@ -295,8 +295,8 @@ def test_the_shortest_tree_takes_it_from_its_loop_at_the_gap_or_keeps_it():
 def test_a_scene_file_writes_and_reads_it_back(tmp_path):
     """save_scene / load_scene: the same model (its arrays), the same run; and a scene written
     by hand with type "planar" builds the same joint as Python does."""
-    from dttmm.profiles import profile
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.model.profiles import profile
+    from dttmm.interfaces.scene import load_scene, save_scene
     p = profile({"profile": "sine", "amplitude": 0.05, "frequency": 0.5, "offset": 0.2}, "x")
     model, _ = mujoco_case(drives=(JointMotion(p, p.rate, p.acceleration),
                                    SpringDamper(8.0, 0.3, rest=0.1), None),

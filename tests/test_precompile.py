@@ -13,11 +13,11 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, RevoluteJoint,
                    RigidBody, StrainRod, System, build_chain, simulate)
-from dttmm.chains import arm, three_pendulum, unit_link
+from dttmm.model.chains import arm, three_pendulum, unit_link
 from dttmm.kernels import python_twin
 from dttmm.kernels.stepping import step as kstep
 from dttmm.kernels.stepping.loop import _skeleton
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 
 # the kinds of model the issue's new user met, as a script a fresh process runs
 SESSION = '''
@@ -25,8 +25,8 @@ import numpy as np
 import dttmm
 from dttmm import (ElasticHinge, EulerBernoulliBeam, FixedHinge, BallJoint, RevoluteJoint,
                    RigidBody, StrainRod, System, build_chain, simulate)
-from dttmm.chains import arm, unit_link
-from dttmm.mechanisms import n_four_bar, slider_crank
+from dttmm.model.chains import arm, unit_link
+from dttmm.model.mechanisms import n_four_bar, slider_crank
 from numba.core import event
 
 compiled = []

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from dttmm import (BallJoint, Checkpoint, ElasticHinge, Result, build_chain, simulate)
-from dttmm.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
+from dttmm.model.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
                           unit_link)
-from dttmm import run_records
+from dttmm.solving import run_records
 
 ROOT = Path(__file__).resolve().parents[1]
 STATE = ("t", "rotation", "angular_velocity", "angular_acceleration", "force", "moment",

@@ -438,9 +438,9 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     from pathlib import Path
 
     from dttmm import StrainRod
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.kernels import python_twin
-    from dttmm.mechanisms import slider_crank
+    from dttmm.model.mechanisms import slider_crank
     from dttmm.reference import equations
     from dttmm.reference.integrator import integrate_dop853
     from dttmm.reference.newton_euler import _Problem
@@ -476,7 +476,7 @@ def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
 
     from helpers import joints_arm
 
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.reference.newton_euler import _Problem
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
     import spin_up
@@ -498,12 +498,12 @@ def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
 
 def test_a_hub_spun_by_a_profile_is_evaluated_in_compiled_code_as_the_profile():
     """reference/hub.py: the hub's rotation, angular velocity and acceleration from its angle's
-    terms in compiled code equal the motion's own Python functions (dttmm.profiles through
+    terms in compiled code equal the motion's own Python functions (dttmm.model.profiles through
     PrescribedMotion.spin_about_axis) for every kind it reads, at times before and after a
     ramp's and a spin-up's end, to rounding (the kernels' fused multiply-adds: 1e-13 here); an
     angle it does not read (a table, a plain function, derivatives not the profile's own, a
     motion not made by spin_about_axis) gives no table, and such a run keeps solve_ivp."""
-    from dttmm.profiles import profile
+    from dttmm.model.profiles import profile
     from dttmm.reference.hub import hub_table, spun_ground
     from dttmm.reference.newton_euler import _Problem
     kinds = [{"profile": "constant", "value": 0.3},

@@ -8,9 +8,9 @@ import numpy as np
 
 from dttmm import (BallJoint, ElasticHinge, FixedHinge, JointMotion, PrismaticJoint,
                    RevoluteJoint, RigidBody, SpringDamper, System)
-from dttmm.chains import TURNED_ABOUT_Y, unit_link
+from dttmm.model.chains import TURNED_ABOUT_Y, unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 
 G = 9.81
 TIGHT = dict(rtol=1e-11, atol=1e-11)

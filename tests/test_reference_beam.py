@@ -8,7 +8,7 @@ import pytest
 from dttmm import BallJoint, EulerBernoulliBeam, RigidBody, build_chain
 from dttmm.elements import BEAM, RIGID
 from dttmm.reference import simulate_reference
-from dttmm.result import _GL_W, _GL_X, beam_midpoint_deflection, chain_energies
+from dttmm.results.result import _GL_W, _GL_X, beam_midpoint_deflection, chain_energies
 
 G = 9.81
 MU, L = 1.32, 1.0
@@ -146,8 +146,8 @@ def pendulum_runs():
 # --------------------------------------------------------------------------------------------
 
 def test_energy_quadrature_is_exact_for_ten_modes():
-    """The 64-point Gauss-Legendre rule of dttmm.result integrates the products of modes (times
-    1, x, x^2) that |r'(x)|^2 and g . r(x) contain, for up to 10 modes, to round-off."""
+    """The 64-point Gauss-Legendre rule of dttmm.results.result integrates the products of modes
+    (times 1, x, x^2) that |r'(x)|^2 and g . r(x) contain, for up to 10 modes, to round-off."""
     x = 0.5 * L * (_GL_X + 1)
     wq = 0.5 * L * _GL_W
     k = np.arange(1, 11)

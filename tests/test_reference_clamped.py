@@ -554,7 +554,8 @@ def test_elastic_hinge_at_beam_output_energy(gravity, k_t):
     assert np.abs(psi).max() > 3e-3 and np.abs(d).max() > 5e-4
     drift = np.abs(energy - energy[0]).max() / res.kinetic.max()
     assert drift < 1e-9, drift                                     # 5e-14 to 1e-12 measured
-    # chain_energies (dttmm.result) agrees: it too takes the end section as the inboard frame
+    # chain_energies (dttmm.results.result) agrees: it too takes the end section as the inboard
+    # frame
     assert np.abs(energy - res.total_energy).max() < 1e-12 * res.kinetic.max()
     scale_f, scale_m = np.abs(force).max(), np.abs(couple).max()
     assert np.abs(res.force[:, 1] - force).max() < 1e-9 * scale_f

@@ -9,9 +9,9 @@ from scipy.integrate import cumulative_simpson
 from dttmm import (EulerBernoulliBeam, FixedHinge, Ground, JointForce, JointMotion,
                    PrescribedMotion, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                    System, UniversalJoint)
-from dttmm.chains import unit_link
+from dttmm.model.chains import unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 from helpers import crossing_period
 
 G = 9.81
@@ -320,7 +320,7 @@ def test_a_drive_that_fails_during_the_run_names_its_joint():
 def test_chain_energies_counts_drive_springs_only_when_given_the_coordinates():
     """chain_energies(joint_coordinates=q) adds 1/2 k (q - rest)^2 per SpringDamper (by hand
     here); without the argument (the DT-TMM solver's call) the energies are unchanged."""
-    from dttmm.result import chain_energies
+    from dttmm.results.result import chain_energies
     model = arm(SpringDamper(50.0, 0.5, rest=0.02))
     n = model.n_bodies
     args = (model.initial_rotation, model.initial_angular_velocity, np.zeros((n, 3)),

@@ -5,7 +5,7 @@ import pytest
 
 import dttmm
 from dttmm import BallJoint, RevoluteJoint, RigidBody, System, simulate_reference
-from dttmm.mechanisms import n_four_bar, parallelogram, slider_crank
+from dttmm.model.mechanisms import n_four_bar, parallelogram, slider_crank
 
 from helpers import rot_z
 
@@ -104,7 +104,7 @@ def test_assembly_closes_a_gap_keeps_what_it_is_told_and_refuses_what_cannot_clo
     model = four_bar(1.0)
     gap = dttmm.loop_residuals(model)[0][0]
     assert 0.1 < gap < 0.3                                  # the crank tilted by 0.2 rad
-    with pytest.warns(dttmm.closures.AssemblyWarning, match="'rocker' 0.2 m and 0.2 rad"):
+    with pytest.warns(dttmm.model.closures.AssemblyWarning, match="'rocker' 0.2 m and 0.2 rad"):
         assembled = dttmm.assemble(model, keep=["O"])      # (and says so: issue 65)
     assert dttmm.loop_residuals(assembled)[0].max() < 1e-12
     assert np.array_equal(assembled.initial_rotation[0], model.initial_rotation[0])

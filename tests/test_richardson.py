@@ -7,11 +7,11 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import BallJoint, DivergenceError, build_chain, simulate
-from dttmm import run_inputs
-from dttmm.chains import rigid_chain, three_pendulum, unit_link
+from dttmm.solving import run_inputs
+from dttmm.model.chains import rigid_chain, three_pendulum, unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
-from dttmm import run_tables
+from dttmm.results.result import beam_midpoint_deflection
+from dttmm.solving import run_tables
 
 DTS = (5e-3, 2.5e-3, 1.25e-3)
 
@@ -105,7 +105,8 @@ def test_energy_drift_fourth_order():
     assert drifts[-1] < 1e-6 * res.kinetic.max()
 
 
-@pytest.mark.filterwarnings("ignore::dttmm.solver.UnresolvedMotionWarning")  # (the 50 ms run)
+# (the warning: the 50 ms run)
+@pytest.mark.filterwarnings("ignore::dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("runs, dts, low, high", [
     (3, (2e-2, 1e-2, 5e-3), 5.6, 6.5),
     (4, (5e-2, 2.5e-2, 1.25e-2), 7.0, 8.8)])
@@ -135,7 +136,7 @@ def test_extrapolation_is_stable_at_steps_far_above_a_stiff_beams_periods():
     runs (order 6 where the step resolves the motion) follow a run at dt = 1e-4 to 5.7e-4 m at
     the tip (the plain run at 10 ms: 5.6e-3 m; the tip swings 0.31 m), with the energy held to
     1e-6 J."""
-    from dttmm.chains import stiff_cantilever
+    from dttmm.model.chains import stiff_cantilever
     model = stiff_cantilever(20)
     shortest = 1.0 / np.max(dttmm_frequencies(model))
     dt = 0.01
@@ -157,8 +158,8 @@ def dttmm_frequencies(model):
 def test_a_scene_takes_the_number_of_runs(tmp_path):
     """[run] richardson = 3 in a scene file: three runs, as simulate(richardson=3)."""
     from importlib import resources
-    from dttmm.scene import SceneError, load_scene
-    text = (resources.files("dttmm") / "scenes" / "rigid_chain.toml").read_text()
+    from dttmm.interfaces.scene import SceneError, load_scene
+    text = (resources.files("dttmm.interfaces") / "scenes" / "rigid_chain.toml").read_text()
     path = tmp_path / "chain.toml"
     path.write_text(text.replace("dt = 0.001", "dt = 0.01\nrichardson = 3"))
     scene = load_scene(path)

@@ -9,8 +9,9 @@ import numba
 import numpy as np
 
 import dttmm
-from dttmm import feedback, simulate
-from dttmm.chains import rigid_chain
+from dttmm import simulate
+from dttmm.results import feedback
+from dttmm.model.chains import rigid_chain
 
 
 def test_the_last_step_lands_on_t_end():

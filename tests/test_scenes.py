@@ -8,13 +8,13 @@ import sys
 import numpy as np
 import pytest
 
-from dttmm.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.cli import main, shipped_scenes
-from dttmm.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
-from dttmm.model import Model
-from dttmm.result import Result
-from dttmm.profiles import KINDS, profile
-from dttmm.scene import SceneError, load_scene, save_scene
+from dttmm.model.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.interfaces.cli import main, shipped_scenes
+from dttmm.model.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
+from dttmm.model.model import Model
+from dttmm.results.result import Result
+from dttmm.model.profiles import KINDS, profile
+from dttmm.interfaces.scene import SceneError, load_scene, save_scene
 
 BUILDERS = {"three_pendulum": three_pendulum, "rigid_chain": lambda: rigid_chain(3),
             "tree": five_link_tree, "arm": lambda: arm("torque"),
@@ -70,7 +70,7 @@ def test_named_points_keep_their_indices_through_a_scene(tmp_path):
     the saved scene keeps their indices (the first written as a stand-in), so the model comes
     back with the same attachment arrays."""
     from dttmm import BallJoint, System
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
     system = System()
     system.add(unit_link(name="hub", points={"a": [0.1, 0, 0], "b": [0.2, 0, 0],
                                              "c": [0.3, 0.1, 0]}), BallJoint())
@@ -182,7 +182,7 @@ def test_a_profile_with_a_bad_key_is_refused(tmp_path):
     with pytest.raises(SceneError, match=r"key 'force'.*'frequency' \(Hz\) and "
                                          r"'angular_frequency'"):
         load_scene(path)
-    from dttmm.profiles import profile
+    from dttmm.model.profiles import profile
     for spec, key in ((dict(profile="table", t=1.0, value=[1.0, 2.0]), "'t'"),
                       (dict(profile="table", t=[0.0, 1.0], value=3.0), "'value'")):
         with pytest.raises(ValueError, match=f"key {key}"):
@@ -271,7 +271,7 @@ def test_figures_and_an_animation_are_written(tmp_path):
 def test_a_stiffened_beam_keeps_its_stiffening_through_a_scene(tmp_path):
     """save_scene writes `stiffening = true` for a beam with geometric stiffening, and the scene
     builds it back (beam_params' STIFFENING column), while a plain beam stays plain."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     for on in (True, False):
         model = three_pendulum(2, stiffening=on)
         save_scene(model, tmp_path / "tp.toml")
@@ -326,7 +326,7 @@ def test_strain_rods_run_from_a_scene_and_save_back_as_rods(tmp_path):
     assert np.all(np.isfinite(result.modal_coordinates)) and result.t[-1] == pytest.approx(0.01)
     import matplotlib
     matplotlib.use("Agg")
-    from dttmm.plots import plot_modal
+    from dttmm.results.plots import plot_modal
     axes = plot_modal(result).axes[0]       # (a rod's strain, not a beam's modal coordinates)
     assert "strain coefficient (1/m" in axes.get_ylabel()
     assert axes.get_legend_handles_labels()[1][:2] == ["inner bend_z1", "inner bend_z2"]

@@ -6,11 +6,12 @@ import pytest
 from numba import njit
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, StrainRod,
-                   build_chain, run_tables)
-from dttmm.chains import arm, unit_link
+                   build_chain)
+from dttmm.solving import run_tables
+from dttmm.model.chains import arm, unit_link
 from dttmm.kernels import model_tables, schema
 from dttmm.kernels.schema import MODEL, SIZES, pack, unpack
-from dttmm.mechanisms import n_four_bar
+from dttmm.model.mechanisms import n_four_bar
 
 
 def test_the_accessors_are_generated_from_the_schema():

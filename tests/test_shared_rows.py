@@ -16,8 +16,8 @@ import pytest
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, RigidBody,
                    build_chain, simulate)
-from dttmm.chains import binary_tree, rigid_chain
-from dttmm.model import SHARED_TABLES, is_shared
+from dttmm.model.chains import binary_tree, rigid_chain
+from dttmm.model.model import SHARED_TABLES, is_shared
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -130,7 +130,7 @@ def test_no_kernel_reads_a_table_past_its_rows():
         "import sys; sys.path.insert(0, 'tests')\n"
         "from test_shared_rows import CASES\n"
         "from dttmm import simulate\n"
-        "from dttmm.chains import binary_tree, rigid_chain\n"
+        "from dttmm.model.chains import binary_tree, rigid_chain\n"
         "cases = list(CASES.values()) + [(lambda: binary_tree(2), dict(full_state=True)),\n"
         "                                (lambda: rigid_chain(4), dict(scheme='dop853'))]\n"
         "for build, options in cases:\n"

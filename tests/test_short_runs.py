@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from dttmm import BallJoint, build_chain, simulate
-from dttmm.chains import arm, rigid_chain, three_pendulum, unit_link
-from dttmm.mechanisms import n_four_bar
-from dttmm.recording import leaves
-from dttmm.result import FIELDS
-from dttmm import run_checks, run_tables
+from dttmm.model.chains import arm, rigid_chain, three_pendulum, unit_link
+from dttmm.model.mechanisms import n_four_bar
+from dttmm.results.recording import leaves
+from dttmm.results.result import FIELDS
+from dttmm.solving import run_checks, run_tables
 
 
 MODELS = {
@@ -67,7 +67,8 @@ def test_a_second_run_does_not_rebuild_the_kernels_model(monkeypatch):
 def test_a_checkpoint_holds_the_finished_runs_arrays_read_only():
     """A checkpoint's arrays are read-only and resume the run: a run of its own (a large
     model's) hands them over without a copy (a million bodies' would double its memory); a
-    run kept on its model (run_plan.py) copies them, since the next run reuses its arrays."""
+    run kept on its model (solving/run_plan.py) copies them, since the next run reuses its
+    arrays."""
     result = simulate(rigid_chain(3), 0.01, 1e-3)
     arrays = result.checkpoint.arrays
     assert arrays and not any(a.flags.writeable for a in arrays)
@@ -91,7 +92,7 @@ def _run_arrays(result):
 @pytest.mark.parametrize("name", list(KEPT))
 def test_a_prepared_run_kept_on_the_model_gives_a_fresh_models_numbers(name):
     """A model whose start calls no function of the user's keeps its prepared run (the kernels'
-    arrays after the consistent start: run_plan.py) and starts the next run from it: runs
+    arrays after the consistent start: solving/run_plan.py) and starts the next run from it: runs
     with other steps and options and a resumed run in between, a run equals the same run of
     the same system built again bit for bit, and a finished run's checkpoint is not changed
     by the runs after it (they reuse the kept arrays, not the checkpoint's)."""
@@ -138,7 +139,7 @@ def test_a_repeated_calls_options_are_kept_and_bad_ones_still_refused():
     """A call with the arguments of an earlier one (same values and types) takes its checked
     options (run_options); True and 1 are not the same argument, so a refused value is refused
     after an accepted one that compares equal; arrays (t_eval) are checked every time."""
-    from dttmm.run_options import run_options
+    from dttmm.solving.run_options import run_options
     model = rigid_chain(2)
     args = dict(rtol=None, atol=0.0, method="riccati", scheme="newmark", rho_inf=1.0,
                 newton_iterations=None, newton_tol=1e-12, record_every=None, record_dt=None,
@@ -212,7 +213,7 @@ def test_a_kept_run_holds_a_bounded_number_of_chunk_arrays_and_reuses_them_bitwi
     """A kept prepared run keeps its chunks' arrays and settings by shape and step (a short
     run's fixed cost), but no more than run_plan.KEEP_CHUNK_ARRAYS of them however many run
     lengths a study asks for; a run after the bound was passed equals a fresh model's."""
-    from dttmm import run_plan
+    from dttmm.solving import run_plan
     model = rigid_chain(3)
     for n in range(1, 3 * run_plan.KEEP_CHUNK_ARRAYS):
         simulate(model, n * 1e-4, 1e-4)
@@ -240,8 +241,8 @@ def test_a_kept_run_in_use_is_not_shared_and_is_released_after_its_run():
     """While a kept prepared run is in use (its lock held: another thread's run, here a run
     entered by hand), a run of the same model and options builds one of its own and gives the
     same numbers; the kept run is released when its run ends, even one that raised."""
-    from dttmm import run_plan
-    from dttmm.run_options import run_options
+    from dttmm.solving import run_plan
+    from dttmm.solving.run_options import run_options
     model = rigid_chain(3)
     first = simulate(model, 0.01, 1e-3)
     opts = run_options(model, 0.01, 1e-3, rtol=None, atol=0.0, method="riccati",

@@ -39,7 +39,7 @@ TOML = re.compile(r"^```toml\n(.*?)^```", re.S | re.M)
 def test_scene_snippets_load_and_run(page, tmp_path):
     """Every ```toml block of a page is a scene that loads and runs two steps as written."""
     from dttmm import simulate
-    from dttmm.scene import load_scene
+    from dttmm.interfaces.scene import load_scene
     for i, block in enumerate(TOML.findall(page.read_text())):
         path = tmp_path / f"{page.stem}_{i + 1}.toml"
         path.write_text(block)

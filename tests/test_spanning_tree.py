@@ -8,9 +8,9 @@ import dttmm
 from dttmm import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge,
                    Ground, PlanarJoint, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                    System, UniversalJoint, simulate_reference)
-from dttmm.assembly import assemble
+from dttmm.model.assembly import assemble
 from dttmm.elements.kinds import COORDINATE_0, RATE_0, row_axes
-from dttmm.mechanisms import _frame, n_four_bar, parallelogram
+from dttmm.model.mechanisms import _frame, n_four_bar, parallelogram
 
 
 def test_the_chain_built_four_bar_is_rooted_at_its_pivots():
@@ -127,7 +127,7 @@ def _slider_joint(kind, drives):
 
 
 def _slider_crank(kind, reversed_, rod_w=None, c_rates=(0.0, 0.0)):
-    """The IFToMM slider-crank (dttmm.mechanisms.slider_crank) built as a chain, the slider
+    """The IFToMM slider-crank (dttmm.model.mechanisms.slider_crank) built as a chain, the slider
     hanging from the rod by the universal joint C, its joint "slide" of `kind` closing the loop
     to the ground at the origin: from the ground to the slider (driven), or, reversed_, from
     the slider to the ground (undriven: the new tree runs it the other way).  rod_w, c_rates:

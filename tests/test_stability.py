@@ -6,7 +6,7 @@ import pytest
 
 from dttmm import (DivergenceError, ElasticHinge, FixedHinge, RigidBody,
                    build_chain, simulate)
-from dttmm.chains import rigid_chain, stiff_cantilever, three_pendulum, unit_link
+from dttmm.model.chains import rigid_chain, stiff_cantilever, three_pendulum, unit_link
 
 H = 1e-3
 K_SPRING = 1e4
@@ -87,7 +87,7 @@ def elastic_clamped_chain():
 # dt = 1e-3 on purpose, 0.1% of the energy)
 @pytest.mark.parametrize("name", ["rigid3", "three_pendulum", "elastic_clamped", "cantilever4"])
 @pytest.mark.filterwarnings("ignore:simulate. the step does not resolve beam:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 def test_direct_and_riccati_agree_on_short_systems(name):
     model = {"rigid3": lambda: rigid_chain(3), "three_pendulum": lambda: three_pendulum(2),
              "elastic_clamped": elastic_clamped_chain,

@@ -1,13 +1,13 @@
-"""Static equilibrium (dttmm/statics.py, docs/statics.md) against analytic answers: a pendulum
-hanging and its small-vibration frequency, the elastica rolled up by a tip moment (and its
-convergence order in the number of elements), Euler's buckling load; and the errors."""
+"""Static equilibrium (dttmm/solving/statics.py, docs/statics.md) against analytic answers: a
+pendulum hanging and its small-vibration frequency, the elastica rolled up by a tip moment (and
+its convergence order in the number of elements), Euler's buckling load; and the errors."""
 import warnings
 
 import numpy as np
 import pytest
 
 import dttmm
-from dttmm import chains
+from dttmm.model import chains
 
 EI = 100.0          # N m^2: the issue's cantilever (L = 1 m)
 
@@ -156,7 +156,7 @@ def test_link_on_an_elastic_hinge_is_analytic():
     ElasticHinge.deflection, which a scene keeps; DT-TMM from the equilibrium moves nothing by
     1e-9 m over 0.5 s."""
     from scipy.optimize import brentq
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     mass, l_c, i_c, k_t, k_z = 2.0, 0.5, 1.0 / 6.0, 2000.0, 15.0
     link = dttmm.RigidBody(mass=mass, inertia=[1e-3, i_c, i_c], inertia_about="mass_center",
                            to_mass_center=[l_c, 0, 0], to_output=[1.0, 0, 0])
@@ -332,8 +332,8 @@ def test_the_shipped_scenes_reach_their_equilibrium(name):
     """dttmm run --static-start's solve on every shipped scene (rigid_chain and tree start
     horizontal; before stop 28 both failed): it converges, and DT-TMM from it stays at rest
     (1e-9 m over 0.05 s)."""
-    from dttmm.scene import load_scene
-    from dttmm.cli import shipped_scenes
+    from dttmm.interfaces.scene import load_scene
+    from dttmm.interfaces.cli import shipped_scenes
     model = load_scene(shipped_scenes()[name]).model
     eq = dttmm.static_equilibrium(model)
     assert eq.residual < 1e-8
@@ -354,12 +354,12 @@ def test_an_element_bent_beyond_its_validity_is_refused():
 
 @pytest.mark.parametrize("n", [1, 2])
 def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
-    """The N-four-bar (closing revolute joints, dttmm.mechanisms.n_four_bar; redundant spatial
+    """The N-four-bar (closing revolute joints, dttmm.model.mechanisms.n_four_bar; redundant spatial
     rows of a planar loop) from its vertical bars 3 rad off upright: they hang straight down
     (B_0 at (0, -1)), the horizontal bars above them, and its one swing has the exact
     reduction's squared frequency g c / I, I = (n + 1) / 3 + n, c = (n + 1) / 2 + n
     (mechanisms.parallelogram); DT-TMM from the equilibrium stays at rest."""
-    from dttmm.mechanisms import n_four_bar
+    from dttmm.model.mechanisms import n_four_bar
     eq = dttmm.static_equilibrium(n_four_bar(n, theta=3.0, rate=0.0))
     r_o = eq.positions()[2]
     assert np.abs(r_o[0] - [0.0, -1.0, 0.0]).max() < 1e-9, r_o[0]
@@ -372,14 +372,14 @@ def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
 
 
 # (the crank turned to 2.5 rad and the loop assembled around it on purpose: AssemblyWarning)
-@pytest.mark.filterwarnings("ignore::dttmm.closures.AssemblyWarning")
+@pytest.mark.filterwarnings("ignore::dttmm.model.closures.AssemblyWarning")
 def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
     """The IFToMM spatial slider-crank under gravity (closed by its prismatic joint): its
     potential, g (0.12 (0.12 + 0.04 cos th) + 0.5 (0.12 + 0.08 cos th) / 2), is least with the
     crank hanging down, th = pi, where the slider sits at x = sqrt(0.3^2 - 0.1^2 - 0.04^2) =
     0.28 m; the one small vibration's frequency equals the reference's swing from 0.01 rad off
     (its period measured over 2 s)."""
-    from dttmm.mechanisms import slider_crank
+    from dttmm.model.mechanisms import slider_crank
     from helpers import crossing_period
     model = slider_crank(crank_rate=0.0)
     eq = dttmm.static_equilibrium(dttmm.assemble(_with_crank(model, 2.5), keep=["A"]))

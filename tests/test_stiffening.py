@@ -6,7 +6,7 @@ import pytest
 from numba import njit
 
 from dttmm import EulerBernoulliBeam, FixedHinge, build_chain, simulate, simulate_reference
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import equations as eq
 from helpers import fitted_order, output_errors_against_reference
 
@@ -24,7 +24,7 @@ def test_the_three_pendulums_stiff_beam_barely_feels_it():
 
 
 def test_the_stiffened_three_pendulum_conserves_energy():
-    """Energy, with the foreshortening's terms (dttmm.result.chain_energies), over 2 s at
+    """Energy, with the foreshortening's terms (dttmm.results.result.chain_energies), over 2 s at
     dt = 1e-3: within 1e-5 of the largest kinetic energy (issue 16)."""
     res = simulate(three_pendulum(2, stiffening=True), 2.0, 1e-3)
     e = res.kinetic + res.potential
@@ -52,7 +52,7 @@ def _hub_cantilever():
 # (bent far on purpose, 0.9-1.1 rad in one element: an integration test against the reference,
 # which shares the modes; the run's warning that a real beam would differ is beside its point)
 @pytest.mark.filterwarnings("ignore:simulate. beam .* rings while bent:"
-                            "dttmm.solver.UnresolvedMotionWarning")
+                            "dttmm.solving.solver.UnresolvedMotionWarning")
 @pytest.mark.parametrize("system", ["three_pendulum", "hub_cantilever"])
 def test_stiffened_beam_converges_to_the_reference_at_order_2(system):
     """DT-TMM against the Newton-Euler reference (rtol 1e-11) on the same stiffened models:
@@ -306,9 +306,10 @@ def test_the_exact_foreshortening_carries_the_default_two_modes_through_the_whip
 
 def test_the_exact_foreshortening_survives_a_scene_file():
     """A model with stiffening="exact" beams (and stretch) saved as a scene and read back has
-    the same beam table, the exact flag included (scene.py writes stiffening = "exact")."""
+    the same beam table, the exact flag included (interfaces/scene.py writes stiffening =
+    "exact")."""
     from dttmm.elements.beam import EXACT, STIFFENING
-    from dttmm.scene import scene_from_dict, scene_of
+    from dttmm.interfaces.scene import scene_from_dict, scene_of
     model = _soft_pendulum(2, 2, "exact", 1260.0)
     data = scene_of(model)
     back = scene_from_dict(data).model
@@ -406,7 +407,7 @@ def test_the_exact_foreshortening_adds_nothing_where_the_beams_bend_little():
     on the stiffened three-pendulum (its beam deflects by 0.5 mm) the two references agree to
     1e-8 m over 0.5 s (measured 3.2e-10 m), both keeping the energy to 1e-12 of the largest
     kinetic energy (measured 2e-15)."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     from dttmm.reference.newton_euler import simulate_reference
     t = np.linspace(0.0, 0.5, 26)
     model = three_pendulum(2, stiffening=True)
@@ -421,7 +422,7 @@ def test_describe_says_how_far_a_stiffened_element_holds():
     """A stiffened beam of loaded-end modes (welded elements) says in describe() how far it may
     bend before its second-order energy stops holding (docs/beam.md); a pinned one, which holds
     past where a modal element describes its deflection, does not."""
-    from dttmm.chains import three_pendulum
+    from dttmm.model.chains import three_pendulum
     welded = _soft_pendulum(4, 2).describe()
     assert "bends less than ~0.17 rad over its length with 2 modes per plane" in welded
     assert "bends less than" not in three_pendulum(2, stiffening=True).describe()

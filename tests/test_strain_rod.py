@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 import dttmm
 from dttmm.elements.strain_rod import (STRAIGHT, kinematics_tables, stations, strain_basis)
-from dttmm.rod_motion import rod_end_section
+from dttmm.model.rod_motion import rod_end_section
 from dttmm.kernels.transfers.strain_rod import (SERIES_BELOW, jacobian_coefficients,
                                                 rod_kinematics)
 from dttmm.reference.newton_euler import _Problem
@@ -710,8 +710,8 @@ def test_describe_says_which_element_suits_and_steps_for_the_rods_frequencies():
     resolves the highest (20 steps per period)."""
     import sys
     from pathlib import Path
-    from dttmm.describe import element_advice, suggested_dt
-    from dttmm.rod_motion import rod_frequencies
+    from dttmm.interfaces.describe import element_advice, suggested_dt
+    from dttmm.model.rod_motion import rod_frequencies
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
     import falling_pendulum
     modal = element_advice(falling_pendulum.pendulum(8, "modal"))

@@ -105,7 +105,7 @@ def test_bad_stretch_input_is_refused_naming_the_beam(kwargs, words):
 def test_stretch_in_a_scene_round_trip(tmp_path):
     """A scene's beam takes axial_modes and axial_stiffness, save_scene writes them back;
     `describe` lists the stretch modes' frequencies."""
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.interfaces.scene import load_scene, save_scene
     model = rod(1, 2, initial_modal_coordinates=[0.0, 0.0, 1e-4, 0.0], name="rod")
     save_scene(model, tmp_path / "rod.toml")
     again = load_scene(tmp_path / "rod.toml").model

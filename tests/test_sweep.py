@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm.chains import rigid_chain
+from dttmm.model.chains import rigid_chain
 
 RUNS = {"n_links": [3], "gravity": [(0.0, -9.81, 0.0), (0.0, -4.0, 0.0)],
         "tip_angular_velocity": [(0.0, 0.1, 0.0), (0.3, 0.0, 0.2)]}
@@ -68,7 +68,7 @@ def test_a_dask_sweep_in_a_script_without_a_main_guard_says_so(tmp_path):
     import subprocess
     import sys
     script = tmp_path / "sweep_script.py"
-    script.write_text("import dttmm\nfrom dttmm.chains import rigid_chain\n"
+    script.write_text("import dttmm\nfrom dttmm.model.chains import rigid_chain\n"
                       "dttmm.sweep(rigid_chain, {'n_links': [2]}, 0.01, 1e-3, engine='dask',\n"
                       "            n_workers=1)\n")
     run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,

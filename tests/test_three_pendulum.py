@@ -8,9 +8,9 @@ import pytest
 from helpers import fitted_order
 
 from dttmm import simulate
-from dttmm.chains import three_pendulum
+from dttmm.model.chains import three_pendulum
 from dttmm.reference import simulate_reference
-from dttmm.result import beam_midpoint_deflection
+from dttmm.results.result import beam_midpoint_deflection
 
 T_END = 2.0
 SAMPLE = 0.01

@@ -8,7 +8,7 @@ import pytest
 import dttmm
 from dttmm import (BallJoint, ElasticHinge, FixedHinge, RigidBody, System, build_chain,
                    simulate)
-from dttmm.chains import three_pendulum, unit_link
+from dttmm.model.chains import three_pendulum, unit_link
 from dttmm.elements import BODY_KINDS, JOINT_KINDS, kinds
 
 
@@ -161,8 +161,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     # (statics, linear models) and as one pass of the general loop's skeleton (a run's)
     from dttmm.kernels.stepping import step as kstep
     from dttmm.kernels.stepping.loop import Monitor, Settings
-    from dttmm.run_tables import Workspace, kernel_params
-    from dttmm.consistent_start import _consistent_start
+    from dttmm.solving.run_tables import Workspace, kernel_params
+    from dttmm.solving.consistent_start import _consistent_start
     for odd, element in ((odd_body, "body 'body1' \\(kind 7\\)"),
                          (odd_hinge, "hinge 'FixedHinge1' \\(kind 9\\)")):
         ws = Workspace(odd)
@@ -184,7 +184,7 @@ def test_a_start_pass_that_ends_without_detail_never_reads_as_done():
     not-finite start, never 0, whichever loop ran the pass."""
     from dttmm.kernels.stepping.loop import (NOT_FINITE, OK, SINGULAR, UNCONVERGED,
                                              UNSUPPORTED)
-    from dttmm.consistent_start import _NOT_FINITE_START, _start_status
+    from dttmm.solving.consistent_start import _NOT_FINITE_START, _start_status
 
     def info(status, detail):
         return np.array([status, 0, detail, 0, 0], dtype=np.int64)

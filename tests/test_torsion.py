@@ -137,7 +137,7 @@ def test_twist_in_a_scene_round_trip(tmp_path):
     """A scene's beam takes torsion_modes and torsional_stiffness, save_scene writes them back,
     with the twist coordinates among the initial modal coordinates; `describe` lists the
     twist modes' frequencies."""
-    from dttmm.scene import load_scene, save_scene
+    from dttmm.interfaces.scene import load_scene, save_scene
     model = shaft(1, 2, initial_modal_coordinates=[0.0, 0.0, 0.01, -0.002], name="shaft")
     save_scene(model, tmp_path / "shaft.toml")
     again = load_scene(tmp_path / "shaft.toml").model

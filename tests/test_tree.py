@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from dttmm import BallJoint, ElasticHinge, FixedHinge, System, simulate
-from dttmm.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_chain,
+from dttmm.model.chains import (TURNED_ABOUT_Y, binary_tree, five_link_tree, rigid_chain,
                           three_pendulum, unit_link)
-from dttmm.model import Model
+from dttmm.model.model import Model
 from dttmm.reference import simulate_reference
-from dttmm import run_plan
-from dttmm import run_tables
+from dttmm.solving import run_plan
+from dttmm.solving import run_tables
 
 def angular_momentum(model, res):
     """(T, 3) total angular momentum about the world origin from the recorded state."""

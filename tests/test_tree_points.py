@@ -6,9 +6,9 @@ import numpy as np
 
 from dttmm import (BallJoint, ElasticHinge, EulerBernoulliBeam, FixedHinge, RevoluteJoint,
                    RigidBody, System, simulate)
-from dttmm.chains import TURNED_ABOUT_Y, unit_link
+from dttmm.model.chains import TURNED_ABOUT_Y, unit_link
 from dttmm.reference import simulate_reference
-from dttmm.result import angular_momentum
+from dttmm.results.result import angular_momentum
 
 SIDE, TOP = [0.3, 0.2, -0.1], [0.6, 0.0, 0.3]
 

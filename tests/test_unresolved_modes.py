@@ -9,7 +9,7 @@ import pytest
 
 from dttmm import (EulerBernoulliBeam, FixedHinge, JointMotion, RevoluteJoint, RigidBody, System,
                    UnresolvedMotionWarning, simulate)
-from dttmm.describe import beam_frequencies
+from dttmm.interfaces.describe import beam_frequencies
 
 
 def smooth(amplitude, duration):

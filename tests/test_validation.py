@@ -5,7 +5,7 @@ import pytest
 
 from dttmm import (BallJoint, DivergenceError, ElasticHinge, FixedHinge, RigidBody, build_chain,
                    simulate)
-from dttmm.chains import rigid_chain, unit_link
+from dttmm.model.chains import rigid_chain, unit_link
 
 
 def body(**kw):
@@ -136,7 +136,7 @@ def test_the_model_is_read_only_and_the_kernels_see_writable_arrays():
     for read-only arrays (numba types them apart), also after a run's checkpoint has made its
     own arrays read-only (a second run of each model)."""
     from dttmm import simulate_reference
-    from dttmm.chains import arm, three_pendulum
+    from dttmm.model.chains import arm, three_pendulum
     from dttmm.kernels import python_twin
     from dttmm.kernels.stepping import loop, step as kstep
     from dttmm.reference import equations
@@ -162,7 +162,7 @@ def test_motions_defined_from_t_0_on_are_accepted():
     differences at t = 0 (they called it at t = -1e-5 s), and still catch a wrong derivative
     there."""
     from dttmm import JointMotion, RevoluteJoint, System
-    from dttmm.chains import unit_link
+    from dttmm.model.chains import unit_link
 
     def angle(t):
         assert t >= 0.0, "called before t = 0"

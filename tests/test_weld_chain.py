@@ -9,7 +9,7 @@ from helpers import fused_and_general
 
 from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, Ground, PrescribedMotion,
                    RigidBody, build_chain, forward_dynamics, simulate)
-from dttmm.chains import stiff_cantilever
+from dttmm.model.chains import stiff_cantilever
 
 HUB = PrescribedMotion.spin_about_axis([0, 0, 1], angle=lambda t: 0.5 * t * t, rate=lambda t: t,
                                        acceleration=lambda t: 1.0, position=[0.1, 0.0, 0.0])

@@ -663,7 +663,7 @@ class EulerBernoulliBeam:
                              f"(the default, None, keeps as many modes as the beam needs for "
                              f"{ACCURACY:.1%} accuracy)")
         if auto:
-            # no cutoff: FROM_STEP, derived by the build from its step= (freeze.py)
+            # no cutoff: FROM_STEP, derived by the build from its step= (model/freeze.py)
             cutoff = (FROM_STEP if self.frequency_cutoff is None else
                       finite_scalar(who, "frequency_cutoff", self.frequency_cutoff,
                                     positive=True))
@@ -696,7 +696,7 @@ class EulerBernoulliBeam:
         per_plane = self.modes_per_plane
         if accurate:
             # initial modal coordinates given: their size says how many modes; otherwise the
-            # build counts them (freeze.py::_resolve_mode_families, accurate_mode_count)
+            # build counts them (model/freeze.py::_resolve_mode_families, accurate_mode_count)
             given = [np.size(v) for v in (self.initial_modal_coordinates,
                                           self.initial_modal_velocities) if v is not None]
             bending = (given[0] - n_twist - n_axial) if given else 0
@@ -733,7 +733,7 @@ class EulerBernoulliBeam:
                                                                          (bool, np.bool_)):
             raise ValueError(f"{who}: stiffening must be True, False, 'exact' or None (on unless "
                              f"the beam would lock: the default), got {self.stiffening!r}")
-        # None: AUTO, resolved by build_chain (freeze.py::_resolve_mode_families)
+        # None: AUTO, resolved by build_chain (model/freeze.py::_resolve_mode_families)
         row[STIFFENING] = (AUTO if self.stiffening is None else EXACT if exact
                            else float(self.stiffening))
         # the undeformed beam as a rigid body (line mass on the x axis plus the polar inertia)

@@ -175,11 +175,11 @@ JOINT_KINDS = (
          doc="docs/joints.md", what="a planar joint"),
 )
 
-# the kinds of a closing joint's constraint rows (closures.py::constraint_rows, read by
+# the kinds of a closing joint's constraint rows (model/closures.py::constraint_rows, read by
 # kernels/assembly/closure.py and the reference): gaps e . (p_b - p_a) with e fixed in the world
 # or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an axis fixed in a's
-# or in b's frame (closures.py::driven_directions), and an elastic hinge's rotation about an
-# axis fixed in a's frame (closures.py::spring_directions)
+# or in b's frame (model/closures.py::driven_directions), and an elastic hinge's rotation about an
+# axis fixed in a's frame (model/closures.py::spring_directions)
 GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B, ROTATION_A = 0, 1, 2, 3, 4, 5
 
 BODY_KIND = {k.code: k for k in BODY_KINDS}

@@ -17,7 +17,7 @@ from .rigid_body import straight_line_body
  ROD_TWIST, ROD_STRETCH, ROD_STATIONS, ROD_DAMPING) = range(14)
 ROD_PARAM_SIZE = 14
 MAX_STRAIN_MODES = 6
-DEFAULT_STRAIN_MODES = 2      # strain_modes=None where no end is pinned (freeze.py raises it)
+DEFAULT_STRAIN_MODES = 2      # strain_modes=None where no end is pinned (model/freeze.py raises it)
 
 # the strain's components, their rows in xi = [angular; linear] (section frame): the twist
 # kappa_x, the curvatures kappa_y (bending toward -z) and kappa_z (toward +y), the stretch

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..kernels import kernel
 from ..kernels.algebra.mat3 import put2
-from ..profiles import Profile
+from ..model.profiles import Profile
 from .rotations import _expm
 
 CONSTANT, LINEAR, SINE, RAMP, SPIN_UP = 0, 1, 2, 3, 4

@@ -257,12 +257,12 @@ from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED
 from ..elements.kinds import COORDINATE_0, JOINT_KIND, RATE_0, coordinate_count
 from ..kernels import python_twin
-from ..assembly import assemble
-from ..closures import (check_drives_move, closure_forces, constraint_rows,
-                        has_closure_drives, loop_residuals)
-from ..model import Model
-from ..result import Result, chain_energies
-from ..sections import point_positions, rotation_to_quaternion
+from ..model.assembly import assemble
+from ..model.closures import (check_drives_move, closure_forces, constraint_rows,
+                              has_closure_drives, loop_residuals)
+from ..model.model import Model
+from ..results.result import Result, chain_energies
+from ..model.sections import point_positions, rotation_to_quaternion
 
 from .rows import JOINTS_WITH_COORDINATES, N_SHAPE_ROWS, _SY
 from .shapes import (beam_shape_constants, exact_foreshortening_table, stiffening_matrices,

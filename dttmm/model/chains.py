@@ -1,0 +1,178 @@
+"""Ready-made chains and trees used by the examples, tests and benchmarks."""
+import numba
+import numpy as np
+
+from ..elements import BallJoint, FixedHinge, RigidBody
+from .system import System, build_chain
+
+# +90 degrees about world y: a body's x axis along world -z
+TURNED_ABOUT_Y = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+
+
+# the unit link's vectors, shared by every link (immutable): a million links each with their
+# own three lists held 420 MB of the million-link chain's 2.3 GB peak (issue 65, item 11)
+_UNIT_INERTIA, _UNIT_MASS_CENTER, _UNIT_OUTPUT = (1.0 / 6.0, 5.0 / 12.0, 5.0 / 12.0), \
+    (0.5, 0.0, 0.0), (1.0, 0.0, 0.0)
+
+
+def unit_link(**kwargs):
+    """The paper's 1 m, 1 kg link: mass centre at [0.5, 0, 0], output point at [1, 0, 0] m,
+    inertia about the input point diag(1/6, 5/12, 5/12) kg m^2 (a uniform 1 m cube)."""
+    return RigidBody(mass=1.0, inertia=_UNIT_INERTIA, inertia_about="input",
+                     to_mass_center=_UNIT_MASS_CENTER, to_output=_UNIT_OUTPUT, **kwargs)
+
+
+def rigid_chain(n_links, gravity=(0.0, -9.81, 0.0), tip_angular_velocity=(0.0, 0.1, 0.0)):
+    """n_links unit links joined by ball-and-socket hinges, link 1 to the ground at the origin,
+    all along +x at rest except the last, which spins at tip_angular_velocity."""
+    if int(n_links) != n_links or n_links < 1:
+        raise ValueError(f"rigid_chain: n_links must be an integer >= 1, got {n_links!r}")
+    elements = []
+    for k in range(int(n_links)):
+        w = np.asarray(tip_angular_velocity, float) if k == n_links - 1 else None
+        elements += [BallJoint(), unit_link(name=f"link{k + 1}", angular_velocity=w)]
+    return build_chain(elements, gravity=gravity)
+
+
+def three_pendulum(modes_per_plane=2, damping_ratio=0.0, gravity=(0.0, -9.81, 0.0),
+                   stiffness_factor=1.0, tip_angular_velocity=(0.0, 0.1, 0.0), stiffening=False):
+    """The paper's Section 5 system (notes §6): rigid body 2, ball joint, beam 4 (1 m, 1.32 kg,
+    E = 2.5e10 Pa, rho = 3300 kg/m^3, 20 mm square section), ball joint, rigid body 6; joint 1
+    joins body 2 to the ground at the origin.  All along +x at rest, except body 6 with angular
+    velocity tip_angular_velocity ([0, 0.1, 0] rad/s).  stiffness_factor multiplies the beam's
+    modulus (a stiff variant for the stability study); stiffening: the beam's geometric
+    stiffening (docs/beam.md; off by default here: the paper's beam, the main job's)."""
+    from ..elements import EulerBernoulliBeam
+    side = 0.02
+    area = side * side
+    beam = EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
+                              bending_stiffness=stiffness_factor * 2.5e10 * side ** 4 / 12.0,
+                              polar_inertia_per_length=3300.0 * area * side * side / 6.0,
+                              modes_per_plane=modes_per_plane, damping_ratio=damping_ratio,
+                              stiffening=stiffening, name="beam4")
+    return build_chain([BallJoint(name="joint1"), unit_link(name="body2"),
+                        BallJoint(name="joint3"), beam,
+                        BallJoint(name="joint5"),
+                        unit_link(name="body6", angular_velocity=tip_angular_velocity)],
+                       gravity=gravity)
+
+
+def stiff_cantilever(n_elements, length=5.0, joint=FixedHinge):
+    """A cantilever of n_elements beam elements (EI = 1e4 N m^2, 2 kg/m, two modes per plane)
+    welded end to end by fixed hinges: the stiff beam chain of the stability study.  joint:
+    the hinge class before every element (BallJoint: a hanging chain of the same elements)."""
+    from ..elements import EulerBernoulliBeam
+    elements = []
+    for _ in range(n_elements):
+        elements += [joint(),
+                     EulerBernoulliBeam(length=length / n_elements, bending_stiffness=1e4,
+                                        mass_per_length=2.0, polar_inertia_per_length=1e-3,
+                                        modes_per_plane=2)]
+    return build_chain(elements)
+
+
+def five_link_tree(gravity=(0.0, -9.81, 0.0)):
+    """Five unit links joined by ball joints (examples/tree.py): link 1 on the ground at the
+    origin; links 2 and 4 both on link 1's output point; link 3 on link 2's, link 5 on link 4's.
+    Links 1-3 along +x; links 4 and 5 turned by +90 deg about world y (along -z: link 4's output
+    at (1, 0, -1), link 5's at (1, 0, -2)).  All at rest except link 3, world angular velocity
+    [0, 0.1, 0] rad/s, and link 5, [0.2, 0, 0] rad/s."""
+    system = System(gravity=gravity)
+    system.add(unit_link(name="link1"), BallJoint(name="joint1"))
+    system.add(unit_link(name="link2"), BallJoint(name="joint2"), parent="link1")
+    system.add(unit_link(name="link3", angular_velocity=[0.0, 0.1, 0.0]),
+               BallJoint(name="joint3"), parent="link2")
+    system.add(unit_link(name="link4", rotation=TURNED_ABOUT_Y), BallJoint(name="joint4"),
+               parent="link1")
+    system.add(unit_link(name="link5", rotation=TURNED_ABOUT_Y, angular_velocity=[0.2, 0.0, 0.0]),
+               BallJoint(name="joint5"), parent="link4")
+    return system.build()
+
+
+def binary_tree(depth, gravity=(0.0, -9.81, 0.0)):
+    """2^depth - 1 unit links joined by ball joints, each carrying two children on its output
+    point (node i's parent is (i - 1) // 2, breadth first), the root on the ground at the
+    origin.  The children are turned alternately by +-0.3 rad about world y, so the tree
+    spreads; every fifth link spins at [0, 0, 0.3] rad/s, the rest are at rest."""
+    if int(depth) != depth or depth < 1:
+        raise ValueError(f"binary_tree: depth must be an integer >= 1, got {depth!r}")
+    c, s = np.cos(0.3), np.sin(0.3)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    system = System(gravity=gravity)
+    system.add(unit_link(name="n0"), BallJoint())
+    for i in range(1, 2 ** int(depth) - 1):
+        system.add(unit_link(name=f"n{i}", rotation=turn if i % 2 else turn.T,
+                             angular_velocity=[0.0, 0.0, 0.3] if i % 5 == 0 else None),
+                   BallJoint(), parent=f"n{(i - 1) // 2}")
+    return system.build()
+
+
+@numba.njit
+def arm_servo(t, q, q_dot):
+    """The arm's joint-1 feedback law compiled with numba (drive "pd-njit"): kp (target - q) +
+    kd (target' - q'), kp = 200 N m/rad, kd = 20 N m s/rad, target = 0.5 t + 0.2 (1 - cos 2t)
+    rad; the same law as drive "pd"'s PDTracking."""
+    target = 0.5 * t + 0.2 * (1.0 - np.cos(2.0 * t))
+    rate = 0.5 + 0.4 * np.sin(2.0 * t)
+    return 200.0 * (target - q) + 20.0 * (rate - q_dot)
+
+
+def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=False):
+    """The arm of examples/arm.py (docs/joints.md): link 1 on a revolute joint at the origin
+    about world y; link 2 on a revolute joint at link 1's output point about link 1's body z;
+    link 3 on a universal joint at link 2's output point (first axis link 2's body z, second
+    link 3's body y); body 4 (0.5 kg, inertia diag(0.01) kg m^2 about its mass centre, which is
+    its joint point) on a prismatic joint along link 3's body x through link 3's output point,
+    with a 50 N/m spring and a 0.5 N s/m damper.  All along +x, joint 1 turning at 0.5 rad/s.
+    drive "torque": 2 sin(pi t) N m on joint 1; "motion": joint 1's angle prescribed as
+    0.5 t + 0.2 (1 - cos 2t) rad; "pd": joint 1 tracks that angle by PD feedback, kp = 200 N
+    m/rad, kd = 20 N m s/rad (a PDTracking, inside the compiled loop); "pd-njit": the same
+    law written as a numba-compiled JointForce (arm_servo), also inside it.  flexible: link 2 is
+    the paper's beam 4 (1 m, 20 mm square section, E = 2.5e10 Pa, rho = 3300 kg/m^3).
+    undriven: no drive on joint 1 and no damper
+    (the energy test)."""
+    from ..elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
+                            PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
+    from .profiles import ProfileForce, profile
+    if drive not in ("torque", "motion", "pd", "pd-njit"):
+        raise ValueError(f"arm: drive must be 'torque', 'motion', 'pd' or 'pd-njit', got "
+                         f"{drive!r}")
+    if undriven:
+        first = None
+    elif drive == "pd-njit":
+        first = JointForce(arm_servo)
+    elif drive == "torque":
+        first = JointForce(ProfileForce(profile(       # 2 sin(pi t), N m
+            {"profile": "sine", "amplitude": 2.0, "frequency": 0.5})))
+    else:                                               # 0.5 t + 0.2 (1 - cos 2t), rad
+        angle = profile({"profile": "sum", "terms": [
+            {"profile": "linear", "slope": 0.5},
+            {"profile": "sine", "amplitude": -0.2, "angular_frequency": 2.0,
+             "phase": np.pi / 2, "offset": 0.2}]})
+        first = (JointMotion(position=angle, velocity=angle.rate,
+                             acceleration=angle.acceleration) if drive == "motion" else
+                 PDTracking(kp=200.0, kd=20.0, target=angle, target_rate=angle.rate))
+    if flexible:
+        side = 0.02
+        area = side * side
+        link2 = EulerBernoulliBeam(length=1.0, density=3300.0, area=area,
+                                   bending_stiffness=2.5e10 * side ** 4 / 12.0,
+                                   polar_inertia_per_length=3300.0 * area * side * side / 6.0,
+                                   modes_per_plane=1, name="link2")
+        # (one mode: with the default's two (the second at 88 Hz) the joints' order tests at
+        # dt 5e-4 and 2.5e-4 s measured order 1.5, outside the asymptotic range; describe()
+        # shows what one mode leaves out: 17% on the first frequency)
+    else:
+        link2 = unit_link(name="link2")
+    system = System(gravity=gravity)
+    system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=first,
+                                                      name="joint1"))
+    system.add(link2, RevoluteJoint(axis=[0, 0, 1], name="joint2"), parent="link1")
+    system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
+                                                       name="joint3"), parent="link2")
+    system.add(RigidBody(mass=0.5, inertia=[0.01, 0.01, 0.01], inertia_about="mass_center",
+                         name="body4"),
+               PrismaticJoint(axis=[1, 0, 0], name="joint4",
+                              drive=SpringDamper(50.0, 0.0 if undriven else 0.5)),
+               parent="link3")
+    return system.build()
