@@ -51,7 +51,7 @@ _drop_stale_caches()
 def compiled_dttmm_function(event):
     """The Python function a "numba:compile" event compiles if it is dttmm's (a kernel, a
     kernel's copy or twin, the reference's), else None (a user's own numba function).  The
-    listeners that act on dttmm's compiles only (here; feedback.py's notice) ask this."""
+    listeners that act on dttmm's compiles only (here; results/feedback.py's notice) ask this."""
     function = getattr(event.data.get("dispatcher"), "py_func", None)
     return function if getattr(function, "__module__", "").startswith("dttmm") else None
 

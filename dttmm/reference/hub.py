@@ -1,10 +1,11 @@
 """A ground spun about a fixed axis by a profile's angle, evaluated in compiled code for the
 reference's integrator (integrator.py): the model's PrescribedMotion.spin_about_axis with a
-dttmm.profiles Profile as its angle, read here as a table of terms, so that a run of a driven hub
-(seed 000's spin-up, a scene's [ground.spin]) needs no Python between its right-hand sides.
+dttmm.model.profiles Profile as its angle, read here as a table of terms, so that a run of a
+driven hub (seed 000's spin-up, a scene's [ground.spin]) needs no Python between its right-hand
+sides.
 
     angle(t) = sum of the terms' values (a "sum" profile's terms, flattened), each in closed
-    form as dttmm/profiles.py gives it:
+    form as dttmm/model/profiles.py gives it:
       constant  v                                     0                  0
       linear    o + s t                               s                  0
       sine      o + a sin(w t + p)                    a w cos(w t + p)   -a w^2 sin(w t + p)

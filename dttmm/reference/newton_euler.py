@@ -1,6 +1,6 @@
 """Independent reference solver: global Newton-Euler equations with joint reactions.
 
-This module shares only the model description (dttmm.model, dttmm.elements, dttmm.result) with
+This module shares only the model description (dttmm.model, dttmm.elements, dttmm.results) with
 the rest of the package; it uses no transfer matrices, and it evaluates the beams' mode shapes
 itself (it does not call dttmm.elements.beam.mode_shapes).
 
@@ -149,8 +149,8 @@ drive_force), and its q, q' are read from the motion at every evaluation (their 
 only carry them along).  On the parent the loads are -F_k at r_O,P + d and -N_k: Euler row
 + (rho_O + d) x F_k + N_k, a beam parent's modal rows + B_r^T F_k + B_t^T (N_k + d x F_k), the
 transposes of the constraint rows' parent columns as for a weld.  The drive springs store
-1/2 k (q - rest)^2 (dttmm.result.chain_energies(joint_coordinates=...)), the dampers dissipate
-c q'^2, a FORCE drive does the work tau q'.
+1/2 k (q - rest)^2 (dttmm.results.result.chain_energies(joint_coordinates=...)), the dampers
+dissipate c q'^2, a FORCE drive does the work tau q'.
 
 Euler-Bernoulli beams (docs/beam.md).  A beam body carries, besides its frame (quaternion, w, or
 the inboard output section through a fixed hinge), its modal coordinates eta = [eta_v (n),
@@ -199,8 +199,8 @@ the end forces work through it), and the modal rows gain mu e1 . (g - a_I) D1 et
 mu (w_y^2 + w_z^2) D2 eta on the left, with D0, D1, D2 = int (1, L - x, (L^2 - x^2) / 2) Y' Y'^T
 (stiffening_matrices: polynomial moments or quadrature of the slopes).  These are Lagrange's
 equations of the kinetic and potential energy to second order in eta, whose terms in c
-dttmm.result.chain_energies counts by its own quadrature of c(x).  (The energies in
-dttmm.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
+dttmm.results.result.chain_energies counts by its own quadrature of c(x).  (The energies in
+dttmm.results.result are computed independently, by quadrature of |r'(x)|^2 and g . r(x).)
 
 Geometric stiffening, exact (simulate_reference(exact_foreshortening=True); docs/beam.md, "Where
 the second-order energy stops"): the energies to second order in eta are not positive where an
@@ -215,8 +215,9 @@ p p^T, Phi, p^ Phi and Phi^T Phi over the points, the velocity terms those of
 p''), and the modal rows Phi^T (A^T g - w x (w x p) - 2 w x Phi eta' - kappa) (_beam_terms_exact):
 Lagrange's equations of the kinetic energy 1/2 int mu |r'|^2 exactly, positive for every
 motion, and of the potential energy with the same sections.  The output point is the same as
-above (exact in c already), and dttmm.result.chain_energies(exact_foreshortening=True) counts
-the energies with the same sections.  The stiffening terms above (G eta, the Newton row's
+above (exact in c already), and
+dttmm.results.result.chain_energies(exact_foreshortening=True) counts the energies with the same
+sections.  The stiffening terms above (G eta, the Newton row's
 -mu A e1 (D1 eta)^T eta'') are the first-order parts of these sums.
 
 Torsion (docs/beam.md; a beam's TORSION_MODES): the sections twist by psi(x) = Psi(x) . eta_t
@@ -690,7 +691,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     Result
         ``dttmm.Result`` with method "newton-euler/DOP853" (or "/RK45"): positions, velocities,
         rotations, angular velocities and accelerations, the forces and moments at every
-        body's input, the energies (``dttmm.result.chain_energies``) at every recorded time;
+        body's input, the energies (``dttmm.results.result.chain_energies``) at every recorded time;
         wall_time (s, the integration only), n_steps (the integrator's steps) and info, which
         holds nfev and the number of state variables (n_state) and unknowns (n_unknowns) of
         the global system.  For models with EulerBernoulliBeam bodies (every mode family of

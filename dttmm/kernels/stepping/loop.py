@@ -78,7 +78,7 @@ Inputs = namedtuple("Inputs", [
     "joint_input",                     # (m, n, 3, 3) per joint coordinate at t_{s+1}: a
                                        # prescribed motion's (q, q', q''), a JointForce's value
     "closure_target",                  # (m, R, 3) per closing joints' row at t_{s+1}: a driven
-                                       # coordinate's (q, q', q''), else 0 (closures.py)
+                                       # coordinate's (q, q', q''), else 0 (model/closures.py)
 ])
 
 Record = namedtuple("Record", [
