@@ -42,8 +42,12 @@ DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_10
 _CHILD = r"""
 import statistics, sys
 from dttmm import simulate
-from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.model.mechanisms import n_four_bar, slider_crank
+try:
+    from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+    from dttmm.model.mechanisms import n_four_bar, slider_crank
+except ImportError:     # a checkout from before the layer folders (issue 66)
+    from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+    from dttmm.mechanisms import n_four_bar, slider_crank
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -62,8 +66,12 @@ print(1e6 * statistics.median(costs))
 _CALL_CHILD = r"""
 import statistics, time
 from dttmm import simulate
-from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-from dttmm.model.mechanisms import n_four_bar, slider_crank
+try:
+    from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+    from dttmm.model.mechanisms import n_four_bar, slider_crank
+except ImportError:     # a checkout from before the layer folders (issue 66)
+    from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
+    from dttmm.mechanisms import n_four_bar, slider_crank
 model = {expr}
 for _ in range(50):
     simulate(model, 1e-4, 1e-4)
@@ -88,6 +96,18 @@ def us_per_step(checkout, system, call=False):
     return float(out.stdout.strip().splitlines()[-1])
 
 
+def _chains_of(package):
+    """A package's chains and mechanisms as one namespace (dttmm/model/ since the layer folders;
+    dttmm/ in checkouts from before them)."""
+    import importlib
+    try:
+        names = [f"{package}.model.chains", f"{package}.model.mechanisms"]
+        modules = [importlib.import_module(n) for n in names]
+    except ImportError:
+        modules = [importlib.import_module(f"{package}.{n}") for n in ("chains", "mechanisms")]
+    return {**vars(modules[0]), **vars(modules[1])}
+
+
 def in_process(a_dir, b_dir, systems, pairs):
     """{system: (median us A, median us B, [ratios])} with both packages in this process."""
     import importlib
@@ -100,11 +120,11 @@ def in_process(a_dir, b_dir, systems, pairs):
                         ignore=shutil.ignore_patterns("__pycache__"))   # caches name dttmm
     sys.path.insert(0, root)
     packages = [importlib.import_module(name) for name in ("dttmm_a", "dttmm_b")]
-    chains = [importlib.import_module(f"{name}.model.chains") for name in ("dttmm_a", "dttmm_b")]
+    chains = [_chains_of(name) for name in ("dttmm_a", "dttmm_b")]
     out = {}
     for system in systems:
         expr, steps = SYSTEMS[system]
-        models = [eval(expr, vars(c)) for c in chains]                    # noqa: S307
+        models = [eval(expr, c) for c in chains]                    # noqa: S307
         dt = 1e-4
         short = max(1, steps // 5)
 
