@@ -101,7 +101,7 @@ def main(argv=None):
     print(f"{'model':<28} {'rows':>5} {'loops us/step':>14} {'opened us/step':>15} {'ratio':>7}")
     for name, model, steps in cases:
         with_loops, tree = measure(model, steps, 2 if args.quick else 3)
-        rows_count = len(dttmm.model.closures.constraint_rows(model)[0])
+        rows_count = len(dttmm.model.loop_rows.constraint_rows(model)[0])
         rows.append(dict(model=name, rows=rows_count, loops_us=with_loops * 1e6,
                          opened_us=tree * 1e6, ratio=with_loops / tree))
         print(f"{name:<28} {rows_count:>5} {with_loops * 1e6:>14.0f} {tree * 1e6:>15.0f} "

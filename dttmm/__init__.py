@@ -7,7 +7,7 @@ from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulli
                        PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
                        UniversalJoint)
 from .model.assembly import assemble
-from .model.closures import loop_residuals
+from .model.loop_kinematics import loop_residuals
 from .solving.dynamics import forward_dynamics, linearize, ode
 from .model.model import Ground, Model, PrescribedMotion
 from .model.system import System, build_chain

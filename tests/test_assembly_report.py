@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dttmm
-from dttmm.model.closures import AssemblyWarning
+from dttmm.model.loop_kinematics import AssemblyWarning
 
 UP = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]          # a bar's x along world y
 

@@ -6,7 +6,7 @@ import pytest
 
 from dttmm.solving.loop_dynamics import loop_accelerations
 from dttmm.model.mechanisms import n_four_bar, slider_crank
-from dttmm.reference.newton_euler import _Problem
+from dttmm.reference.problem import _Problem
 
 
 @pytest.mark.parametrize("n", [1, 3])

@@ -7,7 +7,8 @@ import dttmm
 from dttmm import (BallJoint, FixedHinge, PrismaticJoint,
                    RevoluteJoint, RigidBody, System, UniversalJoint, build_chain, simulate,
                    simulate_reference)
-from dttmm.model.closures import GROUND, closure_gaps, closure_points
+from dttmm.model.loop_rows import GROUND
+from dttmm.model.loop_kinematics import closure_gaps, closure_points
 from dttmm.elements import BALL, PRISMATIC, REVOLUTE, UNIVERSAL
 
 from helpers import rot_z

@@ -1,4 +1,4 @@
-"""An elastic hinge closing a loop (closures.spring_directions, docs/loops.md "An elastic hinge
+"""An elastic hinge closing a loop (loop_rows.spring_directions, docs/loops.md "An elastic hinge
 closing a loop"): the same mechanism built with the hinge in the tree and with it closing the
 loop is one physical system, so the closing hinge in DT-TMM and in the reference converges to
 the reference's tree hinge, whose equations (docs/hinges.md) share no code with the rows."""

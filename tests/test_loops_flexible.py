@@ -89,7 +89,7 @@ def _flexible_four_bar(closing, beam_side):
     (UniversalJoint(axis1=[0, 0, 1.0], axis2=[1.0, 0, 0], name="B"), "b"),
 ])
 # (the mechanism built roughly and assembled on purpose: AssemblyWarning)
-@pytest.mark.filterwarnings("ignore::dttmm.model.closures.AssemblyWarning")
+@pytest.mark.filterwarnings("ignore::dttmm.model.loop_kinematics.AssemblyWarning")
 def test_a_beam_closing_a_loop_by_each_joint_kind_follows_the_reference(closing, beam_side):
     """The flexible four-bar over 0.3 s, gravity partly out of its plane: the coupler's output
     point and the joints' angles converge to the reference at order 2 from dt = 5e-4 to

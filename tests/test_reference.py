@@ -443,7 +443,7 @@ def test_the_references_kernels_compile_once_for_every_kind_of_model():
     from dttmm.model.mechanisms import slider_crank
     from dttmm.reference import equations
     from dttmm.reference.integrator import integrate_dop853
-    from dttmm.reference.newton_euler import _Problem
+    from dttmm.reference.problem import _Problem
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
     import spin_up
     rod = build_chain([BallJoint(), StrainRod(length=1.0, bending_stiffness=2.0,
@@ -477,7 +477,7 @@ def test_the_compiled_integrator_is_scipys_dop853(case, monkeypatch):
     from helpers import joints_arm
 
     from dttmm.model.chains import three_pendulum
-    from dttmm.reference.newton_euler import _Problem
+    from dttmm.reference.problem import _Problem
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
     import spin_up
     model = {"three_pendulum": three_pendulum(2), "joints": joints_arm(),
@@ -505,7 +505,7 @@ def test_a_hub_spun_by_a_profile_is_evaluated_in_compiled_code_as_the_profile():
     motion not made by spin_about_axis) gives no table, and such a run keeps solve_ivp."""
     from dttmm.model.profiles import profile
     from dttmm.reference.hub import hub_table, spun_ground
-    from dttmm.reference.newton_euler import _Problem
+    from dttmm.reference.problem import _Problem
     kinds = [{"profile": "constant", "value": 0.3},
              {"profile": "linear", "slope": 2.0, "offset": -0.5},
              {"profile": "sine", "amplitude": 0.7, "frequency": 1.3, "phase": 0.2, "offset": 1.0},
@@ -542,7 +542,7 @@ def test_a_model_with_python_inputs_integrates_through_scipy():
     """A drive, load or ground motion given as a function keeps solve_ivp (it runs Python at
     every right-hand side)."""
     from dttmm.reference.integrator import _JOINTS
-    from dttmm.reference.newton_euler import _Problem
+    from dttmm.reference.problem import _Problem
     pushed = build_chain([BallJoint(), link(force=lambda t: [0.0, np.sin(t), 0.0])])
     assert _Problem(pushed).fixed_args() is None
     problem = _Problem(build_chain([BallJoint(), link()]))

@@ -104,7 +104,8 @@ def test_assembly_closes_a_gap_keeps_what_it_is_told_and_refuses_what_cannot_clo
     model = four_bar(1.0)
     gap = dttmm.loop_residuals(model)[0][0]
     assert 0.1 < gap < 0.3                                  # the crank tilted by 0.2 rad
-    with pytest.warns(dttmm.model.closures.AssemblyWarning, match="'rocker' 0.2 m and 0.2 rad"):
+    with pytest.warns(dttmm.model.loop_kinematics.AssemblyWarning,
+                      match="'rocker' 0.2 m and 0.2 rad"):
         assembled = dttmm.assemble(model, keep=["O"])      # (and says so: issue 65)
     assert dttmm.loop_residuals(assembled)[0].max() < 1e-12
     assert np.array_equal(assembled.initial_rotation[0], model.initial_rotation[0])

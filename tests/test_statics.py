@@ -372,7 +372,7 @@ def test_closed_n_four_bar_hangs_and_swings_at_its_exact_frequency(n):
 
 
 # (the crank turned to 2.5 rad and the loop assembled around it on purpose: AssemblyWarning)
-@pytest.mark.filterwarnings("ignore::dttmm.model.closures.AssemblyWarning")
+@pytest.mark.filterwarnings("ignore::dttmm.model.loop_kinematics.AssemblyWarning")
 def test_the_slider_crank_hangs_its_crank_down_and_swings_as_the_reference():
     """The IFToMM spatial slider-crank under gravity (closed by its prismatic joint): its
     potential, g (0.12 (0.12 + 0.04 cos th) + 0.5 (0.12 + 0.08 cos th) / 2), is least with the

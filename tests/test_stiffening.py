@@ -329,7 +329,7 @@ def _reference_system_sign(model, bend, exact=False):
     the joints' rows) at rest, with the first element bent in its first mode by `bend` rad at its
     end (exact: with the foreshortening kept exactly)."""
     from dttmm.elements.beam import FAMILY, LENGTH, mode_shapes
-    from dttmm.reference.newton_euler import _Problem
+    from dttmm.reference.problem import _Problem
     p = _Problem(model, exact)
     y = p.initial_state()
     row = model.beam_params[0]

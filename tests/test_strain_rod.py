@@ -17,7 +17,7 @@ from dttmm.elements.strain_rod import (STRAIGHT, kinematics_tables, stations, st
 from dttmm.model.rod_motion import rod_end_section
 from dttmm.kernels.transfers.strain_rod import (SERIES_BELOW, jacobian_coefficients,
                                                 rod_kinematics)
-from dttmm.reference.newton_euler import _Problem
+from dttmm.reference.problem import _Problem
 from dttmm.reference.strain_rod import rod_sections
 
 L = 1.2

@@ -96,7 +96,7 @@ class Kind:
                  axes fixed in the parent.
     freedoms:    joints: its degrees of freedom (describe); None: one per coordinate.
     closure_rows: joints: the constraint equations it holds as a closing joint (describe,
-                 closures.constraint_directions); None: 6 less its freedoms.
+                 loop_rows.constraint_directions); None: 6 less its freedoms.
     scene:       joints: its type in scene files (and describe's name for it).
     arguments:   joints with coordinates: its class's names of the coordinates' initial values,
                  rates and drives (scalars for a joint of one coordinate, else sequences of one
@@ -175,11 +175,11 @@ JOINT_KINDS = (
          doc="docs/joints.md", what="a planar joint"),
 )
 
-# the kinds of a closing joint's constraint rows (model/closures.py::constraint_rows, read by
+# the kinds of a closing joint's constraint rows (model/loop_rows.py::constraint_rows, read by
 # kernels/assembly/closure.py and the reference): gaps e . (p_b - p_a) with e fixed in the world
 # or in a's frame, dots (F_a x) . (F_b y), a driven coordinate's angle about an axis fixed in a's
-# or in b's frame (model/closures.py::driven_directions), and an elastic hinge's rotation about an
-# axis fixed in a's frame (model/closures.py::spring_directions)
+# or in b's frame (model/loop_rows.py::driven_directions), and an elastic hinge's rotation about an
+# axis fixed in a's frame (model/loop_rows.py::spring_directions)
 GAP_WORLD, GAP_A, DOT, ANGLE_A, ANGLE_B, ROTATION_A = 0, 1, 2, 3, 4, 5
 
 BODY_KIND = {k.code: k for k in BODY_KINDS}

@@ -11,7 +11,8 @@ from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from ..elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                    rod_components)
 from ..model.rod_motion import rod_frequencies
-from ..model.closures import describe_closures, held_chords, loop_rank
+from ..model.closures import describe_closures
+from ..model.loop_kinematics import held_chords, loop_rank
 from ..model.model import DESCRIBE
 
 # each joint kind's name (its scene type) and degrees of freedom (elements/kinds.py)
@@ -181,7 +182,7 @@ def _loop_reach(model):
     """How far the closing joints' sweep columns reach (run_tables.loop_tables): the cost of a step
     grows with it, and a spanning tree whose loops close near the ground keeps it small."""
     from ..solving import run_tables
-    from ..model.closures import constraint_rows
+    from ..model.loop_rows import constraint_rows
     km = run_tables.kernel_model(model)[0]
     owner = constraint_rows(km)[1]
     body = np.array(km.closure_body, dtype=np.int64).reshape(-1, 2)

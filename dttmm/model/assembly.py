@@ -1,11 +1,12 @@
 """Assembly: the closest configuration, to the model's joint coordinates, rotations and modal
 coordinates, that closes every loop (docs/loops.md, "Assembly"), by Gauss-Newton on the
-closing joints' rows (closures.py::closure_residuals).  In the model layer (docs/README.md,
+closing joints' rows (loop_kinematics.py::closure_residuals).  In the model layer (docs/README.md,
 "Layout"): it builds an assembled Model from the user's, with numpy alone."""
 import numpy as np
 
-from .closures import (AssemblyWarning, _coordinates, _start_values, _state_of, check_drives_move,
-                       closure_residuals, constraint_rows)
+from .loop_rows import constraint_rows
+from .loop_kinematics import (AssemblyWarning, _coordinates, _start_values, _state_of,
+                              check_drives_move, closure_residuals)
 from ..elements.kinds import COORDINATE_0, GAP_A, GAP_WORLD, RATE_0
 from ..elements.rigid_body import TO_OUTPUT
 from .model import adopt_arrays

@@ -4,7 +4,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from . import closures
+from . import loop_kinematics
 from .closures import closure_rows, loop_membership
 from ..elements import BALL, BEAM, FIXED, RIGID, ROD, BallJoint
 from ..elements._checks import finite_scalar, finite_vector, rotation_matrix
@@ -248,10 +248,10 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
 
 def _unstiffen_held_chords(model, candidates):
     """Resolve stiffening=None of the inextensible beams in closed loops (the candidates,
-    stiffened so far): off where the loops hold the beam's chord length (closures.held_chords:
-    held between points that cannot approach, it could not bow), on elsewhere (a four-bar's
-    coupler: its ends move)."""
-    held = closures.held_chords(model, candidates)
+    stiffened so far): off where the loops hold the beam's chord length
+    (loop_kinematics.held_chords: held between points that cannot approach, it could not bow), on
+    elsewhere (a four-bar's coupler: its ends move)."""
+    held = loop_kinematics.held_chords(model, candidates)
     if not held:
         return model
     params = np.array(model.beam_params, order="C")

@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .closures import _side_motion, start_state
+from .loop_kinematics import _side_motion, start_state
 from ..elements import BallJoint, ElasticHinge, RigidBody
 from ..elements.drives import MOTION
 from ..elements.kinds import CHILD, SLIDE, TURN, joint_kind_of, joint_motion, turn_rotations
@@ -70,8 +70,8 @@ def _from_point(body, p, rotation, angular_velocity):
 
 def _attachment(model, state, k):
     """((point, velocity, frame, angular velocity) of tree body k's attachment point, the same
-    of its input point) at t = 0 (state: closures.start_state; the parent's side as
-    closures.tree_state places it)."""
+    of its input point) at t = 0 (state: loop_kinematics.start_state; the parent's side as
+    loop_kinematics.tree_state places it)."""
     rot, w, r_in, v_in, rot_o, w_o, r_o, v_o = state
     p = model.parent[k]
     if p < 0:

@@ -517,8 +517,8 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     flat in hinge order (as Result.joint_coordinates); given, the potential counts
     1/2 k (q - rest)^2 of every SpringDamper drive (docs/joints.md, "Drives"); None (default):
     no drive springs are counted.  The potential counts the closing elastic hinges' springs
-    (closures.elastic_closure_terms); ground_position (3,) or (T, 3): the ground point at this
-    time (default: the model's), where a closing joint meets the ground.
+    (loop_kinematics.elastic_closure_terms); ground_position (3,) or (T, 3): the ground point at
+    this time (default: the model's), where a closing joint meets the ground.
     exact_foreshortening: the stiffened beams' foreshortening to all orders (_beam_energies;
     a beam of stiffening="exact" takes it always).
     """
@@ -578,7 +578,7 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b
                 potential[i] += 0.5 * psi @ h[K_ROTATION].reshape(3, 3) @ psi
     if np.any(model.closure_kind == ELASTIC):
-        from ..model.closures import elastic_closure_terms
+        from ..model.loop_kinematics import elastic_closure_terms
         r_g = np.broadcast_to(np.asarray(model.ground_position if ground_position is None
                                          else ground_position, dtype=float), (n_t, 3))
         zero = np.zeros((n_t, 3))

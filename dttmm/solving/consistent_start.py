@@ -14,7 +14,7 @@ from ..kernels.stepping.loop import (OK, SINGULAR, UNSUPPORTED, Inputs,
                                      Record, Run)
 from ..kernels.stepping.loop import run_steps
 from ..kernels.assembly.sweep import LOST_ACCURACY
-from ..model.closures import closure_forces, closure_targets, has_closure_drives
+from ..model.loop_rows import closure_forces, closure_targets, has_closure_drives
 from .run_tables import _station_histories, compiled_forces, loop_tables
 from .run_checks import DivergenceError, _DIRECT_HINT, _singular_cause, _unsupported_cause
 from .run_inputs import _drive_number, _ground, _joint_inputs, _loads

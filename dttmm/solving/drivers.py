@@ -14,7 +14,7 @@ from . import consistent_start, run_checks, run_inputs, run_records, run_tables
 from ..elements.kinds import MAX_COORDINATES
 from .energy_balance import EnergyBalance
 from ..results.feedback import Progress, note_once
-from ..model.closures import closure_targets
+from ..model.loop_rows import closure_targets
 from ..kernels.stepping import runge_kutta as runge_kutta_kernels
 from ..kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
                                      Inputs, Run)

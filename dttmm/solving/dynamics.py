@@ -606,7 +606,7 @@ def linearize(model, state=None, t=0.0):
 def _closed_chart(model, t, full, free, columns, m, moved, fixed):
     """A closed model's coordinates for linearize (docs/dynamics.md, "Closed loops"): the
     tree's coordinates x split into dependent and independent ones by the loops' constraint
-    Jacobian G = dg/dx (g: closures.closure_residuals at the tree's kinematics; central
+    Jacobian G = dg/dx (g: loop_kinematics.closure_residuals at the tree's kinematics; central
     differences): the independent ones chosen root first, each whose column G can lose keeping
     its rank (singular values above 1e-6 of G's largest; G's own rank counts those above 1e-9,
     a planar loop's redundant rows dropping out), so a crank's angle before a coupler's.
@@ -615,7 +615,7 @@ def _closed_chart(model, t, full, free, columns, m, moved, fixed):
     g' = G x' = 0, by Newton's iteration with G_dep); moves = dx/dy (m x d).  fixed: the
     coordinates that are neither (prescribed motions: they stay as they are)."""
     from scipy.linalg import lstsq
-    from ..model.closures import closure_residuals, tree_state
+    from ..model.loop_kinematics import closure_residuals, tree_state
     from ..kernels.algebra.so3 import log_so3
     n = model.n_bodies
 

@@ -30,7 +30,7 @@ from ..elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY,
                              TORSION_MODES, foreshortening_integrals, modal_size, mode_shapes,
                              stretch_along)
 from ..elements.hinges import C_ROTATION, C_TRANSLATION, ELASTIC
-from ..model.closures import elastic_closure_terms, side_motions
+from ..model.loop_kinematics import elastic_closure_terms, side_motions
 from ..elements.rigid_body import TO_MASS_CENTER
 from ..results.result import _drive_spring_energy
 from ..model.sections import beam_output_offset, output_section

@@ -14,7 +14,8 @@ from ..kernels.stepping import step as kstep
 from ..kernels.stepping.loop import (ERROR_ESTIMATE, UNCONVERGED)
 from ..kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
 from ..model.assembly import assemble
-from ..model.closures import check_drives_move, check_runs_in_sweeps, loop_residuals
+from ..model.closures import check_runs_in_sweeps
+from ..model.loop_kinematics import check_drives_move, loop_residuals
 from ..model.model import model_fact
 from .energy_balance import does_work
 from .run_tables import (full_tree, has_coordinates, has_loops, kernel_model)

@@ -21,9 +21,9 @@ from collections import OrderedDict
 
 import numpy as np
 
-from ..model import closures
+from ..model import closures, loop_rows
 from . import consistent_start, run_checks, run_inputs, run_tables
-from ..model.closures import has_closure_drives
+from ..model.loop_rows import has_closure_drives
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from ..kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
 from ..kernels.stepping import step as kstep
@@ -196,7 +196,7 @@ class PreparedRun:
                 n, len(self.state.eta), runge_kutta.dop853_tables())
         self.beam_tips = run_checks._beam_tips(model)
         self.start_fastest = run_checks._fastest_rate(self.state.omega[None])  # (drivers)
-        self.closing_forces = closures.closure_forces(model, self.loops)
+        self.closing_forces = loop_rows.closure_forces(model, self.loops)
         # what each run's chunks evaluate in Python (drivers.Stepping.inputs_for): JointForces
         # of the state given as Python functions (one step per chunk), the drives' and the
         # driven closing joints' inputs, the applied loads

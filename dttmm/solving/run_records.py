@@ -4,7 +4,7 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from ..kernels.stepping import step as kstep
-from ..model.closures import has_closure_drives
+from ..model.loop_rows import has_closure_drives
 from ..results.recording import NoCheckpoint
 from ..results.result import (DERIVED, FIELDS, Result, chain_energies)
 from .run_tables import (column_names, coordinate_columns)

@@ -26,7 +26,7 @@ from ..kernels.schema import pack
 from ..kernels.stepping.loop import (State,
                                      Sweep)
 from ..kernels.transfers.beam_relations import (gauss_points, quadrature_size)
-from ..model.closures import constraint_rows
+from ..model.loop_rows import constraint_rows
 from .methods import SWEEPS
 from ..model.model import Model, adopt_arrays, children_of, is_shared, kernel_array, model_fact
 from ..model.sections import beam_output_offset, element_end_section, output_section

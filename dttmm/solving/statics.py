@@ -18,7 +18,8 @@ import warnings
 
 import numpy as np
 
-from ..model.closures import check_runs_in_sweeps, closure_residuals, start_state
+from ..model.closures import check_runs_in_sweeps
+from ..model.loop_kinematics import closure_residuals, start_state
 from ..elements import BEAM, ROD
 from ..elements.drives import MOTION
 from ..elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
@@ -259,7 +260,7 @@ class _Configuration:
         self.mode_off = mode_off
         # closed loops: the constraint closure(q) = 0 beside a(q) = 0 (docs/statics.md,
         # "Closed loops"): a tip joined to the ground stays where it starts; closing joints
-        # hold their rows (closures.closure_residuals)
+        # hold their rows (loop_kinematics.closure_residuals)
         self.closed = model.n_closures > 0
         self.pin = _positions(model)[2][-1] if km.tip_pinned else None
         self.rot0 = np.array(km.initial_rotation, order="C")
@@ -395,7 +396,7 @@ class _Configuration:
 
     def closure(self, q):
         """The closed loops' constraints at q: the pinned tip's output point less its pin,
-        world, m; or every closing joint's rows (closures.closure_residuals: gaps, m, and
+        world, m; or every closing joint's rows (loop_kinematics.closure_residuals: gaps, m, and
         dots)."""
         model = self.result_model(q)
         if self.pin is not None:

@@ -56,7 +56,7 @@ Loops = namedtuple("Loops", [
                                      # ANGLE_A / ANGLE_B / ROTATION_A, its closing joint, e
                                      # (or x, in a's frame) and y (b's frame); ROTATION_A:
                                      # R0's first two columns
-    "v3", "target", "coordinate",    # (R, 3) an angle's axis (closures.driven_directions,
+    "v3", "target", "coordinate",    # (R, 3) an angle's axis (loop_rows.driven_directions,
                                      # spring_directions);
                                      # (R, 3) the step's targets (value, rate, acceleration):
                                      # a driven coordinate's motion at the step's end, a
@@ -310,7 +310,7 @@ def _rotation_vector(m):
 @kernel
 def _relative_rotation(f_a, f_b, c1, c2):
     """log(F_a^T F_b R0^T) (in a's frame), R0 = [c1, c2, c1 x c2] from its first two columns
-    (an elastic hinge's rest rotation, closures.spring_directions)."""
+    (an elastic hinge's rest rotation, loop_rows.spring_directions)."""
     c3 = t_cross(c1, c2)
     r0 = (c1[0], c2[0], c3[0], c1[1], c2[1], c3[1], c1[2], c2[2], c3[2])
     f_at = (f_a[0], f_a[3], f_a[6], f_a[1], f_a[4], f_a[7], f_a[2], f_a[5], f_a[8])
