@@ -39,15 +39,19 @@ SYSTEMS = {          # name: (constructor expression, steps of the long run: ~0.
 }
 DEFAULT = ["three_pendulum", "rigid_chain_3", "rigid_chain_100", "rigid_chain_1000"]
 
-_CHILD = r"""
-import statistics, sys
-from dttmm import simulate
-try:
+# the models' builders, in either layout (dttmm/model/ since the layer folders; dttmm/ before)
+_IMPORTS = """try:
     from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
     from dttmm.model.mechanisms import n_four_bar, slider_crank
 except ImportError:     # a checkout from before the layer folders (issue 66)
     from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
     from dttmm.mechanisms import n_four_bar, slider_crank
+"""
+
+_CHILD = r"""
+import statistics, sys
+from dttmm import simulate
+{imports}
 model = {expr}
 steps, dt = {steps}, 1e-4
 simulate(model, 5 * dt, dt)
@@ -66,12 +70,7 @@ print(1e6 * statistics.median(costs))
 _CALL_CHILD = r"""
 import statistics, time
 from dttmm import simulate
-try:
-    from dttmm.model.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-    from dttmm.model.mechanisms import n_four_bar, slider_crank
-except ImportError:     # a checkout from before the layer folders (issue 66)
-    from dttmm.chains import arm, rigid_chain, stiff_cantilever, three_pendulum
-    from dttmm.mechanisms import n_four_bar, slider_crank
+{imports}
 model = {expr}
 for _ in range(50):
     simulate(model, 1e-4, 1e-4)
@@ -89,7 +88,7 @@ def us_per_step(checkout, system, call=False):
     """us per step of the system with the checkout's dttmm (call: us per 1-step call)."""
     expr, steps = SYSTEMS[system]
     env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout))
-    child = (_CALL_CHILD if call else _CHILD).format(expr=expr, steps=steps)
+    child = (_CALL_CHILD if call else _CHILD).format(imports=_IMPORTS, expr=expr, steps=steps)
     out = subprocess.run([sys.executable, "-c", child],
                          env=env, capture_output=True, text=True, check=True,
                          cwd=os.path.abspath(checkout))

@@ -13,8 +13,7 @@ from ..elements.kinds import (ANGLE_A, ANGLE_B, CHILD, DOT, GAP_A, GAP_WORLD, PA
                               SLIDE, TURN, coordinates_of, row_axes)
 from ..elements.drives import FORCE, SPRING_DAMPER
 
-
-GROUND = -1
+GROUND = -1     # a closing joint's side that is the ground (Model.closure_body)
 
 
 def _principal_axes(label, part, k, c):
