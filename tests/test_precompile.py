@@ -145,6 +145,63 @@ def test_after_dttmm_compile_a_read_only_install_compiles_nothing(tmp_path):
     assert line == "COMPILED []", line
 
 
+# every version numba holds of dttmm's kernels in a process (each kernel module's dispatchers,
+# the skeletons, the Python layer's twins)
+VERSIONS = """
+import importlib, pkgutil
+import dttmm.kernels as kernels
+from dttmm.kernels.stepping import loop
+from numba.core.dispatcher import Dispatcher
+
+
+def versions():
+    found = set(kernels.PYTHON_CALLED.values()) | set(loop._SKELETONS.values())
+    for info in pkgutil.walk_packages(kernels.__path__, "dttmm.kernels."):
+        module = importlib.import_module(info.name)
+        found |= {v for v in vars(module).values() if isinstance(v, Dispatcher)}
+    return {(d.py_func.__qualname__, str(s)) for d in found for s in d.signatures}
+"""
+
+# after the session: statics, linear models, forward dynamics from a given state, a rod's
+# describe, and the derived fields of a loop's result (its closing joints' energies)
+MORE = """
+from dttmm.model.mechanisms import slider_crank
+crank = slider_crank()
+dttmm.static_equilibrium(crank)
+dttmm.linearize(crank)
+res = simulate(crank, 2e-3, 1e-3, hold_energy=True)
+res.kinetic, res.position_output
+dttmm.forward_dynamics(crank, res.t[-1], state=res.state(-1))
+rod_model = build_chain([RevoluteJoint(axis=[0, 0, 1.0]), rod], gravity=[0, -9.81, 0])
+rod_model.describe()
+simulate(rod_model, 2e-3, 1e-3).position_output
+"""
+
+
+@pytest.mark.filterwarnings("ignore::dttmm.UnresolvedMotionWarning")
+def test_the_core_is_whole_after_its_first_use():
+    """solving/core.py lists the core's kernels the Python layer calls itself, which the core's
+    first use on an install compiles with the skeleton.  A process that takes that path (its
+    first use forced) for the arm: after it, the issue's session of other kinds of model, their
+    statics, linear models and forward dynamics, and their results' derived fields add no
+    version to any kernel (on a fresh install each would be a compile: the slider-crank's
+    4.8 s before the list)."""
+    first = """
+from dttmm.solving import core
+core.compiled_here = lambda: True
+from dttmm.model.chains import arm
+dttmm.simulate(arm(), 2e-3, 1e-3)
+before = versions()
+"""
+    session = SESSION.replace('print("COMPILED", compiled)', "")
+    script = ("import dttmm\n" + VERSIONS + first + session + MORE
+              + "print('ADDED', sorted(versions() - before))\n")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    line = [x for x in run.stdout.splitlines() if x.startswith("ADDED")][0]
+    assert line == "ADDED []", line[:3000]
+
+
 @pytest.mark.parametrize("model", [three_pendulum])
 def test_describe_says_the_core_is_compiled_once(model):
     text = model().describe()

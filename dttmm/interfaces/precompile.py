@@ -3,9 +3,10 @@
 
 One compiled core runs every kind of model: the general loop (its consistent start, sweeps,
 closing joints, beams, strain rods, elastic hinges and joints with coordinates, read from the
-model's tables at run time), with statics, forward dynamics and linearize on its start.  The
-fused loops (ball chains, trees, welded chains, the energy-momentum scheme, DOP853) and the
-Newton-Euler reference are families of their own, each compiled on its first use.  numba keeps
+model's tables at run time), with statics, forward dynamics and linearize on its start, and
+the kernels the Python layer calls around it (solving/core.py).  The fused loops (ball chains,
+trees, welded chains, the energy-momentum scheme, DOP853) and the Newton-Euler reference are
+families of their own, each compiled on its first use.  numba keeps
 what it compiles in its cache (`cache_location()`); a later process, whatever its model,
 loads it.  Each family below is compiled by a short run of a small model in a process of its
 own, as many at once as the machine has cores (numba compiles on one).  After it a read-only
@@ -18,20 +19,17 @@ import time
 
 
 def _general_loop():
-    from ..model.chains import arm, three_pendulum
+    """The core: the general loop, its start and the kernels Python calls around it
+    (solving/core.py), which statics, linear models and forward dynamics take theirs from."""
+    from ..model.chains import arm, stiff_cantilever, three_pendulum
     from ..model.mechanisms import n_four_bar
+    from ..solving.dynamics import forward_dynamics, linearize
     from ..solving.solver import simulate
+    from ..solving.statics import static_equilibrium
     simulate(arm(), 2e-3, 1e-3)
     simulate(n_four_bar(2), 2e-3, 1e-3, hold_energy=True)
     simulate(three_pendulum(), 2e-3, 1e-3, scheme="paper")
     simulate(arm(), 2e-3, 1e-3, rtol=1e-6)
-
-
-def _statics_and_linear_models():
-    from ..model.chains import arm, stiff_cantilever
-    from ..solving.dynamics import forward_dynamics, linearize
-    from ..model.mechanisms import n_four_bar
-    from ..solving.statics import static_equilibrium
     static_equilibrium(stiff_cantilever(2))
     linearize(n_four_bar(2))
     forward_dynamics(arm(), 0.0)
@@ -73,7 +71,6 @@ def _reference_rhs():
 
 # (name, what compiles it), the longest first
 FAMILIES = (("general loop", _general_loop), ("reference", _reference),
-            ("statics and linear models", _statics_and_linear_models),
             ("fused tree", _fused_tree), ("fused chain", _fused_chain),
             ("welded chain", _welded_chain), ("reference right-hand side", _reference_rhs))
 

@@ -15,6 +15,7 @@ from ..kernels.stepping.loop import (OK, SINGULAR, UNSUPPORTED, Inputs,
 from ..kernels.stepping.loop import run_steps
 from ..kernels.assembly.sweep import LOST_ACCURACY
 from ..model.loop_rows import closure_forces, closure_targets, has_closure_drives
+from . import core
 from .run_tables import _station_histories, compiled_forces, loop_tables
 from .run_checks import DivergenceError, _DIRECT_HINT, _singular_cause, _unsupported_cause
 from .run_inputs import _drive_number, _ground, _joint_inputs, _loads
@@ -33,11 +34,11 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
     """The accelerations of the state at time t (a run's start: t = 0; docs/solver.md,
     "Consistent start") into state: by the fused loop's own sweep (fused: its (runner, loop)) or
     kernels/stepping/step.py::initial_accelerations, with the closing joints (loops: loop_tables)
-    held at acceleration level; in_skeleton: as one pass of the general loop's skeleton (a run on
-    it: it then compiles no start of its own), else the start alone (statics, linear models,
-    forward dynamics, the energy-momentum scheme: initial_accelerations' twin, with entry
-    points).  extra_loads: (force, torque), (n, 3) each, world,
-    added to the applied loads (at the mass centres; dynamics.linearize's inputs);
+    held at acceleration level; in_skeleton: as one pass of the general loop's skeleton (a run
+    on it, statics, linear models and forward dynamics: the one compiled core, nothing compiled
+    for them alone), else the start alone (the energy-momentum scheme, a family of its own:
+    initial_accelerations' twin, with entry points).  extra_loads: (force, torque), (n, 3)
+    each, world, added to the applied loads (at the mass centres; dynamics.linearize's inputs);
     extra_joint_forces: (n, 3) generalized forces added to the joint coordinates' (where
     additive_joint_force says they add)."""
     loops = loop_tables(model) if loops is None else loops
@@ -58,6 +59,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 joint_input, len(loops.kind)))
         else:
             set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
+            core.complete(params, loops, state)     # (where the core compiles: all of it)
             if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
                 loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
                 loops.step_coef[:] = 0.0        # the springs' forces explicit

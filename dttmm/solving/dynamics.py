@@ -119,7 +119,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
                                        ws.sweep,
                              monitor, 0.0, loops, t=t, extra_loads=extra_loads,
-                             extra_joint_forces=extra_joint_forces)
+                             extra_joint_forces=extra_joint_forces, in_skeleton=True)
     st = ws.state
     residual = np.zeros(len(loops.kind))
     if len(loops.kind):

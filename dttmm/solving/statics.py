@@ -342,7 +342,7 @@ class _Configuration:
                 rot[k] = a_in @ km.hinge_params[k, REST_ROTATION].reshape(3, 3)
             else:
                 out = np.empty((3, 3))
-                joint_frame(kind, np.array(km.hinge_params[k]), np.ascontiguousarray(a_in),
+                joint_frame(kind, np.array(km.hinge_params[k]), np.array(a_in, dtype=float),
                             zero, zero, jq[k].copy(), np.zeros(MAX_COORDINATES),
                             np.zeros(MAX_COORDINATES), out, w, wd, d, d_rate)
                 rot[k] = out
@@ -365,7 +365,8 @@ class _Configuration:
         st.z[:] = 0.0
         consistent_start._consistent_start(self.model, self.mode, "riccati", self.fused,
                                            self.params,
-                                 self.settings, st, self.ws.sweep, self.monitor, 1.0)
+                                 self.settings, st, self.ws.sweep, self.monitor, 1.0,
+                                 in_skeleton=True)
         a = np.empty(self.e0 + self.n_eta)
         for i, k in enumerate(self.free):
             a[3 * i:3 * i + 3] = st.omega_dot[k]
