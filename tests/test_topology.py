@@ -178,6 +178,60 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
                                   in_skeleton=in_skeleton)
 
 
+def test_every_body_kind_declares_what_the_package_asks_of_it():
+    """Each body kind declares, in elements/kinds.py, its scene type, whether it has coordinates
+    of its own (flexible: then its class's names of their initial values and rates), its doc and
+    its words; the scene files read and write every declared kind from that (issue 66, item 4)."""
+    from dttmm.interfaces import scene
+    assert kinds.FLEXIBLE == tuple(k.code for k in BODY_KINDS if k.flexible)
+    assert len({k.scene for k in BODY_KINDS}) == len(BODY_KINDS)
+    for kind in BODY_KINDS:
+        assert kind.scene and kind.doc and kind.what, kind
+        assert kinds.declared_body_kind(kind.code) is kind
+        if kind.flexible:
+            fields = {f.name for f in dataclasses.fields(kind.cls)}
+            assert len(kind.arguments) == 2 and set(kind.arguments) <= fields, kind
+        else:
+            assert kind.arguments == (), kind
+        assert scene._BODY_KINDS[kind.scene][0] is kind.cls
+        assert kind.code in scene._BODY_TABLES
+
+
+def test_an_undeclared_body_kind_is_refused_by_the_python_layer():
+    """A body kind code no declaration names, in a model's tables, is refused with a ValueError
+    naming the body and the code wherever the Python layer dispatches on the kinds (never run as
+    a rigid body); a declared kind a place does not implement is refused naming its kind."""
+    from dttmm.interfaces.scene import scene_of
+    from dttmm.model.loop_kinematics import start_state
+    from dttmm.reference import simulate_reference
+    from dttmm.solving.statics import _positions
+    model = build_chain([BallJoint(), unit_link(), FixedHinge(), unit_link()])
+    odd = dataclasses.replace(model, body_kind=np.array([0, 7]))
+    named = "body 'body1' has kind code 7, which no body kind declares"
+    for call, where in ((lambda: simulate_reference(odd, 0.01), "simulate_reference: "),
+                        (lambda: scene_of(odd), "save_scene: "),
+                        (lambda: start_state(odd), ""),
+                        (lambda: _positions(odd), "")):
+        with pytest.raises(ValueError, match=where + named):
+            call()
+    error = kinds.unimplemented_body_kind(kinds.ROD, "body 'r'", "the paper's scheme")
+    assert "body 'r' is a strain rod (StrainRod), which the paper's scheme does not " \
+           "implement" in str(error)
+
+
+def test_the_reference_kernels_refuse_an_undeclared_body_kind():
+    """Past the Python layer's check, the reference's kernels refuse the code too
+    (elements/kinds.py, UNDECLARED_BODY_KIND), rather than run it as a rigid body."""
+    from dttmm.reference.problem import _Problem
+    prob = _Problem(build_chain([BallJoint(), unit_link(), FixedHinge(), unit_link()]))
+    y = prob.initial_state()
+    prob.rhs(0.0, y)                # (runs as it is)
+    prob.body_kind[1] = 7
+    with pytest.raises(ValueError, match=kinds.UNDECLARED_BODY_KIND.replace("(", r"\(")
+                       .replace(")", r"\)")):
+        prob.rhs(0.0, y)
+
+
 def test_a_start_pass_that_ends_without_detail_never_reads_as_done():
     """A start pass's loop status maps to the start's code (consistent_start._start_status): done
     only on OK; a status that carries no element (NOT_FINITE, UNCONVERGED, ...) is the

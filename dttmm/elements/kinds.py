@@ -26,6 +26,10 @@ from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
 RIGID, BEAM, ROD = 0, 1, 2      # Model.body_kind
+# what a kernel raises on a body kind code its dispatch does not name, rather than run it as
+# another kind (the Python layer refuses such a code first, naming the body: declared_body_kind,
+# solving/run_checks.py::check_supported)
+UNDECLARED_BODY_KIND = "a body kind code this kernel does not implement (elements/kinds.py)"
 
 SCHEMES = ("newmark", "energy_momentum", "paper", "dop853")
 
@@ -87,6 +91,10 @@ class Kind:
                  the Newton-Euler reference only, so far).
     fused:       bodies: the fused ball-chain loop (kernels/stepping/ball_chain.py) has its
                  reduced map.
+    flexible:    bodies: it has coordinates of its own (Model.n_modes: a beam's modal, a rod's
+                 strain coordinates), its output point and output section (its end section)
+                 move with them, and it has one attachment point, its output end; else it is
+                 rigid: its output section is its own frame.
     moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
                  across it).
     coordinates: joints: its free coordinates, Coordinate each, in its own order (each with its
@@ -97,10 +105,11 @@ class Kind:
     freedoms:    joints: its degrees of freedom (describe); None: one per coordinate.
     closure_rows: joints: the constraint equations it holds as a closing joint (describe,
                  loop_rows.constraint_directions); None: 6 less its freedoms.
-    scene:       joints: its type in scene files (and describe's name for it).
+    scene:       its type in scene files (and describe's name for a joint).
     arguments:   joints with coordinates: its class's names of the coordinates' initial values,
                  rates and drives (scalars for a joint of one coordinate, else sequences of one
-                 per coordinate).
+                 per coordinate); flexible bodies: its class's names of its own coordinates'
+                 initial values and rates.
     axes:        joints with coordinates: its class's axis arguments, in slot order (a slot past
                  them its validated() derives, as the planar joint's n1 x n2).
     doc:         the page that derives its equations.
@@ -110,6 +119,7 @@ class Kind:
     cls: type
     schemes: tuple
     fused: bool = False
+    flexible: bool = False
     moment_free: bool = False
     coordinates: tuple = ()
     freedoms: object = None
@@ -134,12 +144,16 @@ class Kind:
 
 
 BODY_KINDS = (
-    Kind(RIGID, RigidBody, SCHEMES, fused=True, doc="docs/rigid_body.md", what="a rigid body"),
-    Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper", "dop853"), fused=True, doc="docs/beam.md",
-         what="a beam"),
-    Kind(ROD, StrainRod, ("newmark",), doc="docs/strain_rod.md", what="a strain rod"),
+    Kind(RIGID, RigidBody, SCHEMES, fused=True, scene="rigid", doc="docs/rigid_body.md",
+         what="a rigid body"),
+    Kind(BEAM, EulerBernoulliBeam, ("newmark", "paper", "dop853"), fused=True, flexible=True,
+         scene="beam", arguments=("initial_modal_coordinates", "initial_modal_velocities"),
+         doc="docs/beam.md", what="a beam"),
+    Kind(ROD, StrainRod, ("newmark",), flexible=True, scene="rod",
+         arguments=("initial_strain", "initial_strain_rate"), doc="docs/strain_rod.md",
+         what="a strain rod"),
 )
-FLEXIBLE = (BEAM, ROD)      # the body kinds with coordinates of their own (Model.n_modes)
+FLEXIBLE = tuple(k.code for k in BODY_KINDS if k.flexible)     # (their codes: Model.n_modes)
 
 _VALUES = ("coordinates", "rates", "drives")
 
@@ -281,6 +295,27 @@ def joint_motion(kind, axes, r0, a_p, w_p, q, qd):
             d = d + u[:, i] * q[i]
             d_rate = d_rate + u[:, i] * qd[i]
     return frame, w, d, d_rate + np.cross(w_p, d), u
+
+
+def declared_body_kind(code, who="body"):
+    """The Kind declaring body kind code `code` (Model.body_kind), or a ValueError naming who
+    (a body's label) and the code: a table's code no declaration names is refused, never run as
+    another kind's."""
+    kind = BODY_KIND.get(int(code))
+    if kind is None:
+        raise ValueError(f"{who} has kind code {int(code)}, which no body kind declares "
+                         f"(elements/kinds.py, BODY_KINDS: {names(BODY_KINDS)})")
+    return kind
+
+
+def unimplemented_body_kind(code, who, where):
+    """The ValueError for body kind code `code` (of who, a body's label) at a dispatch, where,
+    that has no branch for it: a code no kind declares (declared_body_kind raises), or a declared
+    kind that place does not implement yet (docs/README.md, "Adding an element kind").  Every
+    dispatch on the body kinds ends in it rather than running one kind as another."""
+    kind = declared_body_kind(code, who)
+    return ValueError(f"{who} is {kind.what} ({kind.name}), which {where} does not implement "
+                      f"(docs/README.md, \"Adding an element kind\")")
 
 
 def body_kind_of(element):

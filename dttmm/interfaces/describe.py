@@ -6,7 +6,7 @@ from ..elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_L
                              TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
                              torsion_frequencies, truncation_errors)
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
-from ..elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE
+from ..elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE, unimplemented_body_kind
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from ..elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                    rod_components)
@@ -257,7 +257,10 @@ def _bending_stiffness(model, k):
     """The least bending stiffness EI of beam or rod k, N m^2."""
     if model.body_kind[k] == ROD:
         return float(min(model.rod_params[k, ROD_EI_V], model.rod_params[k, ROD_EI_W]))
-    return float(min(model.beam_params[k, EI_V], model.beam_params[k, EI_W]))
+    if model.body_kind[k] == BEAM:
+        return float(min(model.beam_params[k, EI_V], model.beam_params[k, EI_W]))
+    raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                  "describe's bending stiffness")
 
 
 def describe(model):

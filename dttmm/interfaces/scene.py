@@ -14,14 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking, RigidBody,
-                        SpringDamper, StrainRod)
+from ..elements import (JointForce, JointMotion, PDTracking, SpringDamper)
 from ..elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUENCY_CUTOFF, GJ,
                              EXACT, LENGTH,
                              LOAD_AXES, MASS_PER_LENGTH, MODES, PINNED, POLAR_PER_LENGTH,
                              STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
-from ..elements.kinds import (AXES, BEAM, COORDINATE_0, JOINT_KIND, JOINT_KINDS, RATE_0, ROD,
-                              SCENE_TYPE, SLIDE, WITH_COORDINATES)
+from ..elements.kinds import (AXES, BEAM, BODY_KINDS, COORDINATE_0, JOINT_KIND, JOINT_KINDS,
+                              RATE_0, RIGID, ROD, SCENE_TYPE, SLIDE, WITH_COORDINATES,
+                              declared_body_kind, unimplemented_body_kind)
 from ..elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
                                    ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
                                    ROD_STRETCH, ROD_TWIST)
@@ -68,11 +68,15 @@ _ROD = {"name": "str", "type": "str", "length": "number", "mass_per_length": "nu
         "axial_stiffness": "number", "damping": "number", "initial_strain": "list",
         "initial_strain_rate": "list", "rotation": "matrix", "angular_velocity": "vector",
         "joint": "table"}
-_BODY_KINDS = {"rigid": (RigidBody, _RIGID, ("mass", "inertia", "inertia_about")),
-               "beam": (EulerBernoulliBeam, _BEAM, ("length", "bending_stiffness",
-                                                    "polar_inertia_per_length")),
-               "rod": (StrainRod, _ROD, ("length", "bending_stiffness", "mass_per_length",
-                                         "polar_inertia_per_length"))}
+# each body kind's keys and required keys, by code; by scene type (its declaration's, elements/
+# kinds.py): its class, keys and required keys
+_BODY_KEYS = {RIGID: (_RIGID, ("mass", "inertia", "inertia_about")),
+              BEAM: (_BEAM, ("length", "bending_stiffness", "polar_inertia_per_length")),
+              ROD: (_ROD, ("length", "bending_stiffness", "mass_per_length",
+                           "polar_inertia_per_length"))}
+_BODY_KINDS = {kind.scene: (kind.cls, *_BODY_KEYS[kind.code]) for kind in BODY_KINDS
+               if kind.code in _BODY_KEYS}
+_BODY_TYPES = ", ".join(f"'{t}'" for t in list(_BODY_KINDS)[:-1]) + f" or '{list(_BODY_KINDS)[-1]}'"
 _JOINT_COMMON = {"type": "str", "name": "str", "parent": "str", "at": "point"}
 _CLOSE_COMMON = {"type": "str", "name": "str", "a": "str", "b": "str", "at_a": "point",
                  "at_b": "point"}
@@ -241,9 +245,9 @@ def _body(table, i, where):
     label = f"[[body]] {i + 1}" + (f" ('{name}')" if isinstance(name, str) else "")
     kind = table.get("type")
     if kind not in _BODY_KINDS:
-        raise SceneError(f"{where}: {label} key 'type': 'rigid', 'beam' or 'rod', got "
-                         f"{kind!r}" if "type" in table else
-                         f"{where}: {label} needs the key 'type' ('rigid', 'beam' or 'rod')")
+        raise SceneError(f"{where}: {label} key 'type': {_BODY_TYPES}, got {kind!r}"
+                         if "type" in table else
+                         f"{where}: {label} needs the key 'type' ({_BODY_TYPES})")
     element, schema, required = _BODY_KINDS[kind]
     _keys(table, schema, where, label)
     for key in required:
@@ -442,65 +446,16 @@ def scene_of(model, run=None, name=None):
         who = f"body '{model.body_names[k]}'"
         kind = int(model.hinge_kind[k])
         table = {"name": model.body_names[k]}
+        body = declared_body_kind(model.body_kind[k], f"save_scene: {who}")
         # a beam's or rod's own coordinates and rates at t = 0, under its class's names
-        for key, values in zip(_INITIAL.get(int(model.body_kind[k]), ()),
+        for key, values in zip(body.arguments,
                                (model.initial_modal_coordinates, model.initial_modal_velocities)):
             if np.any(values[offsets[k]:offsets[k + 1]]):
                 table[key] = values[offsets[k]:offsets[k + 1]].tolist()
-        if model.body_kind[k] == ROD:
-            table.update(_rod_table(model.rod_params[k]))
-        elif model.body_kind[k] == BEAM:
-            row = model.beam_params[k]
-            m = int(row[MODES])
-            ball_ends = kind == BALL and (not children[k] or all(
-                model.hinge_kind[c] == BALL for c in children[k]))
-            table.update(type="beam", length=row[LENGTH], mass_per_length=row[MASS_PER_LENGTH],
-                         bending_stiffness=[row[EI_V], row[EI_W]],
-                         polar_inertia_per_length=row[POLAR_PER_LENGTH], modes_per_plane=m,
-                         damping_ratio=row[DAMPING_RATIO],
-                         mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
-            if row[FAMILY] != PINNED and ball_ends:
-                table["force_mode_family"] = True
-            table["stiffening"] = ("exact" if row[STIFFENING] == EXACT   # (on by default)
-                                   else bool(row[STIFFENING]))
-            if row[TORSION_MODES]:
-                table["torsion_modes"] = int(row[TORSION_MODES])
-            if row[GJ] > 0.0:
-                table["torsional_stiffness"] = row[GJ]
-            if row[LOAD_AXES]:
-                table["load_axes"] = "body"
-            if row[AXIAL_MODES]:
-                table["axial_modes"] = int(row[AXIAL_MODES])
-            if row[EA] > 0.0:
-                table["axial_stiffness"] = row[EA]
-            if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
-                table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
-            elif row[FREQUENCY_CUTOFF] == ACCURATE:     # the default: counted again the same
-                del table["modes_per_plane"]
-            for key, f in (("end_force", model.forces[k]), ("end_torque", model.torques[k]),
-                           ("distributed_load", model.line_loads[k])):
-                if f is not None:
-                    if not isinstance(f, Profile):
-                        raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
-                                         f"only profiles (dttmm.model.profiles) can be written")
-                    table[key] = f.spec()
-        else:
-            p = model.body_params[k]
-            table.update(type="rigid", mass=p[MASS],
-                         inertia=p[INERTIA_INPUT].reshape(3, 3).tolist(), inertia_about="input",
-                         to_mass_center=p[TO_MASS_CENTER].tolist(),
-                         to_output=p[TO_OUTPUT].tolist())
-            if named[k]:        # p1 .. p(largest index in use), so that the indices stay
-                used = {int(model.attachment[c]): model.attachment_point[c].tolist()
-                        for c in children[k] if model.attachment[c]}
-                table["points"] = {f"p{j}": used.get(j, [0.0, 0.0, 0.0])   # (unused: a stand-in)
-                                   for j in range(1, max(named[k]) + 1)}
-            for key, f in (("force", model.forces[k]), ("torque", model.torques[k])):
-                if f is not None:
-                    if not isinstance(f, Profile):
-                        raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
-                                         f"only profiles (dttmm.model.profiles) can be written")
-                    table[key] = f.spec()
+        if body.code not in _BODY_TABLES:
+            raise unimplemented_body_kind(body.code, f"save_scene: {who}", "scene files")
+        table["type"] = body.scene
+        table.update(_BODY_TABLES[body.code](model, k, who, children, named))
         if kind in (BALL, ELASTIC):          # (else the joint sets them)
             table["rotation"] = model.initial_rotation[k].tolist()
             table["angular_velocity"] = model.initial_angular_velocity[k].tolist()
@@ -516,13 +471,76 @@ def scene_of(model, run=None, name=None):
     return data
 
 
-_INITIAL = {BEAM: ("initial_modal_coordinates", "initial_modal_velocities"),
-            ROD: ("initial_strain", "initial_strain_rate")}
+def _profiles(model, k, who, loads):
+    """{key: its profile's spec} of body k's applied loads (key, the load or None) that are
+    given; a Python function cannot be written."""
+    table = {}
+    for key, f in loads:
+        if f is not None:
+            if not isinstance(f, Profile):
+                raise ValueError(f"save_scene: {who}'s {key} is a Python function; "
+                                 f"only profiles (dttmm.model.profiles) can be written")
+            table[key] = f.spec()
+    return table
 
 
-def _rod_table(row):
+def _rigid_table(model, k, who, children, named):
+    """A rigid body's keys (its inertia about its input point, its named points in use: named[k]
+    their indices; scene_of)."""
+    p = model.body_params[k]
+    table = dict(mass=p[MASS], inertia=p[INERTIA_INPUT].reshape(3, 3).tolist(),
+                 inertia_about="input", to_mass_center=p[TO_MASS_CENTER].tolist(),
+                 to_output=p[TO_OUTPUT].tolist())
+    if named[k]:        # p1 .. p(largest index in use), so that the indices stay
+        used = {int(model.attachment[c]): model.attachment_point[c].tolist()
+                for c in children[k] if model.attachment[c]}
+        table["points"] = {f"p{j}": used.get(j, [0.0, 0.0, 0.0])   # (unused: a stand-in)
+                           for j in range(1, max(named[k]) + 1)}
+    table.update(_profiles(model, k, who, (("force", model.forces[k]),
+                                           ("torque", model.torques[k]))))
+    return table
+
+
+def _beam_table(model, k, who, children, named):
+    """A beam's keys from its row of Model.beam_params (elements/beam.py): its mode family
+    resolved, with force_mode_family where needed (scene_of)."""
+    row = model.beam_params[k]
+    m = int(row[MODES])
+    ball_ends = model.hinge_kind[k] == BALL and (not children[k] or all(
+        model.hinge_kind[c] == BALL for c in children[k]))
+    table = dict(length=row[LENGTH], mass_per_length=row[MASS_PER_LENGTH],
+                 bending_stiffness=[row[EI_V], row[EI_W]],
+                 polar_inertia_per_length=row[POLAR_PER_LENGTH], modes_per_plane=m,
+                 damping_ratio=row[DAMPING_RATIO],
+                 mode_family="pinned" if row[FAMILY] == PINNED else "clamped")
+    if row[FAMILY] != PINNED and ball_ends:
+        table["force_mode_family"] = True
+    table["stiffening"] = ("exact" if row[STIFFENING] == EXACT   # (on by default)
+                           else bool(row[STIFFENING]))
+    if row[TORSION_MODES]:
+        table["torsion_modes"] = int(row[TORSION_MODES])
+    if row[GJ] > 0.0:
+        table["torsional_stiffness"] = row[GJ]
+    if row[LOAD_AXES]:
+        table["load_axes"] = "body"
+    if row[AXIAL_MODES]:
+        table["axial_modes"] = int(row[AXIAL_MODES])
+    if row[EA] > 0.0:
+        table["axial_stiffness"] = row[EA]
+    if row[FREQUENCY_CUTOFF] > 0.0:     # "auto": the same count when built again
+        table.update(modes_per_plane="auto", frequency_cutoff=row[FREQUENCY_CUTOFF])
+    elif row[FREQUENCY_CUTOFF] == ACCURATE:     # the default: counted again the same
+        del table["modes_per_plane"]
+    table.update(_profiles(model, k, who, (("end_force", model.forces[k]),
+                                           ("end_torque", model.torques[k]),
+                                           ("distributed_load", model.line_loads[k]))))
+    return table
+
+
+def _rod_table(model, k, who, children, named):
     """A strain rod's keys from its row of Model.rod_params (elements/strain_rod.py)."""
-    table = dict(type="rod", length=row[ROD_LENGTH], mass_per_length=row[ROD_MU],
+    row = model.rod_params[k]
+    table = dict(length=row[ROD_LENGTH], mass_per_length=row[ROD_MU],
                  bending_stiffness=[row[ROD_EI_V], row[ROD_EI_W]],
                  polar_inertia_per_length=row[ROD_JP],
                  rotary_inertia_per_length=[row[ROD_JV], row[ROD_JW]],
@@ -533,6 +551,11 @@ def _rod_table(row):
     if row[ROD_STRETCH]:
         table.update(stretch=True, axial_stiffness=row[ROD_EA])
     return table
+
+
+# each body kind's writer of its keys, by code (a kind of elements/kinds.py's BODY_KINDS with a
+# scene type needs one; tests/test_scenes.py checks that every one has it)
+_BODY_TABLES = {RIGID: _rigid_table, BEAM: _beam_table, ROD: _rod_table}
 
 
 def _close_table(model, c):

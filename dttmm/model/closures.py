@@ -38,11 +38,12 @@ elastic hinge's (docs/loops.md, "An elastic hinge closing a loop").
 
 import numpy as np
 
-from ..elements import BALL, BEAM, ELASTIC, FIXED, BallJoint, EulerBernoulliBeam, StrainRod
+from ..elements import BALL, ELASTIC, FIXED, BallJoint
 from ..elements.hinges import K_ROTATION, K_TRANSLATION
 from ..elements.kinds import (CHILD, CLOSING_DRIVES, FLEXIBLE, HINGE_KIND_NAMES, HINGE_PARAM_SIZE,
                               JOINT_KIND, JOINT_KINDS, PARENT, SLIDE, TURN, WITH_COORDINATES,
-                              WITH_TURNS, joint_kind_of, joint_values, pack_hinge, turn_rotations)
+                              WITH_TURNS, body_kind_of, declared_body_kind, joint_kind_of,
+                              joint_values, pack_hinge, turn_rotations)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.rigid_body import TO_OUTPUT
 from .loop_kinematics import closure_gaps, start_state
@@ -111,7 +112,7 @@ def loop_membership(entries, bodies, parent):
 
     def start(k, at):       # a beam or rod closed at its input end: its length is not in
         if k >= 0 and isinstance(at, str) and at == "input" and \
-                isinstance(bodies[k], (EulerBernoulliBeam, StrainRod)):      # the loop
+                body_kind_of(bodies[k]).flexible:                           # the loop
             return parent[k]
         return k
 
@@ -350,9 +351,9 @@ def describe_closures(model):
                 sides.append("the ground")
             elif model.closure_on_end[c, s]:
                 sides.append(f"'{model.body_names[k]}' (output end)")
-            elif model.body_kind[k] == BEAM:
+            elif declared_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'").flexible:
                 sides.append(f"'{model.body_names[k]}' (input end)")
-            else:
+            else:       # a rigid body, at its point
                 point = np.round(model.closure_point[c, s], 6).tolist()
                 sides.append(f"'{model.body_names[k]}' at {point}")
         drives = [f"coordinate {i + 1} " + ("prescribed (JointMotion)" if d["kind"] == MOTION

@@ -35,6 +35,7 @@ from ..elements.beam import (
  )
 from ..elements.drives import MOTION
 from ..elements.kinds import (
+     BODY_KIND,
      CHILD,
      FLEXIBLE,
      HINGE_KIND_NAMES,
@@ -48,6 +49,7 @@ from ..elements.kinds import (
      joint_motion,
      pack_hinge,
      turn_rotations,
+     unimplemented_body_kind,
  )
 from ..elements.rigid_body import pack_body
 from ..elements.strain_rod import ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS, rod_coordinate_count
@@ -144,9 +146,8 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
             attachment_point[k] = ground_points.get(k, 0.0)
             continue
         if body_kind[p] in FLEXIBLE and attachment[k] != 0:
-            what = "a beam" if body_kind[p] == BEAM else "a strain rod"
-            raise ValueError(f"{bodies[k].label(k)}: {what} has one attachment point, its "
-                             f"output end")
+            raise ValueError(f"{bodies[k].label(k)}: {BODY_KIND[body_kind[p]].what} has one "
+                             f"attachment point, its output end")
         attachment_point[k] = (bv[p]["l_io"] if attachment[k] == 0
                                else list(bv[p]["points"].values())[attachment[k] - 1])
     derived = None
@@ -175,11 +176,14 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         elif attachment[k] == 0 and body_kind[p] == ROD:      # its end section
             _, a_in, w_in = rod_end_section(rod_params[p], rotations[p], omegas[p],
                                             bv[p]["eta0"], bv[p]["eta_d0"])
-        elif attachment[k] == 0:     # the parent's output section (a beam's end section)
+        elif attachment[k] == 0 and body_kind[p] == BEAM:     # its end section
             a_in, w_in = output_section(beam_params[p], rotations[p], omegas[p],
                                         bv[p].get("eta0"), bv[p].get("eta_d0"))
-        else:
+        elif body_kind[p] == RIGID:     # its own frame, at its output point or a named one
             a_in, w_in = rotations[p], omegas[p]
+        else:
+            raise unimplemented_body_kind(body_kind[p], bodies[p].label(p),
+                                          "the build's inboard frames (model/freeze.py)")
         locked[k] = kinds[k] == FIXED and (p < 0 or (locked[p] and body_kind[p] == RIGID))
         if kinds[k] in WITH_COORDINATES:
             hv[k] = dict(hv[k])     # (its own: _validated's dicts are shared)

@@ -8,8 +8,9 @@ import numpy as np
 from ..elements import BALL, ELASTIC, FIXED
 from ..elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, K_ROTATION, K_TRANSLATION,
                                REST_ROTATION)
-from ..elements.kinds import (ANGLE_A, ANGLE_B, COORDINATE_0, DOT, FLEXIBLE, GAP_A, RATE_0, SLIDE,
-                              WITH_COORDINATES, WITH_SLIDES, coordinates_of, joint_motion, row_axes)
+from ..elements.kinds import (ANGLE_A, ANGLE_B, COORDINATE_0, DOT, FLEXIBLE, GAP_A, RATE_0, RIGID,
+                              SLIDE, WITH_COORDINATES, WITH_SLIDES, coordinates_of, joint_motion,
+                              row_axes, unimplemented_body_kind)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
 from ..elements.rigid_body import TO_OUTPUT
 from .loop_rows import GROUND, closure_targets, constraint_rows, has_closure_drives
@@ -155,10 +156,13 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
             rho, rho_rate = element_output_offset(model, k, rot[k], w[k], eta, eta_d)
             if stretch_rate is not None and stretch_rate[k]:
                 rho_rate = rho_rate + stretch_rate[k] * rho / np.linalg.norm(rho)
-        else:
+        elif model.body_kind[k] == RIGID:       # its own frame, its output point
             rot_o[k], w_o[k] = rot[k], w[k]
             rho = rot[k] @ model.body_params[k, TO_OUTPUT]
             rho_rate = np.cross(w[k], rho)
+        else:
+            raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                          "the loops' kinematics (model/loop_kinematics.py)")
         r_o[k], v_o[k] = r_in[k] + rho, v_in[k] + rho_rate
     return rot, w, r_in, v_in, rot_o, w_o, r_o, v_o
 

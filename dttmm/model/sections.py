@@ -5,6 +5,7 @@ all read, below each of them."""
 import numpy as np
 
 from ..elements import BEAM, ROD
+from ..elements.kinds import unimplemented_body_kind
 from ..elements.beam import (FAMILY, LENGTH, MODES, TORSION_MODES, end_shapes, foreshortening,
                              slope_grams, stretch_along)
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -82,9 +83,13 @@ def element_output_offset(model, k, rotation, omega, eta, eta_dot):
     """(rho, rho'): a beam's or strain rod's output point from its input point and its rate,
     world (beam_output_offset, elements/strain_rod.py::rod_output_offset), for one state
     (rotation (3, 3)) or T states (T, 3, 3); shaped (..., 3) as rotation's leading axes."""
-    rod = model.body_kind[k] == ROD
-    rho, rate = (rod_output_offset if rod else beam_output_offset)(
-        model.rod_params[k] if rod else model.beam_params[k], rotation, omega, eta, eta_dot)
+    if model.body_kind[k] == ROD:
+        rho, rate = rod_output_offset(model.rod_params[k], rotation, omega, eta, eta_dot)
+    elif model.body_kind[k] == BEAM:
+        rho, rate = beam_output_offset(model.beam_params[k], rotation, omega, eta, eta_dot)
+    else:
+        raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                      "element_output_offset (model/sections.py)")
     shape = np.shape(rotation)[:-1]
     return np.reshape(rho, shape), np.reshape(rate, shape)
 
@@ -94,7 +99,10 @@ def element_end_section(model, k, rotation, omega, eta, eta_dot):
     output_section, elements/strain_rod.py::rod_end_section)."""
     if model.body_kind[k] == ROD:
         return rod_end_section(model.rod_params[k], rotation, omega, eta, eta_dot)[1:]
-    return output_section(model.beam_params[k], rotation, omega, eta, eta_dot)
+    if model.body_kind[k] == BEAM:
+        return output_section(model.beam_params[k], rotation, omega, eta, eta_dot)
+    raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                  "element_end_section (model/sections.py)")
 
 
 def rotation_to_quaternion(rot):

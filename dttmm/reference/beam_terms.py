@@ -10,7 +10,8 @@ import numpy as np
 from ..kernels import kernel
 from ..kernels.algebra.mat3 import dot, matmul, matvec, put1
 from .rows import (N_SHAPE_ROWS, _BEA, _BEAM, _BEIV, _BEIW, _BGJ, _BJP, _BL, _BMODES, _BMU,
-                   _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _DYL, _KF, _MF, _ROD, _SY, _TY, _YL)
+                   _BSTIFF, _BSTRETCH, _BTWIST, _BZETA, _DYL, _KF, _MF, _RIGID, _ROD, _SY, _TY,
+                   _UNDECLARED_BODY_KIND, _YL)
 from .rotations import _cross, _expm, _hat, _left_jacobian, _left_jacobian_derivative
 
 
@@ -377,10 +378,13 @@ def _beam_terms_exact(bp, sv, table, eta, eta_dot, a, w, gravity):
 
 @kernel
 def _flex_size(k, body_kind, beam_params, rods):
-    """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, 0.
+    """The coordinates of body k's own: a beam's modal ones, a strain rod's strain ones, a rigid
+    body's none (another code is refused: elements/kinds.py, UNDECLARED_BODY_KIND).
     rods: the strain rods' tables (newton_euler.py::_rod_tables), n_q[k] = 0 for other bodies."""
     if body_kind[k] == _BEAM:
         return _modal_size(beam_params[k])
     if body_kind[k] == _ROD:
         return rods[0][k]
-    return 0
+    if body_kind[k] == _RIGID:
+        return 0
+    raise ValueError(_UNDECLARED_BODY_KIND)

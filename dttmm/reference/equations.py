@@ -15,7 +15,8 @@ from ..kernels.algebra.mat3 import matmul, matvec, put1, put2
 
 from .rows import (_AXIS, _AXIS_START, _BAXES, _BEAM, _BMU, _BSTIFF, _CHILD, _CR, _CT, _FRAME,
                    _GAP_A, _GAP_WORLD, _HAS_SLIDES, _JI, _KR, _KT, _LIC, _LIO, _MASS, _MAXC,
-                   _MOTION, _N_COORDINATES, _R0, _ROD, _SLIDE, _TURN)
+                   _MOTION, _N_COORDINATES, _R0, _RIGID, _ROD, _SLIDE, _TURN,
+                   _UNDECLARED_BODY_KIND)
 from .beam_terms import _beam_end, _beam_terms, _beam_terms_exact, _flex_size, _modal_size
 from .closure_rows import _closure_rows, _solve_least_closure_force
 from .strain_rod import rod_end, rod_state, rod_terms
@@ -174,7 +175,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             put1(rho_att[k], rho_o[kp])
             put1(acc_v_att[k], acc_v[kp])
             r_prev, v_prev = r_in[kp] + rho_o[kp], v_o[kp]
-        else:
+        elif body_kind[kp] == _RIGID:
             # a rigid parent's attachment point x_k (its output point l_IO or a named point):
             # r_att = r_in,P + A_P x_k,  v_att = v_in,P + w_P x rho_att,
             # a_att = a_P + alpha_P x rho_att + w_P x (w_P x rho_att)
@@ -183,6 +184,8 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             put1(rho_att[k], arm)
             put1(acc_v_att[k], _cross(omega[kp], v_arm))
             r_prev, v_prev = r_in[kp] + arm, v_in[kp] + v_arm
+        else:
+            raise ValueError(_UNDECLARED_BODY_KIND)
         # the inboard frame: the parent's output section (a rigid parent's own frame, A_O = A,
         # w_O = w, whichever of its points the hinge is at; a beam's end section), or the ground
         if hinge_kind[k] == FIXED:   # welded to the inboard frame
@@ -233,13 +236,15 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
             nq = rods[0][k]
             put2(b_r[k, :, :nq], br)
             put2(b_t[k, :, :nq], bt)
-        else:
+        elif body_kind[k] == _RIGID:
             rho = matvec(rot[k], _vec3(body_params[k], _LIO))
             v_rel = _cross(omega[k], rho)
             put1(rho_o[k], rho)
             put2(rot_o[k], rot[k])
             put1(omega_o[k], omega[k])
             put1(acc_v[k], _cross(omega[k], v_rel))
+        else:
+            raise ValueError(_UNDECLARED_BODY_KIND)
         put1(v_o[k], v_in[k] + v_rel)
     return (rot, omega, r_in, v_in, defl, defl_rate, rho_o, rot_o, omega_o, acc_v, alpha_v,
             b_r, b_t, v_o, rho_att, acc_v_att)
@@ -407,7 +412,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 b[ce + j] = modal[j]
                 for i in range(nm2):
                     s[ce + j, ce + i] = m_ee[j, i]
-        else:
+        elif body_kind[k] == _RIGID:
             mass = p[_MASS]
             rho_c = matvec(a, _vec3(p, _LIC))
             h = mass * rho_c
@@ -419,6 +424,8 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
             #     = -w x J w + rho_c x (M g + f) + tau + m_k - sum_c [m_c + (rho_att,c + d_c) x q_c]
             # over the children c (rho_att,c = rho_o for a chain's output point)
             be = -_cross(w, matvec(j_w, w)) + _cross(rho_c, weight) + torques[k]
+        else:
+            raise ValueError(_UNDECLARED_BODY_KIND)
         hc = _hat(h)
         for i in range(3):
             s[rn + i, ca + i] = mass

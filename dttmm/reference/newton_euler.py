@@ -250,6 +250,7 @@ import time
 import numpy as np
 
 from ..elements import BEAM, ROD
+from ..elements.kinds import declared_body_kind
 from ..elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ..model.assembly import assemble
 from ..model.loop_rows import has_closure_drives
@@ -275,6 +276,8 @@ def _check_args(model, t_end, method, rtol, atol, t_eval):
     if not isinstance(model, Model):
         raise ValueError(f"simulate_reference: model must be a dttmm Model (from build_chain), "
                          f"got {type(model).__name__}")
+    for k, code in enumerate(model.body_kind):     # (its kernels would refuse it mid-run)
+        declared_body_kind(code, f"simulate_reference: body '{model.body_names[k]}'")
     try:
         t_end = float(t_end)
     except (TypeError, ValueError):

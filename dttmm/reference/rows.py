@@ -1,6 +1,6 @@
 """The model's row offsets and the shape constants' rows, as plain ints for the reference's kernels
 (the reference's formulation: newton_euler.py)."""
-from ..elements import BEAM, ROD
+from ..elements import BEAM, RIGID, ROD
 from ..elements.beam import (DAMPING_RATIO, EI_V, EI_W, GJ, LENGTH, LOAD_AXES, MASS_PER_LENGTH,
                              MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.drives import FORCE, SPRING_DAMPER
@@ -8,7 +8,7 @@ from ..elements.hinges import (C_ROTATION, C_TRANSLATION, K_ROTATION, K_TRANSLAT
                                REST_ROTATION)
 from ..elements.kinds import (ANGLE_A, ANGLE_B, AXIS, AXIS_START, CHILD, COORDINATES, DOT, FRAME,
                              GAP_A, GAP_WORLD, HAS_SLIDES, MAX_COORDINATES, MOTION, ROTATION_A,
-                             SLIDE, TURN, WITH_COORDINATES)
+                             SLIDE, TURN, UNDECLARED_BODY_KIND, WITH_COORDINATES)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
 
 
@@ -22,8 +22,10 @@ _KT = K_TRANSLATION.start
 _CT = C_TRANSLATION.start
 _KR = K_ROTATION.start
 _CR = C_ROTATION.start
+_RIGID = RIGID
 _BEAM = BEAM
 _ROD = ROD
+_UNDECLARED_BODY_KIND = UNDECLARED_BODY_KIND     # (what the kernels raise on another code)
 _DOT, _GAP_A, _GAP_WORLD, _ANGLE_A, _ANGLE_B, _ROTATION_A = (DOT, GAP_A, GAP_WORLD, ANGLE_A,
                                                             ANGLE_B, ROTATION_A)
 _SPRING_DAMPER = SPRING_DAMPER

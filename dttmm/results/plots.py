@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..elements.beam import FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along
-from ..elements.kinds import ROD
+from ..elements.kinds import BEAM, RIGID, ROD, unimplemented_body_kind
 from ..model.rod_motion import rod_centre_line
 from .feedback import Progress
 from ..model.sections import foreshortening_along
@@ -208,7 +208,7 @@ def centerlines(result, model, points=12):
     offsets = np.concatenate([[0], np.cumsum(model.n_modes)])
     for k in range(n):
         r_in = result.position_input[:, k]
-        if model.body_kind[k] == 1:
+        if model.body_kind[k] == BEAM:
             row = model.beam_params[k]
             m, length = int(row[MODES]), row[LENGTH]
             x = np.linspace(0.0, length, points)
@@ -227,12 +227,15 @@ def centerlines(result, model, points=12):
                                     points)
             out[:, k] = r_in[:, None] + np.einsum("tij,tpj->tpi", result.rotation[:, k], local)
             out[:, k, -1] = result.position_output[:, k]
-        else:
+        elif model.body_kind[k] == RIGID:
             s = np.linspace(0.0, 1.0, points)[None, :, None]
             r_c, r_o = result.position_mass_center[:, k], result.position_output[:, k]
             first = np.where(s <= 0.5, r_in[:, None] + 2 * s * (r_c - r_in)[:, None],
                              r_c[:, None] + (2 * s - 1) * (r_o - r_c)[:, None])
             out[:, k] = first
+        else:
+            raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                          "the figures' centre lines (results/plots.py)")
     return out
 
 

@@ -14,6 +14,7 @@ from ..elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LEN
 from ..elements.drives import SPRING_DAMPER
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from ..elements.rigid_body import MASS, TO_MASS_CENTER
+from ..elements.kinds import unimplemented_body_kind
 from ..model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
                               output_section, rotation_to_quaternion)
 
@@ -565,6 +566,9 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
                                     v_in[:, k], eta[:, j0:j1], eta_dot[:, j0:j1], model.gravity)
             kinetic += t_k
             potential += v_k
+        elif model.body_kind[k] != RIGID:       # (the rigid bodies': above, all at once)
+            raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                          "the energies (results/result.py::chain_energies)")
         if model.hinge_kind[k] == ELASTIC:
             h = model.hinge_params[k]
             for i in range(n_t):                # (a log per state: elastic hinges only)

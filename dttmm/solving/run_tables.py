@@ -13,7 +13,7 @@ from ..elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_component
                                    rod_stiffness)
 from ..elements.strain_rod import rod_tables as rod_element_tables
 from ..elements.kinds import (COORDINATE_0, FLEXIBLE, HINGE_PARAM_SIZE, MAX_COORDINATES, RATE_0,
-                              WITH_COORDINATES, WITH_SLIDES)
+                              WITH_COORDINATES, WITH_SLIDES, unimplemented_body_kind)
 from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
                              MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
                              mode_shapes, slope_grams, torsion_shapes)
@@ -564,12 +564,15 @@ def _station_histories(model, state, independent):
             j0, j1 = mode_off[k], mode_off[k + 1]
             _, rho_dot = beam_output_offset(model.beam_params[k], state.rot[k], w, state.eta[j0:j1],
                                             state.eta_d[j0:j1])
-        else:
+        elif model.body_kind[k] == RIGID:
             rho_c = state.rot[k] @ model.body_params[k, TO_MASS_CENTER]
             c_v[k] = st_v[k] + cross(w, rho_c)
             c_a[k] = (state.z[2 * k + 1, 0:3] + cross(wd, rho_c)
                       + cross(w, cross(w, rho_c)))
             rho_dot = cross(w, state.rot[k] @ model.body_params[k, TO_OUTPUT])
+        else:       # (the paper's scheme runs rigid bodies and beams: elements/kinds.py)
+            raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                          "the paper's scheme's station histories")
         st_v[k + 1] = st_v[k] + rho_dot
         st_a[k + 1] = state.z[2 * k + 2, 0:3]
     return (True, st_v, st_a, st_a.copy(), c_v, c_a, c_a.copy())

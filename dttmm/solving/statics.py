@@ -20,11 +20,12 @@ import numpy as np
 
 from ..model.closures import check_runs_in_sweeps
 from ..model.loop_kinematics import closure_residuals, start_state
-from ..elements import BEAM, ROD
+from ..elements import BEAM, RIGID, ROD
 from ..elements.drives import MOTION
 from ..elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.kinds import (BODY_KIND, COORDINATE_0, JOINT_KIND, MAX_COORDINATES, RATE_0,
-                              WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes)
+                              WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes,
+                              unimplemented_body_kind)
 from ..elements.beam import (FAMILY, LENGTH, MODES, STIFFENING, mode_shapes, stretch_along,
                              trusted_frequency)
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -128,9 +129,12 @@ class StaticEquilibrium:
                 local[-1] = (r_o[k] - r_in[k]) @ m.initial_rotation[k]    # (its own stations')
                 lines.append(r_in[k] + local @ m.initial_rotation[k].T)
                 continue
-            if m.body_kind[k] != BEAM:
+            if m.body_kind[k] == RIGID:
                 lines.append(np.array([r_in[k], r_o[k]]))
                 continue
+            if m.body_kind[k] != BEAM:
+                raise unimplemented_body_kind(m.body_kind[k], f"body '{m.body_names[k]}'",
+                                              "the static shape's centre lines")
             row = m.beam_params[k]
             nm = int(row[MODES])
             x = np.linspace(0.0, row[LENGTH], int(points_per_beam))
@@ -192,6 +196,9 @@ def _positions(m):
         elif m.body_kind[k] == ROD:       # its end point (the rod's kinematics)
             e = m.initial_modal_coordinates[off[k]:off[k + 1]]
             r_o[k] = r_in[k] + rod_end_section(m.rod_params[k], rot, np.zeros(3), e)[0]
+        elif m.body_kind[k] != RIGID:     # (a rigid body's: its output point, above)
+            raise unimplemented_body_kind(m.body_kind[k], f"body '{m.body_names[k]}'",
+                                          "the static positions")
     return r_in, r_c, r_o
 
 

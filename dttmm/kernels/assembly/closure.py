@@ -38,8 +38,9 @@ from collections import namedtuple
 import numpy as np
 
 from .. import allocating_kernel, kernel, model_tables, no_alloc_kernel
-from ...elements.kinds import ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES, ROTATION_A
-from ...elements import BEAM, ROD
+from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES, ROTATION_A,
+                               UNDECLARED_BODY_KIND)
+from ...elements import BEAM, RIGID, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
 from ...elements.hinges import ELASTIC
@@ -232,7 +233,8 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     kernels/transfers/joint.py::joint_offset, an elastic hinge's its deflection d, world,
     v_in = v_out,P + d'), r_out = r_in + A l_IO (a rigid body) or
     r_in + rho (a beam's deflected end, _beam_offset; a strain rod's, _rod_offset); the kernel
-    model hangs every child at its parent's output point."""
+    model hangs every child at its parent's output point.  A body kind code none of these names
+    is refused (elements/kinds.py, UNDECLARED_BODY_KIND)."""
     parent = model_tables.parent(params)
     hinge_kind = model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -262,11 +264,13 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
             arm, arm_rate = _beam_offset(params, k, rot, w, eta, eta_d)
         elif body_kind[k] == ROD:
             arm, arm_rate = _rod_offset(params, k, rot, w, eta, eta_d)
-        else:
+        elif body_kind[k] == RIGID:
             row = body_row[k]
             arm = t_mv(_m9(rot, k), (body_params[row, 4], body_params[row, 5],
                                      body_params[row, 6]))
             arm_rate = t_cross(_v3(w, k), arm)
+        else:
+            raise ValueError(UNDECLARED_BODY_KIND)
         for i in range(3):
             r_out[k, i] = r[i] + arm[i]
             v_out[k, i] = v[i] + arm_rate[i]

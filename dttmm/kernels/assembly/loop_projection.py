@@ -8,7 +8,8 @@ their parents' moved with them (_dependent_frames), and a rigid model's energy h
 import numpy as np
 
 from .. import allocating_kernel, kernel, model_tables, no_alloc_kernel
-from ...elements import BEAM, ROD
+from ...elements import BEAM, RIGID, ROD
+from ...elements.kinds import UNDECLARED_BODY_KIND
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import ELASTIC, FIXED
 from ..transfers.beam_relations import end_section_motion
@@ -71,7 +72,7 @@ def _dependent_frames(params, loops, state, bodies, work):
                 rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
                               state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
                               state.omega[k], state.omega_dot[k])
-            else:                              # A = A_P R0
+            elif body_kind[p] == RIGID:        # A = A_P R0
                 for i in range(3):
                     for j in range(3):
                         state.rot[k, i, j] = (rot_p[i, 0] * rest[0, j] + rot_p[i, 1] * rest[1, j]
@@ -79,6 +80,8 @@ def _dependent_frames(params, loops, state, bodies, work):
                 for i in range(3):
                     state.omega[k, i] = w_p[i]
                     state.omega_dot[k, i] = wd_p[i]
+            else:
+                raise ValueError(UNDECLARED_BODY_KIND)
         else:
             continue
         for i in range(3):

@@ -8,10 +8,10 @@ import numpy as np
 from numba import njit
 
 from .. import CONTRACT, allocating_kernel, kernel, model_tables
-from ...elements import BEAM, ROD
+from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.drives import MOTION
-from ...elements.kinds import MAX_COORDINATES
+from ...elements.kinds import MAX_COORDINATES, UNDECLARED_BODY_KIND
 from ..transfers.beam_relations import end_section_motion
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of
 from ..transfers.hinge import elastic_hinge_loads
@@ -133,7 +133,8 @@ def _end_section_frame(params, k, rest, rot, w, wd, eta, eta_d, eta_dd, rot_out,
 def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_out):
     """The frame of a welded body (_welded) from its parent's: A = A_P R0, w = w_P, w' = w_P',
     or the end section's of a parent beam (_end_section_frame) or strain rod
-    (strain_rod.rod_end_frame)."""
+    (strain_rod.rod_end_frame); a parent's kind code none of these names is refused
+    (elements/kinds.py, UNDECLARED_BODY_KIND)."""
     p = model_tables.parent(params)[k]
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     rest = hinge_params[hinge_row[k], 0:9].copy().reshape((3, 3))
@@ -147,10 +148,12 @@ def _welded_frame(params, k, rot, w, wd, eta, eta_d, eta_dd, rot_out, w_out, wd_
         steps, xi0, phi = rod_tables_of(params, p)[:3]
         rod_end_frame(steps, xi0, phi, rot[p], w[p], wd[p], eta[i0:i1], eta_d[i0:i1],
                       eta_dd[i0:i1], rest, rot_out, w_out, wd_out)
-    else:
+    elif body_kind[p] == RIGID:
         mm3_into(rot[p], rest, rot_out)
         put1(w_out, w[p])
         put1(wd_out, wd[p])
+    else:
+        raise ValueError(UNDECLARED_BODY_KIND)
 
 
 @allocating_kernel
@@ -332,7 +335,7 @@ def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
     for k in range(rot.shape[0]):
         x_in = (z[2 * k + 1, 0:3] - w1_st[k]) / c1
         x_out = (z[2 * k + 2, 0:3] - w1_st[k + 1]) / c1
-        if body_kind[k] != BEAM:
+        if body_kind[k] == RIGID:
             if locked[k]:
                 rot_new = matmul(rot_now, lock_rel[k])
             else:
@@ -340,6 +343,8 @@ def _advance_stations(h, coef, c1, z, rot_now, rot, body_kind, locked, lock_rel,
                 rot_new = matmul(e3, rot[k])
             x_c = x_in + matvec(rot_new - rot[k], body_params[body_row[k], 1:4])
             _advance_history(h, coef, x_c, c_v[k], c_a[k], c_p[k])
+        elif body_kind[k] != BEAM:      # (a beam's stations only; the scheme runs no other)
+            raise ValueError(UNDECLARED_BODY_KIND)
         _advance_history(h, coef, x_out, st_v[k + 1], st_a[k + 1], st_p[k + 1])
 
 
