@@ -30,6 +30,7 @@ from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
 from ..elements.kinds import BODY_KIND
 from ..kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
+from .methods import SCHEMES
 from ..model.model import model_fact
 from ..results.recording import leaves, model_fingerprint
 
@@ -59,7 +60,16 @@ def runs_welded(model, mode, scheme):
 def kernels_used(model, scheme, method="riccati", full_state=False):
     """The loop variant that runs a user's model with `scheme` (dttmm/solving/methods.py),
     `method` and `full_state` (describe(); simulate's BLAS threads: only the general and
-    energy-momentum loops call LAPACK)."""
+    energy-momentum loops call LAPACK).  A fact of the model and the options, kept on it (a
+    short run's fixed cost: ~6 us), per value of the switch that sends chains to the general
+    loop (tests turn it)."""
+    return _kernels_used(model, scheme.name, method, bool(full_state),
+                         run_tables.FUSED_BALL_CHAIN)
+
+
+@model_fact
+def _kernels_used(model, scheme_name, method, full_state, fused_switch):
+    scheme = SCHEMES[scheme_name]
     km, _ = run_tables.kernel_model(model)
     mode = run_tables._mode(km, method, full_state)
     if runs_fused(km, mode, scheme):
