@@ -29,7 +29,7 @@ class Stepping:
 
     def __init__(self, plan, opts, wall0):
         self.plan, self.opts, self.wall0 = plan, opts, wall0
-        model, state = plan.model, plan.state
+        model = plan.model
         n = model.n_bodies
         counters, done = (0, 0), 0
         resume = opts.resume
@@ -42,14 +42,12 @@ class Stepping:
         self.done = done
         self.samples = None if opts.adaptive else run_records._sample_count(opts.sampling, done,
                                                                    opts.n_steps)
-        keys = plan.keys
-        self.recording = Recording(keys, plan.keep, None if opts.stream is None else
-                                   SampleStream.create(opts.stream, keys, opts.dt,
+        self.recording = Recording(plan.record_layout, None if opts.stream is None else
+                                   SampleStream.create(opts.stream, plan.keys, opts.dt,
                                                        dict(plan.run_info, method=opts.method,
                                                             adaptive=opts.adaptive)),
-                                   self.samples, plan.keeps_every_body)
-        self.recording.add_state(state, plan.history_values, done,
-                                 0.0 if opts.adaptive else None)
+                                   self.samples)
+        self.recording.add_state(done, 0.0 if opts.adaptive else None)
         # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the
         # state is evaluated in Python, one step ahead: one step per chunk (said once per
         # process)
@@ -199,7 +197,7 @@ def fixed_steps(run):
         work_steps, work_values = [np.array([done])], [np.zeros(1)]     # W at every step
 
         def result_of(values, steps):
-            rows = Recording(keys, plan.keep, identity=plan.keeps_every_body)
+            rows = Recording(plan.record_layout)
             rows.add(values, steps)
             return run_records._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
 
@@ -265,7 +263,7 @@ def fixed_steps(run):
         bar.close()
     rec = inputs = None                         # (the chunks' buffers)
     if recording.last_step != n_steps:          # the final state is always recorded
-        recording.add_state(state, plan.history_values, n_steps)
+        recording.add_state(n_steps)
         fastest = _faster(fastest, run_checks._fastest_rate(state.omega[None]))
     checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
                                (max_newton, info[4]))
@@ -352,7 +350,7 @@ def adaptive(run):
                 largest = max(largest, float(monitor.error[0]))
                 most_newton = max(most_newton, int(info[2]))
                 if (lands and targets is not None) or (targets is None and t >= next_default):
-                    recording.add_state(plan.state, plan.history_values, taken, t)
+                    recording.add_state(taken, t)
                     while next_default <= t:
                         next_default += every_default
                 bar.update(int(run_records.MAX_SAMPLES * t / t_end))
@@ -369,7 +367,7 @@ def adaptive(run):
     finally:
         bar.close()
     if recording.times[-1] != t_end:           # the final state is always recorded
-        recording.add_state(plan.state, plan.history_values, taken, t_end)
+        recording.add_state(taken, t_end)
     run_info = dict(plan.run_info, dt=None, dt_min=control.h_min, dt_max=control.h_max,
                     segments_rejected=control.rejected, steps_rejected=control.rejected_steps,
                     rtol=opts.rtol, atol=opts.atol)

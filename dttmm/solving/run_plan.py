@@ -32,7 +32,7 @@ from ..elements.kinds import BODY_KIND
 from ..kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
 from .methods import SCHEMES
 from ..model.model import model_fact
-from ..results.recording import leaves, model_fingerprint
+from ..results.recording import RecordLayout, leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
 KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)
@@ -221,6 +221,9 @@ class PreparedRun:
         # the kernel model adds last leaves keep = 0 .. n - 1 with more kernel bodies)
         self.keeps_every_body = bool(len(keep) == model.n_bodies
                                      and np.array_equal(keep, np.arange(len(keep))))
+        # what its runs record, and the arrays a sample of the state reads (recording.py)
+        self.record_layout = RecordLayout(keys, keep, self.keeps_every_body, self.state,
+                                          self.history_values)
         self.lock = threading.Lock()
         self.kept = False               # kept on the model (prepared_run)
         self._chunk_arrays = {}         # the chunks' input and record arrays, by their shape
