@@ -71,7 +71,10 @@ class Stepping:
         self.static_inputs = (self.static_ground and self.no_loads
                               and not plan.joint_inputs_vary and not plan.targets_vary
                               and not plan.closing_forces)
-        self.info = np.zeros(5, dtype=np.int64)
+        # the compiled loop's status, failing step, Newton iterations, samples written and
+        # unconverged steps (a kept run's own array: its next call's arguments are the same)
+        self.info = plan.chunk_arrays(("info",), lambda: np.zeros(5, dtype=np.int64))
+        self.info[:4] = 0
         self.info[4] = counters[1]
         self.max_newton = counters[0]
 
@@ -81,11 +84,9 @@ class Stepping:
         step of chunks of up to self.size steps; a run that samples only its ends (a million
         bodies by default: run_records._sampling) records its last state from the state itself, and
         its chunks write no rows (the rows of a step would hold 0.4 KB per body)."""
-        plan, n = self.plan, self.plan.model.n_bodies
+        plan = self.plan
         ends_only = balance is None and self.samples == 2
-        shape = (0 if ends_only else max(1, self.size // every), n, len(plan.state.eta),
-                 plan.scheme.name == "paper", "v_c" in plan.keys,
-                 plan.loops.wrench.shape[0] if "closure_wrench" in plan.keys else 0)
+        shape = (0 if ends_only else max(1, self.size // every),) + plan.record_shape
         return ends_only, plan.chunk_arrays(("record",) + shape,
                                             lambda: consistent_start._record(*shape))
 
