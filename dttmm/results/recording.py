@@ -47,7 +47,8 @@ class RecordLayout:
                 pick = self.picks[key][1:] if key in self.picks else None
                 if pick is not None and all(isinstance(p, slice) for p in pick):
                     value, pick = value[pick], None
-                self.state_rows.append((key, value, pick))
+                row = value if pick is None else value[pick]
+                self.state_rows.append((key, value, pick, row.shape, row.dtype))
 
 
 class Recording:
@@ -61,13 +62,20 @@ class Recording:
     def __init__(self, layout, stream=None, samples=None):
         self.layout = layout
         self.keys, self.picks = layout.keys, layout.picks
-        self.blocks = {key: [] for key in self.keys}
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
         self.stream = stream
         self.samples = samples
         self.rows = 0           # rows written into the arrays of `samples` rows
-        self._rows_of_state = None  # (add_state's targets in those arrays)
+        self._rows_of_state = None  # (add_state's value, pick and array of samples per key)
+        if stream is None and samples is not None and layout.state_rows is not None:
+            # each key's array of `samples` rows, made now (its row's shape is the state's)
+            self.blocks = {key: [np.empty((samples,) + shape, dtype)]
+                           for key, _, _, shape, dtype in layout.state_rows}
+            self._rows_of_state = [(value, pick, self.blocks[key][0])
+                                   for key, value, pick, _, _ in layout.state_rows]
+        else:
+            self.blocks = {key: [] for key in self.keys}
 
     @classmethod
     def from_stream(cls, path):
@@ -111,18 +119,12 @@ class Recording:
     def add_state(self, step, t=None):
         """One sample of the run's state (its layout's state_rows, as the loop left them: t = 0,
         the state at the end, or an adaptive run's segment end at time t)."""
-        layout = self.layout
-        if self.stream is not None or self.samples is None or self.rows >= self.samples:
-            self.add({key: value[None] for key, value in layout.state_arrays}, [step],
+        if self._rows_of_state is None or self.samples is None or self.rows >= self.samples:
+            self.add({key: value[None] for key, value in self.layout.state_arrays}, [step],
                      () if t is None else [t])
             return
-        if self._rows_of_state is None:         # each key's array of samples, made at the first
-            self._rows_of_state = [             # row (a short run's first and last sample are
-                (value, pick, self._samples_of(key, (value if pick is None  # written in place)
-                                                     else value[pick]).shape, value.dtype))
-                for key, value, pick in layout.state_rows]
-        row = self.rows
-        for value, pick, samples in self._rows_of_state:
+        row = self.rows                         # (written in place: a short run's first and
+        for value, pick, samples in self._rows_of_state:    # last sample cost a copy a key)
             samples[row] = value if pick is None else value[pick]
         self.rows += 1
         self.steps.append(step)
