@@ -226,7 +226,7 @@ def fixed_steps(run):
                 step = max(int(round(err.t / dt)), done + 1)
                 raise run_checks.DivergenceError(step, err.t, str(err), run.partial(done)) from None
             run.run_chunk(inputs, rec, dt, 1 if balance else every, done, (done + 1) * dt)
-            n_rec = int(info[3])
+            status, failed_at, newton, n_rec, _ = info.tolist()     # (Python ints)
             if balance is not None and n_rec:       # the samples asked for, from every step's
                 picked = np.arange(every - 1, n_rec, every)
                 if len(picked):
@@ -235,14 +235,14 @@ def fixed_steps(run):
             elif n_rec:
                 recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
                               done + every * np.arange(1, n_rec + 1))
-            if info[0] != OK:
-                step = done + int(info[1]) + 1
+            if status != OK:
+                step = done + failed_at + 1
                 cause = run_checks._failure_cause(model, plan.mode, info, plan.monitor,
                                                   plan.settings)
-                if opts.method == "direct" and info[0] == SINGULAR:
+                if opts.method == "direct" and status == SINGULAR:
                     cause += "; " + run_checks._DIRECT_HINT
                 raise run.stopped(step, step * dt, cause, step - 1)
-            max_newton = max(max_newton, int(info[2]))
+            max_newton = max(max_newton, newton)
             if n_rec:
                 fastest = _faster(fastest, run_checks._fastest_rate(rec.omega[:n_rec]))
             if balance is not None:
@@ -266,8 +266,9 @@ def fixed_steps(run):
     if recording.last_step != n_steps:          # the final state is always recorded
         recording.add_state(n_steps)
         fastest = _faster(fastest, run_checks._fastest_rate(state.omega[None]))
+    unconverged = int(info[4])
     checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
-                               (max_newton, info[4]))
+                               (max_newton, unconverged))
     turn = fastest[0] * dt
     if turn > run_checks.MAX_TURN_PER_STEP:
         warnings.warn(run_checks.UnresolvedMotionWarning(
@@ -279,7 +280,7 @@ def fixed_steps(run):
             f"a turn), or rtol= for steps chosen by the error"), stacklevel=3)
     result = run_records._result(plan.user_model, recording, dt, 0.0, n_steps,
                        dict(plan.run_info, newton_iterations_used=max_newton,
-                            newton_unconverged_steps=int(info[4]),
+                            newton_unconverged_steps=unconverged,
                             step_error_max=float(plan.monitor.error[0]),
                             turn_per_step_max=turn,
                             **({} if balance is None else

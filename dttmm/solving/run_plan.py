@@ -247,7 +247,8 @@ class PreparedRun:
         arrays themselves (a million bodies' state is not doubled)."""
         if not self.kept:
             return self.structures
-        return _Ending(self, [b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        return _Ending(self, [b.copy() if b.size else b for b in self.buffers],  # (an empty
+                       [a.copy() for a in self.others])         # buffer holds no leaf's values)
 
     def chunk_arrays(self, key, make):
         """Arrays of a chunk (its inputs known before the run, its records) that a kept run's
