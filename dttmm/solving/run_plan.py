@@ -287,6 +287,8 @@ class _SameCalls(DirectCalls):
             return
         super().__call__(compiled, args)
         self.same = same
+
+
 GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
 
 
