@@ -286,3 +286,60 @@ def test_rows_dot_is_matmul_with_each_row_independent_of_the_others():
         if len(sx) > 1:
             for n in (1, 3, 101, 200):
                 assert np.array_equal(rows_dot(x[:n], y), rows_dot(x, y)[:n])
+
+
+def _assert_same_field(name, a, b):
+    """Two Results' field: arrays equal bit for bit, of the same dtype, shape and read-only-ness;
+    a checkpoint's step, run, counters and arrays; anything else equal."""
+    if isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray), name
+        assert (a.dtype, a.shape, a.flags.writeable) == (b.dtype, b.shape, b.flags.writeable), name
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    elif name == "checkpoint":
+        assert (a.step, a.h, a.run, a.counters) == (b.step, b.h, b.run, b.counters)
+        assert len(a.arrays) == len(b.arrays)
+        for x, y in zip(a.arrays, b.arrays):
+            _assert_same_field(name, x, y)
+    else:
+        assert a == b, name
+
+
+STORED = ("t", "rotation", "angular_velocity", "angular_acceleration", "force", "moment",
+          "modal_coordinates", "modal_velocities", "joint_coordinates", "joint_rates",
+          "drive_force", "closure_force", "closure_moment", "closure_drive_force")
+
+
+@pytest.mark.parametrize("name", list(KEPT))
+def test_a_short_runs_fast_path_gives_the_general_paths_result_field_by_field(name, monkeypatch):
+    """A short run on a warm kept prepared run (its checked options, loop variant, record
+    layout, chunk arrays and the compiled loop's entry point all reused: issue 66's fixed cost)
+    gives the Result a run on a prepared run of its own gives (built for that run: KEEP_BYTES
+    = 0), every field: its values bit for bit, dtype, shape and read-only-ness, the info, the
+    checkpoint (and a run resumed from it); and its samples are a longer run's first ones."""
+    from dttmm.solving import run_plan
+    model = KEPT[name]()
+    for steps, record_every in ((1, None), (3, 2), (1, None), (3, 2)):
+        simulate(model, steps * 1e-3, 1e-3, record_every=record_every)     # (warm)
+    fast = [simulate(model, steps * 1e-3, 1e-3, record_every=record_every)
+            for steps, record_every in ((1, None), (3, 2))]
+    fast_resumed = simulate(model, 5e-3, 1e-3, resume=fast[1].checkpoint)
+    longer = simulate(model, 5e-3, 1e-3)
+    assert len(model.__dict__["_prepared_runs"]) == 1
+    monkeypatch.setattr(run_plan, "KEEP_BYTES", 0)
+    own = KEPT[name]()
+    general = [simulate(own, steps * 1e-3, 1e-3, record_every=record_every)
+               for steps, record_every in ((1, None), (3, 2))]
+    general_resumed = simulate(own, 5e-3, 1e-3, resume=general[1].checkpoint)
+    assert not own.__dict__["_prepared_runs"]
+    for a, b in list(zip(fast, general)) + [(fast_resumed, general_resumed)]:
+        for field in FIELDS:
+            if field != "wall_time":
+                _assert_same_field(field, getattr(a, field), getattr(b, field))
+    for field in STORED:            # (samples after steps 0 and 1; 0, 2 and 3)
+        value = getattr(longer, field)
+        if value is not None:
+            np.testing.assert_array_equal(getattr(fast[0], field), value[:2], err_msg=field)
+            np.testing.assert_array_equal(getattr(fast[1], field), value[[0, 2, 3]],
+                                          err_msg=field)
+        else:
+            assert getattr(fast[0], field) is None, field

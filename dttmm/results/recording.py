@@ -13,21 +13,21 @@ import numpy as np
 _PER_BODY = ("rot", "omega", "omega_dot", "defl", "defl_rate", "jq", "jqd", "jtau", "v_c")
 
 
-class Recording:
-    """The samples of one run: each key's rows in blocks, and the steps they were taken at.
-    keep: the kernels' body of each of the model's bodies; identity: whether those are every
-    kernel body, in order (default: keep is 0 .. n - 1; a kernel model with bodies of its own
-    after the model's needs False, run_plan's keeps_every_body).  stream: a SampleStream to write
-    the rows to instead of keeping them (simulate(..., stream=path)).  samples: how many rows
-    the run will record, where known (a fixed-step run): each key's rows are then written into
-    one array of that many rows, which is never joined (a join holds a key's rows twice); more
-    rows than that go on in blocks."""
+class RecordLayout:
+    """What a run records, the same for every run of a prepared run (solving/run_plan.py), so
+    made once: the keys; each key's pick of the model's bodies from the kernels' rows (keep:
+    the kernels' body of each of the model's bodies; identity: whether those are every kernel
+    body, in order; default: keep is 0 .. n - 1; a kernel model with bodies of its own after
+    the model's needs False, run_plan's keeps_every_body); and, given the run's state and its
+    other recorded arrays (extra: the histories), the arrays a sample of the state is read
+    from, the loop writing them in place for the whole run (a short run's first and last
+    sample cost one copy per key)."""
 
-    def __init__(self, keys, keep, stream=None, samples=None, identity=None):
+    def __init__(self, keys, keep, identity=None, state=None, extra=None):
         self.keys = list(keys)
         self.keep = np.asarray(keep)
         self.identity = (np.array_equal(self.keep, np.arange(len(self.keep))) if identity is None
-                         else identity)             # (keep is every body: a prepared run's)
+                         else identity)
         # each key's rows of the model's bodies: "z" holds each body's input station's [m; q]
         # (station 2k + 1), the per-body keys the kept bodies (all of them: every row)
         every = slice(None)
@@ -36,19 +36,52 @@ class Recording:
         if not self.identity:
             self.picks.update({key: (every, self.keep) for key in _PER_BODY})
             self.picks["v_st"] = (every, np.append(self.keep, len(self.keep)))
-        self.blocks = {key: [] for key in self.keys}
+        self.state_arrays = self.state_rows = None
+        if state is not None:
+            # (key, the state's or extra's array), and (key, its row as recorded, pick): the
+            # row picked once where the pick is slices (a view), else picked at each sample
+            self.state_arrays = [(key, extra[key] if key in extra else getattr(state, key))
+                                 for key in self.keys]
+            self.state_rows = []
+            for key, value in self.state_arrays:
+                pick = self.picks[key][1:] if key in self.picks else None
+                if pick is not None and all(isinstance(p, slice) for p in pick):
+                    value, pick = value[pick], None
+                row = value if pick is None else value[pick]
+                self.state_rows.append((key, value, pick, row.shape, row.dtype))
+
+
+class Recording:
+    """The samples of one run: each key's rows in blocks, and the steps they were taken at.
+    layout: what it records (RecordLayout); stream: a SampleStream to write the rows to instead
+    of keeping them (simulate(..., stream=path)).  samples: how many rows the run will record,
+    where known (a fixed-step run): each key's rows are then written into one array of that
+    many rows, which is never joined (a join holds a key's rows twice); more rows than that go
+    on in blocks."""
+
+    def __init__(self, layout, stream=None, samples=None):
+        self.layout = layout
+        self.keys, self.picks = layout.keys, layout.picks
         self.steps = []
         self.times = []         # an adaptive run's sample times (a fixed step's: steps x dt)
         self.stream = stream
         self.samples = samples
         self.rows = 0           # rows written into the arrays of `samples` rows
-        self._rows_of_state = None  # (add_state's targets in those arrays)
+        self._rows_of_state = None  # (add_state's value, pick and array of samples per key)
+        if stream is None and samples is not None and layout.state_rows is not None:
+            # each key's array of `samples` rows, made now (its row's shape is the state's)
+            self.blocks = {key: [np.empty((samples,) + shape, dtype)]
+                           for key, _, _, shape, dtype in layout.state_rows}
+            self._rows_of_state = [(value, pick, self.blocks[key][0])
+                                   for key, value, pick, _, _ in layout.state_rows]
+        else:
+            self.blocks = {key: [] for key in self.keys}
 
     @classmethod
     def from_stream(cls, path):
         """The recording a run streamed to path (its samples so far, if it stopped)."""
         stream = SampleStream.open(path)
-        recording = cls(stream.meta["keys"], np.arange(0), stream)
+        recording = cls(RecordLayout(stream.meta["keys"], np.arange(0)), stream)
         recording.steps, recording.times = stream.steps_and_times()
         return recording
 
@@ -83,25 +116,15 @@ class Recording:
             blocks.append(np.empty((self.samples,) + shape, dtype))
         return blocks[0]
 
-    def add_state(self, state, extra, step, t=None):
-        """One sample from the state the loop advances (t = 0, the state at the end, or an
-        adaptive run's segment end at time t)."""
-        if self.stream is not None or self.samples is None or self.rows >= self.samples:
-            self.add({key: (extra[key] if key in extra else getattr(state, key))[None]
-                      for key in self.keys}, [step], () if t is None else [t])
+    def add_state(self, step, t=None):
+        """One sample of the run's state (its layout's state_rows, as the loop left them: t = 0,
+        the state at the end, or an adaptive run's segment end at time t)."""
+        if self._rows_of_state is None or self.samples is None or self.rows >= self.samples:
+            self.add({key: value[None] for key, value in self.layout.state_arrays}, [step],
+                     () if t is None else [t])
             return
-        if self._rows_of_state is None:         # each key's array of samples and pick, made at
-            self._rows_of_state = []            # the first row (a short run's first and last
-            for key in self.keys:               # sample are written in place)
-                value = extra[key] if key in extra else getattr(state, key)
-                pick = self.picks.get(key)
-                pick = None if pick is None else pick[1:]
-                value = value if pick is None else value[pick]
-                self._rows_of_state.append((key, key in extra, pick,
-                                            self._samples_of(key, value.shape, value.dtype)))
-        row = self.rows
-        for key, is_extra, pick, samples in self._rows_of_state:
-            value = extra[key] if is_extra else getattr(state, key)
+        row = self.rows                         # (written in place: a short run's first and
+        for value, pick, samples in self._rows_of_state:    # last sample cost a copy a key)
             samples[row] = value if pick is None else value[pick]
         self.rows += 1
         self.steps.append(step)

@@ -29,7 +29,7 @@ class Stepping:
 
     def __init__(self, plan, opts, wall0):
         self.plan, self.opts, self.wall0 = plan, opts, wall0
-        model, state = plan.model, plan.state
+        model = plan.model
         n = model.n_bodies
         counters, done = (0, 0), 0
         resume = opts.resume
@@ -42,14 +42,12 @@ class Stepping:
         self.done = done
         self.samples = None if opts.adaptive else run_records._sample_count(opts.sampling, done,
                                                                    opts.n_steps)
-        keys = plan.keys
-        self.recording = Recording(keys, plan.keep, None if opts.stream is None else
-                                   SampleStream.create(opts.stream, keys, opts.dt,
+        self.recording = Recording(plan.record_layout, None if opts.stream is None else
+                                   SampleStream.create(opts.stream, plan.keys, opts.dt,
                                                        dict(plan.run_info, method=opts.method,
                                                             adaptive=opts.adaptive)),
-                                   self.samples, plan.keeps_every_body)
-        self.recording.add_state(state, plan.history_values, done,
-                                 0.0 if opts.adaptive else None)
+                                   self.samples)
+        self.recording.add_state(done, 0.0 if opts.adaptive else None)
         # chunks of up to CHUNK steps; a JointForce drive given as a Python function of the
         # state is evaluated in Python, one step ahead: one step per chunk (said once per
         # process)
@@ -73,7 +71,10 @@ class Stepping:
         self.static_inputs = (self.static_ground and self.no_loads
                               and not plan.joint_inputs_vary and not plan.targets_vary
                               and not plan.closing_forces)
-        self.info = np.zeros(5, dtype=np.int64)
+        # the compiled loop's status, failing step, Newton iterations, samples written and
+        # unconverged steps (a kept run's own array: its next call's arguments are the same)
+        self.info = plan.chunk_arrays(("info",), lambda: np.zeros(5, dtype=np.int64))
+        self.info[:4] = 0
         self.info[4] = counters[1]
         self.max_newton = counters[0]
 
@@ -83,11 +84,9 @@ class Stepping:
         step of chunks of up to self.size steps; a run that samples only its ends (a million
         bodies by default: run_records._sampling) records its last state from the state itself, and
         its chunks write no rows (the rows of a step would hold 0.4 KB per body)."""
-        plan, n = self.plan, self.plan.model.n_bodies
+        plan = self.plan
         ends_only = balance is None and self.samples == 2
-        shape = (0 if ends_only else max(1, self.size // every), n, len(plan.state.eta),
-                 plan.scheme.name == "paper", "v_c" in plan.keys,
-                 plan.loops.wrench.shape[0] if "closure_wrench" in plan.keys else 0)
+        shape = (0 if ends_only else max(1, self.size // every),) + plan.record_shape
         return ends_only, plan.chunk_arrays(("record",) + shape,
                                             lambda: consistent_start._record(*shape))
 
@@ -199,7 +198,7 @@ def fixed_steps(run):
         work_steps, work_values = [np.array([done])], [np.zeros(1)]     # W at every step
 
         def result_of(values, steps):
-            rows = Recording(keys, plan.keep, identity=plan.keeps_every_body)
+            rows = Recording(plan.record_layout)
             rows.add(values, steps)
             return run_records._result(plan.user_model, rows, dt, 0.0, 0, {}), rows.arrays()
 
@@ -227,7 +226,7 @@ def fixed_steps(run):
                 step = max(int(round(err.t / dt)), done + 1)
                 raise run_checks.DivergenceError(step, err.t, str(err), run.partial(done)) from None
             run.run_chunk(inputs, rec, dt, 1 if balance else every, done, (done + 1) * dt)
-            n_rec = int(info[3])
+            status, failed_at, newton, n_rec, _ = info.tolist()     # (Python ints)
             if balance is not None and n_rec:       # the samples asked for, from every step's
                 picked = np.arange(every - 1, n_rec, every)
                 if len(picked):
@@ -236,14 +235,14 @@ def fixed_steps(run):
             elif n_rec:
                 recording.add({key: getattr(rec, key)[:n_rec] for key in keys},
                               done + every * np.arange(1, n_rec + 1))
-            if info[0] != OK:
-                step = done + int(info[1]) + 1
+            if status != OK:
+                step = done + failed_at + 1
                 cause = run_checks._failure_cause(model, plan.mode, info, plan.monitor,
                                                   plan.settings)
-                if opts.method == "direct" and info[0] == SINGULAR:
+                if opts.method == "direct" and status == SINGULAR:
                     cause += "; " + run_checks._DIRECT_HINT
                 raise run.stopped(step, step * dt, cause, step - 1)
-            max_newton = max(max_newton, int(info[2]))
+            max_newton = max(max_newton, newton)
             if n_rec:
                 fastest = _faster(fastest, run_checks._fastest_rate(rec.omega[:n_rec]))
             if balance is not None:
@@ -265,10 +264,11 @@ def fixed_steps(run):
         bar.close()
     rec = inputs = None                         # (the chunks' buffers)
     if recording.last_step != n_steps:          # the final state is always recorded
-        recording.add_state(state, plan.history_values, n_steps)
+        recording.add_state(n_steps)
         fastest = _faster(fastest, run_checks._fastest_rate(state.omega[None]))
+    unconverged = int(info[4])
     checkpoint = Checkpoint.of(n_steps, dt, plan.checkpoint_run, plan.ending(),
-                               (max_newton, info[4]))
+                               (max_newton, unconverged))
     turn = fastest[0] * dt
     if turn > run_checks.MAX_TURN_PER_STEP:
         warnings.warn(run_checks.UnresolvedMotionWarning(
@@ -280,7 +280,7 @@ def fixed_steps(run):
             f"a turn), or rtol= for steps chosen by the error"), stacklevel=3)
     result = run_records._result(plan.user_model, recording, dt, 0.0, n_steps,
                        dict(plan.run_info, newton_iterations_used=max_newton,
-                            newton_unconverged_steps=int(info[4]),
+                            newton_unconverged_steps=unconverged,
                             step_error_max=float(plan.monitor.error[0]),
                             turn_per_step_max=turn,
                             **({} if balance is None else
@@ -352,7 +352,7 @@ def adaptive(run):
                 largest = max(largest, float(monitor.error[0]))
                 most_newton = max(most_newton, int(info[2]))
                 if (lands and targets is not None) or (targets is None and t >= next_default):
-                    recording.add_state(plan.state, plan.history_values, taken, t)
+                    recording.add_state(taken, t)
                     while next_default <= t:
                         next_default += every_default
                 bar.update(int(run_records.MAX_SAMPLES * t / t_end))
@@ -369,7 +369,7 @@ def adaptive(run):
     finally:
         bar.close()
     if recording.times[-1] != t_end:           # the final state is always recorded
-        recording.add_state(plan.state, plan.history_values, taken, t_end)
+        recording.add_state(taken, t_end)
     run_info = dict(plan.run_info, dt=None, dt_min=control.h_min, dt_max=control.h_max,
                     segments_rejected=control.rejected, steps_rejected=control.rejected_steps,
                     rtol=opts.rtol, atol=opts.atol)

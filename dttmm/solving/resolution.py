@@ -36,6 +36,7 @@ from ..elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES,
                              mode_shapes)
 from ..elements.hinges import FIXED
 from ..elements.kinds import BEAM
+from ..model.model import model_fact
 
 MODE_SHARE = 1e-3         # of the run's energy: a mode holding more must be resolved
 STEPS_PER_PERIOD = 20     # the advice: 20 steps a period (or a turn)
@@ -103,31 +104,48 @@ def bent_element(model, result):
     return worst + (int(np.ceil(np.sqrt(worst[2] / BEND_DRIFT))),)     # (per element)
 
 
-def unresolved_mode(model, result, dt, max_phase):
-    """The worst kept bending mode the step does not resolve and the motion excites, as
-    (beam name, plane, mode number, frequency Hz, share of the energy), or None."""
-    if not model.has_beams or result.modal_coordinates is None or len(result.t) < 2:
-        return None
-    beams = np.nonzero(model.body_kind == BEAM)[0]
+@model_fact
+def _bending_modes(model):
+    """Each beam's bending modes per plane, as (name, plane, its first modal column, the modes'
+    angular frequencies rad/s, modal masses and stiffnesses, the largest of those frequencies):
+    a fact of the model, kept on it
+    (unresolved_mode runs after every fixed-step run: ~60 us a call for the three-pendulum's
+    two beams)."""
+    modes = []
     offsets = model.mode_offsets
-    eta, eta_dot = np.asarray(result.modal_coordinates), np.asarray(result.modal_velocities)
-    candidates, elastic = [], np.zeros(len(result.t))
-    for k in beams:
+    for k in np.nonzero(model.body_kind == BEAM)[0]:
         row = model.beam_params[k]
         m = int(row[MODES])
         _, _, _, mass, stiff = mode_shapes(int(row[FAMILY]), row[LENGTH], m, [0.0])
         modal_mass = row[MASS_PER_LENGTH] * mass
         for plane, ei, first in (("v", row[EI_V], 0), ("w", row[EI_W], m)):
             omega = np.sqrt(ei * stiff / modal_mass)
-            q = eta[:, offsets[k] + first:offsets[k] + first + m]
-            elastic += 0.5 * (q * q) @ (ei * stiff)
-            for j in np.nonzero(omega * dt > max_phase)[0]:
-                qd = eta_dot[:, offsets[k] + first + j]
-                energy = 0.5 * modal_mass[j] * qd * qd     # its vibration's (kinetic) energy
-                candidates.append((model.body_names[k], plane, j + 1,
-                                   omega[j] / (2 * np.pi), float(energy.max())))
+            modes.append((model.body_names[k], plane, offsets[k] + first, omega, modal_mass,
+                          ei * stiff, float(omega.max()) if m else 0.0))
+    return modes
+
+
+def unresolved_mode(model, result, dt, max_phase):
+    """The worst kept bending mode the step does not resolve and the motion excites, as
+    (beam name, plane, mode number, frequency Hz, share of the energy), or None."""
+    if not model.has_beams or result.modal_coordinates is None or len(result.t) < 2:
+        return None
+    eta_dot = np.asarray(result.modal_velocities)
+    candidates = []
+    for name, plane, first, omega, modal_mass, _, fastest in _bending_modes(model):
+        if not fastest * dt > max_phase:        # (no mode of the plane: one comparison)
+            continue
+        for j in np.nonzero(omega * dt > max_phase)[0]:
+            qd = eta_dot[:, first + j]
+            energy = 0.5 * modal_mass[j] * qd * qd     # its vibration's (kinetic) energy
+            candidates.append((name, plane, j + 1, omega[j] / (2 * np.pi), float(energy.max())))
     if not candidates:
         return None
+    eta = np.asarray(result.modal_coordinates)
+    elastic = np.zeros(len(result.t))           # (the bending modes' strain energy)
+    for _, _, first, omega, _, stiffness, _ in _bending_modes(model):
+        q = eta[:, first:first + len(omega)]
+        elastic += 0.5 * (q * q) @ stiffness
     total = float(np.max(np.asarray(result.kinetic) + elastic))
     worst = max(candidates, key=lambda c: c[4])
     share = worst[4] / total if total > 0.0 else 0.0

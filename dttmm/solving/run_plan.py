@@ -30,8 +30,9 @@ from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
 from ..elements.kinds import BODY_KIND
 from ..kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
+from .methods import SCHEMES
 from ..model.model import model_fact
-from ..results.recording import leaves, model_fingerprint
+from ..results.recording import RecordLayout, leaves, model_fingerprint
 
 KEEP = 8                    # prepared runs kept per model (the latest used)
 KEEP_BYTES = 2 ** 24        # ... each of at most this much of arrays (a few thousand bodies)
@@ -59,7 +60,16 @@ def runs_welded(model, mode, scheme):
 def kernels_used(model, scheme, method="riccati", full_state=False):
     """The loop variant that runs a user's model with `scheme` (dttmm/solving/methods.py),
     `method` and `full_state` (describe(); simulate's BLAS threads: only the general and
-    energy-momentum loops call LAPACK)."""
+    energy-momentum loops call LAPACK).  A fact of the model and the options, kept on it (a
+    short run's fixed cost: ~6 us), per value of the switch that sends chains to the general
+    loop (tests turn it)."""
+    return _kernels_used(model, scheme.name, method, bool(full_state),
+                         run_tables.FUSED_BALL_CHAIN)
+
+
+@model_fact
+def _kernels_used(model, scheme_name, method, full_state, fused_switch):
+    scheme = SCHEMES[scheme_name]
     km, _ = run_tables.kernel_model(model)
     mode = run_tables._mode(km, method, full_state)
     if runs_fused(km, mode, scheme):
@@ -152,7 +162,7 @@ class PreparedRun:
                                       run_tables.compiled_forces(model).copy())    # (the run's own)
         keys += list(scheme.records)
         self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
-        self.calls = DirectCalls()      # (its skeleton's calls: kernels/stepping/loop.py)
+        self.calls = _SameCalls()       # (its skeleton's calls: kernels/stepping/loop.py)
         self.run_info = dict(mode=run_tables._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
                              loop=loop_name, model_fingerprint=model_fingerprint(user_model))
         if len(loops.kind):
@@ -211,6 +221,12 @@ class PreparedRun:
         # the kernel model adds last leaves keep = 0 .. n - 1 with more kernel bodies)
         self.keeps_every_body = bool(len(keep) == model.n_bodies
                                      and np.array_equal(keep, np.arange(len(keep))))
+        # what its runs record, and the arrays a sample of the state reads (recording.py);
+        # a chunk's record's shape but its rows (consistent_start._record)
+        self.record_shape = (n, len(self.state.eta), scheme.name == "paper", "v_c" in keys,
+                             self.loops.wrench.shape[0] if "closure_wrench" in keys else 0)
+        self.record_layout = RecordLayout(keys, keep, self.keeps_every_body, self.state,
+                                          self.history_values)
         self.lock = threading.Lock()
         self.kept = False               # kept on the model (prepared_run)
         self._chunk_arrays = {}         # the chunks' input and record arrays, by their shape
@@ -220,7 +236,8 @@ class PreparedRun:
         before each run)."""
         buffers, others = self.started
         for buffer, value in zip(self.buffers, buffers):
-            buffer[:] = value
+            if buffer.size:             # (a model without integer arrays: an empty buffer)
+                buffer[:] = value
         for a, value in zip(self.others, others):
             np.copyto(a, value)
 
@@ -230,7 +247,8 @@ class PreparedRun:
         arrays themselves (a million bodies' state is not doubled)."""
         if not self.kept:
             return self.structures
-        return _Ending(self, [b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        return _Ending(self, [b.copy() if b.size else b for b in self.buffers],  # (an empty
+                       [a.copy() for a in self.others])         # buffer holds no leaf's values)
 
     def chunk_arrays(self, key, make):
         """Arrays of a chunk (its inputs known before the run, its records) that a kept run's
@@ -246,6 +264,31 @@ class PreparedRun:
 
 
 KEEP_CHUNK_ARRAYS = 64  # a kept run's chunk arrays and settings kept (chunk_arrays)
+
+
+class _SameCalls(DirectCalls):
+    """A prepared run's DirectCalls (kernels/stepping/loop.py), which skip fingerprinting a call
+    whose varying parts are the very objects of the call before: a kept run's next run of the
+    same length steps with the same settings, inputs, record and info arrays (chunk_arrays), and
+    their types cannot have changed (named tuples are immutable; an array's dtype, dimensions
+    and layout are its own for life, and nothing makes these read-only), so that call's entry
+    point is this one's.  Fingerprinting their ~30 fields cost a short run ~4 us."""
+
+    def __init__(self):
+        super().__init__()
+        self.same = None        # (skeleton, settings, inputs, record, info) of self.key's call
+
+    def __call__(self, compiled, args):
+        _, run, out_info = args
+        same = (compiled, run.settings, run.inputs, run.rec, out_info)
+        if self.entry is not None and self.same is not None and all(
+                a is b for a, b in zip(same, self.same)):
+            self.entry(*args)
+            return
+        super().__call__(compiled, args)
+        self.same = same
+
+
 GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
 
 

@@ -1,10 +1,14 @@
 """Steps and records: chunks of steps, the samples kept, Richardson extrapolation of runs, and
 the Result built from a recording (docs/solver.md, "Steps and records")."""
+from typing import NamedTuple
+
 import numpy as np
 
 from . import adaptive as adaptive_steps
 from ..kernels.stepping import step as kstep
+from ..elements.kinds import MAX_COORDINATES
 from ..model.loop_rows import has_closure_drives
+from ..model.model import model_fact
 from ..results.recording import NoCheckpoint
 from ..results.result import (DERIVED, FIELDS, Result, chain_energies)
 from .run_tables import (column_names, coordinate_columns)
@@ -153,30 +157,57 @@ def richardson_extrapolation(*runs):
     return Result._of_run(derivation, lazy=lazy, **kept)
 
 
+class _ResultFacts(NamedTuple):
+    """What every Result of a model holds whatever the run (_result_facts)."""
+    body_names: tuple           # Result.body_names
+    has_modes: bool             # modal coordinates recorded (beams or strain rods)
+    coordinate_columns: object  # (k, i) -> the flat columns of the recorded (T, n * 3) jq,
+    #                             jqd, jtau (None without joints with coordinates)
+    closure_drives: bool        # closure_drive_force recorded
+    coordinate_names: tuple     # info's column names (run_tables.column_names)
+    modal_names: tuple
+
+
+@model_fact
+def _result_facts(model):
+    """A model's _ResultFacts, kept on it (a short run's fixed cost: ~10 us a call)."""
+    columns = coordinate_columns(model)
+    names = column_names(model)
+    return _ResultFacts(
+        body_names=tuple(model.body_names), has_modes=bool(model.n_modes.any()),
+        coordinate_columns=(np.array([k * MAX_COORDINATES + i for k, i in columns], np.int64)
+                            if columns else None),
+        closure_drives=has_closure_drives(model),
+        coordinate_names=tuple(names["coordinate_names"]),
+        modal_names=tuple(names["modal_names"]))
+
+
 def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
     """The Result of a run's recording: the stored state as recorded; positions, velocities and
     energies left to _derived, computed when first read."""
+    facts = _result_facts(model)
     values = recording.arrays()
     t = (np.asarray(recording.times) if recording.times
          else np.asarray(recording.steps, dtype=float) * h)
     rot, omega, eta, eta_d = values["rot"], values["omega"], values["eta"], values["eta_d"]
-    if "defl" not in values:                # (not recorded without joints that offset)
-        values["defl"] = values["defl_rate"] = _zeros(rot.shape[:2] + (3,))
     joints = {}
-    columns = coordinate_columns(model)
-    if "jq" in values and columns:
-        for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),
+    if "jq" in values and facts.coordinate_columns is not None:   # (T, n, MAX_COORDINATES)
+        for name, key in (("joint_coordinates", "jq"), ("joint_rates", "jqd"),    # -> (T, C)
                           ("drive_force", "jtau")):
-            joints[name] = np.stack([values[key][:, k, i] for k, i in columns], axis=1)
+            recorded = np.asarray(values[key])
+            joints[name] = np.take(recorded.reshape(len(recorded), -1),
+                                   facts.coordinate_columns, axis=1)
     if "closure_wrench" in values:
         joints["closure_force"] = values["closure_wrench"][:, :, :3]
         joints["closure_moment"] = values["closure_wrench"][:, :, 3:6]
-        if has_closure_drives(model):
+        if facts.closure_drives:
             joints["closure_drive_force"] = values["closure_wrench"][:, :, 6:8]
     derived = {}
 
     def derivation(name):
         """The points' positions and velocities, and (when asked) the energies from them."""
+        if "defl" not in values:            # (not recorded without joints that offset)
+            values["defl"] = values["defl_rate"] = _zeros(rot.shape[:2] + (3,))
         if not derived:
             derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
                                    eta, eta_d, values.get("v_st"), values.get("v_c")))
@@ -189,10 +220,11 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
         return derived
 
     loads = values["z"]                     # every body's input [m; q]
-    info = dict(info, **column_names(model))
+    info = dict(info, coordinate_names=list(facts.coordinate_names),    # (each Result's own
+                modal_names=list(facts.modal_names))                    # lists)
     return Result._of_run(derivation, method="dttmm", t=t, rotation=rot, angular_velocity=omega,
-                  angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
-                  moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
-                  modal_coordinates=eta if model.n_modes.any() else None,
-                  modal_velocities=eta_d if model.n_modes.any() else None,
-                  body_names=tuple(model.body_names), checkpoint=checkpoint, **joints)
+                          angular_acceleration=values["omega_dot"], force=loads[:, :, 3:6],
+                          moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
+                          modal_coordinates=eta if facts.has_modes else None,
+                          modal_velocities=eta_d if facts.has_modes else None,
+                          body_names=facts.body_names, checkpoint=checkpoint, **joints)

@@ -7,6 +7,7 @@ in chunks of fixed steps, or in an adaptive run's segments (adaptive.py); Python
 the prescribed ground motion, applied loads and joint drives for each chunk, judges segments,
 and collects the recorded samples (results/recording.py).
 """
+import contextlib
 import functools
 import time
 
@@ -23,6 +24,8 @@ from .run_records import _result
 
 
 MAX_STEP_ERROR = 0.05       # rad or m: simulate's default local error estimate limit per step
+_NO_LIMIT = contextlib.nullcontext()    # (a run whose loop calls no LAPACK: blas_threads'
+#                                         context manager itself costs a short run ~3 us)
 
 
 def simulate(model: Model, t_end, dt=None, *, rtol=None, atol=0.0, method="riccati",
@@ -190,7 +193,7 @@ def _simulate(wall0, threads, model, t_end, dt, **options):
     check_supported(opts.model, opts.scheme.name, opts.method, opts.full_state)
     lapack = kernels_used(opts.model, opts.scheme, opts.method, opts.full_state) in (
         "general", "energy-momentum")
-    with blas_threads(threads, lapack), prepared_run(opts) as plan:
+    with blas_threads(threads) if lapack else _NO_LIMIT, prepared_run(opts) as plan:
         run = drivers.Stepping(plan, opts, wall0)
         result = (drivers.runge_kutta if opts.scheme.loop == "runge_kutta"
                   else drivers.adaptive if opts.adaptive else drivers.fixed_steps)(run)
