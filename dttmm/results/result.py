@@ -16,7 +16,7 @@ from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from ..elements.rigid_body import MASS, TO_MASS_CENTER
 from ..elements.kinds import unimplemented_body_kind
 from ..model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
-                              output_section, rotation_to_quaternion)
+                              element_end_section, rotation_to_quaternion)
 
 
 FIELDS = (
@@ -574,9 +574,10 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
             for i in range(n_t):                # (a log per state: elastic hinges only)
                 inb = model.parent[k]                    # the hinge's inboard body
                 a_in = ground_rot[i] if inb < 0 else rotation[i, inb]
-                if inb >= 0 and model.body_kind[inb] == BEAM:     # the beam's end section
-                    a_in = output_section(model.beam_params[inb], a_in, np.zeros(3),
-                                           eta[i, mode_off[inb]:mode_off[inb + 1]])[0]
+                if inb >= 0 and model.body_kind[inb] != RIGID:  # a beam's or rod's end section
+                    a_in = element_end_section(model, inb, a_in, np.zeros(3),
+                                               eta[i, mode_off[inb]:mode_off[inb + 1]],
+                                               None)[0]
                 d_b = a_in.T @ deflection[i, k]
                 psi = log_rotation(a_in.T @ a[i] @ h[REST_ROTATION].reshape(3, 3).T)
                 potential[i] += 0.5 * d_b @ h[K_TRANSLATION].reshape(3, 3) @ d_b

@@ -24,7 +24,7 @@ where loads act), so it costs about the positions' price per step.
 """
 import numpy as np
 
-from ..elements import BEAM
+from ..elements import BEAM, RIGID
 from ..elements.beam import (AXIAL_MODES, DAMPING_RATIO, EA, EI_V, EI_W, FAMILY, GJ, LENGTH,
                              LOAD_AXES, MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING,
                              TORSION_MODES, foreshortening_integrals, modal_size, mode_shapes,
@@ -67,9 +67,10 @@ class EnergyBalance:
         n = model.n_bodies
         self.elastic = [k for k in range(n) if model.hinge_kind[k] == ELASTIC]
         for k in self.elastic:
-            if model.parent[k] >= 0 and model.body_kind[model.parent[k]] == BEAM:
+            if model.parent[k] >= 0 and model.body_kind[model.parent[k]] != RIGID:
                 raise ValueError(f"simulate(max_energy_error=...): the elastic hinge "
-                                 f"{model.hinge_names[k]!r} follows a beam; its damper's work "
+                                 f"{model.hinge_names[k]!r} follows a beam or strain rod "
+                                 f"({model.body_names[model.parent[k]]!r}); its damper's work "
                                  f"is not counted yet")
         self.roots = [k for k in range(n) if model.parent[k] < 0]
         self.grounded_closures = [c for c in range(model.n_closures)
