@@ -231,6 +231,12 @@ WITH_COORDINATES = tuple(k.code for k in JOINT_KINDS if k.coordinates)    # (the
 WITH_SLIDES = tuple(k.code for k in JOINT_KINDS if any(c.motion == SLIDE for c in k.coordinates))
 WITH_TURNS = tuple(k.code for k in JOINT_KINDS if any(c.motion == TURN for c in k.coordinates))
 HAS_SLIDES = tuple(int(code in WITH_SLIDES) for code in range(max(JOINT_KIND) + 1))
+# (per code) the index of its turn fixed in the parent and of its turn fixed in the child, -1
+# where it has none (at most one each, asserted above): the order joint_frame turns them in
+TURNS = tuple(tuple(next((i for i, c in enumerate(JOINT_KIND[code].coordinates)
+                          if c.motion == TURN and c.frame == frame), -1)
+                    if code in JOINT_KIND else -1 for frame in (PARENT, CHILD))
+              for code in range(max(JOINT_KIND) + 1))
 
 
 def coordinate_count(kind):

@@ -5,9 +5,10 @@ A child behind such a joint is not integrated on its own: its rotation, angular 
 acceleration follow from its parent's and from the joint's coordinates q, which carry the
 Newmark histories (q'' = c1 dq + w1_q, q' = c3 dq + w3_q, dq the step's increment).  Each
 coordinate is a turn about, or a slide along, an axis (its slot of the hinge_params row) fixed
-in the parent's frame or in the child's (kinds.py: MOTION, AXIS, FRAME, indexed here as
-compile-time constants): the turns fixed in the parent come first, then R0, then those fixed in
-the child; the slides move the child's input point along axes fixed in the parent.
+in the parent's frame or in the child's (kinds.py: MOTION, AXIS, TURNS, read here as constant
+arrays): the turn fixed in the parent comes first, then R0, then the one fixed in the child (a
+kind has at most one of each); the slides move the child's input point along axes fixed in the
+parent.
 
   joint_offset         the child's input point from the attachment point: d = A_P sum n_i q_i
                        over the slides, and its rate
@@ -29,13 +30,23 @@ from numba.core.extending import intrinsic
 from .. import kernel
 from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
 from ...elements.hinges import BALL
-from ...elements.kinds import (AXIS, AXIS_START, CHILD, COORDINATES, FRAME, HAS_SLIDES,
-                               MAX_COORDINATES, MOTION as MOVES, SLIDE, TURN)
+from ...elements.kinds import (AXIS, AXIS_START, CHILD, COORDINATES, HAS_SLIDES, MAX_COORDINATES,
+                               MOTION as MOVES, SLIDE, TURN, TURNS)
 from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mv
 from ..algebra.so3 import exp_coefficients
 
 FREE, PRESCRIBED = 1, 2          # sweep.joint_dof: 0 for a coordinate the joint does not have
 ZERO3 = (0.0, 0.0, 0.0)
+
+# The declaration's tables (elements/kinds.py) by kind code, as arrays numba compiles in as
+# constant data.  Read from the tuples of tuples themselves, at a run-time kind, and with a loop
+# over every coordinate slot, joint_frame took 150 ns a call against 94 ns now (a revolute joint,
+# one process, CPU family 25; the four-bar calls it ~100 times a step).
+_COORDINATES = np.array(COORDINATES, dtype=np.int64)
+_MOVES = np.array(MOVES, dtype=np.int64)                    # (kind, coordinate): TURN, SLIDE
+_AXIS_AT = np.array([[AXIS_START[a] for a in row] for row in AXIS], dtype=np.int64)  # hp slot
+_TURNS = np.array(TURNS, dtype=np.int64)                     # (kind, PARENT/CHILD): i or -1
+_HAS_SLIDES = np.array(HAS_SLIDES, dtype=np.int64)
 
 
 @kernel
@@ -56,7 +67,7 @@ def _t_exp(phi):
 def joint_axis(hp, kind, i):
     """Coordinate i's axis n_i of a joint kind (its slot of the hinge_params row hp), a
     3-tuple in the frame the declaration fixes it in."""
-    a = AXIS_START[AXIS[kind][i]]
+    a = _AXIS_AT[kind, i]
     return (hp[a], hp[a + 1], hp[a + 2])
 
 
@@ -69,13 +80,23 @@ def joint_offset(kind, hp, f_p, wp, q, qd):
     tree_points) and the run's first state (run_tables._initial_deflections)."""
     d = ZERO3
     for i in range(MAX_COORDINATES):
-        if MOVES[kind][i] == SLIDE:
+        if _MOVES[kind, i] == SLIDE:
             d = t_lin3(1.0, d, q[i], t_mv(f_p, joint_axis(hp, kind, i)))
     v = t_cross(wp, d)
     for i in range(MAX_COORDINATES):
-        if MOVES[kind][i] == SLIDE:
+        if _MOVES[kind, i] == SLIDE:
             v = t_lin3(1.0, v, qd[i], t_mv(f_p, joint_axis(hp, kind, i)))
     return d, v
+
+
+@kernel
+def _with_coordinate(dirs, befores, i, u, before):
+    """(dirs, befores), the per-coordinate 3-tuples of joint_frame, with coordinate i's set."""
+    if i == 0:
+        return (u, dirs[1], dirs[2]), (before, befores[1], befores[2])
+    if i == 1:
+        return (dirs[0], u, dirs[2]), (befores[0], before, befores[2])
+    return (dirs[0], dirs[1], u), (befores[0], befores[1], before)
 
 
 @kernel(entry=True)
@@ -84,7 +105,8 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     coordinates, from its parent's attachment frame (rot_p, w_p, wd_p) and the coordinates
     q, q', q'' (docs/joints.md, "Kinematics"), written into rot, w, wd; d, d_rate: the child's
     input point relative to the attachment point and its rate (joint_offset; zero without
-    slides).  Turn by turn (the parent's, then R0, then the child's):
+    slides).  The turn fixed in the parent, then R0, then the turn fixed in the child
+    (kinds.py: TURNS), each
         u_i = F n_i,  F <- F Rot(n_i, q_i),  w' <- w' + u_i q_i'' + (w x u_i) q_i',
         w <- w + u_i q_i'
     from F = A_P, w = w_P, w' = w_P'; a slide's u_i = A_P n_i.  Returns per coordinate its
@@ -98,36 +120,26 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
     f = f_p
     w_out = wp
     wd_out = (wd_p[0], wd_p[1], wd_p[2])
-    u0, u1, u2 = ZERO3, ZERO3, ZERO3
-    b0, b1, b2 = ZERO3, ZERO3, ZERO3
-    for which in range(2):
-        if which == CHILD:
+    dirs, befores = (ZERO3, ZERO3, ZERO3), (ZERO3, ZERO3, ZERO3)
+    for side in range(2):                  # PARENT, CHILD
+        if side == CHILD:
             f = t_mm(f, r0)
+        i = _TURNS[kind, side]
+        if i < 0:
+            continue
+        n = joint_axis(hp, kind, i)
+        u = t_mv(f, n)
+        f = t_mm(f, _t_exp(t_lin3(q[i], n, 0.0, n)))
+        wd_out = t_lin3(1.0, t_lin3(1.0, wd_out, qdd[i], u), qd[i], t_cross(w_out, u))
+        dirs, befores = _with_coordinate(dirs, befores, i, u, w_out)
+        w_out = t_lin3(1.0, w_out, qd[i], u)
+    d_out, d_rate_out = ZERO3, ZERO3
+    if _HAS_SLIDES[kind]:
         for i in range(MAX_COORDINATES):
-            if MOVES[kind][i] != TURN or FRAME[kind][i] != which:
-                continue
-            n = joint_axis(hp, kind, i)
-            u = t_mv(f, n)
-            f = t_mm(f, _t_exp(t_lin3(q[i], n, 0.0, n)))
-            wd_out = t_lin3(1.0, t_lin3(1.0, wd_out, qdd[i], u), qd[i], t_cross(w_out, u))
-            before = w_out
-            w_out = t_lin3(1.0, w_out, qd[i], u)
-            if i == 0:
-                u0, b0 = u, before
-            elif i == 1:
-                u1, b1 = u, before
-            else:
-                u2, b2 = u, before
-    for i in range(MAX_COORDINATES):
-        if MOVES[kind][i] == SLIDE:
-            u = t_mv(f_p, joint_axis(hp, kind, i))
-            if i == 0:
-                u0 = u
-            elif i == 1:
-                u1 = u
-            else:
-                u2 = u
-    d_out, d_rate_out = joint_offset(kind, hp, f_p, wp, q, qd)
+            if _MOVES[kind, i] == SLIDE:
+                dirs, befores = _with_coordinate(dirs, befores, i,
+                                                 t_mv(f_p, joint_axis(hp, kind, i)), ZERO3)
+        d_out, d_rate_out = joint_offset(kind, hp, f_p, wp, q, qd)
     for i in range(3):
         for j in range(3):
             rot[i, j] = f[3 * i + j]
@@ -135,15 +147,15 @@ def joint_frame(kind, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate):
         wd[i] = wd_out[i]
         d[i] = d_out[i]
         d_rate[i] = d_rate_out[i]
-    return (u0, u1, u2), (b0, b1, b2)
+    return dirs, befores
 
 
 @kernel(entry=True)
 def n_coordinates(kind):
     """The free coordinates of a joint kind, as its declaration says (elements/kinds.py)."""
-    if kind < 0 or kind >= len(COORDINATES):
+    if kind < 0 or kind >= _COORDINATES.shape[0]:
         return 0
-    return COORDINATES[kind]
+    return _COORDINATES[kind]
 
 
 @intrinsic
@@ -251,12 +263,12 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
     phi_aa = np.zeros((3, 3))
     for c in range(m):
         ui = dirs[c]
-        if MOVES[kind][c] == TURN:
+        if _MOVES[kind, c] == TURN:
             # alpha_O = ... + u_i q_i'' + (w_(i-1) x u_i) q_i': B_i, and (c3/c1) d alpha_P x u_i
             # q_i' from w_P = c3/c1 alpha_P + const in Phi
             b = t_lin3(1.0, ui, r, t_cross(before[c], ui))
             for j in range(c + 1, m):
-                if MOVES[kind][j] == TURN:
+                if _MOVES[kind, j] == TURN:
                     b = t_lin3(1.0, b, r * qd[j], t_cross(ui, dirs[j]))
             x = r * qd[c]
             phi_aa[0, 1] += ui[2] * x
@@ -276,7 +288,7 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
             for i in range(3):
                 u[i, 6 + c] = b[i]
                 u[9 + i, c] = ui[i]             # Bl: the force along u_i
-    if HAS_SLIDES[kind]:
+    if _HAS_SLIDES[kind]:
         # Phi_a,alpha = -d^ (alpha_P x d);  Psi_m,q = d^ (m_I = m_O + d x q_O)
         u[0, 4], u[0, 5] = d[2], -d[1]
         u[1, 3], u[1, 5] = -d[2], d[0]
@@ -288,7 +300,7 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
         # a_O - a_I = sum (u_i q_i'' + 2 q_i' w_P x u_i) + alpha_P x d + w_P x (w_P x d)
         a_rel = ZERO3
         for c in range(m):
-            if MOVES[kind][c] == SLIDE:
+            if _MOVES[kind, c] == SLIDE:
                 a_rel = t_lin3(1.0, t_lin3(1.0, a_rel, qdd[c], dirs[c]), 2.0 * qd[c],
                                t_cross(wp, dirs[c]))
         a_rel = t_lin3(1.0, t_lin3(1.0, a_rel, 1.0, t_cross(wdp, dt)), 1.0,
