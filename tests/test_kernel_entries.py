@@ -124,3 +124,25 @@ def test_a_callee_kernel_caches_and_links_from_its_cache(tmp_path):
     assert run("first") == (np.sin(x) + 2.0 * x + 1.0, 0)    # compiles both, caches both
     assert run("first") == (np.sin(x) + 2.0 * x + 1.0, -1)   # its cache: the callee not needed
     assert run("second") == (3.0 * (np.sin(x) + 2.0 * x), 1)  # links the callee's cache
+
+
+def test_the_profilers_symbol_map_names_the_loaded_kernels(tmp_path):
+    """benchmarks/jit_profile.py's map (what perf reads to name the JIT's samples): a run's
+    compiled loop and its callees at distinct nonzero addresses, their names demangled."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = tmp_path / "perf.map"
+    subprocess.run([sys.executable, os.path.join(root, "benchmarks", "jit_profile.py"),
+                    "three_pendulum", "--map-only", str(path)], check=True, cwd=root,
+                   env=dict(os.environ, PYTHONPATH=root))
+    sys.path.insert(0, os.path.join(root, "benchmarks"))
+    try:
+        from jit_profile import demangled
+    finally:
+        sys.path.pop(0)
+    rows = [line.split() for line in path.read_text().splitlines()]
+    starts = [int(start, 16) for start, _, _ in rows]
+    names = {demangled(name) for _, _, name in rows}
+    assert all(starts) and len(set(starts)) == len(starts)
+    assert any(n.startswith("dttmm.kernels.stepping.loop.run_steps_") for n in names), names
+    assert demangled("_ZN5dttmm7kernels9transfers5joint11joint_frameB2v7B68c8tJTIeE") == (
+        "dttmm.kernels.transfers.joint.joint_frame")
