@@ -94,6 +94,34 @@ def test_forward_dynamics_of_the_initial_state_is_the_consistent_start():
     assert np.abs(out["residual"]).max() < 1e-10
 
 
+
+def test_a_kept_workspace_gives_a_new_ones_result_bit_for_bit():
+    """A model keeps forward_dynamics' workspace (dynamics.py::_Evaluation, its arrays put back
+    to their fresh values before each call): calls at interleaved states, and calls from two
+    threads at once (one of them on a workspace of its own), give what a copy of the model that
+    never evaluated anything gives, bit for bit."""
+    import pickle
+    import threading
+    for model in (arm(drive="motion"), slider_crank()):
+        run = simulate(model, 0.02, 1e-3)
+        samples = (3, 12, 3, 20)
+        kept = [forward_dynamics(model, float(run.t[i]), run.state(i)) for i in samples]
+        fresh = [forward_dynamics(pickle.loads(pickle.dumps(model)), float(run.t[i]),
+                                  run.state(i)) for i in samples]
+        threaded = {}
+
+        def evaluate(i):
+            threaded[i] = forward_dynamics(model, float(run.t[i]), run.state(i))
+        threads = [threading.Thread(target=evaluate, args=(i,)) for i in (12, 20)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        for a, b in zip(kept + [threaded[12], threaded[20]], fresh + [fresh[1], fresh[3]]):
+            for key in a:
+                assert np.array_equal(np.asarray(a[key]), np.asarray(b[key])), key
+
+
 def test_forward_dynamics_refuses_a_bad_state():
     model = arm("torque")
     state = simulate(model, 0.01, 1e-3).state(-1)

@@ -3,6 +3,8 @@ acceleration level (docs/solver.md, "Consistent start"; with closing joints, doc
 "The sweep with closing joints"), as a function of the state for users and checks (docs/
 dynamics.md).
 """
+import threading
+
 import numpy as np
 
 from ..elements import BEAM
@@ -69,71 +71,137 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     extra_loads: (force, torque) (n, 3) each on the model's bodies, added to its loads;
     extra_joint_forces: (n, 3) generalized forces on the joints' coordinates (where
     run_inputs.additive_joint_force)."""
-    from . import consistent_start, run_checks, run_inputs, run_tables
-    from ..model.closures import check_runs_in_sweeps
+    from . import consistent_start, run_inputs, run_tables
     from ..kernels import python_twin
     from ..kernels.assembly.closure import row_residuals, set_ground
     from ..kernels.assembly.loop_projection import _dependent_frames
-    from ..kernels.stepping.loop import Monitor, Settings
-    if model.n_closures and not model.tip_pinned:
-        check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
-    run_checks.check_supported(model, "newmark", "riccati", True)
-    km, keep = run_tables.kernel_model(model)
-    mode = run_tables._mode(km, "riccati", True)
-    settings = Settings(mode=mode, h=1.0, coef=run_tables.Integrator.from_rho_inf(1.0).array(),
-                        newton_max=0, newton_tol=0.0, record_every=1, max_step_error=np.inf,
-                        stop_unconverged=False, start=False)
-    n = km.n_bodies
-    monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
-                      jqp=np.zeros((n, MAX_COORDINATES)), defl_pseudo=np.zeros((0, 3)),
-                      error=np.zeros(2))
-    ws = run_tables.Workspace(km)
-    params = run_tables.kernel_params(km)
-    loops = run_tables.loop_tables(km)
-    columns = run_tables.coordinate_columns(model)
-    if state is not None:
-        _set_state(model, km, keep, columns, ws.state, state, check_frames)
-        _, g_rot, g_w, g_wd, g_pos, g_vel = run_inputs._ground(km, [t])
-        set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
-        given = (ws.state.rot[keep].copy(), ws.state.omega[keep].copy()) if check_frames else ()
-        # (the kernels' callee, called here through its twin, kernels/__init__.py::python_twin)
-        frames = python_twin(_dependent_frames)
-        frames(params, loops, ws.state, np.arange(n, dtype=np.int64), np.zeros(60))
-        for key, rebuilt, value in zip(("rotation", "angular_velocity"),
-                                       (ws.state.rot[keep], ws.state.omega[keep]), given):
-            off = np.abs(rebuilt - value).reshape(len(keep), -1).max(axis=1)
-            if key in state and off.max() > 1e-9 * max(1.0, np.abs(value).max()):
-                k = int(np.argmax(off))
-                raise ValueError(f"forward_dynamics: the state's {key} of body "
-                                 f"'{model.body_names[k]}' is {off[k]:.3g} off what its joint "
-                                 f"'{model.hinge_names[k]}' and its parent give (a joint's "
-                                 f"child follows its parent and the joint's coordinates)")
-    if extra_loads is not None:         # onto the kernel bodies that carry each body's loads
-        extra = np.zeros((2, n, 3))
-        extra[:, run_tables.loaded_bodies(model, km, keep)] = extra_loads
-        extra_loads = extra
-    if extra_joint_forces is not None:
-        extra = np.zeros((n, MAX_COORDINATES))
-        extra[keep] = extra_joint_forces
-        extra_joint_forces = extra
-    consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
-                                       ws.sweep,
-                             monitor, 0.0, loops, t=t, extra_loads=extra_loads,
-                             extra_joint_forces=extra_joint_forces, in_skeleton=True)
-    st = ws.state
-    residual = np.zeros(len(loops.kind))
-    if len(loops.kind):
-        row_residuals(loops, st.z, residual)
-    inputs = 2 * keep + 1
-    return {"angular_acceleration": st.z[inputs, 3:6].copy(),
-            "input_acceleration": st.z[inputs, 0:3].copy(),
-            "joint_acceleration": np.array([st.jqdd[keep[k], i] for k, i in columns]),
-            "modal_acceleration": st.eta_acc.copy(),
-            "deflection_acceleration": st.defl_acc[keep].copy(),
-            "rotation": st.rot[keep].copy(), "angular_velocity": st.omega[keep].copy(),
-            "offsets": (st.defl[keep].copy(), st.defl_rate[keep].copy()),
-            "force": st.z[inputs, 9:12].copy(), "moment": st.z[inputs, 6:9].copy(),
-            "multipliers": loops.lam.copy(), "residual": residual}
+    with _evaluation(model) as work:
+        km, keep, mode, settings, params, columns = (work.km, work.keep, work.mode,
+                                                     work.settings, work.params, work.columns)
+        ws, loops, monitor, n = work, work.loops, work.monitor, work.km.n_bodies
+        if state is not None:
+            _set_state(model, km, keep, columns, ws.state, state, check_frames)
+            _, g_rot, g_w, g_wd, g_pos, g_vel = run_inputs._ground(km, [t])
+            set_ground(loops, g_pos[0], g_vel[0], np.zeros(3), g_rot[0], g_w[0], g_wd[0])
+            given = (ws.state.rot[keep].copy(), ws.state.omega[keep].copy()) if check_frames else ()
+            # (the kernels' callee, called here through its twin, kernels/__init__.py::python_twin)
+            frames = python_twin(_dependent_frames)
+            frames(params, loops, ws.state, np.arange(n, dtype=np.int64), np.zeros(60))
+            for key, rebuilt, value in zip(("rotation", "angular_velocity"),
+                                           (ws.state.rot[keep], ws.state.omega[keep]), given):
+                off = np.abs(rebuilt - value).reshape(len(keep), -1).max(axis=1)
+                if key in state and off.max() > 1e-9 * max(1.0, np.abs(value).max()):
+                    k = int(np.argmax(off))
+                    raise ValueError(f"forward_dynamics: the state's {key} of body "
+                                     f"'{model.body_names[k]}' is {off[k]:.3g} off what its joint "
+                                     f"'{model.hinge_names[k]}' and its parent give (a joint's "
+                                     f"child follows its parent and the joint's coordinates)")
+        if extra_loads is not None:         # onto the kernel bodies that carry each body's loads
+            extra = np.zeros((2, n, 3))
+            extra[:, run_tables.loaded_bodies(model, km, keep)] = extra_loads
+            extra_loads = extra
+        if extra_joint_forces is not None:
+            extra = np.zeros((n, MAX_COORDINATES))
+            extra[keep] = extra_joint_forces
+            extra_joint_forces = extra
+        consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
+                                           ws.sweep,
+                                 monitor, 0.0, loops, t=t, extra_loads=extra_loads,
+                                 extra_joint_forces=extra_joint_forces, in_skeleton=True)
+        st = ws.state
+        residual = np.zeros(len(loops.kind))
+        if len(loops.kind):
+            row_residuals(loops, st.z, residual)
+        inputs = 2 * keep + 1
+        return {"angular_acceleration": st.z[inputs, 3:6].copy(),
+                "input_acceleration": st.z[inputs, 0:3].copy(),
+                "joint_acceleration": np.array([st.jqdd[keep[k], i] for k, i in columns]),
+                "modal_acceleration": st.eta_acc.copy(),
+                "deflection_acceleration": st.defl_acc[keep].copy(),
+                "rotation": st.rot[keep].copy(), "angular_velocity": st.omega[keep].copy(),
+                "offsets": (st.defl[keep].copy(), st.defl_rate[keep].copy()),
+                "force": st.z[inputs, 9:12].copy(), "moment": st.z[inputs, 6:9].copy(),
+                "multipliers": loops.lam.copy(), "residual": residual}
+
+
+class _Evaluation:
+    """forward_dynamics' workspace of one model (_evaluation): the kernel model and its tables,
+    and the state, sweep, loops and monitor of a fresh Workspace, loop_tables and Monitor, their
+    arrays gathered into flat buffers (run_plan._gathered) that restart() puts back to those
+    fresh values, so that a call computes what it would on new ones (a call of dttmm.ode's
+    right-hand side, linearize's differences)."""
+
+    def __init__(self, model):
+        from . import run_checks, run_tables
+        from .run_plan import _gathered, _movable
+        from ..model.closures import check_runs_in_sweeps
+        from ..kernels.stepping.loop import Monitor, Settings
+        from ..results.recording import leaves
+        if model.n_closures and not model.tip_pinned:
+            check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
+        run_checks.check_supported(model, "newmark", "riccati", True)
+        self.km, self.keep = km, _ = run_tables.kernel_model(model)
+        self.mode = run_tables._mode(km, "riccati", True)
+        self.settings = Settings(mode=self.mode, h=1.0,
+                                 coef=run_tables.Integrator.from_rho_inf(1.0).array(),
+                                 newton_max=0, newton_tol=0.0, record_every=1,
+                                 max_step_error=np.inf, stop_unconverged=False, start=False)
+        n = km.n_bodies
+        monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
+                          jqp=np.zeros((n, MAX_COORDINATES)), defl_pseudo=np.zeros((0, 3)),
+                          error=np.zeros(2))
+        ws = run_tables.Workspace(km)
+        self.params = run_tables.kernel_params(km)
+        self.columns = run_tables.coordinate_columns(model)
+        structures = (ws.state, ws.sweep, run_tables.loop_tables(km), monitor)
+        self.buffers, structures, layout = _gathered(structures, _movable(structures))
+        self.state, self.sweep, self.loops, self.monitor = structures
+        self.others = [a for a, place in zip(leaves(structures), layout) if place is None]
+        self.fresh = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        self.lock = threading.Lock()
+
+    def restart(self):
+        """Every array back to its fresh value."""
+        buffers, others = self.fresh
+        for buffer, value in zip(self.buffers, buffers):
+            buffer[:] = value
+        for a, value in zip(self.others, others):
+            np.copyto(a, value)
+
+
+class _evaluation:
+    """with _evaluation(model) as work: the model's kept _Evaluation, restarted, where it is free
+    (held until the block ends), else a new one (another thread's call)."""
+
+    __slots__ = ("model", "work")
+
+    def __init__(self, model):
+        self.model, self.work = model, None
+
+    def __enter__(self):
+        from ..model import closures
+        from . import run_tables
+        key = (closures.PINNED_TIP_SWEEP, run_tables.BANDED_ROWS)     # (switches tests turn)
+        with _KEPT_LOCK:
+            kept = self.model.__dict__.get("_evaluation")
+            if kept is None or kept[0] != key:
+                kept = (key, _Evaluation(self.model))
+                object.__setattr__(self.model, "_evaluation", kept)   # (a frozen Model)
+        work = kept[1]
+        if work.lock.acquire(blocking=False):
+            self.work = work
+            work.restart()
+            return work
+        return _Evaluation(self.model)
+
+    def __exit__(self, *exc):
+        if self.work is not None:
+            self.work.lock.release()
+            self.work = None
+        return False
+
+
+_KEPT_LOCK = threading.Lock()
 
 
 def _set_state(model, km, keep, columns, kernel_state, state, check=True):
