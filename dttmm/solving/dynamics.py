@@ -78,7 +78,7 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
     with _evaluation(model) as work:
         km, keep, mode, settings, params, columns = (work.km, work.keep, work.mode,
                                                      work.settings, work.params, work.columns)
-        ws, loops, monitor, n = work, work.loops, work.monitor, work.km.n_bodies
+        ws, loops, monitor, n = work, work.loops, work.monitor, km.n_bodies
         if state is not None:
             _set_state(model, km, keep, columns, ws.state, state, check_frames)
             _, g_rot, g_w, g_wd, g_pos, g_vel = run_inputs._ground(km, [t])
@@ -105,9 +105,9 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
             extra[keep] = extra_joint_forces
             extra_joint_forces = extra
         consistent_start._consistent_start(km, mode, "riccati", None, params, settings, ws.state,
-                                           ws.sweep,
-                                 monitor, 0.0, loops, t=t, extra_loads=extra_loads,
-                                 extra_joint_forces=extra_joint_forces, in_skeleton=True)
+                                           ws.sweep, monitor, 0.0, loops, t=t,
+                                           extra_loads=extra_loads,
+                                           extra_joint_forces=extra_joint_forces, in_skeleton=True)
         st = ws.state
         residual = np.zeros(len(loops.kind))
         if len(loops.kind):
@@ -140,7 +140,8 @@ class _Evaluation:
         if model.n_closures and not model.tip_pinned:
             check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
         run_checks.check_supported(model, "newmark", "riccati", True)
-        self.km, self.keep = km, _ = run_tables.kernel_model(model)
+        km, keep = run_tables.kernel_model(model)
+        self.km, self.keep = km, keep
         self.mode = run_tables._mode(km, "riccati", True)
         self.settings = Settings(mode=self.mode, h=1.0,
                                  coef=run_tables.Integrator.from_rho_inf(1.0).array(),
