@@ -179,12 +179,12 @@ class PreparedRun:
         # layout each leaf's place in them (None: not there); any other run's arrays stay as
         # they are (gathered, a million bodies' arrays would be held twice at once, and three
         # times with the start's copy: 3.5 GB at 10^6 bodies against 2 GB)
-        movable = _movable(structures)
+        movable = movable_arrays(structures)
         self.keepable = (start_is_pure(user_model)
                          and sum(a.nbytes for a in movable.values()) <= KEEP_BYTES)
         self.buffers, self.layout, self.others, self.started = [], None, None, None
         if self.keepable:
-            self.buffers, structures, self.layout = _gathered(structures, movable)
+            self.buffers, structures, self.layout = gathered(structures, movable)
             self.others = [a for a, place in zip(leaves(structures), self.layout)
                            if place is None and a.size]
             # (the start's values, which restart puts back)
@@ -289,7 +289,7 @@ class _SameCalls(DirectCalls):
         self.same = same
 
 
-GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (_gathered)
+GATHERED = (np.float64, np.int64)      # the dtypes gathered into buffers (gathered)
 
 
 def _root(a):
@@ -298,8 +298,8 @@ def _root(a):
     return a
 
 
-def _movable(structures):
-    """{id: array} of the arrays in the nested tuples that _gathered moves into its buffers:
+def movable_arrays(structures):
+    """{id: array} of the arrays in the nested tuples that gathered moves into its buffers:
     every C-contiguous array of a GATHERED dtype whose memory no other leaf shares (an array
     that appears twice, once)."""
     arrays = leaves(structures)
@@ -312,8 +312,8 @@ def _movable(structures):
             and len(sharing[root]) == 1}
 
 
-def _gathered(structures, movable):
-    """(buffers, structures, layout): every array of movable (_movable's) replaced by a view
+def gathered(structures, movable):
+    """(buffers, structures, layout): every array of movable (movable_arrays') replaced by a view
     of one flat buffer per dtype holding its values; layout: each leaf's (buffer, offset,
     shape) in the new structures' leaf order, None for a leaf left as it is."""
     arrays = leaves(structures)
