@@ -127,16 +127,15 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
 class _Evaluation:
     """forward_dynamics' workspace of one model (_evaluation): the kernel model and its tables,
     and the state, sweep, loops and monitor of a fresh Workspace, loop_tables and Monitor, their
-    arrays gathered into flat buffers (run_plan.gathered) that restart() puts back to those
-    fresh values, so that a call computes what it would on new ones (a call of dttmm.ode's
-    right-hand side, linearize's differences)."""
+    arrays gathered into flat buffers (run_plan.kept_arrays, as a kept prepared run's) that
+    restart() puts back to those fresh values, so that a call computes what it would on new
+    ones (a call of dttmm.ode's right-hand side, linearize's differences)."""
 
     def __init__(self, model):
         from . import run_checks, run_tables
-        from .run_plan import gathered, movable_arrays
+        from .run_plan import copies_of, kept_arrays, movable_arrays
         from ..model.closures import check_runs_in_sweeps
         from ..kernels.stepping.loop import Monitor, Settings
-        from ..results.recording import leaves
         if model.n_closures and not model.tip_pinned:
             check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
         run_checks.check_supported(model, "newmark", "riccati", True)
@@ -155,19 +154,16 @@ class _Evaluation:
         self.params = run_tables.kernel_params(km)
         self.columns = run_tables.coordinate_columns(model)
         structures = (ws.state, ws.sweep, run_tables.loop_tables(km), monitor)
-        self.buffers, structures, layout = gathered(structures, movable_arrays(structures))
+        self.buffers, structures, _, self.others = kept_arrays(structures,
+                                                               movable_arrays(structures))
         self.state, self.sweep, self.loops, self.monitor = structures
-        self.others = [a for a, place in zip(leaves(structures), layout) if place is None]
-        self.fresh = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+        self.fresh = copies_of(self.buffers, self.others)
         self.lock = threading.Lock()
 
     def restart(self):
         """Every array back to its fresh value."""
-        buffers, others = self.fresh
-        for buffer, value in zip(self.buffers, buffers):
-            buffer[:] = value
-        for a, value in zip(self.others, others):
-            np.copyto(a, value)
+        from .run_plan import put_back
+        put_back(self.buffers, self.others, self.fresh)
 
 
 class _evaluation:

@@ -184,11 +184,9 @@ class PreparedRun:
                          and sum(a.nbytes for a in movable.values()) <= KEEP_BYTES)
         self.buffers, self.layout, self.others, self.started = [], None, None, None
         if self.keepable:
-            self.buffers, structures, self.layout = gathered(structures, movable)
-            self.others = [a for a, place in zip(leaves(structures), self.layout)
-                           if place is None and a.size]
+            self.buffers, structures, self.layout, self.others = kept_arrays(structures, movable)
             # (the start's values, which restart puts back)
-            self.started = ([b.copy() for b in self.buffers], [a.copy() for a in self.others])
+            self.started = copies_of(self.buffers, self.others)
         self.state, self.sweep, self.loop, self.monitor = self.structures = structures
         self.loops = self.loop.loops if loop_name == "general" else loops
         histories = self.loop.histories if loop_name == "general" else histories
@@ -234,12 +232,7 @@ class PreparedRun:
     def restart(self):
         """Put the structures back to their values after the start (a kept prepared run,
         before each run)."""
-        buffers, others = self.started
-        for buffer, value in zip(self.buffers, buffers):
-            if buffer.size:             # (a model without integer arrays: an empty buffer)
-                buffer[:] = value
-        for a, value in zip(self.others, others):
-            np.copyto(a, value)
+        put_back(self.buffers, self.others, self.started)
 
     def ending(self):
         """The structures' arrays as a run left them, for its checkpoint: a kept run's copy
@@ -341,6 +334,30 @@ def gathered(structures, movable):
             return type(part)(*items) if hasattr(part, "_fields") else tuple(items)
         return part
     return buffers, rebuilt(structures), [places.get(id(a)) for a in arrays]
+
+
+def kept_arrays(structures, movable):
+    """(buffers, structures, layout, others): gathered's, and the leaves with values left out
+    of its buffers (an array another leaf shares, a strided one), which a restart copies one
+    by one (put_back)."""
+    buffers, structures, layout = gathered(structures, movable)
+    others = [a for a, place in zip(leaves(structures), layout) if place is None and a.size]
+    return buffers, structures, layout, others
+
+
+def copies_of(buffers, others):
+    """The values of kept_arrays' buffers and other arrays, as put_back takes them."""
+    return [b.copy() for b in buffers], [a.copy() for a in others]
+
+
+def put_back(buffers, others, values):
+    """The buffers and other arrays set to values (copies_of's)."""
+    buffer_values, other_values = values
+    for buffer, value in zip(buffers, buffer_values):
+        if buffer.size:             # (a model without integer arrays: an empty buffer)
+            buffer[:] = value
+    for a, value in zip(others, other_values):
+        np.copyto(a, value)
 
 
 class _Ending:
