@@ -206,3 +206,51 @@ before = versions()
 def test_describe_says_the_core_is_compiled_once(model):
     text = model().describe()
     assert "compiled once per install" in text
+
+
+def _first_use_calls(model):
+    """(helper_calls, main_calls, python_calls) of solving/core.py with the types of `model`'s
+    run (its consistent start's loop and Run)."""
+    from dttmm.solving import core
+    seen = {}
+    complete = core.complete
+
+    def spy(params, loops, state, loop=None, run=None):
+        seen.update(params=params, loops=loops, state=state, loop=loop, run=run)
+        complete(params, loops, state, loop, run)
+
+    core.complete = spy
+    try:
+        simulate(model, 2e-3, 1e-3)
+    finally:
+        core.complete = complete
+    return (core.helper_calls(seen["loop"], seen["run"]),
+            core.main_calls(seen["loop"], seen["run"]),
+            core.python_calls(seen["params"], seen["loops"], seen["state"]))
+
+
+@pytest.mark.parametrize("model", [arm, lambda: n_four_bar(2)], ids=["arm", "four_bar"])
+def test_the_first_uses_two_shares_are_the_versions_the_skeleton_calls(model):
+    """The core's first use compiles in two processes (solving/core.py): each kernel of the
+    helper's share and of this process's is compiled by its argument types, so the skeleton,
+    compiled after, must call it with exactly those, or it compiles it again.  numba's cache
+    (compiled by the skeleton here, or by the split itself on a fresh install) holds that version
+    of each, and for the four kernels the shares add, that version alone."""
+    helper, main, python = _first_use_calls(model())
+    for kernel, types in helper + main + python:
+        name = kernel.py_func.__name__
+        if kernel._cache is None or not hasattr(kernel._cache, "_cache_file"):
+            pytest.skip("numba's cache is off")
+        assert kernel._cache.load_overload(types, kernel.targetctx) is not None, name
+        if (kernel, types) in helper + main:
+            assert len(kernel._cache._cache_file._load_index()) == 1, name
+
+
+def test_the_helper_process_compiles_what_it_is_sent():
+    """The helper (solving/core.py::_start_helper) starts, reads the pickled calls and compiles
+    (here: loads) them; it exits cleanly."""
+    from dttmm.solving import core
+    helper, _, _ = _first_use_calls(arm())
+    process = core._start_helper(helper)
+    assert process is not None
+    assert process.wait(timeout=300) == 0

@@ -48,6 +48,38 @@ def _drop_stale_caches():
 _drop_stale_caches()
 
 
+def _lock_cache_saves():
+    """numba saves a compiled version into the kernel's cache index and a numbered data file
+    (numba/core/caching.py, IndexDataCacheFile.save: read the index, take the first free number,
+    write the index, then the data) with no lock.  Two processes saving versions of one kernel
+    at once (the core's first use compiles in two, solving/core.py; `dttmm compile` runs its
+    families side by side) could take the same number, and one version's entry would then name
+    the other's machine code.  Each save holds a lock on its cache folder (where the platform
+    has fcntl; a folder it cannot write to saves as numba does)."""
+    try:
+        import fcntl
+    except ImportError:
+        return
+    from numba.core.caching import IndexDataCacheFile
+    save = IndexDataCacheFile.save
+    if getattr(save, "locked", False):
+        return
+
+    def locked_save(self, key, data):
+        try:
+            lock = open(os.path.join(self._cache_path, ".dttmm-save.lock"), "a")
+        except OSError:
+            return save(self, key, data)
+        with lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            return save(self, key, data)
+    locked_save.locked = True
+    IndexDataCacheFile.save = locked_save
+
+
+_lock_cache_saves()
+
+
 def compiled_dttmm_function(event):
     """The Python function a "numba:compile" event compiles if it is dttmm's (a kernel, a
     kernel's copy or twin, the reference's), else None (a user's own numba function).  The

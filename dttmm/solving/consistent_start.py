@@ -60,11 +60,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 joint_input, len(loops.kind)))
         else:
             set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
-            core.complete(params, loops, state)     # (where the core compiles: all of it)
-            if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
-                loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
-                loops.step_coef[:] = 0.0        # the springs' forces explicit
-
+            loop = run = None
             if in_skeleton:     # one pass of the general loop's skeleton (Settings.start),
                 # on a throwaway scratch: the run that follows compiles nothing else for it
                 loop = kstep.general_loop(n, len(state.eta), settings.h, settings.coef,
@@ -73,7 +69,12 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 run = start_pass(params, settings, state, sweep, monitor,
                                  (g_acc, g_rot, g_w, g_wd, g_pos, g_vel),
                                  (force, torque, line_load), joint_input, len(loops.kind))
+            core.complete(params, loops, state, loop, run)  # (where the core compiles: all)
+            if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
+                loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest
+                loops.step_coef[:] = 0.0        # the springs' forces explicit
 
+            if in_skeleton:
                 def start():
                     info = np.zeros(5, dtype=np.int64)
                     run_steps(loop, run, info, calls=_start_calls(model))

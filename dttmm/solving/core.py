@@ -13,14 +13,32 @@ compiles 196 functions instead of 190 (the compiles it replaced took 1-3 s each;
 their own), and no later model of any kind compiles anything of the core.
 tests/test_precompile.py checks that the list below is whole (a run of each kind after
 `complete` adds no compiled version to any of the core's kernels).
+
+Where the machine has a second core, the first use compiles in two processes (docs/solver.md,
+"Compile time", item 15): numba caches each kernel on its own, and a kernel that another
+process has cached is loaded, not compiled, when a caller reaches it.  So a helper process
+compiles the consistent start (`initial_accelerations` with the element transfers under it,
+helper_calls) while this one compiles the loops' solves and projection, which the start calls
+too (main_calls, first, so the helper finds them cached), and the list above; the skeleton,
+compiled last, then loads both.  The argument types are this run's (numba types pickle), and
+tests/test_precompile.py checks that they are the ones the skeleton calls with (else the
+helper's work would be compiled again: slower, never wrong).
 """
+import importlib
+import os
+import pickle
+import subprocess
+import sys
+
 import numpy as np
 from numba import typeof
+from numba.core import types
 
 from ..kernels import python_twin
 from ..kernels.algebra.so3 import expm_so3, left_jacobian, log_so3
-from ..kernels.assembly.closure import row_residuals, set_ground
-from ..kernels.assembly.loop_projection import _dependent_frames, start_energy
+from ..kernels.assembly.closure import row_residuals, set_ground, solve_with_loops
+from ..kernels.assembly.loop_projection import _dependent_frames, project_onto_loops, start_energy
+from ..kernels.stepping import step as kstep
 from ..kernels.transfers.joint import joint_frame, n_coordinates
 from ..kernels.transfers.strain_rod import (rod_end_points, rod_jacobians, rod_kinematics,
                                             station_arrays)
@@ -57,16 +75,101 @@ def python_calls(params, loops, state):
     )
 
 
-def complete(params, loops, state):
+def _row(array_type):
+    """numba's type of a[i] for an array a of array_type (C rows stay C)."""
+    return array_type.copy(ndim=array_type.ndim - 1,
+                           layout="C" if array_type.layout == "C" else "A")
+
+
+def helper_calls(loop, run):
+    """(kernel, argument types) the helper process compiles: the consistent start, as the
+    skeleton calls it (kernels/stepping/step.py::_iterate, inputs at step s); loop and run: the
+    general loop's scratch and Run (kernels/stepping/loop.py)."""
+    inputs = run.inputs
+    ground = types.BaseTuple.from_types([_row(typeof(inputs.g_acc)), _row(typeof(inputs.g_rot)),
+                                         _row(typeof(inputs.g_w)), _row(typeof(inputs.g_wd))])
+    return ((kstep.initial_accelerations,
+             (typeof(run.params), typeof(run.settings), typeof(run.state), typeof(run.sweep),
+              ground, _row(typeof(inputs.force)), _row(typeof(inputs.torque)),
+              _row(typeof(inputs.line_load)), _row(typeof(inputs.joint_input)),
+              typeof(loop.loops), typeof(loop.forces))),)
+
+
+def main_calls(loop, run):
+    """(kernel, argument types) this process compiles before python_calls while the helper
+    compiles helper_calls: the sweeps of a step with and without closing joints and the
+    projection onto the loops, as the start (step.py::initial_accelerations) and the skeleton's
+    update call them."""
+    params, state, sweep, loops = (typeof(run.params), typeof(run.state), typeof(run.sweep),
+                                   typeof(loop.loops))
+    integer = typeof(0)
+    root_f = typeof(np.zeros(6))
+    rot, omega, z = typeof(run.state.rot), typeof(run.state.omega), typeof(run.state.z)
+    parent = types.Array(params.types[1].dtype, 1, "C")     # (model_tables.parent's view)
+    tip_pinned = params.types[1].dtype                      # (a table's one value)
+    return ((kstep.solve_step, (integer, tip_pinned, parent, sweep, root_f, z)),
+            (solve_with_loops, (params, sweep, root_f, loops, rot, omega, z)),
+            (project_onto_loops, (params, loops, state)))
+
+
+def complete(params, loops, state, loop=None, run=None):
     """Where the core compiles in this process (compiled_here), compile every kernel of
     python_calls too; once per process (every run on the general loop, statics, linear models
-    and forward dynamics call this after set_ground, before the skeleton)."""
+    and forward dynamics call this after set_ground, before the skeleton).  loop, run: the
+    general loop's scratch and Run, where the skeleton follows: with a second core, a helper
+    process compiles part of the core meanwhile (helper_calls)."""
     if _completed:
         return
     _completed.append(True)
-    if compiled_here():
-        for kernel, types in python_calls(params, loops, state):
-            kernel.compile(types)
+    if not compiled_here():
+        return
+    helper = None
+    calls = python_calls(params, loops, state)
+    if loop is not None and (os.cpu_count() or 1) > 1:
+        helper = _start_helper(helper_calls(loop, run))
+        if helper is not None:
+            calls = main_calls(loop, run) + calls
+    try:
+        for kernel, argument_types in calls:
+            kernel.compile(argument_types)
+        if helper is not None:
+            helper.wait(timeout=HELPER_TIMEOUT)
+    except subprocess.TimeoutExpired:       # (the skeleton compiles what is missing)
+        pass
+    finally:                                # (also where this process is interrupted)
+        if helper is not None and helper.poll() is None:
+            helper.kill()
+
+
+HELPER_TIMEOUT = 900.0      # s: far beyond the helper's share (~50 s on the slower machines)
+
+
+def _start_helper(calls):
+    """A process compiling `calls` (kernel, argument types) into numba's cache, or None where
+    one cannot start (this process then compiles everything itself)."""
+    package_parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(
+        __file__))))
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [package_parent,
+                                                      env.get("PYTHONPATH")]))
+    try:
+        payload = pickle.dumps([(kernel.py_func.__module__, kernel.py_func.__name__,
+                                 argument_types) for kernel, argument_types in calls])
+        process = subprocess.Popen(
+            [sys.executable, "-c", "from dttmm.solving.core import compile_sent; "
+             "compile_sent()"], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL, env=env)
+        process.stdin.write(payload)
+        process.stdin.close()
+    except (OSError, TypeError, ValueError, pickle.PicklingError, AttributeError):
+        return None
+    return process
+
+
+def compile_sent():
+    """The helper process (_start_helper): compile the calls pickled on stdin."""
+    for module, name, argument_types in pickle.loads(sys.stdin.buffer.read()):
+        getattr(importlib.import_module(module), name).compile(argument_types)
 
 
 def compiled_here():
