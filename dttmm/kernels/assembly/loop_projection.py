@@ -119,6 +119,42 @@ def _add_rates(params, loops, state, j, f):
 
 
 @no_alloc_kernel
+def _keep_rates(params, loops, state, bodies, saved, save):
+    """Save (save) or put back what a column of project_onto_loops changes on the given bodies:
+    _add_rates' rates (w, the elastic hinges' d', the joints' q', the modal eta'), what
+    _dependent_frames derives from them (w' and the pseudo-acceleration of a body whose frame
+    follows its parent's) and tree_points' output velocities; saved: ((n, 6, >= 3) per body:
+    w, w', pseudo, d', v_out, q'; (n_eta,) eta').  The positions, frames and output points the
+    column computes again come out of unchanged values, bit for bit."""
+    mode_off = model_tables.mode_offset(params)
+    rates, modal = saved
+    for q in range(bodies.shape[0]):
+        k = bodies[q]
+        if save:
+            for i in range(3):
+                rates[k, 0, i] = state.omega[k, i]
+                rates[k, 1, i] = state.omega_dot[k, i]
+                rates[k, 2, i] = state.pseudo[k, i]
+                rates[k, 3, i] = state.defl_rate[k, i]
+                rates[k, 4, i] = loops.v_out[k, i]
+            for i in range(state.jqd.shape[1]):
+                rates[k, 5, i] = state.jqd[k, i]
+            for i in range(mode_off[k], mode_off[k + 1]):
+                modal[i] = state.eta_d[i]
+        else:
+            for i in range(3):
+                state.omega[k, i] = rates[k, 0, i]
+                state.omega_dot[k, i] = rates[k, 1, i]
+                state.pseudo[k, i] = rates[k, 2, i]
+                state.defl_rate[k, i] = rates[k, 3, i]
+                loops.v_out[k, i] = rates[k, 4, i]
+            for i in range(state.jqd.shape[1]):
+                state.jqd[k, i] = rates[k, 5, i]
+            for i in range(mode_off[k], mode_off[k + 1]):
+                state.eta_d[i] = modal[i]
+
+
+@no_alloc_kernel
 def _move(params, loops, state, j, f, e3, phi):
     """Turn every active body of row j by f times its response of w' (A <- exp(f dw'^) A) and
     move its joint coordinates, elastic deflection and modal coordinates by f times their
@@ -196,18 +232,20 @@ def project_onto_loops(params, loops, state):
     base = loops.gd.copy()
     v = loops.delassus
     _clear_rows_matrix(loops, v)
+    saved = (np.empty((state.omega.shape[0], 6, max(3, state.jqd.shape[1]))),
+             np.empty(state.eta_d.shape[0]))
     for j in range(n_rows):
         bodies = loops.act_idx[loops.act_ptr[j + 1]:loops.act_ptr[j + 2]]
         rows = loops.colrow_idx[loops.colrow_ptr[j]:loops.colrow_ptr[j + 1]]
-        for f in (1.0, -1.0):
-            _add_rates(params, loops, state, j, f)
-            _dependent_frames(params, loops, state, bodies, work)
-            tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
-                        state.eta_d, state.defl, state.defl_rate, loops, bodies)
-            if f > 0.0:
-                row_positions(params, loops, state.rot, state.omega, rows)
-                for q in range(rows.shape[0]):
-                    v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
+        _keep_rates(params, loops, state, bodies, saved, True)
+        _add_rates(params, loops, state, j, 1.0)
+        _dependent_frames(params, loops, state, bodies, work)
+        tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
+                    state.eta_d, state.defl, state.defl_rate, loops, bodies)
+        row_positions(params, loops, state.rot, state.omega, rows)
+        for q in range(rows.shape[0]):
+            v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
+        _keep_rates(params, loops, state, bodies, saved, False)
     put1(loops.gd, base)
     for r in range(n_rows):             # a drive's force's row: mu_r = 0
         if _is_force(loops.law, r):
