@@ -146,3 +146,31 @@ def test_the_profilers_symbol_map_names_the_loaded_kernels(tmp_path):
     assert any(n.startswith("dttmm.kernels.stepping.loop.run_steps_") for n in names), names
     assert demangled("_ZN5dttmm7kernels9transfers5joint11joint_frameB2v7B68c8tJTIeE") == (
         "dttmm.kernels.transfers.joint.joint_frame")
+
+
+def _doubled(x):
+    return 2.0 * x
+
+
+kernels.ALWAYS_INLINED.add(_doubled)          # (as kernel(always_inline=True), compiled here)
+_always_inlined = kernels._dispatcher(CalleeKernel, _doubled, exp_coefficients.targetoptions,
+                                      cache=False)
+
+
+@njit
+def _calls_doubled(x):
+    return _always_inlined(x) + 1.0
+
+
+def test_an_always_inlined_kernel_leaves_no_call_in_its_caller():
+    """kernel(..., always_inline=True) (kernels/__init__.py::ALWAYS_INLINED): its library marks
+    its function alwaysinline for LLVM, and its caller's optimized code calls it nowhere."""
+    assert _calls_doubled(1.5) == 4.0
+    cres = next(iter(_always_inlined.overloads.values()))
+    assert isinstance(cres.library, kernels.LinkedOnlyLibrary) and cres.library.always_inline
+    own = [f for f in cres.library._get_module_for_linking().functions if not f.is_declaration]
+    assert own and all(b"alwaysinline" in list(f.attributes) for f in own)
+    caller = next(iter(_calls_doubled.overloads.values()))
+    name = cres.fndesc.mangled_name
+    body = caller.library.get_function(caller.fndesc.mangled_name)
+    assert name not in str(body)                # (no call of it left)

@@ -186,6 +186,15 @@ class LinkedOnlyLibrary(JITCodeLibrary):
     lacks them, callee kernels lower as any other (LINKED_ONLY), and tests/test_kernel_entries.py
     checks both the library and its cache."""
 
+    always_inline = False       # (ALWAYS_INLINED: its function inlined into every caller)
+
+    def add_ir_module(self, ir_module):
+        if self.always_inline:
+            for function in ir_module.functions:
+                if not function.is_declaration and "noinline" not in function.attributes:
+                    function.attributes.add("alwaysinline")
+        super().add_ir_module(ir_module)
+
     def _optimize_final_module(self):
         pass
 
@@ -208,12 +217,23 @@ LINKED_ONLY = all(hasattr(JITCodeLibrary, name) for name in (
     "_verify_declare_only_symbols", "enable_object_caching"))
 
 
+# The callee kernels whose code LLVM inlines into every caller (kernel(..., always_inline=True)):
+# small kernels that take the run's structures whole, called a few times a step.  numba passes
+# a structure to a function as every scalar of every array it carries (the closing joints'
+# Loops: ~50 arrays, ~400 values), so a call that LLVM leaves a call costs that copying; since
+# the flat model's accessors made their bodies larger, LLVM's own threshold left the loop
+# projection's residuals, rows and dependent frames as calls (docs/solver.md, "Compile time",
+# item 16).
+ALWAYS_INLINED = set()
+
+
 class LinkedOnlyCompiler(compiler.Compiler):
     """numba's compiler, lowering into a LinkedOnlyLibrary."""
 
     def compile_extra(self, func):
         if self.state.library is None:
             library = LinkedOnlyLibrary(self.state.targetctx.codegen(), func.__qualname__)
+            library.always_inline = func in ALWAYS_INLINED
             library.enable_object_caching()
             self.state.library = library
         return super().compile_extra(func)
@@ -277,23 +297,27 @@ def _dispatcher(kind, fn, options, cache=True):
     return compiled
 
 
-def _compiled(fn, entry, **options):
+def _compiled(fn, entry, always_inline=False, **options):
     """fn compiled with `options` and CONTRACT, a CalleeKernel unless entry (the decorators
-    below, with or without their arguments)."""
+    below, with or without their arguments); always_inline: its code inlined by LLVM into every
+    caller (ALWAYS_INLINED)."""
     if fn is None:
-        return lambda f: _compiled(f, entry, **options)
+        return lambda f: _compiled(f, entry, always_inline, **options)
+    if always_inline:
+        ALWAYS_INLINED.add(fn)
     kind, no_entry = (CPUDispatcher, _NO_C_ENTRY) if entry else (CalleeKernel, _NO_PYTHON_ENTRY)
     return _dispatcher(kind, fn, dict(options, fastmath=CONTRACT, **no_entry))
 
 
-def kernel(fn=None, *, entry=False):
+def kernel(fn=None, *, entry=False, always_inline=False):
     """njit(cache=True, fastmath=CONTRACT): a kernel called by other kernels only (a
     CalleeKernel) or, with entry=True, from Python too (by the package's Python code or its
-    tests: a test's call of a callee would compile its twin, seconds for the larger kernels)."""
-    return _compiled(fn, entry)
+    tests: a test's call of a callee would compile its twin, seconds for the larger kernels);
+    always_inline: see ALWAYS_INLINED."""
+    return _compiled(fn, entry, always_inline)
 
 
-def no_alloc_kernel(fn=None, *, entry=False):
+def no_alloc_kernel(fn=None, *, entry=False, always_inline=False):
     """kernel() without numba's reference counting (its `_nrt=False` option), for the
     step's kernels that allocate nothing.  Every array argument and every view then costs no
     pair of atomic reference-count calls; numba leaves most of those in functions with loops
@@ -301,8 +325,9 @@ def no_alloc_kernel(fn=None, *, entry=False):
     reduced map (kernels/transfers/beam.py::beam_ball_map): 1.64 against 1.96 us per call; on the
     fused ball-chain loop (kernels/stepping/ball_chain.py::_ball_chain_steps, its scratch allocated
     by its caller): 0.88x the time per step.  A kernel that allocates fails to compile (numba
-    compiles its callees the same way), so the option cannot hide a mistake."""
-    return _compiled(fn, entry, _nrt=False)
+    compiles its callees the same way), so the option cannot hide a mistake.  always_inline:
+    see ALWAYS_INLINED."""
+    return _compiled(fn, entry, always_inline, _nrt=False)
 
 
 def allocating_kernel(fn=None, *, entry=False):

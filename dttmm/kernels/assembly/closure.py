@@ -321,7 +321,7 @@ def _relative_rotation(f_a, f_b, c1, c2):
     return _rotation_vector(t_mm(f_at, t_mmt(f_b, r0)))
 
 
-@no_alloc_kernel
+@no_alloc_kernel(always_inline=True)
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
     v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""

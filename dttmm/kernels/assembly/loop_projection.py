@@ -27,7 +27,7 @@ ENERGY_STEP_LIMIT = 1e-3     # the energy's projection changes the rates by less
                              # fraction in one step, or not at all (a state too slow to carry it)
 
 
-@no_alloc_kernel
+@no_alloc_kernel(always_inline=True)
 def _dependent_frames(params, loops, state, bodies, work):
     """Every given body (in tree order) whose frame follows its parent's, from the parent's
     (as step.py::_update): a joint child's by its coordinates (joint.joint_frame, a slide's
@@ -181,7 +181,7 @@ def _move(params, loops, state, j, f, e3, phi):
             state.eta[i] += f * loops.eta_col[j, i]
 
 
-@no_alloc_kernel
+@no_alloc_kernel(always_inline=True)
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
