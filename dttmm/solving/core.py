@@ -147,18 +147,16 @@ HELPER_TIMEOUT = 900.0      # s: far beyond the helper's share (~50 s on the slo
 def _start_helper(calls):
     """A process compiling `calls` (kernel, argument types) into numba's cache, or None where
     one cannot start (this process then compiles everything itself)."""
-    package_parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(
-        __file__))))
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [package_parent,
-                                                      env.get("PYTHONPATH")]))
+    # (this package, not another on the helper's path: its folder first where it is not on the
+    # path already, as a checkout's; an installed package's folder, site-packages, is)
+    parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    program = (f"import sys\nif {parent!r} not in sys.path: sys.path.insert(0, {parent!r})\n"
+               f"from dttmm.solving.core import compile_sent\ncompile_sent()\n")
     try:
         payload = pickle.dumps([(kernel.py_func.__module__, kernel.py_func.__name__,
                                  argument_types) for kernel, argument_types in calls])
-        process = subprocess.Popen(
-            [sys.executable, "-c", "from dttmm.solving.core import compile_sent; "
-             "compile_sent()"], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL, env=env)
+        process = subprocess.Popen([sys.executable, "-c", program], stdin=subprocess.PIPE,
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         process.stdin.write(payload)
         process.stdin.close()
     except (OSError, TypeError, ValueError, pickle.PicklingError, AttributeError):
