@@ -177,6 +177,10 @@ def test_a_loop_through_an_elastic_hinge_rests_where_static_equilibrium_puts_it(
      "rotation contradicts the bodies' frames"),
     (lambda s: s.close(PrismaticJoint(axis=[1, 0, 0], position=0.2), "right", "ground"),
      "leave position 0"),
+    (lambda s: s.close(RevoluteJoint(axis=[0, 0, 1], rate=5.0), "right", "ground"),
+     "rates follow from the motion of the bodies it joins.*leave rate 0"),
+    (lambda s: s.close(UniversalJoint(axis1=[0, 0, 1], axis2=[1, 0, 0], rates=(0.0, 2.0)),
+                       "right", "ground"), r"leave rates\[1\] 0"),
     (lambda s: s.close(BallJoint(), "top", "ground", at_b="output"), "on the ground is a position"),
 ])
 def test_bad_closing_joints_are_refused_at_build_naming_the_joint(close, message):

@@ -277,8 +277,9 @@ def _closing_coordinates(label, joint, kind, v, drives, f_a, p_a, f_b, p_b):
     measured between its points, (F_a n_i) . (p_b - p_a) (a SpringDamper's rest, if not given,
     that slide), the turns as given, R0 = R_P^T F_a^T F_b R_C^T from the sides' frames, the
     rates 0; its drives, a slide's spring's rest filled in.  ValueError naming the joint: a
-    slide given a value (without a JointMotion), axes of a turn in each frame that are not
-    perpendicular at the start, a drive past the closing joints' CLOSING_DRIVES coordinates."""
+    slide given a value (without a JointMotion), a rate given (the bodies' motion sets it),
+    axes of a turn in each frame that are not perpendicular at the start, a drive past the
+    closing joints' CLOSING_DRIVES coordinates."""
     axes, spec = v["axes"], kind.coordinates
     given = joint_values(joint)[2]
     names = kind.arguments[0:1] if len(spec) == 1 else \
@@ -313,6 +314,13 @@ def _closing_coordinates(label, joint, kind, v, drives, f_a, p_a, f_b, p_b):
             raise ValueError(f"{label}: {first} (in a's frame) and {second} (in b's frame) must "
                              f"be perpendicular at the start; at t = 0 they make {angle:.4g} "
                              f"deg")
+    rates = joint_values(joint)[1]
+    moving = [i for i, rate in enumerate(rates) if rate != 0.0]
+    if moving:          # (they were dropped without a word until 2026-12-07)
+        name = kind.arguments[1] if len(spec) == 1 else f"{kind.arguments[1]}[{moving[0]}]"
+        raise ValueError(f"{label}: a closing joint's rates follow from the motion of the "
+                         f"bodies it joins (their angular velocities and the tree's joint "
+                         f"rates at t = 0); leave {name} 0 and give that motion to the tree")
     v["qd0"] = [0.0] * len(spec)
     return tuple(drives)
 

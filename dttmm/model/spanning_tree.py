@@ -145,14 +145,17 @@ def _placed(joint, forward, side_a, side_b):
 
 def _closing(joint):
     """A tree joint the new tree leaves, as a closing joint: its slides measured between its
-    points (given 0; one on a JointMotion as given: closing, it holds the gap on the motion)."""
+    points (given 0; one on a JointMotion as given: closing, it holds the gap on the motion),
+    its rates those of the bodies' motion (given 0: the model's bodies already move as its
+    rates made them)."""
     kind = joint_kind_of(joint)
-    if kind is None or not any(c.motion == SLIDE for c in kind.coordinates):
+    if kind is None or not kind.coordinates:
         return joint
     v = joint.validated()
     values = [0.0 if c.motion == SLIDE and not (d is not None and d["kind"] == MOTION) else q
               for c, d, q in zip(kind.coordinates, v["drives"], v["q0"])]
-    return replace(joint, **{kind.arguments[0]: _value(kind, values)})
+    return replace(joint, **{kind.arguments[0]: _value(kind, values),
+                             kind.arguments[1]: _value(kind, [0.0] * len(kind.coordinates))})
 
 
 def shortest_tree(entries, closures, model, in_model):

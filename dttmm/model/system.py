@@ -99,7 +99,8 @@ class System:
 
         The bodies' frames at t = 0 define the joint's rest: a joint's relative rotation R0 is
         read from them (at its turns' given angles), a slide's coordinate is measured between
-        its points.  Nothing is checked here: ``build`` validates the joint and its sides.
+        its points, and its rates follow from the bodies' motion (a rate given is refused).
+        Nothing is checked here: ``build`` validates the joint and its sides.
 
         Parameters
         ----------
