@@ -84,8 +84,9 @@ class _CompileWatch(numba_event.Listener):
                 if not self.announced and not self.explained:
                     _say(f"dttmm: compiling the numba kernels ({what}): once per install, "
                          f"for every kind of model (later runs load them from numba's cache; "
-                         f"`dttmm compile` compiles them all ahead); about two minutes on 2 "
-                         f"cores, the second one helping (docs/solver.md, \"Compile time\"). "
+                         f"`dttmm compile` compiles them all ahead); one to two minutes on 2 "
+                         f"cores, the general loop's in two processes (docs/solver.md, "
+                         f"\"Compile time\"). "
                          f"{now - t0:.0f} s so far")
                     self.announced = self.explained = True
                     self.ending = ""
