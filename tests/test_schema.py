@@ -1,6 +1,7 @@
-"""The flat model (issue 66, item 2; kernels/schema.py): a model's tables in two buffers whose
-offsets and sizes come from one schema, read by the kernels through accessors generated from it
-(kernels/model_tables.py)."""
+"""The flat model and the flat loops (issue 66, item 2; kernels/schema.py): a model's tables, and
+the closing joints' tables and scratch, each in two buffers whose offsets and sizes come from one
+schema, read by the kernels through accessors generated from it (kernels/model_tables.py,
+kernels/loop_tables.py)."""
 import numpy as np
 import pytest
 from numba import njit
@@ -9,17 +10,18 @@ from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, Str
                    build_chain)
 from dttmm.solving import run_tables
 from dttmm.model.chains import arm, unit_link
-from dttmm.kernels import model_tables, schema
-from dttmm.kernels.schema import MODEL, SIZES, pack, unpack
+from dttmm.kernels import loop_tables, model_tables, schema
+from dttmm.kernels.schema import LOOP_LAYOUT, LOOPS, MODEL, SIZES, pack, unpack
 from dttmm.model.mechanisms import n_four_bar
 
 
-def test_the_accessors_are_generated_from_the_schema():
-    """kernels/model_tables.py is what the schema generates (after an edit of the schema:
-    schema.write())."""
-    assert schema.GENERATED.read_text() == schema.generated_source(), \
-        'kernels/model_tables.py is stale: python -c "from dttmm.kernels import schema; ' \
-        'schema.write()"'
+@pytest.mark.parametrize("layout", schema.LAYOUTS, ids=lambda layout: layout.generated.name)
+def test_the_accessors_are_generated_from_the_schema(layout):
+    """kernels/model_tables.py and kernels/loop_tables.py are what the schema generates (after an
+    edit of the schema: schema.write())."""
+    assert layout.generated.read_text() == layout.generated_source(), \
+        f'kernels/{layout.generated.name} is stale: python -c "from dttmm.kernels import ' \
+        'schema; schema.write()"'
 
 
 def _models():
@@ -104,3 +106,31 @@ def test_pack_refuses_tables_that_disagree_on_a_size():
         pack(**{k: v for k, v in good.items() if k != "gravity"})
     with pytest.raises(TypeError, match="unknown tables \\['mass'\\]"):
         pack(**dict(good, mass=np.zeros(3)))
+
+
+def test_the_loops_tables_read_back_by_name_in_python_and_in_kernels():
+    """A four-bar's closing joints (run_tables.loop_tables) packed flat: every table reads back
+    from the accessors the kernels call as Python reads it by name (loops.kind), a view of the
+    buffers; the sizes are the four-bar's (its rows, closing joints and bodies, counted apart);
+    a run's copy writes its own buffers; a table the layout does not name is no attribute."""
+    model = n_four_bar(2)
+    km = run_tables.kernel_model(model)[0]
+    loops = run_tables.loop_tables(km)
+    tables = LOOP_LAYOUT.unpack(loops)
+    for field in LOOPS:
+        got = _reader(getattr(loop_tables, field.name))(loops)
+        np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+        np.testing.assert_array_equal(getattr(loops, field.name), tables[field.name])
+        assert np.shape(got) == np.shape(tables[field.name]), field.name
+        if np.size(got) and np.ndim(got):
+            buffer = loops.real if field.buffer == schema.REAL else loops.int
+            assert np.shares_memory(got, buffer), field.name
+    # two revolute joints close it, 5 rows each (3 gaps, 2 dots)
+    assert len(loops.kind) == 10 and LOOP_LAYOUT.size(loops, "rows") == 10
+    assert LOOP_LAYOUT.size(loops, "closings") == 2
+    assert LOOP_LAYOUT.size(loops, "bodies") == km.n_bodies
+    other = run_tables.loop_tables(km)
+    loops.stats[:] = 7.0
+    assert not np.shares_memory(loops.real, other.real) and (other.stats == 0.0).all()
+    with pytest.raises(AttributeError):
+        loops.mass

@@ -42,7 +42,7 @@ PARENT, CHILD = 0, 1
 MAX_COORDINATES = 3             # the most coordinates a joint kind has: the width of every
 #                                 per-joint table of coordinates, rates, drives and directions
 CLOSING_DRIVES = 2              # a closing joint's drivable coordinates (its record's slots:
-#                                 kernels/assembly/closure.py::Loops.wrench, closure_drive_force)
+#                                 kernels/schema.py::LOOPS' wrench, closure_drive_force)
 
 
 @dataclass(frozen=True)

@@ -219,8 +219,8 @@ LINKED_ONLY = all(hasattr(JITCodeLibrary, name) for name in (
 
 # The callee kernels whose code LLVM inlines into every caller (kernel(..., always_inline=True)):
 # small kernels that take the run's structures whole, called a few times a step.  numba passes
-# a structure to a function as every scalar of every array it carries (the closing joints'
-# Loops: ~50 arrays, ~400 values), so a call that LLVM leaves a call costs that copying; since
+# a structure to a function as every scalar of every array it carries (the general loop's
+# scratch: dozens of arrays, each 5-9 values), so a call that LLVM leaves a call costs that; since
 # the flat model's accessors made their bodies larger, LLVM's own threshold left the loop
 # projection's residuals, rows and dependent frames as calls (docs/solver.md, "Compile time",
 # item 16).

@@ -1,19 +1,23 @@
-"""The flat model's schema: every table the kernels read from a model, in the shape of MuJoCo's
-mjModel (docs/flat_model.md).
+"""The flat model's and the flat loops' schemas: every table the kernels read from a model, and
+the closing joints' tables and scratch a run writes, in the shape of MuJoCo's mjModel and
+mjData (docs/flat_model.md).
 
-A model's tables sit in two flat buffers, `real` (float64) and `int` (int64), one after
-another in the order MODEL lists them; `start` holds each table's offset in its buffer and `size`
-the model's sizes (SIZES: bodies, modal rows, rod steps, ...), so a table's shape is a few
-numbers the kernels read at run time, never part of a compiled type.  Each entry of MODEL names
-a table, its buffer and its shape in terms of SIZES (a name, "name+1", or a constant).
+A layout's tables sit in two flat buffers, `real` (float64) and `int` (int64), one after
+another in the order its fields list them; `start` holds each table's offset in its buffer and
+`size` the layout's sizes (SIZES: bodies, modal rows, rod steps, ...; LOOP_SIZES: rows, closing
+joints, ...), so a table's shape is a few numbers the kernels read at run time, never part of a
+compiled type.  Each field names a table, its buffer and its shape in terms of the sizes (a
+name, "name+1", or a constant).
 
-The kernels read a table through its accessor in kernels/model_tables.py, which is generated
-from MODEL (`write` writes it; tests/test_schema.py fails where it
-is stale): ``model_tables.body_params(params)`` is the (body_rows, BODY_PARAM_SIZE) view of
-`real` at start[0].  Python packs a model's tables with `pack` (run_tables.kernel_params) and
-reads them back by name with `unpack`.
+The kernels read a table through its accessor, generated from the layout (`Layout.write`;
+tests/test_schema.py fails where it is stale): ``model_tables.body_params(params)`` is the
+(body_rows, BODY_PARAM_SIZE) view of `real` at start[0], ``loop_tables.kind(loops)`` the rows'
+kinds.  Python packs a layout's tables with `Layout.pack` (run_tables.kernel_params,
+run_tables.loop_tables) and reads them by name with `Layout.unpack` and `Layout.table` (a
+FlatLoops reads its tables as attributes: ``loops.stats``).
 """
 from collections import namedtuple
+import math
 from pathlib import Path
 import textwrap
 
@@ -96,6 +100,100 @@ MODEL = (
 )
 
 
+# The closing joints as the general loop reads them, and its scratch for them (rows R and
+# closing joints m in the kernel model's numbering; run_tables.loop_tables; docs/loops.md).
+# Without closing joints every table with a row axis is empty.
+LOOP_SIZES = (
+    ("rows", "R: the closing joints' scalar rows (loop_rows.constraint_rows)"),
+    ("closings", "m: the closing joints (0 without rows)"),
+    ("bodies", "n: the kernel model's bodies"),
+    ("row_bodies", "n where the model has rows, else 0 (the rows' scratch per body)"),
+    ("row_stations", "2 n + 1 where the model has rows, else 0"),
+    ("modes", "the beams' modal coordinates, all beams"),
+    ("up_entries", "entries of up_idx"),
+    ("act_entries", "entries of act_idx"),
+    ("colrow_entries", "entries of colrow_idx"),
+)
+
+LOOPS = (
+    Field("kind", INT, ("rows",), "GAP_WORLD / GAP_A / DOT / ANGLE_A / ANGLE_B / ROTATION_A "
+                                  "(elements/kinds.py)"),
+    Field("owner", INT, ("rows",), "each row's closing joint"),
+    Field("v1", REAL, ("rows", 3), "e (or x, in side a's frame); ROTATION_A: R0's first column"),
+    Field("v2", REAL, ("rows", 3), "y (side b's frame); ROTATION_A: R0's second column"),
+    Field("v3", REAL, ("rows", 3), "an angle's axis (loop_rows.driven_directions, "
+                                   "spring_directions)"),
+    Field("target", REAL, ("rows", 3),
+          "the step's targets (value, rate, acceleration): a driven coordinate's motion at the "
+          "step's end, a spring's rest, a JointForce's value (in [2]), else 0"),
+    Field("coordinate", INT, ("rows",), "the joint's coordinate a row drives (-1: none)"),
+    Field("law", REAL, ("rows", 3),
+          "a row's drive [kind, stiffness, damping] (kind -1: none; a SpringDamper's or a "
+          "JointForce's row is a force, no constraint)"),
+    Field("acc", REAL, ("rows",), "each row's acceleration in the last solve"),
+    Field("step_coef", REAL, (2,), "[1 / c1, c3 / c1] of the step (0: the consistent start, "
+                                   "springs explicit)"),
+    Field("body", INT, ("closings", 2), "the sides' bodies (-1: the ground)"),
+    Field("point", REAL, ("closings", 2, 3),
+          "the sides' points, in the body's frame from its input point (the ground's: in the "
+          "ground frame from the ground point)"),
+    Field("ground", REAL, (3,), "the ground point"),
+    Field("ground_rot", REAL, (3, 3), "the ground frame"),
+    Field("ground_motion", REAL, (4, 3),
+          "the ground point's velocity and acceleration and the frame's angular velocity and "
+          "acceleration where the rows are written (set_ground: t_{n+1} in a step, 0 at the "
+          "start)"),
+    Field("coef", REAL, ("rows", 4, 3), "the rows' Jacobian terms (_row_coefficients)"),
+    Field("kappa", REAL, ("rows",), "the rows' velocity terms (_row_coefficients)"),
+    Field("z_save", REAL, ("rows+1", "row_stations", 12),
+          "column 0's and each row's response's stations (on the row's active bodies only)"),
+    Field("nu_save", REAL, ("rows+1", "row_bodies", 3), "the same, the joints' nu"),
+    Field("tau_save", REAL, ("rows+1", "row_bodies", 3), "the same, the joints' tau"),
+    Field("delassus", REAL, ("rows", "rows"), "the rows' matrix"),
+    Field("lam", REAL, ("rows",), "the rows' multipliers"),
+    Field("rhs", REAL, ("rows",), "the rows' right-hand side"),
+    Field("r_out", REAL, ("row_bodies", 3), "the output points' positions"),
+    Field("v_out", REAL, ("row_bodies", 3), "the output points' velocities"),
+    Field("g", REAL, ("rows",), "the rows' positions"),
+    Field("gd", REAL, ("rows",), "the rows' rates"),
+    Field("col_body", INT, ("rows+1", 2), "each column's loaded output stations (-1: none)"),
+    Field("col_load", REAL, ("rows+1", 2, 6), "each column's station loads"),
+    Field("up_ptr", INT, ("bodies+1",),
+          "CSR over the bodies: the columns c >= 1 whose sweep passes each body (its active "
+          "bodies and their ancestors)"),
+    Field("up_idx", INT, ("up_entries",), "up_ptr's entries"),
+    Field("act_ptr", INT, ("rows+2",), "CSR over the columns: each column's active bodies in "
+                                       "tree order"),
+    Field("act_idx", INT, ("act_entries",), "act_ptr's entries"),
+    Field("act", INT, ("rows+1", "bodies"), "each column's active bodies as a mask (1: active)"),
+    Field("all_bodies", INT, ("row_bodies",), "0 .. n - 1"),
+    Field("all_rows", INT, ("rows",), "0 .. R - 1"),
+    Field("band", INT, (2,), "the rows' matrices' lower and upper bandwidths where a banded "
+                             "solve pays (_rows_solve), else -1"),
+    Field("colrow_ptr", INT, ("rows+1",), "CSR over the rows' columns: the rows with a side "
+                                          "body among each column's active bodies"),
+    Field("colrow_idx", INT, ("colrow_entries",), "colrow_ptr's entries"),
+    Field("p_col", REAL, ("rows+1", "row_stations", 6), "sweep_columns' scratch"),
+    Field("port_col", REAL, ("rows+1", "row_bodies", 6), "sweep_columns' scratch"),
+    Field("h_store", REAL, ("row_bodies", 3, 6), "sweep_columns' scratch"),
+    Field("k_store", REAL, ("rows+1", "row_bodies", 3), "sweep_columns' scratch"),
+    Field("free_store", INT, ("row_bodies", 4), "sweep_columns' scratch"),
+    Field("p_comb", REAL, ("row_stations", 6), "the multipliers' superposition"),
+    Field("k_comb", REAL, ("row_bodies", 3), "the multipliers' superposition"),
+    Field("eta_col", REAL, ("rows", "modes"), "each row's response of the beams' eta''"),
+    Field("wrench", REAL, ("closings", 10),
+          "each closing joint's force and couple on side b (world; the couple about its point) "
+          "from lam, then its drives' generalized forces and their coordinates' rates "
+          "(coordinates 1, 2)"),
+    Field("stats", REAL, (4,),
+          "the run's largest position residual after a step (before the projection), rate "
+          "residual before and after the rates' projection, position residual after its"),
+    Field("energy", REAL, (3,),
+          "[held (1) or not (0), the total energy the steps hold (set at the start, "
+          "start_energy), the largest relative change of the rates its projection made]"),
+)
+
+
 def axes(shape):
     """[(size name or None, constant, plus)] of a schema shape's axes."""
     dims = []
@@ -108,89 +206,168 @@ def axes(shape):
     return dims
 
 
-def size_index():
-    """{size name: its index in FlatModel.size}."""
-    return {name: i for i, (name, _) in enumerate(SIZES)}
+def size_index(sizes=SIZES):
+    """{size name: its index in the flat structure's `size`}."""
+    return {name: i for i, (name, _) in enumerate(sizes)}
 
 
-def table_of(flat, field, buffer, shape):
-    """Table `field` (its index in the schema; of `buffer`, of the schema's `shape`) of a
-    FlatModel as a numpy view of its buffer (a table without axes: its one value)."""
-    index = size_index()
-    extents = tuple(constant if name is None else int(flat.size[index[name]]) + plus
-                    for name, constant, plus in axes(shape))
+def table_of(flat, field, buffer, shape, sizes=SIZES):
+    """Table `field` (its index in the schema; of `buffer`, of the schema's `shape` in terms of
+    `sizes`) of a flat structure as a numpy view of its buffer (a table without axes: its one
+    value)."""
+    return _view(flat, field, buffer, _dims(shape, size_index(sizes)))
+
+
+def _dims(shape, index):
+    """[(its size's index in `size` or None, constant, plus)] per axis of a schema shape."""
+    return [(None if name is None else index[name], constant, plus)
+            for name, constant, plus in axes(shape)]
+
+
+def _view(flat, field, buffer, dims):
+    size = flat.size
+    extents = tuple(constant if k is None else int(size[k]) + plus for k, constant, plus in dims)
     start = int(flat.start[field])
-    view = getattr(flat, buffer)[start:start + int(np.prod(extents, dtype=np.int64))]
-    return view.reshape(extents)[()]
+    return getattr(flat, buffer)[start:start + math.prod(extents)].reshape(extents)[()]
 
 
-def pack(fields=MODEL, **arrays):
-    """The FlatModel of the tables `arrays` (by their schema names; every field of `fields`):
-    the sizes read from the arrays' shapes (an axis named twice must agree), the tables copied
-    into the two buffers in the schema's order."""
-    index = size_index()
-    size = np.full(len(SIZES), -1, dtype=np.int64)
-    missing = [f.name for f in fields if f.name not in arrays]
-    extra = sorted(set(arrays) - {f.name for f in fields})
-    if missing or extra:
-        raise TypeError(f"pack: missing tables {missing}, unknown tables {extra}")
-    values = []
-    for f in fields:
-        a = np.asarray(arrays[f.name])
-        dims = axes(f.shape)
-        if a.ndim != len(dims):
-            raise ValueError(f"pack: {f.name} has shape {a.shape}, the schema says {f.shape}")
-        for extent, (name, constant, plus) in zip(a.shape, dims):
-            if name is None:
-                if extent != constant:
-                    raise ValueError(f"pack: {f.name} has shape {a.shape}, the schema says "
-                                     f"{f.shape}")
-                continue
-            value = extent - plus
-            if size[index[name]] not in (-1, value):
-                raise ValueError(f"pack: {f.name}'s axis {name} is {value}, another table's "
-                                 f"is {size[index[name]]}")
-            size[index[name]] = value
-        values.append(a)
-    size[size < 0] = 0      # (a size no table of `fields` names)
-    start = np.zeros(len(fields), dtype=np.int64)
-    used = {REAL: 0, INT: 0}
-    for i, (f, a) in enumerate(zip(fields, values)):
-        start[i] = used[f.buffer]
-        used[f.buffer] += a.size
-    real, integer = np.empty(used[REAL]), np.empty(used[INT], dtype=np.int64)
-    for i, (f, a) in enumerate(zip(fields, values)):
-        buffer = real if f.buffer == REAL else integer
-        buffer[start[i]:start[i] + a.size] = a.ravel()
-    return FlatModel(real, integer, start, size)
+class Layout:
+    """One flat structure's schema: its sizes, its fields (tables), the class it packs into
+    and the module of its kernels' accessors (generated: `write`)."""
+
+    def __init__(self, title, sizes, fields, cls, module):
+        self.title, self.sizes, self.fields, self.cls = title, sizes, fields, cls
+        self.generated = Path(__file__).with_name(module)
+        self.sizes_name = {id(SIZES): "SIZES", id(LOOP_SIZES): "LOOP_SIZES"}[id(sizes)]
+        self._index = {f.name: i for i, f in enumerate(fields)}
+        self._size = size_index(sizes)
+        self._reads = {f.name: (i, f.buffer, _dims(f.shape, self._size))
+                       for i, f in enumerate(fields)}
+
+    def pack(self, **arrays):
+        """The flat structure of the tables `arrays` (by their schema names; every field): the
+        sizes read from the arrays' shapes (an axis named twice must agree), the tables copied
+        into the two buffers in the schema's order."""
+        size = np.full(len(self.sizes), -1, dtype=np.int64)
+        missing = [f.name for f in self.fields if f.name not in arrays]
+        extra = sorted(set(arrays) - set(self._index))
+        if missing or extra:
+            raise TypeError(f"pack: missing tables {missing}, unknown tables {extra}")
+        values = []
+        for f in self.fields:
+            a = np.asarray(arrays[f.name])
+            dims = axes(f.shape)
+            if a.ndim != len(dims):
+                raise ValueError(f"pack: {f.name} has shape {a.shape}, the schema says "
+                                 f"{f.shape}")
+            for extent, (name, constant, plus) in zip(a.shape, dims):
+                if name is None:
+                    if extent != constant:
+                        raise ValueError(f"pack: {f.name} has shape {a.shape}, the schema says "
+                                         f"{f.shape}")
+                    continue
+                value = extent - plus
+                if size[self._size[name]] not in (-1, value):
+                    raise ValueError(f"pack: {f.name}'s axis {name} is {value}, another "
+                                     f"table's is {size[self._size[name]]}")
+                size[self._size[name]] = value
+            values.append(a)
+        size[size < 0] = 0      # (a size no table names)
+        start = np.zeros(len(self.fields), dtype=np.int64)
+        used = {REAL: 0, INT: 0}
+        for i, (f, a) in enumerate(zip(self.fields, values)):
+            start[i] = used[f.buffer]
+            used[f.buffer] += a.size
+        real, integer = np.empty(used[REAL]), np.empty(used[INT], dtype=np.int64)
+        for i, (f, a) in enumerate(zip(self.fields, values)):
+            buffer = real if f.buffer == REAL else integer
+            buffer[start[i]:start[i] + a.size] = a.ravel()
+        return self.cls(real, integer, start, size)
+
+    def unpack(self, flat):
+        """{name: view} of a flat structure's tables (the kernels' accessors' views, for
+        Python)."""
+        return {f.name: table_of(flat, i, f.buffer, f.shape, self.sizes)
+                for i, f in enumerate(self.fields)}
+
+    def table(self, flat, name):
+        """Table `name` of a flat structure as a view of its buffer."""
+        return _view(flat, *self._reads[name])
+
+    def size(self, flat, name):
+        """Size `name` of a flat structure."""
+        return int(flat.size[self._size[name]])
+
+    def copy(self, flat):
+        """A flat structure's own copy (a run's: every array its own, as a checkpoint that
+        restores into it or marks it read-only expects)."""
+        return self.cls(*(a.copy() for a in flat))
+
+    def _accessor(self, i, f):
+        doc = textwrap.wrap(f"{f.buffer}: {f.doc}", 96, initial_indent="# ",
+                            subsequent_indent="# ")
+        shape = ", ".join(f'"{a}"' if isinstance(a, str) else str(a) for a in f.shape)
+        shape += "," if len(f.shape) == 1 else ""
+        return "\n".join(doc + [f'{f.name} = table_view({i}, "{f.buffer}", ({shape}), '
+                                f'{self.sizes_name})'])
+
+    def generated_source(self):
+        """The accessors' module's text, generated from the layout."""
+        text = (f"{self.title} by name: one accessor per field of kernels/schema.py's layout, "
+                "each giving, called on the flat structure in a kernel, its table's view of the "
+                "buffers, of the schema's shape (kernels/views.py::table_view). Generated by "
+                "kernels/schema.py::Layout.write from the schema; do not edit.")
+        head = ('"""' + "\n".join(textwrap.wrap(text, 96)) + '"""\n'
+                f"from .schema import {self.sizes_name}\n"
+                "from .views import table_view\n")
+        return head + "".join(f"\n{self._accessor(i, f)}\n" for i, f in enumerate(self.fields))
+
+    def write(self):
+        """(Re)write the accessors' module from the layout (schema.write: every layout)."""
+        self.generated.write_text(self.generated_source())
 
 
-def unpack(flat, fields=MODEL):
-    """{name: view} of a FlatModel's tables (the kernels' accessors' views, for Python)."""
-    return {f.name: table_of(flat, i, f.buffer, f.shape) for i, f in enumerate(fields)}
+class FlatTables(FlatModel):
+    """A flat structure Python reads by name: ``flat.stats`` is its layout's table (a view of
+    the buffers, kept on the instance after its first read; the kernels read the same table
+    through the generated accessors)."""
+    layout = None       # (each subclass's Layout)
+
+    def __getattr__(self, name):
+        layout = type(self).layout
+        if layout is None or name not in layout._reads:
+            raise AttributeError(f"{type(self).__name__} has no table {name!r}")
+        view = layout.table(self, name)
+        if isinstance(view, np.ndarray):
+            self.__dict__[name] = view
+        return view
+
+    def __reduce__(self):       # (its buffers alone: a copy's views are of its own buffers)
+        return (type(self), tuple(self))
 
 
-def _accessor(i, f):
-    doc = textwrap.wrap(f"{f.buffer}: {f.doc}", 96, initial_indent="# ", subsequent_indent="# ")
-    shape = ", ".join(f'"{a}"' if isinstance(a, str) else str(a) for a in f.shape)
-    shape += "," if len(f.shape) == 1 else ""
-    return "\n".join(doc + [f'{f.name} = table_view({i}, "{f.buffer}", ({shape}))'])
+class FlatLoops(FlatTables):
+    """The closing joints' tables and scratch, flat (LOOPS; the kernels read them through
+    kernels/loop_tables.py)."""
+
+    @property
+    def rows(self):
+        """R: the closing joints' rows (0: no loops)."""
+        return int(self.size[0])
 
 
-def generated_source():
-    """kernels/model_tables.py's text, generated from MODEL."""
-    head = ('"""The flat model\'s tables by name: one accessor per entry of kernels/schema.py\'s '
-            'MODEL,\neach giving, called on a flat model in a kernel, its table\'s view of the '
-            'buffers,\nof the schema\'s shape (kernels/views.py::table_view). Generated by\n'
-            'kernels/schema.py::write from the schema; do not edit."""\n'
-            "from .views import table_view\n")
-    return head + "".join(f"\n{_accessor(i, f)}\n" for i, f in enumerate(MODEL))
+MODEL_LAYOUT = Layout("The flat model's tables", SIZES, MODEL, FlatModel, "model_tables.py")
+LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", LOOP_SIZES, LOOPS,
+                     FlatLoops, "loop_tables.py")
+FlatLoops.layout = LOOP_LAYOUT
+LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT)
 
-
-GENERATED = Path(__file__).with_name("model_tables.py")
+pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 
 
 def write():
-    """(Re)write kernels/model_tables.py from the schema: after an edit of MODEL or SIZES,
+    """(Re)write every layout's accessors (kernels/model_tables.py, kernels/loop_tables.py)
+    after an edit of the schema:
     ``python -c "from dttmm.kernels import schema; schema.write()"``."""
-    GENERATED.write_text(generated_source())
+    for layout in LAYOUTS:
+        layout.write()

@@ -1,10 +1,11 @@
-"""A flat model's tables as views of its buffers, made in compiled code (docs/flat_model.md,
+"""A flat structure's tables as views of its buffers, made in compiled code (docs/flat_model.md,
 "The accessors").
 
-`table_view(field, buffer, shape)` is the accessor of table `field` of a FlatModel
-(kernels/schema.py): a numba intrinsic that, called on the flat model in a kernel, gives the
-C-contiguous view of `buffer` ("real" or "int") at offset start[field] of the schema's `shape`
-(per axis a constant, a size's name, or "name+constant": the sizes read from FlatModel.size).
+`table_view(field, buffer, shape, sizes)` is the accessor of table `field` of a flat structure
+(kernels/schema.py: a FlatModel, a FlatLoops): a numba intrinsic that, called on it in a kernel,
+gives the C-contiguous view of `buffer` ("real" or "int") at offset start[field] of the schema's
+`shape` (per axis a constant, a size's name in `sizes`, or "name+constant": the sizes read from
+the structure's `size`).
 
 It is written as LLVM code, not as Python: a view written in Python (a slice, then a reshape)
 and inlined where it is read cost each kernel ~55 ms of compile per read (typing and lowering
@@ -18,9 +19,9 @@ from numba.core.imputils import impl_ret_borrowed
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from .schema import axes, size_index, table_of
+from .schema import SIZES, axes, size_index, table_of
 
-# FlatModel's fields in order (kernels/schema.py::FlatModel)
+# a flat structure's fields in order (kernels/schema.py::FlatModel)
 _POSITION = {"real": 0, "int": 1}
 _START, _SIZE = 2, 3
 
@@ -29,13 +30,13 @@ def _load(builder, context, array, index):
     return builder.load(builder.gep(array.data, [context.get_constant(types.intp, index)]))
 
 
-def table_view(field, buffer, shape):
+def table_view(field, buffer, shape, sizes=SIZES):
     """The accessor of table `field` (its index in the schema) of `buffer`, of the schema's
-    `shape`; with no axes, the table's one value."""
+    `shape` in terms of `sizes`; with no axes, the table's one value."""
     if config.DISABLE_JIT:      # (numba off: the same view by numpy, its indexing checked)
-        return lambda m: table_of(m, field, buffer, shape)
+        return lambda m: table_of(m, field, buffer, shape, sizes)
     position = _POSITION[buffer]
-    index = size_index()
+    index = size_index(sizes)
     dims = [(None if name is None else index[name], constant, plus)
             for name, constant, plus in axes(shape)]
 

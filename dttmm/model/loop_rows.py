@@ -200,7 +200,7 @@ def closure_targets(model, times, rows=None):
     rows' order as constraint_rows: a driven coordinate's prescribed motion, a SpringDamper's
     rest (its row's value is then q - rest), zero for the constraints.  A function's failure or
     a value that is not finite: ValueError naming the closing joint and its coordinate.  rows:
-    constraint_rows(model) (or the kernels' Loops, which carries its owner and coordinate),
+    constraint_rows(model) (or the kernels' flat loops, which carry its owner and coordinate),
     when the caller has them."""
     rows = constraint_rows(model) if rows is None else rows
     owner, coordinate = rows.owner, rows.coordinate
@@ -230,7 +230,7 @@ def closure_targets(model, times, rows=None):
 def closure_forces(model, rows=None):
     """[(row, f, who)]: each closing joint's coordinate driven by a JointForce f(t, q, q'),
     its row in constraint_rows' order and how messages name it.  Its q is the row's value (an
-    angle's in [-pi, pi)), q' its rate.  rows: constraint_rows' table (or the kernels' Loops,
+    angle's in [-pi, pi)), q' its rate.  rows: constraint_rows' table (or the kernels' loops,
     which carries its law, owner and coordinate), when the caller has it."""
     rows = constraint_rows(model) if rows is None else rows
     out = []

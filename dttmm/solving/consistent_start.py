@@ -57,7 +57,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
             status = _fused_start(*fused, start_pass(
                 params, settings, state, sweep, monitor,
                 (g_acc, g_rot, g_w, g_wd, g_pos, g_vel), (force, torque, line_load),
-                joint_input, len(loops.kind)))
+                joint_input, loops.rows))
         else:
             set_ground(loops, g_pos[0], g_vel[0], g_acc[0], g_rot[0], g_w[0], g_wd[0])
             loop = run = None
@@ -68,7 +68,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                                           compiled_forces(model))
                 run = start_pass(params, settings, state, sweep, monitor,
                                  (g_acc, g_rot, g_w, g_wd, g_pos, g_vel),
-                                 (force, torque, line_load), joint_input, len(loops.kind))
+                                 (force, torque, line_load), joint_input, loops.rows)
             core.complete(params, loops, state, loop, run)  # (where the core compiles: all)
             if has_closure_drives(model):   # a driven closing coordinate's q''(0), a
                 loops.target[:, :] = closure_targets(model, [t], loops)[0]  # spring's rest

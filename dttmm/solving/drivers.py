@@ -114,7 +114,7 @@ class Stepping:
                 plan.chunk_arrays(("joint_input", size),
                                   lambda: np.zeros((size, n, MAX_COORDINATES, 3))),
                 plan.chunk_arrays(("closure_target", size),
-                                  lambda: np.zeros((size, len(plan.loops.kind), 3))))
+                                  lambda: np.zeros((size, plan.loops.rows, 3))))
         return self._constants
 
     def inputs_for(self, times, mid_times, h):

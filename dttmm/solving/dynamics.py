@@ -109,8 +109,8 @@ def _accelerations(model, t, state, check_frames, extra_loads=None, extra_joint_
                                            extra_loads=extra_loads,
                                            extra_joint_forces=extra_joint_forces, in_skeleton=True)
         st = ws.state
-        residual = np.zeros(len(loops.kind))
-        if len(loops.kind):
+        residual = np.zeros(loops.rows)
+        if loops.rows:
             row_residuals(loops, st.z, residual)
         inputs = 2 * keep + 1
         return {"angular_acceleration": st.z[inputs, 3:6].copy(),

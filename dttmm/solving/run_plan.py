@@ -143,7 +143,7 @@ class PreparedRun:
         keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
         if mode == kstep.RICCATI_JOINTS:
             keys += ["jq", "jqd", "jtau"]
-        if len(loops.kind):
+        if loops.rows:
             keys.append("closure_wrench")
         if scheme.loop == "energy_momentum":
             loop_name, runner = "energy-momentum", run_steps
@@ -165,7 +165,7 @@ class PreparedRun:
         self.calls = _SameCalls()       # (its skeleton's calls: kernels/stepping/loop.py)
         self.run_info = dict(mode=run_tables._MODE_NAMES[mode], dt=dt, scheme=scheme.name,
                              loop=loop_name, model_fingerprint=model_fingerprint(user_model))
-        if len(loops.kind):
+        if loops.rows:
             self.run_info.update(energy_held=bool(opts.hold_energy))
         if scheme.loads_at_midpoints:
             self.run_info.update(forces="step means (about t - dt/2)")
@@ -198,7 +198,7 @@ class PreparedRun:
             self.derivative_run = consistent_start.start_pass(  # (fixed ground, no loads or
                 params, settings, self.state, self.sweep, self.monitor,  # drives: check_supported)
                 run_inputs._ground(model, [0.0]), run_inputs._loads(model, [0.0]),
-                run_inputs._joint_inputs(model, [0.0]), len(loops.kind))
+                run_inputs._joint_inputs(model, [0.0]), loops.rows)
             self.derivative_loop = ball_chain.start_loop(self.loop, self.state, self.sweep)
             self.integrator = runge_kutta.runge_kutta_scratch(
                 n, len(self.state.eta), runge_kutta.dop853_tables())

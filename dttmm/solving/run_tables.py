@@ -21,8 +21,7 @@ from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compile
 from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from ..kernels.stepping import step as kstep
-from ..kernels.assembly.closure import Loops
-from ..kernels.schema import pack
+from ..kernels.schema import LOOP_LAYOUT, pack
 from ..kernels.stepping.loop import (State,
                                      Sweep)
 from ..kernels.transfers.beam_relations import (gauss_points, quadrature_size)
@@ -353,12 +352,12 @@ def loop_columns(model, owner, body, banded_rows=None):
 
 
 def loop_tables(model):
-    """The closing joints as the general loop reads them (kernels/assembly/closure.py::Loops), in
-    the kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
+    """The closing joints as the general loop reads them (a FlatLoops: kernels/schema.py::LOOPS),
+    in the kernel model's numbering, with their scratch; no rows without loops.  Column 0 of the
     sweep is the step, column r + 1 row r's unit multiplier, which passes the bodies of
     loop_columns.  Each call's own copy (a run writes its scratch) of the tables built once
     per model."""
-    return Loops(*(a.copy() for a in _loop_tables(model, BANDED_ROWS)))
+    return LOOP_LAYOUT.copy(_loop_tables(model, BANDED_ROWS))
 
 
 @model_fact
@@ -379,38 +378,39 @@ def _loop_tables(model, banded_rows):
     np.cumsum(up_ptr, out=up_ptr)
     col_body = np.full((r + 1, 2), -1, dtype=np.int64)
     col_body[1:] = body[np.asarray(owner, dtype=np.int64)]
-    return Loops(kind=kind, owner=owner, v1=v1, v2=v2, v3=v3, target=np.zeros((r, 3)),
-                 coordinate=coordinate, law=law, acc=np.zeros(r), step_coef=np.zeros(2),
-                 body=body, point=point, ground=np.array(model.ground_position, dtype=float),
-                 ground_rot=np.array(model.ground_rotation, dtype=float),
-                 ground_motion=np.zeros((4, 3)), coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
-                 z_save=np.zeros((r + 1, st, 12)),
-                 nu_save=np.zeros((r + 1, nb, 3)), tau_save=np.zeros((r + 1, nb, 3)),
-                 delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
-                 r_out=np.zeros((nb, 3)), v_out=np.zeros((nb, 3)), g=np.zeros(r),
-                 gd=np.zeros(r), col_body=col_body, col_load=np.zeros((r + 1, 2, 6)),
-                 up_ptr=up_ptr, up_idx=np.array([c for k in sorted(ups) for c in ups[k]],
+    tables = dict(kind=kind, owner=owner, v1=v1, v2=v2, v3=v3, target=np.zeros((r, 3)),
+                  coordinate=coordinate, law=law, acc=np.zeros(r), step_coef=np.zeros(2),
+                  body=body, point=point, ground=np.array(model.ground_position, dtype=float),
+                  ground_rot=np.array(model.ground_rotation, dtype=float),
+                  ground_motion=np.zeros((4, 3)), coef=np.zeros((r, 4, 3)), kappa=np.zeros(r),
+                  z_save=np.zeros((r + 1, st, 12)),
+                  nu_save=np.zeros((r + 1, nb, 3)), tau_save=np.zeros((r + 1, nb, 3)),
+                  delassus=np.zeros((r, r)), lam=np.zeros(r), rhs=np.zeros(r),
+                  r_out=np.zeros((nb, 3)), v_out=np.zeros((nb, 3)), g=np.zeros(r),
+                  gd=np.zeros(r), col_body=col_body, col_load=np.zeros((r + 1, 2, 6)),
+                  up_ptr=up_ptr, up_idx=np.array([c for k in sorted(ups) for c in ups[k]],
                                                  dtype=np.int64),
-                 act_ptr=np.array(act_ptr, dtype=np.int64),
-                 act_idx=np.array(act_idx, dtype=np.int64), act=act,
-                 all_bodies=np.arange(nb, dtype=np.int64),
-                 all_rows=np.arange(r, dtype=np.int64),
-                 band=np.array(band, dtype=np.int64),
-                 colrow_ptr=np.cumsum([0] + [len(c) for c in colrows]).astype(np.int64),
-                 colrow_idx=np.array([q for c in colrows for q in c], dtype=np.int64),
-                 p_col=np.zeros((r + 1, st, 6)), port_col=np.zeros((r + 1, nb, 6)),
-                 h_store=np.zeros((nb, 3, 6)), k_store=np.zeros((r + 1, nb, 3)),
-                 free_store=np.zeros((nb, 4), dtype=np.int64),
-                 p_comb=np.zeros((st, 6)), k_comb=np.zeros((nb, 3)),
-                 eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 10)),
-                 stats=np.zeros(4), energy=np.array([0.0, np.nan, 0.0]))
+                  act_ptr=np.array(act_ptr, dtype=np.int64),
+                  act_idx=np.array(act_idx, dtype=np.int64), act=act.astype(np.int64),
+                  all_bodies=np.arange(nb, dtype=np.int64),
+                  all_rows=np.arange(r, dtype=np.int64),
+                  band=np.array(band, dtype=np.int64),
+                  colrow_ptr=np.cumsum([0] + [len(c) for c in colrows]).astype(np.int64),
+                  colrow_idx=np.array([q for c in colrows for q in c], dtype=np.int64),
+                  p_col=np.zeros((r + 1, st, 6)), port_col=np.zeros((r + 1, nb, 6)),
+                  h_store=np.zeros((nb, 3, 6)), k_store=np.zeros((r + 1, nb, 3)),
+                  free_store=np.zeros((nb, 4), dtype=np.int64),
+                  p_comb=np.zeros((st, 6)), k_comb=np.zeros((nb, 3)),
+                  eta_col=np.zeros((r, int(np.sum(model.n_modes)))), wrench=np.zeros((m, 10)),
+                  stats=np.zeros(4), energy=np.array([0.0, np.nan, 0.0]))
+    return LOOP_LAYOUT.pack(**tables)
 
 
 def _loop_info(loops):
-    """A run's info on its closing joints (kernels/assembly/closure.py::Loops.stats, energy): the
+    """A run's info on its closing joints (kernels/schema.py::LOOPS' stats, energy): the
     largest residuals after any step's projections, and before them, and where the energy is
     held the largest relative change of the rates that held it; nothing without loops."""
-    if not len(loops.kind):
+    if not loops.rows:
         return {}
     return {"loop_position_residual": float(loops.stats[3]),
             "loop_rate_residual": float(loops.stats[2]),

@@ -33,11 +33,9 @@ Scope (refused before a run otherwise, closures.check_runs_in_sweeps): rigid bod
 and strain rods (closed at their output ends: the kernel model's end section is the side), a
 fixed or moving ground (set_ground); every joint kind in the tree and closing it.
 """
-from collections import namedtuple
-
 import numpy as np
 
-from .. import allocating_kernel, kernel, model_tables, no_alloc_kernel
+from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel
 from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES, ROTATION_A,
                                UNDECLARED_BODY_KIND)
 from ...elements import BEAM, RIGID, ROD
@@ -50,66 +48,9 @@ from ..algebra.mat3 import matvec, put1, put2, t_cross, t_mm, t_mmt, t_mv
 from .loop_columns import recover_column, sweep_columns
 
 
-# the closing joints as the loop reads them, and the loop's scratch for them (solver.
-# loop_tables): rows (R) and closing joints (m) in the kernel model's numbering
-Loops = namedtuple("Loops", [
-    "kind", "owner", "v1", "v2",     # (R,), (R,), (R, 3), (R, 3): GAP_WORLD / GAP_A / DOT /
-                                     # ANGLE_A / ANGLE_B / ROTATION_A, its closing joint, e
-                                     # (or x, in a's frame) and y (b's frame); ROTATION_A:
-                                     # R0's first two columns
-    "v3", "target", "coordinate",    # (R, 3) an angle's axis (loop_rows.driven_directions,
-                                     # spring_directions);
-                                     # (R, 3) the step's targets (value, rate, acceleration):
-                                     # a driven coordinate's motion at the step's end, a
-                                     # spring's rest, a JointForce's value (in [2]), else 0;
-                                     # (R,) the joint's coordinate a row drives (-1: none)
-    "law", "acc", "step_coef",       # (R, 3) a row's drive [kind, stiffness, damping] (kind
-                                     # -1: none; a SpringDamper's or a JointForce's row is a
-                                     # force, no constraint); (R,) each row's acceleration
-                                     # in the last solve; (2,) [1 / c1, c3 / c1] of the step
-                                     # (0: the consistent start, springs explicit)
-    "body", "point",                 # (m, 2), (m, 2, 3): the sides' bodies and points (in the
-                                     # body's frame from its input point; the ground's: in the
-                                     # ground frame from the ground point)
-    "ground", "ground_rot",          # (3,), (3, 3) the ground point and frame, and (4, 3) the
-    "ground_motion",                 # point's velocity and acceleration and the frame's angular
-                                     # velocity and acceleration, where the rows are written
-                                     # (set_ground: t_{n+1} in a step, 0 at the start)
-    "coef", "kappa",                 # (R, 4, 3), (R,): the rows' Jacobian and velocity terms
-                                     # (_row_coefficients)
-    "z_save", "nu_save", "tau_save",  # (R + 1, ...) column 0's and each row's response's
-                                     # stations and joints (on the row's active bodies only)
-    "delassus", "lam", "rhs",        # (R, R), (R,), (R,)
-    "r_out", "v_out",                # (n, 3) each: the output points' positions, velocities
-    "g", "gd",                       # (R,) the rows' positions and rates
-    "col_body", "col_load",          # (R + 1, 2), (R + 1, 2, 6): each column's loaded output
-                                     # stations (-1: none) and station loads
-    "up_ptr", "up_idx",              # CSR over the bodies: the columns c >= 1 whose sweep
-                                     # passes each body (its active bodies and their ancestors)
-    "act_ptr", "act_idx", "act",     # CSR over the columns (R + 2,): each column's active
-                                     # bodies in tree order; (R + 1, n) the same as a mask
-    "all_bodies", "all_rows",        # (n,) 0 .. n - 1, (R,) 0 .. R - 1
-    "band",                          # (2,) the rows' matrices' lower and upper bandwidths
-                                     # where a banded solve pays (_rows_solve), else -1
-    "colrow_ptr", "colrow_idx",      # CSR over the rows' columns: the rows with a side body
-                                     # among each column's active bodies
-    "p_col", "port_col",             # (R + 1, 2n + 1, 6), (R + 1, n, 6): sweep_columns' scratch,
-    "h_store", "k_store", "free_store",   # (n, 3, 6), (R + 1, n, 3), (n, 4) int
-    "p_comb", "k_comb",              # (2n + 1, 6), (n, 3): the multipliers' superposition
-    "eta_col",                       # (R, n_eta) each row's response of the beams' eta''
-    "wrench",                        # (m, 10) each closing joint's force and couple on side b
-                                     # (world; the couple about its point) from loops.lam,
-                                     # then its drives' generalized forces and their
-                                     # coordinates' rates (coordinates 1, 2)
-    "stats",                         # (4,) the run's largest position residual after a step
-                                     # (before the projection), rate residual before and after
-                                     # the rates' projection, position residual after its
-    "energy",                        # (3,) [held (1) or not (0), the total energy the steps
-                                     # hold (set at the start, start_energy), the largest
-                                     # relative change of the rates its projection made]
-])
-
-
+# The closing joints as the loop reads them, and the loop's scratch for them: one flat
+# structure (`loops`: kernels/schema.py::LOOPS, a FlatLoops), read through
+# kernels/loop_tables.py.
 
 # The rows' geometry on values (kernels/algebra/mat3.py's t_ algebra: 3-vectors as 3-tuples, frames
 # as row-major 9-tuples), and the helpers below compiled without numba's reference counting
@@ -214,14 +155,17 @@ def set_ground(loops, r, v, a, rot, w, wd):
     """The ground point's position r, velocity v and acceleration a and the ground frame's
     rotation rot, angular velocity w and acceleration wd where the rows are next written (a
     step's end, or t = 0): what a moving ground (Model.ground_state) brings into the rows."""
+    ground = loop_tables.ground(loops)
+    ground_motion = loop_tables.ground_motion(loops)
+    ground_rot = loop_tables.ground_rot(loops)
     for i in range(3):
-        loops.ground[i] = r[i]
-        loops.ground_motion[0, i] = v[i]
-        loops.ground_motion[1, i] = a[i]
-        loops.ground_motion[2, i] = w[i]
-        loops.ground_motion[3, i] = wd[i]
+        ground[i] = r[i]
+        ground_motion[0, i] = v[i]
+        ground_motion[1, i] = a[i]
+        ground_motion[2, i] = w[i]
+        ground_motion[3, i] = wd[i]
         for j in range(3):
-            loops.ground_rot[i, j] = rot[i, j]
+            ground_rot[i, j] = rot[i, j]
 
 
 @no_alloc_kernel
@@ -235,24 +179,28 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
     r_in + rho (a beam's deflected end, _beam_offset; a strain rod's, _rod_offset); the kernel
     model hangs every child at its parent's output point.  A body kind code none of these names
     is refused (elements/kinds.py, UNDECLARED_BODY_KIND)."""
+    r_out = loop_tables.r_out(loops)
+    v_out = loop_tables.v_out(loops)
+    ground_motion = loop_tables.ground_motion(loops)
+    ground_rot = loop_tables.ground_rot(loops)
+    ground = loop_tables.ground(loops)
     parent = model_tables.parent(params)
     hinge_kind = model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     hinge_row, body_kind = model_tables.hinge_row(params), model_tables.body_kind(params)
-    r_out, v_out = loops.r_out, loops.v_out
     for q in range(bodies.shape[0]):
         k = bodies[q]
         p = parent[k]
         if p < 0:               # a root hangs at the ground point (moving with the ground)
-            r = (loops.ground[0], loops.ground[1], loops.ground[2])
-            v = _v3(loops.ground_motion, 0)
+            r = (ground[0], ground[1], ground[2])
+            v = _v3(ground_motion, 0)
         else:
             r = _v3(r_out, p)
             v = _v3(v_out, p)
         if HAS_SLIDES[hinge_kind[k]]:      # the slides: kernels/transfers/joint.py
-            f_p = _frame(rot, loops.ground_rot, p)
-            w_p = _v3(loops.ground_motion, 2) if p < 0 else _v3(w, p)
+            f_p = _frame(rot, ground_rot, p)
+            w_p = _v3(ground_motion, 2) if p < 0 else _v3(w, p)
             d, d_rate = joint_offset(hinge_kind[k], hinge_params[hinge_row[k]], f_p, w_p, jq[k],
                                      jqd[k])
             r = _add(r, d)
@@ -282,20 +230,26 @@ def _side(params, loops, rot, w, c, s):
     joint c's side s, at the output points loops.r_out, v_out and the bodies' rot, w, as
     tuples (the ground's: its point, frame and motion in loops.ground, ground_rot,
     ground_motion, the arm from the ground point)."""
-    k = loops.body[c, s]
-    point, ground = loops.point, loops.ground
+    body = loop_tables.body(loops)
+    point = loop_tables.point(loops)
+    ground = loop_tables.ground(loops)
+    ground_rot = loop_tables.ground_rot(loops)
+    ground_motion = loop_tables.ground_motion(loops)
+    r_out = loop_tables.r_out(loops)
+    v_out = loop_tables.v_out(loops)
+    k = body[c, s]
     local = (point[c, s, 0], point[c, s, 1], point[c, s, 2])
     if k < 0:
-        f = _frame(rot, loops.ground_rot, k)
+        f = _frame(rot, ground_rot, k)
         arm = t_mv(f, local)
-        w_g = _v3(loops.ground_motion, 2)
+        w_g = _v3(ground_motion, 2)
         return (_add((ground[0], ground[1], ground[2]), arm),
-                _add(_v3(loops.ground_motion, 0), t_cross(w_g, arm)), arm, f, w_g)
+                _add(_v3(ground_motion, 0), t_cross(w_g, arm)), arm, f, w_g)
     f = _m9(rot, k)
     w_k = _v3(w, k)
     centre, row = model_tables.body_params(params), model_tables.body_row(params)[k]
     arm = t_mv(f, _sub(local, (centre[row, 4], centre[row, 5], centre[row, 6])))
-    return (_add(_v3(loops.r_out, k), arm), _add(_v3(loops.v_out, k), t_cross(w_k, arm)), arm,
+    return (_add(_v3(r_out, k), arm), _add(_v3(v_out, k), t_cross(w_k, arm)), arm,
             f, w_k)
 
 
@@ -325,12 +279,18 @@ def _relative_rotation(f_a, f_b, c1, c2):
 def row_positions(params, loops, rot, w, rows):
     """The given rows' positions g and rates g' (loops.g, gd) at the points loops.r_out,
     v_out, less their targets (loops.target; an angle's difference folded into [-pi, pi))."""
-    kind, v1, v2, v3 = loops.kind, loops.v1, loops.v2, loops.v3
-    target, g, gd = loops.target, loops.g, loops.gd
+    kind = loop_tables.kind(loops)
+    v1 = loop_tables.v1(loops)
+    v2 = loop_tables.v2(loops)
+    v3 = loop_tables.v3(loops)
+    target = loop_tables.target(loops)
+    g = loop_tables.g(loops)
+    gd = loop_tables.gd(loops)
+    owner = loop_tables.owner(loops)
     for q in range(rows.shape[0]):
         r = rows[q]
-        p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
-        p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
+        p_a, v_a, _, f_a, w_a = _side(params, loops, rot, w, owner[r], 0)
+        p_b, v_b, _, f_b, w_b = _side(params, loops, rot, w, owner[r], 1)
         if kind[r] == ROTATION_A:
             # an elastic hinge's g = n . log(F_a^T F_b R0^T), g' = (F_a n) . (w_b - w_a)
             psi = _relative_rotation(f_a, f_b, _v3(v1, r), _v3(v2, r))
@@ -371,11 +331,19 @@ def _row_coefficients(params, loops, rot, w):
         angle: alpha_a: -n, alpha_b: n, kappa = (w_s x n) . (w_b - w_a), s the side holding n
                (an elastic hinge's rotation row: s = a)
     with arm the point from its body's output point and d = p_b - p_a."""
-    kind, v1, v2, v3 = loops.kind, loops.v1, loops.v2, loops.v3
+    kind = loop_tables.kind(loops)
+    v1 = loop_tables.v1(loops)
+    v2 = loop_tables.v2(loops)
+    v3 = loop_tables.v3(loops)
+    kappa_ = loop_tables.kappa(loops)
+    owner = loop_tables.owner(loops)
+    coef = loop_tables.coef(loops)
+    body = loop_tables.body(loops)
+    ground_motion = loop_tables.ground_motion(loops)
     zero = (0.0, 0.0, 0.0)
     for r in range(kind.shape[0]):
-        p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, loops.owner[r], 0)
-        p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, loops.owner[r], 1)
+        p_a, v_a, arm_a, f_a, w_a = _side(params, loops, rot, w, owner[r], 0)
+        p_b, v_b, arm_b, f_b, w_b = _side(params, loops, rot, w, owner[r], 1)
         if kind[r] == ANGLE_A or kind[r] == ANGLE_B or kind[r] == ROTATION_A:
             a_side = kind[r] != ANGLE_B
             n = t_mv(f_a if a_side else f_b, _v3(v3, r))
@@ -401,26 +369,29 @@ def _row_coefficients(params, loops, rot, w):
             rows = (_neg(e), _neg(ma), e, t_cross(arm_b, e))
         for j in range(4):
             for i in range(3):
-                loops.coef[r, j, i] = rows[j][i]
+                coef[r, j, i] = rows[j][i]
         for s in range(2):      # the ground's side: its point's and frame's known accelerations
-            if loops.body[loops.owner[r], s] < 0:
-                kappa += (_dot(rows[2 * s], _v3(loops.ground_motion, 1))
-                          + _dot(rows[2 * s + 1], _v3(loops.ground_motion, 3)))
-        loops.kappa[r] = kappa
+            if body[owner[r], s] < 0:
+                kappa += (_dot(rows[2 * s], _v3(ground_motion, 1))
+                          + _dot(rows[2 * s + 1], _v3(ground_motion, 3)))
+        kappa_[r] = kappa
 
 
 @no_alloc_kernel
 def _row_value(loops, r, z, act):
     """Row r's linear part, coef . (a, alpha), at the stations z (2n + 1, 12) of a column
     whose active bodies are act (elsewhere its response is zero)."""
+    owner = loop_tables.owner(loops)
+    body = loop_tables.body(loops)
+    coef = loop_tables.coef(loops)
     v = 0.0
-    c = loops.owner[r]
+    c = owner[r]
     for s in range(2):
-        k = loops.body[c, s]
+        k = body[c, s]
         if k >= 0 and act[k]:
             for i in range(3):
-                v += (loops.coef[r, 2 * s, i] * z[2 * k + 2, i]
-                      + loops.coef[r, 2 * s + 1, i] * z[2 * k + 1, 3 + i])
+                v += (coef[r, 2 * s, i] * z[2 * k + 2, i]
+                      + coef[r, 2 * s + 1, i] * z[2 * k + 1, 3 + i])
     return v
 
 
@@ -429,19 +400,26 @@ def row_residuals(loops, z, out):
     """Every row's value kappa + J (a, alpha) at the stations z (2n + 1, 12) of the whole
     tree, with the Jacobian of the last solve (_row_coefficients), less its target (a driven
     coordinate's prescribed acceleration)."""
-    for r in range(loops.kind.shape[0]):
-        out[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0]) - loops.target[r, 2]
+    kind = loop_tables.kind(loops)
+    target = loop_tables.target(loops)
+    kappa = loop_tables.kappa(loops)
+    act = loop_tables.act(loops)
+    for r in range(kind.shape[0]):
+        out[r] = kappa[r] + _row_value(loops, r, z, act[0]) - target[r, 2]
 
 
 @no_alloc_kernel
 def _column_loads(loops):
     """Each row's unit multiplier's station loads (column r + 1): -[coef alpha; coef a] on each
     side's output station (_row_coefficients)."""
-    for r in range(loops.kind.shape[0]):
+    kind = loop_tables.kind(loops)
+    col_load = loop_tables.col_load(loops)
+    coef = loop_tables.coef(loops)
+    for r in range(kind.shape[0]):
         for s in range(2):
             for i in range(3):
-                loops.col_load[r + 1, s, i] = -loops.coef[r, 2 * s + 1, i]
-                loops.col_load[r + 1, s, 3 + i] = -loops.coef[r, 2 * s, i]
+                col_load[r + 1, s, i] = -coef[r, 2 * s + 1, i]
+                col_load[r + 1, s, 3 + i] = -coef[r, 2 * s, i]
 
 
 @kernel
@@ -473,8 +451,9 @@ def _clear_rows_matrix(loops, a):
     """a <- 0 where the rows' solve reads it: within the band and its LU fill (columns i -
     lower .. i + lower + upper of row i) where loops.band holds the bandwidths, everywhere
     otherwise (O(R l), not O(R^2), for the banded solve's many rows)."""
+    band = loop_tables.band(loops)
     m = a.shape[0]
-    lower, upper = loops.band[0], loops.band[1]
+    lower, upper = band[0], band[1]
     if lower < 0:
         for i in range(m):
             for j in range(m):
@@ -544,11 +523,12 @@ def _rows_solve(loops, a, b):
     """The multipliers of a x = b for the rows' matrix a (the Delassus matrix or V): the
     truncated SVD (_least_solve), or where loops.band holds its bandwidths (many rows, a
     narrow band) the regularized banded LU (_band_factor; a is overwritten)."""
-    if loops.band[0] < 0:
+    band = loop_tables.band(loops)
+    if band[0] < 0:
         return _least_solve(a, b)
     piv = np.empty(a.shape[0], dtype=np.int64)
-    _band_factor(a, loops.band[0], loops.band[1], piv)
-    return _band_apply(a, loops.band[0], loops.band[1], piv, b)
+    _band_factor(a, band[0], band[1], piv)
+    return _band_apply(a, band[0], band[1], piv, b)
 
 
 @no_alloc_kernel
@@ -558,24 +538,33 @@ def closure_wrenches(params, loops, rot):
     lam (y x x), an angle's couple lam n (the module docstring), with the rows' directions at
     the rotations rot; a driven coordinate's row's lam is also its drive's generalized force
     (loops.wrench[c, 6 + i] for coordinate i: a couple about the axis, or a force along it)."""
-    wrench, kind, lam = loops.wrench, loops.kind, loops.lam
+    wrench = loop_tables.wrench(loops)
+    kind = loop_tables.kind(loops)
+    lam = loop_tables.lam(loops)
+    owner = loop_tables.owner(loops)
+    ground_rot = loop_tables.ground_rot(loops)
+    coordinate = loop_tables.coordinate(loops)
+    body = loop_tables.body(loops)
+    v3 = loop_tables.v3(loops)
+    v1 = loop_tables.v1(loops)
+    v2 = loop_tables.v2(loops)
     wrench[:, :] = 0.0
     for r in range(kind.shape[0]):
-        c = loops.owner[r]
-        if loops.coordinate[r] >= 0:
-            wrench[c, 6 + loops.coordinate[r]] = lam[r]
-        f_a = _frame(rot, loops.ground_rot, loops.body[c, 0])
-        f_b = _frame(rot, loops.ground_rot, loops.body[c, 1])
+        c = owner[r]
+        if coordinate[r] >= 0:
+            wrench[c, 6 + coordinate[r]] = lam[r]
+        f_a = _frame(rot, ground_rot, body[c, 0])
+        f_b = _frame(rot, ground_rot, body[c, 1])
         if kind[r] == ANGLE_A or kind[r] == ANGLE_B or kind[r] == ROTATION_A:
-            n = t_mv(f_b if kind[r] == ANGLE_B else f_a, _v3(loops.v3, r))
+            n = t_mv(f_b if kind[r] == ANGLE_B else f_a, _v3(v3, r))
             for i in range(3):
                 wrench[c, 3 + i] += lam[r] * n[i]
         elif kind[r] == DOT:
-            couple = t_cross(t_mv(f_b, _v3(loops.v2, r)), t_mv(f_a, _v3(loops.v1, r)))
+            couple = t_cross(t_mv(f_b, _v3(v2, r)), t_mv(f_a, _v3(v1, r)))
             for i in range(3):
                 wrench[c, 3 + i] += lam[r] * couple[i]
         else:
-            e = _v3(loops.v1, r) if kind[r] == GAP_WORLD else t_mv(f_a, _v3(loops.v1, r))
+            e = _v3(v1, r) if kind[r] == GAP_WORLD else t_mv(f_a, _v3(v1, r))
             for i in range(3):
                 wrench[c, i] += lam[r] * e[i]
 
@@ -585,13 +574,19 @@ def _delassus(loops):
     """loops.delassus[r, j]: row r's value in row j's response (column j + 1), from the stored
     responses and the rows' Jacobian (_row_value); zero where row r's bodies are not among
     column j + 1's active bodies."""
-    n_rows = loops.kind.shape[0]
-    _clear_rows_matrix(loops, loops.delassus)
+    delassus = loop_tables.delassus(loops)
+    kind = loop_tables.kind(loops)
+    z_save = loop_tables.z_save(loops)
+    act_ = loop_tables.act(loops)
+    colrow_ptr = loop_tables.colrow_ptr(loops)
+    colrow_idx = loop_tables.colrow_idx(loops)
+    n_rows = kind.shape[0]
+    _clear_rows_matrix(loops, delassus)
     for j in range(n_rows):
-        z, act = loops.z_save[j + 1], loops.act[j + 1]
-        for q in range(loops.colrow_ptr[j], loops.colrow_ptr[j + 1]):
-            r = loops.colrow_idx[q]
-            loops.delassus[r, j] = _row_value(loops, r, z, act)
+        z, act = z_save[j + 1], act_[j + 1]
+        for q in range(colrow_ptr[j], colrow_ptr[j + 1]):
+            r = colrow_idx[q]
+            delassus[r, j] = _row_value(loops, r, z, act)
 
 
 @allocating_kernel
@@ -606,8 +601,30 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     zero (acceleration level), then the step with the multipliers' loads, recovered once
     over the tree into z, sweep.joint_nu, joint_tau (P and k superposed, P_c = 0 where
     column c does not pass).  Returns the sweep's status."""
+    h_store = loop_tables.h_store(loops)
+    free_store = loop_tables.free_store(loops)
+    all_bodies = loop_tables.all_bodies(loops)
+    lam = loop_tables.lam(loops)
+    p_comb = loop_tables.p_comb(loops)
+    k_comb = loop_tables.k_comb(loops)
+    kind = loop_tables.kind(loops)
+    p_col = loop_tables.p_col(loops)
+    k_store = loop_tables.k_store(loops)
+    z_save = loop_tables.z_save(loops)
+    nu_save = loop_tables.nu_save(loops)
+    tau_save = loop_tables.tau_save(loops)
+    act = loop_tables.act(loops)
+    rhs = loop_tables.rhs(loops)
+    delassus = loop_tables.delassus(loops)
+    acc = loop_tables.acc(loops)
+    target = loop_tables.target(loops)
+    up_ptr = loop_tables.up_ptr(loops)
+    up_idx = loop_tables.up_idx(loops)
+    kappa = loop_tables.kappa(loops)
+    act_idx = loop_tables.act_idx(loops)
+    act_ptr = loop_tables.act_ptr(loops)
     n = rot.shape[0]
-    n_rows = loops.kind.shape[0]
+    n_rows = kind.shape[0]
     # (recover_column's affine flag as run-time bools: numba compiles a function once per
     # literal True or False it is passed)
     step_column, unit_column = n_rows >= 0, n_rows < 0
@@ -621,48 +638,47 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
         return status
     work = np.empty((9, 12))
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            parent, root_f, sw.s, loops.p_col[0], loops.k_store[0],
-                            loops.h_store, loops.free_store, loops.z_save[0], loops.nu_save[0],
-                            loops.tau_save[0], step_column, loops.all_bodies, loops.act[0],
+                            parent, root_f, sw.s, p_col[0], k_store[0],
+                            h_store, free_store, z_save[0], nu_save[0],
+                            tau_save[0], step_column, all_bodies, act[0],
                             work)
     for c in range(1, n_rows + 1):
         if status == 0:
             status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
-                                    sw.known_loads, parent, root_f, sw.s, loops.p_col[c],
-                                    loops.k_store[c], loops.h_store, loops.free_store,
-                                    loops.z_save[c], loops.nu_save[c], loops.tau_save[c],
+                                    sw.known_loads, parent, root_f, sw.s, p_col[c],
+                                    k_store[c], h_store, free_store,
+                                    z_save[c], nu_save[c], tau_save[c],
                                     unit_column,
-                                    loops.act_idx[loops.act_ptr[c]:loops.act_ptr[c + 1]],
-                                    loops.act[c], work)
+                                    act_idx[act_ptr[c]:act_ptr[c + 1]],
+                                    act[c], work)
     if status != 0:
         return status
     _delassus(loops)
     for r in range(n_rows):
-        loops.rhs[r] = loops.target[r, 2] - (loops.kappa[r]
-                                             + _row_value(loops, r, loops.z_save[0], loops.act[0]))
+        rhs[r] = target[r, 2] - (kappa[r]
+                                             + _row_value(loops, r, z_save[0], act[0]))
     _force_rows(params, loops, rot, w)
-    put1(loops.lam, _rows_solve(loops, loops.delassus, loops.rhs))
+    put1(lam, _rows_solve(loops, delassus, rhs))
     # the step with the multipliers' loads: P and k superposed, one recovery over the tree
-    p_comb, k_comb = loops.p_comb, loops.k_comb
-    put2(p_comb, loops.p_col[0])
-    put2(k_comb, loops.k_store[0])
+    put2(p_comb, p_col[0])
+    put2(k_comb, k_store[0])
     for k in range(n):
-        for q in range(loops.up_ptr[k], loops.up_ptr[k + 1]):
-            c = loops.up_idx[q]
-            f = loops.lam[c - 1]
+        for q in range(up_ptr[k], up_ptr[k + 1]):
+            c = up_idx[q]
+            f = lam[c - 1]
             for i in range(6):
-                p_comb[2 * k, i] += f * loops.p_col[c, 2 * k, i]
-                p_comb[2 * k + 1, i] += f * loops.p_col[c, 2 * k + 1, i]
+                p_comb[2 * k, i] += f * p_col[c, 2 * k, i]
+                p_comb[2 * k + 1, i] += f * p_col[c, 2 * k + 1, i]
             for i in range(3):
-                k_comb[k, i] += f * loops.k_store[c, k, i]
+                k_comb[k, i] += f * k_store[c, k, i]
     status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            parent, root_f, sw.s, p_comb, k_comb, loops.h_store,
-                            loops.free_store, z, sw.joint_nu, sw.joint_tau, step_column,
-                            loops.all_bodies, loops.act[0], work)
+                            parent, root_f, sw.s, p_comb, k_comb, h_store,
+                            free_store, z, sw.joint_nu, sw.joint_tau, step_column,
+                            all_bodies, act[0], work)
     if status != 0:
         return status
     for r in range(n_rows):
-        loops.acc[r] = loops.kappa[r] + _row_value(loops, r, z, loops.act[0])
+        acc[r] = kappa[r] + _row_value(loops, r, z, act[0])
     closure_wrenches(params, loops, rot)
     return 0
 
@@ -685,24 +701,34 @@ def _force_rows(params, loops, rot, w):
     row's value without multipliers); K = 0 at the consistent start (the force explicit).  A
     JointForce's (k = c = 0): lam = F, its value in loops.target[r, 2] (solver: f(t, q, q')
     at the predictor, as a tree joint's), its row the unit row."""
+    all_rows = loop_tables.all_rows(loops)
+    delassus = loop_tables.delassus(loops)
+    rhs = loop_tables.rhs(loops)
+    kind = loop_tables.kind(loops)
+    law = loop_tables.law(loops)
+    target = loop_tables.target(loops)
+    step_coef = loop_tables.step_coef(loops)
+    gd = loop_tables.gd(loops)
+    acc = loop_tables.acc(loops)
+    g = loop_tables.g(loops)
     forces = False
-    for r in range(loops.kind.shape[0]):
-        forces = forces or _is_force(loops.law, r)
+    for r in range(kind.shape[0]):
+        forces = forces or _is_force(law, r)
     if not forces:
         return
-    row_positions(params, loops, rot, w, loops.all_rows)
-    for r in range(loops.kind.shape[0]):
-        if not _is_force(loops.law, r):
+    row_positions(params, loops, rot, w, all_rows)
+    for r in range(kind.shape[0]):
+        if not _is_force(law, r):
             continue
-        k, c = loops.law[r, 1], loops.law[r, 2]
-        stiff = k * loops.step_coef[0] + c * loops.step_coef[1]
-        b = loops.target[r, 2] - loops.rhs[r]
-        for j in range(loops.kind.shape[0]):
-            loops.delassus[r, j] *= stiff
-        loops.delassus[r, r] += 1.0
+        k, c = law[r, 1], law[r, 2]
+        stiff = k * step_coef[0] + c * step_coef[1]
+        b = target[r, 2] - rhs[r]
+        for j in range(kind.shape[0]):
+            delassus[r, j] *= stiff
+        delassus[r, r] += 1.0
         # (a spring's target[r, 2] is 0: closure_targets)
-        loops.rhs[r] = (loops.target[r, 2] - k * loops.g[r] - c * loops.gd[r]
-                        + stiff * (loops.acc[r] - b))
+        rhs[r] = (target[r, 2] - k * g[r] - c * gd[r]
+                        + stiff * (acc[r] - b))
 
 
 @no_alloc_kernel
@@ -710,16 +736,21 @@ def _modal_responses(params, loops, eta_map):
     """loops.eta_col[j]: row j's response of the beams' eta'' and the strain rods' q'' (eta'' =
     eta_map [z_I; 1] at the element's input station, step.py::_modal_accelerations; homogeneous:
     its linear part), on its active beams and rods (zero elsewhere)."""
+    eta_col = loop_tables.eta_col(loops)
+    z_save = loop_tables.z_save(loops)
+    kind = loop_tables.kind(loops)
+    act_ptr = loop_tables.act_ptr(loops)
+    act_idx = loop_tables.act_idx(loops)
     body_kind, mode_off = model_tables.body_kind(params), model_tables.mode_offset(params)
-    loops.eta_col[:, :] = 0.0
-    for j in range(loops.kind.shape[0]):
-        z = loops.z_save[j + 1]
-        for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
-            k = loops.act_idx[q]
+    eta_col[:, :] = 0.0
+    for j in range(kind.shape[0]):
+        z = z_save[j + 1]
+        for q in range(act_ptr[j + 1], act_ptr[j + 2]):
+            k = act_idx[q]
             if body_kind[k] == BEAM or body_kind[k] == ROD:
                 for i in range(mode_off[k], mode_off[k + 1]):
                     v = 0.0
                     for c in range(12):
                         v += eta_map[i, c] * z[2 * k + 1, c]
-                    loops.eta_col[j, i] = v
+                    eta_col[j, i] = v
 

@@ -5,7 +5,7 @@ sweep, recover_column recovers one column's stations.  Called by closure.py::sol
 
 import numpy as np
 
-from .. import kernel, no_alloc_kernel
+from .. import kernel, loop_tables, no_alloc_kernel
 from ..transfers.joint import FREE, PRESCRIBED
 from ..algebra.mat3 import add1, add2, matmul, matvec, put1, put2
 from .sweep import IDENTITY, JOINT, LOCKED, TRANSFER
@@ -67,8 +67,16 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
     known_loads, its outboard motion free) passes no impedance and, in column 0, its known
     inboard loads (tree_sweep.py::riccati_tree_full).  port_s (n, 6, 6) scratch.  Returns 0, or
     j + 1 for the element j whose elimination is singular."""
+    p_col = loop_tables.p_col(loops)
+    port_p = loop_tables.port_col(loops)
+    up_ptr = loop_tables.up_ptr(loops)
+    up_idx = loop_tables.up_idx(loops)
+    col_body = loop_tables.col_body(loops)
+    col_load = loop_tables.col_load(loops)
+    free_store = loop_tables.free_store(loops)
+    h_store = loop_tables.h_store(loops)
+    k_store = loop_tables.k_store(loops)
     n = parent.shape[0]
-    p_col, port_p, up_ptr, up_idx = loops.p_col, loops.port_col, loops.up_ptr, loops.up_idx
     most = 1
     for k in range(n):
         most = max(most, 1 + up_ptr[k + 1] - up_ptr[k])
@@ -76,11 +84,11 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
         port_p[0, k] = 0.0
         for q in range(up_ptr[k], up_ptr[k + 1]):
             port_p[up_idx[q], k] = 0.0
-    for c in range(1, loops.col_body.shape[0]):
+    for c in range(1, col_body.shape[0]):
         for side in range(2):
-            kb = loops.col_body[c, side]
+            kb = col_body[c, side]
             if kb >= 0:
-                add1(port_p[c, kb], loops.col_load[c, side])
+                add1(port_p[c, kb], col_load[c, side])
     cols = np.empty(most, dtype=np.int64)
     p_o = np.empty((most, 6))
     p_i = np.empty((most, 6))
@@ -125,12 +133,12 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
             mf = 0
             for c3 in range(3):
                 if joint_dof[k, c3] == FREE:
-                    loops.free_store[k, mf] = c3
+                    free_store[k, mf] = c3
                     mf += 1
-            loops.free_store[k, 3] = mf
+            free_store[k, 3] = mf
             s_phi = matmul(s_o, uh[0:6, 0:6])
             for a in range(mf):
-                ca = loops.free_store[k, a]
+                ca = free_store[k, a]
                 for i in range(6):
                     gv = 0.0
                     for j in range(6):
@@ -147,7 +155,7 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
                 for j in range(6):
                     y[0, j] += s_o[j, i] * ci
             for a in range(mf):
-                ca = loops.free_store[k, a]
+                ca = free_store[k, a]
                 for j in range(6):
                     xv = 0.0
                     for i in range(6):
@@ -169,9 +177,9 @@ def sweep_columns(kind, u, joint_dof, joint_drive, known_loads, parent, s_mat, p
             s_e = s_phi.copy()
             for a in range(mf):
                 for j in range(6):
-                    loops.h_store[k, a, j] = rhs[a, j]
+                    h_store[k, a, j] = rhs[a, j]
                 for c in range(m):
-                    loops.k_store[cols[c], k, a] = rhs[a, 6 + c]
+                    k_store[cols[c], k, a] = rhs[a, 6 + c]
             for i in range(6):
                 for a in range(mf):
                     for j in range(6):

@@ -7,7 +7,7 @@ their parents' moved with them (_dependent_frames), and a rigid model's energy h
 
 import numpy as np
 
-from .. import allocating_kernel, kernel, model_tables, no_alloc_kernel
+from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel
 from ...elements import BEAM, RIGID, ROD
 from ...elements.kinds import UNDECLARED_BODY_KIND
 from ...elements.beam import MODES, TORSION_MODES
@@ -34,6 +34,8 @@ def _dependent_frames(params, loops, state, bodies, work):
     offset too), a welded body's as the parent's (R0) or its beam's end section's (beam.
     end_section_motion) or its strain rod's (strain_rod.rod_end_frame).  work: (60,) scratch
     (nothing is allocated)."""
+    ground_rot = loop_tables.ground_rot(loops)
+    ground_motion = loop_tables.ground_motion(loops)
     scratch = work[0:48]
     rest = work[48:57].reshape((3, 3))
     body_kind = model_tables.body_kind(params)
@@ -48,7 +50,7 @@ def _dependent_frames(params, loops, state, bodies, work):
         hk = hinge_kind[k]
         p = parent[k]
         if p < 0:
-            rot_p, w_p, wd_p = loops.ground_rot, loops.ground_motion[2], loops.ground_motion[3]
+            rot_p, w_p, wd_p = ground_rot, ground_motion[2], ground_motion[3]
         else:
             rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
         hr = hinge_row[k]             # (the joint's row of the shared table)
@@ -93,8 +95,9 @@ def _deflection_response(params, loops, z, j, k, i):
     """Row j's response of elastic hinge k's d''_i: its outboard input station's acceleration
     less its inboard output station's (v_in = v_out,P + d', step.py::_update; station 0 the
     ground, a parent outside the row's active bodies does not move)."""
+    act = loop_tables.act(loops)
     p = model_tables.parent(params)[k]
-    inboard = 0.0 if p < 0 or not loops.act[j + 1, p] else z[2 * p + 2, i]
+    inboard = 0.0 if p < 0 or not act[j + 1, p] else z[2 * p + 2, i]
     return z[2 * k + 1, i] - inboard
 
 
@@ -103,10 +106,15 @@ def _add_rates(params, loops, state, j, f):
     """The angular velocities, the joint coordinates', the elastic hinges' deflections' and
     the modal coordinates' rates += f times row j's response (of w', q'', d'' and eta'') on
     its active bodies (the dependent frames are rebuilt after, _dependent_frames)."""
+    z_save = loop_tables.z_save(loops)
+    nu_save = loop_tables.nu_save(loops)
+    act_ptr = loop_tables.act_ptr(loops)
+    act_idx = loop_tables.act_idx(loops)
+    eta_col = loop_tables.eta_col(loops)
     mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
-    z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
-    for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
-        k = loops.act_idx[q]
+    z, nu = z_save[j + 1], nu_save[j + 1]
+    for q in range(act_ptr[j + 1], act_ptr[j + 2]):
+        k = act_idx[q]
         for i in range(3):
             state.omega[k, i] += f * z[2 * k + 1, 3 + i]
         if hinge_kind[k] == ELASTIC:
@@ -115,7 +123,7 @@ def _add_rates(params, loops, state, j, f):
         for i in range(n_coordinates(hinge_kind[k])):
             state.jqd[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
-            state.eta_d[i] += f * loops.eta_col[j, i]
+            state.eta_d[i] += f * eta_col[j, i]
 
 
 @no_alloc_kernel
@@ -126,6 +134,7 @@ def _keep_rates(params, loops, state, bodies, saved, save):
     follows its parent's) and tree_points' output velocities; saved: ((n, 6, >= 3) per body:
     w, w', pseudo, d', v_out, q'; (n_eta,) eta').  The positions, frames and output points the
     column computes again come out of unchanged values, bit for bit."""
+    v_out = loop_tables.v_out(loops)
     mode_off = model_tables.mode_offset(params)
     rates, modal = saved
     for q in range(bodies.shape[0]):
@@ -136,7 +145,7 @@ def _keep_rates(params, loops, state, bodies, saved, save):
                 rates[k, 1, i] = state.omega_dot[k, i]
                 rates[k, 2, i] = state.pseudo[k, i]
                 rates[k, 3, i] = state.defl_rate[k, i]
-                rates[k, 4, i] = loops.v_out[k, i]
+                rates[k, 4, i] = v_out[k, i]
             for i in range(state.jqd.shape[1]):
                 rates[k, 5, i] = state.jqd[k, i]
             for i in range(mode_off[k], mode_off[k + 1]):
@@ -147,7 +156,7 @@ def _keep_rates(params, loops, state, bodies, saved, save):
                 state.omega_dot[k, i] = rates[k, 1, i]
                 state.pseudo[k, i] = rates[k, 2, i]
                 state.defl_rate[k, i] = rates[k, 3, i]
-                loops.v_out[k, i] = rates[k, 4, i]
+                v_out[k, i] = rates[k, 4, i]
             for i in range(state.jqd.shape[1]):
                 state.jqd[k, i] = rates[k, 5, i]
             for i in range(mode_off[k], mode_off[k + 1]):
@@ -160,10 +169,15 @@ def _move(params, loops, state, j, f, e3, phi):
     move its joint coordinates, elastic deflection and modal coordinates by f times their
     response of q'', d'' and eta'' (the dependent frames are rebuilt after,
     _dependent_frames); e3 (3, 3), phi (3,) scratch."""
+    z_save = loop_tables.z_save(loops)
+    nu_save = loop_tables.nu_save(loops)
+    act_ptr = loop_tables.act_ptr(loops)
+    act_idx = loop_tables.act_idx(loops)
+    eta_col = loop_tables.eta_col(loops)
     mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
-    z, nu = loops.z_save[j + 1], loops.nu_save[j + 1]
-    for q in range(loops.act_ptr[j + 1], loops.act_ptr[j + 2]):
-        k = loops.act_idx[q]
+    z, nu = z_save[j + 1], nu_save[j + 1]
+    for q in range(act_ptr[j + 1], act_ptr[j + 2]):
+        k = act_idx[q]
         if hinge_kind[k] == ELASTIC:
             for i in range(3):
                 state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
@@ -178,29 +192,37 @@ def _move(params, loops, state, j, f, e3, phi):
         for i in range(n_coordinates(hinge_kind[k])):
             state.jq[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
-            state.eta[i] += f * loops.eta_col[j, i]
+            state.eta[i] += f * eta_col[j, i]
 
 
 @no_alloc_kernel(always_inline=True)
 def _residuals(params, loops, state):
     """The rows' positions and rates at the state (loops.g, gd); their largest (|g|, |g'|)."""
+    all_bodies = loop_tables.all_bodies(loops)
+    all_rows = loop_tables.all_rows(loops)
+    kind = loop_tables.kind(loops)
+    law = loop_tables.law(loops)
+    g = loop_tables.g(loops)
+    gd = loop_tables.gd(loops)
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                state.defl, state.defl_rate, loops, loops.all_bodies)
-    row_positions(params, loops, state.rot, state.omega, loops.all_rows)
+                state.defl, state.defl_rate, loops, all_bodies)
+    row_positions(params, loops, state.rot, state.omega, all_rows)
     largest_g, largest_gd = 0.0, 0.0
-    for r in range(loops.kind.shape[0]):
-        if not _is_force(loops.law, r):           # a drive's force constrains nothing
-            largest_g = max(largest_g, abs(loops.g[r]))
-            largest_gd = max(largest_gd, abs(loops.gd[r]))
+    for r in range(kind.shape[0]):
+        if not _is_force(law, r):           # a drive's force constrains nothing
+            largest_g = max(largest_g, abs(g[r]))
+            largest_gd = max(largest_gd, abs(gd[r]))
     return largest_g, largest_gd
 
 
 @kernel
 def _constrained(loops, values):
     """-values with a drive's force's rows 0 (the projection moves nothing for them)."""
+    law = loop_tables.law(loops)
+    kind = loop_tables.kind(loops)
     out = -values
-    for r in range(loops.kind.shape[0]):
-        if _is_force(loops.law, r):
+    for r in range(kind.shape[0]):
+        if _is_force(law, r):
             out[r] = 0.0
     return out
 
@@ -220,23 +242,40 @@ def project_onto_loops(params, loops, state):
     |g| <= POSITION_TOL (at most POSITION_PROJECTIONS times), then V mu = -g' moves the rates,
     twice at most; the dependent frames are rebuilt after each move.  Records the largest
     residuals before and after (loops.stats)."""
-    n_rows = loops.kind.shape[0]
+    delassus = loop_tables.delassus(loops)
+    stats = loop_tables.stats(loops)
+    gd = loop_tables.gd(loops)
+    kind = loop_tables.kind(loops)
+    act_idx = loop_tables.act_idx(loops)
+    colrow_idx = loop_tables.colrow_idx(loops)
+    law = loop_tables.law(loops)
+    band = loop_tables.band(loops)
+    all_bodies = loop_tables.all_bodies(loops)
+    energy = loop_tables.energy(loops)
+    coordinate = loop_tables.coordinate(loops)
+    wrench = loop_tables.wrench(loops)
+    act_ptr = loop_tables.act_ptr(loops)
+    colrow_ptr = loop_tables.colrow_ptr(loops)
+    g = loop_tables.g(loops)
+    target = loop_tables.target(loops)
+    owner = loop_tables.owner(loops)
+    n_rows = kind.shape[0]
     e3 = np.empty((3, 3))
     phi = np.empty(3)
     work = np.empty(60)
     _modal_responses(params, loops, state.eta_map)
     g0, gd0 = _residuals(params, loops, state)
-    loops.stats[0] = max(loops.stats[0], g0)
-    loops.stats[1] = max(loops.stats[1], gd0)
+    stats[0] = max(stats[0], g0)
+    stats[1] = max(stats[1], gd0)
     # V, column by column, over each row's active bodies and the rows they carry
-    base = loops.gd.copy()
-    v = loops.delassus
+    base = gd.copy()
+    v = delassus
     _clear_rows_matrix(loops, v)
     saved = (np.empty((state.omega.shape[0], 6, max(3, state.jqd.shape[1]))),
              np.empty(state.eta_d.shape[0]))
     for j in range(n_rows):
-        bodies = loops.act_idx[loops.act_ptr[j + 1]:loops.act_ptr[j + 2]]
-        rows = loops.colrow_idx[loops.colrow_ptr[j]:loops.colrow_ptr[j + 1]]
+        bodies = act_idx[act_ptr[j + 1]:act_ptr[j + 2]]
+        rows = colrow_idx[colrow_ptr[j]:colrow_ptr[j + 1]]
         _keep_rates(params, loops, state, bodies, saved, True)
         _add_rates(params, loops, state, j, 1.0)
         _dependent_frames(params, loops, state, bodies, work)
@@ -244,46 +283,46 @@ def project_onto_loops(params, loops, state):
                     state.eta_d, state.defl, state.defl_rate, loops, bodies)
         row_positions(params, loops, state.rot, state.omega, rows)
         for q in range(rows.shape[0]):
-            v[rows[q], j] = loops.gd[rows[q]] - base[rows[q]]
+            v[rows[q], j] = gd[rows[q]] - base[rows[q]]
         _keep_rates(params, loops, state, bodies, saved, False)
-    put1(loops.gd, base)
+    put1(gd, base)
     for r in range(n_rows):             # a drive's force's row: mu_r = 0
-        if _is_force(loops.law, r):
+        if _is_force(law, r):
             v[r, :] = 0.0
             v[:, r] = 0.0
             v[r, r] = 1.0
-    banded = loops.band[0] >= 0
+    banded = band[0] >= 0
     piv = np.empty(n_rows, dtype=np.int64)
     if banded:
-        _band_factor(v, loops.band[0], loops.band[1], piv)
+        _band_factor(v, band[0], band[1], piv)
     u, sv, vt = np.linalg.svd(np.eye(1) if banded else v)
     largest = g0
     for _ in range(POSITION_PROJECTIONS):
         if largest <= POSITION_TOL:
             break
-        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, _constrained(loops, loops.g))
-              if banded else _least_apply(u, sv, vt, _constrained(loops, loops.g)))
+        mu = (_band_apply(v, band[0], band[1], piv, _constrained(loops, g))
+              if banded else _least_apply(u, sv, vt, _constrained(loops, g)))
         for j in range(n_rows):
             _move(params, loops, state, j, mu[j], e3, phi)
-        _dependent_frames(params, loops, state, loops.all_bodies, work)
+        _dependent_frames(params, loops, state, all_bodies, work)
         largest, _ = _residuals(params, loops, state)
-    loops.stats[3] = max(loops.stats[3], largest)
+    stats[3] = max(stats[3], largest)
     rates = 0.0
     for _ in range(2):
         _, rates = _residuals(params, loops, state)
         if rates <= RATE_TOL:
             break
-        mu = (_band_apply(v, loops.band[0], loops.band[1], piv, _constrained(loops, loops.gd))
-              if banded else _least_apply(u, sv, vt, _constrained(loops, loops.gd)))
+        mu = (_band_apply(v, band[0], band[1], piv, _constrained(loops, gd))
+              if banded else _least_apply(u, sv, vt, _constrained(loops, gd)))
         for j in range(n_rows):
             _add_rates(params, loops, state, j, mu[j])
-        _dependent_frames(params, loops, state, loops.all_bodies, work)
+        _dependent_frames(params, loops, state, all_bodies, work)
         _, rates = _residuals(params, loops, state)
-    loops.stats[2] = max(loops.stats[2], rates)
+    stats[2] = max(stats[2], rates)
     for r in range(n_rows):             # the driven coordinates' rates (the drives' power)
-        if loops.coordinate[r] >= 0:
-            loops.wrench[loops.owner[r], 8 + loops.coordinate[r]] = loops.gd[r] + loops.target[r, 1]
-    if loops.energy[0] > 0.0:
+        if coordinate[r] >= 0:
+            wrench[owner[r], 8 + coordinate[r]] = gd[r] + target[r, 1]
+    if energy[0] > 0.0:
         _hold_energy(params, loops, state)
 
 
@@ -292,8 +331,11 @@ def _mechanical_energy(params, loops, state):
     """(T, V) of a model of rigid bodies (docs/loops.md, "The energy held"): every body's
     1/2 m |v_C|^2 + 1/2 (A^T w) . J_C (A^T w) and -m g . r_C, its mass centre from its output
     point (tree_points), r_C = r_O + A (l_IC - l_IO), v_C = v_O + w x A (l_IC - l_IO)."""
+    all_bodies = loop_tables.all_bodies(loops)
+    r_out = loop_tables.r_out(loops)
+    v_out = loop_tables.v_out(loops)
     tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                state.defl, state.defl_rate, loops, loops.all_bodies)
+                state.defl, state.defl_rate, loops, all_bodies)
     bp = model_tables.body_params(params)
     inertia = model_tables.mass_center_inertia(params)
     g, body_row = model_tables.gravity(params), model_tables.body_row(params)
@@ -304,8 +346,8 @@ def _mechanical_energy(params, loops, state):
         w = _v3(state.omega, k)
         arm = t_mv(rot_k, (bp[row, 1] - bp[row, 4], bp[row, 2] - bp[row, 5],
                            bp[row, 3] - bp[row, 6]))
-        r_c = _add(_v3(loops.r_out, k), arm)
-        v_c = _add(_v3(loops.v_out, k), t_cross(w, arm))
+        r_c = _add(_v3(r_out, k), arm)
+        v_c = _add(_v3(v_out, k), t_cross(w, arm))
         w_b = (rot_k[0] * w[0] + rot_k[3] * w[1] + rot_k[6] * w[2],     # A^T w
                rot_k[1] * w[0] + rot_k[4] * w[1] + rot_k[7] * w[2],
                rot_k[2] * w[0] + rot_k[5] * w[1] + rot_k[8] * w[2])
@@ -333,14 +375,15 @@ def _hold_energy(params, loops, state):
     the rows' rates are linear in them (a fixed ground, no driven rows), so the rates stay on
     the loops; the scaling is the least change of the rates, in the kinetic metric, that holds
     E.  Skipped where it would change them by more than ENERGY_STEP_LIMIT (T near 0)."""
+    energy = loop_tables.energy(loops)
     kinetic, potential = _mechanical_energy(params, loops, state)
-    want = loops.energy[1] - potential
+    want = energy[1] - potential
     if not (kinetic > 0.0 and want > 0.0):
         return
     s = np.sqrt(want / kinetic)
     if abs(s - 1.0) > ENERGY_STEP_LIMIT:
         return
-    loops.energy[2] = max(loops.energy[2], abs(s - 1.0))
+    energy[2] = max(energy[2], abs(s - 1.0))
     hinge_kind = model_tables.hinge_kind(params)
     for k in range(hinge_kind.shape[0]):
         for i in range(3):

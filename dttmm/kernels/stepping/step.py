@@ -24,7 +24,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, allocating_kernel, kernel, loop_piece, model_tables
+from .. import CONTRACT, allocating_kernel, kernel, loop_piece, loop_tables, model_tables
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
@@ -379,6 +379,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
+    all_bodies = loop_tables.all_bodies(loops)
+    kind = loop_tables.kind(loops)
     g_acc, g_rot, g_w, g_wd = ground
     rot, omega = state.rot, state.omega
     hinge_kind, hinge_params = model_tables.hinge_kind(params), model_tables.hinge_params(params)
@@ -422,9 +424,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     root_f = np.empty(6)
     put1(root_f[0:3], g_acc)
     put1(root_f[3:6], g_wd)
-    if loops.kind.shape[0] > 0:
+    if kind.shape[0] > 0:
         tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
-                    state.defl, state.defl_rate, loops, loops.all_bodies)
+                    state.defl, state.defl_rate, loops, all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
     else:
         status = solve_step(settings.mode, model_tables.tip_pinned(params), parent, sweep,
@@ -595,11 +597,12 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
-    if loops.kind.shape[0] > 0:  # closing joints: held at acceleration level
-        put2(loops.target, target)
+    if loop_tables.kind(loops).shape[0] > 0:  # closing joints: held at acceleration level
+        put2(loop_tables.target(loops), target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
-        loops.step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
-        loops.step_coef[1] = c3 / c1
+        step_coef = loop_tables.step_coef(loops)
+        step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
+        step_coef[1] = c3 / c1
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
         # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
         # hinges' deflections likewise from their stations' guess, as _update)
@@ -614,7 +617,7 @@ def _iterate(loop, run, s, it):
                     defl_g[k, i] = d[i]
                     defl_rate_g[k, i] = c3 * d[i] + w3d[k, i]
         tree_points(params, guess.rot, guess.w, joints_[2], joints_[3], eta_g,
-                    eta_d_g, defl_g, defl_rate_g, loops, loops.all_bodies)
+                    eta_d_g, defl_g, defl_rate_g, loops, loop_tables.all_bodies(loops))
         status = solve_with_loops(params, sweep, root_f, loops, guess.rot,
                                   guess.w, z)
     else:
@@ -755,8 +758,8 @@ def _update(loop, run, s, _):
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    if loops.kind.shape[0] > 0:    # back onto the loops (closure.py)
-        put2(loops.target, target)
+    if loop_tables.kind(loops).shape[0] > 0:    # back onto the loops (closure.py)
+        put2(loop_tables.target(loops), target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         project_onto_loops(params, loops, state)
     return finite
@@ -767,8 +770,8 @@ def _record(loop, run, s, slot):
     """Write the state into run.rec at slot (every field read first, as in _predict)."""
     state, rec = run.state, run.rec
     histories = loop.histories
-    n_closing, wrench, closure_wrench = (loop.loops.kind.shape[0], loop.loops.wrench,
-                                         rec.closure_wrench)
+    n_closing, wrench, closure_wrench = (loop_tables.kind(loop.loops).shape[0],
+                                         loop_tables.wrench(loop.loops), rec.closure_wrench)
     put3(rec.rot[slot], state.rot)
     put2(rec.omega[slot], state.omega)
     put2(rec.omega_dot[slot], state.omega_dot)
