@@ -10,7 +10,7 @@ from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, Str
                    build_chain)
 from dttmm.solving import run_tables
 from dttmm.model.chains import arm, unit_link
-from dttmm.kernels import loop_tables, model_tables, schema
+from dttmm.kernels import loop_tables, model_tables, schema, state_tables, sweep_tables
 from dttmm.kernels.schema import LOOP_LAYOUT, LOOPS, MODEL, SIZES, pack, unpack
 from dttmm.model.mechanisms import n_four_bar
 
@@ -134,3 +134,30 @@ def test_the_loops_tables_read_back_by_name_in_python_and_in_kernels():
     assert not np.shares_memory(loops.real, other.real) and (other.stats == 0.0).all()
     with pytest.raises(AttributeError):
         loops.mass
+
+
+@pytest.mark.parametrize("fused", [False, True])
+def test_the_state_and_the_sweep_read_back_by_name_in_python_and_in_kernels(fused):
+    """A run's state and the assembly's scratch (run_tables.Workspace) packed flat: every
+    table reads back from the kernels' accessors as Python reads it by name, a view of the
+    buffers, with the model's initial rotations and rates in it; where a fused loop runs, the
+    per-body tables only the general loop reads have no rows."""
+    model = arm(drive="pd", flexible=True) if not fused else build_chain(
+        [BallJoint(), unit_link(), BallJoint(), unit_link()])
+    km = run_tables.kernel_model(model)[0]
+    ws = run_tables.Workspace(km, fused=fused)
+    n = km.n_bodies
+    for layout, flat, accessors in ((schema.STATE_LAYOUT, ws.state, state_tables),
+                                    (schema.SWEEP_LAYOUT, ws.sweep, sweep_tables)):
+        tables = layout.unpack(flat)
+        for field in layout.fields:
+            got = _reader(getattr(accessors, field.name))(flat)
+            np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+            assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
+            if np.size(got):
+                buffer = flat.real if field.buffer == schema.REAL else flat.int
+                assert np.shares_memory(got, buffer), field.name
+    np.testing.assert_array_equal(ws.state.rot, km.initial_rotation)
+    np.testing.assert_array_equal(ws.state.omega, km.initial_angular_velocity)
+    assert ws.state.z.shape == (2 * n + 1, 12) and ws.sweep.red_aq.shape == (n + 1, 6)
+    assert ws.state.jq.shape[0] == ws.sweep.u.shape[0] // 2 == (0 if fused else n)

@@ -159,21 +159,21 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         simulate(odd_hinge, 0.01, 1e-3)
     # the kernels, bypassing the check: the consistent start reports the element, alone
     # (statics, linear models) and as one pass of the general loop's skeleton (a run's)
-    from dttmm.kernels.stepping import step as kstep
+    from dttmm.kernels.assembly import solve as ksolve
     from dttmm.kernels.stepping.loop import Monitor, Settings
     from dttmm.solving.run_tables import Workspace, kernel_params
     from dttmm.solving.consistent_start import _consistent_start
     for odd, element in ((odd_body, "body 'body1' \\(kind 7\\)"),
                          (odd_hinge, "hinge 'FixedHinge1' \\(kind 9\\)")):
         ws = Workspace(odd)
-        settings = Settings(kstep.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
+        settings = Settings(ksolve.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
                             1, np.inf, False, False)
         monitor = Monitor(np.zeros((2, 3)), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 3)),
                           np.zeros(2))
         for in_skeleton in (False, True):
             with pytest.raises(ValueError,
                                match=f"consistent start does not support {element}"):
-                _consistent_start(odd, kstep.RICCATI_FULL, "riccati", None, kernel_params(odd),
+                _consistent_start(odd, ksolve.RICCATI_FULL, "riccati", None, kernel_params(odd),
                                   settings, ws.state, ws.sweep, monitor, 1e-3,
                                   in_skeleton=in_skeleton)
 

@@ -1,20 +1,20 @@
-"""The flat model's and the flat loops' schemas: every table the kernels read from a model, and
-the closing joints' tables and scratch a run writes, in the shape of MuJoCo's mjModel and
-mjData (docs/flat_model.md).
+"""The flat structures' schemas: every table the kernels read from a model (MODEL), and the
+closing joints' tables and scratch (LOOPS), the state (STATE) and the assembly's scratch (SWEEP)
+a run writes, in the shape of MuJoCo's mjModel and mjData (docs/flat_model.md).
 
 A layout's tables sit in two flat buffers, `real` (float64) and `int` (int64), one after
 another in the order its fields list them; `start` holds each table's offset in its buffer and
 `size` the layout's sizes (SIZES: bodies, modal rows, rod steps, ...; LOOP_SIZES: rows, closing
-joints, ...), so a table's shape is a few numbers the kernels read at run time, never part of a
-compiled type.  Each field names a table, its buffer and its shape in terms of the sizes (a
-name, "name+1", or a constant).
+joints, ...; STATE_SIZES, SWEEP_SIZES), so a table's shape is a few numbers the kernels read at
+run time, never part of a compiled type.  Each field names a table, its buffer and its shape in
+terms of the sizes (a name, "name+1", or a constant).
 
 The kernels read a table through its accessor, generated from the layout (`Layout.write`;
 tests/test_schema.py fails where it is stale): ``model_tables.body_params(params)`` is the
 (body_rows, BODY_PARAM_SIZE) view of `real` at start[0], ``loop_tables.kind(loops)`` the rows'
 kinds.  Python packs a layout's tables with `Layout.pack` (run_tables.kernel_params,
-run_tables.loop_tables) and reads them by name with `Layout.unpack` and `Layout.table` (a
-FlatLoops reads its tables as attributes: ``loops.stats``).
+run_tables.loop_tables, run_tables.Workspace) and reads them by name with `Layout.unpack` and
+`Layout.table` (a FlatTables reads its tables as attributes: ``loops.stats``, ``state.rot``).
 """
 from collections import namedtuple
 import math
@@ -194,6 +194,87 @@ LOOPS = (
 )
 
 
+# The state a run advances in place (run_tables.Workspace; kernels/stepping/loop.py, "The
+# step"): world frame; the joints' and the elastic hinges' per-body tables have no rows where a
+# fused loop runs (its ball joints have none: a million links' 190 MB).
+STATE_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("joint_bodies", "n, or 0 where a fused loop runs (no joints with coordinates, no elastic "
+                     "hinges, no mass-centre velocities of their own)"),
+    ("stations", "2 n + 1: the ground station, then each body's input and output"),
+    ("modes", "the beams' modal coordinates, flat over the beams (v of a beam, then w)"),
+)
+
+STATE = (
+    Field("rot", REAL, ("bodies", 3, 3), "each body's rotation"),
+    Field("omega", REAL, ("bodies", 3), "angular velocities, rad/s"),
+    Field("omega_dot", REAL, ("bodies", 3), "angular accelerations, rad/s^2"),
+    Field("pseudo", REAL, ("bodies", 3), "the rotation integrator's pseudo-accelerations"),
+    Field("defl", REAL, ("joint_bodies", 3), "the elastic hinges' deflections (a joint's "
+                                             "offset of its body's input point)"),
+    Field("defl_rate", REAL, ("joint_bodies", 3), "their rates"),
+    Field("defl_acc", REAL, ("joint_bodies", 3), "their accelerations"),
+    Field("defl_pseudo", REAL, ("joint_bodies", 3), "their pseudo-accelerations"),
+    Field("z", REAL, ("stations", 12), "the stations' states"),
+    Field("eta", REAL, ("modes",), "the beams' modal coordinates"),
+    Field("eta_d", REAL, ("modes",), "their rates"),
+    Field("eta_acc", REAL, ("modes",), "their accelerations"),
+    Field("eta_p", REAL, ("modes",), "their pseudo-accelerations"),
+    Field("eta_map", REAL, ("modes", 13), "eta'' on the input state"),
+    Field("v_c", REAL, ("joint_bodies", 3), "mass-centre velocities (the energy-momentum "
+                                            "scheme)"),
+    Field("jq", REAL, ("joint_bodies", MAX_COORDINATES), "joint coordinates "
+                                                         "(kernels/transfers/joint.py)"),
+    Field("jqd", REAL, ("joint_bodies", MAX_COORDINATES), "their rates"),
+    Field("jqdd", REAL, ("joint_bodies", MAX_COORDINATES), "their accelerations"),
+    Field("jqp", REAL, ("joint_bodies", MAX_COORDINATES), "their pseudo-accelerations"),
+    Field("jtau", REAL, ("joint_bodies", MAX_COORDINATES), "their generalized forces"),
+)
+
+# The assembly's scratch (run_tables.Workspace): the elements' transfers and the sweeps'
+# recursions.  A fused loop reads the reduced sweep's alone: the full-state sweep's tables
+# have no rows there (about 6.5 KB per body).
+SWEEP_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("full_bodies", "n, or 0 where a fused loop runs"),
+    ("elements", "2 n, or 0 where a fused loop runs: hinge k is element 2k, body k 2k + 1"),
+    ("full_stations", "2 n + 1, or 0 where a fused loop runs"),
+)
+
+SWEEP = (
+    Field("kind", INT, ("elements",), "each element's kind (kernels/assembly/sweep.py)"),
+    Field("u", REAL, ("elements", 12, 13), "each element's transfer"),
+    Field("known_loads", REAL, ("elements", 12), "each element's known loads"),
+    Field("split", INT, ("full_stations",), "the full-state Riccati sweep (sweep.py)"),
+    Field("s", REAL, ("full_stations", 6, 6), "its Riccati matrices"),
+    Field("p", REAL, ("full_stations", 6), "its Riccati vectors"),
+    Field("tinv", REAL, ("elements", 6, 6), "its eliminations"),
+    Field("t", REAL, ("elements", 6), "its eliminated vectors"),
+    Field("g", REAL, ("elements", 6, 3), "its gains"),
+    Field("gv", REAL, ("elements", 6), "its gains' vectors"),
+    Field("red_v", REAL, ("full_bodies", 6, 7), "the reduced sweep's maps"),
+    Field("red_phi", REAL, ("full_bodies", 3, 7), "the reduced sweep's maps"),
+    Field("red_s", REAL, ("bodies+1", 3, 3), "the reduced sweep's Riccati matrices"),
+    Field("red_p", REAL, ("bodies+1", 3), "the reduced sweep's Riccati vectors"),
+    Field("red_tinv", REAL, ("bodies", 3, 3), "the reduced sweep's eliminations"),
+    Field("red_t", REAL, ("bodies", 3), "the reduced sweep's eliminated vectors"),
+    Field("red_aq", REAL, ("bodies+1", 6), "the reduced sweep's stations [a; q]"),
+    Field("dir_z", REAL, ("full_stations", 12, 6), "the direct full-state sweep"),
+    Field("dir_o", REAL, ("full_stations", 12), "the direct full-state sweep"),
+    Field("port_s", REAL, ("full_bodies", 3, 3), "the reduced tree sweep "
+                                                 "(kernels/stepping/tree.py)"),
+    Field("port_p", REAL, ("full_bodies", 3), "the reduced tree sweep"),
+    Field("aq_out", REAL, ("full_bodies", 6), "the reduced tree sweep"),
+    Field("tree_s", REAL, ("full_bodies", 6, 6), "the full-state tree sweep (tree_sweep.py)"),
+    Field("tree_p", REAL, ("full_bodies", 6), "the full-state tree sweep"),
+    Field("joint_dof", INT, ("full_bodies", 3), "its joints' coordinates: FREE / PRESCRIBED / 0 "
+                                                "(kernels/transfers/joint.py)"),
+    Field("joint_tau_nu", REAL, ("full_bodies", 3, 3), "its joints' eliminations"),
+    Field("joint_nu", REAL, ("full_bodies", 3), "its joints' nu"),
+    Field("joint_tau", REAL, ("full_bodies", 3), "its joints' tau"),
+)
+
+
 def axes(shape):
     """[(size name or None, constant, plus)] of a schema shape's axes."""
     dims = []
@@ -235,12 +316,12 @@ class Layout:
     """One flat structure's schema: its sizes, its fields (tables), the class it packs into
     and the module of its kernels' accessors (generated: `write`)."""
 
-    def __init__(self, title, sizes, fields, cls, module):
-        self.title, self.sizes, self.fields, self.cls = title, sizes, fields, cls
+    def __init__(self, title, sizes_name, fields, cls, module):
+        self.title, self.fields, self.cls = title, fields, cls
+        self.sizes_name, self.sizes = sizes_name, globals()[sizes_name]
         self.generated = Path(__file__).with_name(module)
-        self.sizes_name = {id(SIZES): "SIZES", id(LOOP_SIZES): "LOOP_SIZES"}[id(sizes)]
         self._index = {f.name: i for i, f in enumerate(fields)}
-        self._size = size_index(sizes)
+        self._size = size_index(self.sizes)
         self._reads = {f.name: (i, f.buffer, _dims(f.shape, self._size))
                        for i, f in enumerate(fields)}
 
@@ -345,6 +426,10 @@ class FlatTables(FlatModel):
     def __reduce__(self):       # (its buffers alone: a copy's views are of its own buffers)
         return (type(self), tuple(self))
 
+    def tables(self):
+        """{name: table} of every table of its layout."""
+        return {name: getattr(self, name) for name in type(self).layout._index}
+
 
 class FlatLoops(FlatTables):
     """The closing joints' tables and scratch, flat (LOOPS; the kernels read them through
@@ -356,18 +441,30 @@ class FlatLoops(FlatTables):
         return int(self.size[0])
 
 
-MODEL_LAYOUT = Layout("The flat model's tables", SIZES, MODEL, FlatModel, "model_tables.py")
-LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", LOOP_SIZES, LOOPS,
+class FlatState(FlatTables):
+    """The state a run advances, flat (STATE; kernels/state_tables.py)."""
+
+
+class FlatSweep(FlatTables):
+    """The assembly's scratch, flat (SWEEP; kernels/sweep_tables.py)."""
+
+
+MODEL_LAYOUT = Layout("The flat model's tables", "SIZES", MODEL, FlatModel, "model_tables.py")
+LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", "LOOP_SIZES", LOOPS,
                      FlatLoops, "loop_tables.py")
-FlatLoops.layout = LOOP_LAYOUT
-LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT)
+STATE_LAYOUT = Layout("The run's flat state", "STATE_SIZES", STATE, FlatState,
+                      "state_tables.py")
+SWEEP_LAYOUT = Layout("The assembly's flat scratch", "SWEEP_SIZES", SWEEP, FlatSweep,
+                      "sweep_tables.py")
+FlatLoops.layout, FlatState.layout, FlatSweep.layout = LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT
+LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT)
 
 pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 
 
 def write():
-    """(Re)write every layout's accessors (kernels/model_tables.py, kernels/loop_tables.py)
-    after an edit of the schema:
+    """(Re)write every layout's accessors (kernels/model_tables.py, loop_tables.py,
+    state_tables.py, sweep_tables.py) after an edit of the schema:
     ``python -c "from dttmm.kernels import schema; schema.write()"``."""
     for layout in LAYOUTS:
         layout.write()

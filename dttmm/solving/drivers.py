@@ -204,7 +204,7 @@ def fixed_steps(run):
 
         balance = EnergyBalance(plan.user_model, opts.max_energy_error, result_of,
                                 run_tables.beam_tables(plan.user_model))
-        start_values = dict(state._asdict(), **plan.history_values)
+        start_values = dict(state.tables(), **plan.history_values)
         f0, tq0, ll0 = run_inputs._loads(model, [done * dt])
         loaded = plan.loaded
         balance.start({key: start_values[key][None] for key in keys}, f0[:, loaded],

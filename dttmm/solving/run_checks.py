@@ -10,6 +10,7 @@ from ..elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from ..elements.beam import (CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
                              MODES, STIFFENING, TORSION_MODES, end_shapes)
 from ..elements.hinges import (BALL, ELASTIC, FIXED)
+from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.stepping.loop import (ERROR_ESTIMATE, UNCONVERGED)
 from ..kernels.assembly.sweep import DIRECT_TOLERANCE, LOST_ACCURACY
@@ -275,7 +276,7 @@ def _singular_cause(model, mode, status, where):
     """status: j + 1 for element j of the full-state sweeps (2k: hinge k, 2k + 1: body k), or
     k + 1 for body k of the reduced sweeps; past the last element: the tip's equations."""
     j = status - 1
-    reduced = mode in (kstep.RICCATI_REDUCED, kstep.DIRECT_REDUCED, kstep.RICCATI_TREE)
+    reduced = mode in (ksolve.RICCATI_REDUCED, ksolve.DIRECT_REDUCED, ksolve.RICCATI_TREE)
     n_el = model.n_bodies if reduced else 2 * model.n_bodies
     if j >= n_el:
         return f"{where}: the boundary equations at the free tip are singular"

@@ -26,6 +26,7 @@ from . import consistent_start, run_checks, run_inputs, run_tables
 from ..model.loop_rows import has_closure_drives
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER, runs_in_loop
 from ..kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
+from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
 from ..elements.kinds import BODY_KIND
@@ -42,7 +43,7 @@ def runs_fused(model, mode, scheme):
     """Whether a kernel model runs in a fused loop (kernels/stepping/ball_chain.py,
     kernels/stepping/tree.py): rigid bodies and beams between ball joints, Newmark or the high-order
     scheme."""
-    return (run_tables.FUSED_BALL_CHAIN and mode in (kstep.RICCATI_REDUCED, kstep.RICCATI_TREE)
+    return (run_tables.FUSED_BALL_CHAIN and mode in (ksolve.RICCATI_REDUCED, ksolve.RICCATI_TREE)
             and scheme.loop in ("newmark", "runge_kutta") and not model.needs_general_loop
             and all(BODY_KIND[int(c)].fused for c in model.body_kind))
 
@@ -50,7 +51,7 @@ def runs_fused(model, mode, scheme):
 def runs_welded(model, mode, scheme):
     """Whether a kernel model runs in the fused welded-chain loop (kernels/stepping/weld_chain.py):
     a chain of beams welded end to end from the ground (fixed hinges, a free tip), Newmark."""
-    return (run_tables.FUSED_BALL_CHAIN and mode == kstep.RICCATI_FULL and scheme.loop == "newmark"
+    return (run_tables.FUSED_BALL_CHAIN and mode == ksolve.RICCATI_FULL and scheme.loop == "newmark"
             and model.is_chain and not model.tip_pinned and model.n_bodies > 0
             and all(int(c) == run_tables.BEAM for c in model.body_kind)
             and all(int(h) == run_tables.FIXED for h in model.hinge_kind)
@@ -73,7 +74,7 @@ def _kernels_used(model, scheme_name, method, full_state, fused_switch):
     km, _ = run_tables.kernel_model(model)
     mode = run_tables._mode(km, method, full_state)
     if runs_fused(km, mode, scheme):
-        return "ball-tree" if mode == kstep.RICCATI_TREE else "ball-chain"
+        return "ball-tree" if mode == ksolve.RICCATI_TREE else "ball-chain"
     if scheme.loop == "energy_momentum":
         return "energy-momentum"
     if runs_welded(km, mode, scheme):
@@ -118,7 +119,7 @@ class PreparedRun:
                           error=np.zeros(2))
         welded = runs_welded(model, mode, scheme)
         loop = runner = None
-        if fused and mode == kstep.RICCATI_TREE:
+        if fused and mode == ksolve.RICCATI_TREE:
             loop_name, runner = "ball-tree", run_steps
             loop = tree.fused_tree_loop(n, model.parent, model.mode_offsets, dt, coef)
         elif fused:
@@ -141,7 +142,7 @@ class PreparedRun:
         # (they are zero otherwise: _result's zeros, 48 B per body and sample not kept)
         offsets = ["defl", "defl_rate"] if run_tables.has_offsets(model) else []
         keys = ["rot", "omega", "omega_dot", "z"] + offsets + ["eta", "eta_d"]
-        if mode == kstep.RICCATI_JOINTS:
+        if mode == ksolve.RICCATI_JOINTS:
             keys += ["jq", "jqd", "jtau"]
         if loops.rows:
             keys.append("closure_wrench")

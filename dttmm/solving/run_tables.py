@@ -20,10 +20,8 @@ from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH
 from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
 from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
-from ..kernels.stepping import step as kstep
-from ..kernels.schema import LOOP_LAYOUT, pack
-from ..kernels.stepping.loop import (State,
-                                     Sweep)
+from ..kernels.assembly import solve as ksolve
+from ..kernels.schema import LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, pack
 from ..kernels.transfers.beam_relations import (gauss_points, quadrature_size)
 from ..model.loop_rows import constraint_rows
 from .methods import SWEEPS
@@ -60,8 +58,8 @@ class Integrator:
 
 class Workspace:
     """Preallocated state and scratch of one run (nothing here is shared between runs): the
-    state the loops advance (kernels/stepping/loop.py::State) and the assembly's scratch
-    (Sweep).  fused: the run takes a fused ball-chain or ball-tree loop,
+    state the loops advance (a FlatState: kernels/schema.py::STATE) and the assembly's scratch
+    (a FlatSweep: SWEEP).  fused: the run takes a fused ball-chain or ball-tree loop,
     which reads the reduced sweep's recursion arrays only (red_s, red_p, red_tinv, red_t,
     red_aq): the full-state sweep's and the general loop's reduced maps (red_v, red_phi) are
     left empty (about 6.5 KB per body: a million bodies' gigabytes)."""
@@ -82,7 +80,7 @@ class Workspace:
                     model.hinge_params[:, RATE_0].copy()) if has_coordinates(model)
                    else (np.zeros((n_joint, MAX_COORDINATES)),
                          np.zeros((n_joint, MAX_COORDINATES))))
-        self.state = State(
+        self.state = STATE_LAYOUT.pack(
             rot=model.initial_rotation.copy(), omega=model.initial_angular_velocity.copy(),
             omega_dot=z3(), pseudo=z3(),    # pseudo: the rotation integrator's pseudo-acceleration
             defl=off3(), defl_rate=off3(), defl_acc=off3(), defl_pseudo=off3(),
@@ -96,7 +94,7 @@ class Workspace:
             # force
             jq=jq, jqd=jqd, jqdd=np.zeros((n_joint, MAX_COORDINATES)),
             jqp=np.zeros((n_joint, MAX_COORDINATES)), jtau=np.zeros((n_joint, MAX_COORDINATES)))
-        self.sweep = Sweep(
+        self.sweep = SWEEP_LAYOUT.pack(
             kind=np.zeros(n_el, dtype=np.int64), u=np.zeros((n_el, 12, 13)),
             known_loads=np.zeros((n_el, 12)), split=np.zeros(n_sst, dtype=np.int64),
             s=np.zeros((n_sst, 6, 6)), p=np.zeros((n_sst, 6)), tinv=np.zeros((n_el, 6, 6)),
@@ -532,12 +530,12 @@ def _mode(model, method, full_state):
         raise ValueError(f"simulate: method must be one of {tuple(SWEEPS)}, got {method!r}")
     reduced = model.all_ball and not full_state
     if full_tree(model, full_state):    # (check_supported has refused the rest)
-        return kstep.RICCATI_JOINTS
+        return ksolve.RICCATI_JOINTS
     if not model.is_chain:
-        return kstep.RICCATI_TREE
+        return ksolve.RICCATI_TREE
     if method == "direct":
-        return kstep.DIRECT_REDUCED if reduced else kstep.DIRECT_FULL
-    return kstep.RICCATI_REDUCED if reduced else kstep.RICCATI_FULL
+        return ksolve.DIRECT_REDUCED if reduced else ksolve.DIRECT_FULL
+    return ksolve.RICCATI_REDUCED if reduced else ksolve.RICCATI_FULL
 
 
 FUSED_BALL_CHAIN = True     # False: every chain through the general loop (tests compare the two)

@@ -284,7 +284,7 @@ class _Configuration:
                                              MAX_COORDINATES)),
                                defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
         self.fused = None
-        if (run_tables.FUSED_BALL_CHAIN and self.mode == run_tables.kstep.RICCATI_REDUCED
+        if (run_tables.FUSED_BALL_CHAIN and self.mode == run_tables.ksolve.RICCATI_REDUCED
                 and not km.needs_general_loop
                 and all(BODY_KIND[int(c)].fused for c in km.body_kind)):
             self.fused = (run_steps,

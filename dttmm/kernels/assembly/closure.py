@@ -35,7 +35,7 @@ fixed or moving ground (set_ground); every joint kind in the tree and closing it
 """
 import numpy as np
 
-from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel
+from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel, sweep_tables
 from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES, ROTATION_A,
                                UNDECLARED_BODY_KIND)
 from ...elements import BEAM, RIGID, ROD
@@ -629,23 +629,32 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
     # literal True or False it is passed)
     step_column, unit_column = n_rows >= 0, n_rows < 0
     sw = sweep
+    element_kind = sweep_tables.kind(sw)
+    u = sweep_tables.u(sw)
+    joint_dof = sweep_tables.joint_dof(sw)
+    joint_tau_nu = sweep_tables.joint_tau_nu(sw)
+    known_loads = sweep_tables.known_loads(sw)
+    s = sweep_tables.s(sw)
+    tree_s = sweep_tables.tree_s(sw)
+    joint_nu = sweep_tables.joint_nu(sw)
+    joint_tau = sweep_tables.joint_tau(sw)
     _row_coefficients(params, loops, rot, w)
     _column_loads(loops)
     parent = model_tables.parent(params)
-    status = sweep_columns(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                           parent, sw.s, sw.tree_s, loops)
+    status = sweep_columns(element_kind, u, joint_dof, joint_tau_nu, known_loads,
+                           parent, s, tree_s, loops)
     if status != 0:
         return status
     work = np.empty((9, 12))
-    status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            parent, root_f, sw.s, p_col[0], k_store[0],
+    status = recover_column(element_kind, u, joint_dof, joint_tau_nu, known_loads,
+                            parent, root_f, s, p_col[0], k_store[0],
                             h_store, free_store, z_save[0], nu_save[0],
                             tau_save[0], step_column, all_bodies, act[0],
                             work)
     for c in range(1, n_rows + 1):
         if status == 0:
-            status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu,
-                                    sw.known_loads, parent, root_f, sw.s, p_col[c],
+            status = recover_column(element_kind, u, joint_dof, joint_tau_nu,
+                                    known_loads, parent, root_f, s, p_col[c],
                                     k_store[c], h_store, free_store,
                                     z_save[c], nu_save[c], tau_save[c],
                                     unit_column,
@@ -671,9 +680,9 @@ def solve_with_loops(params, sweep, root_f, loops, rot, w, z):
                 p_comb[2 * k + 1, i] += f * p_col[c, 2 * k + 1, i]
             for i in range(3):
                 k_comb[k, i] += f * k_store[c, k, i]
-    status = recover_column(sw.kind, sw.u, sw.joint_dof, sw.joint_tau_nu, sw.known_loads,
-                            parent, root_f, sw.s, p_comb, k_comb, h_store,
-                            free_store, z, sw.joint_nu, sw.joint_tau, step_column,
+    status = recover_column(element_kind, u, joint_dof, joint_tau_nu, known_loads,
+                            parent, root_f, s, p_comb, k_comb, h_store,
+                            free_store, z, joint_nu, joint_tau, step_column,
                             all_bodies, act[0], work)
     if status != 0:
         return status

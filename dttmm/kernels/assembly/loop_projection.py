@@ -7,7 +7,8 @@ their parents' moved with them (_dependent_frames), and a rigid model's energy h
 
 import numpy as np
 
-from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel
+from .. import (allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel,
+                state_tables)
 from ...elements import BEAM, RIGID, ROD
 from ...elements.kinds import UNDECLARED_BODY_KIND
 from ...elements.beam import MODES, TORSION_MODES
@@ -36,6 +37,18 @@ def _dependent_frames(params, loops, state, bodies, work):
     (nothing is allocated)."""
     ground_rot = loop_tables.ground_rot(loops)
     ground_motion = loop_tables.ground_motion(loops)
+    pseudo = state_tables.pseudo(state)
+    omega_dot = state_tables.omega_dot(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    jqdd = state_tables.jqdd(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
     scratch = work[0:48]
     rest = work[48:57].reshape((3, 3))
     body_kind = model_tables.body_kind(params)
@@ -52,12 +65,12 @@ def _dependent_frames(params, loops, state, bodies, work):
         if p < 0:
             rot_p, w_p, wd_p = ground_rot, ground_motion[2], ground_motion[3]
         else:
-            rot_p, w_p, wd_p = state.rot[p], state.omega[p], state.omega_dot[p]
+            rot_p, w_p, wd_p = rot[p], omega[p], omega_dot[p]
         hr = hinge_row[k]             # (the joint's row of the shared table)
         if n_coordinates(hk) > 0:
-            joint_frame(hk, hinge_params[hr], rot_p, w_p, wd_p, state.jq[k],
-                        state.jqd[k], state.jqdd[k], state.rot[k], state.omega[k],
-                        state.omega_dot[k], state.defl[k], state.defl_rate[k])
+            joint_frame(hk, hinge_params[hr], rot_p, w_p, wd_p, jq[k],
+                        jqd[k], jqdd[k], rot[k], omega[k],
+                        omega_dot[k], defl[k], defl_rate[k])
         elif hk == FIXED and p >= 0 and not locked[k]:
             for i in range(3):                 # R0, row-major in hinge_params[hr, 0:9]
                 for j in range(3):
@@ -66,28 +79,28 @@ def _dependent_frames(params, loops, state, bodies, work):
             if body_kind[p] == BEAM:
                 m, mt = int(bp[p, MODES]), int(bp[p, TORSION_MODES])
                 end_section_motion(ends[p, :m], ends[p, m:m + mt], rot_p, w_p, wd_p,
-                                   state.eta[i0:i1], state.eta_d[i0:i1], state.eta_acc[i0:i1],
-                                   rest, state.rot[k], state.omega[k], state.omega_dot[k],
+                                   eta[i0:i1], eta_d[i0:i1], eta_acc[i0:i1],
+                                   rest, rot[k], omega[k], omega_dot[k],
                                    scratch)
             elif body_kind[p] == ROD:
                 steps, xi0, phi = rod_tables_of(params, p)[:3]
-                rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, state.eta[i0:i1],
-                              state.eta_d[i0:i1], state.eta_acc[i0:i1], rest, state.rot[k],
-                              state.omega[k], state.omega_dot[k])
+                rod_end_frame(steps, xi0, phi, rot_p, w_p, wd_p, eta[i0:i1],
+                              eta_d[i0:i1], eta_acc[i0:i1], rest, rot[k],
+                              omega[k], omega_dot[k])
             elif body_kind[p] == RIGID:        # A = A_P R0
                 for i in range(3):
                     for j in range(3):
-                        state.rot[k, i, j] = (rot_p[i, 0] * rest[0, j] + rot_p[i, 1] * rest[1, j]
+                        rot[k, i, j] = (rot_p[i, 0] * rest[0, j] + rot_p[i, 1] * rest[1, j]
                                               + rot_p[i, 2] * rest[2, j])
                 for i in range(3):
-                    state.omega[k, i] = w_p[i]
-                    state.omega_dot[k, i] = wd_p[i]
+                    omega[k, i] = w_p[i]
+                    omega_dot[k, i] = wd_p[i]
             else:
                 raise ValueError(UNDECLARED_BODY_KIND)
         else:
             continue
         for i in range(3):
-            state.pseudo[k, i] = state.omega_dot[k, i]
+            pseudo[k, i] = omega_dot[k, i]
 
 
 @no_alloc_kernel
@@ -111,19 +124,23 @@ def _add_rates(params, loops, state, j, f):
     act_ptr = loop_tables.act_ptr(loops)
     act_idx = loop_tables.act_idx(loops)
     eta_col = loop_tables.eta_col(loops)
+    omega = state_tables.omega(state)
+    jqd = state_tables.jqd(state)
+    eta_d = state_tables.eta_d(state)
+    defl_rate = state_tables.defl_rate(state)
     mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
     z, nu = z_save[j + 1], nu_save[j + 1]
     for q in range(act_ptr[j + 1], act_ptr[j + 2]):
         k = act_idx[q]
         for i in range(3):
-            state.omega[k, i] += f * z[2 * k + 1, 3 + i]
+            omega[k, i] += f * z[2 * k + 1, 3 + i]
         if hinge_kind[k] == ELASTIC:
             for i in range(3):
-                state.defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
+                defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(n_coordinates(hinge_kind[k])):
-            state.jqd[k, i] += f * nu[k, i]
+            jqd[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
-            state.eta_d[i] += f * eta_col[j, i]
+            eta_d[i] += f * eta_col[j, i]
 
 
 @no_alloc_kernel
@@ -135,32 +152,38 @@ def _keep_rates(params, loops, state, bodies, saved, save):
     w, w', pseudo, d', v_out, q'; (n_eta,) eta').  The positions, frames and output points the
     column computes again come out of unchanged values, bit for bit."""
     v_out = loop_tables.v_out(loops)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    pseudo = state_tables.pseudo(state)
+    defl_rate = state_tables.defl_rate(state)
+    jqd = state_tables.jqd(state)
+    eta_d = state_tables.eta_d(state)
     mode_off = model_tables.mode_offset(params)
     rates, modal = saved
     for q in range(bodies.shape[0]):
         k = bodies[q]
         if save:
             for i in range(3):
-                rates[k, 0, i] = state.omega[k, i]
-                rates[k, 1, i] = state.omega_dot[k, i]
-                rates[k, 2, i] = state.pseudo[k, i]
-                rates[k, 3, i] = state.defl_rate[k, i]
+                rates[k, 0, i] = omega[k, i]
+                rates[k, 1, i] = omega_dot[k, i]
+                rates[k, 2, i] = pseudo[k, i]
+                rates[k, 3, i] = defl_rate[k, i]
                 rates[k, 4, i] = v_out[k, i]
-            for i in range(state.jqd.shape[1]):
-                rates[k, 5, i] = state.jqd[k, i]
+            for i in range(jqd.shape[1]):
+                rates[k, 5, i] = jqd[k, i]
             for i in range(mode_off[k], mode_off[k + 1]):
-                modal[i] = state.eta_d[i]
+                modal[i] = eta_d[i]
         else:
             for i in range(3):
-                state.omega[k, i] = rates[k, 0, i]
-                state.omega_dot[k, i] = rates[k, 1, i]
-                state.pseudo[k, i] = rates[k, 2, i]
-                state.defl_rate[k, i] = rates[k, 3, i]
+                omega[k, i] = rates[k, 0, i]
+                omega_dot[k, i] = rates[k, 1, i]
+                pseudo[k, i] = rates[k, 2, i]
+                defl_rate[k, i] = rates[k, 3, i]
                 v_out[k, i] = rates[k, 4, i]
-            for i in range(state.jqd.shape[1]):
-                state.jqd[k, i] = rates[k, 5, i]
+            for i in range(jqd.shape[1]):
+                jqd[k, i] = rates[k, 5, i]
             for i in range(mode_off[k], mode_off[k + 1]):
-                state.eta_d[i] = modal[i]
+                eta_d[i] = modal[i]
 
 
 @no_alloc_kernel
@@ -174,25 +197,29 @@ def _move(params, loops, state, j, f, e3, phi):
     act_ptr = loop_tables.act_ptr(loops)
     act_idx = loop_tables.act_idx(loops)
     eta_col = loop_tables.eta_col(loops)
+    rot = state_tables.rot(state)
+    jq = state_tables.jq(state)
+    eta = state_tables.eta(state)
+    defl = state_tables.defl(state)
     mode_off, hinge_kind = model_tables.mode_offset(params), model_tables.hinge_kind(params)
     z, nu = z_save[j + 1], nu_save[j + 1]
     for q in range(act_ptr[j + 1], act_ptr[j + 2]):
         k = act_idx[q]
         if hinge_kind[k] == ELASTIC:
             for i in range(3):
-                state.defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
+                defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):
             phi[i] = f * z[2 * k + 1, 3 + i]
         expm_so3(phi, e3)
-        rot_k = _m9(state.rot, k)
+        rot_k = _m9(rot, k)
         for a in range(3):
             for b in range(3):
-                state.rot[k, a, b] = (e3[a, 0] * rot_k[b] + e3[a, 1] * rot_k[3 + b]
+                rot[k, a, b] = (e3[a, 0] * rot_k[b] + e3[a, 1] * rot_k[3 + b]
                                       + e3[a, 2] * rot_k[6 + b])
         for i in range(n_coordinates(hinge_kind[k])):
-            state.jq[k, i] += f * nu[k, i]
+            jq[k, i] += f * nu[k, i]
         for i in range(mode_off[k], mode_off[k + 1]):
-            state.eta[i] += f * eta_col[j, i]
+            eta[i] += f * eta_col[j, i]
 
 
 @no_alloc_kernel(always_inline=True)
@@ -204,9 +231,17 @@ def _residuals(params, loops, state):
     law = loop_tables.law(loops)
     g = loop_tables.g(loops)
     gd = loop_tables.gd(loops)
-    tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                state.defl, state.defl_rate, loops, all_bodies)
-    row_positions(params, loops, state.rot, state.omega, all_rows)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    tree_points(params, rot, omega, jq, jqd, eta, eta_d,
+                defl, defl_rate, loops, all_bodies)
+    row_positions(params, loops, rot, omega, all_rows)
     largest_g, largest_gd = 0.0, 0.0
     for r in range(kind.shape[0]):
         if not _is_force(law, r):           # a drive's force constrains nothing
@@ -242,7 +277,7 @@ def project_onto_loops(params, loops, state):
     |g| <= POSITION_TOL (at most POSITION_PROJECTIONS times), then V mu = -g' moves the rates,
     twice at most; the dependent frames are rebuilt after each move.  Records the largest
     residuals before and after (loops.stats)."""
-    delassus = loop_tables.delassus(loops)
+    v = loop_tables.delassus(loops)
     stats = loop_tables.stats(loops)
     gd = loop_tables.gd(loops)
     kind = loop_tables.kind(loops)
@@ -259,29 +294,37 @@ def project_onto_loops(params, loops, state):
     g = loop_tables.g(loops)
     target = loop_tables.target(loops)
     owner = loop_tables.owner(loops)
+    eta_map = state_tables.eta_map(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
     n_rows = kind.shape[0]
     e3 = np.empty((3, 3))
     phi = np.empty(3)
     work = np.empty(60)
-    _modal_responses(params, loops, state.eta_map)
+    _modal_responses(params, loops, eta_map)
     g0, gd0 = _residuals(params, loops, state)
     stats[0] = max(stats[0], g0)
     stats[1] = max(stats[1], gd0)
     # V, column by column, over each row's active bodies and the rows they carry
     base = gd.copy()
-    v = delassus
     _clear_rows_matrix(loops, v)
-    saved = (np.empty((state.omega.shape[0], 6, max(3, state.jqd.shape[1]))),
-             np.empty(state.eta_d.shape[0]))
+    saved = (np.empty((omega.shape[0], 6, max(3, jqd.shape[1]))),
+             np.empty(eta_d.shape[0]))
     for j in range(n_rows):
         bodies = act_idx[act_ptr[j + 1]:act_ptr[j + 2]]
         rows = colrow_idx[colrow_ptr[j]:colrow_ptr[j + 1]]
         _keep_rates(params, loops, state, bodies, saved, True)
         _add_rates(params, loops, state, j, 1.0)
         _dependent_frames(params, loops, state, bodies, work)
-        tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta,
-                    state.eta_d, state.defl, state.defl_rate, loops, bodies)
-        row_positions(params, loops, state.rot, state.omega, rows)
+        tree_points(params, rot, omega, jq, jqd, eta,
+                    eta_d, defl, defl_rate, loops, bodies)
+        row_positions(params, loops, rot, omega, rows)
         for q in range(rows.shape[0]):
             v[rows[q], j] = gd[rows[q]] - base[rows[q]]
         _keep_rates(params, loops, state, bodies, saved, False)
@@ -334,16 +377,24 @@ def _mechanical_energy(params, loops, state):
     all_bodies = loop_tables.all_bodies(loops)
     r_out = loop_tables.r_out(loops)
     v_out = loop_tables.v_out(loops)
-    tree_points(params, state.rot, state.omega, state.jq, state.jqd, state.eta, state.eta_d,
-                state.defl, state.defl_rate, loops, all_bodies)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    tree_points(params, rot, omega, jq, jqd, eta, eta_d,
+                defl, defl_rate, loops, all_bodies)
     bp = model_tables.body_params(params)
     inertia = model_tables.mass_center_inertia(params)
     g, body_row = model_tables.gravity(params), model_tables.body_row(params)
     kinetic, potential = 0.0, 0.0
     for k in range(body_row.shape[0]):
         row = body_row[k]
-        rot_k = _m9(state.rot, k)
-        w = _v3(state.omega, k)
+        rot_k = _m9(rot, k)
+        w = _v3(omega, k)
         arm = t_mv(rot_k, (bp[row, 1] - bp[row, 4], bp[row, 2] - bp[row, 5],
                            bp[row, 3] - bp[row, 6]))
         r_c = _add(_v3(r_out, k), arm)
@@ -376,6 +427,9 @@ def _hold_energy(params, loops, state):
     the loops; the scaling is the least change of the rates, in the kinetic metric, that holds
     E.  Skipped where it would change them by more than ENERGY_STEP_LIMIT (T near 0)."""
     energy = loop_tables.energy(loops)
+    omega = state_tables.omega(state)
+    defl_rate = state_tables.defl_rate(state)
+    jqd = state_tables.jqd(state)
     kinetic, potential = _mechanical_energy(params, loops, state)
     want = energy[1] - potential
     if not (kinetic > 0.0 and want > 0.0):
@@ -387,8 +441,8 @@ def _hold_energy(params, loops, state):
     hinge_kind = model_tables.hinge_kind(params)
     for k in range(hinge_kind.shape[0]):
         for i in range(3):
-            state.omega[k, i] *= s
-            state.defl_rate[k, i] *= s
+            omega[k, i] *= s
+            defl_rate[k, i] *= s
         for i in range(n_coordinates(hinge_kind[k])):
-            state.jqd[k, i] *= s
+            jqd[k, i] *= s
 

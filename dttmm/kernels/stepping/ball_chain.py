@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ...elements import BEAM, RIGID
-from .. import CONTRACT, kernel, loop_piece, model_tables
+from .. import CONTRACT, kernel, loop_piece, model_tables, state_tables, sweep_tables
 from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from ..transfers.body import kappa_values, rigid_point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
@@ -209,19 +209,24 @@ def _predict(loop, run, s, _):
     """phi* of every body by the constant-acceleration predictor, with the integrator's offsets
     of the rotations and the modal coordinates."""
     state = run.state
+    eta = state_tables.eta(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    pseudo = state_tables.pseudo(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    eta_p = state_tables.eta_p(state)
     h, coef = run.settings.h, run.settings.coef
     c1, c3 = loop.coefficients[0], loop.coefficients[1]
     w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
-    omega, omega_dot, pseudo = state.omega, state.omega_dot, state.pseudo
     for k in range(omega.shape[0]):
         _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k], phi_star[k])
-    eta = state.eta
     n_eta = eta.shape[0]
     if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
         w1e, w3e, a1e, eta_dd_star = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[2],
                                       loop.per_mode[3])
         # (eta_dd_star first receives the predicted increment of eta)
-        _offsets_into(h, coef, state.eta_d, state.eta_acc, state.eta_p, a1e, w3e, eta_dd_star)
+        _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
         for i in range(n_eta):
             w1e[i] = a1e[i] - c1 * eta[i]
             w3e[i] -= c3 * eta[i]
@@ -233,6 +238,13 @@ def _iterate(loop, run, s, it):
     """One forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
     (recovery, beams' modal accelerations); returns (status, detail, change)."""
     params, state, inputs, sweep = run.params, run.state, run.inputs, run.sweep
+    eta_map = state_tables.eta_map(state)
+    red_s = sweep_tables.red_s(sweep)
+    red_p = sweep_tables.red_p(sweep)
+    red_tinv = sweep_tables.red_tinv(sweep)
+    red_t = sweep_tables.red_t(sweep)
+    red_aq = sweep_tables.red_aq(sweep)
+    rot_ = state_tables.rot(state)
     c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
                         loop.coefficients[3])
     w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
@@ -242,10 +254,10 @@ def _iterate(loop, run, s, it):
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
     w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
                                          loop.per_mode[4])
-    s_mat, p_vec, t_inv, t_vec, aq = sweep.red_s, sweep.red_p, sweep.red_tinv, sweep.red_t, \
-        sweep.red_aq
+    s_mat, p_vec, t_inv, t_vec, aq = red_s, red_p, red_tinv, red_t, \
+        red_aq
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
-    gravity, rot = model_tables.gravity(params), state.rot
+    gravity, rot = model_tables.gravity(params), rot_
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind = model_tables.body_kind(params)
     beam_params = model_tables.beam_params(params)
@@ -253,7 +265,6 @@ def _iterate(loop, run, s, it):
     mode_off = model_tables.mode_offset(params)
     beam_ends = model_tables.beam_ends(params)
     beam_factors = model_tables.beam_factors(params)
-    eta_map = state.eta_map
     n = rot.shape[0]
     for i in range(3):
         p_vec[0, i] = inputs.g_acc[s, i]
@@ -339,12 +350,18 @@ def _adopt(loop, run, s, it):
 def _update(loop, run, s, _):
     """Rotations and modal coordinates over the step from the solution; every rate finite?"""
     state = run.state
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    pseudo = state_tables.pseudo(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    eta_p = state_tables.eta_p(state)
     h, coef = run.settings.h, run.settings.coef
     c1 = loop.coefficients[0]
     phi_new = loop.per_body[3]
     e3, rot_prev = loop.mats[2], loop.mats[5]
-    rot, omega, omega_dot, pseudo = state.rot, state.omega, state.omega_dot, state.pseudo
-    eta, eta_d = state.eta, state.eta_d
     w1e, a1e, eta_dd_new = loop.per_mode[0], loop.per_mode[2], loop.per_mode[4]
     finite = True
     for k in range(rot.shape[0]):
@@ -362,7 +379,7 @@ def _update(loop, run, s, _):
         eta_new = (eta_dd_new[i] - w1e[i]) / c1
         a1e[i] = eta_new - eta[i]               # (the increment)
         eta[i] = eta_new
-    _advance_history(h, coef, a1e, eta_d, state.eta_acc, state.eta_p)
+    _advance_history(h, coef, a1e, eta_d, eta_acc, eta_p)
     for i in range(n_eta):
         if not np.isfinite(eta_d[i]):
             finite = False
@@ -373,33 +390,40 @@ def _update(loop, run, s, _):
 def record_state(state, rec, slot):
     """The bodies' rotations, angular velocities and accelerations and the modal coordinates
     and rates into the record's slot (every fused loop's _record; its stations apart)."""
-    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
     for k in range(rot.shape[0]):
         for i in range(3):
             rec.omega[slot, k, i] = omega[k, i]
             rec.omega_dot[slot, k, i] = omega_dot[k, i]
             for j in range(3):
                 rec.rot[slot, k, i, j] = rot[k, i, j]
-    for i in range(state.eta.shape[0]):
-        rec.eta[slot, i] = state.eta[i]
-        rec.eta_d[slot, i] = state.eta_d[i]
+    for i in range(eta.shape[0]):
+        rec.eta[slot, i] = eta[i]
+        rec.eta_d[slot, i] = eta_d[i]
 
 
 @loop_piece
 def _record(loop, run, s, slot):
+    red_aq = sweep_tables.red_aq(run.sweep)
     phi_g = loop.vecs[4]
     _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
-    _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, run.rec.z[slot])
+    _write_stations(red_aq, loop.per_body[3], phi_g, run.rec.z[slot])
     record_state(run.state, run.rec, slot)
 
 
 @loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
+    red_aq = sweep_tables.red_aq(run.sweep)
+    z = state_tables.z(run.state)
     if n_steps > 0:
         phi_g = loop.vecs[4]
         _ground_increment(run.inputs.g_rot, n_steps - 1, loop.mats[6], phi_g)
-        _write_stations(run.sweep.red_aq, loop.per_body[3], phi_g, run.state.z)
+        _write_stations(red_aq, loop.per_body[3], phi_g, z)
 
 
 loop_variant(FusedLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,

@@ -17,12 +17,13 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece, model_tables
+from .. import loop_piece, model_tables, state_tables, sweep_tables
 from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from .step import _all_finite, solve_step
+from ..assembly.solve import solve_step
+from .step import _all_finite
 from ..algebra.mat3 import put2, put3
 from ..assembly.sweep import IDENTITY, TRANSFER
 from ..assembly.sweep import BALL as EL_BALL
@@ -46,11 +47,15 @@ def energy_momentum_loop(n):
 def _predict(loop, run, s, _):
     """The guess: phi = h w_n + h^2 w'_n / 2, in b = 2 phi / h^2 units."""
     state, h = run.state, run.settings.h
+    z = state_tables.z(state)
+    rot = state_tables.rot(state)
+    omega_dot = state_tables.omega_dot(state)
+    omega = state_tables.omega(state)
     z_star = loop.z_star
-    put2(z_star, state.z)
-    for k in range(state.rot.shape[0]):
+    put2(z_star, z)
+    for k in range(rot.shape[0]):
         for i in range(3):
-            b = (2.0 / h) * state.omega[k, i] + state.omega_dot[k, i]
+            b = (2.0 / h) * omega[k, i] + omega_dot[k, i]
             z_star[2 * k + 1, 3 + i] = b
             z_star[2 * k + 2, 3 + i] = b
 
@@ -60,14 +65,19 @@ def _iterate(loop, run, s, it):
     """Every element's step transfer about the guess, the sweep; returns (status, detail,
     change) with change the largest update of a rotation increment (rad)."""
     params, state, sweep = run.params, run.state, run.sweep
+    kind = sweep_tables.kind(sweep)
+    u = sweep_tables.u(sweep)
+    z_ = state_tables.z(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    v_c = state_tables.v_c(state)
     h = run.settings.h
     s_half = 0.5 * h * h
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     hinge_kind, body_kind = model_tables.hinge_kind(params), model_tables.body_kind(params)
     gravity, inertia = model_tables.gravity(params), model_tables.mass_center_inertia(params)
-    kind, u = sweep.kind, sweep.u
-    z, z_star = state.z, loop.z_star
-    n = state.rot.shape[0]
+    z, z_star = z_, loop.z_star
+    n = rot.shape[0]
     for k in range(n):
         if hinge_kind[k] == BALL:
             kind[2 * k] = EL_BALL
@@ -82,8 +92,8 @@ def _iterate(loop, run, s, it):
         load = loop.load
         for i in range(3):
             load[i] = body_params[row, 0] * gravity[i] + run.inputs.force[s, k, i]
-        rigid_body_transfer_em(body_params[row], inertia[row], state.rot[k],
-                               state.omega[k], state.v_c[k], h, z_star[2 * k + 1], load,
+        rigid_body_transfer_em(body_params[row], inertia[row], rot[k],
+                               omega[k], v_c[k], h, z_star[2 * k + 1], load,
                                run.inputs.torque[s, k], u[2 * k + 1])
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
@@ -100,20 +110,25 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _adopt(loop, run, s, it):
-    put2(loop.z_star, run.state.z)
+    z = state_tables.z(run.state)
+    put2(loop.z_star, z)
 
 
 @loop_piece
 def _update(loop, run, s, _):
     """Rotations, angular velocities and mass-centre velocities over the step."""
     state, h = run.state, run.settings.h
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    v_c = state_tables.v_c(state)
+    z = state_tables.z(state)
+    omega_dot = state_tables.omega_dot(state)
     s_half = 0.5 * h * h
-    rot, omega, v_c = state.rot, state.omega, state.v_c
     rot_new, omega_new = loop.rot_new, loop.omega_new
     body_params, body_row = model_tables.body_params(run.params), model_tables.body_row(run.params)
     finite = True
     for k in range(rot.shape[0]):
-        zi = state.z[2 * k + 1]
+        zi = z[2 * k + 1]
         em_body_kinematics(rot[k], omega[k], zi[3:6], h, rot_new, omega_new)
         # v_C,n+1 = 2 dx_C / h - v_C,n,  dx_C = dx_I + A_{n+1} l_IC - A_n l_IC
         l_ic = body_params[body_row[k], 1:4]
@@ -122,7 +137,7 @@ def _update(loop, run, s, _):
             before = rot[k, i, 0] * l_ic[0] + rot[k, i, 1] * l_ic[1] + rot[k, i, 2] * l_ic[2]
             dx_c = s_half * zi[i] + now - before
             v_c[k, i] = (2.0 / h) * dx_c - v_c[k, i]
-            state.omega_dot[k, i] = (omega_new[i] - omega[k, i]) / h
+            omega_dot[k, i] = (omega_new[i] - omega[k, i]) / h
             omega[k, i] = omega_new[i]
             for j in range(3):
                 rot[k, i, j] = rot_new[i, j]
@@ -135,11 +150,16 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
-    put3(rec.rot[slot], state.rot)
-    put2(rec.omega[slot], state.omega)
-    put2(rec.omega_dot[slot], state.omega_dot)
-    put2(rec.v_c[slot], state.v_c)
-    put2(rec.z[slot], state.z)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    v_c = state_tables.v_c(state)
+    z = state_tables.z(state)
+    put3(rec.rot[slot], rot)
+    put2(rec.omega[slot], omega)
+    put2(rec.omega_dot[slot], omega_dot)
+    put2(rec.v_c[slot], v_c)
+    put2(rec.z[slot], z)
 
 
 @loop_piece

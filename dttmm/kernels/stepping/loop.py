@@ -6,8 +6,10 @@ positional arrays:
   params    the frozen model's tables as one flat model (kernels/schema.py::FlatModel: two
             buffers, their offsets and sizes; read by name through kernels/model_tables.py)
   Settings  the run's integrator and Newton settings
-  State     the preallocated state the loop advances in place
-  Sweep     the assembly's scratch (element transfers, Riccati and direct sweeps)
+  state     the preallocated state the loop advances in place, flat (kernels/schema.py::STATE,
+            a FlatState: read by name through kernels/state_tables.py)
+  sweep     the assembly's scratch (element transfers, Riccati and direct sweeps), flat
+            (kernels/schema.py::SWEEP, a FlatSweep: kernels/sweep_tables.py)
   Inputs    one chunk's prescribed data (ground motion, applied loads), step by step
   Record    where one chunk's samples are written
   Monitor   the step's local error estimate (docs/solver.md, "Runs that cannot go wrong")
@@ -27,7 +29,7 @@ from types import FunctionType
 from numba import njit
 from numba._dispatcher import compute_fingerprint
 
-from .. import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, no_alloc_kernel, state_tables
 from ..algebra.mat3 import put1, put2
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
@@ -44,29 +46,6 @@ Settings = namedtuple("Settings", [
     "stop_unconverged",  # stop (UNCONVERGED) at a step whose Newton iterations do not converge
     "start",            # the consistent start instead of steps: the fused variants' one linear
                         # sweep at acceleration level (kernels/stepping/ball_chain.py::start_loop)
-])
-
-State = namedtuple("State", [
-    "rot", "omega", "omega_dot", "pseudo",          # (n, 3, 3), (n, 3) x 3: world frame
-    "defl", "defl_rate", "defl_acc", "defl_pseudo",  # (n, 3) elastic hinges' deflections
-    "z",                                            # (2n + 1, 12) the stations' states
-    "eta", "eta_d", "eta_acc", "eta_p",             # (total modes,) the beams' coordinates
-    "eta_map",                                      # (total modes, 13) eta'' on the input state
-    "v_c",                                          # (n, 3) mass-centre velocities (EM scheme)
-    "jq", "jqd", "jqdd", "jqp",                     # (n, 3) joint coordinates, rates,
-                                                    # accelerations, pseudo-accelerations
-    "jtau",                                         # (n, 3) their generalized forces
-])
-
-Sweep = namedtuple("Sweep", [
-    "kind", "u", "known_loads",                      # the elements and their transfers
-    "split", "s", "p", "tinv", "t", "g", "gv",       # full-state Riccati sweep (sweep.py)
-    "red_v", "red_phi", "red_s", "red_p", "red_tinv", "red_t", "red_aq",   # reduced sweeps
-    "dir_z", "dir_o",                                # direct full-state sweep
-    "port_s", "port_p", "aq_out",                    # reduced tree sweep (kernels/stepping/tree.py)
-    "tree_s", "tree_p",                              # full-state tree sweep (tree_sweep.py)
-    "joint_dof", "joint_tau_nu", "joint_nu", "joint_tau",   # its joints
-    #                                                         (kernels/transfers/joint.py)
 ])
 
 Inputs = namedtuple("Inputs", [
@@ -187,12 +166,15 @@ def _run_steps(loop, run, out_info):
     in a stack slot of its whole type, which LLVM splits up again at every read
     (docs/solver.md, "Compile time", item 6); `run` goes on whole to the pieces only."""
     settings, state, monitor = run.settings, run.state, run.monitor
+    pseudo = state_tables.pseudo(state)
+    eta_p = state_tables.eta_p(state)
+    jqp = state_tables.jqp(state)
+    defl_pseudo = state_tables.defl_pseudo(state)
     n_steps = run.inputs.force.shape[0]
     newton_max, newton_tol = settings.newton_max, settings.newton_tol
     start, h, beta = settings.start, settings.h, settings.coef[0]
     max_step_error, record_every = settings.max_step_error, settings.record_every
     stop_unconverged = settings.stop_unconverged
-    pseudo, eta_p, jqp, defl_pseudo = state.pseudo, state.eta_p, state.jqp, state.defl_pseudo
     kept, error_so_far = (monitor.pseudo, monitor.eta_p, monitor.jqp,
                           monitor.defl_pseudo), monitor.error
     max_iter = 0

@@ -21,7 +21,7 @@ from types import FunctionType
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, no_alloc_kernel
+from .. import CONTRACT, no_alloc_kernel, state_tables, sweep_tables
 from .ball_chain import record_state
 from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
 from ..algebra.mat3 import mm3_into
@@ -88,25 +88,32 @@ def _derivative(loop, run, info, rk, y, out):
     coordinates), its accelerations (state.omega_dot, state.eta_acc) and its stations
     (state.z); False where the sweep fails (info[0] says why)."""
     state, sweep = run.state, run.sweep
-    n, m = state.rot.shape[0], state.eta.shape[0]
+    red_aq = sweep_tables.red_aq(sweep)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    n, m = rot.shape[0], eta.shape[0]
     rot0, e3 = rk.rot0, rk.e3[0]
     w1, w3, phi_star, accel = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
         loop.per_body[3]
     for k in range(n):
         expm_so3(y[3 * k:3 * k + 3], e3)
-        mm3_into(e3, rot0[k], state.rot[k])
+        mm3_into(e3, rot0[k], rot[k])
         for i in range(3):
-            state.omega[k, i] = y[3 * n + 3 * k + i]
+            omega[k, i] = y[3 * n + 3 * k + i]
             w1[k, i] = 0.0                      # (ball_chain.start_loop)
-            w3[k, i] = state.omega[k, i]
+            w3[k, i] = omega[k, i]
             phi_star[k, i] = 0.0
     for i in range(m):
-        state.eta[i] = y[6 * n + i]
-        state.eta_d[i] = y[6 * n + m + i]
-        loop.per_mode[0, i] = -state.eta[i]
-        loop.per_mode[1, i] = state.eta_d[i]
+        eta[i] = y[6 * n + i]
+        eta_d[i] = y[6 * n + m + i]
+        loop.per_mode[0, i] = -eta[i]
+        loop.per_mode[1, i] = eta_d[i]
         loop.per_mode[3, i] = 0.0
-    sweep.red_aq[:, :] = 0.0
+    red_aq[:, :] = 0.0
     # the skeleton's consistent-start pass (loop.py::_run_steps with settings.start): one
     # iterate, then finish writes the stations; the variant's pieces are bound by _integrator
     status, detail, _ = iterate(loop, run, 0, 0)        # noqa: F821
@@ -116,13 +123,13 @@ def _derivative(loop, run, info, rk, y, out):
     finish(loop, run, 1, 0)                             # noqa: F821
     info[0] = OK
     for k in range(n):
-        dexp_inverse(y[3 * k:3 * k + 3], state.omega[k], out, 3 * k)
+        dexp_inverse(y[3 * k:3 * k + 3], omega[k], out, 3 * k)
         for i in range(3):
-            state.omega_dot[k, i] = accel[k, i]
+            omega_dot[k, i] = accel[k, i]
             out[3 * n + 3 * k + i] = accel[k, i]
     for i in range(m):
-        state.eta_acc[i] = loop.per_mode[4, i]
-        out[6 * n + i] = state.eta_d[i]
+        eta_acc[i] = loop.per_mode[4, i]
+        out[6 * n + i] = eta_d[i]
         out[6 * n + m + i] = loop.per_mode[4, i]
     return True
 
@@ -142,17 +149,21 @@ def _start(loop, run, info, rk, rtol, atol, first_step, t_end):
     where given (> 0), else Hairer-Norsett-Wanner's choice from the derivative's size
     (II.4, scipy's select_initial_step).  False where the sweep fails."""
     state = run.state
-    n, m = state.rot.shape[0], state.eta.shape[0]
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    n, m = rot.shape[0], eta.shape[0]
     y, f, rot0 = rk.y, rk.f, rk.rot0
     for k in range(n):
         for i in range(3):
             y[3 * k + i] = 0.0
-            y[3 * n + 3 * k + i] = state.omega[k, i]
+            y[3 * n + 3 * k + i] = omega[k, i]
             for j in range(3):
-                rot0[k, i, j] = state.rot[k, i, j]
+                rot0[k, i, j] = rot[k, i, j]
     for i in range(m):
-        y[6 * n + i] = state.eta[i]
-        y[6 * n + m + i] = state.eta_d[i]
+        y[6 * n + i] = eta[i]
+        y[6 * n + m + i] = eta_d[i]
     if not _derivative(loop, run, info, rk, y, f):
         return False
     h = first_step
@@ -198,7 +209,9 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
     error estimate; its last step lands on the chunk's end)."""
     a, b, _, e3_w, e5_w, d = rk.tables     # (the nodes c unread: the models it runs have no
     state = run.state                       # time-dependent input, _check_runge_kutta)
-    n = state.rot.shape[0]
+    rot = state_tables.rot(state)
+    z = state_tables.z(state)
+    n = rot.shape[0]
     size = rk.y.shape[0]
     y, f, y_new, y_stage, kk, dense = rk.y, rk.f, rk.y_new, rk.y_stage, rk.k, rk.dense
     control = rk.control
@@ -293,9 +306,9 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
                     info[1], info[2], info[3] = int(control[2]), info[0], n_rec
                     return
                 record_state(state, rec, n_rec)
-                for st in range(state.z.shape[0]):
+                for st in range(z.shape[0]):
                     for i in range(12):
-                        rec.z[n_rec, st, i] = state.z[st, i]
+                        rec.z[n_rec, st, i] = z[st, i]
                 sample_steps[n_rec] = int(control[2]) + 1
                 n_rec += 1
         # recentre: R0 <- exp(theta^) R0, theta <- 0; the next step's first stage is this

@@ -24,7 +24,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, allocating_kernel, kernel, loop_piece, loop_tables, model_tables
+from .. import (CONTRACT, allocating_kernel, kernel, loop_piece, loop_tables, model_tables,
+                state_tables, sweep_tables)
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED
@@ -45,13 +46,11 @@ from .generalized_alpha import (_advance_body, _advance_deflection, _advance_joi
                                 _welded_guess)
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..algebra.mat3 import dot, inv3, put1, put2, put3
-from ..assembly.sweep import (IDENTITY, LOCKED, TRANSFER, direct_full, direct_reduced,
-                              fold_ball_body, riccati_full, riccati_reduced)
-from ..assembly.tree_sweep import riccati_tree_full, riccati_tree_reduced, write_tree_stations
+from ..assembly.sweep import IDENTITY, LOCKED, TRANSFER
+from ..assembly.solve import RICCATI_FULL, RICCATI_JOINTS, solve_step
 from ..assembly.sweep import BALL as EL_BALL
 from ..assembly.sweep import JOINT as EL_JOINT
 
-RICCATI_FULL, RICCATI_REDUCED, DIRECT_REDUCED, DIRECT_FULL, RICCATI_TREE, RICCATI_JOINTS = range(6)
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -84,9 +83,6 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
         u[3 + i, 12] += wd_out[i] - (dwd_out[i, 0] * phi_out[0] + dwd_out[i, 1] * phi_out[1]
                                      + dwd_out[i, 2] * phi_out[2])
 
-
-# a sweep mode no sweep implements (the solver's mistake, never the user's)
-_UNKNOWN_SWEEP = "unknown sweep mode (kernels/assembly/sweep.py)"
 
 
 @kernel
@@ -179,6 +175,10 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     about the coordinates' guess; given (n, 3): each JointForce drive's value over the step (a
     compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
     addresses."""
+    kind = sweep_tables.kind(sweep)
+    u = sweep_tables.u(sweep)
+    joint_dof = sweep_tables.joint_dof(sweep)
+    joint_tau_nu = sweep_tables.joint_tau_nu(sweep)
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
     independent = independent and not at_start
@@ -195,7 +195,6 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     beam_factors = model_tables.beam_factors(params)
     eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
-    kind, u = sweep.kind, sweep.u
     n = hinge_kind.shape[0]
     load, w1_out, dw1 = np.empty(3), np.empty(3), np.empty(3)
     most_modes = 0
@@ -217,7 +216,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             # unread, and the table has one row of none without joints with coordinates)
             joint_linearization(hk, hinge_params[hr], drive, given[k], rot_p,
                                 w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
-                                sweep.joint_dof[k], sweep.joint_tau_nu[k], forces)
+                                joint_dof[k], joint_tau_nu[k], forces)
         elif hk == BALL:
             kind[jh] = EL_BALL
         elif hk == FIXED:
@@ -296,73 +295,6 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     return 0
 
 
-@allocating_kernel
-def solve_step(mode, tip_pinned, parent, sweep, root_f, z):
-    """Solve the assembled step (sweep.kind, sweep.u, sweep.known_loads) into z (the stations'
-    states) by the mode's sweep; returns 0 or a singularity code (sweep.py).  parent: the
-    bodies' parents (RICCATI_TREE; a chain's are k - 1)."""
-    sw = sweep
-    if mode == RICCATI_JOINTS:
-        return riccati_tree_full(sw.kind, sw.u, sw.known_loads, sw.joint_dof, sw.joint_tau_nu,
-                                 parent, root_f, sw.s, sw.p, sw.tree_s, sw.tree_p, sw.joint_nu,
-                                 sw.joint_tau, z)
-    if mode == RICCATI_FULL:
-        return riccati_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.split, sw.s,
-                            sw.p, sw.tinv, sw.t, sw.g, sw.gv, z)
-    if mode == DIRECT_FULL:
-        return direct_full(sw.kind, sw.u, sw.known_loads, root_f, tip_pinned, sw.dir_z,
-                           sw.dir_o, sw.gv, sw.g, z)
-    if mode not in (RICCATI_TREE, RICCATI_REDUCED, DIRECT_REDUCED):
-        raise ValueError(_UNKNOWN_SWEEP)
-    n = sw.red_v.shape[0]
-    for k in range(n):
-        fold_ball_body(sw.u[2 * k + 1], sw.red_v[k], sw.red_phi[k])
-    if mode == RICCATI_TREE:
-        return _solve_tree(sw, parent, root_f, z)
-    if mode == RICCATI_REDUCED:
-        status = riccati_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_s, sw.red_p,
-                                 sw.red_tinv, sw.red_t, sw.red_aq)
-    elif mode == DIRECT_REDUCED:
-        status = direct_reduced(sw.red_v, root_f[0:3], tip_pinned, sw.red_aq)
-    else:
-        raise ValueError(_UNKNOWN_SWEEP)
-    if status != 0:
-        return status
-    red_aq, red_phi = sw.red_aq, sw.red_phi
-    z[:, :] = 0.0
-    put1(z[0, 0:6], root_f[0:6])
-    put1(z[0, 9:12], red_aq[0, 3:6])
-    for k in range(n):
-        for i in range(3):
-            phi = red_phi[k, i, 6]
-            for c in range(6):
-                phi += red_phi[k, i, c] * red_aq[k, c]
-            z[2 * k + 1, 3 + i] = phi
-            z[2 * k + 2, 3 + i] = phi
-        put1(z[2 * k + 1, 0:3], red_aq[k, 0:3])
-        put1(z[2 * k + 1, 9:12], red_aq[k, 3:6])
-        put1(z[2 * k + 2, 0:3], red_aq[k + 1, 0:3])
-        put1(z[2 * k + 2, 9:12], red_aq[k + 1, 3:6])
-    return 0
-
-
-@kernel
-def _solve_tree(sw, parent, root_f, z):
-    """The reduced tree sweep (kernels/stepping/tree.py) on the folded maps, into z."""
-    n = sw.red_v.shape[0]
-    status = riccati_tree_reduced(sw.red_v, parent, root_f[0:3], sw.red_s, sw.red_p, sw.red_tinv,
-                                  sw.port_s, sw.port_p, sw.red_aq, sw.aq_out)
-    if status != 0:
-        return status
-    phi = np.empty((n, 3))
-    for k in range(n):
-        for i in range(3):
-            x = sw.red_phi[k, i, 6]
-            for c in range(6):
-                x += sw.red_phi[k, i, c] * sw.red_aq[k, c]
-            phi[k, i] = x
-    write_tree_stations(parent, root_f[0:3], root_f[3:6], sw.red_aq, sw.aq_out, phi, z)
-    return 0
 
 
 @allocating_kernel
@@ -381,8 +313,24 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     accelerations and loads."""
     all_bodies = loop_tables.all_bodies(loops)
     kind = loop_tables.kind(loops)
+    eta = state_tables.eta(state)
+    known_loads = sweep_tables.known_loads(sweep)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    eta_d = state_tables.eta_d(state)
+    eta_map = state_tables.eta_map(state)
+    z = state_tables.z(state)
+    eta_acc = state_tables.eta_acc(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    jqdd = state_tables.jqdd(state)
+    joint_nu = sweep_tables.joint_nu(sweep)
+    jqp = state_tables.jqp(state)
+    jtau = state_tables.jtau(state)
+    joint_tau = sweep_tables.joint_tau(sweep)
     g_acc, g_rot, g_w, g_wd = ground
-    rot, omega = state.rot, state.omega
     hinge_kind, hinge_params = model_tables.hinge_kind(params), model_tables.hinge_params(params)
     hinge_row, parent = model_tables.hinge_row(params), model_tables.parent(params)
     n = hinge_kind.shape[0]
@@ -393,14 +341,13 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
             unit33[k, i, i] = 1.0
     guess = Guess(zero3, rot, np.zeros((n, 3, 3)), omega, zero3, np.zeros((n, 3, 3)), unit33)
     g = (g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3))
-    eta = state.eta
-    modal = (eta, state.eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
-             state.eta_map)
+    modal = (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
+             eta_map)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
-                              np.zeros(state.z.shape), force, torque, line_load, n >= 0, rot,
+                              np.zeros(z.shape), force, torque, line_load, n >= 0, rot,
                               zero3, modal,
                               (n < 0, np.zeros((n + 1, 3)), zero3),     # (False)
-                              (settings.mode == RICCATI_JOINTS, state.jq, state.jqd,
+                              (settings.mode == RICCATI_JOINTS, jq, jqd,
                                joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces))
     # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start and
     # the stations' flag run-time bools (n >= 0, n < 0), as the step's: numba compiles a
@@ -408,15 +355,14 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     # with its callees took 10-60 s cold a second time)
     if unknown != 0:
         return -unknown
-    known_loads = sweep.known_loads
     for k in range(n):
         if hinge_kind[k] == ELASTIC:
             p = parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
             q, m_in, m_out = elastic_hinge_loads(hinge_params[hinge_row[k]], rot_in,
-                                                 w_in, rot[k], omega[k], state.defl[k],
-                                                 state.defl_rate[k])
+                                                 w_in, rot[k], omega[k], defl[k],
+                                                 defl_rate[k])
             put1(known_loads[2 * k, 0:3], m_in)
             put1(known_loads[2 * k, 3:6], q)
             put1(known_loads[2 * k, 6:9], m_out)
@@ -425,18 +371,18 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     put1(root_f[0:3], g_acc)
     put1(root_f[3:6], g_wd)
     if kind.shape[0] > 0:
-        tree_points(params, rot, omega, state.jq, state.jqd, state.eta, state.eta_d,
-                    state.defl, state.defl_rate, loops, all_bodies)
-        status = solve_with_loops(params, sweep, root_f, loops, rot, omega, state.z)
+        tree_points(params, rot, omega, jq, jqd, eta, eta_d,
+                    defl, defl_rate, loops, all_bodies)
+        status = solve_with_loops(params, sweep, root_f, loops, rot, omega, z)
     else:
         status = solve_step(settings.mode, model_tables.tip_pinned(params), parent, sweep,
-                            root_f, state.z)
-    _modal_accelerations(params, state.eta_map, state.z, state.eta_acc)
+                            root_f, z)
+    _modal_accelerations(params, eta_map, z, eta_acc)
     for k in range(n):
         for i in range(n_coordinates(hinge_kind[k])):
-            state.jqdd[k, i] = sweep.joint_nu[k, i]
-            state.jqp[k, i] = sweep.joint_nu[k, i]
-            state.jtau[k, i] = sweep.joint_tau[k, i]
+            jqdd[k, i] = joint_nu[k, i]
+            jqp[k, i] = joint_nu[k, i]
+            jtau[k, i] = joint_tau[k, i]
     return status
 
 
@@ -488,6 +434,23 @@ def _predict(loop, run, s, _):
     (docs/solver.md, "Compile time"); and every field is read first, in the piece's first
     block (item 6 there)."""
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
+    rot_ = state_tables.rot(state)
+    omega_ = state_tables.omega(state)
+    omega_dot_ = state_tables.omega_dot(state)
+    pseudo_ = state_tables.pseudo(state)
+    z_ = state_tables.z(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    eta_p = state_tables.eta_p(state)
+    defl_ = state_tables.defl(state)
+    defl_rate_ = state_tables.defl_rate(state)
+    defl_acc_ = state_tables.defl_acc(state)
+    defl_pseudo_ = state_tables.defl_pseudo(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    jqdd = state_tables.jqdd(state)
+    jqp = state_tables.jqp(state)
     guess, ground, w1, w3, w1d, w3d = (loop.guess, loop.ground, loop.w1, loop.w3, loop.w1d,
                                        loop.w3d)
     w1e, w3e, eta_dd_star, z_star, root_f = (loop.w1e, loop.w3e, loop.eta_dd_star, loop.z_star,
@@ -502,12 +465,10 @@ def _predict(loop, run, s, _):
     lock_rel = model_tables.lock_rel(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
-                                        state.z)
-    eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p
-    defl, defl_rate, defl_acc, defl_pseudo = (state.defl, state.defl_rate, state.defl_acc,
-                                              state.defl_pseudo)
-    jq, jqd, jqdd, jqp = state.jq, state.jqd, state.jqdd, state.jqp
+    rot, omega, omega_dot, pseudo, z = (rot_, omega_, omega_dot_, pseudo_,
+                                        z_)
+    defl, defl_rate, defl_acc, defl_pseudo = (defl_, defl_rate_, defl_acc_,
+                                              defl_pseudo_)
     rot_before, rot_now = inputs.g_rot[s], inputs.g_rot[s + 1]
     g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
     g_acc, joint_input = inputs.g_acc[s], inputs.joint_input[s]
@@ -562,18 +523,27 @@ def _iterate(loop, run, s, it):
     _predict."""
     params, settings, state, sweep, inputs = (run.params, run.settings, run.state, run.sweep,
                                               run.inputs)
+    z = state_tables.z(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_map = state_tables.eta_map(state)
+    rot = state_tables.rot(state)
+    u = sweep_tables.u(sweep)
+    joint_nu = sweep_tables.joint_nu(sweep)
     guess, ground, w1d, w3d, z_star, w3 = (loop.guess, loop.ground, loop.w1d, loop.w3d,
                                            loop.z_star, loop.w3)
     w1e, w3e, eta_dd_star, eta_dd_new = loop.w1e, loop.w3e, loop.eta_dd_star, loop.eta_dd_new
     root_f, g_inv, histories, joints_, forces = (loop.root_f, loop.g_inv, loop.histories,
                                                  loop.joints, loop.forces)
     loops, at_guess = loop.loops, loop.at_guess
+    step_coef = loop_tables.step_coef(loops)
+    target_ = loop_tables.target(loops)
+    all_bodies = loop_tables.all_bodies(loops)
+    kind = loop_tables.kind(loops)
     hinge_kind = model_tables.hinge_kind(params)
     tip_pinned = model_tables.tip_pinned(params)
     parent = model_tables.parent(params)
     h, coef, mode = settings.h, settings.coef, settings.mode
-    z, eta, eta_d, eta_map, rot = state.z, state.eta, state.eta_d, state.eta_map, state.rot
-    u, joint_nu = sweep.u, sweep.joint_nu
     force, torque, line_load, joint_input = (inputs.force[s], inputs.torque[s],
                                              inputs.line_load[s], inputs.joint_input[s, :, :, 0])
     # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
@@ -597,10 +567,9 @@ def _iterate(loop, run, s, it):
         return UNSUPPORTED, unknown, 0.0
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
-    if loop_tables.kind(loops).shape[0] > 0:  # closing joints: held at acceleration level
-        put2(loop_tables.target(loops), target)
+    if kind.shape[0] > 0:  # closing joints: held at acceleration level
+        put2(target_, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
-        step_coef = loop_tables.step_coef(loops)
         step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
         step_coef[1] = c3 / c1
         # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
@@ -617,7 +586,7 @@ def _iterate(loop, run, s, it):
                     defl_g[k, i] = d[i]
                     defl_rate_g[k, i] = c3 * d[i] + w3d[k, i]
         tree_points(params, guess.rot, guess.w, joints_[2], joints_[3], eta_g,
-                    eta_d_g, defl_g, defl_rate_g, loops, loop_tables.all_bodies(loops))
+                    eta_d_g, defl_g, defl_rate_g, loops, all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, guess.rot,
                                   guess.w, z)
     else:
@@ -652,8 +621,12 @@ def _iterate(loop, run, s, it):
 def _adopt(loop, run, s, it):
     """The latest solution becomes the guess: phi*, the bodies' kinematics, eta''* (every field
     read first, as in _predict)."""
+    joint_nu = sweep_tables.joint_nu(run.sweep)
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
-    joint_nu = run.sweep.joint_nu
+    z = state_tables.z(state)
+    rot = state_tables.rot(state)
+    jq = state_tables.jq(state)
+    eta = state_tables.eta(state)
     guess, w1, w3, w1e, w3e = loop.guess, loop.w1, loop.w3, loop.w1e, loop.w3e
     z_star, eta_dd_star, eta_dd_new = loop.z_star, loop.eta_dd_star, loop.eta_dd_new
     w1q, w3q, q_s, qd_s, qdd_s = loop.joints
@@ -665,7 +638,6 @@ def _adopt(loop, run, s, it):
     locked = model_tables.locked(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    z, rot, jq, eta = state.z, state.rot, state.jq, state.eta
     rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
     c1, c3 = _integrator_coefficients(settings.h, settings.coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
@@ -701,11 +673,32 @@ def _update(loop, run, s, _):
     first, as in _predict)."""
     params, state, inputs, settings, sweep = (run.params, run.state, run.inputs, run.settings,
                                               run.sweep)
-    joint_nu, joint_tau = sweep.joint_nu, sweep.joint_tau
+    joint_nu = sweep_tables.joint_nu(sweep)
+    joint_tau = sweep_tables.joint_tau(sweep)
+    rot_ = state_tables.rot(state)
+    omega_ = state_tables.omega(state)
+    omega_dot_ = state_tables.omega_dot(state)
+    pseudo_ = state_tables.pseudo(state)
+    z_ = state_tables.z(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    eta_p = state_tables.eta_p(state)
+    defl_ = state_tables.defl(state)
+    defl_rate_ = state_tables.defl_rate(state)
+    defl_acc_ = state_tables.defl_acc(state)
+    defl_pseudo_ = state_tables.defl_pseudo(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    jqdd = state_tables.jqdd(state)
+    jqp = state_tables.jqp(state)
+    jtau = state_tables.jtau(state)
     histories, w1q, w1d = loop.histories, loop.joints[0], loop.w1d
     eta_dd_new, w1e, e3, rot_prev = loop.eta_dd_new, loop.w1e, loop.e3, loop.rot_prev
     loops, target, g_pos, g_vel, g_acc = (loop.loops, inputs.closure_target[s], inputs.g_pos[s],
                                           inputs.g_vel[s], inputs.g_acc[s])
+    target_ = loop_tables.target(loops)
+    kind = loop_tables.kind(loops)
     h, coef, mode = settings.h, settings.coef, settings.mode
     hinge_kind = model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -717,12 +710,10 @@ def _update(loop, run, s, _):
     body_kind = model_tables.body_kind(params)
     body_params = model_tables.body_params(params)
     body_row = model_tables.body_row(params)
-    rot, omega, omega_dot, pseudo, z = (state.rot, state.omega, state.omega_dot, state.pseudo,
-                                        state.z)
-    eta, eta_d, eta_acc, eta_p = state.eta, state.eta_d, state.eta_acc, state.eta_p
-    defl, defl_rate, defl_acc, defl_pseudo = (state.defl, state.defl_rate, state.defl_acc,
-                                              state.defl_pseudo)
-    jq, jqd, jqdd, jqp, jtau = state.jq, state.jqd, state.jqdd, state.jqp, state.jtau
+    rot, omega, omega_dot, pseudo, z = (rot_, omega_, omega_dot_, pseudo_,
+                                        z_)
+    defl, defl_rate, defl_acc, defl_pseudo = (defl_, defl_rate_, defl_acc_,
+                                              defl_pseudo_)
     rot_now, g_w, g_wd, joint_input = (inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s],
                                        inputs.joint_input[s])
     c1, _ = _integrator_coefficients(h, coef)
@@ -758,8 +749,8 @@ def _update(loop, run, s, _):
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
-    if loop_tables.kind(loops).shape[0] > 0:    # back onto the loops (closure.py)
-        put2(loop_tables.target(loops), target)
+    if kind.shape[0] > 0:    # back onto the loops (closure.py)
+        put2(target_, target)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
         project_onto_loops(params, loops, state)
     return finite
@@ -768,21 +759,34 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     """Write the state into run.rec at slot (every field read first, as in _predict)."""
+    wrench_ = loop_tables.wrench(loop.loops)
+    kind = loop_tables.kind(loop.loops)
     state, rec = run.state, run.rec
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    z = state_tables.z(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    jq = state_tables.jq(state)
+    jqd = state_tables.jqd(state)
+    jtau = state_tables.jtau(state)
     histories = loop.histories
-    n_closing, wrench, closure_wrench = (loop_tables.kind(loop.loops).shape[0],
-                                         loop_tables.wrench(loop.loops), rec.closure_wrench)
-    put3(rec.rot[slot], state.rot)
-    put2(rec.omega[slot], state.omega)
-    put2(rec.omega_dot[slot], state.omega_dot)
-    put2(rec.z[slot], state.z)
-    put2(rec.defl[slot], state.defl)
-    put2(rec.defl_rate[slot], state.defl_rate)
-    put1(rec.eta[slot], state.eta)
-    put1(rec.eta_d[slot], state.eta_d)
-    put2(rec.jq[slot], state.jq)
-    put2(rec.jqd[slot], state.jqd)
-    put2(rec.jtau[slot], state.jtau)
+    n_closing, wrench, closure_wrench = (kind.shape[0],
+                                         wrench_, rec.closure_wrench)
+    put3(rec.rot[slot], rot)
+    put2(rec.omega[slot], omega)
+    put2(rec.omega_dot[slot], omega_dot)
+    put2(rec.z[slot], z)
+    put2(rec.defl[slot], defl)
+    put2(rec.defl_rate[slot], defl_rate)
+    put1(rec.eta[slot], eta)
+    put1(rec.eta_d[slot], eta_d)
+    put2(rec.jq[slot], jq)
+    put2(rec.jqd[slot], jqd)
+    put2(rec.jtau[slot], jtau)
     if n_closing > 0:
         put2(closure_wrench[slot], wrench)
     if histories[0]:

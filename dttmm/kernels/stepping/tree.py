@@ -8,7 +8,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece, model_tables
+from .. import loop_piece, model_tables, state_tables, sweep_tables
 from ...elements import BEAM, RIGID
 from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
                          recover_body)
@@ -51,7 +51,10 @@ def _iterate(loop, run, s, it):
     """Every body's map and its step of the sweep, from the leaves to the root; then the
     recovery from the root to the leaves, with each body's angular (and a beam's modal)
     accelerations.  Returns (status, detail, change)."""
+    red_aq = sweep_tables.red_aq(run.sweep)
     params, state, inputs = run.params, run.state, run.inputs
+    eta_map = state_tables.eta_map(state)
+    rot_ = state_tables.rot(state)
     c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
                         loop.coefficients[3])
     w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
@@ -61,12 +64,12 @@ def _iterate(loop, run, s, it):
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
     w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
                                          loop.per_mode[4])
-    aq_in, aq_out = run.sweep.red_aq, loop.aq_out
+    aq_in, aq_out = red_aq, loop.aq_out
     s_in, p_in, t_inv, port_s, port_p = loop.s_in, loop.p_in, loop.t_inv, loop.port_s, \
         loop.port_p
     parent = loop.parent
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
-    gravity, rot = model_tables.gravity(params), state.rot
+    gravity, rot = model_tables.gravity(params), rot_
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind = model_tables.body_kind(params)
     beam_params = model_tables.beam_params(params)
@@ -74,7 +77,6 @@ def _iterate(loop, run, s, it):
     mode_off = model_tables.mode_offset(params)
     beam_ends = model_tables.beam_ends(params)
     beam_factors = model_tables.beam_factors(params)
-    eta_map = state.eta_map
     n = rot.shape[0]
     _clear_ports(port_s, port_p)
     for k in range(n - 1, -1, -1):
@@ -126,9 +128,10 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _write(loop, run, s, z):
+    red_aq = sweep_tables.red_aq(run.sweep)
     phi_g = loop.vecs[4]
     _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
-    write_tree_stations(loop.parent, run.inputs.g_acc[s], phi_g, run.sweep.red_aq, loop.aq_out,
+    write_tree_stations(loop.parent, run.inputs.g_acc[s], phi_g, red_aq, loop.aq_out,
                         loop.per_body[3], z)
 
 
@@ -140,8 +143,9 @@ def _record(loop, run, s, slot):
 
 @loop_piece
 def _finish(loop, run, n_steps, _):
+    z = state_tables.z(run.state)
     if n_steps > 0:
-        _write(loop, run, n_steps - 1, run.state.z)
+        _write(loop, run, n_steps - 1, z)
 
 
 loop_variant(FusedTreeLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,

@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, kernel, loop_piece, model_tables
+from .. import CONTRACT, kernel, loop_piece, model_tables, state_tables
 from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
@@ -123,6 +123,7 @@ def _follow_welds(loop, run):
     w3 = w* - c3 phi*, so that the weld's slot is w'* there.  In order from the root: each
     beam's guess is its inboard's."""
     params, state = run.params, run.state
+    rot = state_tables.rot(state)
     c1, c3 = loop.coefficients[0], loop.coefficients[1]
     w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
     w1e, w3e, eta_dd_star = loop.per_mode[0], loop.per_mode[1], loop.per_mode[3]
@@ -133,7 +134,6 @@ def _follow_welds(loop, run):
     mode_off = model_tables.mode_offset(params)
     beam_ends = model_tables.beam_ends(params)
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
-    rot = state.rot
     for k in range(1, phi_star.shape[0]):
         p = k - 1
         expm_so3(phi_star[p], rel)
@@ -167,6 +167,10 @@ def _iterate(loop, run, s, it):
     backward pass (the stations, then each body's phi and modal accelerations); returns
     (status, detail, change)."""
     params, state, inputs = run.params, run.state, run.inputs
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_map = state_tables.eta_map(state)
+    rot = state_tables.rot(state)
     c1, c3 = loop.coefficients[0], loop.coefficients[1]
     w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
         loop.per_body[3]
@@ -183,7 +187,6 @@ def _iterate(loop, run, s, it):
     beam_factors = model_tables.beam_factors(params)
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     gravity = model_tables.gravity(params)
-    eta, eta_d, eta_map = state.eta, state.eta_d, state.eta_map
     force, torque, line_load = inputs.force[s], inputs.torque[s], inputs.line_load[s]
     n = phi_star.shape[0]
     for r in range(6):
@@ -202,18 +205,18 @@ def _iterate(loop, run, s, it):
         for i in range(3):
             w1_out[i] = w1[kout, i]             # (its w' = c1 phi_out + w1_out)
         outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
-                    state.rot[kout], w1_out)
+                    rot[kout], w1_out)
         tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                   force[k], torque[k], line_load[k], beam_ends[k, m:m + mt],
                   beam_ends[k, m + mt:i1 - i0 - m])          # (as kernels/stepping/step.py)
         if run.settings.start:      # (the flag a literal: the step's copy keeps no start code)
             beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
-                          True, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
+                          True, rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
                           eta_map[i0:i1], loop.beam_work)
         else:
             beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
-                          False, state.rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
+                          False, rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
                           eta_map[i0:i1], loop.beam_work)
         if not _all_finite(u):
@@ -270,12 +273,18 @@ def _update(loop, run, s, _):
     angular acceleration (as step.py's welded bodies); every rate finite?"""
     finite = _update_integrated(loop, run, s, 0)
     params, state, inputs = run.params, run.state, run.inputs
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    eta = state_tables.eta(state)
+    eta_d = state_tables.eta_d(state)
+    eta_acc = state_tables.eta_acc(state)
+    pseudo = state_tables.pseudo(state)
     beam_params = model_tables.beam_params(params)
     mode_off = model_tables.mode_offset(params)
     beam_ends = model_tables.beam_ends(params)
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     locked, lock_rel = model_tables.locked(params), model_tables.lock_rel(params)
-    rot, omega, omega_dot = state.rot, state.omega, state.omega_dot
     scratch = loop.follow[3]
     for k in range(rot.shape[0]):
         if locked[k]:
@@ -289,12 +298,12 @@ def _update(loop, run, s, _):
         m = int(beam_params[p, MODES])
         mt = int(beam_params[p, TORSION_MODES])
         end_section_motion(beam_ends[p, :m], beam_ends[p, m:m + mt], rot[p], omega[p],
-                           omega_dot[p], state.eta[i0:i1], state.eta_d[i0:i1],
-                           state.eta_acc[i0:i1],
+                           omega_dot[p], eta[i0:i1], eta_d[i0:i1],
+                           eta_acc[i0:i1],
                            hinge_params[hinge_row[k], 0:9].reshape((3, 3)),
                            rot[k], omega[k], omega_dot[k], scratch)
         for i in range(3):
-            state.pseudo[k, i] = omega_dot[k, i]
+            pseudo[k, i] = omega_dot[k, i]
             if not (np.isfinite(omega[k, i]) and np.isfinite(omega_dot[k, i])):
                 finite = False
     return finite
@@ -328,8 +337,9 @@ def _record(loop, run, s, slot):
 @loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
+    z = state_tables.z(run.state)
     if n_steps > 0:
-        _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], run.state.z)
+        _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], z)
 
 
 loop_variant(WeldLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
