@@ -161,3 +161,31 @@ def test_the_state_and_the_sweep_read_back_by_name_in_python_and_in_kernels(fuse
     np.testing.assert_array_equal(ws.state.omega, km.initial_angular_velocity)
     assert ws.state.z.shape == (2 * n + 1, 12) and ws.sweep.red_aq.shape == (n + 1, 6)
     assert ws.state.jq.shape[0] == ws.sweep.u.shape[0] // 2 == (0 if fused else n)
+
+
+def test_the_general_loops_scratch_reads_back_by_name_in_python_and_in_kernels():
+    """The general loop's own scratch (kernels/stepping/step.py::general_loop) packed flat:
+    every table reads back from the kernels' accessors as Python reads it by name; the ground's
+    dw'/dphi starts at c1 I, the paper's scheme's flag and histories are the ones given, and the
+    compiled JointForces' addresses are kept as given."""
+    from dttmm.kernels import general_tables
+    from dttmm.kernels.stepping import step as kstep
+    km = run_tables.kernel_model(arm(drive="pd", flexible=True))[0]
+    n, n_eta, h = km.n_bodies, int(km.n_modes.sum()), 1e-3
+    coef = np.array([0.25, 0.5, 0.5, 0.5])
+    st = np.arange(3.0 * (n + 1)).reshape(n + 1, 3)
+    c = np.arange(3.0 * n).reshape(n, 3)
+    loop = kstep.general_loop(n, n_eta, h, coef, (True, st, 2 * st, 3 * st, c, 2 * c, 3 * c),
+                              run_tables.loop_tables(km), np.array([7, 9], dtype=np.int64))
+    scratch = loop.scratch
+    tables = schema.GENERAL_LAYOUT.unpack(scratch)
+    for field in schema.GENERAL:
+        got = _reader(getattr(general_tables, field.name))(scratch)
+        np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+        np.testing.assert_array_equal(getattr(scratch, field.name), tables[field.name])
+    c1 = (1.0 - 0.5) / ((1.0 - 0.5) * 0.25 * h * h)        # docs/solver.md, the step's c1
+    np.testing.assert_allclose(scratch.ground_dwd, c1 * np.eye(3), rtol=1e-15)
+    assert scratch.independent == 1 and scratch.eta_g.shape == (n_eta,)
+    np.testing.assert_array_equal(scratch.st_a, 2 * st)
+    np.testing.assert_array_equal(scratch.c_p, 3 * c)
+    np.testing.assert_array_equal(scratch.forces, [7, 9])

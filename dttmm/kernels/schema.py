@@ -275,6 +275,72 @@ SWEEP = (
 )
 
 
+# The general loop's own scratch (kernels/stepping/step.py::general_loop): the step's guess of
+# every body's kinematics, the integrator's offsets, the ground's motion over the step, the
+# paper's scheme's point histories, the joints' guess, the loops' arms at the guess.
+GENERAL_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("stations", "2 n + 1"),
+    ("modes", "the beams' modal coordinates"),
+    ("history_points", "n + 1 where the paper's scheme runs (its station points), else 1"),
+    ("history_centres", "n where the paper's scheme runs (its mass centres), else 1"),
+    ("forces", "the compiled JointForces' callbacks"),
+)
+
+GENERAL = (
+    Field("guess_phi", REAL, ("bodies", 3), "each body's rotation increment phi* (the guess; "
+                                            "step.py::Guess)"),
+    Field("guess_rot", REAL, ("bodies", 3, 3), "its rotation at the guess"),
+    Field("guess_lam", REAL, ("bodies", 3, 3), "its left Jacobian J_l(phi*)"),
+    Field("guess_w", REAL, ("bodies", 3), "its angular velocity at the guess"),
+    Field("guess_wd", REAL, ("bodies", 3), "its angular acceleration at the guess"),
+    Field("guess_dw", REAL, ("bodies", 3, 3), "dw / dphi"),
+    Field("guess_dwd", REAL, ("bodies", 3, 3), "dw' / dphi"),
+    Field("w1", REAL, ("bodies", 3), "w' = c1 phi + w1"),
+    Field("w3", REAL, ("bodies", 3), "w = c3 phi + w3"),
+    Field("w1d", REAL, ("bodies", 3), "the same for the elastic hinges' deflections d"),
+    Field("w3d", REAL, ("bodies", 3), "the same for the elastic hinges' deflections d"),
+    Field("z_star", REAL, ("stations", 12), "the stations' guess (phi slots)"),
+    Field("w1e", REAL, ("modes",), "eta'' = c1 eta + w1e"),
+    Field("w3e", REAL, ("modes",), "eta' = c3 eta + w3e"),
+    Field("eta_dd_star", REAL, ("modes",), "the modal accelerations' guess"),
+    Field("eta_dd_new", REAL, ("modes",), "the modal accelerations' solution"),
+    Field("ground_rot", REAL, (3, 3), "the ground's rotation over the step"),
+    Field("ground_lam", REAL, (3, 3), "its left Jacobian"),
+    Field("ground_w", REAL, (3,), "its angular velocity"),
+    Field("ground_wd", REAL, (3,), "its angular acceleration"),
+    Field("ground_dwd", REAL, (3, 3), "dw' / dphi of the ground: c1 I (run_records._set_step)"),
+    Field("ground_phi", REAL, (3,), "its rotation increment"),
+    Field("root_f", REAL, (6,), "the ground station's [a, w']"),
+    Field("e3", REAL, (3, 3), "3 x 3 scratch"),
+    Field("g_inv", REAL, (3, 3), "3 x 3 scratch"),
+    Field("rot_prev", REAL, (3, 3), "3 x 3 scratch"),
+    Field("independent", INT, (), "1 where the paper's scheme gives every station point and "
+                                  "mass centre its own Newmark history"),
+    Field("st_v", REAL, ("history_points", 3), "the station points' velocities (the paper's "
+                                               "scheme; run_tables._station_histories)"),
+    Field("st_a", REAL, ("history_points", 3), "their accelerations"),
+    Field("st_p", REAL, ("history_points", 3), "their pseudo-accelerations"),
+    Field("c_v", REAL, ("history_centres", 3), "the mass centres' velocities"),
+    Field("c_a", REAL, ("history_centres", 3), "their accelerations"),
+    Field("c_p", REAL, ("history_centres", 3), "their pseudo-accelerations"),
+    Field("w1_st", REAL, ("bodies+1", 3), "the station points' w1 offsets"),
+    Field("w1_c", REAL, ("bodies", 3), "the mass centres' w1 offsets"),
+    Field("q_w1", REAL, ("bodies", MAX_COORDINATES), "the joint coordinates' offsets "
+                                                      "(kernels/transfers/joint.py)"),
+    Field("q_w3", REAL, ("bodies", MAX_COORDINATES), "the joint coordinates' offsets"),
+    Field("q_star", REAL, ("bodies", MAX_COORDINATES), "their guess q*"),
+    Field("qd_star", REAL, ("bodies", MAX_COORDINATES), "q'*"),
+    Field("qdd_star", REAL, ("bodies", MAX_COORDINATES), "q''*"),
+    Field("eta_g", REAL, ("modes",), "eta at the guess, for the loops' rows (_iterate)"),
+    Field("eta_d_g", REAL, ("modes",), "eta' at the guess"),
+    Field("defl_g", REAL, ("bodies", 3), "d at the guess"),
+    Field("defl_rate_g", REAL, ("bodies", 3), "d' at the guess"),
+    Field("forces", INT, ("forces",), "the compiled JointForces' C callbacks' addresses "
+                                      "(kernels/transfers/joint.py::drive_value)"),
+)
+
+
 def axes(shape):
     """[(size name or None, constant, plus)] of a schema shape's axes."""
     dims = []
@@ -449,6 +515,10 @@ class FlatSweep(FlatTables):
     """The assembly's scratch, flat (SWEEP; kernels/sweep_tables.py)."""
 
 
+class FlatGeneral(FlatTables):
+    """The general loop's own scratch, flat (GENERAL; kernels/general_tables.py)."""
+
+
 MODEL_LAYOUT = Layout("The flat model's tables", "SIZES", MODEL, FlatModel, "model_tables.py")
 LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", "LOOP_SIZES", LOOPS,
                      FlatLoops, "loop_tables.py")
@@ -456,15 +526,18 @@ STATE_LAYOUT = Layout("The run's flat state", "STATE_SIZES", STATE, FlatState,
                       "state_tables.py")
 SWEEP_LAYOUT = Layout("The assembly's flat scratch", "SWEEP_SIZES", SWEEP, FlatSweep,
                       "sweep_tables.py")
+GENERAL_LAYOUT = Layout("The general loop's flat scratch", "GENERAL_SIZES", GENERAL, FlatGeneral,
+                        "general_tables.py")
 FlatLoops.layout, FlatState.layout, FlatSweep.layout = LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT
-LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT)
+FlatGeneral.layout = GENERAL_LAYOUT
+LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, GENERAL_LAYOUT)
 
 pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 
 
 def write():
     """(Re)write every layout's accessors (kernels/model_tables.py, loop_tables.py,
-    state_tables.py, sweep_tables.py) after an edit of the schema:
+    state_tables.py, sweep_tables.py, general_tables.py) after an edit of the schema:
     ``python -c "from dttmm.kernels import schema; schema.write()"``."""
     for layout in LAYOUTS:
         layout.write()

@@ -454,7 +454,8 @@ class Checkpoint:
         if len(targets) != len(self.arrays) or any(
                 t.shape != a.shape for t, a in zip(targets, self.arrays)):
             raise ValueError("simulate(resume=...): the checkpoint's arrays do not fit this run's "
-                             "model (another model?)")
+                             "(another model, or a checkpoint saved by a dttmm before its run "
+                             "data went flat, 2026-12-07: run it again from the start)")
         for target, value in zip(targets, self.arrays):
             target[...] = value
 

@@ -92,7 +92,7 @@ def helper_calls(loop, run):
              (typeof(run.params), typeof(run.settings), typeof(run.state), typeof(run.sweep),
               ground, _row(typeof(inputs.force)), _row(typeof(inputs.torque)),
               _row(typeof(inputs.line_load)), _row(typeof(inputs.joint_input)),
-              typeof(loop.loops), typeof(loop.forces))),)
+              typeof(loop.loops), typeof(loop.scratch.forces))),)
 
 
 def main_calls(loop, run):

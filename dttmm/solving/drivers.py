@@ -36,9 +36,9 @@ class Stepping:
         if resume is not None:
             resume.restore(plan.structures, plan.checkpoint_run)
             counters, done = resume.counters, resume.step
-            if plan.loop_name == "general":     # this process's callbacks, not the
-                plan.loop.forces[:] = run_tables.compiled_forces(model)  # checkpoint's addresses
-                # (another process's, or another function of the same name)
+            if plan.loop_name == "general":     # this process's callbacks, not the checkpoint's
+                # addresses (another process's, or another function of the same name)
+                plan.loop.scratch.forces[:] = run_tables.compiled_forces(model)
         self.done = done
         self.samples = None if opts.adaptive else run_records._sample_count(opts.sampling, done,
                                                                    opts.n_steps)

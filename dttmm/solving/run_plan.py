@@ -190,10 +190,10 @@ class PreparedRun:
             self.started = copies_of(self.buffers, self.others)
         self.state, self.sweep, self.loop, self.monitor = self.structures = structures
         self.loops = self.loop.loops if loop_name == "general" else loops
-        histories = self.loop.histories if loop_name == "general" else histories
-        self.history_values = dict(v_st=histories[1],
-                                   v_c=(self.state.v_c if scheme.name != "paper"
-                                        else histories[4]),
+        v_st, c_v = ((self.loop.scratch.st_v, self.loop.scratch.c_v) if loop_name == "general"
+                     else (histories[1], histories[4]))
+        self.history_values = dict(v_st=v_st,
+                                   v_c=self.state.v_c if scheme.name != "paper" else c_v,
                                    closure_wrench=self.loops.wrench)
         if scheme.loop == "runge_kutta":     # its stages: the fused loop's start pass
             self.derivative_run = consistent_start.start_pass(  # (fixed ground, no loads or

@@ -21,7 +21,7 @@ def _set_step(loop, h, coef):
     the skeleton's pieces take h itself from Settings): the fused loops' (c1, c3, 1/c1, c3/c1)
     and the general loop's ground d(w')/d(phi) = c1 I (kernels/stepping/step.py::general_loop)."""
     if isinstance(loop, kstep.GeneralLoop):
-        loop.ground[4][...] = kstep._coefficients_py(h, coef)[0] * np.eye(3)
+        loop.scratch.ground_dwd[...] = kstep._coefficients_py(h, coef)[0] * np.eye(3)
     elif hasattr(loop, "coefficients"):
         loop.coefficients[:] = kstep.fused_coefficients(h, coef)
 

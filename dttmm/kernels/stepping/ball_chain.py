@@ -239,11 +239,11 @@ def _iterate(loop, run, s, it):
     (recovery, beams' modal accelerations); returns (status, detail, change)."""
     params, state, inputs, sweep = run.params, run.state, run.inputs, run.sweep
     eta_map = state_tables.eta_map(state)
-    red_s = sweep_tables.red_s(sweep)
-    red_p = sweep_tables.red_p(sweep)
-    red_tinv = sweep_tables.red_tinv(sweep)
-    red_t = sweep_tables.red_t(sweep)
-    red_aq = sweep_tables.red_aq(sweep)
+    s_mat = sweep_tables.red_s(sweep)
+    p_vec = sweep_tables.red_p(sweep)
+    t_inv = sweep_tables.red_tinv(sweep)
+    t_vec = sweep_tables.red_t(sweep)
+    aq = sweep_tables.red_aq(sweep)
     rot_ = state_tables.rot(state)
     c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
                         loop.coefficients[3])
@@ -254,8 +254,6 @@ def _iterate(loop, run, s, it):
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
     w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
                                          loop.per_mode[4])
-    s_mat, p_vec, t_inv, t_vec, aq = red_s, red_p, red_tinv, red_t, \
-        red_aq
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
     force, torque, line_load = inputs.force, inputs.torque, inputs.line_load

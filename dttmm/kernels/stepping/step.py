@@ -17,26 +17,23 @@ docs/solver.md, "The paper's scheme").
 
 This module is the general loop's pieces (kernels/stepping/loop.py: predict, iterate, adopt, update,
 record, finish) for every chain and tree, sweep and the Newmark and paper's schemes, and the
-consistent start.
+consistent start; every element's transfer about the guess is kernels/stepping/linearize.py's.
 """
 from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from .. import (CONTRACT, allocating_kernel, kernel, loop_piece, loop_tables, model_tables,
-                state_tables, sweep_tables)
-from ...elements import BEAM, RIGID, ROD
-from ...elements.beam import MODES, TORSION_MODES
-from ...elements.hinges import BALL, ELASTIC, FIXED
+from .. import (CONTRACT, allocating_kernel, general_tables, kernel, loop_piece, loop_tables,
+                model_tables, state_tables, sweep_tables)
+from ..schema import GENERAL_LAYOUT
+from ...elements import BEAM, ROD
+from ...elements.hinges import ELASTIC, FIXED
 from ...elements.kinds import MAX_COORDINATES
-from ..transfers.beam import beam_transfer, transfer_work_size
-from ..transfers.body import rigid_body_transfer, station_history_correction
-from ..transfers.strain_rod import rod_tables_of, rod_transfer
 from ..assembly.closure import set_ground, solve_with_loops, tree_points
 from ..assembly.loop_projection import project_onto_loops
-from ..transfers.hinge import elastic_hinge_loads, elastic_hinge_transfer
-from ..transfers.joint import joint_linearization, n_coordinates
+from ..transfers.hinge import elastic_hinge_loads
+from ..transfers.joint import n_coordinates
 from .generalized_alpha import (_advance_body, _advance_deflection, _advance_joint,
                                 _advance_modal, _advance_stations, _body_kinematics,
                                 _deflection_offsets, _ground_guess, _hinge_deflection,
@@ -44,44 +41,13 @@ from .generalized_alpha import (_advance_body, _advance_deflection, _advance_joi
                                 _locked_frame, _locked_guess, _modal_guess, _offsets_into,
                                 _spring_guess, _station_offsets, _stations_guess, _welded_frame,
                                 _welded_guess)
+from .linearize import _build_elements, has_coordinates
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..algebra.mat3 import dot, inv3, put1, put2, put3
-from ..assembly.sweep import IDENTITY, LOCKED, TRANSFER
 from ..assembly.solve import RICCATI_FULL, RICCATI_JOINTS, solve_step
-from ..assembly.sweep import BALL as EL_BALL
-from ..assembly.sweep import JOINT as EL_JOINT
 
 
 
-@njit(cache=True, inline='always', fastmath=CONTRACT)
-def has_coordinates(kind):
-    return n_coordinates(kind) > 0
-
-
-@kernel
-def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, phi_out):
-    """Rewrite a transfer linearized in phi slots as one in angular-acceleration slots
-    (docs/assembly.md, "scaling"): phi_in = phi_in* + Dwd_in^-1 (w'_in - wd_in*) and
-    w'_out = wd_out* + Dwd_out (phi_out - phi_out*).  Angular accelerations are ~ m/s^2 like the
-    a slots, where phi is ~ h^2 times smaller: the sweep's 6 x 6 matrices would otherwise mix
-    scales 1e8 apart."""
-    g_in = np.empty((3, 3))
-    inv3(dwd_in, g_in)
-    for r in range(12):
-        u3, u4, u5 = u[r, 3], u[r, 4], u[r, 5]
-        shift = u3 * phi_in[0] + u4 * phi_in[1] + u5 * phi_in[2]
-        for i in range(3):
-            new = u3 * g_in[0, i] + u4 * g_in[1, i] + u5 * g_in[2, i]
-            u[r, 3 + i] = new
-            shift -= new * wd_in[i]
-        u[r, 12] += shift
-    for c in range(13):
-        r0, r1, r2 = u[3, c], u[4, c], u[5, c]
-        for i in range(3):
-            u[3 + i, c] = dwd_out[i, 0] * r0 + dwd_out[i, 1] * r1 + dwd_out[i, 2] * r2
-    for i in range(3):
-        u[3 + i, 12] += wd_out[i] - (dwd_out[i, 0] * phi_out[0] + dwd_out[i, 1] * phi_out[1]
-                                     + dwd_out[i, 2] * phi_out[2])
 
 
 
@@ -98,48 +64,74 @@ def _all_finite(a):
 # derivatives with respect to phi (docs/solver.md); (n, ...) arrays, one row per body.
 Guess = namedtuple("Guess", ["phi", "rot", "lam", "w", "wd", "dw", "dwd"])
 
-# The general loop's own scratch (allocated by the solver, kernels/stepping/step.py::general_loop):
-GeneralLoop = namedtuple("GeneralLoop", [
-    "guess",                        # Guess
-    "w1", "w3",                     # (n, 3) w' = c1 phi + w1, w = c3 phi + w3
-    "w1d", "w3d",                   # (n, 3) the same for the elastic hinges' deflections d
-    "z_star",                       # (2n + 1, 12) the stations' guess (phi slots)
-    "w1e", "w3e",                   # (total modes,) eta'' = c1 eta + w1e, eta' = c3 eta + w3e
-    "eta_dd_star", "eta_dd_new",    # (total modes,) the modal accelerations' guess, solution
-    "ground",                       # (rot, lam, w, wd, dwd, phi) of the ground over the step
-    "root_f",                       # (6,) the ground station's [a, w']
-    "e3", "g_inv", "rot_prev",      # 3 x 3 scratch
-    "histories",                    # the paper's scheme: (independent, st_v, st_a, st_p, c_v,
-                                    # c_a, c_p, w1_st, w1_c), see general_loop
-    "joints",                       # (w1q, w3q, q*, q'*, q''*) (n, 3) each: the joint
-                                    # coordinates' offsets and guess (kernels/transfers/joint.py)
-    "loops",                        # the closing joints and their scratch
-    #                                 (kernels/assembly/closure.py)
-    "at_guess",                     # (eta, eta', d, d') at the guess, for the loops' rows:
-                                    # (total modes,) twice, (n, 3) twice (_iterate)
-    "forces",                       # (k,) int64: the compiled JointForces' C callbacks'
-                                    # addresses (kernels/transfers/joint.py::drive_value)
-])
+# The general loop's structure (kernels/stepping/loop.py, "loop_variant"): its own scratch, flat
+# (a FlatGeneral: kernels/schema.py::GENERAL, read through kernels/general_tables.py), and the
+# closing joints' tables and scratch (a FlatLoops: kernels/schema.py::LOOPS).
+GeneralLoop = namedtuple("GeneralLoop", ["scratch", "loops"])
 
 
 def general_loop(n, n_eta, h, coef, histories, loops, forces):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
     paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (run_tables._station_histories);
     the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
-    joints (kernels/assembly/closure.py::Loops; no rows without them).  forces: the compiled
+    joints (a FlatLoops, run_tables.loop_tables; no rows without them).  forces: the compiled
     JointForces' callbacks' addresses (run_tables.compiled_forces)."""
     c1, _ = _coefficients_py(h, coef)
-    guess = Guess(np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3)),
-                  np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3)))
-    ground = (np.eye(3), np.zeros((3, 3)), np.zeros(3), np.zeros(3), c1 * np.eye(3), np.zeros(3))
-    return GeneralLoop(guess, np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
-                       np.zeros((n, 3)), np.zeros((2 * n + 1, 12)), np.zeros(n_eta),
-                       np.zeros(n_eta), np.zeros(n_eta), np.zeros(n_eta), ground, np.zeros(6),
-                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
-                       tuple(histories) + (np.zeros((n + 1, 3)), np.zeros((n, 3))),
-                       tuple(np.zeros((n, MAX_COORDINATES)) for _ in range(5)), loops,
-                       (np.zeros(n_eta), np.zeros(n_eta), np.zeros((n, 3)), np.zeros((n, 3))),
-                       forces)
+    independent, st_v, st_a, st_p, c_v, c_a, c_p = histories
+    body3, body33, coordinates = (n, 3), (n, 3, 3), (n, MAX_COORDINATES)
+    scratch = GENERAL_LAYOUT.pack(
+        guess_phi=np.zeros(body3), guess_rot=np.zeros(body33), guess_lam=np.zeros(body33),
+        guess_w=np.zeros(body3), guess_wd=np.zeros(body3), guess_dw=np.zeros(body33),
+        guess_dwd=np.zeros(body33), w1=np.zeros(body3), w3=np.zeros(body3), w1d=np.zeros(body3),
+        w3d=np.zeros(body3), z_star=np.zeros((2 * n + 1, 12)), w1e=np.zeros(n_eta),
+        w3e=np.zeros(n_eta), eta_dd_star=np.zeros(n_eta), eta_dd_new=np.zeros(n_eta),
+        ground_rot=np.eye(3), ground_lam=np.zeros((3, 3)), ground_w=np.zeros(3),
+        ground_wd=np.zeros(3), ground_dwd=c1 * np.eye(3), ground_phi=np.zeros(3),
+        root_f=np.zeros(6), e3=np.zeros((3, 3)), g_inv=np.zeros((3, 3)),
+        rot_prev=np.zeros((3, 3)), independent=np.int64(bool(independent)), st_v=st_v,
+        st_a=st_a, st_p=st_p, c_v=c_v, c_a=c_a, c_p=c_p, w1_st=np.zeros((n + 1, 3)),
+        w1_c=np.zeros(body3), q_w1=np.zeros(coordinates), q_w3=np.zeros(coordinates),
+        q_star=np.zeros(coordinates), qd_star=np.zeros(coordinates),
+        qdd_star=np.zeros(coordinates), eta_g=np.zeros(n_eta), eta_d_g=np.zeros(n_eta),
+        defl_g=np.zeros(body3), defl_rate_g=np.zeros(body3),
+        forces=np.asarray(forces, dtype=np.int64))
+    return GeneralLoop(scratch, loops)
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _guess_of(scratch):
+    """Each body's kinematics at the guess (Guess) as views of the general loop's scratch."""
+    return Guess(general_tables.guess_phi(scratch), general_tables.guess_rot(scratch),
+                 general_tables.guess_lam(scratch), general_tables.guess_w(scratch),
+                 general_tables.guess_wd(scratch), general_tables.guess_dw(scratch),
+                 general_tables.guess_dwd(scratch))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _ground_of(scratch):
+    """(rot, lam, w, wd, dwd, phi) of the ground over the step (generalized_alpha's ground)."""
+    return (general_tables.ground_rot(scratch), general_tables.ground_lam(scratch),
+            general_tables.ground_w(scratch), general_tables.ground_wd(scratch),
+            general_tables.ground_dwd(scratch), general_tables.ground_phi(scratch))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _histories_of(scratch):
+    """The paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p, w1_st, w1_c)
+    (generalized_alpha's histories)."""
+    return (general_tables.independent(scratch) != 0, general_tables.st_v(scratch),
+            general_tables.st_a(scratch), general_tables.st_p(scratch),
+            general_tables.c_v(scratch), general_tables.c_a(scratch),
+            general_tables.c_p(scratch), general_tables.w1_st(scratch),
+            general_tables.w1_c(scratch))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _joints_of(scratch):
+    """(w1q, w3q, q*, q'*, q''*): the joint coordinates' offsets and guess."""
+    return (general_tables.q_w1(scratch), general_tables.q_w3(scratch),
+            general_tables.q_star(scratch), general_tables.qd_star(scratch),
+            general_tables.qdd_star(scratch))
 
 
 def _coefficients_py(h, coef):
@@ -155,144 +147,6 @@ def fused_coefficients(h, coef):
     return np.array([c1, c3, 1.0 / c1, c3 / c1])
 
 
-@allocating_kernel
-def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
-                    line_load, at_start, rot, w3, modal, stations, joints):
-    """Element kinds and transfers about the guess z_star (phi slots), written in angular
-    acceleration slots; returns 0, or j + 1 for an element j (2k: hinge k, 2k + 1: body k) of a
-    kind this loop does not know.  at_start: the consistent-start solve, where the phi slots
-    already hold angular accelerations and elastic hinges are LOCKED (their loads are set by the
-    caller).  guess: each body's kinematics at the guess; ground: (rot, lam, w, wd, dwd, phi) of
-    the ground.  rot, w3: the bodies' rotations at the step's start and the integrator's offsets
-    (beams).  modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map), flat over the beams' modal
-    coordinates.  A body welded to a beam's output (fixed hinge) takes its rotation from the
-    beam's end section (kernels/transfers/beam.py).  stations = (independent, w1_st, w1_c): in the
-    paper's scheme (independent) every station point (w1_st, n + 1 of them: the ground point,
-    then each body's output) and every rigid body's mass centre (w1_c) has its own Newmark
-    history, a_X = c1 dr_X + w1_X (docs/solver.md, "The paper's scheme").  joints =
-    (full_tree, q, q', q'', given, forces): in the full-state tree sweep (RICCATI_JOINTS) ball
-    joints and joints with coordinates are JOINT elements (kernels/transfers/joint.py), linearized
-    about the coordinates' guess; given (n, 3): each JointForce drive's value over the step (a
-    compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
-    addresses."""
-    kind = sweep_tables.kind(sweep)
-    u = sweep_tables.u(sweep)
-    joint_dof = sweep_tables.joint_dof(sweep)
-    joint_tau_nu = sweep_tables.joint_tau_nu(sweep)
-    independent, w1_st, w1_c = stations
-    full_tree, q_j, qd_j, qdd_j, given, forces = joints
-    independent = independent and not at_start
-    body_params, hinge_kind = model_tables.body_params(params), model_tables.hinge_kind(params)
-    hinge_params = model_tables.hinge_params(params)
-    parent, gravity = model_tables.parent(params), model_tables.gravity(params)
-    hinge_row, body_row = model_tables.hinge_row(params), model_tables.body_row(params)
-    joint_drive = model_tables.joint_drive(params)
-    body_kind = model_tables.body_kind(params)
-    beam_params = model_tables.beam_params(params)
-    beam_moments = model_tables.beam_moments(params)
-    mode_off = model_tables.mode_offset(params)
-    beam_ends = model_tables.beam_ends(params)
-    beam_factors = model_tables.beam_factors(params)
-    eta, eta_d, w1e, w3e, eta_dd_star, eta_map = modal
-    phi_star, rot_star, lam, w, wd, dw, dwd = guess
-    n = hinge_kind.shape[0]
-    load, w1_out, dw1 = np.empty(3), np.empty(3), np.empty(3)
-    most_modes = 0
-    for k in range(n):
-        most_modes = max(most_modes, mode_off[k + 1] - mode_off[k])
-    beam_work = np.empty(transfer_work_size(most_modes))    # (one block for every beam)
-    for k in range(n):
-        jh = 2 * k
-        hk = hinge_kind[k]
-        p = parent[k]
-        hr, row = hinge_row[k], body_row[k]   # (their rows of the shared tables)
-        if full_tree and (hk == BALL or has_coordinates(hk)):
-            kind[jh] = EL_JOINT
-            if p < 0:
-                rot_p, w_p, wd_p = ground[0], ground[2], ground[3]
-            else:
-                rot_p, w_p, wd_p = rot_star[p], w[p], wd[p]
-            drive = joint_drive[k if has_coordinates(hk) else 0]   # (a ball joint's:
-            # unread, and the table has one row of none without joints with coordinates)
-            joint_linearization(hk, hinge_params[hr], drive, given[k], rot_p,
-                                w_p, wd_p, q_j[k], qd_j[k], qdd_j[k], c1, c3, at_start, u[jh],
-                                joint_dof[k], joint_tau_nu[k], forces)
-        elif hk == BALL:
-            kind[jh] = EL_BALL
-        elif hk == FIXED:
-            kind[jh] = IDENTITY
-        elif hk == ELASTIC and at_start:
-            kind[jh] = LOCKED
-        elif hk == ELASTIC:
-            kind[jh] = TRANSFER
-            if p < 0:
-                rot_in, lam_in, w_in, wd_in, dwd_in, phi_in = ground
-                dw_in = dwd_in
-            else:
-                rot_in, lam_in, w_in, wd_in, dw_in, dwd_in, phi_in = (
-                    rot_star[p], lam[p], w[p], wd[p], dw[p], dwd[p], phi_star[p])
-            if p == k - 1:
-                z_in = z_star[jh]           # the hinge's inboard station: 2k in a chain
-            else:                           # in a tree the parent's output station holds the
-                z_in = z_star[jh + 1].copy()    # loads of all its children: the hinge's own q
-                put1(z_in[3:6], phi_in)         # is its outboard's (a massless hinge passes it)
-            elastic_hinge_transfer(hinge_params[hr], rot_in, lam_in, w_in, dw_in, rot_star[k],
-                                   lam[k], w[k], dw[k], phi_star[k], c1, c3, w1d[k], w3d[k],
-                                   z_in, u[jh])
-            _rotation_slots_to_acceleration(u[jh], dwd_in, wd_in, phi_in, dwd[k], wd[k],
-                                            phi_star[k])
-        else:           # (an unknown kind: the builder's mistake, named by the caller)
-            return jh + 1
-        kind[jh + 1] = TRANSFER
-        if body_kind[k] == BEAM:
-            i0, i1 = mode_off[k], mode_off[k + 1]
-            m = int(beam_params[k, MODES])
-            mt = int(beam_params[k, TORSION_MODES])     # then the twist, then the stretch
-            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and parent[k + 1] == k
-            kout = k + 1 if welded else k
-            for i in range(3):
-                w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
-                dw1[i] = w1_st[k + 1, i] - w1_st[k, i]
-            outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
-                        rot[kout], w1_out)
-            tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
-                      force[k], torque[k], line_load[k],    # (the loads: docs/beam.md)
-                      beam_ends[k, m:m + mt],               # the twist and stretch tables
-                      beam_ends[k, m + mt:i1 - i0 - m])     # (run_tables.beam_tables)
-            history = (independent, dw1)
-            beam_transfer(beam_params[k], tables, outboard, history, gravity, at_start,
-                          rot[k], phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1],
-                          w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z_star[jh + 1],
-                          eta_dd_star[i0:i1], u[jh + 1], eta_map[i0:i1], beam_work)
-        elif body_kind[k] == ROD:
-            # a strain rod (kernels/transfers/strain_rod.py; docs/strain_rod.md, "Its
-            # transfer"): the beam's contract, its strain rows solved inside the element
-            i0, i1 = mode_off[k], mode_off[k + 1]
-            welded = k + 1 < n and hinge_kind[k + 1] == FIXED and parent[k + 1] == k
-            kout = k + 1 if welded else k
-            for i in range(3):
-                w1_out[i] = wd[kout, i] - c1 * phi_star[kout, i]
-            outboard = (welded, hinge_params[hinge_row[kout], 0:9].reshape((3, 3)),
-                        rot[kout], w1_out)
-            rod_transfer(rod_tables_of(params, k), outboard, gravity, at_start, rot[k],
-                         phi_star[k], wd[k], c1, c3, w3[k], w[k], w1e[i0:i1], w3e[i0:i1],
-                         eta[i0:i1], eta_d[i0:i1], z_star[jh + 1], eta_dd_star[i0:i1],
-                         u[jh + 1], eta_map[i0:i1])
-        elif body_kind[k] == RIGID:
-            for i in range(3):
-                load[i] = body_params[row, 0] * gravity[i] + force[k, i]
-            rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
-                                w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
-            if independent:
-                station_history_correction(body_params[row], rot[k], rot_star[k], lam[k], dwd[k],
-                                           dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],
-                                           w1_c[k], z_star[jh + 1], u[jh + 1])
-            if not at_start:
-                _rotation_slots_to_acceleration(u[jh + 1], dwd[k], wd[k], phi_star[k], dwd[k],
-                                                wd[k], phi_star[k])
-        else:
-            return jh + 2
-    return 0
 
 
 
@@ -434,28 +288,31 @@ def _predict(loop, run, s, _):
     (docs/solver.md, "Compile time"); and every field is read first, in the piece's first
     block (item 6 there)."""
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
-    rot_ = state_tables.rot(state)
-    omega_ = state_tables.omega(state)
-    omega_dot_ = state_tables.omega_dot(state)
-    pseudo_ = state_tables.pseudo(state)
-    z_ = state_tables.z(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    pseudo = state_tables.pseudo(state)
+    z = state_tables.z(state)
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
     eta_acc = state_tables.eta_acc(state)
     eta_p = state_tables.eta_p(state)
-    defl_ = state_tables.defl(state)
-    defl_rate_ = state_tables.defl_rate(state)
-    defl_acc_ = state_tables.defl_acc(state)
-    defl_pseudo_ = state_tables.defl_pseudo(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    defl_acc = state_tables.defl_acc(state)
+    defl_pseudo = state_tables.defl_pseudo(state)
     jq = state_tables.jq(state)
     jqd = state_tables.jqd(state)
     jqdd = state_tables.jqdd(state)
     jqp = state_tables.jqp(state)
-    guess, ground, w1, w3, w1d, w3d = (loop.guess, loop.ground, loop.w1, loop.w3, loop.w1d,
-                                       loop.w3d)
-    w1e, w3e, eta_dd_star, z_star, root_f = (loop.w1e, loop.w3e, loop.eta_dd_star, loop.z_star,
-                                             loop.root_f)
-    histories, (w1q, w3q, q_s, qd_s, qdd_s) = loop.histories, loop.joints
+    scratch = loop.scratch
+    guess, ground = _guess_of(scratch), _ground_of(scratch)
+    w1, w3 = general_tables.w1(scratch), general_tables.w3(scratch)
+    w1d, w3d = general_tables.w1d(scratch), general_tables.w3d(scratch)
+    w1e, w3e = general_tables.w1e(scratch), general_tables.w3e(scratch)
+    eta_dd_star, z_star = general_tables.eta_dd_star(scratch), general_tables.z_star(scratch)
+    root_f = general_tables.root_f(scratch)
+    histories, (w1q, w3q, q_s, qd_s, qdd_s) = _histories_of(scratch), _joints_of(scratch)
     h, coef, mode = settings.h, settings.coef, settings.mode
     hinge_kind = model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -465,10 +322,6 @@ def _predict(loop, run, s, _):
     lock_rel = model_tables.lock_rel(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot, omega, omega_dot, pseudo, z = (rot_, omega_, omega_dot_, pseudo_,
-                                        z_)
-    defl, defl_rate, defl_acc, defl_pseudo = (defl_, defl_rate_, defl_acc_,
-                                              defl_pseudo_)
     rot_before, rot_now = inputs.g_rot[s], inputs.g_rot[s + 1]
     g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
     g_acc, joint_input = inputs.g_acc[s], inputs.joint_input[s]
@@ -530,12 +383,18 @@ def _iterate(loop, run, s, it):
     rot = state_tables.rot(state)
     u = sweep_tables.u(sweep)
     joint_nu = sweep_tables.joint_nu(sweep)
-    guess, ground, w1d, w3d, z_star, w3 = (loop.guess, loop.ground, loop.w1d, loop.w3d,
-                                           loop.z_star, loop.w3)
-    w1e, w3e, eta_dd_star, eta_dd_new = loop.w1e, loop.w3e, loop.eta_dd_star, loop.eta_dd_new
-    root_f, g_inv, histories, joints_, forces = (loop.root_f, loop.g_inv, loop.histories,
-                                                 loop.joints, loop.forces)
-    loops, at_guess = loop.loops, loop.at_guess
+    scratch, loops = loop.scratch, loop.loops
+    guess, ground = _guess_of(scratch), _ground_of(scratch)
+    w1d, w3d = general_tables.w1d(scratch), general_tables.w3d(scratch)
+    z_star, w3 = general_tables.z_star(scratch), general_tables.w3(scratch)
+    w1e, w3e = general_tables.w1e(scratch), general_tables.w3e(scratch)
+    eta_dd_star = general_tables.eta_dd_star(scratch)
+    eta_dd_new = general_tables.eta_dd_new(scratch)
+    root_f, g_inv = general_tables.root_f(scratch), general_tables.g_inv(scratch)
+    histories, joints_ = _histories_of(scratch), _joints_of(scratch)
+    forces = general_tables.forces(scratch)
+    at_guess = (general_tables.eta_g(scratch), general_tables.eta_d_g(scratch),
+                general_tables.defl_g(scratch), general_tables.defl_rate_g(scratch))
     step_coef = loop_tables.step_coef(loops)
     target_ = loop_tables.target(loops)
     all_bodies = loop_tables.all_bodies(loops)
@@ -627,9 +486,14 @@ def _adopt(loop, run, s, it):
     rot = state_tables.rot(state)
     jq = state_tables.jq(state)
     eta = state_tables.eta(state)
-    guess, w1, w3, w1e, w3e = loop.guess, loop.w1, loop.w3, loop.w1e, loop.w3e
-    z_star, eta_dd_star, eta_dd_new = loop.z_star, loop.eta_dd_star, loop.eta_dd_new
-    w1q, w3q, q_s, qd_s, qdd_s = loop.joints
+    scratch = loop.scratch
+    guess = _guess_of(scratch)
+    w1, w3 = general_tables.w1(scratch), general_tables.w3(scratch)
+    w1e, w3e = general_tables.w1e(scratch), general_tables.w3e(scratch)
+    z_star = general_tables.z_star(scratch)
+    eta_dd_star = general_tables.eta_dd_star(scratch)
+    eta_dd_new = general_tables.eta_dd_new(scratch)
+    w1q, w3q, q_s, qd_s, qdd_s = _joints_of(scratch)
     mode = settings.mode
     hinge_kind = model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -675,26 +539,29 @@ def _update(loop, run, s, _):
                                               run.sweep)
     joint_nu = sweep_tables.joint_nu(sweep)
     joint_tau = sweep_tables.joint_tau(sweep)
-    rot_ = state_tables.rot(state)
-    omega_ = state_tables.omega(state)
-    omega_dot_ = state_tables.omega_dot(state)
-    pseudo_ = state_tables.pseudo(state)
-    z_ = state_tables.z(state)
+    rot = state_tables.rot(state)
+    omega = state_tables.omega(state)
+    omega_dot = state_tables.omega_dot(state)
+    pseudo = state_tables.pseudo(state)
+    z = state_tables.z(state)
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
     eta_acc = state_tables.eta_acc(state)
     eta_p = state_tables.eta_p(state)
-    defl_ = state_tables.defl(state)
-    defl_rate_ = state_tables.defl_rate(state)
-    defl_acc_ = state_tables.defl_acc(state)
-    defl_pseudo_ = state_tables.defl_pseudo(state)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    defl_acc = state_tables.defl_acc(state)
+    defl_pseudo = state_tables.defl_pseudo(state)
     jq = state_tables.jq(state)
     jqd = state_tables.jqd(state)
     jqdd = state_tables.jqdd(state)
     jqp = state_tables.jqp(state)
     jtau = state_tables.jtau(state)
-    histories, w1q, w1d = loop.histories, loop.joints[0], loop.w1d
-    eta_dd_new, w1e, e3, rot_prev = loop.eta_dd_new, loop.w1e, loop.e3, loop.rot_prev
+    scratch = loop.scratch
+    histories, w1q = _histories_of(scratch), general_tables.q_w1(scratch)
+    w1d, eta_dd_new = general_tables.w1d(scratch), general_tables.eta_dd_new(scratch)
+    w1e, e3 = general_tables.w1e(scratch), general_tables.e3(scratch)
+    rot_prev = general_tables.rot_prev(scratch)
     loops, target, g_pos, g_vel, g_acc = (loop.loops, inputs.closure_target[s], inputs.g_pos[s],
                                           inputs.g_vel[s], inputs.g_acc[s])
     target_ = loop_tables.target(loops)
@@ -710,10 +577,6 @@ def _update(loop, run, s, _):
     body_kind = model_tables.body_kind(params)
     body_params = model_tables.body_params(params)
     body_row = model_tables.body_row(params)
-    rot, omega, omega_dot, pseudo, z = (rot_, omega_, omega_dot_, pseudo_,
-                                        z_)
-    defl, defl_rate, defl_acc, defl_pseudo = (defl_, defl_rate_, defl_acc_,
-                                              defl_pseudo_)
     rot_now, g_w, g_wd, joint_input = (inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s],
                                        inputs.joint_input[s])
     c1, _ = _integrator_coefficients(h, coef)
@@ -759,8 +622,6 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     """Write the state into run.rec at slot (every field read first, as in _predict)."""
-    wrench_ = loop_tables.wrench(loop.loops)
-    kind = loop_tables.kind(loop.loops)
     state, rec = run.state, run.rec
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
@@ -773,9 +634,9 @@ def _record(loop, run, s, slot):
     jq = state_tables.jq(state)
     jqd = state_tables.jqd(state)
     jtau = state_tables.jtau(state)
-    histories = loop.histories
-    n_closing, wrench, closure_wrench = (kind.shape[0],
-                                         wrench_, rec.closure_wrench)
+    histories = _histories_of(loop.scratch)
+    n_closing = loop_tables.kind(loop.loops).shape[0]
+    wrench, closure_wrench = loop_tables.wrench(loop.loops), rec.closure_wrench
     put3(rec.rot[slot], rot)
     put2(rec.omega[slot], omega)
     put2(rec.omega_dot[slot], omega_dot)
