@@ -21,7 +21,8 @@ from dttmm.model.chains import arm, binary_tree, rigid_chain, stiff_cantilever, 
 from dttmm.reference import simulate_reference
 from dttmm.results.result import beam_midpoint_deflection
 from dttmm.elements import BALL, FIXED
-from dttmm.kernels.stepping import step as kstep
+from dttmm.kernels.assembly import sweep as ksweep
+from dttmm.kernels.assembly.solve import solve_step
 from dttmm.solving.run_tables import Workspace, _mode, kernel_model
 from numba import njit
 
@@ -48,7 +49,7 @@ def median_us_per_step(model, steps, repeats, **kw):
 @njit
 def _repeat_solve(repeats, mode, tip_pinned, parent, sweep, root, z):
     for _ in range(repeats):
-        kstep.solve_step(mode, tip_pinned, parent, sweep, root, z)
+        solve_step(mode, tip_pinned, parent, sweep, root, z)
 
 
 def us_per_call(model, steps=1, batches=5, calls=300):
@@ -77,10 +78,10 @@ def floor_us_per_step(model, repeats=20000):
         sweep.u[j, :, :12] = np.eye(12) + 0.05 * rng.normal(size=(12, 12))
         sweep.u[j, :, 12] = rng.normal(size=12)
         if j % 2 == 1:
-            sweep.kind[j] = kstep.TRANSFER
+            sweep.kind[j] = ksweep.TRANSFER
         else:
-            sweep.kind[j] = {BALL: kstep.EL_BALL, FIXED: kstep.IDENTITY}.get(
-                int(chain.hinge_kind[j // 2]), kstep.TRANSFER)
+            sweep.kind[j] = {BALL: ksweep.BALL, FIXED: ksweep.IDENTITY}.get(
+                int(chain.hinge_kind[j // 2]), ksweep.TRANSFER)
     args = (_mode(chain, "riccati", False), chain.tip_pinned, chain.parent, sweep, np.zeros(6),
             ws.state.z)
     _repeat_solve(10, *args)
