@@ -82,8 +82,10 @@ def floor_us_per_step(model, repeats=20000):
         else:
             sweep.kind[j] = {BALL: ksweep.BALL, FIXED: ksweep.IDENTITY}.get(
                 int(chain.hinge_kind[j // 2]), ksweep.TRANSFER)
-    args = (_mode(chain, "riccati", False), chain.tip_pinned, chain.parent, sweep, np.zeros(6),
-            ws.state.z)
+    # (the argument types the loops pass: another would add a second compiled version of
+    # solve_step to the cache, which tests/test_precompile.py finds)
+    args = (_mode(chain, "riccati", False), int(chain.tip_pinned), np.array(chain.parent), sweep,
+            np.zeros(6), ws.state.z)
     _repeat_solve(10, *args)
     t0 = time.perf_counter()
     _repeat_solve(repeats, *args)
