@@ -1,7 +1,8 @@
-"""The flat model and the flat loops (issue 66, item 2; kernels/schema.py): a model's tables, and
-the closing joints' tables and scratch, each in two buffers whose offsets and sizes come from one
-schema, read by the kernels through accessors generated from it (kernels/model_tables.py,
-kernels/loop_tables.py)."""
+"""The flat model and the flat run data (issue 66, item 2; kernels/schema.py): a model's tables,
+the closing joints' tables and scratch, the state, the sweep's and the general loop's scratch, a
+chunk's inputs and record and the error monitor, each in two buffers whose offsets and sizes come
+from one schema, read by the kernels through accessors generated from it (kernels/model_tables.py,
+kernels/loop_tables.py, ...)."""
 import numpy as np
 import pytest
 from numba import njit
@@ -189,3 +190,41 @@ def test_the_general_loops_scratch_reads_back_by_name_in_python_and_in_kernels()
     np.testing.assert_array_equal(scratch.st_a, 2 * st)
     np.testing.assert_array_equal(scratch.c_p, 3 * c)
     np.testing.assert_array_equal(scratch.forces, [7, 9])
+
+
+def test_a_chunks_inputs_record_and_monitor_read_back_by_name_in_python_and_in_kernels():
+    """A chunk's inputs (packed from its tables, as Stepping.inputs_for packs them), its record
+    and the error monitor (made by size, Layout.zeros) flat: every table reads back from the
+    kernels' accessors as Python reads it by name, a view of the buffers, of the shape its sizes
+    give; the paper's point velocities, the mass centres' and the closing joints' wrenches have
+    slots only where recorded."""
+    from dttmm.elements.kinds import MAX_COORDINATES
+    from dttmm.kernels import input_tables, monitor_tables, record_tables
+    from dttmm.solving.consistent_start import _record
+    m, n, rows = 3, 4, 5
+    values = {f.name: np.arange(float(np.prod(shape))).reshape(shape) + 1000.0 * i
+              for i, (f, shape) in enumerate(
+                  (f, tuple({"steps": m, "steps+1": m + 1, "bodies": n, "rows": rows}.get(a, a)
+                            for a in f.shape)) for f in schema.INPUTS)}
+    inputs = schema.INPUT_LAYOUT.pack(**values)
+    assert inputs.steps == m and inputs.g_rot.shape == (m + 1, 3, 3)
+    record = _record(6, n, 7, v_st=True, n_closures=2)
+    monitor = schema.MONITOR_LAYOUT.zeros(bodies=n, modes=7, coordinate_bodies=n,
+                                          elastic_bodies=0)
+    for layout, flat, accessors in ((schema.INPUT_LAYOUT, inputs, input_tables),
+                                    (schema.RECORD_LAYOUT, record, record_tables),
+                                    (schema.MONITOR_LAYOUT, monitor, monitor_tables)):
+        tables = layout.unpack(flat)
+        for field in layout.fields:
+            got = _reader(getattr(accessors, field.name))(flat)
+            np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+            assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
+            if np.size(got):
+                assert np.shares_memory(got, flat.real), field.name
+    for name, value in values.items():
+        np.testing.assert_array_equal(getattr(inputs, name), value, err_msg=name)
+    assert record.rot.shape == (6, n, 3, 3) and record.z.shape == (6, 2 * n + 1, 12)
+    assert record.v_st.shape == (6, n + 1, 3) and record.v_c.shape == (1, n, 3)
+    assert record.closure_wrench.shape == (6, 2, 10) and record.eta.shape == (6, 7)
+    assert monitor.jqp.shape == (n, MAX_COORDINATES) and monitor.defl_pseudo.shape == (0, 3)
+    assert monitor.error.shape == (2,) and not monitor.error.any()

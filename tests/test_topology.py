@@ -160,7 +160,8 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
     # the kernels, bypassing the check: the consistent start reports the element, alone
     # (statics, linear models) and as one pass of the general loop's skeleton (a run's)
     from dttmm.kernels.assembly import solve as ksolve
-    from dttmm.kernels.stepping.loop import Monitor, Settings
+    from dttmm.kernels.schema import MONITOR_LAYOUT
+    from dttmm.kernels.stepping.loop import Settings
     from dttmm.solving.run_tables import Workspace, kernel_params
     from dttmm.solving.consistent_start import _consistent_start
     for odd, element in ((odd_body, "body 'body1' \\(kind 7\\)"),
@@ -168,8 +169,7 @@ def test_an_undeclared_kind_is_refused_not_run_as_another():
         ws = Workspace(odd)
         settings = Settings(ksolve.RICCATI_FULL, 1e-3, np.array([0.25, 0.5, 0.5, 0.5]), 0, 1e-12,
                             1, np.inf, False, False)
-        monitor = Monitor(np.zeros((2, 3)), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 3)),
-                          np.zeros(2))
+        monitor = MONITOR_LAYOUT.zeros(bodies=2, modes=0, coordinate_bodies=0, elastic_bodies=0)
         for in_skeleton in (False, True):
             with pytest.raises(ValueError,
                                match=f"consistent start does not support {element}"):

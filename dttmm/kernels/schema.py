@@ -341,6 +341,88 @@ GENERAL = (
 )
 
 
+# One chunk's prescribed data (solving/drivers.py::Stepping.inputs_for; kernels/stepping/loop.py,
+# "The step"): step s's values at t_{s+1}, the ground's rotations at t_s (s = 0 .. steps).
+INPUT_SIZES = (
+    ("steps", "m: the chunk's steps"),
+    ("bodies", "n: the kernel model's bodies"),
+    ("rows", "R: the closing joints' rows"),
+)
+
+INPUTS = (
+    Field("g_acc", REAL, ("steps", 3), "the ground's acceleration"),
+    Field("g_rot", REAL, ("steps+1", 3, 3), "the ground's rotation at t_s"),
+    Field("g_w", REAL, ("steps", 3), "the ground's angular velocity"),
+    Field("g_wd", REAL, ("steps", 3), "the ground's angular acceleration"),
+    Field("g_pos", REAL, ("steps", 3), "the ground point's position (where closing joints "
+                                       "meet a moving ground)"),
+    Field("g_vel", REAL, ("steps", 3), "its velocity"),
+    Field("force", REAL, ("steps", "bodies", 3), "applied forces (the energy-momentum scheme: "
+                                                 "the step's means)"),
+    Field("torque", REAL, ("steps", "bodies", 3), "applied couples (likewise)"),
+    Field("line_load", REAL, ("steps", "bodies", 3), "a beam's distributed load per length, "
+                                                     "world"),
+    Field("joint_input", REAL, ("steps", "bodies", MAX_COORDINATES, 3),
+          "per joint coordinate: a prescribed motion's (q, q', q''), a JointForce's value"),
+    Field("closure_target", REAL, ("steps", "rows", 3),
+          "per closing joints' row: a driven coordinate's (q, q', q''), else 0 "
+          "(model/closures.py)"),
+)
+
+# Where one chunk's samples are written (solving/consistent_start.py::record_for; read back by
+# results/recording.py): the paper's scheme's point velocities, the mass centres' velocities and
+# the closing joints' wrenches have slots only where they are recorded.
+RECORD_SIZES = (
+    ("slots", "the chunk's samples"),
+    ("bodies", "n: the kernel model's bodies"),
+    ("stations", "2 n + 1"),
+    ("modes", "the beams' modal coordinates"),
+    ("point_slots", "slots where the paper's scheme's station points are recorded, else 1"),
+    ("centre_slots", "slots where the mass centres' velocities are recorded, else 1"),
+    ("wrench_slots", "slots where the closing joints' wrenches are recorded, else 1"),
+    ("closings", "the closing joints"),
+)
+
+RECORD = (
+    Field("rot", REAL, ("slots", "bodies", 3, 3), "each body's rotation"),
+    Field("omega", REAL, ("slots", "bodies", 3), "angular velocities, rad/s"),
+    Field("omega_dot", REAL, ("slots", "bodies", 3), "angular accelerations, rad/s^2"),
+    Field("z", REAL, ("slots", "stations", 12), "the stations' states"),
+    Field("defl", REAL, ("slots", "bodies", 3), "the elastic hinges' deflections"),
+    Field("defl_rate", REAL, ("slots", "bodies", 3), "their rates"),
+    Field("eta", REAL, ("slots", "modes"), "the beams' modal coordinates"),
+    Field("eta_d", REAL, ("slots", "modes"), "their rates"),
+    Field("v_st", REAL, ("point_slots", "bodies+1", 3), "the paper's scheme's station points' "
+                                                        "velocities"),
+    Field("v_c", REAL, ("centre_slots", "bodies", 3), "the mass centres' velocities (the "
+                                                      "energy-momentum scheme)"),
+    Field("jq", REAL, ("slots", "bodies", MAX_COORDINATES), "joint coordinates"),
+    Field("jqd", REAL, ("slots", "bodies", MAX_COORDINATES), "their rates"),
+    Field("jtau", REAL, ("slots", "bodies", MAX_COORDINATES), "their generalized forces"),
+    Field("closure_wrench", REAL, ("wrench_slots", "closings", 10),
+          "the closing joints' force and couple on side b (world), their drives' generalized "
+          "forces and their coordinates' rates"),
+)
+
+# The step's local error estimate's memory (docs/solver.md, "Runs that cannot go wrong"): the
+# state's pseudo-accelerations before a step, and the run's largest estimate.
+MONITOR_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("modes", "the beams' modal coordinates"),
+    ("coordinate_bodies", "n where joints have coordinates, else 0"),
+    ("elastic_bodies", "n where elastic hinges deflect, else 0"),
+)
+
+MONITOR = (
+    Field("pseudo", REAL, ("bodies", 3), "the rotations' pseudo-accelerations before a step"),
+    Field("eta_p", REAL, ("modes",), "the modal coordinates'"),
+    Field("jqp", REAL, ("coordinate_bodies", MAX_COORDINATES), "the joint coordinates'"),
+    Field("defl_pseudo", REAL, ("elastic_bodies", 3), "the elastic hinges' deflections'"),
+    Field("error", REAL, (2,), "the run's largest local error estimate so far; the failing "
+                               "step's"),
+)
+
+
 def axes(shape):
     """[(size name or None, constant, plus)] of a schema shape's axes."""
     dims = []
@@ -445,6 +527,17 @@ class Layout:
         """Size `name` of a flat structure."""
         return int(flat.size[self._size[name]])
 
+    def zeros(self, **sizes):
+        """The flat structure of these sizes (by name; every size), its tables zero."""
+        size = np.array([sizes[name] for name, _ in self.sizes], dtype=np.int64)
+        start = np.zeros(len(self.fields), dtype=np.int64)
+        used = {REAL: 0, INT: 0}
+        for i, f in enumerate(self.fields):
+            start[i] = used[f.buffer]
+            used[f.buffer] += math.prod(constant if name is None else sizes[name] + plus
+                                        for name, constant, plus in axes(f.shape))
+        return self.cls(np.zeros(used[REAL]), np.zeros(used[INT], dtype=np.int64), start, size)
+
     def copy(self, flat):
         """A flat structure's own copy (a run's: every array its own, as a checkpoint that
         restores into it or marks it read-only expects)."""
@@ -519,6 +612,23 @@ class FlatGeneral(FlatTables):
     """The general loop's own scratch, flat (GENERAL; kernels/general_tables.py)."""
 
 
+class FlatInputs(FlatTables):
+    """One chunk's prescribed data, flat (INPUTS; kernels/input_tables.py)."""
+
+    @property
+    def steps(self):
+        """m: the chunk's steps."""
+        return int(self.size[0])
+
+
+class FlatRecord(FlatTables):
+    """Where one chunk's samples are written, flat (RECORD; kernels/record_tables.py)."""
+
+
+class FlatMonitor(FlatTables):
+    """The step's error estimate's memory, flat (MONITOR; kernels/monitor_tables.py)."""
+
+
 MODEL_LAYOUT = Layout("The flat model's tables", "SIZES", MODEL, FlatModel, "model_tables.py")
 LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", "LOOP_SIZES", LOOPS,
                      FlatLoops, "loop_tables.py")
@@ -529,15 +639,24 @@ SWEEP_LAYOUT = Layout("The assembly's flat scratch", "SWEEP_SIZES", SWEEP, FlatS
 GENERAL_LAYOUT = Layout("The general loop's flat scratch", "GENERAL_SIZES", GENERAL, FlatGeneral,
                         "general_tables.py")
 FlatLoops.layout, FlatState.layout, FlatSweep.layout = LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT
-FlatGeneral.layout = GENERAL_LAYOUT
-LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, GENERAL_LAYOUT)
+INPUT_LAYOUT = Layout("One chunk's flat inputs", "INPUT_SIZES", INPUTS, FlatInputs,
+                      "input_tables.py")
+RECORD_LAYOUT = Layout("One chunk's flat record", "RECORD_SIZES", RECORD, FlatRecord,
+                       "record_tables.py")
+MONITOR_LAYOUT = Layout("The step's flat error monitor", "MONITOR_SIZES", MONITOR, FlatMonitor,
+                        "monitor_tables.py")
+FlatGeneral.layout, FlatInputs.layout = GENERAL_LAYOUT, INPUT_LAYOUT
+FlatRecord.layout, FlatMonitor.layout = RECORD_LAYOUT, MONITOR_LAYOUT
+LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, GENERAL_LAYOUT, INPUT_LAYOUT,
+           RECORD_LAYOUT, MONITOR_LAYOUT)
 
 pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 
 
 def write():
     """(Re)write every layout's accessors (kernels/model_tables.py, loop_tables.py,
-    state_tables.py, sweep_tables.py, general_tables.py) after an edit of the schema:
+    state_tables.py, sweep_tables.py, general_tables.py, input_tables.py, record_tables.py,
+    monitor_tables.py) after an edit of the schema:
     ``python -c "from dttmm.kernels import schema; schema.write()"``."""
     for layout in LAYOUTS:
         layout.write()

@@ -4,14 +4,13 @@ import numpy as np
 
 from ..elements.drives import MOTION
 from ..elements.hinges import ELASTIC
-from ..elements.kinds import MAX_COORDINATES
 from ..kernels.stepping import ball_chain
 from ..kernels.stepping import weld_chain
 from ..kernels.stepping import step as kstep
 from ..kernels import python_twin
 from ..kernels.assembly.closure import set_ground
-from ..kernels.stepping.loop import (OK, SINGULAR, UNSUPPORTED, Inputs,
-                                     Record, Run)
+from ..kernels.schema import INPUT_LAYOUT, RECORD_LAYOUT
+from ..kernels.stepping.loop import OK, SINGULAR, UNSUPPORTED, Run
 from ..kernels.stepping.loop import DirectCalls, run_steps
 from ..kernels.assembly.sweep import LOST_ACCURACY
 from ..model.model import model_fact
@@ -138,27 +137,21 @@ def start_pass(params, settings, state, sweep, monitor, ground, loads, joint_inp
     g_acc, g_rot, g_w, g_wd, g_pos, g_vel = ground
     force, torque, line_load = loads
     return Run(params, settings._replace(newton_max=0, start=True), state, sweep,
-               Inputs(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w, g_wd=g_wd,
-                      g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
-                      line_load=line_load, joint_input=joint_input,
-                      closure_target=np.zeros((1, n_closures, 3))),
+               INPUT_LAYOUT.pack(g_acc=g_acc, g_rot=np.concatenate([g_rot, g_rot]), g_w=g_w,
+                                 g_wd=g_wd, g_pos=g_pos, g_vel=g_vel, force=force, torque=torque,
+                                 line_load=line_load, joint_input=joint_input,
+                                 closure_target=np.zeros((1, n_closures, 3))),
                _record(0, len(state.rot), len(state.eta)), monitor)
 
 
 def _record(n_rec_max, n, n_eta, v_st=False, v_c=False, n_closures=0):
-    """Where a chunk's samples are written (kernels/stepping/loop.py::Record): n_rec_max of each;
-    the paper scheme's station velocities, the mass-centre velocities and the closing joints'
-    wrenches only where recorded."""
-    return Record(rot=np.empty((n_rec_max, n, 3, 3)), omega=np.empty((n_rec_max, n, 3)),
-                  omega_dot=np.empty((n_rec_max, n, 3)), z=np.empty((n_rec_max, 2 * n + 1, 12)),
-                  defl=np.zeros((n_rec_max, n, 3)), defl_rate=np.zeros((n_rec_max, n, 3)),
-                  eta=np.zeros((n_rec_max, n_eta)), eta_d=np.zeros((n_rec_max, n_eta)),
-                  v_st=np.zeros((n_rec_max if v_st else 1, n + 1, 3)),
-                  v_c=np.zeros((n_rec_max if v_c else 1, n, 3)),
-                  jq=np.zeros((n_rec_max, n, MAX_COORDINATES)),
-                  jqd=np.zeros((n_rec_max, n, MAX_COORDINATES)),
-                  jtau=np.zeros((n_rec_max, n, MAX_COORDINATES)),
-                  closure_wrench=np.zeros((n_rec_max if n_closures else 1, n_closures, 10)))
+    """Where a chunk's samples are written (kernels/schema.py::RECORD, a FlatRecord): n_rec_max
+    of each; the paper scheme's station velocities, the mass-centre velocities and the closing
+    joints' wrenches only where recorded."""
+    return RECORD_LAYOUT.zeros(slots=n_rec_max, bodies=n, stations=2 * n + 1, modes=n_eta,
+                               point_slots=n_rec_max if v_st else 1,
+                               centre_slots=n_rec_max if v_c else 1,
+                               wrench_slots=n_rec_max if n_closures else 1, closings=n_closures)
 
 
 _NOT_FINITE_START = -(1 << 30)      # a start pass's status for accelerations not finite

@@ -11,13 +11,12 @@ import numpy as np
 
 from . import adaptive as adaptive_steps
 from . import consistent_start, run_checks, run_inputs, run_records, run_tables
-from ..elements.kinds import MAX_COORDINATES
 from .energy_balance import EnergyBalance
 from ..results.feedback import Progress, note_once
 from ..model.loop_rows import closure_targets
 from ..kernels.stepping import runge_kutta as runge_kutta_kernels
-from ..kernels.stepping.loop import (ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED,
-                                     Inputs, Run)
+from ..kernels.schema import INPUT_LAYOUT
+from ..kernels.stepping.loop import ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Run
 from ..results.recording import Checkpoint, NoCheckpoint, Recording, SampleStream
 from .resolution import warn_unresolved
 from ..results.result import _drive_spring_energy
@@ -66,7 +65,7 @@ class Stepping:
             run_records.CHUNK if opts.adaptive else opts.n_steps - done))
         self.static_ground = model.ground_motion is None
         self.no_loads = not plan.has_loads
-        self._constants = None          # (constant_inputs)
+        self._fixed_ground = None       # (fixed_ground)
         # nothing prescribed varies in time: every chunk of m steps reads the same inputs
         self.static_inputs = (self.static_ground and self.no_loads
                               and not plan.joint_inputs_vary and not plan.targets_vary
@@ -98,52 +97,45 @@ class Stepping:
                 np.arange(m + 1) * h, None, h))
         return self.inputs_for((done + np.arange(m + 1)) * h, (done + np.arange(m) + 0.5) * h, h)
 
-    def constant_inputs(self):
-        """(ground, loads, joint inputs, closure targets) of chunks of up to self.size steps
-        where they do not vary in time (a fixed ground's; zero loads, joint inputs and targets,
-        written where they do vary), made once per chunk size."""
-        if self._constants is None:
-            plan, model, size = self.plan, self.plan.model, self.size
-            n = model.n_bodies
-            self._constants = (
-                plan.chunk_arrays(("ground", size), lambda: run_inputs._ground(model,
-                                                                               np.zeros(size + 1)))
-                if self.static_ground else None,
-                plan.chunk_arrays(("loads", size), lambda: tuple(
-                    np.zeros((size, n, 3)) for _ in range(3))) if self.no_loads else None,
-                plan.chunk_arrays(("joint_input", size),
-                                  lambda: np.zeros((size, n, MAX_COORDINATES, 3))),
-                plan.chunk_arrays(("closure_target", size),
-                                  lambda: np.zeros((size, plan.loops.rows, 3))))
-        return self._constants
+    def fixed_ground(self):
+        """A fixed ground's six arrays (run_inputs._ground) for chunks of up to self.size steps,
+        made once."""
+        if self._fixed_ground is None:
+            self._fixed_ground = self.plan.chunk_arrays(
+                ("ground", self.size),
+                lambda: run_inputs._ground(self.plan.model, np.zeros(self.size + 1)))
+        return self._fixed_ground
 
     def inputs_for(self, times, mid_times, h):
-        """The prescribed data of m = len(times) - 1 steps of h from times[0]: at the steps'
-        ends times[1:] (the energy-momentum step's loads: at mid_times)."""
+        """The prescribed data of m = len(times) - 1 steps of h from times[0] (a FlatInputs,
+        kernels/schema.py::INPUTS; zero where nothing is prescribed): at the steps' ends
+        times[1:] (the energy-momentum step's loads: at mid_times)."""
         plan, model = self.plan, self.plan.model
         m = len(times) - 1
-        ground, zero_loads, joint_input, closure_target = self.constant_inputs()
+        inputs = INPUT_LAYOUT.zeros(steps=m, bodies=model.n_bodies, rows=plan.loops.rows)
         if self.static_ground:
-            ga, gr, gw, gwd, gp, gv = ground
+            ga, gr, gw, gwd, gp, gv = (a[:m + 1] for a in self.fixed_ground())
         else:
             ga, gr, gw, gwd, gp, gv = run_inputs._ground(model, times)
             ga, gw, gwd, gp, gv = ga[1:], gw[1:], gwd[1:], gp[1:], gv[1:]
-        f, tq, ll = zero_loads if self.no_loads else run_inputs._loads(
-            model, mid_times if self.opts.scheme.loads_at_midpoints else times[1:])
-        ji = (run_inputs._joint_inputs(model, times[1:], plan.state, h) if plan.joint_inputs_vary
-              else joint_input)
+        for name, value in (("g_acc", ga[:m]), ("g_rot", gr), ("g_w", gw[:m]),
+                            ("g_wd", gwd[:m]), ("g_pos", gp[:m]), ("g_vel", gv[:m])):
+            getattr(inputs, name)[:] = value
+        if not self.no_loads:
+            loads = run_inputs._loads(model, mid_times if self.opts.scheme.loads_at_midpoints
+                                      else times[1:])
+            for name, value in zip(("force", "torque", "line_load"), loads):
+                getattr(inputs, name)[:] = value
+        if plan.joint_inputs_vary:
+            inputs.joint_input[:] = run_inputs._joint_inputs(model, times[1:], plan.state, h)
         loops = plan.loops
-        ct = closure_targets(model, times[1:], loops) if plan.targets_vary else \
-            closure_target
+        if plan.targets_vary:
+            inputs.closure_target[:] = closure_targets(model, times[1:], loops)
         for r, law, who in plan.closing_forces:  # f(t, q, q') at the predictor from the last
-            q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its
-            ct[0, r, 2] = run_inputs._drive_number(law(times[1], q + h * qd + 0.5 * h * h * qdd,
-                                                        # proj.)
-                                              qd + h * qdd), who, times[1])
-        return Inputs(g_acc=ga[:m], g_rot=gr[:m + 1], g_w=gw[:m], g_wd=gwd[:m], g_pos=gp[:m],
-                      g_vel=gv[:m], force=f[:m],
-                      torque=tq[:m], line_load=ll[:m], joint_input=ji[:m],
-                      closure_target=ct[:m])
+            q, qd, qdd = loops.g[r], loops.gd[r], loops.acc[r]  # step's q, q' (its projection)
+            inputs.closure_target[0, r, 2] = run_inputs._drive_number(
+                law(times[1], q + h * qd + 0.5 * h * h * qdd, qd + h * qdd), who, times[1])
+        return inputs
 
     def run_chunk(self, inputs, rec, h, every, first_step, t_first, step_limit=None):
         """The compiled loop over one chunk's steps (stopping at a step whose estimate exceeds

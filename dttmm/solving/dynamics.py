@@ -135,7 +135,8 @@ class _Evaluation:
         from . import run_checks, run_tables
         from .run_plan import copies_of, kept_arrays, movable_arrays
         from ..model.closures import check_runs_in_sweeps
-        from ..kernels.stepping.loop import Monitor, Settings
+        from ..kernels.schema import MONITOR_LAYOUT
+        from ..kernels.stepping.loop import Settings
         if model.n_closures and not model.tip_pinned:
             check_runs_in_sweeps(model, "forward_dynamics", moving_ground=True)
         run_checks.check_supported(model, "newmark", "riccati", True)
@@ -147,9 +148,8 @@ class _Evaluation:
                                  newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)
         n = km.n_bodies
-        monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(int(km.n_modes.sum())),
-                          jqp=np.zeros((n, MAX_COORDINATES)), defl_pseudo=np.zeros((0, 3)),
-                          error=np.zeros(2))
+        monitor = MONITOR_LAYOUT.zeros(bodies=n, modes=int(km.n_modes.sum()),
+                                       coordinate_bodies=n, elastic_bodies=0)
         ws = run_tables.Workspace(km)
         self.params = run_tables.kernel_params(km)
         self.columns = run_tables.coordinate_columns(model)

@@ -30,7 +30,8 @@ from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
 from ..elements.kinds import BODY_KIND
-from ..kernels.stepping.loop import DirectCalls, Monitor, Settings, run_steps
+from ..kernels.schema import MONITOR_LAYOUT
+from ..kernels.stepping.loop import DirectCalls, Settings, run_steps
 from .methods import SCHEMES
 from ..model.model import model_fact
 from ..results.recording import RecordLayout, leaves, model_fingerprint
@@ -111,12 +112,10 @@ class PreparedRun:
             mode=mode, h=dt, coef=coef, newton_max=int(opts.newton_iterations),
             newton_tol=opts.newton_tol, record_every=1, max_step_error=opts.max_step_error,
             stop_unconverged=scheme.stop_unconverged, start=False)
-        monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(len(state.eta)),
-                          jqp=np.zeros((n if run_tables.has_coordinates(model) else 0,
-                                        run_tables.MAX_COORDINATES)),
-                          defl_pseudo=np.zeros((n if (model.hinge_kind == run_tables.ELASTIC).any()
-                                                else 0, 3)),
-                          error=np.zeros(2))
+        monitor = MONITOR_LAYOUT.zeros(
+            bodies=n, modes=len(state.eta),
+            coordinate_bodies=n if run_tables.has_coordinates(model) else 0,
+            elastic_bodies=n if (model.hinge_kind == run_tables.ELASTIC).any() else 0)
         welded = runs_welded(model, mode, scheme)
         loop = runner = None
         if fused and mode == ksolve.RICCATI_TREE:

@@ -32,7 +32,8 @@ from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from ..elements.strain_rod import ROD_LENGTH
 from ..model.rod_motion import rod_centre_line, rod_end_section
 from ..kernels.stepping import ball_chain
-from ..kernels.stepping.loop import Monitor, Settings
+from ..kernels.schema import MONITOR_LAYOUT
+from ..kernels.stepping.loop import Settings
 from ..kernels.transfers.joint import joint_frame, n_coordinates
 from ..kernels.algebra.so3 import expm_so3
 from ..kernels.stepping.loop import run_steps
@@ -279,10 +280,9 @@ class _Configuration:
         self.settings = Settings(mode=self.mode, h=1.0, coef=run_tables.Integrator.from_rho_inf(1.0)
                                  .array(), newton_max=0, newton_tol=0.0, record_every=1,
                                  max_step_error=np.inf, stop_unconverged=False, start=False)
-        self.monitor = Monitor(pseudo=np.zeros((n, 3)), eta_p=np.zeros(self.n_eta),
-                               jqp=np.zeros((n if run_tables.has_coordinates(km) else 0,
-                                             MAX_COORDINATES)),
-                               defl_pseudo=np.zeros((0, 3)), error=np.zeros(2))
+        self.monitor = MONITOR_LAYOUT.zeros(
+            bodies=n, modes=self.n_eta, elastic_bodies=0,
+            coordinate_bodies=n if run_tables.has_coordinates(km) else 0)
         self.fused = None
         if (run_tables.FUSED_BALL_CHAIN and self.mode == run_tables.ksolve.RICCATI_REDUCED
                 and not km.needs_general_loop

@@ -14,7 +14,8 @@ import numpy as np
 from numba import njit
 
 from ...elements import BEAM, RIGID
-from .. import CONTRACT, kernel, loop_piece, model_tables, state_tables, sweep_tables
+from .. import (CONTRACT, input_tables, kernel, loop_piece, model_tables, record_tables,
+                state_tables, sweep_tables)
 from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from ..transfers.body import kappa_values, rigid_point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
@@ -238,6 +239,10 @@ def _iterate(loop, run, s, it):
     """One forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
     (recovery, beams' modal accelerations); returns (status, detail, change)."""
     params, state, inputs, sweep = run.params, run.state, run.inputs, run.sweep
+    force = input_tables.force(inputs)
+    torque = input_tables.torque(inputs)
+    line_load = input_tables.line_load(inputs)
+    g_acc = input_tables.g_acc(inputs)
     eta_map = state_tables.eta_map(state)
     s_mat = sweep_tables.red_s(sweep)
     p_vec = sweep_tables.red_p(sweep)
@@ -256,7 +261,6 @@ def _iterate(loop, run, s, it):
                                          loop.per_mode[4])
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
-    force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind = model_tables.body_kind(params)
     beam_params = model_tables.beam_params(params)
     beam_moments = model_tables.beam_moments(params)
@@ -265,7 +269,7 @@ def _iterate(loop, run, s, it):
     beam_factors = model_tables.beam_factors(params)
     n = rot.shape[0]
     for i in range(3):
-        p_vec[0, i] = inputs.g_acc[s, i]
+        p_vec[0, i] = g_acc[s, i]
         for j in range(3):
             s_mat[0, i, j] = 0.0
     for k in range(n):
@@ -388,6 +392,11 @@ def _update(loop, run, s, _):
 def record_state(state, rec, slot):
     """The bodies' rotations, angular velocities and accelerations and the modal coordinates
     and rates into the record's slot (every fused loop's _record; its stations apart)."""
+    rec_eta = record_tables.eta(rec)
+    rec_eta_d = record_tables.eta_d(rec)
+    rec_omega = record_tables.omega(rec)
+    rec_omega_dot = record_tables.omega_dot(rec)
+    rec_rot = record_tables.rot(rec)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -395,32 +404,35 @@ def record_state(state, rec, slot):
     eta_d = state_tables.eta_d(state)
     for k in range(rot.shape[0]):
         for i in range(3):
-            rec.omega[slot, k, i] = omega[k, i]
-            rec.omega_dot[slot, k, i] = omega_dot[k, i]
+            rec_omega[slot, k, i] = omega[k, i]
+            rec_omega_dot[slot, k, i] = omega_dot[k, i]
             for j in range(3):
-                rec.rot[slot, k, i, j] = rot[k, i, j]
+                rec_rot[slot, k, i, j] = rot[k, i, j]
     for i in range(eta.shape[0]):
-        rec.eta[slot, i] = eta[i]
-        rec.eta_d[slot, i] = eta_d[i]
+        rec_eta[slot, i] = eta[i]
+        rec_eta_d[slot, i] = eta_d[i]
 
 
 @loop_piece
 def _record(loop, run, s, slot):
+    g_rot = input_tables.g_rot(run.inputs)
+    z = record_tables.z(run.rec)
     red_aq = sweep_tables.red_aq(run.sweep)
     phi_g = loop.vecs[4]
-    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
-    _write_stations(red_aq, loop.per_body[3], phi_g, run.rec.z[slot])
+    _ground_increment(g_rot, s, loop.mats[6], phi_g)
+    _write_stations(red_aq, loop.per_body[3], phi_g, z[slot])
     record_state(run.state, run.rec, slot)
 
 
 @loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
+    g_rot = input_tables.g_rot(run.inputs)
     red_aq = sweep_tables.red_aq(run.sweep)
     z = state_tables.z(run.state)
     if n_steps > 0:
         phi_g = loop.vecs[4]
-        _ground_increment(run.inputs.g_rot, n_steps - 1, loop.mats[6], phi_g)
+        _ground_increment(g_rot, n_steps - 1, loop.mats[6], phi_g)
         _write_stations(red_aq, loop.per_body[3], phi_g, z)
 
 

@@ -17,7 +17,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece, model_tables, state_tables, sweep_tables
+from .. import (input_tables, loop_piece, model_tables, record_tables, state_tables,
+                sweep_tables)
 from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
@@ -64,6 +65,8 @@ def _predict(loop, run, s, _):
 def _iterate(loop, run, s, it):
     """Every element's step transfer about the guess, the sweep; returns (status, detail,
     change) with change the largest update of a rotation increment (rad)."""
+    torque = input_tables.torque(run.inputs)
+    force = input_tables.force(run.inputs)
     params, state, sweep = run.params, run.state, run.sweep
     kind = sweep_tables.kind(sweep)
     u = sweep_tables.u(sweep)
@@ -91,10 +94,10 @@ def _iterate(loop, run, s, it):
         row = body_row[k]             # (the body's row of the shared tables)
         load = loop.load
         for i in range(3):
-            load[i] = body_params[row, 0] * gravity[i] + run.inputs.force[s, k, i]
+            load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
         rigid_body_transfer_em(body_params[row], inertia[row], rot[k],
                                omega[k], v_c[k], h, z_star[2 * k + 1], load,
-                               run.inputs.torque[s, k], u[2 * k + 1])
+                               torque[s, k], u[2 * k + 1])
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
     status = solve_step(run.settings.mode, model_tables.tip_pinned(params),
@@ -150,16 +153,21 @@ def _update(loop, run, s, _):
 @loop_piece
 def _record(loop, run, s, slot):
     state, rec = run.state, run.rec
+    rec_rot = record_tables.rot(rec)
+    rec_omega = record_tables.omega(rec)
+    rec_omega_dot = record_tables.omega_dot(rec)
+    rec_v_c = record_tables.v_c(rec)
+    rec_z = record_tables.z(rec)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
     v_c = state_tables.v_c(state)
     z = state_tables.z(state)
-    put3(rec.rot[slot], rot)
-    put2(rec.omega[slot], omega)
-    put2(rec.omega_dot[slot], omega_dot)
-    put2(rec.v_c[slot], v_c)
-    put2(rec.z[slot], z)
+    put3(rec_rot[slot], rot)
+    put2(rec_omega[slot], omega)
+    put2(rec_omega_dot[slot], omega_dot)
+    put2(rec_v_c[slot], v_c)
+    put2(rec_z[slot], z)
 
 
 @loop_piece

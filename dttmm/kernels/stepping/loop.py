@@ -10,9 +10,12 @@ positional arrays:
             a FlatState: read by name through kernels/state_tables.py)
   sweep     the assembly's scratch (element transfers, Riccati and direct sweeps), flat
             (kernels/schema.py::SWEEP, a FlatSweep: kernels/sweep_tables.py)
-  Inputs    one chunk's prescribed data (ground motion, applied loads), step by step
-  Record    where one chunk's samples are written
-  Monitor   the step's local error estimate (docs/solver.md, "Runs that cannot go wrong")
+  inputs    one chunk's prescribed data (ground motion, applied loads), step by step, flat
+            (kernels/schema.py::INPUTS, a FlatInputs: kernels/input_tables.py)
+  rec       where one chunk's samples are written, flat (RECORD, a FlatRecord:
+            kernels/record_tables.py)
+  monitor   the step's local error estimate, flat (MONITOR, a FlatMonitor:
+            kernels/monitor_tables.py; docs/solver.md, "Runs that cannot go wrong")
 
 bundled as one Run, and a loop variant's own scratch (its "loop" structure).  run_steps is the
 skeleton: predict, then Newton iterations (iterate: linearize, sweep, recover; adopt: the
@@ -29,7 +32,7 @@ from types import FunctionType
 from numba import njit
 from numba._dispatcher import compute_fingerprint
 
-from .. import CONTRACT, no_alloc_kernel, state_tables
+from .. import CONTRACT, input_tables, monitor_tables, no_alloc_kernel, state_tables
 from ..algebra.mat3 import put1, put2
 
 OK, SINGULAR, NOT_FINITE, UNSUPPORTED, ERROR_ESTIMATE, UNCONVERGED = 0, 1, 2, 3, 4, 5
@@ -46,31 +49,6 @@ Settings = namedtuple("Settings", [
     "stop_unconverged",  # stop (UNCONVERGED) at a step whose Newton iterations do not converge
     "start",            # the consistent start instead of steps: the fused variants' one linear
                         # sweep at acceleration level (kernels/stepping/ball_chain.py::start_loop)
-])
-
-Inputs = namedtuple("Inputs", [
-    "g_acc", "g_rot", "g_w", "g_wd",   # ground: (m, 3) at t_{s+1}; rotations (m + 1, 3, 3) at t_s
-    "g_pos", "g_vel",                  # (m, 3) the ground point's position and velocity at
-                                       # t_{s+1} (where closing joints meet a moving ground)
-    "force", "torque",                 # (m, n, 3) applied at t_{s+1} (EM: the step's means)
-    "line_load",                       # (m, n, 3) a beam's distributed load per length, world
-    "joint_input",                     # (m, n, 3, 3) per joint coordinate at t_{s+1}: a
-                                       # prescribed motion's (q, q', q''), a JointForce's value
-    "closure_target",                  # (m, R, 3) per closing joints' row at t_{s+1}: a driven
-                                       # coordinate's (q, q', q''), else 0 (model/closures.py)
-])
-
-Record = namedtuple("Record", [
-    "rot", "omega", "omega_dot", "z", "defl", "defl_rate", "eta", "eta_d",
-    "v_st", "v_c",      # the paper's scheme's point velocities; the EM scheme's mass centres
-    "jq", "jqd", "jtau",  # joint coordinates, rates, generalized forces
-    "closure_wrench",   # (m, 10) the closing joints' force and couple on side b (world),
-                        # their drives' generalized forces and their coordinates' rates
-])
-
-Monitor = namedtuple("Monitor", [
-    "pseudo", "eta_p", "jqp", "defl_pseudo",   # the state's pseudo-accelerations before a step
-    "error",            # (2,) the run's largest local error estimate so far; the failing step's
 ])
 
 # params: the flat model (kernels/schema.py::FlatModel)
@@ -170,13 +148,14 @@ def _run_steps(loop, run, out_info):
     eta_p = state_tables.eta_p(state)
     jqp = state_tables.jqp(state)
     defl_pseudo = state_tables.defl_pseudo(state)
-    n_steps = run.inputs.force.shape[0]
+    n_steps = input_tables.force(run.inputs).shape[0]
     newton_max, newton_tol = settings.newton_max, settings.newton_tol
     start, h, beta = settings.start, settings.h, settings.coef[0]
     max_step_error, record_every = settings.max_step_error, settings.record_every
     stop_unconverged = settings.stop_unconverged
-    kept, error_so_far = (monitor.pseudo, monitor.eta_p, monitor.jqp,
-                          monitor.defl_pseudo), monitor.error
+    kept = (monitor_tables.pseudo(monitor), monitor_tables.eta_p(monitor),
+            monitor_tables.jqp(monitor), monitor_tables.defl_pseudo(monitor))
+    error_so_far = monitor_tables.error(monitor)
     max_iter = 0
     n_rec = 0
     for s in range(n_steps):

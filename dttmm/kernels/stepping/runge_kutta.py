@@ -21,7 +21,7 @@ from types import FunctionType
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, no_alloc_kernel, state_tables, sweep_tables
+from .. import CONTRACT, no_alloc_kernel, record_tables, state_tables, sweep_tables
 from .ball_chain import record_state
 from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
 from ..algebra.mat3 import mm3_into
@@ -207,6 +207,7 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
     a step is taken again with a quarter of its length where a pass fails, and the run stops
     with ERROR_ESTIMATE once the step falls below h_min.  rtol = 0: fixed steps of rk's h (no
     error estimate; its last step lands on the chunk's end)."""
+    rec_z = record_tables.z(rec)
     a, b, _, e3_w, e5_w, d = rk.tables     # (the nodes c unread: the models it runs have no
     state = run.state                       # time-dependent input, _check_runge_kutta)
     rot = state_tables.rot(state)
@@ -308,7 +309,7 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
                 record_state(state, rec, n_rec)
                 for st in range(z.shape[0]):
                     for i in range(12):
-                        rec.z[n_rec, st, i] = z[st, i]
+                        rec_z[n_rec, st, i] = z[st, i]
                 sample_steps[n_rec] = int(control[2]) + 1
                 n_rec += 1
         # recentre: R0 <- exp(theta^) R0, theta <- 0; the next step's first stage is this

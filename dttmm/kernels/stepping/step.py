@@ -24,8 +24,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import (CONTRACT, allocating_kernel, general_tables, kernel, loop_piece, loop_tables,
-                model_tables, state_tables, sweep_tables)
+from .. import (CONTRACT, allocating_kernel, general_tables, input_tables, kernel, loop_piece,
+                loop_tables, model_tables, record_tables, state_tables, sweep_tables)
 from ..schema import GENERAL_LAYOUT
 from ...elements import BEAM, ROD
 from ...elements.hinges import ELASTIC, FIXED
@@ -288,6 +288,11 @@ def _predict(loop, run, s, _):
     (docs/solver.md, "Compile time"); and every field is read first, in the piece's first
     block (item 6 there)."""
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
+    g_rot = input_tables.g_rot(inputs)
+    g_w_steps = input_tables.g_w(inputs)
+    g_wd_steps = input_tables.g_wd(inputs)
+    g_acc_steps = input_tables.g_acc(inputs)
+    joint_input_steps = input_tables.joint_input(inputs)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -322,9 +327,9 @@ def _predict(loop, run, s, _):
     lock_rel = model_tables.lock_rel(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot_before, rot_now = inputs.g_rot[s], inputs.g_rot[s + 1]
-    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
-    g_acc, joint_input = inputs.g_acc[s], inputs.joint_input[s]
+    rot_before, rot_now = g_rot[s], g_rot[s + 1]
+    g_w, g_wd = g_w_steps[s], g_wd_steps[s]
+    g_acc, joint_input = g_acc_steps[s], joint_input_steps[s]
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     n = hinge_kind.shape[0]
@@ -376,6 +381,17 @@ def _iterate(loop, run, s, it):
     _predict."""
     params, settings, state, sweep, inputs = (run.params, run.settings, run.state, run.sweep,
                                               run.inputs)
+    force_steps = input_tables.force(inputs)
+    torque_steps = input_tables.torque(inputs)
+    line_load_steps = input_tables.line_load(inputs)
+    joint_input_steps = input_tables.joint_input(inputs)
+    closure_target = input_tables.closure_target(inputs)
+    g_pos_steps = input_tables.g_pos(inputs)
+    g_vel_steps = input_tables.g_vel(inputs)
+    g_acc_steps = input_tables.g_acc(inputs)
+    g_rot = input_tables.g_rot(inputs)
+    g_w_steps = input_tables.g_w(inputs)
+    g_wd_steps = input_tables.g_wd(inputs)
     z = state_tables.z(state)
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
@@ -403,15 +419,15 @@ def _iterate(loop, run, s, it):
     tip_pinned = model_tables.tip_pinned(params)
     parent = model_tables.parent(params)
     h, coef, mode = settings.h, settings.coef, settings.mode
-    force, torque, line_load, joint_input = (inputs.force[s], inputs.torque[s],
-                                             inputs.line_load[s], inputs.joint_input[s, :, :, 0])
+    force, torque, line_load, joint_input = (force_steps[s], torque_steps[s],
+                                             line_load_steps[s], joint_input_steps[s, :, :, 0])
     # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
-    target, g_pos, g_vel = inputs.closure_target[s], inputs.g_pos[s], inputs.g_vel[s]
-    g_acc, rot_now, g_w, g_wd = (inputs.g_acc[s], inputs.g_rot[s + 1], inputs.g_w[s],
-                                 inputs.g_wd[s])
+    target, g_pos, g_vel = closure_target[s], g_pos_steps[s], g_vel_steps[s]
+    g_acc, rot_now, g_w, g_wd = (g_acc_steps[s], g_rot[s + 1], g_w_steps[s],
+                                 g_wd_steps[s])
     if settings.start:      # the consistent start (Settings.start): one pass, at t
         start = initial_accelerations(params, settings, state, sweep, (g_acc, rot_now, g_w, g_wd),
-                                      force, torque, line_load, inputs.joint_input[s], loops,
+                                      force, torque, line_load, joint_input_steps[s], loops,
                                       forces)
         return (OK, 0, 0.0) if start == 0 else (SINGULAR, start, 0.0)
     c1, c3 = _integrator_coefficients(h, coef)
@@ -482,6 +498,9 @@ def _adopt(loop, run, s, it):
     read first, as in _predict)."""
     joint_nu = sweep_tables.joint_nu(run.sweep)
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
+    g_rot = input_tables.g_rot(inputs)
+    g_w_steps = input_tables.g_w(inputs)
+    g_wd_steps = input_tables.g_wd(inputs)
     z = state_tables.z(state)
     rot = state_tables.rot(state)
     jq = state_tables.jq(state)
@@ -502,7 +521,7 @@ def _adopt(loop, run, s, it):
     locked = model_tables.locked(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot_now, g_w, g_wd = inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s]
+    rot_now, g_w, g_wd = g_rot[s + 1], g_w_steps[s], g_wd_steps[s]
     c1, c3 = _integrator_coefficients(settings.h, settings.coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     put2(z_star, z)
@@ -537,6 +556,14 @@ def _update(loop, run, s, _):
     first, as in _predict)."""
     params, state, inputs, settings, sweep = (run.params, run.state, run.inputs, run.settings,
                                               run.sweep)
+    closure_target = input_tables.closure_target(inputs)
+    g_pos_steps = input_tables.g_pos(inputs)
+    g_vel_steps = input_tables.g_vel(inputs)
+    g_acc_steps = input_tables.g_acc(inputs)
+    g_rot = input_tables.g_rot(inputs)
+    g_w_steps = input_tables.g_w(inputs)
+    g_wd_steps = input_tables.g_wd(inputs)
+    joint_input_steps = input_tables.joint_input(inputs)
     joint_nu = sweep_tables.joint_nu(sweep)
     joint_tau = sweep_tables.joint_tau(sweep)
     rot = state_tables.rot(state)
@@ -562,8 +589,8 @@ def _update(loop, run, s, _):
     w1d, eta_dd_new = general_tables.w1d(scratch), general_tables.eta_dd_new(scratch)
     w1e, e3 = general_tables.w1e(scratch), general_tables.e3(scratch)
     rot_prev = general_tables.rot_prev(scratch)
-    loops, target, g_pos, g_vel, g_acc = (loop.loops, inputs.closure_target[s], inputs.g_pos[s],
-                                          inputs.g_vel[s], inputs.g_acc[s])
+    loops, target, g_pos, g_vel, g_acc = (loop.loops, closure_target[s], g_pos_steps[s],
+                                          g_vel_steps[s], g_acc_steps[s])
     target_ = loop_tables.target(loops)
     kind = loop_tables.kind(loops)
     h, coef, mode = settings.h, settings.coef, settings.mode
@@ -577,8 +604,8 @@ def _update(loop, run, s, _):
     body_kind = model_tables.body_kind(params)
     body_params = model_tables.body_params(params)
     body_row = model_tables.body_row(params)
-    rot_now, g_w, g_wd, joint_input = (inputs.g_rot[s + 1], inputs.g_w[s], inputs.g_wd[s],
-                                       inputs.joint_input[s])
+    rot_now, g_w, g_wd, joint_input = (g_rot[s + 1], g_w_steps[s], g_wd_steps[s],
+                                       joint_input_steps[s])
     c1, _ = _integrator_coefficients(h, coef)
     n = hinge_kind.shape[0]
     if histories[0]:
@@ -623,6 +650,20 @@ def _update(loop, run, s, _):
 def _record(loop, run, s, slot):
     """Write the state into run.rec at slot (every field read first, as in _predict)."""
     state, rec = run.state, run.rec
+    closure_wrench = record_tables.closure_wrench(rec)
+    rec_rot = record_tables.rot(rec)
+    rec_omega = record_tables.omega(rec)
+    rec_omega_dot = record_tables.omega_dot(rec)
+    rec_z = record_tables.z(rec)
+    rec_defl = record_tables.defl(rec)
+    rec_defl_rate = record_tables.defl_rate(rec)
+    rec_eta = record_tables.eta(rec)
+    rec_eta_d = record_tables.eta_d(rec)
+    rec_jq = record_tables.jq(rec)
+    rec_jqd = record_tables.jqd(rec)
+    rec_jtau = record_tables.jtau(rec)
+    rec_v_st = record_tables.v_st(rec)
+    rec_v_c = record_tables.v_c(rec)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -636,23 +677,23 @@ def _record(loop, run, s, slot):
     jtau = state_tables.jtau(state)
     histories = _histories_of(loop.scratch)
     n_closing = loop_tables.kind(loop.loops).shape[0]
-    wrench, closure_wrench = loop_tables.wrench(loop.loops), rec.closure_wrench
-    put3(rec.rot[slot], rot)
-    put2(rec.omega[slot], omega)
-    put2(rec.omega_dot[slot], omega_dot)
-    put2(rec.z[slot], z)
-    put2(rec.defl[slot], defl)
-    put2(rec.defl_rate[slot], defl_rate)
-    put1(rec.eta[slot], eta)
-    put1(rec.eta_d[slot], eta_d)
-    put2(rec.jq[slot], jq)
-    put2(rec.jqd[slot], jqd)
-    put2(rec.jtau[slot], jtau)
+    wrench = loop_tables.wrench(loop.loops)
+    put3(rec_rot[slot], rot)
+    put2(rec_omega[slot], omega)
+    put2(rec_omega_dot[slot], omega_dot)
+    put2(rec_z[slot], z)
+    put2(rec_defl[slot], defl)
+    put2(rec_defl_rate[slot], defl_rate)
+    put1(rec_eta[slot], eta)
+    put1(rec_eta_d[slot], eta_d)
+    put2(rec_jq[slot], jq)
+    put2(rec_jqd[slot], jqd)
+    put2(rec_jtau[slot], jtau)
     if n_closing > 0:
         put2(closure_wrench[slot], wrench)
     if histories[0]:
-        put2(rec.v_st[slot], histories[1])
-        put2(rec.v_c[slot], histories[4])
+        put2(rec_v_st[slot], histories[1])
+        put2(rec_v_c[slot], histories[4])
 
 
 @loop_piece

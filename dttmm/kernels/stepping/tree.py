@@ -8,7 +8,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .. import loop_piece, model_tables, state_tables, sweep_tables
+from .. import input_tables, loop_piece, model_tables, record_tables, state_tables, sweep_tables
 from ...elements import BEAM, RIGID
 from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
                          recover_body)
@@ -53,6 +53,10 @@ def _iterate(loop, run, s, it):
     accelerations.  Returns (status, detail, change)."""
     red_aq = sweep_tables.red_aq(run.sweep)
     params, state, inputs = run.params, run.state, run.inputs
+    force = input_tables.force(inputs)
+    torque = input_tables.torque(inputs)
+    line_load = input_tables.line_load(inputs)
+    g_acc = input_tables.g_acc(inputs)
     eta_map = state_tables.eta_map(state)
     rot_ = state_tables.rot(state)
     c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
@@ -70,7 +74,6 @@ def _iterate(loop, run, s, it):
     parent = loop.parent
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
-    force, torque, line_load = inputs.force, inputs.torque, inputs.line_load
     body_kind = model_tables.body_kind(params)
     beam_params = model_tables.beam_params(params)
     beam_moments = model_tables.beam_moments(params)
@@ -113,8 +116,8 @@ def _iterate(loop, run, s, it):
     for k in range(n):
         p = parent[k]
         if p < 0:
-            tree_reduced_recover(maps[k], s_in[k], p_in[k], inputs.g_acc[s, 0],
-                                 inputs.g_acc[s, 1], inputs.g_acc[s, 2], aq_in[k], aq_out[k])
+            tree_reduced_recover(maps[k], s_in[k], p_in[k], g_acc[s, 0],
+                                 g_acc[s, 1], g_acc[s, 2], aq_in[k], aq_out[k])
         else:
             tree_reduced_recover(maps[k], s_in[k], p_in[k], aq_out[p, 0], aq_out[p, 1],
                                  aq_out[p, 2], aq_in[k], aq_out[k])
@@ -128,16 +131,19 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _write(loop, run, s, z):
+    g_rot = input_tables.g_rot(run.inputs)
+    g_acc = input_tables.g_acc(run.inputs)
     red_aq = sweep_tables.red_aq(run.sweep)
     phi_g = loop.vecs[4]
-    _ground_increment(run.inputs.g_rot, s, loop.mats[6], phi_g)
-    write_tree_stations(loop.parent, run.inputs.g_acc[s], phi_g, red_aq, loop.aq_out,
+    _ground_increment(g_rot, s, loop.mats[6], phi_g)
+    write_tree_stations(loop.parent, g_acc[s], phi_g, red_aq, loop.aq_out,
                         loop.per_body[3], z)
 
 
 @loop_piece
 def _record(loop, run, s, slot):
-    _write(loop, run, s, run.rec.z[slot])
+    z = record_tables.z(run.rec)
+    _write(loop, run, s, z[slot])
     record_state(run.state, run.rec, slot)
 
 

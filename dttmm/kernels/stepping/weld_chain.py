@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, kernel, loop_piece, model_tables, state_tables
+from .. import CONTRACT, input_tables, kernel, loop_piece, model_tables, record_tables, state_tables
 from .ball_chain import _adopt as _adopt_solution
 from .ball_chain import _ground_increment, record_state
 from .ball_chain import _update as _update_integrated
@@ -95,11 +95,15 @@ def _predict(loop, run, s, _):
     w3 = g_w - c3 phi_g; and the root's known [a, w']."""
     _predict_offsets(loop, run, s, 0)
     inputs = run.inputs
+    g_rot = input_tables.g_rot(inputs)
+    g_w_steps = input_tables.g_w(inputs)
+    g_wd_steps = input_tables.g_wd(inputs)
+    g_acc = input_tables.g_acc(inputs)
     c1, c3 = loop.coefficients[0], loop.coefficients[1]
     w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
     phi_g = loop.vecs[4]
-    _ground_increment(inputs.g_rot, s, loop.mats[6], phi_g)
-    g_w, g_wd = inputs.g_w[s], inputs.g_wd[s]
+    _ground_increment(g_rot, s, loop.mats[6], phi_g)
+    g_w, g_wd = g_w_steps[s], g_wd_steps[s]
     locked = model_tables.locked(run.params)
     for k in range(locked.shape[0]):
         if locked[k]:
@@ -108,7 +112,7 @@ def _predict(loop, run, s, _):
                 w1[k, i] = g_wd[i] - c1 * phi_g[i]
                 w3[k, i] = g_w[i] - c3 * phi_g[i]
     for i in range(3):
-        loop.root[i] = inputs.g_acc[s, i]
+        loop.root[i] = g_acc[s, i]
         loop.root[3 + i] = g_wd[i]
     _follow_welds(loop, run)
 
@@ -167,6 +171,9 @@ def _iterate(loop, run, s, it):
     backward pass (the stations, then each body's phi and modal accelerations); returns
     (status, detail, change)."""
     params, state, inputs = run.params, run.state, run.inputs
+    force_steps = input_tables.force(inputs)
+    torque_steps = input_tables.torque(inputs)
+    line_load_steps = input_tables.line_load(inputs)
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
     eta_map = state_tables.eta_map(state)
@@ -187,7 +194,7 @@ def _iterate(loop, run, s, it):
     beam_factors = model_tables.beam_factors(params)
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     gravity = model_tables.gravity(params)
-    force, torque, line_load = inputs.force[s], inputs.torque[s], inputs.line_load[s]
+    force, torque, line_load = force_steps[s], torque_steps[s], line_load_steps[s]
     n = phi_star.shape[0]
     for r in range(6):
         p_vec[0, r] = loop.root[r]
@@ -273,6 +280,9 @@ def _update(loop, run, s, _):
     angular acceleration (as step.py's welded bodies); every rate finite?"""
     finite = _update_integrated(loop, run, s, 0)
     params, state, inputs = run.params, run.state, run.inputs
+    g_rot = input_tables.g_rot(inputs)
+    g_w = input_tables.g_w(inputs)
+    g_wd = input_tables.g_wd(inputs)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -288,10 +298,10 @@ def _update(loop, run, s, _):
     scratch = loop.follow[3]
     for k in range(rot.shape[0]):
         if locked[k]:
-            mm3_into(inputs.g_rot[s + 1], lock_rel[k], rot[k])
+            mm3_into(g_rot[s + 1], lock_rel[k], rot[k])
             for i in range(3):
-                omega[k, i] = inputs.g_w[s, i]
-                omega_dot[k, i] = inputs.g_wd[s, i]
+                omega[k, i] = g_w[s, i]
+                omega_dot[k, i] = g_wd[s, i]
     for k in range(1, rot.shape[0]):
         p = k - 1
         i0, i1 = mode_off[p], mode_off[p + 1]
@@ -330,7 +340,8 @@ def _write_stations(stations, phi, phi_g, z):
 
 @loop_piece
 def _record(loop, run, s, slot):
-    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], run.rec.z[slot])
+    z = record_tables.z(run.rec)
+    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], z[slot])
     record_state(run.state, run.rec, slot)
 
 
