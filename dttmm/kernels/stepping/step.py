@@ -134,6 +134,19 @@ def _joints_of(scratch):
             general_tables.qdd_star(scratch))
 
 
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _step_inputs(inputs, s):
+    """Step s's prescribed data as views of the chunk's inputs (kernels/schema.py::INPUTS):
+    (g_acc, rot_before, rot_now, g_w, g_wd, g_pos, g_vel, target, force, torque, line_load,
+    joint_input), the ground's rotation at t_s and t_{s+1}, the rest at t_{s+1}."""
+    g_rot = input_tables.g_rot(inputs)
+    return (input_tables.g_acc(inputs)[s], g_rot[s], g_rot[s + 1], input_tables.g_w(inputs)[s],
+            input_tables.g_wd(inputs)[s], input_tables.g_pos(inputs)[s],
+            input_tables.g_vel(inputs)[s], input_tables.closure_target(inputs)[s],
+            input_tables.force(inputs)[s], input_tables.torque(inputs)[s],
+            input_tables.line_load(inputs)[s], input_tables.joint_input(inputs)[s])
+
+
 def _coefficients_py(h, coef):
     beta, gamma, alpha_m, alpha_f = coef
     return (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h), gamma / (beta * h)
@@ -288,11 +301,8 @@ def _predict(loop, run, s, _):
     (docs/solver.md, "Compile time"); and every field is read first, in the piece's first
     block (item 6 there)."""
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
-    g_rot = input_tables.g_rot(inputs)
-    g_w_steps = input_tables.g_w(inputs)
-    g_wd_steps = input_tables.g_wd(inputs)
-    g_acc_steps = input_tables.g_acc(inputs)
-    joint_input_steps = input_tables.joint_input(inputs)
+    (g_acc, rot_before, rot_now, g_w, g_wd, _, _, _, _, _, _,
+     joint_input) = _step_inputs(inputs, s)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -327,9 +337,6 @@ def _predict(loop, run, s, _):
     lock_rel = model_tables.lock_rel(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot_before, rot_now = g_rot[s], g_rot[s + 1]
-    g_w, g_wd = g_w_steps[s], g_wd_steps[s]
-    g_acc, joint_input = g_acc_steps[s], joint_input_steps[s]
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     n = hinge_kind.shape[0]
@@ -381,17 +388,9 @@ def _iterate(loop, run, s, it):
     _predict."""
     params, settings, state, sweep, inputs = (run.params, run.settings, run.state, run.sweep,
                                               run.inputs)
-    force_steps = input_tables.force(inputs)
-    torque_steps = input_tables.torque(inputs)
-    line_load_steps = input_tables.line_load(inputs)
-    joint_input_steps = input_tables.joint_input(inputs)
-    closure_target = input_tables.closure_target(inputs)
-    g_pos_steps = input_tables.g_pos(inputs)
-    g_vel_steps = input_tables.g_vel(inputs)
-    g_acc_steps = input_tables.g_acc(inputs)
-    g_rot = input_tables.g_rot(inputs)
-    g_w_steps = input_tables.g_w(inputs)
-    g_wd_steps = input_tables.g_wd(inputs)
+    # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
+    (g_acc, _, rot_now, g_w, g_wd, g_pos, g_vel, target, force, torque, line_load,
+     joint_inputs) = _step_inputs(inputs, s)
     z = state_tables.z(state)
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
@@ -419,15 +418,10 @@ def _iterate(loop, run, s, it):
     tip_pinned = model_tables.tip_pinned(params)
     parent = model_tables.parent(params)
     h, coef, mode = settings.h, settings.coef, settings.mode
-    force, torque, line_load, joint_input = (force_steps[s], torque_steps[s],
-                                             line_load_steps[s], joint_input_steps[s, :, :, 0])
-    # (at t_{s+1}: the ground's and the closing joints' targets, for the loops)
-    target, g_pos, g_vel = closure_target[s], g_pos_steps[s], g_vel_steps[s]
-    g_acc, rot_now, g_w, g_wd = (g_acc_steps[s], g_rot[s + 1], g_w_steps[s],
-                                 g_wd_steps[s])
+    joint_input = joint_inputs[:, :, 0]
     if settings.start:      # the consistent start (Settings.start): one pass, at t
         start = initial_accelerations(params, settings, state, sweep, (g_acc, rot_now, g_w, g_wd),
-                                      force, torque, line_load, joint_input_steps[s], loops,
+                                      force, torque, line_load, joint_inputs, loops,
                                       forces)
         return (OK, 0, 0.0) if start == 0 else (SINGULAR, start, 0.0)
     c1, c3 = _integrator_coefficients(h, coef)
@@ -498,9 +492,7 @@ def _adopt(loop, run, s, it):
     read first, as in _predict)."""
     joint_nu = sweep_tables.joint_nu(run.sweep)
     params, state, inputs, settings = run.params, run.state, run.inputs, run.settings
-    g_rot = input_tables.g_rot(inputs)
-    g_w_steps = input_tables.g_w(inputs)
-    g_wd_steps = input_tables.g_wd(inputs)
+    _, _, rot_now, g_w, g_wd, _, _, _, _, _, _, _ = _step_inputs(inputs, s)
     z = state_tables.z(state)
     rot = state_tables.rot(state)
     jq = state_tables.jq(state)
@@ -521,7 +513,6 @@ def _adopt(loop, run, s, it):
     locked = model_tables.locked(params)
     joint_drive = model_tables.joint_drive(params)
     body_kind = model_tables.body_kind(params)
-    rot_now, g_w, g_wd = g_rot[s + 1], g_w_steps[s], g_wd_steps[s]
     c1, c3 = _integrator_coefficients(settings.h, settings.coef)
     phi_star, rot_star, lam, w, wd, dw, dwd = guess
     put2(z_star, z)
@@ -556,14 +547,8 @@ def _update(loop, run, s, _):
     first, as in _predict)."""
     params, state, inputs, settings, sweep = (run.params, run.state, run.inputs, run.settings,
                                               run.sweep)
-    closure_target = input_tables.closure_target(inputs)
-    g_pos_steps = input_tables.g_pos(inputs)
-    g_vel_steps = input_tables.g_vel(inputs)
-    g_acc_steps = input_tables.g_acc(inputs)
-    g_rot = input_tables.g_rot(inputs)
-    g_w_steps = input_tables.g_w(inputs)
-    g_wd_steps = input_tables.g_wd(inputs)
-    joint_input_steps = input_tables.joint_input(inputs)
+    (g_acc, _, rot_now, g_w, g_wd, g_pos, g_vel, target, _, _, _,
+     joint_input) = _step_inputs(inputs, s)
     joint_nu = sweep_tables.joint_nu(sweep)
     joint_tau = sweep_tables.joint_tau(sweep)
     rot = state_tables.rot(state)
@@ -589,8 +574,7 @@ def _update(loop, run, s, _):
     w1d, eta_dd_new = general_tables.w1d(scratch), general_tables.eta_dd_new(scratch)
     w1e, e3 = general_tables.w1e(scratch), general_tables.e3(scratch)
     rot_prev = general_tables.rot_prev(scratch)
-    loops, target, g_pos, g_vel, g_acc = (loop.loops, closure_target[s], g_pos_steps[s],
-                                          g_vel_steps[s], g_acc_steps[s])
+    loops = loop.loops
     target_ = loop_tables.target(loops)
     kind = loop_tables.kind(loops)
     h, coef, mode = settings.h, settings.coef, settings.mode
@@ -604,8 +588,6 @@ def _update(loop, run, s, _):
     body_kind = model_tables.body_kind(params)
     body_params = model_tables.body_params(params)
     body_row = model_tables.body_row(params)
-    rot_now, g_w, g_wd, joint_input = (g_rot[s + 1], g_w_steps[s], g_wd_steps[s],
-                                       joint_input_steps[s])
     c1, _ = _integrator_coefficients(h, coef)
     n = hinge_kind.shape[0]
     if histories[0]:
