@@ -78,6 +78,19 @@ def _reader(accessor):
     return read
 
 
+def _reads_back(layout, flat, accessors):
+    """Every table of a flat structure read by its compiled accessor equals the table Python
+    reads by name (and unpack), of the same shape, a view of the buffers where it has entries."""
+    tables = layout.unpack(flat)
+    for field in layout.fields:
+        got = _reader(getattr(accessors, field.name))(flat)
+        np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+        assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
+        if np.size(got):
+            buffer = flat.real if field.buffer == schema.REAL else flat.int
+            assert np.shares_memory(got, buffer), field.name
+
+
 def test_each_compiled_accessor_reads_its_table():
     """The accessors the kernels call (compiled) return each table's view of the buffers: the
     same shape and values as Python's unpack, and a view (no copy) of a table with entries."""
@@ -148,16 +161,8 @@ def test_the_state_and_the_sweep_read_back_by_name_in_python_and_in_kernels(fuse
     km = run_tables.kernel_model(model)[0]
     ws = run_tables.Workspace(km, fused=fused)
     n = km.n_bodies
-    for layout, flat, accessors in ((schema.STATE_LAYOUT, ws.state, state_tables),
-                                    (schema.SWEEP_LAYOUT, ws.sweep, sweep_tables)):
-        tables = layout.unpack(flat)
-        for field in layout.fields:
-            got = _reader(getattr(accessors, field.name))(flat)
-            np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
-            assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
-            if np.size(got):
-                buffer = flat.real if field.buffer == schema.REAL else flat.int
-                assert np.shares_memory(got, buffer), field.name
+    _reads_back(schema.STATE_LAYOUT, ws.state, state_tables)
+    _reads_back(schema.SWEEP_LAYOUT, ws.sweep, sweep_tables)
     np.testing.assert_array_equal(ws.state.rot, km.initial_rotation)
     np.testing.assert_array_equal(ws.state.omega, km.initial_angular_velocity)
     assert ws.state.z.shape == (2 * n + 1, 12) and ws.sweep.red_aq.shape == (n + 1, 6)
@@ -211,16 +216,9 @@ def test_a_chunks_inputs_record_and_monitor_read_back_by_name_in_python_and_in_k
     record = _record(6, n, 7, v_st=True, n_closures=2)
     monitor = schema.MONITOR_LAYOUT.zeros(bodies=n, modes=7, coordinate_bodies=n,
                                           elastic_bodies=0)
-    for layout, flat, accessors in ((schema.INPUT_LAYOUT, inputs, input_tables),
-                                    (schema.RECORD_LAYOUT, record, record_tables),
-                                    (schema.MONITOR_LAYOUT, monitor, monitor_tables)):
-        tables = layout.unpack(flat)
-        for field in layout.fields:
-            got = _reader(getattr(accessors, field.name))(flat)
-            np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
-            assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
-            if np.size(got):
-                assert np.shares_memory(got, flat.real), field.name
+    _reads_back(schema.INPUT_LAYOUT, inputs, input_tables)
+    _reads_back(schema.RECORD_LAYOUT, record, record_tables)
+    _reads_back(schema.MONITOR_LAYOUT, monitor, monitor_tables)
     for name, value in values.items():
         np.testing.assert_array_equal(getattr(inputs, name), value, err_msg=name)
     assert record.rot.shape == (6, n, 3, 3) and record.z.shape == (6, 2 * n + 1, 12)
