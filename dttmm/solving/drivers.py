@@ -108,11 +108,15 @@ class Stepping:
 
     def inputs_for(self, times, mid_times, h):
         """The prescribed data of m = len(times) - 1 steps of h from times[0] (a FlatInputs,
-        kernels/schema.py::INPUTS; zero where nothing is prescribed): at the steps' ends
-        times[1:] (the energy-momentum step's loads: at mid_times)."""
+        kernels/schema.py::INPUTS, zero where nothing is prescribed; valid until the next call
+        of the same length): at the steps' ends times[1:] (the energy-momentum step's loads: at
+        mid_times)."""
         plan, model = self.plan, self.plan.model
         m = len(times) - 1
-        inputs = INPUT_LAYOUT.zeros(steps=m, bodies=model.n_bodies, rows=plan.loops.rows)
+        # (a kept run's inputs of m steps, made once: every call writes all that is prescribed,
+        # and what is not stays zero)
+        inputs = plan.chunk_arrays(("inputs", m), lambda: INPUT_LAYOUT.zeros(
+            steps=m, bodies=model.n_bodies, rows=plan.loops.rows))
         if self.static_ground:
             ga, gr, gw, gwd, gp, gv = (a[:m + 1] for a in self.fixed_ground())
         else:
