@@ -476,7 +476,7 @@ class Layout:
     def pack(self, **arrays):
         """The flat structure of the tables `arrays` (by their schema names; every field): the
         sizes read from the arrays' shapes (an axis named twice must agree), the tables copied
-        into the two buffers in the schema's order."""
+        into the buffers of that size (zeros) in the schema's order."""
         size = np.full(len(self.sizes), -1, dtype=np.int64)
         missing = [f.name for f in self.fields if f.name not in arrays]
         extra = sorted(set(arrays) - set(self._index))
@@ -502,16 +502,11 @@ class Layout:
                 size[self._size[name]] = value
             values.append(a)
         size[size < 0] = 0      # (a size no table names)
-        start = np.zeros(len(self.fields), dtype=np.int64)
-        used = {REAL: 0, INT: 0}
+        flat = self.zeros(**{name: int(v) for (name, _), v in zip(self.sizes, size)})
         for i, (f, a) in enumerate(zip(self.fields, values)):
-            start[i] = used[f.buffer]
-            used[f.buffer] += a.size
-        real, integer = np.empty(used[REAL]), np.empty(used[INT], dtype=np.int64)
-        for i, (f, a) in enumerate(zip(self.fields, values)):
-            buffer = real if f.buffer == REAL else integer
-            buffer[start[i]:start[i] + a.size] = a.ravel()
-        return self.cls(real, integer, start, size)
+            buffer = flat.real if f.buffer == REAL else flat.int
+            buffer[flat.start[i]:flat.start[i] + a.size] = a.ravel()
+        return flat
 
     def unpack(self, flat):
         """{name: view} of a flat structure's tables (the kernels' accessors' views, for
