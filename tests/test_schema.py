@@ -1,8 +1,8 @@
 """The flat model and the flat run data (issue 66, item 2; kernels/schema.py): a model's tables,
-the closing joints' tables and scratch, the state, the sweep's and the general loop's scratch, a
-chunk's inputs and record and the error monitor, each in two buffers whose offsets and sizes come
-from one schema, read by the kernels through accessors generated from it (kernels/model_tables.py,
-kernels/loop_tables.py, ...)."""
+the closing joints' tables and scratch, the state, the sweep's, the general loop's and the fused
+loops' scratch, a chunk's inputs and record and the error monitor, each in two buffers whose
+offsets and sizes come from one schema, read by the kernels through accessors generated from it
+(kernels/model_tables.py, kernels/loop_tables.py, ...)."""
 import numpy as np
 import pytest
 from numba import njit
@@ -226,3 +226,49 @@ def test_a_chunks_inputs_record_and_monitor_read_back_by_name_in_python_and_in_k
     assert record.closure_wrench.shape == (6, 2, 10) and record.eta.shape == (6, 7)
     assert monitor.jqp.shape == (n, MAX_COORDINATES) and monitor.defl_pseudo.shape == (0, 3)
     assert monitor.error.shape == (2,) and not monitor.error.any()
+
+
+def test_the_fused_loops_scratch_reads_back_by_name_in_python_and_in_kernels():
+    """The fused loops' own scratch (FUSED for ball chains and trees, WELD, MOMENTUM and
+    RUNGE_KUTTA), made by their constructors: every table reads back from the kernels'
+    accessors as Python reads it by name (the buffers filled with distinct values first), a
+    chain has no rows of the tree's tables, a tree keeps its parents, the welded loop its
+    stations' guess from z, DOP853's scratch scipy's tableau."""
+    from dttmm.kernels import fused_tables, momentum_tables, runge_kutta_tables, weld_tables
+    from dttmm.kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chain
+    mode_off = np.array([0, 4, 4, 10])              # a beam of 4, a body, a beam of 6 modes
+    coef = np.array([0.25, 0.5, 0.0, 0.0])
+    chain = ball_chain.fused_loop(3, mode_off, 1e-3, coef)
+    ball_tree = tree.fused_tree_loop(3, [-1, 0, 0], mode_off, 1e-3, coef)
+    z = np.arange(7 * 12.0).reshape(7, 12)
+    welded = weld_chain.weld_loop(3, mode_off, 1e-3, coef, z)
+    tableau = runge_kutta.dop853_tables()
+    rk = runge_kutta.runge_kutta_scratch(3, 10, tableau)
+    momentum = em_step.energy_momentum_loop(3)
+    assert type(chain) is schema.FlatFused and type(ball_tree) is schema.FlatFusedTree
+    assert chain.maps.shape == (0, 6, 7) and ball_tree.maps.shape == (3, 6, 7)
+    np.testing.assert_array_equal(ball_tree.parent, [-1, 0, 0])
+    assert chain.per_mode.shape == (5, 10) and chain.beam_work.shape[1] == 12 + 6
+    np.testing.assert_array_equal(welded.stations[:3], z[1:6:2])
+    np.testing.assert_array_equal(welded.stations[3], z[6])
+    np.testing.assert_array_equal(chain.coefficients, welded.coefficients)
+    for table, want in zip(("tableau_a", "tableau_b", "tableau_c", "error_e3", "error_e5",
+                            "dense_d"), tableau):
+        np.testing.assert_array_equal(getattr(rk, table), want, err_msg=table)
+    assert rk.y.shape == (6 * 3 + 2 * 10,) and momentum.z_star.shape == (7, 12)
+    for layout, flat, accessors in ((schema.FUSED_LAYOUT, chain, fused_tables),
+                                    (schema.FUSED_LAYOUT, ball_tree, fused_tables),
+                                    (schema.WELD_LAYOUT, welded, weld_tables),
+                                    (schema.RUNGE_KUTTA_LAYOUT, rk, runge_kutta_tables),
+                                    (schema.MOMENTUM_LAYOUT, momentum, momentum_tables)):
+        flat.real[:] = np.arange(len(flat.real)) + 0.5
+        flat.int[:] = np.arange(len(flat.int))
+        _reads_back(layout, flat, accessors)
+    # the consistent start runs on the loop itself: its coefficients set, the step's returned
+    km = run_tables.kernel_model(build_chain([BallJoint(), unit_link()] * 3))[0]
+    ws = run_tables.Workspace(km, fused=True)
+    rigid = ball_chain.fused_loop(3, km.mode_offsets, 1e-3, coef)
+    step = rigid.coefficients.copy()
+    np.testing.assert_array_equal(ball_chain.start_loop(rigid, ws.state, ws.sweep), step)
+    np.testing.assert_array_equal(rigid.coefficients, [1.0, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(rigid.per_body[1], km.initial_angular_velocity)

@@ -423,6 +423,112 @@ MONITOR = (
 )
 
 
+# The fused loops' own scratch (kernels/stepping/ball_chain.py, tree.py: a chain's and a tree's
+# of ball joints; the tree's tables have no rows in a chain's).
+FUSED_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("modes", "the beams' modal coordinates"),
+    ("work_rows", "rows of beam_ball_map's work block (transfers/beam.py::ball_map_work_shape)"),
+    ("work_columns", "its columns"),
+    ("tree_bodies", "n in a tree, 0 in a chain"),
+)
+
+FUSED = (
+    Field("coefficients", REAL, (4,), "c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, "
+                                      "w = c3 phi + w3)"),
+    Field("per_body", REAL, (4, "bodies", 3), "w1, w3, phi*, phi (the latest solution)"),
+    Field("pmap", REAL, ("bodies", 3, 7), "each body's angular acceleration "
+                                          "w' = pmap [a_I; q_I; 1]"),
+    Field("v", REAL, (6, 7), "one body's reduced map [a_O; q_O] = v [a_I; q_I; 1]"),
+    Field("mats", REAL, (7, 3, 3), "T, its numerator, exp(phi^), A*, J_l(phi*), A_n, the "
+                                   "ground's relative rotation"),
+    Field("vecs", REAL, (5, 3), "w, w', alpha, the load, the ground's increment"),
+    Field("per_mode", REAL, (5, "modes"), "w1e, w3e, the offsets' scratch, eta''*, eta''"),
+    Field("beam_work", REAL, ("work_rows", "work_columns"), "beam_ball_map's work block"),
+    Field("parent", INT, ("tree_bodies",), "the tree's Model.parent"),
+    Field("maps", REAL, ("tree_bodies", 6, 7), "every body's map V (the recovery needs them "
+                                               "all)"),
+    Field("s_in", REAL, ("tree_bodies", 3, 3), "q_I = S_I a_I + P_I"),
+    Field("p_in", REAL, ("tree_bodies", 3), "P_I"),
+    Field("t_inv", REAL, ("tree_bodies", 3, 3), "T^-1 of each body's Riccati step"),
+    Field("port_s", REAL, ("tree_bodies", 3, 3), "q_O = S_O a_O + P_O, summed over the "
+                                                 "children"),
+    Field("port_p", REAL, ("tree_bodies", 3), "P_O"),
+    Field("aq_out", REAL, ("tree_bodies", 6), "every body's output [a; q] (its input's is "
+                                              "the sweep's red_aq[k])"),
+)
+
+# The welded-chain loop's own scratch (kernels/stepping/weld_chain.py).
+WELD_SIZES = (
+    ("bodies", "n: the beams"),
+    ("modes", "the beams' modal coordinates"),
+    ("work", "beam_transfer's work block (transfers/beam.py::transfer_work_size)"),
+)
+
+WELD = (
+    Field("coefficients", REAL, (4,), "c1, c3, 1 / c1, c3 / c1"),
+    Field("per_body", REAL, (4, "bodies", 3), "w1, w3, phi*, phi (the latest solution)"),
+    Field("mats", REAL, (7, 3, 3), "scratch: [2], [5] for _update, [6] the ground's increment"),
+    Field("vecs", REAL, (5, 3), "w, w', the weld's offset w1_out, zero, the ground's increment"),
+    Field("per_mode", REAL, (5, "modes"), "w1e, w3e, the offsets' scratch, eta''*, eta''"),
+    Field("stations", REAL, ("bodies+1", 12), "[a, w', m, q] at each body's input, then the "
+                                              "tip's output"),
+    Field("riccati_s", REAL, ("bodies+1", 6, 6), "the Riccati sweep's S"),
+    Field("riccati_p", REAL, ("bodies+1", 6), "its P"),
+    Field("riccati_t_inv", REAL, ("bodies", 6, 6), "its T^-1"),
+    Field("riccati_t", REAL, ("bodies", 6), "its t"),
+    Field("transfer", REAL, (12, 13), "one beam's transfer"),
+    Field("transfer_work", REAL, (6, 13), "its work for the Riccati step"),
+    Field("root", REAL, (6,), "the ground station's [a, w']"),
+    Field("beam_work", REAL, ("work",), "beam_transfer's work block"),
+    Field("follow_modal", REAL, (2, "modes"), "eta, eta' at the guess (_follow_welds)"),
+    Field("follow_mats", REAL, (3, 3, 3), "A_p*, A*, A* A_n^T"),
+    Field("follow_vecs", REAL, (4, 3), "w_p*, w_p'*, w*, w'*"),
+    Field("follow_work", REAL, (48,), "_follow_welds' scratch"),
+)
+
+# The energy-momentum loop's own scratch (kernels/stepping/em_step.py).
+MOMENTUM_SIZES = (
+    ("stations", "2 n + 1"),
+)
+
+MOMENTUM = (
+    Field("z_star", REAL, ("stations", 12), "the stations' guess"),
+    Field("root_f", REAL, (6,), "a fixed ground: no displacement, no rotation"),
+    Field("rot_new", REAL, (3, 3), "scratch"),
+    Field("omega_new", REAL, (3,), "scratch"),
+    Field("load", REAL, (3,), "scratch: a body's applied force with its weight"),
+)
+
+# The high-order scheme's scratch and tableau (kernels/stepping/runge_kutta.py: DOP853's 12
+# stages, the next step's first and three of the dense output, 16 in all).
+RUNGE_KUTTA_SIZES = (
+    ("bodies", "n: the kernel model's bodies"),
+    ("states", "6 n + 2 (modal coordinates): the integrated state's length"),
+)
+
+RUNGE_KUTTA = (
+    Field("rot0", REAL, ("bodies", 3, 3), "the rotations the step's local coordinates start "
+                                          "from"),
+    Field("y", REAL, ("states",), "the state at t (theta = 0)"),
+    Field("f", REAL, ("states",), "its derivative"),
+    Field("y_new", REAL, ("states",), "the state after the step (theta from rot0)"),
+    Field("y_stage", REAL, ("states",), "a stage's state, a sample's state"),
+    Field("k", REAL, (16, "states"), "the stages' derivatives (12 of the step, the next "
+                                     "step's first, three of the dense output)"),
+    Field("dense", REAL, (7, "states"), "the step's interpolant (scipy's F)"),
+    Field("e3", REAL, (2, 3, 3), "scratch"),
+    Field("control", REAL, (8,), "t, h, steps, rejected steps, evaluations, the last step "
+                                 "rejected, smallest and largest step"),
+    Field("tableau_a", REAL, (16, 16), "DOP853's A (scipy's dop853_coefficients)"),
+    Field("tableau_b", REAL, (12,), "its B"),
+    Field("tableau_c", REAL, (16,), "its C"),
+    Field("error_e3", REAL, (13,), "its E3"),
+    Field("error_e5", REAL, (13,), "its E5"),
+    Field("dense_d", REAL, (4, 16), "its D"),
+)
+
+
 def axes(shape):
     """[(size name or None, constant, plus)] of a schema shape's axes."""
     dims = []
@@ -534,9 +640,9 @@ class Layout:
         return self.cls(np.zeros(used[REAL]), np.zeros(used[INT], dtype=np.int64), start, size)
 
     def copy(self, flat):
-        """A flat structure's own copy (a run's: every array its own, as a checkpoint that
-        restores into it or marks it read-only expects)."""
-        return self.cls(*(a.copy() for a in flat))
+        """A flat structure's own copy, of its class (a run's: every array its own, as a
+        checkpoint that restores into it or marks it read-only expects)."""
+        return type(flat)(*(a.copy() for a in flat))
 
     def _accessor(self, i, f):
         doc = textwrap.wrap(f"{f.buffer}: {f.doc}", 96, initial_indent="# ",
@@ -624,6 +730,29 @@ class FlatMonitor(FlatTables):
     """The step's error estimate's memory, flat (MONITOR; kernels/monitor_tables.py)."""
 
 
+
+class FlatFused(FlatTables):
+    """The fused ball-chain loop's scratch, flat (FUSED; kernels/fused_tables.py)."""
+
+
+class FlatFusedTree(FlatFused):
+    """The fused ball-tree loop's scratch, flat (FUSED, its tree's tables sized; a class of
+    its own: the skeleton's variant is chosen by the scratch's class, loop.py::loop_variant)."""
+
+
+class FlatWeld(FlatTables):
+    """The welded-chain loop's scratch, flat (WELD; kernels/weld_tables.py)."""
+
+
+class FlatMomentum(FlatTables):
+    """The energy-momentum loop's scratch, flat (MOMENTUM; kernels/momentum_tables.py)."""
+
+
+class FlatRungeKutta(FlatTables):
+    """The high-order scheme's scratch and tableau, flat (RUNGE_KUTTA;
+    kernels/runge_kutta_tables.py)."""
+
+
 MODEL_LAYOUT = Layout("The flat model's tables", "SIZES", MODEL, FlatModel, "model_tables.py")
 LOOP_LAYOUT = Layout("The closing joints' flat tables and scratch", "LOOP_SIZES", LOOPS,
                      FlatLoops, "loop_tables.py")
@@ -642,8 +771,20 @@ MONITOR_LAYOUT = Layout("The step's flat error monitor", "MONITOR_SIZES", MONITO
                         "monitor_tables.py")
 FlatGeneral.layout, FlatInputs.layout = GENERAL_LAYOUT, INPUT_LAYOUT
 FlatRecord.layout, FlatMonitor.layout = RECORD_LAYOUT, MONITOR_LAYOUT
+FUSED_LAYOUT = Layout("The fused loops' flat scratch", "FUSED_SIZES", FUSED, FlatFused,
+                      "fused_tables.py")
+WELD_LAYOUT = Layout("The welded-chain loop's flat scratch", "WELD_SIZES", WELD, FlatWeld,
+                     "weld_tables.py")
+MOMENTUM_LAYOUT = Layout("The energy-momentum loop's flat scratch", "MOMENTUM_SIZES", MOMENTUM,
+                         FlatMomentum, "momentum_tables.py")
+RUNGE_KUTTA_LAYOUT = Layout("The high-order scheme's flat scratch", "RUNGE_KUTTA_SIZES",
+                            RUNGE_KUTTA, FlatRungeKutta, "runge_kutta_tables.py")
+FlatFused.layout = FlatFusedTree.layout = FUSED_LAYOUT
+FlatWeld.layout, FlatMomentum.layout = WELD_LAYOUT, MOMENTUM_LAYOUT
+FlatRungeKutta.layout = RUNGE_KUTTA_LAYOUT
 LAYOUTS = (MODEL_LAYOUT, LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, GENERAL_LAYOUT, INPUT_LAYOUT,
-           RECORD_LAYOUT, MONITOR_LAYOUT)
+           RECORD_LAYOUT, MONITOR_LAYOUT, FUSED_LAYOUT, WELD_LAYOUT, MOMENTUM_LAYOUT,
+           RUNGE_KUTTA_LAYOUT)
 
 pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 
@@ -651,7 +792,8 @@ pack, unpack = MODEL_LAYOUT.pack, MODEL_LAYOUT.unpack
 def write():
     """(Re)write every layout's accessors (kernels/model_tables.py, loop_tables.py,
     state_tables.py, sweep_tables.py, general_tables.py, input_tables.py, record_tables.py,
-    monitor_tables.py) after an edit of the schema:
+    monitor_tables.py, fused_tables.py, weld_tables.py, momentum_tables.py,
+    runge_kutta_tables.py) after an edit of the schema:
     ``python -c "from dttmm.kernels import schema; schema.write()"``."""
     for layout in LAYOUTS:
         layout.write()

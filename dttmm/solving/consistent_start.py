@@ -9,7 +9,7 @@ from ..kernels.stepping import weld_chain
 from ..kernels.stepping import step as kstep
 from ..kernels import python_twin
 from ..kernels.assembly.closure import set_ground
-from ..kernels.schema import INPUT_LAYOUT, RECORD_LAYOUT
+from ..kernels.schema import INPUT_LAYOUT, RECORD_LAYOUT, FlatWeld
 from ..kernels.stepping.loop import OK, SINGULAR, UNSUPPORTED, Run
 from ..kernels.stepping.loop import DirectCalls, run_steps
 from ..kernels.assembly.sweep import LOST_ACCURACY
@@ -164,10 +164,10 @@ def _fused_start(runner, loop, run):
     state.eta_acc, as kernels/stepping/step.py::initial_accelerations does; returns its status
     codes."""
     info = np.zeros(5, dtype=np.int64)
-    if isinstance(loop, weld_chain.WeldLoop):
-        runner(weld_chain.start_loop(loop, run), run, info)
-    else:
-        runner(ball_chain.start_loop(loop, run.state, run.sweep), run, info)
+    step_coefficients = (weld_chain.start_loop(loop, run) if isinstance(loop, FlatWeld)
+                         else ball_chain.start_loop(loop, run.state, run.sweep))
+    runner(loop, run, info)
+    loop.coefficients[:] = step_coefficients
     run.state.eta_acc[:] = loop.per_mode[4]
     return _start_status(info)
 

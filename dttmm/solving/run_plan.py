@@ -30,7 +30,7 @@ from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
 from ..elements.kinds import BODY_KIND
-from ..kernels.schema import MONITOR_LAYOUT
+from ..kernels.schema import FUSED_LAYOUT, MONITOR_LAYOUT
 from ..kernels.stepping.loop import DirectCalls, Settings, run_steps
 from .methods import SCHEMES
 from ..model.model import model_fact
@@ -199,7 +199,8 @@ class PreparedRun:
                 params, settings, self.state, self.sweep, self.monitor,  # drives: check_supported)
                 run_inputs._ground(model, [0.0]), run_inputs._loads(model, [0.0]),
                 run_inputs._joint_inputs(model, [0.0]), loops.rows)
-            self.derivative_loop = ball_chain.start_loop(self.loop, self.state, self.sweep)
+            self.derivative_loop = FUSED_LAYOUT.copy(self.loop)    # (its stages' own scratch)
+            ball_chain.start_loop(self.derivative_loop, self.state, self.sweep)
             self.integrator = runge_kutta.runge_kutta_scratch(
                 n, len(self.state.eta), runge_kutta.dop853_tables())
         self.beam_tips = run_checks._beam_tips(model)

@@ -8,14 +8,13 @@ each rigid body's reduced 6 x 7 map on [a; q; 1] is written directly in angular-
 goes straight into its Riccati step.  Results agree with the general loop to rounding
 (tests/test_ball_chain.py).
 """
-from collections import namedtuple
-
 import numpy as np
 from numba import njit
 
 from ...elements import BEAM, RIGID
-from .. import (CONTRACT, input_tables, kernel, loop_piece, model_tables, record_tables,
-                state_tables, sweep_tables)
+from .. import (CONTRACT, fused_tables, input_tables, kernel, loop_piece, model_tables,
+                record_tables, state_tables, sweep_tables)
+from ..schema import FUSED_LAYOUT, FlatFused, FlatFusedTree
 from ..transfers.beam import ball_map_work_shape, beam_ball_map
 from ..transfers.body import kappa_values, rigid_point_jacobian_values
 from ..algebra.mat3 import (mm3_into, t_cross, t_hat, t_hat_mul, t_inverse, t_lin3, t_lin9, t_mm,
@@ -149,28 +148,16 @@ def _ground_increment(g_rot, s, rel, out):
     log_so3(rel, out)
 
 
-# The fused loop's own scratch (allocated by fused_loop; nothing is allocated in the loop, so
-# its skeleton is compiled without numba's reference counting: loop.py::_skeleton).
-FusedLoop = namedtuple("FusedLoop", [
-    "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
-    "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)
-    "pmap",             # (n, 3, 7) each body's angular acceleration w' = pmap [a_I; q_I; 1]
-    "v",                # (6, 7) one body's reduced map [a_O; q_O] = v [a_I; q_I; 1]
-    "mats",             # (7, 3, 3) T, its numerator, exp(phi^), A*, J_l(phi*), A_n, ground rel.
-    "vecs",             # (5, 3) w, w', alpha, the load, the ground's increment
-    "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
-    "beam_work",        # beam_ball_map's work block
-    #                     (kernels/transfers/beam.py::ball_map_work_shape)
-])
-
-
-def fused_loop(n, mode_off, h, coef):
-    """The fused loop's scratch for n bodies whose modal coordinates start at mode_off."""
-    max_modes = int(np.max(np.diff(mode_off))) if n else 0
-    return FusedLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)),
-                     np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
-                     np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
-                     np.zeros(ball_map_work_shape(max_modes)))
+# The fused loop's own scratch (kernels/schema.py::FUSED, made by fused_loop; nothing is allocated
+# in the loop, so its skeleton is compiled without numba's reference counting: loop.py::_skeleton).
+def fused_loop(n, mode_off, h, coef, tree=False):
+    """The fused loop's scratch (FUSED) for n bodies whose modal coordinates start at mode_off;
+    with tree=True the tree's tables sized too (tree.py::fused_tree_loop)."""
+    work_rows, work_columns = ball_map_work_shape(int(np.max(np.diff(mode_off))) if n else 0)
+    loop = FUSED_LAYOUT.zeros(bodies=n, modes=int(mode_off[-1]), work_rows=work_rows,
+                              work_columns=work_columns, tree_bodies=n if tree else 0)
+    loop.coefficients[:] = fused_coefficients(h, coef)
+    return FlatFusedTree(*loop) if tree else loop
 
 
 def start_loop(loop, state, sweep):
@@ -180,7 +167,8 @@ def start_loop(loop, state, sweep):
     phi* = 0, a body's rotation slot is its angular acceleration (w' = phi, w = w_n, A = A_n) and
     nothing else moves with it (s = r = 0); with w1e = -eta_n, w3e = eta'_n and eta''* = 0 the
     beams keep eta_n and eta'_n.  The relations are then linear in the accelerations: one sweep
-    solves them.  Returns the loop to run; its scratch is the step loop's own."""
+    solves them.  Set in place (the pass leaves its solution in the loop's scratch, where the
+    first step starts from it); returns the step's coefficients, for the caller to put back."""
     w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
     w1[:] = 0.0
     w3[:] = state.omega
@@ -189,7 +177,9 @@ def start_loop(loop, state, sweep):
     loop.per_mode[1] = state.eta_d
     loop.per_mode[3] = 0.0
     sweep.red_aq[:] = 0.0
-    return loop._replace(coefficients=np.array([1.0, 0.0, 0.0, 0.0]))
+    step_coefficients = loop.coefficients.copy()
+    loop.coefficients[:] = 1.0, 0.0, 0.0, 0.0
+    return step_coefficients
 
 
 @kernel(entry=True)
@@ -207,8 +197,15 @@ def guess_from_stations(z, aq):
 
 @loop_piece
 def _predict(loop, run, s, _):
+    predict_offsets(run, fused_tables.coefficients(loop), fused_tables.per_body(loop),
+                    fused_tables.per_mode(loop))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def predict_offsets(run, coefficients, per_body, per_mode):
     """phi* of every body by the constant-acceleration predictor, with the integrator's offsets
-    of the rotations and the modal coordinates."""
+    of the rotations and the modal coordinates (the fused and the welded loops' predictor: their
+    coefficients, per_body and per_mode tables)."""
     state = run.state
     eta = state_tables.eta(state)
     omega = state_tables.omega(state)
@@ -218,14 +215,14 @@ def _predict(loop, run, s, _):
     eta_acc = state_tables.eta_acc(state)
     eta_p = state_tables.eta_p(state)
     h, coef = run.settings.h, run.settings.coef
-    c1, c3 = loop.coefficients[0], loop.coefficients[1]
-    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
+    c1, c3 = coefficients[0], coefficients[1]
+    w1, w3, phi_star = per_body[0], per_body[1], per_body[2]
     for k in range(omega.shape[0]):
         _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k], phi_star[k])
     n_eta = eta.shape[0]
     if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
-        w1e, w3e, a1e, eta_dd_star = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[2],
-                                      loop.per_mode[3])
+        w1e, w3e, a1e, eta_dd_star = (per_mode[0], per_mode[1], per_mode[2],
+                                      per_mode[3])
         # (eta_dd_star first receives the predicted increment of eta)
         _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
         for i in range(n_eta):
@@ -238,6 +235,14 @@ def _predict(loop, run, s, _):
 def _iterate(loop, run, s, it):
     """One forward pass (kinematics, reduced map, Riccati step per body) and one backward pass
     (recovery, beams' modal accelerations); returns (status, detail, change)."""
+    mats = fused_tables.mats(loop)
+    vecs = fused_tables.vecs(loop)
+    pmap = fused_tables.pmap(loop)
+    v = fused_tables.v(loop)
+    coefficients = fused_tables.coefficients(loop)
+    per_body = fused_tables.per_body(loop)
+    per_mode = fused_tables.per_mode(loop)
+    beam_work = fused_tables.beam_work(loop)
     params, state, inputs, sweep = run.params, run.state, run.inputs, run.sweep
     force = input_tables.force(inputs)
     torque = input_tables.torque(inputs)
@@ -250,15 +255,14 @@ def _iterate(loop, run, s, it):
     t_vec = sweep_tables.red_t(sweep)
     aq = sweep_tables.red_aq(sweep)
     rot_ = state_tables.rot(state)
-    c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
-                        loop.coefficients[3])
-    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
-        loop.per_body[3]
-    mats, vecs, pmap, v = loop.mats, loop.vecs, loop.pmap, loop.v
+    c1, c3, s_c, r_c = (coefficients[0], coefficients[1], coefficients[2],
+                        coefficients[3])
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
+        per_body[3]
     t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
-                                         loop.per_mode[4])
+    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
+                                         per_mode[4])
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
     body_kind = model_tables.body_kind(params)
@@ -282,9 +286,9 @@ def _iterate(loop, run, s, it):
             m = (i1 - i0) // 2              # (no twist here: Model.has_twist runs general)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[s, k], torque[s, k], line_load[s, k])   # (docs/beam.md)
-            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,
+            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, coefficients,
                           w3[k], w1e[i0:i1], w3e[i0:i1], aq[k, 0:3], aq[k, 3:6],
-                          eta_dd_star[i0:i1], loop.beam_work, v, pmap[k], eta_map[i0:i1])
+                          eta_dd_star[i0:i1], beam_work, v, pmap[k], eta_map[i0:i1])
         elif body_kind[k] == RIGID:
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
@@ -337,20 +341,34 @@ def recover_body(pk, aq_k, w1_k, c1, phi_star_k, phi_new_k, beam, i0, i1, eta_ma
     return change, finite
 
 
-@loop_piece
-def _adopt(loop, run, s, it):
-    phi_star, phi_new = loop.per_body[2], loop.per_body[3]
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def adopt_solution(per_body, per_mode):
+    """The latest solution becomes the guess: phi* = phi, eta''* = eta'' (per_body's and
+    per_mode's rows, the fused and the welded loops' layout)."""
+    phi_star, phi_new = per_body[2], per_body[3]
     for k in range(phi_star.shape[0]):
         for i in range(3):
             phi_star[k, i] = phi_new[k, i]
-    eta_dd_star, eta_dd_new = loop.per_mode[3], loop.per_mode[4]
+    eta_dd_star, eta_dd_new = per_mode[3], per_mode[4]
     for i in range(eta_dd_star.shape[0]):
         eta_dd_star[i] = eta_dd_new[i]
 
 
 @loop_piece
+def _adopt(loop, run, s, it):
+    adopt_solution(fused_tables.per_body(loop), fused_tables.per_mode(loop))
+
+
+@loop_piece
 def _update(loop, run, s, _):
-    """Rotations and modal coordinates over the step from the solution; every rate finite?"""
+    return update_integrated(run, fused_tables.coefficients(loop), fused_tables.per_body(loop),
+                             fused_tables.mats(loop), fused_tables.per_mode(loop))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def update_integrated(run, coefficients, per_body, mats, per_mode):
+    """Rotations and modal coordinates over the step from the solution (per_body's phi), with
+    mats[2] and mats[5] for scratch; every rate finite?  (The fused and the welded loops'.)"""
     state = run.state
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
@@ -361,10 +379,10 @@ def _update(loop, run, s, _):
     eta_acc = state_tables.eta_acc(state)
     eta_p = state_tables.eta_p(state)
     h, coef = run.settings.h, run.settings.coef
-    c1 = loop.coefficients[0]
-    phi_new = loop.per_body[3]
-    e3, rot_prev = loop.mats[2], loop.mats[5]
-    w1e, a1e, eta_dd_new = loop.per_mode[0], loop.per_mode[2], loop.per_mode[4]
+    c1 = coefficients[0]
+    phi_new = per_body[3]
+    e3, rot_prev = mats[2], mats[5]
+    w1e, a1e, eta_dd_new = per_mode[0], per_mode[2], per_mode[4]
     finite = True
     for k in range(rot.shape[0]):
         _advance_history(h, coef, phi_new[k], omega[k], omega_dot[k], pseudo[k])
@@ -415,26 +433,32 @@ def record_state(state, rec, slot):
 
 @loop_piece
 def _record(loop, run, s, slot):
+    vecs = fused_tables.vecs(loop)
+    mats = fused_tables.mats(loop)
+    per_body = fused_tables.per_body(loop)
     g_rot = input_tables.g_rot(run.inputs)
     z = record_tables.z(run.rec)
     red_aq = sweep_tables.red_aq(run.sweep)
-    phi_g = loop.vecs[4]
-    _ground_increment(g_rot, s, loop.mats[6], phi_g)
-    _write_stations(red_aq, loop.per_body[3], phi_g, z[slot])
+    phi_g = vecs[4]
+    _ground_increment(g_rot, s, mats[6], phi_g)
+    _write_stations(red_aq, per_body[3], phi_g, z[slot])
     record_state(run.state, run.rec, slot)
 
 
 @loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
+    vecs = fused_tables.vecs(loop)
+    mats = fused_tables.mats(loop)
+    per_body = fused_tables.per_body(loop)
     g_rot = input_tables.g_rot(run.inputs)
     red_aq = sweep_tables.red_aq(run.sweep)
     z = state_tables.z(run.state)
     if n_steps > 0:
-        phi_g = loop.vecs[4]
-        _ground_increment(g_rot, n_steps - 1, loop.mats[6], phi_g)
-        _write_stations(red_aq, loop.per_body[3], phi_g, z)
+        phi_g = vecs[4]
+        _ground_increment(g_rot, n_steps - 1, mats[6], phi_g)
+        _write_stations(red_aq, per_body[3], phi_g, z)
 
 
-loop_variant(FusedLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+loop_variant(FlatFused, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
              record=_record, finish=_finish)

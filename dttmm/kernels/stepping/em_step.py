@@ -13,14 +13,13 @@ The pieces allocate nothing (the skeleton is compiled without numba's reference 
 loop.py::_skeleton): their array work is written element by element into the loop's
 scratch; the body's kernels, which allocate, are kernels/__init__.py::allocating_kernel.
 """
-from collections import namedtuple
-
 import numpy as np
 
-from .. import (input_tables, loop_piece, model_tables, record_tables, state_tables,
-                sweep_tables)
+from .. import (input_tables, loop_piece, model_tables, momentum_tables, record_tables,
+                state_tables, sweep_tables)
 from ...elements import RIGID
 from ...elements.hinges import BALL, FIXED
+from ..schema import MOMENTUM_LAYOUT, FlatMomentum
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..assembly.solve import solve_step
@@ -29,30 +28,20 @@ from ..algebra.mat3 import put2, put3
 from ..assembly.sweep import IDENTITY, TRANSFER
 from ..assembly.sweep import BALL as EL_BALL
 
-# The energy-momentum loop's own scratch (energy_momentum_loop).
-EnergyMomentumLoop = namedtuple("EnergyMomentumLoop", [
-    "z_star",           # (2n + 1, 12) the stations' guess
-    "root_f",           # (6,) a fixed ground: no displacement, no rotation
-    "rot_new",          # (3, 3) scratch
-    "omega_new",        # (3,) scratch
-    "load",             # (3,) scratch: a body's applied force with its weight
-])
-
-
 def energy_momentum_loop(n):
-    return EnergyMomentumLoop(np.zeros((2 * n + 1, 12)), np.zeros(6), np.zeros((3, 3)),
-                              np.zeros(3), np.zeros(3))
+    """The energy-momentum loop's own scratch (kernels/schema.py::MOMENTUM) for n bodies."""
+    return MOMENTUM_LAYOUT.zeros(stations=2 * n + 1)
 
 
 @loop_piece
 def _predict(loop, run, s, _):
     """The guess: phi = h w_n + h^2 w'_n / 2, in b = 2 phi / h^2 units."""
+    z_star = momentum_tables.z_star(loop)
     state, h = run.state, run.settings.h
     z = state_tables.z(state)
     rot = state_tables.rot(state)
     omega_dot = state_tables.omega_dot(state)
     omega = state_tables.omega(state)
-    z_star = loop.z_star
     put2(z_star, z)
     for k in range(rot.shape[0]):
         for i in range(3):
@@ -65,12 +54,15 @@ def _predict(loop, run, s, _):
 def _iterate(loop, run, s, it):
     """Every element's step transfer about the guess, the sweep; returns (status, detail,
     change) with change the largest update of a rotation increment (rad)."""
+    z_star = momentum_tables.z_star(loop)
+    load = momentum_tables.load(loop)
+    root_f = momentum_tables.root_f(loop)
     torque = input_tables.torque(run.inputs)
     force = input_tables.force(run.inputs)
     params, state, sweep = run.params, run.state, run.sweep
     kind = sweep_tables.kind(sweep)
     u = sweep_tables.u(sweep)
-    z_ = state_tables.z(state)
+    z = state_tables.z(state)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     v_c = state_tables.v_c(state)
@@ -79,7 +71,6 @@ def _iterate(loop, run, s, it):
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     hinge_kind, body_kind = model_tables.hinge_kind(params), model_tables.body_kind(params)
     gravity, inertia = model_tables.gravity(params), model_tables.mass_center_inertia(params)
-    z, z_star = z_, loop.z_star
     n = rot.shape[0]
     for k in range(n):
         if hinge_kind[k] == BALL:
@@ -92,7 +83,6 @@ def _iterate(loop, run, s, it):
             return UNSUPPORTED, 2 * k + 2, 0.0
         kind[2 * k + 1] = TRANSFER
         row = body_row[k]             # (the body's row of the shared tables)
-        load = loop.load
         for i in range(3):
             load[i] = body_params[row, 0] * gravity[i] + force[s, k, i]
         rigid_body_transfer_em(body_params[row], inertia[row], rot[k],
@@ -101,7 +91,7 @@ def _iterate(loop, run, s, it):
     if not _all_finite(u):
         return NOT_FINITE, 0, 0.0
     status = solve_step(run.settings.mode, model_tables.tip_pinned(params),
-                        model_tables.parent(params), sweep, loop.root_f, z)
+                        model_tables.parent(params), sweep, root_f, z)
     if status != 0:
         return SINGULAR, status, 0.0
     change = 0.0
@@ -113,13 +103,16 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _adopt(loop, run, s, it):
+    z_star = momentum_tables.z_star(loop)
     z = state_tables.z(run.state)
-    put2(loop.z_star, z)
+    put2(z_star, z)
 
 
 @loop_piece
 def _update(loop, run, s, _):
     """Rotations, angular velocities and mass-centre velocities over the step."""
+    rot_new = momentum_tables.rot_new(loop)
+    omega_new = momentum_tables.omega_new(loop)
     state, h = run.state, run.settings.h
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
@@ -127,7 +120,6 @@ def _update(loop, run, s, _):
     z = state_tables.z(state)
     omega_dot = state_tables.omega_dot(state)
     s_half = 0.5 * h * h
-    rot_new, omega_new = loop.rot_new, loop.omega_new
     body_params, body_row = model_tables.body_params(run.params), model_tables.body_row(run.params)
     finite = True
     for k in range(rot.shape[0]):
@@ -175,5 +167,5 @@ def _finish(loop, run, n_steps, _):
     pass
 
 
-loop_variant(EnergyMomentumLoop, predict=_predict, iterate=_iterate, adopt=_adopt,
+loop_variant(FlatMomentum, predict=_predict, iterate=_iterate, adopt=_adopt,
              update=_update, record=_record, finish=_finish)

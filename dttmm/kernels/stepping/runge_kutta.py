@@ -15,13 +15,14 @@ one: orthogonal to rounding, whatever the tolerance.
 The method's coefficients are scipy's (scipy.integrate._ivp.dop853_coefficients), passed as
 tables; the error norm and step control follow Hairer, Norsett and Wanner (scipy's DOP853).
 """
-from collections import namedtuple
 from types import FunctionType
 
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, no_alloc_kernel, record_tables, state_tables, sweep_tables
+from .. import (CONTRACT, fused_tables, no_alloc_kernel, record_tables, runge_kutta_tables,
+                state_tables, sweep_tables)
+from ..schema import RUNGE_KUTTA_LAYOUT
 from .ball_chain import record_state
 from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
 from ..algebra.mat3 import mm3_into
@@ -32,28 +33,13 @@ N_EXTENDED = 16         # ... with the three of its dense output
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERROR_EXPONENT = -1.0 / 8.0     # -1 / (order of the error estimate + 1)
 
-RungeKutta = namedtuple("RungeKutta", [
-    "rot0",         # (n, 3, 3) the rotations the step's local coordinates start from
-    "y",            # (N,) the state at t (theta = 0)
-    "f",            # (N,) its derivative
-    "y_new",        # (N,) the state after the step (theta from rot0)
-    "y_stage",      # (N,) a stage's state, a sample's state
-    "k",            # (16, N) the stages' derivatives (12 of the step, the next step's first,
-    #                 three of the dense output)
-    "dense",        # (7, N) the step's interpolant (scipy's F)
-    "e3",           # (2, 3, 3) scratch
-    "control",      # (8,) t, h, steps, rejected steps, evaluations, the last step rejected,
-    #                 smallest and largest step
-    "tables",       # (A (16, 16), B (12,), C (16,), E3 (13,), E5 (13,), D (4, 16))
-])
-
-
 def runge_kutta_scratch(n, n_eta, tables):
-    """The scratch of an integration of n bodies and n_eta modal coordinates."""
-    size = 6 * n + 2 * n_eta
-    return RungeKutta(np.zeros((n, 3, 3)), np.zeros(size), np.zeros(size), np.zeros(size),
-                      np.zeros(size), np.zeros((N_EXTENDED, size)), np.zeros((7, size)),
-                      np.zeros((2, 3, 3)), np.zeros(8), tables)
+    """The scratch of an integration of n bodies and n_eta modal coordinates, with the tableau
+    `tables` (dop853_tables) (kernels/schema.py::RUNGE_KUTTA)."""
+    rk = RUNGE_KUTTA_LAYOUT.zeros(bodies=n, states=6 * n + 2 * n_eta)
+    (rk.tableau_a[:], rk.tableau_b[:], rk.tableau_c[:], rk.error_e3[:], rk.error_e5[:],
+     rk.dense_d[:]) = tables
+    return rk
 
 
 def dop853_tables():
@@ -87,6 +73,10 @@ def _derivative(loop, run, info, rk, y, out):
     """out = the state y's derivative; the run's state holds y (rotations, rates, modal
     coordinates), its accelerations (state.omega_dot, state.eta_acc) and its stations
     (state.z); False where the sweep fails (info[0] says why)."""
+    rot0 = runge_kutta_tables.rot0(rk)
+    e3 = runge_kutta_tables.e3(rk)[0]
+    per_body = fused_tables.per_body(loop)
+    per_mode = fused_tables.per_mode(loop)
     state, sweep = run.state, run.sweep
     red_aq = sweep_tables.red_aq(sweep)
     eta = state_tables.eta(state)
@@ -96,9 +86,7 @@ def _derivative(loop, run, info, rk, y, out):
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
     n, m = rot.shape[0], eta.shape[0]
-    rot0, e3 = rk.rot0, rk.e3[0]
-    w1, w3, phi_star, accel = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
-        loop.per_body[3]
+    w1, w3, phi_star, accel = per_body[0], per_body[1], per_body[2], per_body[3]
     for k in range(n):
         expm_so3(y[3 * k:3 * k + 3], e3)
         mm3_into(e3, rot0[k], rot[k])
@@ -110,9 +98,9 @@ def _derivative(loop, run, info, rk, y, out):
     for i in range(m):
         eta[i] = y[6 * n + i]
         eta_d[i] = y[6 * n + m + i]
-        loop.per_mode[0, i] = -eta[i]
-        loop.per_mode[1, i] = eta_d[i]
-        loop.per_mode[3, i] = 0.0
+        per_mode[0, i] = -eta[i]
+        per_mode[1, i] = eta_d[i]
+        per_mode[3, i] = 0.0
     red_aq[:, :] = 0.0
     # the skeleton's consistent-start pass (loop.py::_run_steps with settings.start): one
     # iterate, then finish writes the stations; the variant's pieces are bound by _integrator
@@ -128,9 +116,9 @@ def _derivative(loop, run, info, rk, y, out):
             omega_dot[k, i] = accel[k, i]
             out[3 * n + 3 * k + i] = accel[k, i]
     for i in range(m):
-        eta_acc[i] = loop.per_mode[4, i]
+        eta_acc[i] = per_mode[4, i]
         out[6 * n + i] = eta_d[i]
-        out[6 * n + m + i] = loop.per_mode[4, i]
+        out[6 * n + m + i] = per_mode[4, i]
     return True
 
 
@@ -148,13 +136,18 @@ def _start(loop, run, info, rk, rtol, atol, first_step, t_end):
     """rk's state from the run's (theta = 0) and its derivative; the first step: first_step
     where given (> 0), else Hairer-Norsett-Wanner's choice from the derivative's size
     (II.4, scipy's select_initial_step).  False where the sweep fails."""
+    control = runge_kutta_tables.control(rk)
+    y = runge_kutta_tables.y(rk)
+    f = runge_kutta_tables.f(rk)
+    rot0 = runge_kutta_tables.rot0(rk)
+    y_stage = runge_kutta_tables.y_stage(rk)
+    stages = runge_kutta_tables.k(rk)
     state = run.state
     eta = state_tables.eta(state)
     eta_d = state_tables.eta_d(state)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     n, m = rot.shape[0], eta.shape[0]
-    y, f, rot0 = rk.y, rk.f, rk.rot0
     for k in range(n):
         for i in range(3):
             y[3 * k + i] = 0.0
@@ -180,19 +173,18 @@ def _start(loop, run, info, rk, rtol, atol, first_step, t_end):
         if not h0 > 1e-12 * t_end:
             h0 = 1e-12 * t_end
         for i in range(size):
-            rk.y_stage[i] = y[i] + h0 * f[i]
-        if not _derivative(loop, run, info, rk, rk.y_stage, rk.k[1]):
+            y_stage[i] = y[i] + h0 * f[i]
+        if not _derivative(loop, run, info, rk, y_stage, stages[1]):
             return False
         d2 = 0.0
         for i in range(size):
-            d2 += ((rk.k[1, i] - f[i]) / _scale(y, y, 3 * n, rtol, atol, i)) ** 2
+            d2 += ((stages[1, i] - f[i]) / _scale(y, y, 3 * n, rtol, atol, i)) ** 2
         d2 = np.sqrt(d2 / size) / h0
         if max(d1, d2) <= 1e-15:
             h1 = max(1e-6, 1e-3 * h0)
         else:
             h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
         h = min(100.0 * h0, h1)
-    control = rk.control
     control[0], control[1] = 0.0, h
     control[2:6] = 0.0
     control[6], control[7] = np.inf, 0.0
@@ -207,15 +199,26 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
     a step is taken again with a quarter of its length where a pass fails, and the run stops
     with ERROR_ESTIMATE once the step falls below h_min.  rtol = 0: fixed steps of rk's h (no
     error estimate; its last step lands on the chunk's end)."""
+    a = runge_kutta_tables.tableau_a(rk)   # (the nodes c unread: the models it runs have
+    b = runge_kutta_tables.tableau_b(rk)   # no time-dependent input, _check_runge_kutta)
+    e3_w = runge_kutta_tables.error_e3(rk)
+    e5_w = runge_kutta_tables.error_e5(rk)
+    d = runge_kutta_tables.dense_d(rk)
+    control = runge_kutta_tables.control(rk)
+    y = runge_kutta_tables.y(rk)
+    f = runge_kutta_tables.f(rk)
+    y_new = runge_kutta_tables.y_new(rk)
+    y_stage = runge_kutta_tables.y_stage(rk)
+    kk = runge_kutta_tables.k(rk)
+    dense = runge_kutta_tables.dense(rk)
+    e3_pair = runge_kutta_tables.e3(rk)
+    rot0 = runge_kutta_tables.rot0(rk)
     rec_z = record_tables.z(rec)
-    a, b, _, e3_w, e5_w, d = rk.tables     # (the nodes c unread: the models it runs have no
-    state = run.state                       # time-dependent input, _check_runge_kutta)
+    state = run.state
     rot = state_tables.rot(state)
     z = state_tables.z(state)
     n = rot.shape[0]
-    size = rk.y.shape[0]
-    y, f, y_new, y_stage, kk, dense = rk.y, rk.f, rk.y_new, rk.y_stage, rk.k, rk.dense
-    control = rk.control
+    size = y.shape[0]
     t, h = control[0], control[1]
     rejected_last = False
     n_rec = 0
@@ -314,13 +317,13 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
                 n_rec += 1
         # recentre: R0 <- exp(theta^) R0, theta <- 0; the next step's first stage is this
         # step's end, its rotation rate J_l(0)^-1 omega = omega
-        e3, before = rk.e3[0], rk.e3[1]
+        e3, before = e3_pair[0], e3_pair[1]
         for k in range(n):
             expm_so3(y_new[3 * k:3 * k + 3], e3)
             for i in range(3):
                 for j in range(3):
-                    before[i, j] = rk.rot0[k, i, j]
-            mm3_into(e3, before, rk.rot0[k])
+                    before[i, j] = rot0[k, i, j]
+            mm3_into(e3, before, rot0[k])
         for i in range(size):
             y[i] = y_new[i]
             f[i] = kk[N_STAGES, i]

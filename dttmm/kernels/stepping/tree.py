@@ -4,46 +4,27 @@ kernels/transfers/beam.py::beam_ball_map) goes straight into the leaves-to-root 
 (kernels/assembly/tree_sweep.py, "Trees"; docs/assembly.md, "Trees"), then the recovery
 from the root to the leaves.  Predict, adopt and update are the fused chain loop's (they do not
 depend on the topology)."""
-from collections import namedtuple
-
-import numpy as np
-
-from .. import input_tables, loop_piece, model_tables, record_tables, state_tables, sweep_tables
+from .. import (fused_tables, input_tables, loop_piece, model_tables, record_tables, state_tables,
+                sweep_tables)
 from ...elements import BEAM, RIGID
-from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, record_state,
-                         recover_body)
-from ..transfers.beam import ball_map_work_shape, beam_ball_map
+from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, fused_loop,
+                         record_state, recover_body)
+from ..schema import FlatFusedTree
+from ..transfers.beam import beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..algebra.mat3 import mm3_into
 from ..algebra.so3 import expm_so3, left_jacobian
-from .step import fused_coefficients
 from ..assembly.tree_sweep import (_add_to_port, _clear_ports, tree_reduced_recover,
                                    tree_reduced_step, write_tree_stations)
 
 
-# The fused tree loop's scratch: the fused chain loop's (kernels/stepping/ball_chain.py::FusedLoop,
-# whose predict, adopt and update pieces it shares) and the tree sweep's.
-FusedTreeLoop = namedtuple("FusedTreeLoop", [
-    "coefficients", "per_body", "pmap", "v", "mats", "vecs", "per_mode", "beam_work",
-    "parent",           # (n,) Model.parent
-    "maps",             # (n, 6, 7) every body's map V (the recovery needs them all)
-    "s_in", "p_in",     # (n, 3, 3), (n, 3) q_I = S_I a_I + P_I
-    "t_inv",            # (n, 3, 3)
-    "port_s", "port_p",  # (n, 3, 3), (n, 3) q_O = S_O a_O + P_O, summed over the children
-    "aq_out",           # (n, 6) every body's output [a; q] (its input's is Sweep.red_aq[k])
-])
-
-
 def fused_tree_loop(n, parent, mode_off, h, coef):
-    """The fused tree loop's scratch for n bodies with parents `parent`."""
-    max_modes = int(np.max(np.diff(mode_off))) if n else 0
-    return FusedTreeLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)),
-                         np.zeros((n, 3, 7)), np.zeros((6, 7)), np.zeros((7, 3, 3)),
-                         np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))),
-                         np.zeros(ball_map_work_shape(max_modes)),
-                         np.array(parent, dtype=np.int64), np.zeros((n, 6, 7)),
-                         np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3, 3)),
-                         np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 6)))
+    """The fused tree loop's scratch for n bodies with parents `parent`: the fused chain loop's
+    (kernels/stepping/ball_chain.py::fused_loop, whose predict, adopt and update pieces it
+    shares) with the tree sweep's tables (kernels/schema.py::FUSED; a FlatFusedTree)."""
+    loop = fused_loop(n, mode_off, h, coef, tree=True)
+    loop.parent[:] = parent
+    return loop
 
 
 @loop_piece
@@ -51,7 +32,22 @@ def _iterate(loop, run, s, it):
     """Every body's map and its step of the sweep, from the leaves to the root; then the
     recovery from the root to the leaves, with each body's angular (and a beam's modal)
     accelerations.  Returns (status, detail, change)."""
-    red_aq = sweep_tables.red_aq(run.sweep)
+    parent = fused_tables.parent(loop)
+    mats = fused_tables.mats(loop)
+    vecs = fused_tables.vecs(loop)
+    pmap = fused_tables.pmap(loop)
+    maps = fused_tables.maps(loop)
+    aq_out = fused_tables.aq_out(loop)
+    s_in_ = fused_tables.s_in(loop)
+    p_in_ = fused_tables.p_in(loop)
+    t_inv_ = fused_tables.t_inv(loop)
+    port_s_ = fused_tables.port_s(loop)
+    port_p_ = fused_tables.port_p(loop)
+    coefficients = fused_tables.coefficients(loop)
+    per_body = fused_tables.per_body(loop)
+    per_mode = fused_tables.per_mode(loop)
+    beam_work = fused_tables.beam_work(loop)
+    aq_in = sweep_tables.red_aq(run.sweep)
     params, state, inputs = run.params, run.state, run.inputs
     force = input_tables.force(inputs)
     torque = input_tables.torque(inputs)
@@ -59,19 +55,16 @@ def _iterate(loop, run, s, it):
     g_acc = input_tables.g_acc(inputs)
     eta_map = state_tables.eta_map(state)
     rot_ = state_tables.rot(state)
-    c1, c3, s_c, r_c = (loop.coefficients[0], loop.coefficients[1], loop.coefficients[2],
-                        loop.coefficients[3])
-    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
-        loop.per_body[3]
-    mats, vecs, pmap, maps = loop.mats, loop.vecs, loop.pmap, loop.maps
+    c1, c3, s_c, r_c = (coefficients[0], coefficients[1], coefficients[2],
+                        coefficients[3])
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
+        per_body[3]
     t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
-                                         loop.per_mode[4])
-    aq_in, aq_out = red_aq, loop.aq_out
-    s_in, p_in, t_inv, port_s, port_p = loop.s_in, loop.p_in, loop.t_inv, loop.port_s, \
-        loop.port_p
-    parent = loop.parent
+    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
+                                         per_mode[4])
+    s_in, p_in, t_inv, port_s, port_p = s_in_, p_in_, t_inv_, port_s_, \
+        port_p_
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
     body_kind = model_tables.body_kind(params)
@@ -92,9 +85,9 @@ def _iterate(loop, run, s, it):
             m = (i1 - i0) // 2              # (no twist here: Model.has_twist runs general)
             tables = (beam_moments[k, :m, :4 * m + 2], beam_ends[k, :m], beam_factors[k, :m],
                       force[s, k], torque[s, k], line_load[s, k])   # (docs/beam.md)
-            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, loop.coefficients,
+            beam_ball_map(beam_params[k], tables, gravity, rot[k], phi, wd, coefficients,
                           w3[k], w1e[i0:i1], w3e[i0:i1], aq_in[k, 0:3], aq_in[k, 3:6],
-                          eta_dd_star[i0:i1], loop.beam_work, maps[k], pmap[k], eta_map[i0:i1])
+                          eta_dd_star[i0:i1], beam_work, maps[k], pmap[k], eta_map[i0:i1])
         elif body_kind[k] == RIGID:
             expm_so3(phi, e3)
             mm3_into(e3, rot[k], rot_star)
@@ -131,13 +124,18 @@ def _iterate(loop, run, s, it):
 
 @loop_piece
 def _write(loop, run, s, z):
+    vecs = fused_tables.vecs(loop)
+    parent = fused_tables.parent(loop)
+    aq_out = fused_tables.aq_out(loop)
+    mats = fused_tables.mats(loop)
+    per_body = fused_tables.per_body(loop)
     g_rot = input_tables.g_rot(run.inputs)
     g_acc = input_tables.g_acc(run.inputs)
     red_aq = sweep_tables.red_aq(run.sweep)
-    phi_g = loop.vecs[4]
-    _ground_increment(g_rot, s, loop.mats[6], phi_g)
-    write_tree_stations(loop.parent, g_acc[s], phi_g, red_aq, loop.aq_out,
-                        loop.per_body[3], z)
+    phi_g = vecs[4]
+    _ground_increment(g_rot, s, mats[6], phi_g)
+    write_tree_stations(parent, g_acc[s], phi_g, red_aq, aq_out,
+                        per_body[3], z)
 
 
 @loop_piece
@@ -154,5 +152,5 @@ def _finish(loop, run, n_steps, _):
         _write(loop, run, n_steps - 1, z)
 
 
-loop_variant(FusedTreeLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+loop_variant(FlatFusedTree, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
              record=_record, finish=_finish)

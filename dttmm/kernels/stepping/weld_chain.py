@@ -11,17 +11,15 @@ per-body work runs: no guess kinematics (the beam evaluates its own state), no s
 no element kinds.  Results agree with the general loop to rounding
 (tests/test_weld_chain.py).
 """
-from collections import namedtuple
-
 import numpy as np
 from numba import njit
 
-from .. import CONTRACT, input_tables, kernel, loop_piece, model_tables, record_tables, state_tables
-from .ball_chain import _adopt as _adopt_solution
-from .ball_chain import _ground_increment, record_state
-from .ball_chain import _update as _update_integrated
-from .ball_chain import _predict as _predict_offsets
-from ..transfers.beam import (beam_transfer, transfer_work_size)
+from .. import (CONTRACT, input_tables, kernel, loop_piece, model_tables, record_tables,
+                state_tables, weld_tables)
+from .ball_chain import (_ground_increment, adopt_solution, predict_offsets, record_state,
+                         update_integrated)
+from ..schema import WELD_LAYOUT, FlatWeld
+from ..transfers.beam import beam_transfer, transfer_work_size
 from ..transfers.beam_relations import end_section_motion
 from .loop import NOT_FINITE, OK, SINGULAR, loop_variant
 from ..algebra.mat3 import mm3_into
@@ -30,40 +28,18 @@ from .step import _all_finite, fused_coefficients
 from ..assembly.sweep import riccati_step
 from ...elements.beam import MODES, TORSION_MODES
 
-# The loop's own scratch (allocated by weld_loop; the skeleton is compiled without numba's
-# reference counting, as every loop's: loop.py::_skeleton).
-WeldLoop = namedtuple("WeldLoop", [
-    "coefficients",     # (4,) c1, c3, 1 / c1, c3 / c1 (w' = c1 phi + w1, w = c3 phi + w3)
-    "per_body",         # (4, n, 3) w1, w3, phi*, phi (the latest solution)
-    "mats",             # (7, 3, 3) scratch; [2], [5] for _update, [6] for the ground's increment
-    "vecs",             # (5, 3) w, w', the weld's offset w1_out, zero, the ground's increment
-    "per_mode",         # (5, total modes) w1e, w3e, the offsets' scratch, eta''*, eta''
-    "stations",         # (n + 1, 12) [a, w', m, q] at each body's input, then the tip's output
-    "riccati",          # (s (n + 1, 6, 6), p (n + 1, 6), T^-1 (n, 6, 6), t (n, 6))
-    "transfer",         # (12, 13) one beam's transfer; its work (6, 13) for the Riccati step
-    "root",             # (6,) the ground station's [a, w']
-    "beam_work",        # beam_transfer's work block (transfer_work_size)
-    "follow",           # _follow_welds' scratch: ((2, total modes) eta, eta' at the guess,
-    #                     (3, 3, 3) A_p*, A*, A* A_n^T, (4, 3) w_p*, w_p'*, w*, w'*, (48,))
-])
-
-
+# The loop's own scratch (kernels/schema.py::WELD, made by weld_loop; the skeleton is compiled
+# without numba's reference counting, as every loop's: loop.py::_skeleton).
 def weld_loop(n, mode_off, h, coef, z):
     """The welded-chain loop's scratch for n beams whose modal coordinates start at mode_off,
     its stations' guess from the stations' states z (the general loop's layout: z[2k + 1] body
     k's input, z[2n] the tip)."""
     most = int(np.max(np.diff(mode_off))) if n else 0
-    stations = np.zeros((n + 1, 12))
-    stations[:n] = z[1:2 * n:2]
-    stations[n] = z[2 * n]
-    return WeldLoop(fused_coefficients(h, coef), np.zeros((4, n, 3)), np.zeros((7, 3, 3)),
-                    np.zeros((5, 3)), np.zeros((5, int(mode_off[-1]))), stations,
-                    (np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 6)), np.zeros((n, 6, 6)),
-                     np.zeros((n, 6))),
-                    (np.zeros((12, 13)), np.zeros((6, 13))), np.zeros(6),
-                    np.zeros(transfer_work_size(most)),
-                    (np.zeros((2, int(mode_off[-1]))), np.zeros((3, 3, 3)), np.zeros((4, 3)),
-                     np.zeros(48)))
+    loop = WELD_LAYOUT.zeros(bodies=n, modes=int(mode_off[-1]), work=transfer_work_size(most))
+    loop.coefficients[:] = fused_coefficients(h, coef)
+    loop.stations[:n] = z[1:2 * n:2]
+    loop.stations[n] = z[2 * n]
+    return loop
 
 
 def start_loop(loop, run):
@@ -73,7 +49,8 @@ def start_loop(loop, run):
     rotation, rate and modal state and takes w' and eta'' as the unknowns (a welded output's slot
     the end section's w'), so with (c1, c3) = (1, 0), w1 = 0, w3 = w_n and the root's [a, w'] the
     ground's, one sweep solves the linear relations and each body's phi comes out as its w'.
-    Returns the loop to run."""
+    Set in place, as ball_chain.start_loop; returns the step's coefficients, for the caller to
+    put back."""
     w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
     w1[:] = 0.0
     w3[:] = run.state.omega
@@ -84,7 +61,9 @@ def start_loop(loop, run):
     loop.root[:3] = run.inputs.g_acc[0]
     loop.root[3:] = run.inputs.g_wd[0]
     loop.vecs[4] = run.inputs.g_wd[0]       # (the ground station's slot: z[0] = [a, w']_g)
-    return loop._replace(coefficients=np.array([1.0, 0.0, 1.0, 0.0]))
+    step_coefficients = loop.coefficients.copy()
+    loop.coefficients[:] = 1.0, 0.0, 1.0, 0.0
+    return step_coefficients
 
 
 @loop_piece
@@ -93,16 +72,21 @@ def _predict(loop, run, s, _):
     coordinate), then the bodies locked to the ground (the first beam) follow the ground's
     increment exactly, as in the general loop: phi* = phi_g, w1 = g_w' - c1 phi_g,
     w3 = g_w - c3 phi_g; and the root's known [a, w']."""
-    _predict_offsets(loop, run, s, 0)
+    vecs = weld_tables.vecs(loop)
+    coefficients = weld_tables.coefficients(loop)
+    per_body = weld_tables.per_body(loop)
+    mats = weld_tables.mats(loop)
+    root = weld_tables.root(loop)
+    predict_offsets(run, coefficients, per_body, weld_tables.per_mode(loop))
     inputs = run.inputs
     g_rot = input_tables.g_rot(inputs)
     g_w_steps = input_tables.g_w(inputs)
     g_wd_steps = input_tables.g_wd(inputs)
     g_acc = input_tables.g_acc(inputs)
-    c1, c3 = loop.coefficients[0], loop.coefficients[1]
-    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
-    phi_g = loop.vecs[4]
-    _ground_increment(g_rot, s, loop.mats[6], phi_g)
+    c1, c3 = coefficients[0], coefficients[1]
+    w1, w3, phi_star = per_body[0], per_body[1], per_body[2]
+    phi_g = vecs[4]
+    _ground_increment(g_rot, s, mats[6], phi_g)
     g_w, g_wd = g_w_steps[s], g_wd_steps[s]
     locked = model_tables.locked(run.params)
     for k in range(locked.shape[0]):
@@ -112,8 +96,8 @@ def _predict(loop, run, s, _):
                 w1[k, i] = g_wd[i] - c1 * phi_g[i]
                 w3[k, i] = g_w[i] - c3 * phi_g[i]
     for i in range(3):
-        loop.root[i] = g_acc[s, i]
-        loop.root[3 + i] = g_wd[i]
+        root[i] = g_acc[s, i]
+        root[3 + i] = g_wd[i]
     _follow_welds(loop, run)
 
 
@@ -126,12 +110,18 @@ def _follow_welds(loop, run):
     (beam.end_section_motion); then phi* = log(A* A_n^T), and the offsets w1 = w'* - c1 phi*,
     w3 = w* - c3 phi*, so that the weld's slot is w'* there.  In order from the root: each
     beam's guess is its inboard's."""
+    modal = weld_tables.follow_modal(loop)
+    mats = weld_tables.follow_mats(loop)
+    vecs = weld_tables.follow_vecs(loop)
+    scratch = weld_tables.follow_work(loop)
+    coefficients = weld_tables.coefficients(loop)
+    per_body = weld_tables.per_body(loop)
+    per_mode = weld_tables.per_mode(loop)
     params, state = run.params, run.state
     rot = state_tables.rot(state)
-    c1, c3 = loop.coefficients[0], loop.coefficients[1]
-    w1, w3, phi_star = loop.per_body[0], loop.per_body[1], loop.per_body[2]
-    w1e, w3e, eta_dd_star = loop.per_mode[0], loop.per_mode[1], loop.per_mode[3]
-    modal, mats, vecs, scratch = loop.follow
+    c1, c3 = coefficients[0], coefficients[1]
+    w1, w3, phi_star = per_body[0], per_body[1], per_body[2]
+    w1e, w3e, eta_dd_star = per_mode[0], per_mode[1], per_mode[3]
     rot_p, rot_k, rel = mats[0], mats[1], mats[2]
     w_p, wd_p, w_k, wd_k = vecs[0], vecs[1], vecs[2], vecs[3]
     beam_params = model_tables.beam_params(params)
@@ -170,6 +160,19 @@ def _iterate(loop, run, s, it):
     """One forward pass (each beam's transfer about the guess, its Riccati step) and one
     backward pass (the stations, then each body's phi and modal accelerations); returns
     (status, detail, change)."""
+    s_mat = weld_tables.riccati_s(loop)
+    p_vec = weld_tables.riccati_p(loop)
+    t_inv = weld_tables.riccati_t_inv(loop)
+    t_vec = weld_tables.riccati_t(loop)
+    u = weld_tables.transfer(loop)
+    work = weld_tables.transfer_work(loop)
+    z = weld_tables.stations(loop)
+    coefficients = weld_tables.coefficients(loop)
+    per_body = weld_tables.per_body(loop)
+    vecs = weld_tables.vecs(loop)
+    per_mode = weld_tables.per_mode(loop)
+    root = weld_tables.root(loop)
+    beam_work = weld_tables.beam_work(loop)
     params, state, inputs = run.params, run.state, run.inputs
     force_steps = input_tables.force(inputs)
     torque_steps = input_tables.torque(inputs)
@@ -178,15 +181,12 @@ def _iterate(loop, run, s, it):
     eta_d = state_tables.eta_d(state)
     eta_map = state_tables.eta_map(state)
     rot = state_tables.rot(state)
-    c1, c3 = loop.coefficients[0], loop.coefficients[1]
-    w1, w3, phi_star, phi_new = loop.per_body[0], loop.per_body[1], loop.per_body[2], \
-        loop.per_body[3]
-    w, wd, w1_out, zero3 = loop.vecs[0], loop.vecs[1], loop.vecs[2], loop.vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (loop.per_mode[0], loop.per_mode[1], loop.per_mode[3],
-                                         loop.per_mode[4])
-    s_mat, p_vec, t_inv, t_vec = loop.riccati
-    u, work = loop.transfer
-    z = loop.stations
+    c1, c3 = coefficients[0], coefficients[1]
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
+        per_body[3]
+    w, wd, w1_out, zero3 = vecs[0], vecs[1], vecs[2], vecs[3]
+    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
+                                         per_mode[4])
     beam_params = model_tables.beam_params(params)
     beam_moments = model_tables.beam_moments(params)
     mode_off = model_tables.mode_offset(params)
@@ -197,7 +197,7 @@ def _iterate(loop, run, s, it):
     force, torque, line_load = force_steps[s], torque_steps[s], line_load_steps[s]
     n = phi_star.shape[0]
     for r in range(6):
-        p_vec[0, r] = loop.root[r]
+        p_vec[0, r] = root[r]
         for c in range(6):
             s_mat[0, r, c] = 0.0
     for k in range(n):
@@ -220,12 +220,12 @@ def _iterate(loop, run, s, it):
             beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
                           True, rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
-                          eta_map[i0:i1], loop.beam_work)
+                          eta_map[i0:i1], beam_work)
         else:
             beam_transfer(beam_params[k], tables, outboard, (False, zero3), gravity,
                           False, rot[k], phi_star[k], wd, c1, c3, w3[k], w, w1e[i0:i1],
                           w3e[i0:i1], eta[i0:i1], eta_d[i0:i1], z[k], eta_dd_star[i0:i1], u,
-                          eta_map[i0:i1], loop.beam_work)
+                          eta_map[i0:i1], beam_work)
         if not _all_finite(u):
             return NOT_FINITE, 0, 0.0
         if not riccati_step(u, s_mat[k], p_vec[k], s_mat[k + 1], p_vec[k + 1], t_inv[k],
@@ -266,7 +266,7 @@ def _iterate(loop, run, s, it):
 def _adopt(loop, run, s, it):
     """The latest solution becomes the guess (the fused ball chain's), the welded beams follow
     their inboard sections at it."""
-    _adopt_solution(loop, run, s, it)
+    adopt_solution(weld_tables.per_body(loop), weld_tables.per_mode(loop))
     _follow_welds(loop, run)
 
 
@@ -278,7 +278,9 @@ def _update(loop, run, s, _):
     increments would alternate from step to step), and every beam after the first its
     inboard's end section's motion (beam.end_section_motion), its pseudo-acceleration its
     angular acceleration (as step.py's welded bodies); every rate finite?"""
-    finite = _update_integrated(loop, run, s, 0)
+    scratch = weld_tables.follow_work(loop)
+    finite = update_integrated(run, weld_tables.coefficients(loop), weld_tables.per_body(loop),
+                               weld_tables.mats(loop), weld_tables.per_mode(loop))
     params, state, inputs = run.params, run.state, run.inputs
     g_rot = input_tables.g_rot(inputs)
     g_w = input_tables.g_w(inputs)
@@ -295,7 +297,6 @@ def _update(loop, run, s, _):
     beam_ends = model_tables.beam_ends(params)
     hinge_params, hinge_row = model_tables.hinge_params(params), model_tables.hinge_row(params)
     locked, lock_rel = model_tables.locked(params), model_tables.lock_rel(params)
-    scratch = loop.follow[3]
     for k in range(rot.shape[0]):
         if locked[k]:
             mm3_into(g_rot[s + 1], lock_rel[k], rot[k])
@@ -340,18 +341,24 @@ def _write_stations(stations, phi, phi_g, z):
 
 @loop_piece
 def _record(loop, run, s, slot):
+    stations = weld_tables.stations(loop)
+    per_body = weld_tables.per_body(loop)
+    vecs = weld_tables.vecs(loop)
     z = record_tables.z(run.rec)
-    _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], z[slot])
+    _write_stations(stations, per_body[3], vecs[4], z[slot])
     record_state(run.state, run.rec, slot)
 
 
 @loop_piece
 def _finish(loop, run, n_steps, _):
     """The stations' states z after the chunk's last step (the general loop's layout)."""
+    stations = weld_tables.stations(loop)
+    per_body = weld_tables.per_body(loop)
+    vecs = weld_tables.vecs(loop)
     z = state_tables.z(run.state)
     if n_steps > 0:
-        _write_stations(loop.stations, loop.per_body[3], loop.vecs[4], z)
+        _write_stations(stations, per_body[3], vecs[4], z)
 
 
-loop_variant(WeldLoop, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
+loop_variant(FlatWeld, predict=_predict, iterate=_iterate, adopt=_adopt, update=_update,
              record=_record, finish=_finish)
