@@ -221,8 +221,7 @@ def predict_offsets(run, coefficients, per_body, per_mode):
         _offsets_into(h, coef, omega[k], omega_dot[k], pseudo[k], w1[k], w3[k], phi_star[k])
     n_eta = eta.shape[0]
     if n_eta > 0:                               # eta'' = c1 eta + w1e, eta' = c3 eta + w3e
-        w1e, w3e, a1e, eta_dd_star = (per_mode[0], per_mode[1], per_mode[2],
-                                      per_mode[3])
+        w1e, w3e, a1e, eta_dd_star = per_mode[0], per_mode[1], per_mode[2], per_mode[3]
         # (eta_dd_star first receives the predicted increment of eta)
         _offsets_into(h, coef, eta_d, eta_acc, eta_p, a1e, w3e, eta_dd_star)
         for i in range(n_eta):
@@ -255,14 +254,11 @@ def _iterate(loop, run, s, it):
     t_vec = sweep_tables.red_t(sweep)
     aq = sweep_tables.red_aq(sweep)
     rot_ = state_tables.rot(state)
-    c1, c3, s_c, r_c = (coefficients[0], coefficients[1], coefficients[2],
-                        coefficients[3])
-    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
-        per_body[3]
+    c1, c3, s_c, r_c = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], per_body[3]
     t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
-                                         per_mode[4])
+    w1e, w3e, eta_dd_star, eta_dd_new = per_mode[0], per_mode[1], per_mode[3], per_mode[4]
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
     body_kind = model_tables.body_kind(params)

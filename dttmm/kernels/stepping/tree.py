@@ -38,11 +38,11 @@ def _iterate(loop, run, s, it):
     pmap = fused_tables.pmap(loop)
     maps = fused_tables.maps(loop)
     aq_out = fused_tables.aq_out(loop)
-    s_in_ = fused_tables.s_in(loop)
-    p_in_ = fused_tables.p_in(loop)
-    t_inv_ = fused_tables.t_inv(loop)
-    port_s_ = fused_tables.port_s(loop)
-    port_p_ = fused_tables.port_p(loop)
+    s_in = fused_tables.s_in(loop)
+    p_in = fused_tables.p_in(loop)
+    t_inv = fused_tables.t_inv(loop)
+    port_s = fused_tables.port_s(loop)
+    port_p = fused_tables.port_p(loop)
     coefficients = fused_tables.coefficients(loop)
     per_body = fused_tables.per_body(loop)
     per_mode = fused_tables.per_mode(loop)
@@ -55,16 +55,11 @@ def _iterate(loop, run, s, it):
     g_acc = input_tables.g_acc(inputs)
     eta_map = state_tables.eta_map(state)
     rot_ = state_tables.rot(state)
-    c1, c3, s_c, r_c = (coefficients[0], coefficients[1], coefficients[2],
-                        coefficients[3])
-    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
-        per_body[3]
+    c1, c3, s_c, r_c = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], per_body[3]
     t_buf, num_buf, e3, rot_star, lam = mats[0], mats[1], mats[2], mats[3], mats[4]
     w, wd, alpha, load = vecs[0], vecs[1], vecs[2], vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
-                                         per_mode[4])
-    s_in, p_in, t_inv, port_s, port_p = s_in_, p_in_, t_inv_, port_s_, \
-        port_p_
+    w1e, w3e, eta_dd_star, eta_dd_new = per_mode[0], per_mode[1], per_mode[3], per_mode[4]
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     gravity, rot = model_tables.gravity(params), rot_
     body_kind = model_tables.body_kind(params)

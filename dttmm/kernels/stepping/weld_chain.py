@@ -182,11 +182,9 @@ def _iterate(loop, run, s, it):
     eta_map = state_tables.eta_map(state)
     rot = state_tables.rot(state)
     c1, c3 = coefficients[0], coefficients[1]
-    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], \
-        per_body[3]
+    w1, w3, phi_star, phi_new = per_body[0], per_body[1], per_body[2], per_body[3]
     w, wd, w1_out, zero3 = vecs[0], vecs[1], vecs[2], vecs[3]
-    w1e, w3e, eta_dd_star, eta_dd_new = (per_mode[0], per_mode[1], per_mode[3],
-                                         per_mode[4])
+    w1e, w3e, eta_dd_star, eta_dd_new = per_mode[0], per_mode[1], per_mode[3], per_mode[4]
     beam_params = model_tables.beam_params(params)
     beam_moments = model_tables.beam_moments(params)
     mode_off = model_tables.mode_offset(params)
