@@ -75,19 +75,3 @@ def pytest_collection_finish(session):
     directory = Path(tempfile.gettempdir()) / f"dttmm-compile-{run}"
     directory.mkdir(exist_ok=True)
     _compile_families(directory)
-
-
-@pytest.hookimpl(tryfirst=True)     # (before xdist's, which names each test's group in its id)
-def pytest_collection_modifyitems(config, items):
-    """Tests that share a module's fixture (scope="module": a reference run of tens of seconds)
-    run on one worker, which then makes it once: each in the xdist group of its module and
-    fixture (pyproject.toml's --dist loadgroup; where xdist spreads them, each worker made it)."""
-    for item in items:
-        info = getattr(item, "_fixtureinfo", None)
-        if info is None or item.get_closest_marker("xdist_group"):
-            continue
-        for name in item.fixturenames:
-            defs = info.name2fixturedefs.get(name)
-            if defs and defs[-1].scope == "module":
-                item.add_marker(pytest.mark.xdist_group(f"{item.module.__name__}::{name}"))
-                break

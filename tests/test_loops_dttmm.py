@@ -1,7 +1,5 @@
 """DT-TMM's time step with closed loops (kernels/assembly/closure.py, docs/loops.md "The step with
 loops"): against the Newton-Euler reference and the parallelogram's exact reduction."""
-import functools
-
 import numpy as np
 import pytest
 
@@ -31,26 +29,6 @@ def test_slider_crank_converges_at_order_two_to_the_reference_and_holds_its_loop
     assert errors[-1] < 5e-6
 
 
-# The free slider-crank's 5 s runs, each made once for the three tests that read it (one worker
-# runs them: their xdist group, pyproject.toml's --dist loadgroup). Recorded by default: 1001
-# samples, every 20th step at dt = 2.5e-4 and every 50th at 1e-4, so every 0.05 s at which the
-# reference is sampled is among them.
-SLIDER_CRANK_5_S = "slider_crank_5_s"
-
-
-@functools.lru_cache(maxsize=None)
-def _slider_crank_5_s(tree, dt, hold_energy=None):
-    return simulate(slider_crank(tree), 5.0, dt, hold_energy=hold_energy)
-
-
-def _samples_at(result, t):
-    """The rows of a run's samples at the times t (which it recorded)."""
-    rows = np.searchsorted(result.t, t - 1e-9)
-    assert np.abs(result.t[rows] - t).max() < 1e-9
-    return rows
-
-
-@pytest.mark.xdist_group(SLIDER_CRANK_5_S)
 def test_slider_crank_holds_its_energy_from_both_spanning_trees():
     """Free (no drive), the mechanism keeps its energy, 0.76643568 J at the start. By default
     the loops' projection holds it (docs/loops.md, "The energy held"): over 5 s at dt = 2.5e-4
@@ -58,8 +36,9 @@ def test_slider_crank_holds_its_energy_from_both_spanning_trees():
     prismatic or by a universal joint. The step's own energy error, without it
     (hold_energy=False), is second order: 2.9e-5 and 1.6e-5 here."""
     for tree in ("slider on the rod", "slider on the ground"):
+        model = slider_crank(tree)
         for hold, low, high in ((None, 0.0, 1e-12), (False, 1e-6, 5e-5)):
-            result = _slider_crank_5_s(tree, 2.5e-4, hold)
+            result = simulate(model, 5.0, 2.5e-4, hold_energy=hold)
             energy = result.kinetic + result.potential
             assert abs(energy[0] - 0.76643568) < 1e-10
             drift = np.abs(energy - energy[0]).max() / result.kinetic.max()
@@ -71,14 +50,13 @@ def test_slider_crank_holds_its_energy_from_both_spanning_trees():
                 assert 0.0 < result.info["energy_correction"] < 1e-6
 
 
-@pytest.mark.xdist_group(SLIDER_CRANK_5_S)
 def test_slider_crank_keeps_its_energy_to_1e_6_at_dt_1e_4():
     """Issue 29's figure: over 5 s at dt = 1e-4 the energy within 1e-6 of the largest kinetic
     energy, by default (measured 1.4e-15; 4.9e-6 without holding it), the loop closed after
     every step, and the slider where the reference puts it (0.24071957 m at t = 5 s, DOP853 at
     rtol 1e-12: 55 s to compute, so its value is written here; test_slider_crank_over_5_s_
     against_the_reference computes it): measured 0.240719927 m."""
-    result = _slider_crank_5_s("slider on the rod", 1e-4)
+    result = simulate(slider_crank("slider on the rod"), 5.0, 1e-4)
     energy = result.kinetic + result.potential
     assert np.abs(energy - energy[0]).max() < 1e-6 * result.kinetic.max()
     assert result.info["loop_position_residual"] < 1e-10
@@ -87,7 +65,6 @@ def test_slider_crank_keeps_its_energy_to_1e_6_at_dt_1e_4():
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group(SLIDER_CRANK_5_S)
 def test_slider_crank_over_5_s_against_the_reference():
     """Every body's end point over 5 s (101 samples) against the reference, held and not: held,
     the two spanning trees agree with it alike, at order 2 (5.4e-6, 8.6e-7 m and 5.8e-6,
@@ -102,9 +79,9 @@ def test_slider_crank_over_5_s_against_the_reference():
         assert abs(ref.position_output[-1, 2, 0] - 0.24071957) < 1e-8
         errors = {}
         for hold in (None, False):
-            runs = [_slider_crank_5_s(tree, dt, hold) for dt in (2.5e-4, 1e-4)]
-            errors[hold] = [np.abs(run.position_output[_samples_at(run, t)]
-                                   - ref.position_output).max() for run in runs]
+            errors[hold] = [np.abs(simulate(model, 5.0, dt, hold_energy=hold, t_eval=t)
+                                   .position_output - ref.position_output).max()
+                            for dt in (2.5e-4, 1e-4)]
         assert abs(fitted_order([2.5e-4, 1e-4], errors[None]) - 2.0) < 0.2, errors
         assert errors[None][1] < 1e-6, errors
         assert errors[None][1] < 2.0 * errors[False][1], errors
