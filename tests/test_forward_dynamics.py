@@ -427,3 +427,33 @@ def test_linearize_refuses_what_its_loops_do_not_cover():
         dttmm.linearize(flexible_slider_crank())
     with pytest.raises(ValueError, match="no freedom left"):
         dttmm.linearize(stewart_platform())
+
+
+def test_a_compiled_joint_force_is_an_input_between_rigid_bodies_only():
+    """linearize offers a compiled JointForce's coordinate force as a pair of body loads (the
+    joint's own slot holds t): between rigid bodies its B column is the joint element's own
+    (the same coordinate without a compiled drive, applied inside the joint: an independent
+    path, to 1e-9). A strain rod carries no loads, so next to one the pair lost its rod half
+    and the column came out as minus the first joint's, quietly (an entry of 17.7 where the
+    joint's own column has 451); like a beam's there, it is not offered."""
+    from numba import njit
+    from dttmm import JointForce, RevoluteJoint, StrainRod, build_chain, linearize
+    from dttmm.model.chains import unit_link
+
+    @njit
+    def law(t, q, qd):
+        return 0.0
+
+    def model(drive):
+        rod = StrainRod(length=1.0, bending_stiffness=50.0, mass_per_length=1.0,
+                        polar_inertia_per_length=1e-4, strain_modes=2)
+        return build_chain([RevoluteJoint(axis=[0, 0, 1], drive=drive), unit_link(),
+                            RevoluteJoint(axis=[0, 0, 1], drive=drive), rod])
+
+    compiled, own = linearize(model(JointForce(law))), linearize(model(None))
+    torques = [name for name in own.inputs if "torque" in name]
+    assert torques == ["RevoluteJoint0.torque0", "RevoluteJoint1.torque0"]
+    assert [name for name in compiled.inputs if "torque" in name] == torques[:1]
+    first = own.inputs.index(torques[0])
+    np.testing.assert_allclose(compiled.B[:, compiled.inputs.index(torques[0])],
+                               own.B[:, first], atol=1e-9 * np.abs(own.B[:, first]).max())

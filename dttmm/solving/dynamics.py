@@ -7,9 +7,8 @@ import threading
 
 import numpy as np
 
-from ..elements import BEAM
-from ..elements.kinds import (CHILD, COORDINATE_0, MAX_COORDINATES, RATE_0, SLIDE, TURN,
-                              WITH_COORDINATES, coordinates_of, row_axes)
+from ..elements.kinds import (CHILD, COORDINATE_0, FLEXIBLE, MAX_COORDINATES, RATE_0, SLIDE,
+                              TURN, WITH_COORDINATES, coordinates_of, row_axes)
 
 # the state forward_dynamics takes, as Result records it (one sample), and the kernel state's
 # field each is written to; deflection and deflection_rate: elastic hinges' (world, m, m/s)
@@ -552,7 +551,8 @@ def linearize(model, state=None, t=0.0):
     # +tau n on the child and -tau n on the parent; a slide's force f n, +f n on the child and
     # -f n on the parent at one point P, the child's input point, i.e. at the mass centres with
     # the torques +-(P - c) x f n), between rigid bodies only (a beam's body loads act at its
-    # output end, not where the joint is)
+    # output end, not where the joint is; a strain rod carries none: half the pair would be
+    # dropped)
     joint_inputs, joint_names = [], []
     points = None
     for k in range(n):
@@ -571,8 +571,8 @@ def linearize(model, state=None, t=0.0):
                                      else "prescribed"))
                 joint_names.append(name)
                 continue
-            if model.body_kind[k] == BEAM or (p >= 0 and model.body_kind[p] == BEAM):
-                continue
+            if model.body_kind[k] in FLEXIBLE or (p >= 0 and model.body_kind[p] in FLEXIBLE):
+                continue            # (a beam's body loads act at its end; a rod has none)
             rot_p = model.ground_rotation if p < 0 else base["rotation"][p]
             axis = _joint_axis(model, base, k, i, rot_p)
             arms = None
