@@ -12,7 +12,7 @@ from dttmm import (BallJoint, EulerBernoulliBeam, FixedHinge, RevoluteJoint, Str
 from dttmm.solving import run_tables
 from dttmm.model.chains import arm, unit_link
 from dttmm.kernels import loop_tables, model_tables, schema, state_tables, sweep_tables
-from dttmm.kernels.schema import LOOP_LAYOUT, LOOPS, MODEL, SIZES, pack, unpack
+from dttmm.kernels.schema import LOOP_LAYOUT, MODEL, SIZES, pack, unpack
 from dttmm.model.mechanisms import n_four_bar
 
 
@@ -80,13 +80,16 @@ def _reader(accessor):
 
 def _reads_back(layout, flat, accessors):
     """Every table of a flat structure read by its compiled accessor equals the table Python
-    reads by name (and unpack), of the same shape, a view of the buffers where it has entries."""
+    reads by name and unpack's, of the same shape, a view of the buffers where it has entries
+    (a table without axes reads as its one value)."""
     tables = layout.unpack(flat)
     for field in layout.fields:
         got = _reader(getattr(accessors, field.name))(flat)
         np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
+        np.testing.assert_array_equal(getattr(flat, field.name), tables[field.name],
+                                      err_msg=field.name)
         assert np.shape(got) == np.shape(getattr(flat, field.name)), field.name
-        if np.size(got):
+        if np.size(got) and np.ndim(got):
             buffer = flat.real if field.buffer == schema.REAL else flat.int
             assert np.shares_memory(got, buffer), field.name
 
@@ -130,15 +133,7 @@ def test_the_loops_tables_read_back_by_name_in_python_and_in_kernels():
     model = n_four_bar(2)
     km = run_tables.kernel_model(model)[0]
     loops = run_tables.loop_tables(km)
-    tables = LOOP_LAYOUT.unpack(loops)
-    for field in LOOPS:
-        got = _reader(getattr(loop_tables, field.name))(loops)
-        np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
-        np.testing.assert_array_equal(getattr(loops, field.name), tables[field.name])
-        assert np.shape(got) == np.shape(tables[field.name]), field.name
-        if np.size(got) and np.ndim(got):
-            buffer = loops.real if field.buffer == schema.REAL else loops.int
-            assert np.shares_memory(got, buffer), field.name
+    _reads_back(LOOP_LAYOUT, loops, loop_tables)
     # two revolute joints close it, 5 rows each (3 gaps, 2 dots)
     assert len(loops.kind) == 10 and LOOP_LAYOUT.size(loops, "rows") == 10
     assert LOOP_LAYOUT.size(loops, "closings") == 2
@@ -184,11 +179,7 @@ def test_the_general_loops_scratch_reads_back_by_name_in_python_and_in_kernels()
     loop = kstep.general_loop(n, n_eta, h, coef, (True, st, 2 * st, 3 * st, c, 2 * c, 3 * c),
                               run_tables.loop_tables(km), np.array([7, 9], dtype=np.int64))
     scratch = loop.scratch
-    tables = schema.GENERAL_LAYOUT.unpack(scratch)
-    for field in schema.GENERAL:
-        got = _reader(getattr(general_tables, field.name))(scratch)
-        np.testing.assert_array_equal(got, tables[field.name], err_msg=field.name)
-        np.testing.assert_array_equal(getattr(scratch, field.name), tables[field.name])
+    _reads_back(schema.GENERAL_LAYOUT, scratch, general_tables)
     c1 = (1.0 - 0.5) / ((1.0 - 0.5) * 0.25 * h * h)        # docs/solver.md, the step's c1
     np.testing.assert_allclose(scratch.ground_dwd, c1 * np.eye(3), rtol=1e-15)
     assert scratch.independent == 1 and scratch.eta_g.shape == (n_eta,)
