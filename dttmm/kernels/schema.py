@@ -730,7 +730,6 @@ class FlatMonitor(FlatTables):
     """The step's error estimate's memory, flat (MONITOR; kernels/monitor_tables.py)."""
 
 
-
 class FlatFused(FlatTables):
     """The fused ball-chain loop's scratch, flat (FUSED; kernels/fused_tables.py)."""
 
