@@ -3,7 +3,7 @@ flexible beams (Rui et al.), with an independent Newton-Euler reference solver."
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam,
-                       FixedHinge, JointForce, JointMotion, PDTracking, PlanarJoint,
+                       FixedHinge, FreeJoint, JointForce, JointMotion, PDTracking, PlanarJoint,
                        PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
                        UniversalJoint)
 from .model.assembly import assemble
@@ -27,8 +27,8 @@ except PackageNotFoundError:        # run from a source tree that is not install
     __version__ = "0.0.0+unknown"
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
-           "ElasticHinge", "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "CylindricalJoint",
-           "PlanarJoint", "JointForce",
+           "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
+           "CylindricalJoint", "PlanarJoint", "JointForce",
            "SpringDamper", "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model",
            "System", "build_chain", "assemble", "loop_residuals", "forward_dynamics", "ode",
            "linearize", "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",

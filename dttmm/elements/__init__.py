@@ -2,7 +2,7 @@
 declared once (kinds.py)."""
 from .beam import EulerBernoulliBeam
 from .drives import JointForce, JointMotion, PDTracking, SpringDamper
-from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge
+from .hinges import BALL, ELASTIC, FIXED, FREE, BallJoint, ElasticHinge, FixedHinge, FreeJoint
 from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint, PlanarJoint,
                      PrismaticJoint, RevoluteJoint, UniversalJoint)
 from .kinds import BEAM, BODY_KINDS, JOINT_KINDS, RIGID, ROD
@@ -10,7 +10,8 @@ from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
-           "ElasticHinge", "RevoluteJoint", "UniversalJoint", "PrismaticJoint", "CylindricalJoint",
-           "PlanarJoint", "JointForce",
-           "SpringDamper", "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "REVOLUTE",
-           "UNIVERSAL", "PRISMATIC", "RIGID", "BEAM", "ROD", "BODY_KINDS", "JOINT_KINDS"]
+           "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
+           "CylindricalJoint", "PlanarJoint", "JointForce",
+           "SpringDamper", "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "FREE",
+           "REVOLUTE", "UNIVERSAL", "PRISMATIC", "RIGID", "BEAM", "ROD", "BODY_KINDS",
+           "JOINT_KINDS"]

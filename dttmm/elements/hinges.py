@@ -10,6 +10,7 @@ import numpy as np
 from ._checks import finite_vector, matrix3, rotation_matrix, symmetric_positive
 
 BALL, FIXED, ELASTIC = 0, 1, 2        # Model.hinge_kind (declared in kinds.py)
+FREE = 8                               # (after the joints with coordinates, 3..7)
 
 # layout of one row of Model.hinge_params (3x3 blocks, row-major); a joint's axes, coordinates
 # and rates follow (elements/kinds.py: AXES, COORDINATE_0, RATE_0, HINGE_PARAM_SIZE)
@@ -20,6 +21,8 @@ K_ROTATION = slice(27, 36)         # N m/rad
 C_ROTATION = slice(36, 45)         # N m s/rad
 DEFLECTION_0 = slice(45, 48)       # an elastic hinge's deflection d at t = 0 (world, m), in
 #                                    the first axis slot (kinds.AXIS_1), which it has no use for
+DEFLECTION_RATE_0 = slice(48, 51)  # its rate at t = 0 (world, m/s; zero for an elastic hinge,
+#                                    a free joint's from its velocity), in the second axis slot
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,6 +180,58 @@ class ElasticHinge:
         return dict(rotation=r, k_t=k_t, c_t=c_t, k_r=k_r, c_r=c_r, d0=d0)
 
 
+@dataclass(frozen=True, eq=False)
+class FreeJoint:
+    """Six degrees of freedom: the body flies free (docs/free_joint.md).
+
+    Nothing passes the joint: no force, no moment.  The body's input point starts at
+    ``position`` from the attachment point, in the parent's frame (the ground's for a root),
+    moving at ``velocity`` (world frame, absolute, like ``RigidBody.angular_velocity``); the
+    body turns freely from its own ``rotation`` and world-frame ``angular_velocity``, as behind
+    a ball joint.  Behind it a whole subtree flies: a free rigid body, a hub with flexible
+    panels, a chain of links on ball joints.  Its offset from the attachment point is a
+    Newmark coordinate of the joint, as an elastic hinge's deflection (``Result`` positions
+    and velocities include it).
+
+    Parameters
+    ----------
+    position : array_like of 3, optional
+        The body's input point at t = 0 relative to the attachment point, in the parent's
+        frame (the ground's for a root), m.  Default (0, 0, 0).
+    velocity : array_like of 3, optional
+        The input point's velocity at t = 0, world frame, m/s (absolute, not relative to the
+        parent).  Default (0, 0, 0).
+    name : str, optional
+        The joint's name, in messages and ``Model.hinge_names`` (default "": ``FreeJoint{k}``).
+
+    Raises
+    ------
+    ValueError
+        At build time, naming the joint (its name and index) and the argument: a position or
+        velocity that is not 3 finite numbers.
+
+    Examples
+    --------
+    A box tumbling in space, its input point at its mass centre:
+
+    >>> import dttmm
+    >>> box = dttmm.RigidBody(mass=1.0, inertia=[0.00417, 0.00833, 0.01083],
+    ...                       inertia_about="mass_center", angular_velocity=[1e-3, 4.0, 1e-3])
+    >>> model = dttmm.build_chain([dttmm.FreeJoint(), box], gravity=[0, 0, 0])
+    """
+    position: object = (0.0, 0.0, 0.0)
+    velocity: object = (0.0, 0.0, 0.0)
+    name: str = ""
+    kind = FREE
+
+    def validated(self, index=None):
+        who = _label(self, index)
+        zero = np.zeros((3, 3))
+        return dict(rotation=np.eye(3), k_t=zero, c_t=zero, k_r=zero, c_r=zero,
+                    d0=finite_vector(who, "position", self.position, size=3),
+                    d_rate0=finite_vector(who, "velocity", self.velocity, size=3))
+
+
 def _label(hinge, index):
     where = f"hinge {index}" if index is not None else "hinge"
     kind = type(hinge).__name__
@@ -193,4 +248,6 @@ def row_blocks(v, row):
     row[C_ROTATION] = v["c_r"].reshape(-1)
     if "d0" in v:
         row[DEFLECTION_0] = v["d0"]
+    if "d_rate0" in v:
+        row[DEFLECTION_RATE_0] = v["d_rate0"]
     return row

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .beam import EulerBernoulliBeam
-from .hinges import BALL, ELASTIC, FIXED, BallJoint, ElasticHinge, FixedHinge, row_blocks
+from .hinges import (BALL, ELASTIC, FIXED, FREE, BallJoint, ElasticHinge, FixedHinge, FreeJoint,
+                     row_blocks)
 from .joints import (CYLINDRICAL, PLANAR, PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint,
                      PlanarJoint, PrismaticJoint, RevoluteJoint, UniversalJoint, rotation_about)
 from .rigid_body import RigidBody
@@ -97,6 +98,12 @@ class Kind:
                  rigid: its output section is its own frame.
     moment_free: joints: transmits no moment (the reduced [a; q] form and the fused loop apply
                  across it).
+    deflects:    joints: its child's input point is offset from the attachment point by d
+                 (world), a Newmark coordinate of the joint (Model state.defl, recorded, in the
+                 positions): an elastic hinge's deflection, a free joint's flight.
+    carries_loads: joints: False where nothing passes it (a free joint): in the step it is
+                 LOCKED with zero loads on both sides (kernels/assembly/sweep.py), the child's
+                 subtree's motion solved from its own loads alone.
     coordinates: joints: its free coordinates, Coordinate each, in its own order (each with its
                  drive, its columns in a Result and its rows in the kernels: coordinate_count,
                  kernels/transfers/joint.py).  The family: turns fixed in the parent, then R0,
@@ -121,6 +128,8 @@ class Kind:
     fused: bool = False
     flexible: bool = False
     moment_free: bool = False
+    deflects: bool = False
+    carries_loads: bool = True
     coordinates: tuple = ()
     freedoms: object = None
     closure_rows: object = None
@@ -162,8 +171,10 @@ JOINT_KINDS = (
          doc="docs/hinges.md", what="a ball joint"),
     Kind(FIXED, FixedHinge, ("newmark", "energy_momentum", "paper"), freedoms=0, scene="fixed",
          doc="docs/hinges.md", what="a fixed hinge"),
-    Kind(ELASTIC, ElasticHinge, ("newmark",), freedoms=6, closure_rows=0, scene="elastic",
-         doc="docs/hinges.md", what="elastic"),
+    Kind(ELASTIC, ElasticHinge, ("newmark",), freedoms=6, closure_rows=0, deflects=True,
+         scene="elastic", doc="docs/hinges.md", what="elastic"),
+    Kind(FREE, FreeJoint, ("newmark",), freedoms=6, closure_rows=0, deflects=True,
+         carries_loads=False, scene="free", doc="docs/free_joint.md", what="a free joint"),
     # joints with coordinates and drives (kernels/transfers/joint.py): the general loop's full-state
     # tree sweep
     Kind(REVOLUTE, RevoluteJoint, ("newmark",), coordinates=(Coordinate(TURN, 0),),
@@ -228,6 +239,10 @@ COORDINATES = tuple(len(JOINT_KIND[code].coordinates) if code in JOINT_KIND else
 MOTION, AXIS, FRAME = _table("motion"), _table("axis"), _table("frame")
 
 WITH_COORDINATES = tuple(k.code for k in JOINT_KINDS if k.coordinates)    # (their codes)
+DEFLECTING = tuple(k.code for k in JOINT_KINDS if k.deflects)             # (their codes)
+# (per code) 1 where the joint's child's input point is offset by the joint's own Newmark
+# coordinate d (state.defl), else 0: a tuple the kernels index (numba reads it as a constant)
+DEFLECTS = tuple(int(code in DEFLECTING) for code in range(max(JOINT_KIND) + 1))
 WITH_SLIDES = tuple(k.code for k in JOINT_KINDS if any(c.motion == SLIDE for c in k.coordinates))
 WITH_TURNS = tuple(k.code for k in JOINT_KINDS if any(c.motion == TURN for c in k.coordinates))
 HAS_SLIDES = tuple(int(code in WITH_SLIDES) for code in range(max(JOINT_KIND) + 1))

@@ -26,9 +26,10 @@ from ..elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_
                                    ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
                                    ROD_STRETCH, ROD_TWIST)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from ..elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, ELASTIC, FIXED,
-                               K_ROTATION, K_TRANSLATION, REST_ROTATION)
+from ..elements.hinges import (BALL, C_ROTATION, C_TRANSLATION, DEFLECTION_0, DEFLECTION_RATE_0,
+                               ELASTIC, FIXED, FREE, K_ROTATION, K_TRANSLATION, REST_ROTATION)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_MASS_CENTER, TO_OUTPUT
+from ..model.loop_kinematics import start_attachment
 from ..model.model import Ground, Model, PrescribedMotion, children_of
 from ..model.system import System
 from ..model.profiles import Profile, ProfileForce, profile
@@ -89,6 +90,7 @@ _OWN_KEYS = {
     ELASTIC: {"translational_stiffness": "stiffness", "rotational_stiffness": "stiffness",
               "translational_damping": "stiffness", "rotational_damping": "stiffness",
               "rotation": "matrix", "deflection": "vector"},
+    FREE: {"position": "vector", "velocity": "vector"},
 }
 
 
@@ -456,7 +458,7 @@ def scene_of(model, run=None, name=None):
             raise unimplemented_body_kind(body.code, f"save_scene: {who}", "scene files")
         table["type"] = body.scene
         table.update(_BODY_TABLES[body.code](model, k, who, children, named))
-        if kind in (BALL, ELASTIC):          # (else the joint sets them)
+        if kind in (BALL, ELASTIC, FREE):    # (else the joint sets them)
             table["rotation"] = model.initial_rotation[k].tolist()
             table["angular_velocity"] = model.initial_angular_velocity[k].tolist()
         elif kind in WITH_COORDINATES:       # (its R0 read again from it; w from the rates)
@@ -634,6 +636,11 @@ def _joint_table(model, k, who):
                      rotation=rest.tolist())
         if np.any(h[DEFLECTION_0]):
             table["deflection"] = h[DEFLECTION_0].tolist()
+    elif kind == FREE:      # as given: the position in the parent's frame (the world's for
+        _, v_att, frame, _ = start_attachment(model, k)     # the ground), the velocity absolute
+        frame = np.eye(3) if p < 0 else frame
+        table.update(position=(frame.T @ h[DEFLECTION_0]).tolist(),
+                     velocity=(h[DEFLECTION_RATE_0] + v_att).tolist())
     elif kind in WITH_COORDINATES:
         table.update(_coordinate_table(JOINT_KIND[kind], h, model.drives[k], who))
     return table

@@ -2,7 +2,7 @@
 import numba
 import numpy as np
 
-from ..elements import BallJoint, FixedHinge, RigidBody
+from ..elements import BallJoint, FixedHinge, FreeJoint, RigidBody
 from .system import System, build_chain
 
 # +90 degrees about world y: a body's x axis along world -z
@@ -176,3 +176,14 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
                               drive=SpringDamper(50.0, 0.0 if undriven else 0.5)),
                parent="link3")
     return system.build()
+
+
+def tumbling_box(sides=(0.3, 0.2, 0.1), mass=1.0, angular_velocity=(1e-3, 4.0, 1e-3)):
+    """A uniform box (m, kg) on a free joint at the origin, its input point at its mass centre,
+    the identity rotation, spun at angular_velocity (rad/s; body axes = world at t = 0), no
+    gravity: Dzhanibekov's nut (examples/tumbling_body.py; docs/free_joint.md)."""
+    sides = np.asarray(sides, dtype=float)
+    inertia = mass * (np.sum(sides ** 2) - sides ** 2) / 12.0      # (b^2 + c^2) m / 12, ...
+    box = RigidBody(mass=mass, inertia=inertia, inertia_about="mass_center",
+                    angular_velocity=angular_velocity, name="box")
+    return build_chain([FreeJoint(name="free"), box], gravity=[0.0, 0.0, 0.0])

@@ -49,7 +49,8 @@ from ..elements.rigid_body import TO_OUTPUT
 from .loop_kinematics import closure_gaps, start_state
 from .loop_rows import GROUND, _principal_axes
 
-CLOSING_KINDS = tuple(k.code for k in JOINT_KINDS)     # (every joint kind closes a loop)
+# (every joint kind that passes loads closes a loop: a free joint closes none)
+CLOSING_KINDS = tuple(k.code for k in JOINT_KINDS if k.carries_loads)
 
 
 def empty_table():
@@ -206,6 +207,10 @@ def closure_rows(model, entries, index_of, named):
             raise ValueError(f"System.close (closure {c}): joint must be one of "
                              f"{', '.join(HINGE_KIND_NAMES[k] for k in CLOSING_KINDS)}, got "
                              f"{type(joint).__name__}")
+        if not kind.carries_loads:
+            raise ValueError(f"{label}: {kind.what} passes no force and no moment: between two "
+                             f"bodies it closes no loop; leave it out (a body on a free joint "
+                             f"closed to others: give it the free joint in the tree)")
         if kind.code not in CLOSING_KINDS:
             raise ValueError(f"{label}: {kind.what} does not close a loop yet (closing joints: "
                              f"{', '.join(HINGE_KIND_NAMES[k] for k in CLOSING_KINDS)})")

@@ -6,7 +6,8 @@ import numpy as np
 
 from . import loop_kinematics
 from .closures import closure_rows, loop_membership
-from ..elements import BALL, BEAM, FIXED, RIGID, ROD, BallJoint
+from ..elements import BALL, BEAM, FIXED, FREE, RIGID, ROD, BallJoint
+from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0
 from ..elements._checks import finite_scalar, finite_vector, rotation_matrix
 from ..elements.beam import (
      ACCURATE,
@@ -201,7 +202,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
                                      f"before it (the body moves with its inboard neighbour); "
                                      f"leave it None")
         else:
-            default = a_in @ hv[k]["rotation"] if kinds[k] != BALL else np.eye(3)
+            default = a_in @ hv[k]["rotation"] if kinds[k] not in (BALL, FREE) else np.eye(3)
             rot = default if bv[k]["rotation"] is None else bv[k]["rotation"]
             om = np.zeros(3) if bv[k]["omega"] is None else bv[k]["omega"]
         rotations[k], omegas[k] = rot, om
@@ -240,6 +241,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         frequency_cutoff_reasons=tuple(derived[1] if f else "" for f in from_step),
         beam_ends=tuple(beam_ends),
     )
+    tree = _free_joints_in_world(tree)
     tree = replace(tree, **{name: shared_rows(getattr(tree, name)) for name in SHARED_TABLES})
     adopt_arrays(tree)
     if not closures:
@@ -248,6 +250,23 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     named = [dict(v.get("points") or {}) for v in bv]
     return _unstiffen_held_chords(adopt_arrays(
         replace(tree, **closure_rows(tree, closures, index_of, named)), tree), loop_stiffened)
+
+
+def _free_joints_in_world(model):
+    """model with each free joint's start in the world, as its deflection d and rate (the
+    elastic hinge's slots, DEFLECTION_0 and DEFLECTION_RATE_0): d = F p (p the position given
+    in the parent's frame F; the world's for the ground), d' = v - v_att (v the velocity given,
+    absolute; v_att the attachment point's), parents first (a free joint's attachment moves
+    with any free joint before it)."""
+    for k in np.nonzero(model.hinge_kind == FREE)[0]:
+        _, v_att, frame, _ = loop_kinematics.start_attachment(model, k)
+        if model.parent[k] < 0:
+            frame = np.eye(3)
+        params = np.array(model.hinge_params)
+        params[k, DEFLECTION_0] = frame @ model.hinge_params[k, DEFLECTION_0]
+        params[k, DEFLECTION_RATE_0] = model.hinge_params[k, DEFLECTION_RATE_0] - v_att
+        model = replace(model, hinge_params=params)
+    return model
 
 
 def _unstiffen_held_chords(model, candidates):

@@ -6,9 +6,10 @@ the drives' check solve over.  The table of closing joints is built in closures.
 import numpy as np
 
 from ..elements import BALL, ELASTIC, FIXED
-from ..elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, K_ROTATION, K_TRANSLATION,
-                               REST_ROTATION)
-from ..elements.kinds import (ANGLE_A, ANGLE_B, COORDINATE_0, DOT, FLEXIBLE, GAP_A, RATE_0, RIGID,
+from ..elements.hinges import (C_ROTATION, C_TRANSLATION, DEFLECTION_0, DEFLECTION_RATE_0,
+                               K_ROTATION, K_TRANSLATION, REST_ROTATION)
+from ..elements.kinds import (ANGLE_A, ANGLE_B, COORDINATE_0, DEFLECTING, DOT, FLEXIBLE, GAP_A,
+                              RATE_0, RIGID,
                               SLIDE, WITH_COORDINATES, WITH_SLIDES, coordinates_of, joint_motion,
                               row_axes, unimplemented_body_kind)
 from ..elements.drives import FORCE, MOTION, SPRING_DAMPER
@@ -21,6 +22,28 @@ def start_state(model):
     """The tree's kinematics at t = 0 (tree_state at the model's own coordinates and rates)."""
     return tree_state(model, np.zeros((model.n_bodies, 3)), model.hinge_params[:, COORDINATE_0],
                       model.initial_angular_velocity, model.hinge_params[:, RATE_0])
+
+
+def start_attachment(model, k):
+    """(r, v, F, w) at t = 0 of body k's attachment point: its position and velocity, the
+    frame its joint is fixed in (the parent's output section, or the ground's) and that
+    frame's angular velocity."""
+    state = start_state(model)
+    return _attachment(model, k, model.ground_state(0.0), *state)
+
+
+def _attachment(model, k, ground, rot, w, r_in, v_in, rot_o, w_o, r_o, v_o):
+    """(r, v, F, w) of body k's attachment point from its parent's motion (tree_state's
+    arrays, filled for the bodies before k) or the ground's (model.ground_state)."""
+    p = model.parent[k]
+    r_g, v_g, _, rot_g, w_g, _ = ground
+    if p < 0:               # its place on the ground
+        arm = rot_g @ model.attachment_point[k]
+        return r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
+    if model.attachment[k] == 0:
+        return r_o[p], v_o[p], rot_o[p], w_o[p]
+    arm = rot[p] @ model.attachment_point[k]
+    return r_in[p] + arm, v_in[p] + np.cross(w[p], arm), rot[p], w[p]
 
 
 def closure_points(model):
@@ -120,19 +143,12 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
     r_in, v_in = np.zeros((n, 3)), np.zeros((n, 3))
     rot_o, w_o = np.zeros((n, 3, 3)), np.zeros((n, 3))
     r_o, v_o = np.zeros((n, 3)), np.zeros((n, 3))
-    r_g, v_g, _, rot_g, w_g, _ = model.ground_state(0.0)
+    ground = model.ground_state(0.0)
     e3 = np.empty((3, 3))
     for k in range(n):
-        p, kind, h = model.parent[k], int(model.hinge_kind[k]), model.hinge_params[k]
-        if p < 0:               # its place on the ground
-            arm = rot_g @ model.attachment_point[k]
-            r_att, v_att, f_in, w_in = r_g + arm, v_g + np.cross(w_g, arm), rot_g, w_g
-        elif model.attachment[k] == 0:
-            r_att, v_att, f_in, w_in = r_o[p], v_o[p], rot_o[p], w_o[p]
-        else:
-            arm = rot[p] @ model.attachment_point[k]
-            r_att, v_att = r_in[p] + arm, v_in[p] + np.cross(w[p], arm)
-            f_in, w_in = rot[p], w[p]
+        kind, h = int(model.hinge_kind[k]), model.hinge_params[k]
+        r_att, v_att, f_in, w_in = _attachment(model, k, ground, rot, w, r_in, v_in, rot_o, w_o,
+                                               r_o, v_o)
         r0 = h[REST_ROTATION].reshape(3, 3)
         d, d_rate = np.zeros(3), np.zeros(3)
         if kind in WITH_COORDINATES:                # elements/kinds.py::joint_motion
@@ -140,11 +156,11 @@ def tree_state(model, theta, q, omega, qd, stretch_rate=None):
                                                       qd[k])
         elif kind == FIXED:
             rot[k], w[k] = f_in @ r0, w_in
-        elif kind in (BALL, ELASTIC):               # free rotation
+        elif kind == BALL or kind in DEFLECTING:    # free rotation
             expm_so3(np.ascontiguousarray(theta[k], dtype=float), e3)
             rot[k], w[k] = e3 @ model.initial_rotation[k], omega[k]
-            if kind == ELASTIC:
-                d = model.hinge_params[k, DEFLECTION_0]     # the deflection, as given
+            if kind in DEFLECTING:      # the deflection or flight, as given (world)
+                d, d_rate = h[DEFLECTION_0], h[DEFLECTION_RATE_0]
         else:
             raise ValueError(f"tree_state: joint '{model.hinge_names[k]}' has no kinematics "
                              f"here (kind {kind})")

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-from ..elements.hinges import ELASTIC, FIXED
+from ..elements.hinges import FIXED
+from ..elements.kinds import DEFLECTS
 from ..kernels import kernel
 from ..kernels.algebra.mat3 import matmul, matvec, put1, put2
 
@@ -206,7 +207,7 @@ def _kinematics(y, body_params, hinge_kind, hinge_params, body_kind, beam_params
         else:
             put2(rot[k], _quat_to_rot(y[q_off[k]:q_off[k] + 4]))
             put1(omega[k], y[w_off[k]:w_off[k] + 3])
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             put1(defl[k], y[d_off[k]:d_off[k] + 3])
             put1(defl_rate[k], y[d_off[k] + 3:d_off[k] + 6])
         put1(r_in[k], r_prev + defl[k])
@@ -260,7 +261,7 @@ def _elastic_loads(rot, omega, rot_o, omega_o, defl, defl_rate, hinge_kind, hing
     q = np.zeros((n, 3))
     m = np.zeros((n, 3))
     for k in range(n):
-        if hinge_kind[k] != ELASTIC:
+        if not DEFLECTS[hinge_kind[k]]:
             continue
         h = hinge_params[k]
         a_in = rot_g if parent[k] < 0 else rot_o[parent[k]]
@@ -434,7 +435,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
                 s[re + i, cal + j] = j_w[i, j]
                 s[re + i, ca + j] = hc[i, j]
         # the inboard hinge acting on body k
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             bn += q_el[k]
             be += m_el[k]
         else:
@@ -453,7 +454,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         for ci in range(child_start[k], child_start[k + 1]):
             kc = child_list[ci]
             arm = rho_att[kc] + defl[kc]
-            if hinge_kind[kc] == ELASTIC:
+            if DEFLECTS[hinge_kind[kc]]:
                 # -q at r_att and the couple -m_in = -(m_out + d x q) about r_att; on a beam
                 # their generalized forces -(B_r^T q + B_t^T m_in), as a weld's reactions'
                 bn -= q_el[kc]
@@ -491,7 +492,7 @@ def _assemble(y, rot, omega, defl, rho_o, rot_o, omega_o, acc_v, alpha_v, b_r, b
         # constraint rows of the inboard hinge (acceleration level), P = parent[k]:
         #     a_k = a_att,k = a_P + alpha_P x rho_att,k + B_r eta''_P + acc_v_att,k,
         #     alpha_k = alpha_O,P (fixed hinge)
-        if hinge_kind[k] != ELASTIC:
+        if not DEFLECTS[hinge_kind[k]]:
             r = f_col[k]
             for i in range(3):
                 s[r + i, ca + i] = 1.0
@@ -600,7 +601,7 @@ def _solve_dynamics(y, body_params, hinge_kind, hinge_params, body_kind, beam_pa
     for k in range(n):
         put1(acc[k], x[6 * k:6 * k + 3])
         put1(alpha[k], x[6 * k + 3:6 * k + 6])
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             put1(force[k], q_el[k])
             put1(moment[k], m_el[k])
         else:
@@ -655,7 +656,7 @@ def rhs_kernel(y, body_params, hinge_kind, hinge_params, body_kind, beam_params,
             dy[o + 2] = 0.5 * (qw * wy + wz * qx - wx * qz)
             dy[o + 3] = 0.5 * (qw * wz + wx * qy - wy * qx)
             put1(dy[w_off[k]:w_off[k] + 3], alpha[k])
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             o = d_off[k]
             put1(dy[o:o + 3], y[o + 3:o + 6])
             kp = topology[0][k]

@@ -12,8 +12,8 @@ from ..elements.strain_rod import (ROD_DAMPING, ROD_MU, rod_coordinate_count, ro
 from ..elements.beam import (AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EXACT, FAMILY, MODES, PINNED,
                              STIFFENING, TORSION_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
-from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED
-from ..elements.kinds import COORDINATE_0, JOINT_KIND, RATE_0, coordinate_count
+from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, FIXED
+from ..elements.kinds import COORDINATE_0, DEFLECTING, JOINT_KIND, RATE_0, coordinate_count
 from ..kernels import python_twin
 from ..model.loop_rows import closure_forces, constraint_rows
 from ..model.sections import rotation_to_quaternion
@@ -77,11 +77,12 @@ class _Problem:
         self.body_params = np.array(model.body_params, dtype=float, order="C")
         self.hinge_params = np.array(model.hinge_params, dtype=float, order="C")
         self.gravity = np.array(model.gravity, dtype=float)
-        # a quaternion and w of its own: bodies behind ball joints and elastic hinges (a fixed
-        # hinge's or a joint's child follows its parent and the joint's coordinates)
+        # a quaternion and w of its own: bodies behind ball joints, elastic hinges and free
+        # joints (a fixed hinge's or a joint's child follows its parent and the joint's
+        # coordinates); d and d' of its own: behind elastic hinges and free joints (DEFLECTING)
         free = [k for k in range(n) if kinds[k] != FIXED and kinds[k] not in
                 JOINTS_WITH_COORDINATES]
-        elastic = [k for k in range(n) if kinds[k] == ELASTIC]
+        elastic = [k for k in range(n) if kinds[k] in DEFLECTING]
         self.q_off = np.full(n, -1, dtype=np.int64)
         self.w_off = np.full(n, -1, dtype=np.int64)
         self.d_off = np.full(n, -1, dtype=np.int64)
@@ -164,7 +165,7 @@ class _Problem:
         self.m_col = np.full(n, -1, dtype=np.int64)
         c = 6 * n
         for k in range(n):
-            if kinds[k] != ELASTIC:
+            if kinds[k] not in DEFLECTING:      # (their loads: the springs')
                 self.f_col[k] = c
                 c += 3
             if kinds[k] == FIXED or kinds[k] in JOINTS_WITH_COORDINATES:
@@ -240,8 +241,10 @@ class _Problem:
             if self.q_off[k] >= 0:
                 y[self.q_off[k]:self.q_off[k] + 4] = rotation_to_quaternion(m.initial_rotation[k])
                 y[self.w_off[k]:self.w_off[k] + 3] = m.initial_angular_velocity[k]
-            if self.d_off[k] >= 0:          # an elastic hinge's deflection (its rate: 0)
-                y[self.d_off[k]:self.d_off[k] + 3] = self.hinge_params[k, DEFLECTION_0]
+            if self.d_off[k] >= 0:  # an elastic hinge's deflection (its rate: 0), a free
+                d = self.d_off[k]       # joint's flight and its rate (world: model/freeze.py)
+                y[d:d + 3] = self.hinge_params[k, DEFLECTION_0]
+                y[d + 3:d + 6] = self.hinge_params[k, DEFLECTION_RATE_0]
         nm = self.n_modal
         if nm > 0:
             y[self.e0:self.e0 + nm] = np.asarray(m.initial_modal_coordinates, dtype=float)

@@ -3,7 +3,7 @@ general loop's start (docs/solver.md, "Consistent start")."""
 import numpy as np
 
 from ..elements.drives import MOTION
-from ..elements.hinges import ELASTIC
+from ..elements.kinds import DEFLECTING
 from ..kernels.stepping import ball_chain
 from ..kernels.stepping import weld_chain
 from ..kernels.stepping import step as kstep
@@ -111,7 +111,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
         raise DivergenceError(0, t, _singular_cause(model, mode, status, "consistent start"))
     for k in range(n):
         state.omega_dot[k] = g_wd[0] if model.ground_locked[k] else state.z[2 * k + 1, 3:6]
-        if model.hinge_kind[k] == ELASTIC:
+        if model.hinge_kind[k] in DEFLECTING:
             st = 2 * model.parent[k] + 2            # the inboard station (0: the ground)
             state.defl_acc[k] = state.z[2 * k + 1, 0:3] - state.z[st, 0:3]
     state.pseudo[:] = state.omega_dot

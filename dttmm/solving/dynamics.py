@@ -264,7 +264,8 @@ class ODE:
 
     def __init__(self, model, _closed=False):
         from . import run_tables
-        from ..elements.hinges import BALL, ELASTIC
+        from ..elements.hinges import BALL
+        from ..elements.kinds import DEFLECTING
         from ..model.model import Model
         if not isinstance(model, Model):
             raise ValueError(f"ode: model must be a Model, got {type(model).__name__}")
@@ -273,8 +274,11 @@ class ODE:
                              "integrator (they are held at acceleration level only); "
                              "simulate projects them back after every step")
         self.model = model
-        self.free = np.nonzero(np.isin(model.hinge_kind, (BALL, ELASTIC)))[0]
-        self.elastic = np.nonzero(model.hinge_kind == ELASTIC)[0]
+        # bodies turning on their own (behind ball joints, elastic hinges, free joints) and
+        # joints whose child's input point moves on its own (an elastic hinge's deflection, a
+        # free joint's flight: d, world)
+        self.free = np.nonzero(np.isin(model.hinge_kind, (BALL,) + DEFLECTING))[0]
+        self.elastic = np.nonzero(np.isin(model.hinge_kind, DEFLECTING))[0]
         self.columns = run_tables.coordinate_columns(model)
         n_eta = int(model.n_modes.sum())
         names = []

@@ -29,7 +29,7 @@ from ..kernels.stepping import ball_chain, em_step, runge_kutta, tree, weld_chai
 from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.assembly.loop_projection import start_energy
-from ..elements.kinds import BODY_KIND
+from ..elements.kinds import BODY_KIND, DEFLECTING
 from ..kernels.schema import FUSED_LAYOUT, MONITOR_LAYOUT
 from ..kernels.stepping.loop import DirectCalls, Settings, run_steps
 from .methods import SCHEMES
@@ -115,7 +115,7 @@ class PreparedRun:
         monitor = MONITOR_LAYOUT.zeros(
             bodies=n, modes=len(state.eta),
             coordinate_bodies=n if run_tables.has_coordinates(model) else 0,
-            elastic_bodies=n if (model.hinge_kind == run_tables.ELASTIC).any() else 0)
+            elastic_bodies=n if np.isin(model.hinge_kind, DEFLECTING).any() else 0)
         welded = runs_welded(model, mode, scheme)
         loop = runner = None
         if fused and mode == ksolve.RICCATI_TREE:

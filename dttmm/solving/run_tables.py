@@ -12,13 +12,14 @@ from ..elements.strain_rod import (ROD_DAMPING, ROD_MODES, ROD_MU, rod_component
                                    rod_section,
                                    rod_stiffness)
 from ..elements.strain_rod import rod_tables as rod_element_tables
-from ..elements.kinds import (COORDINATE_0, FLEXIBLE, HINGE_PARAM_SIZE, MAX_COORDINATES, RATE_0,
-                              WITH_COORDINATES, WITH_SLIDES, unimplemented_body_kind)
+from ..elements.kinds import (COORDINATE_0, DEFLECTING, FLEXIBLE, HINGE_PARAM_SIZE,
+                              MAX_COORDINATES, RATE_0, WITH_COORDINATES, WITH_SLIDES,
+                              unimplemented_body_kind)
 from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
                              MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
                              mode_shapes, slope_grams, torsion_shapes)
 from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
-from ..elements.hinges import DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
+from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from ..kernels.assembly import solve as ksolve
 from ..kernels.schema import LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, pack
@@ -116,13 +117,15 @@ def _initial_deflections(model, state):
     """state.defl at t = 0, the offset of each body's input point from its parent's output
     point, which the loops keep from the first step on (the t = 0 sample, the energies and
     positions then place the body where the model says): an elastic hinge's given deflection
-    (ElasticHinge.deflection; its rate starts at zero), and a joint's slides d = A_P sum n_i q_i
+    (ElasticHinge.deflection; its rate starts at zero) or a free joint's offset and rate (world,
+    as the build set them: model/freeze.py), and a joint's slides d = A_P sum n_i q_i
     with its rate (w_p, the parent's output section's angular velocity;
     kernels/transfers/joint.py::joint_frame and its joint_offset)."""
     from ..kernels.transfers.joint import joint_frame
     for k in range(model.n_bodies):
-        if model.hinge_kind[k] == ELASTIC:
+        if model.hinge_kind[k] in DEFLECTING:
             state.defl[k] = model.hinge_params[k, DEFLECTION_0]
+            state.defl_rate[k] = model.hinge_params[k, DEFLECTION_RATE_0]
         if model.hinge_kind[k] not in WITH_SLIDES:
             continue
         p = model.parent[k]
@@ -262,8 +265,9 @@ def has_coordinates(model):
 @model_fact
 def has_offsets(model):
     """A joint offsets its body's input point from its parent's output point (state.defl): an
-    elastic hinge's deflection, a joint's slides (elements/kinds.py: WITH_SLIDES)."""
-    return bool(np.isin(model.hinge_kind, (ELASTIC,) + WITH_SLIDES).any())
+    elastic hinge's deflection, a free joint's flight (DEFLECTING), a joint's slides
+    (elements/kinds.py: WITH_SLIDES)."""
+    return bool(np.isin(model.hinge_kind, DEFLECTING + WITH_SLIDES).any())
 
 
 @model_fact

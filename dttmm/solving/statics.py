@@ -225,6 +225,11 @@ class _Configuration:
         n = km.n_bodies
         for k in range(n):
             kind = int(km.hinge_kind[k])
+            if not JOINT_KIND[kind].carries_loads:
+                raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
+                                 f"{JOINT_KIND[kind].what}: nothing holds the body behind it, "
+                                 f"which has no static equilibrium (it flies); simulate it "
+                                 f"instead (a body held by closing joints as well: not yet)")
             if kind not in (BALL, FIXED, ELASTIC) + WITH_COORDINATES:
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
                                  f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "

@@ -36,12 +36,11 @@ fixed or moving ground (set_ground); every joint kind in the tree and closing it
 import numpy as np
 
 from .. import allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel, sweep_tables
-from ...elements.kinds import (ANGLE_A, ANGLE_B, DOT, GAP_A, GAP_WORLD, HAS_SLIDES, ROTATION_A,
-                               UNDECLARED_BODY_KIND)
+from ...elements.kinds import (ANGLE_A, ANGLE_B, DEFLECTS, DOT, GAP_A, GAP_WORLD, HAS_SLIDES,
+                               ROTATION_A, UNDECLARED_BODY_KIND)
 from ...elements import BEAM, RIGID, ROD
 from ...elements.drives import FORCE, SPRING_DAMPER
 from ...elements.beam import AXIAL_MODES, LENGTH, MODES, STIFFENING, TORSION_MODES
-from ...elements.hinges import ELASTIC
 from ..transfers.strain_rod import rod_end, rod_tables_of
 from ..transfers.joint import joint_offset
 from ..algebra.mat3 import matvec, put1, put2, t_cross, t_mm, t_mmt, t_mv
@@ -205,7 +204,7 @@ def tree_points(params, rot, w, jq, jqd, eta, eta_d, defl, defl_rate, loops, bod
                                      jqd[k])
             r = _add(r, d)
             v = _add(v, d_rate)
-        elif hinge_kind[k] == ELASTIC:
+        elif DEFLECTS[hinge_kind[k]]:    # an elastic hinge's deflection, a free joint's flight
             r = _add(r, _v3(defl, k))
             v = _add(v, _v3(defl_rate, k))
         if body_kind[k] == BEAM:

@@ -10,9 +10,9 @@ import numpy as np
 from .. import (allocating_kernel, kernel, loop_tables, model_tables, no_alloc_kernel,
                 state_tables)
 from ...elements import BEAM, RIGID, ROD
-from ...elements.kinds import UNDECLARED_BODY_KIND
+from ...elements.kinds import DEFLECTS, UNDECLARED_BODY_KIND
 from ...elements.beam import MODES, TORSION_MODES
-from ...elements.hinges import ELASTIC, FIXED
+from ...elements.hinges import FIXED
 from ..transfers.beam_relations import end_section_motion
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of
 from ..transfers.joint import joint_frame, n_coordinates
@@ -134,7 +134,7 @@ def _add_rates(params, loops, state, j, f):
         k = act_idx[q]
         for i in range(3):
             omega[k, i] += f * z[2 * k + 1, 3 + i]
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             for i in range(3):
                 defl_rate[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(n_coordinates(hinge_kind[k])):
@@ -205,7 +205,7 @@ def _move(params, loops, state, j, f, e3, phi):
     z, nu = z_save[j + 1], nu_save[j + 1]
     for q in range(act_ptr[j + 1], act_ptr[j + 2]):
         k = act_idx[q]
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:
             for i in range(3):
                 defl[k, i] += f * _deflection_response(params, loops, z, j, k, i)
         for i in range(3):

@@ -7,7 +7,7 @@ from numba import njit
 from .. import CONTRACT, allocating_kernel, kernel, model_tables, sweep_tables
 from ...elements import BEAM, RIGID, ROD
 from ...elements.beam import MODES, TORSION_MODES
-from ...elements.hinges import BALL, ELASTIC, FIXED
+from ...elements.hinges import BALL, ELASTIC, FIXED, FREE
 from ..transfers.beam import beam_transfer, transfer_work_size
 from ..transfers.body import rigid_body_transfer, station_history_correction
 from ..transfers.strain_rod import rod_tables_of, rod_transfer
@@ -72,6 +72,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     addresses."""
     kind = sweep_tables.kind(sweep)
     u = sweep_tables.u(sweep)
+    known_loads = sweep_tables.known_loads(sweep)
     joint_dof = sweep_tables.joint_dof(sweep)
     joint_tau_nu = sweep_tables.joint_tau_nu(sweep)
     independent, w1_st, w1_c = stations
@@ -118,6 +119,10 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
             kind[jh] = IDENTITY
         elif hk == ELASTIC and at_start:
             kind[jh] = LOCKED
+        elif hk == FREE:            # nothing passes it (docs/free_joint.md): both sides' loads
+            kind[jh] = LOCKED       # are zero, its child's motion solved from its own subtree
+            for i in range(12):
+                known_loads[jh, i] = 0.0
         elif hk == ELASTIC:
             kind[jh] = TRANSFER
             if p < 0:

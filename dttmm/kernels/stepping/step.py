@@ -29,7 +29,7 @@ from .. import (CONTRACT, allocating_kernel, general_tables, input_tables, kerne
 from ..schema import GENERAL_LAYOUT
 from ...elements import BEAM, ROD
 from ...elements.hinges import ELASTIC, FIXED
-from ...elements.kinds import MAX_COORDINATES
+from ...elements.kinds import DEFLECTS, MAX_COORDINATES
 from ..assembly.closure import set_ground, solve_with_loops, tree_points
 from ..assembly.loop_projection import project_onto_loops
 from ..transfers.hinge import elastic_hinge_loads
@@ -223,7 +223,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     if unknown != 0:
         return -unknown
     for k in range(n):
-        if hinge_kind[k] == ELASTIC:
+        if DEFLECTS[hinge_kind[k]]:     # (a free joint's: zero)
             p = parent[k]
             rot_in = g_rot if p < 0 else rot[p]
             w_in = g_w if p < 0 else omega[p]
@@ -363,7 +363,7 @@ def _predict(loop, run, s, _):
                           phi_star[k])   # phi* by the predictor
             _body_kinematics(c1, c3, rot[k], phi_star[k], w1[k], w3[k], rot_star[k], lam[k],
                              w[k], wd[k], dw[k], dwd[k])
-        if hk == ELASTIC:
+        if DEFLECTS[hk]:
             _deflection_offsets(h, coef, c1, c3, defl[k], defl_rate[k], defl_acc[k],
                                 defl_pseudo[k], w1d[k], w3d[k])
     if histories[0]:
@@ -449,7 +449,7 @@ def _iterate(loop, run, s, it):
             eta_g[i] = (eta_dd_star[i] - w1e[i]) / c1
             eta_d_g[i] = c3 * eta_g[i] + w3e[i]
         for k in range(defl_g.shape[0]):
-            if hinge_kind[k] == ELASTIC:
+            if DEFLECTS[hinge_kind[k]]:
                 d = _hinge_deflection(params, z_star, w1d, c1, k)
                 for i in range(3):
                     defl_g[k, i] = d[i]
@@ -615,7 +615,7 @@ def _update(loop, run, s, _):
         else:
             _advance_body(h, coef, z[2 * k + 1, 3:6], rot[k], omega[k], omega_dot[k],
                           pseudo[k], e3, rot_prev)
-        if hk == ELASTIC:
+        if DEFLECTS[hk]:
             _advance_deflection(params, z, w1d, c1, k, h, coef, defl[k], defl_rate[k],
                                 defl_acc[k], defl_pseudo[k])
         for i in range(3):
