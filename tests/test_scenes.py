@@ -8,7 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from dttmm.model.chains import arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum
+from dttmm.model.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
+                                tumbling_box)
 from dttmm.interfaces.cli import main, shipped_scenes
 from dttmm.model.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
 from dttmm.model.model import Model
@@ -23,7 +24,7 @@ BUILDERS = {"three_pendulum": three_pendulum, "rigid_chain": lambda: rigid_chain
             "cantilever": lambda: stiff_cantilever(4),
             "slider_crank": slider_crank, "four_bar": lambda: n_four_bar(2),
             "stewart": lambda: stewart_platform("motion"),
-            "flexible_slider_crank": flexible_slider_crank}
+            "flexible_slider_crank": flexible_slider_crank, "tumbling_body": tumbling_box}
 
 
 # the closed-loop mechanisms are assembled (dttmm.assemble): their joints' rest rotations are
