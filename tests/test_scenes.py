@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from dttmm.model.chains import (arm, five_link_tree, rigid_chain, stiff_cantilever, three_pendulum,
-                                tumbling_box)
+from dttmm.model.chains import (arm, five_link_tree, rigid_chain, spacecraft, stiff_cantilever,
+                                three_pendulum, tumbling_box)
 from dttmm.interfaces.cli import main, shipped_scenes
 from dttmm.model.mechanisms import flexible_slider_crank, n_four_bar, slider_crank, stewart_platform
 from dttmm.model.model import Model
@@ -24,7 +24,8 @@ BUILDERS = {"three_pendulum": three_pendulum, "rigid_chain": lambda: rigid_chain
             "cantilever": lambda: stiff_cantilever(4),
             "slider_crank": slider_crank, "four_bar": lambda: n_four_bar(2),
             "stewart": lambda: stewart_platform("motion"),
-            "flexible_slider_crank": flexible_slider_crank, "tumbling_body": tumbling_box}
+            "flexible_slider_crank": flexible_slider_crank, "tumbling_body": tumbling_box,
+            "spacecraft": spacecraft}
 
 
 # the closed-loop mechanisms are assembled (dttmm.assemble): their joints' rest rotations are
@@ -98,6 +99,7 @@ def test_profiles_carry_their_own_derivatives(kind):
     spec = {"constant": {"value": 2.0}, "linear": {"slope": 0.7, "offset": 1.0},
             "sine": {"amplitude": [1.0, 2.0], "frequency": 0.8, "phase": 0.3},
             "ramp": {"value": 3.0, "duration": 2.0}, "spin_up": {"omega": 6.0, "period": 15.0},
+            "pulse": {"value": [0.0, 10.0], "duration": 1.0},
             "table": {"t": [0.0, 1.0, 3.0], "value": [0.0, 2.0, 1.0]},
             "sum": {"terms": [{"profile": "linear", "slope": 1.0},
                               {"profile": "sine", "amplitude": 1.0,
@@ -110,6 +112,12 @@ def test_profiles_carry_their_own_derivatives(kind):
         assert np.allclose(p.rate(t), rate, atol=1e-6), t
         assert np.allclose(p.acceleration(t), acc, atol=1e-5), t
     assert profile(p.spec()).spec() == p.spec()
+
+
+def test_a_pulse_is_its_value_then_nothing_and_their_mean_at_the_switch():
+    p = profile({"profile": "pulse", "value": 10.0, "duration": 2.0})
+    assert (p(0.0), p(1.999), p(2.0), p(2.0 + 1e-6), p(5.0)) == (10.0, 10.0, 5.0, 0.0, 0.0)
+    assert p.rate(1.0) == 0.0 and p.acceleration(1.0) == 0.0
 
 
 def test_the_spin_up_law_of_seed_000():

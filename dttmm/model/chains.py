@@ -2,7 +2,8 @@
 import numba
 import numpy as np
 
-from ..elements import BallJoint, FixedHinge, FreeJoint, RigidBody
+from ..elements import BallJoint, EulerBernoulliBeam, FixedHinge, FreeJoint, RigidBody
+from .profiles import profile
 from .system import System, build_chain
 
 # +90 degrees about world y: a body's x axis along world -z
@@ -187,3 +188,41 @@ def tumbling_box(sides=(0.3, 0.2, 0.1), mass=1.0, angular_velocity=(1e-3, 4.0, 1
     box = RigidBody(mass=mass, inertia=inertia, inertia_about="mass_center",
                     angular_velocity=angular_velocity, name="box")
     return build_chain([FreeJoint(name="free"), box], gravity=[0.0, 0.0, 0.0])
+
+
+def slew_torque(torque=10.0, duration=2.0):
+    """The spacecraft's slew: a couple of `torque` N m about world z until `duration` s, then
+    none (a pulse profile: their mean at the switch itself, where the trapezoidal rule's
+    impulse is then exact; model/profiles.py)."""
+    return profile({"profile": "pulse", "value": [0.0, 0.0, float(torque)],
+                    "duration": float(duration)})
+
+
+def spacecraft(hub_mass=200.0, hub_side=1.0, panel_length=2.0, panel_width=0.5,
+               panel_thickness=2e-3, young=70e9, density=2700.0, torque=slew_torque(),
+               modes_per_plane=None):
+    """A free rigid hub (a uniform cube, kg, m) with two flat panels (beams: aluminium by
+    default, Pa, kg/m^3) clamped at the centres of its +x and -x faces and extending along x,
+    their thickness in the x-y plane (the slew's): "panel+x", "panel-x" on fixed hinges to the
+    hub's named points.  The hub on a free joint at the origin, at rest; `torque(t)` (N m, a
+    callable or 3 numbers) acts on it; no gravity (examples/spacecraft.py; docs/free_joint.md).
+    The panels' foreshortening is kept to all orders (stiffening="exact"): their positions,
+    and the momenta from them, are the model's own to every order."""
+    half = 0.5 * hub_side
+    hub = RigidBody(mass=hub_mass, inertia=hub_mass * hub_side ** 2 / 6.0,
+                    inertia_about="mass_center", torque=torque, name="hub",
+                    points={"+x": [half, 0.0, 0.0], "-x": [-half, 0.0, 0.0]})
+    area = panel_width * panel_thickness
+    in_plane = young * panel_width * panel_thickness ** 3 / 12.0     # bending along y
+    out_of_plane = young * panel_thickness * panel_width ** 3 / 12.0    # along z
+    polar = density * (panel_width * panel_thickness ** 3 + panel_thickness
+                       * panel_width ** 3) / 12.0
+    system = System(gravity=[0.0, 0.0, 0.0])
+    system.add(hub, FreeJoint(name="free"))
+    for side, turn in (("+x", np.eye(3)), ("-x", np.diag([-1.0, -1.0, 1.0]))):
+        panel = EulerBernoulliBeam(length=panel_length, density=density, area=area,
+                                   bending_stiffness=[in_plane, out_of_plane],
+                                   polar_inertia_per_length=polar, stiffening="exact",
+                                   modes_per_plane=modes_per_plane, name=f"panel{side}")
+        system.add(panel, FixedHinge(rotation=turn, name=f"clamp{side}"), parent="hub", at=side)
+    return system.build()

@@ -12,6 +12,8 @@ Kinds (values may be scalars or vectors of one length):
   sine       offset + amplitude sin(w t + phase), w = angular_frequency (rad/s) or
              2 pi frequency (Hz)
   ramp       value min(t / duration, 1)                              (from 0 to value)
+  pulse      value for 0 <= t < duration, then 0; value / 2 at t = duration itself (the
+             trapezoidal rule's impulse over a step ending or starting there is then exact)
   spin_up    (omega / T)(t^2 / 2 + (T / 2 pi)^2 (cos(2 pi t / T) - 1)) for t <= T = period,
              then omega (t - T / 2): a hub angle reaching the rate omega smoothly at T
   table      linear interpolation of values at times t (held beyond them)
@@ -19,7 +21,7 @@ Kinds (values may be scalars or vectors of one length):
 """
 import numpy as np
 
-KINDS = ("constant", "linear", "sine", "ramp", "spin_up", "table", "sum")
+KINDS = ("constant", "linear", "sine", "ramp", "pulse", "spin_up", "table", "sum")
 
 
 class Profile:
@@ -34,8 +36,8 @@ class Profile:
     Parameters
     ----------
     kind : str
-        One of the module's kinds: "constant", "linear", "sine", "ramp", "spin_up", "table",
-        "sum".
+        One of the module's kinds: "constant", "linear", "sine", "ramp", "pulse", "spin_up",
+        "table", "sum".
     **params
         The kind's parameters, checked by ``profile`` (not here): numbers or arrays of one
         length, "terms" a list of Profiles.
@@ -126,6 +128,11 @@ class Profile:
             if t >= d:
                 return (v, 0.0 * v, 0.0 * v)[order]
             return (v * t / d, v / d, 0.0 * v)[order]
+        if kind == "pulse":
+            d, v = p["duration"], p["value"]
+            at_switch = abs(t - d) <= 1e-9 * d
+            return ((0.5 * v if at_switch else v if t < d else 0.0 * v), 0.0 * v,
+                    0.0 * v)[order]
         if kind == "spin_up":
             om, per = p["omega"], p["period"]
             if t > per:
@@ -152,7 +159,8 @@ class Profile:
 # each kind's parameters: (required, optional)
 _PARAMS = {"constant": (("value",), ()), "linear": (("slope",), ("offset",)),
            "sine": (("amplitude",), ("frequency", "angular_frequency", "phase", "offset")),
-           "ramp": (("value", "duration"), ()), "spin_up": (("omega", "period"), ()),
+           "ramp": (("value", "duration"), ()), "pulse": (("value", "duration"), ()),
+           "spin_up": (("omega", "period"), ()),
            "table": (("t", "value"), ()), "sum": (("terms",), ())}
 
 
@@ -164,7 +172,8 @@ def profile(spec, where="profile"):
     spec : dict, float or Profile
         A table {"profile": KIND, key: value, ...} with the kind's keys (module docstring):
         constant (value), linear (slope; offset), sine (amplitude, and one of frequency in Hz
-        or angular_frequency in rad/s; phase in rad, offset), ramp (value, duration in s),
+        or angular_frequency in rad/s; phase in rad, offset), ramp and pulse (value,
+        duration in s),
         spin_up (omega in rad/s, period in s), table (t: at least two increasing times, s;
         value: one per time), sum (terms: a non-empty list of profiles).  Values are numbers
         or lists of numbers of one length (a vector profile: a force, a torque).  A number

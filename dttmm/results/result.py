@@ -596,6 +596,88 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     return kinetic, potential
 
 
+def momenta(model, result):
+    """The bodies' mass, and at every sample their first moment of mass, linear momentum and
+    angular momentum about the world's origin, from the Result's positions, velocities, rates
+    and modal coordinates (a run of `model`).
+
+    Returns (mass, first (T, 3), linear (T, 3), angular (T, 3)): kg, kg m, kg m/s, kg m^2/s.
+    The mass centre is first / mass; the angular momentum about it is
+    angular - (first / mass) x linear.  A rigid body counts m r_C, m v_C and
+    A J_C A^T w + m r_C x v_C; a beam int mu r dx, int mu r' dx and int mu r x r' dx +
+    j_p L (w . A e1) A e1 over its sections r(x) = r_I + A (x e1 + u(x)) by quadrature (with
+    its foreshortening -c(x) e1 where it is stiffened, docs/beam.md; its twist's rate too).
+    Strain rods are not counted yet (a ValueError names the body)."""
+    t = len(result.t)
+    rot, w = result.rotation, result.angular_velocity
+    r_in, v_in = result.position_input, result.velocity_input
+    eta = result.modal_coordinates
+    eta_d = result.modal_velocities
+    mode_off = model.mode_offsets
+    mass, first = 0.0, np.zeros((t, 3))
+    linear, angular = np.zeros((t, 3)), np.zeros((t, 3))
+    for k in range(model.n_bodies):
+        a = rot[:, k]
+        if model.body_kind[k] == RIGID:
+            m = model.body_params[k, MASS]
+            rho = np.einsum("tij,j->ti", a, model.body_params[k, TO_MASS_CENTER])
+            r_c, v_c = r_in[:, k] + rho, v_in[:, k] + cross(w[:, k], rho)
+            spin = np.einsum("tij,jk,tlk,tl->ti", a, model.body_mass_center_inertia[k], a,
+                             w[:, k])
+            mass += m
+            first += m * r_c
+            linear += m * v_c
+            angular += spin + m * cross(r_c, v_c)
+        elif model.body_kind[k] == BEAM:
+            row = model.beam_params[k]
+            j0, j1 = mode_off[k], mode_off[k + 1]
+            x, wq, r, vel, section_spin = _beam_sections(row, a, w[:, k], r_in[:, k],
+                                                        v_in[:, k], eta[:, j0:j1],
+                                                        eta_d[:, j0:j1])
+            mu = row[MASS_PER_LENGTH]
+            mass += mu * row[LENGTH]
+            first += mu * np.einsum("tqi,q->ti", r, wq)
+            linear += mu * np.einsum("tqi,q->ti", vel, wq)
+            angular += mu * np.einsum("tqi,q->ti", cross(r, vel), wq)
+            angular += row[POLAR_PER_LENGTH] * rows_dot(section_spin, wq)[:, None] * a[:, :, 0]
+        else:
+            raise unimplemented_body_kind(model.body_kind[k], f"body '{model.body_names[k]}'",
+                                          "momenta (results/result.py)")
+    return mass, first, linear, angular
+
+
+def _beam_sections(row, a, w, r_in, v_in, eta, eta_dot):
+    """A beam's quadrature points x (Q,), weights (Q,), their world positions and velocities
+    (T, Q, 3), and the sections' spin rates about the beam's axis (T, Q): r = r_I + A p,
+    p = x e1 + u(x) (the stretch along x, the foreshortening -c(x) along x where stiffened),
+    r' = v_I + w x A p + A p'."""
+    length, nm = row[LENGTH], int(row[MODES])
+    x = 0.5 * length * (_GL_X + 1.0)
+    wq = 0.5 * length * _GL_W
+    y = mode_shapes(int(row[FAMILY]), length, nm, x)[0]
+    p = np.zeros((len(eta), len(x), 3))
+    p[:, :, 0] = x + stretch_along(row, eta, x)
+    p[:, :, 1] = rows_dot(eta[:, :nm], y)
+    p[:, :, 2] = rows_dot(eta[:, nm:2 * nm], y)
+    p_dot = np.zeros_like(p)
+    p_dot[:, :, 0] = stretch_along(row, eta_dot, x)
+    p_dot[:, :, 1] = rows_dot(eta_dot[:, :nm], y)
+    p_dot[:, :, 2] = rows_dot(eta_dot[:, nm:2 * nm], y)
+    if row[STIFFENING]:
+        c, c_dot = foreshortening_along(row, x, eta, eta_dot)
+        p[:, :, 0] -= c
+        p_dot[:, :, 0] -= c_dot
+    a_t = np.swapaxes(a, 1, 2)
+    rho = p @ a_t
+    vel = v_in[:, None, :] + cross(w[:, None, :], rho) + p_dot @ a_t
+    spin = np.broadcast_to(np.einsum("ti,ti->t", w, a[:, :, 0])[:, None], (len(eta), len(x)))
+    mt = int(row[TORSION_MODES])
+    if mt:
+        psi = torsion_shapes(int(row[FAMILY]), length, mt, x)[0]
+        spin = spin + rows_dot(eta_dot[:, 2 * nm:2 * nm + mt], psi)
+    return x, wq, r_in[:, None, :] + rho, vel, spin
+
+
 def _drive_spring_energy(model, joint_coordinates, n_t):
     """(T,) sum of 1/2 k (q - rest)^2 over every SpringDamper drive (docs/joints.md, "Drives");
     joint_coordinates (T, total coordinates) or (total coordinates,), Model.drives' order."""
