@@ -3,9 +3,9 @@ flexible beams (Rui et al.), with an independent Newton-Euler reference solver."
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam,
-                       FixedHinge, FreeJoint, JointForce, JointMotion, PDTracking, PlanarJoint,
-                       PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper, StrainRod,
-                       UniversalJoint)
+                       FixedHinge, FreeJoint, JointForce, JointLimit, JointMotion, PDTracking,
+                       PlanarJoint, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
+                       StrainRod, UniversalJoint)
 from .model.assembly import assemble
 from .model.loop_kinematics import loop_residuals
 from .solving.dynamics import forward_dynamics, linearize, ode
@@ -28,7 +28,7 @@ except PackageNotFoundError:        # run from a source tree that is not install
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
-           "CylindricalJoint", "PlanarJoint", "JointForce",
+           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce",
            "SpringDamper", "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model",
            "System", "build_chain", "assemble", "loop_residuals", "forward_dynamics", "ode",
            "linearize", "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",

@@ -6,12 +6,13 @@ from .hinges import BALL, ELASTIC, FIXED, FREE, BallJoint, ElasticHinge, FixedHi
 from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint, PlanarJoint,
                      PrismaticJoint, RevoluteJoint, UniversalJoint)
 from .kinds import BEAM, BODY_KINDS, JOINT_KINDS, RIGID, ROD
+from .limits import JointLimit
 from .rigid_body import RigidBody
 from .strain_rod import StrainRod
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
-           "CylindricalJoint", "PlanarJoint", "JointForce",
+           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce",
            "SpringDamper", "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "FREE",
            "REVOLUTE", "UNIVERSAL", "PRISMATIC", "RIGID", "BEAM", "ROD", "BODY_KINDS",
            "JOINT_KINDS"]

@@ -35,6 +35,7 @@ import numpy as np
 
 from ._checks import finite_scalar, finite_vector
 from .drives import JointMotion, validated_drive
+from .limits import JointLimit
 
 REVOLUTE, UNIVERSAL, PRISMATIC, CYLINDRICAL, PLANAR = 3, 4, 5, 6, 7   # Model.hinge_kind
 
@@ -75,13 +76,36 @@ def _coordinates(who, values, rates, drives, names):
     return q0, qd0, checked
 
 
-def _common(axes, q0, qd0, drives):
+def _common(axes, q0, qd0, drives, limits):
     """A joint's validated parameters: R0 (the identity until the build reads it from the
     bodies), no springs, its axes by slot (elements/kinds.py::AXES), its coordinates' and
-    rates' initial values and its drives, one per coordinate."""
+    rates' initial values, its drives and its end stops, one per coordinate (a stop: (lower,
+    upper, stiffness, damping) or None)."""
     return dict(rotation=np.eye(3), k_t=np.zeros((3, 3)), c_t=np.zeros((3, 3)),
                 k_r=np.zeros((3, 3)), c_r=np.zeros((3, 3)), axes=tuple(axes), q0=list(q0),
-                qd0=list(qd0), drives=tuple(drives))
+                qd0=list(qd0), drives=tuple(drives), limits=tuple(limits))
+
+
+def _limits(who, limits, count):
+    """The end stops of a joint of `count` coordinates (elements/limits.py): `limits` a
+    JointLimit or None for one coordinate, else None or a tuple or list of count of them;
+    ValueError naming the joint, the argument and the entry otherwise."""
+    if limits is None:
+        return (None,) * count
+    entries = (limits,) if count == 1 and not isinstance(limits, (tuple, list)) else limits
+    if not isinstance(entries, (tuple, list)) or len(entries) != count:
+        raise ValueError(f"{who}: limits must be None or {count} entries (a JointLimit or None "
+                         f"per coordinate), got {limits!r}")
+    out = []
+    for i, limit in enumerate(entries):
+        label = f"{who}: limits" + ("" if count == 1 else f"[{i}]")
+        if limit is None:
+            out.append(None)
+        elif isinstance(limit, JointLimit):
+            out.append(limit.validated(label))
+        else:
+            raise ValueError(f"{label} must be a JointLimit or None, got {limit!r}")
+    return tuple(out)
 
 
 def _per_coordinate(who, joint, names, count, what="one per axis"):
@@ -124,6 +148,9 @@ class RevoluteJoint:
     name : str, optional
         The joint's name, in messages and ``Model.hinge_names`` (default "":
         ``RevoluteJoint{k}``).
+    limits : JointLimit, optional
+        End stops on the angle (elements/limits.py, docs/limits.md): a one-sided
+        spring-damper past a lower and an upper bound.  None (default): none.
 
     Raises
     ------
@@ -147,6 +174,7 @@ class RevoluteJoint:
     rate: float = 0.0
     drive: Optional[object] = None
     name: str = ""
+    limits: Optional[object] = None
     kind = REVOLUTE
 
     def validated(self, index=None):
@@ -154,7 +182,7 @@ class RevoluteJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _coordinates(who, [self.angle], [self.rate], [self.drive],
                                        [("angle", "rate")])
-        return _common([n], q0, qd0, drives)
+        return _common([n], q0, qd0, drives, _limits(who, self.limits, 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,6 +213,9 @@ class UniversalJoint:
     name : str, optional
         The joint's name, in messages and ``Model.hinge_names`` (default "":
         ``UniversalJoint{k}``).
+    limits : pair, optional
+        End stops on each coordinate, a JointLimit or None each (elements/limits.py,
+        docs/limits.md).  None (default): none.
 
     Raises
     ------
@@ -209,6 +240,7 @@ class UniversalJoint:
     rates: tuple = (0.0, 0.0)
     drives: tuple = (None, None)
     name: str = ""
+    limits: Optional[tuple] = None
     kind = UNIVERSAL
 
     def validated(self, index=None):
@@ -216,7 +248,7 @@ class UniversalJoint:
         n1 = unit_axis(who, "axis1", self.axis1)
         n2 = unit_axis(who, "axis2", self.axis2)
         q0, qd0, drives = _per_coordinate(who, self, ("angles", "rates", "drives"), 2)
-        return _common([n1, n2], q0, qd0, drives)
+        return _common([n1, n2], q0, qd0, drives, _limits(who, self.limits, 2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -242,6 +274,9 @@ class PrismaticJoint:
     name : str, optional
         The joint's name, in messages and ``Model.hinge_names`` (default "":
         ``PrismaticJoint{k}``).
+    limits : JointLimit, optional
+        End stops on the slide (elements/limits.py, docs/limits.md): a one-sided
+        spring-damper past a lower and an upper bound.  None (default): none.
 
     Raises
     ------
@@ -263,6 +298,7 @@ class PrismaticJoint:
     rate: float = 0.0
     drive: Optional[object] = None
     name: str = ""
+    limits: Optional[object] = None
     kind = PRISMATIC
 
     def validated(self, index=None):
@@ -270,7 +306,7 @@ class PrismaticJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _coordinates(who, [self.position], [self.rate], [self.drive],
                                        [("position", "rate")])
-        return _common([n], q0, qd0, drives)
+        return _common([n], q0, qd0, drives, _limits(who, self.limits, len(q0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -299,6 +335,9 @@ class CylindricalJoint:
     name : str, optional
         The joint's name, in messages and ``Model.hinge_names`` (default "":
         ``CylindricalJoint{k}``).
+    limits : pair, optional
+        End stops on each coordinate, a JointLimit or None each (elements/limits.py,
+        docs/limits.md).  None (default): none.
 
     Raises
     ------
@@ -324,6 +363,7 @@ class CylindricalJoint:
     rates: tuple = (0.0, 0.0)
     drives: tuple = (None, None)
     name: str = ""
+    limits: Optional[tuple] = None
     kind = CYLINDRICAL
 
     def validated(self, index=None):
@@ -331,7 +371,7 @@ class CylindricalJoint:
         n = unit_axis(who, "axis", self.axis)
         q0, qd0, drives = _per_coordinate(who, self, ("coordinates", "rates", "drives"), 2,
                                           "one per coordinate: theta, s")
-        return _common([n], q0, qd0, drives)
+        return _common([n], q0, qd0, drives, _limits(who, self.limits, len(q0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -369,6 +409,9 @@ class PlanarJoint:
     name : str, optional
         The joint's name, in messages and ``Model.hinge_names`` (default "":
         ``PlanarJoint{k}``).
+    limits : 3 entries, optional
+        End stops on each coordinate, a JointLimit or None each (elements/limits.py,
+        docs/limits.md).  None (default): none.
 
     Raises
     ------
@@ -397,6 +440,7 @@ class PlanarJoint:
     rates: tuple = (0.0, 0.0, 0.0)
     drives: tuple = (None, None, None)
     name: str = ""
+    limits: Optional[tuple] = None
     kind = PLANAR
 
     def validated(self, index=None):
@@ -411,7 +455,8 @@ class PlanarJoint:
         q0, qd0, drives = _per_coordinate(who, self, ("coordinates", "rates", "drives"), 3,
                                           "one per coordinate: x, y, theta")
         normal = np.cross(n1, n2)
-        return _common([n1, n2, normal / np.linalg.norm(normal)], q0, qd0, drives)
+        return _common([n1, n2, normal / np.linalg.norm(normal)], q0, qd0, drives,
+                       _limits(who, self.limits, 3))
 
 
 def rotation_about(axis, angle):

@@ -68,10 +68,22 @@ AXIS_START = tuple(a.start for a in AXES)       # (a constant the kernels index)
 assert RATE_0.stop == AXIS_3.start and AXIS_3.stop == HINGE_PARAM_SIZE
 
 
+# a joint with coordinates' end stops (elements/limits.py): (lower, upper, stiffness, damping)
+# of coordinate i at LIMIT_0 + LIMIT_SIZE i, in the slots of an elastic hinge's translational
+# spring and damper, which it has no use for; stiffness 0: no stop on that coordinate
+LIMIT_0, LIMIT_SIZE = 9, 4
+assert LIMIT_0 + LIMIT_SIZE * MAX_COORDINATES <= 27
+
+
+def limit_of(row, i):
+    """(lower, upper, stiffness, damping) of coordinate i's end stops in a hinge_params row."""
+    return row[LIMIT_0 + LIMIT_SIZE * i:LIMIT_0 + LIMIT_SIZE * (i + 1)]
+
+
 def pack_hinge(v):
     """A hinge's validated parameters (its validated()) as one hinge_params row: R0, springs and
     dampers, deflection (hinges.py::row_blocks), and a joint's axes, coordinates and rates at
-    t = 0 (zero past its own)."""
+    t = 0 (zero past its own) and its end stops (LIMIT_0)."""
     row = row_blocks(v, np.zeros(HINGE_PARAM_SIZE))
     if "axes" in v:
         for slot, axis in enumerate(v["axes"]):
@@ -79,6 +91,10 @@ def pack_hinge(v):
         q0, qd0 = np.asarray(v["q0"], dtype=float), np.asarray(v["qd0"], dtype=float)
         row[COORDINATE_0.start:COORDINATE_0.start + len(q0)] = q0
         row[RATE_0.start:RATE_0.start + len(qd0)] = qd0
+        for i, limit in enumerate(v.get("limits", ())):
+            if limit is not None:
+                start = LIMIT_0 + LIMIT_SIZE * i
+                row[start:start + LIMIT_SIZE] = limit
     return row
 
 

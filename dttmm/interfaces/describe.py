@@ -6,7 +6,8 @@ from ..elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_L
                              TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
                              torsion_frequencies, truncation_errors)
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
-from ..elements.kinds import BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE, unimplemented_body_kind
+from ..elements.kinds import (BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE, limit_of,
+                              unimplemented_body_kind)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
 from ..elements.strain_rod import (ROD_EI_V, ROD_EI_W, ROD_LENGTH, ROD_MODES, ROD_STATIONS,
                                    rod_components)
@@ -288,6 +289,11 @@ def describe(model):
         out.append(f"  {model.body_names[k]:<14} {kind:<5} {model.body_params[k, MASS]:8.4g} kg, "
                    f"on {'an' if joint[0] in 'aeio' else 'a'} {joint} joint "
                    f"'{model.hinge_names[k]}' to {parent}")
+        for i in range(len(model.drives[k])):     # its end stops (docs/limits.md)
+            lower, upper, stiffness, damping = limit_of(model.hinge_params[k], i)
+            if stiffness:
+                out.append(f"  {'':<14} coordinate {i}: end stops at [{lower:.6g}, {upper:.6g}], "
+                           f"stiffness {stiffness:.4g}, damping {damping:.4g} (docs/limits.md)")
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k],
                                                                  k in held)]

@@ -21,7 +21,8 @@ from ..elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUE
                              STIFFENING, TORSION_MODES, AXIAL_MODES, EA)
 from ..elements.kinds import (AXES, BEAM, BODY_KINDS, COORDINATE_0, JOINT_KIND, JOINT_KINDS,
                               RATE_0, RIGID, ROD, SCENE_TYPE, SLIDE, WITH_COORDINATES,
-                              declared_body_kind, unimplemented_body_kind)
+                              declared_body_kind, limit_of, unimplemented_body_kind)
+from ..elements.limits import JointLimit
 from ..elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
                                    ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
                                    ROD_STRETCH, ROD_TWIST)
@@ -102,7 +103,8 @@ def _coordinate_keys(kind):
     return dict({axis: "vector" for axis in kind.axes},
                 **{values: "number" if one else f"numbers{count}",
                    rates: "number" if one else f"numbers{count}",
-                   drives: "table" if one else f"drives{count}"})
+                   drives: "table" if one else f"drives{count}",
+                   "limits": "limit" if one else f"limits{count}"})
 
 
 _JOINTS = {k.scene: (k.cls, _coordinate_keys(k) if k.code in WITH_COORDINATES
@@ -295,6 +297,11 @@ def _joint(table, where, label, common=_JOINT_COMMON):
                               for j, d in enumerate(args[key]))
         elif value.startswith("numbers"):
             args[key] = tuple(args[key])
+        elif value == "limit":
+            args[key] = _limit(args[key], where, f"{label} key '{key}'")
+        elif value.startswith("limits"):
+            args[key] = tuple(_limit(d, where, f"{label} key '{key}[{j}]'")
+                              for j, d in enumerate(args[key]))
     try:
         joint = cls(**args)
         joint.validated()
@@ -302,6 +309,20 @@ def _joint(table, where, label, common=_JOINT_COMMON):
         raise SceneError(f"{where}: {label}: {err}") from None
     parent = table.get("parent", "ground")
     return joint, (None if parent == "ground" else parent), table.get("at")
+
+
+def _limit(table, where, label):
+    """A JointLimit from its table {lower, upper, stiffness, damping} ({}: none)."""
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: {label}: a table with keys lower, upper, stiffness, damping "
+                         f"({{}} for none), got {table!r}")
+    if not table:
+        return None
+    unknown = set(table) - {"lower", "upper", "stiffness", "damping"}
+    if unknown:
+        raise SceneError(f"{where}: {label}: unknown key '{sorted(unknown)[0]}' (a limit takes "
+                         f"lower, upper, stiffness, damping)")
+    return JointLimit(**table)
 
 
 def _drive(table, where, label):
@@ -368,6 +389,9 @@ def _value(value, kind, where, label):
           **{f"numbers{n}": isinstance(value, list) and len(value) == n
              and all(map(number, value)) for n in (2, 3)},
           **{f"drives{n}": isinstance(value, list) and len(value) == n for n in (2, 3)},
+          "limit": isinstance(value, dict),
+          **{f"limits{n}": isinstance(value, list) and len(value) == n
+             and all(isinstance(x, dict) for x in value) for n in (2, 3)},
           "profile": number(value) or isinstance(value, dict)}
     ok["point"] = ok["str"] or ok["vector"]
     ok["stiffness"] = number(value) or ok["vector"] or ok["matrix"]
@@ -611,7 +635,19 @@ def _coordinate_table(kind, h, drives, who, closing=False):
             table[drives_key] = written[0]
     elif not closing or any(d is not None for d in drives):
         table[drives_key] = written
+    limits = [_limit_table(limit_of(h, i)) for i in range(count)]
+    if not closing and any(limits):
+        table["limits"] = limits[0] if count == 1 else limits
     return table
+
+
+def _limit_table(limit):
+    """A coordinate's end stops as a scene table ({} for none; an infinite bound left out)."""
+    lower, upper, stiffness, damping = (float(x) for x in limit)
+    if stiffness == 0.0:
+        return {}
+    table = {"lower": lower, "upper": upper, "stiffness": stiffness, "damping": damping}
+    return {k: v for k, v in table.items() if np.isfinite(v)}
 
 
 def _joint_table(model, k, who):

@@ -118,7 +118,7 @@ def arm_servo(t, q, q_dot):
     return 200.0 * (target - q) + 20.0 * (rate - q_dot)
 
 
-def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=False):
+def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=False, stop=None):
     """The arm of examples/arm.py (docs/joints.md): link 1 on a revolute joint at the origin
     about world y; link 2 on a revolute joint at link 1's output point about link 1's body z;
     link 3 on a universal joint at link 2's output point (first axis link 2's body z, second
@@ -131,7 +131,7 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
     law written as a numba-compiled JointForce (arm_servo), also inside it.  flexible: link 2 is
     the paper's beam 4 (1 m, 20 mm square section, E = 2.5e10 Pa, rho = 3300 kg/m^3).
     undriven: no drive on joint 1 and no damper
-    (the energy test)."""
+    (the energy test).  stop: a JointLimit on joint 1 (examples/end_stop.py)."""
     from ..elements import (EulerBernoulliBeam, JointForce, JointMotion, PDTracking,
                             PrismaticJoint, RevoluteJoint, SpringDamper, UniversalJoint)
     from .profiles import ProfileForce, profile
@@ -167,7 +167,7 @@ def arm(drive="torque", flexible=False, gravity=(0.0, -9.81, 0.0), undriven=Fals
         link2 = unit_link(name="link2")
     system = System(gravity=gravity)
     system.add(unit_link(name="link1"), RevoluteJoint(axis=[0, 1, 0], rate=0.5, drive=first,
-                                                      name="joint1"))
+                                                      name="joint1", limits=stop))
     system.add(link2, RevoluteJoint(axis=[0, 0, 1], name="joint2"), parent="link1")
     system.add(unit_link(name="link3"), UniversalJoint(axis1=[0, 0, 1], axis2=[0, 1, 0],
                                                        name="joint3"), parent="link2")

@@ -220,6 +220,9 @@ def closure_rows(model, entries, index_of, named):
             raise ValueError(f"{label}: closes {_side_name(model, ka)} to itself; a closing "
                              f"joint joins two different bodies (or a body and the ground)")
         v = joint.validated(c)
+        if any(limit is not None for limit in v.get("limits", ())):
+            raise ValueError(f"{label}: end stops (limits) on a closing joint do not run yet; "
+                             f"give them to a joint of the tree")
         drives = tuple(v.get("drives", ()))
         if any(d is not None and d["kind"] == PD for d in drives):
             raise ValueError(f"{label}: a closing joint's coordinate takes a JointMotion, "

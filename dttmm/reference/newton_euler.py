@@ -471,7 +471,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         # free coordinate's drive force as applied, a prescribed one's as the joint loads' s.N
         y_i = prob.joint_inputs(t, ys[i])
         q_rec[i], qd_rec[i] = y_i[c0:c0 + nq], y_i[c0 + nq:c0 + 2 * nq]
-        drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value)
+        drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value - prob.stop_value)
         deflection[i] = dk
         ground = model.ground_state(t)
         ground_rot[i], ground_pos[i] = ground[3], ground[0]

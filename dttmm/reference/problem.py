@@ -13,7 +13,8 @@ from ..elements.beam import (AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EXACT, FAMILY
                              STIFFENING, TORSION_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, FIXED
-from ..elements.kinds import COORDINATE_0, DEFLECTING, JOINT_KIND, RATE_0, coordinate_count
+from ..elements.kinds import (COORDINATE_0, DEFLECTING, JOINT_KIND, RATE_0, coordinate_count,
+                              limit_of)
 from ..kernels import python_twin
 from ..model.loop_rows import closure_forces, constraint_rows
 from ..model.sections import rotation_to_quaternion
@@ -225,6 +226,13 @@ class _Problem:
             else:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
+        # the end stops of the free coordinates (elements/limits.py): (coordinate, whether it
+        # has a drive, lower, upper, stiffness, damping), their generalized forces (added to
+        # drive_value) in stop_value
+        self._stops = [(c, d is not None) + tuple(limit_of(self.hinge_params[k], i))
+                       for c, (k, i, d) in enumerate(self.coordinates)
+                       if limit_of(self.hinge_params[k], i)[2] != 0.0 and not self.prescribed[c]]
+        self.stop_value = np.zeros(nq)
         self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
         self.kernels = _Kernels()
 
@@ -283,6 +291,13 @@ class _Problem:
                 + kd * (self._number(c, "PDTracking target_rate", t, rate(t)) - y[c0 + nq + c])
                 + (0.0 if feedforward is None else
                    self._number(c, "PDTracking feedforward", t, feedforward(t))))
+        for c, driven, lower, upper, stiffness, damping in self._stops:
+            # past a bound a one-sided spring-damper pushes back, never pulls (docs/limits.md)
+            q, qd = y[c0 + c], y[c0 + nq + c]
+            push = (stiffness * (q - upper) + damping * qd if q > upper else
+                    stiffness * (lower - q) - damping * qd if q < lower else 0.0)
+            self.stop_value[c] = 0.0 if push <= 0.0 else -push if q > upper else push
+            self.drive_value[c] = (self.drive_value[c] if driven else 0.0) + self.stop_value[c]
         return y
 
     def ground(self, t):
@@ -339,7 +354,7 @@ class _Problem:
         profile's angle): integrator.py runs such a model in compiled code, setting the springs'
         forces as joint_inputs does and the spun ground as ground does; None otherwise."""
         hub = hub_table(self.model.ground_motion)
-        if (self._motions or self._drive_fns or self._pds or self._force_fns
+        if (self._motions or self._drive_fns or self._pds or self._stops or self._force_fns
                 or self._torque_fns or self._line_load_fns or self._closure_motions
                 or self._closure_forces or hub is None):
             return None

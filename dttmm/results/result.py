@@ -11,10 +11,10 @@ from ..elements.beam import (AXIAL_MODES, EA, EI_V, EI_W, EXACT, FAMILY, GJ, LEN
                              MASS_PER_LENGTH, MODES, POLAR_PER_LENGTH, STIFFENING, TORSION_MODES,
                              mode_shapes, stretch_along,
                              torsion_shapes)
-from ..elements.drives import SPRING_DAMPER
+from ..elements.drives import MOTION, SPRING_DAMPER
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from ..elements.rigid_body import MASS, TO_MASS_CENTER
-from ..elements.kinds import unimplemented_body_kind
+from ..elements.kinds import limit_of, unimplemented_body_kind
 from ..model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
                               element_end_section, rotation_to_quaternion)
 
@@ -594,6 +594,36 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     if single:
         return float(kinetic[0]), float(potential[0])
     return kinetic, potential
+
+
+def limit_forces(model, result):
+    """The end stops' generalized forces (N m or N) at every sample, and when each engaged.
+
+    Returns (forces (T, C), engaged): forces in Result.joint_coordinates' columns (0 where a
+    coordinate has no stop or is between its bounds), from the recorded coordinates and rates
+    by the stops' law (elements/limits.py: past a bound -max(0, k (q - upper) + c q') or
+    max(0, k (lower - q) - c q'), the force the run applied at each sample to its Newton
+    tolerance); engaged: a list of (column, "lower" or "upper", t_on, t_off) per contact, the
+    first and last samples it pushed at (t_off None while it still pushes at the end).  A
+    prescribed coordinate's stops do not act (its motion rules): zero there."""
+    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    forces = np.zeros((len(result.t), len(columns)))
+    engaged = []
+    for col, (k, i) in enumerate(columns):
+        lower, upper, stiffness, damping = limit_of(model.hinge_params[k], i)
+        drive = model.drives[k][i]
+        if stiffness == 0.0 or (drive is not None and drive["kind"] == MOTION):
+            continue
+        q, qd = result.joint_coordinates[:, col], result.joint_rates[:, col]
+        above = np.where(q > upper, np.maximum(0.0, stiffness * (q - upper) + damping * qd), 0.0)
+        below = np.where(q < lower, np.maximum(0.0, stiffness * (lower - q) - damping * qd), 0.0)
+        forces[:, col] = below - above
+        for side, push in (("lower", below), ("upper", above)):
+            on = np.flatnonzero(np.diff(np.concatenate([[0], (push > 0).astype(int), [0]])))
+            for start, stop in zip(on[::2], on[1::2]):
+                engaged.append((col, side, float(result.t[start]),
+                                None if stop == len(push) else float(result.t[stop - 1])))
+    return forces, engaged
 
 
 def momenta(model, result):

@@ -15,7 +15,7 @@ from ...elements.kinds import MAX_COORDINATES, UNDECLARED_BODY_KIND
 from ..transfers.beam_relations import end_section_motion
 from ..transfers.strain_rod import rod_end_frame, rod_tables_of
 from ..transfers.hinge import elastic_hinge_loads
-from ..transfers.joint import joint_frame, n_coordinates
+from ..transfers.joint import drive_share, joint_frame, n_coordinates
 from ..algebra.mat3 import matmul, matmul_into, matvec, mm3_into, put1
 from ..algebra.so3 import expm_so3, left_jacobian, log_so3
 
@@ -381,7 +381,7 @@ def _advance_joint(hk, hp, drive, given, h, coef, c1, nu, tau, w1q, q, qd, qdd, 
             q[i] = given[i, 0]
             qd[i] = given[i, 1]
             qdd[i] = given[i, 2]
-        jtau[i] = tau[i]
+        jtau[i] = drive_share(hp, drive, i, tau[i], q[i], qd[i])
     rot_p, w_p, wd_p = frame
     joint_frame(hk, hp, rot_p, w_p, wd_p, q, qd, qdd, rot, w, wd, d, d_rate)
     for i in range(3):

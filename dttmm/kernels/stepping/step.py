@@ -33,7 +33,7 @@ from ...elements.kinds import DEFLECTS, MAX_COORDINATES
 from ..assembly.closure import set_ground, solve_with_loops, tree_points
 from ..assembly.loop_projection import project_onto_loops
 from ..transfers.hinge import elastic_hinge_loads
-from ..transfers.joint import n_coordinates
+from ..transfers.joint import drive_share, n_coordinates
 from .generalized_alpha import (_advance_body, _advance_deflection, _advance_joint,
                                 _advance_modal, _advance_stations, _body_kinematics,
                                 _deflection_offsets, _ground_guess, _hinge_deflection,
@@ -196,6 +196,7 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     joint_nu = sweep_tables.joint_nu(sweep)
     jqp = state_tables.jqp(state)
     jtau = state_tables.jtau(state)
+    joint_drive = model_tables.joint_drive(params)
     joint_tau = sweep_tables.joint_tau(sweep)
     g_acc, g_rot, g_w, g_wd = ground
     hinge_kind, hinge_params = model_tables.hinge_kind(params), model_tables.hinge_params(params)
@@ -249,7 +250,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
         for i in range(n_coordinates(hinge_kind[k])):
             jqdd[k, i] = joint_nu[k, i]
             jqp[k, i] = joint_nu[k, i]
-            jtau[k, i] = joint_tau[k, i]
+            jtau[k, i] = drive_share(hinge_params[hinge_row[k]], joint_drive[k], i,
+                                     joint_tau[k, i], jq[k, i], jqd[k, i])
     return status
 
 

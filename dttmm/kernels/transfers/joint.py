@@ -30,8 +30,8 @@ from numba.core.extending import intrinsic
 from .. import kernel
 from ...elements.drives import COMPILED_FORCE, FORCE, MOTION, SPRING_DAMPER
 from ...elements.hinges import BALL
-from ...elements.kinds import (AXIS, AXIS_START, CHILD, COORDINATES, HAS_SLIDES, MAX_COORDINATES,
-                               MOTION as MOVES, SLIDE, TURN, TURNS)
+from ...elements.kinds import (AXIS, AXIS_START, CHILD, COORDINATES, HAS_SLIDES, LIMIT_0,
+                               LIMIT_SIZE, MAX_COORDINATES, MOTION as MOVES, SLIDE, TURN, TURNS)
 from ..algebra.mat3 import t_cross, t_lin3, t_mm, t_mv
 from ..algebra.so3 import exp_coefficients
 
@@ -205,6 +205,40 @@ def drive_value(drive, given, q, qd, c1, c3, at_start, forces):
 
 
 @kernel
+def stop_value(hp, i, q, qd, c1, c3, at_start):
+    """(tau, d tau / d nu) of coordinate i's end stops (elements/limits.py; docs/limits.md) at
+    (q, q'): past a bound a one-sided spring-damper pushes back and never pulls,
+        q > upper:  tau = -max(0, k (q - upper) + c q'),
+        q < lower:  tau = max(0, k (lower - q) - c q'),
+    its slope -(k + c c3) / c1 while it pushes (q = nu / c1 + const, q' = c3 / c1 nu + const
+    over the step; 0 at the consistent start).  hp: the joint's hinge_params row (its stops at
+    LIMIT_0 + LIMIT_SIZE i: lower, upper, stiffness, damping; stiffness 0: none)."""
+    j = LIMIT_0 + LIMIT_SIZE * i
+    k, c = hp[j + 2], hp[j + 3]
+    if k == 0.0:
+        return 0.0, 0.0
+    if q > hp[j + 1]:
+        push = k * (q - hp[j + 1]) + c * qd
+        if push > 0.0:
+            return -push, 0.0 if at_start else -(k + c * c3) / c1
+    elif q < hp[j]:
+        push = k * (hp[j] - q) - c * qd
+        if push > 0.0:
+            return push, 0.0 if at_start else -(k + c * c3) / c1
+    return 0.0, 0.0
+
+
+@kernel
+def drive_share(hp, drive, i, tau, q, qd):
+    """The part of coordinate i's generalized force tau (Bl . e_O, all that acts on it) its
+    drive applies: tau less its end stops' at (q, q') where the coordinate is free (a prescribed
+    one's stops are not applied: its motion rules)."""
+    if drive[i, 0] == MOTION:
+        return tau
+    return tau - stop_value(hp, i, q, qd, 1.0, 0.0, True)[0]
+
+
+@kernel
 def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1, c3, at_start,
                         u, dof, tau_nu, forces):
     """The joint's element about the guess (q, q', q'' and the parent's frame), written into
@@ -256,6 +290,9 @@ def joint_linearization(kind, hp, drive, given, rot_p, w_p, wd_p, q, qd, qdd, c1
         else:
             dof[i] = FREE
             tau, slope = drive_value(drive[i], given[i], q[i], qd[i], c1, c3, at_start, forces)
+            stop, stop_slope = stop_value(hp, i, q[i], qd[i], c1, c3, at_start)
+            tau += stop
+            slope += stop_slope
             tau_nu[i, 0] = tau - slope * qdd[i]
             tau_nu[i, 1] = slope
     wp = (w_p[0], w_p[1], w_p[2])
