@@ -457,3 +457,13 @@ def test_a_compiled_joint_force_is_an_input_between_rigid_bodies_only():
     first = own.inputs.index(torques[0])
     np.testing.assert_allclose(compiled.B[:, compiled.inputs.index(torques[0])],
                                own.B[:, first], atol=1e-9 * np.abs(own.B[:, first]).max())
+
+
+def test_linearize_names_its_argument_order_when_given_forward_dynamics_order():
+    """linearize takes (model, state, t) and forward_dynamics (model, t, state): the order of
+    the other is refused with both named, not numpy's float() error."""
+    model = rigid_chain(2)
+    state = simulate(model, 0.01, 1e-3).state(-1)
+    with pytest.raises(ValueError, match=r"linearize: the arguments are \(model, state=None"):
+        dttmm.linearize(model, 0.01, state)
+    assert dttmm.linearize(model, state, 0.01).A.shape == (12, 12)

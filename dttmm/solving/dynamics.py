@@ -474,6 +474,11 @@ def linearize(model, state=None, t=0.0):
                          "(closing joints, System.close); a pinned tip, beams or elastic "
                          "hinges in a closed model are not yet (static_equilibrium gives "
                          "their small vibrations at an equilibrium)")
+    if isinstance(t, dict) or not isinstance(state, (dict, type(None))):
+        raise ValueError(f"linearize: the arguments are (model, state=None, t=0.0): state a "
+                         f"dict (forward_dynamics' or Result.state's), t a number of seconds; "
+                         f"got state {type(state).__name__} and t {type(t).__name__} "
+                         f"(forward_dynamics takes (model, t, state))")
     system = ODE(model, _closed=closed)
     t = float(t)
     base = forward_dynamics(model, t, state)            # the state with every frame rebuilt
