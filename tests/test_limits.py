@@ -64,6 +64,7 @@ def test_a_link_rebounds_at_e_times_its_rate(restitution):
     assert errors[0] < 0.015, errors
     assert abs(_order(errors, [5e-5, 2.5e-5]) - 1.0) < 0.2, errors
     forces, engaged = limit_forces(model, run)
+    assert np.array_equal(forces, run.limit_force) and engaged == run.limit_contacts()
     assert len(engaged) == 1 and engaged[0][:2] == (0, "upper")
     t_on, t_off = engaged[0][2:]
     assert t_on == pytest.approx(0.25, abs=1e-3) and 0.0 < t_off - t_on < 5e-3
@@ -105,13 +106,14 @@ def test_stops_follow_the_reference(damping):
     t_end = 1.0
     ref = simulate_reference(model, t_end, t_eval=np.linspace(0, t_end, 21), rtol=1e-11,
                              atol=1e-12)
-    _, engaged_ref = limit_forces(model, ref)
-    assert {e[0] for e in engaged_ref} == {0, 1}           # both stops are struck
+    assert {c[0] for c in ref.limit_contacts()} == {0, 1}    # both stops are struck
+    assert np.array_equal(ref.limit_force, limit_forces(model, ref)[0])
     errors = []
     for dt in (2e-4, 1e-4):
         run = simulate(model, t_end, dt, record_every=int(round(0.05 / dt)))
         errors.append(np.abs(run.position_output - ref.position_output).max())
         assert np.abs(run.drive_force).max() < 1e-9        # (the total less the stop: rounding)
+        assert [c[:2] for c in run.limit_contacts()] == [c[:2] for c in ref.limit_contacts()]
     assert errors[1] < errors[0], errors
     assert errors[1] < (1e-5 if damping == 0.0 else 1.2e-4), errors
 

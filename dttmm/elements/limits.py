@@ -66,8 +66,8 @@ class JointLimit:
     or N s/m), added to the coordinate's drive.  A drive that pushes against a stop is held
     there, a penetration of its force / stiffness.  ``JointLimit.with_restitution`` sets the
     stiffness and damping from a restitution coefficient, the inertia the stop stops and the
-    contact's duration.  ``dttmm.results.result.limit_forces`` gives each stop's force and
-    when it engaged from a Result.
+    contact's duration.  ``Result.limit_force`` holds each stop's force, and
+    ``Result.limit_contacts()`` when it engaged.
 
     Parameters
     ----------

@@ -460,6 +460,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
     q_rec = np.empty((nt, nq))
     qd_rec = np.empty((nt, nq))
     drive = np.empty((nt, nq))
+    stops = np.empty((nt, nq))
     closure_load = np.empty((nt, model.n_closures, 8))
     for i, t in enumerate(t_eval):
         out = prob.evaluate(t, ys[i])
@@ -472,6 +473,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
         y_i = prob.joint_inputs(t, ys[i])
         q_rec[i], qd_rec[i] = y_i[c0:c0 + nq], y_i[c0 + nq:c0 + 2 * nq]
         drive[i] = np.where(prob.prescribed == 1, out[14], prob.drive_value - prob.stop_value)
+        stops[i] = prob.stop_value
         deflection[i] = dk
         ground = model.ground_state(t)
         ground_rot[i], ground_pos[i] = ground[3], ground[0]
@@ -511,6 +513,7 @@ def simulate_reference(model, t_end, *, method="DOP853", rtol=1e-10, atol=1e-12,
                   joint_coordinates=q_rec if nq > 0 else None,
                   joint_rates=qd_rec if nq > 0 else None,
                   drive_force=drive if nq > 0 else None,
+                  limit_force=stops if prob.has_stops else None,
                   body_names=tuple(model.body_names))
 
 

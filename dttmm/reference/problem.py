@@ -233,6 +233,7 @@ class _Problem:
                        for c, (k, i, d) in enumerate(self.coordinates)
                        if limit_of(self.hinge_params[k], i)[2] != 0.0 and not self.prescribed[c]]
         self.stop_value = np.zeros(nq)
+        self.has_stops = bool(self._stops)
         self.joints = (self.c_off, self.c0, nq, self.c_col0, self.prescribed, self.drive_value)
         self.kernels = _Kernels()
 

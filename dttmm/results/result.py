@@ -24,7 +24,7 @@ FIELDS = (
     "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
     "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
     "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint",
-    "energy_work", "closure_force", "closure_moment", "closure_drive_force")
+    "energy_work", "closure_force", "closure_moment", "closure_drive_force", "limit_force")
 # computed from the stored state on first use, when the solver leaves them to its derivation
 DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
            "kinetic", "potential")
@@ -114,6 +114,11 @@ class Result:
         What each closing joint (``System.close``, in the order closed) exerts on its side b,
         world axes: the force (N) and the couple about b's point (N m); side a receives the
         opposite.  None without closing joints.
+    limit_force : ndarray (T, total coordinates) or None
+        Each joint coordinate's end stops' generalized force on the child (N m or N;
+        JointLimit, docs/limits.md), in joint_coordinates' columns: 0 between the bounds,
+        negative against the upper, positive against the lower; not in drive_force.  None
+        without stops.  ``limit_contacts()`` lists when each stop engaged.
     closure_drive_force : ndarray (T, closing joints, 2) or None
         The generalized force (N m about the axis, or N along a slide) each closing joint's
         drive (a prescribed motion or a spring-damper) applies on side b, per coordinate (0
@@ -269,6 +274,22 @@ class Result:
             if value is not None:
                 out[key] = value[i]
         return out
+
+    def limit_contacts(self):
+        """Every contact of an end stop: a list of (column, "lower" or "upper", t_on, t_off),
+        column in joint_coordinates' columns, t_on and t_off the first and last samples the
+        stop pushed at (t_off None while it still pushes at the end); [] without stops."""
+        if self.limit_force is None:
+            return []
+        out = []
+        for col in range(self.limit_force.shape[1]):
+            force = self.limit_force[:, col]
+            for side, pushing in (("lower", force > 0.0), ("upper", force < 0.0)):
+                edges = np.flatnonzero(np.diff(np.concatenate([[0], pushing.astype(int), [0]])))
+                for start, stop in zip(edges[::2], edges[1::2]):
+                    out.append((col, side, float(self.t[start]),
+                                None if stop == len(force) else float(self.t[stop - 1])))
+        return sorted(out, key=lambda c: (c[2], c[0]))
 
     @property
     def total_energy(self):
@@ -596,34 +617,39 @@ def chain_energies(model, rotation, omega, r_in, v_in, deflection, ground_rotati
     return kinetic, potential
 
 
-def limit_forces(model, result):
-    """The end stops' generalized forces (N m or N) at every sample, and when each engaged.
-
-    Returns (forces (T, C), engaged): forces in Result.joint_coordinates' columns (0 where a
-    coordinate has no stop or is between its bounds), from the recorded coordinates and rates
-    by the stops' law (elements/limits.py: past a bound -max(0, k (q - upper) + c q') or
-    max(0, k (lower - q) - c q'), the force the run applied at each sample to its Newton
-    tolerance); engaged: a list of (column, "lower" or "upper", t_on, t_off) per contact, the
-    first and last samples it pushed at (t_off None while it still pushes at the end).  A
-    prescribed coordinate's stops do not act (its motion rules): zero there."""
+def stop_forces(model, q, qd):
+    """(T, C) the end stops' generalized forces at joint coordinates q and rates qd (T, C; C
+    in Result.joint_coordinates' columns), by the stops' law (elements/limits.py: past a bound
+    -max(0, k (q - upper) + c q') or max(0, k (lower - q) - c q'), the force a run applied at
+    each sample to its Newton tolerance); 0 for a coordinate without stops or prescribed (its
+    motion rules); None for a model without stops."""
     columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
-    forces = np.zeros((len(result.t), len(columns)))
-    engaged = []
-    for col, (k, i) in enumerate(columns):
-        lower, upper, stiffness, damping = limit_of(model.hinge_params[k], i)
-        drive = model.drives[k][i]
-        if stiffness == 0.0 or (drive is not None and drive["kind"] == MOTION):
-            continue
-        q, qd = result.joint_coordinates[:, col], result.joint_rates[:, col]
-        above = np.where(q > upper, np.maximum(0.0, stiffness * (q - upper) + damping * qd), 0.0)
-        below = np.where(q < lower, np.maximum(0.0, stiffness * (lower - q) - damping * qd), 0.0)
+    stopped = [(col, limit_of(model.hinge_params[k], i)) for col, (k, i) in enumerate(columns)
+               if limit_of(model.hinge_params[k], i)[2] != 0.0
+               and not (model.drives[k][i] is not None and model.drives[k][i]["kind"] == MOTION)]
+    if not stopped:
+        return None
+    q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+    forces = np.zeros(q.shape)
+    for col, (lower, upper, stiffness, damping) in stopped:
+        x, v = q[:, col], qd[:, col]
+        above = np.where(x > upper, np.maximum(0.0, stiffness * (x - upper) + damping * v), 0.0)
+        below = np.where(x < lower, np.maximum(0.0, stiffness * (lower - x) - damping * v), 0.0)
         forces[:, col] = below - above
-        for side, push in (("lower", below), ("upper", above)):
-            on = np.flatnonzero(np.diff(np.concatenate([[0], (push > 0).astype(int), [0]])))
-            for start, stop in zip(on[::2], on[1::2]):
-                engaged.append((col, side, float(result.t[start]),
-                                None if stop == len(push) else float(result.t[stop - 1])))
-    return forces, engaged
+    return forces
+
+
+def limit_forces(model, result):
+    """(forces (T, C), contacts): the end stops' generalized forces (Result.limit_force, or
+    stop_forces from the recorded coordinates and rates of a Result without it) and their
+    contacts (Result.limit_contacts); zeros and [] for a model without stops."""
+    forces = result.limit_force
+    if forces is None and result.joint_coordinates is not None:
+        forces = stop_forces(model, result.joint_coordinates, result.joint_rates)
+    if forces is None:
+        width = 0 if result.joint_coordinates is None else result.joint_coordinates.shape[1]
+        return np.zeros((len(result.t), width)), []
+    return forces, result.replace(limit_force=forces).limit_contacts()
 
 
 def momenta(model, result):

@@ -10,7 +10,7 @@ from ..elements.kinds import MAX_COORDINATES
 from ..model.loop_rows import has_closure_drives
 from ..model.model import model_fact
 from ..results.recording import NoCheckpoint
-from ..results.result import (DERIVED, FIELDS, Result, chain_energies)
+from ..results.result import (DERIVED, FIELDS, Result, chain_energies, stop_forces)
 from .run_tables import (column_names, coordinate_columns)
 from .run_checks import (_check_count, _check_positive)
 from .run_inputs import (_points, _zeros, nearest_rotations)
@@ -125,7 +125,7 @@ def richardson_extrapolation(*runs):
                 "angular_velocity", "angular_acceleration", "force", "moment",
                 "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
                 "joint_rates", "drive_force", "closure_force", "closure_moment",
-                "closure_drive_force", "kinetic", "potential")
+                "closure_drive_force", "limit_force", "kinetic", "potential")
     points = ("position_input", "position_mass_center", "position_output")
     lazy = ("rotation", "info") + tuple(name for name in combined if name not in DERIVED)
 
@@ -164,6 +164,7 @@ class _ResultFacts(NamedTuple):
     coordinate_columns: object  # (k, i) -> the flat columns of the recorded (T, n * 3) jq,
     #                             jqd, jtau (None without joints with coordinates)
     closure_drives: bool        # closure_drive_force recorded
+    has_stops: bool             # end stops on some joint coordinate (Result.limit_force)
     coordinate_names: tuple     # info's column names (run_tables.column_names)
     modal_names: tuple
 
@@ -178,6 +179,8 @@ def _result_facts(model):
         coordinate_columns=(np.array([k * MAX_COORDINATES + i for k, i in columns], np.int64)
                             if columns else None),
         closure_drives=has_closure_drives(model),
+        has_stops=bool(columns) and stop_forces(model, np.zeros((1, len(columns))),
+                                                np.zeros((1, len(columns)))) is not None,
         coordinate_names=tuple(names["coordinate_names"]),
         modal_names=tuple(names["modal_names"]))
 
@@ -197,6 +200,9 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
             recorded = np.asarray(values[key])
             joints[name] = np.take(recorded.reshape(len(recorded), -1),
                                    facts.coordinate_columns, axis=1)
+        if facts.has_stops:     # the end stops' forces (not in drive_force: docs/limits.md)
+            joints["limit_force"] = stop_forces(model, joints["joint_coordinates"],
+                                                joints["joint_rates"])
     if "closure_wrench" in values:
         joints["closure_force"] = values["closure_wrench"][:, :, :3]
         joints["closure_moment"] = values["closure_wrench"][:, :, 3:6]
