@@ -27,7 +27,6 @@ import numpy as np
 import dttmm
 from dttmm import JointLimit, simulate
 from dttmm.model.chains import arm
-from dttmm.results.result import limit_forces
 
 STOP, RESTITUTION, CONTACT_TIME = 0.5, 0.5, 5e-3
 COLUMNS = ("t", "angle", "rate", "stop_torque")
@@ -54,19 +53,17 @@ def run(t_end=2.0, dt=1e-4, inertia=None):
     return m, simulate(m, t_end, dt, record_every=max(1, int(round(1e-3 / dt))))
 
 
-def columns(m, result):
-    forces, _ = limit_forces(m, result)
+def columns(result):
     return np.column_stack([result.t, result.joint_coordinates[:, 0], result.joint_rates[:, 0],
-                            forces[:, 0]])
+                            result.limit_force[:, 0]])
 
 
-def contacts(m, result):
+def contacts(result):
     """[(t_on, rate before, rate after)] per contact of joint 1's stop: the rates at the samples
-    just before it pushed and just after it let go."""
-    _, engaged = limit_forces(m, result)
+    just before it pushed and just after it let go (Result.limit_contacts)."""
     rate, t = result.joint_rates[:, 0], result.t
     out = []
-    for col, _, t_on, t_off in engaged:
+    for col, _, t_on, t_off in result.limit_contacts():
         if col != 0 or t_off is None:
             continue
         i_on, i_off = np.searchsorted(t, t_on), np.searchsorted(t, t_off)
@@ -85,15 +82,15 @@ def main(argv=None):
         parser.error("--t-end and --dt must be > 0")
     wall = time.perf_counter()
     inertia = joint1_inertia()
-    m, result = run(args.t_end, args.dt, inertia)
+    _, result = run(args.t_end, args.dt, inertia)
     wall = time.perf_counter() - wall
     print(f"arm against a stop at {STOP} rad, restitution {RESTITUTION} for {inertia:.4f} kg m^2 "
           f"about joint 1, dt = {args.dt:g} s, {args.t_end:g} s in {wall:.1f} s")
     print(f"{'contact at (s)':>15} {'struck at (rad/s)':>18} {'left at (rad/s)':>16} "
           f"{'ratio':>7}")
-    for t_on, before, after in contacts(m, result):
+    for t_on, before, after in contacts(result):
         print(f"{t_on:15.4f} {before:18.5f} {after:16.5f} {-after / before:7.4f}")
-    table = columns(m, result)
+    table = columns(result)
     if args.csv:
         np.savetxt(args.csv, table, delimiter=",", header=",".join(COLUMNS), comments="",
                    fmt="%.10g")

@@ -167,6 +167,6 @@ def test_the_end_stop_example(tmp_path):
     assert (tmp_path / "end_stop.png").stat().st_size > 1000
     pushing = table[:, 3] < 0.0
     assert pushing.any() and np.all(table[pushing, 1] > 0.5) and np.all(table[:, 3] <= 0.0)
-    m, result = end_stop.run(1.0)
-    first = end_stop.contacts(m, result)[0]
+    _, result = end_stop.run(1.0)
+    first = end_stop.contacts(result)[0]
     assert first[0] == pytest.approx(0.702, abs=2e-3) and first[1] > 0.0 > first[2]

@@ -15,7 +15,21 @@ whatever the rate at impact).
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ._checks import finite_scalar
+
+
+def stop_force(limit, q, qd):
+    """The end stops' generalized force at (q, q'), scalars or arrays alike: the law above for
+    limit = (lower, upper, stiffness, damping) (a hinge_params row's, kinds.limit_of).  The
+    Python twin of the kernels' kernels/transfers/joint.py::stop_value (which adds its slope),
+    for the reference and the Result."""
+    lower, upper, k, c = (float(x) for x in limit)
+    q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+    above = np.where(q > upper, np.maximum(0.0, k * (q - upper) + c * qd), 0.0)
+    below = np.where(q < lower, np.maximum(0.0, k * (lower - q) - c * qd), 0.0)
+    return below - above
 
 
 def restitution_of(zeta):

@@ -13,6 +13,7 @@ from ..elements.beam import (AXIAL_MODES, CLAMPED, CLAMPED_LOADED, EXACT, FAMILY
                              STIFFENING, TORSION_MODES)
 from ..elements.drives import FORCE, MOTION, PD, SPRING_DAMPER
 from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, FIXED
+from ..elements.limits import stop_force
 from ..elements.kinds import (COORDINATE_0, DEFLECTING, JOINT_KIND, RATE_0, coordinate_count,
                               limit_of)
 from ..kernels import python_twin
@@ -227,9 +228,9 @@ class _Problem:
                 raise ValueError(f"simulate_reference: {self.coordinate_label(c)}: unknown drive "
                                  f"kind {d['kind']}")
         # the end stops of the free coordinates (elements/limits.py): (coordinate, whether it
-        # has a drive, lower, upper, stiffness, damping), their generalized forces (added to
-        # drive_value) in stop_value
-        self._stops = [(c, d is not None) + tuple(limit_of(self.hinge_params[k], i))
+        # has a drive, its stops (lower, upper, stiffness, damping)), their generalized forces
+        # (added to drive_value) in stop_value
+        self._stops = [(c, d is not None, limit_of(self.hinge_params[k], i))
                        for c, (k, i, d) in enumerate(self.coordinates)
                        if limit_of(self.hinge_params[k], i)[2] != 0.0 and not self.prescribed[c]]
         self.stop_value = np.zeros(nq)
@@ -292,12 +293,9 @@ class _Problem:
                 + kd * (self._number(c, "PDTracking target_rate", t, rate(t)) - y[c0 + nq + c])
                 + (0.0 if feedforward is None else
                    self._number(c, "PDTracking feedforward", t, feedforward(t))))
-        for c, driven, lower, upper, stiffness, damping in self._stops:
+        for c, driven, limit in self._stops:
             # past a bound a one-sided spring-damper pushes back, never pulls (docs/limits.md)
-            q, qd = y[c0 + c], y[c0 + nq + c]
-            push = (stiffness * (q - upper) + damping * qd if q > upper else
-                    stiffness * (lower - q) - damping * qd if q < lower else 0.0)
-            self.stop_value[c] = 0.0 if push <= 0.0 else -push if q > upper else push
+            self.stop_value[c] = stop_force(limit, y[c0 + c], y[c0 + nq + c])
             self.drive_value[c] = (self.drive_value[c] if driven else 0.0) + self.stop_value[c]
         return y
 

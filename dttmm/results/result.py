@@ -15,6 +15,7 @@ from ..elements.drives import MOTION, SPRING_DAMPER
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION, REST_ROTATION
 from ..elements.rigid_body import MASS, TO_MASS_CENTER
 from ..elements.kinds import limit_of, unimplemented_body_kind
+from ..elements.limits import stop_force
 from ..model.sections import (_GL_W, _GL_X, foreshortening_along, log_rotation,
                               element_end_section, rotation_to_quaternion)
 
@@ -623,20 +624,24 @@ def stop_forces(model, q, qd):
     -max(0, k (q - upper) + c q') or max(0, k (lower - q) - c q'), the force a run applied at
     each sample to its Newton tolerance); 0 for a coordinate without stops or prescribed (its
     motion rules); None for a model without stops."""
-    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
-    stopped = [(col, limit_of(model.hinge_params[k], i)) for col, (k, i) in enumerate(columns)
-               if limit_of(model.hinge_params[k], i)[2] != 0.0
-               and not (model.drives[k][i] is not None and model.drives[k][i]["kind"] == MOTION)]
+    stopped = stopped_columns(model)
     if not stopped:
         return None
     q, qd = np.atleast_2d(q), np.atleast_2d(qd)
     forces = np.zeros(q.shape)
-    for col, (lower, upper, stiffness, damping) in stopped:
-        x, v = q[:, col], qd[:, col]
-        above = np.where(x > upper, np.maximum(0.0, stiffness * (x - upper) + damping * v), 0.0)
-        below = np.where(x < lower, np.maximum(0.0, stiffness * (lower - x) - damping * v), 0.0)
-        forces[:, col] = below - above
+    for col, limit in stopped:
+        forces[:, col] = stop_force(limit, q[:, col], qd[:, col])
     return forces
+
+
+def stopped_columns(model):
+    """[(column, its stops (lower, upper, stiffness, damping))] of every free joint coordinate
+    with end stops, columns in Result.joint_coordinates' order (a prescribed coordinate's stops
+    do not act: its motion rules)."""
+    columns = [(k, i) for k in range(model.n_bodies) for i in range(len(model.drives[k]))]
+    return [(col, limit_of(model.hinge_params[k], i)) for col, (k, i) in enumerate(columns)
+            if limit_of(model.hinge_params[k], i)[2] != 0.0
+            and not (model.drives[k][i] is not None and model.drives[k][i]["kind"] == MOTION)]
 
 
 def limit_forces(model, result):

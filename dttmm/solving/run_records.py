@@ -10,7 +10,8 @@ from ..elements.kinds import MAX_COORDINATES
 from ..model.loop_rows import has_closure_drives
 from ..model.model import model_fact
 from ..results.recording import NoCheckpoint
-from ..results.result import (DERIVED, FIELDS, Result, chain_energies, stop_forces)
+from ..results.result import (DERIVED, FIELDS, Result, chain_energies, stop_forces,
+                              stopped_columns)
 from .run_tables import (column_names, coordinate_columns)
 from .run_checks import (_check_count, _check_positive)
 from .run_inputs import (_points, _zeros, nearest_rotations)
@@ -179,8 +180,7 @@ def _result_facts(model):
         coordinate_columns=(np.array([k * MAX_COORDINATES + i for k, i in columns], np.int64)
                             if columns else None),
         closure_drives=has_closure_drives(model),
-        has_stops=bool(columns) and stop_forces(model, np.zeros((1, len(columns))),
-                                                np.zeros((1, len(columns)))) is not None,
+        has_stops=bool(stopped_columns(model)),
         coordinate_names=tuple(names["coordinate_names"]),
         modal_names=tuple(names["modal_names"]))
 
