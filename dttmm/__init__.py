@@ -2,8 +2,9 @@
 flexible beams (Rui et al.), with an independent Newton-Euler reference solver."""
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from .elements import (BallJoint, CylindricalJoint, ElasticHinge, EulerBernoulliBeam,
-                       FixedHinge, FreeJoint, JointForce, JointLimit, JointMotion, PDTracking,
+from .elements import (BallJoint, Box, Capsule, Contact, CylindricalJoint, ElasticHinge,
+                       EulerBernoulliBeam, FixedHinge, FreeJoint, JointForce, JointLimit,
+                       JointMotion, PDTracking, Plane, Sphere,
                        PlanarJoint, PrismaticJoint, RevoluteJoint, RigidBody, SpringDamper,
                        StrainRod, UniversalJoint)
 from .model.assembly import assemble
@@ -28,8 +29,9 @@ except PackageNotFoundError:        # run from a source tree that is not install
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
-           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce",
-           "SpringDamper", "JointMotion", "PDTracking", "Ground", "PrescribedMotion", "Model",
+           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce", "Sphere", "Capsule",
+           "Box", "Contact", "Plane", "SpringDamper", "JointMotion", "PDTracking", "Ground",
+           "PrescribedMotion", "Model",
            "System", "build_chain", "assemble", "loop_residuals", "forward_dynamics", "ode",
            "linearize", "simulate", "simulate_reference", "load_stream", "Result", "Checkpoint",
            "DivergenceError", "UnresolvedMotionWarning", "static_equilibrium",

@@ -1,6 +1,7 @@
 """The element library: bodies and joints, each a small declarative class, and their kinds
 declared once (kinds.py)."""
 from .beam import EulerBernoulliBeam
+from .contact import Box, Capsule, Contact, Plane, Sphere
 from .drives import JointForce, JointMotion, PDTracking, SpringDamper
 from .hinges import BALL, ELASTIC, FIXED, FREE, BallJoint, ElasticHinge, FixedHinge, FreeJoint
 from .joints import (PRISMATIC, REVOLUTE, UNIVERSAL, CylindricalJoint, PlanarJoint,
@@ -12,7 +13,8 @@ from .strain_rod import StrainRod
 
 __all__ = ["RigidBody", "EulerBernoulliBeam", "StrainRod", "BallJoint", "FixedHinge",
            "ElasticHinge", "FreeJoint", "RevoluteJoint", "UniversalJoint", "PrismaticJoint",
-           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce",
+           "CylindricalJoint", "PlanarJoint", "JointLimit", "JointForce", "Sphere", "Capsule",
+           "Box", "Contact", "Plane",
            "SpringDamper", "JointMotion", "PDTracking", "BALL", "FIXED", "ELASTIC", "FREE",
            "REVOLUTE", "UNIVERSAL", "PRISMATIC", "RIGID", "BEAM", "ROD", "BODY_KINDS",
            "JOINT_KINDS"]

@@ -74,6 +74,12 @@ class RigidBody:
         at=NAME)``): name -> body-frame vector from the input point, m.  Names are non-empty
         strings other than "output" and "input"; the output point is the attachment point
         "output".
+    shapes : Sphere, Capsule, Box or a list of them, optional
+        The body's shapes that touch the ground's plane (``Ground(plane=...)``;
+        docs/contact.md), in the body frame from the input point.  Default: none.
+    contact : Contact, optional
+        Their contact law's parameters (stiffness or contact time, restitution, friction);
+        required with shapes.
 
     Raises
     ------
@@ -109,6 +115,8 @@ class RigidBody:
     angular_velocity: object = None
     name: str = ""
     points: Optional[dict] = None
+    shapes: object = ()
+    contact: object = None
     _valid: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def label(self, index=None):

@@ -6,6 +6,10 @@ from ..elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_L
                              TORSION_MODES, axial_frequencies, bending_frequencies, largest_basis,
                              torsion_frequencies, truncation_errors)
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
+from ..elements.contact import BODY as CONTACT_BODY
+from ..elements.contact import NORMAL as CONTACT_NORMAL
+from ..elements.contact import STIFFNESS as CONTACT_STIFFNESS
+from ..elements.contact import restitution_of_damping
 from ..elements.kinds import (BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE, limit_of,
                               unimplemented_body_kind)
 from ..elements.rigid_body import INERTIA_INPUT, MASS, TO_OUTPUT
@@ -98,6 +102,9 @@ def suggested_dt(model):
             stiffest = float(np.linalg.eigvals(spring.reshape(3, 3)).real.max())
             if stiffest > 0.0 and inertia > 0.0:
                 dt = min(dt, 2.0 * np.pi / (20.0 * np.sqrt(stiffest / inertia)))
+    for row in model.contacts:          # 20 steps a contact (docs/contact.md)
+        mass = float(model.body_params[int(row[CONTACT_BODY]), MASS])
+        dt = min(dt, np.pi / (20.0 * np.sqrt(row[CONTACT_STIFFNESS] / mass)))
     exponent = np.floor(np.log10(dt))
     mantissa = dt / 10 ** exponent
     return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
@@ -294,6 +301,7 @@ def describe(model):
             if stiffness:
                 out.append(f"  {'':<14} coordinate {i}: end stops at [{lower:.6g}, {upper:.6g}], "
                            f"stiffness {stiffness:.4g}, damping {damping:.4g} (docs/limits.md)")
+        out += [f"  {'':<14} {line}" for line in _contact_lines(model, k)]
         if kind == "beam":
             out += [f"  {'':<14} {line}" for line in _beam_lines(model, k, end_masses[k],
                                                                  k in held)]
@@ -316,11 +324,35 @@ def describe(model):
     if advice is not None:
         out.append(advice)
     out.append(f"suggested dt: {suggested_dt(model):g} s (20 steps per period of the fastest "
-               f"retained mode or elastic hinge, 0.02 rad per step of the fastest spin or "
-               f"swing)")
+               f"retained mode or elastic hinge, and per contact; 0.02 rad per step of the "
+               f"fastest spin or swing)")
     out.append(_kernels_line(model))
     out.append(_schemes_line(model))
     return "\n".join(out)
+
+
+def _contact_lines(model, k):
+    """Body k's contact spheres against the plane, one line per distinct law (docs/contact.md):
+    the stiffness and how long a contact lasts on the body, the restitution its damping gives,
+    the friction."""
+    rows = [row for row in model.contacts if int(row[CONTACT_BODY]) == k]
+    if not rows:
+        return []
+    mass = float(model.body_params[k, MASS])
+    out = []
+    laws = {}
+    for row in rows:
+        law = tuple(row[CONTACT_STIFFNESS:CONTACT_STIFFNESS + 4])
+        laws[law] = laws.get(law, 0) + 1
+    normal = np.array2string(rows[0][CONTACT_NORMAL], precision=4)
+    for (stiffness, damping, mu, v_s), count in laws.items():
+        omega = np.sqrt(stiffness / mass)
+        out.append(f"touches the plane (normal {normal}) at {count} contact sphere"
+                   f"{'s' if count > 1 else ''}: stiffness {stiffness:.4g} N/m (a contact "
+                   f"lasts ~{np.pi / omega:.3g} s on this body), restitution "
+                   f"{restitution_of_damping(damping):.3g}, friction {mu:.3g} (sticks to "
+                   f"within {v_s:.2g} m/s) (docs/contact.md)")
+    return out
 
 
 def _kernels_line(model):

@@ -22,7 +22,9 @@ from ..elements.beam import (ACCURATE, DAMPING_RATIO, EI_V, EI_W, FAMILY, FREQUE
 from ..elements.kinds import (AXES, BEAM, BODY_KINDS, COORDINATE_0, JOINT_KIND, JOINT_KINDS,
                               RATE_0, RIGID, ROD, SCENE_TYPE, SLIDE, WITH_COORDINATES,
                               declared_body_kind, limit_of, unimplemented_body_kind)
+from ..elements.contact import Contact, Plane
 from ..elements.limits import JointLimit
+from .scene_shapes import CONTACT_KEYS, PLANE_KEYS, SHAPE_KEYS, contact_tables, plane_table
 from ..elements.strain_rod import (ROD_DAMPING, ROD_EA, ROD_EI_V, ROD_EI_W, ROD_GJ, ROD_JP,
                                    ROD_JV, ROD_JW, ROD_LENGTH, ROD_MODES, ROD_MU, ROD_STATIONS,
                                    ROD_STRETCH, ROD_TWIST)
@@ -46,12 +48,13 @@ class SceneError(ValueError):
 # "pair", "matrix", "stiffness": a number, 3 numbers or a 3 x 3 matrix, "profile", "table",
 # "numbers<n>": n numbers, "drives<n>": a list of n drive tables)
 _MODEL = {"name": "str", "gravity": "vector", "tip": "str"}
-_GROUND = {"position": "vector", "rotation": "matrix", "spin": "table"}
+_GROUND = {"position": "vector", "rotation": "matrix", "spin": "table", "plane": "table"}
 _SPIN = {"axis": "vector", "angle": "profile", "position": "vector"}
 _RIGID = {"name": "str", "type": "str", "mass": "number", "inertia": "stiffness",
           "inertia_about": "str", "to_mass_center": "vector", "to_output": "vector",
           "rotation": "matrix", "angular_velocity": "vector", "points": "table",
-          "force": "profile", "torque": "profile", "joint": "table"}
+          "force": "profile", "torque": "profile", "joint": "table", "shapes": "bodies",
+          "contact": "table"}
 _BEAM = {"name": "str", "type": "str", "length": "number", "mass_per_length": "number",
          "density": "number", "area": "number", "bending_stiffness": "pair",
          "polar_inertia_per_length": "number", "modes_per_plane": "modes",
@@ -222,9 +225,16 @@ def scene_from_dict(data, where="scene"):
 def _ground(table, where):
     _keys(table, _GROUND, where, "[ground]")
     spin = table.get("spin")
+    plane = None
+    if "plane" in table:
+        _keys(table["plane"], PLANE_KEYS, where, "[ground.plane]")
+        plane = Plane(**table["plane"])
     if spin is None:
         return Ground(position=table.get("position", (0.0, 0.0, 0.0)),
-                      rotation=table.get("rotation"))
+                      rotation=table.get("rotation"), plane=plane)
+    if plane is not None:
+        raise SceneError(f"{where}: [ground]: a plane on a spinning ground does not touch "
+                         f"bodies yet")
     if "rotation" in table:
         raise SceneError(f"{where}: [ground]: give rotation or spin, not both")
     _keys(spin, _SPIN, where, "[ground.spin]")
@@ -267,6 +277,12 @@ def _body(table, i, where):
     if "points" in args:
         for point, vec in args["points"].items():
             _value(vec, "vector", where, f"{label} key 'points.{point}'")
+    if "shapes" in args:
+        args["shapes"] = [_shape(t, where, f"{label} shapes[{j}]")
+                          for j, t in enumerate(args["shapes"])]
+    if "contact" in args:
+        _keys(args["contact"], CONTACT_KEYS, where, f"{label} [body.contact]")
+        args["contact"] = Contact(**args["contact"])
     try:
         body = element(**args)
         body.validated(i)
@@ -276,6 +292,20 @@ def _body(table, i, where):
         raise SceneError(f"{where}: {label}: {err}") from None
     joint, parent, at = _joint(table["joint"], where, f"{label} [body.joint]")
     return body, joint, parent, at
+
+
+def _shape(table, where, label):
+    """A body's shape from its table: type = "sphere", "capsule" or "box" and its keys."""
+    kind = table.get("type") if isinstance(table, dict) else None
+    if kind not in SHAPE_KEYS:
+        raise SceneError(f"{where}: {label} key 'type': one of {', '.join(SHAPE_KEYS)}, got "
+                         f"{kind!r}")
+    cls, keys = SHAPE_KEYS[kind]
+    _keys(table, keys, where, label)
+    try:
+        return cls(**{k: v for k, v in table.items() if k != "type"})
+    except TypeError as err:
+        raise SceneError(f"{where}: {label}: {err}") from None
 
 
 def _joint(table, where, label, common=_JOINT_COMMON):
@@ -463,6 +493,8 @@ def scene_of(model, run=None, name=None):
     else:
         data["ground"] = {"position": model.ground_position.tolist(),
                           "rotation": model.ground_rotation.tolist()}
+        if len(model.contacts):     # the plane, in the ground frame
+            data["ground"]["plane"] = plane_table(model)
     offsets = model.mode_offsets
     children = children_of(model.parent)
     named = [sorted({int(model.attachment[c]) for c in children[k] if model.attachment[c]})
@@ -524,6 +556,7 @@ def _rigid_table(model, k, who, children, named):
                            for j in range(1, max(named[k]) + 1)}
     table.update(_profiles(model, k, who, (("force", model.forces[k]),
                                            ("torque", model.torques[k]))))
+    table.update(contact_tables(model, k))      # (its shapes and their law, if any)
     return table
 
 

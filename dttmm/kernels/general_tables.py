@@ -141,3 +141,12 @@ defl_rate_g = table_view(43, "real", ("bodies", 3), GENERAL_SIZES)
 # int: the compiled JointForces' C callbacks' addresses
 # (kernels/transfers/joint.py::drive_value)
 forces = table_view(44, "int", ("forces",), GENERAL_SIZES)
+
+# real: each contact sphere's force at the guess, world, N (kernels/transfers/contact.py)
+contact_force = table_view(45, "real", ("contacts", 3), GENERAL_SIZES)
+
+# real: its derivative by the contact point's acceleration
+contact_slope = table_view(46, "real", ("contacts", 3, 3), GENERAL_SIZES)
+
+# real: its centre at the guess (the Newton iterations' change)
+contact_centre = table_view(47, "real", ("contacts", 3), GENERAL_SIZES)

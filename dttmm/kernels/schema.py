@@ -24,6 +24,7 @@ import textwrap
 import numpy as np
 
 from ..elements.beam import BEAM_PARAM_SIZE
+from ..elements.contact import CONTACT_SIZE
 from ..elements.kinds import HINGE_PARAM_SIZE, MAX_COORDINATES
 from ..elements.rigid_body import BODY_PARAM_SIZE
 
@@ -49,6 +50,8 @@ SIZES = (
     ("rods", "rows of the rods' tables: one per distinct rod (at least 1)"),
     ("rod_steps", "the most steps of a rod's quadrature (at least 1)"),
     ("rod_coordinates", "the most strain coordinates of a rod (at least 1)"),
+    ("contacts", "the bodies' contact spheres (elements/contact.py), 0 without shapes"),
+    ("contact_lookup", "entries of contact_first: n + 1 where the model has contacts, else 1"),
 )
 
 # The model's tables (run_tables.kernel_params); the kernels read them and never write them.
@@ -97,6 +100,11 @@ MODEL = (
     Field("rod_stiffness", REAL, ("rods", "rod_coordinates"), "K's diagonal"),
     Field("rod_mu_damping", REAL, ("rods", 2), "[mass per length, damping]"),
     Field("rod_section", REAL, ("rods", 3), "the section's inertia per length"),
+    Field("contacts", REAL, ("contacts", CONTACT_SIZE),
+          "elements/contact.py: each contact sphere's row, body by body (its BODY column the "
+          "kernel model's body)"),
+    Field("contact_first", INT, ("contact_lookup",),
+          "body k's contact spheres are rows contact_first[k] .. contact_first[k + 1] - 1"),
 )
 
 
@@ -285,6 +293,7 @@ GENERAL_SIZES = (
     ("history_points", "n + 1 where the paper's scheme runs (its station points), else 1"),
     ("history_centres", "n where the paper's scheme runs (its mass centres), else 1"),
     ("forces", "the compiled JointForces' callbacks"),
+    ("contacts", "the contact spheres (elements/contact.py)"),
 )
 
 GENERAL = (
@@ -338,6 +347,12 @@ GENERAL = (
     Field("defl_rate_g", REAL, ("bodies", 3), "d' at the guess"),
     Field("forces", INT, ("forces",), "the compiled JointForces' C callbacks' addresses "
                                       "(kernels/transfers/joint.py::drive_value)"),
+    Field("contact_force", REAL, ("contacts", 3), "each contact sphere's force at the guess, "
+                                                  "world, N (kernels/transfers/contact.py)"),
+    Field("contact_slope", REAL, ("contacts", 3, 3), "its derivative by the contact point's "
+                                                     "acceleration"),
+    Field("contact_centre", REAL, ("contacts", 3), "its centre at the guess (the Newton "
+                                                   "iterations' change)"),
 )
 
 

@@ -2,7 +2,9 @@
 import numba
 import numpy as np
 
-from ..elements import BallJoint, EulerBernoulliBeam, FixedHinge, FreeJoint, RigidBody
+from ..elements import (BallJoint, Box, Capsule, Contact, EulerBernoulliBeam, FixedHinge,
+                        FreeJoint, Plane, RigidBody, Sphere)
+from .model import Ground
 from .profiles import profile
 from .system import System, build_chain
 
@@ -226,3 +228,65 @@ def spacecraft(hub_mass=200.0, hub_side=1.0, panel_length=2.0, panel_width=0.5,
                                    modes_per_plane=modes_per_plane, name=f"panel{side}")
         system.add(panel, FixedHinge(rotation=turn, name=f"clamp{side}"), parent="hub", at=side)
     return system.build()
+
+
+def bouncing_ball(radius=0.05, density=7850.0, height=1.0, restitution=0.8, contact_time=2e-4):
+    """A uniform ball (m, kg/m^3) on a free joint, its centre `height` m above the plane z = 0
+    at rest, gravity -9.81 along z; its contact (docs/contact.md) rebounds it at `restitution`
+    and lasts about contact_time s (a steel ball's on steel: Hertz's law gives ~0.2 ms at the
+    4.3 m/s of a 1 m drop) (examples/bouncing_ball.py)."""
+    mass = density * 4.0 / 3.0 * np.pi * radius ** 3
+    ball = RigidBody(mass=mass, inertia=0.4 * mass * radius ** 2, inertia_about="mass_center",
+                     name="ball", shapes=Sphere(radius),
+                     contact=Contact(contact_time=contact_time, restitution=restitution))
+    return build_chain([FreeJoint(position=[0.0, 0.0, height], name="free"), ball],
+                       gravity=[0.0, 0.0, -9.81], ground=Ground(plane=Plane()))
+
+
+def incline_normal(angle):
+    """The unit normal of a plane through the origin inclined by `angle` rad about y, which
+    falls along +x: (sin a, 0, cos a); down its slope is (cos a, 0, -sin a)."""
+    return np.array([np.sin(angle), 0.0, np.cos(angle)])
+
+
+def box_on_incline(friction=0.3, angle=np.radians(30.0), sides=(0.2, 0.2, 0.1), mass=1.0,
+                   contact_time=2e-3, restitution=0.5):
+    """A uniform box (m, kg) resting on its largest face on a plane through the origin inclined
+    by `angle` rad (incline_normal), at rest, its corners just touching; each corner's
+    stiffness is the one that would hold the whole box for contact_time s (docs/contact.md:
+    k = m (pi / T)^2, so the box on its four lasts about T / 2), Coulomb's friction, static =
+    kinetic; gravity -9.81 along z (examples/incline.py)."""
+    sides = np.asarray(sides, dtype=float)
+    inertia = mass * (np.sum(sides ** 2) - sides ** 2) / 12.0
+    c, s = np.cos(angle), np.sin(angle)
+    tilt = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])     # its z along the normal
+    box = RigidBody(mass=mass, inertia=inertia, inertia_about="mass_center", rotation=tilt,
+                    name="box", shapes=Box(sides),
+                    contact=Contact(contact_time=contact_time, restitution=restitution,
+                                    friction=friction))
+    normal = incline_normal(angle)
+    return build_chain([FreeJoint(position=0.5 * sides[2] * normal, name="free"), box],
+                       gravity=[0.0, 0.0, -9.81], ground=Ground(plane=Plane(normal=normal)))
+
+
+def capsule_chain(n=20, length=0.1, radius=0.02, mass=0.1, height=0.1, contact_time=2e-3,
+                  restitution=0.5, friction=0.5, plane_at=0.0, shapes=True):
+    """n links (m, kg) on ball joints, the first on a free joint, all along +x at rest with
+    their input points at `height` above the plane z = plane_at (gravity -9.81 along z), each
+    a capsule of `radius` from its input to its output point (docs/contact.md; its contact
+    lasting about contact_time s on one sphere), mass centre at mid-length, inertia
+    diag(2e-4, 1e-3, 1e-3) m (m^2): the chain dropped flat onto the ground
+    (tests/test_contact_mujoco.py, benchmarks/contact.py).  shapes=False: the same chain
+    without shapes (and no plane)."""
+    links = []
+    for k in range(n):
+        body = RigidBody(
+            mass=mass, inertia=mass * np.array([2e-4, 1e-3, 1e-3]), inertia_about="mass_center",
+            to_mass_center=[0.5 * length, 0.0, 0.0], to_output=[length, 0.0, 0.0],
+            name=f"link{k}",
+            **(dict(shapes=Capsule(radius, [0.0, 0.0, 0.0], [length, 0.0, 0.0]),
+                    contact=Contact(contact_time=contact_time, restitution=restitution,
+                                    friction=friction)) if shapes else {}))
+        links += [FreeJoint(position=[0.0, 0.0, height]) if k == 0 else BallJoint(), body]
+    ground = Ground(plane=Plane(point=[0.0, 0.0, plane_at])) if shapes else Ground()
+    return build_chain(links, gravity=[0.0, 0.0, -9.81], ground=ground)

@@ -34,6 +34,7 @@ from ..elements.beam import (
      modal_size,
      torsion_frequencies,
  )
+from ..elements.contact import CONTACT_SIZE, Plane, contact_rows
 from ..elements.drives import MOTION
 from ..elements.kinds import (
      BODY_KIND,
@@ -242,6 +243,9 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         beam_ends=tuple(beam_ends),
     )
     tree = _free_joints_in_world(tree)
+    contacts = _contact_rows(bodies, bv, body_kind, ground, rot_g, r_g)
+    if len(contacts):
+        tree = replace(tree, contacts=contacts)
     tree = replace(tree, **{name: shared_rows(getattr(tree, name)) for name in SHARED_TABLES})
     adopt_arrays(tree)
     if not closures:
@@ -250,6 +254,35 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
     named = [dict(v.get("points") or {}) for v in bv]
     return _unstiffen_held_chords(adopt_arrays(
         replace(tree, **closure_rows(tree, closures, index_of, named)), tree), loop_stiffened)
+
+
+def _contact_rows(bodies, bv, body_kind, ground, rot_g, r_g):
+    """The bodies' contact spheres against the ground's plane (elements/contact.py::
+    contact_rows), body by body; ValueError for shapes without a plane, on a body that is not
+    rigid, or a plane on a moving ground."""
+    shaped = [k for k, b in enumerate(bodies) if getattr(b, "shapes", ())]
+    plane = ground.plane
+    if plane is not None and not isinstance(plane, Plane):
+        raise ValueError(f"Ground: plane must be a Plane, got {plane!r}")
+    if plane is not None and ground.motion is not None:
+        raise ValueError("Ground: a plane on a moving ground does not touch bodies yet; give "
+                         "the plane to a fixed Ground")
+    if not shaped:
+        return np.zeros((0, CONTACT_SIZE))
+    for k in shaped:
+        if body_kind[k] != RIGID:
+            raise ValueError(f"{bodies[k].label(k)}: shapes are rigid bodies' (a beam's or "
+                             f"rod's centre line does not touch yet): carry the shape on a "
+                             f"rigid body welded to it")
+    if plane is None:
+        k = shaped[0]
+        raise ValueError(f"{bodies[k].label(k)}: has shapes, but nothing to touch: give the "
+                         f"System a Ground(plane=dttmm.Plane(...))")
+    plane_values = plane.validated(rot_g, r_g)
+    rows = [row for k in shaped
+            for row in contact_rows(bodies[k].label(k), k, bv[k]["mass"], bodies[k].shapes,
+                                    bodies[k].contact, plane_values)]
+    return np.array(rows)
 
 
 def _free_joints_in_world(model):

@@ -22,6 +22,7 @@ from ..elements.beam import (
 from ..elements.kinds import (
      JOINT_KIND,
  )
+from ..elements.contact import CONTACT_SIZE
 from ..elements.rigid_body import MASS
 from ..elements.strain_rod import (
      ROD_PARAM_SIZE,
@@ -220,6 +221,9 @@ class Ground:
         A prescribed motion of the ground point and frame (a driven hub); its position and
         rotation at t = 0 become ``Model.ground_position`` and ``Model.ground_rotation``.
         None (default): the ground is fixed.
+    plane : Plane, optional
+        A plane of the ground (in the ground frame) that the bodies' shapes touch
+        (docs/contact.md).  None (default): nothing touches.  Refused beside a motion.
 
     Raises
     ------
@@ -237,6 +241,7 @@ class Ground:
     position: object = (0.0, 0.0, 0.0)
     rotation: object = None
     motion: Optional[PrescribedMotion] = None
+    plane: object = None
 
 
 def model_fact(function):
@@ -433,6 +438,10 @@ class Model:
     closure_drives : tuple
         Per closing joint, per coordinate, its drive as ``drives`` (a prescribed motion or a
         spring-damper) or None.
+    contacts : ndarray (n_contacts, CONTACT_SIZE)
+        The rigid bodies' contact spheres against the ground's plane, one row each
+        (elements/contact.py: the body, the sphere's centre and radius, the plane, the contact
+        law's parameters; docs/contact.md).  Empty without shapes.
 
     Examples
     --------
@@ -488,6 +497,9 @@ class Model:
     closure_params: np.ndarray = field(default_factory=lambda: empty_table()["closure_params"])
     closure_names: tuple = ()
     closure_drives: tuple = ()   # per closing joint, per coordinate: a drive's parameters or None
+    contacts: np.ndarray = field(default_factory=lambda: np.zeros((0, CONTACT_SIZE)))
+    # (n_contacts, CONTACT_SIZE): the bodies' contact spheres against the ground's plane, body
+    # by body (elements/contact.py)
 
     def __post_init__(self):
         # frozen through and through: the arrays cannot be written either (a negative mass
@@ -580,7 +592,8 @@ class Model:
         twist modes or loads in body axes), so the model runs in the general loop, not the fused one
         (kernels/transfers/beam.py::beam_transfer)."""
         return (self.has_beam_end_torque or self.has_twist or self.has_stretch
-                or self.has_follower_loads or self.has_exact_foreshortening)
+                or self.has_follower_loads or self.has_exact_foreshortening
+                or len(self.contacts) > 0)
 
     @cached_property
     def has_exact_foreshortening(self):

@@ -70,6 +70,10 @@ class _Problem:
     drives."""
 
     def __init__(self, model, exact_foreshortening=False):
+        if len(model.contacts):
+            raise ValueError("simulate_reference: the model's bodies have contact shapes "
+                             "(docs/contact.md), which the reference does not take yet: "
+                             "simulate them with dttmm.simulate")
         n = model.n_bodies
         # writable copies of the model's read-only arrays (numba types read-only arrays apart)
         kinds = np.array(model.hinge_kind, dtype=np.int64)

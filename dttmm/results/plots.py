@@ -147,6 +147,30 @@ def plot_joints(result, ax=None, title=None):
 ZERO_FORCE = 1e-9     # of the largest drive force (or 1 N): below it a column is rounding
 
 
+def plot_contacts(result, model=None, ax=None, title=None):
+    """The contact forces (docs/contact.md) against t: the normal force (N, along the plane's
+    normal) and the friction force's size (N), summed over each body's contact spheres (per
+    sphere without the model, whose Model.contacts names their bodies)."""
+    if result.contact_force is None:
+        raise ValueError("plot_contacts: the result has no contact shapes")
+    force, normal = np.asarray(result.contact_force), np.asarray(result.contact_normal)
+    along = np.einsum("tci,tci->tc", force, normal)
+    across = np.linalg.norm(force - along[:, :, None] * normal, axis=2)
+    if model is not None:
+        owner = np.asarray(model.contacts)[:, 0].astype(int)
+        groups = [(model.body_names[k], owner == k) for k in dict.fromkeys(owner)]
+    else:
+        groups = [(f"sphere {c}", np.arange(force.shape[1]) == c)
+                  for c in range(force.shape[1])]
+    fig, axes = _axes(ax, 2)
+    for j, (name, mine) in enumerate(groups):
+        axes[0].plot(result.t, along[:, mine].sum(axis=1), label=name, **_style(j))
+        axes[1].plot(result.t, across[:, mine].sum(axis=1), label=name, **_style(j))
+    axes[0].set_ylabel("normal force (N)")
+    axes[1].set_ylabel("friction force (N)")
+    return _finish(fig, axes, title or "contact forces")
+
+
 def plot_modal(result, ax=None, title=None):
     """The beams' modal coordinates eta (m, mode shapes of unit amplitude) and the strain rods'
     strain coefficients (1/m for curvatures and twist, 1 for stretch) against t."""
@@ -185,6 +209,9 @@ def run_figures(result, model, directory, title=""):
                ("energy", plot_energy(result, title=prefix + "energy"))]
     if result.joint_coordinates is not None:
         figures.append(("joints", plot_joints(result, title=prefix + "joints")))
+    if result.contact_force is not None:
+        figures.append(("contacts", plot_contacts(result, model,
+                                                  title=prefix + "contact forces")))
     if result.modal_coordinates is not None:
         names = _column_labels(result, "modal_names", "eta", result.modal_coordinates.shape[1])
         figures.append(("modal", plot_modal(result, title=prefix + _modal_words(names)[0])))

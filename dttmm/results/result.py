@@ -25,7 +25,8 @@ FIELDS = (
     "angular_velocity", "angular_acceleration", "force", "moment", "kinetic", "potential",
     "wall_time", "n_steps", "info", "velocity_input", "modal_coordinates", "modal_velocities",
     "joint_coordinates", "joint_rates", "drive_force", "body_names", "checkpoint",
-    "energy_work", "closure_force", "closure_moment", "closure_drive_force", "limit_force")
+    "energy_work", "closure_force", "closure_moment", "closure_drive_force", "limit_force",
+    "contact_force", "contact_point", "contact_normal")
 # computed from the stored state on first use, when the solver leaves them to its derivation
 DERIVED = ("position_input", "position_mass_center", "position_output", "velocity_input",
            "kinetic", "potential")
@@ -120,6 +121,12 @@ class Result:
         JointLimit, docs/limits.md), in joint_coordinates' columns: 0 between the bounds,
         negative against the upper, positive against the lower; not in drive_force.  None
         without stops.  ``limit_contacts()`` lists when each stop engaged.
+    contact_force, contact_point, contact_normal : ndarray (T, contact spheres, 3) or None
+        Each contact sphere's (a body's shapes', docs/contact.md, in Model.contacts' order)
+        force on its body (N, world: 0 while apart), the point it acts at (the sphere's
+        point nearest the plane, m) and the plane's normal there; by the contact law from
+        the recorded positions and velocities.  None without shapes.  ``contacts()`` lists
+        when each touched.
     closure_drive_force : ndarray (T, closing joints, 2) or None
         The generalized force (N m about the axis, or N along a slide) each closing joint's
         drive (a prescribed motion or a spring-damper) applies on side b, per coordinate (0
@@ -292,6 +299,14 @@ class Result:
                                 None if stop == len(force) else float(self.t[stop - 1])))
         return sorted(out, key=lambda c: (c[2], c[0]))
 
+    def contacts(self):
+        """Every touch of a contact sphere: a list of (sphere, t_on, t_off), sphere its index
+        in contact_force's columns (Model.contacts' rows), t_on and t_off the first and last
+        samples it pushed at (t_off None while it still pushes at the end); [] without
+        shapes (results/contact_states.py::touches)."""
+        from .contact_states import touches
+        return touches(self.t, self.contact_force)
+
     @property
     def total_energy(self):
         """(T,) kinetic + potential, J."""
@@ -322,6 +337,10 @@ class Result:
     plot_modal = _plot_method(
         "plot_modal", "The beams' modal coordinates eta (m) against t (s)",
         missing="The result has no beams.")
+    plot_contacts = _plot_method(
+        "plot_contacts", "Each contact sphere's normal and friction force (N) against t (s)",
+        ", model (a Model: its bodies' spheres summed)",
+        missing="The result has no contact shapes.")
 
     def save_npz(self, path):
         """Write every field to a compressed .npz.

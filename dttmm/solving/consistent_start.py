@@ -9,7 +9,7 @@ from ..kernels.stepping import weld_chain
 from ..kernels.stepping import step as kstep
 from ..kernels import python_twin
 from ..kernels.assembly.closure import set_ground
-from ..kernels.schema import INPUT_LAYOUT, RECORD_LAYOUT, FlatWeld
+from ..kernels.schema import INPUT_LAYOUT, MODEL_LAYOUT, RECORD_LAYOUT, FlatWeld
 from ..kernels.stepping.loop import OK, SINGULAR, UNSUPPORTED, Run
 from ..kernels.stepping.loop import DirectCalls, run_steps
 from ..kernels.assembly.sweep import LOST_ACCURACY
@@ -64,7 +64,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                 # on a throwaway scratch: the run that follows compiles nothing else for it
                 loop = kstep.general_loop(n, len(state.eta), settings.h, settings.coef,
                                           _station_histories(model, state, False), loops,
-                                          compiled_forces(model))
+                                          compiled_forces(model), len(model.contacts))
                 run = start_pass(params, settings, state, sweep, monitor,
                                  (g_acc, g_rot, g_w, g_wd, g_pos, g_vel),
                                  (force, torque, line_load), joint_input, loops.rows)
@@ -85,7 +85,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                     return start_alone(
                         params, settings, state, sweep, (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                         force[0], torque[0], line_load[0], joint_input[0], loops,
-                        compiled_forces(model))
+                        compiled_forces(model), start_contacts(params))
             status = start()
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
@@ -185,3 +185,11 @@ def _start_status(info):
     if info[0] == UNSUPPORTED:
         return -int(info[2])
     return _NOT_FINITE_START
+
+
+def start_contacts(params):
+    """The start's contacts argument (kernels/stepping/step.py::initial_accelerations) where it
+    runs alone: the model's contact_first and scratch for its contact spheres' forces."""
+    n_contacts = len(MODEL_LAYOUT.table(params, "contacts"))
+    return (MODEL_LAYOUT.table(params, "contact_first"), np.zeros((n_contacts, 3)),
+            np.zeros((n_contacts, 3, 3)), np.zeros((n_contacts, 3)))

@@ -92,7 +92,9 @@ def helper_calls(loop, run):
              (typeof(run.params), typeof(run.settings), typeof(run.state), typeof(run.sweep),
               ground, _row(typeof(inputs.force)), _row(typeof(inputs.torque)),
               _row(typeof(inputs.line_load)), _row(typeof(inputs.joint_input)),
-              typeof(loop.loops), typeof(loop.scratch.forces))),)
+              typeof(loop.loops), typeof(loop.scratch.forces),
+              typeof((np.zeros(1, dtype=np.int64), loop.scratch.contact_force,
+                      loop.scratch.contact_slope, loop.scratch.contact_centre)))),)
 
 
 def main_calls(loop, run):

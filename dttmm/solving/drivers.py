@@ -18,7 +18,7 @@ from ..kernels.stepping import runge_kutta as runge_kutta_kernels
 from ..kernels.schema import INPUT_LAYOUT
 from ..kernels.stepping.loop import ERROR_ESTIMATE, NOT_FINITE, OK, SINGULAR, UNSUPPORTED, Run
 from ..results.recording import Checkpoint, NoCheckpoint, Recording, SampleStream
-from .resolution import warn_unresolved
+from .resolution import warn_contact, warn_unresolved
 from ..results.result import _drive_spring_energy
 
 
@@ -285,6 +285,8 @@ def fixed_steps(run):
                        checkpoint)
     warn_unresolved(plan.user_model, result, dt, run_checks.UnresolvedMotionWarning,
                     run_checks.MAX_TURN_PER_STEP)
+    warn_contact(plan.user_model, result, dt, run_checks.UnresolvedMotionWarning,
+                 run_checks.MAX_TURN_PER_STEP)
     if balance is not None:                     # W at the samples
         work = np.interp(np.asarray(recording.steps, dtype=float), np.concatenate(work_steps),
                          np.concatenate(work_values))

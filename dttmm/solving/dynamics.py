@@ -467,6 +467,10 @@ def linearize(model, state=None, t=0.0):
     from ..elements.hinges import ELASTIC
     from ..elements.drives import MOTION
     from .run_inputs import additive_joint_force
+    if len(getattr(model, "contacts", ())):
+        raise ValueError("linearize: the model's bodies have contact shapes (docs/contact.md), "
+                         "whose forces switch on and off: their linear model is not defined; "
+                         "linearize the model without shapes")
     closed = bool(model.n_closures)
     if closed and (model.tip_pinned or model.has_beams
                    or np.isin(model.hinge_kind, (ELASTIC,)).any()):

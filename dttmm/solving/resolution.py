@@ -34,6 +34,8 @@ import numpy as np
 
 from ..elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
                              mode_shapes)
+from ..elements.contact import BODY as CONTACT_BODY
+from ..elements.contact import RATE as CONTACT_RATE
 from ..elements.hinges import FIXED
 from ..elements.kinds import BEAM
 from ..model.model import model_fact
@@ -180,3 +182,35 @@ def warn_unresolved(model, result, dt, warning, max_phase, stacklevel=4):
             f"the deflection far off; take dt <= {1.0 / (STEPS_PER_PERIOD * f):.2g} s "
             f"({STEPS_PER_PERIOD} steps a period), or fewer modes (modes_per_plane)"),
             stacklevel=stacklevel)
+
+
+def unresolved_contact(model, result, dt, max_phase):
+    """The stiffest contact sphere that touched in the run and that the step does not resolve,
+    omega dt > max_phase with omega = sqrt(k / m) (k its stiffness, m its body's mass: the
+    contact lasts about pi / omega, docs/contact.md), as (body name, sphere, omega), or None."""
+    if not len(model.contacts) or result.contact_force is None:
+        return None
+    touched = np.any(result.contact_force != 0.0, axis=(0, 2))
+    worst = None
+    for c in np.nonzero(touched)[0]:
+        row = model.contacts[c]
+        k = int(row[CONTACT_BODY])
+        omega = float(row[CONTACT_RATE])
+        if omega * dt > max_phase and (worst is None or omega > worst[2]):
+            worst = (model.body_names[k], int(c), omega)
+    return worst
+
+
+def warn_contact(model, result, dt, warning, max_phase, stacklevel=4):
+    """Warn (`warning`, UnresolvedMotionWarning) of a contact a finished fixed-step run touched
+    with too long a step."""
+    found = unresolved_contact(model, result, dt, max_phase)
+    if found is not None:
+        name, c, omega = found
+        duration = np.pi / omega
+        warnings.warn(warning(
+            f"simulate: the step does not resolve the contact of body '{name}' (contact sphere "
+            f"{c}): it lasts about {duration:.3g} s, {duration / dt:.3g} steps of {dt:g} s, "
+            f"where the rebound's speed and the contact force may be far off; take dt <= "
+            f"{duration / STEPS_PER_PERIOD:.2g} s ({STEPS_PER_PERIOD} steps a contact), or a "
+            f"softer contact (Contact(contact_time=...))"), stacklevel=stacklevel)

@@ -102,10 +102,13 @@ def energy_not_held(model, rho_inf=1.0):
 def _iterates(model, full_state):
     """Joint children and bodies welded to a beam's end in the full-state tree sweep have a
     Jacobian exact only to O(dt) terms (kernels/transfers/joint.py, step.py::_welded): their steps
-    iterate to newton_tol by default (without iterations a flexible link there is not stable).
-    Asked of the kernels' model (kernel_model: an end section is welded to its beam)."""
+    iterate to newton_tol by default (without iterations a flexible link there is not stable);
+    so do contacts, whose forces are evaluated at the guess.  Asked of the kernels' model
+    (kernel_model: an end section is welded to its beam)."""
     model = kernel_model(model)[0]
     if has_loops(model):            # closing joints: their rows converge with the iterations
+        return True
+    if len(model.contacts):         # contacts: their forces (docs/contact.md, "In the step")
         return True
     return has_coordinates(model) or (full_tree(model, full_state) and any(
         model.hinge_kind[k] == FIXED and model.parent[k] >= 0
@@ -164,6 +167,10 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     the Newmark scheme and the Riccati sweep (_check_full_tree, _check_tree); closed loops of
     rigid bodies and beams (closures.check_runs_in_sweeps)."""
     check_runs_in_sweeps(model, "simulate", moving_ground=True)
+    if len(model.contacts) and scheme != "newmark":
+        raise ValueError(f"simulate(scheme={scheme!r}): the model's bodies have contact shapes "
+                         f"(docs/contact.md), whose law is in the Newmark step's iterations: "
+                         f"use scheme='newmark'")
     if scheme == "dop853":
         _check_runge_kutta(model, method, full_state)
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):

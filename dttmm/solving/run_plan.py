@@ -159,7 +159,8 @@ class PreparedRun:
         else:
             loop_name, runner = "general", run_steps
             loop = kstep.general_loop(n, len(state.eta), dt, coef, histories, loops,
-                                      run_tables.compiled_forces(model).copy())    # (the run's own)
+                                      run_tables.compiled_forces(model).copy(),    # (the run's own)
+                                      len(model.contacts))
         keys += list(scheme.records)
         self.keys, self.loop_name, self.runner, self.fused = keys, loop_name, runner, fused
         self.calls = _SameCalls()       # (its skeleton's calls: kernels/stepping/loop.py)

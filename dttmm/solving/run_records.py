@@ -10,6 +10,7 @@ from ..elements.kinds import MAX_COORDINATES
 from ..model.loop_rows import has_closure_drives
 from ..model.model import model_fact
 from ..results.recording import NoCheckpoint
+from ..results.contact_states import contact_states
 from ..results.result import (DERIVED, FIELDS, Result, chain_energies, stop_forces,
                               stopped_columns)
 from .run_tables import (column_names, coordinate_columns)
@@ -126,7 +127,8 @@ def richardson_extrapolation(*runs):
                 "angular_velocity", "angular_acceleration", "force", "moment",
                 "velocity_input", "modal_coordinates", "modal_velocities", "joint_coordinates",
                 "joint_rates", "drive_force", "closure_force", "closure_moment",
-                "closure_drive_force", "limit_force", "kinetic", "potential")
+                "closure_drive_force", "limit_force", "contact_force", "contact_point",
+                "contact_normal", "kinetic", "potential")
     points = ("position_input", "position_mass_center", "position_output")
     lazy = ("rotation", "info") + tuple(name for name in combined if name not in DERIVED)
 
@@ -156,6 +158,9 @@ def richardson_extrapolation(*runs):
                 checkpoint=NoCheckpoint("a Richardson extrapolation (richardson=) keeps no "
                                         "checkpoint: it combines runs"))
     return Result._of_run(derivation, lazy=lazy, **kept)
+
+
+CONTACT_FIELDS = ("contact_force", "contact_point", "contact_normal")   # (derived when read)
 
 
 class _ResultFacts(NamedTuple):
@@ -217,6 +222,10 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
         if not derived:
             derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
                                    eta, eta_d, values.get("v_st"), values.get("v_c")))
+        if name in CONTACT_FIELDS and "contact_force" not in derived:
+            derived.update(contact_states(model, Result(t=t, method="dttmm", rotation=rot,
+                                                        angular_velocity=omega, **{
+                name: derived[name] for name in ("position_input", "velocity_input")})))
         if name in ("kinetic", "potential") and "kinetic" not in derived:
             ground_r, _, ground_rot, _ = model.ground_states(t)
             derived["kinetic"], derived["potential"] = chain_energies(
@@ -233,4 +242,5 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
                           moment=loads[:, :, 0:3], wall_time=wall, n_steps=n_steps, info=info,
                           modal_coordinates=eta if facts.has_modes else None,
                           modal_velocities=eta_d if facts.has_modes else None,
-                          body_names=facts.body_names, checkpoint=checkpoint, **joints)
+                          body_names=facts.body_names, checkpoint=checkpoint,
+                          lazy=CONTACT_FIELDS if len(model.contacts) else (), **joints)

@@ -18,6 +18,8 @@ from ..elements.kinds import (COORDINATE_0, DEFLECTING, FLEXIBLE, HINGE_PARAM_SI
 from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH,
                              MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
                              mode_shapes, slope_grams, torsion_shapes)
+from ..elements.contact import BODY as CONTACT_BODY
+from ..elements.contact import contact_tables
 from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
 from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -171,7 +173,9 @@ def kernel_params(model):
                 beam_moments=beam_moments, mode_offset=mode_offset, beam_ends=beam_ends,
                 beam_factors=beam_factors, rod_row=rod_row, rod_steps=steps, rod_xi0=xi0,
                 rod_phi=phi, rod_weights=weights, rod_stiffness=stiffness,
-                rod_mu_damping=mu_damping, rod_section=section)
+                rod_mu_damping=mu_damping, rod_section=section,
+                **contact_tables(model.contacts, model.n_bodies))
+
 
 
 @model_fact
@@ -372,7 +376,8 @@ def _loop_tables(model, banded_rows):
     point = np.array(model.closure_point[:m], dtype=float).reshape(m, 2, 3)
     body = np.array(model.closure_body[:m], dtype=np.int64).reshape(m, 2)
     act, ups, act_idx, act_ptr, colrows, band = loop_columns(model, owner, body, banded_rows)
-    nb = n if r else 0          # the rows' scratch per body (kernels/assembly/closure.py;
+    nb = n if r or len(model.contacts) else 0   # the rows' scratch per body (the contacts
+    # read the points of it: kernels/transfers/contact.py; kernels/assembly/closure.py;
     st = 2 * nb + 1 if r else 0  # none without rows: a million bodies' 900 B each)
     up_ptr = np.zeros(n + 1, dtype=np.int64)      # (body k's columns: up_idx[up_ptr[k]:..])
     for k, u in ups.items():
@@ -748,7 +753,11 @@ def _kernel_model(model):
     for c, s in zip(*np.nonzero(body >= 0)):        # a beam's output end to its end section
         k = int(body[c, s])
         body[c, s] = hub[k] if k in closed_ends and model.closure_on_end[c, s] else keep[k]
+    contacts = np.array(model.contacts)            # the contact spheres' bodies, renumbered
+    contacts[:, CONTACT_BODY] = np.asarray(keep, dtype=float)[
+        contacts[:, CONTACT_BODY].astype(np.int64)]
     return adopt_arrays(replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
+                                contacts=contacts,
                                 attachment=np.zeros(len(parent), dtype=np.int64),
                                 attachment_point=attachment_point, frequency_cutoff_reasons=(),
                                 **arrays), model), np.array(keep)

@@ -220,6 +220,10 @@ class _Configuration:
                              f"({kind.name}), which DT-TMM's sweep does not run yet (the "
                              f"static solve takes its consistent start); the Newton-Euler "
                              f"reference runs it (dttmm.reference.simulate_reference)")
+        if len(model.contacts):
+            raise ValueError(f"{where}: the model's bodies have contact shapes "
+                             f"(docs/contact.md); the static solve does not take contact "
+                             f"forces yet: simulate the model with damping to rest instead")
         km, self.keep = run_tables.kernel_model(model)
         self.model = km
         n = km.n_bodies

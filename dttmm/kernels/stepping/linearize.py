@@ -10,6 +10,7 @@ from ...elements.beam import MODES, TORSION_MODES
 from ...elements.hinges import BALL, ELASTIC, FIXED, FREE
 from ..transfers.beam import beam_transfer, transfer_work_size
 from ..transfers.body import rigid_body_transfer, station_history_correction
+from ..transfers.contact import contact_correction
 from ..transfers.strain_rod import rod_tables_of, rod_transfer
 from ..transfers.hinge import elastic_hinge_transfer
 from ..transfers.joint import joint_linearization, n_coordinates
@@ -52,7 +53,7 @@ def _rotation_slots_to_acceleration(u, dwd_in, wd_in, phi_in, dwd_out, wd_out, p
 
 @allocating_kernel
 def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force, torque,
-                    line_load, at_start, rot, w3, modal, stations, joints):
+                    line_load, at_start, rot, w3, modal, stations, joints, contacts):
     """Element kinds and transfers about the guess z_star (phi slots), written in angular
     acceleration slots; returns 0, or j + 1 for an element j (2k: hinge k, 2k + 1: body k) of a
     kind this loop does not know.  at_start: the consistent-start solve, where the phi slots
@@ -69,7 +70,9 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     joints and joints with coordinates are JOINT elements (kernels/transfers/joint.py), linearized
     about the coordinates' guess; given (n, 3): each JointForce drive's value over the step (a
     compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
-    addresses."""
+    addresses.  contacts = (contact_first, force, slope): each contact sphere's force at the
+    guess and its slope (kernels/transfers/contact.py::contact_forces), added to its rigid
+    body's transfer (contact_correction)."""
     kind = sweep_tables.kind(sweep)
     u = sweep_tables.u(sweep)
     known_loads = sweep_tables.known_loads(sweep)
@@ -77,6 +80,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     joint_tau_nu = sweep_tables.joint_tau_nu(sweep)
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
+    contact_first, contact_force, contact_slope = contacts
+    contact_rows = model_tables.contacts(params)
     independent = independent and not at_start
     body_params, hinge_kind = model_tables.body_params(params), model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -183,6 +188,11 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                 load[i] = body_params[row, 0] * gravity[i] + force[k, i]
             rigid_body_transfer(body_params[row], rot_star[k], lam[k], dwd[k], dw[k], wd[k],
                                 w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
+            if contact_first.shape[0] > k + 1:
+                for c in range(contact_first[k], contact_first[k + 1]):
+                    contact_correction(contact_rows[c], body_params[row, 4:7], rot_star[k],
+                                       lam[k], w[k], wd[k], dw[k], dwd[k], contact_force[c],
+                                       contact_slope[c], z_star[jh + 1], u[jh + 1])
             if independent:
                 station_history_correction(body_params[row], rot[k], rot_star[k], lam[k], dwd[k],
                                            dw[k], wd[k], w[k], c1, w1_st[k], w1_st[k + 1],

@@ -32,6 +32,7 @@ from ...elements.hinges import ELASTIC, FIXED
 from ...elements.kinds import DEFLECTS, MAX_COORDINATES
 from ..assembly.closure import set_ground, solve_with_loops, tree_points
 from ..assembly.loop_projection import project_onto_loops
+from ..transfers.contact import contact_forces
 from ..transfers.hinge import elastic_hinge_loads
 from ..transfers.joint import drive_share, n_coordinates
 from .generalized_alpha import (_advance_body, _advance_deflection, _advance_joint,
@@ -70,7 +71,7 @@ Guess = namedtuple("Guess", ["phi", "rot", "lam", "w", "wd", "dw", "dwd"])
 GeneralLoop = namedtuple("GeneralLoop", ["scratch", "loops"])
 
 
-def general_loop(n, n_eta, h, coef, histories, loops, forces):
+def general_loop(n, n_eta, h, coef, histories, loops, forces, n_contacts=0):
     """The general loop's scratch for n bodies and n_eta modal coordinates.  histories: the
     paper's scheme's (independent, st_v, st_a, st_p, c_v, c_a, c_p) (run_tables._station_histories);
     the loop adds the w1 offsets of every station point and mass centre.  loops: the closing
@@ -94,7 +95,8 @@ def general_loop(n, n_eta, h, coef, histories, loops, forces):
         q_star=np.zeros(coordinates), qd_star=np.zeros(coordinates),
         qdd_star=np.zeros(coordinates), eta_g=np.zeros(n_eta), eta_d_g=np.zeros(n_eta),
         defl_g=np.zeros(body3), defl_rate_g=np.zeros(body3),
-        forces=np.asarray(forces, dtype=np.int64))
+        forces=np.asarray(forces, dtype=np.int64), contact_force=np.zeros((n_contacts, 3)),
+        contact_slope=np.zeros((n_contacts, 3, 3)), contact_centre=np.zeros((n_contacts, 3)))
     return GeneralLoop(scratch, loops)
 
 
@@ -166,7 +168,7 @@ def fused_coefficients(h, coef):
 
 @allocating_kernel
 def initial_accelerations(params, settings, state, sweep, ground, force, torque, line_load,
-                          joint_input, loops, forces):
+                          joint_input, loops, forces, contacts):
     """The consistent start: one linear sweep at acceleration level.  The phi slot of every
     station holds the angular acceleration (w' = 1 * slot, w fixed, no rotation change), and an
     elastic hinge's loads are known from its state (its outboard motion is free); beams' modal
@@ -175,7 +177,8 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     inputs at t = 0 (kernels/stepping/loop.py::Inputs), their accelerations come out in state.jqdd.
     loops: the closing joints (kernels/assembly/closure.py), held at acceleration level.  forces:
     the compiled JointForces' callbacks' addresses (kernels/transfers/joint.py::drive_value).
-    Returns the status: 0, a singularity code (sweep.py), or
+    contacts = (contact_first, force, slope, centre): the contact spheres' forces, from the
+    state (kernels/transfers/contact.py).  Returns the status: 0, a singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
     all_bodies = loop_tables.all_bodies(loops)
@@ -211,12 +214,19 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     g = (g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3))
     modal = (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
              eta_map)
+    if kind.shape[0] > 0 or contacts[3].shape[0] > 0:
+        tree_points(params, rot, omega, jq, jqd, eta, eta_d,
+                    defl, defl_rate, loops, all_bodies)
+    if contacts[3].shape[0] > 0:        # (known at the start: no slope)
+        contact_forces(params, loops, rot, omega, 0.0, 0.0, contacts[1], contacts[2],
+                       contacts[3], True)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
                               np.zeros(z.shape), force, torque, line_load, n >= 0, rot,
                               zero3, modal,
                               (n < 0, np.zeros((n + 1, 3)), zero3),     # (False)
                               (settings.mode == RICCATI_JOINTS, jq, jqd,
-                               joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces))
+                               joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces),
+                              contacts[0:3])
     # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start and
     # the stations' flag run-time bools (n >= 0, n < 0), as the step's: numba compiles a
     # function once per layout and per literal True or False it is passed, and _build_elements
@@ -239,8 +249,6 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     put1(root_f[0:3], g_acc)
     put1(root_f[3:6], g_wd)
     if kind.shape[0] > 0:
-        tree_points(params, rot, omega, jq, jqd, eta, eta_d,
-                    defl, defl_rate, loops, all_bodies)
         status = solve_with_loops(params, sweep, root_f, loops, rot, omega, z)
     else:
         status = solve_step(settings.mode, model_tables.tip_pinned(params), parent, sweep,
@@ -419,33 +427,28 @@ def _iterate(loop, run, s, it):
     hinge_kind = model_tables.hinge_kind(params)
     tip_pinned = model_tables.tip_pinned(params)
     parent = model_tables.parent(params)
+    contacts = (model_tables.contact_first(params), general_tables.contact_force(scratch),
+                general_tables.contact_slope(scratch))
+    contact_centre = general_tables.contact_centre(scratch)
     h, coef, mode = settings.h, settings.coef, settings.mode
     joint_input = joint_inputs[:, :, 0]
     if settings.start:      # the consistent start (Settings.start): one pass, at t
         start = initial_accelerations(params, settings, state, sweep, (g_acc, rot_now, g_w, g_wd),
                                       force, torque, line_load, joint_inputs, loops,
-                                      forces)
+                                      forces, contacts + (contact_centre,))
         return (OK, 0, 0.0) if start == 0 else (SINGULAR, start, 0.0)
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star, wd, dwd = guess.phi, guess.wd, guess.dwd
     modal = (eta, eta_d, w1e, w3e, eta_dd_star, eta_map)
     stations = (histories[0], histories[7], histories[8])
     joints = (mode == RICCATI_JOINTS, joints_[2], joints_[3], joints_[4], joint_input, forces)
-    unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force,
-                              torque, line_load, settings.start,     # (False)
-                              rot, w3, modal, stations, joints)
-    if unknown != 0:
-        return UNSUPPORTED, unknown, 0.0
-    if not _all_finite(u):
-        return NOT_FINITE, 0, 0.0
-    if kind.shape[0] > 0:  # closing joints: held at acceleration level
-        put2(target_, target)
+    contact_change = 0.0
+    if kind.shape[0] > 0 or contact_centre.shape[0] > 0:
+        # the points at the guess: the closing joints' rows' velocity terms and the
+        # multipliers' arms, the contacts' places (the beams' modal coordinates at theirs:
+        # eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic hinges' deflections
+        # likewise from their stations' guess, as _update)
         set_ground(loops, g_pos, g_vel, g_acc, rot_now, g_w, g_wd)
-        step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
-        step_coef[1] = c3 / c1
-        # the rows' velocity terms and the multipliers' arms at the guess (the beams' modal
-        # coordinates at theirs: eta = (eta''* - w1e) / c1, eta' = c3 eta + w3e; the elastic
-        # hinges' deflections likewise from their stations' guess, as _update)
         eta_g, eta_d_g, defl_g, defl_rate_g = at_guess
         for i in range(eta_g.shape[0]):
             eta_g[i] = (eta_dd_star[i] - w1e[i]) / c1
@@ -458,6 +461,20 @@ def _iterate(loop, run, s, it):
                     defl_rate_g[k, i] = c3 * d[i] + w3d[k, i]
         tree_points(params, guess.rot, guess.w, joints_[2], joints_[3], eta_g,
                     eta_d_g, defl_g, defl_rate_g, loops, all_bodies)
+        if contact_centre.shape[0] > 0:     # (docs/contact.md, "In the step")
+            contact_change = contact_forces(params, loops, guess.rot, guess.w, c1, c3,
+                                            contacts[1], contacts[2], contact_centre, it == 0)
+    unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force,
+                              torque, line_load, settings.start,     # (False)
+                              rot, w3, modal, stations, joints, contacts)
+    if unknown != 0:
+        return UNSUPPORTED, unknown, 0.0
+    if not _all_finite(u):
+        return NOT_FINITE, 0, 0.0
+    if kind.shape[0] > 0:  # closing joints: held at acceleration level
+        put2(target_, target)
+        step_coef[0] = 1.0 / c1           # a spring's q and q' per unit row acceleration
+        step_coef[1] = c3 / c1
         status = solve_with_loops(params, sweep, root_f, loops, guess.rot,
                                   guess.w, z)
     else:
@@ -468,7 +485,7 @@ def _iterate(loop, run, s, it):
     # back from angular-acceleration to phi slots
     for i in range(3):
         z[0, 3 + i] = ground[5][i]
-    change = 0.0
+    change = contact_change
     for i in range(eta_dd_new.shape[0]):
         change = max(change, abs(eta_dd_new[i] - eta_dd_star[i]) / c1)
     qdd_s = joints_[4]

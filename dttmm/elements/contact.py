@@ -1,0 +1,355 @@
+"""Contact of bodies' shapes with a ground plane (docs/contact.md): the shapes, the contact law's
+parameters and how a body's and the plane's combine, and the law itself in Python (the kernels'
+twin is kernels/transfers/contact.py).
+
+Every shape is a set of contact spheres, each a centre fixed in the body frame and a radius: a
+sphere is one, a capsule its two end spheres, a box its eight corners (radius 0).  Against a
+plane these are exactly the shape's points that can touch first: a capsule's and a box's
+deepest point is always one of them (or a whole edge or face of them, at once).
+
+Each contact sphere pushes on its body at the point of it nearest the plane, by a compliant
+law.  With n the plane's unit normal, x_c the sphere's centre, r its radius, the penetration
+and its rate are
+
+    delta = r - (n . x_c - n . p0),   delta' = -n . v       (v: the contact point's velocity)
+
+and the force on the body, while delta > 0,
+
+    normal:   f_n = k delta max(0, 1 + a delta' / rho),   rho = sqrt(delta'^2 + w^2 delta^2)
+    friction: f_t = -mu f_n v_t / sqrt(|v_t|^2 + v_s^2),    v_t = v - (n . v) n
+
+with w = sqrt(k / m), m the body's mass: a linear spring whose damping (Hunt and Crossley's
+form, k delta times a function of the rates) is homogeneous of degree one in (delta,
+delta'), so that a body of mass m striking on one sphere at any speed rebounds at the same
+ratio e(a) of it: the law scales with the speed.  e(a) is the rebound of x'' = -x max(0, 1 +
+a x' / sqrt(x'^2 + x^2)), x(0) = 0, x'(0) = 1 (restitution_of_damping, solved once by scipy),
+and `a` the damping that gives the restitution asked for (damping_of_restitution).  The force
+rises from zero at the touch (no jump, which the step would place to within a step only) and
+never pulls; resting, the damper is viscous, c = a sqrt(k m).  Coulomb's friction is made
+smooth below the stick velocity v_s: a body held by friction creeps at most at about v_s
+(v_s r / sqrt(1 - r^2) at a ratio r < 1 of the friction it needs to what the contact can give).
+"""
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._checks import finite_scalar, finite_vector, rotation_matrix
+
+# layout of one contact sphere's row (Model.contacts; the kernels' contacts table)
+BODY = 0                # the body (the user's index in Model.contacts, the kernel model's there)
+CENTRE = slice(1, 4)    # the sphere's centre from the body's input point, body frame, m
+RADIUS = 4              # its radius, m
+NORMAL = slice(5, 8)    # the plane's unit normal, world
+LEVEL = 8               # n . p0 of the plane, m
+STIFFNESS = 9           # k, N/m
+DAMPING = 10            # a, the law's damping (dimensionless: damping_of_restitution)
+FRICTION = 11           # mu
+STICK_VELOCITY = 12     # v_s, m/s
+RATE = 13               # w = sqrt(k / m), rad/s (m: the body's mass)
+CONTACT_SIZE = 14
+
+STICK_VELOCITY_DEFAULT = 1e-4   # m/s
+LEAST_RESTITUTION = 0.01        # (a restitution below it: ask for 0.01, a dead stop)
+
+
+def restitution_of_damping(a):
+    """e(a): the rebound ratio of the law's scaled contact, x'' = -x max(0, 1 + a x' / sqrt(x'^2
+    + x^2)) from x(0) = 0, x'(0) = 1 until x returns to 0 (time in units of 1 / w, x in v0 / w);
+    where the force lets go first (1 + a x' / |(x, x')| = 0 on the way out, a > 1) the body
+    leaves at the rate it has there.  e(0) = 1, falling to 0 as a grows."""
+    from scipy.integrate import solve_ivp
+    if a <= 0.0:
+        return 1.0
+
+    def rates(_, y):
+        x, v = y
+        r = math.hypot(x, v)
+        return [v, -x * max(0.0, 1.0 + a * v / r) if r > 0.0 else 0.0]
+
+    def back(_, y):
+        return y[0]
+
+    def lets_go(_, y):
+        return 1.0 + a * y[1] / max(math.hypot(y[0], y[1]), 1e-300) if y[1] < 0.0 else 1.0
+
+    back.terminal = lets_go.terminal = True
+    back.direction = lets_go.direction = -1
+    sol = solve_ivp(rates, (0.0, 100.0), [0.0, 1.0], method="DOP853", events=(back, lets_go),
+                    rtol=1e-12, atol=1e-14, first_step=1e-6)
+    ends = [y[0][1] for y in sol.y_events if len(y)]
+    if not ends:
+        raise RuntimeError(f"restitution_of_damping({a}): the scaled contact did not end")
+    return -ends[0]
+
+
+@functools.lru_cache(maxsize=256)
+def damping_of_restitution(restitution):
+    """The law's damping a at which it rebounds at `restitution` (0 < e <= 1; e(a) inverted by
+    Brent's method to 1e-12)."""
+    from scipy.optimize import brentq
+    if restitution >= 1.0:
+        return 0.0
+    return brentq(lambda a: restitution_of_damping(a) - restitution, 0.0, 200.0, xtol=1e-13,
+                  rtol=1e-13)
+
+
+def _positive(who, name, value, allow_inf=False):
+    if allow_inf and isinstance(value, (int, float)) and value == math.inf:
+        return math.inf
+    x = finite_scalar(who, name, value)
+    if not x > 0.0:
+        raise ValueError(f"{who}: {name} must be > 0, got {value!r}")
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class Contact:
+    """The contact law's parameters of a body's shapes or of a plane (docs/contact.md).
+
+    Parameters
+    ----------
+    stiffness : float, optional
+        k, N/m, of each contact sphere (a box's corner, a capsule's end).  Give it or
+        contact_time, not both.
+    contact_time : float, optional
+        T, s: the stiffness that makes the body's contact on one sphere last about T (its
+        undamped half period), k = m (pi / T)^2 with m the body's mass.  Choose T of at least
+        ~20 steps: a stiffer contact is not resolved by the step (the run says so).
+    restitution : float, optional
+        e in [0.01, 1] (default 1): the law's damping (damping_of_restitution) rebounds the
+        body, striking on one sphere, at e times the speed it struck at, whatever that speed.
+    friction : float, optional
+        mu >= 0, Coulomb's coefficient, static = kinetic (default 0: frictionless).
+    stick_velocity : float, optional
+        v_s > 0, m/s (default 1e-4): below it friction is smooth, so a body it holds creeps
+        at about v_s at most.
+
+    A plane's Contact combines with a body's: the stiffnesses in series (1/k = 1/k_body +
+    1/k_plane), the smaller restitution, the smaller friction, the smaller stick velocity.
+    ``Plane``'s default (stiffness and friction infinite, restitution 1) leaves the body's.
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> steel = dttmm.Contact(stiffness=1e8, restitution=0.8, friction=0.3)
+    """
+    stiffness: float = None
+    contact_time: float = None
+    restitution: float = 1.0
+    friction: float = 0.0
+    stick_velocity: float = STICK_VELOCITY_DEFAULT
+
+    def validated(self, who, mass=None):
+        """(k, e, mu, v_s) as floats; k from contact_time needs the body's mass.  ValueError
+        naming who and the argument."""
+        if (self.stiffness is None) == (self.contact_time is None):
+            raise ValueError(f"{who}: Contact needs a stiffness (N/m) or a contact_time (s), "
+                             f"exactly one")
+        if self.stiffness is not None:
+            k = _positive(who, "Contact stiffness", self.stiffness, allow_inf=True)
+        else:
+            t = _positive(who, "Contact contact_time", self.contact_time)
+            if mass is None:
+                raise ValueError(f"{who}: a plane's Contact takes a stiffness, not a "
+                                 f"contact_time (it has no mass of its own)")
+            k = mass * (math.pi / t) ** 2
+        e = finite_scalar(who, "Contact restitution", self.restitution)
+        if not LEAST_RESTITUTION <= e <= 1.0:
+            raise ValueError(f"{who}: Contact restitution must be in [{LEAST_RESTITUTION}, 1], "
+                             f"got {self.restitution!r}")
+        if self.friction == math.inf:
+            mu = math.inf
+        else:
+            mu = finite_scalar(who, "Contact friction", self.friction)
+            if mu < 0.0:
+                raise ValueError(f"{who}: Contact friction must be >= 0, got {self.friction!r}")
+        v_s = _positive(who, "Contact stick_velocity", self.stick_velocity, allow_inf=True)
+        return k, e, mu, v_s
+
+
+@dataclass(frozen=True, eq=False)
+class Plane:
+    """A plane of the ground that bodies' shapes touch (docs/contact.md): the half-space behind
+    it is solid.  Pass it as ``Ground(plane=...)``.
+
+    Parameters
+    ----------
+    normal : array_like of 3, optional
+        Its outward normal in the ground frame (default (0, 0, 1)); normalized.
+    point : array_like of 3, optional
+        A point of it in the ground frame, m (default the origin).
+    contact : Contact, optional
+        Its own contact parameters (default: rigid, friction infinite, restitution 1, so
+        that every body's are used as they are).
+
+    Examples
+    --------
+    >>> import dttmm
+    >>> floor = dttmm.Plane(normal=[0, 0, 1], point=[0, 0, 0])
+    >>> ground = dttmm.Ground(plane=floor)
+    """
+    normal: object = (0.0, 0.0, 1.0)
+    point: object = (0.0, 0.0, 0.0)
+    contact: Contact = Contact(stiffness=math.inf, friction=math.inf,
+                               stick_velocity=math.inf)
+
+    def validated(self, rotation, position):
+        """(n, level) in the world for a ground frame at (rotation, position)."""
+        who = "Plane"
+        n = finite_vector(who, "normal", self.normal)
+        size = float(np.linalg.norm(n))
+        if not size > 1e-12:
+            raise ValueError(f"{who}: normal must not be zero, got {self.normal!r}")
+        if not isinstance(self.contact, Contact):
+            raise ValueError(f"{who}: contact must be a Contact, got {self.contact!r}")
+        n = rotation @ (n / size)
+        p = rotation @ finite_vector(who, "point", self.point) + position
+        return n, float(n @ p), self.contact.validated(who)
+
+
+@dataclass(frozen=True, eq=False)
+class Sphere:
+    """A ball of the body that touches planes (docs/contact.md): one contact sphere.
+
+    Parameters
+    ----------
+    radius : float
+        m, >= 0 (0: a point of the body that touches).
+    center : array_like of 3, optional
+        Its centre from the body's input point, body frame, m (default the input point).
+    """
+    radius: float
+    center: object = (0.0, 0.0, 0.0)
+
+    def spheres(self, who):
+        radius = finite_scalar(who, "Sphere radius", self.radius)
+        if radius < 0.0:
+            raise ValueError(f"{who}: Sphere radius must be >= 0 (0: a point), got "
+                             f"{self.radius!r}")
+        return [(finite_vector(who, "Sphere center", self.center), radius)]
+
+
+@dataclass(frozen=True, eq=False)
+class Capsule:
+    """A cylinder with hemispherical ends (docs/contact.md): its two end spheres touch.
+
+    Parameters
+    ----------
+    radius : float
+        m, > 0.
+    start, end : array_like of 3
+        Its axis' ends from the body's input point, body frame, m.
+    """
+    radius: float
+    start: object = (0.0, 0.0, 0.0)
+    end: object = (0.0, 0.0, 0.0)
+
+    def spheres(self, who):
+        r = _positive(who, "Capsule radius", self.radius)
+        return [(finite_vector(who, "Capsule start", self.start), r),
+                (finite_vector(who, "Capsule end", self.end), r)]
+
+
+@dataclass(frozen=True, eq=False)
+class Box:
+    """A rectangular box of the body (docs/contact.md): its eight corners touch.
+
+    Parameters
+    ----------
+    size : array_like of 3
+        Its edges along its own x, y, z, m, each > 0.
+    center : array_like of 3, optional
+        Its centre from the body's input point, body frame, m (default the input point).
+    rotation : array_like (3, 3), optional
+        Its axes in the body frame (default the body's).
+    """
+    size: object
+    center: object = (0.0, 0.0, 0.0)
+    rotation: object = None
+
+    def spheres(self, who):
+        size = finite_vector(who, "Box size", self.size)
+        if not np.all(size > 0.0):
+            raise ValueError(f"{who}: Box size must be 3 lengths > 0, got {self.size!r}")
+        centre = finite_vector(who, "Box center", self.center)
+        rot = np.eye(3) if self.rotation is None else rotation_matrix(who, "Box rotation",
+                                                                      self.rotation)
+        return [(centre + rot @ (0.5 * size * np.array([sx, sy, sz])), 0.0)
+                for sx in (-1.0, 1.0) for sy in (-1.0, 1.0) for sz in (-1.0, 1.0)]
+
+
+SHAPES = (Sphere, Capsule, Box)
+
+
+def contact_rows(who, body, mass, shapes, contact, plane):
+    """The rows (CONTACT_SIZE each) of a rigid body's shapes against the plane (n, level,
+    plane's (k, e, mu, v_s)): one per contact sphere, the combined law's parameters."""
+    if not isinstance(shapes, (list, tuple)):
+        shapes = [shapes]
+    for s in shapes:
+        if not isinstance(s, SHAPES):
+            raise ValueError(f"{who}: shapes must be Sphere, Capsule or Box, got {s!r}")
+    if contact is None:
+        raise ValueError(f"{who}: a body with shapes needs contact=Contact(stiffness=... or "
+                         f"contact_time=..., restitution=..., friction=...)")
+    if not isinstance(contact, Contact):
+        raise ValueError(f"{who}: contact must be a Contact, got {contact!r}")
+    k_b, e_b, mu_b, vs_b = contact.validated(who, mass)
+    n, level, (k_p, e_p, mu_p, vs_p) = plane
+    k = 1.0 / (1.0 / k_b + 1.0 / k_p)
+    if not math.isfinite(k):
+        raise ValueError(f"{who}: the contact's stiffness is infinite (the body's and the "
+                         f"plane's): give the body's Contact a finite stiffness")
+    e, mu, v_s = min(e_b, e_p), min(mu_b, mu_p), min(vs_b, vs_p)
+    if not math.isfinite(mu):
+        mu = 0.0
+    a = damping_of_restitution(e)
+    rows = []
+    for s in shapes:
+        for centre, radius in s.spheres(who):
+            row = np.zeros(CONTACT_SIZE)
+            row[BODY] = body
+            row[CENTRE] = centre
+            row[RADIUS] = radius
+            row[NORMAL] = n
+            row[LEVEL] = level
+            row[STIFFNESS], row[DAMPING], row[FRICTION], row[STICK_VELOCITY] = k, a, mu, v_s
+            row[RATE] = math.sqrt(k / mass)
+            rows.append(row)
+    return rows
+
+
+def contact_tables(rows, n_bodies):
+    """The kernels' contact tables (kernels/schema.py::MODEL) of a model's contact spheres
+    (Model.contacts, their BODY column the kernel model's bodies): the rows ordered body by
+    body, and contact_first (n + 1 entries; one without contacts): body k's rows are
+    contact_first[k] .. contact_first[k + 1] - 1 (kernels/transfers/contact.py)."""
+    rows = np.asarray(rows, dtype=float)
+    if not len(rows):
+        return dict(contacts=np.zeros((0, CONTACT_SIZE)), contact_first=np.zeros(1, np.int64))
+    rows = rows[np.argsort(rows[:, BODY], kind="stable")]
+    counts = np.bincount(rows[:, BODY].astype(np.int64), minlength=n_bodies)
+    first = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return dict(contacts=np.ascontiguousarray(rows), contact_first=first)
+
+
+def contact_forces(rows, centre, velocity):
+    """The law above for contact spheres (rows (N, CONTACT_SIZE)) whose centres are at centre
+    (..., N, 3) and whose contact points move at velocity (..., N, 3): (force (..., N, 3) on
+    the body, world, N; penetration (..., N), m).  The Python twin of the kernels'
+    kernels/transfers/contact.py::contact_value (which adds its slope), for the Result."""
+    rows = np.asarray(rows, dtype=float)
+    n = rows[:, NORMAL]
+    delta = rows[:, RADIUS] + rows[:, LEVEL] - np.einsum("...i,...i->...", centre, n)
+    vn = np.einsum("...i,...i->...", velocity, n)
+    inside = delta > 0.0
+    depth = np.where(inside, delta, 0.0)
+    rho = np.hypot(vn, rows[:, RATE] * depth)
+    share = np.where(inside, -vn / np.where(inside, rho, 1.0), 0.0)
+    f_n = rows[:, STIFFNESS] * depth * np.maximum(0.0, 1.0 + rows[:, DAMPING] * share)
+    v_t = velocity - vn[..., None] * n
+    s = np.sqrt(np.einsum("...i,...i->...", v_t, v_t) + rows[:, STICK_VELOCITY] ** 2)
+    force = f_n[..., None] * (n - (rows[:, FRICTION] / s)[..., None] * v_t)
+    return force, delta
