@@ -48,7 +48,15 @@ DAMPING = 10            # a, the law's damping (dimensionless: damping_of_restit
 FRICTION = 11           # mu
 STICK_VELOCITY = 12     # v_s, m/s
 RATE = 13               # w = sqrt(k / m), rad/s (m: the body's mass)
-CONTACT_SIZE = 14
+# ... and the body's own law, which two bodies' spheres combine when they touch each other
+OWN_STIFFNESS = 14      # k_body, N/m
+OWN_DAMPING = 15        # a of the body's restitution
+OWN_FRICTION = 16       # mu_body
+OWN_STICK_VELOCITY = 17  # v_s of the body
+MASS = 18               # the body's mass, kg
+ON_PLANE = 19           # 1: it touches the plane (NORMAL .. RATE hold that law), 0: no plane
+PARENT = 20             # the body's parent (-1: the ground), whose spheres it does not touch
+CONTACT_SIZE = 21
 
 STICK_VELOCITY_DEFAULT = 1e-4   # m/s
 LEAST_RESTITUTION = 0.01        # (a restitution below it: ask for 0.01, a dead stop)
@@ -283,9 +291,10 @@ class Box:
 SHAPES = (Sphere, Capsule, Box)
 
 
-def contact_rows(who, body, mass, shapes, contact, plane):
-    """The rows (CONTACT_SIZE each) of a rigid body's shapes against the plane (n, level,
-    plane's (k, e, mu, v_s)): one per contact sphere, the combined law's parameters."""
+def contact_rows(who, body, parent, mass, shapes, contact, plane):
+    """The rows (CONTACT_SIZE each) of a rigid body's shapes: one per contact sphere, the
+    body's own law, and against the plane (plane: (n, level, plane's (k, e, mu, v_s)), or
+    None) the combined law's parameters."""
     if not isinstance(shapes, (list, tuple)):
         shapes = [shapes]
     for s in shapes:
@@ -297,59 +306,78 @@ def contact_rows(who, body, mass, shapes, contact, plane):
     if not isinstance(contact, Contact):
         raise ValueError(f"{who}: contact must be a Contact, got {contact!r}")
     k_b, e_b, mu_b, vs_b = contact.validated(who, mass)
-    n, level, (k_p, e_p, mu_p, vs_p) = plane
-    k = 1.0 / (1.0 / k_b + 1.0 / k_p)
-    if not math.isfinite(k):
-        raise ValueError(f"{who}: the contact's stiffness is infinite (the body's and the "
-                         f"plane's): give the body's Contact a finite stiffness")
-    e, mu, v_s = min(e_b, e_p), min(mu_b, mu_p), min(vs_b, vs_p)
-    if not math.isfinite(mu):
-        mu = 0.0
-    a = damping_of_restitution(e)
+    if not math.isfinite(k_b):
+        raise ValueError(f"{who}: Contact stiffness must be finite for a body's shapes")
+    if plane is not None:
+        n, level, (k_p, e_p, mu_p, vs_p) = plane
+        k = 1.0 / (1.0 / k_b + 1.0 / k_p)
+        e, mu, v_s = min(e_b, e_p), min(mu_b, mu_p), min(vs_b, vs_p)
     rows = []
     for s in shapes:
         for centre, radius in s.spheres(who):
             row = np.zeros(CONTACT_SIZE)
-            row[BODY] = body
+            row[BODY], row[PARENT] = body, parent
             row[CENTRE] = centre
             row[RADIUS] = radius
-            row[NORMAL] = n
-            row[LEVEL] = level
-            row[STIFFNESS], row[DAMPING], row[FRICTION], row[STICK_VELOCITY] = k, a, mu, v_s
-            row[RATE] = math.sqrt(k / mass)
+            row[OWN_STIFFNESS], row[OWN_DAMPING] = k_b, damping_of_restitution(e_b)
+            row[OWN_FRICTION], row[OWN_STICK_VELOCITY], row[MASS] = mu_b, vs_b, mass
+            if plane is not None:
+                row[ON_PLANE] = 1.0
+                row[NORMAL] = n
+                row[LEVEL] = level
+                row[STIFFNESS], row[DAMPING] = k, damping_of_restitution(e)
+                row[FRICTION], row[STICK_VELOCITY] = mu, v_s
+                row[RATE] = math.sqrt(k / mass)
             rows.append(row)
     return rows
 
 
-def contact_tables(rows, n_bodies):
-    """The kernels' contact tables (kernels/schema.py::MODEL) of a model's contact spheres
-    (Model.contacts, their BODY column the kernel model's bodies): the rows ordered body by
-    body, and contact_first (n + 1 entries; one without contacts): body k's rows are
-    contact_first[k] .. contact_first[k + 1] - 1 (kernels/transfers/contact.py)."""
-    rows = np.asarray(rows, dtype=float)
-    if not len(rows):
-        return dict(contacts=np.zeros((0, CONTACT_SIZE)), contact_first=np.zeros(1, np.int64))
-    rows = rows[np.argsort(rows[:, BODY], kind="stable")]
-    counts = np.bincount(rows[:, BODY].astype(np.int64), minlength=n_bodies)
-    first = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    return dict(contacts=np.ascontiguousarray(rows), contact_first=first)
+def pair_law(row_a, row_b):
+    """(k, a, w, mu, v_s) of two bodies' spheres touching each other: the stiffnesses in
+    series, the smaller restitution (the larger damping a), the smaller friction and stick
+    velocity, and w = sqrt(k / m) with m = m_a m_b / (m_a + m_b), the pair's reduced mass:
+    two free bodies striking on one sphere each, head on, part at e times the speed they
+    closed at.  The Python twin of kernels/transfers/contact.py::pair_value's."""
+    k = 1.0 / (1.0 / row_a[OWN_STIFFNESS] + 1.0 / row_b[OWN_STIFFNESS])
+    reduced = row_a[MASS] * row_b[MASS] / (row_a[MASS] + row_b[MASS])
+    return (k, max(row_a[OWN_DAMPING], row_b[OWN_DAMPING]), math.sqrt(k / reduced),
+            min(row_a[OWN_FRICTION], row_b[OWN_FRICTION]),
+            min(row_a[OWN_STICK_VELOCITY], row_b[OWN_STICK_VELOCITY]))
 
 
-def contact_forces(rows, centre, velocity):
-    """The law above for contact spheres (rows (N, CONTACT_SIZE)) whose centres are at centre
-    (..., N, 3) and whose contact points move at velocity (..., N, 3): (force (..., N, 3) on
-    the body, world, N; penetration (..., N), m).  The Python twin of the kernels'
-    kernels/transfers/contact.py::contact_value (which adds its slope), for the Result."""
-    rows = np.asarray(rows, dtype=float)
-    n = rows[:, NORMAL]
-    delta = rows[:, RADIUS] + rows[:, LEVEL] - np.einsum("...i,...i->...", centre, n)
+def law_forces(k, a, w, mu, v_s, n, delta, velocity):
+    """The law (the module's docstring) on arrays: the force (..., 3) on a body whose contact
+    point moves at `velocity` (..., 3; relative to what it touches), n (..., 3) the normal
+    pushing it, delta (...) the penetration; the parameters scalars or arrays (...).  The
+    Python twin of kernels/transfers/contact.py::law_value (which adds its slope)."""
     vn = np.einsum("...i,...i->...", velocity, n)
     inside = delta > 0.0
     depth = np.where(inside, delta, 0.0)
-    rho = np.hypot(vn, rows[:, RATE] * depth)
+    rho = np.hypot(vn, w * depth)
     share = np.where(inside, -vn / np.where(inside, rho, 1.0), 0.0)
-    f_n = rows[:, STIFFNESS] * depth * np.maximum(0.0, 1.0 + rows[:, DAMPING] * share)
+    f_n = k * depth * np.maximum(0.0, 1.0 + a * share)
     v_t = velocity - vn[..., None] * n
-    s = np.sqrt(np.einsum("...i,...i->...", v_t, v_t) + rows[:, STICK_VELOCITY] ** 2)
-    force = f_n[..., None] * (n - (rows[:, FRICTION] / s)[..., None] * v_t)
+    s = np.sqrt(np.einsum("...i,...i->...", v_t, v_t) + v_s ** 2)
+    return f_n[..., None] * (n - (mu / s)[..., None] * v_t)
+
+
+def contact_forces(rows, centre, velocity):
+    """The plane's force (..., N, 3) on contact spheres (rows (N, CONTACT_SIZE)) whose centres
+    are at centre (..., N, 3) and whose contact points move at velocity (..., N, 3), and the
+    penetration (..., N; -inf for a sphere without a plane), m."""
+    rows = np.asarray(rows, dtype=float)
+    n = rows[:, NORMAL]
+    delta = np.where(rows[:, ON_PLANE] > 0.0, rows[:, RADIUS] + rows[:, LEVEL]
+                     - np.einsum("...i,...i->...", centre, n), -np.inf)
+    force = law_forces(rows[:, STIFFNESS], rows[:, DAMPING], rows[:, RATE], rows[:, FRICTION],
+                       rows[:, STICK_VELOCITY], n, delta, velocity)
     return force, delta
+
+
+def touching_pairs(rows):
+    """The pairs (i, j), i < j, of contact spheres that may touch each other: of two bodies,
+    neither the other's parent (kernels/transfers/contact.py::contact_forces' exclusions)."""
+    rows = np.asarray(rows, dtype=float)
+    body, parent = rows[:, BODY].astype(int), rows[:, PARENT].astype(int)
+    return [(i, j) for i in range(len(rows)) for j in range(i + 1, len(rows))
+            if body[i] != body[j] and parent[i] != body[j] and parent[j] != body[i]]

@@ -189,8 +189,9 @@ JOINT_KINDS = (
          doc="docs/hinges.md", what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), freedoms=6, closure_rows=0, deflects=True,
          scene="elastic", doc="docs/hinges.md", what="elastic"),
-    Kind(FREE, FreeJoint, ("newmark",), freedoms=6, closure_rows=0, deflects=True,
-         carries_loads=False, scene="free", doc="docs/free_joint.md", what="a free joint"),
+    Kind(FREE, FreeJoint, ("newmark", "energy_momentum"), freedoms=6, closure_rows=0,
+         deflects=True, carries_loads=False, scene="free", doc="docs/free_joint.md",
+         what="a free joint"),
     # joints with coordinates and drives (kernels/transfers/joint.py): the general loop's full-state
     # tree sweep
     Kind(REVOLUTE, RevoluteJoint, ("newmark",), coordinates=(Coordinate(TURN, 0),),

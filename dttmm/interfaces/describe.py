@@ -8,6 +8,8 @@ from ..elements.beam import (ACCURACY, ACCURATE, AXIAL_MODES, CLAMPED, CLAMPED_L
 from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
 from ..elements.contact import BODY as CONTACT_BODY
 from ..elements.contact import NORMAL as CONTACT_NORMAL
+from ..elements.contact import ON_PLANE as CONTACT_ON_PLANE
+from ..elements.contact import OWN_STIFFNESS as CONTACT_OWN_STIFFNESS
 from ..elements.contact import STIFFNESS as CONTACT_STIFFNESS
 from ..elements.contact import restitution_of_damping
 from ..elements.kinds import (BEAM, JOINT_KINDS, RIGID, ROD, SCENE_TYPE, limit_of,
@@ -104,7 +106,7 @@ def suggested_dt(model):
                 dt = min(dt, 2.0 * np.pi / (20.0 * np.sqrt(stiffest / inertia)))
     for row in model.contacts:          # 20 steps a contact (docs/contact.md)
         mass = float(model.body_params[int(row[CONTACT_BODY]), MASS])
-        dt = min(dt, np.pi / (20.0 * np.sqrt(row[CONTACT_STIFFNESS] / mass)))
+        dt = min(dt, np.pi / (20.0 * np.sqrt(row[CONTACT_OWN_STIFFNESS] / mass)))
     exponent = np.floor(np.log10(dt))
     mantissa = dt / 10 ** exponent
     return float(max(m for m in (1.0, 2.0, 5.0) if m <= mantissa) * 10 ** exponent)
@@ -332,7 +334,7 @@ def describe(model):
 
 
 def _contact_lines(model, k):
-    """Body k's contact spheres against the plane, one line per distinct law (docs/contact.md):
+    """Body k's contact spheres, one line per distinct law (docs/contact.md): what they touch,
     the stiffness and how long a contact lasts on the body, the restitution its damping gives,
     the friction."""
     rows = [row for row in model.contacts if int(row[CONTACT_BODY]) == k]
@@ -342,16 +344,19 @@ def _contact_lines(model, k):
     out = []
     laws = {}
     for row in rows:
-        law = tuple(row[CONTACT_STIFFNESS:CONTACT_STIFFNESS + 4])
+        on_plane = bool(row[CONTACT_ON_PLANE])
+        law = (on_plane,) + tuple(row[CONTACT_STIFFNESS:CONTACT_STIFFNESS + 4] if on_plane
+                                  else row[CONTACT_OWN_STIFFNESS:CONTACT_OWN_STIFFNESS + 4])
         laws[law] = laws.get(law, 0) + 1
     normal = np.array2string(rows[0][CONTACT_NORMAL], precision=4)
-    for (stiffness, damping, mu, v_s), count in laws.items():
+    for (on_plane, stiffness, damping, mu, v_s), count in laws.items():
         omega = np.sqrt(stiffness / mass)
-        out.append(f"touches the plane (normal {normal}) at {count} contact sphere"
-                   f"{'s' if count > 1 else ''}: stiffness {stiffness:.4g} N/m (a contact "
-                   f"lasts ~{np.pi / omega:.3g} s on this body), restitution "
-                   f"{restitution_of_damping(damping):.3g}, friction {mu:.3g} (sticks to "
-                   f"within {v_s:.2g} m/s) (docs/contact.md)")
+        what = (f"the plane (normal {normal}) and other bodies' shapes" if on_plane
+                else "other bodies' shapes")
+        out.append(f"touches {what} at {count} contact sphere{'s' if count > 1 else ''}: "
+                   f"stiffness {stiffness:.4g} N/m (a contact lasts ~{np.pi / omega:.3g} s on "
+                   f"this body), restitution {restitution_of_damping(damping):.3g}, friction "
+                   f"{mu:.3g} (sticks to within {v_s:.2g} m/s) (docs/contact.md)")
     return out
 
 

@@ -142,11 +142,26 @@ defl_rate_g = table_view(43, "real", ("bodies", 3), GENERAL_SIZES)
 # (kernels/transfers/joint.py::drive_value)
 forces = table_view(44, "int", ("forces",), GENERAL_SIZES)
 
-# real: each contact sphere's force at the guess, world, N (kernels/transfers/contact.py)
-contact_force = table_view(45, "real", ("contacts", 3), GENERAL_SIZES)
+# real: each contact sphere's centre at the guess (the Newton iterations' change)
+contact_centre = table_view(45, "real", ("contacts", 3), GENERAL_SIZES)
 
-# real: its derivative by the contact point's acceleration
-contact_slope = table_view(46, "real", ("contacts", 3, 3), GENERAL_SIZES)
+# int: each contact at the guess: its sphere (kernels/transfers/contact.py)
+contact_sphere = table_view(46, "int", ("instances",), GENERAL_SIZES)
 
-# real: its centre at the guess (the Newton iterations' change)
-contact_centre = table_view(47, "real", ("contacts", 3), GENERAL_SIZES)
+# real: its point from its sphere's centre, world
+contact_offset = table_view(47, "real", ("instances", 3), GENERAL_SIZES)
+
+# real: its force on the sphere's body, world, N
+contact_force = table_view(48, "real", ("instances", 3), GENERAL_SIZES)
+
+# real: the force's derivative by its point's acceleration
+contact_slope = table_view(49, "real", ("instances", 3, 3), GENERAL_SIZES)
+
+# int: the next contact of its body (-1: none)
+contact_next = table_view(50, "int", ("instances",), GENERAL_SIZES)
+
+# int: each body's first contact (-1: none)
+contact_body_first = table_view(51, "int", ("bodies",), GENERAL_SIZES)
+
+# int: the contacts at the guess
+contact_count = table_view(52, "int", (1,), GENERAL_SIZES)

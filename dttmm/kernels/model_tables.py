@@ -85,9 +85,6 @@ rod_mu_damping = table_view(24, "real", ("rods", 2), SIZES)
 # real: the section's inertia per length
 rod_section = table_view(25, "real", ("rods", 3), SIZES)
 
-# real: elements/contact.py: each contact sphere's row, body by body (its BODY column the kernel
-# model's body)
-contacts = table_view(26, "real", ("contacts", 14), SIZES)
-
-# int: body k's contact spheres are rows contact_first[k] .. contact_first[k + 1] - 1
-contact_first = table_view(27, "int", ("contact_lookup",), SIZES)
+# real: elements/contact.py: each contact sphere's row (its BODY and PARENT columns the kernel
+# model's bodies)
+contacts = table_view(26, "real", ("contacts", 21), SIZES)

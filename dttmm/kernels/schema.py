@@ -51,7 +51,6 @@ SIZES = (
     ("rod_steps", "the most steps of a rod's quadrature (at least 1)"),
     ("rod_coordinates", "the most strain coordinates of a rod (at least 1)"),
     ("contacts", "the bodies' contact spheres (elements/contact.py), 0 without shapes"),
-    ("contact_lookup", "entries of contact_first: n + 1 where the model has contacts, else 1"),
 )
 
 # The model's tables (run_tables.kernel_params); the kernels read them and never write them.
@@ -101,10 +100,8 @@ MODEL = (
     Field("rod_mu_damping", REAL, ("rods", 2), "[mass per length, damping]"),
     Field("rod_section", REAL, ("rods", 3), "the section's inertia per length"),
     Field("contacts", REAL, ("contacts", CONTACT_SIZE),
-          "elements/contact.py: each contact sphere's row, body by body (its BODY column the "
-          "kernel model's body)"),
-    Field("contact_first", INT, ("contact_lookup",),
-          "body k's contact spheres are rows contact_first[k] .. contact_first[k + 1] - 1"),
+          "elements/contact.py: each contact sphere's row (its BODY and PARENT columns the "
+          "kernel model's bodies)"),
 )
 
 
@@ -294,6 +291,8 @@ GENERAL_SIZES = (
     ("history_centres", "n where the paper's scheme runs (its mass centres), else 1"),
     ("forces", "the compiled JointForces' callbacks"),
     ("contacts", "the contact spheres (elements/contact.py)"),
+    ("instances", "the most contacts at once: a plane's per sphere, two per touching pair "
+                  "(step.py::contact_capacity)"),
 )
 
 GENERAL = (
@@ -347,12 +346,17 @@ GENERAL = (
     Field("defl_rate_g", REAL, ("bodies", 3), "d' at the guess"),
     Field("forces", INT, ("forces",), "the compiled JointForces' C callbacks' addresses "
                                       "(kernels/transfers/joint.py::drive_value)"),
-    Field("contact_force", REAL, ("contacts", 3), "each contact sphere's force at the guess, "
-                                                  "world, N (kernels/transfers/contact.py)"),
-    Field("contact_slope", REAL, ("contacts", 3, 3), "its derivative by the contact point's "
-                                                     "acceleration"),
-    Field("contact_centre", REAL, ("contacts", 3), "its centre at the guess (the Newton "
-                                                   "iterations' change)"),
+    Field("contact_centre", REAL, ("contacts", 3), "each contact sphere's centre at the guess "
+                                                   "(the Newton iterations' change)"),
+    Field("contact_sphere", INT, ("instances",), "each contact at the guess: its sphere "
+                                                 "(kernels/transfers/contact.py)"),
+    Field("contact_offset", REAL, ("instances", 3), "its point from its sphere's centre, world"),
+    Field("contact_force", REAL, ("instances", 3), "its force on the sphere's body, world, N"),
+    Field("contact_slope", REAL, ("instances", 3, 3), "the force's derivative by its point's "
+                                                      "acceleration"),
+    Field("contact_next", INT, ("instances",), "the next contact of its body (-1: none)"),
+    Field("contact_body_first", INT, ("bodies",), "each body's first contact (-1: none)"),
+    Field("contact_count", INT, (1,), "the contacts at the guess"),
 )
 
 

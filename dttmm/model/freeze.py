@@ -243,7 +243,7 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         beam_ends=tuple(beam_ends),
     )
     tree = _free_joints_in_world(tree)
-    contacts = _contact_rows(bodies, bv, body_kind, ground, rot_g, r_g)
+    contacts = _contact_rows(bodies, bv, body_kind, parent, ground, rot_g, r_g)
     if len(contacts):
         tree = replace(tree, contacts=contacts)
     tree = replace(tree, **{name: shared_rows(getattr(tree, name)) for name in SHARED_TABLES})
@@ -256,10 +256,10 @@ def _freeze(bodies, hinges, parents, attach, gravity, ground, tip, step=None, du
         replace(tree, **closure_rows(tree, closures, index_of, named)), tree), loop_stiffened)
 
 
-def _contact_rows(bodies, bv, body_kind, ground, rot_g, r_g):
-    """The bodies' contact spheres against the ground's plane (elements/contact.py::
-    contact_rows), body by body; ValueError for shapes without a plane, on a body that is not
-    rigid, or a plane on a moving ground."""
+def _contact_rows(bodies, bv, body_kind, parent, ground, rot_g, r_g):
+    """The bodies' contact spheres (elements/contact.py::contact_rows), body by body, against
+    the ground's plane if it has one and each other; ValueError for shapes on a body that is
+    not rigid, or a plane on a moving ground."""
     shaped = [k for k, b in enumerate(bodies) if getattr(b, "shapes", ())]
     plane = ground.plane
     if plane is not None and not isinstance(plane, Plane):
@@ -274,14 +274,14 @@ def _contact_rows(bodies, bv, body_kind, ground, rot_g, r_g):
             raise ValueError(f"{bodies[k].label(k)}: shapes are rigid bodies' (a beam's or "
                              f"rod's centre line does not touch yet): carry the shape on a "
                              f"rigid body welded to it")
-    if plane is None:
+    if plane is None and len(shaped) < 2:
         k = shaped[0]
         raise ValueError(f"{bodies[k].label(k)}: has shapes, but nothing to touch: give the "
-                         f"System a Ground(plane=dttmm.Plane(...))")
-    plane_values = plane.validated(rot_g, r_g)
+                         f"System a Ground(plane=dttmm.Plane(...)), or other bodies shapes")
+    plane_values = None if plane is None else plane.validated(rot_g, r_g)
     rows = [row for k in shaped
-            for row in contact_rows(bodies[k].label(k), k, bv[k]["mass"], bodies[k].shapes,
-                                    bodies[k].contact, plane_values)]
+            for row in contact_rows(bodies[k].label(k), k, int(parent[k]), bv[k]["mass"],
+                                    bodies[k].shapes, bodies[k].contact, plane_values)]
     return np.array(rows)
 
 

@@ -85,7 +85,7 @@ def _consistent_start(model, mode, method, fused, params, settings, state, sweep
                     return start_alone(
                         params, settings, state, sweep, (g_acc[0], g_rot[0], g_w[0], g_wd[0]),
                         force[0], torque[0], line_load[0], joint_input[0], loops,
-                        compiled_forces(model), start_contacts(params))
+                        compiled_forces(model), start_contacts(params, n))
             status = start()
             forces = closure_forces(model, loops)
             if forces and status == 0:  # a closing JointForce's f(0, q, q'): the start's
@@ -187,9 +187,10 @@ def _start_status(info):
     return _NOT_FINITE_START
 
 
-def start_contacts(params):
+def start_contacts(params, n_bodies):
     """The start's contacts argument (kernels/stepping/step.py::initial_accelerations) where it
-    runs alone: the model's contact_first and scratch for its contact spheres' forces."""
-    n_contacts = len(MODEL_LAYOUT.table(params, "contacts"))
-    return (MODEL_LAYOUT.table(params, "contact_first"), np.zeros((n_contacts, 3)),
-            np.zeros((n_contacts, 3, 3)), np.zeros((n_contacts, 3)))
+    runs alone: the general loop's contact scratch for the model's spheres (_contacts_of)."""
+    c = kstep.contact_scratch(n_bodies, len(MODEL_LAYOUT.table(params, "contacts")))
+    inst = (c["contact_sphere"], c["contact_offset"], c["contact_force"], c["contact_slope"],
+            c["contact_next"], c["contact_body_first"], c["contact_count"])
+    return inst, (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3]), c["contact_centre"]

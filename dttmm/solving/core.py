@@ -93,8 +93,15 @@ def helper_calls(loop, run):
               ground, _row(typeof(inputs.force)), _row(typeof(inputs.torque)),
               _row(typeof(inputs.line_load)), _row(typeof(inputs.joint_input)),
               typeof(loop.loops), typeof(loop.scratch.forces),
-              typeof((np.zeros(1, dtype=np.int64), loop.scratch.contact_force,
-                      loop.scratch.contact_slope, loop.scratch.contact_centre)))),)
+              typeof(_contacts_of_scratch(loop.scratch)))),)
+
+
+def _contacts_of_scratch(g):
+    """The general loop's contacts argument of the start (kernels/stepping/step.py::
+    _contacts_of) from its scratch's tables, for its type."""
+    inst = (g.contact_sphere, g.contact_offset, g.contact_force, g.contact_slope,
+            g.contact_next, g.contact_body_first, g.contact_count)
+    return inst, (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3]), g.contact_centre
 
 
 def main_calls(loop, run):

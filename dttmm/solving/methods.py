@@ -32,7 +32,8 @@ SCHEMES = {scheme.name: scheme for scheme in (
            adaptive=True, richardson=True, damping=True, newton_iterations=None,
            stop_unconverged=False, loads_at_midpoints=False, loop="newmark"),
     Scheme("energy_momentum", "conserves the total energy and the angular momentum to "
-           "newton_tol; rigid chains with ball and fixed hinges on a fixed ground",
+           "newton_tol; rigid chains with ball and fixed hinges on a fixed ground, and free "
+           "chains (free joints; their linear momentum too)",
            adaptive=False, richardson=False, damping=False, newton_iterations=20,
            stop_unconverged=True, loads_at_midpoints=True, loop="energy_momentum",
            records=("v_c",)),

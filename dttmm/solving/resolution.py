@@ -35,6 +35,9 @@ import numpy as np
 from ..elements.beam import (EI_V, EI_W, FAMILY, LENGTH, MASS_PER_LENGTH, MODES, PINNED,
                              mode_shapes)
 from ..elements.contact import BODY as CONTACT_BODY
+from ..elements.contact import MASS as CONTACT_MASS
+from ..elements.contact import ON_PLANE as CONTACT_ON_PLANE
+from ..elements.contact import OWN_STIFFNESS as CONTACT_OWN_STIFFNESS
 from ..elements.contact import RATE as CONTACT_RATE
 from ..elements.hinges import FIXED
 from ..elements.kinds import BEAM
@@ -195,7 +198,8 @@ def unresolved_contact(model, result, dt, max_phase):
     for c in np.nonzero(touched)[0]:
         row = model.contacts[c]
         k = int(row[CONTACT_BODY])
-        omega = float(row[CONTACT_RATE])
+        omega = float(row[CONTACT_RATE] if row[CONTACT_ON_PLANE]      # (against another
+                      else np.sqrt(row[CONTACT_OWN_STIFFNESS] / row[CONTACT_MASS]))  # body: ~)
         if omega * dt > max_phase and (worst is None or omega > worst[2]):
             worst = (model.body_names[k], int(c), omega)
     return worst

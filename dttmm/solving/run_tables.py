@@ -19,7 +19,7 @@ from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH
                              MODES, STIFFENING, TORSION_MODES, foreshortening_integrals,
                              mode_shapes, slope_grams, torsion_shapes)
 from ..elements.contact import BODY as CONTACT_BODY
-from ..elements.contact import contact_tables
+from ..elements.contact import PARENT as CONTACT_PARENT
 from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
 from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, REST_ROTATION
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
@@ -174,7 +174,7 @@ def kernel_params(model):
                 beam_factors=beam_factors, rod_row=rod_row, rod_steps=steps, rod_xi0=xi0,
                 rod_phi=phi, rod_weights=weights, rod_stiffness=stiffness,
                 rod_mu_damping=mu_damping, rod_section=section,
-                **contact_tables(model.contacts, model.n_bodies))
+                contacts=np.array(model.contacts, dtype=float, order="C"))
 
 
 
@@ -586,11 +586,14 @@ def _station_histories(model, state, independent):
 
 
 def _initial_mass_center_velocities(model, rot, omega):
-    """(n, 3) mass-centre velocities from the initial rotations and angular velocities."""
+    """(n, 3) mass-centre velocities of a chain from the initial rotations and angular
+    velocities, and a free joint's flight rate (its d', as the build set it)."""
     p = model.body_params
     v_in = model.ground_state(0.0)[1].copy()
     v_c = np.empty((model.n_bodies, 3))
     for k in range(model.n_bodies):
+        if model.hinge_kind[k] in DEFLECTING:
+            v_in = v_in + model.hinge_params[k, DEFLECTION_RATE_0]
         v_c[k] = v_in + cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
         v_in = v_in + cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
     return v_c
@@ -753,9 +756,10 @@ def _kernel_model(model):
     for c, s in zip(*np.nonzero(body >= 0)):        # a beam's output end to its end section
         k = int(body[c, s])
         body[c, s] = hub[k] if k in closed_ends and model.closure_on_end[c, s] else keep[k]
-    contacts = np.array(model.contacts)            # the contact spheres' bodies, renumbered
-    contacts[:, CONTACT_BODY] = np.asarray(keep, dtype=float)[
-        contacts[:, CONTACT_BODY].astype(np.int64)]
+    contacts = np.array(model.contacts)            # the contact spheres' bodies (and their
+    kept = np.concatenate([np.asarray(keep, dtype=float), [-1.0]])      # parents), renumbered
+    for column in (CONTACT_BODY, CONTACT_PARENT):
+        contacts[:, column] = kept[contacts[:, column].astype(np.int64)]
     return adopt_arrays(replace(model, n_bodies=len(parent), parent=parent, closure_body=body,
                                 contacts=contacts,
                                 attachment=np.zeros(len(parent), dtype=np.int64),

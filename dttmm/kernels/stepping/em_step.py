@@ -1,31 +1,33 @@
 """The energy-momentum scheme's loop variant (docs/solver.md, "Energy-momentum scheme").
 
 Each step solves the chain's nonlinear step equations (kernels/transfers/em_body.py) by Newton's
-method: every body's transfer is linearized about the latest guess, the same sweeps as the Newmark
-loop solve the linear chain, and the guess is updated until the rotation increments change by less
-than newton_tol.  The converged step conserves the total energy and the angular momentum about
-any axis the external loads have no moment about, for rigid chains with ball and fixed hinges
-on a fixed ground.  The pieces below go through the one skeleton (kernels/stepping/loop.py); state.z
+method: every body's transfer is linearized about the latest guess, the same sweeps as the
+Newmark loop solve the linear chain, and the guess is updated until the rotation increments
+change by less than newton_tol. The converged step conserves the total energy and the angular
+momentum about any axis the external loads have no moment about, for rigid chains with ball and
+fixed hinges on a fixed ground, and free chains (a free joint at the root or within: its LOCKED
+element carries nothing, and the chain's displacement is its own), whose linear momentum it
+keeps too. The pieces below go through the one skeleton (kernels/stepping/loop.py); state.z
 holds the last step's station states [a, b, m, q] (see kernels/transfers/em_body.py),
 state.omega_dot (w_{n+1} - w_n) / h of the last step (the predictor's slope) and state.v_c each
 body's mass-centre velocity; inputs.force and inputs.torque are the applied loads' step means.
 The pieces allocate nothing (the skeleton is compiled without numba's reference counting,
-loop.py::_skeleton): their array work is written element by element into the loop's
-scratch; the body's kernels, which allocate, are kernels/__init__.py::allocating_kernel.
+loop.py::_skeleton): their array work is written element by element into the loop's scratch; the
+body's kernels, which allocate, are kernels/__init__.py::allocating_kernel.
 """
 import numpy as np
 
 from .. import (input_tables, loop_piece, model_tables, momentum_tables, record_tables,
                 state_tables, sweep_tables)
 from ...elements import RIGID
-from ...elements.hinges import BALL, FIXED
+from ...elements.hinges import BALL, FIXED, FREE
 from ..schema import MOMENTUM_LAYOUT, FlatMomentum
 from ..transfers.em_body import em_body_kinematics, rigid_body_transfer_em
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
 from ..assembly.solve import solve_step
 from .step import _all_finite
 from ..algebra.mat3 import put2, put3
-from ..assembly.sweep import IDENTITY, TRANSFER
+from ..assembly.sweep import IDENTITY, LOCKED, TRANSFER
 from ..assembly.sweep import BALL as EL_BALL
 
 def energy_momentum_loop(n):
@@ -62,6 +64,7 @@ def _iterate(loop, run, s, it):
     params, state, sweep = run.params, run.state, run.sweep
     kind = sweep_tables.kind(sweep)
     u = sweep_tables.u(sweep)
+    known_loads = sweep_tables.known_loads(sweep)
     z = state_tables.z(state)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
@@ -77,6 +80,10 @@ def _iterate(loop, run, s, it):
             kind[2 * k] = EL_BALL
         elif hinge_kind[k] == FIXED:
             kind[2 * k] = IDENTITY
+        elif hinge_kind[k] == FREE:     # nothing passes it (docs/free_joint.md): its child's
+            kind[2 * k] = LOCKED        # displacement is the chain's own, both sides' loads 0
+            for i in range(12):
+                known_loads[2 * k, i] = 0.0
         else:
             return UNSUPPORTED, 2 * k + 1, 0.0
         if body_kind[k] != RIGID:
@@ -110,10 +117,15 @@ def _adopt(loop, run, s, it):
 
 @loop_piece
 def _update(loop, run, s, _):
-    """Rotations, angular velocities and mass-centre velocities over the step."""
+    """Rotations, angular velocities and mass-centre velocities over the step; a free joint's
+    flight d (the child's input point from the parent's output point, world) by its
+    displacement dd = dx_I - dx_O,parent and the midpoint rule, d'_{n+1} = 2 dd / h - d'_n."""
     rot_new = momentum_tables.rot_new(loop)
     omega_new = momentum_tables.omega_new(loop)
     state, h = run.state, run.settings.h
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
+    hinge_kind = model_tables.hinge_kind(run.params)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     v_c = state_tables.v_c(state)
@@ -136,6 +148,11 @@ def _update(loop, run, s, _):
             omega[k, i] = omega_new[i]
             for j in range(3):
                 rot[k, i, j] = rot_new[i, j]
+        if hinge_kind[k] == FREE:      # (a chain: the hinge's inboard station is 2k)
+            for i in range(3):
+                dd = s_half * (zi[i] - z[2 * k, i])
+                defl[k, i] += dd
+                defl_rate[k, i] = (2.0 / h) * dd - defl_rate[k, i]
         for i in range(3):
             if not (np.isfinite(omega[k, i]) and np.isfinite(v_c[k, i])):
                 finite = False
@@ -150,6 +167,10 @@ def _record(loop, run, s, slot):
     rec_omega_dot = record_tables.omega_dot(rec)
     rec_v_c = record_tables.v_c(rec)
     rec_z = record_tables.z(rec)
+    rec_defl = record_tables.defl(rec)
+    rec_defl_rate = record_tables.defl_rate(rec)
+    defl = state_tables.defl(state)
+    defl_rate = state_tables.defl_rate(state)
     rot = state_tables.rot(state)
     omega = state_tables.omega(state)
     omega_dot = state_tables.omega_dot(state)
@@ -160,6 +181,8 @@ def _record(loop, run, s, slot):
     put2(rec_omega_dot[slot], omega_dot)
     put2(rec_v_c[slot], v_c)
     put2(rec_z[slot], z)
+    put2(rec_defl[slot], defl)          # (over the record's rows: none without free joints)
+    put2(rec_defl_rate[slot], defl_rate)
 
 
 @loop_piece

@@ -95,9 +95,40 @@ def general_loop(n, n_eta, h, coef, histories, loops, forces, n_contacts=0):
         q_star=np.zeros(coordinates), qd_star=np.zeros(coordinates),
         qdd_star=np.zeros(coordinates), eta_g=np.zeros(n_eta), eta_d_g=np.zeros(n_eta),
         defl_g=np.zeros(body3), defl_rate_g=np.zeros(body3),
-        forces=np.asarray(forces, dtype=np.int64), contact_force=np.zeros((n_contacts, 3)),
-        contact_slope=np.zeros((n_contacts, 3, 3)), contact_centre=np.zeros((n_contacts, 3)))
+        forces=np.asarray(forces, dtype=np.int64), **contact_scratch(n, n_contacts))
     return GeneralLoop(scratch, loops)
+
+
+def contact_capacity(n_contacts):
+    """The most contacts the scratch holds at once: one per sphere against the plane and two
+    per touching pair of spheres, up to every pair of up to 64 spheres, else 32 pairs a sphere
+    (kernels/transfers/contact.py::contact_forces: a run that needs more stops, not finite)."""
+    pairs = n_contacts * (n_contacts - 1) // 2 if n_contacts <= 64 else 32 * n_contacts
+    return n_contacts + 2 * pairs
+
+
+def contact_scratch(n, n_contacts):
+    """The general loop's contact tables (kernels/schema.py::GENERAL) for n bodies and
+    n_contacts spheres, by name."""
+    m = contact_capacity(n_contacts)
+    return dict(contact_centre=np.zeros((n_contacts, 3)),
+                contact_sphere=np.zeros(m, dtype=np.int64), contact_offset=np.zeros((m, 3)),
+                contact_force=np.zeros((m, 3)), contact_slope=np.zeros((m, 3, 3)),
+                contact_next=np.zeros(m, dtype=np.int64),
+                contact_body_first=np.full(n, -1, dtype=np.int64),
+                contact_count=np.zeros(1, dtype=np.int64))
+
+
+@njit(cache=True, inline='always', fastmath=CONTRACT)
+def _contacts_of(scratch):
+    """(the instances' tuple for contact_forces, the bodies' lists for _build_elements, the
+    spheres' centres) as views of the general loop's scratch."""
+    inst = (general_tables.contact_sphere(scratch), general_tables.contact_offset(scratch),
+            general_tables.contact_force(scratch), general_tables.contact_slope(scratch),
+            general_tables.contact_next(scratch), general_tables.contact_body_first(scratch),
+            general_tables.contact_count(scratch))
+    lists = (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3])
+    return inst, lists, general_tables.contact_centre(scratch)
 
 
 @njit(cache=True, inline='always', fastmath=CONTRACT)
@@ -177,8 +208,9 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     inputs at t = 0 (kernels/stepping/loop.py::Inputs), their accelerations come out in state.jqdd.
     loops: the closing joints (kernels/assembly/closure.py), held at acceleration level.  forces:
     the compiled JointForces' callbacks' addresses (kernels/transfers/joint.py::drive_value).
-    contacts = (contact_first, force, slope, centre): the contact spheres' forces, from the
-    state (kernels/transfers/contact.py).  Returns the status: 0, a singularity code (sweep.py), or
+    contacts = (instances, the bodies' lists, the spheres' centres: _contacts_of): the
+    contacts' forces, from the state (kernels/transfers/contact.py).  Returns the status: 0, a
+    singularity code (sweep.py), or
     -(j + 1) for an element j of a kind this loop does not know; state.z holds the stations'
     accelerations and loads."""
     all_bodies = loop_tables.all_bodies(loops)
@@ -214,19 +246,20 @@ def initial_accelerations(params, settings, state, sweep, ground, force, torque,
     g = (g_rot, np.zeros((3, 3)), g_w, g_wd, np.eye(3), np.zeros(3))
     modal = (eta, eta_d, np.zeros_like(eta), np.zeros_like(eta), np.zeros_like(eta),
              eta_map)
-    if kind.shape[0] > 0 or contacts[3].shape[0] > 0:
+    inst, lists, centre = contacts
+    lists[0][:] = -1                    # (no contacts but those found below)
+    if kind.shape[0] > 0 or centre.shape[0] > 0:
         tree_points(params, rot, omega, jq, jqd, eta, eta_d,
                     defl, defl_rate, loops, all_bodies)
-    if contacts[3].shape[0] > 0:        # (known at the start: no slope)
-        contact_forces(params, loops, rot, omega, 0.0, 0.0, contacts[1], contacts[2],
-                       contacts[3], True)
+    if centre.shape[0] > 0:             # (known at the start: no slope)
+        contact_forces(params, loops, rot, omega, 0.0, 0.0, centre, True, inst)
     unknown = _build_elements(params, sweep, guess, g, 1.0, 0.0, zero3, zero3,
                               np.zeros(z.shape), force, torque, line_load, n >= 0, rot,
                               zero3, modal,
                               (n < 0, np.zeros((n + 1, 3)), zero3),     # (False)
                               (settings.mode == RICCATI_JOINTS, jq, jqd,
                                joint_input[:, :, 2].copy(), joint_input[:, :, 0], forces),
-                              contacts[0:3])
+                              lists)
     # (given: a strided view, as the step's inputs.joint_input[s, :, :, 0], and at_start and
     # the stations' flag run-time bools (n >= 0, n < 0), as the step's: numba compiles a
     # function once per layout and per literal True or False it is passed, and _build_elements
@@ -427,15 +460,13 @@ def _iterate(loop, run, s, it):
     hinge_kind = model_tables.hinge_kind(params)
     tip_pinned = model_tables.tip_pinned(params)
     parent = model_tables.parent(params)
-    contacts = (model_tables.contact_first(params), general_tables.contact_force(scratch),
-                general_tables.contact_slope(scratch))
-    contact_centre = general_tables.contact_centre(scratch)
+    inst, contacts, contact_centre = _contacts_of(scratch)
     h, coef, mode = settings.h, settings.coef, settings.mode
     joint_input = joint_inputs[:, :, 0]
     if settings.start:      # the consistent start (Settings.start): one pass, at t
         start = initial_accelerations(params, settings, state, sweep, (g_acc, rot_now, g_w, g_wd),
                                       force, torque, line_load, joint_inputs, loops,
-                                      forces, contacts + (contact_centre,))
+                                      forces, (inst, contacts, contact_centre))
         return (OK, 0, 0.0) if start == 0 else (SINGULAR, start, 0.0)
     c1, c3 = _integrator_coefficients(h, coef)
     phi_star, wd, dwd = guess.phi, guess.wd, guess.dwd
@@ -463,7 +494,9 @@ def _iterate(loop, run, s, it):
                     eta_d_g, defl_g, defl_rate_g, loops, all_bodies)
         if contact_centre.shape[0] > 0:     # (docs/contact.md, "In the step")
             contact_change = contact_forces(params, loops, guess.rot, guess.w, c1, c3,
-                                            contacts[1], contacts[2], contact_centre, it == 0)
+                                            contact_centre, it == 0, inst)
+            if not contact_change == contact_change:      # (NaN: more contacts than held)
+                return NOT_FINITE, 0, 0.0
     unknown = _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, force,
                               torque, line_load, settings.start,     # (False)
                               rot, w3, modal, stations, joints, contacts)

@@ -24,40 +24,46 @@ rho_P = A l_IP - r n its arm from the input point, so that the transfer of the b
 
 with their derivatives by a_I (S, (rho_P - rho)^ S) and by phi (S Dkappa_P,
 (rho_P - rho)^ S Dkappa_P - F^ (D rho_P - D rho), D rho_X = -(A l_X)^ Lam).
+
+Two bodies' spheres i and j touch each other with the same law (elements/contact.py::pair_law)
+along n = (x_i - x_j) / |x_i - x_j|, delta = r_i + r_j - |x_i - x_j|, at the relative velocity
+v_i - v_j of their contact points x_i - r_i n and x_j + r_j n: F on i, -F on j.  Each body's
+transfer takes its own force with the slope by its own point's acceleration (the same S for
+both: F_j = -F(v_i - v_j)); the other body's motion is the guess's, so the iterations converge
+as a block-Jacobi Newton, at a rate S / (M + S) ~ (w h)^2 / 4 per iteration: fast for a contact
+the step resolves.  The pairs are found by sweep and prune (sorting the spheres' extents along
+world x, O(N log N)), spheres of one body and of a body and its parent excluded.
 """
 import numpy as np
 
 from .. import allocating_kernel, kernel, loop_tables, model_tables
-from ...elements.contact import (CENTRE, DAMPING, FRICTION, LEVEL, NORMAL, RADIUS, RATE,
-                                 STICK_VELOCITY, STIFFNESS)
+from ...elements.contact import (BODY, CENTRE, DAMPING, FRICTION, LEVEL, MASS, NORMAL,
+                                 ON_PLANE, OWN_DAMPING, OWN_FRICTION, OWN_STICK_VELOCITY,
+                                 OWN_STIFFNESS, PARENT, RADIUS, RATE, STICK_VELOCITY,
+                                 STIFFNESS)
 from ..algebra.so3 import hat
-from ...elements.rigid_body import TO_OUTPUT
 from .body import A, CONST, M, PHI, Q, _kappa_into, _mm_add
 
 
 @kernel
-def contact_value(row, centre, velocity, c1, c3, force, slope):
-    """The force (world, N) of the contact sphere `row` whose centre is at `centre` and whose
-    contact point moves at `velocity` into force, its derivative by the contact point's
-    acceleration into slope (zero where c1 is 0: the consistent start, positions and velocities
-    known); returns the penetration delta (m; < 0: apart)."""
-    n = row[NORMAL]
-    delta = row[RADIUS] + row[LEVEL] - (n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2])
-    vn = n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2]
+def law_value(k, a, w, mu, v_s, n, delta, velocity, c1, c3, force, slope):
+    """The law's force (world, N) on the body whose contact point moves at `velocity`
+    (relative to what it touches) into force, and its slope by the point's acceleration into
+    slope (zero where c1 is 0: the consistent start); n the normal pushing the body, delta the
+    penetration (m; nothing where <= 0)."""
     for i in range(3):
         force[i] = 0.0
         for j in range(3):
             slope[i, j] = 0.0
     if delta <= 0.0:
-        return delta
-    k, a, w = row[STIFFNESS], row[DAMPING], row[RATE]
+        return
+    vn = n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2]
     rate = -vn
     rho = np.sqrt(rate * rate + w * w * delta * delta)
     g = 1.0 + a * rate / rho
     if g <= 0.0:
-        return delta
+        return
     f_n = k * delta * g
-    mu, v_s = row[FRICTION], row[STICK_VELOCITY]
     v_t = np.empty(3)
     for i in range(3):
         v_t[i] = velocity[i] - vn * n[i]
@@ -67,7 +73,7 @@ def contact_value(row, centre, velocity, c1, c3, force, slope):
         direction[i] = n[i] - mu * v_t[i] / s
         force[i] = f_n * direction[i]
     if c1 == 0.0:
-        return delta
+        return
     rho3 = rho * rho * rho
     by_depth = k * g - k * a * rate * w * w * delta * delta / rho3
     by_rate = k * a * w * w * delta * delta * delta / rho3
@@ -78,29 +84,45 @@ def contact_value(row, centre, velocity, c1, c3, force, slope):
             proj = (1.0 if i == j else 0.0) - n[i] * n[j]
             slope[i, j] = (-direction[i] * normal * n[j]
                            - glide * (proj / s - v_t[i] * v_t[j] / (s * s * s)))
+
+
+@kernel
+def contact_value(row, centre, velocity, c1, c3, force, slope):
+    """The plane's force on the contact sphere `row` whose centre is at `centre` and whose
+    contact point moves at `velocity` (law_value with the plane's law); returns the
+    penetration delta (m; < 0: apart; -inf: the sphere has no plane)."""
+    if row[ON_PLANE] == 0.0:
+        law_value(0.0, 0.0, 0.0, 0.0, 1.0, row[NORMAL], -1.0, velocity, c1, c3, force, slope)
+        return -np.inf
+    n = row[NORMAL]
+    delta = row[RADIUS] + row[LEVEL] - (n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2])
+    law_value(row[STIFFNESS], row[DAMPING], row[RATE], row[FRICTION], row[STICK_VELOCITY], n,
+              delta, velocity, c1, c3, force, slope)
     return delta
 
 
 @kernel
-def contact_arm(row, rot):
-    """(A l_IP, rho_P = A l_IP - r n): the contact sphere's centre and its contact point from
-    the body's input point, world."""
-    centre = np.empty(3)
-    point = np.empty(3)
-    l_ip, n, r = row[CENTRE], row[NORMAL], row[RADIUS]
-    for i in range(3):
-        centre[i] = rot[i, 0] * l_ip[0] + rot[i, 1] * l_ip[1] + rot[i, 2] * l_ip[2]
-        point[i] = centre[i] - r * n[i]
-    return centre, point
+def pair_value(row_i, row_j, n, delta, velocity, c1, c3, force, slope):
+    """Sphere j's force on sphere i (law_value with the pair's law, elements/contact.py::
+    pair_law): n from j to i, velocity v_i - v_j at the contact points."""
+    k = 1.0 / (1.0 / row_i[OWN_STIFFNESS] + 1.0 / row_j[OWN_STIFFNESS])
+    reduced = row_i[MASS] * row_j[MASS] / (row_i[MASS] + row_j[MASS])
+    law_value(k, max(row_i[OWN_DAMPING], row_j[OWN_DAMPING]), np.sqrt(k / reduced),
+              min(row_i[OWN_FRICTION], row_j[OWN_FRICTION]),
+              min(row_i[OWN_STICK_VELOCITY], row_j[OWN_STICK_VELOCITY]), n, delta, velocity,
+              c1, c3, force, slope)
 
 
 @kernel
-def contact_correction(row, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star, u):
-    """Add the contact's force F* + S (a_P - a_P*) to the rigid body's transfer u (12 x 13, phi
+def contact_correction(row, offset, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star, u):
+    """Add a contact's force F* + S (a_P - a_P*) at the sphere's point A l_IP + offset (world;
+    offset: from its centre to the contact point) to the rigid body's transfer u (12 x 13, phi
     slots, about z_star), as the module's docstring derives."""
-    centre, rho_p = contact_arm(row, rot)
-    rho = np.empty(3)
+    l_ip = row[CENTRE]
+    centre, rho_p, rho = np.empty(3), np.empty(3), np.empty(3)
     for i in range(3):
+        centre[i] = rot[i, 0] * l_ip[0] + rot[i, 1] * l_ip[1] + rot[i, 2] * l_ip[2]
+        rho_p[i] = centre[i] + offset[i]
         rho[i] = rot[i, 0] * l_io[0] + rot[i, 1] * l_io[1] + rot[i, 2] * l_io[2]
     mat = np.empty((12, 3, 3))
     d_rho_p, d_rho, dkap, s_dk, arm_h, f_h, buf = (mat[0], mat[1], mat[2], mat[3], mat[4],
@@ -108,7 +130,7 @@ def contact_correction(row, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star
     h = mat[11]
     hat(centre, h)
     d_rho_p[:, :] = 0.0
-    _mm_add(h, lam, -1.0, d_rho_p)          # d(A l_IP)/d phi (the offset -r n stays put)
+    _mm_add(h, lam, -1.0, d_rho_p)          # d(A l_IP)/d phi (the offset stays put)
     hat(rho, h)
     d_rho[:, :] = 0.0
     _mm_add(h, lam, -1.0, d_rho)
@@ -147,45 +169,139 @@ def contact_correction(row, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star
         u[M + i, CONST] += shift_m
 
 
+@kernel
+def _add_instance(inst, body, sphere, offset, force, slope, sign):
+    """Append a contact (its sphere, the offset of its point from the sphere's centre, sign
+    times the force, the slope) to the instances inst = (sphere, offset, force, slope, next,
+    body_first, count) and to body's list; False where they are full."""
+    i_sphere, i_offset, i_force, i_slope, i_next, body_first, count = inst
+    i = count[0]
+    if i >= i_sphere.shape[0]:
+        return False
+    i_sphere[i] = sphere
+    for a in range(3):
+        i_offset[i, a] = offset[a]
+        i_force[i, a] = sign * force[a]
+        for b in range(3):
+            i_slope[i, a, b] = slope[a, b]
+    i_next[i] = body_first[body]
+    body_first[body] = i
+    count[0] = i + 1
+    return True
+
+
 @allocating_kernel
-def contact_forces(params, loops, rot, w, c1, c3, force, slope, centre_before, first):
-    """Every contact sphere's force and slope (contact_value) at the bodies' rotations rot,
-    angular velocities w and output points loops.r_out, v_out (kernels/assembly/closure.py::
-    tree_points, at the same state); returns the Newton iterations' change for the contacts,
-    m: the largest move of a sphere's centre since the iteration before (centre_before, which
-    takes the new ones), over the spheres within reach of the plane (delta > -4 |v| c3 / c1,
-    about two steps' travel); in the first iteration (first) infinite where any is, so that a
-    contact is never taken from the predictor alone."""
+def contact_forces(params, loops, rot, w, c1, c3, centre_before, first, inst):
+    """Every contact at rotations rot, angular velocities w and output points loops.r_out,
+    v_out (kernels/assembly/closure.py::tree_points, at the same state): each sphere against
+    the plane (contact_value), each pair of spheres of two bodies the sweep and prune finds
+    (pair_value), written as instances inst = (sphere, offset, force, slope, next, body_first,
+    count) for the bodies' transfers (contact_correction).  Returns the Newton iterations'
+    change for the contacts, m: the largest move of a sphere's centre since the iteration
+    before (centre_before, which takes the new ones), over the spheres within reach of the
+    plane or of another sphere (two steps' travel, 4 |v| c3 / c1); in the first iteration
+    (first) infinite where any is, so that a contact is never taken from the predictor alone;
+    NaN where the instances are full."""
     rows = model_tables.contacts(params)
-    first_row = model_tables.contact_first(params)
     body_params, body_row = model_tables.body_params(params), model_tables.body_row(params)
     r_out, v_out = loop_tables.r_out(loops), loop_tables.v_out(loops)
+    body_first, count = inst[5], inst[6]
+    count[0] = 0
+    for k in range(body_first.shape[0]):
+        body_first[k] = -1
+    n_spheres = rows.shape[0]
+    x_c, v_c = np.empty((n_spheres, 3)), np.empty((n_spheres, 3))
+    reach = np.zeros(n_spheres)
+    near = np.zeros(n_spheres, dtype=np.bool_)
+    step = 2.0 * c3 / c1 if c1 > 0.0 else 0.0           # (h, for gamma = 1/2)
+    arm, v_p, offset = np.empty(3), np.empty(3), np.empty(3)
+    force, slope = np.empty(3), np.empty((3, 3))
+    ok = True
+    for c in range(n_spheres):         # the spheres' centres and velocities
+        row = rows[c]
+        k = int(row[BODY])
+        l_io = body_params[body_row[k], 4:7]
+        for i in range(3):              # from the output point: A (l_IP - l_IO)
+            arm[i] = (rot[k, i, 0] * (row[CENTRE][0] - l_io[0])
+                      + rot[k, i, 1] * (row[CENTRE][1] - l_io[1])
+                      + rot[k, i, 2] * (row[CENTRE][2] - l_io[2]))
+            x_c[c, i] = r_out[k, i] + arm[i]
+        wk = w[k]
+        v_c[c, 0] = v_out[k, 0] + wk[1] * arm[2] - wk[2] * arm[1]
+        v_c[c, 1] = v_out[k, 1] + wk[2] * arm[0] - wk[0] * arm[2]
+        v_c[c, 2] = v_out[k, 2] + wk[0] * arm[1] - wk[1] * arm[0]
+        speed = np.sqrt(v_c[c, 0] ** 2 + v_c[c, 1] ** 2 + v_c[c, 2] ** 2
+                        + (wk[0] ** 2 + wk[1] ** 2 + wk[2] ** 2) * row[RADIUS] ** 2)
+        reach[c] = 2.0 * speed * step
+    for c in range(n_spheres):         # against the plane
+        row = rows[c]
+        k = int(row[BODY])
+        wk = w[k]
+        for i in range(3):
+            offset[i] = -row[RADIUS] * row[NORMAL][i]
+        v_p[0] = v_c[c, 0] + wk[1] * offset[2] - wk[2] * offset[1]
+        v_p[1] = v_c[c, 1] + wk[2] * offset[0] - wk[0] * offset[2]
+        v_p[2] = v_c[c, 2] + wk[0] * offset[1] - wk[1] * offset[0]
+        delta = contact_value(row, x_c[c], v_p, c1, c3, force, slope)
+        if delta > -reach[c]:
+            near[c] = True
+        if delta > 0.0:
+            ok = ok and _add_instance(inst, k, c, offset, force, slope, 1.0)
+    if n_spheres > 1:                  # pairs: sweep and prune along world x
+        low = np.empty(n_spheres)
+        for c in range(n_spheres):
+            low[c] = x_c[c, 0] - rows[c, RADIUS] - reach[c]
+        order = np.argsort(low)
+        n_ij, v_j = np.empty(3), np.empty(3)
+        offset_j = np.empty(3)
+        for ii in range(n_spheres):
+            i = order[ii]
+            row_i = rows[i]
+            high = x_c[i, 0] + row_i[RADIUS] + reach[i]
+            for jj in range(ii + 1, n_spheres):
+                j = order[jj]
+                if low[j] > high:
+                    break
+                row_j = rows[j]
+                bi, bj = int(row_i[BODY]), int(row_j[BODY])
+                if bi == bj or int(row_i[PARENT]) == bj or int(row_j[PARENT]) == bi:
+                    continue
+                dist = 0.0
+                for a in range(3):
+                    n_ij[a] = x_c[i, a] - x_c[j, a]
+                    dist += n_ij[a] * n_ij[a]
+                dist = np.sqrt(dist)
+                delta = row_i[RADIUS] + row_j[RADIUS] - dist
+                if delta <= -(reach[i] + reach[j]) or dist == 0.0:
+                    continue
+                near[i] = True
+                near[j] = True
+                if delta <= 0.0:
+                    continue
+                wi, wj = w[bi], w[bj]
+                for a in range(3):
+                    n_ij[a] /= dist
+                    offset[a] = -row_i[RADIUS] * n_ij[a]
+                    offset_j[a] = row_j[RADIUS] * n_ij[a]
+                v_p[0] = v_c[i, 0] + wi[1] * offset[2] - wi[2] * offset[1]
+                v_p[1] = v_c[i, 1] + wi[2] * offset[0] - wi[0] * offset[2]
+                v_p[2] = v_c[i, 2] + wi[0] * offset[1] - wi[1] * offset[0]
+                v_j[0] = v_c[j, 0] + wj[1] * offset_j[2] - wj[2] * offset_j[1]
+                v_j[1] = v_c[j, 1] + wj[2] * offset_j[0] - wj[0] * offset_j[2]
+                v_j[2] = v_c[j, 2] + wj[0] * offset_j[1] - wj[1] * offset_j[0]
+                for a in range(3):
+                    v_p[a] -= v_j[a]
+                pair_value(row_i, row_j, n_ij, delta, v_p, c1, c3, force, slope)
+                ok = ok and _add_instance(inst, bi, i, offset, force, slope, 1.0)
+                ok = ok and _add_instance(inst, bj, j, offset_j, force, slope, -1.0)
     change = 0.0
-    x_c, v_p = np.empty(3), np.empty(3)
-    for k in range(first_row.shape[0] - 1):
-        l_io = body_params[body_row[k], TO_OUTPUT]
-        for c in range(first_row[k], first_row[k + 1]):
-            row = rows[c]
-            centre, point = contact_arm(row, rot[k])       # (point: reused below)
-            wk = w[k]
-            for i in range(3):          # from the output point: r_in = r_out - A l_IO
-                x_c[i] = r_out[k, i] + centre[i] - (rot[k, i, 0] * l_io[0]
-                                                    + rot[k, i, 1] * l_io[1]
-                                                    + rot[k, i, 2] * l_io[2])
-            for i in range(3):          # arm from the output point to the contact point
-                point[i] = x_c[i] - row[RADIUS] * row[NORMAL][i] - r_out[k, i]
-            v_p[0] = v_out[k, 0] + wk[1] * point[2] - wk[2] * point[1]
-            v_p[1] = v_out[k, 1] + wk[2] * point[0] - wk[0] * point[2]
-            v_p[2] = v_out[k, 2] + wk[0] * point[1] - wk[1] * point[0]
-            delta = contact_value(row, x_c, v_p, c1, c3, force[c], slope[c])
-            if c1 > 0.0:
-                speed = np.sqrt(v_p[0] * v_p[0] + v_p[1] * v_p[1] + v_p[2] * v_p[2])
-                if delta > -4.0 * speed * c3 / c1:
-                    if first:
-                        change = np.inf
-                    else:
-                        for i in range(3):
-                            change = max(change, abs(x_c[i] - centre_before[c, i]))
-            for i in range(3):
-                centre_before[c, i] = x_c[i]
-    return change
+    for c in range(n_spheres):
+        if near[c] and c1 > 0.0:
+            if first:
+                change = np.inf
+            else:
+                for i in range(3):
+                    change = max(change, abs(x_c[c, i] - centre_before[c, i]))
+        for i in range(3):
+            centre_before[c, i] = x_c[c, i]
+    return change if ok else np.nan
