@@ -261,6 +261,8 @@ def test_what_does_not_take_contact_says_so():
             gravity=[0, 0, -G], ground=Ground(plane=Plane(point=[0, 0, -2.0]))))
     with pytest.raises(ValueError, match="contact shapes"):
         dttmm.linearize(model)
+    with pytest.raises(ValueError, match="work of contacts"):
+        simulate(model, 0.01, 1e-3, max_energy_error=1e-3)
     with pytest.raises(ValueError, match="contact shapes"):
         dttmm.simulate_reference(model, 0.01)
 

@@ -138,7 +138,7 @@ def _run(args):
     from ..solving.energy_balance import does_work
     worked = does_work(model)
     if (worked and "rtol" not in options and "max_energy_error" not in options
-            and not args.no_energy_balance):
+            and not args.no_energy_balance and not len(model.contacts)):
         options["max_energy_error"] = 1e300     # kept, to show the balance, never to stop
     steps = (f"adaptive steps, rtol = {options['rtol']:g}" if "rtol" in options
              else f"dt = {dt:g} s")
@@ -171,6 +171,10 @@ def _run(args):
               f"{float(res.energy_work[-1]):.4g} J: energy balance E - E(0) - W = {gap:.3g} J "
               f"({abs(gap) / scale:.2g} of the largest kinetic energy; at worst "
               f"{res.info['energy_balance_error']:.2g})")
+    elif len(model.contacts):
+        print(f"energy: largest kinetic {scale:.4g} J; the total changed by {change:.4g} J, "
+              f"including what the contacts dissipate and store (not tracked: "
+              f"docs/contact.md)")
     elif worked:
         print(f"energy: largest kinetic {scale:.4g} J; the total changed by {change:.4g} J, "
               f"including the work done on the system (not tracked: adaptive steps or "
