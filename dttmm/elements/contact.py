@@ -104,12 +104,10 @@ def damping_of_restitution(restitution):
 
 
 def _positive(who, name, value, allow_inf=False):
+    """finite_scalar(..., positive=True), or infinity where allow_inf (a rigid plane's)."""
     if allow_inf and isinstance(value, (int, float)) and value == math.inf:
         return math.inf
-    x = finite_scalar(who, name, value)
-    if not x > 0.0:
-        raise ValueError(f"{who}: {name} must be > 0, got {value!r}")
-    return x
+    return finite_scalar(who, name, value, positive=True)
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,9 +168,7 @@ class Contact:
         if self.friction == math.inf:
             mu = math.inf
         else:
-            mu = finite_scalar(who, "Contact friction", self.friction)
-            if mu < 0.0:
-                raise ValueError(f"{who}: Contact friction must be >= 0, got {self.friction!r}")
+            mu = finite_scalar(who, "Contact friction", self.friction, nonnegative=True)
         v_s = _positive(who, "Contact stick_velocity", self.stick_velocity, allow_inf=True)
         return k, e, mu, v_s
 
