@@ -2,10 +2,12 @@
 parameters and how a body's and the plane's combine, and the law itself in Python (the kernels'
 twin is kernels/transfers/contact.py).
 
-Every shape is a set of contact spheres, each a centre fixed in the body frame and a radius: a
+Every shape is a set of contact rows, each a centre fixed in the body frame and a radius: a
 sphere is one, a capsule its two end spheres, a box its eight corners (radius 0).  Against a
 plane these are exactly the shape's points that can touch first: a capsule's and a box's
-deepest point is always one of them (or a whole edge or face of them, at once).
+deepest point is always one of them (or a whole edge or face of them, at once).  Against
+other bodies a capsule is its whole axis swept by its radius, and a box is also solid (a row
+of its own): see ROLE below and touching_pairs.
 
 Each contact sphere pushes on its body at the point of it nearest the plane, by a compliant
 law.  With n the plane's unit normal, x_c the sphere's centre, r its radius, the penetration
@@ -56,9 +58,25 @@ OWN_STICK_VELOCITY = 17  # v_s of the body
 MASS = 18               # the body's mass, kg
 ON_PLANE = 19           # 1: it touches the plane (NORMAL .. RATE hold that law), 0: no plane
 PARENT = 20             # the body's parent (-1: the ground), whose spheres it does not touch
-CONTACT_SIZE = 21
+SEGMENT = slice(21, 24)  # a capsule's axis, from CENTRE to its other end, body frame, m (else 0)
+ROLE = 24               # what the row touches other bodies as (below)
+HALF = slice(25, 28)    # a box's half edges, m (its SOLID row)
+AXES = slice(28, 37)    # a box's axes, the columns of a 3 x 3 matrix in the body frame, row major
+CONTACT_SIZE = 37
+
+# roles: SWEPT a sphere swept along SEGMENT (a sphere, a capsule's start row: its whole axis),
+# END a capsule's end sphere (the plane only: its SWEPT row touches bodies), CORNER a box's
+# corner (the plane, and other bodies' boxes), SOLID a box (other bodies' spheres, capsules and
+# corners; not the plane, which its corners touch)
+SWEPT, END, CORNER, SOLID = 0, 1, 2, 3
 
 STICK_VELOCITY_DEFAULT = 1e-4   # m/s
+# Two bodies' friction below the stick velocity is a damper, c = mu f_n / v_s, coupling them;
+# the step's block-Jacobi iterations (kernels/transfers/contact.py) converge at c h/2 / (m + c
+# h/2) per iteration (m the pair's reduced mass), slowly where c h/2 >> m.  So the pair's stick
+# velocity is at least mu f_n / (STICK_DAMPING m w): c <= STICK_DAMPING m w, and a step that
+# resolves the contact (w h <= pi / 20) converges at 0.24 or better per iteration.
+STICK_DAMPING = 4.0
 LEAST_RESTITUTION = 0.01        # (a restitution below it: ask for 0.01, a dead stop)
 
 
@@ -227,17 +245,18 @@ class Sphere:
     radius: float
     center: object = (0.0, 0.0, 0.0)
 
-    def spheres(self, who):
+    def primitives(self, who):
         radius = finite_scalar(who, "Sphere radius", self.radius)
         if radius < 0.0:
             raise ValueError(f"{who}: Sphere radius must be >= 0 (0: a point), got "
                              f"{self.radius!r}")
-        return [(finite_vector(who, "Sphere center", self.center), radius)]
+        return [_primitive(finite_vector(who, "Sphere center", self.center), radius)]
 
 
 @dataclass(frozen=True, eq=False)
 class Capsule:
-    """A cylinder with hemispherical ends (docs/contact.md): its two end spheres touch.
+    """A cylinder with hemispherical ends (docs/contact.md): its two end spheres touch a plane,
+    its whole axis (a swept sphere) touches other bodies.
 
     Parameters
     ----------
@@ -250,15 +269,17 @@ class Capsule:
     start: object = (0.0, 0.0, 0.0)
     end: object = (0.0, 0.0, 0.0)
 
-    def spheres(self, who):
+    def primitives(self, who):
         r = _positive(who, "Capsule radius", self.radius)
-        return [(finite_vector(who, "Capsule start", self.start), r),
-                (finite_vector(who, "Capsule end", self.end), r)]
+        start = finite_vector(who, "Capsule start", self.start)
+        end = finite_vector(who, "Capsule end", self.end)
+        return [_primitive(start, r, segment=end - start), _primitive(end, r, role=END)]
 
 
 @dataclass(frozen=True, eq=False)
 class Box:
-    """A rectangular box of the body (docs/contact.md): its eight corners touch.
+    """A rectangular box of the body (docs/contact.md): its eight corners touch a plane and
+    other boxes, its faces other bodies' spheres, capsules and corners.
 
     Parameters
     ----------
@@ -273,15 +294,24 @@ class Box:
     center: object = (0.0, 0.0, 0.0)
     rotation: object = None
 
-    def spheres(self, who):
+    def primitives(self, who):
         size = finite_vector(who, "Box size", self.size)
         if not np.all(size > 0.0):
             raise ValueError(f"{who}: Box size must be 3 lengths > 0, got {self.size!r}")
         centre = finite_vector(who, "Box center", self.center)
         rot = np.eye(3) if self.rotation is None else rotation_matrix(who, "Box rotation",
                                                                       self.rotation)
-        return [(centre + rot @ (0.5 * size * np.array([sx, sy, sz])), 0.0)
-                for sx in (-1.0, 1.0) for sy in (-1.0, 1.0) for sz in (-1.0, 1.0)]
+        corners = [_primitive(centre + rot @ (0.5 * size * np.array([sx, sy, sz])), 0.0,
+                              role=CORNER)
+                   for sx in (-1.0, 1.0) for sy in (-1.0, 1.0) for sz in (-1.0, 1.0)]
+        return corners + [_primitive(centre, 0.0, role=SOLID, half=0.5 * size, axes=rot)]
+
+
+def _primitive(centre, radius, segment=(0.0, 0.0, 0.0), role=SWEPT, half=(0.0, 0.0, 0.0),
+               axes=np.zeros((3, 3))):
+    """One row's geometry (the layout above)."""
+    return dict(centre=centre, radius=radius, segment=segment, role=role, half=half,
+                axes=np.asarray(axes).ravel())
 
 
 SHAPES = (Sphere, Capsule, Box)
@@ -310,16 +340,17 @@ def contact_rows(who, body, parent, mass, shapes, contact, plane):
         e, mu, v_s = min(e_b, e_p), min(mu_b, mu_p), min(vs_b, vs_p)
     rows = []
     for s in shapes:
-        for centre, radius in s.spheres(who):
+        for p in s.primitives(who):
             row = np.zeros(CONTACT_SIZE)
             row[BODY], row[PARENT] = body, parent
-            row[CENTRE] = centre
-            row[RADIUS] = radius
+            row[CENTRE], row[RADIUS], row[SEGMENT] = p["centre"], p["radius"], p["segment"]
+            row[ROLE], row[HALF], row[AXES] = p["role"], p["half"], p["axes"]
             row[OWN_STIFFNESS], row[OWN_DAMPING] = k_b, damping_of_restitution(e_b)
             row[OWN_FRICTION], row[OWN_STICK_VELOCITY], row[MASS] = mu_b, vs_b, mass
             if plane is not None:
+                row[NORMAL] = n                 # (a box's SOLID row: its Result's normal)
+            if plane is not None and p["role"] != SOLID:
                 row[ON_PLANE] = 1.0
-                row[NORMAL] = n
                 row[LEVEL] = level
                 row[STIFFNESS], row[DAMPING] = k, damping_of_restitution(e)
                 row[FRICTION], row[STICK_VELOCITY] = mu, v_s
@@ -329,23 +360,27 @@ def contact_rows(who, body, parent, mass, shapes, contact, plane):
 
 
 def pair_law(row_a, row_b):
-    """(k, a, w, mu, v_s) of two bodies' spheres touching each other: the stiffnesses in
+    """(k, a, w, mu, v_s, cap) of two bodies' rows touching each other: the stiffnesses in
     series, the smaller restitution (the larger damping a), the smaller friction and stick
     velocity, and w = sqrt(k / m) with m = m_a m_b / (m_a + m_b), the pair's reduced mass:
     two free bodies striking on one sphere each, head on, part at e times the speed they
-    closed at.  The Python twin of kernels/transfers/contact.py::pair_value's."""
+    closed at.  cap = STICK_DAMPING m w: the stick velocity is at least mu f_n / cap (see
+    STICK_DAMPING).  The Python twin of kernels/transfers/contact.py::pair_value's."""
     k = 1.0 / (1.0 / row_a[OWN_STIFFNESS] + 1.0 / row_b[OWN_STIFFNESS])
     reduced = row_a[MASS] * row_b[MASS] / (row_a[MASS] + row_b[MASS])
-    return (k, max(row_a[OWN_DAMPING], row_b[OWN_DAMPING]), math.sqrt(k / reduced),
+    w = math.sqrt(k / reduced)
+    return (k, max(row_a[OWN_DAMPING], row_b[OWN_DAMPING]), w,
             min(row_a[OWN_FRICTION], row_b[OWN_FRICTION]),
-            min(row_a[OWN_STICK_VELOCITY], row_b[OWN_STICK_VELOCITY]))
+            min(row_a[OWN_STICK_VELOCITY], row_b[OWN_STICK_VELOCITY]),
+            STICK_DAMPING * reduced * w)
 
 
-def law_forces(k, a, w, mu, v_s, n, delta, velocity):
+def law_forces(k, a, w, mu, v_s, n, delta, velocity, cap=0.0):
     """The law (the module's docstring) on arrays: the force (..., 3) on a body whose contact
     point moves at `velocity` (..., 3; relative to what it touches), n (..., 3) the normal
-    pushing it, delta (...) the penetration; the parameters scalars or arrays (...).  The
-    Python twin of kernels/transfers/contact.py::law_value (which adds its slope)."""
+    pushing it, delta (...) the penetration; the parameters scalars or arrays (...); cap > 0:
+    the stick velocity at least mu f_n / cap (pair_law).  The Python twin of
+    kernels/transfers/contact.py::law_value (which adds its slope)."""
     vn = np.einsum("...i,...i->...", velocity, n)
     inside = delta > 0.0
     depth = np.where(inside, delta, 0.0)
@@ -353,8 +388,11 @@ def law_forces(k, a, w, mu, v_s, n, delta, velocity):
     share = np.where(inside, -vn / np.where(inside, rho, 1.0), 0.0)
     f_n = k * depth * np.maximum(0.0, 1.0 + a * share)
     v_t = velocity - vn[..., None] * n
+    if cap > 0.0:
+        v_s = np.maximum(v_s, mu * f_n / cap)
     s = np.sqrt(np.einsum("...i,...i->...", v_t, v_t) + v_s ** 2)
-    return f_n[..., None] * (n - (mu / s)[..., None] * v_t)
+    glide = np.divide(mu, s, out=np.zeros(np.broadcast(mu, s).shape), where=s > 0.0)
+    return f_n[..., None] * (n - glide[..., None] * v_t)
 
 
 def contact_forces(rows, centre, velocity):
@@ -371,9 +409,107 @@ def contact_forces(rows, centre, velocity):
 
 
 def touching_pairs(rows):
-    """The pairs (i, j), i < j, of contact spheres that may touch each other: of two bodies,
-    neither the other's parent (kernels/transfers/contact.py::contact_forces' exclusions)."""
+    """The pairs (i, j) of contact rows that may touch each other, j the box where one is (a
+    sphere or capsule with a sphere or capsule, either with a box, a box's corner with another
+    box): of two bodies, neither the other's parent (kernels/transfers/contact.py::
+    contact_forces' exclusions)."""
     rows = np.asarray(rows, dtype=float)
     body, parent = rows[:, BODY].astype(int), rows[:, PARENT].astype(int)
-    return [(i, j) for i in range(len(rows)) for j in range(i + 1, len(rows))
-            if body[i] != body[j] and parent[i] != body[j] and parent[j] != body[i]]
+    role = rows[:, ROLE].astype(int)
+    out = []
+    for i in range(len(rows)):
+        for j in range(i + 1, len(rows)):
+            if body[i] == body[j] or parent[i] == body[j] or parent[j] == body[i]:
+                continue
+            if role[i] == SOLID:
+                i_, j_ = j, i
+            else:
+                i_, j_ = i, j
+            if (role[i_] == SWEPT and role[j_] in (SWEPT, SOLID)) or (
+                    role[i_] == CORNER and role[j_] == SOLID):
+                out.append((i_, j_))
+    return out
+
+
+# the narrow phase (docs/contact.md, "Bodies touching each other"), on arrays (..., 3): the
+# Python twins of kernels/transfers/contact_geometry.py's
+
+def segment_parameters(p1, d1, p2, d2):
+    """(s, t) in [0, 1] of the nearest points p1 + s d1 and p2 + t d2 of two segments (Ericson,
+    Real-Time Collision Detection, 5.1.9); parallel ones at the middle of their overlap."""
+    dot = lambda a, b: np.einsum("...i,...i->...", a, b)    # noqa: E731
+    r = p1 - p2
+    a, e, b, c, f = dot(d1, d1), dot(d2, d2), dot(d1, d2), dot(d1, r), dot(d2, r)
+    a_ = np.where(a > 0.0, a, 1.0)
+    e_ = np.where(e > 0.0, e, 1.0)
+    denom = a * e - b * b
+    parallel = denom <= 1e-12 * a * e
+    s = np.where(parallel, 0.5 * (np.clip(-c / a_, 0, 1) + np.clip((b - c) / a_, 0, 1)),
+                 np.clip((b * f - c * e) / np.where(parallel, 1.0, denom), 0.0, 1.0))
+    s = np.where(a > 0.0, s, 0.0)
+    t = (b * s + f) / e_
+    s = np.where(t < 0.0, np.clip(-c / a_, 0, 1), np.where(t > 1.0, np.clip((b - c) / a_, 0, 1),
+                                                              s))
+    s = np.where(a > 0.0, s, 0.0)
+    t = np.where(e > 0.0, np.clip(t, 0.0, 1.0), 0.0)
+    return s, t
+
+
+def box_distance(x, centre, axes, half):
+    """(sd, n): the signed distance of x from a box (centre, its axes the columns of `axes`
+    (3, 3), its half edges) and the box's outward normal there (inside: sd < 0, the face
+    nearest)."""
+    local = np.einsum("...i,...ij->...j", x - centre, axes)
+    q = np.abs(local) - half
+    out = np.maximum(q, 0.0)
+    d_out = np.linalg.norm(out, axis=-1)
+    sign = np.where(local < 0.0, -1.0, 1.0)
+    face = np.argmax(q, axis=-1)
+    inside = d_out == 0.0
+    n_in = np.take_along_axis(sign, face[..., None], axis=-1) * (
+        np.arange(3) == face[..., None])
+    n_out = sign * out / np.where(inside, 1.0, d_out)[..., None]
+    n_local = np.where(inside[..., None], n_in, n_out)
+    return np.where(inside, np.max(q, axis=-1), d_out), np.einsum("...ij,...j->...i", axes,
+                                                                  n_local)
+
+
+GOLDEN_STEPS = 48       # golden-section steps of segment_box_parameter: 0.618^48 ~ 1e-10
+TIE = 1e-9              # its tie-breaking curvature (m): flat minima at the middle
+
+
+def segment_box_parameter(p, d, centre, axes, half):
+    """t in [0, 1] of the point p + t d of a segment that goes deepest into a box (or nearest
+    to it): the signed distance is convex along the segment, minimized by golden sections,
+    with TIE (t - 1/2)^2 |d| added so that a flat minimum (lying on a face) is taken at the
+    middle of its span."""
+    size = np.linalg.norm(d, axis=-1)
+    lo, hi = np.zeros(size.shape), np.ones(size.shape)
+    g = 0.5 * (np.sqrt(5.0) - 1.0)
+
+    def f(t):
+        return box_distance(p + t[..., None] * d, centre, axes, half)[0] + TIE * size * (
+            t - 0.5) ** 2
+
+    for _ in range(GOLDEN_STEPS):
+        t1, t2 = hi - g * (hi - lo), lo + g * (hi - lo)
+        lower = f(t1) < f(t2)
+        hi, lo = np.where(lower, t2, hi), np.where(lower, lo, t1)
+    return np.where(size > 0.0, 0.5 * (lo + hi), 0.0)
+
+
+def pair_geometry(row_i, row_j, x_i, seg_i, x_j, seg_j, axes_j):
+    """(delta, n, point_i, point_j): a pair's penetration, its normal from j to i and the
+    contact points on each (world), rows i and j at centres x (..., 3), axes seg (world) and
+    j's box axes axes_j (..., 3, 3; world) where j is a box (touching_pairs' order)."""
+    if int(row_j[ROLE]) == SOLID:
+        t = segment_box_parameter(x_i, seg_i, x_j, axes_j, row_j[HALF])
+        c_i = x_i + t[..., None] * seg_i
+        sd, n = box_distance(c_i, x_j, axes_j, row_j[HALF])
+        return row_i[RADIUS] - sd, n, c_i - row_i[RADIUS] * n, c_i - sd[..., None] * n
+    s, t = segment_parameters(x_i, seg_i, x_j, seg_j)
+    c_i, c_j = x_i + s[..., None] * seg_i, x_j + t[..., None] * seg_j
+    dist = np.linalg.norm(c_i - c_j, axis=-1)
+    n = (c_i - c_j) / np.where(dist > 0.0, dist, 1.0)[..., None]
+    delta = np.where(dist > 0.0, row_i[RADIUS] + row_j[RADIUS] - dist, -np.inf)
+    return delta, n, c_i - row_i[RADIUS] * n, c_j + row_j[RADIUS] * n

@@ -9,6 +9,8 @@ from ..elements.hinges import ELASTIC, K_ROTATION, K_TRANSLATION
 from ..elements.contact import BODY as CONTACT_BODY
 from ..elements.contact import NORMAL as CONTACT_NORMAL
 from ..elements.contact import ON_PLANE as CONTACT_ON_PLANE
+from ..elements.contact import ROLE as CONTACT_ROLE
+from ..elements.contact import SOLID as CONTACT_SOLID
 from ..elements.contact import OWN_STIFFNESS as CONTACT_OWN_STIFFNESS
 from ..elements.contact import STIFFNESS as CONTACT_STIFFNESS
 from ..elements.contact import restitution_of_damping
@@ -337,7 +339,8 @@ def _contact_lines(model, k):
     """Body k's contact spheres, one line per distinct law (docs/contact.md): what they touch,
     the stiffness and how long a contact lasts on the body, the restitution its damping gives,
     the friction."""
-    rows = [row for row in model.contacts if int(row[CONTACT_BODY]) == k]
+    rows = [row for row in model.contacts
+            if int(row[CONTACT_BODY]) == k and int(row[CONTACT_ROLE]) != CONTACT_SOLID]
     if not rows:
         return []
     mass = float(model.body_params[k, MASS])

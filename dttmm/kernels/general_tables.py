@@ -142,13 +142,13 @@ defl_rate_g = table_view(43, "real", ("bodies", 3), GENERAL_SIZES)
 # (kernels/transfers/joint.py::drive_value)
 forces = table_view(44, "int", ("forces",), GENERAL_SIZES)
 
-# real: each contact sphere's centre at the guess (the Newton iterations' change)
+# real: each contact row's centre at the guess (the Newton iterations' change)
 contact_centre = table_view(45, "real", ("contacts", 3), GENERAL_SIZES)
 
-# int: each contact at the guess: its sphere (kernels/transfers/contact.py)
-contact_sphere = table_view(46, "int", ("instances",), GENERAL_SIZES)
+# real: each contact at the guess: its body's point, body frame (transfers/contact.py)
+contact_point = table_view(46, "real", ("instances", 3), GENERAL_SIZES)
 
-# real: its point from its sphere's centre, world
+# real: the contact point from it, world
 contact_offset = table_view(47, "real", ("instances", 3), GENERAL_SIZES)
 
 # real: its force on the sphere's body, world, N

@@ -87,4 +87,4 @@ rod_section = table_view(25, "real", ("rods", 3), SIZES)
 
 # real: elements/contact.py: each contact sphere's row (its BODY and PARENT columns the kernel
 # model's bodies)
-contacts = table_view(26, "real", ("contacts", 21), SIZES)
+contacts = table_view(26, "real", ("contacts", 37), SIZES)

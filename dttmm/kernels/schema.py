@@ -346,11 +346,11 @@ GENERAL = (
     Field("defl_rate_g", REAL, ("bodies", 3), "d' at the guess"),
     Field("forces", INT, ("forces",), "the compiled JointForces' C callbacks' addresses "
                                       "(kernels/transfers/joint.py::drive_value)"),
-    Field("contact_centre", REAL, ("contacts", 3), "each contact sphere's centre at the guess "
+    Field("contact_centre", REAL, ("contacts", 3), "each contact row's centre at the guess "
                                                    "(the Newton iterations' change)"),
-    Field("contact_sphere", INT, ("instances",), "each contact at the guess: its sphere "
-                                                 "(kernels/transfers/contact.py)"),
-    Field("contact_offset", REAL, ("instances", 3), "its point from its sphere's centre, world"),
+    Field("contact_point", REAL, ("instances", 3), "each contact at the guess: its body's "
+                                                   "point, body frame (transfers/contact.py)"),
+    Field("contact_offset", REAL, ("instances", 3), "the contact point from it, world"),
     Field("contact_force", REAL, ("instances", 3), "its force on the sphere's body, world, N"),
     Field("contact_slope", REAL, ("instances", 3, 3), "the force's derivative by its point's "
                                                       "acceleration"),

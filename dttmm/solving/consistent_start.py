@@ -191,6 +191,6 @@ def start_contacts(params, n_bodies):
     """The start's contacts argument (kernels/stepping/step.py::initial_accelerations) where it
     runs alone: the general loop's contact scratch for the model's spheres (_contacts_of)."""
     c = kstep.contact_scratch(n_bodies, len(MODEL_LAYOUT.table(params, "contacts")))
-    inst = (c["contact_sphere"], c["contact_offset"], c["contact_force"], c["contact_slope"],
+    inst = (c["contact_point"], c["contact_offset"], c["contact_force"], c["contact_slope"],
             c["contact_next"], c["contact_body_first"], c["contact_count"])
     return inst, (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3]), c["contact_centre"]

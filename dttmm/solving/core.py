@@ -99,7 +99,7 @@ def helper_calls(loop, run):
 def _contacts_of_scratch(g):
     """The general loop's contacts argument of the start (kernels/stepping/step.py::
     _contacts_of) from its scratch's tables, for its type."""
-    inst = (g.contact_sphere, g.contact_offset, g.contact_force, g.contact_slope,
+    inst = (g.contact_point, g.contact_offset, g.contact_force, g.contact_slope,
             g.contact_next, g.contact_body_first, g.contact_count)
     return inst, (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3]), g.contact_centre
 

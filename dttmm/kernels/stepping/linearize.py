@@ -70,7 +70,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     joints and joints with coordinates are JOINT elements (kernels/transfers/joint.py), linearized
     about the coordinates' guess; given (n, 3): each JointForce drive's value over the step (a
     compiled one's: the time it is called at), forces: the compiled JointForces' callbacks'
-    addresses.  contacts = (body_first, next, sphere, offset, force, slope): each body's
+    addresses.  contacts = (body_first, next, point, offset, force, slope): each body's
     contacts at the guess, a list through next from body_first (-1 ends it), their forces and
     slopes (kernels/transfers/contact.py::contact_forces), added to its rigid body's transfer
     (contact_correction)."""
@@ -81,9 +81,8 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
     joint_tau_nu = sweep_tables.joint_tau_nu(sweep)
     independent, w1_st, w1_c = stations
     full_tree, q_j, qd_j, qdd_j, given, forces = joints
-    contact_first, contact_next, contact_sphere, contact_offset, contact_force, contact_slope = \
+    contact_first, contact_next, contact_point, contact_offset, contact_force, contact_slope = \
         contacts
-    contact_rows = model_tables.contacts(params)
     independent = independent and not at_start
     body_params, hinge_kind = model_tables.body_params(params), model_tables.hinge_kind(params)
     hinge_params = model_tables.hinge_params(params)
@@ -192,7 +191,7 @@ def _build_elements(params, sweep, guess, ground, c1, c3, w1d, w3d, z_star, forc
                                 w[k], z_star[jh + 1], load, torque[k], u[jh + 1])
             c = contact_first[k] if contact_first.shape[0] > k else -1
             while c >= 0:           # (its contacts: kernels/transfers/contact.py)
-                contact_correction(contact_rows[contact_sphere[c]], contact_offset[c],
+                contact_correction(contact_point[c], contact_offset[c],
                                    body_params[row, 4:7], rot_star[k], lam[k], w[k], wd[k],
                                    dw[k], dwd[k], contact_force[c], contact_slope[c],
                                    z_star[jh + 1], u[jh + 1])

@@ -112,7 +112,7 @@ def contact_scratch(n, n_contacts):
     n_contacts spheres, by name."""
     m = contact_capacity(n_contacts)
     return dict(contact_centre=np.zeros((n_contacts, 3)),
-                contact_sphere=np.zeros(m, dtype=np.int64), contact_offset=np.zeros((m, 3)),
+                contact_point=np.zeros((m, 3)), contact_offset=np.zeros((m, 3)),
                 contact_force=np.zeros((m, 3)), contact_slope=np.zeros((m, 3, 3)),
                 contact_next=np.zeros(m, dtype=np.int64),
                 contact_body_first=np.full(n, -1, dtype=np.int64),
@@ -123,7 +123,7 @@ def contact_scratch(n, n_contacts):
 def _contacts_of(scratch):
     """(the instances' tuple for contact_forces, the bodies' lists for _build_elements, the
     spheres' centres) as views of the general loop's scratch."""
-    inst = (general_tables.contact_sphere(scratch), general_tables.contact_offset(scratch),
+    inst = (general_tables.contact_point(scratch), general_tables.contact_offset(scratch),
             general_tables.contact_force(scratch), general_tables.contact_slope(scratch),
             general_tables.contact_next(scratch), general_tables.contact_body_first(scratch),
             general_tables.contact_count(scratch))

@@ -14,9 +14,14 @@ transfer a force F* + S (a_P - a_P*) at the contact point, like a point mass -S:
   d f_n / d delta  = k g - k a delta' w^2 delta^2 / rho^3,
   d f_n / d delta' = k a w^2 delta^3 / rho^3                       (g > 0; else both 0)
   dF/da_P = S = -(n - mu v_t / s) (d f_n / d delta + c3 d f_n / d delta') / c1 n^T
-                - mu f_n (P / s - v_t v_t^T / s^3) c3 / c1,
+                - mu f_n P / s c3 / c1,
 
-P = E - n n^T the projection on the plane.  a_P = a_I + kappa(rho_P) (kernels/transfers/body.py),
+P = E - n n^T the projection on the plane.  The friction's slope is its secant, f_t / v_t,
+not its tangent (which lacks - v_t v_t^T / s^3): sliding, the tangent is flat along v_t, and
+Newton's steps from it cross zero and come back, so that a box spun on the plane kept 0.7% of
+its spin; the secant's iterations converge to the same force from either side.
+
+a_P = a_I + kappa(rho_P) (kernels/transfers/body.py),
 rho_P = A l_IP - r n its arm from the input point, so that the transfer of the body
 (q_O = q_I + ... + F, m_O = m_I - rho x q_O + ... + rho_P x F) gains
 
@@ -37,20 +42,23 @@ world x, O(N log N)), spheres of one body and of a body and its parent excluded.
 import numpy as np
 
 from .. import allocating_kernel, kernel, loop_tables, model_tables
-from ...elements.contact import (BODY, CENTRE, DAMPING, FRICTION, LEVEL, MASS, NORMAL,
-                                 ON_PLANE, OWN_DAMPING, OWN_FRICTION, OWN_STICK_VELOCITY,
-                                 OWN_STIFFNESS, PARENT, RADIUS, RATE, STICK_VELOCITY,
-                                 STIFFNESS)
+from ...elements.contact import (AXES, BODY, CENTRE, CORNER, DAMPING, FRICTION, HALF, LEVEL,
+                                 MASS, NORMAL, ON_PLANE, OWN_DAMPING, OWN_FRICTION,
+                                 OWN_STICK_VELOCITY, OWN_STIFFNESS, PARENT, RADIUS, RATE, ROLE,
+                                 SEGMENT, SOLID, STICK_DAMPING, STICK_VELOCITY, STIFFNESS,
+                                 SWEPT)
 from ..algebra.so3 import hat
 from .body import A, CONST, M, PHI, Q, _kappa_into, _mm_add
+from .contact_geometry import box_distance, segment_box_parameter, segment_parameters
 
 
 @kernel
-def law_value(k, a, w, mu, v_s, n, delta, velocity, c1, c3, force, slope):
+def law_value(k, a, w, mu, v_s, cap, n, delta, velocity, c1, c3, force, slope):
     """The law's force (world, N) on the body whose contact point moves at `velocity`
     (relative to what it touches) into force, and its slope by the point's acceleration into
     slope (zero where c1 is 0: the consistent start); n the normal pushing the body, delta the
-    penetration (m; nothing where <= 0)."""
+    penetration (m; nothing where <= 0); cap > 0: the stick velocity at least mu f_n / cap
+    (two bodies' friction, elements/contact.py::pair_law; its slope as for a constant one)."""
     for i in range(3):
         force[i] = 0.0
         for j in range(3):
@@ -67,6 +75,8 @@ def law_value(k, a, w, mu, v_s, n, delta, velocity, c1, c3, force, slope):
     v_t = np.empty(3)
     for i in range(3):
         v_t[i] = velocity[i] - vn * n[i]
+    if cap > 0.0:
+        v_s = max(v_s, mu * f_n / cap)
     s = np.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2] + v_s * v_s)
     direction = np.empty(3)
     for i in range(3):
@@ -83,7 +93,7 @@ def law_value(k, a, w, mu, v_s, n, delta, velocity, c1, c3, force, slope):
         for j in range(3):
             proj = (1.0 if i == j else 0.0) - n[i] * n[j]
             slope[i, j] = (-direction[i] * normal * n[j]
-                           - glide * (proj / s - v_t[i] * v_t[j] / (s * s * s)))
+                           - glide * proj / s)
 
 
 @kernel
@@ -92,33 +102,34 @@ def contact_value(row, centre, velocity, c1, c3, force, slope):
     contact point moves at `velocity` (law_value with the plane's law); returns the
     penetration delta (m; < 0: apart; -inf: the sphere has no plane)."""
     if row[ON_PLANE] == 0.0:
-        law_value(0.0, 0.0, 0.0, 0.0, 1.0, row[NORMAL], -1.0, velocity, c1, c3, force, slope)
+        law_value(0.0, 0.0, 0.0, 0.0, 1.0, 0.0, row[NORMAL], -1.0, velocity, c1, c3, force,
+                  slope)
         return -np.inf
     n = row[NORMAL]
     delta = row[RADIUS] + row[LEVEL] - (n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2])
-    law_value(row[STIFFNESS], row[DAMPING], row[RATE], row[FRICTION], row[STICK_VELOCITY], n,
-              delta, velocity, c1, c3, force, slope)
+    law_value(row[STIFFNESS], row[DAMPING], row[RATE], row[FRICTION], row[STICK_VELOCITY], 0.0,
+              n, delta, velocity, c1, c3, force, slope)
     return delta
 
 
 @kernel
 def pair_value(row_i, row_j, n, delta, velocity, c1, c3, force, slope):
-    """Sphere j's force on sphere i (law_value with the pair's law, elements/contact.py::
-    pair_law): n from j to i, velocity v_i - v_j at the contact points."""
+    """Row j's force on row i (law_value with the pair's law, elements/contact.py::pair_law):
+    n from j to i, velocity v_i - v_j at the contact points."""
     k = 1.0 / (1.0 / row_i[OWN_STIFFNESS] + 1.0 / row_j[OWN_STIFFNESS])
     reduced = row_i[MASS] * row_j[MASS] / (row_i[MASS] + row_j[MASS])
-    law_value(k, max(row_i[OWN_DAMPING], row_j[OWN_DAMPING]), np.sqrt(k / reduced),
+    w = np.sqrt(k / reduced)
+    law_value(k, max(row_i[OWN_DAMPING], row_j[OWN_DAMPING]), w,
               min(row_i[OWN_FRICTION], row_j[OWN_FRICTION]),
-              min(row_i[OWN_STICK_VELOCITY], row_j[OWN_STICK_VELOCITY]), n, delta, velocity,
-              c1, c3, force, slope)
+              min(row_i[OWN_STICK_VELOCITY], row_j[OWN_STICK_VELOCITY]),
+              STICK_DAMPING * reduced * w, n, delta, velocity, c1, c3, force, slope)
 
 
 @kernel
-def contact_correction(row, offset, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star, u):
-    """Add a contact's force F* + S (a_P - a_P*) at the sphere's point A l_IP + offset (world;
-    offset: from its centre to the contact point) to the rigid body's transfer u (12 x 13, phi
-    slots, about z_star), as the module's docstring derives."""
-    l_ip = row[CENTRE]
+def contact_correction(l_ip, offset, l_io, rot, lam, w, wd, dw, dwd, force, slope, z_star, u):
+    """Add a contact's force F* + S (a_P - a_P*) at the point A l_IP + offset (world; l_IP the
+    body's point the contact holds, offset from it to the contact point) to the rigid body's
+    transfer u (12 x 13, phi slots, about z_star), as the module's docstring derives."""
     centre, rho_p, rho = np.empty(3), np.empty(3), np.empty(3)
     for i in range(3):
         centre[i] = rot[i, 0] * l_ip[0] + rot[i, 1] * l_ip[1] + rot[i, 2] * l_ip[2]
@@ -170,16 +181,26 @@ def contact_correction(row, offset, l_io, rot, lam, w, wd, dw, dwd, force, slope
 
 
 @kernel
-def _add_instance(inst, body, sphere, offset, force, slope, sign):
-    """Append a contact (its sphere, the offset of its point from the sphere's centre, sign
-    times the force, the slope) to the instances inst = (sphere, offset, force, slope, next,
-    body_first, count) and to body's list; False where they are full."""
-    i_sphere, i_offset, i_force, i_slope, i_next, body_first, count = inst
+def _point_velocity(r_out, v_out, w, x, out):
+    """out = the velocity of the body's point at x (world): v_O + w x (x - r_O)."""
+    a0, a1, a2 = x[0] - r_out[0], x[1] - r_out[1], x[2] - r_out[2]
+    out[0] = v_out[0] + w[1] * a2 - w[2] * a1
+    out[1] = v_out[1] + w[2] * a0 - w[0] * a2
+    out[2] = v_out[2] + w[0] * a1 - w[1] * a0
+
+
+@kernel
+def _add_instance(inst, body, point, offset, force, slope, sign):
+    """Append a contact (its body's point, body frame from the input point, the offset of the
+    contact point from it, world, sign times the force, the slope) to the instances inst =
+    (point, offset, force, slope, next, body_first, count) and to body's list; False where
+    they are full."""
+    i_point, i_offset, i_force, i_slope, i_next, body_first, count = inst
     i = count[0]
-    if i >= i_sphere.shape[0]:
+    if i >= i_point.shape[0]:
         return False
-    i_sphere[i] = sphere
     for a in range(3):
+        i_point[i, a] = point[a]
         i_offset[i, a] = offset[a]
         i_force[i, a] = sign * force[a]
         for b in range(3):
@@ -190,16 +211,26 @@ def _add_instance(inst, body, sphere, offset, force, slope, sign):
     return True
 
 
+@kernel
+def _body_point(rot, r_out, l_io, x, out):
+    """out = the body's point at x (world) in its frame from its input point:
+    A^T (x - r_O) + l_IO."""
+    for i in range(3):
+        out[i] = (rot[0, i] * (x[0] - r_out[0]) + rot[1, i] * (x[1] - r_out[1])
+                  + rot[2, i] * (x[2] - r_out[2]) + l_io[i])
+
+
 @allocating_kernel
 def contact_forces(params, loops, rot, w, c1, c3, centre_before, first, inst):
     """Every contact at rotations rot, angular velocities w and output points loops.r_out,
-    v_out (kernels/assembly/closure.py::tree_points, at the same state): each sphere against
-    the plane (contact_value), each pair of spheres of two bodies the sweep and prune finds
-    (pair_value), written as instances inst = (sphere, offset, force, slope, next, body_first,
-    count) for the bodies' transfers (contact_correction).  Returns the Newton iterations'
-    change for the contacts, m: the largest move of a sphere's centre since the iteration
-    before (centre_before, which takes the new ones), over the spheres within reach of the
-    plane or of another sphere (two steps' travel, 4 |v| c3 / c1); in the first iteration
+    v_out (kernels/assembly/closure.py::tree_points, at the same state): each row but a box's
+    solid against the plane (contact_value), each pair of rows of two bodies the sweep and
+    prune finds (elements/contact.py::touching_pairs' kinds; kernels/transfers/
+    contact_geometry.py; pair_value), written as instances inst = (point, offset, force,
+    slope, next, body_first, count) for the bodies' transfers (contact_correction).  Returns
+    the Newton iterations' change for the contacts, m: the largest move of a row's centre since
+    the iteration before (centre_before, which takes the new ones), over the rows within reach
+    of the plane or of another (two steps' travel, 4 |v| c3 / c1); in the first iteration
     (first) infinite where any is, so that a contact is never taken from the predictor alone;
     NaN where the instances are full."""
     rows = model_tables.contacts(params)
@@ -209,93 +240,114 @@ def contact_forces(params, loops, rot, w, c1, c3, centre_before, first, inst):
     count[0] = 0
     for k in range(body_first.shape[0]):
         body_first[k] = -1
-    n_spheres = rows.shape[0]
-    x_c, v_c = np.empty((n_spheres, 3)), np.empty((n_spheres, 3))
-    reach = np.zeros(n_spheres)
-    near = np.zeros(n_spheres, dtype=np.bool_)
+    n_rows = rows.shape[0]
+    x_c, v_c, seg = np.empty((n_rows, 3)), np.empty((n_rows, 3)), np.zeros((n_rows, 3))
+    axes = np.zeros((n_rows, 3, 3))
+    reach, low, high = np.zeros(n_rows), np.empty(n_rows), np.empty(n_rows)
+    near = np.zeros(n_rows, dtype=np.bool_)
     step = 2.0 * c3 / c1 if c1 > 0.0 else 0.0           # (h, for gamma = 1/2)
-    arm, v_p, offset = np.empty(3), np.empty(3), np.empty(3)
+    v_p, v_j, offset, offset_j = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    n_ij, c_i, c_j, local = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     force, slope = np.empty(3), np.empty((3, 3))
     ok = True
-    for c in range(n_spheres):         # the spheres' centres and velocities
+    for c in range(n_rows):            # the rows' centres, axes, boxes, velocities, extents
         row = rows[c]
         k = int(row[BODY])
         l_io = body_params[body_row[k], 4:7]
         for i in range(3):              # from the output point: A (l_IP - l_IO)
-            arm[i] = (rot[k, i, 0] * (row[CENTRE][0] - l_io[0])
-                      + rot[k, i, 1] * (row[CENTRE][1] - l_io[1])
-                      + rot[k, i, 2] * (row[CENTRE][2] - l_io[2]))
-            x_c[c, i] = r_out[k, i] + arm[i]
+            x_c[c, i] = r_out[k, i]
+            for j in range(3):
+                x_c[c, i] += rot[k, i, j] * (row[CENTRE][j] - l_io[j])
+                seg[c, i] += rot[k, i, j] * row[SEGMENT][j]
+                for m in range(3):
+                    axes[c, i, j] += rot[k, i, m] * row[AXES][3 * m + j]
+        _point_velocity(r_out[k], v_out[k], w[k], x_c[c], v_c[c])
+        size = row[RADIUS] + np.sqrt(seg[c, 0] ** 2 + seg[c, 1] ** 2 + seg[c, 2] ** 2)
+        half_x = 0.0
+        for i in range(3):
+            size += row[HALF][i]
+            half_x += abs(axes[c, 0, i]) * row[HALF][i]
         wk = w[k]
-        v_c[c, 0] = v_out[k, 0] + wk[1] * arm[2] - wk[2] * arm[1]
-        v_c[c, 1] = v_out[k, 1] + wk[2] * arm[0] - wk[0] * arm[2]
-        v_c[c, 2] = v_out[k, 2] + wk[0] * arm[1] - wk[1] * arm[0]
         speed = np.sqrt(v_c[c, 0] ** 2 + v_c[c, 1] ** 2 + v_c[c, 2] ** 2
-                        + (wk[0] ** 2 + wk[1] ** 2 + wk[2] ** 2) * row[RADIUS] ** 2)
+                        + (wk[0] ** 2 + wk[1] ** 2 + wk[2] ** 2) * size ** 2)
         reach[c] = 2.0 * speed * step
-    for c in range(n_spheres):         # against the plane
+        low[c] = min(x_c[c, 0], x_c[c, 0] + seg[c, 0]) - row[RADIUS] - half_x - reach[c]
+        high[c] = max(x_c[c, 0], x_c[c, 0] + seg[c, 0]) + row[RADIUS] + half_x + reach[c]
+    for c in range(n_rows):            # against the plane
         row = rows[c]
         k = int(row[BODY])
-        wk = w[k]
         for i in range(3):
             offset[i] = -row[RADIUS] * row[NORMAL][i]
-        v_p[0] = v_c[c, 0] + wk[1] * offset[2] - wk[2] * offset[1]
-        v_p[1] = v_c[c, 1] + wk[2] * offset[0] - wk[0] * offset[2]
-        v_p[2] = v_c[c, 2] + wk[0] * offset[1] - wk[1] * offset[0]
+            c_i[i] = x_c[c, i] + offset[i]
+        _point_velocity(r_out[k], v_out[k], w[k], c_i, v_p)
         delta = contact_value(row, x_c[c], v_p, c1, c3, force, slope)
         if delta > -reach[c]:
             near[c] = True
         if delta > 0.0:
-            ok = ok and _add_instance(inst, k, c, offset, force, slope, 1.0)
-    if n_spheres > 1:                  # pairs: sweep and prune along world x
-        low = np.empty(n_spheres)
-        for c in range(n_spheres):
-            low[c] = x_c[c, 0] - rows[c, RADIUS] - reach[c]
+            ok = ok and _add_instance(inst, k, row[CENTRE], offset, force, slope, 1.0)
+    if n_rows > 1:                     # pairs: sweep and prune along world x
         order = np.argsort(low)
-        n_ij, v_j = np.empty(3), np.empty(3)
-        offset_j = np.empty(3)
-        for ii in range(n_spheres):
-            i = order[ii]
-            row_i = rows[i]
-            high = x_c[i, 0] + row_i[RADIUS] + reach[i]
-            for jj in range(ii + 1, n_spheres):
-                j = order[jj]
-                if low[j] > high:
+        for ii in range(n_rows):
+            a = order[ii]
+            for jj in range(ii + 1, n_rows):
+                b = order[jj]
+                if low[b] > high[a]:
                     break
-                row_j = rows[j]
+                i, j = (b, a) if int(rows[a, ROLE]) == SOLID else (a, b)
+                row_i, row_j = rows[i], rows[j]
                 bi, bj = int(row_i[BODY]), int(row_j[BODY])
                 if bi == bj or int(row_i[PARENT]) == bj or int(row_j[PARENT]) == bi:
                     continue
-                dist = 0.0
-                for a in range(3):
-                    n_ij[a] = x_c[i, a] - x_c[j, a]
-                    dist += n_ij[a] * n_ij[a]
-                dist = np.sqrt(dist)
-                delta = row_i[RADIUS] + row_j[RADIUS] - dist
-                if delta <= -(reach[i] + reach[j]) or dist == 0.0:
+                role_i, role_j = int(row_i[ROLE]), int(row_j[ROLE])
+                if role_j == SOLID and (role_i == SWEPT or role_i == CORNER):
+                    t = segment_box_parameter(x_c[i], seg[i], x_c[j], axes[j], row_j[HALF],
+                                              n_ij)
+                    for m in range(3):
+                        c_i[m] = x_c[i, m] + t * seg[i, m]
+                    sd = box_distance(c_i[0], c_i[1], c_i[2], x_c[j], axes[j], row_j[HALF],
+                                      n_ij)
+                    delta = row_i[RADIUS] - sd
+                    for m in range(3):
+                        c_j[m] = c_i[m] - sd * n_ij[m]          # (on the box's surface)
+                        offset_j[m] = 0.0
+                elif role_i == SWEPT and role_j == SWEPT:
+                    s, t = segment_parameters(x_c[i], seg[i], x_c[j], seg[j])
+                    dist = 0.0
+                    for m in range(3):
+                        c_i[m] = x_c[i, m] + s * seg[i, m]
+                        c_j[m] = x_c[j, m] + t * seg[j, m]
+                        n_ij[m] = c_i[m] - c_j[m]
+                        dist += n_ij[m] * n_ij[m]
+                    dist = np.sqrt(dist)
+                    if dist == 0.0:
+                        continue
+                    for m in range(3):
+                        n_ij[m] /= dist
+                        offset_j[m] = row_j[RADIUS] * n_ij[m]
+                    delta = row_i[RADIUS] + row_j[RADIUS] - dist
+                else:
+                    continue
+                if delta <= -(reach[i] + reach[j]):
                     continue
                 near[i] = True
                 near[j] = True
                 if delta <= 0.0:
                     continue
-                wi, wj = w[bi], w[bj]
-                for a in range(3):
-                    n_ij[a] /= dist
-                    offset[a] = -row_i[RADIUS] * n_ij[a]
-                    offset_j[a] = row_j[RADIUS] * n_ij[a]
-                v_p[0] = v_c[i, 0] + wi[1] * offset[2] - wi[2] * offset[1]
-                v_p[1] = v_c[i, 1] + wi[2] * offset[0] - wi[0] * offset[2]
-                v_p[2] = v_c[i, 2] + wi[0] * offset[1] - wi[1] * offset[0]
-                v_j[0] = v_c[j, 0] + wj[1] * offset_j[2] - wj[2] * offset_j[1]
-                v_j[1] = v_c[j, 1] + wj[2] * offset_j[0] - wj[0] * offset_j[2]
-                v_j[2] = v_c[j, 2] + wj[0] * offset_j[1] - wj[1] * offset_j[0]
-                for a in range(3):
-                    v_p[a] -= v_j[a]
+                for m in range(3):
+                    offset[m] = -row_i[RADIUS] * n_ij[m]
+                    v_p[m] = c_i[m] + offset[m]
+                    v_j[m] = c_j[m] + offset_j[m]
+                _point_velocity(r_out[bi], v_out[bi], w[bi], v_p, v_p)
+                _point_velocity(r_out[bj], v_out[bj], w[bj], v_j, v_j)
+                for m in range(3):
+                    v_p[m] -= v_j[m]
                 pair_value(row_i, row_j, n_ij, delta, v_p, c1, c3, force, slope)
-                ok = ok and _add_instance(inst, bi, i, offset, force, slope, 1.0)
-                ok = ok and _add_instance(inst, bj, j, offset_j, force, slope, -1.0)
+                _body_point(rot[bi], r_out[bi], body_params[body_row[bi], 4:7], c_i, local)
+                ok = ok and _add_instance(inst, bi, local, offset, force, slope, 1.0)
+                _body_point(rot[bj], r_out[bj], body_params[body_row[bj], 4:7], c_j, local)
+                ok = ok and _add_instance(inst, bj, local, offset_j, force, slope, -1.0)
     change = 0.0
-    for c in range(n_spheres):
+    for c in range(n_rows):
         if near[c] and c1 > 0.0:
             if first:
                 change = np.inf
