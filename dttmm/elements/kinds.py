@@ -189,7 +189,7 @@ JOINT_KINDS = (
          doc="docs/hinges.md", what="a fixed hinge"),
     Kind(ELASTIC, ElasticHinge, ("newmark",), freedoms=6, closure_rows=0, deflects=True,
          scene="elastic", doc="docs/hinges.md", what="elastic"),
-    Kind(FREE, FreeJoint, ("newmark", "energy_momentum"), freedoms=6, closure_rows=0,
+    Kind(FREE, FreeJoint, ("newmark", "energy_momentum", "dop853"), freedoms=6, closure_rows=0,
          deflects=True, carries_loads=False, scene="free", doc="docs/free_joint.md",
          what="a free joint"),
     # joints with coordinates and drives (kernels/transfers/joint.py): the general loop's full-state

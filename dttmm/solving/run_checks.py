@@ -9,7 +9,7 @@ from ..elements import BEAM, ROD
 from ..elements.kinds import BODY_KIND, JOINT_KIND, WITH_COORDINATES
 from ..elements.beam import (CLAMPED_LOADED, EXACT, FAMILY, LENGTH,
                              MODES, STIFFENING, TORSION_MODES, end_shapes)
-from ..elements.hinges import (BALL, ELASTIC, FIXED)
+from ..elements.hinges import (BALL, ELASTIC, FIXED, FREE)
 from ..kernels.assembly import solve as ksolve
 from ..kernels.stepping import step as kstep
 from ..kernels.stepping.loop import (ERROR_ESTIMATE, UNCONVERGED)
@@ -19,7 +19,7 @@ from ..model.closures import check_runs_in_sweeps
 from ..model.loop_kinematics import check_drives_move, loop_residuals
 from ..model.model import model_fact
 from .energy_balance import does_work
-from .run_tables import (full_tree, has_coordinates, has_loops, kernel_model)
+from .run_tables import (free_ball_tree, full_tree, has_coordinates, has_loops, kernel_model)
 
 
 class DivergenceError(RuntimeError):
@@ -176,7 +176,9 @@ def check_supported(model, scheme, method="riccati", full_state=False):
     if has_loops(model) and (scheme != "newmark" or method != "riccati"):
         raise ValueError(f"simulate: closed loops run with scheme='newmark' and "
                          f"method='riccati' so far, got scheme={scheme!r}, method={method!r}")
-    if full_tree(model, full_state):
+    if scheme == "dop853" and free_ball_tree(model):
+        pass                            # (the reduced tree sweep, free roots: _mode)
+    elif full_tree(model, full_state):
         _check_full_tree(model, scheme, method)
     elif not model.is_chain and scheme != "dop853":
         _check_tree(model, scheme, method)
@@ -206,14 +208,17 @@ def check_supported(model, scheme, method="riccati", full_state=False):
 
 def _check_runge_kutta(model, method, full_state):
     """The high-order scheme (kernels/stepping/runge_kutta.py) integrates the fused loops' sweep:
-    chains and trees of rigid bodies and beams on ball joints (bending modes only), on a fixed
-    ground with gravity alone (its compiled stages evaluate no function of the user's)."""
+    chains and trees of rigid bodies and beams on ball joints (bending modes only), their roots
+    on the ground or on free joints from it, on a fixed ground with gravity alone (its compiled
+    stages evaluate no function of the user's)."""
     where = "simulate(scheme='dop853')"
-    joint = next((k for k in range(model.n_bodies) if model.hinge_kind[k] != BALL), None)
+    joint = next((k for k in range(model.n_bodies) if model.hinge_kind[k] != BALL
+                  and not (model.hinge_kind[k] == FREE and model.parent[k] < 0)), None)
     locked = next((k for k in range(model.n_bodies) if model.ground_locked[k]), None)
     why = ("the model has closed loops" if has_loops(model) or model.tip_pinned
            else f"hinge '{model.hinge_names[joint]}' is "
-                f"{JOINT_KIND[int(model.hinge_kind[joint])].what} (ball joints only)"
+                f"{JOINT_KIND[int(model.hinge_kind[joint])].what} (ball joints only, and "
+                f"free joints from the ground)"
            if joint is not None
            else "method='direct' (its stages take the Riccati sweep)" if method != "riccati"
            else "full_state=True (its stages take the reduced sweep)" if full_state

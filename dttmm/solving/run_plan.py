@@ -73,7 +73,7 @@ def kernels_used(model, scheme, method="riccati", full_state=False):
 def _kernels_used(model, scheme_name, method, full_state, fused_switch):
     scheme = SCHEMES[scheme_name]
     km, _ = run_tables.kernel_model(model)
-    mode = run_tables._mode(km, method, full_state)
+    mode = run_tables._mode(km, method, full_state, scheme.loop == "runge_kutta")
     if runs_fused(km, mode, scheme):
         return "ball-tree" if mode == ksolve.RICCATI_TREE else "ball-chain"
     if scheme.loop == "energy_momentum":
@@ -96,7 +96,8 @@ class PreparedRun:
         self.user_model, self.model, self.keep = user_model, model, keep
         self.loaded = run_tables.loaded_bodies(user_model, model,
                                                keep)  # where each body's loads act
-        self.mode = mode = run_tables._mode(model, opts.method, opts.full_state)
+        self.mode = mode = run_tables._mode(model, opts.method, opts.full_state,
+                                            scheme.loop == "runge_kutta")
         dt, coef, n = opts.dt, opts.coef, model.n_bodies
         # the loop variant (kernels/stepping/loop.py): a fused one (kernels/stepping/ball_chain.py,
         # tree.py, weld_chain.py), the energy-momentum scheme's, or the general loop
@@ -203,7 +204,8 @@ class PreparedRun:
             self.derivative_loop = FUSED_LAYOUT.copy(self.loop)    # (its stages' own scratch)
             ball_chain.start_loop(self.derivative_loop, self.state, self.sweep)
             self.integrator = runge_kutta.runge_kutta_scratch(
-                n, len(self.state.eta), runge_kutta.dop853_tables())
+                n, len(self.state.eta), runge_kutta.dop853_tables(),
+                int(np.count_nonzero(model.hinge_kind == run_tables.FREE)))
         self.beam_tips = run_checks._beam_tips(model)
         self.start_fastest = run_checks._fastest_rate(self.state.omega[None])  # (drivers)
         self.closing_forces = loop_rows.closure_forces(model, self.loops)

@@ -21,7 +21,8 @@ from ..elements.beam import (AXIAL_MODES, BEAM_PARAM_SIZE, EXACT, FAMILY, LENGTH
 from ..elements.contact import BODY as CONTACT_BODY
 from ..elements.contact import PARENT as CONTACT_PARENT
 from ..elements.drives import (COMPILED_FORCE, FORCE, PD, SPRING_DAMPER, compiled_force)
-from ..elements.hinges import DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, REST_ROTATION
+from ..elements.hinges import (BALL, DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, FREE,
+                               REST_ROTATION)
 from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from ..kernels.assembly import solve as ksolve
 from ..kernels.schema import LOOP_LAYOUT, STATE_LAYOUT, SWEEP_LAYOUT, pack
@@ -76,7 +77,7 @@ class Workspace:
         z3 = lambda: np.zeros((n, 3))                               # noqa: E731
         # a fused loop's ball joints have no offsets, coordinates or mass-centre velocities of
         # their own: those per-body arrays are empty there (a million links: 190 MB)
-        n_joint = 0 if fused else n
+        n_joint = 0 if fused and not has_offsets(model) else n     # (a free root's flight)
         off3 = lambda: np.zeros((n_joint, 3))                       # noqa: E731
         # the joints' coordinates and rates at t = 0 (zeros, untouched, without such joints)
         jq, jqd = ((model.hinge_params[:, COORDINATE_0].copy(),
@@ -272,6 +273,16 @@ def has_offsets(model):
     elastic hinge's deflection, a free joint's flight (DEFLECTING), a joint's slides
     (elements/kinds.py: WITH_SLIDES)."""
     return bool(np.isin(model.hinge_kind, DEFLECTING + WITH_SLIDES).any())
+
+
+@model_fact
+def free_ball_tree(model):
+    """Ball joints throughout but at the roots, of which one or more are free joints from the
+    ground: the reduced tree sweep runs it, each free root's input acceleration from its load
+    q_I = 0 (kernels/stepping/tree.py; the high-order scheme's)."""
+    free = model.hinge_kind == FREE
+    return bool(free.any() and np.all(model.parent[free] < 0)
+                and np.all((model.hinge_kind == BALL) | free) and not has_loops(model))
 
 
 @model_fact
@@ -534,9 +545,13 @@ def beam_tables(model):
     return kernel_array(model, "body_kind"), beam_params, moments, mode_off, ends, factors
 
 
-def _mode(model, method, full_state):
+def _mode(model, method, full_state, high_order=False):
+    """The sweep a model runs in; high_order: the high-order scheme's (a tree of ball joints
+    on free roots runs in the reduced tree sweep: free_ball_tree)."""
     if method not in SWEEPS:
         raise ValueError(f"simulate: method must be one of {tuple(SWEEPS)}, got {method!r}")
+    if high_order and free_ball_tree(model) and not full_state:
+        return ksolve.RICCATI_TREE
     reduced = model.all_ball and not full_state
     if full_tree(model, full_state):    # (check_supported has refused the rest)
         return ksolve.RICCATI_JOINTS

@@ -3,10 +3,12 @@ Dormand and Prince's explicit Runge-Kutta method of order 8 (DOP853: an embedded
 estimate of orders 5 and 3, a dense output of order 7), compiled with the fused loops' sweep
 (kernels/stepping/ball_chain.py, tree.py), on the rotation group.
 
-The state is [theta; omega; eta; eta'] with, per body, theta the rotation vector of
+The state is [theta; omega; eta; eta'; x; v] with, per body, theta the rotation vector of
 R = exp(theta^) R0 from the step's initial rotation R0 (local exponential coordinates,
 recentred after every step: R0 <- exp(theta^) R0, theta <- 0) and omega the world angular
-velocity; its derivative [J_l(theta)^-1 omega; omega'; eta'; eta''] takes the accelerations from
+velocity, and per free joint (a root's: kernels/stepping/tree.py) its flight x (the state's
+defl) and rate v; its derivative [J_l(theta)^-1 omega; omega'; eta'; eta''; v; a_I] takes the
+accelerations from
 one pass of the fused loop in its consistent-start form (ball_chain.start_loop: the coefficients
 (1, 0, 0, 0) make a body's rotation slot its angular acceleration, and the pass solves the
 accelerations of the given state).  Every rotation is exp of a skew matrix times an orthogonal
@@ -20,8 +22,9 @@ from types import FunctionType
 import numpy as np
 from numba import njit
 
-from .. import (CONTRACT, fused_tables, no_alloc_kernel, record_tables, runge_kutta_tables,
-                state_tables, sweep_tables)
+from .. import (CONTRACT, fused_tables, model_tables, no_alloc_kernel, record_tables,
+                runge_kutta_tables, state_tables, sweep_tables)
+from ...elements.hinges import FREE
 from ..schema import RUNGE_KUTTA_LAYOUT
 from .ball_chain import record_state
 from .loop import _VARIANTS, ERROR_ESTIMATE, OK, UNSUPPORTED
@@ -33,10 +36,11 @@ N_EXTENDED = 16         # ... with the three of its dense output
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERROR_EXPONENT = -1.0 / 8.0     # -1 / (order of the error estimate + 1)
 
-def runge_kutta_scratch(n, n_eta, tables):
-    """The scratch of an integration of n bodies and n_eta modal coordinates, with the tableau
-    `tables` (dop853_tables) (kernels/schema.py::RUNGE_KUTTA)."""
-    rk = RUNGE_KUTTA_LAYOUT.zeros(bodies=n, states=6 * n + 2 * n_eta)
+def runge_kutta_scratch(n, n_eta, tables, n_free=0):
+    """The scratch of an integration of n bodies, n_eta modal coordinates and n_free free
+    joints' flights, with the tableau `tables` (dop853_tables) (kernels/schema.py::
+    RUNGE_KUTTA)."""
+    rk = RUNGE_KUTTA_LAYOUT.zeros(bodies=n, states=6 * n + 2 * n_eta + 6 * n_free)
     (rk.tableau_a[:], rk.tableau_b[:], rk.tableau_c[:], rk.error_e3[:], rk.error_e5[:],
      rk.dense_d[:]) = tables
     return rk
@@ -87,6 +91,16 @@ def _derivative(loop, run, info, rk, y, out):
     omega_dot = state_tables.omega_dot(state)
     n, m = rot.shape[0], eta.shape[0]
     w1, w3, phi_star, accel = per_body[0], per_body[1], per_body[2], per_body[3]
+    hinge_kind = model_tables.hinge_kind(run.params)
+    defl, defl_rate = state_tables.defl(state), state_tables.defl_rate(state)
+    at = 6 * n + 2 * m                          # (the flights: a free root's x and v)
+    for k in range(n):
+        if hinge_kind[k] == FREE:
+            for i in range(3):
+                defl[k, i] = y[at + i]
+                defl_rate[k, i] = y[at + 3 + i]
+                out[at + i] = y[at + 3 + i]
+            at += 6
     for k in range(n):
         expm_so3(y[3 * k:3 * k + 3], e3)
         mm3_into(e3, rot0[k], rot[k])
@@ -119,6 +133,12 @@ def _derivative(loop, run, info, rk, y, out):
         eta_acc[i] = per_mode[4, i]
         out[6 * n + i] = eta_d[i]
         out[6 * n + m + i] = per_mode[4, i]
+    at = 6 * n + 2 * m
+    for k in range(n):
+        if hinge_kind[k] == FREE:               # v' = a_I, the root's input acceleration
+            for i in range(3):
+                out[at + 3 + i] = red_aq[k, i]
+            at += 6
     return True
 
 
@@ -157,6 +177,15 @@ def _start(loop, run, info, rk, rtol, atol, first_step, t_end):
     for i in range(m):
         y[6 * n + i] = eta[i]
         y[6 * n + m + i] = eta_d[i]
+    hinge_kind = model_tables.hinge_kind(run.params)
+    defl, defl_rate = state_tables.defl(state), state_tables.defl_rate(state)
+    at = 6 * n + 2 * m
+    for k in range(n):
+        if hinge_kind[k] == FREE:
+            for i in range(3):
+                y[at + i] = defl[k, i]
+                y[at + 3 + i] = defl_rate[k, i]
+            at += 6
     if not _derivative(loop, run, info, rk, y, f):
         return False
     h = first_step
@@ -214,9 +243,11 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
     e3_pair = runge_kutta_tables.e3(rk)
     rot0 = runge_kutta_tables.rot0(rk)
     rec_z = record_tables.z(rec)
+    rec_defl, rec_defl_rate = record_tables.defl(rec), record_tables.defl_rate(rec)
     state = run.state
     rot = state_tables.rot(state)
     z = state_tables.z(state)
+    defl, defl_rate = state_tables.defl(state), state_tables.defl_rate(state)
     n = rot.shape[0]
     size = y.shape[0]
     t, h = control[0], control[1]
@@ -310,6 +341,10 @@ def _steps(loop, run, info, rk, times, rec, sample_steps, rtol, atol, h_min):
                     info[1], info[2], info[3] = int(control[2]), info[0], n_rec
                     return
                 record_state(state, rec, n_rec)
+                for k in range(defl.shape[0]):          # (the free joints' flights)
+                    for i in range(3):
+                        rec_defl[n_rec, k, i] = defl[k, i]
+                        rec_defl_rate[n_rec, k, i] = defl_rate[k, i]
                 for st in range(z.shape[0]):
                     for i in range(12):
                         rec_z[n_rec, st, i] = z[st, i]

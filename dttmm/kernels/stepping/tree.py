@@ -2,17 +2,20 @@
 body's reduced map (kernels/stepping/ball_chain.py::ball_body_map,
 kernels/transfers/beam.py::beam_ball_map) goes straight into the leaves-to-root sweep
 (kernels/assembly/tree_sweep.py, "Trees"; docs/assembly.md, "Trees"), then the recovery
-from the root to the leaves.  Predict, adopt and update are the fused chain loop's (they do not
+from the root to the leaves: a root on the ground moves with it, a root on a free joint (the
+high-order scheme's, docs/free_joint.md) carries no load, q_I = 0, which gives its acceleration.
+Predict, adopt and update are the fused chain loop's (they do not
 depend on the topology)."""
 from .. import (fused_tables, input_tables, loop_piece, model_tables, record_tables, state_tables,
                 sweep_tables)
 from ...elements import BEAM, RIGID
+from ...elements.hinges import FREE
 from .ball_chain import (_adopt, _ground_increment, _predict, _update, ball_body_map, fused_loop,
                          record_state, recover_body)
 from ..schema import FlatFusedTree
 from ..transfers.beam import beam_ball_map
 from .loop import NOT_FINITE, OK, SINGULAR, UNSUPPORTED, loop_variant
-from ..algebra.mat3 import mm3_into
+from ..algebra.mat3 import mm3_into, t_inverse, t_mv, t_of_mat
 from ..algebra.so3 import expm_so3, left_jacobian
 from ..assembly.tree_sweep import (_add_to_port, _clear_ports, tree_reduced_recover,
                                    tree_reduced_step, write_tree_stations)
@@ -101,9 +104,17 @@ def _iterate(loop, run, s, it):
             _add_to_port(s_in[k], p_in[k], port_s[parent[k]], port_p[parent[k]])
     change = 0.0
     finite = True
+    hinge_kind = model_tables.hinge_kind(params)
     for k in range(n):
         p = parent[k]
-        if p < 0:
+        if p < 0 and hinge_kind[k] == FREE:     # q_I = S_I a_I + P_I = 0: a_I = -S_I^-1 P_I
+            det, g = t_inverse(t_of_mat(s_in[k]))
+            if det == 0.0:
+                return SINGULAR, k + 1, 0.0
+            a_free = t_mv(g, (p_in[k, 0], p_in[k, 1], p_in[k, 2]))
+            tree_reduced_recover(maps[k], s_in[k], p_in[k], -a_free[0], -a_free[1],
+                                 -a_free[2], aq_in[k], aq_out[k])
+        elif p < 0:
             tree_reduced_recover(maps[k], s_in[k], p_in[k], g_acc[s, 0],
                                  g_acc[s, 1], g_acc[s, 2], aq_in[k], aq_out[k])
         else:
