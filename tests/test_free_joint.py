@@ -12,6 +12,7 @@ from scipy.special import ellipk, ellipkinc
 
 import dttmm
 import dttmm.model.chains
+from dttmm.elements.hinges import DEFLECTION_0
 from dttmm.results.result import momenta
 from dttmm import (BallJoint, FixedHinge, FreeJoint, RigidBody, System, build_chain, simulate,
                    simulate_reference)
@@ -279,7 +280,7 @@ def test_what_a_free_joint_refuses():
     s.close(FreeJoint(), "b", "ground")
     with pytest.raises(ValueError, match="passes no force and no moment"):
         s.build()
-    with pytest.raises(ValueError, match="nothing holds the body"):
+    with pytest.raises(ValueError, match="nothing holds the body.*closing joints"):
         dttmm.static_equilibrium(_box())
     with pytest.raises(ValueError, match="energy_momentum"):     # (a free tree: chains only)
         simulate(_free_tree(), 0.01, 1e-3, scheme="energy_momentum")
@@ -385,6 +386,53 @@ def test_a_free_body_closed_to_others_moves_as_the_mechanism_it_makes():
     assert np.abs(top - exact).max() < 1e-5, np.abs(top - exact).max()
     coupler = run.position_input[:, 2, :2]
     assert np.abs(coupler - top).max() < 1e-12             # the loop held (measured 4e-16 m)
+
+
+def _parallelogram(free, gravity):
+    """The four-bar above at rest, its coupler on a free joint closed to both rockers' tops
+    (free) or on a revolute joint to the first rocker's top, closed to the second's."""
+    from dttmm import RevoluteJoint
+    from dttmm.model.mechanisms import _bar, _rot_z
+    z = [0, 0, 1.0]
+    s = System(gravity=gravity)
+    s.add(_bar("v0", _rot_z(np.pi / 2)), RevoluteJoint(axis=z, name="O0"))
+    s.add(_bar("v1", _rot_z(np.pi / 2)), RevoluteJoint(axis=z, name="O1"), at=[1.0, 0, 0])
+    if free:
+        s.add(_bar("h1", np.eye(3)), FreeJoint(position=(0, 1, 0), name="fly"))
+        s.close(RevoluteJoint(axis=z, name="B0"), "v0", "h1", at_b="input")
+    else:
+        s.add(_bar("h1", np.eye(3)), RevoluteJoint(axis=z, name="B0"), parent="v0")
+    s.close(RevoluteJoint(axis=z, name="B1"), "v1", "h1")
+    return s.build()
+
+
+def test_a_free_body_held_by_closing_joints_has_a_static_equilibrium():
+    """static_equilibrium of the parallelogram four-bar whose coupler is on a free joint (its
+    flight and rotation unknowns, like an elastic hinge's without stiffness), under a slanted
+    gravity g = (-3, -9.81, 0): the potential of the translating coupler and the two rockers
+    is stationary where the rockers point along -g (from the start at 90 degrees, the upright
+    equilibrium, unstable) at atan2(9.81, 3), to 1e-9 rad; the coupler's flight is the
+    rocker's top; the one unstable direction's squared frequency is the closed form's; and
+    the same mechanism with the coupler on a revolute joint rests in the same configuration."""
+    gravity = [-3.0, -9.81, 0.0]
+    with pytest.warns(UserWarning, match="unstable"):
+        free = dttmm.static_equilibrium(_parallelogram(True, gravity))
+    with pytest.warns(UserWarning, match="unstable"):
+        joined = dttmm.static_equilibrium(_parallelogram(False, gravity))
+    angle = np.arctan2(9.81, 3.0)
+    rot = free.model.initial_rotation
+    for k in (0, 1):
+        assert np.arctan2(rot[k, 1, 0], rot[k, 0, 0]) == pytest.approx(angle, abs=1e-9)
+    assert np.allclose(rot[2], np.eye(3), atol=1e-9)            # the coupler translates
+    flight = free.model.hinge_params[2, DEFLECTION_0]
+    assert flight == pytest.approx([np.cos(angle), np.sin(angle), 0.0], abs=1e-9)
+    assert np.abs(rot - joined.model.initial_rotation).max() < 1e-9
+    # its one freedom: V'' = -2 |g| (m L / 2 per rocker, m L the coupler), I = 2 / 3 + 1
+    # about the rocker angle: w^2 = -6 |g| / 5 (measured -12.31 both ways)
+    for eq in (free, joined):
+        assert not eq.stable
+        assert np.min(eq.squared_frequencies.real) == pytest.approx(
+            -1.2 * np.hypot(3.0, 9.81), rel=1e-6)
 
 
 def test_a_free_body_linearizes_to_six_rigid_body_modes():

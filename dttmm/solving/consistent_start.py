@@ -3,7 +3,9 @@ general loop's start (docs/solver.md, "Consistent start")."""
 import numpy as np
 
 from ..elements.drives import MOTION
+from ..elements.hinges import DEFLECTION_RATE_0
 from ..elements.kinds import DEFLECTING
+from ..elements.rigid_body import TO_MASS_CENTER, TO_OUTPUT
 from ..kernels.stepping import ball_chain
 from ..kernels.stepping import weld_chain
 from ..kernels.stepping import step as kstep
@@ -16,6 +18,7 @@ from ..kernels.assembly.sweep import LOST_ACCURACY
 from ..model.model import model_fact
 from ..model.loop_rows import closure_forces, closure_targets, has_closure_drives
 from . import core
+from ..vectors import cross
 from .run_tables import _station_histories, compiled_forces, loop_tables
 from .run_checks import DivergenceError, _DIRECT_HINT, _singular_cause, _unsupported_cause
 from .run_inputs import _drive_number, _ground, _joint_inputs, _loads
@@ -194,3 +197,17 @@ def start_contacts(params, n_bodies):
     inst = (c["contact_point"], c["contact_offset"], c["contact_force"], c["contact_slope"],
             c["contact_next"], c["contact_body_first"], c["contact_count"])
     return inst, (inst[5], inst[4], inst[0], inst[1], inst[2], inst[3]), c["contact_centre"]
+
+
+def initial_mass_center_velocities(model, rot, omega):
+    """(n, 3) mass-centre velocities of a chain from the initial rotations and angular
+    velocities, and a free joint's flight rate (its d', as the build set it)."""
+    p = model.body_params
+    v_in = model.ground_state(0.0)[1].copy()
+    v_c = np.empty((model.n_bodies, 3))
+    for k in range(model.n_bodies):
+        if model.hinge_kind[k] in DEFLECTING:
+            v_in = v_in + model.hinge_params[k, DEFLECTION_RATE_0]
+        v_c[k] = v_in + cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
+        v_in = v_in + cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
+    return v_c

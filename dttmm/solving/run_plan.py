@@ -149,7 +149,8 @@ class PreparedRun:
         if scheme.loop == "energy_momentum":
             loop_name, runner = "energy-momentum", run_steps
             loop = em_step.energy_momentum_loop(n)
-            state.v_c[:] = run_tables._initial_mass_center_velocities(model, state.rot, state.omega)
+            state.v_c[:] = consistent_start.initial_mass_center_velocities(model, state.rot,
+                                                                          state.omega)
         elif fused and scheme.loop == "runge_kutta":
             loop_name = f"runge-kutta ({loop_name})"
         elif fused:

@@ -600,20 +600,6 @@ def _station_histories(model, state, independent):
     return (True, st_v, st_a, st_a.copy(), c_v, c_a, c_a.copy())
 
 
-def _initial_mass_center_velocities(model, rot, omega):
-    """(n, 3) mass-centre velocities of a chain from the initial rotations and angular
-    velocities, and a free joint's flight rate (its d', as the build set it)."""
-    p = model.body_params
-    v_in = model.ground_state(0.0)[1].copy()
-    v_c = np.empty((model.n_bodies, 3))
-    for k in range(model.n_bodies):
-        if model.hinge_kind[k] in DEFLECTING:
-            v_in = v_in + model.hinge_params[k, DEFLECTION_RATE_0]
-        v_c[k] = v_in + cross(omega[k], rot[k] @ p[k, TO_MASS_CENTER])
-        v_in = v_in + cross(omega[k], rot[k] @ p[k, TO_OUTPUT])
-    return v_c
-
-
 def kernel_model(model):
     """The model the kernels integrate, and the kernel index of each of the model's bodies
     (results are mapped back, recording.Recording).  Three kinds of massless rigid body,

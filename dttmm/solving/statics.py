@@ -22,7 +22,8 @@ from ..model.closures import check_runs_in_sweeps
 from ..model.loop_kinematics import closure_residuals, start_state
 from ..elements import BEAM, RIGID, ROD
 from ..elements.drives import MOTION
-from ..elements.hinges import BALL, DEFLECTION_0, ELASTIC, FIXED, REST_ROTATION
+from ..elements.hinges import (BALL, DEFLECTION_0, DEFLECTION_RATE_0, ELASTIC, FIXED, FREE,
+                               REST_ROTATION)
 from ..elements.kinds import (BODY_KIND, COORDINATE_0, JOINT_KIND, MAX_COORDINATES, RATE_0,
                               WITH_COORDINATES, WITH_SLIDES, joint_motion, row_axes,
                               unimplemented_body_kind)
@@ -185,7 +186,7 @@ def _positions(m):
             r_in[k] = r_in[k] + joint_motion(m.hinge_kind[k], row_axes(h), np.eye(3), rot_p,
                                              np.zeros(3), h[COORDINATE_0],
                                              np.zeros(MAX_COORDINATES))[2]
-        elif m.hinge_kind[k] == ELASTIC:          # the hinge's deflection (world)
+        elif m.hinge_kind[k] in (ELASTIC, FREE):  # the hinge's deflection, the flight (world)
             r_in[k] = r_in[k] + m.hinge_params[k, DEFLECTION_0]
         rot = m.initial_rotation[k]
         r_c[k] = r_in[k] + rot @ m.body_params[k, TO_MASS_CENTER]
@@ -229,18 +230,18 @@ class _Configuration:
         n = km.n_bodies
         for k in range(n):
             kind = int(km.hinge_kind[k])
-            if not JOINT_KIND[kind].carries_loads:
+            if not JOINT_KIND[kind].carries_loads and not run_tables.has_loops(km):
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
                                  f"{JOINT_KIND[kind].what}: nothing holds the body behind it, "
                                  f"which has no static equilibrium (it flies); simulate it "
-                                 f"instead (a body held by closing joints as well: not yet)")
-            if kind not in (BALL, FIXED, ELASTIC) + WITH_COORDINATES:
+                                 f"instead, or hold it by closing joints (System.close)")
+            if kind not in (BALL, FIXED, ELASTIC, FREE) + WITH_COORDINATES:
                 raise ValueError(f"{where}: joint '{km.hinge_names[k]}' is "
                                  f"{JOINT_KIND[kind].what}; the static solve takes ball joints, "
                                  f"fixed and elastic hinges and joints with coordinates so far "
                                  f"(run the model with damping to rest instead)")
         self.free = [k for k in range(n)
-                     if km.hinge_kind[k] in (BALL, ELASTIC) and not km.ground_locked[k]]
+                     if km.hinge_kind[k] in (BALL, ELASTIC, FREE) and not km.ground_locked[k]]
         self.n_rot = 3 * len(self.free)
         # joint coordinates: free unless a motion prescribes them (then held at their value)
         self.coords = [(k, i) for k in range(n) for i in range(n_coordinates(km.hinge_kind[k]))
@@ -248,10 +249,11 @@ class _Configuration:
                                and km.drives[k][i]["kind"] == MOTION)]
         self.n_q = len(self.coords)
         self.jq0 = np.array(km.hinge_params[:, COORDINATE_0], order="C")
-        # elastic hinges' deflections (world, m): after the joint coordinates
-        self.elastic = [k for k in range(n) if km.hinge_kind[k] == ELASTIC]
+        # elastic hinges' deflections and free joints' flights (world, m): after the joint
+        # coordinates (a free joint: an elastic hinge of no stiffness, held by closing joints)
+        self.elastic = [k for k in range(n) if km.hinge_kind[k] in (ELASTIC, FREE)]
         self.d0 = self.n_rot + self.n_q
-        self.defl0 = np.where((km.hinge_kind == ELASTIC)[:, None],
+        self.defl0 = np.where(np.isin(km.hinge_kind, (ELASTIC, FREE))[:, None],
                               km.hinge_params[:, DEFLECTION_0], 0.0)
         self.n_eta = len(km.initial_modal_coordinates)
         mode_off = np.concatenate([[0], np.cumsum(km.n_modes)])
@@ -346,7 +348,7 @@ class _Configuration:
         w, wd, d, d_rate = (np.zeros(3) for _ in range(4))
         for k in range(km.n_bodies):
             kind = int(km.hinge_kind[k])
-            if kind in (BALL, ELASTIC) or (kind == FIXED and km.ground_locked[k]):
+            if kind in (BALL, ELASTIC, FREE) or (kind == FIXED and km.ground_locked[k]):
                 continue
             p = km.parent[k]
             if p < 0:
@@ -443,8 +445,9 @@ class _Configuration:
         hinge_params = np.array(user.hinge_params, order="C")
         hinge_params[:, COORDINATE_0] = jq[self.keep]
         hinge_params[:, RATE_0] = 0.0
-        elastic = user.hinge_kind == ELASTIC
+        elastic = np.isin(user.hinge_kind, (ELASTIC, FREE))    # (a free joint's flight at rest)
         hinge_params[elastic, DEFLECTION_0] = defl[self.keep][elastic]
+        hinge_params[elastic, DEFLECTION_RATE_0] = 0.0
         return replace(user, initial_rotation=rot[self.keep],
                        initial_angular_velocity=np.zeros((user.n_bodies, 3)),
                        hinge_params=hinge_params, initial_modal_coordinates=eta,
@@ -536,7 +539,7 @@ def static_equilibrium(model: Model, *, guess=None, tol=1e-10, max_iterations=50
         jq = cfg.jq0.copy()
         jq[cfg.keep] = start.hinge_params[:, COORDINATE_0]
         defl = cfg.defl0.copy()
-        defl[cfg.keep] = np.where((start.hinge_kind == ELASTIC)[:, None],
+        defl[cfg.keep] = np.where(np.isin(start.hinge_kind, (ELASTIC, FREE))[:, None],
                                   start.hinge_params[:, DEFLECTION_0], 0.0)
         q = cfg.vector(rot_k, jq, start.initial_modal_coordinates, defl)
     a = a0 = cfg.accelerations(q)
