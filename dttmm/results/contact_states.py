@@ -6,25 +6,26 @@ from ..elements.contact import (AXES, BODY, CENTRE, NORMAL, RADIUS, SEGMENT, con
                                 law_forces, pair_geometry, pair_law, touching_pairs)
 
 
-def contact_states(model, result):
+def contact_states(model, rotation, angular_velocity, position_input, velocity_input):
     """{"contact_force", "contact_point", "contact_normal"}: (T, N, 3) each, the model's contact
-    rows (Model.contacts) at the result's samples from its bodies' input points, rotations
-    and velocities, by the contact law (elements/contact.py): each row's total force (the
-    plane's and every other body's on it), and the point and normal of the one pushing
-    hardest (the plane's where none pushes); None each for a model without shapes."""
+    rows (Model.contacts) at a run's samples from its bodies' rotations (T, n, 3, 3), angular
+    velocities, input points and their velocities (T, n, 3), by the contact law
+    (elements/contact.py): each row's total force (the plane's and every other body's on it),
+    and the point and normal of the one pushing hardest (the plane's where none pushes); None
+    each for a model without shapes."""
     rows = np.asarray(model.contacts)
     if not len(rows):
         return dict(contact_force=None, contact_point=None, contact_normal=None)
     body = rows[:, BODY].astype(np.int64)
-    rot = result.rotation[:, body]                                  # (T, N, 3, 3)
-    origin = result.position_input[:, body]
+    rot = rotation[:, body]                                  # (T, N, 3, 3)
+    origin = position_input[:, body]
     centre = origin + np.einsum("tnij,nj->tni", rot, rows[:, CENTRE])      # A l_IP
     segment = np.einsum("tnij,nj->tni", rot, rows[:, SEGMENT])
     axes = np.einsum("tnij,njk->tnik", rot, rows[:, AXES].reshape(-1, 3, 3))
-    omega = result.angular_velocity[:, body]
+    omega = angular_velocity[:, body]
 
     def velocity(c, point):     # of row c's body's point at `point` (T, 3)
-        return result.velocity_input[:, body[c]] + np.cross(omega[:, c], point - origin[:, c])
+        return velocity_input[:, body[c]] + np.cross(omega[:, c], point - origin[:, c])
 
     normal = np.array(np.broadcast_to(rows[:, NORMAL], centre.shape))
     point = centre - rows[:, RADIUS, None] * normal

@@ -223,9 +223,8 @@ def _result(model, recording, h, wall, n_steps, info, checkpoint=None):
             derived.update(_points(model, t, rot, omega, values["defl"], values["defl_rate"],
                                    eta, eta_d, values.get("v_st"), values.get("v_c")))
         if name in CONTACT_FIELDS and "contact_force" not in derived:
-            derived.update(contact_states(model, Result(t=t, method="dttmm", rotation=rot,
-                                                        angular_velocity=omega, **{
-                name: derived[name] for name in ("position_input", "velocity_input")})))
+            derived.update(contact_states(model, rot, omega, derived["position_input"],
+                                          derived["velocity_input"]))
         if name in ("kinetic", "potential") and "kinetic" not in derived:
             ground_r, _, ground_rot, _ = model.ground_states(t)
             derived["kinetic"], derived["potential"] = chain_energies(
