@@ -30,14 +30,20 @@ rho_P = A l_IP - r n its arm from the input point, so that the transfer of the b
 with their derivatives by a_I (S, (rho_P - rho)^ S) and by phi (S Dkappa_P,
 (rho_P - rho)^ S Dkappa_P - F^ (D rho_P - D rho), D rho_X = -(A l_X)^ Lam).
 
-Two bodies' spheres i and j touch each other with the same law (elements/contact.py::pair_law)
-along n = (x_i - x_j) / |x_i - x_j|, delta = r_i + r_j - |x_i - x_j|, at the relative velocity
-v_i - v_j of their contact points x_i - r_i n and x_j + r_j n: F on i, -F on j.  Each body's
+Two bodies' rows i and j touch each other with the same law (elements/contact.py::pair_law)
+at their nearest points x_i and x_j (kernels/transfers/contact_geometry.py: two swept rows'
+axes, or a row's deepest point x_i in a box and the box's surface point x_j below it), along
+n = (x_i - x_j) / |x_i - x_j| (a box's outward normal there), delta = r_i + r_j - |x_i - x_j|
+(r_i - sd for a box), at the relative velocity v_i - v_j of their contact points x_i - r_i n
+and x_j + r_j n: F on i, -F on j, each at its body's point held through the iterations (the
+instance's point, body frame).  Each body's
 transfer takes its own force with the slope by its own point's acceleration (the same S for
 both: F_j = -F(v_i - v_j)); the other body's motion is the guess's, so the iterations converge
 as a block-Jacobi Newton, at a rate S / (M + S) ~ (w h)^2 / 4 per iteration: fast for a contact
-the step resolves.  The pairs are found by sweep and prune (sorting the spheres' extents along
-world x, O(N log N)), spheres of one body and of a body and its parent excluded.
+the step resolves; friction's damper c = mu f_n / v_s is capped (elements/contact.py::
+STICK_DAMPING) so that its share converges as fast.  The pairs are found by sweep and prune
+(sorting the rows' extents along world x, O(N log N)), rows of one body and of a body and
+its parent excluded.
 """
 import numpy as np
 
